@@ -1,0 +1,223 @@
+"""Inverse kinematics of the 2(3PUS+S) hip simulator, Eq. (1)-(6) of the hip paper.
+
+Vectorised over samples: every array has a leading sample axis ``n``; legs (modules)
+``i = 1..3`` are axis ``-2`` of the per-leg arrays. Both platforms share the orientation
+``R(t)`` and the two sliders on a screw are rigidly ``h1 - h2`` apart, so the two levers of
+one module are parallel and move by the same velocity field: lever directions, angular
+velocities and centre velocities/accelerations are the same for both platforms and are
+stored once per module; positions are given per platform.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ...errors import SingularityError, SingularityWarning, UnreachablePoseError
+from ...profiles.orientation import OrientationMotion
+from ...spatial import cross, dot, euler_kinematics
+from .params import HipModel
+
+__all__ = ["HipKinematics", "inverse_kinematics", "platform_kinematics", "DEFAULT_SINGULARITY_THRESHOLD"]
+
+Array = NDArray[np.float64]
+
+#: warn when 1 / cond(J_j) falls below this (the pose is near a J_a or J_b singularity)
+DEFAULT_SINGULARITY_THRESHOLD = 1e-3
+
+
+@dataclass(frozen=True)
+class HipKinematics:
+    """Kinematics of all bodies, per sample. Base frame O-XYZ, SI units.
+
+    Platform and slider quantities
+      ``t (n,)`` [s]; ``R (n, 3, 3)`` platform rotation; ``omega, omega_dot (n, 3)`` [rad/s,
+      rad/s^2] platform angular velocity/acceleration; ``r (n, 3, 3)`` [m] vectors o_j a_ji
+      [sample, leg, xyz]; ``L, Ld, Ldd (n, 2, 3)`` [m, m/s, m/s^2] slider positions,
+      velocities, accelerations [sample, platform, leg] (Eq. 2, 3, 5).
+    Jacobians (Eq. 3) -- identical for both platforms
+      ``Ja (n, 3)`` diagonal of J_a (e_ji . e_z); ``Jb (n, 3, 3)`` rows (r_ji x e_ji);
+      ``J (n, 3, 3)`` = J_a^-1 J_b, so ``Ld_j = J omega``; ``det_Ja, det_Jb, cond_J (n,)``.
+    Levers (Eq. 4, 6) -- per module, both platforms alike
+      ``d (n, 3, 3)`` [m] lever vector b -> a; ``d_dot, d_ddot`` its rates; ``e_lever`` unit
+      vector; ``R_lever (n, 3, 3, 3)`` lever frame [sample, leg] (columns: x along the U
+      joint's second axis, y = z x x, z from b to a); ``omega_lever, omega_lever_dot (n, 3,
+      3)``; ``v_lever, a_lever (n, 3, 3)`` centre velocity/acceleration; ``c_lever (n, 2, 3,
+      3)`` [m] centre positions [sample, platform, leg]; ``spin (n, 3)`` [rad/s] the lever's
+      angular velocity about its own axis (zero for ``lever_spin = "perpendicular"``).
+    """
+
+    t: Array
+    R: Array
+    omega: Array
+    omega_dot: Array
+    r: Array
+    L: Array
+    Ld: Array
+    Ldd: Array
+    Ja: Array
+    Jb: Array
+    J: Array
+    det_Ja: Array
+    det_Jb: Array
+    cond_J: Array
+    d: Array
+    d_dot: Array
+    d_ddot: Array
+    e_lever: Array
+    R_lever: Array
+    omega_lever: Array
+    omega_lever_dot: Array
+    v_lever: Array
+    a_lever: Array
+    c_lever: Array
+    spin: Array
+
+
+def _unreachable(model: HipModel, t: Array, reach2: Array) -> None:
+    rows, legs = np.nonzero(~(reach2 > 0.0))
+    k = int(np.argmin(rows))
+    row, leg = int(rows[k]), int(legs[k])
+    horiz = np.sqrt(max(model.geometry.l**2 - float(reach2[row, leg]), 0.0))
+    raise UnreachablePoseError(
+        f"t = {t[row]:.6g} s (sample {row + 1}): leg {leg + 1} cannot reach its platform: the horizontal "
+        f"distance {horiz:.4f} m from the screw to the S joint is not less than the lever length "
+        f"{model.geometry.l:.4f} m"
+    )
+
+
+def platform_kinematics(
+    model: HipModel,
+    t: Array,
+    R: Array,
+    omega: Array,
+    omega_dot: Array,
+    singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD,
+    check_conditioning: bool = True,
+) -> HipKinematics:
+    """All body kinematics from the platform motion ``R (n,3,3), omega, omega_dot (n,3)``.
+
+    Solves, for each leg i and platform j, the loop closure of Eq. (1),
+    ``|o_j + R r_ai - (A_i + L_ji e_z)| = l``, on the branch with the slider below the S joint
+    (Eq. 2), then differentiates it twice (Eq. 3, 5). Lever angular velocity: the U joint's
+    first axis t_i is fixed in the slider and its second axis is perpendicular to t_i and to
+    the lever, so ``omega_l = omega_perp + s e`` with ``omega_perp = d x d_dot / l^2`` (the
+    paper's Eq. 4) and the spin ``s = (omega_perp . t)(t . e) / (1 - (t . e)^2)`` that keeps
+    ``omega_l`` in the plane of the two U axes.
+    """
+    g = model.geometry
+    n = t.shape[0]
+    l2 = g.l * g.l
+    r = np.matmul(R, g.r_a.T).transpose(0, 2, 1)  # (n, leg, xyz)
+    dx = r[..., 0] - g.A[:, 0]
+    dy = r[..., 1] - g.A[:, 1]
+    reach2 = l2 - dx * dx - dy * dy
+    if not np.all(reach2 > 0.0):
+        _unreachable(model, t, reach2)
+    dz = np.sqrt(reach2)
+    d = np.stack((dx, dy, dz), axis=-1)
+    L2 = g.h[1] + r[..., 2] - dz  # Eq. (2), lower platform
+    w = omega[:, None, :]
+    wd = omega_dot[:, None, :]
+    v_a = cross(w, r)
+    Ld = dot(d, v_a) / dz  # Eq. (3)
+    d_dot = v_a.copy()
+    d_dot[..., 2] -= Ld
+    a_a = cross(wd, r) + cross(w, v_a)
+    Ldd = (dot(d, a_a) + dot(d_dot, d_dot)) / dz  # Eq. (5)
+    d_ddot = a_a.copy()
+    d_ddot[..., 2] -= Ldd
+    e = d / g.l
+    Ja = e[..., 2]
+    Jb = cross(r, e)
+    J = Jb / Ja[..., None]
+    w_perp = cross(d, d_dot) / l2  # Eq. (4)
+    wd_perp = cross(d, d_ddot) / l2  # Eq. (6)
+    tt = g.t[None, :, :]
+    if g.lever_spin == "u_joint":
+        c = dot(tt, e)
+        one_c2 = 1.0 - c * c
+        if np.any(one_c2 < 1e-12):
+            row = int(np.flatnonzero((one_c2 < 1e-12).any(axis=1))[0])
+            raise SingularityError(f"t = {t[row]:.6g} s: a lever is aligned with its U joint's first axis")
+        wt = dot(w_perp, tt)
+        spin = wt * c / one_c2
+        e_dot = d_dot / g.l
+        c_dot = dot(tt, e_dot)
+        wt_dot = dot(wd_perp, tt)
+        spin_dot = (wt_dot * c + wt * c_dot) / one_c2 + 2.0 * wt * c * c * c_dot / (one_c2 * one_c2)
+        omega_l = w_perp + spin[..., None] * e
+        omega_l_dot = wd_perp + spin_dot[..., None] * e + spin[..., None] * e_dot
+    else:
+        spin = np.zeros((n, 3))
+        omega_l = w_perp
+        omega_l_dot = wd_perp
+    ez = np.array([0.0, 0.0, 1.0])
+    v_lever = 0.5 * d_dot + Ld[..., None] * ez
+    a_lever = 0.5 * d_ddot + Ldd[..., None] * ez
+    x_axis = cross(np.broadcast_to(tt, e.shape), e)
+    x_axis /= np.sqrt(dot(x_axis, x_axis))[..., None]
+    R_lever = np.stack((x_axis, cross(e, x_axis), e), axis=-1)
+    dh = g.h[0] - g.h[1]
+    L = np.stack((L2 + dh, L2), axis=1)
+    b2 = np.broadcast_to(g.A, (n, 3, 3)).copy()
+    b2[..., 2] = L2
+    c2 = b2 + 0.5 * d
+    c1 = c2.copy()
+    c1[..., 2] += dh
+    det_Ja = np.prod(Ja, axis=-1)
+    det_Jb = np.linalg.det(Jb)
+    cond_J = np.linalg.cond(J) if check_conditioning else np.full(n, np.nan)
+    if check_conditioning:
+        near = np.flatnonzero(~(1.0 / cond_J >= singularity_threshold))
+        if near.size:
+            k = int(near[np.argmax(cond_J[near])])
+            warnings.warn(
+                f"{near.size} sample(s) near a singularity (1/cond(J) < {singularity_threshold:g}); the "
+                f"worst at t = {t[k]:.6g} s (sample {k + 1}): cond(J) = {cond_J[k]:.3g}, "
+                f"det(J_a) = {det_Ja[k]:.3g}, det(J_b) = {det_Jb[k]:.3g} m^3",
+                SingularityWarning,
+                stacklevel=2,
+            )
+    Ld2 = np.stack((Ld, Ld), axis=1)
+    Ldd2 = np.stack((Ldd, Ldd), axis=1)
+    return HipKinematics(
+        t=t,
+        R=R,
+        omega=omega,
+        omega_dot=omega_dot,
+        r=r,
+        L=L,
+        Ld=Ld2,
+        Ldd=Ldd2,
+        Ja=Ja,
+        Jb=Jb,
+        J=J,
+        det_Ja=det_Ja,
+        det_Jb=det_Jb,
+        cond_J=cond_J,
+        d=d,
+        d_dot=d_dot,
+        d_ddot=d_ddot,
+        e_lever=e,
+        R_lever=R_lever,
+        omega_lever=omega_l,
+        omega_lever_dot=omega_l_dot,
+        v_lever=v_lever,
+        a_lever=a_lever,
+        c_lever=np.stack((c1, c2), axis=1),
+        spin=spin,
+    )
+
+
+def inverse_kinematics(
+    model: HipModel,
+    motion: OrientationMotion,
+    singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD,
+) -> HipKinematics:
+    """Inverse kinematics along a motion (Euler angles and rates -> every body's motion)."""
+    R, omega, omega_dot = euler_kinematics(model.geometry.euler_sequence, motion.angles, motion.rates, motion.accels)
+    return platform_kinematics(model, motion.t, R, omega, omega_dot, singularity_threshold)

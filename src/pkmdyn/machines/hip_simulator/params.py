@@ -1,0 +1,250 @@
+"""Parameters of the 2(3PUS+S) hip simulator: TOML description -> frozen :class:`HipModel`.
+
+The file format is the one of the model specification (``docs/hip_simulator.md``); the
+built-in default (``default.toml`` beside this module) holds the paper's Tables 1-2.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import Field, field_validator, model_validator
+
+from ...errors import ParameterError
+from ...params_util import Section, read_toml, validate
+from ...spatial import check_sequence
+
+__all__ = [
+    "HipGeometry",
+    "HipInertia",
+    "HipFriction",
+    "HipModel",
+    "load_params",
+    "model_from_dict",
+    "default_params_dict",
+    "DEFAULT_PARAMS_TEXT",
+]
+
+Array = NDArray[np.float64]
+Pos = Annotated[float, Field(gt=0.0)]
+NonNeg = Annotated[float, Field(ge=0.0)]
+
+
+def _vec(n: int, item: Any = float) -> Any:
+    return Annotated[list[item], Field(min_length=n, max_length=n)]
+
+
+class _Geometry(Section):
+    base_radius_m: Pos
+    platform_radius_m: Pos
+    lever_length_m: Pos
+    platform_heights_m: _vec(2, Pos)
+    screw_lead_m: Pos
+    module_angles_deg: _vec(3)
+    platform_joint_angles_deg: _vec(3)
+    euler_sequence: str = "XYZ"
+    lever_spin: Literal["u_joint", "perpendicular"] = "u_joint"
+
+    @model_validator(mode="after")
+    def _rules(self) -> "_Geometry":
+        h1, h2 = self.platform_heights_m
+        if not h1 > h2:
+            raise ValueError("platform_heights_m: platform 1 is the upper one, so h1 must exceed h2")
+        return self
+
+    @field_validator("euler_sequence")
+    @classmethod
+    def _sequence(cls, v: str) -> str:
+        try:
+            return check_sequence(v)
+        except ParameterError:
+            raise ValueError(
+                f"{v!r} is not a valid Euler sequence (three axes from XYZ for intrinsic or xyz for "
+                "extrinsic, no axis twice in a row)"
+            ) from None
+
+
+class _Inertia(Section):
+    slider_mass_kg: Pos
+    lever_mass_kg: Pos
+    lever_inertia_kgm2: _vec(3, Pos)
+    screw_inertia_kgm2: Pos
+    platform_mass_kg: NonNeg
+    platform_inertia_kgm2: _vec(3, Pos)
+    gravity_m_s2: NonNeg
+
+
+class _Friction(Section):
+    hip_radius_m: NonNeg
+    hip_coefficient: NonNeg
+    thrust_radius_m: NonNeg
+    thrust_coefficient: NonNeg
+    friction_velocity_eps_rad_s: Pos = 1e-3
+    friction_velocity_eps_m_s: Pos = 1e-4
+    slider_coulomb_N: NonNeg = 0.0
+    slider_viscous_Ns_m: NonNeg = 0.0
+    screw_coulomb_Nm: NonNeg = 0.0
+    screw_viscous_Nms_rad: NonNeg = 0.0
+    spherical_coulomb_Nm: NonNeg = 0.0
+    spherical_viscous_Nms_rad: NonNeg = 0.0
+    universal_coulomb_Nm: NonNeg = 0.0
+    universal_viscous_Nms_rad: NonNeg = 0.0
+
+
+class _HipFile(Section):
+    geometry: _Geometry
+    inertia: _Inertia
+    friction: _Friction
+
+
+@dataclass(frozen=True)
+class HipGeometry:
+    """Geometry in SI units and radians (spec, "Frames and geometry")."""
+
+    E: float  #: base radius [m]
+    e: float  #: platform radius [m]
+    l: float  #: lever length [m]
+    h: Array  #: (2,) platform heights h1, h2 [m]
+    p: float  #: screw lead [m]
+    phi: Array  #: (3,) module angles [rad]
+    psi: Array  #: (3,) platform joint angles [rad]
+    euler_sequence: str
+    lever_spin: str
+    A: Array = field(repr=False)  #: (3, 3) module screw points A_i, base frame [m], [module, xyz]
+    r_a: Array = field(repr=False)  #: (3, 3) S-joint centres o_j a_ji, platform frame [m], [module, xyz]
+    t: Array = field(repr=False)  #: (3, 3) U-joint first axes t_i, base frame, [module, xyz]
+    o: Array = field(repr=False)  #: (2, 3) platform centres o_j, base frame [m], [platform, xyz]
+
+
+@dataclass(frozen=True)
+class HipInertia:
+    """Masses [kg], principal inertias [kg m^2] and gravity [m/s^2] (Table 2)."""
+
+    m_L: float  #: slider mass
+    m_l: float  #: lever mass
+    I_l: Array  #: (3,) lever principal inertia (x = U second axis, z = b -> a)
+    I_L: float  #: lead-screw rotor inertia
+    m_m: float  #: platform mass
+    I_m: Array  #: (3,) platform principal inertia, platform frame
+    g: float  #: gravity, acting along -Z
+
+
+@dataclass(frozen=True)
+class HipFriction:
+    """Friction parameters (Eq. 16 and the spec's further joint friction)."""
+
+    r_h: float
+    mu_h: float
+    r_t: float
+    mu_t: float
+    eps_w: float  #: regularisation of angular velocities [rad/s]
+    eps_v: float  #: regularisation of sliding velocities [m/s]
+    slider_coulomb: float
+    slider_viscous: float
+    screw_coulomb: float
+    screw_viscous: float
+    spherical_coulomb: float
+    spherical_viscous: float
+    universal_coulomb: float
+    universal_viscous: float
+
+
+@dataclass(frozen=True)
+class HipModel:
+    """The whole machine: immutable, plain numbers and arrays."""
+
+    geometry: HipGeometry
+    inertia: HipInertia
+    friction: HipFriction
+
+
+def _build(d: _HipFile, source: str) -> HipModel:
+    g = d.geometry
+    phi = np.deg2rad(np.array(g.module_angles_deg))
+    psi = np.deg2rad(np.array(g.platform_joint_angles_deg))
+    A = g.base_radius_m * np.stack([np.cos(phi), np.sin(phi), np.zeros(3)], axis=-1)
+    r_a = g.platform_radius_m * np.stack([np.cos(psi), np.sin(psi), np.zeros(3)], axis=-1)
+    t = np.stack([-np.sin(phi), np.cos(phi), np.zeros(3)], axis=-1)
+    h = np.array(g.platform_heights_m, dtype=float)
+    o = np.stack([np.zeros(2), np.zeros(2), h], axis=-1)
+    reach = np.linalg.norm((r_a - A)[:, :2], axis=-1)
+    for i in range(3):
+        if reach[i] >= g.lever_length_m:
+            raise ParameterError(
+                f"{source}: [geometry] lever_length_m: {g.lever_length_m} m is too short for leg {i + 1} "
+                f"to reach its platform at the zero pose (horizontal distance {reach[i]:.4f} m)"
+            )
+    geom = HipGeometry(
+        E=g.base_radius_m,
+        e=g.platform_radius_m,
+        l=g.lever_length_m,
+        h=h,
+        p=g.screw_lead_m,
+        phi=phi,
+        psi=psi,
+        euler_sequence=g.euler_sequence,
+        lever_spin=g.lever_spin,
+        A=A,
+        r_a=r_a,
+        t=t,
+        o=o,
+    )
+    i = d.inertia
+    inertia = HipInertia(
+        m_L=i.slider_mass_kg,
+        m_l=i.lever_mass_kg,
+        I_l=np.array(i.lever_inertia_kgm2, dtype=float),
+        I_L=i.screw_inertia_kgm2,
+        m_m=i.platform_mass_kg,
+        I_m=np.array(i.platform_inertia_kgm2, dtype=float),
+        g=i.gravity_m_s2,
+    )
+    f = d.friction
+    friction = HipFriction(
+        r_h=f.hip_radius_m,
+        mu_h=f.hip_coefficient,
+        r_t=f.thrust_radius_m,
+        mu_t=f.thrust_coefficient,
+        eps_w=f.friction_velocity_eps_rad_s,
+        eps_v=f.friction_velocity_eps_m_s,
+        slider_coulomb=f.slider_coulomb_N,
+        slider_viscous=f.slider_viscous_Ns_m,
+        screw_coulomb=f.screw_coulomb_Nm,
+        screw_viscous=f.screw_viscous_Nms_rad,
+        spherical_coulomb=f.spherical_coulomb_Nm,
+        spherical_viscous=f.spherical_viscous_Nms_rad,
+        universal_coulomb=f.universal_coulomb_Nm,
+        universal_viscous=f.universal_viscous_Nms_rad,
+    )
+    return HipModel(geom, inertia, friction)
+
+
+def model_from_dict(data: dict[str, Any], source: str = "parameters") -> HipModel:
+    """Validate a description (the TOML structure as a dict) and build the model."""
+    return _build(validate(_HipFile, data, source), source)
+
+
+def load_params(path: str | Path | None = None) -> HipModel:
+    """Load a parameter file; ``None`` gives the built-in paper parameters."""
+    if path is None:
+        return model_from_dict(default_params_dict(), "built-in parameters")
+    return model_from_dict(read_toml(path), str(path))
+
+
+def _default_resource() -> Any:
+    return resources.files(__package__).joinpath("default.toml")
+
+
+DEFAULT_PARAMS_TEXT: str = _default_resource().read_text(encoding="utf-8")
+
+
+def default_params_dict() -> dict[str, Any]:
+    """A fresh copy of the built-in description, as a nested dict (safe to modify)."""
+    import tomllib
+
+    return tomllib.loads(DEFAULT_PARAMS_TEXT)

@@ -1,0 +1,132 @@
+"""A smooth periodic model of the ISO 14242-1 hip-simulator cycle (motion and load).
+
+ISO 14242-1 prescribes, for a 1 Hz walking cycle, flexion/extension between +25 and -18
+degrees, abduction/adduction between +7 and -4 degrees, internal/external rotation between
++2 and -10 degrees, and a double-peak axial load with 3000 N peaks and 300 N in the swing
+phase. The standard's tabulated curves are not public, so this module does not reproduce
+them: it builds a documented smooth model whose extremes, their phases and the load's key
+points are parameters (:class:`IsoCycle`). The defaults are chosen to resemble the published
+figure of the standard; they are *not* calibrated to any paper.
+
+Angles. Each angle moves between its maximum ``q_max`` at phase ``p_max`` and its minimum
+``q_min`` at phase ``p_min`` (fractions of the period ``T``) as
+
+    q(t) = m + a cos(pi phi(tau)),   m = (q_max + q_min)/2,  a = (q_max - q_min)/2,
+    tau = frac(t/T - p_max),  phi(tau) = 2 tau + A (1 - cos 2 pi tau) / (2 pi),
+    A = 2 pi (1 - 2 d) / (1 - cos 2 pi d),  d = frac(p_min - p_max),
+
+a cosine on a smoothly warped clock. ``phi(0) = 0`` (maximum), ``phi(d) = 1`` (minimum),
+``phi(1) = 2``, and ``phi' = 2 + A sin 2 pi tau > 0`` when ``|A| < 2`` (rise and fall
+durations between about 29 % and 71 % of the cycle), so the curve is infinitely smooth,
+periodic, and its first and second derivatives below are exact.
+
+Load. ``F(t) = F_swing + sum_k c_k exp(kappa (cos 2 pi (t/T - s_k) - 1))``, three periodic
+bumps centred on the first peak, the mid-stance valley and the second peak, whose amplitudes
+``c_k`` are solved so that ``F`` passes exactly through the three key values. With the
+default concentration the load is within a few newtons of ``F_swing`` over the swing phase.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import MotionError, ParameterError
+from .orientation import OrientationMotion, make_motion
+
+__all__ = ["AxisWave", "IsoCycle", "angle_wave", "iso_load", "iso14242_motion"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class AxisWave:
+    """Extremes of one Euler angle [deg] and their phases [fraction of the cycle]."""
+
+    max_deg: float
+    max_phase: float
+    min_deg: float
+    min_phase: float
+
+
+@dataclass(frozen=True)
+class IsoCycle:
+    """Key points of the cycle model; every default value is a documented choice."""
+
+    period_s: float = 1.0
+    fe: AxisWave = field(default_factory=lambda: AxisWave(25.0, 0.0, -18.0, 0.55))
+    aa: AxisWave = field(default_factory=lambda: AxisWave(7.0, 0.32, -4.0, 0.75))
+    ier: AxisWave = field(default_factory=lambda: AxisWave(2.0, 0.10, -10.0, 0.58))
+    swing_load_N: float = 300.0
+    peak_load_N: float = 3000.0
+    peak_phases: tuple[float, float] = (0.12, 0.50)
+    valley_load_N: float = 1500.0
+    valley_phase: float = 0.31
+    load_concentration: float = 25.0
+
+
+def _warp_coefficient(wave: AxisWave, name: str) -> float:
+    d = (wave.min_phase - wave.max_phase) % 1.0
+    if not wave.max_deg > wave.min_deg:
+        raise ParameterError(f"{name}: max_deg ({wave.max_deg}) must exceed min_deg ({wave.min_deg})")
+    denom = 1.0 - np.cos(2 * np.pi * d)
+    a = 2 * np.pi * (1 - 2 * d) / denom if denom > 0 else np.inf
+    if not abs(a) < 2.0:
+        raise ParameterError(
+            f"{name}: the minimum is {d:.2f} of a cycle after the maximum; the smooth model needs "
+            "between about 0.29 and 0.71"
+        )
+    return float(a)
+
+
+def angle_wave(t: Array, period: float, wave: AxisWave, name: str = "angle") -> tuple[Array, Array, Array]:
+    """Angle [rad], rate [rad/s] and acceleration [rad/s^2] of one axis at times ``t (n,)`` [s]."""
+    a_warp = _warp_coefficient(wave, name)
+    mid = np.deg2rad(0.5 * (wave.max_deg + wave.min_deg))
+    amp = np.deg2rad(0.5 * (wave.max_deg - wave.min_deg))
+    tau = np.mod(np.asarray(t, dtype=float) / period - wave.max_phase, 1.0)
+    two_pi_tau = 2 * np.pi * tau
+    phi = 2 * tau + a_warp * (1 - np.cos(two_pi_tau)) / (2 * np.pi)
+    dphi = 2 + a_warp * np.sin(two_pi_tau)
+    ddphi = 2 * np.pi * a_warp * np.cos(two_pi_tau)
+    s, c = np.sin(np.pi * phi), np.cos(np.pi * phi)
+    q = mid + amp * c
+    qd = -amp * np.pi * s * dphi / period
+    qdd = -amp * np.pi * (np.pi * c * dphi**2 + s * ddphi) / period**2
+    return q, qd, qdd
+
+
+def iso_load(t: Array, cycle: IsoCycle = IsoCycle()) -> Array:
+    """Hydraulic load [N] at times ``t (n,)`` [s]: double peak in stance, ``F_swing`` in swing."""
+    centres = np.array([cycle.peak_phases[0], cycle.valley_phase, cycle.peak_phases[1]])
+    targets = np.array([cycle.peak_load_N, cycle.valley_load_N, cycle.peak_load_N]) - cycle.swing_load_N
+    kappa = cycle.load_concentration
+
+    def bumps(phase: Array) -> Array:
+        return np.exp(kappa * (np.cos(2 * np.pi * (phase[:, None] - centres[None, :])) - 1.0))
+
+    coeffs = np.linalg.solve(bumps(centres), targets)
+    phase = np.asarray(t, dtype=float) / cycle.period_s
+    return cycle.swing_load_N + bumps(phase.reshape(-1)) @ coeffs
+
+
+def iso14242_motion(
+    cycles: float = 1.0, samples_per_cycle: int = 1000, cycle: IsoCycle = IsoCycle()
+) -> OrientationMotion:
+    """The cycle model sampled at ``samples_per_cycle`` points per period over ``cycles`` periods.
+
+    Angles are returned in the order (alpha FE, beta AA, gamma IER).
+    """
+    if not cycles > 0:
+        raise MotionError(f"cycles: must be > 0, got {cycles}")
+    if samples_per_cycle < 2:
+        raise MotionError(f"samples per cycle: must be >= 2, got {samples_per_cycle}")
+    n = int(round(cycles * samples_per_cycle)) + 1
+    t = np.linspace(0.0, cycles * cycle.period_s, n)
+    waves = [angle_wave(t, cycle.period_s, w, name) for w, name in ((cycle.fe, "fe"), (cycle.aa, "aa"), (cycle.ier, "ier"))]
+    q = np.stack([w[0] for w in waves], axis=-1)
+    qd = np.stack([w[1] for w in waves], axis=-1)
+    qdd = np.stack([w[2] for w in waves], axis=-1)
+    return make_motion(t, q, qd, qdd, iso_load(t, cycle))

@@ -1,0 +1,119 @@
+"""Orientation motions with a load: the hip simulator's motion, and its CSV file format.
+
+CSV columns (spec, "Motion file"): ``t_s, alpha_deg, beta_deg, gamma_deg``; optional
+Euler-angle rates ``alpha_dot_deg_s, beta_dot_deg_s, gamma_dot_deg_s`` and accelerations
+``alpha_ddot_deg_s2, beta_ddot_deg_s2, gamma_ddot_deg_s2`` (all three of a kind or none);
+optional ``load_N``. When the rates are absent they are derived from the samples by an
+interpolating quintic B-spline through the angles (``scipy.interpolate.make_interp_spline``,
+k = 5, not-a-knot ends), whose first and second derivatives are continuous; give the
+derivative columns whenever they are known exactly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.interpolate import make_interp_spline
+
+from ..errors import MotionError
+from ..io import read_csv_columns, write_csv
+
+__all__ = ["OrientationMotion", "make_motion", "read_motion_csv", "write_motion_csv", "MOTION_COLUMNS"]
+
+Array = NDArray[np.float64]
+
+_ANG = ("alpha_deg", "beta_deg", "gamma_deg")
+_RATE = ("alpha_dot_deg_s", "beta_dot_deg_s", "gamma_dot_deg_s")
+_ACC = ("alpha_ddot_deg_s2", "beta_ddot_deg_s2", "gamma_ddot_deg_s2")
+MOTION_COLUMNS = ("t_s", *_ANG, *_RATE, *_ACC, "load_N")
+
+
+@dataclass(frozen=True)
+class OrientationMotion:
+    """Euler angles of the platforms over time, with the hydraulic load.
+
+    ``t (n,)`` [s]; ``angles, rates, accels (n, 3)`` [rad, rad/s, rad/s^2] in the order of the
+    model's Euler sequence (alpha FE, beta AA, gamma IER); ``load (n,)`` [N], >= 0.
+    """
+
+    t: Array
+    angles: Array
+    rates: Array
+    accels: Array
+    load: Array
+
+    def __len__(self) -> int:
+        return int(self.t.shape[0])
+
+
+def make_motion(t: Array, angles: Array, rates: Array, accels: Array, load: Array | None = None) -> OrientationMotion:
+    """Check shapes and values and build a motion; errors name the row and the quantity."""
+    t = np.atleast_1d(np.asarray(t, dtype=float))
+    n = t.shape[0]
+    arrays = {}
+    for name, a in (("angles", angles), ("rates", rates), ("accels", accels)):
+        a = np.asarray(a, dtype=float).reshape(-1, 3) if np.size(a) else np.zeros((0, 3))
+        if a.shape != (n, 3):
+            raise MotionError(f"motion {name}: expected shape ({n}, 3), got {np.shape(a)}")
+        arrays[name] = a
+    ld = np.zeros(n) if load is None else np.atleast_1d(np.asarray(load, dtype=float))
+    if ld.shape != (n,):
+        raise MotionError(f"motion load: expected {n} values, got {ld.shape}")
+    for name, a in (("t", t), *arrays.items(), ("load", ld)):
+        bad = ~np.isfinite(a)
+        if bad.any():
+            row = int(np.flatnonzero(bad.reshape(n, -1).any(axis=1))[0])
+            raise MotionError(f"motion row {row + 1} (t = {t[row]:g} s): {name} is not finite")
+    neg = np.flatnonzero(ld < 0)
+    if neg.size:
+        r = int(neg[0])
+        raise MotionError(f"motion row {r + 1} (t = {t[r]:g} s): load {ld[r]:g} N is negative")
+    if n > 1 and np.any(np.diff(t) <= 0):
+        r = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
+        raise MotionError(f"motion row {r + 1}: time {t[r]:g} s does not increase")
+    return OrientationMotion(t, arrays["angles"], arrays["rates"], arrays["accels"], ld)
+
+
+def read_motion_csv(path: str | Path) -> OrientationMotion:
+    """Read the spec's motion CSV (degrees on file, radians inside)."""
+    cols = read_csv_columns(path, ("t_s", *_ANG), (*_RATE, *_ACC, "load_N"))
+    t = cols["t_s"]
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if bad.size:
+        raise MotionError(f"{path}: row {bad[0] + 2}: t_s = {t[bad[0] + 1]:g} does not increase")
+    angles = np.deg2rad(np.column_stack([cols[c] for c in _ANG]))
+    load = cols.get("load_N")
+    if load is not None:
+        neg = np.flatnonzero(load < 0)
+        if neg.size:
+            raise MotionError(f"{path}: row {neg[0] + 1}, column 'load_N': {load[neg[0]]:g} N is negative")
+    for group in (_RATE, _ACC):
+        present = [c for c in group if c in cols]
+        if present and len(present) != 3:
+            missing = [c for c in group if c not in cols]
+            raise MotionError(f"{path}: column {missing[0]!r} is missing; give all three of {', '.join(group)} or none")
+    if _RATE[0] in cols and _ACC[0] not in cols or _ACC[0] in cols and _RATE[0] not in cols:
+        raise MotionError(f"{path}: give both the rate and the acceleration columns, or neither")
+    if _RATE[0] in cols:
+        rates = np.deg2rad(np.column_stack([cols[c] for c in _RATE]))
+        accels = np.deg2rad(np.column_stack([cols[c] for c in _ACC]))
+    else:
+        if t.shape[0] < 6:
+            raise MotionError(f"{path}: at least 6 rows are needed to derive rates by a quintic spline fit")
+        spline = make_interp_spline(t, angles, k=5)
+        rates = spline.derivative(1)(t)
+        accels = spline.derivative(2)(t)
+    return make_motion(t, angles, rates, accels, load)
+
+
+def write_motion_csv(path: str | Path, motion: OrientationMotion) -> None:
+    """Write a motion with all derivative columns and the load (degrees on file)."""
+    cols = {"t_s": motion.t}
+    for names, arr in ((_ANG, motion.angles), (_RATE, motion.rates), (_ACC, motion.accels)):
+        for k, name in enumerate(names):
+            cols[name] = np.rad2deg(arr[:, k])
+    cols["load_N"] = motion.load
+    write_csv(path, cols)

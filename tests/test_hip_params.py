@@ -1,0 +1,78 @@
+"""Every parameter-validation rule gives a ParameterError naming the key."""
+
+import copy
+
+import numpy as np
+import pytest
+
+from pkmdyn.errors import ParameterError
+from pkmdyn.machines.hip_simulator.params import DEFAULT_PARAMS_TEXT, default_params_dict, load_params, model_from_dict
+
+
+def _with(change):
+    d = copy.deepcopy(default_params_dict())
+    change(d)
+    return d
+
+
+def test_defaults_are_the_papers_tables_in_si_units():
+    m = load_params()
+    g, i, f = m.geometry, m.inertia, m.friction
+    assert (g.l, g.e, g.E, g.p) == (0.328, 0.144, 0.265, 0.010)
+    np.testing.assert_allclose(g.h, [0.899, 0.490])
+    np.testing.assert_allclose(i.I_l, [26395.81e-6, 26339.29e-6, 480.07e-6])
+    np.testing.assert_allclose(i.I_m, [0.24803050, 0.24994025, 0.38650235])
+    assert i.I_L == pytest.approx(54.91e-6) and i.m_L == 3.0 and i.m_l == 1.43 and i.g == 9.8
+    assert (f.r_h, f.mu_h, f.r_t, f.mu_t) == (0.015, 0.095, 0.064, 0.025)
+    # frames of the spec: X perpendicular to A1A2, away from A3; y_j through a_j2
+    assert abs(g.A[0, 0] - g.A[1, 0]) < 1e-15 and g.A[2, 0] < 0 < g.A[0, 0]
+    np.testing.assert_allclose(g.r_a[1], [0, g.e, 0], atol=1e-15)
+
+
+def test_file_round_trip(tmp_path):
+    p = tmp_path / "p.toml"
+    p.write_text(DEFAULT_PARAMS_TEXT.replace("lever_length_m = 0.328", "lever_length_m = 0.35"))
+    assert load_params(p).geometry.l == 0.35
+
+
+CASES = [
+    (lambda d: d["geometry"].update(lever_length_m=-0.3), r"\[geometry\] lever_length_m: .*greater than 0"),
+    (lambda d: d["geometry"].update(base_radius_m=0.0), r"\[geometry\] base_radius_m: .*greater than 0"),
+    (lambda d: d["inertia"].update(slider_mass_kg=-3.0), r"\[inertia\] slider_mass_kg: .*greater than 0"),
+    (lambda d: d["inertia"].update(lever_inertia_kgm2=[1e-3, 0.0, 1e-3]), r"\[inertia\] lever_inertia_kgm2\.1: .*greater than 0"),
+    (lambda d: d["inertia"].update(screw_inertia_kgm2=0.0), r"\[inertia\] screw_inertia_kgm2"),
+    (lambda d: d["geometry"].update(module_angles_deg=[0.0, 120.0]), r"\[geometry\] module_angles_deg: .*at least 3"),
+    (lambda d: d["geometry"].update(platform_joint_angles_deg=[0.0, 1, 2, 3]), r"\[geometry\] platform_joint_angles_deg: .*at most 3"),
+    (lambda d: d["geometry"].update(platform_heights_m=[0.5]), r"\[geometry\] platform_heights_m"),
+    (lambda d: d["geometry"].update(lever_length_m="long"), r"\[geometry\] lever_length_m: .*valid number"),
+    (lambda d: d["geometry"].update(euler_sequence="XXZ"), r"\[geometry\] .*euler_sequence"),
+    (lambda d: d["geometry"].update(lever_spin="free"), r"\[geometry\] lever_spin"),
+    (lambda d: d["geometry"].update(colour="red"), r"\[geometry\] colour: unknown key"),
+    (lambda d: d.update(extra={}), r"key 'extra': unknown key"),
+    (lambda d: d["geometry"].pop("screw_lead_m"), r"\[geometry\] screw_lead_m: missing required key"),
+    (lambda d: d.pop("inertia"), r"\[inertia\]: missing required key"),
+    (lambda d: d["friction"].update(hip_coefficient=-0.1), r"\[friction\] hip_coefficient: .*greater than or equal to 0"),
+    (lambda d: d["geometry"].update(lever_length_m=0.12), r"\[geometry\] lever_length_m: .* too short for leg 1"),
+    (lambda d: d["geometry"].update(platform_heights_m=[0.4, 0.5]), r"h1 must exceed h2"),
+]
+
+
+@pytest.mark.parametrize("change, message", CASES)
+def test_rule_violations_name_the_key(change, message):
+    with pytest.raises(ParameterError, match=message):
+        model_from_dict(_with(change), "p.toml")
+
+
+def test_bad_toml_and_missing_file(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[geometry\nx = 1")
+    with pytest.raises(ParameterError, match="not valid TOML"):
+        load_params(bad)
+    with pytest.raises(ParameterError, match="cannot read"):
+        load_params(tmp_path / "missing.toml")
+
+
+def test_model_is_immutable():
+    m = load_params()
+    with pytest.raises(Exception):
+        m.geometry.l = 1.0  # type: ignore[misc]
