@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 
 from ...errors import MotionError, SingularityError
 from ...friction import coulomb_viscous, hip_bearing_friction
-from ...spatial import cross, dot
+from ...spatial import cross0, dot0
 from .kinematics import HipKinematics
 from .params import HipModel
 
@@ -66,30 +66,38 @@ class HipTorques:
     power: Array
 
 
+def _first(x: Array) -> Array:
+    """Documented component-last ``(..., 3)`` -> component-first ``(3, ...)`` (a view)."""
+    return np.moveaxis(x, -1, 0)
+
+
 def lever_generalised_force(kin: HipKinematics, t_axis: Array, k: Array, F: Array, T: Array) -> Array:
-    """``J_vl^T F + J_wl^T T`` for every lever: ``F, T (n, 3, 3)`` -> ``(n, 3, 3)`` [sample, leg, omega].
+    """``J_vl^T F + J_wl^T T`` for every lever, component-first: ``F, T (3, n, leg)`` -> ``(3, n, leg)``.
 
-    ``F`` [N] acts at the lever centre, ``T`` [N m] on the lever; ``t_axis (3, 3)`` holds the U
-    joints' first axes and ``k (n, 3)`` the spin gain c / (1 - c^2) (zero for perpendicular
-    levers). See the module docstring for the derivation.
+    ``F`` [N] acts at the lever centre, ``T`` [N m] on the lever; ``t_axis (3, 1, leg)`` holds
+    the U joints' first axes and ``k (n, leg)`` the spin gain c / (1 - c^2) (zero for
+    perpendicular levers). See the module docstring for the derivation.
     """
-    l2 = dot(kin.d, kin.d)
-    Tp = T + (k * dot(kin.e_lever, T))[..., None] * t_axis
-    X = 0.5 * F + cross(Tp, kin.d) / l2[..., None]
-    return kin.J * (F[..., 2] - X[..., 2])[..., None] + cross(kin.r, X)
+    d = _first(kin.d)
+    l2 = dot0(d, d)
+    Tp = T + k * dot0(_first(kin.e_lever), T) * t_axis
+    X = 0.5 * F + cross0(Tp, d) / l2
+    return _first(kin.J) * (F[2] - X[2]) + cross0(_first(kin.r), X)
 
 
-def _spin_gain(model: HipModel, kin: HipKinematics) -> Array:
+def _spin_gain(model: HipModel, kin: HipKinematics, t_axis: Array) -> Array:
     if model.geometry.lever_spin != "u_joint":
         return np.zeros(kin.e_lever.shape[:-1])
-    c = dot(model.geometry.t, kin.e_lever)
+    c = dot0(t_axis, _first(kin.e_lever))
     return c / (1.0 - c * c)
 
 
-def _world_inertia_times(R: Array, I_diag: Array, w: Array) -> Array:
-    """``(R diag(I) R^T) w`` for rotation ``R (..., 3, 3)`` and vectors ``w (..., 3)``."""
-    body = np.matmul(w[..., None, :], R)[..., 0, :]  # R^T w
-    return np.matmul(R, (I_diag * body)[..., None])[..., 0]
+def _inertia_times(cols: Array, I_diag: Array, w: Array) -> Array:
+    """``(R diag(I) R^T) w``, component-first: frame columns ``cols (col, row, ...)``, ``w (3, ...)``."""
+    out = np.zeros(np.broadcast_shapes(cols.shape[1:], w.shape))
+    for k in range(3):
+        out += cols[k] * (I_diag[k] * dot0(cols[k], w))
+    return out
 
 
 def _check_load(load: Array, t: Array) -> Array:
@@ -108,38 +116,42 @@ def inverse_dynamics(model: HipModel, kin: HipKinematics, load: Array) -> HipTor
     """Motor torques of the three linear modules, split into the parts of Eq. (14) plus friction.
 
     ``load (n,)`` [N] is the hydraulic force on each platform, along -Z through o_j.
+    Vectors are handled component-first internally (see :func:`platform_kinematics`).
     """
     load = _check_load(load, kin.t)
     g, m, f = model.geometry, model.inertia, model.friction
     n_platforms = g.h.shape[0]
     gear = g.p / (2.0 * np.pi)  # [m/rad]
-    ez = np.array([0.0, 0.0, 1.0])
+    t_axis = g.t.T[:, None, :]
 
-    # J^-T by cofactors: rows of J are j1, j2, j3; J^-T Q = (c . Q) / det with c_i the cofactor rows
-    j1, j2, j3 = kin.J[:, 0], kin.J[:, 1], kin.J[:, 2]
-    cof = np.stack((cross(j2, j3), cross(j3, j1), cross(j1, j2)), axis=1)
-    det = dot(j1, cof[:, 0])
-    singular = ~(np.abs(det) > 1e-12 * np.abs(kin.J).max(axis=(1, 2)) ** 3)
+    # J^-T by cofactors: rows of J are j1, j2, j3 (one per leg); J^-T Q = (c_i . Q) / det(J)
+    J = _first(kin.J)  # (3 omega, n, leg)
+    j1, j2, j3 = J[:, :, 0], J[:, :, 1], J[:, :, 2]
+    cof = np.stack((cross0(j2, j3), cross0(j3, j1), cross0(j1, j2)), axis=-1)  # (3, n, leg)
+    det = dot0(j1, cof[..., 0])
+    singular = ~(np.abs(det) > 1e-12 * np.abs(J).max(axis=(0, 2)) ** 3)
     if np.any(singular):
         row = int(np.flatnonzero(singular)[0])
         raise SingularityError(f"t = {kin.t[row]:.6g} s: J is singular (det(J_b) = 0), the motor torques are undefined")
+    scale = gear / det
 
     def to_motors(Q: Array) -> Array:
-        return gear * np.matmul(cof, Q[..., None])[..., 0] / det[:, None]
+        """(p / 2 pi) J^-T Q for generalised forces ``Q (3, n)`` -> motor torques ``(n, leg)``."""
+        return dot0(cof, Q[:, :, None]) * scale[:, None]
 
     # platform inertia, Eq. (7): required torque I_w omega_dot + omega x I_w omega
-    Iw_wd = _world_inertia_times(kin.R, m.I_m, kin.omega_dot)
-    Iw_w = _world_inertia_times(kin.R, m.I_m, kin.omega)
-    Q_platform = n_platforms * (Iw_wd + cross(kin.omega, Iw_w))
+    R_cols = np.moveaxis(kin.R, (2, 1), (0, 1))  # (col, row, n)
+    w, wd = _first(kin.omega), _first(kin.omega_dot)
+    Q_platform = n_platforms * (_inertia_times(R_cols, m.I_m, wd) + cross0(w, _inertia_times(R_cols, m.I_m, w)))
 
     # levers, Eq. (8): required force m_l (a_c + g e_z) and torque I_w w_l_dot + w_l x I_w w_l
-    t_axis = g.t
-    k = _spin_gain(model, kin)
-    F_lever = m.m_l * (kin.a_lever + m.g * ez)
-    T_lever = _world_inertia_times(kin.R_lever, m.I_l, kin.omega_lever_dot) + cross(
-        kin.omega_lever, _world_inertia_times(kin.R_lever, m.I_l, kin.omega_lever)
-    )
-    Q_lever = n_platforms * lever_generalised_force(kin, t_axis, k, F_lever, T_lever).sum(axis=1)
+    k = _spin_gain(model, kin, t_axis)
+    lever_cols = np.moveaxis(kin.R_lever, (3, 2), (0, 1))  # (col, row, n, leg)
+    wl, wld = _first(kin.omega_lever), _first(kin.omega_lever_dot)
+    F_lever = m.m_l * _first(kin.a_lever)
+    F_lever[2] += m.m_l * m.g
+    T_lever = _inertia_times(lever_cols, m.I_l, wld) + cross0(wl, _inertia_times(lever_cols, m.I_l, wl))
+    Q_lever = n_platforms * lever_generalised_force(kin, t_axis, k, F_lever, T_lever).sum(axis=2)
 
     # sliders, Eq. (9), and lead screws, Eq. (10)
     Ld = kin.Ld[:, -1]
@@ -149,20 +161,25 @@ def inverse_dynamics(model: HipModel, kin: HipKinematics, load: Array) -> HipTor
 
     # friction: hip joint + thrust bearing (Eq. 16), S and U joints, sliders, screws
     tau_mf = hip_bearing_friction(kin.omega, load, m.m_m * m.g, f.r_h, f.mu_h, f.r_t, f.mu_t, f.eps_w)
-    hip = to_motors(n_platforms * tau_mf)
-    Q_joints = np.zeros_like(Q_lever)
-    zero = np.zeros_like(kin.omega_lever)
+    hip = to_motors(n_platforms * _first(tau_mf))
+    friction = hip
+    Q_joints = None
+    zero = np.zeros_like(wl)
     if f.spherical_coulomb or f.spherical_viscous:
         w_rel = kin.omega_lever - kin.omega[:, None, :]
-        tau_s = coulomb_viscous(w_rel, f.spherical_coulomb, f.spherical_viscous, f.eps_w, vector=True)
-        Q_joints += (lever_generalised_force(kin, t_axis, k, zero, tau_s) - tau_s).sum(axis=1)
+        tau_s = _first(coulomb_viscous(w_rel, f.spherical_coulomb, f.spherical_viscous, f.eps_w, vector=True))
+        Q_joints = (lever_generalised_force(kin, t_axis, k, zero, tau_s) - tau_s).sum(axis=2)
     if f.universal_coulomb or f.universal_viscous:
-        tau_u = coulomb_viscous(kin.omega_lever, f.universal_coulomb, f.universal_viscous, f.eps_w, vector=True)
-        Q_joints += lever_generalised_force(kin, t_axis, k, zero, tau_u).sum(axis=1)
+        tau_u = _first(coulomb_viscous(kin.omega_lever, f.universal_coulomb, f.universal_viscous, f.eps_w, vector=True))
+        Q_u = lever_generalised_force(kin, t_axis, k, zero, tau_u).sum(axis=2)
+        Q_joints = Q_u if Q_joints is None else Q_joints + Q_u
+    if Q_joints is not None:
+        friction = friction + to_motors(n_platforms * Q_joints)
     theta_dot = Ld / gear
-    friction = hip + to_motors(n_platforms * Q_joints)
-    friction = friction + gear * n_platforms * coulomb_viscous(Ld, f.slider_coulomb, f.slider_viscous, f.eps_v, vector=False)
-    friction = friction + coulomb_viscous(theta_dot, f.screw_coulomb, f.screw_viscous, f.eps_w, vector=False)
+    if f.slider_coulomb or f.slider_viscous:
+        friction = friction + gear * n_platforms * coulomb_viscous(Ld, f.slider_coulomb, f.slider_viscous, f.eps_v, vector=False)
+    if f.screw_coulomb or f.screw_viscous:
+        friction = friction + coulomb_viscous(theta_dot, f.screw_coulomb, f.screw_viscous, f.eps_w, vector=False)
 
     platform = to_motors(Q_platform)
     lever = to_motors(Q_lever)
@@ -175,5 +192,5 @@ def inverse_dynamics(model: HipModel, kin: HipKinematics, load: Array) -> HipTor
         screw=tau_screw,
         friction=friction,
         hip_friction=hip,
-        power=dot(tau, theta_dot),
+        power=np.sum(tau * theta_dot, axis=1),
     )

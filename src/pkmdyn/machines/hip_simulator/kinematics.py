@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from ...errors import SingularityError, SingularityWarning, UnreachablePoseError
 from ...profiles.orientation import OrientationMotion
-from ...spatial import cross, dot, euler_kinematics
+from ...spatial import cross0, dot0, euler_kinematics
 from .params import HipModel
 
 __all__ = ["HipKinematics", "inverse_kinematics", "platform_kinematics", "DEFAULT_SINGULARITY_THRESHOLD"]
@@ -89,6 +89,11 @@ def _unreachable(model: HipModel, t: Array, reach2: Array) -> None:
     )
 
 
+def _last(x: Array) -> Array:
+    """Component-first ``(3, ...)`` -> the documented component-last ``(..., 3)`` (a view)."""
+    return np.moveaxis(x, 0, -1)
+
+
 def platform_kinematics(
     model: HipModel,
     t: Array,
@@ -102,76 +107,89 @@ def platform_kinematics(
 
     Solves, for each leg i and platform j, the loop closure of Eq. (1),
     ``|o_j + R r_ai - (A_i + L_ji e_z)| = l``, on the branch with the slider below the S joint
-    (Eq. 2), then differentiates it twice (Eq. 3, 5). Lever angular velocity: the U joint's
-    first axis t_i is fixed in the slider and its second axis is perpendicular to t_i and to
-    the lever, so ``omega_l = omega_perp + s e`` with ``omega_perp = d x d_dot / l^2`` (the
-    paper's Eq. 4) and the spin ``s = (omega_perp . t)(t . e) / (1 - (t . e)^2)`` that keeps
-    ``omega_l`` in the plane of the two U axes.
+    (Eq. 2), then differentiates it twice (Eq. 3, 5):
+
+        Ld = d . (omega x r) / d_z,   Ldd = (d . a_a + |d_dot|^2) / d_z,
+
+    with ``d = a - b`` the lever vector, ``a_a = omega_dot x r + omega x (omega x r)``. Lever
+    angular velocity: the U joint's first axis t_i is fixed in the slider and its second axis is
+    perpendicular to t_i and to the lever, so ``omega_l = omega_perp + s e`` with
+    ``omega_perp = d x d_dot / l^2`` (the paper's Eq. 4) and the spin
+    ``s = (omega_perp . t)(t . e) / (1 - (t . e)^2)`` that keeps ``omega_l`` in the plane of the
+    two U axes; ``omega_l_dot`` is its exact derivative (Eq. 6 plus the spin rate).
+
+    Internally every vector is held component-first, ``(3, n, leg)``, so that each component
+    is a contiguous block; the returned fields are views in the documented layout.
     """
     g = model.geometry
+    t = np.asarray(t, dtype=float)
     n = t.shape[0]
     l2 = g.l * g.l
-    r = np.matmul(R, g.r_a.T).transpose(0, 2, 1)  # (n, leg, xyz)
-    dx = r[..., 0] - g.A[:, 0]
-    dy = r[..., 1] - g.A[:, 1]
+    # r_ji = R r_ai, component-first (3, n, leg)
+    r = np.einsum("nxk,ik->xni", R, g.r_a, optimize=False)
+    dx = r[0] - g.A[:, 0]
+    dy = r[1] - g.A[:, 1]
     reach2 = l2 - dx * dx - dy * dy
     if not np.all(reach2 > 0.0):
         _unreachable(model, t, reach2)
     dz = np.sqrt(reach2)
-    d = np.stack((dx, dy, dz), axis=-1)
-    L2 = g.h[1] + r[..., 2] - dz  # Eq. (2), lower platform
-    w = omega[:, None, :]
-    wd = omega_dot[:, None, :]
-    v_a = cross(w, r)
-    Ld = dot(d, v_a) / dz  # Eq. (3)
-    d_dot = v_a.copy()
-    d_dot[..., 2] -= Ld
-    a_a = cross(wd, r) + cross(w, v_a)
-    Ldd = (dot(d, a_a) + dot(d_dot, d_dot)) / dz  # Eq. (5)
-    d_ddot = a_a.copy()
-    d_ddot[..., 2] -= Ldd
+    d = np.stack((dx, dy, dz))
+    L2 = g.h[1] + r[2] - dz  # Eq. (2), lower platform
+    w = np.ascontiguousarray(omega.T)[:, :, None]
+    wd = np.ascontiguousarray(omega_dot.T)[:, :, None]
+    v_a = cross0(w, r)
+    Ld = dot0(d, v_a) / dz  # Eq. (3)
+    d_dot = v_a
+    d_dot[2] -= Ld
+    a_a = cross0(wd, r)
+    a_a += cross0(w, cross0(w, r))
+    Ldd = (dot0(d, a_a) + dot0(d_dot, d_dot)) / dz  # Eq. (5)
+    d_ddot = a_a
+    d_ddot[2] -= Ldd
     e = d / g.l
-    Ja = e[..., 2]
-    Jb = cross(r, e)
-    J = Jb / Ja[..., None]
-    w_perp = cross(d, d_dot) / l2  # Eq. (4)
-    wd_perp = cross(d, d_ddot) / l2  # Eq. (6)
-    tt = g.t[None, :, :]
+    Ja = e[2]
+    Jb = cross0(r, e)
+    J = Jb / Ja
+    w_perp = cross0(d, d_dot) / l2  # Eq. (4)
+    wd_perp = cross0(d, d_ddot) / l2  # Eq. (6)
+    tt = g.t.T[:, None, :]  # (3, 1, leg)
     if g.lever_spin == "u_joint":
-        c = dot(tt, e)
+        c = dot0(tt, e)
         one_c2 = 1.0 - c * c
         if np.any(one_c2 < 1e-12):
             row = int(np.flatnonzero((one_c2 < 1e-12).any(axis=1))[0])
             raise SingularityError(f"t = {t[row]:.6g} s: a lever is aligned with its U joint's first axis")
-        wt = dot(w_perp, tt)
+        wt = dot0(w_perp, tt)
         spin = wt * c / one_c2
         e_dot = d_dot / g.l
-        c_dot = dot(tt, e_dot)
-        wt_dot = dot(wd_perp, tt)
+        c_dot = dot0(tt, e_dot)
+        wt_dot = dot0(wd_perp, tt)
         spin_dot = (wt_dot * c + wt * c_dot) / one_c2 + 2.0 * wt * c * c * c_dot / (one_c2 * one_c2)
-        omega_l = w_perp + spin[..., None] * e
-        omega_l_dot = wd_perp + spin_dot[..., None] * e + spin[..., None] * e_dot
+        omega_l = w_perp + spin * e
+        omega_l_dot = wd_perp + spin_dot * e + spin * e_dot
     else:
         spin = np.zeros((n, 3))
         omega_l = w_perp
         omega_l_dot = wd_perp
-    ez = np.array([0.0, 0.0, 1.0])
-    v_lever = 0.5 * d_dot + Ld[..., None] * ez
-    a_lever = 0.5 * d_ddot + Ldd[..., None] * ez
-    x_axis = cross(np.broadcast_to(tt, e.shape), e)
-    x_axis /= np.sqrt(dot(x_axis, x_axis))[..., None]
-    R_lever = np.stack((x_axis, cross(e, x_axis), e), axis=-1)
+    v_lever = 0.5 * d_dot
+    v_lever[2] += Ld
+    a_lever = 0.5 * d_ddot
+    a_lever[2] += Ldd
+    x_axis = cross0(tt, e)
+    x_axis /= np.sqrt(dot0(x_axis, x_axis))
+    frame = np.stack((x_axis, cross0(e, x_axis), e))  # (column, row, n, leg)
     dh = g.h[0] - g.h[1]
-    L = np.stack((L2 + dh, L2), axis=1)
-    b2 = np.broadcast_to(g.A, (n, 3, 3)).copy()
-    b2[..., 2] = L2
-    c2 = b2 + 0.5 * d
+    c2 = np.empty((3, n, 3))
+    c2[0] = g.A[:, 0] + 0.5 * dx
+    c2[1] = g.A[:, 1] + 0.5 * dy
+    c2[2] = L2 + 0.5 * dz
     c1 = c2.copy()
-    c1[..., 2] += dh
-    det_Ja = np.prod(Ja, axis=-1)
-    det_Jb = np.linalg.det(Jb)
-    cond_J = np.linalg.cond(J) if check_conditioning else np.full(n, np.nan)
+    c1[2] += dh
+    det_Ja = Ja[:, 0] * Ja[:, 1] * Ja[:, 2]
+    det_Jb = dot0(Jb[:, :, 0], cross0(Jb[:, :, 1], Jb[:, :, 2]))
+    J_n = _last(J)  # (n, leg, 3): row i of J is leg i
     if check_conditioning:
+        cond_J = np.linalg.cond(J_n)
         near = np.flatnonzero(~(1.0 / cond_J >= singularity_threshold))
         if near.size:
             k = int(near[np.argmax(cond_J[near])])
@@ -182,33 +200,33 @@ def platform_kinematics(
                 SingularityWarning,
                 stacklevel=2,
             )
-    Ld2 = np.stack((Ld, Ld), axis=1)
-    Ldd2 = np.stack((Ldd, Ldd), axis=1)
+    else:
+        cond_J = np.full(n, np.nan)
     return HipKinematics(
         t=t,
         R=R,
         omega=omega,
         omega_dot=omega_dot,
-        r=r,
-        L=L,
-        Ld=Ld2,
-        Ldd=Ldd2,
+        r=_last(r),
+        L=np.stack((L2 + dh, L2), axis=1),
+        Ld=np.stack((Ld, Ld), axis=1),
+        Ldd=np.stack((Ldd, Ldd), axis=1),
         Ja=Ja,
-        Jb=Jb,
-        J=J,
+        Jb=_last(Jb),
+        J=J_n,
         det_Ja=det_Ja,
         det_Jb=det_Jb,
         cond_J=cond_J,
-        d=d,
-        d_dot=d_dot,
-        d_ddot=d_ddot,
-        e_lever=e,
-        R_lever=R_lever,
-        omega_lever=omega_l,
-        omega_lever_dot=omega_l_dot,
-        v_lever=v_lever,
-        a_lever=a_lever,
-        c_lever=np.stack((c1, c2), axis=1),
+        d=_last(d),
+        d_dot=_last(d_dot),
+        d_ddot=_last(d_ddot),
+        e_lever=_last(e),
+        R_lever=frame.transpose(2, 3, 1, 0),
+        omega_lever=_last(omega_l),
+        omega_lever_dot=_last(omega_l_dot),
+        v_lever=_last(v_lever),
+        a_lever=_last(a_lever),
+        c_lever=np.stack((_last(c1), _last(c2)), axis=1),
         spin=spin,
     )
 

@@ -24,11 +24,26 @@ from .dynamics import PARTS, HipTorques, inverse_dynamics
 from .kinematics import DEFAULT_SINGULARITY_THRESHOLD, platform_kinematics
 from .params import HipModel, load_params
 
-__all__ = ["HipResults", "simulate", "results_columns", "summary", "run_hip", "DEFAULT_CHUNK"]
+__all__ = ["HipResults", "torques_batched", "simulate", "results_columns", "summary", "run_hip", "DEFAULT_CHUNK"]
 
 Array = NDArray[np.float64]
 
-DEFAULT_CHUNK = 20_000
+DEFAULT_CHUNK = 4096  # samples per block: keeps the working set of a block in cache
+
+
+def torques_batched(
+    model: HipModel, t: Array, R: Array, omega: Array, omega_dot: Array, load: Array, chunk: int = DEFAULT_CHUNK
+) -> Array:
+    """Motor torques ``(n, 3)`` [N m] from the platform motion, in blocks of ``chunk`` samples.
+
+    The lean path for controllers and sweeps: no conditioning check, only the total torque.
+    """
+    out = np.empty((t.shape[0], 3))
+    for s in range(0, t.shape[0], chunk):
+        sl = slice(s, s + chunk)
+        kin = platform_kinematics(model, t[sl], R[sl], omega[sl], omega_dot[sl], check_conditioning=False)
+        out[sl] = inverse_dynamics(model, kin, load[sl]).tau
+    return out
 
 
 @dataclass(frozen=True)
@@ -48,7 +63,7 @@ class HipResults:
 def simulate(
     model: HipModel,
     motion: OrientationMotion,
-    chunk: int = DEFAULT_CHUNK,
+    chunk: int = 20_000,
     progress: bool = False,
     singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD,
 ) -> HipResults:
