@@ -60,7 +60,8 @@ def main() -> None:
         key = part.split()[0]
         value = tq.tau if key == "total" else getattr(tq, key)
         print(_row(part, 1e3 * np.abs(value).max(axis=0), paper))
-    print(_row("friction (not split out in the paper)", 1e3 * np.abs(tq.friction).max(axis=0), (np.nan,) * 3).replace("nan", "-"))
+    fr = 1e3 * np.abs(tq.friction).max(axis=0)
+    print("| friction (not split out in the paper) | " + " | ".join(f"{v:.2f} / -" for v in fr) + " |")
     print(_row("platform + friction", 1e3 * np.abs(tq.platform + tq.friction).max(axis=0), PAPER_TORQUES["platform"]))
 
     # the paper's perpendicular-lever assumption against the U-joint default
@@ -74,7 +75,8 @@ def main() -> None:
           f"(max |omega_lever| {np.abs(kin.omega_lever).max():.4f} rad/s)")
     for part in ("lever", "tau"):
         diff = np.abs(getattr(tq_p, part) - getattr(tq, part)).max()
-        print(f"- max |difference| in tau_{part}: {1e3 * diff:.4f} N mm "
+        label = "the total torque" if part == "tau" else f"tau_{part}"
+        print(f"- max |difference| in {label}: {1e3 * diff:.4f} N mm "
               f"({100 * diff / np.abs(getattr(tq, part)).max():.3f} % of its max)")
     # the platform mass only enters the thrust-bearing friction
     d = copy.deepcopy(default_params_dict())
