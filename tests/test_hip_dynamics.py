@@ -153,3 +153,25 @@ def test_nan_in_motion_names_the_row():
     q[2, 1] = np.nan
     with pytest.raises(MotionError, match=r"row 3 .*angles"):
         make_motion(t, q, np.zeros((5, 3)), np.zeros((5, 3)))
+
+
+def test_perpendicular_lever_option_is_close_to_the_u_joint_model():
+    """The paper's Eq. 4 assumption drops only the small lever spin (regression: any batch size)."""
+    import copy
+
+    from pkmdyn.machines.hip_simulator.params import default_params_dict, model_from_dict
+    from pkmdyn.profiles.iso14242 import iso14242_motion
+
+    d = copy.deepcopy(default_params_dict())
+    d["geometry"]["lever_spin"] = "perpendicular"
+    perp, ujoint = model_from_dict(d), load_params()
+    motion = iso14242_motion(1, 250)
+    k_p, k_u = inverse_kinematics(perp, motion), inverse_kinematics(ujoint, motion)
+    tq_p = inverse_dynamics(perp, k_p, motion.load)
+    tq_u = inverse_dynamics(ujoint, k_u, motion.load)
+    assert np.all(np.isfinite(tq_p.tau))
+    np.testing.assert_allclose(k_p.spin, 0.0)
+    assert np.abs(k_u.spin).max() > 1e-3
+    diff = np.abs(tq_p.lever - tq_u.lever).max()
+    assert 0 < diff < 1e-2 * np.abs(tq_u.lever).max()
+    np.testing.assert_array_equal(tq_p.platform, tq_u.platform)

@@ -67,15 +67,15 @@ class HipTorques:
 
 
 def _first(x: Array) -> Array:
-    """Documented component-last ``(..., 3)`` -> component-first ``(3, ...)`` (a view)."""
-    return np.moveaxis(x, -1, 0)
+    """Documented ``(n, leg, 3)`` or ``(n, 3)`` -> internal ``(3, leg, n)`` or ``(3, n)`` (a view)."""
+    return x.T
 
 
 def lever_generalised_force(kin: HipKinematics, t_axis: Array, k: Array, F: Array, T: Array) -> Array:
-    """``J_vl^T F + J_wl^T T`` for every lever, component-first: ``F, T (3, n, leg)`` -> ``(3, n, leg)``.
+    """``J_vl^T F + J_wl^T T`` for every lever, internal layout: ``F, T (3, leg, n)`` -> ``(3, leg, n)``.
 
-    ``F`` [N] acts at the lever centre, ``T`` [N m] on the lever; ``t_axis (3, 1, leg)`` holds
-    the U joints' first axes and ``k (n, leg)`` the spin gain c / (1 - c^2) (zero for
+    ``F`` [N] acts at the lever centre, ``T`` [N m] on the lever; ``t_axis (3, leg, 1)`` holds
+    the U joints' first axes and ``k (leg, n)`` the spin gain c / (1 - c^2) (zero for
     perpendicular levers). See the module docstring for the derivation.
     """
     d = _first(kin.d)
@@ -86,9 +86,10 @@ def lever_generalised_force(kin: HipKinematics, t_axis: Array, k: Array, F: Arra
 
 
 def _spin_gain(model: HipModel, kin: HipKinematics, t_axis: Array) -> Array:
-    if model.geometry.lever_spin != "u_joint":
-        return np.zeros(kin.e_lever.shape[:-1])
+    """k = c / (1 - c^2), c = t . e, per lever ``(leg, n)``; zero for perpendicular levers."""
     c = dot0(t_axis, _first(kin.e_lever))
+    if model.geometry.lever_spin != "u_joint":
+        return np.zeros_like(c)
     return c / (1.0 - c * c)
 
 
@@ -122,14 +123,14 @@ def inverse_dynamics(model: HipModel, kin: HipKinematics, load: Array) -> HipTor
     g, m, f = model.geometry, model.inertia, model.friction
     n_platforms = g.h.shape[0]
     gear = g.p / (2.0 * np.pi)  # [m/rad]
-    t_axis = g.t.T[:, None, :]
+    t_axis = g.t.T[:, :, None]
 
     # J^-T by cofactors: rows of J are j1, j2, j3 (one per leg); J^-T Q = (c_i . Q) / det(J)
-    J = _first(kin.J)  # (3 omega, n, leg)
-    j1, j2, j3 = J[:, :, 0], J[:, :, 1], J[:, :, 2]
-    cof = np.stack((cross0(j2, j3), cross0(j3, j1), cross0(j1, j2)), axis=-1)  # (3, n, leg)
-    det = dot0(j1, cof[..., 0])
-    singular = ~(np.abs(det) > 1e-12 * np.abs(J).max(axis=(0, 2)) ** 3)
+    J = _first(kin.J)  # (3 omega, leg, n)
+    j1, j2, j3 = J[:, 0], J[:, 1], J[:, 2]
+    cof = np.stack((cross0(j2, j3), cross0(j3, j1), cross0(j1, j2)), axis=1)  # (3, leg, n)
+    det = dot0(j1, cof[:, 0])
+    singular = ~(np.abs(det) > 1e-12 * np.abs(J).max(axis=(0, 1)) ** 3)
     if np.any(singular):
         row = int(np.flatnonzero(singular)[0])
         raise SingularityError(f"t = {kin.t[row]:.6g} s: J is singular (det(J_b) = 0), the motor torques are undefined")
@@ -137,21 +138,21 @@ def inverse_dynamics(model: HipModel, kin: HipKinematics, load: Array) -> HipTor
 
     def to_motors(Q: Array) -> Array:
         """(p / 2 pi) J^-T Q for generalised forces ``Q (3, n)`` -> motor torques ``(n, leg)``."""
-        return dot0(cof, Q[:, :, None]) * scale[:, None]
+        return (dot0(cof, Q[:, None, :]) * scale).T
 
     # platform inertia, Eq. (7): required torque I_w omega_dot + omega x I_w omega
-    R_cols = np.moveaxis(kin.R, (2, 1), (0, 1))  # (col, row, n)
+    R_cols = kin.R.transpose(2, 1, 0)  # (col, row, n)
     w, wd = _first(kin.omega), _first(kin.omega_dot)
     Q_platform = n_platforms * (_inertia_times(R_cols, m.I_m, wd) + cross0(w, _inertia_times(R_cols, m.I_m, w)))
 
     # levers, Eq. (8): required force m_l (a_c + g e_z) and torque I_w w_l_dot + w_l x I_w w_l
     k = _spin_gain(model, kin, t_axis)
-    lever_cols = np.moveaxis(kin.R_lever, (3, 2), (0, 1))  # (col, row, n, leg)
+    lever_cols = kin.R_lever.transpose(3, 2, 1, 0)  # (col, row, leg, n)
     wl, wld = _first(kin.omega_lever), _first(kin.omega_lever_dot)
     F_lever = m.m_l * _first(kin.a_lever)
     F_lever[2] += m.m_l * m.g
     T_lever = _inertia_times(lever_cols, m.I_l, wld) + cross0(wl, _inertia_times(lever_cols, m.I_l, wl))
-    Q_lever = n_platforms * lever_generalised_force(kin, t_axis, k, F_lever, T_lever).sum(axis=2)
+    Q_lever = n_platforms * lever_generalised_force(kin, t_axis, k, F_lever, T_lever).sum(axis=1)
 
     # sliders, Eq. (9), and lead screws, Eq. (10)
     Ld = kin.Ld[:, -1]
@@ -168,10 +169,10 @@ def inverse_dynamics(model: HipModel, kin: HipKinematics, load: Array) -> HipTor
     if f.spherical_coulomb or f.spherical_viscous:
         w_rel = kin.omega_lever - kin.omega[:, None, :]
         tau_s = _first(coulomb_viscous(w_rel, f.spherical_coulomb, f.spherical_viscous, f.eps_w, vector=True))
-        Q_joints = (lever_generalised_force(kin, t_axis, k, zero, tau_s) - tau_s).sum(axis=2)
+        Q_joints = (lever_generalised_force(kin, t_axis, k, zero, tau_s) - tau_s).sum(axis=1)
     if f.universal_coulomb or f.universal_viscous:
         tau_u = _first(coulomb_viscous(kin.omega_lever, f.universal_coulomb, f.universal_viscous, f.eps_w, vector=True))
-        Q_u = lever_generalised_force(kin, t_axis, k, zero, tau_u).sum(axis=2)
+        Q_u = lever_generalised_force(kin, t_axis, k, zero, tau_u).sum(axis=1)
         Q_joints = Q_u if Q_joints is None else Q_joints + Q_u
     if Q_joints is not None:
         friction = friction + to_motors(n_platforms * Q_joints)

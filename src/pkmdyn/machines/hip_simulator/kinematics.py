@@ -90,8 +90,8 @@ def _unreachable(model: HipModel, t: Array, reach2: Array) -> None:
 
 
 def _last(x: Array) -> Array:
-    """Component-first ``(3, ...)`` -> the documented component-last ``(..., 3)`` (a view)."""
-    return np.moveaxis(x, 0, -1)
+    """Internal ``(3, leg, n)`` -> the documented ``(n, leg, 3)`` (a view, no copy)."""
+    return x.transpose(2, 1, 0)
 
 
 def platform_kinematics(
@@ -118,25 +118,26 @@ def platform_kinematics(
     ``s = (omega_perp . t)(t . e) / (1 - (t . e)^2)`` that keeps ``omega_l`` in the plane of the
     two U axes; ``omega_l_dot`` is its exact derivative (Eq. 6 plus the spin rate).
 
-    Internally every vector is held component-first, ``(3, n, leg)``, so that each component
-    is a contiguous block; the returned fields are views in the documented layout.
+    Internally every vector is held component-first with the sample axis innermost,
+    ``(3, leg, n)``, so that each component of each leg is a contiguous run of samples; the
+    returned fields are views in the documented layout.
     """
     g = model.geometry
     t = np.asarray(t, dtype=float)
     n = t.shape[0]
     l2 = g.l * g.l
-    # r_ji = R r_ai, component-first (3, n, leg)
-    r = np.einsum("nxk,ik->xni", R, g.r_a, optimize=False)
-    dx = r[0] - g.A[:, 0]
-    dy = r[1] - g.A[:, 1]
+    # r_ji = R r_ai, internal layout (3, leg, n)
+    r = np.einsum("nxk,ik->xin", R, g.r_a, optimize=False)
+    dx = r[0] - g.A[:, 0, None]
+    dy = r[1] - g.A[:, 1, None]
     reach2 = l2 - dx * dx - dy * dy
     if not np.all(reach2 > 0.0):
-        _unreachable(model, t, reach2)
+        _unreachable(model, t, reach2.T)
     dz = np.sqrt(reach2)
     d = np.stack((dx, dy, dz))
     L2 = g.h[1] + r[2] - dz  # Eq. (2), lower platform
-    w = np.ascontiguousarray(omega.T)[:, :, None]
-    wd = np.ascontiguousarray(omega_dot.T)[:, :, None]
+    w = np.ascontiguousarray(omega.T)[:, None, :]
+    wd = np.ascontiguousarray(omega_dot.T)[:, None, :]
     v_a = cross0(w, r)
     Ld = dot0(d, v_a) / dz  # Eq. (3)
     d_dot = v_a
@@ -152,12 +153,12 @@ def platform_kinematics(
     J = Jb / Ja
     w_perp = cross0(d, d_dot) / l2  # Eq. (4)
     wd_perp = cross0(d, d_ddot) / l2  # Eq. (6)
-    tt = g.t.T[:, None, :]  # (3, 1, leg)
+    tt = g.t.T[:, :, None]  # (3, leg, 1)
     if g.lever_spin == "u_joint":
         c = dot0(tt, e)
         one_c2 = 1.0 - c * c
         if np.any(one_c2 < 1e-12):
-            row = int(np.flatnonzero((one_c2 < 1e-12).any(axis=1))[0])
+            row = int(np.flatnonzero((one_c2 < 1e-12).any(axis=0))[0])
             raise SingularityError(f"t = {t[row]:.6g} s: a lever is aligned with its U joint's first axis")
         wt = dot0(w_perp, tt)
         spin = wt * c / one_c2
@@ -168,7 +169,7 @@ def platform_kinematics(
         omega_l = w_perp + spin * e
         omega_l_dot = wd_perp + spin_dot * e + spin * e_dot
     else:
-        spin = np.zeros((n, 3))
+        spin = np.zeros((3, n))
         omega_l = w_perp
         omega_l_dot = wd_perp
     v_lever = 0.5 * d_dot
@@ -177,16 +178,16 @@ def platform_kinematics(
     a_lever[2] += Ldd
     x_axis = cross0(tt, e)
     x_axis /= np.sqrt(dot0(x_axis, x_axis))
-    frame = np.stack((x_axis, cross0(e, x_axis), e))  # (column, row, n, leg)
+    frame = np.stack((x_axis, cross0(e, x_axis), e))  # (column, row, leg, n)
     dh = g.h[0] - g.h[1]
-    c2 = np.empty((3, n, 3))
-    c2[0] = g.A[:, 0] + 0.5 * dx
-    c2[1] = g.A[:, 1] + 0.5 * dy
+    c2 = np.empty((3, 3, n))
+    c2[0] = g.A[:, 0, None] + 0.5 * dx
+    c2[1] = g.A[:, 1, None] + 0.5 * dy
     c2[2] = L2 + 0.5 * dz
     c1 = c2.copy()
     c1[2] += dh
-    det_Ja = Ja[:, 0] * Ja[:, 1] * Ja[:, 2]
-    det_Jb = dot0(Jb[:, :, 0], cross0(Jb[:, :, 1], Jb[:, :, 2]))
+    det_Ja = Ja[0] * Ja[1] * Ja[2]
+    det_Jb = dot0(Jb[:, 0], cross0(Jb[:, 1], Jb[:, 2]))
     J_n = _last(J)  # (n, leg, 3): row i of J is leg i
     if check_conditioning:
         cond_J = np.linalg.cond(J_n)
@@ -208,10 +209,10 @@ def platform_kinematics(
         omega=omega,
         omega_dot=omega_dot,
         r=_last(r),
-        L=np.stack((L2 + dh, L2), axis=1),
-        Ld=np.stack((Ld, Ld), axis=1),
-        Ldd=np.stack((Ldd, Ldd), axis=1),
-        Ja=Ja,
+        L=np.stack((L2 + dh, L2)).transpose(2, 0, 1),
+        Ld=np.stack((Ld, Ld)).transpose(2, 0, 1),
+        Ldd=np.stack((Ldd, Ldd)).transpose(2, 0, 1),
+        Ja=Ja.T,
         Jb=_last(Jb),
         J=J_n,
         det_Ja=det_Ja,
@@ -221,13 +222,13 @@ def platform_kinematics(
         d_dot=_last(d_dot),
         d_ddot=_last(d_ddot),
         e_lever=_last(e),
-        R_lever=frame.transpose(2, 3, 1, 0),
+        R_lever=frame.transpose(3, 2, 1, 0),
         omega_lever=_last(omega_l),
         omega_lever_dot=_last(omega_l_dot),
         v_lever=_last(v_lever),
         a_lever=_last(a_lever),
-        c_lever=np.stack((_last(c1), _last(c2)), axis=1),
-        spin=spin,
+        c_lever=np.stack((c1, c2)).transpose(3, 0, 2, 1),
+        spin=spin.T,
     )
 
 
