@@ -49,9 +49,15 @@ def test_load_key_points():
     for ph in cyc.peak_phases:
         assert iso_load(np.array([ph]), cyc)[0] == pytest.approx(3000.0, rel=1e-12)
     assert iso_load(np.array([cyc.valley_phase]), cyc)[0] == pytest.approx(cyc.valley_load_N, rel=1e-12)
-    swing = (t > 0.65) & (t < 0.97)
-    assert np.all(np.abs(F[swing] - 300.0) < 10.0)
-    assert F.min() > 290 and F.max() < 3100
+    swing = t >= cyc.stance_end_phase
+    np.testing.assert_allclose(F[swing], 300.0, rtol=1e-12)
+    assert F.min() >= 300.0 - 1e-9 and F.max() <= 3000.0 + 1e-9
+    # monotone between the key points: rise, fall to the valley, rise, fall to swing
+    for a, b, sign in ((0.0, 0.12, 1), (0.12, 0.31, -1), (0.31, 0.50, 1), (0.50, 0.62, -1)):
+        seg = F[(t >= a) & (t <= b)]
+        assert np.all(sign * np.diff(seg) >= -1e-9)
+    with pytest.raises(ParameterError, match="load phases"):
+        iso_load(t, IsoCycle(valley_phase=0.6))
 
 
 def test_default_cycle_ranges_and_csv_round_trip(tmp_path):

@@ -20,10 +20,12 @@ a cosine on a smoothly warped clock. ``phi(0) = 0`` (maximum), ``phi(d) = 1`` (m
 durations between about 29 % and 71 % of the cycle), so the curve is infinitely smooth,
 periodic, and its first and second derivatives below are exact.
 
-Load. ``F(t) = F_swing + sum_k c_k exp(kappa (cos 2 pi (t/T - s_k) - 1))``, three periodic
-bumps centred on the first peak, the mid-stance valley and the second peak, whose amplitudes
-``c_k`` are solved so that ``F`` passes exactly through the three key values. With the
-default concentration the load is within a few newtons of ``F_swing`` over the swing phase.
+Load. Stance starts at phase 0 at ``F_swing``, rises to the first peak, falls to the
+mid-stance valley, rises to the second peak and falls back to ``F_swing`` at the end of
+stance, where it stays through the swing phase. Between consecutive key points the load
+follows the quintic smoothstep ``S(s) = 10 s^3 - 15 s^4 + 6 s^5``, so it passes exactly
+through every key value, is monotone between them, has zero slope at the peaks and the valley,
+and is twice continuously differentiable and periodic.
 """
 
 from __future__ import annotations
@@ -64,7 +66,7 @@ class IsoCycle:
     peak_phases: tuple[float, float] = (0.12, 0.50)
     valley_load_N: float = 1500.0
     valley_phase: float = 0.31
-    load_concentration: float = 25.0
+    stance_end_phase: float = 0.62
 
 
 def _warp_coefficient(wave: AxisWave, name: str) -> float:
@@ -100,16 +102,20 @@ def angle_wave(t: Array, period: float, wave: AxisWave, name: str = "angle") -> 
 
 def iso_load(t: Array, cycle: IsoCycle = IsoCycle()) -> Array:
     """Hydraulic load [N] at times ``t (n,)`` [s]: double peak in stance, ``F_swing`` in swing."""
-    centres = np.array([cycle.peak_phases[0], cycle.valley_phase, cycle.peak_phases[1]])
-    targets = np.array([cycle.peak_load_N, cycle.valley_load_N, cycle.peak_load_N]) - cycle.swing_load_N
-    kappa = cycle.load_concentration
-
-    def bumps(phase: Array) -> Array:
-        return np.exp(kappa * (np.cos(2 * np.pi * (phase[:, None] - centres[None, :])) - 1.0))
-
-    coeffs = np.linalg.solve(bumps(centres), targets)
-    phase = np.asarray(t, dtype=float) / cycle.period_s
-    return cycle.swing_load_N + bumps(phase.reshape(-1)) @ coeffs
+    knots = np.array([0.0, cycle.peak_phases[0], cycle.valley_phase, cycle.peak_phases[1], cycle.stance_end_phase, 1.0])
+    if not np.all(np.diff(knots) > 0):
+        raise ParameterError(
+            "load phases: need 0 < first peak < valley < second peak < end of stance < 1, got "
+            f"{knots[1:-1].tolist()}"
+        )
+    values = np.array(
+        [cycle.swing_load_N, cycle.peak_load_N, cycle.valley_load_N, cycle.peak_load_N, cycle.swing_load_N, cycle.swing_load_N]
+    )
+    tau = np.mod(np.asarray(t, dtype=float) / cycle.period_s, 1.0)
+    seg = np.clip(np.searchsorted(knots, tau, side="right") - 1, 0, len(knots) - 2)
+    s = (tau - knots[seg]) / (knots[seg + 1] - knots[seg])
+    smooth = s * s * s * (10.0 - 15.0 * s + 6.0 * s * s)
+    return values[seg] + (values[seg + 1] - values[seg]) * smooth
 
 
 def iso14242_motion(

@@ -92,11 +92,11 @@ def plot_torques(t: np.ndarray, tau: np.ndarray, path: Path) -> Path:
 
 
 def plot_friction_vs_load(t: np.ndarray, load: np.ndarray, tau_friction: np.ndarray, path: Path) -> Path:
-    """Friction torque per motor [N mm] and the load [N] over the cycle, on twin axes."""
-    fig, ax = plt.subplots(figsize=(8, 4))
+    """Friction torque per motor [N mm]: (a) with the load over the cycle, (b) against the load."""
+    fig, (ax, ax3) = plt.subplots(1, 2, figsize=(13, 4.2))
     for i in range(3):
         ax.plot(t, 1e3 * tau_friction[:, i], color=_LEG_COLOURS[i], label=f"friction, motor {i + 1}")
-    ax.set(xlabel="t [s]", ylabel="friction torque [N mm]")
+    ax.set(xlabel="t [s]", ylabel="friction torque [N mm]", title="(a) Over the cycle")
     ax.grid(alpha=0.3)
     ax2 = ax.twinx()
     ax2.plot(t, load, color="tab:red", alpha=0.5, label="load")
@@ -104,6 +104,11 @@ def plot_friction_vs_load(t: np.ndarray, load: np.ndarray, tau_friction: np.ndar
     lines = ax.get_legend_handles_labels()
     lines2 = ax2.get_legend_handles_labels()
     ax.legend(lines[0] + lines2[0], lines[1] + lines2[1], fontsize=8, loc="upper right")
+    for i in range(3):
+        ax3.plot(load, 1e3 * np.abs(tau_friction[:, i]), ".", ms=2, color=_LEG_COLOURS[i], label=f"motor {i + 1}")
+    ax3.set(xlabel="load F [N]", ylabel="|friction torque| [N mm]", title="(b) Against the load")
+    ax3.grid(alpha=0.3)
+    ax3.legend(fontsize=8, markerscale=4)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
