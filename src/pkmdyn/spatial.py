@@ -59,9 +59,10 @@ def cross0(a: Array, b: Array) -> Array:
     The component-first layout keeps each component contiguous, which is what the batched
     hot paths use internally.
     """
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-    np.multiply(a[1], b[2], out=out[0])
-    out[0] -= a[2] * b[1]
+    x = a[1] * b[2]
+    x -= a[2] * b[1]
+    out = np.empty((3,) + x.shape)
+    out[0] = x
     np.multiply(a[2], b[0], out=out[1])
     out[1] -= a[0] * b[2]
     np.multiply(a[0], b[1], out=out[2])
