@@ -1,0 +1,30 @@
+"""The 4-DOF over-constrained parallel driving mechanism (PDM) of Huang et al. (2023).
+
+Two RPR and two SPU limbs drive a planar six-bar that carries the moving platform through
+the revolute joint R4. Data flows one way: TOML -> :class:`PdmModel` -> motion ->
+:func:`inverse_kinematics` -> results and plots.
+"""
+
+from .kinematics import (
+    BODY_NAMES,
+    BodyState,
+    PdmKinematics,
+    PdmPositions,
+    inverse_kinematics,
+    inverse_position,
+    reachable,
+)
+from .params import PdmModel, default_params_path, load_params
+
+__all__ = [
+    "PdmModel",
+    "load_params",
+    "default_params_path",
+    "BODY_NAMES",
+    "BodyState",
+    "PdmPositions",
+    "PdmKinematics",
+    "inverse_position",
+    "inverse_kinematics",
+    "reachable",
+]

@@ -1,0 +1,115 @@
+"""``pkmdyn pdm run`` end to end: results agree with finite differences and with an
+independent inverse position from geometry.json; mobility.json; errors as one line + status 2."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import tomllib
+
+import numpy as np
+import pytest
+
+from pkmdyn.cli import main
+from pkmdyn.machines.pdm4 import default_params_path
+from pkmdyn.profiles.pdm_motion import cycloidal_motion, write_pdm_motion
+
+
+def _read(path):
+    with open(path, newline="") as fh:
+        rows = list(csv.reader(fh))
+    return {name: np.array([float(r[k]) for r in rows[1:]]) for k, name in enumerate(rows[0])}
+
+
+@pytest.fixture(scope="module")
+def fine_run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("pdm")
+    motion = cycloidal_motion((0.015, -0.01, math.radians(4), math.radians(12)), 1.0, 2001)
+    write_pdm_motion(d / "motion.csv", motion)
+    assert main(["pdm", "run", "--motion", str(d / "motion.csv"), "--no-plots", "--out", str(d / "out")]) == 0
+    return d / "out"
+
+
+def test_limb_rates_in_results_match_finite_differences(fine_run):
+    cols = _read(fine_run / "results.csv")
+    t = cols["t_s"]
+    dt = t[1] - t[0]
+    for k in range(1, 5):
+        l, ld, ldd = cols[f"l{k}_m"], cols[f"ld{k}_m_s"], cols[f"ldd{k}_m_s2"]
+        fd = (l[2:] - l[:-2]) / (2 * dt)
+        fdd = (l[2:] - 2 * l[1:-1] + l[:-2]) / dt**2
+        assert np.abs(fd - ld[1:-1]).max() < 1e-4 * np.abs(ld).max()
+        assert np.abs(fdd - ldd[1:-1]).max() < 1e-3 * np.abs(ldd).max()
+    assert cols["loop_residual_m"].max() < 1e-12
+    assert list(cols)[:17] == ["t_s", "x_m", "y_m", "alpha_rad", "gamma_rad"] + [
+        f"{p}{k}_{u}" for k in range(1, 5) for p, u in (("l", "m"), ("ld", "m_s"), ("ldd", "m_s2"))]
+
+
+def test_limb_lengths_match_an_inverse_position_from_the_documented_geometry(fine_run):
+    cols = _read(fine_run / "results.csv")
+    geo = json.loads((fine_run / "geometry.json").read_text())
+    g = tomllib.loads(default_params_path().read_text())["geometry"]
+    r0, r2, r3 = g["platform_offset_m"], g["crank_length_m"], g["coupler_length_m"]
+    for s in range(0, len(cols["t_s"]), 250):
+        x, y, a, gm = (cols[c][s] for c in ("x_m", "y_m", "alpha_rad", "gamma_rad"))
+        ca, sa, cg, sg = math.cos(a), math.sin(a), math.cos(gm), math.sin(gm)
+        T = np.array([[ca, -sa * cg, sa * sg], [sa, ca * cg, -ca * sg], [0, sg, cg]])
+        C = np.array([x, y, r0 * cg]) - T @ np.array(geo["P_platform_m"])
+        for i, (r1n, r3n, r4n) in enumerate((("R11", "R31", "R41"), ("R12", "R32", "R42"))):
+            R1 = np.array(geo["R1_m"][r1n])
+            R3 = C + T @ np.array(geo["R3_output_link_m"][r3n])  # gamma does not move it: on the R4 axis
+            d = np.linalg.norm(R3 - R1)
+            e = (R3 - R1) / d
+            along = (d * d + r2 * r2 - r3 * r3) / (2 * d)
+            h = math.sqrt(r2 * r2 - along * along)
+            side = -1 if i == 0 else 1
+            perp = np.array([-e[1], e[0], 0.0])
+            R2 = max((R1 + along * e + h * perp, R1 + along * e - h * perp), key=lambda p: side * p[0])
+            assert abs(np.linalg.norm(R2 - np.array(geo["R4_m"][r4n])) - cols[f"l{i + 1}_m"][s]) < 1e-9
+        for j, (un, sn) in enumerate((("U23", "S23"), ("U24", "S24"))):
+            U = C + T @ np.array(geo["U_platform_m"][un])
+            assert abs(np.linalg.norm(U - np.array(geo["S_m"][sn])) - cols[f"l{j + 3}_m"][s]) < 1e-9
+
+
+def test_mobility_json(fine_run):
+    mob = json.loads((fine_run / "mobility.json").read_text())
+    assert mob["t"] == 9 and mob["t_screw"] == 9 and mob["dof"] == 4
+    assert mob["joint_counts"] == {"R": 11, "P": 4, "S": 2, "U": 2} and mob["moving_links"] == 14
+    assert len(mob["overconstrained_subchains"]) == 3
+    for sub in mob["overconstrained_subchains"]:
+        assert sub["directions"] == ["force_z", "couple_x", "couple_y"]
+        assert sub["constraint_wrenches"] == [[0, 0, 1, 0, 0, 0], [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0]]
+
+
+def test_default_run_with_plots(tmp_path, capsys):
+    assert main(["pdm", "run", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    for name in ("results.csv", "mobility.json", "geometry.json", "workspace.csv", "workspace_xy.csv",
+                 "limbs.png", "workspace.png", "schematic.png"):
+        assert (tmp_path / name).stat().st_size > 0
+        assert name in out
+    text = (tmp_path / "results.csv").read_text()
+    assert "nan" not in text.lower()
+
+
+def test_bad_parameter_file_is_one_line_and_status_2(tmp_path, capsys):
+    text = default_params_path().read_text().replace("crank_length_m = 0.240", "crank_length_m = -0.240")
+    (tmp_path / "p.toml").write_text(text)
+    assert main(["pdm", "run", "--params", str(tmp_path / "p.toml"), "--no-plots", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "pkmdyn: error: p.toml: [geometry] crank_length_m: must be > 0"
+
+
+def test_unreachable_motion_names_time_and_limb(tmp_path, capsys):
+    motion = cycloidal_motion((0.12, 0.0, 0.0, 0.0), 1.0, 51)
+    write_pdm_motion(tmp_path / "m.csv", motion)
+    assert main(["pdm", "run", "--motion", str(tmp_path / "m.csv"), "--no-plots", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err
+    assert err.startswith("pkmdyn: error: t = ") and " s: limb " in err
+
+
+def test_missing_out_option_is_a_usage_error(capsys):
+    assert main(["pdm", "run"]) == 2
+    assert "--out" in capsys.readouterr().err
