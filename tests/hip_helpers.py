@@ -10,8 +10,15 @@ from pkmdyn.machines.hip_simulator.params import HipModel, default_params_dict, 
 from pkmdyn.profiles.orientation import OrientationMotion, make_motion
 
 
-def random_model(rng: np.random.Generator, spread: float = 0.15, friction: bool = False, **geometry) -> HipModel:
-    """The paper's machine with every length, mass and inertia scaled by up to +-spread."""
+def random_model(
+    rng: np.random.Generator, spread: float = 0.15, friction: bool = False, inertia: dict | None = None, **geometry
+) -> HipModel:
+    """The paper's machine with every length, mass and inertia scaled by up to +-spread.
+
+    Angles move by up to +-8 deg, which keeps each S joint well ahead of its module. With
+    ``friction`` every friction coefficient is non-zero; ``inertia`` and ``geometry`` override
+    keys of those tables.
+    """
     d = copy.deepcopy(default_params_dict())
 
     def jitter(x: float) -> float:
@@ -31,9 +38,10 @@ def random_model(rng: np.random.Generator, spread: float = 0.15, friction: bool 
     i["platform_mass_kg"] = float(rng.uniform(0.5, 5.0))
     i["lever_inertia_kgm2"] = [jitter(x) for x in i["lever_inertia_kgm2"]]
     i["platform_inertia_kgm2"] = [jitter(x) for x in i["platform_inertia_kgm2"]]
+    i.update(inertia or {})
     if friction:
         f = d["friction"]
-        for key in ("hip_coefficient", "thrust_coefficient"):
+        for key in ("hip_radius_m", "hip_coefficient", "thrust_radius_m", "thrust_coefficient"):
             f[key] = jitter(f[key])
         f.update(
             slider_coulomb_N=rng.uniform(1, 20),

@@ -8,7 +8,6 @@ Euler-angle motions.
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 
 import numpy as np
@@ -16,6 +15,7 @@ import pytest
 
 pin = pytest.importorskip("pinocchio")
 
+from hip_helpers import random_model
 from pkmdyn.machines.hip_simulator.dynamics import inverse_dynamics  # noqa: E402
 from pkmdyn.machines.hip_simulator.kinematics import platform_kinematics  # noqa: E402
 from pkmdyn.machines.hip_simulator.params import HipModel, default_params_dict, model_from_dict  # noqa: E402
@@ -35,49 +35,8 @@ N_SAMPLES = 40
 
 
 def perturbed_model(seed: int, spread: float = 0.15, friction: bool = True, **inertia_override) -> HipModel:
-    """The built-in machine with lengths, masses and inertias scaled by up to +-spread.
-
-    Angles move by up to +-8 deg, which keeps each S joint well ahead of its module (psi - phi
-    stays near 30 deg). With ``friction`` every friction coefficient is non-zero.
-    """
-    rng = np.random.default_rng(seed)
-    d = copy.deepcopy(default_params_dict())
-
-    def jit(x: float) -> float:
-        return float(x * (1.0 + spread * rng.uniform(-1.0, 1.0)))
-
-    geo = d["geometry"]
-    for key in ("base_radius_m", "platform_radius_m", "lever_length_m", "screw_lead_m"):
-        geo[key] = jit(geo[key])
-    h1, h2 = geo["platform_heights_m"]
-    h2 = jit(h2)
-    geo["platform_heights_m"] = [h2 + jit(h1 - geo["platform_heights_m"][1]), h2]
-    geo["module_angles_deg"] = [a + rng.uniform(-8.0, 8.0) for a in geo["module_angles_deg"]]
-    geo["platform_joint_angles_deg"] = [a + rng.uniform(-8.0, 8.0) for a in geo["platform_joint_angles_deg"]]
-    ine = d["inertia"]
-    for key in ("slider_mass_kg", "lever_mass_kg", "screw_inertia_kgm2", "gravity_m_s2"):
-        ine[key] = jit(ine[key])
-    ine["platform_mass_kg"] = float(rng.uniform(0.5, 5.0))
-    ine["lever_inertia_kgm2"] = [jit(x) for x in ine["lever_inertia_kgm2"]]
-    ine["platform_inertia_kgm2"] = [jit(x) for x in ine["platform_inertia_kgm2"]]
-    ine.update(inertia_override)
-    if friction:
-        fr = d["friction"]
-        for key in ("hip_radius_m", "hip_coefficient", "thrust_radius_m", "thrust_coefficient"):
-            fr[key] = jit(fr[key])
-        fr.update(
-            friction_velocity_eps_rad_s=float(rng.uniform(1e-3, 0.05)),
-            friction_velocity_eps_m_s=float(rng.uniform(1e-4, 5e-3)),
-            slider_coulomb_N=float(rng.uniform(1.0, 20.0)),
-            slider_viscous_Ns_m=float(rng.uniform(1.0, 50.0)),
-            screw_coulomb_Nm=float(rng.uniform(1e-3, 0.05)),
-            screw_viscous_Nms_rad=float(rng.uniform(1e-5, 1e-3)),
-            spherical_coulomb_Nm=float(rng.uniform(0.01, 0.5)),
-            spherical_viscous_Nms_rad=float(rng.uniform(1e-3, 0.05)),
-            universal_coulomb_Nm=float(rng.uniform(0.01, 0.5)),
-            universal_viscous_Nms_rad=float(rng.uniform(1e-3, 0.05)),
-        )
-    return model_from_dict(d, f"perturbed model (seed {seed})")
+    """The built-in machine with lengths, masses and inertias scaled by up to +-spread."""
+    return random_model(np.random.default_rng(seed), spread, friction, inertia=inertia_override)
 
 
 def motion_on(seed: int, t: np.ndarray, amplitude_deg: float = 18.0):
