@@ -88,6 +88,19 @@ def test_csv_without_derivatives_uses_the_spline_fit(tmp_path):
     assert np.all(back.load == 0)
 
 
+def test_csv_with_rates_only_fits_the_accelerations_to_the_rates(tmp_path):
+    m = iso14242_motion(1, 400)
+    p = tmp_path / "m.csv"
+    rows = ["t_s,alpha_deg,beta_deg,gamma_deg,alpha_dot_deg_s,beta_dot_deg_s,gamma_dot_deg_s"]
+    for k in range(len(m)):
+        rows.append(",".join(f"{v:.15g}" for v in (m.t[k], *np.rad2deg(m.angles[k]), *np.rad2deg(m.rates[k]))))
+    p.write_text("\n".join(rows) + "\n")
+    back = read_motion_csv(p)
+    np.testing.assert_allclose(back.rates, m.rates, rtol=1e-12, atol=1e-14)
+    inner = slice(20, -20)
+    np.testing.assert_allclose(back.accels[inner], m.accels[inner], atol=1e-4 * np.abs(m.accels).max())
+
+
 @pytest.mark.parametrize(
     "text, message",
     [
@@ -96,9 +109,11 @@ def test_csv_without_derivatives_uses_the_spline_fit(tmp_path):
         ("t_s,alpha_deg,beta_deg,gamma_deg\n0,1,2,3\n1,1,x,3\n", r"row 2, column 'beta_deg': 'x' is not a number"),
         ("t_s,alpha_deg,beta_deg,gamma_deg\n0,1,2,3\n1,1,nan,3\n", r"row 2, column 'beta_deg'.*not finite"),
         ("t_s,alpha_deg,beta_deg,gamma_deg,load_N\n0,1,2,3,5\n1,1,2,3,-5\n", r"row 2, column 'load_N'.*negative"),
-        ("t_s,alpha_deg,beta_deg,gamma_deg\n0,1,2,3\n0,1,2,3\n", r"row 2: t_s = 0 does not increase"),
+        ("t_s,alpha_deg,beta_deg,gamma_deg\n0,1,2,3\n0,1,2,3\n", r"row 2, column 't_s': time must increase strictly"),
         ("t_s,alpha_deg,beta_deg,gamma_deg\n0,1,2,3\n1,2,3\n", r"row 2 has 3 fields"),
-        ("t_s,alpha_deg,beta_deg,gamma_deg,alpha_dot_deg_s\n0,1,2,3,4\n", "beta_dot_deg_s' is missing"),
+        ("t_s,alpha_deg,beta_deg,gamma_deg,alpha_dot_deg_s\n0,1,2,3,4\n", "missing column 'beta_dot_deg_s'"),
+        ("t_s,alpha_deg,beta_deg,gamma_deg,alpha_ddot_deg_s2,beta_ddot_deg_s2,gamma_ddot_deg_s2\n0,1,2,3,4,5,6\n",
+         "acceleration columns need the rate columns"),
     ],
 )
 def test_bad_motion_files_name_row_and_column(tmp_path, text, message):

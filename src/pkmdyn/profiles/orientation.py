@@ -3,10 +3,11 @@
 CSV columns (spec, "Motion file"): ``t_s, alpha_deg, beta_deg, gamma_deg``; optional
 Euler-angle rates ``alpha_dot_deg_s, beta_dot_deg_s, gamma_dot_deg_s`` and accelerations
 ``alpha_ddot_deg_s2, beta_ddot_deg_s2, gamma_ddot_deg_s2`` (all three of a kind or none);
-optional ``load_N``. When the rates are absent they are derived from the samples by an
-interpolating quintic B-spline through the angles (``scipy.interpolate.make_interp_spline``,
-k = 5, not-a-knot ends), whose first and second derivatives are continuous; give the
-derivative columns whenever they are known exactly.
+optional ``load_N``. Given derivative columns are used as they are; missing ones are derived
+by an interpolating quintic B-spline (``scipy.interpolate.make_interp_spline``, k = 5,
+not-a-knot ends) through the angles, or through the rates when only the accelerations are
+missing; its first and second derivatives are continuous. Give the derivative columns
+whenever they are known exactly.
 """
 
 from __future__ import annotations
@@ -16,10 +17,10 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import make_interp_spline
 
 from ..errors import MotionError
 from ..io import read_csv_columns, write_csv
+from ._columns import column_group, derivatives, require_increasing
 
 __all__ = ["OrientationMotion", "make_motion", "read_motion_csv", "write_motion_csv", "MOTION_COLUMNS"]
 
@@ -81,31 +82,16 @@ def read_motion_csv(path: str | Path) -> OrientationMotion:
     """Read the spec's motion CSV (degrees on file, radians inside)."""
     cols = read_csv_columns(path, ("t_s", *_ANG), (*_RATE, *_ACC, "load_N"))
     t = cols["t_s"]
-    bad = np.flatnonzero(np.diff(t) <= 0)
-    if bad.size:
-        raise MotionError(f"{path}: row {bad[0] + 2}: t_s = {t[bad[0] + 1]:g} does not increase")
-    angles = np.deg2rad(np.column_stack([cols[c] for c in _ANG]))
+    require_increasing(path, t)
     load = cols.get("load_N")
     if load is not None:
         neg = np.flatnonzero(load < 0)
         if neg.size:
             raise MotionError(f"{path}: row {neg[0] + 1}, column 'load_N': {load[neg[0]]:g} N is negative")
-    for group in (_RATE, _ACC):
-        present = [c for c in group if c in cols]
-        if present and len(present) != 3:
-            missing = [c for c in group if c not in cols]
-            raise MotionError(f"{path}: column {missing[0]!r} is missing; give all three of {', '.join(group)} or none")
-    if _RATE[0] in cols and _ACC[0] not in cols or _ACC[0] in cols and _RATE[0] not in cols:
-        raise MotionError(f"{path}: give both the rate and the acceleration columns, or neither")
-    if _RATE[0] in cols:
-        rates = np.deg2rad(np.column_stack([cols[c] for c in _RATE]))
-        accels = np.deg2rad(np.column_stack([cols[c] for c in _ACC]))
-    else:
-        if t.shape[0] < 6:
-            raise MotionError(f"{path}: at least 6 rows are needed to derive rates by a quintic spline fit")
-        spline = make_interp_spline(t, angles, k=5)
-        rates = spline.derivative(1)(t)
-        accels = spline.derivative(2)(t)
+    angles = np.deg2rad(column_group(path, cols, _ANG))
+    groups = [column_group(path, cols, names) for names in (_RATE, _ACC)]
+    rates, accels = (None if g is None else np.deg2rad(g) for g in groups)
+    rates, accels = derivatives(path, t, angles, rates, accels, _RATE)
     return make_motion(t, angles, rates, accels, load)
 
 

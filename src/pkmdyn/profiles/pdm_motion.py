@@ -17,10 +17,10 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import make_interp_spline
 
 from ..errors import MotionError
 from ..io import read_csv_columns, write_csv
+from ._columns import column_group, derivatives, require_increasing
 from .cycloidal import cycloidal
 
 __all__ = ["PdmMotion", "POSE_COLUMNS", "RATE_COLUMNS", "ACCEL_COLUMNS", "cycloidal_motion",
@@ -72,40 +72,14 @@ def cycloidal_motion(strokes: tuple[float, float, float, float], period: float, 
     return PdmMotion(t, q, qd, qdd)
 
 
-def _spline_derivatives(path: Path, t: Array, y: Array, orders: tuple[int, ...]) -> list[Array]:
-    if t.shape[0] < 6:
-        raise MotionError(f"{path}: at least 6 rows are needed to derive missing derivative columns "
-                          f"by a quintic spline, found {t.shape[0]}")
-    spline = make_interp_spline(t, y, k=5, axis=0)
-    return [spline.derivative(k)(t) for k in orders]
-
-
 def read_pdm_motion(path: str | Path) -> PdmMotion:
     """Read a PDM motion CSV (see the module docstring); errors name the file, row and column."""
     path = Path(path)
     cols = read_csv_columns(path, ("t_s", *POSE_COLUMNS), (*RATE_COLUMNS, *ACCEL_COLUMNS))
     t = cols["t_s"]
-    steps = np.diff(t)
-    if np.any(steps <= 0):
-        r = int(np.flatnonzero(steps <= 0)[0]) + 2
-        raise MotionError(f"{path}: row {r}, column 't_s': time must increase strictly "
-                          f"({t[r - 1]:g} s after {t[r - 2]:g} s)")
-    q = np.stack([cols[c] for c in POSE_COLUMNS], axis=-1)
-    groups = {}
-    for label, names in (("first-derivative", RATE_COLUMNS), ("second-derivative", ACCEL_COLUMNS)):
-        present = [c for c in names if c in cols]
-        if present and len(present) != 4:
-            missing = next(c for c in names if c not in cols)
-            raise MotionError(f"{path}: missing column {missing!r} (the {label} columns come all together or not at all)")
-        groups[label] = np.stack([cols[c] for c in names], axis=-1) if present else None
-    qd, qdd = groups["first-derivative"], groups["second-derivative"]
-    if qd is None and qdd is not None:
-        raise MotionError(f"{path}: second-derivative columns need the first-derivative columns "
-                          f"({', '.join(RATE_COLUMNS)})")
-    if qd is None:
-        qd, qdd = _spline_derivatives(path, t, q, (1, 2))
-    elif qdd is None:
-        (qdd,) = _spline_derivatives(path, t, qd, (1,))
+    require_increasing(path, t)
+    q = column_group(path, cols, POSE_COLUMNS)
+    qd, qdd = derivatives(path, t, q, column_group(path, cols, RATE_COLUMNS), column_group(path, cols, ACCEL_COLUMNS), RATE_COLUMNS)
     return PdmMotion(t, q, qd, qdd)
 
 

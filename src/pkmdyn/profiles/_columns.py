@@ -1,0 +1,64 @@
+"""Checks and fits shared by the motion-file readers (hip and PDM).
+
+Errors name the file, the 1-based data row and the column.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.interpolate import make_interp_spline
+
+from ..errors import MotionError
+
+__all__ = ["require_increasing", "column_group", "derivatives"]
+
+Array = NDArray[np.float64]
+
+
+def require_increasing(path: str | Path, t: Array) -> None:
+    """Time ``t_s`` must increase strictly from row to row."""
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if bad.size:
+        r = int(bad[0]) + 2
+        raise MotionError(
+            f"{path}: row {r}, column 't_s': time must increase strictly ({t[r - 1]:g} s after {t[r - 2]:g} s)"
+        )
+
+
+def column_group(path: str | Path, cols: Mapping[str, Array], names: Sequence[str]) -> Array | None:
+    """The columns ``names`` stacked as ``(n, len(names))``, or ``None`` when none is present.
+
+    A group is all or nothing: a partial group is an error naming the first missing column.
+    """
+    present = [c for c in names if c in cols]
+    if not present:
+        return None
+    if len(present) != len(names):
+        missing = next(c for c in names if c not in cols)
+        raise MotionError(f"{path}: missing column {missing!r} (give all of {', '.join(names)} or none)")
+    return np.stack([cols[c] for c in names], axis=-1)
+
+
+def derivatives(
+    path: str | Path, t: Array, q: Array, qd: Array | None, qdd: Array | None, rate_names: Sequence[str]
+) -> tuple[Array, Array]:
+    """Rates and accelerations of ``q (n, k)``: given columns are used as they are; missing ones
+    come from an interpolating quintic B-spline (``make_interp_spline``, k = 5, not-a-knot ends)
+    through the angles (both missing) or through the given rates (accelerations missing)."""
+    if qd is None and qdd is not None:
+        raise MotionError(f"{path}: acceleration columns need the rate columns ({', '.join(rate_names)})")
+    if qd is not None and qdd is not None:
+        return qd, qdd
+    if t.shape[0] < 6:
+        raise MotionError(
+            f"{path}: at least 6 rows are needed to derive missing derivative columns by a quintic spline, "
+            f"found {t.shape[0]}"
+        )
+    if qd is None:
+        spline = make_interp_spline(t, q, k=5, axis=0)
+        return spline.derivative(1)(t), spline.derivative(2)(t)
+    return qd, make_interp_spline(t, qd, k=5, axis=0).derivative(1)(t)
