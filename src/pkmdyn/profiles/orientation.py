@@ -22,7 +22,7 @@ from ..errors import MotionError
 from ..io import read_csv_columns, write_csv
 from ._columns import column_group, derivatives, require_increasing
 
-__all__ = ["OrientationMotion", "make_motion", "read_motion_csv", "write_motion_csv", "MOTION_COLUMNS"]
+__all__ = ["OrientationMotion", "check_load", "make_motion", "read_motion_csv", "write_motion_csv", "MOTION_COLUMNS"]
 
 Array = NDArray[np.float64]
 
@@ -50,6 +50,20 @@ class OrientationMotion:
         return int(self.t.shape[0])
 
 
+def check_load(t: Array, load: Array) -> Array:
+    """The hydraulic load ``(n,)`` [N] as floats; a wrong shape, a NaN, an infinity or a negative
+    value is a :class:`MotionError` naming the row and its time."""
+    load = np.asarray(load, dtype=float)
+    if load.shape != t.shape:
+        raise MotionError(f"load: expected {t.shape[0]} values, got shape {load.shape}")
+    bad = np.flatnonzero(~(np.isfinite(load) & (load >= 0.0)))
+    if bad.size:
+        r = int(bad[0])
+        what = "not finite" if not np.isfinite(load[r]) else "negative"
+        raise MotionError(f"load row {r + 1} (t = {t[r]:g} s): {load[r]:g} N is {what}")
+    return load
+
+
 def make_motion(t: Array, angles: Array, rates: Array, accels: Array, load: Array | None = None) -> OrientationMotion:
     """Check shapes and values and build a motion; errors name the row and the quantity."""
     t = np.atleast_1d(np.asarray(t, dtype=float))
@@ -60,18 +74,12 @@ def make_motion(t: Array, angles: Array, rates: Array, accels: Array, load: Arra
         if a.shape != (n, 3):
             raise MotionError(f"motion {name}: expected shape ({n}, 3), got {np.shape(a)}")
         arrays[name] = a
-    ld = np.zeros(n) if load is None else np.atleast_1d(np.asarray(load, dtype=float))
-    if ld.shape != (n,):
-        raise MotionError(f"motion load: expected {n} values, got {ld.shape}")
-    for name, a in (("t", t), *arrays.items(), ("load", ld)):
+    for name, a in (("t", t), *arrays.items()):
         bad = ~np.isfinite(a)
         if bad.any():
             row = int(np.flatnonzero(bad.reshape(n, -1).any(axis=1))[0])
             raise MotionError(f"motion row {row + 1} (t = {t[row]:g} s): {name} is not finite")
-    neg = np.flatnonzero(ld < 0)
-    if neg.size:
-        r = int(neg[0])
-        raise MotionError(f"motion row {r + 1} (t = {t[r]:g} s): load {ld[r]:g} N is negative")
+    ld = np.zeros(n) if load is None else check_load(t, np.atleast_1d(np.asarray(load, dtype=float)))
     if n > 1 and np.any(np.diff(t) <= 0):
         r = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
         raise MotionError(f"motion row {r + 1}: time {t[r]:g} s does not increase")

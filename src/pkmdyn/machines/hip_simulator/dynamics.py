@@ -33,8 +33,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import MotionError, SingularityError
+from ...errors import SingularityError
 from ...friction import coulomb_viscous, hip_bearing_friction
+from ...profiles.orientation import check_load
 from ...spatial import cross0, dot0
 from .kinematics import HipKinematics
 from .params import HipModel
@@ -101,25 +102,13 @@ def _inertia_times(cols: Array, I_diag: Array, w: Array) -> Array:
     return out
 
 
-def _check_load(load: Array, t: Array) -> Array:
-    load = np.asarray(load, dtype=float)
-    if load.shape != t.shape:
-        raise MotionError(f"load: expected {t.shape[0]} values, got shape {load.shape}")
-    bad = np.flatnonzero(~(np.isfinite(load) & (load >= 0.0)))
-    if bad.size:
-        r = int(bad[0])
-        what = "not finite" if not np.isfinite(load[r]) else "negative"
-        raise MotionError(f"load row {r + 1} (t = {t[r]:g} s): {load[r]:g} N is {what}")
-    return load
-
-
 def inverse_dynamics(model: HipModel, kin: HipKinematics, load: Array) -> HipTorques:
     """Motor torques of the three linear modules, split into the parts of Eq. (14) plus friction.
 
     ``load (n,)`` [N] is the hydraulic force on each platform, along -Z through o_j.
     Vectors are handled component-first internally (see :func:`platform_kinematics`).
     """
-    load = _check_load(load, kin.t)
+    load = check_load(kin.t, load)
     g, m, f = model.geometry, model.inertia, model.friction
     n_platforms = g.h.shape[0]
     gear = g.p / (2.0 * np.pi)  # [m/rad]
