@@ -14,17 +14,14 @@ __all__ = ["regularised_sign", "coulomb_viscous", "hip_bearing_friction"]
 Array = NDArray[np.float64]
 
 
-def regularised_sign(w: Array, eps: float) -> Array:
+def regularised_sign(w: Array, eps: float, vector: bool) -> Array:
     """``u(w) = w / sqrt(|w|^2 + eps^2)``: the sign (or unit direction) made smooth at rest.
 
-    ``w`` is ``(...,)`` for a scalar velocity or ``(..., 3)`` for an angular velocity; for a
-    vector the norm is taken over the last axis. ``|u| < 1`` always, and ``u(0) = 0``.
+    ``vector=True``: ``w (..., 3)`` is an angular velocity and the norm is taken over the last
+    axis; otherwise ``w`` holds scalar velocities. ``|u| < 1`` always, and ``u(0) = 0``.
     """
     w = np.asarray(w, dtype=float)
-    if w.ndim and w.shape[-1] == 3:
-        norm2 = np.sum(w * w, axis=-1, keepdims=True)
-    else:
-        norm2 = w * w
+    norm2 = np.sum(w * w, axis=-1, keepdims=True) if vector else w * w
     return w / np.sqrt(norm2 + eps * eps)
 
 
@@ -35,11 +32,7 @@ def coulomb_viscous(w: Array, coulomb: float, viscous: float, eps: float, vector
     a joint); otherwise ``w`` holds scalar velocities.
     """
     w = np.asarray(w, dtype=float)
-    if vector:
-        u = w / np.sqrt(np.sum(w * w, axis=-1, keepdims=True) + eps * eps)
-    else:
-        u = w / np.sqrt(w * w + eps * eps)
-    return coulomb * u + viscous * w
+    return coulomb * regularised_sign(w, eps, vector) + viscous * w
 
 
 def hip_bearing_friction(
@@ -62,5 +55,4 @@ def hip_bearing_friction(
     magnitude = hip_radius * hip_coefficient * np.abs(load) + thrust_radius * thrust_coefficient * np.abs(
         load + platform_weight
     )
-    u = omega / np.sqrt(np.sum(omega * omega, axis=-1, keepdims=True) + eps * eps)
-    return u * magnitude[..., None]
+    return regularised_sign(omega, eps, vector=True) * magnitude[..., None]
