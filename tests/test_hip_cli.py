@@ -132,6 +132,13 @@ def test_bad_option_exits_2_with_one_line(tmp_path):
         assert len(r.stderr.strip().splitlines()) == 1, r.stderr
 
 
+def test_out_path_that_is_a_file_is_one_line_and_status_2(tmp_path, capsys):
+    (tmp_path / "o").write_text("not a folder")
+    assert main(["hip", "run", "--no-plots", "--samples-per-cycle", "20", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "is a file" in err
+
+
 def test_profile_command_writes_a_readable_motion(tmp_path):
     p = tmp_path / "motion.csv"
     assert main(["hip", "profile", "--samples-per-cycle", "100", "--out", str(p)]) == 0
@@ -139,3 +146,13 @@ def test_profile_command_writes_a_readable_motion(tmp_path):
     assert main(["hip", "run", "--motion", str(p), "--no-plots", "--out", str(out)]) == 0
     header, data = _read(out / "results.csv")
     assert data.shape[0] == 101 and not list(out.glob("*.png"))
+
+
+def test_out_folder_helper_refuses_a_file(tmp_path):
+    from pkmdyn.errors import PkmdynError
+    from pkmdyn.io import make_out_dir
+
+    (tmp_path / "f").write_text("x")
+    with pytest.raises(PkmdynError, match="exists and is not a folder"):
+        make_out_dir(tmp_path / "f")
+    assert make_out_dir(tmp_path / "a" / "b").is_dir()

@@ -108,6 +108,14 @@ def test_unreachable_motion_names_time_and_limb(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert "\n" not in err
     assert err.startswith("pkmdyn: error: t = ") and " s: limb " in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_out_path_that_is_a_file_is_one_line_and_status_2(tmp_path, capsys):
+    (tmp_path / "o").write_text("not a folder")
+    assert main(["pdm", "run", "--no-plots", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "is a file" in err
 
 
 def test_missing_out_option_is_a_usage_error(capsys):

@@ -20,9 +20,23 @@ from numpy.typing import NDArray
 
 from .errors import MotionError, PkmdynError
 
-__all__ = ["read_csv_columns", "write_csv", "write_json"]
+__all__ = ["make_out_dir", "read_csv_columns", "write_csv", "write_json"]
 
 Array = NDArray[np.float64]
+
+
+def make_out_dir(path: str | Path) -> Path:
+    """Create the output folder (and its parents); a file in the way or a refused creation is a
+    :class:`PkmdynError` naming the folder. Call it only once every result is computed, so that
+    a user error leaves nothing behind."""
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise PkmdynError(f"--out {out}: exists and is not a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise PkmdynError(f"--out {out}: cannot create folder ({exc.strerror or exc})") from None
+    return out
 
 
 def read_csv_columns(

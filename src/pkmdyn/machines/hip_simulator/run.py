@@ -14,8 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
-from ...errors import PkmdynError
-from ...io import write_csv, write_json
+from ...io import make_out_dir, write_csv, write_json
 from ...profiles.iso14242 import IsoCycle, iso14242_motion
 from ...profiles.orientation import OrientationMotion, read_motion_csv
 from ...spatial import euler_kinematics
@@ -170,11 +169,7 @@ def run_hip(
         warnings.simplefilter("always")
         res = simulate(model, motion, progress=progress, singularity_threshold=singularity_threshold)
     messages = [str(w.message) for w in caught]
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise PkmdynError(f"--out {out}: cannot create directory ({exc.strerror or exc})") from None
+    out = make_out_dir(out_dir)
     files = {"results": out / "results.csv", "summary": out / "summary.json"}
     write_csv(files["results"], results_columns(res))
     summ = summary(res)

@@ -17,8 +17,7 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from ...analysis.mobility import analyse
-from ...errors import PkmdynError
-from ...io import write_csv, write_json
+from ...io import make_out_dir, write_csv, write_json
 from ...profiles.pdm_motion import PdmMotion, cycloidal_motion, read_pdm_motion
 from .kinematics import BODY_NAMES, PdmKinematics, inverse_kinematics, mechanism_joints
 from .params import PdmModel, load_params
@@ -147,19 +146,16 @@ def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_
         motion = cycloidal_motion(tr.strokes, tr.period_s, tr.samples)
     else:
         motion = read_pdm_motion(motion_path)
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise PkmdynError(f"--out {out}: exists and is not a folder")
-    out.mkdir(parents=True, exist_ok=True)
     cols = _kinematics_columns(model, motion)
+    mob = mobility_summary(model, motion.q[0])
+    ws = reachable_workspace(model)
+    out = make_out_dir(out_dir)  # only now: a user error above leaves nothing behind
     files: dict[str, Path] = {"results": out / "results.csv"}
     write_csv(files["results"], cols)
-    mob = mobility_summary(model, motion.q[0])
     files["mobility"] = out / "mobility.json"
     write_json(files["mobility"], mob)
     files["geometry"] = out / "geometry.json"
     write_json(files["geometry"], geometry_summary(model))
-    ws = reachable_workspace(model)
     files["workspace"] = out / "workspace.csv"
     write_workspace_csv(files["workspace"], ws)
     files["workspace_xy"] = out / "workspace_xy.csv"
