@@ -1,0 +1,62 @@
+"""The interface every machine offers to the layers above it (simulation, control, identification).
+
+A machine is data (its frozen model) plus free functions. The layers that drive a machine
+(``pkmdyn.simulate``, ``pkmdyn.control``, ``pkmdyn.identify``) never import a machine's
+modules: they receive a :class:`MachineDynamics` - any object, in practice a machine's
+``minimal`` module, that provides the verbs below - and the machine's model.
+
+Coordinates. ``q (n, nq)`` are the machine's minimal coordinates and ``qd, qdd`` their first
+and second time derivatives (hip simulator: the platform's Euler angles in the model's
+sequence [rad]; PDM: ``x, y`` [m], ``alpha, gamma`` [rad]). ``u (n, nu)`` are the actuator
+efforts (hip: motor torques [N m]; PDM: limb forces [N]). ``load (n,)`` is the machine's
+external load (hip: the hydraulic force [N]); a machine without one accepts ``None``.
+
+Equations of motion, in generalised forces dual to ``qd``:
+
+    M(q) qdd + h(q, qd, load) = B(q) u
+
+with ``M`` symmetric positive definite, ``h`` every velocity, gravity and friction term
+(friction with its load dependence), and ``B`` the actuator map. ``inverse_dynamics``
+returns the ``u`` that solves this for given ``qdd``; ``forward_dynamics`` the ``qdd`` for
+given ``u``. Every verb is batched over a leading sample axis.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["MachineDynamics"]
+
+Array = NDArray[np.float64]
+
+
+class MachineDynamics(Protocol):
+    """The verbs a machine answers in its own minimal coordinates (see the module docstring)."""
+
+    #: coordinate names with their unit suffix, e.g. ``("alpha_rad", "beta_rad", "gamma_rad")``
+    COORDINATES: tuple[str, ...]
+    #: actuator names with their unit suffix, e.g. ``("tau1_Nm", "tau2_Nm", "tau3_Nm")``
+    ACTUATORS: tuple[str, ...]
+
+    def mass_matrix(self, model: Any, q: Array) -> Array:
+        """``M(q) (n, nq, nq)``, symmetric positive definite."""
+        ...
+
+    def bias_forces(self, model: Any, q: Array, qd: Array, load: Array | None) -> Array:
+        """``h(q, qd, load) (n, nq)``: velocity terms, gravity and friction."""
+        ...
+
+    def actuator_map(self, model: Any, q: Array) -> Array:
+        """``B(q) (n, nq, nu)``: generalised forces of unit actuator efforts."""
+        ...
+
+    def inverse_dynamics(self, model: Any, q: Array, qd: Array, qdd: Array, load: Array | None) -> Array:
+        """Actuator efforts ``u (n, nu)`` that produce ``qdd``."""
+        ...
+
+    def forward_dynamics(self, model: Any, q: Array, qd: Array, u: Array, load: Array | None) -> Array:
+        """Accelerations ``qdd (n, nq)`` under actuator efforts ``u``."""
+        ...
