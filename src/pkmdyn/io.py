@@ -11,7 +11,10 @@ from __future__ import annotations
 import csv
 import json
 import math
-from collections.abc import Iterable, Mapping, Sequence
+import shutil
+import tempfile
+from contextlib import contextmanager
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -20,9 +23,50 @@ from numpy.typing import NDArray
 
 from .errors import MotionError, PkmdynError
 
-__all__ = ["make_out_dir", "read_csv_columns", "write_csv", "write_json"]
+__all__ = ["output_dir", "RUN_MARKER", "make_out_dir", "read_csv_columns", "write_csv", "write_json"]
 
 Array = NDArray[np.float64]
+
+
+#: the file that marks a folder as a pkmdyn run's output (so a rerun may replace it whole)
+RUN_MARKER = ".pkmdyn-run"
+
+
+@contextmanager
+def output_dir(path: str | Path) -> Iterator[Path]:
+    """Write a run's files all at once: ``with output_dir(out) as tmp: write into tmp``.
+
+    The files go into a fresh temporary folder beside ``path``; only when the block ends
+    without an exception (Ctrl-C included) is that folder moved into place, replacing an
+    earlier pkmdyn run at ``path`` whole. A non-empty ``path`` that holds no earlier run is
+    refused before anything is written. On any failure the temporary folder is removed and
+    ``path`` is left as it was.
+    """
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise PkmdynError(f"--out {out}: exists and is not a folder")
+    if out.is_dir() and any(out.iterdir()) and not (out / RUN_MARKER).is_file():
+        raise PkmdynError(f"--out {out}: folder is not empty and holds no earlier pkmdyn run; refusing to overwrite it")
+    parent = out.absolute().parent
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=parent))
+    except OSError as exc:
+        raise PkmdynError(f"--out {out}: cannot create folder ({exc.strerror or exc})") from None
+    try:
+        yield tmp
+        (tmp / RUN_MARKER).write_text("pkmdyn run output; a rerun into this folder replaces it whole\n", encoding="utf-8")
+        old = None
+        if out.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=parent))
+            old.rmdir()
+            out.rename(old)
+        tmp.rename(out)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
 
 
 def make_out_dir(path: str | Path) -> Path:
