@@ -5,6 +5,7 @@ the revolute joint R4. Data flows one way: TOML -> :class:`PdmModel` -> motion -
 :func:`inverse_kinematics` -> results and plots.
 """
 
+from . import minimal  # the MachineDynamics verbs in (x, y, alpha, gamma)
 from .kinematics import (
     BODY_NAMES,
     BodyState,

@@ -130,7 +130,25 @@ def _when(t: Array | None, s: int) -> str:
 @dataclass(frozen=True)
 class BodyState:
     """One rigid body: centre of mass ``p, v, a`` (n, 3) [m, m/s, m/s^2] and angular velocity
-    ``w`` (n, 3) [rad/s] and acceleration ``wd`` (n, 3) [rad/s^2], all in the base frame."""
+    ``w`` (n, 3) [rad/s] and acceleration ``wd`` (n, 3) [rad/s^2], all in the base frame;
+    ``R`` (n, 3, 3) the rotation from the body's own frame to the base frame.
+
+    Body frames (origin at the centre of mass; the x axis is the axis of the rod or tube that
+    the inertia model of ``pdm4.inertia`` uses):
+
+    - ``platform``: the platform frame, ``R = T = Rz(alpha) Rx(gamma)`` (Eq. 3), x = R4 axis;
+    - ``link4``: ``Rz(alpha)``, x from R31 towards R32;
+    - ``crank{i}``: ``Rz(theta_1i)``, x from R1i towards R2i; ``coupler{i}``: ``Rz(theta_2i)``,
+      x from R2i towards R3i;
+    - RPR ``cylinder{i}``, ``piston{i}``: x along the limb ``u`` (R4i -> R2i), z = base z,
+      i.e. ``Rz(phi_i)`` (Eq. 17);
+    - SPU ``cylinder{j}``, ``piston{j}``: x along the limb ``u`` (S2j -> U2j), y the second
+      U-joint axis ``U_j2`` (Eq. 26, fixed in the limb), z = x cross y.
+
+    The planar bodies (six-bar and RPR limbs) lie in stacked layers: their centres of mass sit
+    at ``model.layer_z`` above the plane z = 0 of the output link; the offset is along their
+    rotation axis, so it changes ``p`` only, never ``v`` or ``a``.
+    """
 
     name: str
     p: Array
@@ -138,6 +156,7 @@ class BodyState:
     a: Array
     w: Array
     wd: Array
+    R: Array
 
 
 @dataclass(frozen=True)
@@ -438,22 +457,34 @@ def inverse_kinematics(model: PdmModel, motion: PdmMotion, check_strokes: bool =
     cyl34, pis34 = _limb_bodies(np.broadcast_to(model.S, u34.shape), u34, ud34, udd34, l34, ld34, ldd34,
                                 w_spu, wd_spu, model.cylinder_com[2:], model.piston_com[2:])
 
-    def body(name: str, pva: tuple[Array, Array, Array], w: Array, wd: Array) -> BodyState:
-        return BodyState(name, pva[0], pva[1], pva[2], np.ascontiguousarray(w), np.ascontiguousarray(wd))
+    def body(name: str, pva: tuple[Array, Array, Array], w: Array, wd: Array, R: Array) -> BodyState:
+        p = pva[0]
+        dz = float(model.layer_z[BODY_NAMES.index(name)])
+        if dz != 0.0:
+            p = p + np.array([0.0, 0.0, dz])
+        return BodyState(name, p, pva[1], pva[2], np.ascontiguousarray(w), np.ascontiguousarray(wd), R)
+
+    R_limb = np.empty((n, 4, 3, 3))
+    R_limb[:, :2] = axis_rotation(2, rpr[0])
+    R_limb[:, 2:, :, 0] = u34
+    R_limb[:, 2:, :, 1] = U2
+    R_limb[:, 2:, :, 2] = cross(u34, U2)
 
     w_l = np.concatenate([w_rpr, w_spu], axis=1)
     wd_l = np.concatenate([wd_rpr, wd_spu], axis=1)
     cyl = [np.concatenate([a, b], axis=1) for a, b in zip(cyl12, cyl34)]
     pis = [np.concatenate([a, b], axis=1) for a, b in zip(pis12, pis34)]
     bodies = [
-        body("platform", (pos.P, vP, aP), w_mp, wd_mp),
-        body("link4", (pos.C, vC, aC), w4, wd4),
-        *(body(f"crank{i + 1}", tuple(x[:, i] for x in crank), _planar(th1d[:, i]), _planar(th1dd[:, i]))  # type: ignore[arg-type]
-          for i in range(2)),
-        *(body(f"coupler{i + 1}", tuple(x[:, i] for x in coupler), _planar(th2d[:, i]), _planar(th2dd[:, i]))  # type: ignore[arg-type]
-          for i in range(2)),
-        *(body(f"cylinder{k + 1}", tuple(x[:, k] for x in cyl), w_l[:, k], wd_l[:, k]) for k in range(4)),  # type: ignore[arg-type]
-        *(body(f"piston{k + 1}", tuple(x[:, k] for x in pis), w_l[:, k], wd_l[:, k]) for k in range(4)),  # type: ignore[arg-type]
+        body("platform", (pos.P, vP, aP), w_mp, wd_mp, pos.T),
+        body("link4", (pos.C, vC, aC), w4, wd4, axis_rotation(2, alpha)),
+        *(body(f"crank{i + 1}", tuple(x[:, i] for x in crank), _planar(th1d[:, i]), _planar(th1dd[:, i]),  # type: ignore[arg-type]
+               axis_rotation(2, pos.theta1[:, i])) for i in range(2)),
+        *(body(f"coupler{i + 1}", tuple(x[:, i] for x in coupler), _planar(th2d[:, i]), _planar(th2dd[:, i]),  # type: ignore[arg-type]
+               axis_rotation(2, pos.theta2[:, i])) for i in range(2)),
+        *(body(f"cylinder{k + 1}", tuple(x[:, k] for x in cyl), w_l[:, k], wd_l[:, k], R_limb[:, k])  # type: ignore[arg-type]
+          for k in range(4)),
+        *(body(f"piston{k + 1}", tuple(x[:, k] for x in pis), w_l[:, k], wd_l[:, k], R_limb[:, k])  # type: ignore[arg-type]
+          for k in range(4)),
     ]
     closure = np.abs(np.sqrt(dot(pos.R3 - pos.R2, pos.R3 - pos.R2)) - model.r3).max(axis=1)
     residual = np.maximum(closure, np.abs(pos.C[:, 2]))

@@ -24,7 +24,7 @@ from pydantic import Field, field_validator
 
 from ...errors import ParameterError
 from ...params_util import Section as _Section
-from ...params_util import read_toml, validate
+from ...params_util import check_limit, read_toml, validate
 
 __all__ = ["PdmModel", "TrajectorySettings", "WorkspaceSettings", "load_params", "default_params_path"]
 
@@ -47,6 +47,10 @@ class _Geometry(_Section):
     spu_home_length_m: _Pos
     spu_home_azimuth_deg: list[float] = Field(min_length=2, max_length=2)
     spu_home_elevation_deg: float = Field(gt=-90, lt=90)
+    # z of each planar link layer above the output link's plane (CHOSEN; docs/pdm4.md)
+    coupler_layer_z_m: float = Field(default=-0.025, ge=-1, le=1)
+    crank_layer_z_m: float = Field(default=-0.050, ge=-1, le=1)
+    rpr_limb_layer_z_m: float = Field(default=-0.075, ge=-1, le=1)
 
     @field_validator("assembly_branch")
     @classmethod
@@ -66,28 +70,50 @@ class _Limbs(_Section):
 
 
 class _Material(_Section):
-    youngs_modulus_Pa: _Pos
+    youngs_modulus_Pa: float = Field(gt=0, le=1e13)
     poisson_ratio: float = Field(gt=-1, lt=0.5)
-    section_diameters_m: list[_Pos] = Field(min_length=3, max_length=3)
+    section_diameters_m: list[Annotated[float, Field(gt=0, le=10)]] = Field(min_length=3, max_length=3)
+    cylinder_wall_m: float = Field(default=0.005, gt=0, le=1)
+    stiffness_diameters_m: dict[str, Annotated[float, Field(gt=0, le=10)]] = Field(default_factory=dict)
+
+
+class _BodyInertia(_Section):
+    mass_kg: float | None = Field(default=None, gt=0, le=1e6)
+    inertia_kgm2: list[Annotated[list[Annotated[float, Field(ge=-1e6, le=1e6)]], Field(min_length=3, max_length=3)]] | None = Field(
+        default=None, min_length=3, max_length=3)
+
+
+class _Inertia(_Section):
+    gravity_m_s2: list[Annotated[float, Field(ge=-1000, le=1000)]] = Field(
+        default_factory=lambda: [0.0, 0.0, -9.80665], min_length=3, max_length=3)
+    density_kg_m3: float = Field(default=2700.0, gt=0, le=1e5)
+    bodies: dict[str, _BodyInertia] = Field(default_factory=dict)
 
 
 class _Trajectory(_Section):
-    stroke_x_m: float
-    stroke_y_m: float
-    stroke_alpha_deg: float
-    stroke_gamma_deg: float
-    period_s: _Pos
+    stroke_x_m: float = Field(ge=-10, le=10)
+    stroke_y_m: float = Field(ge=-10, le=10)
+    stroke_alpha_deg: float = Field(ge=-360, le=360)
+    stroke_gamma_deg: float = Field(ge=-360, le=360)
+    period_s: float = Field(ge=1e-3, le=1e6)
     samples: int = Field(ge=6)
 
 
 class _Workspace(_Section):
-    alpha_deg: float
-    gamma_min_deg: float
-    gamma_max_deg: float
-    gamma_layers: int = Field(ge=1)
-    directions: int = Field(ge=8)
-    radial_step_m: _Pos
-    max_radius_m: _Pos
+    alpha_deg: float = Field(ge=-360, le=360)
+    gamma_min_deg: float = Field(ge=-360, le=360)
+    gamma_max_deg: float = Field(ge=-360, le=360)
+    gamma_layers: int = Field(ge=1, le=361)
+    directions: int = Field(ge=8, le=3600)
+    radial_step_m: float = Field(ge=1e-6, le=10)
+    max_radius_m: float = Field(gt=0, le=10)
+
+
+class _Limits(_Section):
+    """Plausibility limits on the run's size (docs/file_formats.md, "Limits"); raise them here."""
+
+    max_samples: int = Field(default=200_000, gt=0)  # trajectory samples or motion-file rows
+    max_workspace_points: int = Field(default=5_000_000, gt=0)  # layers x directions x ray samples
 
 
 class _Description(_Section):
@@ -96,6 +122,8 @@ class _Description(_Section):
     material: _Material
     trajectory: _Trajectory
     workspace: _Workspace
+    limits: _Limits = Field(default_factory=_Limits)
+    inertia: _Inertia = Field(default_factory=_Inertia)
 
 
 @dataclass(frozen=True)
@@ -132,6 +160,14 @@ class PdmModel:
     ``U1_local`` (3,): first U-joint axis, fixed in the platform (its x axis, parallel to R4).
     ``P_local`` (3,): platform point P in the platform frame relative to C, ``(0, 0, r0)``.
     ``home_lengths`` (4,): limb lengths l11, l12, l23, l24 at the home pose.
+
+    Inertia and material (``pdm4.inertia``, docs/pdm4.md section 10), every body array in
+    ``BODY_NAMES`` order: ``gravity`` (3,) [m/s^2], base frame; ``mass`` (14,) [kg];
+    ``inertia`` (14, 3, 3) [kg m^2] about the centre of mass in the body's own frame (the frame
+    of ``BodyState.R``); ``layer_z`` (14,) [m] z of each planar body's plane (0 for the platform
+    and the SPU limbs, which are spatial); ``section_outer``, ``section_inner`` (14,) [m] outer
+    and inner diameter of each body's section for its stiffness (Eq. 64; inner 0: solid rod);
+    ``body_length`` (14,) [m] the rod or tube length used for its mass and inertia.
     """
 
     r0: float
@@ -159,10 +195,18 @@ class PdmModel:
     trajectory: TrajectorySettings
     workspace: WorkspaceSettings
     source: str
+    gravity: Array
+    mass: Array
+    inertia: Array
+    layer_z: Array
+    section_outer: Array
+    section_inner: Array
+    body_length: Array
 
     def __post_init__(self) -> None:
         for name in ("R1", "R4", "S", "U_local", "R3_local", "U1_local", "P_local",
-                     "home_lengths", "cylinder_com", "piston_com"):
+                     "home_lengths", "cylinder_com", "piston_com", "gravity", "mass", "inertia",
+                     "layer_z", "section_outer", "section_inner", "body_length"):
             getattr(self, name).setflags(write=False)
 
 
@@ -205,7 +249,16 @@ def _build(d: _Description, name: str) -> PdmModel:
     t, w = d.trajectory, d.workspace
     if w.gamma_max_deg < w.gamma_min_deg:
         raise ParameterError(f"{name}: [workspace] gamma_max_deg: must be >= gamma_min_deg")
+    caps = d.limits
+    check_limit(t.samples, caps.max_samples, f"{name}: [trajectory] samples", "max_samples", option=False)
+    points = w.gamma_layers * w.directions * (math.floor(w.max_radius_m / w.radial_step_m + 0.5) + 1)
+    check_limit(points, caps.max_workspace_points,
+                f"{name}: [workspace] gamma_layers x directions x (max_radius_m / radial_step_m + 1)",
+                "max_workspace_points", option=False)
     gammas = np.radians(np.linspace(w.gamma_min_deg, w.gamma_max_deg, w.gamma_layers))
+    from .inertia import body_inertia  # the inertia and material model, docs/pdm4.md section 10
+
+    props = body_inertia(d, name, r2=r2, r3=r3, r4=r4)
     return PdmModel(
         r0=g.platform_offset_m, r1=r1, r2=r2, r3=r3, r4=r4, n1=g.crank_pivot_y_m,
         branch=(int(branch[0]), int(branch[1])),
@@ -229,17 +282,18 @@ def _build(d: _Description, name: str) -> PdmModel:
             directions=w.directions, radial_step_m=w.radial_step_m, max_radius_m=w.max_radius_m,
         ),
         source=name,
+        **props,
     )
 
 
 def load_params(path: str | Path | None = None) -> PdmModel:
     """Read, validate and build a :class:`PdmModel`; ``None`` reads the built-in defaults.
 
-    Raises :class:`~pkmdyn.errors.ParameterError` naming the file, section and key, e.g.
-    ``"params.toml: [geometry] crank_length_m: must be > 0"``.
+    Raises :class:`~pkmdyn.errors.ParameterError` naming the file by its full path, the
+    section and the key, e.g. ``"/home/me/params.toml: [geometry] crank_length_m: must be > 0"``.
     """
-    p = default_params_path() if path is None else Path(path)
-    name = p.name
+    p = (default_params_path() if path is None else Path(path)).absolute()
+    name = str(p)
     return _build(_validate(read_toml(p), name), name)
 
 

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from .workspace import Workspace
 
-__all__ = ["plot_limbs", "plot_workspace"]
+__all__ = ["plot_limbs", "plot_workspace", "plot_forces", "plot_overconstraints"]
 
 Array = NDArray[np.float64]
 _LIMBS = ("$l_{11}$", "$l_{12}$", "$l_{23}$", "$l_{24}$")
@@ -71,4 +71,42 @@ def plot_workspace(ws: Workspace, path: str | Path) -> Path:
     ax2.grid(True, alpha=0.3)
     ax2.set_title("(b) projection on the x-y plane")
     ax2.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.0, 0.5))
+    return _save(fig, path)
+
+
+def plot_forces(t: Array, force: Array, path: str | Path) -> Path:
+    """Actuator forces [N] of the four limbs against time (Fig. 20/21 style); ``force`` (n, 4),
+    the axial force of each cylinder on its piston (positive: pushes the limb longer)."""
+    fig = Figure(figsize=(7.5, 4.5), layout="constrained")
+    ax = fig.subplots()
+    for k in range(4):
+        ax.plot(t, force[:, k], label=_LIMBS[k])
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("actuator force [N]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(ncol=4, loc="best")
+    ax.set_title("PDM actuator forces, Newton-Euler (Eq. 49-62)")
+    return _save(fig, path)
+
+
+def plot_overconstraints(t: Array, redundant: Array, path: str | Path) -> Path:
+    """The nine over-constrained reaction components (Fig. 22 style): force along z [N] and
+    moments about x and y [N m] at R32, R21 (crank 1 - piston 1) and R22; ``redundant`` (n, 9)
+    in the order of ``dynamics.REDUNDANT_LABELS``. SI units, as in the files."""
+    fig = Figure(figsize=(12.0, 7.0), layout="constrained")
+    axes = fig.subplots(2, 3, sharex=True)
+    for c, (joint, col) in enumerate((("R32", 2), ("R21", 0), ("R22", 1))):
+        data = redundant[:, 3 * col:3 * col + 3]
+        axes[0, c].plot(t, data[:, 0], color="C0", label="$f_z$")
+        axes[0, c].set_ylabel("force [N]")
+        axes[0, c].set_title(f"{joint}: $f_z$")
+        axes[1, c].plot(t, data[:, 1], color="C1", label="$m_x$")
+        axes[1, c].plot(t, data[:, 2], color="C2", label="$m_y$")
+        axes[1, c].set_ylabel("moment [N m]")
+        axes[1, c].set_title(f"{joint}: $m_x$, $m_y$")
+        axes[1, c].legend(loc="best")
+        axes[1, c].set_xlabel("time [s]")
+        for ax in axes[:, c]:
+            ax.grid(True, alpha=0.3)
+    fig.suptitle("Reactions in the over-constrained directions (Eq. 70), unique by link compliance (Eq. 83)")
     return _save(fig, path)

@@ -1,14 +1,19 @@
 """The whole PDM job behind ``pkmdyn pdm run``: parameters and motion in, files out.
 
 Files written to the output folder (formats in docs/pdm4.md):
-``results.csv`` (one row per sample), ``mobility.json`` (Eq. 1 and the screw analysis),
-``geometry.json`` (the joint positions the layout derives), ``workspace.csv`` and
+``results.csv`` (one row per sample: kinematics, actuator forces, the over-constrained
+reactions), ``model.json`` (gravity, bodies, joints), ``bodies.npz`` (every body's motion and
+every joint's reaction wrench), ``summary.json``, ``mobility.json`` (Eq. 1 and the screw
+analysis), ``geometry.json`` (the joint positions the layout derives), ``workspace.csv`` and
 ``workspace_xy.csv`` (boundary search), and unless plots are off ``limbs.png``,
-``workspace.png`` and ``schematic.png``.
+``forces.png``, ``overconstraints.png``, ``workspace.png`` and ``schematic.png``. Everything is
+computed before the output folder is touched, and the folder is written whole through
+:func:`pkmdyn.io.output_dir`.
 """
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -17,13 +22,16 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from ...analysis.mobility import analyse
-from ...io import make_out_dir, write_csv, write_json
+from ...errors import PkmdynError
+from ...io import output_dir, write_csv, write_json
 from ...profiles.pdm_motion import PdmMotion, cycloidal_motion, read_pdm_motion
+from .dynamics import JOINTS, REDUNDANT_LABELS, PdmReactions, inverse_dynamics
 from .kinematics import BODY_NAMES, PdmKinematics, inverse_kinematics, mechanism_joints
-from .params import PdmModel, load_params
+from .params import PdmModel, TrajectorySettings, load_params
 from .workspace import reachable_workspace, write_projection_csv, write_workspace_csv
 
-__all__ = ["run_pdm", "results_columns", "mobility_summary", "geometry_summary", "CHUNK"]
+__all__ = ["run_pdm", "results_columns", "dynamics_columns", "mobility_summary", "geometry_summary",
+           "model_summary", "trajectory_with", "CHUNK"]
 
 Array = NDArray[np.float64]
 #: samples per block of the kinematics loop (one progress-bar step per block)
@@ -77,6 +85,73 @@ def results_columns(model: PdmModel, kin: PdmKinematics) -> dict[str, Array]:
     return cols
 
 
+def dynamics_columns(reac: PdmReactions) -> dict[str, Array]:
+    """Actuator forces ``f{k}_N`` (k = 1..4, the order of ``l{k}_m``), the nine over-constrained
+    reaction components (``R21_fz_N`` ... ``R32_my_Nm``, ``dynamics.REDUNDANT_LABELS``) and the
+    U-joint constraint torques ``U23_torque_Nm, U24_torque_Nm``."""
+    cols: dict[str, Array] = {f"f{k + 1}_N": reac.force[:, k] for k in range(4)}
+    for c, label in enumerate(REDUNDANT_LABELS):
+        cols[label] = reac.redundant[:, c]
+    cols["U23_torque_Nm"] = reac.u_joint_torque[:, 0]
+    cols["U24_torque_Nm"] = reac.u_joint_torque[:, 1]
+    return cols
+
+
+def model_summary(model: PdmModel) -> dict[str, Any]:
+    """``model.json``: gravity, every body (mass, inertia about its centre of mass in its own
+    frame) and every joint (type and the two bodies; the reaction is what ``body_a`` exerts
+    on ``body_b``), in the order of ``bodies.npz``."""
+    return {
+        "source": model.source,
+        "gravity_m_s2": model.gravity,
+        "body_frames": "origin at the centre of mass; x along the link (docs/pdm4.md, body frames)",
+        "bodies": [{"name": name, "mass_kg": float(model.mass[b]), "inertia_kgm2": model.inertia[b]}
+                   for b, name in enumerate(BODY_NAMES)],
+        "joints": [{"name": name, "type": typ, "body_a": a, "body_b": b} for name, typ, a, b in JOINTS],
+        "material": {"youngs_modulus_Pa": model.youngs_modulus_Pa, "poisson_ratio": model.poisson_ratio,
+                     "section_outer_m": {n: float(model.section_outer[b]) for b, n in enumerate(BODY_NAMES)},
+                     "section_inner_m": {n: float(model.section_inner[b]) for b, n in enumerate(BODY_NAMES)}},
+    }
+
+
+def trajectory_with(model: PdmModel, stroke_x_m: float | None = None, stroke_y_m: float | None = None,
+                    stroke_alpha_deg: float | None = None, stroke_gamma_deg: float | None = None,
+                    period_s: float | None = None, peak_y_accel_m_s2: float | None = None) -> TrajectorySettings:
+    """The Eq. 84 settings of ``model`` with the given amplitudes/period replaced.
+
+    ``peak_y_accel_m_s2`` sets the period instead: the cycloid peaks at
+    ``|y_ddot|max = 2 pi |S_y| / T^2``, so ``T = sqrt(2 pi |S_y| / a)``. Raises
+    :class:`~pkmdyn.errors.PkmdynError` naming the option for a non-finite or out-of-range value.
+    """
+    tr = model.trajectory
+    strokes = list(tr.strokes)
+    for k, (opt, v, scale, lim) in enumerate((("--stroke-x-m", stroke_x_m, 1.0, 10.0),
+                                              ("--stroke-y-m", stroke_y_m, 1.0, 10.0),
+                                              ("--stroke-alpha-deg", stroke_alpha_deg, math.pi / 180, 360.0),
+                                              ("--stroke-gamma-deg", stroke_gamma_deg, math.pi / 180, 360.0))):
+        if v is None:
+            continue
+        if not math.isfinite(v) or abs(v) > lim:
+            raise PkmdynError(f"{opt}: must be a finite number within +-{lim:g}, got {v!r}")
+        strokes[k] = v * scale
+    period = tr.period_s
+    if period_s is not None and peak_y_accel_m_s2 is not None:
+        raise PkmdynError("--period-s and --peak-y-accel: give one of them, not both")
+    if period_s is not None:
+        if not math.isfinite(period_s) or not 1e-3 <= period_s <= 1e6:
+            raise PkmdynError(f"--period-s: must be within 0.001 .. 1e6 s, got {period_s!r}")
+        period = period_s
+    if peak_y_accel_m_s2 is not None:
+        if not math.isfinite(peak_y_accel_m_s2) or not 0 < peak_y_accel_m_s2 <= 1e3:
+            raise PkmdynError(f"--peak-y-accel: must be within 0 .. 1000 m/s^2 (exclusive of 0), got {peak_y_accel_m_s2!r}")
+        if strokes[1] == 0:
+            raise PkmdynError("--peak-y-accel: the y stroke S_y is zero, so no period gives that acceleration")
+        period = math.sqrt(2.0 * math.pi * abs(strokes[1]) / peak_y_accel_m_s2)
+        if not 1e-3 <= period <= 1e6:
+            raise PkmdynError(f"--peak-y-accel: implies a period of {period:.6g} s, outside 0.001 .. 1e6 s")
+    return TrajectorySettings(strokes=tuple(strokes), period_s=period, samples=tr.samples)  # type: ignore[arg-type]
+
+
 def mobility_summary(model: PdmModel, q: Array) -> dict[str, Any]:
     """``mobility.json`` content: joint counts, Eq. 1 and the screw analysis at pose ``q``."""
     rep = analyse(mechanism_joints(model, q), "ground", "platform")
@@ -120,36 +195,82 @@ def geometry_summary(model: PdmModel) -> dict[str, Any]:
     }
 
 
-def _kinematics_columns(model: PdmModel, motion: PdmMotion) -> dict[str, Array]:
-    """``results.csv`` columns, computed in blocks of ``CHUNK`` samples (progress bar on a
-    terminal when there is more than one block)."""
-    blocks = []
+_BODY_FIELDS = ("R", "p", "v", "w", "a", "wd")
+
+
+def _compute(model: PdmModel, motion: PdmMotion) -> tuple[dict[str, Array], dict[str, Array]]:
+    """``results.csv`` columns and ``bodies.npz`` arrays, in blocks of ``CHUNK`` samples
+    (progress bar on a terminal when there is more than one block)."""
+    blocks, arrays = [], []
     starts = range(0, len(motion), CHUNK)
-    for s in tqdm(starts, desc="pdm kinematics", unit="block", disable=None if len(starts) > 1 else True):
-        blocks.append(results_columns(model, inverse_kinematics(model, motion.slice(s, s + CHUNK))))
-    return {k: np.concatenate([b[k] for b in blocks]) for k in blocks[0]}
+    for s in tqdm(starts, desc="pdm dynamics", unit="block", disable=None if len(starts) > 1 else True):
+        kin = inverse_kinematics(model, motion.slice(s, s + CHUNK))
+        reac = inverse_dynamics(model, kin)
+        blocks.append({**results_columns(model, kin), **dynamics_columns(reac)})
+        arr = {f: np.stack([getattr(b, f) for b in kin.bodies], axis=1) for f in _BODY_FIELDS}
+        arr.update(joint_point=reac.joint_point, joint_force=reac.joint_force, joint_moment=reac.joint_moment)
+        arrays.append(arr)
+    cols = {k: np.concatenate([b[k] for b in blocks]) for k in blocks[0]}
+    npz = {k: np.concatenate([b[k] for b in arrays]) for k in arrays[0]}
+    npz["t"] = motion.t
+    for k, v in npz.items():
+        if not np.all(np.isfinite(v)):
+            raise PkmdynError(f"bodies.npz: {k} has a non-finite value; refusing to write it")
+    return cols, npz
+
+
+def _summary(cols: dict[str, Array], n: int, mob: dict[str, Any], files: dict[str, Path]) -> dict[str, Any]:
+    def peak(name: str) -> float:
+        return float(np.abs(cols[name]).max())
+
+    return {
+        "samples": n,
+        "max_abs_actuator_force_N": {f"f{k}_N": peak(f"f{k}_N") for k in range(1, 5)},
+        "max_abs_overconstrained_reaction": {label: peak(label) for label in REDUNDANT_LABELS},
+        "max_abs_u_joint_torque_Nm": {k: peak(k) for k in ("U23_torque_Nm", "U24_torque_Nm")},
+        "max_loop_residual_m": float(cols["loop_residual_m"].max()),
+        "t": mob["t"],
+        "files": sorted(p.name for p in files.values()),
+    }
 
 
 def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_dir: str | Path,
-            plots: bool = True) -> dict[str, Any]:
-    """Run the PDM kinematics and write every result file into ``out_dir``.
+            plots: bool = True, trajectory: dict[str, float | None] | None = None) -> dict[str, Any]:
+    """Run the PDM kinematics and dynamics and write every result file into ``out_dir``.
 
     ``params_path``: TOML parameters (None: built-in defaults); ``motion_path``: motion CSV
-    (None: the Eq. 84 cycloidal motion of the ``[trajectory]`` section). Returns a summary
-    ``{"files": {label: path}, "samples": n, "max_loop_residual_m": ..., "t": ...}``.
-    User errors raise :class:`~pkmdyn.errors.PkmdynError` subclasses naming the key, row,
-    sample time or limb.
+    (None: the Eq. 84 cycloidal motion of the ``[trajectory]`` section, with the overrides of
+    ``trajectory``, the keyword arguments of :func:`trajectory_with`). Returns the summary of
+    ``summary.json`` with ``files`` as ``{label: path}``. User errors raise
+    :class:`~pkmdyn.errors.PkmdynError` subclasses naming the file (full path), key, row,
+    sample time or limb; they are raised before ``out_dir`` is touched.
     """
     model = load_params(params_path)
+    overrides = {k: v for k, v in (trajectory or {}).items() if v is not None}
     if motion_path is None:
-        tr = model.trajectory
+        tr = trajectory_with(model, **overrides) if overrides else model.trajectory
         motion = cycloidal_motion(tr.strokes, tr.period_s, tr.samples)
     else:
-        motion = read_pdm_motion(motion_path)
-    cols = _kinematics_columns(model, motion)
+        if overrides:
+            raise PkmdynError("--motion: the trajectory options (--stroke-*, --period-s, --peak-y-accel) "
+                              "apply to the built-in Eq. 84 motion only")
+        motion = read_pdm_motion(Path(motion_path).absolute())
+    cols, npz = _compute(model, motion)
     mob = mobility_summary(model, motion.q[0])
     ws = reachable_workspace(model)
-    out = make_out_dir(out_dir)  # only now: a user error above leaves nothing behind
+    with output_dir(out_dir) as out:  # only now: a user error above leaves nothing behind
+        files = _write(model, out, cols, npz, mob, ws, plots)
+        summ = _summary(cols, len(motion), mob, files)
+        files["summary"] = out / "summary.json"
+        summ["files"] = sorted(p.name for p in files.values())
+        write_json(files["summary"], summ)
+    final = Path(out_dir)
+    return {**summ, "files": {k: final / v.name for k, v in files.items()}}
+
+
+def _write(model: PdmModel, out: Path, cols: dict[str, Array], npz: dict[str, Array], mob: dict[str, Any],
+           ws: Any, plots: bool) -> dict[str, Path]:
+    """Write every file of a run into the (temporary) folder ``out``."""
     files: dict[str, Path] = {"results": out / "results.csv"}
     write_csv(files["results"], cols)
     files["mobility"] = out / "mobility.json"
@@ -160,8 +281,16 @@ def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_
     write_workspace_csv(files["workspace"], ws)
     files["workspace_xy"] = out / "workspace_xy.csv"
     write_projection_csv(files["workspace_xy"], ws)
+    files["model"] = out / "model.json"
+    write_json(files["model"], model_summary(model))
+    files["bodies"] = out / "bodies.npz"
+    try:
+        np.savez_compressed(files["bodies"], body_names=np.array(BODY_NAMES),
+                            joint_names=np.array([j[0] for j in JOINTS]), **npz)
+    except OSError as exc:
+        raise PkmdynError(f"{files['bodies']}: cannot write file ({exc.strerror or type(exc).__name__})") from None
     if plots:
-        from .plots import plot_limbs, plot_workspace
+        from .plots import plot_forces, plot_limbs, plot_overconstraints, plot_workspace
         from .schematic import draw_schematic
 
         ext = np.stack([cols[f"s{k}_m"] for k in range(1, 5)], axis=-1)
@@ -170,9 +299,8 @@ def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_
         files["limbs_plot"] = plot_limbs(cols["t_s"], ext, ld, ldd, out / "limbs.png")
         files["workspace_plot"] = plot_workspace(ws, out / "workspace.png")
         files["schematic"] = draw_schematic(model, out / "schematic.png")
-    return {
-        "files": files,
-        "samples": len(motion),
-        "max_loop_residual_m": float(cols["loop_residual_m"].max()),
-        "t": mob["t"],
-    }
+        force = np.stack([cols[f"f{k}_N"] for k in range(1, 5)], axis=-1)
+        files["forces_plot"] = plot_forces(cols["t_s"], force, out / "forces.png")
+        red = np.stack([cols[label] for label in REDUNDANT_LABELS], axis=-1)
+        files["overconstraints_plot"] = plot_overconstraints(cols["t_s"], red, out / "overconstraints.png")
+    return files

@@ -1,0 +1,105 @@
+"""Speed of the PDM's inverse dynamics: actuator forces, all joint reactions, the independent route.
+
+Runs, in one process and on the same samples (the Eq. 84 cycloidal motion of the built-in
+parameters, resampled to ``--samples`` samples), the Newton-Euler route of
+``pkmdyn.machines.pdm4.dynamics`` (actuator forces only, and every reaction with the
+compliance solution of Eq. 63-83), the virtual-power route in minimal coordinates
+(``pkmdyn.machines.pdm4.minimal.inverse_dynamics``, when present) and the dense general
+compliance solver of ``pkmdyn.analysis.compliance`` (on ``--dense-samples`` samples). Prints
+one JSON object; with ``--json`` nothing else is printed.
+
+    python benchmarks/pdm_inverse_dynamics.py --json [--samples 10000]
+
+Fields (us = microseconds, best of ``--repeat``): ``samples``; ``actuator_us_per_sample`` and
+``reactions_us_per_sample`` (from the kinematics of the samples, which every route shares);
+``kinematics_us_per_sample`` (``inverse_kinematics``); ``actuator_with_kinematics_us_per_sample``
+and ``reactions_with_kinematics_us_per_sample`` (from q, qd, qdd); ``reference_us_per_sample``
+(the independent route, from q, qd, qdd); ``dense_general_us_per_sample``; ``single_sample_us``
+(one sample, kinematics + every reaction, as a controller would call it); agreement figures;
+the targets (actuator <= 10 us, reactions <= 50 us per sample on 10,000 samples) and whether
+they are met.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+# every route here is single-threaded per call (batched small matrices); BLAS threads would only
+# contend with each other on a shared machine, so they are pinned to one before numpy loads
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+
+from pkmdyn.machines.pdm4 import inverse_kinematics, load_params  # noqa: E402
+from pkmdyn.machines.pdm4.dynamics import actuator_forces, compliance_system, equilibrium_system, inverse_dynamics  # noqa: E402
+from pkmdyn.profiles.pdm_motion import cycloidal_motion  # noqa: E402
+
+
+def _best(fn, repeat: int) -> float:
+    fn()
+    best = np.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--samples", type=int, default=10_000)
+    ap.add_argument("--dense-samples", type=int, default=100)
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args()
+    n = args.samples
+    model = load_params()
+    tr = model.trajectory
+    motion = cycloidal_motion(tr.strokes, tr.period_s, n)
+    kin = inverse_kinematics(model, motion)
+    us = 1e6 / n
+    out: dict = {"samples": n}
+    out["actuator_us_per_sample"] = _best(lambda: actuator_forces(model, kin), args.repeat) * us
+    out["reactions_us_per_sample"] = _best(lambda: inverse_dynamics(model, kin), args.repeat) * us
+    out["kinematics_us_per_sample"] = _best(lambda: inverse_kinematics(model, motion), args.repeat) * us
+    out["actuator_with_kinematics_us_per_sample"] = _best(
+        lambda: actuator_forces(model, inverse_kinematics(model, motion)), args.repeat) * us
+    out["reactions_with_kinematics_us_per_sample"] = _best(
+        lambda: inverse_dynamics(model, inverse_kinematics(model, motion)), args.repeat) * us
+    reac = inverse_dynamics(model, kin)
+    try:
+        from pkmdyn.machines.pdm4 import minimal
+    except ImportError:  # pragma: no cover - the independent route is optional here
+        minimal = None
+    if minimal is not None:
+        ref = minimal.inverse_dynamics(model, motion.q, motion.qd, motion.qdd, None)
+        out["reference_us_per_sample"] = _best(
+            lambda: minimal.inverse_dynamics(model, motion.q, motion.qd, motion.qdd, None), args.repeat) * us
+        out["max_rel_difference_vs_reference"] = float(np.abs(ref - reac.force).max() / np.abs(ref).max())
+        out["speedup_actuator_vs_reference"] = out["reference_us_per_sample"] / out["actuator_with_kinematics_us_per_sample"]
+    m = min(args.dense_samples, n)
+    small = inverse_kinematics(model, motion.slice(0, m))
+
+    def dense():
+        from pkmdyn.analysis.compliance import unique_reactions
+
+        A, b, _ = equilibrium_system(model, small)
+        G, w0, C = compliance_system(model, small)
+        return unique_reactions(A, b, G, w0, C)
+
+    out["dense_general_us_per_sample"] = _best(dense, 1) * 1e6 / m
+    one = motion.slice(n // 3, n // 3 + 1)
+    out["single_sample_us"] = _best(lambda: inverse_dynamics(model, inverse_kinematics(model, one)), 50) * 1e6
+    out["targets"] = {"actuator_us_per_sample": 10.0, "reactions_us_per_sample": 50.0}
+    out["targets_met"] = {k: bool(out[k] <= v) for k, v in out["targets"].items()}
+    if not args.json:
+        print("PDM inverse dynamics benchmark")
+    print(json.dumps(out, indent=2))
+
+
+if __name__ == "__main__":
+    main()
