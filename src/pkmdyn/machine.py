@@ -60,3 +60,11 @@ class MachineDynamics(Protocol):
     def forward_dynamics(self, model: Any, q: Array, qd: Array, u: Array, load: Array | None) -> Array:
         """Accelerations ``qdd (n, nq)`` under actuator efforts ``u``."""
         ...
+
+    def inverse_dynamics_one(self, model: Any, q: Array, qd: Array, qdd: Array, load: float | None) -> Array:
+        """One sample of :meth:`inverse_dynamics`: ``q, qd, qdd (nq,)`` -> ``u (nu,)``, the real-time path."""
+        ...
+
+    def forward_dynamics_one(self, model: Any, q: Array, qd: Array, u: Array, load: float | None) -> Array:
+        """One sample of :meth:`forward_dynamics`: ``q, qd (nq,), u (nu,)`` -> ``qdd (nq,)``, the real-time path."""
+        ...

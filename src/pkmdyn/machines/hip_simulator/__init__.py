@@ -1,6 +1,7 @@
 """The 2(3PUS+S) dual-platform hip-joint wear simulator (Chen, Cheng & Pang 2022)."""
 
 from .dynamics import HipTorques, inverse_dynamics
+from .forward import forward_dynamics
 from .kinematics import HipKinematics, inverse_kinematics, platform_kinematics
 from .params import HipModel, load_params, model_from_dict
 
@@ -13,4 +14,5 @@ __all__ = [
     "platform_kinematics",
     "HipTorques",
     "inverse_dynamics",
+    "forward_dynamics",
 ]

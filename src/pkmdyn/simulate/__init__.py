@@ -1,0 +1,29 @@
+"""Closed-loop simulation of any machine through its verbs (:mod:`pkmdyn.machine`).
+
+``_plant``: the integrator of the forward dynamics with efforts held over each control cycle
+(a third-order explicit step where the motion is smooth, the linearly implicit ROS2 in the
+friction band); ``_loop``: encoders, pose sensor, controller and effort limits, once
+per control cycle. Nothing here imports a machine.
+"""
+
+from ._loop import DivergenceError, LoopResult, LoopSettings, check_timing, closed_loop
+from ._run import Tracking, track
+from ._plant import EXPLICIT_LIMIT, METHODS, ROS2_GAMMA, Plant, accelerations, hold_interval, make_plant, make_work
+
+__all__ = [
+    "Plant",
+    "make_plant",
+    "make_work",
+    "accelerations",
+    "hold_interval",
+    "ROS2_GAMMA",
+    "METHODS",
+    "EXPLICIT_LIMIT",
+    "LoopSettings",
+    "LoopResult",
+    "DivergenceError",
+    "closed_loop",
+    "check_timing",
+    "Tracking",
+    "track",
+]

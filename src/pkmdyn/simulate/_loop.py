@@ -1,0 +1,267 @@
+"""The closed loop: sensors -> controller -> held efforts -> plant, once per control cycle.
+
+Per cycle ``k`` (instant ``t_k = k T``):
+
+1. **Encoders.** The actuator displacement ``s`` (hip: motor angle [rad]; PDM: limb extension
+   [m]) from the start, read as a whole number of counts: ``s_enc = res floor(s / res)``,
+   ``res`` = travel per turn / counts per turn. The true ``s`` is taken to first order in the
+   tracking error about the plant's own reference displacement,
+   ``s = s_ref + B_p(q_ref)^T (q - q_ref)`` (``B_p`` the plant's actuator map; the neglected
+   second-order term is ``O(|q - q_ref|^2)``, below one count for the errors these loops
+   produce). Rate: backward difference ``(s_enc,k - s_enc,k-1) / T`` through a first-order
+   low-pass filter (cutoff ``velocity_cutoff_Hz``); acceleration: backward difference of the
+   filtered rate through a second low-pass filter (``acceleration_cutoff_Hz``) - the chain of
+   the PDM paper's section 7 (position differentiated twice, filtered). A cutoff of 0 means no
+   filter. The filter is ``y += a (x - y)``, ``a = 1 - exp(-2 pi f_c T)``; both filters start
+   on the reference's rate and acceleration (the loop starts in steady state on the reference).
+2. **Pose.** The pose sensor (the hip's attitude heading reference system) reads the pose
+   ``delay`` cycles ago plus Gaussian noise of the given standard deviation per coordinate
+   (seeded generator); it is recorded, and fed back only with ``pose_from_sensor``. By
+   default the controller's pose comes from the encoders through the controller's model,
+   ``q_s = q_ref + (B(q_ref)^T)^-1 (s_enc - s_ref)`` (forward kinematics to first order about
+   the reference), and its rate is always ``qd_s = (B(q_ref)^T)^-1 sd_enc``.
+3. **Controller** (:func:`pkmdyn.control.effort`) -> efforts, clipped to the effort limits.
+4. **Plant**: the efforts held over the cycle, ``T / dt`` steps of the integrator
+   (:mod:`pkmdyn.simulate._plant`), the load evaluated at every step boundary and middle.
+
+A run diverges when the state stops being finite, a tracking error exceeds its
+``divergence_limit`` or the machine's verbs fail (singular pose); :class:`DivergenceError`
+names the time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import PkmdynError
+from ._plant import Plant, hold_interval, make_work
+
+__all__ = ["LoopSettings", "LoopResult", "DivergenceError", "closed_loop", "check_timing"]
+
+Array = NDArray[np.float64]
+
+
+class DivergenceError(PkmdynError):
+    """A closed-loop run that went unstable; the message names the time."""
+
+
+@dataclass(frozen=True)
+class LoopSettings:
+    """Timing, sensors and limits of a closed loop (SI; displacement unit of the actuators).
+
+    ``cycle_s`` control cycle; ``step_s`` integration step (divides the cycle);
+    ``effort_limit (nu,)`` [N m or N]; ``divergence_limit (nq,)`` [rad or m];
+    ``encoder_resolution`` actuator displacement per count [rad or m];
+    ``velocity_cutoff_Hz``, ``acceleration_cutoff_Hz`` encoder filters (0: none);
+    ``pose_noise (nq,)`` standard deviation [rad or m]; ``pose_delay_cycles``; ``seed``;
+    ``pose_from_sensor``: the controller's pose from the pose sensor (else from the encoders);
+    ``method``: the plant's step (:data:`pkmdyn.simulate.METHODS`; by default a third-order
+    explicit step away from the friction band and ROS2 in it).
+    """
+
+    cycle_s: float
+    step_s: float
+    effort_limit: Array
+    divergence_limit: Array
+    encoder_resolution: float
+    velocity_cutoff_Hz: float
+    acceleration_cutoff_Hz: float
+    pose_noise: Array
+    pose_delay_cycles: int
+    seed: int
+    pose_from_sensor: bool = False
+    method: str = "rk3-ros2"
+
+
+@dataclass(frozen=True)
+class LoopResult:
+    """One row per cycle ``k = 0 .. K - 1`` at ``t_k``: true ``q, qd (K, nq)``, held efforts
+    ``u (K, nu)`` (after the limits), the controller's pose and rate ``q_s, qd_s (K, nq)``, the
+    pose sensor's reading ``q_att (K, nq)``, true actuator
+    displacement ``s (K, nu)``, encoder ``s_enc, sd_enc, sdd_enc (K, nu)``; the state at the
+    end ``q_end, qd_end (nq,)``; ``saturated (K, nu)`` where an effort hit its limit."""
+
+    t: Array
+    q: Array
+    qd: Array
+    u: Array
+    q_s: Array
+    qd_s: Array
+    q_att: Array
+    s: Array
+    s_enc: Array
+    sd_enc: Array
+    sdd_enc: Array
+    q_end: Array
+    qd_end: Array
+    saturated: Array
+
+
+def check_timing(cycle_s: float, step_s: float) -> int:
+    """Integration steps per cycle; the cycle must be a positive whole multiple of the step."""
+    from ..errors import ParameterError
+
+    for name, v in (("control_cycle_s", cycle_s), ("integration_step_s", step_s)):
+        if not (np.isfinite(v) and v > 0):
+            raise ParameterError(f"[timing] {name}: {v:g} must be finite and > 0")
+    ratio = cycle_s / step_s
+    n = int(round(ratio))
+    if n < 1 or abs(ratio - n) > 1e-9 * max(1.0, ratio):
+        raise ParameterError(
+            f"[timing] control_cycle_s = {cycle_s:g} s is not a positive whole multiple of "
+            f"integration_step_s = {step_s:g} s (ratio {ratio:.6g})")
+    return n
+
+
+def _alpha(fc: float, T: float) -> float:
+    return 1.0 if fc <= 0 else float(1.0 - np.exp(-2.0 * np.pi * fc * T))
+
+
+@numba.njit(cache=True)
+def _sense(k: int, q: Array, qd: Array, q_ref: Array, div: Array, s_ref_p: Array, Bt_p: Array,
+           s_ref_c: Array, rate_map: Array, res: float, T: float, a_v: float, a_a: float,
+           noise: Array, delay: int, pose_from_sensor: bool,
+           s_prev: Array, sd_prev: Array, yq: Array, yqd: Array, ys: Array, ysd: Array, ysdd: Array,
+           out_q: Array, out_qd: Array, out_att: Array, out_s: Array, out_qs: Array, out_qds: Array,
+           out_se: Array, out_sde: Array, out_sdde: Array) -> int:  # pragma: no cover - compiled
+    """Sensors of cycle ``k`` (module docstring, items 1-2); records the true and sensed state.
+    Returns the index of a coordinate beyond its divergence limit (or not finite), else -1."""
+    nq = q.shape[0]
+    nu = ys.shape[0]
+    for i in range(nq):
+        e = q[i] - q_ref[k, i]
+        if not (np.isfinite(e) and np.isfinite(qd[i]) and abs(e) <= div[i]):
+            return i
+        out_q[k, i] = q[i]
+        out_qd[k, i] = qd[i]
+    for a in range(nu):
+        s = s_ref_p[k, a]
+        for i in range(nq):
+            s += Bt_p[k, a, i] * (q[i] - q_ref[k, i])
+        out_s[k, a] = s
+        se = res * np.floor(s / res) if res > 0 else s
+        if k > 0:
+            ysd[a] += a_v * ((se - s_prev[a]) / T - ysd[a])
+            ysdd[a] += a_a * ((ysd[a] - sd_prev[a]) / T - ysdd[a])
+        s_prev[a] = se
+        sd_prev[a] = ysd[a]
+        ys[a] = se
+        out_se[k, a] = se
+        out_sde[k, a] = ysd[a]
+        out_sdde[k, a] = ysdd[a]
+    j = k - delay if k >= delay else 0
+    for i in range(nq):
+        out_att[k, i] = out_q[j, i] + noise[k, i]
+        r = 0.0
+        p = q_ref[k, i]
+        for a in range(nu):
+            r += rate_map[k, i, a] * ysd[a]
+            p += rate_map[k, i, a] * (ys[a] - s_ref_c[k, a])
+        yqd[i] = r
+        yq[i] = out_att[k, i] if pose_from_sensor else p
+        out_qs[k, i] = yq[i]
+        out_qds[k, i] = r
+    return -1
+
+
+@numba.njit(cache=True)
+def _actuate(k: int, u_raw: Array, lim: Array, u: Array, out_u: Array, sat: Array) -> None:  # pragma: no cover
+    """Clip the efforts to their limits and record them."""
+    for a in range(u.shape[0]):
+        v = min(max(u_raw[a], -lim[a]), lim[a])
+        u[a] = v
+        out_u[k, a] = v
+        sat[k, a] = abs(u_raw[a]) >= lim[a]
+
+
+def closed_loop(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_joint: Any, rate_map: Array,
+                settings: LoopSettings, loads: Array | None = None, progress: bool = False) -> LoopResult:
+    """Run the loop over the reference's ``K`` cycles from the reference's initial state.
+
+    ``controller`` from :func:`pkmdyn.control.make_controller`; ``ref`` its
+    :class:`~pkmdyn.control.Reference`; ``plant_joint``, ``ctrl_joint`` the plant's and the
+    controller's :class:`~pkmdyn.control.JointReference` (encoder model; pose from the
+    encoders); ``rate_map (K + 1, nq, nu)`` the controller's ``(B^T)^-1`` along the reference;
+    ``loads (2 K steps + 1,)`` the load [N] at every integration step boundary and middle,
+    ``j dt / 2`` (None: the reference load, linear within a cycle; zeros for a machine without
+    load; :func:`pkmdyn.simulate.track` passes the motion's own load).
+    """
+    from ..control._laws import Sensed, effort, new_memory
+
+    T = settings.cycle_s
+    steps = check_timing(T, settings.step_s)
+    dt = T / steps
+    K = ref.cycles
+    nq, nu = plant.nq, plant.nu
+    if loads is None:
+        if ref.load is None:
+            loads = np.zeros(2 * K * steps + 1)
+        else:
+            tt = np.arange(2 * K * steps + 1) * (0.5 * dt)
+            loads = np.interp(tt, ref.t, ref.load)
+    loads = np.asarray(loads, dtype=float)
+    if loads.shape != (2 * K * steps + 1,):
+        raise ValueError(f"loads: expected {2 * K * steps + 1} values (step boundaries and middles), got {loads.shape}")
+    rng = np.random.default_rng(settings.seed)
+    noise = rng.standard_normal((K, nq)) * settings.pose_noise
+    a_v = _alpha(settings.velocity_cutoff_Hz, T)
+    a_a = _alpha(settings.acceleration_cutoff_Hz, T)
+    res = float(settings.encoder_resolution)
+    lim = np.asarray(settings.effort_limit, dtype=float)
+    div = np.asarray(settings.divergence_limit, dtype=float)
+    delay = int(settings.pose_delay_cycles)
+    from_sensor = bool(settings.pose_from_sensor)
+
+    out_q = np.empty((K, nq)); out_qd = np.empty((K, nq)); out_u = np.empty((K, nu))
+    out_att = np.empty((K, nq)); out_qds = np.empty((K, nq)); out_s = np.empty((K, nu))
+    out_se = np.empty((K, nu)); out_sde = np.empty((K, nu)); out_sdde = np.empty((K, nu))
+    out_qs = np.empty((K, nq))
+    sat = np.zeros((K, nu), dtype=bool)
+    q = ref.q[0].astype(float).copy()
+    qd = ref.qd[0].astype(float).copy()
+    # the filters start on the reference (the loop starts in steady state on it)
+    y = Sensed(np.empty(nq), np.empty(nq), np.empty(nu), ctrl_joint.sd[0].astype(float).copy(),
+               ctrl_joint.sdd[0].astype(float).copy())
+    memory = new_memory(controller, nu)
+    work = make_work(plant, settings.method)
+    s_prev = np.zeros(nu)
+    sd_prev = y.sd.copy()
+    u = np.empty(nu)
+    q_ref = np.ascontiguousarray(ref.q)
+    args = (q_ref, div, np.ascontiguousarray(plant_joint.s), np.ascontiguousarray(plant_joint.Bt),
+            np.ascontiguousarray(ctrl_joint.s), np.ascontiguousarray(rate_map), res, T, a_v, a_a, noise,
+            delay, from_sensor, s_prev, sd_prev, y.q, y.qd, y.s, y.sd, y.sdd, out_q, out_qd, out_att, out_s,
+            out_qs, out_qds, out_se, out_sde, out_sdde)
+
+    bar = None
+    if progress and K >= 2000:
+        from tqdm import tqdm
+
+        bar = tqdm(total=K, desc="closed loop", unit="cycle", leave=False, disable=None, mininterval=0.5)
+    try:
+        for k in range(K):
+            bad = _sense(k, q, qd, *args)
+            if bad >= 0:
+                e = q[bad] - q_ref[k, bad]
+                raise DivergenceError(
+                    f"run diverged at t = {ref.t[k]:.4f} s: tracking error of coordinate {bad + 1} is "
+                    f"{e:.3g}, beyond its divergence limit {div[bad]:g}")
+            _actuate(k, effort(controller, ref, k, y, memory), lim, u, out_u, sat)
+            try:
+                hold_interval(plant, q, qd, u, loads[2 * k * steps:2 * (k + 1) * steps + 1], dt, work)
+            except PkmdynError as exc:
+                raise DivergenceError(f"run diverged at t = {ref.t[k]:.4f} s: {exc}") from None
+            if bar is not None and (k + 1) % 1000 == 0:
+                bar.update(1000)
+    finally:
+        if bar is not None:
+            bar.close()
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+        raise DivergenceError(f"run diverged at t = {ref.t[-1]:.4f} s: the state is not finite")
+    return LoopResult(ref.t[:-1].copy(), out_q, out_qd, out_u, out_qs, out_qds, out_att, out_s, out_se, out_sde,
+                      out_sdde, q, qd, sat)
