@@ -1,0 +1,101 @@
+"""Identification of any machine from measured actuator efforts, through the machine verbs.
+
+Given a machine (an object with the verbs of :class:`pkmdyn.machine.MachineDynamics`), a map
+``model_with(theta)`` from the parameter vector to a model whose inverse dynamics is affine in
+``theta``, and samples ``q, qd, qdd, load`` with measured efforts ``u (n, nu)``:
+
+1. regressor ``u = Y theta + u_0`` by :func:`affine_regressor` over ``machine.inverse_dynamics``;
+2. base parameters by :func:`base_parameters`;
+3. the constrained fit :func:`constrained_least_squares`, then once more with each actuator's
+   rows weighted by the inverse RMS of its first-pass residual (actuators may differ in noise).
+
+Bad input raises :class:`MotionError` naming ``source``: efforts of the wrong shape or not
+finite (row and actuator named), fewer samples than parameters, or a regressor of rank zero.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import MotionError
+from ..machine import MachineDynamics
+from ._base import DEFAULT_RANK_TOL, BaseParameters, base_parameters
+from ._regressor import Regressor, affine_regressor
+from ._solve import Estimate, constrained_least_squares
+
+__all__ = ["Identification", "identify_efforts"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Identification:
+    """One identification. ``names, prior (p,)`` the parameters and their prior values;
+    ``u_measured, u_identified (n, nu)``; ``residual_rms (nu,)`` per actuator [effort]; ``T,
+    lower, upper`` the consistency transform and bounds that were imposed."""
+
+    names: tuple[str, ...]
+    prior: Array
+    regressor: Regressor
+    base: BaseParameters
+    estimate: Estimate
+    u_measured: Array
+    u_identified: Array
+    residual_rms: Array
+    T: Array
+    lower: Array
+    upper: Array
+
+
+def identify_efforts(
+    machine: MachineDynamics,
+    model_with: Callable[[Array], Any],
+    names: tuple[str, ...],
+    prior: Array,
+    consistency: tuple[Array, Array, Array],
+    q: Array,
+    qd: Array,
+    qdd: Array,
+    load: Array | None,
+    u_measured: Array,
+    rank_tol: float = DEFAULT_RANK_TOL,
+    source: str = "measured",
+    what: str = "parameters",
+) -> Identification:
+    """Identify ``names`` (module docstring); ``consistency = (T, lower, upper)``, ``theta = T s``."""
+    u = np.asarray(u_measured, dtype=float)
+    n = np.asarray(q).shape[0]
+    nu = len(machine.ACTUATORS)
+    if u.shape != (n, nu):
+        raise MotionError(f"{source}: expected efforts of shape ({n}, {nu}), got {u.shape}")
+    bad = np.argwhere(~np.isfinite(u))
+    if bad.size:
+        r, c = bad[0]
+        raise MotionError(f"{source}: row {r + 1}, column {machine.ACTUATORS[c]!r}: value is not finite")
+    p = len(names)
+    if n < p or n * nu < 2 * p:
+        raise MotionError(f"{source}: {n} samples are too few to identify {p} {what}; give at least {max(p, -(-2 * p // nu))}")
+    reg = affine_regressor(lambda th: machine.inverse_dynamics(model_with(th), q, qd, qdd, load), names)
+    W = reg.stacked()
+    base = base_parameters(W, names, rank_tol)
+    if base.rank == 0:
+        raise MotionError(
+            f"{source}: the motion excites none of the {what} (regressor of rank 0); the machine must move, "
+            "and its load vary, for them to show"
+        )
+    if n * nu <= base.rank:
+        raise MotionError(f"{source}: {n} samples leave no degree of freedom for the residual")
+    T, lower, upper = consistency
+    y = (u - reg.offset).reshape(-1)
+    est = constrained_least_squares(W, y, base, T, lower, upper, prior)
+    level = np.sqrt(np.mean(est.residual.reshape(n, nu) ** 2, axis=0))
+    if np.all(level > 1e-12 * max(float(np.max(np.abs(u))), 1e-300)):
+        est = constrained_least_squares(W, y, base, T, lower, upper, prior, np.tile(1.0 / level, n))
+    u_id = reg.efforts(est.theta)
+    rms = np.sqrt(np.mean((u - u_id) ** 2, axis=0))
+    return Identification(tuple(names), np.asarray(prior, float), reg, base, est, u, u_id, rms, T, lower, upper)

@@ -1,0 +1,402 @@
+"""Identification of the hip simulator's friction and inertia (the first machine of the layer).
+
+The hip's torques (``pkmdyn.machines.hip_simulator``: Eq. 7-14 and 16 of the hip paper plus
+the spec's joint friction) are affine in the parameters below once the geometry, gravity and
+the friction regularisation ``eps`` are held at the parameter file's values.
+This module maps the machine's model to and from a parameter vector; the torques come from
+the machine verb ``inverse_dynamics`` of ``machines/hip_simulator/minimal.py``.
+
+Parameters (name with unit, what it is)
+  friction: ``bearing_load_coeff_m`` and ``bearing_weight_friction_Nm`` (Eq. 16, see below),
+  and the Coulomb/viscous coefficients of the sliders, screws, S joints and U joints.
+  inertia: ``slider_mass_kg`` (m_L), ``screw_inertia_kgm2`` (I_L), ``lever_mass_kg`` (m_l), the
+  lever's and the platform's principal inertias ``..._I{x,y,z}_kgm2``.
+
+Linearisation of the products. Eq. (16) gives each platform the friction torque magnitude
+``r_h mu_h F + r_t mu_t |F + m_m g|``. Since ``F >= 0`` and ``m_m >= 0`` this is exactly
+
+    S F + C,   S = r_h mu_h + r_t mu_t  (bearing_load_coeff_m),   C = r_t mu_t m_m g  (bearing_weight_friction_Nm),
+
+linear in ``S`` and ``C``. Radii and coefficients enter only through these products, and the
+platform mass enters the torques nowhere else (its centre of mass is the fixed hip centre), so
+``S`` and ``C`` are all that torques can tell: the hip-joint and thrust-bearing coefficients
+are separable only given the platform mass (``r_t mu_t = C / (m_m g)``). Writing the file,
+``S`` and ``C`` are split back by :func:`bearing_split`.
+
+Fit. :func:`pkmdyn.identify._identify.identify_efforts` through the machine verbs of
+:mod:`pkmdyn.machines.hip_simulator.minimal` (q = the Euler angles of the motion).
+
+Physical consistency. Friction coefficients ``>= 0``; masses and the screw inertia ``> 0``
+(lower bound 1e-9 of the unit); principal inertias satisfy the triangle inequality
+``I_x + I_y >= I_z`` (and cyclic), imposed exactly by solving for the second moments of mass
+``(s_x, s_y, s_z) >= 0`` with ``I_x = s_y + s_z, I_y = s_x + s_z, I_z = s_x + s_y``.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.signal import savgol_filter
+
+from ..errors import MotionError, ParameterError
+from ..io import read_csv_columns
+from ..machines.hip_simulator import HipModel, model_from_dict
+from ..machines.hip_simulator import minimal as hip_machine
+from ..profiles.orientation import MOTION_COLUMNS, OrientationMotion, make_motion
+from ._base import DEFAULT_RANK_TOL, BaseParameters
+from ._identify import identify_efforts
+from ._regressor import Regressor, affine_regressor
+from ._solve import Estimate
+
+__all__ = [
+    "FRICTION_NAMES",
+    "INERTIA_NAMES",
+    "TORQUE_COLUMNS",
+    "parameter_names",
+    "parameter_vector",
+    "with_parameters",
+    "bearing_split",
+    "hip_regressor",
+    "consistency_transform",
+    "HipIdentification",
+    "identify_hip",
+    "identified_description",
+    "read_measured_csv",
+    "savgol_derivatives",
+]
+
+Array = NDArray[np.float64]
+Which = Literal["friction", "inertia", "all"]
+
+TORQUE_COLUMNS = ("tau1_Nm", "tau2_Nm", "tau3_Nm")
+
+#: (parameter name, [friction] key it writes)
+_FRICTION = (
+    ("bearing_load_coeff_m", "hip_coefficient"),
+    ("bearing_weight_friction_Nm", "thrust_coefficient"),
+    ("slider_coulomb_N", "slider_coulomb_N"),
+    ("slider_viscous_Ns_m", "slider_viscous_Ns_m"),
+    ("screw_coulomb_Nm", "screw_coulomb_Nm"),
+    ("screw_viscous_Nms_rad", "screw_viscous_Nms_rad"),
+    ("spherical_coulomb_Nm", "spherical_coulomb_Nm"),
+    ("spherical_viscous_Nms_rad", "spherical_viscous_Nms_rad"),
+    ("universal_coulomb_Nm", "universal_coulomb_Nm"),
+    ("universal_viscous_Nms_rad", "universal_viscous_Nms_rad"),
+)
+FRICTION_NAMES = tuple(n for n, _ in _FRICTION)
+INERTIA_NAMES = (
+    "slider_mass_kg",
+    "screw_inertia_kgm2",
+    "lever_mass_kg",
+    "lever_Ix_kgm2",
+    "lever_Iy_kgm2",
+    "lever_Iz_kgm2",
+    "platform_Ix_kgm2",
+    "platform_Iy_kgm2",
+    "platform_Iz_kgm2",
+)
+_FIELD = {n: k for n, k in _FRICTION[2:]}
+_FRICTION_ATTR = {
+    "slider_coulomb_N": "slider_coulomb",
+    "slider_viscous_Ns_m": "slider_viscous",
+    "screw_coulomb_Nm": "screw_coulomb",
+    "screw_viscous_Nms_rad": "screw_viscous",
+    "spherical_coulomb_Nm": "spherical_coulomb",
+    "spherical_viscous_Nms_rad": "spherical_viscous",
+    "universal_coulomb_Nm": "universal_coulomb",
+    "universal_viscous_Nms_rad": "universal_viscous",
+}
+_POSITIVE_FLOOR = 1e-9
+
+
+def parameter_names(which: Which) -> tuple[str, ...]:
+    """The parameters identified for ``which`` = ``friction``, ``inertia`` or ``all``."""
+    if which == "friction":
+        return FRICTION_NAMES
+    if which == "inertia":
+        return INERTIA_NAMES
+    if which == "all":
+        return INERTIA_NAMES + FRICTION_NAMES
+    raise ParameterError(f"identify: expected friction, inertia or all, got {which!r}")
+
+
+def parameter_vector(model: HipModel, names: tuple[str, ...]) -> Array:
+    """The model's values of ``names`` (units as in the names)."""
+    f, m = model.friction, model.inertia
+    value = {
+        "bearing_load_coeff_m": f.r_h * f.mu_h + f.r_t * f.mu_t,
+        "bearing_weight_friction_Nm": f.r_t * f.mu_t * m.m_m * m.g,
+        "slider_mass_kg": m.m_L,
+        "screw_inertia_kgm2": m.I_L,
+        "lever_mass_kg": m.m_l,
+    }
+    value.update({n: getattr(f, a) for n, a in _FRICTION_ATTR.items()})
+    value.update({f"lever_I{x}_kgm2": m.I_l[k] for k, x in enumerate("xyz")})
+    value.update({f"platform_I{x}_kgm2": m.I_m[k] for k, x in enumerate("xyz")})
+    return np.array([value[n] for n in names], dtype=float)
+
+
+def bearing_split(model: HipModel, S: float, C: float) -> tuple[float, float, float]:
+    """Hip-joint and thrust-bearing coefficients and platform mass ``(mu_h, mu_t, m_m)`` with
+    ``r_h mu_h + r_t mu_t = S`` and ``r_t mu_t m_m g = C`` (radii and gravity from ``model``).
+
+    With ``C = 0`` the file's platform mass is kept, and with it zero the file's hip/thrust
+    share of ``S``. The file's platform mass is kept when it can be (``m_m > 0`` and ``C / (m_m g) <= S``);
+    otherwise the model's share of the thrust bearing in ``S`` is kept (all of ``S`` when that
+    share is zero) and the platform mass follows. Raises :class:`ParameterError` where no
+    admissible split exists (a radius or gravity of zero that the values need).
+    """
+    f, m = model.friction, model.inertia
+    a0, b0 = f.r_h * f.mu_h, f.r_t * f.mu_t
+    if C > 0 and not (m.g > 0 and S > 0):
+        raise ParameterError(
+            f"bearing_weight_friction_Nm = {C:.6g} N m needs gravity > 0 and bearing_load_coeff_m > 0 to be "
+            "written as thrust-bearing friction of the platform weight"
+        )
+    share = b0 / (a0 + b0) if a0 + b0 > 0 else 0.0
+    if C <= 0:
+        b = 0.0 if m.m_m > 0 else S * share  # with m_m = 0 any split fits: keep the file's
+        a, m_m = S - b, m.m_m
+    elif m.m_m > 0 and C / (m.m_m * m.g) <= S:
+        b = C / (m.m_m * m.g)
+        a, m_m = S - b, m.m_m
+    else:
+        b = S * (share if share > 0 else 1.0)
+        a, m_m = S - b, C / (b * m.g)
+    for value, radius, key in ((a, f.r_h, "hip_radius_m"), (b, f.r_t, "thrust_radius_m")):
+        if value > 0 and not radius > 0:
+            raise ParameterError(f"[friction] {key} is 0 in the parameter file; the identified friction needs it > 0")
+    return (a / f.r_h if a > 0 else 0.0), (b / f.r_t if b > 0 else 0.0), m_m
+
+
+def with_parameters(model: HipModel, names: tuple[str, ...], theta: Array) -> HipModel:
+    """A copy of ``model`` with ``names`` set to ``theta`` (no validation: zeros are allowed).
+    The bearing products are split by :func:`bearing_split` and need both to be given."""
+    values = dict(zip(names, np.asarray(theta, dtype=float).tolist()))
+    f, m = model.friction, model.inertia
+    fr: dict[str, Any] = {a: values[n] for n, a in _FRICTION_ATTR.items() if n in values}
+    inr: dict[str, Any] = {}
+    if "bearing_load_coeff_m" in values:
+        fr["mu_h"], fr["mu_t"], inr["m_m"] = bearing_split(
+            model, values["bearing_load_coeff_m"], values["bearing_weight_friction_Nm"]
+        )
+    for name, attr in (("slider_mass_kg", "m_L"), ("screw_inertia_kgm2", "I_L"), ("lever_mass_kg", "m_l")):
+        if name in values:
+            inr[attr] = values[name]
+    for body, attr in (("lever", "I_l"), ("platform", "I_m")):
+        keys = [f"{body}_I{x}_kgm2" for x in "xyz"]
+        if any(k in values for k in keys):
+            current = getattr(m, attr)
+            inr[attr] = np.array([values.get(k, current[i]) for i, k in enumerate(keys)])
+    return replace(model, friction=replace(f, **fr), inertia=replace(m, **inr))
+
+
+def _linear_model(model: HipModel, names: tuple[str, ...], theta: Array) -> HipModel:
+    """``model`` with ``names`` set so that the torques are affine in ``theta`` everywhere the
+    regressor evaluates them (``C >= 0``): the bearing friction is written with unit radii as
+    ``mu_t = 1``, ``mu_h = S - 1``, ``m_m = C / g``, so that its magnitude
+    ``(S - 1) F + |F + C| = S F + C`` (a negative ``mu_h`` is allowed here: no file sees it)."""
+    values = dict(zip(names, np.asarray(theta, dtype=float).tolist()))
+    rest = tuple(n for n in names if not n.startswith("bearing_"))
+    out = with_parameters(model, rest, np.array([values[n] for n in rest]))
+    if "bearing_load_coeff_m" in values:
+        g = model.inertia.g
+        if not g > 0:
+            raise ParameterError("[inertia] gravity_m_s2 is 0: the bearing weight friction cannot be identified")
+        out = replace(
+            out,
+            friction=replace(out.friction, r_h=1.0, mu_h=values["bearing_load_coeff_m"] - 1.0, r_t=1.0, mu_t=1.0),
+            inertia=replace(out.inertia, m_m=values["bearing_weight_friction_Nm"] / g),
+        )
+    return out
+
+
+def hip_regressor(model: HipModel, motion: OrientationMotion, names: tuple[str, ...]) -> Regressor:
+    """``tau = Y theta + offset`` along ``motion``, ``Y (n, 3, p)`` [N m per unit], exact by
+    linearity through the machine verb ``inverse_dynamics`` (:mod:`pkmdyn.identify._regressor`)."""
+    return affine_regressor(
+        lambda th: hip_machine.inverse_dynamics(_linear_model(model, names, th), motion.angles, motion.rates,
+                                                motion.accels, motion.load),
+        names,
+    )
+
+
+def consistency_transform(names: tuple[str, ...]) -> tuple[Array, Array, Array]:
+    """``theta = T s`` and bounds ``lower <= s <= upper`` that express physical consistency.
+
+    Principal-inertia triplets map to second moments of mass (module docstring); everything
+    else maps to itself. Friction ``>= 0``; masses and inertias ``>= 1e-9`` of their unit.
+    """
+    p = len(names)
+    T = np.eye(p)
+    lower = np.zeros(p)
+    for k, n in enumerate(names):
+        if n in INERTIA_NAMES:
+            lower[k] = _POSITIVE_FLOOR
+    for body in ("lever", "platform"):
+        keys = [f"{body}_I{x}_kgm2" for x in "xyz"]
+        idx = [names.index(k) for k in keys if k in names]
+        if len(idx) == 3:
+            T[np.ix_(idx, idx)] = np.array([[0.0, 1.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 0.0]])
+            lower[idx] = 0.5 * _POSITIVE_FLOOR
+    return T, lower, np.full(p, np.inf)
+
+
+@dataclass(frozen=True)
+class HipIdentification:
+    """Everything one identification found.
+
+    ``names (p,)`` the parameters asked for; ``prior (p,)`` their values in the parameter file;
+    ``regressor``, ``base``, ``estimate`` (see those classes); ``tau_measured, tau_identified
+    (n, 3)`` [N m]; ``residual_rms (3,)`` [N m] per motor; ``model`` the identified machine.
+    """
+
+    names: tuple[str, ...]
+    prior: Array
+    regressor: Regressor
+    base: BaseParameters
+    estimate: Estimate
+    tau_measured: Array
+    tau_identified: Array
+    residual_rms: Array
+    model: HipModel
+
+
+def identify_hip(
+    model: HipModel,
+    motion: OrientationMotion,
+    tau_measured: Array,
+    which: Which = "friction",
+    rank_tol: float = DEFAULT_RANK_TOL,
+    source: str = "measured",
+) -> HipIdentification:
+    """Identify the parameters of ``which`` from measured motor torques ``(n, 3)`` [N m].
+
+    Raises :class:`MotionError` (naming ``source``) for non-finite torques, too few samples
+    for the parameters asked for, or a motion that excites none of them.
+    """
+    names = parameter_names(which)
+    res = identify_efforts(
+        hip_machine,
+        lambda th: _linear_model(model, names, th),
+        names,
+        parameter_vector(model, names),
+        consistency_transform(names),
+        motion.angles,
+        motion.rates,
+        motion.accels,
+        motion.load,
+        tau_measured,
+        rank_tol,
+        source,
+        f"{which} parameters",
+    )
+    identified = with_parameters(model, names, res.estimate.theta)
+    return HipIdentification(
+        names, res.prior, res.regressor, res.base, res.estimate, res.u_measured, res.u_identified, res.residual_rms,
+        identified,
+    )
+
+
+def identified_description(description: dict[str, Any], result: HipIdentification) -> dict[str, Any]:
+    """The parameter-file structure of ``description`` with the identified values written in.
+
+    The bearing friction is written as split by :func:`bearing_split` (which may change
+    ``platform_mass_kg`` when the file's value cannot carry the identified weight friction).
+    """
+    d = copy.deepcopy(description)
+    fr, inr = d["friction"], d["inertia"]
+    values = dict(zip(result.names, result.estimate.theta.tolist()))
+    if "bearing_load_coeff_m" in values:
+        m = result.model
+        fr["hip_coefficient"], fr["thrust_coefficient"] = float(m.friction.mu_h), float(m.friction.mu_t)
+        inr["platform_mass_kg"] = float(m.inertia.m_m)
+    for name, key in _FIELD.items():
+        if name in values:
+            fr[key] = values[name]
+    for name in ("slider_mass_kg", "screw_inertia_kgm2", "lever_mass_kg"):
+        if name in values:
+            inr[{"screw_inertia_kgm2": "screw_inertia_kgm2"}.get(name, name)] = values[name]
+    for body in ("lever", "platform"):
+        keys = [f"{body}_I{x}_kgm2" for x in "xyz"]
+        if keys[0] in values:
+            inr[f"{body}_inertia_kgm2"] = [values[k] for k in keys]
+    model_from_dict(d, "identified parameters")  # validates: every value is admissible
+    return d
+
+
+def savgol_derivatives(t: Array, x: Array, window: int, order: int, source: str) -> tuple[Array, Array]:
+    """First and second time derivatives of ``x (n, k)`` by a Savitzky-Golay filter.
+
+    A polynomial of degree ``order`` is fitted by least squares to each ``window`` samples
+    (``scipy.signal.savgol_filter``, ends by a fit to the first/last window) and
+    differentiated; sampling must be uniform. Errors name ``source``.
+    """
+    n = t.shape[0]
+    if window % 2 == 0 or window < 3:
+        raise MotionError(f"--sg-window: must be an odd number >= 3, got {window}")
+    if not 2 <= order < window:
+        raise MotionError(f"--sg-order: must be >= 2 and less than the window ({window}), got {order}")
+    if n < window:
+        raise MotionError(f"{source}: {n} rows are fewer than the smoothing window of {window} samples")
+    dt = np.diff(t)
+    h = (t[-1] - t[0]) / (n - 1)
+    if np.max(np.abs(dt - h)) > 1e-6 * h:
+        r = int(np.argmax(np.abs(dt - h))) + 2
+        raise MotionError(
+            f"{source}: row {r}, column 't_s': sampling is not uniform (step {dt[r - 2]:g} s, mean {h:g} s); "
+            "the smoothing differentiator needs a uniform time step, or give the derivative columns"
+        )
+    d1 = savgol_filter(x, window, order, deriv=1, delta=h, axis=0, mode="interp")
+    d2 = savgol_filter(x, window, order, deriv=2, delta=h, axis=0, mode="interp")
+    return d1, d2
+
+
+def read_measured_csv(path: str | Path, sg_window: int = 15, sg_order: int = 5) -> tuple[OrientationMotion, Array, dict[str, Any]]:
+    """Read a measurement file: the motion columns plus ``tau1_Nm, tau2_Nm, tau3_Nm``.
+
+    Derivative columns that are given are used as they are; missing rates and accelerations
+    come from :func:`savgol_derivatives` of the angles (or the accelerations from the given
+    rates). Returns the motion, the torques ``(n, 3)`` [N m] and how the derivatives were had.
+    """
+    ang, rate, acc = MOTION_COLUMNS[1:4], MOTION_COLUMNS[4:7], MOTION_COLUMNS[7:10]
+    cols = read_csv_columns(path, ("t_s", *ang, *TORQUE_COLUMNS), (*rate, *acc, "load_N"))
+    t = cols["t_s"]
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if bad.size:
+        raise MotionError(f"{path}: row {bad[0] + 2}, column 't_s': time must increase strictly")
+
+    def group(names: tuple[str, ...]) -> Array | None:
+        present = [c for c in names if c in cols]
+        if not present:
+            return None
+        if len(present) != 3:
+            missing = next(c for c in names if c not in cols)
+            raise MotionError(f"{path}: missing column {missing!r} (give all of {', '.join(names)} or none)")
+        return np.deg2rad(np.stack([cols[c] for c in names], axis=-1))
+
+    q, qd, qdd = group(ang), group(rate), group(acc)
+    if qd is None and qdd is not None:
+        raise MotionError(f"{path}: acceleration columns need the rate columns ({', '.join(rate)})")
+    info: dict[str, Any] = {"rates": "given", "accelerations": "given"}
+    if qd is None:
+        qd, qdd = savgol_derivatives(t, q, sg_window, sg_order, str(path))
+        info = {"rates": "savitzky_golay", "accelerations": "savitzky_golay"}
+    elif qdd is None:
+        qdd = savgol_derivatives(t, qd, sg_window, sg_order, str(path))[0]
+        info["accelerations"] = "savitzky_golay"
+    if "savitzky_golay" in info.values():
+        info.update(sg_window_samples=sg_window, sg_order=sg_order)
+    load = cols.get("load_N")
+    if load is not None:
+        neg = np.flatnonzero(load < 0)
+        if neg.size:
+            raise MotionError(f"{path}: row {neg[0] + 1}, column 'load_N': {load[neg[0]]:g} N is negative")
+    motion = make_motion(t, q, qd, qdd, load)
+    tau = np.stack([cols[c] for c in TORQUE_COLUMNS], axis=-1)
+    return motion, tau, info

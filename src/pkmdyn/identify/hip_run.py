@@ -1,0 +1,195 @@
+"""The hip identification jobs behind the command line: files in, every result computed, files out.
+
+``run_identify``: parameter file + measured run -> identified.toml, identification.json,
+torques.csv, torque_fit.png, residuals.png. ``run_excite``: parameter file + limits -> an
+excitation motion CSV. Every input is validated and every result computed before anything is
+written.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import tempfile
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import PkmdynError
+from ..io import output_dir, write_csv, write_json
+from ..machines.hip_simulator import HipModel, load_params, model_from_dict
+from ..machines.hip_simulator.params import default_params_dict
+from ..params_util import read_toml
+from ..profiles.orientation import write_motion_csv
+from ._toml import dumps_tables
+from ._report import identification_report
+from .hip import TORQUE_COLUMNS, Which, consistency_transform, identified_description, identify_hip, read_measured_csv
+from .hip_excite import ExcitationLimits, design_excitation, excitation_motion
+
+__all__ = ["run_identify", "run_excite", "complete_description", "HELD_FIXED"]
+
+#: what every identification holds at the parameter file's values
+HELD_FIXED = (
+    "geometry (every [geometry] key)",
+    "gravity_m_s2",
+    "hip_radius_m and thrust_radius_m (only products with the coefficients are identified)",
+    "platform_mass_kg, unless the identified weight friction needs another value (see bearing_split)",
+    "friction_velocity_eps_rad_s, friction_velocity_eps_m_s",
+)
+
+_OPTIONAL_FRICTION = {
+    "friction_velocity_eps_rad_s": "eps_w",
+    "friction_velocity_eps_m_s": "eps_v",
+    "slider_coulomb_N": "slider_coulomb",
+    "slider_viscous_Ns_m": "slider_viscous",
+    "screw_coulomb_Nm": "screw_coulomb",
+    "screw_viscous_Nms_rad": "screw_viscous",
+    "spherical_coulomb_Nm": "spherical_coulomb",
+    "spherical_viscous_Nms_rad": "spherical_viscous",
+    "universal_coulomb_Nm": "universal_coulomb",
+    "universal_viscous_Nms_rad": "universal_viscous",
+}
+
+#: which parameter-file key each identified parameter writes
+_KEY_OF = {
+    "bearing_load_coeff_m": "hip_coefficient",
+    "bearing_weight_friction_Nm": "thrust_coefficient",
+    "lever_Ix_kgm2": "lever_inertia_kgm2",
+    "lever_Iy_kgm2": "lever_inertia_kgm2",
+    "lever_Iz_kgm2": "lever_inertia_kgm2",
+    "platform_Ix_kgm2": "platform_inertia_kgm2",
+    "platform_Iy_kgm2": "platform_inertia_kgm2",
+    "platform_Iz_kgm2": "platform_inertia_kgm2",
+}
+
+
+def complete_description(description: dict[str, Any], model: HipModel) -> dict[str, Any]:
+    """The description with every optional key written out (from the model's defaults)."""
+    d = copy.deepcopy(description)
+    g = d["geometry"]
+    g.setdefault("euler_sequence", model.geometry.euler_sequence)
+    g.setdefault("lever_spin", model.geometry.lever_spin)
+    f = d["friction"]
+    for key, attr in _OPTIONAL_FRICTION.items():
+        f.setdefault(key, float(getattr(model.friction, attr)))
+    return {name: d[name] for name in ("geometry", "inertia", "friction")}
+
+
+def run_identify(
+    out_dir: str | Path,
+    measured_path: str | Path,
+    params_path: str | Path | None,
+    which: Which,
+    sg_window: int = 15,
+    sg_order: int = 5,
+    rank_tol: float = 1e-6,
+    make_plots: bool = True,
+) -> tuple[dict[str, Path], list[str]]:
+    """Identify and write the output folder; returns the files written and summary lines."""
+    model = load_params(params_path)
+    description = read_toml(params_path) if params_path is not None else default_params_dict()
+    description = complete_description(description, model)
+    motion, tau, deriv = read_measured_csv(measured_path, sg_window, sg_order)
+    result = identify_hip(model, motion, tau, which, rank_tol, source=str(measured_path))
+    identified = identified_description(description, result)
+    T, _, _ = consistency_transform(result.names)
+    report = identification_report(
+        result.base, result.estimate, result.prior, TORQUE_COLUMNS,
+        np.sqrt(np.mean(tau**2, axis=0)), result.residual_rms, T,
+    )
+    report = {
+        "measured": str(measured_path),
+        "parameters": str(params_path) if params_path is not None else "built-in (paper Tables 1-2)",
+        "identify": which,
+        "samples": len(motion),
+        "derivatives": deriv,
+        **report,
+        "held_at_parameter_file_values": list(HELD_FIXED),
+    }
+    notes = {}
+    for name in report["not_separable"]:
+        notes[_KEY_OF.get(name, name)] = "not separable from the data: only a combination is (identification.json)"
+    for name in report["not_excited"]:
+        notes[_KEY_OF.get(name, name)] = "not excited by the measured motion: parameter file value"
+    if "bearing_load_coeff_m" in result.names:
+        split = "share of bearing_load_coeff_m; the data fix the split only through platform_mass_kg"
+        notes.setdefault("hip_coefficient", split)
+        notes.setdefault("thrust_coefficient", split)
+        if identified["inertia"]["platform_mass_kg"] != description["inertia"]["platform_mass_kg"]:
+            notes["platform_mass_kg"] = "set to carry the identified bearing_weight_friction_Nm (file value could not)"
+    header = (
+        f"2(3PUS+S) hip simulator: parameters identified ({which}) from {Path(measured_path).name}\n"
+        "by pkmdyn hip identify; estimates, standard errors and base parameters in identification.json.\n"
+        "A value marked 'not separable' is one split of a combination that the data fix as a whole."
+    )
+    text = dumps_tables(identified, header, notes)
+    check = model_from_dict(tomllib.loads(text), "identified.toml")  # loadable, as `hip run --params` needs
+    del check
+    columns: dict[str, Any] = {"t_s": motion.t}
+    for i, name in enumerate(TORQUE_COLUMNS):
+        stem = name[: -len("_Nm")]
+        columns[f"{stem}_measured_Nm"] = tau[:, i]
+        columns[f"{stem}_identified_Nm"] = result.tau_identified[:, i]
+        columns[f"{stem}_residual_Nm"] = tau[:, i] - result.tau_identified[:, i]
+    out = Path(out_dir)
+    with output_dir(out) as tmp:
+        (tmp / "identified.toml").write_text(text, encoding="utf-8")
+        write_json(tmp / "identification.json", report)
+        write_csv(tmp / "torques.csv", columns)
+        names = ["identified.toml", "identification.json", "torques.csv"]
+        if make_plots:
+            from .plots import plot_residuals, plot_torque_fit
+
+            plot_torque_fit(motion.t, tau, result.tau_identified, tmp / "torque_fit.png")
+            plot_residuals(motion.t, tau - result.tau_identified, tmp / "residuals.png")
+            names += ["torque_fit.png", "residuals.png"]
+    lines = [f"rank {result.base.rank} of {len(result.names)} parameters, condition number {result.base.condition_number:.4g}"]
+    for name, v in report["separable"].items():
+        lines.append(f"{name} = {v['estimate']:.6g} +- {v['standard_error']:.2g}")
+    for c in report["combinations"]:
+        lines.append(f"{c['combination']} = {c['estimate']:.6g} +- {c['standard_error']:.2g}")
+    if report["not_excited"]:
+        lines.append("not excited: " + ", ".join(report["not_excited"]))
+    rms = ", ".join(f"{1e3 * v:.4g}" for v in result.residual_rms)
+    lines.append(f"residual RMS per motor [N mm]: {rms}")
+    return {Path(n).stem.replace(".", "_"): out / n for n in names}, lines
+
+
+def run_excite(
+    out_path: str | Path,
+    params_path: str | Path | None,
+    which: Which,
+    limits: ExcitationLimits,
+    period_s: float,
+    harmonics: int,
+    cycles: int,
+    samples_per_cycle: int,
+    iterations: int,
+    starts: int,
+    seed: int,
+    design_samples: int = 120,
+) -> list[str]:
+    """Design the excitation and write it as a motion CSV; returns summary lines."""
+    model = load_params(params_path)
+    out = Path(out_path)
+    if out.is_dir():
+        raise PkmdynError(f"--out {out}: is a folder, expected a CSV file name")
+    ex = design_excitation(model, which, limits, period_s, harmonics, design_samples, iterations, starts, seed)
+    n = cycles * samples_per_cycle + 1
+    t = np.linspace(0.0, cycles * ex.period_s, n)
+    motion = excitation_motion(ex.coeffs, ex.period_s, limits, t)
+    out.absolute().parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", dir=out.absolute().parent)
+    os.close(fd)
+    try:
+        write_motion_csv(tmp, motion)
+        os.replace(tmp, out)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return [
+        f"period {ex.period_s:.4g} s, {harmonics} harmonics; condition number {ex.condition_number:.4g} "
+        f"over {len(ex.parameters)} parameters: {', '.join(ex.parameters)}"
+    ]
