@@ -85,6 +85,8 @@ def main() -> None:
     tq_h = inverse_dynamics(heavy, inverse_kinematics(heavy, motion), motion.load)
     print(f"\nA 10 kg platform (instead of 0) raises the max friction torque by "
           f"{1e3 * (np.abs(tq_h.friction).max() - np.abs(tq.friction).max()):.3f} N mm.")
+    rise = 1e3 * (np.abs(tq_h.friction).max(axis=0) - np.abs(tq.friction).max(axis=0))
+    print("Per motor: " + ", ".join(f"motor {i + 1} +{r:.2f} N mm" for i, r in enumerate(rise)) + ".")
 
 
 if __name__ == "__main__":

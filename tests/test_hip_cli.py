@@ -16,7 +16,7 @@ from pkmdyn.machines.hip_simulator.params import DEFAULT_PARAMS_TEXT, load_param
 SPEC_COLUMNS = (
     ["t_s"]
     + [f"{q}{j}{i}_{u}" for j in (1, 2) for i in (1, 2, 3) for q, u in (("L", "m"), ("Ld", "m_s"), ("Ldd", "m_s2"))]
-    + [f"detJ{x}{j}" for j in (1, 2) for x in "ab"]
+    + ["detJa", "detJb_m3"]
     + [f"tau{i}_{p}Nm" for i in (1, 2, 3) for p in ("", "platform_", "lever_", "slider_", "screw_", "friction_")]
 )
 
@@ -103,6 +103,9 @@ def test_unreachable_motion_exits_2_with_one_line(tmp_path):
     motion = tmp_path / "m.csv"
     motion.write_text("t_s,alpha_deg,beta_deg,gamma_deg\n" + "".join(f"{k / 10},0,0,{k * 12}\n" for k in range(10)))
     r = _cli("hip", "run", "--motion", str(motion), "--out", str(tmp_path / "o"), cwd=tmp_path)
+    assert r.returncode == 2 and "max_abs_angle_deg = 45" in r.stderr  # refused by the angle limit first
+    r = _cli("hip", "run", "--motion", str(motion), "--limit", "max_abs_angle_deg=180", "--out", str(tmp_path / "o"),
+             cwd=tmp_path)
     assert r.returncode == 2
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and "leg" in lines[0] and "t = " in lines[0] and "Traceback" not in r.stderr
@@ -153,6 +156,193 @@ def test_out_folder_helper_refuses_a_file(tmp_path):
     from pkmdyn.io import make_out_dir
 
     (tmp_path / "f").write_text("x")
-    with pytest.raises(PkmdynError, match="exists and is not a folder"):
+    with pytest.raises(PkmdynError, match="exists and is a file"):
         make_out_dir(tmp_path / "f")
     assert make_out_dir(tmp_path / "a" / "b").is_dir()
+
+
+def test_streamed_run_equals_the_in_memory_path(tmp_path):
+    """run_hip in blocks of 7 samples (file + summary) against simulate() holding everything."""
+    from pkmdyn.machines.hip_simulator.run import results_columns, run_hip, simulate, summary
+    from pkmdyn.profiles.iso14242 import iso14242_motion
+
+    files, _ = run_hip(tmp_path / "o", cycles=1.5, samples_per_cycle=40, make_plots=False, chunk=7)
+    header, data = _read(files["results"])
+    res = simulate(load_params(), iso14242_motion(1.5, 40))
+    cols = results_columns(res)
+    assert header == list(cols)
+    np.testing.assert_array_equal(data, np.column_stack([cols[k] for k in header]) + 0.0)
+    written = json.loads(files["summary"].read_text())
+    col = {name: data[:, k] for k, name in enumerate(header)}  # extremes by brute force over the file
+    for j in (1, 2):
+        for i in (1, 2, 3):
+            s = written["sliders"][f"S{j}{i}"]
+            assert s["max_position_m"] == col[f"L{j}{i}_m"].max() and s["min_position_m"] == col[f"L{j}{i}_m"].min()
+            assert s["max_abs_velocity_m_s"] == np.abs(col[f"Ld{j}{i}_m_s"]).max()
+            assert s["max_abs_acceleration_m_s2"] == np.abs(col[f"Ldd{j}{i}_m_s2"]).max()
+    for i in (1, 2, 3):
+        assert written["motors"][f"motor{i}"]["max_abs_tau_Nm"] == np.abs(col[f"tau{i}_Nm"]).max()
+        assert written["motors"][f"motor{i}"]["max_abs_tau_lever_Nm"] == np.abs(col[f"tau{i}_lever_Nm"]).max()
+    assert written["max_condJ"] == col["condJ"].max() and written["min_abs_detJb_m3"] == np.abs(col["detJb_m3"]).min()
+    assert written["samples"] == data.shape[0] == 61 and written["duration_s"] == 1.5
+    assert summary(res)["max_abs_power_W"] == written["max_abs_power_W"]
+
+
+def test_parquet_and_csv_hold_the_same_numbers(tmp_path):
+    import pyarrow.parquet as pq
+
+    assert main(["hip", "run", "--no-plots", "--samples-per-cycle", "30", "--out", str(tmp_path / "c")]) == 0
+    assert main(["hip", "run", "--no-plots", "--samples-per-cycle", "30", "--format", "parquet",
+                 "--out", str(tmp_path / "p")]) == 0
+    header, data = _read(tmp_path / "c" / "results.csv")
+    table = pq.read_table(tmp_path / "p" / "results.parquet")
+    assert table.column_names == header
+    np.testing.assert_array_equal(np.column_stack([table.column(k).to_numpy() for k in header]), data)
+
+
+def test_plot_envelope_is_the_min_and_max_of_each_bin():
+    from pkmdyn.machines.hip_simulator import run as hrun
+
+    rng = np.random.default_rng(8)
+    n = 12_345
+    x = rng.standard_normal((n, 3))
+    col = hrun._PlotCollector(n)
+    assert col.envelope
+    s = 0
+    while s < n:
+        k = int(rng.integers(1, 3000))
+        sl = slice(s, s + k)
+        col.add(s, {"t": np.arange(n, dtype=float)[sl], "tau": x[sl]}, np.zeros(min(k, n - s)), x[sl])
+        s += k
+    bins = np.arange(n) * hrun.PLOT_BINS // n
+    for b in (0, 17, hrun.PLOT_BINS - 1):
+        np.testing.assert_array_equal(col.lo["tau"][b], x[bins == b].min(axis=0))
+        np.testing.assert_array_equal(col.hi["tau"][b], x[bins == b].max(axis=0))
+    data = col.data("")
+    assert data.t.shape == (hrun.PLOT_BINS,) and len(data.scatter_load) <= hrun.SCATTER_MAX
+
+
+def test_multi_cycle_plots_show_the_first_cycle(tmp_path):
+    out = tmp_path / "o"
+    assert main(["hip", "run", "--cycles", "4", "--samples-per-cycle", "50", "--out", str(out)]) == 0
+    from pkmdyn.machines.hip_simulator import run as hrun
+
+    col = hrun._PlotCollector(51)
+    assert not col.envelope
+    assert (out / "torques.png").stat().st_size > 10_000
+
+
+def test_limits_from_the_parameter_file_and_the_command_line(tmp_path, capsys):
+    p = tmp_path / "p.toml"
+    p.write_text(DEFAULT_PARAMS_TEXT + "\n[limits]\nmax_load_N = 1000.0\n")
+    assert main(["hip", "run", "--params", str(p), "--no-plots", "--samples-per-cycle", "20", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "3000 N exceeds the limit max_load_N = 1000 N" in err and not (tmp_path / "o").exists()
+    assert main(["hip", "run", "--params", str(p), "--limit", "max_load_N=5000", "--no-plots", "--samples-per-cycle",
+                 "20", "--out", str(tmp_path / "o")]) == 0
+    assert json.loads((tmp_path / "o" / "summary.json").read_text())["limits"]["max_load_N"] == 5000
+    for bad in ("max_load_N=inf", "max_load_N=-1", "colour=3", "max_samples=1.5", "max_load_N"):
+        assert main(["hip", "run", "--limit", bad, "--no-plots", "--out", str(tmp_path / "x")]) == 2
+    assert main(["hip", "run", "--limit", "max_samples=100", "--no-plots", "--out", str(tmp_path / "x")]) == 2
+    assert "exceeds the limit max_samples = 100" in capsys.readouterr().err and not (tmp_path / "x").exists()
+
+
+def test_fast_motion_is_refused_by_the_slider_speed_limit(tmp_path, capsys):
+    """The ISO cycle squeezed into 1 ms: the slider speed limit names the sample and the slider."""
+    from pkmdyn.profiles.iso14242 import iso14242_motion
+    from pkmdyn.profiles.orientation import make_motion, write_motion_csv
+
+    m = iso14242_motion(1, 100)
+    k = 1e3
+    fast = make_motion(m.t / k, m.angles, m.rates * k, m.accels * k * k, m.load)
+    write_motion_csv(tmp_path / "m.csv", fast)
+    assert main(["hip", "run", "--motion", str(tmp_path / "m.csv"), "--no-plots", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "exceeds the limit max_slider_speed_m_s = 2 m/s" in err and "slider" in err
+    assert not (tmp_path / "o").exists() and not [p for p in tmp_path.iterdir() if ".partial" in p.name]
+
+
+def test_profile_help_documents_every_option():
+    from click.testing import CliRunner
+
+    from pkmdyn.cli import cli
+
+    for cmd in ("profile", "run"):
+        command = cli.commands["hip"].commands[cmd]
+        for param in command.params:
+            assert getattr(param, "help", None), (cmd, param.name)
+        text = CliRunner().invoke(cli, ["hip", cmd, "--help"]).output
+        assert "--samples-per-cycle" in text and "--out" in text
+
+
+def test_profile_into_a_missing_folder_creates_it_and_says_so(tmp_path, capsys):
+    out = tmp_path / "new" / "m.csv"
+    assert main(["hip", "profile", "--samples-per-cycle", "10", "--out", str(out)]) == 0
+    assert "created folder" in capsys.readouterr().err
+    assert out.read_text().startswith("t_s,alpha_deg") and [p.name for p in out.parent.iterdir()] == ["m.csv"]
+
+
+@pytest.mark.parametrize("args, word", [
+    (["--cycles", "inf"], "finite"), (["--cycles", "nan"], "finite"), (["--cycles", "0.0001"], "fewer than 2 samples"),
+    (["--cycles", "1e9"], "max_samples"), (["--samples-per-cycle", "99999999999999999999"], "max_samples"),
+    (["--singularity-threshold", "nan"], "finite"), (["--singularity-threshold", "2"], "not in"),
+])
+def test_sizes_and_numbers_of_options_are_checked(tmp_path, capsys, args, word):
+    assert main(["hip", "run", *args, "--no-plots", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and word in err and not list(tmp_path.iterdir())
+
+
+def test_library_entry_checks_name_the_expected_shape():
+    from pkmdyn.errors import MotionError, ParameterError
+    from pkmdyn.machines.hip_simulator import inverse_dynamics, inverse_kinematics, platform_kinematics
+    from pkmdyn.profiles.orientation import make_motion
+
+    model = load_params()
+    n = 5
+    t = np.linspace(0, 1, n)
+    z = np.zeros((n, 3))
+    with pytest.raises(MotionError, match=r"angles: expected shape \(5, 3\), got \(3, 5\)"):
+        make_motion(t, z.T, z, z)
+    with pytest.raises(MotionError, match=r"rates: expected shape \(5, 3\), got \(15,\)"):
+        make_motion(t, z, z.ravel(), z)
+    with pytest.raises(MotionError, match="expected a float array"):
+        make_motion(t, "angles", z, z)
+    R = np.tile(np.eye(3), (n, 1, 1))
+    R[2] *= 1.01
+    with pytest.raises(MotionError, match=r"R: sample 3 is not a rotation matrix"):
+        platform_kinematics(model, t, R, z, z)
+    R[2] = np.diag([1.0, 1.0, -1.0])  # orthonormal but a reflection
+    with pytest.raises(MotionError, match=r"sample 3 is not a rotation"):
+        platform_kinematics(model, t, R, z, z)
+    with pytest.raises(MotionError, match=r"omega: expected shape \(5, 3\)"):
+        platform_kinematics(model, t, np.tile(np.eye(3), (n, 1, 1)), z[:, :2], z)
+    with pytest.raises(ParameterError, match="model: expected a HipModel"):
+        platform_kinematics({"l": 1}, t, np.tile(np.eye(3), (n, 1, 1)), z, z)
+    with pytest.raises(MotionError, match="motion: expected a OrientationMotion"):
+        inverse_kinematics(model, {"t": t})
+    kin = inverse_kinematics(model, make_motion(t, z, z, z))
+    with pytest.raises(MotionError, match=r"load: expected shape \(5,\)"):
+        inverse_dynamics(model, kin, np.zeros((5, 1)))
+    with pytest.raises(MotionError, match="kin: expected a HipKinematics"):
+        inverse_dynamics(model, "kin", np.zeros(5))
+
+
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_interrupting_a_run_leaves_nothing(tmp_path, sig):
+    """Ctrl-C (or SIGTERM) while results are being written: one line, and no trace of the run."""
+    import signal
+    import time
+
+    out = tmp_path / "o"
+    proc = subprocess.Popen([sys.executable, "-m", "pkmdyn.cli", "hip", "run", "--no-plots", "--cycles", "2000",
+                             "--out", str(out)], cwd=tmp_path, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not any(tmp_path.glob(".o.partial-*/results.csv")):
+        time.sleep(0.05)
+    assert any(tmp_path.glob(".o.partial-*/results.csv")), "the run never started writing"
+    proc.send_signal(getattr(signal, sig))
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and err.strip().splitlines() == [
+        "pkmdyn: interrupted; --out holds either the whole new run or what it held before"], err
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

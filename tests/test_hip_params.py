@@ -36,8 +36,8 @@ def test_file_round_trip(tmp_path):
 
 
 CASES = [
-    (lambda d: d["geometry"].update(lever_length_m=-0.3), r"\[geometry\] lever_length_m: must be > 0"),
-    (lambda d: d["geometry"].update(base_radius_m=0.0), r"\[geometry\] base_radius_m: must be > 0"),
+    (lambda d: d["geometry"].update(lever_length_m=-0.3), r"\[geometry\] lever_length_m: must be >= 0.001"),
+    (lambda d: d["geometry"].update(base_radius_m=0.0), r"\[geometry\] base_radius_m: must be >= 0.001"),
     (lambda d: d["inertia"].update(slider_mass_kg=-3.0), r"\[inertia\] slider_mass_kg: must be > 0"),
     (lambda d: d["inertia"].update(lever_inertia_kgm2=[1e-3, 0.0, 1e-3]), r"\[inertia\] lever_inertia_kgm2\[1\]: must be > 0"),
     (lambda d: d["inertia"].update(screw_inertia_kgm2=0.0), r"\[inertia\] screw_inertia_kgm2"),
@@ -76,3 +76,43 @@ def test_model_is_immutable():
     m = load_params()
     with pytest.raises(Exception):
         m.geometry.l = 1.0  # type: ignore[misc]
+
+
+def _numeric_keys():
+    d = default_params_dict()
+    return [(t, k) for t, table in d.items() for k, v in table.items() if isinstance(v, (float, list))]
+
+
+@pytest.mark.parametrize("table, key", _numeric_keys())
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), -float("inf")])
+def test_every_number_must_be_finite(table, key, bad):
+    def change(d):
+        v = d[table][key]
+        d[table][key] = [bad] + v[1:] if isinstance(v, list) else bad
+
+    with pytest.raises(ParameterError, match=rf"\[{table}\] {key}(\[0\])?: must be a finite number"):
+        model_from_dict(_with(change), "p.toml")
+
+
+@pytest.mark.parametrize("table, key, value, message", [
+    ("inertia", "slider_mass_kg", 1e308, "must be <= 10000"),
+    ("geometry", "lever_length_m", 1e5, "must be <= 10"),
+    ("geometry", "module_angles_deg", [0.0, 1e9, 2.0], r"module_angles_deg\[1\]: must be <= 360"),
+    ("friction", "hip_coefficient", 50.0, "must be <= 5"),
+    ("inertia", "gravity_m_s2", 1e4, "must be <= 100"),
+])
+def test_physically_meaningful_ranges(table, key, value, message):
+    with pytest.raises(ParameterError, match=rf"\[{table}\] {message if message.startswith(key) else key + ': ' + message}"):
+        model_from_dict(_with(lambda d: d[table].update({key: value})), "p.toml")
+
+
+def test_limits_table_is_optional_validated_and_reaches_the_model():
+    from pkmdyn.machines.hip_simulator.params import HipLimits
+
+    assert load_params().limits == HipLimits()
+    m = model_from_dict(_with(lambda d: d.update(limits={"max_load_N": 5e4, "max_samples": 10})))
+    assert m.limits.max_load_N == 5e4 and m.limits.max_samples == 10 and m.limits.max_abs_angle_deg == 45.0
+    for bad, message in (({"max_load_N": -1.0}, "must be > 0"), ({"max_samples": 1.5}, "wrong type"),
+                         ({"max_slider_speed_m_s": float("inf")}, "finite"), ({"speed": 1.0}, "unknown key")):
+        with pytest.raises(ParameterError, match=rf"\[limits\] .*{message}"):
+            model_from_dict(_with(lambda d: d.update(limits=bad)), "p.toml")

@@ -1,7 +1,9 @@
 """One exception family for every user error pkmdyn can report.
 
 Every message names what is wrong (the key, the row, the leg, the sample time) so that
-the command line can print it as one line and exit with status 2.
+the command line can print it as one line and exit with status 2. The entry checks of the
+library's public functions (:func:`as_array`, :func:`check_type`) live here too, so that a
+wrong shape or type becomes one of these errors with the expected shape.
 """
 
 from __future__ import annotations
@@ -13,6 +15,9 @@ __all__ = [
     "UnreachablePoseError",
     "SingularityError",
     "SingularityWarning",
+    "LimitError",
+    "as_array",
+    "check_type",
 ]
 
 
@@ -36,5 +41,36 @@ class SingularityError(PkmdynError):
     """A configuration at which a Jacobian cannot be inverted."""
 
 
+class LimitError(PkmdynError):
+    """A value beyond a configurable plausibility limit; the message names the limit and how to raise it."""
+
+
 class SingularityWarning(UserWarning):
     """A sample closer to a singularity than the configured threshold."""
+
+
+def as_array(value: object, shape: tuple[int | None, ...], name: str, error: type[PkmdynError] = PkmdynError):
+    """``value`` as a float array of ``shape`` (``None`` = any length), or ``error`` naming ``name``.
+
+    The entry check of the library's public functions: a wrong type, a transposed or flattened
+    array, or a wrong number of dimensions is reported with the expected shape, e.g.
+    ``"angles: expected shape (n, 3), got (3, 100)"``, instead of a numpy error deep inside.
+    """
+    import numpy as np
+
+    want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + (",)" if len(shape) == 1 else ")")
+    if isinstance(value, (str, bytes)) or value is None:
+        raise error(f"{name}: expected a float array of shape {want}, got {type(value).__name__}")
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise error(f"{name}: expected a float array of shape {want}, got {type(value).__name__}") from None
+    if arr.ndim != len(shape) or any(s is not None and a != s for a, s in zip(arr.shape, shape)):
+        raise error(f"{name}: expected shape {want}, got {arr.shape}")
+    return arr
+
+
+def check_type(value: object, cls: type, name: str, error: type[PkmdynError] = PkmdynError) -> None:
+    """Raise ``error`` naming ``name`` unless ``value`` is an instance of ``cls``."""
+    if not isinstance(value, cls):
+        raise error(f"{name}: expected a {cls.__name__}, got {type(value).__name__}")

@@ -14,19 +14,44 @@ import click
 from ..errors import PkmdynError
 from . import hip as _hip_commands  # noqa: F401  (registers the commands)
 from . import pdm as _pdm_commands  # noqa: F401
+from . import export as _export_commands  # noqa: F401
+from . import identify as _identify_commands  # noqa: F401
+from . import control as _control_commands  # noqa: F401
 from ._groups import cli
 
 __all__ = ["main", "cli", "run"]
 
 
+def _sigterm(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; return the exit status (0 ok, 2 user error)."""
+    """Run the command line; return the exit status (0 ok, 2 user error, 130 interrupted).
+
+    Ctrl-C and SIGTERM end a run cleanly (its temporary output removed) with one line.
+    """
+    import signal
+    import threading
+
+    old = None
+    if threading.current_thread() is threading.main_thread():
+        old = signal.signal(signal.SIGTERM, _sigterm)
+    args = sys.argv[1:] if argv is None else list(argv)
     try:
-        cli.main(args=argv, prog_name="pkmdyn", standalone_mode=False)
+        with cli.make_context("pkmdyn", args) as ctx:
+            cli.invoke(ctx)
     except click.exceptions.Exit as exc:
         return int(exc.exit_code)
-    except click.exceptions.Abort:
-        click.echo("pkmdyn: aborted", err=True)
+    except (KeyboardInterrupt, click.exceptions.Abort):
+        click.echo("pkmdyn: interrupted; --out holds either the whole new run or what it held before", err=True)
+        return 130
+    except MemoryError:
+        click.echo("pkmdyn: error: out of memory (lower the sample count or --limit max_samples)", err=True)
+        return 2
+    except OSError as exc:
+        where = f" {exc.filename}" if exc.filename else ""
+        click.echo(f"pkmdyn: error:{where} {exc.strerror or type(exc).__name__}", err=True)
         return 2
     except click.ClickException as exc:
         message = " ".join(exc.format_message().split())
@@ -36,6 +61,9 @@ def main(argv: list[str] | None = None) -> int:
         message = " ".join(str(exc).split())
         click.echo(f"pkmdyn: error: {message}", err=True)
         return 2
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
     return 0
 
 

@@ -30,15 +30,18 @@ and is twice continuously differentiable and periodic.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import MotionError, ParameterError
+from ..errors import LimitError, MotionError, ParameterError
+from ..io import DEFAULT_MAX_SAMPLES
 from .orientation import OrientationMotion, make_motion
 
-__all__ = ["AxisWave", "IsoCycle", "angle_wave", "iso_load", "iso14242_motion"]
+__all__ = ["AxisWave", "IsoCycle", "angle_wave", "iso_load", "iso14242_motion", "iso14242_samples",
+           "iso14242_times", "iso14242_block"]
 
 Array = NDArray[np.float64]
 
@@ -118,21 +121,65 @@ def iso_load(t: Array, cycle: IsoCycle = IsoCycle()) -> Array:
     return values[seg] + (values[seg + 1] - values[seg]) * smooth
 
 
-def iso14242_motion(
-    cycles: float = 1.0, samples_per_cycle: int = 1000, cycle: IsoCycle = IsoCycle()
-) -> OrientationMotion:
-    """The cycle model sampled at ``samples_per_cycle`` points per period over ``cycles`` periods.
-
-    Angles are returned in the order (alpha FE, beta AA, gamma IER).
-    """
-    if not cycles > 0:
-        raise MotionError(f"cycles: must be > 0, got {cycles}")
+def iso14242_samples(cycles: float, samples_per_cycle: int, max_samples: int = DEFAULT_MAX_SAMPLES) -> int:
+    """The number of samples of ``cycles`` periods at ``samples_per_cycle`` (both ends included),
+    checked before anything is allocated: ``cycles`` finite and > 0, at least 2 samples, at most
+    ``max_samples`` (a :class:`LimitError` that says how to raise it)."""
+    if isinstance(cycles, bool) or not isinstance(cycles, (int, float, np.integer, np.floating)):
+        raise MotionError(f"cycles: expected a number, got {type(cycles).__name__}")
+    if isinstance(samples_per_cycle, bool) or not isinstance(samples_per_cycle, (int, np.integer)):
+        raise MotionError(f"samples per cycle: expected an integer, got {type(samples_per_cycle).__name__}")
+    if not (math.isfinite(cycles) and cycles > 0):
+        raise MotionError(f"cycles: must be a finite number > 0, got {cycles}")
     if samples_per_cycle < 2:
         raise MotionError(f"samples per cycle: must be >= 2, got {samples_per_cycle}")
-    n = int(round(cycles * samples_per_cycle)) + 1
-    t = np.linspace(0.0, cycles * cycle.period_s, n)
+    intervals = float(cycles) * float(samples_per_cycle)
+    if not intervals <= max_samples:
+        raise LimitError(
+            f"cycles x samples per cycle = {intervals:.4g} samples exceeds the limit max_samples = {max_samples} "
+            "(raise it with [limits] max_samples in the parameter file or --limit max_samples=N)"
+        )
+    n = int(round(intervals)) + 1
+    if n < 2:
+        raise MotionError(
+            f"cycles x samples per cycle = {intervals:.4g} gives fewer than 2 samples; give more cycles or samples per cycle"
+        )
+    if n > max_samples:
+        raise LimitError(
+            f"{n} samples exceed the limit max_samples = {max_samples} "
+            "(raise it with [limits] max_samples in the parameter file or --limit max_samples=N)"
+        )
+    return n
+
+
+def iso14242_block(t: Array, cycle: IsoCycle = IsoCycle()) -> OrientationMotion:
+    """The cycle model at the times ``t (n,)`` [s] (one block of a long run)."""
     waves = [angle_wave(t, cycle.period_s, w, name) for w, name in ((cycle.fe, "fe"), (cycle.aa, "aa"), (cycle.ier, "ier"))]
     q = np.stack([w[0] for w in waves], axis=-1)
     qd = np.stack([w[1] for w in waves], axis=-1)
     qdd = np.stack([w[2] for w in waves], axis=-1)
     return make_motion(t, q, qd, qdd, iso_load(t, cycle))
+
+
+def iso14242_times(n: int, cycles: float, cycle: IsoCycle = IsoCycle(), start: int = 0, stop: int | None = None) -> Array:
+    """Sample times ``start:stop`` of ``n`` equally spaced samples over ``cycles`` periods [s]
+    (the same values as ``np.linspace(0, cycles T, n)[start:stop]``)."""
+    stop = n if stop is None else min(stop, n)
+    step = cycles * cycle.period_s / (n - 1)
+    t = np.arange(start, stop, dtype=float) * step
+    if stop == n:
+        t[-1] = cycles * cycle.period_s
+    return t
+
+
+def iso14242_motion(
+    cycles: float = 1.0, samples_per_cycle: int = 1000, cycle: IsoCycle = IsoCycle(),
+    max_samples: int = DEFAULT_MAX_SAMPLES,
+) -> OrientationMotion:
+    """The cycle model sampled at ``samples_per_cycle`` points per period over ``cycles`` periods.
+
+    Angles are returned in the order (alpha FE, beta AA, gamma IER). More than ``max_samples``
+    samples is a :class:`LimitError`, raised before allocating.
+    """
+    n = iso14242_samples(cycles, samples_per_cycle, max_samples)
+    return iso14242_block(iso14242_times(n, cycles, cycle), cycle)

@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import MotionError
-from ..io import read_csv_columns, write_csv
+from ..errors import MotionError, as_array
+from ..io import DEFAULT_MAX_SAMPLES, read_csv_columns, write_csv
 from ._columns import column_group, derivatives, require_increasing
 
 __all__ = ["OrientationMotion", "check_load", "make_motion", "read_motion_csv", "write_motion_csv", "MOTION_COLUMNS"]
@@ -53,9 +53,7 @@ class OrientationMotion:
 def check_load(t: Array, load: Array) -> Array:
     """The hydraulic load ``(n,)`` [N] as floats; a wrong shape, a NaN, an infinity or a negative
     value is a :class:`MotionError` naming the row and its time."""
-    load = np.asarray(load, dtype=float)
-    if load.shape != t.shape:
-        raise MotionError(f"load: expected {t.shape[0]} values, got shape {load.shape}")
+    load = as_array(load, np.shape(t), "load", MotionError)
     bad = np.flatnonzero(~(np.isfinite(load) & (load >= 0.0)))
     if bad.size:
         r = int(bad[0])
@@ -65,30 +63,32 @@ def check_load(t: Array, load: Array) -> Array:
 
 
 def make_motion(t: Array, angles: Array, rates: Array, accels: Array, load: Array | None = None) -> OrientationMotion:
-    """Check shapes and values and build a motion; errors name the row and the quantity."""
-    t = np.atleast_1d(np.asarray(t, dtype=float))
+    """Check shapes and values and build a motion; errors name the row and the quantity.
+
+    ``t (n,)`` [s] strictly increasing; ``angles, rates, accels (n, 3)`` [rad, rad/s, rad/s^2],
+    one row per sample (a transposed ``(3, n)`` or flattened array is refused with the expected
+    shape); ``load (n,)`` [N] >= 0 or ``None`` (zero).
+    """
+    t = as_array(t, (None,), "motion t", MotionError)
     n = t.shape[0]
-    arrays = {}
-    for name, a in (("angles", angles), ("rates", rates), ("accels", accels)):
-        a = np.asarray(a, dtype=float).reshape(-1, 3) if np.size(a) else np.zeros((0, 3))
-        if a.shape != (n, 3):
-            raise MotionError(f"motion {name}: expected shape ({n}, 3), got {np.shape(a)}")
-        arrays[name] = a
+    arrays = {name: as_array(a, (n, 3), f"motion {name}", MotionError)
+              for name, a in (("angles", angles), ("rates", rates), ("accels", accels))}
     for name, a in (("t", t), *arrays.items()):
         bad = ~np.isfinite(a)
         if bad.any():
             row = int(np.flatnonzero(bad.reshape(n, -1).any(axis=1))[0])
-            raise MotionError(f"motion row {row + 1} (t = {t[row]:g} s): {name} is not finite")
-    ld = np.zeros(n) if load is None else check_load(t, np.atleast_1d(np.asarray(load, dtype=float)))
+            when = f"t = {t[row]:g} s" if np.isfinite(t[row]) else "t not finite"
+            raise MotionError(f"motion row {row + 1} ({when}): {name} is not finite")
+    ld = np.zeros(n) if load is None else check_load(t, as_array(load, (n,), "motion load", MotionError))
     if n > 1 and np.any(np.diff(t) <= 0):
         r = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
         raise MotionError(f"motion row {r + 1}: time {t[r]:g} s does not increase")
     return OrientationMotion(t, arrays["angles"], arrays["rates"], arrays["accels"], ld)
 
 
-def read_motion_csv(path: str | Path) -> OrientationMotion:
-    """Read the spec's motion CSV (degrees on file, radians inside)."""
-    cols = read_csv_columns(path, ("t_s", *_ANG), (*_RATE, *_ACC, "load_N"))
+def read_motion_csv(path: str | Path, max_rows: int | None = DEFAULT_MAX_SAMPLES) -> OrientationMotion:
+    """Read the spec's motion CSV (degrees on file, radians inside); at most ``max_rows`` rows."""
+    cols = read_csv_columns(path, ("t_s", *_ANG), (*_RATE, *_ACC, "load_N"), max_rows=max_rows)
     t = cols["t_s"]
     require_increasing(path, t)
     load = cols.get("load_N")

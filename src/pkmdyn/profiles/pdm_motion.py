@@ -72,10 +72,15 @@ def cycloidal_motion(strokes: tuple[float, float, float, float], period: float, 
     return PdmMotion(t, q, qd, qdd)
 
 
-def read_pdm_motion(path: str | Path) -> PdmMotion:
-    """Read a PDM motion CSV (see the module docstring); errors name the file, row and column."""
+#: default cap on the rows of a PDM motion file (the PDM's ``[limits] max_samples`` default)
+PDM_MAX_ROWS = 200_000
+
+
+def read_pdm_motion(path: str | Path, max_rows: int | None = PDM_MAX_ROWS) -> PdmMotion:
+    """Read a PDM motion CSV (see the module docstring); errors name the file, row and column.
+    More than ``max_rows`` data rows is a :class:`~pkmdyn.errors.LimitError`."""
     path = Path(path)
-    cols = read_csv_columns(path, ("t_s", *POSE_COLUMNS), (*RATE_COLUMNS, *ACCEL_COLUMNS))
+    cols = read_csv_columns(path, ("t_s", *POSE_COLUMNS), (*RATE_COLUMNS, *ACCEL_COLUMNS), max_rows=max_rows)
     t = cols["t_s"]
     require_increasing(path, t)
     q = column_group(path, cols, POSE_COLUMNS)

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import SingularityError
+from ...errors import MotionError, ParameterError, SingularityError, check_type
 from ...friction import coulomb_viscous, hip_bearing_friction
 from ...profiles.orientation import check_load
 from ...spatial import cross0, dot0
@@ -108,6 +108,8 @@ def inverse_dynamics(model: HipModel, kin: HipKinematics, load: Array) -> HipTor
     ``load (n,)`` [N] is the hydraulic force on each platform, along -Z through o_j.
     Vectors are handled component-first internally (see :func:`platform_kinematics`).
     """
+    check_type(model, HipModel, "model", ParameterError)
+    check_type(kin, HipKinematics, "kin", MotionError)
     load = check_load(kin.t, load)
     g, m, f = model.geometry, model.inertia, model.friction
     n_platforms = g.h.shape[0]

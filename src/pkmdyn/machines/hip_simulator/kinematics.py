@@ -16,7 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import SingularityError, SingularityWarning, UnreachablePoseError
+from ...errors import MotionError, ParameterError, SingularityError, SingularityWarning, UnreachablePoseError
+from ...errors import as_array, check_type
 from ...profiles.orientation import OrientationMotion
 from ...spatial import cross0, dot0, euler_kinematics
 from .params import HipModel
@@ -94,6 +95,32 @@ def _last(x: Array) -> Array:
     return x.transpose(2, 1, 0)
 
 
+def _check_platform_motion(model: object, t: object, R: object, omega: object, omega_dot: object,
+                           singularity_threshold: object) -> tuple[Array, Array, Array, Array]:
+    """Entry check of :func:`platform_kinematics`: types, shapes ``t (n,), R (n, 3, 3), omega,
+    omega_dot (n, 3)``, finite values, ``R`` orthonormal with det +1 (to 1e-6)."""
+    check_type(model, HipModel, "model", ParameterError)
+    t = as_array(t, (None,), "t", MotionError)
+    n = t.shape[0]
+    R = as_array(R, (n, 3, 3), "R", MotionError)
+    omega = as_array(omega, (n, 3), "omega", MotionError)
+    omega_dot = as_array(omega_dot, (n, 3), "omega_dot", MotionError)
+    for name, a in (("t", t), ("R", R), ("omega", omega), ("omega_dot", omega_dot)):
+        bad = ~np.isfinite(a.reshape(n, -1)).all(axis=1)
+        if bad.any():
+            raise MotionError(f"{name}: sample {int(np.flatnonzero(bad)[0]) + 1} is not finite")
+    err = np.abs(np.einsum("nki,nkj->nij", R, R) - np.eye(3)).max(axis=(1, 2)) if n else np.zeros(0)
+    bad = ~(err <= 1e-6) | ~(np.linalg.det(R) > 0) if n else np.zeros(0, bool)
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise MotionError(f"R: sample {k + 1} is not a rotation matrix (|R^T R - I| = {err[k]:.3g}, det = "
+                          f"{np.linalg.det(R[k]):.6g}); expected orthonormal with det +1")
+    if isinstance(singularity_threshold, bool) or not isinstance(singularity_threshold, (int, float, np.floating)) \
+            or not 0 <= singularity_threshold <= 1:
+        raise ParameterError(f"singularity_threshold: expected a number in [0, 1], got {singularity_threshold!r}")
+    return t, R, omega, omega_dot
+
+
 def platform_kinematics(
     model: HipModel,
     t: Array,
@@ -122,8 +149,8 @@ def platform_kinematics(
     ``(3, leg, n)``, so that each component of each leg is a contiguous run of samples; the
     returned fields are views in the documented layout.
     """
+    t, R, omega, omega_dot = _check_platform_motion(model, t, R, omega, omega_dot, singularity_threshold)
     g = model.geometry
-    t = np.asarray(t, dtype=float)
     n = t.shape[0]
     l2 = g.l * g.l
     # r_ji = R r_ai, internal layout (3, leg, n)
@@ -238,5 +265,7 @@ def inverse_kinematics(
     singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD,
 ) -> HipKinematics:
     """Inverse kinematics along a motion (Euler angles and rates -> every body's motion)."""
+    check_type(model, HipModel, "model", ParameterError)
+    check_type(motion, OrientationMotion, "motion", MotionError)
     R, omega, omega_dot = euler_kinematics(model.geometry.euler_sequence, motion.angles, motion.rates, motion.accels)
     return platform_kinematics(model, motion.t, R, omega, omega_dot, singularity_threshold)

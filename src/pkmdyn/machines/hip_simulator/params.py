@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 from pydantic import Field, field_validator, model_validator
 
 from ...errors import ParameterError
+from ...io import DEFAULT_MAX_SAMPLES
 from ...params_util import Section, read_toml, validate
 from ...spatial import check_sequence
 
@@ -24,6 +25,8 @@ __all__ = [
     "HipInertia",
     "HipFriction",
     "HipModel",
+    "HipLimits",
+    "LIMIT_KEYS",
     "load_params",
     "model_from_dict",
     "default_params_dict",
@@ -33,6 +36,17 @@ __all__ = [
 Array = NDArray[np.float64]
 Pos = Annotated[float, Field(gt=0.0)]
 NonNeg = Annotated[float, Field(ge=0.0)]
+# physically meaningful ranges: a value outside is a typing error, not a machine
+Length = Annotated[float, Field(ge=1e-3, le=10.0)]  #: [m]
+Angle = Annotated[float, Field(ge=-360.0, le=360.0)]  #: [deg]
+Mass = Annotated[float, Field(gt=0.0, le=1e4)]  #: [kg]
+Inertia = Annotated[float, Field(gt=0.0, le=1e4)]  #: [kg m^2]
+Radius = Annotated[float, Field(ge=0.0, le=1.0)]  #: [m] friction radii
+Coefficient = Annotated[float, Field(ge=0.0, le=5.0)]  #: friction coefficients
+Force = Annotated[float, Field(ge=0.0, le=1e5)]  #: [N]
+Torque = Annotated[float, Field(ge=0.0, le=1e4)]  #: [N m]
+Damping = Annotated[float, Field(ge=0.0, le=1e6)]  #: [N s/m] or [N m s/rad]
+Eps = Annotated[float, Field(ge=1e-9, le=1e3)]  #: friction regularisation velocities
 
 
 def _vec(n: int, item: Any = float) -> Any:
@@ -40,13 +54,13 @@ def _vec(n: int, item: Any = float) -> Any:
 
 
 class _Geometry(Section):
-    base_radius_m: Pos
-    platform_radius_m: Pos
-    lever_length_m: Pos
-    platform_heights_m: _vec(2, Pos)
-    screw_lead_m: Pos
-    module_angles_deg: _vec(3)
-    platform_joint_angles_deg: _vec(3)
+    base_radius_m: Length
+    platform_radius_m: Length
+    lever_length_m: Length
+    platform_heights_m: _vec(2, Length)
+    screw_lead_m: Annotated[float, Field(ge=1e-4, le=1.0)]
+    module_angles_deg: _vec(3, Angle)
+    platform_joint_angles_deg: _vec(3, Angle)
     euler_sequence: str = "XYZ"
     lever_spin: Literal["u_joint", "perpendicular"] = "u_joint"
 
@@ -63,43 +77,55 @@ class _Geometry(Section):
         try:
             return check_sequence(v)
         except ParameterError:
+            shown = v if len(v) <= 20 else v[:20] + "..."
             raise ValueError(
-                f"{v!r} is not a valid Euler sequence (three axes from XYZ for intrinsic or xyz for "
+                f"{shown!r} is not a valid Euler sequence (three axes from XYZ for intrinsic or xyz for "
                 "extrinsic, no axis twice in a row)"
             ) from None
 
 
 class _Inertia(Section):
-    slider_mass_kg: Pos
-    lever_mass_kg: Pos
-    lever_inertia_kgm2: _vec(3, Pos)
-    screw_inertia_kgm2: Pos
-    platform_mass_kg: NonNeg
-    platform_inertia_kgm2: _vec(3, Pos)
-    gravity_m_s2: NonNeg
+    slider_mass_kg: Mass
+    lever_mass_kg: Mass
+    lever_inertia_kgm2: _vec(3, Inertia)
+    screw_inertia_kgm2: Annotated[float, Field(gt=0.0, le=10.0)]
+    platform_mass_kg: Annotated[float, Field(ge=0.0, le=1e4)]
+    platform_inertia_kgm2: _vec(3, Inertia)
+    gravity_m_s2: Annotated[float, Field(ge=0.0, le=100.0)]
 
 
 class _Friction(Section):
-    hip_radius_m: NonNeg
-    hip_coefficient: NonNeg
-    thrust_radius_m: NonNeg
-    thrust_coefficient: NonNeg
-    friction_velocity_eps_rad_s: Pos = 1e-3
-    friction_velocity_eps_m_s: Pos = 1e-4
-    slider_coulomb_N: NonNeg = 0.0
-    slider_viscous_Ns_m: NonNeg = 0.0
-    screw_coulomb_Nm: NonNeg = 0.0
-    screw_viscous_Nms_rad: NonNeg = 0.0
-    spherical_coulomb_Nm: NonNeg = 0.0
-    spherical_viscous_Nms_rad: NonNeg = 0.0
-    universal_coulomb_Nm: NonNeg = 0.0
-    universal_viscous_Nms_rad: NonNeg = 0.0
+    hip_radius_m: Radius
+    hip_coefficient: Coefficient
+    thrust_radius_m: Radius
+    thrust_coefficient: Coefficient
+    friction_velocity_eps_rad_s: Eps = 1e-3
+    friction_velocity_eps_m_s: Eps = 1e-4
+    slider_coulomb_N: Force = 0.0
+    slider_viscous_Ns_m: Damping = 0.0
+    screw_coulomb_Nm: Torque = 0.0
+    screw_viscous_Nms_rad: Damping = 0.0
+    spherical_coulomb_Nm: Torque = 0.0
+    spherical_viscous_Nms_rad: Damping = 0.0
+    universal_coulomb_Nm: Torque = 0.0
+    universal_viscous_Nms_rad: Damping = 0.0
+
+
+class _Limits(Section):
+    """Plausibility limits: implausible but possible inputs are refused unless raised here."""
+
+    max_samples: Annotated[int, Field(gt=0)] = DEFAULT_MAX_SAMPLES
+    max_load_N: Pos = 20_000.0
+    max_abs_angle_deg: Annotated[float, Field(gt=0.0, le=180.0)] = 45.0
+    max_slider_speed_m_s: Pos = 2.0
+    max_slider_acceleration_m_s2: Pos = 50.0
 
 
 class _HipFile(Section):
     geometry: _Geometry
     inertia: _Inertia
     friction: _Friction
+    limits: _Limits = _Limits()
 
 
 @dataclass(frozen=True)
@@ -155,12 +181,32 @@ class HipFriction:
 
 
 @dataclass(frozen=True)
+class HipLimits:
+    """Plausibility limits of a run (``[limits]``, all optional; ``docs/file_formats.md``).
+
+    Inputs beyond them are refused with a message naming the limit; raise one in the parameter
+    file or with ``--limit KEY=VALUE``.
+    """
+
+    max_samples: int = DEFAULT_MAX_SAMPLES  #: samples of one run, checked before allocating
+    max_load_N: float = 20_000.0  #: hydraulic load on a platform [N]
+    max_abs_angle_deg: float = 45.0  #: |Euler angle| of the platforms [deg]
+    max_slider_speed_m_s: float = 2.0  #: |slider velocity| [m/s]
+    max_slider_acceleration_m_s2: float = 50.0  #: |slider acceleration| [m/s^2]
+
+
+#: the ``[limits]`` keys and their types (for ``--limit KEY=VALUE``)
+LIMIT_KEYS: dict[str, type] = {f: (int if f == "max_samples" else float) for f in HipLimits.__dataclass_fields__}
+
+
+@dataclass(frozen=True)
 class HipModel:
     """The whole machine: immutable, plain numbers and arrays."""
 
     geometry: HipGeometry
     inertia: HipInertia
     friction: HipFriction
+    limits: HipLimits = field(default_factory=HipLimits)
 
 
 def _build(d: _HipFile, source: str) -> HipModel:
@@ -221,7 +267,7 @@ def _build(d: _HipFile, source: str) -> HipModel:
         universal_coulomb=f.universal_coulomb_Nm,
         universal_viscous=f.universal_viscous_Nms_rad,
     )
-    return HipModel(geom, inertia, friction)
+    return HipModel(geom, inertia, friction, HipLimits(**d.limits.model_dump()))
 
 
 def model_from_dict(data: dict[str, Any], source: str = "parameters") -> HipModel:

@@ -1,7 +1,15 @@
-"""Plots of the hip simulator in the style of the paper's figures (matplotlib, Agg backend)."""
+"""Plots of the hip simulator in the style of the paper's figures (matplotlib, Agg backend).
+
+Units on the axes are those of the results files (m, m/s, m/s^2, N m, N, deg), so a value read
+off a plot can be looked up in ``results.csv`` unchanged. A plot never draws more than one
+cycle's worth of curves: the built-in motion is periodic, so its plots show the first cycle;
+a long motion file is shown as an envelope (minimum and maximum over equal bins of samples,
+:class:`PlotData`), never as a solid block of overdrawn lines.
+"""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib
@@ -9,107 +17,132 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from numpy.typing import NDArray  # noqa: E402
 
-from ...profiles.orientation import OrientationMotion  # noqa: E402
+__all__ = ["PlotData", "plot_motion_and_load", "plot_slider_motion", "plot_torque_parts", "plot_torques",
+           "plot_friction_vs_load"]
 
-__all__ = ["plot_motion_and_load", "plot_slider_motion", "plot_torque_parts", "plot_torques", "plot_friction_vs_load"]
-
+Array = NDArray[np.float64]
 _LEG_COLOURS = ("tab:blue", "tab:orange", "tab:green")
 
 
-def plot_motion_and_load(motion: OrientationMotion, path: Path) -> Path:
+@dataclass(frozen=True)
+class PlotData:
+    """What the plots draw: ``t (m,)`` [s] and, per curve name, ``lo, hi (m, k)``.
+
+    Without ``envelope`` ``lo == hi`` are the samples; with it they are the minimum and maximum
+    of each bin centred at ``t``. Curves: ``angles_deg`` (3), ``load_N`` (1), ``L`` (6: platform
+    1 legs 1-3, platform 2 legs 1-3) [m], ``Ld``, ``Ldd`` (3, one per screw) [m/s, m/s^2],
+    ``tau`` and each part of :data:`~pkmdyn.machines.hip_simulator.dynamics.PARTS` (3) [N m].
+    ``scatter_load (s,)`` [N], ``scatter_friction (s, 3)`` [N m]: thinned samples for the
+    friction-against-load plot. ``note``: what the time axis shows (e.g. the first cycle).
+    """
+
+    t: Array
+    lo: dict[str, Array]
+    hi: dict[str, Array]
+    envelope: bool
+    note: str
+    scatter_load: Array
+    scatter_friction: Array
+
+
+def _curve(ax, data: PlotData, name: str, col: int, **style) -> None:
+    lo, hi = data.lo[name][:, col], data.hi[name][:, col]
+    if data.envelope:
+        colour = style.get("color")
+        ax.fill_between(data.t, lo, hi, alpha=0.3, color=colour, label=style.get("label"), lw=0)
+        ax.plot(data.t, lo, color=colour, lw=0.7, alpha=style.get("alpha", 1.0))
+        ax.plot(data.t, hi, color=colour, lw=0.7, alpha=style.get("alpha", 1.0))
+    else:
+        ax.plot(data.t, lo, style.pop("fmt", "-"), **style)
+
+
+def _finish(fig, data: PlotData, path: Path) -> Path:
+    if data.note:
+        fig.suptitle(data.note, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def plot_motion_and_load(data: PlotData, path: Path) -> Path:
     """Fig. 4 style: (a) the three Euler angles [deg], (b) the load [N] over time."""
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4))
     for k, label in enumerate(("FE (alpha)", "AA (beta)", "IER (gamma)")):
-        ax1.plot(motion.t, np.rad2deg(motion.angles[:, k]), label=label)
+        _curve(ax1, data, "angles_deg", k, color=_LEG_COLOURS[k], label=label)
     ax1.set(xlabel="t [s]", ylabel="angle [deg]", title="(a) Motion")
     ax1.legend()
     ax1.grid(alpha=0.3)
-    ax2.plot(motion.t, motion.load, color="tab:red")
+    _curve(ax2, data, "load_N", 0, color="tab:red")
     ax2.set(xlabel="t [s]", ylabel="load F [N]", title="(b) Load")
     ax2.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _finish(fig, data, path)
 
 
-def plot_slider_motion(t: np.ndarray, L: np.ndarray, Ld: np.ndarray, Ldd: np.ndarray, path: Path) -> Path:
-    """Fig. 6 style: displacement [mm], velocity [mm/s], acceleration [mm/s^2] of all sliders.
+def plot_slider_motion(data: PlotData, path: Path) -> Path:
+    """Fig. 6 style: displacement [m], velocity [m/s], acceleration [m/s^2] of the sliders.
 
-    ``L, Ld, Ldd (n, 2, 3)`` [m, m/s, m/s^2], [sample, platform, leg]. The two sliders of one
-    screw share velocity and acceleration, so panels (b) and (c) show one curve per screw.
+    The two sliders of one screw share velocity and acceleration, so panels (b) and (c) show
+    one curve per screw.
     """
     fig, axes = plt.subplots(1, 3, figsize=(15, 4))
-    quantities = (
-        (L, "displacement L [mm]", "(a) Displacement"),
-        (Ld, "velocity dL/dt [mm/s]", "(b) Velocity"),
-        (Ldd, "acceleration d2L/dt2 [mm/s^2]", "(c) Acceleration"),
-    )
-    for ax, (q, ylabel, title) in zip(axes, quantities):
-        platforms = (0, 1) if ax is axes[0] else (1,)
-        for j in platforms:
-            for i in range(3):
-                style = "-" if j == 0 else "--"
-                label = f"S{j + 1}{i + 1}" if ax is axes[0] else f"S1{i + 1}, S2{i + 1}"
-                ax.plot(t, 1e3 * q[:, j, i], style, color=_LEG_COLOURS[i], label=label)
+    for j in (0, 1):
+        for i in range(3):
+            _curve(axes[0], data, "L", 3 * j + i, fmt="-" if j == 0 else "--", color=_LEG_COLOURS[i], label=f"S{j + 1}{i + 1}")
+    for ax, name in ((axes[1], "Ld"), (axes[2], "Ldd")):
+        for i in range(3):
+            _curve(ax, data, name, i, color=_LEG_COLOURS[i], label=f"S1{i + 1}, S2{i + 1}")
+    titles = (("displacement L [m]", "(a) Displacement"), ("velocity dL/dt [m/s]", "(b) Velocity"),
+              ("acceleration d2L/dt2 [m/s^2]", "(c) Acceleration"))
+    for ax, (ylabel, title) in zip(axes, titles):
         ax.set(xlabel="t [s]", ylabel=ylabel, title=title)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, ncol=2)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _finish(fig, data, path)
 
 
-def plot_torque_parts(t: np.ndarray, parts: dict[str, np.ndarray], path: Path) -> Path:
-    """Fig. 8 style: one panel per part, three motors each; torques in N mm as in the paper."""
-    names = list(parts)
+def plot_torque_parts(data: PlotData, path: Path) -> Path:
+    """Fig. 8 style: one panel per part of Eq. (14), three motors each [N m]."""
+    names = (("platform", "(a) platform"), ("lever", "(b) lever"), ("slider", "(c) slider"), ("screw", "(d) screw"))
     fig, axes = plt.subplots(1, len(names), figsize=(4.2 * len(names), 4))
-    for ax, name in zip(np.atleast_1d(axes), names):
+    for ax, (key, title) in zip(axes, names):
         for i in range(3):
-            ax.plot(t, 1e3 * parts[name][:, i], color=_LEG_COLOURS[i], label=f"motor {i + 1}")
-        ax.set(xlabel="t [s]", ylabel="torque [N mm]", title=name)
+            _curve(ax, data, key, i, color=_LEG_COLOURS[i], label=f"motor {i + 1}")
+        ax.set(xlabel="t [s]", ylabel="torque [N m]", title=title)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _finish(fig, data, path)
 
 
-def plot_torques(t: np.ndarray, tau: np.ndarray, path: Path) -> Path:
-    """Fig. 11 style: the total driving torque of each motor [N mm]."""
+def plot_torques(data: PlotData, path: Path) -> Path:
+    """Fig. 11 style: the total driving torque of each motor [N m]."""
     fig, axes = plt.subplots(1, 3, figsize=(15, 4))
     for i, ax in enumerate(axes):
-        ax.plot(t, 1e3 * tau[:, i], color=_LEG_COLOURS[i])
-        ax.set(xlabel="t [s]", ylabel="torque [N mm]", title=f"({'abc'[i]}) Linear module {i + 1}")
+        _curve(ax, data, "tau", i, color=_LEG_COLOURS[i])
+        ax.set(xlabel="t [s]", ylabel="torque tau [N m]", title=f"({'abc'[i]}) Linear module {i + 1}")
         ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _finish(fig, data, path)
 
 
-def plot_friction_vs_load(t: np.ndarray, load: np.ndarray, tau_friction: np.ndarray, path: Path) -> Path:
-    """Friction torque per motor [N mm]: (a) with the load over the cycle, (b) against the load."""
+def plot_friction_vs_load(data: PlotData, path: Path) -> Path:
+    """Friction torque per motor [N m]: (a) with the load over time, (b) against the load."""
     fig, (ax, ax3) = plt.subplots(1, 2, figsize=(13, 4.2))
     for i in range(3):
-        ax.plot(t, 1e3 * tau_friction[:, i], color=_LEG_COLOURS[i], label=f"friction, motor {i + 1}")
-    ax.set(xlabel="t [s]", ylabel="friction torque [N mm]", title="(a) Over the cycle")
+        _curve(ax, data, "friction", i, color=_LEG_COLOURS[i], label=f"friction, motor {i + 1}")
+    ax.set(xlabel="t [s]", ylabel="friction torque [N m]", title="(a) Over time")
     ax.grid(alpha=0.3)
     ax2 = ax.twinx()
-    ax2.plot(t, load, color="tab:red", alpha=0.5, label="load")
+    _curve(ax2, data, "load_N", 0, color="tab:red", alpha=0.5, label="load")
     ax2.set_ylabel("load F [N]")
     lines = ax.get_legend_handles_labels()
     lines2 = ax2.get_legend_handles_labels()
     ax.legend(lines[0] + lines2[0], lines[1] + lines2[1], fontsize=8, loc="upper right")
     for i in range(3):
-        ax3.plot(load, 1e3 * np.abs(tau_friction[:, i]), ".", ms=2, color=_LEG_COLOURS[i], label=f"motor {i + 1}")
-    ax3.set(xlabel="load F [N]", ylabel="|friction torque| [N mm]", title="(b) Against the load")
+        ax3.plot(data.scatter_load, np.abs(data.scatter_friction[:, i]), ".", ms=2, color=_LEG_COLOURS[i],
+                 label=f"motor {i + 1}")
+    ax3.set(xlabel="load F [N]", ylabel="|friction torque| [N m]", title="(b) Against the load")
     ax3.grid(alpha=0.3)
     ax3.legend(fontsize=8, markerscale=4)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _finish(fig, data, path)
