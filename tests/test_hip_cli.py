@@ -346,3 +346,29 @@ def test_interrupting_a_run_leaves_nothing(tmp_path, sig):
     assert proc.returncode == 130 and err.strip().splitlines() == [
         "pkmdyn: interrupted; --out holds either the whole new run or what it held before"], err
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_motion_model_paper_fit_is_the_fitted_cycle(tmp_path, capsys):
+    """``--motion-model paper-fit`` runs the fitted ISO cycle: the run's slider maxima are those of
+    the preset computed by the library, and differ from the default cycle's."""
+    from pkmdyn.profiles.iso_fit import iso_cycle_preset, slider_maxima
+
+    out = tmp_path / "fit"
+    assert main(["hip", "run", "--motion-model", "paper-fit", "--samples-per-cycle", "400", "--no-plots",
+                 "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert "paper-fit" in s["motion"]
+    got = np.array([s["sliders"][f"S1{i}"]["max_position_m"] for i in (1, 2, 3)])
+    model = load_params()
+    expected = slider_maxima(model, iso_cycle_preset("paper-fit"), samples=400)[:3]
+    default = slider_maxima(model, iso_cycle_preset("default"), samples=400)[:3]
+    np.testing.assert_allclose(got, expected, rtol=1e-12)
+    assert np.abs(expected - default).max() > 1e-4
+    capsys.readouterr()
+    motion = tmp_path / "m.csv"
+    assert main(["hip", "profile", "--cycles", "0.01", "--out", str(motion)]) == 0
+    capsys.readouterr()
+    assert main(["hip", "run", "--motion", str(motion), "--motion-model", "paper-fit", "--out", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--motion-model" in err[0]
+    assert not (tmp_path / "x").exists()

@@ -51,6 +51,11 @@ _LIMIT_HELP = ("Raise or lower a plausibility limit, KEY=VALUE (repeatable; over
               help="Cycles of the built-in motion (finite, > 0; with --samples-per-cycle at least 2 samples).")
 @click.option("--samples-per-cycle", type=click.IntRange(min=2), default=1000, show_default=True,
               help="Samples per cycle of the built-in motion.")
+@click.option("--motion-model", type=click.Choice(["default", "paper-fit", "paper-fit-zxy"]), default="default",
+              show_default=True,
+              help="Cycle model of the built-in motion: default (documented choices), paper-fit (phases fitted to the "
+                   "hip paper's slider maxima), paper-fit-zxy (the same for euler_sequence = \"ZXY\"); see "
+                   "docs/identification.md.")
 @click.option("--singularity-threshold", type=FiniteFloat(0.0, 1.0), default=1e-3, show_default=True,
               help="Warn where 1/cond(J) falls below this (0 to 1).")
 @click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv", show_default=True,
@@ -59,16 +64,17 @@ _LIMIT_HELP = ("Raise or lower a plausibility limit, KEY=VALUE (repeatable; over
 @click.option("--no-plots", is_flag=True, help="Write no PNG plots.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
-def hip_run(params_path, motion_path, cycles, samples_per_cycle, singularity_threshold, fmt, limits, no_plots,
-            out_dir) -> None:
+def hip_run(params_path, motion_path, cycles, samples_per_cycle, motion_model, singularity_threshold, fmt, limits,
+            no_plots, out_dir) -> None:
     """Kinematics and driving torques along a motion; writes results.csv (or .parquet), summary.json, plots."""
     from ..machines.hip_simulator.run import run_hip
 
-    if motion_path is not None and (cycles != 1.0 or samples_per_cycle != 1000):
-        raise click.UsageError("--cycles and --samples-per-cycle apply to the built-in motion, not to --motion")
+    if motion_path is not None and (cycles != 1.0 or samples_per_cycle != 1000 or motion_model != "default"):
+        raise click.UsageError(
+            "--cycles, --samples-per-cycle and --motion-model apply to the built-in motion, not to --motion")
     files, messages = run_hip(out_dir, params_path, motion_path, cycles, samples_per_cycle,
                               make_plots=not no_plots, progress=True, singularity_threshold=singularity_threshold,
-                              fmt=fmt, limits=tuple(limits))
+                              fmt=fmt, limits=tuple(limits), motion_model=motion_model)
     for m in messages:
         click.echo(f"pkmdyn: warning: {m}", err=True)
     for name, path in files.items():

@@ -26,6 +26,7 @@ from tqdm import tqdm
 from ...errors import ParameterError, PkmdynError, SingularityWarning
 from ...io import TABLE_FORMATS, open_table_writer, output_dir, write_json
 from ...params_util import check_limit, parse_limit_options
+from ...profiles.iso_fit import iso_cycle_preset
 from ...profiles.iso14242 import IsoCycle, iso14242_block, iso14242_samples, iso14242_times
 from ...profiles.orientation import OrientationMotion, read_motion_csv
 from ...spatial import euler_kinematics
@@ -324,11 +325,13 @@ def run_hip(
     fmt: str = "csv",
     limits: dict[str, Any] | tuple[str, ...] | None = None,
     chunk: int = RUN_CHUNK,
+    motion_model: str = "default",
 ) -> tuple[dict[str, Path], list[str]]:
     """Run the whole job; returns the files written and the warnings raised on the way.
 
     ``fmt``: ``"csv"`` or ``"parquet"`` for ``results``; ``limits``: overrides of the
-    ``[limits]`` table (``{key: value}`` or ``("key=value", ...)``). Every input (parameters,
+    ``[limits]`` table (``{key: value}`` or ``("key=value", ...)``); ``motion_model``: the named
+    ISO 14242-1 cycle model of the built-in motion (:func:`pkmdyn.profiles.iso_fit.iso_cycle_preset`). Every input (parameters,
     motion, options, limits on load and angles) is checked before ``out_dir`` is touched; the
     slider speed and acceleration limits are checked block by block as the kinematics are
     computed. On any error nothing is left at or beside ``out_dir``.
@@ -344,7 +347,9 @@ def run_hip(
         given = parse_limit_options(items, LIMIT_KEYS)
         model = dataclasses.replace(model, limits=dataclasses.replace(model.limits, **given))
     lim = model.limits
-    cycle = IsoCycle()
+    cycle = iso_cycle_preset(motion_model)
+    if motion_path is not None and motion_model != "default":
+        raise ParameterError("--motion-model names a built-in motion; it cannot be combined with --motion")
     if motion_path is None:
         n = iso14242_samples(cycles, samples_per_cycle, lim.max_samples)
         motion = None
@@ -355,7 +360,7 @@ def run_hip(
             check_limit(max(abs(w.max_deg), abs(w.min_deg)), lim.max_abs_angle_deg, f"built-in motion: |{name}|",
                         "max_abs_angle_deg", "deg")
         window = min(n, samples_per_cycle + 1)
-        source = f"built-in ISO 14242-1 model, {cycles:g} cycle(s)"
+        source = f"built-in ISO 14242-1 model ({motion_model}), {cycles:g} cycle(s)"
         note = f"first cycle of {cycles:g} (every cycle is the same)" if cycles > 1 else ""
     else:
         motion = read_motion_csv(motion_path, max_rows=lim.max_samples)
