@@ -121,3 +121,23 @@ def test_out_path_that_is_a_file_is_one_line_and_status_2(tmp_path, capsys):
 def test_missing_out_option_is_a_usage_error(capsys):
     assert main(["pdm", "run"]) == 2
     assert "--out" in capsys.readouterr().err
+
+
+def test_motion_file_rows_follow_the_limits_table(tmp_path, capsys):
+    """``[limits] max_samples`` of the parameter file caps the rows of a motion file too: below the
+    file's rows it refuses the run (naming the limit), raised above them it lets it run."""
+    motion = tmp_path / "m.csv"
+    write_pdm_motion(motion, cycloidal_motion((0.005, 0.005, 0.02, 0.02), 1.0, 41))
+    base = default_params_path().read_text(encoding="utf-8")
+    base = base.replace("samples = 401", "samples = 11")  # the built-in trajectory stays under both caps
+    assert "samples = 11" in base
+    tight = tmp_path / "tight.toml"
+    tight.write_text(base + "\n[limits]\nmax_samples = 30\n", encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["pdm", "run", "--params", str(tight), "--motion", str(motion), "--no-plots", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "max_samples" in err[0] and str(motion) in err[0]
+    assert not out.exists()
+    loose = tmp_path / "loose.toml"
+    loose.write_text(base + "\n[limits]\nmax_samples = 41\n", encoding="utf-8")
+    assert main(["pdm", "run", "--params", str(loose), "--motion", str(motion), "--no-plots", "--out", str(out)]) == 0

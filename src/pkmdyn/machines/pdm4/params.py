@@ -202,6 +202,8 @@ class PdmModel:
     section_outer: Array
     section_inner: Array
     body_length: Array
+    #: ``[limits] max_samples``: trajectory samples or motion-file rows a run may hold
+    max_samples: int = 200_000
 
     def __post_init__(self) -> None:
         for name in ("R1", "R4", "S", "U_local", "R3_local", "U1_local", "P_local",
@@ -282,6 +284,7 @@ def _build(d: _Description, name: str) -> PdmModel:
             directions=w.directions, radial_step_m=w.radial_step_m, max_radius_m=w.max_radius_m,
         ),
         source=name,
+        max_samples=caps.max_samples,
         **props,
     )
 

@@ -254,7 +254,7 @@ def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_
         if overrides:
             raise PkmdynError("--motion: the trajectory options (--stroke-*, --period-s, --peak-y-accel) "
                               "apply to the built-in Eq. 84 motion only")
-        motion = read_pdm_motion(Path(motion_path).absolute())
+        motion = read_pdm_motion(Path(motion_path).absolute(), max_rows=model.max_samples)
     cols, npz = _compute(model, motion)
     mob = mobility_summary(model, motion.q[0])
     ws = reachable_workspace(model)
