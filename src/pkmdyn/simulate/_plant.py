@@ -79,6 +79,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from .._dense import solve_in_place
+
 __all__ = ["Plant", "make_plant", "make_work", "accelerations", "hold_interval", "ROS2_GAMMA", "METHODS",
            "EXPLICIT_LIMIT"]
 
@@ -143,34 +145,10 @@ def accelerations(plant: Plant, q: Array, qd: Array, u: Array, load: float) -> A
 
 @numba.njit(cache=True)
 def _solve_small(W: Array, b: Array, out: Array) -> None:  # pragma: no cover - compiled
-    """``out = W^-1 b`` by Gaussian elimination with partial pivoting (W is overwritten)."""
-    n = b.shape[0]
-    for i in range(n):
+    """``out = W^-1 b`` (W is overwritten)."""
+    for i in range(b.shape[0]):
         out[i] = b[i]
-    for c in range(n):
-        p = c
-        for r in range(c + 1, n):
-            if abs(W[r, c]) > abs(W[p, c]):
-                p = r
-        if p != c:
-            for j in range(n):
-                tmp = W[c, j]
-                W[c, j] = W[p, j]
-                W[p, j] = tmp
-            tmp = out[c]
-            out[c] = out[p]
-            out[p] = tmp
-        for r in range(c + 1, n):
-            m = W[r, c] / W[c, c]
-            if m != 0.0:
-                for j in range(c, n):
-                    W[r, j] -= m * W[c, j]
-                out[r] -= m * out[c]
-    for i in range(n - 1, -1, -1):
-        s = out[i]
-        for j in range(i + 1, n):
-            s -= W[i, j] * out[j]
-        out[i] = s / W[i, i]
+    solve_in_place(W, out)
 
 
 @numba.njit(cache=True)

@@ -12,47 +12,22 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..._dense import solve_in_place
+
 __all__ = ["ne_kernel"]
 
 
 @njit(cache=True)
 def _solve_inplace(M, r):  # pragma: no cover - compiled
-    """Gaussian elimination with partial pivoting; returns False when singular."""
+    """``M x = r`` in place (``r`` becomes ``x``); False when a pivot falls below 1e-13 of the
+    largest entry of ``M`` (singular)."""
     m = M.shape[0]
     scale = 0.0
     for i in range(m):
         for j in range(m):
             if abs(M[i, j]) > scale:
                 scale = abs(M[i, j])
-    for k in range(m):
-        p = k
-        big = abs(M[k, k])
-        for i in range(k + 1, m):
-            if abs(M[i, k]) > big:
-                big = abs(M[i, k])
-                p = i
-        if big <= 1e-13 * scale:
-            return False
-        if p != k:
-            for j in range(m):
-                t = M[k, j]
-                M[k, j] = M[p, j]
-                M[p, j] = t
-            t = r[k]
-            r[k] = r[p]
-            r[p] = t
-        for i in range(k + 1, m):
-            f = M[i, k] / M[k, k]
-            if f != 0.0:
-                for j in range(k, m):
-                    M[i, j] -= f * M[k, j]
-                r[i] -= f * r[k]
-    for k in range(m - 1, -1, -1):
-        acc = r[k]
-        for j in range(k + 1, m):
-            acc -= M[k, j] * r[j]
-        r[k] = acc / M[k, k]
-    return True
+    return solve_in_place(M, r)[1] > 1e-13 * scale
 
 
 @njit(cache=True)

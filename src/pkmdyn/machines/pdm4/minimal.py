@@ -51,6 +51,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from ..._dense import solve_in_place
 from ...errors import MotionError, PkmdynError, SingularityError, UnreachablePoseError
 from ...spatial import cross
 from .kinematics import BODY_NAMES, inverse_kinematics
@@ -555,35 +556,10 @@ def _motion_one(geo, R1, R4, S, Ul, R3l, U1l, Pl, ccom, pcom, q, QD, v, w, a, wd
 
 @njit(cache=True)
 def _solve4(A, b):  # type: ignore[no-untyped-def]
-    """``x`` with ``A x = b`` for a 4 x 4 ``A`` (Gaussian elimination, partial pivoting) and
-    ``det A``; ``x`` is not valid when the determinant is 0."""
-    n = 4
-    M = A.copy()
+    """``x`` with ``A x = b`` for a 4 x 4 ``A`` and ``det A``; ``x`` is not valid when the
+    determinant is 0."""
     x = b.copy()
-    det = 1.0
-    for k in range(n):
-        p = k
-        for i in range(k + 1, n):
-            if abs(M[i, k]) > abs(M[p, k]):
-                p = i
-        if p != k:
-            for c in range(n):
-                M[k, c], M[p, c] = M[p, c], M[k, c]
-            x[k], x[p] = x[p], x[k]
-            det = -det
-        det *= M[k, k]
-        if M[k, k] == 0.0:
-            return x, 0.0
-        for i in range(k + 1, n):
-            f = M[i, k] / M[k, k]
-            for c in range(k, n):
-                M[i, c] -= f * M[k, c]
-            x[i] -= f * x[k]
-    for k in range(n - 1, -1, -1):
-        s = x[k]
-        for c in range(k + 1, n):
-            s -= M[k, c] * x[c]
-        x[k] = s / M[k, k]
+    det, _ = solve_in_place(A.copy(), x)
     return x, det
 
 
