@@ -122,3 +122,27 @@ def test_compiled_kernels_equal_the_verbs_and_report_status() -> None:
         np.testing.assert_allclose(back, qdd[k], rtol=0, atol=1e-11 * np.abs(qdd[k]).max())
     out = np.empty(3)
     assert forward(p, np.array([0.0, 0.0, 3.0]), qd[0], qdd[0], 0.0, out) == 1  # leg 1 unreachable
+
+
+def test_the_plant_and_controllers_use_the_unchecked_kernels_with_the_verbs_as_fallback():
+    """The plant integrator's and the controllers' per-cycle calls go through the compiled kernels
+    without input checks; they equal the checked verbs, and an invalid sample still raises the
+    machine's own error through the checked verb."""
+    from pkmdyn.control._laws import _id_one
+    from pkmdyn.machines.hip_simulator import load_params
+    from pkmdyn.simulate._plant import make_plant
+
+    model = load_params()
+    rng = np.random.default_rng(7)
+    plant = make_plant(minimal, model, True)
+    id_one = _id_one(minimal, model, True)
+    for _ in range(20):
+        q, qd, x = rng.uniform(-0.3, 0.3, 3), rng.uniform(-1, 1, 3), rng.uniform(-1, 1, 3)
+        load = float(rng.uniform(0, 3000))
+        np.testing.assert_array_equal(plant.f(q, qd, x, load), minimal.forward_dynamics_one(model, q, qd, x, load))
+        np.testing.assert_array_equal(id_one(q, qd, x, load), minimal.inverse_dynamics_one(model, q, qd, x, load))
+    far = np.array([1.3, 1.3, 0.0])
+    with pytest.raises(UnreachablePoseError, match="leg 1"):
+        plant.f(far, np.zeros(3), np.zeros(3), 0.0)
+    with pytest.raises(UnreachablePoseError, match="leg 1"):
+        id_one(far, np.zeros(3), np.zeros(3), 0.0)

@@ -68,3 +68,13 @@ class MachineDynamics(Protocol):
     def forward_dynamics_one(self, model: Any, q: Array, qd: Array, u: Array, load: float | None) -> Array:
         """One sample of :meth:`forward_dynamics`: ``q, qd (nq,), u (nu,)`` -> ``qdd (nq,)``, the real-time path."""
         ...
+
+    def one_sample_kernels(self, model: Any) -> tuple[Array, Any, Any]:
+        """Optional: ``(p, inverse, forward)``, the compiled kernels behind the two ``*_one`` verbs
+        for callers in a loop (the plant integrator, a controller), where the verbs' input checks
+        cost more than the model. ``inverse(p, q, qd, qdd, load, out) -> status`` and
+        ``forward(p, q, qd, u, load, out) -> status`` write into ``out``; ``load`` is a float (0.0
+        for a machine without one); nothing is checked; a nonzero status means the sample is
+        invalid, and the caller repeats it through the checked ``*_one`` verb, which raises the
+        machine's own error."""
+        ...

@@ -100,6 +100,18 @@ class Controller:
 
 def _id_one(verbs: Any, model: Any, has_load: bool) -> Any:
     one = getattr(verbs, "inverse_dynamics_one", None)
+    kernels = getattr(verbs, "one_sample_kernels", None)
+    if one is not None and kernels is not None:
+        p, inverse, _ = kernels(model)
+        nu = len(verbs.ACTUATORS)
+
+        def id_kernel(q: Array, qd: Array, qdd: Array, load: float) -> Array:
+            out = np.empty(nu)
+            if inverse(p, q, qd, qdd, load if has_load else 0.0, out):
+                return one(model, q, qd, qdd, load if has_load else None)  # raises the machine's error
+            return out
+
+        return id_kernel
     if one is not None:
         if has_load:
             return lambda q, qd, qdd, load: one(model, q, qd, qdd, load)

@@ -120,7 +120,16 @@ def make_plant(verbs: Any, model: Any, has_load: bool) -> Plant:
     """
     nq, nu = len(verbs.COORDINATES), len(verbs.ACTUATORS)
     one = getattr(verbs, "forward_dynamics_one", None)
-    if one is not None:
+    kernels = getattr(verbs, "one_sample_kernels", None)
+    if one is not None and kernels is not None:
+        p, _, forward = kernels(model)
+
+        def f(q: Array, qd: Array, u: Array, load: float) -> Array:
+            out = np.empty(nq)
+            if forward(p, q, qd, u, load if has_load else 0.0, out):
+                return one(model, q, qd, u, load if has_load else None)  # raises the machine's error
+            return out
+    elif one is not None:
         if has_load:
             def f(q: Array, qd: Array, u: Array, load: float) -> Array:
                 return one(model, q, qd, u, load)

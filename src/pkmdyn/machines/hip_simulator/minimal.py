@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from ...errors import MotionError, SingularityError, as_array
 from ...spatial import euler_kinematics
 from .dynamics import inverse_dynamics as _torques
-from .fast import forward_dynamics_one, inverse_dynamics_one
+from .fast import forward_dynamics_one, inverse_dynamics_one, kernels
 from .forward import accelerate, mass_matrix_omega
 from .kinematics import HipKinematics, platform_kinematics
 from .params import HipModel
@@ -44,6 +44,7 @@ __all__ = [
     "forward_dynamics",
     "inverse_dynamics_one",
     "forward_dynamics_one",
+    "one_sample_kernels",
     "rate_map",
 ]
 
@@ -140,3 +141,10 @@ def forward_dynamics(model: HipModel, q: Array, qd: Array, u: Array, load: Array
             f"sequence {model.geometry.euler_sequence!r} is singular (gimbal lock)"
         )
     return np.linalg.solve(E, E_qdd[..., None])[..., 0]
+
+
+def one_sample_kernels(model: HipModel) -> tuple[Array, object, object]:
+    """``(p, inverse, forward)``: the compiled kernels behind :func:`inverse_dynamics_one` and
+    :func:`forward_dynamics_one` without their input checks (see :func:`.fast.kernels`), for the
+    plant integrator and the controllers' per-cycle calls."""
+    return kernels(model)
