@@ -6,8 +6,9 @@ Problem. With the efforts ``u`` held (zero-order hold) over a control cycle, int
 
 from the cycle's start to its end in ``substeps`` equal steps ``dt``, the load known at every
 step boundary and middle. The only access to the machine is its verbs (:mod:`pkmdyn.machine`):
-the single-sample ``forward_dynamics_one`` where the machine offers it (the fast path), else
-the batched ``forward_dynamics`` at ``n = 1``.
+the compiled kernel behind ``forward_dynamics_one`` (``one_sample_kernels``, no input checks)
+where the machine offers it, else ``forward_dynamics_one`` itself (the fast path), else the
+batched ``forward_dynamics`` at ``n = 1``.
 
 Where the ODE is stiff, and where it is not. Regularised Coulomb friction
 ``F w / sqrt(|w|^2 + eps^2)`` has the slope ``F / eps`` at zero velocity: 4 N m of hip-joint
