@@ -355,3 +355,21 @@ def test_bad_shapes_loads_and_values_are_refused():
 def test_names():
     assert minimal.COORDINATES == ("x_m", "y_m", "alpha_rad", "gamma_rad")
     assert minimal.ACTUATORS == ("f1_N", "f2_N", "f3_N", "f4_N")
+
+
+def test_unchecked_kernels_equal_the_checked_verbs():
+    """``one_sample_kernels`` (what the plant integrator and the controllers call per cycle) give
+    the checked single-sample verbs' results and flag an unreachable pose."""
+    model = load_params()
+    p, inverse, forward = minimal.one_sample_kernels(model)
+    rng = np.random.default_rng(3)
+    for _ in range(10):
+        q = np.array([rng.uniform(-0.01, 0.01), rng.uniform(-0.01, 0.01), rng.uniform(-0.05, 0.05),
+                      rng.uniform(-0.1, 0.1)])
+        qd, x = rng.uniform(-0.05, 0.05, 4), rng.uniform(-0.1, 0.1, 4)
+        out = np.empty(4)
+        assert not inverse(p, q, qd, x, 0.0, out)
+        np.testing.assert_array_equal(out, minimal.inverse_dynamics_one(model, q, qd, x))
+        assert not forward(p, q, qd, x, 0.0, out)
+        np.testing.assert_array_equal(out, minimal.forward_dynamics_one(model, q, qd, x))
+    assert inverse(p, np.array([5.0, 5.0, 0.0, 0.0]), np.zeros(4), np.zeros(4), 0.0, np.empty(4))

@@ -70,6 +70,7 @@ __all__ = [
     "forward_dynamics",
     "inverse_dynamics_one",
     "forward_dynamics_one",
+    "one_sample_kernels",
     "kinetic_energy",
     "potential_energy",
 ]
@@ -725,3 +726,22 @@ def forward_dynamics_one(model: PdmModel, q: Array, qd: Array, u: Array, load: f
     if st != _OK:
         _fail(st, q, qd, u, "u")
     return out
+
+
+@njit(cache=True)
+def _inverse_kernel(c, q, qd, qdd, load, out):  # type: ignore[no-untyped-def]
+    return _one(c, q, qd, qdd, False, out) != _OK
+
+
+@njit(cache=True)
+def _forward_kernel(c, q, qd, u, load, out):  # type: ignore[no-untyped-def]
+    return _one(c, q, qd, u, True, out) != _OK
+
+
+def one_sample_kernels(model: PdmModel) -> tuple[Array, Callable, Callable]:
+    """``(p, inverse, forward)``: the compiled kernels behind :func:`inverse_dynamics_one` and
+    :func:`forward_dynamics_one` without their input checks (``pkmdyn.machine``): ``inverse(p,
+    q, qd, qdd, load, out)``, ``forward(p, q, qd, u, load, out)`` write ``(4,)`` into ``out``,
+    ignore ``load`` and return True for an invalid sample (then call the checked verb for the
+    error)."""
+    return _pack(model), _inverse_kernel, _forward_kernel
