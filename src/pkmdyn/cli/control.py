@@ -11,6 +11,7 @@ benchmark.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -20,13 +21,20 @@ import numpy as np
 
 from ..errors import MotionError, ParameterError
 from ._groups import PATH_IN, hip, pdm
+from .hip import FiniteFloat
 
-__all__ = ["hip_closed_loop", "run_control", "HIP_CONTROLLERS", "PDM_CONTROLLERS"]
+__all__ = ["hip_closed_loop", "run_control", "HIP_CONTROLLERS", "PDM_CONTROLLERS", "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
 
 HIP_CONTROLLERS = ("pd", "augmented-pd", "feedforward", "computed-torque")
 PDM_CONTROLLERS = ("pid", "feedforward", "computed-torque")
 #: PDM limb names, in the order of the actuators (``l{k}_m`` columns)
 PDM_LIMBS = ("l11", "l12", "l23", "l24")
+#: most cycles of the built-in motion (``--cycles``)
+MAX_CYCLES = 1000.0
+#: most control cycles of one run (the loop stores every one of them)
+MAX_CONTROL_CYCLES = 2_000_000
+#: most plant integration steps per control cycle
+MAX_STEPS_PER_CYCLE = 1000
 
 
 @dataclass(frozen=True)
@@ -79,6 +87,12 @@ def _hip_setup(params: Path | None, plant_params: Path | None, motion: Path | No
         from ..profiles.orientation import read_motion_csv
 
         mo = read_motion_csv(motion)
+        if mo.load is not None:
+            lim = float(model.limits.max_load_N)
+            big = np.flatnonzero(np.abs(mo.load) > lim)
+            if big.size:
+                raise MotionError(f"{motion}: row {big[0] + 1}, column 'load_N': {mo.load[big[0]]:g} N is above "
+                                  f"max_load_N = {lim:g} N ([limits] of the parameter file)")
         fn = hermite_motion(mo.t, mo.angles, mo.rates, mo.accels, mo.load)
         duration, source = float(mo.t[-1] - mo.t[0]), str(motion)
     return _Setup("hip", minimal, model, plant, fn, duration, True, str(params or "built-in parameters"),
@@ -136,18 +150,40 @@ def run_control(machine: str, controller: str, params: Path | None = None, plant
                 progress: bool = False) -> tuple[_Setup, Any, dict[str, Any]]:
     """Set up and run one closed loop; returns the setup, the :class:`~pkmdyn.simulate.Tracking`
     and the settings. Raises a :class:`~pkmdyn.errors.PkmdynError` on any bad input."""
-    from ..control import gains, load_settings, loop_settings
-    from ..simulate import check_timing, track
+    from ..control import load_settings, loop_settings
+    from ..simulate import check_timing
 
     allowed = HIP_CONTROLLERS if machine == "hip" else PDM_CONTROLLERS
     if controller not in allowed:
         raise ParameterError(f"--controller {controller!r}: unknown for the {machine} (choose from {', '.join(allowed)})")
-    if not (np.isfinite(cycles) and cycles > 0):
-        raise MotionError(f"--cycles: {cycles:g} must be > 0")
+    if not (np.isfinite(cycles) and 0 < cycles <= MAX_CYCLES):
+        raise MotionError(f"--cycles: {cycles:g} must be > 0 and at most {MAX_CYCLES:g}")
     settings = load_settings(machine, gains_path)
     ls = loop_settings(settings)
-    check_timing(ls.cycle_s, ls.step_s)
+    steps = check_timing(ls.cycle_s, ls.step_s)
+    if steps > MAX_STEPS_PER_CYCLE:
+        raise ParameterError(f"[timing] integration_step_s = {ls.step_s:g} s: {steps:g} steps per control cycle, above "
+                             f"the limit {MAX_STEPS_PER_CYCLE}")
+    with warnings.catch_warnings():
+        # a model whose values overflow ends as a PkmdynError (unreachable pose, divergence), not as
+        # numpy's warning lines on stderr
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return _run_control(machine, controller, params, plant_params, motion, cycles, gains_path, progress, settings,
+                            ls, steps)
+
+
+def _run_control(machine: str, controller: str, params: Path | None, plant_params: Path | None, motion: Path | None,
+                 cycles: float, gains_path: Path | None, progress: bool, settings: dict[str, Any], ls: Any,
+                 steps: int) -> tuple[_Setup, Any, dict[str, Any]]:
+    from ..control import gains
+    from ..simulate import track
+
     setup = (_hip_setup if machine == "hip" else _pdm_setup)(params, plant_params, motion, cycles, settings)
+    n_cycles = setup.duration / ls.cycle_s
+    if not np.isfinite(n_cycles) or n_cycles > MAX_CONTROL_CYCLES or n_cycles * steps > 50 * MAX_CONTROL_CYCLES:
+        raise MotionError(f"motion: {setup.duration:g} s is {n_cycles:g} control cycles of {ls.cycle_s:g} s "
+                          f"({n_cycles * steps:g} integration steps), above the limit {MAX_CONTROL_CYCLES:,} cycles "
+                          f"({50 * MAX_CONTROL_CYCLES:,} steps)")
     n = len(setup.verbs.ACTUATORS) if controller == "pid" else len(setup.verbs.COORDINATES)
     g = gains(settings, controller, n)
     tracking = track(setup.verbs, setup.model, setup.plant_model, setup.motion, setup.duration, controller, g, ls,
@@ -313,7 +349,14 @@ def _loop_method(settings: dict[str, Any]) -> str:
 def _write(setup: _Setup, tr: Any, settings: dict[str, Any], out: Path, plots: bool, gains_path: Path | None) -> dict[str, Path]:
     from ..io import output_dir, write_csv, write_json
 
-    cols, parts = _columns(setup, tr)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        cols, parts = _columns(setup, tr)
+    for name, v in cols.items():  # checked before --out is touched
+        bad = np.flatnonzero(~np.isfinite(v))
+        if bad.size:
+            raise MotionError(f"run: column {name!r} is not finite at t = {cols['t_s'][bad[0]]:g} s "
+                              "(the model's values overflow)")
     ls = tr.reference
     summary = {
         "machine": setup.machine,
@@ -354,7 +397,9 @@ def _options(f: Any) -> Any:
         click.option("--plant-params", "plant_path", type=PATH_IN,
                      help="Plant's parameter file (TOML); default: the controller's with the [mismatch] factors."),
         click.option("--motion", "motion_path", type=PATH_IN, help="Motion file (CSV); default: the built-in motion."),
-        click.option("--cycles", type=float, default=1.0, show_default=True, help="Cycles of the built-in motion."),
+        click.option("--cycles", type=FiniteFloat(0.0, MAX_CYCLES, lo_open=True), default=1.0, show_default=True,
+                     help=f"Cycles of the built-in motion (> 0, at most {MAX_CYCLES:g}; a run holds at most "
+                          f"{MAX_CONTROL_CYCLES:,} control cycles)."),
         click.option("--gains", "gains_path", type=PATH_IN, help="Control settings (TOML), laid over the built-in ones."),
         click.option("--no-plots", is_flag=True, help="Write no PNG plots."),
         click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,

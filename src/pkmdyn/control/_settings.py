@@ -5,7 +5,7 @@ accepts, with its default; a user file overrides any subset of them. Rules (each
 a :class:`~pkmdyn.errors.ParameterError` naming the table and key): no table or key the
 built-in file lacks; a number where the default is a number, a list of the same length where
 it is a list; every value finite and >= 0; the keys in :data:`POSITIVE` > 0; the keys in
-:data:`INTEGER` whole numbers. Units come from the key's suffix; ``_deg`` and ``_mm`` values
+:data:`INTEGER` whole numbers; the keys in :data:`MAXIMUM` at most their bound. Units come from the key's suffix; ``_deg`` and ``_mm`` values
 are converted to radians and metres by :func:`si`.
 """
 
@@ -23,7 +23,7 @@ from ..errors import ParameterError
 from ..params_util import read_toml
 
 __all__ = ["MACHINES", "default_settings_text", "load_settings", "loop_settings", "gains", "si", "scale_description",
-           "POSITIVE", "INTEGER"]
+           "POSITIVE", "INTEGER", "MAXIMUM"]
 
 MACHINES = ("hip", "pdm")
 #: keys (prefixes) whose values must be > 0
@@ -31,6 +31,8 @@ POSITIVE = ("control_cycle_s", "integration_step_s", "effort_limit", "encoder_co
             "encoder_travel_per_turn", "divergence_limit", "mass_factor", "friction_factor")
 #: keys whose values must be whole numbers
 INTEGER = ("encoder_counts_per_turn", "pose_delay_cycles", "seed", "pose_feedback_from_sensor")
+#: upper bounds of keys (the loop allocates ``pose_delay_cycles`` samples; seeds are 64-bit; a flag is 0 or 1)
+MAXIMUM = {"pose_delay_cycles": 10_000, "seed": 2**63 - 1, "pose_feedback_from_sensor": 1}
 
 
 def default_settings_text(machine: str) -> str:
@@ -57,6 +59,8 @@ def _check_value(where: str, key: str, value: Any, default: Any) -> Any:
         raise ParameterError(f"{where} {key}: {value} must be > 0")
     if base in INTEGER and v != int(v):
         raise ParameterError(f"{where} {key}: {value} must be a whole number")
+    if base in MAXIMUM and v > MAXIMUM[base]:
+        raise ParameterError(f"{where} {key}: {value} is above the limit {MAXIMUM[base]}")
     return value
 
 

@@ -96,7 +96,12 @@ class BaseParameters:
 
 
 def base_parameters(W: Array, names: tuple[str, ...], tol: float = DEFAULT_RANK_TOL) -> BaseParameters:
-    """Rank-revealing decomposition of a stacked regressor ``W (m, p)`` (module docstring)."""
+    """Rank-revealing decomposition of a stacked regressor ``W (m, p)`` (module docstring).
+    ``tol`` must lie in (0, 1): at 1 no singular value counts, and the rank would be 0."""
+    from ..errors import ParameterError
+
+    if not (np.isfinite(tol) and 0.0 < tol < 1.0):
+        raise ParameterError(f"rank tolerance: {tol:g} must be a finite number in (0, 1)")
     W = np.asarray(W, dtype=float)
     p = W.shape[1]
     if len(names) != p:

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import minimize
 
-__all__ = ["bounded_fourier", "minimize_excitation"]
+__all__ = ["bounded_fourier", "minimize_excitation", "max_evaluations"]
 
 Array = NDArray[np.float64]
 
@@ -46,17 +46,30 @@ def bounded_fourier(t: Array, period: float, coeffs: Array, low: float, high: fl
     return mid + half * th, half * sech2 * fd, half * sech2 * (fdd - 2.0 * th * fd * fd)
 
 
+def max_evaluations(n_vars: int, starts: int, iterations: int) -> int:
+    """The most cost evaluations :func:`minimize_excitation` makes: ``4 starts`` draws plus, per
+    refined start, ``2 iterations (n_vars + 1)`` (each iteration a finite-difference gradient of
+    ``n_vars + 1`` evaluations and, typically, one line-search step)."""
+    return 4 * starts + starts * 2 * iterations * (n_vars + 1)
+
+
 def minimize_excitation(
     cost: Callable[[Array], float], n_vars: int, rng: np.random.Generator, starts: int = 3, iterations: int = 40,
     scale: float = 0.8,
 ) -> tuple[Array, float]:
     """The coefficient vector with the lowest cost found: the best of ``4 starts`` random draws
-    (normal, standard deviation ``scale``) refines ``starts`` of them by L-BFGS-B."""
+    (normal, standard deviation ``scale``) refines ``starts`` of them by L-BFGS-B, each limited
+    to ``iterations`` iterations and ``2 iterations (n_vars + 1)`` cost evaluations, so the work
+    is bounded by :func:`max_evaluations`."""
     draws = [rng.normal(0.0, scale, n_vars) for _ in range(4 * starts)]
     costs = [cost(z) for z in draws]
     best_z, best_c = draws[int(np.argmin(costs))], float(np.min(costs))
+    if iterations < 1:
+        return best_z, best_c
+    maxfun = 2 * iterations * (n_vars + 1)
     for k in np.argsort(costs)[:starts]:
-        res = minimize(cost, draws[k], method="L-BFGS-B", options={"maxiter": iterations, "eps": 1e-5})
+        res = minimize(cost, draws[k], method="L-BFGS-B",
+                       options={"maxiter": iterations, "maxfun": maxfun, "eps": 1e-5})
         if res.fun < best_c:
             best_z, best_c = res.x, float(res.fun)
     return best_z, best_c

@@ -330,6 +330,12 @@ def identified_description(description: dict[str, Any], result: HipIdentificatio
     return d
 
 
+#: plausibility limits of a measured run's columns (``read_measured_csv``)
+MAX_ANGLE_DEG = 360.0
+MAX_TORQUE_NM = 1e4
+MAX_LOAD_N = 1e5
+
+
 def savgol_derivatives(t: Array, x: Array, window: int, order: int, source: str) -> tuple[Array, Array]:
     """First and second time derivatives of ``x (n, k)`` by a Savitzky-Golay filter.
 
@@ -352,8 +358,14 @@ def savgol_derivatives(t: Array, x: Array, window: int, order: int, source: str)
             f"{source}: row {r}, column 't_s': sampling is not uniform (step {dt[r - 2]:g} s, mean {h:g} s); "
             "the smoothing differentiator needs a uniform time step, or give the derivative columns"
         )
-    d1 = savgol_filter(x, window, order, deriv=1, delta=h, axis=0, mode="interp")
-    d2 = savgol_filter(x, window, order, deriv=2, delta=h, axis=0, mode="interp")
+    try:
+        with np.errstate(all="ignore"):
+            d1 = savgol_filter(x, window, order, deriv=1, delta=h, axis=0, mode="interp")
+            d2 = savgol_filter(x, window, order, deriv=2, delta=h, axis=0, mode="interp")
+    except (ValueError, np.linalg.LinAlgError):
+        d1 = d2 = np.full_like(x, np.nan)
+    if not (np.all(np.isfinite(d1)) and np.all(np.isfinite(d2))):
+        raise MotionError(f"{source}: the derivatives overflow (time step {h:g} s); check the column 't_s'")
     return d1, d2
 
 
@@ -366,6 +378,14 @@ def read_measured_csv(path: str | Path, sg_window: int = 15, sg_order: int = 5) 
     """
     ang, rate, acc = MOTION_COLUMNS[1:4], MOTION_COLUMNS[4:7], MOTION_COLUMNS[7:10]
     cols = read_csv_columns(path, ("t_s", *ang, *TORQUE_COLUMNS), (*rate, *acc, "load_N"))
+    for names, limit, unit in ((ang, MAX_ANGLE_DEG, "deg"), (TORQUE_COLUMNS, MAX_TORQUE_NM, "N m"),
+                               (("load_N",), MAX_LOAD_N, "N")):
+        for name in names:
+            if name in cols:
+                big = np.flatnonzero(np.abs(cols[name]) > limit)
+                if big.size:
+                    raise MotionError(f"{path}: row {big[0] + 1}, column {name!r}: |{cols[name][big[0]]:g}| {unit} is "
+                                      f"above the plausibility limit {limit:g} {unit}")
     t = cols["t_s"]
     bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:

@@ -15,6 +15,7 @@ unreachable or singular pose costs 1e6.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,15 +25,30 @@ from ..errors import PkmdynError, ParameterError
 from ..machines.hip_simulator import HipModel, inverse_dynamics, inverse_kinematics
 from ..profiles.orientation import OrientationMotion, make_motion
 from ._base import base_parameters
-from ._excite import bounded_fourier, minimize_excitation
+from ._excite import bounded_fourier, max_evaluations, minimize_excitation
 from ._regressor import affine_regressor
 from .hip import Which, _linear_model, hip_regressor, parameter_names
 
-__all__ = ["ExcitationLimits", "HipExcitation", "excitation_motion", "design_excitation"]
+__all__ = ["ExcitationLimits", "HipExcitation", "excitation_motion", "design_excitation", "design_work",
+           "MAX_HARMONICS", "MAX_DESIGN_SAMPLES", "MAX_ITERATIONS", "MAX_STARTS", "MAX_WORK"]
 
 Array = NDArray[np.float64]
 _SELECT_TOL = 1e-3
 _DENSE = 4000  # samples per period of the final limit check
+_STRETCH_MAX = 1e6  # a period stretched further than this counts as unreachable
+
+#: bounds of the design, checked by :func:`design_excitation` (the command line states them)
+MAX_HARMONICS = 6
+MAX_DESIGN_SAMPLES = 1000
+MAX_ITERATIONS = 200
+MAX_STARTS = 5
+#: most cost evaluations x design samples of one design (:func:`~pkmdyn.identify._excite.max_evaluations`)
+MAX_WORK = 1_000_000
+MIN_PERIOD_S, MAX_PERIOD_S = 1e-3, 3600.0
+MAX_LOAD_N = 1e5
+MAX_SLIDER_SPEED_M_S = 100.0
+MAX_SLIDER_ACCEL_M_S2 = 1e5
+MAX_COND_J = 1e6
 
 
 @dataclass(frozen=True)
@@ -49,15 +65,27 @@ class ExcitationLimits:
     cond_J: float = 10.0
 
     def check(self) -> None:
+        """Every range finite, ordered and inside its plausible bounds (angles within +-180 deg,
+        load in [0, MAX_LOAD_N]); every limit finite and > 0, ``cond_J >= 1``."""
         for name in ("alpha_deg", "beta_deg", "gamma_deg", "load_N"):
-            lo, hi = getattr(self, name)
+            lo, hi = (float(x) for x in getattr(self, name))
             if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
                 raise ParameterError(f"{name} range: need a finite maximum above the minimum, got {lo:g}..{hi:g}")
+            if name != "load_N" and not (-180.0 <= lo and hi <= 180.0):
+                raise ParameterError(f"{name} range: {lo:g}..{hi:g} deg is outside -180..180 deg")
         if self.load_N[0] < 0:
             raise ParameterError(f"load_N range: the load must be >= 0, got {self.load_N[0]:g}")
-        for name in ("slider_speed_m_s", "slider_accel_m_s2", "cond_J"):
-            if not getattr(self, name) > 0:
-                raise ParameterError(f"{name}: must be > 0, got {getattr(self, name)}")
+        if self.load_N[1] > MAX_LOAD_N:
+            raise ParameterError(f"load_N range: {self.load_N[1]:g} N is above the limit {MAX_LOAD_N:g} N")
+        for name, top in (("slider_speed_m_s", MAX_SLIDER_SPEED_M_S), ("slider_accel_m_s2", MAX_SLIDER_ACCEL_M_S2),
+                          ("cond_J", MAX_COND_J)):
+            v = float(getattr(self, name))
+            if not (np.isfinite(v) and v > 0):
+                raise ParameterError(f"{name}: must be finite and > 0, got {v:g}")
+            if v > top:
+                raise ParameterError(f"{name}: {v:g} is above the limit {top:g}")
+        if self.cond_J < 1:
+            raise ParameterError(f"cond_J: {self.cond_J:g} is below 1, which no pose reaches")
 
 
 @dataclass(frozen=True)
@@ -85,7 +113,34 @@ def excitation_motion(coeffs: Array, period: float, limits: ExcitationLimits, t:
 
 
 def _penalty(value: float, limit: float) -> float:
-    return 0.0 if value <= limit else 10.0 * (value / limit - 1.0) ** 2
+    return 0.0 if value <= limit else 10.0 * (min(value / limit, 1e100) - 1.0) ** 2
+
+
+def design_work(harmonics: int, samples: int, iterations: int, starts: int) -> tuple[int, int]:
+    """``(evaluations, work)``: the most cost evaluations of a design (the optimiser's, plus up to
+    50 draws that choose the parameters and the final check) and those times the design
+    samples, the measure bounded by :data:`MAX_WORK`."""
+    n = max_evaluations(4 * (2 * harmonics + 1), starts, iterations) + 51
+    return n, n * samples
+
+
+def _check_design(period_s: float, harmonics: int, samples: int, iterations: int, starts: int, seed: int) -> None:
+    period_s = float(period_s)
+    if not (np.isfinite(period_s) and MIN_PERIOD_S <= period_s <= MAX_PERIOD_S):
+        raise ParameterError(f"period: {period_s:g} s is outside {MIN_PERIOD_S:g}..{MAX_PERIOD_S:g} s")
+    for name, v, lo, hi in (("harmonics", harmonics, 1, MAX_HARMONICS), ("samples", samples, 16, MAX_DESIGN_SAMPLES),
+                            ("iterations", iterations, 0, MAX_ITERATIONS), ("starts", starts, 1, MAX_STARTS)):
+        if isinstance(v, bool) or int(v) != v or not lo <= v <= hi:
+            raise ParameterError(f"{name}: {v} is outside {lo}..{hi}")
+    if samples < 8 * harmonics:
+        raise ParameterError(f"harmonics/samples: need >= 8 samples per harmonic, got {harmonics}/{samples}")
+    if isinstance(seed, bool) or int(seed) != seed or seed < 0:
+        raise ParameterError(f"seed: {seed} must be a whole number >= 0")
+    n, work = design_work(harmonics, samples, iterations, starts)
+    if work > MAX_WORK:
+        raise ParameterError(
+            f"design effort: up to {n} cost evaluations x {samples} samples = {work:,} is above the limit "
+            f"{MAX_WORK:,}; lower the iterations, starts, harmonics or design samples")
 
 
 def design_excitation(
@@ -98,13 +153,15 @@ def design_excitation(
     iterations: int = 15,
     starts: int = 1,
     seed: int = 0,
+    progress: Callable[[int], None] | None = None,
 ) -> HipExcitation:
-    """Optimise the coefficients (module docstring) over one period sampled ``samples`` times."""
+    """Optimise the coefficients (module docstring) over one period sampled ``samples`` times.
+
+    Sizes are bounded (``harmonics <= MAX_HARMONICS``, ``samples <= MAX_DESIGN_SAMPLES``,
+    ``iterations <= MAX_ITERATIONS``, ``starts <= MAX_STARTS``, :func:`design_work` <=
+    :data:`MAX_WORK`); ``progress``, if given, is called with 1 after each cost evaluation."""
     limits.check()
-    if not period_s > 0:
-        raise ParameterError(f"period: must be > 0 s, got {period_s}")
-    if harmonics < 1 or samples < 8 * harmonics:
-        raise ParameterError(f"harmonics/samples: need >= 1 harmonic and >= 8 samples per harmonic, got {harmonics}/{samples}")
+    _check_design(period_s, harmonics, samples, iterations, starts, seed)
     names = parameter_names(which)
     t = np.linspace(0.0, period_s, samples, endpoint=False)
     shape = (4, 2 * harmonics + 1)
@@ -119,6 +176,8 @@ def design_excitation(
                 kin = inverse_kinematics(model, motion)
                 stretch = max(1.0, float(np.max(np.abs(kin.Ld))) / limits.slider_speed_m_s,
                               float(np.sqrt(np.max(np.abs(kin.Ldd)) / limits.slider_accel_m_s2)))
+                if not stretch <= _STRETCH_MAX:  # NaN included
+                    return 1e6, None, period_s, np.inf
                 period = period_s * stretch * (1.0 + 1e-9)
                 motion = excitation_motion(z.reshape(shape), period, limits, t * (period / period_s))
                 kin = inverse_kinematics(model, motion)
@@ -126,8 +185,10 @@ def design_excitation(
                 W = affine_regressor(
                     lambda th: inverse_dynamics(_linear_model(model, names, th), kin, motion.load).tau, names
                 ).stacked()
-        except PkmdynError:
+        except (PkmdynError, np.linalg.LinAlgError, FloatingPointError, OverflowError):
             return 1e6, None, period_s, np.inf
+        if not (np.all(np.isfinite(W)) and np.all(np.isfinite(kin.cond_J))):
+            return 1e6, None, period_s, np.inf  # a model whose values overflow on this motion
         cond_J = float(np.max(kin.cond_J))
         return _penalty(cond_J, limits.cond_J) + (stretch - 1.0) ** 2, W, period, cond_J
 
@@ -136,10 +197,15 @@ def design_excitation(
         norms = np.linalg.norm(A, axis=0)
         if not np.all(norms > 0):
             return 1e3
-        s = np.linalg.svd(A / norms, compute_uv=False)
+        try:
+            s = np.linalg.svd(A / norms, compute_uv=False)
+        except np.linalg.LinAlgError:
+            return 1e3
         return float(np.log10(s[0] / s[-1])) if s[-1] > 0 else 1e3
 
     def cost(z: Array) -> float:
+        if progress is not None:
+            progress(1)
         pen, W, _, _ = evaluate(z)
         return pen if W is None else log_cond(W) + pen
 
@@ -162,6 +228,9 @@ def design_excitation(
             kin = inverse_kinematics(model, excitation_motion(z.reshape(shape), period_s, limits, dense))
         stretch = max(1.0, float(np.max(np.abs(kin.Ld))) / limits.slider_speed_m_s,
                       float(np.sqrt(np.max(np.abs(kin.Ldd)) / limits.slider_accel_m_s2)))
+        if not stretch <= _STRETCH_MAX:
+            raise ParameterError("excitation: the slider limits need a period stretched beyond "
+                                 f"{_STRETCH_MAX:g} times the requested one; widen the limits")
         period = max(period, period_s * stretch * (1.0 + 1e-9))
         cond_J = max(cond_J, float(np.max(kin.cond_J)))
     if W is None or cond_J > limits.cond_J:

@@ -9,16 +9,14 @@ written.
 from __future__ import annotations
 
 import copy
-import os
-import tempfile
 import tomllib
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import PkmdynError
-from ..io import output_dir, write_csv, write_json
+from ..errors import LimitError, MotionError, ParameterError, PkmdynError
+from ..io import atomic_file, output_dir, write_csv, write_json
 from ..machines.hip_simulator import HipModel, load_params, model_from_dict
 from ..machines.hip_simulator.params import default_params_dict
 from ..params_util import read_toml
@@ -28,7 +26,10 @@ from ._report import identification_report
 from .hip import TORQUE_COLUMNS, Which, consistency_transform, identified_description, identify_hip, read_measured_csv
 from .hip_excite import ExcitationLimits, design_excitation, excitation_motion
 
-__all__ = ["run_identify", "run_excite", "complete_description", "HELD_FIXED"]
+__all__ = ["run_identify", "run_excite", "complete_description", "HELD_FIXED", "MAX_EXCITE_ROWS"]
+
+#: most rows of an excitation motion file
+MAX_EXCITE_ROWS = 2_000_000
 
 #: what every identification holds at the parameter file's values
 HELD_FIXED = (
@@ -65,6 +66,25 @@ _KEY_OF = {
 }
 
 
+#: bounds of ``hip identify``'s options and of the measured values
+MAX_SG_WINDOW = 10001
+MAX_SG_ORDER = 20
+
+
+def _check_identify_options(which: str, sg_window: int, sg_order: int, rank_tol: float) -> None:
+    if which not in ("friction", "inertia", "all"):
+        raise ParameterError(f"--identify {which!r}: choose friction, inertia or all")
+    if isinstance(sg_window, bool) or int(sg_window) != sg_window or not 3 <= sg_window <= MAX_SG_WINDOW \
+            or sg_window % 2 == 0:
+        raise ParameterError(f"--sg-window: must be an odd number from 3 to {MAX_SG_WINDOW}, got {sg_window}")
+    if isinstance(sg_order, bool) or int(sg_order) != sg_order or not 2 <= sg_order <= min(MAX_SG_ORDER, sg_window - 1):
+        raise ParameterError(f"--sg-order: must be from 2 to {MAX_SG_ORDER} and less than the window "
+                             f"({sg_window}), got {sg_order}")
+    rank_tol = float(rank_tol)
+    if not (np.isfinite(rank_tol) and 0 < rank_tol < 1):
+        raise ParameterError(f"--rank-tol: must be a finite number in (0, 1), got {rank_tol:g} (1 leaves no rank)")
+
+
 def complete_description(description: dict[str, Any], model: HipModel) -> dict[str, Any]:
     """The description with every optional key written out (from the model's defaults)."""
     d = copy.deepcopy(description)
@@ -87,12 +107,31 @@ def run_identify(
     rank_tol: float = 1e-6,
     make_plots: bool = True,
 ) -> tuple[dict[str, Path], list[str]]:
-    """Identify and write the output folder; returns the files written and summary lines."""
+    """Identify and write the output folder; returns the files written and summary lines.
+
+    The options are checked first (``sg_window`` odd, 3 to :data:`MAX_SG_WINDOW`; ``sg_order``
+    2 to :data:`MAX_SG_ORDER` and below the window; ``0 < rank_tol < 1``); the measured
+    values by :func:`~pkmdyn.identify.hip.read_measured_csv`; a fit that still overflows is
+    refused, never written."""
+    import warnings
+
+    _check_identify_options(which, sg_window, sg_order, rank_tol)
     model = load_params(params_path)
     description = read_toml(params_path) if params_path is not None else default_params_dict()
     description = complete_description(description, model)
     motion, tau, deriv = read_measured_csv(measured_path, sg_window, sg_order)
-    result = identify_hip(model, motion, tau, which, rank_tol, source=str(measured_path))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            result = identify_hip(model, motion, tau, which, rank_tol, source=str(measured_path))
+        except (np.linalg.LinAlgError, FloatingPointError, OverflowError) as exc:
+            raise MotionError(f"{measured_path}: the fit failed numerically ({exc}); check the file's values") from None
+    ok = np.all(np.isfinite(result.tau_identified)) and np.all(np.isfinite(result.residual_rms))
+    if not ok:
+        raise MotionError(f"{measured_path}: the fit is not finite (the values overflow); check the file's values")
+    for w in caught:  # anything else the solvers said, not printed mid-run
+        if not issubclass(w.category, RuntimeWarning):
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     identified = identified_description(description, result)
     T, _, _ = consistency_transform(result.names)
     report = identification_report(
@@ -170,25 +209,38 @@ def run_excite(
     starts: int,
     seed: int,
     design_samples: int = 120,
+    progress: bool = False,
 ) -> list[str]:
-    """Design the excitation and write it as a motion CSV; returns summary lines."""
+    """Design the excitation and write it as a motion CSV; returns summary lines.
+
+    Every input is checked before the design starts (``cycles x samples_per_cycle + 1`` rows
+    at most :data:`MAX_EXCITE_ROWS`); ``progress`` shows a bar of the cost evaluations on a
+    terminal. The file is written atomically (:func:`pkmdyn.io.atomic_file`)."""
+    from tqdm import tqdm
+
+    from .hip_excite import design_work
+
     model = load_params(params_path)
     out = Path(out_path)
     if out.is_dir():
         raise PkmdynError(f"--out {out}: is a folder, expected a CSV file name")
-    ex = design_excitation(model, which, limits, period_s, harmonics, design_samples, iterations, starts, seed)
-    n = cycles * samples_per_cycle + 1
+    limits.check()
+    for name, v, lo in (("cycles", cycles, 1), ("samples per cycle", samples_per_cycle, 16)):
+        if isinstance(v, bool) or int(v) != v or v < lo:
+            raise ParameterError(f"{name}: {v} must be a whole number >= {lo}")
+    n = int(cycles) * int(samples_per_cycle) + 1
+    if n > MAX_EXCITE_ROWS:
+        raise LimitError(f"motion: {cycles} cycles x {samples_per_cycle} samples per cycle = {n:,} rows is above "
+                         f"the limit {MAX_EXCITE_ROWS:,}")
+    total, _ = design_work(harmonics, design_samples, iterations, starts)
+    with tqdm(total=total, desc="excitation design", unit="evaluation", disable=not progress or None,
+              leave=False) as bar:
+        ex = design_excitation(model, which, limits, period_s, harmonics, design_samples, iterations, starts, seed,
+                               progress=bar.update)
     t = np.linspace(0.0, cycles * ex.period_s, n)
     motion = excitation_motion(ex.coeffs, ex.period_s, limits, t)
-    out.absolute().parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", dir=out.absolute().parent)
-    os.close(fd)
-    try:
+    with atomic_file(out) as tmp:
         write_motion_csv(tmp, motion)
-        os.replace(tmp, out)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
     return [
         f"period {ex.period_s:.4g} s, {harmonics} harmonics; condition number {ex.condition_number:.4g} "
         f"over {len(ex.parameters)} parameters: {', '.join(ex.parameters)}"

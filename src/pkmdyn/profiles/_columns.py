@@ -58,7 +58,16 @@ def derivatives(
             f"{path}: at least 6 rows are needed to derive missing derivative columns by a quintic spline, "
             f"found {t.shape[0]}"
         )
-    if qd is None:
-        spline = make_interp_spline(t, q, k=5, axis=0)
-        return spline.derivative(1)(t), spline.derivative(2)(t)
-    return qd, make_interp_spline(t, qd, k=5, axis=0).derivative(1)(t)
+    try:
+        with np.errstate(all="ignore"):
+            if qd is None:
+                spline = make_interp_spline(t, q, k=5, axis=0)
+                qd, qdd = spline.derivative(1)(t), spline.derivative(2)(t)
+            else:
+                qdd = make_interp_spline(t, qd, k=5, axis=0).derivative(1)(t)
+    except (ValueError, np.linalg.LinAlgError):  # e.g. times so far apart that the spline is singular
+        qdd = None
+    if qdd is None or not (np.all(np.isfinite(qd)) and np.all(np.isfinite(qdd))):
+        raise MotionError(f"{path}: the spline through the rows gives no finite derivatives (column 't_s' from "
+                          f"{t[0]:g} to {t[-1]:g} s); give the derivative columns or check the times")
+    return qd, qdd

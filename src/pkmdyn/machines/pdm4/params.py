@@ -29,19 +29,19 @@ from ...params_util import check_limit, read_toml, validate
 __all__ = ["PdmModel", "TrajectorySettings", "WorkspaceSettings", "load_params", "default_params_path"]
 
 Array = NDArray[np.float64]
-_Pos = Annotated[float, Field(gt=0)]
+_Pos = Annotated[float, Field(gt=0, le=10)]  # a length [m]: > 0 and, for plausibility, at most 10 m
 
 
 class _Geometry(_Section):
-    platform_offset_m: float = Field(ge=0)
+    platform_offset_m: float = Field(ge=0, le=10)
     crank_pivot_spacing_m: _Pos
     crank_length_m: _Pos
     coupler_length_m: _Pos
     output_link_length_m: _Pos
-    crank_pivot_y_m: float
+    crank_pivot_y_m: float = Field(ge=-10, le=10)
     assembly_branch: list[int] = Field(min_length=2, max_length=2)
     u_joint_half_spacing_m: _Pos
-    u_joint_height_m: float
+    u_joint_height_m: float = Field(ge=-10, le=10)
     rpr_home_length_m: _Pos
     rpr_home_direction_deg: list[float] = Field(min_length=2, max_length=2)
     spu_home_length_m: _Pos
