@@ -54,25 +54,32 @@ class _Setup:
 
 
 # ----------------------------------------------------------------------------- machines
+def _plant_model(load: Any, from_dict: Any, description: Any, params: Path | None, plant_params: Path | None,
+                 settings: dict[str, Any]) -> tuple[Any, str]:
+    """The plant's model and a line saying where it came from: ``--plant-params`` when given, else
+    the controller's description (``description()``) with the ``[mismatch]`` factors applied."""
+    from ..control import scale_description
+
+    if plant_params is not None:
+        return load(plant_params), str(plant_params)
+    mm = settings["mismatch"]
+    plant = from_dict(scale_description(description(), mm["mass_factor"], mm["friction_factor"]),
+                      "plant (parameters with the [mismatch] factors)")
+    return plant, (f"{params or 'built-in parameters'} with masses x {mm['mass_factor']:g}, "
+                   f"friction x {mm['friction_factor']:g}")
+
+
 def _hip_setup(params: Path | None, plant_params: Path | None, motion: Path | None, cycles: float,
                settings: dict[str, Any]) -> _Setup:
-    from ..control import scale_description
     from ..machines.hip_simulator import minimal
     from ..machines.hip_simulator.params import default_params_dict, load_params, model_from_dict
     from ..params_util import read_toml
     from ..profiles.iso14242 import IsoCycle, angle_wave, iso_load
 
     model = load_params(params)
-    mm = settings["mismatch"]
-    if plant_params is not None:
-        plant = load_params(plant_params)
-        plant_source = str(plant_params)
-    else:
-        desc = read_toml(params) if params is not None else default_params_dict()
-        plant = model_from_dict(scale_description(desc, mm["mass_factor"], mm["friction_factor"]),
-                                "plant (parameters with the [mismatch] factors)")
-        plant_source = (f"{params or 'built-in parameters'} with masses x {mm['mass_factor']:g}, "
-                        f"friction x {mm['friction_factor']:g}")
+    plant, plant_source = _plant_model(
+        load_params, model_from_dict, lambda: read_toml(params) if params is not None else default_params_dict(),
+        params, plant_params, settings)
     if motion is None:
         cyc = IsoCycle()
 
@@ -101,23 +108,15 @@ def _hip_setup(params: Path | None, plant_params: Path | None, motion: Path | No
 
 def _pdm_setup(params: Path | None, plant_params: Path | None, motion: Path | None, cycles: float,
                settings: dict[str, Any]) -> _Setup:
-    from ..control import scale_description
     from ..machines.pdm4 import minimal
     from ..machines.pdm4.params import default_params_path, load_params, params_from_dict
     from ..params_util import read_toml
     from ..profiles.cycloidal import cycloidal
 
     model = load_params(params)
-    mm = settings["mismatch"]
-    if plant_params is not None:
-        plant = load_params(plant_params)
-        plant_source = str(plant_params)
-    else:
-        desc = read_toml(params if params is not None else default_params_path())
-        plant = params_from_dict(scale_description(desc, mm["mass_factor"], mm["friction_factor"]),
-                                 "plant (parameters with the [mismatch] factors)")
-        plant_source = (f"{params or 'built-in parameters'} with masses x {mm['mass_factor']:g}, "
-                        f"friction x {mm['friction_factor']:g}")
+    plant, plant_source = _plant_model(
+        load_params, params_from_dict, lambda: read_toml(params if params is not None else default_params_path()),
+        params, plant_params, settings)
     if motion is None:
         tr = model.trajectory
         S, P = np.asarray(tr.strokes, dtype=float), float(tr.period_s)

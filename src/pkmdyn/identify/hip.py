@@ -101,7 +101,8 @@ INERTIA_NAMES = (
     "platform_Iz_kgm2",
 )
 _FIELD = {n: k for n, k in _FRICTION[2:]}
-_FRICTION_ATTR = {
+#: friction keys of the parameter file -> fields of :class:`HipFriction` (the optional families)
+FRICTION_ATTR = {
     "slider_coulomb_N": "slider_coulomb",
     "slider_viscous_Ns_m": "slider_viscous",
     "screw_coulomb_Nm": "screw_coulomb",
@@ -135,7 +136,7 @@ def parameter_vector(model: HipModel, names: tuple[str, ...]) -> Array:
         "screw_inertia_kgm2": m.I_L,
         "lever_mass_kg": m.m_l,
     }
-    value.update({n: getattr(f, a) for n, a in _FRICTION_ATTR.items()})
+    value.update({n: getattr(f, a) for n, a in FRICTION_ATTR.items()})
     value.update({f"lever_I{x}_kgm2": m.I_l[k] for k, x in enumerate("xyz")})
     value.update({f"platform_I{x}_kgm2": m.I_m[k] for k, x in enumerate("xyz")})
     return np.array([value[n] for n in names], dtype=float)
@@ -179,7 +180,7 @@ def with_parameters(model: HipModel, names: tuple[str, ...], theta: Array) -> Hi
     The bearing products are split by :func:`bearing_split` and need both to be given."""
     values = dict(zip(names, np.asarray(theta, dtype=float).tolist()))
     f, m = model.friction, model.inertia
-    fr: dict[str, Any] = {a: values[n] for n, a in _FRICTION_ATTR.items() if n in values}
+    fr: dict[str, Any] = {a: values[n] for n, a in FRICTION_ATTR.items() if n in values}
     inr: dict[str, Any] = {}
     if "bearing_load_coeff_m" in values:
         fr["mu_h"], fr["mu_t"], inr["m_m"] = bearing_split(

@@ -23,7 +23,7 @@ from ..params_util import read_toml
 from ..profiles.orientation import write_motion_csv
 from ._toml import dumps_tables
 from ._report import identification_report
-from .hip import TORQUE_COLUMNS, Which, consistency_transform, identified_description, identify_hip, read_measured_csv
+from .hip import FRICTION_ATTR, TORQUE_COLUMNS, Which, consistency_transform, identified_description, identify_hip, read_measured_csv
 from .hip_excite import ExcitationLimits, design_excitation, excitation_motion
 
 __all__ = ["run_identify", "run_excite", "complete_description", "HELD_FIXED", "MAX_EXCITE_ROWS"]
@@ -43,14 +43,7 @@ HELD_FIXED = (
 _OPTIONAL_FRICTION = {
     "friction_velocity_eps_rad_s": "eps_w",
     "friction_velocity_eps_m_s": "eps_v",
-    "slider_coulomb_N": "slider_coulomb",
-    "slider_viscous_Ns_m": "slider_viscous",
-    "screw_coulomb_Nm": "screw_coulomb",
-    "screw_viscous_Nms_rad": "screw_viscous",
-    "spherical_coulomb_Nm": "spherical_coulomb",
-    "spherical_viscous_Nms_rad": "spherical_viscous",
-    "universal_coulomb_Nm": "universal_coulomb",
-    "universal_viscous_Nms_rad": "universal_viscous",
+    **FRICTION_ATTR,
 }
 
 #: which parameter-file key each identified parameter writes
