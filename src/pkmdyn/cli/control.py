@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import MotionError, ParameterError
 from ._groups import PATH_IN, hip, pdm
-from .hip import FiniteFloat
+from ._groups import FiniteFloat
 
 __all__ = ["hip_closed_loop", "run_control", "HIP_CONTROLLERS", "PDM_CONTROLLERS", "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
 

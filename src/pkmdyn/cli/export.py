@@ -8,7 +8,7 @@ import click
 
 from ._groups import PATH_IN as _PATH_IN
 from ._groups import hip
-from .hip import FiniteFloat
+from ._groups import FiniteFloat
 
 
 @hip.command("export")

@@ -6,38 +6,12 @@ checked against the sample limit before anything is allocated.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import click
 
 from ._groups import PATH_IN as _PATH_IN
-from ._groups import hip
-
-
-class FiniteFloat(click.ParamType):
-    """A finite float in ``[lo, hi]`` (``lo`` excluded when ``lo_open``): ``inf``/``nan`` refused."""
-
-    name = "number"
-
-    def __init__(self, lo: float, hi: float, lo_open: bool = False) -> None:
-        self.lo, self.hi, self.lo_open = lo, hi, lo_open
-
-    def convert(self, value, param, ctx):
-        if isinstance(value, float):
-            x = value
-        else:
-            try:
-                x = float(str(value).strip())
-            except ValueError:
-                self.fail(f"{str(value)[:40]!r} is not a number", param, ctx)
-        if not math.isfinite(x):
-            self.fail(f"{value!r} is not a finite number", param, ctx)
-        if x < self.lo or (self.lo_open and x == self.lo) or x > self.hi:
-            bracket = "(" if self.lo_open else "["
-            self.fail(f"{x:g} is not in {bracket}{self.lo:g}, {self.hi:g}]", param, ctx)
-        return x
-
+from ._groups import FiniteFloat, hip
 
 _LIMIT_HELP = ("Raise or lower a plausibility limit, KEY=VALUE (repeatable; overrides [limits] of the parameter "
                "file). Keys: max_samples, max_load_N, max_abs_angle_deg, max_slider_speed_m_s, "

@@ -10,7 +10,7 @@ from ..identify import hip_excite as _ex
 from ..identify.hip_run import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW
 from ._groups import PATH_IN as _PATH_IN
 from ._groups import hip
-from .hip import FiniteFloat
+from ._groups import FiniteFloat
 
 
 @hip.command("identify")
