@@ -29,6 +29,8 @@ from pkmdyn.machines.hip_simulator.run import torques_batched
 from pkmdyn.profiles.iso14242 import iso14242_motion
 from pkmdyn.spatial import euler_kinematics
 
+from _timing import best_time
+
 
 def _inputs(n: int):
     model = load_params()
@@ -36,16 +38,6 @@ def _inputs(n: int):
     motion_t = motion.t[:n]
     R, w, wd = euler_kinematics(model.geometry.euler_sequence, motion.angles[:n], motion.rates[:n], motion.accels[:n])
     return model, motion_t, R, w, wd, motion.load[:n]
-
-
-def _best(fn, repeat: int) -> float:
-    fn()
-    best = np.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def _peak_rss_child(n: int) -> None:
@@ -83,10 +75,10 @@ def main() -> None:
 
     model, t, R, w, wd, load = _inputs(args.samples)
     n = t.shape[0]
-    closed = _best(lambda: torques_batched(model, t, R, w, wd, load), args.repeat) / n * 1e6
+    closed = best_time(lambda: torques_batched(model, t, R, w, wd, load), args.repeat) / n * 1e6
 
     nr = min(args.reference_samples, n)
-    ref_time = _best(lambda: reference_torques(model, t[:nr], R[:nr], w[:nr], wd[:nr], load[:nr]), 1) / nr * 1e6
+    ref_time = best_time(lambda: reference_torques(model, t[:nr], R[:nr], w[:nr], wd[:nr], load[:nr]), 1) / nr * 1e6
     tau_closed = torques_batched(model, t[:nr], R[:nr], w[:nr], wd[:nr], load[:nr])
     tau_ref = reference_torques(model, t[:nr], R[:nr], w[:nr], wd[:nr], load[:nr])["tau"]
     agreement = float(np.abs(tau_closed - tau_ref).max() / np.abs(tau_ref).max())

@@ -25,7 +25,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import time
 
 # every route here is single-threaded per call (batched small matrices); BLAS threads would only
 # contend with each other on a shared machine, so they are pinned to one before numpy loads
@@ -38,15 +37,7 @@ from pkmdyn.machines.pdm4 import inverse_kinematics, load_params  # noqa: E402
 from pkmdyn.machines.pdm4.dynamics import actuator_forces, compliance_system, equilibrium_system, inverse_dynamics  # noqa: E402
 from pkmdyn.profiles.pdm_motion import cycloidal_motion  # noqa: E402
 
-
-def _best(fn, repeat: int) -> float:
-    fn()
-    best = np.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
+from _timing import best_time  # noqa: E402
 
 
 def main() -> None:
@@ -63,12 +54,12 @@ def main() -> None:
     kin = inverse_kinematics(model, motion)
     us = 1e6 / n
     out: dict = {"samples": n}
-    out["actuator_us_per_sample"] = _best(lambda: actuator_forces(model, kin), args.repeat) * us
-    out["reactions_us_per_sample"] = _best(lambda: inverse_dynamics(model, kin), args.repeat) * us
-    out["kinematics_us_per_sample"] = _best(lambda: inverse_kinematics(model, motion), args.repeat) * us
-    out["actuator_with_kinematics_us_per_sample"] = _best(
+    out["actuator_us_per_sample"] = best_time(lambda: actuator_forces(model, kin), args.repeat) * us
+    out["reactions_us_per_sample"] = best_time(lambda: inverse_dynamics(model, kin), args.repeat) * us
+    out["kinematics_us_per_sample"] = best_time(lambda: inverse_kinematics(model, motion), args.repeat) * us
+    out["actuator_with_kinematics_us_per_sample"] = best_time(
         lambda: actuator_forces(model, inverse_kinematics(model, motion)), args.repeat) * us
-    out["reactions_with_kinematics_us_per_sample"] = _best(
+    out["reactions_with_kinematics_us_per_sample"] = best_time(
         lambda: inverse_dynamics(model, inverse_kinematics(model, motion)), args.repeat) * us
     reac = inverse_dynamics(model, kin)
     try:
@@ -77,7 +68,7 @@ def main() -> None:
         minimal = None
     if minimal is not None:
         ref = minimal.inverse_dynamics(model, motion.q, motion.qd, motion.qdd, None)
-        out["reference_us_per_sample"] = _best(
+        out["reference_us_per_sample"] = best_time(
             lambda: minimal.inverse_dynamics(model, motion.q, motion.qd, motion.qdd, None), args.repeat) * us
         out["max_rel_difference_vs_reference"] = float(np.abs(ref - reac.force).max() / np.abs(ref).max())
         out["speedup_actuator_vs_reference"] = out["reference_us_per_sample"] / out["actuator_with_kinematics_us_per_sample"]
@@ -91,9 +82,9 @@ def main() -> None:
         G, w0, C = compliance_system(model, small)
         return unique_reactions(A, b, G, w0, C)
 
-    out["dense_general_us_per_sample"] = _best(dense, 1) * 1e6 / m
+    out["dense_general_us_per_sample"] = best_time(dense, 1) * 1e6 / m
     one = motion.slice(n // 3, n // 3 + 1)
-    out["single_sample_us"] = _best(lambda: inverse_dynamics(model, inverse_kinematics(model, one)), 50) * 1e6
+    out["single_sample_us"] = best_time(lambda: inverse_dynamics(model, inverse_kinematics(model, one)), 50) * 1e6
     out["targets"] = {"actuator_us_per_sample": 10.0, "reactions_us_per_sample": 50.0}
     out["targets_met"] = {k: bool(out[k] <= v) for k, v in out["targets"].items()}
     if not args.json:
