@@ -694,6 +694,22 @@ def _fail(st: int, q: Array, qd: Array, x: Array, name: str) -> None:
     raise cls(f"q = {q.tolist()}: {why}")
 
 
+def _checked_one(model: PdmModel, q: Array, qd: Array, x: Array, load: float | None, forward: bool,
+                 name: str) -> Array:
+    """The compiled sample (``x`` = ``qdd`` or ``u``, named ``name`` in errors) behind the two
+    single-sample verbs, with their input checks and errors."""
+    if load is not None:
+        _no_load(load)
+    q, qd, x = np.asarray(q, np.float64), np.asarray(qd, np.float64), np.asarray(x, np.float64)
+    if q.shape != (4,) or qd.shape != (4,) or x.shape != (4,):
+        _fail(-1, q, qd, x, name)
+    out = np.empty(4)
+    st = _one(_pack(model), q, qd, x, forward, out)
+    if st != _OK:
+        _fail(st, q, qd, x, name)
+    return out
+
+
 def inverse_dynamics_one(model: PdmModel, q: Array, qd: Array, qdd: Array, load: float | None = None) -> Array:
     """One sample of :func:`inverse_dynamics`: ``q, qd, qdd`` (4,) -> limb forces ``u`` (4,) [N].
 
@@ -701,31 +717,13 @@ def inverse_dynamics_one(model: PdmModel, q: Array, qd: Array, qdd: Array, load:
     implementation of Eq. 2-48 for one sample (see the comment above :func:`_motion_one`).
     Errors as the batched verb, naming the pose instead of the sample.
     """
-    if load is not None:
-        _no_load(load)
-    q, qd, qdd = np.asarray(q, np.float64), np.asarray(qd, np.float64), np.asarray(qdd, np.float64)
-    if q.shape != (4,) or qd.shape != (4,) or qdd.shape != (4,):
-        _fail(-1, q, qd, qdd, "qdd")
-    out = np.empty(4)
-    st = _one(_pack(model), q, qd, qdd, False, out)
-    if st != _OK:
-        _fail(st, q, qd, qdd, "qdd")
-    return out
+    return _checked_one(model, q, qd, qdd, load, False, "qdd")
 
 
 def forward_dynamics_one(model: PdmModel, q: Array, qd: Array, u: Array, load: float | None = None) -> Array:
     """One sample of :func:`forward_dynamics`: ``q, qd`` (4,), limb forces ``u`` (4,) [N] ->
     ``qdd`` (4,). Compiled like :func:`inverse_dynamics_one`."""
-    if load is not None:
-        _no_load(load)
-    q, qd, u = np.asarray(q, np.float64), np.asarray(qd, np.float64), np.asarray(u, np.float64)
-    if q.shape != (4,) or qd.shape != (4,) or u.shape != (4,):
-        _fail(-1, q, qd, u, "u")
-    out = np.empty(4)
-    st = _one(_pack(model), q, qd, u, True, out)
-    if st != _OK:
-        _fail(st, q, qd, u, "u")
-    return out
+    return _checked_one(model, q, qd, u, load, True, "u")
 
 
 @njit(cache=True)
