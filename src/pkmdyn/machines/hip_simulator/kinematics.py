@@ -115,10 +115,14 @@ def _check_platform_motion(model: object, t: object, R: object, omega: object, o
         k = int(np.flatnonzero(bad)[0])
         raise MotionError(f"R: sample {k + 1} is not a rotation matrix (|R^T R - I| = {err[k]:.3g}, det = "
                           f"{np.linalg.det(R[k]):.6g}); expected orthonormal with det +1")
+    _check_threshold(singularity_threshold)
+    return t, R, omega, omega_dot
+
+
+def _check_threshold(singularity_threshold: object) -> None:
     if isinstance(singularity_threshold, bool) or not isinstance(singularity_threshold, (int, float, np.floating)) \
             or not 0 <= singularity_threshold <= 1:
         raise ParameterError(f"singularity_threshold: expected a number in [0, 1], got {singularity_threshold!r}")
-    return t, R, omega, omega_dot
 
 
 def platform_kinematics(
@@ -150,6 +154,15 @@ def platform_kinematics(
     returned fields are views in the documented layout.
     """
     t, R, omega, omega_dot = _check_platform_motion(model, t, R, omega, omega_dot, singularity_threshold)
+    return _platform_kinematics(model, t, R, omega, omega_dot, singularity_threshold, check_conditioning)
+
+
+def _platform_kinematics(model: HipModel, t: Array, R: Array, omega: Array, omega_dot: Array,
+                         singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD,
+                         check_conditioning: bool = True) -> HipKinematics:
+    """:func:`platform_kinematics` without its entry checks, for callers whose ``R`` comes from
+    :func:`~pkmdyn.spatial.euler_kinematics` of validated angles (a rotation by construction):
+    the checks cost about a third of the batched hot path."""
     g = model.geometry
     n = t.shape[0]
     l2 = g.l * g.l
@@ -267,5 +280,6 @@ def inverse_kinematics(
     """Inverse kinematics along a motion (Euler angles and rates -> every body's motion)."""
     check_type(model, HipModel, "model", ParameterError)
     check_type(motion, OrientationMotion, "motion", MotionError)
+    _check_threshold(singularity_threshold)
     R, omega, omega_dot = euler_kinematics(model.geometry.euler_sequence, motion.angles, motion.rates, motion.accels)
-    return platform_kinematics(model, motion.t, R, omega, omega_dot, singularity_threshold)
+    return _platform_kinematics(model, motion.t, R, omega, omega_dot, singularity_threshold)

@@ -31,7 +31,7 @@ from ...spatial import euler_kinematics
 from .dynamics import inverse_dynamics as _torques
 from .fast import forward_dynamics_one, inverse_dynamics_one, kernels
 from .forward import accelerate, mass_matrix_omega
-from .kinematics import HipKinematics, platform_kinematics
+from .kinematics import HipKinematics, _platform_kinematics
 from .params import HipModel
 
 __all__ = [
@@ -73,7 +73,7 @@ def rate_map(model: HipModel, q: Array) -> Array:
 
 def _kin(model: HipModel, q: Array, qd: Array, qdd: Array) -> HipKinematics:
     R, w, wd = euler_kinematics(model.geometry.euler_sequence, q, qd, qdd)
-    return platform_kinematics(model, np.zeros(q.shape[0]), R, w, wd, check_conditioning=False)
+    return _platform_kinematics(model, np.zeros(q.shape[0]), R, w, wd, check_conditioning=False)
 
 
 def _load(load: object, n: int) -> Array:

@@ -31,7 +31,7 @@ from ...profiles.iso14242 import IsoCycle, iso14242_block, iso14242_samples, iso
 from ...profiles.orientation import OrientationMotion, read_motion_csv
 from ...spatial import euler_kinematics
 from .dynamics import PARTS, HipTorques, inverse_dynamics
-from .kinematics import DEFAULT_SINGULARITY_THRESHOLD, HipKinematics, platform_kinematics
+from .kinematics import DEFAULT_SINGULARITY_THRESHOLD, HipKinematics, _platform_kinematics, platform_kinematics
 from .params import LIMIT_KEYS, HipLimits, HipModel, load_params
 
 __all__ = [
@@ -90,7 +90,7 @@ class HipResults:
 
 def _block(model: HipModel, motion: OrientationMotion, threshold: float) -> tuple[HipKinematics, HipTorques]:
     R, w, wd = euler_kinematics(model.geometry.euler_sequence, motion.angles, motion.rates, motion.accels)
-    kin = platform_kinematics(model, motion.t, R, w, wd, threshold)
+    kin = _platform_kinematics(model, motion.t, R, w, wd, threshold)
     return kin, inverse_dynamics(model, kin, motion.load)
 
 
