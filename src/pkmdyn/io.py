@@ -44,6 +44,7 @@ __all__ = [
     "write_json",
     "TableWriter",
     "open_table_writer",
+    "check_table_format",
     "TABLE_FORMATS",
 ]
 
@@ -397,6 +398,21 @@ def write_csv(path: str | Path, columns: Mapping[str, Array], precision: int = 1
         raise PkmdynError(f"cannot write {path} ({_os_reason(exc)})") from None
 
 
+def check_table_format(fmt: str) -> None:
+    """``fmt`` is a results-table format that can be written here (Parquet needs pyarrow); call it
+    before any work so that a missing optional dependency fails first."""
+    if fmt not in TABLE_FORMATS:
+        raise PkmdynError(f"--format {fmt}: must be one of {', '.join(TABLE_FORMATS)}")
+    if fmt == "parquet":
+        try:
+            import pyarrow  # noqa: F401
+            import pyarrow.parquet  # noqa: F401
+        except ImportError:
+            raise PkmdynError(
+                "--format parquet needs pyarrow: pip install 'pkmdyn[parquet]' (or use --format csv)"
+            ) from None
+
+
 class TableWriter:
     """Writes a results table block by block (CSV or Parquet), so that memory stays bounded.
 
@@ -406,8 +422,6 @@ class TableWriter:
     """
 
     def __init__(self, path: Path, fmt: str, precision: int = 17) -> None:
-        if fmt not in TABLE_FORMATS:
-            raise PkmdynError(f"--format {fmt}: must be one of {', '.join(TABLE_FORMATS)}")
         self.path, self.fmt, self.precision = path, fmt, precision
         self.rows = 0
         self._names: list[str] | None = None
@@ -415,6 +429,7 @@ class TableWriter:
         self._pq: Any = None
         self._arrow_csv: Any = None
         self._arrow_options: Any = None
+        check_table_format(fmt)
         if fmt == "csv" and precision >= 17:
             # pyarrow, where installed, formats numbers some 3x faster, in the shortest form that
             # reads back to the identical double; the plain path writes %.17g (also exact)
@@ -425,14 +440,6 @@ class TableWriter:
                 self._arrow_options = pacsv.WriteOptions(include_header=False, quoting_style="none")
             except ImportError:
                 pass
-        if fmt == "parquet":
-            try:
-                import pyarrow  # noqa: F401
-                import pyarrow.parquet  # noqa: F401
-            except ImportError:
-                raise PkmdynError(
-                    "--format parquet needs pyarrow: pip install 'pkmdyn[parquet]' (or use --format csv)"
-                ) from None
 
     def write(self, columns: Mapping[str, Array]) -> None:
         names, arrays = _finite_columns(self.path, columns, self.rows)

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from ...errors import ParameterError, PkmdynError, SingularityWarning
-from ...io import TABLE_FORMATS, open_table_writer, output_dir, write_json
+from ...io import TABLE_FORMATS, check_table_format, open_table_writer, output_dir, write_json
 from ...params_util import check_limit, parse_limit_options
 from ...profiles.iso_fit import iso_cycle_preset
 from ...profiles.iso14242 import IsoCycle, iso14242_block, iso14242_samples, iso14242_times
@@ -369,8 +369,7 @@ def run_hip(
         window = n
         source = str(motion_path)
         note = ""
-    if fmt == "parquet":
-        open_table_writer(Path("unused.parquet"), fmt)  # pyarrow present? (checked before any work)
+    check_table_format(fmt)  # pyarrow present? (checked before any work)
 
     summ = SummaryAccumulator()
     collect = _PlotCollector(window) if make_plots else None
