@@ -151,16 +151,6 @@ def test_profile_command_writes_a_readable_motion(tmp_path):
     assert data.shape[0] == 101 and not list(out.glob("*.png"))
 
 
-def test_out_folder_helper_refuses_a_file(tmp_path):
-    from pkmdyn.errors import PkmdynError
-    from pkmdyn.io import make_out_dir
-
-    (tmp_path / "f").write_text("x")
-    with pytest.raises(PkmdynError, match="exists and is a file"):
-        make_out_dir(tmp_path / "f")
-    assert make_out_dir(tmp_path / "a" / "b").is_dir()
-
-
 def test_streamed_run_equals_the_in_memory_path(tmp_path):
     """run_hip in blocks of 7 samples (file + summary) against simulate() holding everything."""
     from pkmdyn.machines.hip_simulator.run import results_columns, run_hip, simulate, summary

@@ -38,7 +38,6 @@ __all__ = [
     "atomic_file",
     "RUN_MARKER",
     "DEFAULT_MAX_SAMPLES",
-    "make_out_dir",
     "read_csv_columns",
     "write_csv",
     "write_json",
@@ -240,19 +239,6 @@ def atomic_file(path: str | Path, notify: Callable[[str], None] | None = _note) 
         tmp.unlink(missing_ok=True)
         _remove_created(created)
         raise
-
-
-def make_out_dir(path: str | Path) -> Path:
-    """Create the output folder (and its parents); a file in the way or a refused creation is a
-    :class:`PkmdynError` naming the folder. Prefer :func:`output_dir`, which writes a run whole."""
-    out = Path(path)
-    if out.exists() and not out.is_dir():
-        raise PkmdynError(f"--out {out}: exists and is a file, not a folder")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise PkmdynError(f"--out {out}: cannot create folder ({_os_reason(exc)})") from None
-    return out
 
 
 _BOMS = ((b"\x00\x00\xfe\xff", "UTF-32"), (b"\xff\xfe\x00\x00", "UTF-32"), (b"\xfe\xff", "UTF-16"), (b"\xff\xfe", "UTF-16"))
