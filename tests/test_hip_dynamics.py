@@ -7,7 +7,7 @@ import pytest
 
 from hip_helpers import SmoothMotion, random_model
 from pkmdyn.errors import MotionError
-from pkmdyn.machines.hip_simulator.dynamics import PARTS, inverse_dynamics
+from pkmdyn.machines.hip_simulator.dynamics import inverse_dynamics
 from pkmdyn.machines.hip_simulator.kinematics import inverse_kinematics
 from pkmdyn.machines.hip_simulator.params import load_params
 from pkmdyn.profiles.orientation import make_motion
@@ -86,16 +86,6 @@ def test_power_balance_detects_a_dropped_term(part):
     broken = dataclasses.replace(tq, tau=tq.tau - getattr(tq, part))
     residual, scale, _, _ = _power_residual(model, sm, t, broken)
     assert np.abs(residual).max() > 1e-3 * scale
-
-
-def test_parts_add_up_to_total():
-    rng = np.random.default_rng(5)
-    model = random_model(rng, friction=True)
-    sm = SmoothMotion(rng)
-    t = np.linspace(0, 1, 50)
-    tq = inverse_dynamics(model, inverse_kinematics(model, sm.motion(t)), sm.load(t))
-    total = sum(getattr(tq, p) for p in PARTS)
-    np.testing.assert_allclose(total, tq.tau, rtol=0, atol=1e-15 * np.abs(tq.tau).max())
 
 
 def test_static_pose_needs_only_gravity_and_friction_is_finite_at_rest():

@@ -1,6 +1,7 @@
 """Every parameter-validation rule gives a ParameterError naming the key."""
 
 import copy
+import dataclasses
 
 import numpy as np
 import pytest
@@ -74,7 +75,7 @@ def test_bad_toml_and_missing_file(tmp_path):
 
 def test_model_is_immutable():
     m = load_params()
-    with pytest.raises(Exception):
+    with pytest.raises(dataclasses.FrozenInstanceError):
         m.geometry.l = 1.0  # type: ignore[misc]
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hip_helpers import SmoothMotion, random_model
-from pkmdyn.errors import MotionError
+from pkmdyn.errors import MotionError, ParameterError
 from pkmdyn.identify import base_parameters, bounded_fourier
 from pkmdyn.identify._report import identification_report
 from pkmdyn.identify.hip import (
@@ -195,7 +195,7 @@ def test_paper_fit_preset_is_closer_to_the_paper_than_the_default():
     default = slider_maxima(model, iso_cycle_preset("default")) / PAPER_SLIDER_MAXIMA - 1.0
     assert iso_cycle_preset("default") == IsoCycle()
     assert np.sum(fit**2) < 0.1 * np.sum(default**2)
-    with pytest.raises(Exception, match="motion model"):
+    with pytest.raises(ParameterError, match="motion model"):
         iso_cycle_preset("nope")
 
 

@@ -7,12 +7,10 @@ import tomllib
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from pkmdyn.machines.pdm4 import default_params_path, inverse_position, load_params
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
-pytestmark = pytest.mark.skipif(not (DOCS / "pdm4.md").exists(), reason="docs not in this checkout")
 
 
 def test_joint_table_matches_the_model():

@@ -15,6 +15,7 @@ from pkmdyn.cli import main
 from pkmdyn.errors import ParameterError
 from pkmdyn.machines.pdm4 import BODY_NAMES, default_params_path, inverse_kinematics, load_params
 from pkmdyn.machines.pdm4 import dynamics as dyn
+from pkmdyn.machines.pdm4 import minimal
 from pkmdyn.machines.pdm4.params import params_from_dict
 from pkmdyn.profiles.pdm_motion import PdmMotion
 
@@ -211,7 +212,6 @@ def test_results_columns_and_summary(tmp_path):
 # ----------------------------------------------------------------------------- independent route
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_actuator_forces_agree_with_the_independent_route(seed):
-    minimal = pytest.importorskip("pkmdyn.machines.pdm4.minimal")
     m = _random_model(seed)
     mot = _motion(seed, n=8)
     f_ne = dyn.inverse_dynamics(m, inverse_kinematics(m, mot)).force

@@ -26,6 +26,7 @@ from pkmdyn.machines.pdm4 import (
     minimal,
     reachable,
 )
+from pkmdyn.machines.pdm4 import dynamics
 from pkmdyn.machines.pdm4.params import params_from_dict
 from pkmdyn.params_util import read_toml
 from pkmdyn.profiles.pdm_motion import PdmMotion
@@ -215,7 +216,6 @@ def test_forward_inverts_inverse_dynamics(seed):
 def test_newton_euler_actuator_forces_agree(seed):
     """Issue 7 item 4: the Newton-Euler actuator forces (Eq. 49-62, pdm4.dynamics) against this
     independent route, on random machines and motions, to 1e-8 relative."""
-    dynamics = pytest.importorskip("pkmdyn.machines.pdm4.dynamics")
     for model in (BASE, _machine(seed)):
         q, qd, qdd = _states(seed, 25, model)
         kin = inverse_kinematics(model, PdmMotion(np.arange(25.0), q, qd, qdd), check_strokes=False)
