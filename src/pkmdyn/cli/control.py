@@ -74,21 +74,23 @@ def _hip_setup(params: Path | None, plant_params: Path | None, motion: Path | No
     from ..machines.hip_simulator import minimal
     from ..machines.hip_simulator.params import default_params_dict, load_params, model_from_dict
     from ..params_util import read_toml
-    from ..profiles.iso14242 import IsoCycle, angle_wave, iso_load
+    from ..profiles.iso14242 import angle_wave, iso_load
+    from ..profiles.iso_fit import iso_cycle_preset
 
     model = load_params(params)
     plant, plant_source = _plant_model(
         load_params, model_from_dict, lambda: read_toml(params) if params is not None else default_params_dict(),
         params, plant_params, settings)
     if motion is None:
-        cyc = IsoCycle()
+        cyc = iso_cycle_preset(model.motion_model)
 
         def fn(t: np.ndarray) -> tuple:
             w = [angle_wave(t, cyc.period_s, x) for x in (cyc.fe, cyc.aa, cyc.ier)]
             return (np.stack([a[0] for a in w], -1), np.stack([a[1] for a in w], -1),
                     np.stack([a[2] for a in w], -1), iso_load(t, cyc))
 
-        duration, source = cycles * cyc.period_s, f"built-in ISO 14242-1 cycle model, {cycles:g} cycle(s)"
+        duration, source = (cycles * cyc.period_s,
+                            f"built-in ISO 14242-1 cycle model ({model.motion_model}), {cycles:g} cycle(s)")
     else:
         from ..control import hermite_motion
         from ..profiles.orientation import read_motion_csv

@@ -25,9 +25,9 @@ _LIMIT_HELP = ("Raise or lower a plausibility limit, KEY=VALUE (repeatable; over
               help="Cycles of the built-in motion (finite, > 0; with --samples-per-cycle at least 2 samples).")
 @click.option("--samples-per-cycle", type=click.IntRange(min=2), default=1000, show_default=True,
               help="Samples per cycle of the built-in motion.")
-@click.option("--motion-model", type=click.Choice(["default", "paper-fit", "paper-fit-zxy"]), default="default",
-              show_default=True,
-              help="Cycle model of the built-in motion: default (documented choices), paper-fit (phases fitted to the "
+@click.option("--motion-model", type=click.Choice(["default", "paper-fit", "paper-fit-zxy"]), default=None,
+              help="Cycle model of the built-in motion (default: the parameter file's [motion] iso_cycle, else "
+                   "default): default (documented choices), paper-fit (phases fitted to the "
                    "hip paper's slider maxima), paper-fit-zxy (the same for euler_sequence = \"ZXY\"); see "
                    "docs/identification.md.")
 @click.option("--singularity-threshold", type=FiniteFloat(0.0, 1.0), default=1e-3, show_default=True,
@@ -43,7 +43,7 @@ def hip_run(params_path, motion_path, cycles, samples_per_cycle, motion_model, s
     """Kinematics and driving torques along a motion; writes results.csv (or .parquet), summary.json, plots."""
     from ..machines.hip_simulator.run import run_hip
 
-    if motion_path is not None and (cycles != 1.0 or samples_per_cycle != 1000 or motion_model != "default"):
+    if motion_path is not None and (cycles != 1.0 or samples_per_cycle != 1000 or motion_model is not None):
         raise click.UsageError(
             "--cycles, --samples-per-cycle and --motion-model apply to the built-in motion, not to --motion")
     files, messages = run_hip(out_dir, params_path, motion_path, cycles, samples_per_cycle,

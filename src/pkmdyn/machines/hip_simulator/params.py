@@ -18,6 +18,7 @@ from pydantic import Field, field_validator, model_validator
 from ...errors import ParameterError
 from ...io import DEFAULT_MAX_SAMPLES
 from ...params_util import Section, read_toml, validate
+from ...profiles.iso_fit import iso_cycle_preset
 from ...spatial import check_sequence
 
 __all__ = [
@@ -30,6 +31,7 @@ __all__ = [
     "load_params",
     "model_from_dict",
     "default_params_dict",
+    "paper_params_path",
     "DEFAULT_PARAMS_TEXT",
 ]
 
@@ -121,11 +123,27 @@ class _Limits(Section):
     max_slider_acceleration_m_s2: Pos = 50.0
 
 
+class _Motion(Section):
+    """The built-in motion a run takes when no motion file is given (``[motion]``, optional)."""
+
+    iso_cycle: str = "default"
+
+    @field_validator("iso_cycle")
+    @classmethod
+    def _preset(cls, v: str) -> str:
+        try:
+            iso_cycle_preset(v)
+        except ParameterError as exc:
+            raise ValueError(str(exc)) from None
+        return v
+
+
 class _HipFile(Section):
     geometry: _Geometry
     inertia: _Inertia
     friction: _Friction
     limits: _Limits = _Limits()
+    motion: _Motion = _Motion()
 
 
 @dataclass(frozen=True)
@@ -207,6 +225,9 @@ class HipModel:
     inertia: HipInertia
     friction: HipFriction
     limits: HipLimits = field(default_factory=HipLimits)
+    #: the ISO 14242-1 cycle preset of the built-in motion (``[motion] iso_cycle``;
+    #: :func:`pkmdyn.profiles.iso_fit.iso_cycle_preset`)
+    motion_model: str = "default"
 
 
 def _build(d: _HipFile, source: str) -> HipModel:
@@ -267,7 +288,7 @@ def _build(d: _HipFile, source: str) -> HipModel:
         universal_coulomb=f.universal_coulomb_Nm,
         universal_viscous=f.universal_viscous_Nms_rad,
     )
-    return HipModel(geom, inertia, friction, HipLimits(**d.limits.model_dump()))
+    return HipModel(geom, inertia, friction, HipLimits(**d.limits.model_dump()), d.motion.iso_cycle)
 
 
 def model_from_dict(data: dict[str, Any], source: str = "parameters") -> HipModel:
@@ -284,6 +305,13 @@ def load_params(path: str | Path | None = None) -> HipModel:
 
 def _default_resource() -> Any:
     return resources.files(__package__).joinpath("default.toml")
+
+
+def paper_params_path() -> Path:
+    """The built-in parameter file of the paper's own convention (``paper.toml``: the Euler
+    sequence and ISO cycle under which the paper's §5 figures are reproduced best;
+    ``docs/hip_simulator.md``, "The paper's own convention")."""
+    return Path(str(resources.files(__package__).joinpath("paper.toml")))
 
 
 DEFAULT_PARAMS_TEXT: str = _default_resource().read_text(encoding="utf-8")

@@ -325,13 +325,14 @@ def run_hip(
     fmt: str = "csv",
     limits: dict[str, Any] | tuple[str, ...] | None = None,
     chunk: int = RUN_CHUNK,
-    motion_model: str = "default",
+    motion_model: str | None = None,
 ) -> tuple[dict[str, Path], list[str]]:
     """Run the whole job; returns the files written and the warnings raised on the way.
 
     ``fmt``: ``"csv"`` or ``"parquet"`` for ``results``; ``limits``: overrides of the
     ``[limits]`` table (``{key: value}`` or ``("key=value", ...)``); ``motion_model``: the named
-    ISO 14242-1 cycle model of the built-in motion (:func:`pkmdyn.profiles.iso_fit.iso_cycle_preset`). Every input (parameters,
+    ISO 14242-1 cycle model of the built-in motion (:func:`pkmdyn.profiles.iso_fit.iso_cycle_preset`;
+    ``None``: the parameter file's ``[motion] iso_cycle``). Every input (parameters,
     motion, options, limits on load and angles) is checked before ``out_dir`` is touched; the
     slider speed and acceleration limits are checked block by block as the kinematics are
     computed. On any error nothing is left at or beside ``out_dir``.
@@ -347,9 +348,11 @@ def run_hip(
         given = parse_limit_options(items, LIMIT_KEYS)
         model = dataclasses.replace(model, limits=dataclasses.replace(model.limits, **given))
     lim = model.limits
-    cycle = iso_cycle_preset(motion_model)
-    if motion_path is not None and motion_model != "default":
+    if motion_path is not None and motion_model is not None:
         raise ParameterError("--motion-model names a built-in motion; it cannot be combined with --motion")
+    if motion_model is None:
+        motion_model = model.motion_model
+    cycle = iso_cycle_preset(motion_model)
     if motion_path is None:
         n = iso14242_samples(cycles, samples_per_cycle, lim.max_samples)
         motion = None
