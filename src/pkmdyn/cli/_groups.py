@@ -4,11 +4,14 @@ the option types they share."""
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from pathlib import Path
 
 import click
 
-__all__ = ["cli", "hip", "pdm", "PATH_IN", "FiniteFloat"]
+from ..errors import PkmdynError
+
+__all__ = ["cli", "hip", "pdm", "PATH_IN", "FiniteFloat", "list_files", "echo_lines", "echo"]
 
 #: an input file option (existence is checked by the readers, which name the file)
 PATH_IN = click.Path(dir_okay=False, path_type=Path)
@@ -52,3 +55,25 @@ class FiniteFloat(click.ParamType):
             bracket = "(" if self.lo_open else "["
             self.fail(f"{x:g} is not in {bracket}{self.lo:g}, {self.hi:g}]", param, ctx)
         return x
+
+
+def echo(line: str) -> None:
+    """One line on standard output; a standard output that cannot be written (a full device) is a
+    :class:`~pkmdyn.errors.PkmdynError` that says so."""
+    try:
+        click.echo(line)
+    except OSError as exc:
+        raise PkmdynError(f"standard output: cannot write ({exc.strerror or type(exc).__name__})") from None
+
+
+def list_files(files: Mapping[str, Path]) -> None:
+    """Print ``label: path`` for every file of a run; given to a run as its ``report``, so that the
+    listing is written before the files move into place (:func:`pkmdyn.io.output_dir`)."""
+    for name, path in files.items():
+        echo(f"{name}: {path}")
+
+
+def echo_lines(lines: list[str]) -> None:
+    """Print each line (a run's ``report``, like :func:`list_files`)."""
+    for line in lines:
+        echo(line)

@@ -20,7 +20,7 @@ import click
 import numpy as np
 
 from ..errors import MotionError, ParameterError
-from ._groups import PATH_IN, hip, pdm
+from ._groups import PATH_IN, hip, list_files, pdm
 from ._groups import FiniteFloat
 
 __all__ = ["hip_closed_loop", "run_control", "HIP_CONTROLLERS", "PDM_CONTROLLERS", "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
@@ -345,7 +345,8 @@ def _loop_method(settings: dict[str, Any]) -> str:
     return str(loop_settings(settings).method)
 
 
-def _write(setup: _Setup, tr: Any, settings: dict[str, Any], out: Path, plots: bool, gains_path: Path | None) -> dict[str, Path]:
+def _write(setup: _Setup, tr: Any, settings: dict[str, Any], out: Path, plots: bool, gains_path: Path | None,
+           inputs: dict[str, Path | None]) -> dict[str, Path]:
     from ..io import output_dir, write_csv, write_json
 
     with warnings.catch_warnings():
@@ -372,22 +373,27 @@ def _write(setup: _Setup, tr: Any, settings: dict[str, Any], out: Path, plots: b
         "motion": setup.motion_source,
         "gains_file": str(gains_path) if gains_path else "built-in",
     }
-    with output_dir(out) as tmp:
+    with output_dir(out, inputs=inputs) as tmp:
         write_csv(tmp / "control.csv", cols)
         write_json(tmp / "summary.json", summary)
         names = ["control.csv", "summary.json"]
         if plots:
             names += [p.name for p in _plots(setup, tr, tmp)]
-    return {n: out / n for n in names}
+        files = {n: out / n for n in names}
+        list_files(files)
+    return files
 
 
 def _command(machine: str, controller: str, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir) -> None:
+    from ..io import check_output_dir
+
     if motion_path is not None and cycles != 1.0:
         raise click.UsageError("--cycles applies to the built-in motion, not to --motion")
+    inputs = {"--params": params_path, "--plant-params": plant_path, "--motion": motion_path, "--gains": gains_path}
+    check_output_dir(out_dir, inputs)
     setup, tr, settings = run_control(machine, controller, params_path, plant_path, motion_path, cycles, gains_path,
                                       progress=True)
-    for name, path in _write(setup, tr, settings, out_dir, not no_plots, gains_path).items():
-        click.echo(f"{name}: {path}")
+    _write(setup, tr, settings, out_dir, not no_plots, gains_path, inputs)
 
 
 def _options(f: Any) -> Any:

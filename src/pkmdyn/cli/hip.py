@@ -11,7 +11,7 @@ from pathlib import Path
 import click
 
 from ._groups import PATH_IN as _PATH_IN
-from ._groups import FiniteFloat, hip
+from ._groups import FiniteFloat, echo, hip, list_files
 
 _LIMIT_HELP = ("Raise or lower a plausibility limit, KEY=VALUE (repeatable; overrides [limits] of the parameter "
                "file). Keys: max_samples, max_load_N, max_abs_angle_deg, max_slider_speed_m_s, "
@@ -48,11 +48,9 @@ def hip_run(params_path, motion_path, cycles, samples_per_cycle, motion_model, s
             "--cycles, --samples-per-cycle and --motion-model apply to the built-in motion, not to --motion")
     files, messages = run_hip(out_dir, params_path, motion_path, cycles, samples_per_cycle,
                               make_plots=not no_plots, progress=True, singularity_threshold=singularity_threshold,
-                              fmt=fmt, limits=tuple(limits), motion_model=motion_model)
+                              fmt=fmt, limits=tuple(limits), motion_model=motion_model, report=list_files)
     for m in messages:
         click.echo(f"pkmdyn: warning: {m}", err=True)
-    for name, path in files.items():
-        click.echo(f"{name}: {path}")
 
 
 @hip.command("profile")
@@ -75,4 +73,4 @@ def hip_profile(cycles, samples_per_cycle, limits, out_path) -> None:
     motion = iso14242_motion(cycles, samples_per_cycle, max_samples=max_samples)
     with atomic_file(out_path) as tmp:
         write_motion_csv(tmp, motion)
-    click.echo(f"motion: {out_path}")
+        echo(f"motion: {out_path}")

@@ -9,7 +9,7 @@ import click
 from ..identify import hip_excite as _ex
 from ..identify.hip_run import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW
 from ._groups import PATH_IN as _PATH_IN
-from ._groups import hip
+from ._groups import echo_lines, hip
 from ._groups import FiniteFloat
 
 
@@ -35,12 +35,8 @@ def hip_identify(measured_path, params_path, which, sg_window, sg_order, rank_to
     identification.json, torques.csv and plots."""
     from ..identify.hip_run import run_identify
 
-    files, lines = run_identify(out_dir, measured_path, params_path, which, sg_window, sg_order, rank_tol,
-                                make_plots=not no_plots)
-    for line in lines:
-        click.echo(line)
-    for name, path in files.items():
-        click.echo(f"{name}: {path}")
+    run_identify(out_dir, measured_path, params_path, which, sg_window, sg_order, rank_tol, make_plots=not no_plots,
+                 report=echo_lines)
 
 
 _ANGLE = FiniteFloat(-180.0, 180.0)
@@ -96,8 +92,5 @@ def hip_excite(params_path, which, period_s, harmonics, cycles, samples_per_cycl
 
     limits = ExcitationLimits(alpha_range_deg, beta_range_deg, gamma_range_deg, load_range, max_slider_speed_m_s,
                               max_slider_accel_m_s2, max_cond_j)
-    lines = run_excite(out_path, params_path, which, limits, period_s, harmonics, cycles, samples_per_cycle,
-                       iterations, starts, seed, design_samples, progress=True)
-    for line in lines:
-        click.echo(line)
-    click.echo(f"motion: {out_path}")
+    run_excite(out_path, params_path, which, limits, period_s, harmonics, cycles, samples_per_cycle,
+               iterations, starts, seed, design_samples, progress=True, report=echo_lines)

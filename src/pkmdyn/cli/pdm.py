@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ._groups import PATH_IN, pdm
+from ._groups import PATH_IN, list_files, pdm
 
 
 @pdm.command("run")
@@ -34,6 +34,4 @@ def pdm_run(params_path: Path | None, motion_path: Path | None, stroke_x_m: floa
 
     trajectory = {"stroke_x_m": stroke_x_m, "stroke_y_m": stroke_y_m, "stroke_alpha_deg": stroke_alpha_deg,
                   "stroke_gamma_deg": stroke_gamma_deg, "period_s": period_s, "peak_y_accel_m_s2": peak_y_accel}
-    summary = run_pdm(params_path, motion_path, out_dir, plots=not no_plots, trajectory=trajectory)
-    for label, path in summary["files"].items():
-        click.echo(f"{label}: {path}")
+    run_pdm(params_path, motion_path, out_dir, plots=not no_plots, trajectory=trajectory, report=list_files)

@@ -326,6 +326,7 @@ def run_hip(
     limits: dict[str, Any] | tuple[str, ...] | None = None,
     chunk: int = RUN_CHUNK,
     motion_model: str = "default",
+    report: Callable[[dict[str, Path]], None] | None = None,
 ) -> tuple[dict[str, Path], list[str]]:
     """Run the whole job; returns the files written and the warnings raised on the way.
 
@@ -334,7 +335,9 @@ def run_hip(
     ISO 14242-1 cycle model of the built-in motion (:func:`pkmdyn.profiles.iso_fit.iso_cycle_preset`). Every input (parameters,
     motion, options, limits on load and angles) is checked before ``out_dir`` is touched; the
     slider speed and acceleration limits are checked block by block as the kinematics are
-    computed. On any error nothing is left at or beside ``out_dir``.
+    computed. On any error nothing is left at or beside ``out_dir``. ``report`` is called with
+    the files' final paths before they move into place (:func:`pkmdyn.io.output_dir`), so that a
+    listing that cannot be printed leaves ``out_dir`` as it was.
     """
     singularity_threshold = _finite_option("--singularity-threshold", singularity_threshold, 0.0, 1.0)
     if fmt not in TABLE_FORMATS:
@@ -376,7 +379,7 @@ def run_hip(
     near = 0
     worst = (0.0, 0.0, 0)  # cond, t, sample
     other: dict[str, None] = {}
-    with output_dir(out_dir) as tmp:
+    with output_dir(out_dir, inputs={"--params": params_path, "--motion": motion_path}) as tmp:
         files = {"results": tmp / ("results.csv" if fmt == "csv" else "results.parquet"), "summary": tmp / "summary.json"}
         blocks = _motion_blocks(motion, n, cycles, cycle, chunk)
         bar = tqdm(blocks, total=-(-n // chunk), desc="hip: kinematics + dynamics", unit="block",
@@ -426,6 +429,8 @@ def run_hip(
             files["torque_parts_plot"] = plots.plot_torque_parts(data, tmp / "torque_parts.png")
             files["torque_plot"] = plots.plot_torques(data, tmp / "torques.png")
             files["friction_plot"] = plots.plot_friction_vs_load(data, tmp / "friction_vs_load.png")
-    out = Path(out_dir)
-    return {k: out / p.name for k, p in files.items()}, messages
+        final = {k: Path(out_dir) / p.name for k, p in files.items()}
+        if report is not None:
+            report(final)
+    return final, messages
 

@@ -14,6 +14,7 @@ computed before the output folder is touched, and the folder is written whole th
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +24,7 @@ from tqdm import tqdm
 
 from ...analysis.mobility import analyse
 from ...errors import PkmdynError
-from ...io import output_dir, write_csv, write_json
+from ...io import check_output_dir, output_dir, write_csv, write_json
 from ...profiles.pdm_motion import PdmMotion, cycloidal_motion, read_pdm_motion
 from .dynamics import JOINTS, REDUNDANT_LABELS, PdmReactions, inverse_dynamics
 from .kinematics import BODY_NAMES, PdmKinematics, inverse_kinematics, mechanism_joints
@@ -235,7 +236,8 @@ def _summary(cols: dict[str, Array], n: int, mob: dict[str, Any], files: dict[st
 
 
 def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_dir: str | Path,
-            plots: bool = True, trajectory: dict[str, float | None] | None = None) -> dict[str, Any]:
+            plots: bool = True, trajectory: dict[str, float | None] | None = None,
+            report: Callable[[dict[str, Path]], None] | None = None) -> dict[str, Any]:
     """Run the PDM kinematics and dynamics and write every result file into ``out_dir``.
 
     ``params_path``: TOML parameters (None: built-in defaults); ``motion_path``: motion CSV
@@ -243,8 +245,12 @@ def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_
     ``trajectory``, the keyword arguments of :func:`trajectory_with`). Returns the summary of
     ``summary.json`` with ``files`` as ``{label: path}``. User errors raise
     :class:`~pkmdyn.errors.PkmdynError` subclasses naming the file (full path), key, row,
-    sample time or limb; they are raised before ``out_dir`` is touched.
+    sample time or limb; they are raised before ``out_dir`` is touched (which must pass the output
+    rule, :func:`pkmdyn.io.check_output_dir`, checked first). ``report`` is called with the files'
+    final paths before they move into place.
     """
+    inputs = {"--params": params_path, "--motion": motion_path}
+    check_output_dir(out_dir, inputs)
     model = load_params(params_path)
     overrides = {k: v for k, v in (trajectory or {}).items() if v is not None}
     if motion_path is None:
@@ -258,14 +264,16 @@ def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_
     cols, npz = _compute(model, motion)
     mob = mobility_summary(model, motion.q[0])
     ws = reachable_workspace(model)
-    with output_dir(out_dir) as out:  # only now: a user error above leaves nothing behind
+    with output_dir(out_dir, inputs=inputs) as out:  # only now: a user error above leaves nothing behind
         files = _write(model, out, cols, npz, mob, ws, plots)
         summ = _summary(cols, len(motion), mob, files)
         files["summary"] = out / "summary.json"
         summ["files"] = sorted(p.name for p in files.values())
         write_json(files["summary"], summ)
-    final = Path(out_dir)
-    return {**summ, "files": {k: final / v.name for k, v in files.items()}}
+        final = {k: Path(out_dir) / v.name for k, v in files.items()}
+        if report is not None:
+            report(final)
+    return {**summ, "files": final}
 
 
 def _write(model: PdmModel, out: Path, cols: dict[str, Array], npz: dict[str, Array], mob: dict[str, Any],
