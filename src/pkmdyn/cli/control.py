@@ -51,6 +51,7 @@ class _Setup:
     params_source: str
     plant_source: str
     motion_source: str
+    span_s: float = 0.0  #: the motion as a whole [s]: a full cycle of a built-in motion even for a part of one
 
 
 # ----------------------------------------------------------------------------- machines
@@ -102,8 +103,9 @@ def _hip_setup(params: Path | None, plant_params: Path | None, motion: Path | No
                                   f"max_load_N = {lim:g} N ([limits] of the parameter file)")
         fn = hermite_motion(mo.t, mo.angles, mo.rates, mo.accels, mo.load)
         duration, source = float(mo.t[-1] - mo.t[0]), str(motion)
+    span = max(duration, IsoCycle().period_s) if motion is None else duration
     return _Setup("hip", minimal, model, plant, fn, duration, True, str(params or "built-in parameters"),
-                  plant_source, source)
+                  plant_source, source, span)
 
 
 def _pdm_setup(params: Path | None, plant_params: Path | None, motion: Path | None, cycles: float,
@@ -139,8 +141,9 @@ def _pdm_setup(params: Path | None, plant_params: Path | None, motion: Path | No
         mo = read_pdm_motion(motion)
         fn = hermite_motion(mo.t, mo.q, mo.qd, mo.qdd, None)
         duration, source = float(mo.t[-1] - mo.t[0]), str(motion)
+    span = max(duration, float(model.trajectory.period_s)) if motion is None else duration
     return _Setup("pdm", minimal, model, plant, fn, duration, False, str(params or "built-in parameters"),
-                  plant_source, source)
+                  plant_source, source, span)
 
 
 # ----------------------------------------------------------------------------- run
@@ -160,6 +163,7 @@ def run_control(machine: str, controller: str, params: Path | None = None, plant
     settings = load_settings(machine, gains_path)
     ls = loop_settings(settings)
     steps = check_timing(ls.cycle_s, ls.step_s)
+    _check_filters(ls, gains_path)
     if steps > MAX_STEPS_PER_CYCLE:
         raise ParameterError(f"[timing] integration_step_s = {ls.step_s:g} s: {steps:g} steps per control cycle, above "
                              f"the limit {MAX_STEPS_PER_CYCLE}")
@@ -183,11 +187,50 @@ def _run_control(machine: str, controller: str, params: Path | None, plant_param
         raise MotionError(f"motion: {setup.duration:g} s is {n_cycles:g} control cycles of {ls.cycle_s:g} s "
                           f"({n_cycles * steps:g} integration steps), above the limit {MAX_CONTROL_CYCLES:,} cycles "
                           f"({50 * MAX_CONTROL_CYCLES:,} steps)")
+    _check_encoder(setup, ls, settings, gains_path)
     n = len(setup.verbs.ACTUATORS) if controller == "pid" else len(setup.verbs.COORDINATES)
     g = gains(settings, controller, n)
     tracking = track(setup.verbs, setup.model, setup.plant_model, setup.motion, setup.duration, controller, g, ls,
                      setup.has_load, progress=progress, joint_accelerations=True)
     return setup, tracking, settings
+
+
+#: fewest encoder counts over the largest actuator travel of a run
+MIN_ENCODER_COUNTS = 10
+
+
+def _check_filters(ls: Any, gains_path: Path | None) -> None:
+    """The encoder filters must sit below the Nyquist frequency of the control cycle: a
+    first-order filter at or above it does not filter a signal sampled once per cycle."""
+    nyquist = 0.5 / ls.cycle_s
+    where = f"{gains_path}: [sensors]" if gains_path is not None else "built-in settings: [sensors]"
+    for key in ("velocity_cutoff_Hz", "acceleration_cutoff_Hz"):
+        fc = float(getattr(ls, key))
+        if fc >= nyquist:
+            raise ParameterError(f"{where} {key}: {fc:g} Hz is at or above {nyquist:g} Hz, the Nyquist frequency of the "
+                                 f"{ls.cycle_s:g} s control cycle, where a filter cannot act (lower it; 0: no filter)")
+
+
+def _check_encoder(setup: _Setup, ls: Any, settings: dict[str, Any], gains_path: Path | None) -> None:
+    """The encoders must resolve the motion: at least :data:`MIN_ENCODER_COUNTS` counts over the
+    largest actuator travel of the motion (a whole cycle of a built-in motion, even when the run
+    is a part of one; estimated on up to 20,001 samples)."""
+    span = max(setup.span_s, setup.duration)
+    n = int(min(20_001, max(3, span / ls.cycle_s + 1)))
+    t = np.linspace(0.0, span, n)
+    q, qd = setup.motion(t)[:2]
+    sd = np.einsum("kji,kj->ki", setup.verbs.actuator_map(setup.model, q), qd)
+    s = np.concatenate([np.zeros((1, sd.shape[1])), np.cumsum(0.5 * (sd[1:] + sd[:-1]) * np.diff(t)[:, None], axis=0)])
+    travel = float(np.max(np.ptp(s, axis=0)))
+    res = float(ls.encoder_resolution)
+    if travel > 0 and res * MIN_ENCODER_COUNTS > travel:
+        unit = "rad" if setup.machine == "hip" else "m"
+        where = f"{gains_path}: [sensors]" if gains_path is not None else "built-in settings: [sensors]"
+        counts = settings["sensors"]["encoder_counts_per_turn"]
+        raise ParameterError(
+            f"{where} encoder_counts_per_turn: {counts:g} counts per turn make one count {res:.3g} {unit} of actuator "
+            f"travel, while the motion moves an actuator at most {travel:.3g} {unit}: fewer than "
+            f"{MIN_ENCODER_COUNTS} counts, too coarse to measure it (raise encoder_counts_per_turn)")
 
 
 def hip_closed_loop(duration_s: float = 10.0, controller: str = "augmented-pd",

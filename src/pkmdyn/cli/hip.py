@@ -15,7 +15,7 @@ from ._groups import FiniteFloat, echo, hip, list_files
 
 _LIMIT_HELP = ("Raise or lower a plausibility limit, KEY=VALUE (repeatable; overrides [limits] of the parameter "
                "file). Keys: max_samples, max_load_N, max_abs_angle_deg, max_slider_speed_m_s, "
-               "max_slider_acceleration_m_s2.")
+               "max_slider_acceleration_m_s2, max_duration_s.")
 
 
 @hip.command("run")

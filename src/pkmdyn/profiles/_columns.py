@@ -20,7 +20,11 @@ Array = NDArray[np.float64]
 
 
 def require_increasing(path: str | Path, t: Array) -> None:
-    """Time ``t_s`` must increase strictly from row to row."""
+    """Time ``t_s`` must increase strictly from row to row, over at least two rows (one sample
+    has no duration)."""
+    if t.shape[0] < 2:
+        raise MotionError(f"{path}: a motion needs at least 2 data rows, found {t.shape[0]} (one sample has no "
+                          "duration)")
     bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:
         r = int(bad[0]) + 2

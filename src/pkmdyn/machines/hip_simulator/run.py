@@ -362,12 +362,15 @@ def run_hip(
         for name, w in (("alpha", cycle.fe), ("beta", cycle.aa), ("gamma", cycle.ier)):
             check_limit(max(abs(w.max_deg), abs(w.min_deg)), lim.max_abs_angle_deg, f"built-in motion: |{name}|",
                         "max_abs_angle_deg", "deg")
+        check_limit(cycles * cycle.period_s, lim.max_duration_s, "built-in motion: duration", "max_duration_s", "s")
         window = min(n, samples_per_cycle + 1)
         source = f"built-in ISO 14242-1 model ({motion_model}), {cycles:g} cycle(s)"
         note = f"first cycle of {cycles:g} (every cycle is the same)" if cycles > 1 else ""
     else:
         motion = read_motion_csv(motion_path, max_rows=lim.max_samples)
         n = len(motion)
+        check_limit(float(motion.t[-1] - motion.t[0]), lim.max_duration_s, f"{motion_path}: duration",
+                    "max_duration_s", "s")
         _check_motion_limits(lambda k: f"{motion_path}: row {k + 1}", motion, lim)
         window = n
         source = str(motion_path)
