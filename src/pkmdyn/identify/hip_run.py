@@ -23,7 +23,7 @@ from ..machines.hip_simulator.params import default_params_dict
 from ..params_util import read_toml
 from ..profiles.orientation import write_motion_csv
 from ._toml import dumps_tables
-from ._report import identification_report
+from ._report import MIN_EXPLAINED_PERCENT, explained_percent, fit_failure, identification_report
 from .hip import FRICTION_ATTR, TORQUE_COLUMNS, Which, consistency_transform, identified_description, identify_hip, read_measured_csv
 from .hip_excite import ExcitationLimits, design_excitation, excitation_motion
 
@@ -115,10 +115,16 @@ def run_identify(
     _check_identify_options(which, sg_window, sg_order, rank_tol)
     inputs = {"--measured": measured_path, "--params": params_path}
     check_output_dir(out_dir, inputs)
-    model = load_params(params_path)
+    # the parameter file is read once (it may be a pipe)
     description = read_toml(params_path) if params_path is not None else default_params_dict()
+    model = model_from_dict(copy.deepcopy(description), str(params_path) if params_path is not None else
+                            "built-in parameters")
     description = complete_description(description, model)
     motion, tau, deriv = read_measured_csv(measured_path, sg_window, sg_order)
+    for i, name in enumerate(TORQUE_COLUMNS):
+        if not np.any(tau[:, i]):
+            raise MotionError(f"{measured_path}: column {name!r} is zero in every row: no measured torque to "
+                              "identify from")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
@@ -131,6 +137,9 @@ def run_identify(
     for w in caught:  # anything else the solvers said, not printed mid-run
         if not issubclass(w.category, RuntimeWarning):
             warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    failure = fit_failure(result.base, result.estimate, TORQUE_COLUMNS, tau, tau - result.tau_identified)
+    if failure is not None:  # a meaningless fit is an error, never a result
+        raise MotionError(f"{measured_path}: {failure}")
     identified = identified_description(description, result)
     T, _, _ = consistency_transform(result.names)
     report_doc = identification_report(
@@ -144,6 +153,8 @@ def run_identify(
         "samples": len(motion),
         "derivatives": deriv,
         **report_doc,
+        "explained_percent": dict(zip(TORQUE_COLUMNS, explained_percent(tau, tau - result.tau_identified).tolist())),
+        "minimum_explained_percent": MIN_EXPLAINED_PERCENT,
         "held_at_parameter_file_values": list(HELD_FIXED),
     }
     notes = {}
