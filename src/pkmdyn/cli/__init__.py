@@ -22,6 +22,10 @@ from ._groups import cli
 __all__ = ["main", "cli", "run"]
 
 
+#: a group called without a command (click >= 8.2 raises this; older versions print the help)
+_NO_ARGS_IS_HELP: type[BaseException] = getattr(click.exceptions, "NoArgsIsHelpError", type("_Never", (Exception,), {}))
+
+
 def _sigterm(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
 
@@ -43,6 +47,9 @@ def main(argv: list[str] | None = None) -> int:
             cli.invoke(ctx)
     except click.exceptions.Exit as exc:
         return int(exc.exit_code)
+    except _NO_ARGS_IS_HELP as exc:  # `pkmdyn`, `pkmdyn hip`: the group's help, as --help prints it
+        click.echo(exc.ctx.get_help() if exc.ctx is not None else cli.get_help(click.Context(cli)))
+        return 0
     except (KeyboardInterrupt, click.exceptions.Abort):
         click.echo("pkmdyn: interrupted; --out holds either the whole new run or what it held before", err=True)
         return 130

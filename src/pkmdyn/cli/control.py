@@ -19,7 +19,7 @@ from typing import Any
 import click
 import numpy as np
 
-from ..errors import MotionError, ParameterError
+from ..errors import MotionError, ParameterError, PkmdynError
 from ._groups import PATH_IN, hip, list_files, pdm
 from ._groups import FiniteFloat
 
@@ -179,7 +179,7 @@ def _run_control(machine: str, controller: str, params: Path | None, plant_param
                  cycles: float, gains_path: Path | None, progress: bool, settings: dict[str, Any], ls: Any,
                  steps: int) -> tuple[_Setup, Any, dict[str, Any]]:
     from ..control import gains
-    from ..simulate import track
+    from ..simulate import DivergenceError, track
 
     setup = (_hip_setup if machine == "hip" else _pdm_setup)(params, plant_params, motion, cycles, settings)
     n_cycles = setup.duration / ls.cycle_s
@@ -190,9 +190,79 @@ def _run_control(machine: str, controller: str, params: Path | None, plant_param
     _check_encoder(setup, ls, settings, gains_path)
     n = len(setup.verbs.ACTUATORS) if controller == "pid" else len(setup.verbs.COORDINATES)
     g = gains(settings, controller, n)
-    tracking = track(setup.verbs, setup.model, setup.plant_model, setup.motion, setup.duration, controller, g, ls,
-                     setup.has_load, progress=progress, joint_accelerations=True)
+    try:
+        tracking = track(setup.verbs, setup.model, setup.plant_model, setup.motion, setup.duration, controller, g,
+                         ls, setup.has_load, progress=progress, joint_accelerations=True)
+    except DivergenceError as exc:
+        raise DivergenceError(_divergence_message(setup, controller, exc), exc.coordinate, exc.error, exc.limit,
+                              exc.t) from None
+    if controller == "feedforward":
+        unstable = _open_loop_growth(setup)
+        if unstable is not None:
+            warnings.warn(f"feedforward alone: {unstable}; this run stayed within the divergence limits, a longer "
+                          "one may not (use a feedback controller)", ControlWarning, stacklevel=2)
     return setup, tracking, settings
+
+
+class ControlWarning(UserWarning):
+    """A run that succeeded but whose result should be read with care (printed by the command)."""
+
+
+#: clinical names of the hip's Euler angles (FE, AA, IER), for messages
+_HIP_NAMES = {"alpha": "alpha (FE)", "beta": "beta (AA)", "gamma": "gamma (IER)"}
+
+
+def _divergence_message(setup: _Setup, controller: str, exc: Any) -> str:
+    """The divergence said in the coordinate's name and in the unit of the settings file's
+    ``[run] divergence_limit_*`` key (deg for angles, m for lengths); with feedforward on an
+    open-loop unstable plant, why."""
+    if exc.coordinate is None:
+        text = str(exc)
+    else:
+        base, unit = setup.verbs.COORDINATES[exc.coordinate].rsplit("_", 1)
+        name = _HIP_NAMES.get(base, base) if setup.machine == "hip" else base
+        scale, shown, key = (180 / np.pi, "deg", "divergence_limit_deg") if unit == "rad" else (1.0, "m",
+                                                                                                  "divergence_limit_m")
+        err = f"{exc.error * scale:.4g} {shown}" if np.isfinite(exc.error) else "not finite"
+        text = (f"run diverged at t = {exc.t:.4f} s: the tracking error of {name} is {err}, beyond "
+                f"[run] {key} = {exc.limit * scale:.4g} {shown}")
+    if controller == "feedforward":
+        unstable = _open_loop_growth(setup)
+        if unstable is not None:
+            text += f"; feedforward alone cannot hold it: {unstable} (use a feedback controller)"
+    return text
+
+
+def _open_loop_growth(setup: _Setup) -> str | None:
+    """Whether the plant, held at the efforts that keep it at the start of the reference, is
+    open-loop unstable there: the eigenvalues of the linearised forward dynamics (central
+    differences of the ``forward_dynamics`` verb); a sentence naming the fastest growth, or None."""
+    v, model = setup.verbs, setup.plant_model
+    q, qd = (np.asarray(a, dtype=float)[:1] for a in setup.motion(np.zeros(1))[:2])
+    load_t = setup.motion(np.zeros(1))[3]
+    load = None if load_t is None else np.asarray(load_t, dtype=float)[:1]
+    zero = np.zeros_like(q)
+    try:
+        u = v.inverse_dynamics(model, q, zero, zero, load)
+        nq = q.shape[1]
+        A = np.zeros((2 * nq, 2 * nq))
+        A[:nq, nq:] = np.eye(nq)
+        for j in range(2 * nq):
+            h = 1e-6 * (1.0 + abs(float(q[0, j % nq])))
+            d = np.zeros_like(q)
+            d[0, j % nq] = h
+            if j < nq:
+                f = (v.forward_dynamics(model, q + d, zero, u, load) - v.forward_dynamics(model, q - d, zero, u, load))
+            else:
+                f = (v.forward_dynamics(model, q, zero + d, u, load) - v.forward_dynamics(model, q, zero - d, u, load))
+            A[nq:, j] = f[0] / (2 * h)
+        rate = float(np.max(np.linalg.eigvals(A).real))
+    except (PkmdynError, np.linalg.LinAlgError, FloatingPointError, ValueError):
+        return None
+    if not (np.isfinite(rate) and rate > 1e-6):
+        return None
+    return (f"the {setup.machine.upper() if setup.machine == 'pdm' else 'hip simulator'} is open-loop unstable at the "
+            f"start pose (an error grows by e every {1 / rate:.3g} s)")
 
 
 #: fewest encoder counts over the largest actuator travel of a run
@@ -434,8 +504,15 @@ def _command(machine: str, controller: str, params_path, plant_path, motion_path
         raise click.UsageError("--cycles applies to the built-in motion, not to --motion")
     inputs = {"--params": params_path, "--plant-params": plant_path, "--motion": motion_path, "--gains": gains_path}
     check_output_dir(out_dir, inputs)
-    setup, tr, settings = run_control(machine, controller, params_path, plant_path, motion_path, cycles, gains_path,
-                                      progress=True)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ControlWarning)
+        setup, tr, settings = run_control(machine, controller, params_path, plant_path, motion_path, cycles,
+                                          gains_path, progress=True)
+    for w in caught:
+        if issubclass(w.category, ControlWarning):
+            click.echo(f"pkmdyn: warning: {w.message}", err=True)
+        else:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     _write(setup, tr, settings, out_dir, not no_plots, gains_path, inputs)
 
 

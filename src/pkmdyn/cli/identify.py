@@ -6,8 +6,8 @@ from pathlib import Path
 
 import click
 
-from ..identify import hip_excite as _ex
-from ..identify.hip_run import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW
+from ..identify import bounds as _ex
+from ..identify.bounds import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW
 from ._groups import PATH_IN as _PATH_IN
 from ._groups import echo_lines, hip
 from ._groups import FiniteFloat

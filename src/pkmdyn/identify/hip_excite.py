@@ -38,17 +38,8 @@ _DENSE = 4000  # samples per period of the final limit check
 _STRETCH_MAX = 1e6  # a period stretched further than this counts as unreachable
 
 #: bounds of the design, checked by :func:`design_excitation` (the command line states them)
-MAX_HARMONICS = 6
-MAX_DESIGN_SAMPLES = 1000
-MAX_ITERATIONS = 200
-MAX_STARTS = 5
-#: most cost evaluations x design samples of one design (:func:`~pkmdyn.identify._excite.max_evaluations`)
-MAX_WORK = 1_000_000
-MIN_PERIOD_S, MAX_PERIOD_S = 1e-3, 3600.0
-MAX_LOAD_N = 1e5
-MAX_SLIDER_SPEED_M_S = 100.0
-MAX_SLIDER_ACCEL_M_S2 = 1e5
-MAX_COND_J = 1e6
+from .bounds import (MAX_COND_J, MAX_DESIGN_SAMPLES, MAX_HARMONICS, MAX_ITERATIONS, MAX_LOAD_N,  # noqa: E402
+                     MAX_PERIOD_S, MAX_SLIDER_ACCEL_M_S2, MAX_SLIDER_SPEED_M_S, MAX_STARTS, MAX_WORK, MIN_PERIOD_S)
 
 
 @dataclass(frozen=True)

@@ -29,8 +29,7 @@ from .hip_excite import ExcitationLimits, design_excitation, excitation_motion
 
 __all__ = ["run_identify", "run_excite", "complete_description", "HELD_FIXED", "MAX_EXCITE_ROWS"]
 
-#: most rows of an excitation motion file
-MAX_EXCITE_ROWS = 2_000_000
+from .bounds import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW  # noqa: E402  (the bounds, stated by the CLI)
 
 #: what every identification holds at the parameter file's values
 HELD_FIXED = (
@@ -60,9 +59,6 @@ _KEY_OF = {
 }
 
 
-#: bounds of ``hip identify``'s options and of the measured values
-MAX_SG_WINDOW = 10001
-MAX_SG_ORDER = 20
 
 
 def _check_identify_options(which: str, sg_window: int, sg_order: int, rank_tol: float) -> None:

@@ -47,7 +47,16 @@ Array = NDArray[np.float64]
 
 
 class DivergenceError(PkmdynError):
-    """A closed-loop run that went unstable; the message names the time."""
+    """A closed-loop run that went unstable; the message names the time.
+
+    Where a tracking error crossed its limit, ``coordinate`` is its index, ``error`` and
+    ``limit`` the values in SI (rad or m) and ``t`` the time [s], so that a caller who knows the
+    coordinates' names and units can say it in them."""
+
+    def __init__(self, message: str, coordinate: int | None = None, error: float = float("nan"),
+                 limit: float = float("nan"), t: float = float("nan")) -> None:
+        super().__init__(message)
+        self.coordinate, self.error, self.limit, self.t = coordinate, error, limit, t
 
 
 @dataclass(frozen=True)
@@ -250,7 +259,8 @@ def closed_loop(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_
                 e = q[bad] - q_ref[k, bad]
                 raise DivergenceError(
                     f"run diverged at t = {ref.t[k]:.4f} s: tracking error of coordinate {bad + 1} is "
-                    f"{e:.3g}, beyond its divergence limit {div[bad]:g}")
+                    f"{e:.3g}, beyond its divergence limit {div[bad]:g}", bad, float(e), float(div[bad]),
+                    float(ref.t[k]))
             _actuate(k, effort(controller, ref, k, y, memory), lim, u, out_u, sat)
             try:
                 hold_interval(plant, q, qd, u, loads[2 * k * steps:2 * (k + 1) * steps + 1], dt, work)
