@@ -20,7 +20,7 @@ import click
 import numpy as np
 
 from ..errors import MotionError, ParameterError, PkmdynError
-from ._groups import PATH_IN, hip, list_files, pdm
+from ._groups import PATH_IN, announce_compiles, hip, list_files, pdm
 from ._groups import FiniteFloat
 
 __all__ = ["hip_closed_loop", "run_control", "HIP_CONTROLLERS", "PDM_CONTROLLERS", "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
@@ -500,6 +500,7 @@ def _write(setup: _Setup, tr: Any, settings: dict[str, Any], out: Path, plots: b
 def _command(machine: str, controller: str, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir) -> None:
     from ..io import check_output_dir
 
+    announce_compiles()
     if motion_path is not None and cycles != 1.0:
         raise click.UsageError("--cycles applies to the built-in motion, not to --motion")
     inputs = {"--params": params_path, "--plant-params": plant_path, "--motion": motion_path, "--gains": gains_path}
