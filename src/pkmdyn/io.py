@@ -15,6 +15,7 @@ write beside the target and move into place only on success.
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import os
@@ -524,11 +525,16 @@ def read_csv_columns(
         raise MotionError(f"expected a file path, got {type(path).__name__}")
     path = Path(path)
     try:
-        fh = path.open("r", encoding="utf-8-sig", newline="")
-        with path.open("rb") as raw:
-            head = raw.read(4096)
+        # opened once and read once: a pipe (``--motion <(cat m.csv)``) can be read only once
+        raw = path.open("rb")
     except OSError as exc:
         raise MotionError(f"{path}: cannot read file ({_os_reason(exc)})") from None
+    try:
+        head = raw.peek(4096)[:4096]
+    except OSError as exc:
+        raw.close()
+        raise MotionError(f"{path}: cannot read file ({_os_reason(exc)})") from None
+    fh = io.TextIOWrapper(raw, encoding="utf-8-sig", newline="")
     with fh:
         check_text_encoding(path, head, MotionError)
         reader = csv.reader(fh)

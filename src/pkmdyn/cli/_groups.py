@@ -114,3 +114,40 @@ def announce_compiles() -> None:
 
 _LISTENING = False
 _TOLD = False
+
+
+def write_default_file(machine: str, control: bool, out_path: Path) -> None:
+    """Write a machine's built-in parameter file (or, with ``control``, its control settings) to
+    ``out_path`` for a user to edit, under the output rule (:func:`pkmdyn.io.atomic_file`)."""
+    from ..io import atomic_file
+
+    if control:
+        from ..control import default_settings_text
+
+        text, what = default_settings_text(machine), "control settings"
+    elif machine == "hip":
+        from ..machines.hip_simulator.params import DEFAULT_PARAMS_TEXT
+
+        text, what = DEFAULT_PARAMS_TEXT, "parameters"
+    else:
+        from ..machines.pdm4.params import default_params_path
+
+        text, what = default_params_path().read_text(encoding="utf-8"), "parameters"
+    with atomic_file(out_path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+        echo(f"{what}: {out_path}")
+
+
+def params_command(group: click.Group, machine: str, option: str) -> None:
+    """Register ``pkmdyn MACHINE params`` on ``group``."""
+
+    @group.command("params")
+    @click.option("--control", is_flag=True,
+                  help=f"Write the control settings ({option} control --gains) instead of the parameter file.")
+    @click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
+                  help="File to write (e.g. params.toml); an existing file is replaced only if pkmdyn wrote it and "
+                       "nobody changed it since.")
+    def params(control: bool, out_path: Path) -> None:
+        """Write the built-in parameter file (TOML), every key with its unit and a comment, to edit and pass
+        as --params (or, with --control, the control settings to pass as --gains)."""
+        write_default_file(machine, control, out_path)

@@ -11,6 +11,7 @@ benchmark.
 
 from __future__ import annotations
 
+import copy
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -77,10 +78,11 @@ def _hip_setup(params: Path | None, plant_params: Path | None, motion: Path | No
     from ..params_util import read_toml
     from ..profiles.iso14242 import IsoCycle, angle_wave, iso_load
 
-    model = load_params(params)
-    plant, plant_source = _plant_model(
-        load_params, model_from_dict, lambda: read_toml(params) if params is not None else default_params_dict(),
-        params, plant_params, settings)
+    # each file is read once (it may be a pipe)
+    description = read_toml(params) if params is not None else default_params_dict()
+    model = model_from_dict(copy.deepcopy(description), str(params) if params is not None else "built-in parameters")
+    plant, plant_source = _plant_model(load_params, model_from_dict, lambda: description, params, plant_params,
+                                       settings)
     if motion is None:
         cyc = IsoCycle()
 
@@ -115,10 +117,12 @@ def _pdm_setup(params: Path | None, plant_params: Path | None, motion: Path | No
     from ..params_util import read_toml
     from ..profiles.cycloidal import cycloidal
 
-    model = load_params(params)
-    plant, plant_source = _plant_model(
-        load_params, params_from_dict, lambda: read_toml(params if params is not None else default_params_path()),
-        params, plant_params, settings)
+    # each file is read once (it may be a pipe)
+    source = (default_params_path() if params is None else Path(params)).absolute()
+    description = read_toml(source)
+    model = params_from_dict(copy.deepcopy(description), str(source))
+    plant, plant_source = _plant_model(load_params, params_from_dict, lambda: description, params, plant_params,
+                                       settings)
     if motion is None:
         tr = model.trajectory
         S, P = np.asarray(tr.strokes, dtype=float), float(tr.period_s)

@@ -11,7 +11,7 @@ from pathlib import Path
 import click
 
 from ._groups import PATH_IN as _PATH_IN
-from ._groups import FiniteFloat, echo, hip, list_files
+from ._groups import FiniteFloat, echo, hip, list_files, params_command
 
 _LIMIT_HELP = ("Raise or lower a plausibility limit, KEY=VALUE (repeatable; overrides [limits] of the parameter "
                "file). Keys: max_samples, max_load_N, max_abs_angle_deg, max_slider_speed_m_s, "
@@ -51,6 +51,9 @@ def hip_run(params_path, motion_path, cycles, samples_per_cycle, motion_model, s
                               fmt=fmt, limits=tuple(limits), motion_model=motion_model, report=list_files)
     for m in messages:
         click.echo(f"pkmdyn: warning: {m}", err=True)
+
+
+params_command(hip, "hip", "pkmdyn hip")
 
 
 @hip.command("profile")

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ._groups import PATH_IN, announce_compiles, list_files, pdm
+from ._groups import PATH_IN, announce_compiles, list_files, params_command, pdm
 
 
 @pdm.command("run")
@@ -43,3 +43,6 @@ def pdm_run(params_path: Path | None, motion_path: Path | None, stroke_x_m: floa
                   "stroke_gamma_deg": stroke_gamma_deg, "period_s": period_s, "peak_y_accel_m_s2": peak_y_accel}
     run_pdm(params_path, motion_path, out_dir, plots=not no_plots, trajectory=trajectory, report=list_files,
             limits=tuple(limits))
+
+
+params_command(pdm, "pdm", "pkmdyn pdm")

@@ -150,7 +150,8 @@ def design_excitation(
 
     Sizes are bounded (``harmonics <= MAX_HARMONICS``, ``samples <= MAX_DESIGN_SAMPLES``,
     ``iterations <= MAX_ITERATIONS``, ``starts <= MAX_STARTS``, :func:`design_work` <=
-    :data:`MAX_WORK`); ``progress``, if given, is called with 1 after each cost evaluation."""
+    :data:`MAX_WORK`); ``progress``, if given, is called with 1 before each evaluation of a
+    candidate motion, at most :func:`design_work` ``[0]`` times in all (a true bound)."""
     limits.check()
     _check_design(period_s, harmonics, samples, iterations, starts, seed)
     names = parameter_names(which)
@@ -160,6 +161,8 @@ def design_excitation(
 
     def evaluate(z: Array) -> tuple[float, Array | None, float, float]:
         """Penalty, stacked regressor, stretched period and max cond(J) of coefficients ``z``."""
+        if progress is not None:
+            progress(1)
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -195,8 +198,6 @@ def design_excitation(
         return float(np.log10(s[0] / s[-1])) if s[-1] > 0 else 1e3
 
     def cost(z: Array) -> float:
-        if progress is not None:
-            progress(1)
         pen, W, _, _ = evaluate(z)
         return pen if W is None else log_cond(W) + pen
 
