@@ -32,7 +32,8 @@ PDM_CONTROLLERS = ("pid", "feedforward", "computed-torque")
 PDM_LIMBS = ("l11", "l12", "l23", "l24")
 #: most cycles of the built-in motion (``--cycles``)
 MAX_CYCLES = 1000.0
-#: most control cycles of one run (the loop stores every one of them)
+#: most control cycles of one run (streamed in spans, so memory does not grow with it; the bound keeps the
+#: run's time and files in reason)
 MAX_CONTROL_CYCLES = 2_000_000
 #: most plant integration steps per control cycle
 MAX_STEPS_PER_CYCLE = 1000
