@@ -14,23 +14,26 @@ from scipy.interpolate import make_interp_spline
 
 from ..errors import MotionError
 
-__all__ = ["require_increasing", "column_group", "derivatives"]
+__all__ = ["require_increasing", "require_rows", "column_group", "derivatives"]
 
 Array = NDArray[np.float64]
 
 
 def require_increasing(path: str | Path, t: Array) -> None:
-    """Time ``t_s`` must increase strictly from row to row, over at least two rows (one sample
-    has no duration)."""
-    if t.shape[0] < 2:
-        raise MotionError(f"{path}: a motion needs at least 2 data rows, found {t.shape[0]} (one sample has no "
-                          "duration)")
+    """Time ``t_s`` must increase strictly from row to row."""
     bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:
         r = int(bad[0]) + 2
         raise MotionError(
             f"{path}: row {r}, column 't_s': time must increase strictly ({t[r - 1]:g} s after {t[r - 2]:g} s)"
         )
+
+
+def require_rows(path: str | Path, t: Array) -> None:
+    """A motion has at least two rows (one sample has no duration)."""
+    if t.shape[0] < 2:
+        raise MotionError(f"{path}: a motion needs at least 2 data rows, found {t.shape[0]} (one sample has no "
+                          "duration)")
 
 
 def column_group(path: str | Path, cols: Mapping[str, Array], names: Sequence[str]) -> Array | None:
