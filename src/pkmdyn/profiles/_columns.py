@@ -58,6 +58,7 @@ def derivatives(
     through the angles (both missing) or through the given rates (accelerations missing)."""
     if qd is None and qdd is not None:
         raise MotionError(f"{path}: acceleration columns need the rate columns ({', '.join(rate_names)})")
+    require_rows(path, t)
     if qd is not None and qdd is not None:
         return qd, qdd
     if t.shape[0] < 6:

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from ..errors import MotionError, as_array
 from ..io import DEFAULT_MAX_SAMPLES, read_csv_columns, write_csv
-from ._columns import column_group, derivatives, require_increasing, require_rows
+from ._columns import column_group, derivatives, require_increasing
 
 __all__ = ["OrientationMotion", "check_load", "make_motion", "read_motion_csv", "write_motion_csv", "MOTION_COLUMNS"]
 
@@ -99,7 +99,6 @@ def read_motion_csv(path: str | Path, max_rows: int | None = DEFAULT_MAX_SAMPLES
     angles = np.deg2rad(column_group(path, cols, _ANG))
     groups = [column_group(path, cols, names) for names in (_RATE, _ACC)]
     rates, accels = (None if g is None else np.deg2rad(g) for g in groups)
-    require_rows(path, t)
     rates, accels = derivatives(path, t, angles, rates, accels, _RATE)
     return make_motion(t, angles, rates, accels, load)
 

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from ..errors import MotionError
 from ..io import read_csv_columns, write_csv
-from ._columns import column_group, derivatives, require_increasing, require_rows
+from ._columns import column_group, derivatives, require_increasing
 from .cycloidal import cycloidal
 
 __all__ = ["PdmMotion", "POSE_COLUMNS", "RATE_COLUMNS", "ACCEL_COLUMNS", "cycloidal_motion",
@@ -85,7 +85,6 @@ def read_pdm_motion(path: str | Path, max_rows: int | None = PDM_MAX_ROWS) -> Pd
     require_increasing(path, t)
     q = column_group(path, cols, POSE_COLUMNS)
     rates, accels = column_group(path, cols, RATE_COLUMNS), column_group(path, cols, ACCEL_COLUMNS)
-    require_rows(path, t)
     qd, qdd = derivatives(path, t, q, rates, accels, RATE_COLUMNS)
     return PdmMotion(t, q, qd, qdd)
 
