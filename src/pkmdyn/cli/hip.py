@@ -37,7 +37,8 @@ _LIMIT_HELP = ("Raise or lower a plausibility limit, KEY=VALUE (repeatable; over
 @click.option("--limit", "limits", multiple=True, metavar="KEY=VALUE", help=_LIMIT_HELP)
 @click.option("--no-plots", is_flag=True, help="Write no PNG plots.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
+              help="Output folder; an earlier run there is replaced whole, nothing else is (docs/file_formats.md, "
+                   "\"The output rule\").")
 def hip_run(params_path, motion_path, cycles, samples_per_cycle, motion_model, singularity_threshold, fmt, limits,
             no_plots, out_dir) -> None:
     """Kinematics and driving torques along a motion; writes results.csv (or .parquet), summary.json, plots."""

@@ -29,7 +29,7 @@ from ._groups import FiniteFloat
                    "(0 < rank-tol < 1).")
 @click.option("--no-plots", is_flag=True, help="Write no PNG plots.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output directory.")
+              help="Output directory; an earlier run there is replaced whole, nothing else is.")
 def hip_identify(measured_path, params_path, which, sg_window, sg_order, rank_tol, no_plots, out_dir) -> None:
     """Identify friction and/or inertia from measured motor torques; writes identified.toml,
     identification.json, torques.csv and plots."""
