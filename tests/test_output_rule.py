@@ -244,3 +244,32 @@ def test_single_file_commands_refuse_a_device_a_pipe_and_a_link(tmp_path, capsys
         assert main([*command, "--out", str(out)]) == 2
         _one_error(capsys, word)
     assert _tree(tmp_path) == before and stat.S_ISCHR(os.stat("/dev/null").st_mode)
+
+
+_FOLDER_COMMANDS = {
+    "hip run": ["hip", "run", "--no-plots", "--samples-per-cycle", "20"],
+    "pdm run": ["pdm", "run", "--no-plots"],
+    "hip control": ["hip", "control", "--controller", "pd", "--no-plots", "--cycles", "0.02"],
+    "pdm control": ["pdm", "control", "--controller", "pid", "--no-plots", "--cycles", "0.02"],
+}
+
+
+@pytest.mark.parametrize("command", sorted(_FOLDER_COMMANDS))
+def test_folder_commands_refuse_devices_links_and_write_protected_runs(tmp_path, capsys, command):
+    args = _FOLDER_COMMANDS[command]
+    run = tmp_path / "run"
+    assert main([*args, "--out", str(run)]) == 0
+    for p in [*run.iterdir(), run]:  # chmod -R a-w
+        p.chmod(p.stat().st_mode & ~0o222)
+    (tmp_path / "target").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "target")
+    capsys.readouterr()
+    before = _tree(tmp_path)
+    try:
+        for out, word in (("/dev/null", "character device"), (tmp_path / "link", "symbolic link"),
+                          (run, "write-protected")):
+            assert main([*args, "--out", str(out)]) == 2
+            _one_error(capsys, word)
+        assert _tree(tmp_path) == before
+    finally:
+        run.chmod(0o755)
