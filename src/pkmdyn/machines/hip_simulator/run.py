@@ -326,6 +326,7 @@ def run_hip(
     limits: dict[str, Any] | tuple[str, ...] | None = None,
     chunk: int = RUN_CHUNK,
     motion_model: str | None = None,
+    report: Callable[[dict[str, Path]], None] | None = None,
 ) -> tuple[dict[str, Path], list[str]]:
     """Run the whole job; returns the files written and the warnings raised on the way.
 
@@ -335,7 +336,9 @@ def run_hip(
     ``None``: the parameter file's ``[motion] iso_cycle``). Every input (parameters,
     motion, options, limits on load and angles) is checked before ``out_dir`` is touched; the
     slider speed and acceleration limits are checked block by block as the kinematics are
-    computed. On any error nothing is left at or beside ``out_dir``.
+    computed. On any error nothing is left at or beside ``out_dir``. ``report`` is called with
+    the files' final paths before they move into place (:func:`pkmdyn.io.output_dir`), so that a
+    listing that cannot be printed leaves ``out_dir`` as it was.
     """
     singularity_threshold = _finite_option("--singularity-threshold", singularity_threshold, 0.0, 1.0)
     if fmt not in TABLE_FORMATS:
@@ -362,12 +365,15 @@ def run_hip(
         for name, w in (("alpha", cycle.fe), ("beta", cycle.aa), ("gamma", cycle.ier)):
             check_limit(max(abs(w.max_deg), abs(w.min_deg)), lim.max_abs_angle_deg, f"built-in motion: |{name}|",
                         "max_abs_angle_deg", "deg")
+        check_limit(cycles * cycle.period_s, lim.max_duration_s, "built-in motion: duration", "max_duration_s", "s")
         window = min(n, samples_per_cycle + 1)
         source = f"built-in ISO 14242-1 model ({motion_model}), {cycles:g} cycle(s)"
         note = f"first cycle of {cycles:g} (every cycle is the same)" if cycles > 1 else ""
     else:
         motion = read_motion_csv(motion_path, max_rows=lim.max_samples)
         n = len(motion)
+        check_limit(float(motion.t[-1] - motion.t[0]), lim.max_duration_s, f"{motion_path}: duration",
+                    "max_duration_s", "s")
         _check_motion_limits(lambda k: f"{motion_path}: row {k + 1}", motion, lim)
         window = n
         source = str(motion_path)
@@ -379,7 +385,7 @@ def run_hip(
     near = 0
     worst = (0.0, 0.0, 0)  # cond, t, sample
     other: dict[str, None] = {}
-    with output_dir(out_dir) as tmp:
+    with output_dir(out_dir, inputs={"--params": params_path, "--motion": motion_path}) as tmp:
         files = {"results": tmp / ("results.csv" if fmt == "csv" else "results.parquet"), "summary": tmp / "summary.json"}
         blocks = _motion_blocks(motion, n, cycles, cycle, chunk)
         bar = tqdm(blocks, total=-(-n // chunk), desc="hip: kinematics + dynamics", unit="block",
@@ -429,6 +435,8 @@ def run_hip(
             files["torque_parts_plot"] = plots.plot_torque_parts(data, tmp / "torque_parts.png")
             files["torque_plot"] = plots.plot_torques(data, tmp / "torques.png")
             files["friction_plot"] = plots.plot_friction_vs_load(data, tmp / "friction_vs_load.png")
-    out = Path(out_dir)
-    return {k: out / p.name for k, p in files.items()}, messages
+        final = {k: Path(out_dir) / p.name for k, p in files.items()}
+        if report is not None:
+            report(final)
+    return final, messages
 
