@@ -57,3 +57,22 @@ def test_run_takes_the_parameter_files_cycle(tmp_path):
         kin = inverse_kinematics(model, iso14242_motion(1, 100, iso_cycle_preset(preset)))
         for i in range(3):
             np.testing.assert_allclose(data[f"L1{i + 1}_m"], kin.L[:, 0, i], rtol=0, atol=1e-12)
+
+
+def test_paper_option_is_the_paper_file_on_every_hip_command(tmp_path, capsys):
+    """``--paper`` stands for ``--params paper.toml`` (run and export compared file for file)
+    and refuses to be combined with ``--params``."""
+    for cmd, extra in ((["hip", "run", "--samples-per-cycle", "50", "--no-plots"], "results.csv"),
+                       (["hip", "export", "--format", "mjcf"], None)):
+        a, b = tmp_path / f"{cmd[1]}_paper", tmp_path / f"{cmd[1]}_params"
+        if extra is None:
+            a, b = a.with_suffix(".xml"), b.with_suffix(".xml")
+        assert main([*cmd, "--paper", "--out", str(a)]) == 0
+        assert main([*cmd, "--params", str(paper_params_path()), "--out", str(b)]) == 0
+        fa, fb = (a / extra, b / extra) if extra else (a, b)
+        assert fa.read_bytes() == fb.read_bytes()
+    for cmd in (["hip", "run"], ["hip", "control", "--controller", "pd"], ["hip", "export", "--format", "mjcf"],
+                ["hip", "excite"], ["hip", "identify", "--measured", str(paper_params_path())]):
+        out = tmp_path / "refused"
+        assert main([*cmd, "--paper", "--params", str(paper_params_path()), "--out", str(out)]) == 2
+        assert "--paper and --params" in capsys.readouterr().err and not out.exists()

@@ -23,6 +23,7 @@ import numpy as np
 from ..errors import MotionError, ParameterError, PkmdynError
 from ._groups import PATH_IN, announce_compiles, hip, list_files, pdm
 from ._groups import FiniteFloat
+from ._hip_options import paper_option
 
 __all__ = ["hip_closed_loop", "run_control", "HIP_CONTROLLERS", "PDM_CONTROLLERS", "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
 
@@ -734,6 +735,7 @@ def _options(f: Any) -> Any:
 
 
 @hip.command("control")
+@paper_option
 @click.option("--controller", required=True, help="One of: " + ", ".join(HIP_CONTROLLERS) + ".")
 @_options
 def hip_control(controller, params_path, plant_path, motion_path, cycles, gains_path, fmt, no_plots, out_dir) -> None:

@@ -9,11 +9,13 @@ import click
 from ._groups import PATH_IN as _PATH_IN
 from ._groups import echo, hip
 from ._groups import FiniteFloat
+from ._hip_options import paper_option
 
 
 @hip.command("export")
 @click.option("--format", "fmt", type=click.Choice(["mjcf"]), required=True,
               help="mjcf: a MuJoCo model (kinematic tree, six connect loop constraints, slide motors, no friction).")
+@paper_option
 @click.option("--params", "params_path", type=_PATH_IN, help="Parameter file (TOML); default: the paper's Tables 1-2.")
 @click.option("--timestep", "timestep_s", type=FiniteFloat(1e-6, 1.0), default=1e-3,
               show_default=True, help="MuJoCo integration step [s], 1e-6 to 1.")

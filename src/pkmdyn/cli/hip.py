@@ -12,6 +12,7 @@ import click
 
 from ._groups import PATH_IN as _PATH_IN
 from ._groups import FiniteFloat, echo, hip, list_files, params_command
+from ._hip_options import paper_option
 
 _LIMIT_HELP = ("Raise or lower a plausibility limit, KEY=VALUE (repeatable; overrides [limits] of the parameter "
                "file). Keys: max_samples, max_load_N, max_abs_angle_deg, max_slider_speed_m_s, "
@@ -19,6 +20,7 @@ _LIMIT_HELP = ("Raise or lower a plausibility limit, KEY=VALUE (repeatable; over
 
 
 @hip.command("run")
+@paper_option
 @click.option("--params", "params_path", type=_PATH_IN, help="Parameter file (TOML); default: the paper's Tables 1-2.")
 @click.option("--motion", "motion_path", type=_PATH_IN, help="Motion file (CSV); default: the built-in ISO 14242-1 cycle.")
 @click.option("--cycles", type=FiniteFloat(0.0, 1e12, lo_open=True), default=1.0, show_default=True,

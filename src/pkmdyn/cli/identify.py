@@ -11,9 +11,11 @@ from ..identify.bounds import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW
 from ._groups import PATH_IN as _PATH_IN
 from ._groups import announce_compiles, echo_lines, hip
 from ._groups import FiniteFloat
+from ._hip_options import paper_option
 
 
 @hip.command("identify")
+@paper_option
 @click.option("--measured", "measured_path", type=_PATH_IN, required=True,
               help="Measured run (CSV): motion columns plus tau1_Nm, tau2_Nm, tau3_Nm.")
 @click.option("--params", "params_path", type=_PATH_IN,
@@ -46,6 +48,7 @@ _LOAD = FiniteFloat(0.0, _ex.MAX_LOAD_N)
 
 
 @hip.command("excite")
+@paper_option
 @click.option("--params", "params_path", type=_PATH_IN, help="Parameter file (TOML); default: the paper's Tables 1-2.")
 @click.option("--identify", "which", type=click.Choice(["friction", "inertia", "all"]), default="all",
               show_default=True, help="Parameters the motion is designed to identify.")
