@@ -13,22 +13,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
-import sys
 import tempfile
-import time
 from pathlib import Path
 
-BOUND_MIB = 500.0
+from _timing import cli_peak_memory
 
-_CHILD = """
-import resource, sys, time
-from pkmdyn.cli import main
-t0 = time.perf_counter()
-rc = main(sys.argv[1:])
-dt = time.perf_counter() - t0
-print(f"{rc} {dt} {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}")
-"""
+BOUND_MIB = 500.0
 
 
 def measure(cycles: float, fmt: str, plots: bool) -> dict:
@@ -37,16 +27,9 @@ def measure(cycles: float, fmt: str, plots: bool) -> dict:
         out = Path(tmp) / "out"
         args = ["hip", "control", "--controller", "augmented-pd", "--cycles", repr(cycles), "--format", fmt,
                 "--out", str(out)] + ([] if plots else ["--no-plots"])
-        t0 = time.perf_counter()
-        proc = subprocess.run([sys.executable, "-c", _CHILD, *args], capture_output=True, text=True)
-        wall = time.perf_counter() - t0
-        lines = proc.stdout.strip().splitlines()
-        if proc.returncode != 0 or not lines or lines[-1].split()[0] != "0":
-            raise SystemExit(f"run failed: {proc.stderr.strip()}")
-        _, run_s, maxrss_kib = lines[-1].split()
+        peak, run_s, wall = cli_peak_memory(args)
         summary = json.loads((out / "summary.json").read_text())
         size = sum(p.stat().st_size for p in out.iterdir())
-    peak = int(maxrss_kib) / 1024.0
     return {"cycles": cycles, "control_cycles": summary["cycles"], "format": fmt, "plots": plots,
             "peak_rss_mib": round(peak, 1), "control_cycles_per_s": round(summary["cycles"] / float(run_s)),
             "run_s": round(float(run_s), 2), "process_wall_s": round(wall, 2), "output_mib": round(size / 2**20, 1),
