@@ -469,23 +469,35 @@ def _wrap(a):
 
 
 @njit(cache=True)
+def _fill(K, J, sel_rows, idle):
+    m = sel_rows.shape[0]
+    nq = J.shape[1]
+    for i in range(m):
+        for j in range(nq):
+            K[i, j] = J[sel_rows[i], j]
+    for i in range(idle.shape[0]):
+        for j in range(nq):
+            K[m + i, j] = idle[i, j]
+
+
+@njit(cache=True)
 def solve_batch(x, xd, xdd, q_start,
                 body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, RP, pP, RC, pC, anc,
                 row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                 task_body, task_point, task_kind, task_index, euler_axes,
-                sel_rows, free_cols, row_scale, tol, max_iter,
+                sel_rows, idle, q_ref, row_scale, tol, max_iter,
                 q_out, qd_out, qdd_out, R_out, p_out, V_out, A_out, G_out, res_out, status, worst):
     """Kinematics of every sample, warm-started along the motion.
 
-    For sample s: Newton on the selected rows (square system ``K = J[sel_rows][:, free_cols]``)
+    For sample s: Newton on the square system of the selected rows and the idle rows
 
         rows(q) = 0 (loop closure),  task(q) - x_s = 0 (task coordinates, angles wrapped),
+        idle (q - q_ref) = 0         (each idle freedom held along its direction at the reference),
 
-    starting from ``q_{s-1} + G_{s-1} (x_s - x_{s-1})`` (``q_start`` for the first), until
+    ``K = [J[sel_rows]; idle]`` (nq, nq), starting from ``q_{s-1} + G_{s-1} (x_s - x_{s-1})`` (``q_start`` for the first), until
     the scaled residual of every row (selected or not) is below ``tol``; then
     ``K qd = (0; xd_s)``, ``K qdd = (-gamma_loops; xdd_s - gamma_task)`` and
-    ``G = K^-1 (0; I)`` (tree rates per task rate). Coordinates outside ``free_cols`` (idle
-    freedoms) keep their start value and have zero rates. Writes the per-sample outputs and
+    ``G = K^-1 (0; I; 0)`` (tree rates per task rate). Writes the per-sample outputs and
     ``status[s]`` (OK, NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN) with ``worst[s]``
     the row of the largest residual; stops at the first failed sample.
     """
@@ -496,6 +508,8 @@ def solve_batch(x, xd, xdd, q_start,
     nt = task_kind.shape[0]
     nrow = nr + nt
     m = sel_rows.shape[0]
+    ni = idle.shape[0]
+    mk = m + ni
     q = q_start.copy()
     qd = np.zeros(nq)
     qdd = np.zeros(nq)
@@ -509,9 +523,10 @@ def solve_batch(x, xd, xdd, q_start,
     J = np.empty((nrow, nq))
     gamma = np.zeros(nrow)
     res = np.empty(nrow)
-    K = np.empty((m, m))
-    piv = np.empty(m, dtype=np.int64)
-    rhs = np.empty(m)
+    K = np.empty((mk, mk))
+    piv = np.empty(mk, dtype=np.int64)
+    rhs = np.empty(mk)
+    ires = np.empty(ni)
     G = np.zeros((nq, nt))
     for s in range(n):
         if s > 0:
@@ -549,21 +564,31 @@ def solve_batch(x, xd, xdd, q_start,
                     wr = rr
             worst[s] = wr
             res_out[s] = big
+            for i in range(ni):
+                acc = 0.0
+                for c in range(nq):
+                    acc += idle[i, c] * (q[c] - q_ref[c])
+                ires[i] = acc
+                if abs(acc) > big:
+                    big = abs(acc)
             if big <= tol:
                 converged = True
                 break
             if it == max_iter:
                 break
+            _fill(K, J, sel_rows, idle)
             for i in range(m):
-                for j in range(m):
-                    K[i, j] = J[sel_rows[i], free_cols[j]]
                 rhs[i] = -res[sel_rows[i]]
+            for i in range(ni):
+                rhs[m + i] = -ires[i]
             if not lu_factor(K, piv):
                 status[s] = SINGULAR
+                for c in range(nq):
+                    q_out[s, c] = q[c]
                 return
             lu_solve(K, piv, rhs)
-            for j in range(m):
-                q[free_cols[j]] += rhs[j]
+            for j in range(mk):
+                q[j] += rhs[j]
         if not converged:
             # redundant (unselected) rows left open while the selected ones closed: the loop cannot close
             sel_big = 0.0
@@ -572,22 +597,24 @@ def solve_batch(x, xd, xdd, q_start,
                 if sc > sel_big:
                     sel_big = sc
             status[s] = LOOP_OPEN if sel_big <= tol else NOT_CONVERGED
+            for c in range(nq):
+                q_out[s, c] = q[c]
             return
-        for i in range(m):
-            for j in range(m):
-                K[i, j] = J[sel_rows[i], free_cols[j]]
+        _fill(K, J, sel_rows, idle)
         if not lu_factor(K, piv):
             status[s] = SINGULAR
+            for c in range(nq):
+                q_out[s, c] = q[c]
             return
         # velocities
+        for i in range(mk):
+            rhs[i] = 0.0
         for i in range(m):
             rr = sel_rows[i]
             rhs[i] = xd[s, rr - nr] if rr >= nr else 0.0
         lu_solve(K, piv, rhs)
-        for c in range(nq):
-            qd[c] = 0.0
-        for j in range(m):
-            qd[free_cols[j]] = rhs[j]
+        for j in range(nq):
+            qd[j] = rhs[j]
         forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre)
         for c in range(nq):
             qdd[c] = 0.0
@@ -595,22 +622,22 @@ def solve_batch(x, xd, xdd, q_start,
         rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
              RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
              val, J, True, V, A, gamma)
+        for i in range(mk):
+            rhs[i] = 0.0
         for i in range(m):
             rr = sel_rows[i]
             rhs[i] = (xdd[s, rr - nr] - gamma[rr]) if rr >= nr else -gamma[rr]
         lu_solve(K, piv, rhs)
-        for j in range(m):
-            qdd[free_cols[j]] = rhs[j]
+        for j in range(nq):
+            qdd[j] = rhs[j]
         forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
         # G = K^-1 (0; I)
         for t in range(nt):
-            for i in range(m):
-                rhs[i] = 1.0 if sel_rows[i] == nr + t else 0.0
+            for i in range(mk):
+                rhs[i] = 1.0 if (i < m and sel_rows[i] == nr + t) else 0.0
             lu_solve(K, piv, rhs)
-            for c in range(nq):
-                G[c, t] = 0.0
-            for j in range(m):
-                G[free_cols[j], t] = rhs[j]
+            for j in range(nq):
+                G[j, t] = rhs[j]
         for c in range(nq):
             q_out[s, c] = q[c]
             qd_out[s, c] = qd[c]

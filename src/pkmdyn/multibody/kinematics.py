@@ -6,9 +6,10 @@ Problem solved per sample s (tree coordinates q (nq,), task coordinates x_s (nt,
     tau(q) = x_s                   task: base-frame components of the task point and Euler
                                    angles of the task body (angles wrapped to (-pi, pi])
 
-by Newton's method on the square system of the model's ``solver_rows`` x ``solver_cols``
-(redundant constraint directions of an over-constrained mechanism are checked, not solved;
-idle freedoms are held), warm-started along the motion by the first-order predictor
+by Newton's method on the square system of the model's ``solver_rows`` (redundant
+constraint directions of an over-constrained mechanism are checked, not solved) and its
+``solver_idle`` rows (each idle freedom held, ``n_k . (q - q_ref) = 0`` along its direction
+at the reference configuration), warm-started along the motion by the first-order predictor
 ``q_s = q_{s-1} + G_{s-1} (x_s - x_{s-1})``. Rates and accelerations follow from the
 linear systems ``[Phi_q; tau_q] qd = [0; xd]`` and
 ``[Phi_q; tau_q] qdd = [-gamma_Phi; xdd - gamma_tau]`` with the drift
@@ -127,7 +128,7 @@ def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array)
                   model.joint_R_child, model.joint_p_child, model.ancestors, model.row_loop, model.row_kind,
                   model.row_i, model.row_j, model.loop_joint, model.joint_parent, model.joint_child,
                   model.task_body, model.task_point, model.task_kind, model.task_index, model.euler_axes,
-                  model.solver_rows, model.solver_cols, row_scale(model), TOLERANCE, MAX_ITER,
+                  model.solver_rows, model.solver_idle, model.coord_offset, row_scale(model), TOLERANCE, MAX_ITER,
                   out["q"], out["qd"], out["qdd"], out["R"], out["p"], out["V"], out["A"], out["G"], out["res"],
                   out["status"], out["worst"])
     return out
@@ -179,8 +180,11 @@ def _fail(model: MechanismModel, out: dict, t: Array | None, x: Array, offset: i
 
 def _singular_row(model: MechanismModel, q: Array) -> str:
     """The row that carries the most of the null direction of the Newton matrix at ``q``."""
+    from .topology import column_scale
+
     _, J = constraint_jacobian(model, q)
-    Ks = (J[0] * row_scale(model)[:, None])[model.solver_rows][:, model.solver_cols]
+    Ks = (J[0] * row_scale(model)[:, None] * column_scale(model)[None, :])[model.solver_rows]
+    Ks = np.concatenate([Ks, model.solver_idle * column_scale(model)[None, :]])
     if not np.all(np.isfinite(Ks)):
         return "an unknown row"
     u, _, _ = np.linalg.svd(Ks)
@@ -261,13 +265,14 @@ class SingularityMeasures:
     """Per-sample distance to the two kinds of singularity, each the ratio of the smallest
     to the largest singular value (1 isotropic, 0 singular) of a dimensionless matrix:
 
-    ``inverse`` (n,): of ``[Phi_q; tau_q]`` over the free coordinates: zero where the task
+    ``inverse`` (n,): of ``[Phi_q; tau_q]`` (with the idle rows): zero where the task
     coordinates no longer determine the joint coordinates (a leg stretched or folded, the
     Gosselin-Angeles type I / serial singularity); ``direct`` (n,): of ``[Phi_q; E_a]``
     (``E_a`` selecting the actuator coordinates): zero where the mechanism moves with its
     actuators locked (type II / parallel singularity; only for as many actuators as
-    degrees of freedom, otherwise NaN); ``constraint`` (n,): of ``Phi_q`` alone (its
-    rank-deficient direction gives the loops an extra freedom)."""
+    degrees of freedom, otherwise NaN); ``constraint`` (n,): of ``Phi_q`` (with the idle
+    rows) alone, the smallest of its ``nq - dof`` singular values: zero where the loops gain a
+    freedom (constraint singularity)."""
 
     inverse: Array
     direct: Array
@@ -286,17 +291,18 @@ def singularity_measures(model: MechanismModel, q: Array) -> SingularityMeasures
     q = np.atleast_2d(np.asarray(q, dtype=float))
     _, J = constraint_jacobian(model, q)
     Js = J * row_scale(model)[None, :, None] * column_scale(model)[None, None, :]
-    rows, cols = model.solver_rows, model.solver_cols
+    rows = model.solver_rows
     nr = model.row_loop.shape[0]
-    Kt = Js[:, rows][:, :, cols]
-    inverse = _ratio(Kt)
+    n = q.shape[0]
+    idle = np.broadcast_to(model.solver_idle * column_scale(model)[None, :], (n, *model.solver_idle.shape))
+    inverse = _ratio(np.concatenate([Js[:, rows], idle], axis=1))
     cut = rows[rows < nr]
-    Phi = Js[:, cut][:, :, cols]
-    constraint = _ratio(Phi) if cut.size else np.ones(q.shape[0])
+    Phi = np.concatenate([Js[:, cut], idle], axis=1)
+    constraint = _ratio(Phi) if Phi.shape[1] else np.ones(n)
     if model.na == model.nt:
-        Ea = np.zeros((q.shape[0], model.na, cols.size))
+        Ea = np.zeros((n, model.na, model.nq))
         for i, c in enumerate(model.act_coord):
-            Ea[:, i, int(np.flatnonzero(cols == c)[0])] = 1.0
+            Ea[:, i, c] = 1.0
         direct = _ratio(np.concatenate([Phi, Ea], axis=1))
     else:
         direct = np.full(q.shape[0], np.nan)

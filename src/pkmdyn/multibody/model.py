@@ -95,8 +95,8 @@ class MechanismModel:
     Actuators: ``act_joint`` (na,) joint indices, ``act_coord`` (na,) tree coordinates.
 
     Solver: ``solver_rows`` (m,) rows of the square Newton system (independent constraint
-    rows, then every task row) and ``solver_cols`` (m,) its free tree coordinates (the others
-    are idle freedoms, held), chosen at the reference configuration
+    rows, then every task row) and ``solver_idle`` (nq - m, nq) the directions of the idle
+    freedoms, held (``solver_idle (q - q_ref) = 0``), chosen at the reference configuration
     (:func:`~.topology.solver_selection`); ``topology``: the
     :class:`~.topology.TopologyReport` there.
     """
@@ -157,7 +157,7 @@ class MechanismModel:
     length_scale: float
     motion: object
     solver_rows: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    solver_cols: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    solver_idle: Array = field(default_factory=lambda: np.zeros((0, 0)))
     topology: object = None
 
     @property
@@ -379,8 +379,8 @@ def compile_model(desc: Description) -> MechanismModel:
 
     from .topology import solver_selection
 
-    rows, cols, rep = solver_selection(model)
-    return replace(model, solver_rows=rows, solver_cols=cols, topology=rep)
+    rows, idle, rep = solver_selection(model)
+    return replace(model, solver_rows=rows, solver_idle=idle, topology=rep)
 
 
 def _loop_path(desc: Description, tree: list[int], child_of_joint: dict, parent_name: dict, a: str, b: str) -> tuple[str, ...]:

@@ -195,13 +195,13 @@ def analyse_topology(model: MechanismModel, q: Array | None = None) -> TopologyR
 
 
 def solver_selection(model: MechanismModel, q: Array | None = None) -> tuple[Array, Array, TopologyReport]:
-    """Rows and columns of the square Newton system, chosen at ``q`` (default: reference).
+    """Rows of the square Newton system and its idle rows, chosen at ``q`` (default: reference).
 
     Rows: a maximal independent set of the constraint rows (pivoted QR; the redundant
     directions of an over-constrained mechanism are left out and only checked) followed by
-    every task row. Columns: the actuated coordinates, then those a pivoted QR of the
-    remaining columns (actuated ones projected out) picks; the others (idle freedoms) are
-    held. Raises :class:`~pkmdyn.errors.ParameterError` when the task coordinates do not
+    every task row. Idle rows ``(ni, nq)``: a basis ``n_k`` of the null space of those rows
+    (the idle freedoms), each held by the linear equation ``n_k . (q - q_ref) = 0``; a
+    smooth choice, so that the coordinates stay differentiable functions of the task. Raises :class:`~pkmdyn.errors.ParameterError` when the task coordinates do not
     determine the mechanism (fewer or more than its degrees of freedom, or dependent) or
     when there are more actuators than degrees of freedom.
     """
@@ -231,25 +231,16 @@ def solver_selection(model: MechanismModel, q: Array | None = None) -> tuple[Arr
     if _rank(Ks) != sel.size:
         raise ParameterError(f"{src}: [task]: the task coordinates {', '.join(model.task_names)} are not independent "
                              "at the reference configuration (they do not determine the mechanism's pose)")
-    act = list(model.act_coord)
-    Ka = Ks[:, act]
-    if _rank(Ka) < len(act):
-        raise ParameterError(f"{src}: [joints]: the actuated joints {', '.join(model.actuator_names)} cannot move "
-                             "independently at the reference configuration")
-    rest = [c for c in range(model.nq) if c not in act]
-    need = sel.size - len(act)
-    if need > 0:
-        if Ka.size:
-            Qa, _ = np.linalg.qr(Ka)
-            Kr = Ks[:, rest] - Qa @ (Qa.T @ Ks[:, rest])
-        else:
-            Kr = Ks[:, rest]
-        _, _, piv = scipy.linalg.qr(Kr, pivoting=True, mode="economic")
-        cols = sorted(act + [rest[i] for i in piv[:need]])
-    else:
-        cols = sorted(act)
-    cols = np.array(cols, dtype=np.int64)
-    if _rank(Ks[:, cols]) != sel.size:
+    N = _null(Ks, model.nq)  # scaled coordinates; dq = D dq_s with D = column_scale
+    idle = (N / column_scale(model)[:, None]).T.copy()
+    Kfull = np.concatenate([Ks, N.T])
+    if _rank(Kfull) != model.nq:  # pragma: no cover - N completes the rank by construction
         raise ParameterError(f"{src}: the loop-closure and task equations are singular at the reference "
                              "configuration; describe the mechanism at a regular pose")
-    return sel, cols, rep
+    Phi = np.concatenate([Js[:nr][cut_rows], N.T])
+    Ea = np.zeros((model.na, model.nq))
+    Ea[np.arange(model.na), model.act_coord] = 1.0
+    if _rank(np.concatenate([Phi, Ea])) < Phi.shape[0] + model.na:
+        raise ParameterError(f"{src}: [joints]: the actuated joints {', '.join(model.actuator_names)} cannot move "
+                             "independently at the reference configuration")
+    return sel, np.ascontiguousarray(idle), rep
