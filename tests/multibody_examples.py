@@ -113,3 +113,21 @@ def smooth_motion(x0, amp, t, seed=0):
     ph = rng.uniform(0, 2 * np.pi, k)
     s, c = np.sin(w * t[:, None] + ph), np.cos(w * t[:, None] + ph)
     return x0 + amp * (s - np.sin(ph)), amp * w * c, -amp * w**2 * s
+
+
+def four_bar_cut_b():
+    """The four-bar cut at B: the tree reaches the rocker and coupler through D and C backwards."""
+    d = four_bar()
+    d["mechanism"]["cut_joints"] = ["B"]
+    return d
+
+
+def stewart_flipped_spheres():
+    """The built-in Stewart platform with every spherical joint described platform -> piston,
+    so that the tree traverses one of them backwards (three coordinates, inverse motion)."""
+    d = builtin_dict("stewart")
+    for leg in d["legs"]:
+        for j in leg["joints"]:
+            if j["name"] == "S":
+                j["parent"], j["child"] = j["child"], j["parent"]
+    return d

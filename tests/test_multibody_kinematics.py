@@ -19,14 +19,16 @@ from pkmdyn.multibody import (
 AMP = {"stewart": [0.05, 0.05, 0.05, 0.1, 0.1, 0.1], "delta": [0.15, 0.15, 0.1], "rrr3": [0.04, 0.04, 0.2],
        "bennett": [0.5], "four_bar": [0.6], "slider_crank": [1.0], "rssr": [0.1], "stewart_sps": [0.05] * 6,
        "stewart_tool": [0.05, 0.05, 0.05, 0.1, 0.1, 0.1], "rrr3_planar": [0.04, 0.04, 0.2],
-       "rrr3_planar_cut": [0.04, 0.04, 0.2], "slider_crank_c": [1.0]}
+       "rrr3_planar_cut": [0.04, 0.04, 0.2], "slider_crank_c": [1.0], "four_bar_cut_b": [0.6],
+       "stewart_flipped": [0.05, 0.05, 0.05, 0.1, 0.1, 0.1]}
 
 
 def _models():
     out = {name: ex.MACHINES / name / f"{name}.toml" for name in ex.BUILTIN}
     out.update(four_bar=ex.four_bar(), slider_crank=ex.slider_crank(), rssr=ex.rssr(), stewart_sps=ex.stewart_sps(),
                stewart_tool=ex.stewart_with_tool(), rrr3_planar=ex.rrr3_planar_platform(),
-               rrr3_planar_cut=ex.rrr3_planar_platform(cut_legs=True), slider_crank_c=ex.slider_crank("cylindrical"))
+               rrr3_planar_cut=ex.rrr3_planar_platform(cut_legs=True), slider_crank_c=ex.slider_crank("cylindrical"),
+               four_bar_cut_b=ex.four_bar_cut_b(), stewart_flipped=ex.stewart_flipped_spheres())
     return out
 
 
@@ -166,6 +168,22 @@ def test_unreachable_pose_names_the_sample_and_loop():
     t = np.linspace(0.0, 1.0, 30)
     with pytest.raises(UnreachablePoseError, match=r"sample \d+ \(t = [0-9.e-]+ s\).*loop \d+ \(cut \w+\)"):
         solve_kinematics(m, x, t=t)
+
+
+def test_a_joint_traversed_backwards_gives_the_same_motion():
+    """Describing joints the other way round (the tree then inverts their motion) changes nothing."""
+    for plain, flipped in ((ex.four_bar(), ex.four_bar_cut_b()), (ex.builtin_dict("stewart"), ex.stewart_flipped_spheres())):
+        m1, m2 = load_mechanism(plain), load_mechanism(flipped)
+        assert m2.joint_flipped.any()
+        name = m1.name
+        t = np.linspace(0.0, 1.0, 50)
+        x, xd, xdd = ex.smooth_motion(reference_task(m1), np.array(AMP["stewart" if name == "stewart" else name]), t)
+        k1, k2 = solve_kinematics(m1, x, xd, xdd), solve_kinematics(m2, x, xd, xdd)
+        for b, nm in enumerate(m1.body_names):
+            b2 = m2.body_names.index(nm)
+            for f in ("R", "origin", "w", "wd", "origin_a"):
+                assert np.allclose(getattr(k1, f)[:, b], getattr(k2, f)[:, b2], atol=1e-10), (name, nm, f)
+        assert np.allclose(k1.act_q, k2.act_q, atol=1e-12) and np.allclose(k1.act_qdd, k2.act_qdd, atol=1e-9)
 
 
 def test_bad_motion_arrays_are_refused():

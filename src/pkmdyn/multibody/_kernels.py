@@ -65,9 +65,10 @@ def _dot(a, b):
 
 
 @njit(cache=True)
-def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
                       RP, pP, RC, pC, R, p, S):
-    """Body poses ``R (nb, 3, 3)``, ``p (nb, 3)`` and coordinate twists ``S (nq, 6)`` at ``q``."""
+    """Body poses ``R (nb, 3, 3)``, ``p (nb, 3)`` and coordinate twists ``S (nq, 6)`` at ``q``
+    (frames ``RP, pP, RC, pC`` in tree order; coordinate c moves by ``coord_sign[c] (q - offset)``)."""
     Rf = np.empty((3, 3))
     tmp = np.empty((3, 3))
     E = np.empty((3, 3))
@@ -87,14 +88,15 @@ def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_moti
                 o[i] = p[a, i] + R[a, i, 0] * pP[k, 0] + R[a, i, 1] * pP[k, 1] + R[a, i, 2] * pP[k, 2]
         for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
             m = coord_motion[c]
-            qc = q[c] - coord_offset[c]
+            sg = coord_sign[c]
+            qc = sg * (q[c] - coord_offset[c])
             if m < 3:
                 for i in range(3):
                     ax[i] = Rf[i, m]
-                S[c, 0], S[c, 1], S[c, 2] = ax[0], ax[1], ax[2]
-                S[c, 3] = o[1] * ax[2] - o[2] * ax[1]
-                S[c, 4] = o[2] * ax[0] - o[0] * ax[2]
-                S[c, 5] = o[0] * ax[1] - o[1] * ax[0]
+                S[c, 0], S[c, 1], S[c, 2] = sg * ax[0], sg * ax[1], sg * ax[2]
+                S[c, 3] = sg * (o[1] * ax[2] - o[2] * ax[1])
+                S[c, 4] = sg * (o[2] * ax[0] - o[0] * ax[2])
+                S[c, 5] = sg * (o[0] * ax[1] - o[1] * ax[0])
                 _rot(m, qc, E)
                 _matmul3(Rf, E, tmp)
                 Rf[:, :] = tmp
@@ -104,7 +106,7 @@ def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_moti
                 S[c, 0] = 0.0
                 S[c, 1] = 0.0
                 S[c, 2] = 0.0
-                S[c, 3], S[c, 4], S[c, 5] = ax[0], ax[1], ax[2]
+                S[c, 3], S[c, 4], S[c, 5] = sg * ax[0], sg * ax[1], sg * ax[2]
                 for i in range(3):
                     o[i] += ax[i] * qc
         for i in range(3):
@@ -482,7 +484,8 @@ def _fill(K, J, sel_rows, idle):
 
 @njit(cache=True)
 def solve_batch(x, xd, xdd, q_start,
-                body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, RP, pP, RC, pC, anc,
+                body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
                 row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                 task_body, task_point, task_kind, task_index, euler_axes,
                 sel_rows, idle, q_ref, row_scale, tol, max_iter,
@@ -541,7 +544,7 @@ def solve_batch(x, xd, xdd, q_start,
         converged = False
         for it in range(max_iter + 1):
             forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
-                              RP, pP, RC, pC, R, p, S)
+                              coord_sign, tRP, tpP, tRC, tpC, R, p, S)
             ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                       RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
                       val, J, False, V, A, gamma)
@@ -656,7 +659,8 @@ def solve_batch(x, xd, xdd, q_start,
 
 
 @njit(cache=True)
-def jacobians_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, RP, pP, RC, pC, anc,
+def jacobians_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                    tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
                     row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                     task_body, task_point, task_kind, task_index, euler_axes, val_out, J_out):
     """Row values ``val_out (n, nr + nt)`` and Jacobians ``J_out (n, nr + nt, nq)`` at ``q (n, nq)``."""
@@ -670,7 +674,7 @@ def jacobians_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion
     gamma = np.zeros(val_out.shape[1])
     for s in range(q.shape[0]):
         forward_positions(q[s], body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
-                          RP, pP, RC, pC, R, p, S)
+                          coord_sign, tRP, tpP, tRC, tpC, R, p, S)
         rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
              RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
              val_out[s], J_out[s], False, V, A, gamma)

@@ -97,8 +97,8 @@ def _poses(model: MechanismModel, q: Array) -> tuple[Array, Array, Array]:
     p = np.empty((model.nb, 3))
     S = np.empty((model.nq, 6))
     K.forward_positions(np.ascontiguousarray(q, dtype=float), model.body_parent, model.body_joint, model.joint_q0,
-                        model.joint_nq, model.coord_motion, model.coord_offset, model.joint_R_parent,
-                        model.joint_p_parent, model.joint_R_child, model.joint_p_child, R, p, S)
+                        model.joint_nq, model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent,
+                        model.tree_p_parent, model.tree_R_child, model.tree_p_child, R, p, S)
     return R, p, S
 
 
@@ -124,7 +124,8 @@ def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array)
         "status": np.full(n, -1, dtype=np.int64), "worst": np.zeros(n, dtype=np.int64),
     }
     K.solve_batch(x, xd, xdd, q_start, model.body_parent, model.body_joint, model.joint_q0, model.joint_nq,
-                  model.coord_motion, model.coord_offset, model.joint_R_parent, model.joint_p_parent,
+                  model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent,
+                  model.tree_R_child, model.tree_p_child, model.joint_R_parent, model.joint_p_parent,
                   model.joint_R_child, model.joint_p_child, model.ancestors, model.row_loop, model.row_kind,
                   model.row_i, model.row_j, model.loop_joint, model.joint_parent, model.joint_child,
                   model.task_body, model.task_point, model.task_kind, model.task_index, model.euler_axes,

@@ -80,8 +80,13 @@ class MechanismModel:
     coordinate at the reference configuration (1-coordinate joints, [m] or [rad]).
 
     Tree coordinates: ``coord_joint`` (nq,), ``coord_motion`` (nq,) elementary-motion codes
-    (:data:`~.joint_types.MOTION_CODES`), ``coord_offset`` (nq,); ``ancestors`` (nb, nq)
-    bool: coordinate k moves body b.
+    (:data:`~.joint_types.MOTION_CODES`), ``coord_offset`` (nq,), ``coord_sign`` (nq,);
+    ``ancestors`` (nb, nq) bool: coordinate k moves body b. A tree joint reached from its
+    child's side (``joint_flipped``) moves its description parent by the inverse motion
+    ``M_k(-q_k) ... M_1(-q_1)``: its coordinates are stored in reverse order with sign -1,
+    and ``tree_R_parent``/``tree_p_parent``/``tree_R_child``/``tree_p_child`` (nj, ...) hold
+    the frames in tree order (exchanged for a flipped joint). A one-coordinate joint's
+    coordinate is the description's either way.
 
     Loops: ``loops`` (records); kernel rows ``row_loop``, ``row_kind`` (0 translation,
     1 rotation), ``row_i``, ``row_j`` (nr,).
@@ -132,6 +137,12 @@ class MechanismModel:
     coord_joint: IntArray
     coord_motion: IntArray
     coord_offset: Array
+    coord_sign: Array
+    joint_flipped: NDArray[np.bool_]
+    tree_R_parent: Array
+    tree_p_parent: Array
+    tree_R_child: Array
+    tree_p_child: Array
     ancestors: NDArray[np.bool_]
     loops: tuple[LoopRecord, ...]
     loop_joint: IntArray
@@ -268,19 +279,13 @@ def compile_model(desc: Description) -> MechanismModel:
     bidx = {name: i for i, name in enumerate(order)}
     bidx[GROUND] = -1
     nb, nj = len(order), len(desc.joints)
-    # a tree joint is stored with its tree parent as "parent": flip a joint described the other way
+    # a tree joint reached from its child side is traversed backwards ("flipped"): its motion is
+    # the inverse, X_J(q)^-1 = M_k(-q_k) ... M_1(-q_1), with the two frames exchanged
+    flipped = {k for k in tree if child_of_joint[k] == desc.joints[k].parent}
     parent_name = {}
-    flipped = set()
     for k in tree:
         j = desc.joints[k]
-        if child_of_joint[k] == j.parent:
-            flipped.add(k)
-    if flipped:
-        names = ", ".join(desc.joints[k].name for k in sorted(flipped))
-        raise ParameterError(f"[joints] {names}: the tree reaches the parent through the child; describe the joint "
-                             "with parent and child swapped (the parent is the body nearer the ground)")
-    for k in tree:
-        parent_name[desc.joints[k].child] = desc.joints[k].parent
+        parent_name[child_of_joint[k]] = j.child if k in flipped else j.parent
     R0 = np.stack([bspec[n].R0 for n in order])
     p0 = np.stack([bspec[n].p0 for n in order])
 
@@ -300,14 +305,19 @@ def compile_model(desc: Description) -> MechanismModel:
     body_parent = np.array([bidx[parent_name[n]] for n in order], dtype=np.int64)
     q0 = np.full(nj, -1, dtype=np.int64)
     nqj = np.array([joint_type(j.type).freedoms for j in desc.joints], dtype=np.int64)
-    coord_joint, coord_motion, coord_offset = [], [], []
+    coord_joint, coord_motion, coord_offset, coord_sign = [], [], [], []
     for b in range(nb):
         k = int(body_joint[b])
         q0[k] = len(coord_joint)
-        for m in joint_type(desc.joints[k].type).motions:
+        motions = joint_type(desc.joints[k].type).motions
+        for m in (motions[::-1] if k in flipped else motions):
             coord_joint.append(k)
             coord_motion.append(MOTION_CODES[m])
             coord_offset.append(desc.joints[k].offset if nqj[k] == 1 else 0.0)
+            coord_sign.append(-1.0 if k in flipped else 1.0)
+    tRP, tpP, tRC, tpC = RP.copy(), pP.copy(), RC.copy(), pC.copy()
+    for k in flipped:
+        tRP[k], tpP[k], tRC[k], tpC[k] = RC[k], pC[k], RP[k], pP[k]
     nq = len(coord_joint)
     anc = np.zeros((nb, nq), dtype=bool)
     for b in range(nb):
@@ -361,7 +371,9 @@ def compile_model(desc: Description) -> MechanismModel:
         joint_q0=q0, joint_nq=nqj, joint_offset=np.array([j.offset for j in desc.joints]),
         joint_limits=tuple(j.limits for j in desc.joints), joint_friction=tuple(j.friction for j in desc.joints),
         coord_joint=np.array(coord_joint, dtype=np.int64), coord_motion=np.array(coord_motion, dtype=np.int64),
-        coord_offset=np.array(coord_offset, dtype=float), ancestors=anc,
+        coord_offset=np.array(coord_offset, dtype=float), coord_sign=np.array(coord_sign, dtype=float),
+        joint_flipped=np.isin(np.arange(nj), sorted(flipped)), tree_R_parent=tRP, tree_p_parent=tpP,
+        tree_R_child=tRC, tree_p_child=tpC, ancestors=anc,
         loops=tuple(loops), loop_joint=np.array(cuts, dtype=np.int64),
         row_loop=np.array(row_loop, dtype=np.int64), row_kind=np.array(row_kind, dtype=np.int64),
         row_i=np.array(row_i, dtype=np.int64), row_j=np.array(row_j, dtype=np.int64),
