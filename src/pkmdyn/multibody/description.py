@@ -22,10 +22,10 @@ from typing import Annotated, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import Field, field_validator
+from pydantic import Field, ValidationError, field_validator
 
 from ..errors import ParameterError
-from ..params_util import Section, read_toml, validate
+from ..params_util import Section, _rule, read_toml
 from .joint_types import JOINT_TYPES, joint_type
 
 __all__ = ["Description", "BodySpec", "JointSpec", "TaskSpec", "LoadSpec", "MotionSpec",
@@ -300,21 +300,21 @@ def _joint_frame(j: _Joint, where: str) -> Array:
     jt = joint_type(j.type)
     if jt.axes == 2:
         if j.axes is None or len(j.axes) != 2 or j.axis is not None:
-            raise ParameterError(f"{where}: a {j.type} joint needs axes = [[first], [second]] (and no axis)")
+            raise ParameterError(f"{where} a {j.type} joint needs axes = [[first], [second]] (and no axis)")
         x, y = _unit(j.axes[0], f"{where} axes[0]"), _unit(j.axes[1], f"{where} axes[1]")
         if abs(float(x @ y)) > 1e-6:
             raise ParameterError(f"{where} axes: the two axes of a {j.type} joint must be perpendicular "
                                  f"(cosine {float(x @ y):.3g})")
         return np.column_stack([x, y, np.cross(x, y)])
     if j.axes is not None:
-        raise ParameterError(f"{where}: a {j.type} joint takes no axes list (use axis)")
+        raise ParameterError(f"{where} a {j.type} joint takes no axes list (use axis)")
     if jt.axes == 1 and j.axis is None:
-        raise ParameterError(f"{where}: a {j.type} joint needs axis")
+        raise ParameterError(f"{where} a {j.type} joint needs axis")
     if j.axis is None:
         if j.type == "spherical" or j.type == "fixed":
             z = np.array([0.0, 0.0, 1.0])
         else:  # pragma: no cover - every other type needs an axis
-            raise ParameterError(f"{where}: missing axis")
+            raise ParameterError(f"{where} missing axis")
     else:
         z = _unit(j.axis, f"{where} axis")
     if j.x_axis is not None:
@@ -342,7 +342,7 @@ def _body(b: _Body, where: str) -> BodySpec:
 def _joint(j: _Joint, where: str) -> JointSpec:
     jt = joint_type(j.type)
     if j.parent == j.child:
-        raise ParameterError(f"{where}: joins body {j.parent!r} to itself")
+        raise ParameterError(f"{where} joins body {j.parent!r} to itself")
     frame = _joint_frame(j, where)
     unit = jt.units[0] if jt.freedoms == 1 else None
     offset = 0.0
@@ -463,7 +463,7 @@ def load_description(source: str | Path | dict[str, Any]) -> Description:
     else:
         path = str(Path(source).absolute())
         raw, label = read_toml(source), str(source)
-    data = validate(_File, raw, label)
+    data = _validate(raw, label)
     body_specs: dict[str, BodySpec] = {}
     expanded_bodies, expanded_joints = _expand_legs(data, label)
     for b, where in expanded_bodies:
@@ -514,6 +514,51 @@ def load_description(source: str | Path | dict[str, Any]) -> Description:
                        gravity=np.array(data.mechanism.gravity_m_s2, dtype=float),
                        bodies=tuple(body_specs.values()), joints=tuple(joints), task=task, loads=tuple(loads),
                        cut_joints=cuts, motion=motion, path=path)
+
+
+def _item_name(raw: Any, loc: tuple) -> str | None:
+    """The ``name`` of the table at ``loc`` (e.g. ``("legs", 0, "joints", 2)``) in the raw data."""
+    node = raw
+    try:
+        for part in loc:
+            node = node[part]
+    except (KeyError, IndexError, TypeError):
+        return None
+    name = node.get("name") if isinstance(node, dict) else None
+    return name if isinstance(name, str) and len(name) <= 64 else None
+
+
+def _validate(raw: Any, label: str) -> _File:
+    """Validate with one line per failing key; list items are named by their ``name`` when they
+    have one: ``[joints] U1 axis: ...`` rather than ``[joints] 3[axis]``."""
+    if not isinstance(raw, dict):
+        raise ParameterError(f"{label}: expected a description (a dict of tables), got {type(raw).__name__}")
+    try:
+        return _File.model_validate(raw)
+    except ValidationError as exc:
+        parts = []
+        for err in exc.errors():
+            loc = tuple(err["loc"])
+            rule = _rule(err)
+            if not loc:
+                parts.append(f"file: {rule}")
+                continue
+            words = [f"[{loc[0]}]"]
+            k = 1
+            while k < len(loc):
+                p = loc[k]
+                if isinstance(p, int):
+                    nm = _item_name(raw, loc[:k + 1])
+                    words.append(nm if nm is not None else f"#{p + 1}")
+                else:
+                    words.append(str(p))
+                k += 1
+            if len(loc) == 1:
+                rule = rule.replace("key", "section")
+                if err["type"] == "extra_forbidden":
+                    rule = "unknown section"
+            parts.append(" ".join(words) + f": {rule}")
+        raise ParameterError(f"{label}: " + "; ".join(parts[:5]) + (f"; and {len(parts) - 5} more" if len(parts) > 5 else "")) from None
 
 
 def _check_connected(label: str, bodies: dict[str, BodySpec], joints: list[JointSpec]) -> None:
