@@ -30,7 +30,7 @@ from numba import njit
 OK, NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN = 0, 1, 2, 3, 4
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rot(m, ang, out):
     """Elementary rotation about axis m (0, 1, 2) by ang [rad] into out (3, 3)."""
     c, s = math.cos(ang), math.sin(ang)
@@ -45,21 +45,21 @@ def _rot(m, ang, out):
     out[j, i] = s
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _matmul3(a, b, out):
     for i in range(3):
         for j in range(3):
             out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _cross(a, b, out):
     out[0] = a[1] * b[2] - a[2] * b[1]
     out[1] = a[2] * b[0] - a[0] * b[2]
     out[2] = a[0] * b[1] - a[1] * b[0]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
@@ -159,7 +159,7 @@ def forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, 
             A[b, i] = cur[i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _parity(i, j, k):
     return 1.0 if (i, j, k) in ((0, 1, 2), (1, 2, 0), (2, 0, 1)) else -1.0
 
@@ -187,19 +187,36 @@ def euler_angles(Rm, axes, out):
 @njit(cache=True)
 def euler_rate_map(ang, axes, E):
     """``E (3, 3)``: omega = E phi_dot, columns ``k1, R1 k2, R1 R2 k3`` (base frame)."""
-    R1 = np.empty((3, 3))
-    R2 = np.empty((3, 3))
-    R12 = np.empty((3, 3))
-    _rot(axes[0], ang[0], R1)
-    _rot(axes[1], ang[1], R2)
-    _matmul3(R1, R2, R12)
+    i1, i2, i3 = axes[0], axes[1], axes[2]
+    c1, s1 = math.cos(ang[0]), math.sin(ang[0])
+    c2, s2 = math.cos(ang[1]), math.sin(ang[1])
+    # R1 k2: k2 turned about k1 by ang0; R1 R2 k3 = R1 (R2 k3)
+    k2 = np.zeros(3)
+    k2[i2] = 1.0
+    v = np.zeros(3)
+    _rotate_vec(i1, c1, s1, k2, v)
+    k3 = np.zeros(3)
+    k3[i3] = 1.0
+    w = np.zeros(3)
+    _rotate_vec(i2, c2, s2, k3, w)
+    u = np.zeros(3)
+    _rotate_vec(i1, c1, s1, w, u)
     for r in range(3):
-        E[r, 0] = 1.0 if r == axes[0] else 0.0
-        E[r, 1] = R1[r, axes[1]]
-        E[r, 2] = R12[r, axes[2]]
+        E[r, 0] = 1.0 if r == i1 else 0.0
+        E[r, 1] = v[r]
+        E[r, 2] = u[r]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _rotate_vec(m, c, s, x, out):
+    """``out = Rot_m(angle) x`` with ``c, s`` the cosine and sine of the angle."""
+    i, j = (m + 1) % 3, (m + 2) % 3
+    out[m] = x[m]
+    out[i] = c * x[i] - s * x[j]
+    out[j] = s * x[i] + c * x[j]
+
+
+@njit(cache=True, inline="always")
 def _inv3(M, out):
     """Inverse of a 3 x 3 matrix; returns the determinant (out untouched when it is 0)."""
     det = (M[0, 0] * (M[1, 1] * M[2, 2] - M[1, 2] * M[2, 1]) - M[0, 1] * (M[1, 0] * M[2, 2] - M[1, 2] * M[2, 0])
@@ -218,7 +235,7 @@ def _inv3(M, out):
     return det
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _frame(b, R, p, Rj, pj, e, o):
     """Joint frame axes ``e (3, 3)`` (columns) and origin ``o (3,)`` in the world, on body b."""
     if b < 0:
@@ -232,7 +249,7 @@ def _frame(b, R, p, Rj, pj, e, o):
             o[i] = p[b, i] + R[b, i, 0] * pj[0] + R[b, i, 1] * pj[1] + R[b, i, 2] * pj[2]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _point_motion(b, x, V, A, v, a):
     """Velocity ``v`` and acceleration ``a`` of the world point ``x`` fixed in body b."""
     if b < 0:
@@ -250,34 +267,43 @@ def _point_motion(b, x, V, A, v, a):
     a[2] = A[b, 5] + wd[0] * x[1] - wd[1] * x[0] + w[0] * v[1] - w[1] * v[0]
 
 
+@njit(cache=True, inline="always")
+def _jrow(J, rr, wa, wb, S, anc, a, b, coef_a, coef_b):
+    """Jacobian row ``J[rr, c] = (coef_b [c moves b] + coef_a [c moves a]) (wa . S_w + wb . S_v)``;
+    ``anc[b] = (count, coordinates moving body b...)``."""
+    for c in range(S.shape[0]):
+        J[rr, c] = 0.0
+    for body, coef in ((a, coef_a), (b, coef_b)):
+        if body < 0 or coef == 0.0:
+            continue
+        for k in range(1, anc[body, 0] + 1):
+            c = anc[body, k]
+            J[rr, c] += coef * (wa[0] * S[c, 0] + wa[1] * S[c, 1] + wa[2] * S[c, 2]
+                                + wb[0] * S[c, 3] + wb[1] * S[c, 4] + wb[2] * S[c, 5])
+
+
 @njit(cache=True)
 def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
          RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
          val, J, with_drift, V, A, gamma):
-    """Values ``val (nr + nt,)``, Jacobian ``J (nr + nt, nq)`` and, when ``with_drift``, the
-    drift ``gamma (nr + nt,)`` from the bias accelerations ``A`` (qdd = 0) and velocities ``V``.
+    """Values ``val (nr + nt,)`` and Jacobian ``J (nr + nt, nq)``; or, when ``with_drift``, the
+    values and the drift ``gamma (nr + nt,)`` from the bias accelerations ``A`` (qdd = 0) and
+    velocities ``V`` (``J`` untouched).
+
+    Jacobian rows in Plücker form: a translation row ``e . (o_C - o_P)`` changes with tree
+    rate c by ``(s_b - s_a) (e . S_v - (e x o_C) . S_w)`` (s_a, s_b: 1 where c moves body a, b;
+    the terms of ``o_P`` and of the turning ``e`` cancel into this), a rotation row
+    ``e . c_j`` by ``(s_a - s_b) (e x c_j) . S_w``, a task position component m of point x by
+    ``S_v[m] + (x x e_m) . S_w``, a task Euler angle by ``(E^-1 S_w)[m]``.
 
     Returns False where an Euler task angle is at its sequence's singularity."""
-    nq = S.shape[0]
     nr = row_loop.shape[0]
     eP = np.empty((3, 3))
     eC = np.empty((3, 3))
-    oP = np.empty(3)
-    oC = np.empty(3)
-    r = np.empty(3)
-    t3 = np.empty(3)
-    e = np.empty(3)
-    cj = np.empty(3)
-    vP = np.empty(3)
-    aP = np.empty(3)
-    vC = np.empty(3)
-    aC = np.empty(3)
-    ed = np.empty(3)
-    edd = np.empty(3)
-    cd = np.empty(3)
-    cdd = np.empty(3)
-    x = np.empty(3)
-    zero3 = np.zeros(3)
+    wk = np.empty((18, 3))
+    oP, oC, r, t3, e, cj = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5]
+    vP, aP, vC, aC, ed, edd = wk[6], wk[7], wk[8], wk[9], wk[10], wk[11]
+    cd, cdd, x, wa, wb, t4 = wk[12], wk[13], wk[14], wk[15], wk[16], wk[17]
     for rr in range(nr):
         k = loop_joint[row_loop[rr]]
         a = joint_parent[k]
@@ -290,29 +316,21 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
             r[m] = oC[m] - oP[m]
         if row_kind[rr] == 0:
             val[rr] = _dot(e, r)
-            for c in range(nq):
-                s = 0.0
-                if a >= 0 and anc[a, c]:
-                    _cross(S[c, :3], e, t3)
-                    s += _dot(t3, r)
-                    _cross(S[c, :3], oP, t3)
-                    s -= e[0] * (S[c, 3] + t3[0]) + e[1] * (S[c, 4] + t3[1]) + e[2] * (S[c, 5] + t3[2])
-                if b >= 0 and anc[b, c]:
-                    _cross(S[c, :3], oC, t3)
-                    s += e[0] * (S[c, 3] + t3[0]) + e[1] * (S[c, 4] + t3[1]) + e[2] * (S[c, 5] + t3[2])
-                J[rr, c] = s
+            _cross(e, oC, t3)
+            for m in range(3):
+                wa[m] = -t3[m]
+                wb[m] = e[m]
+            if not with_drift:
+                _jrow(J, rr, wa, wb, S, anc, a, b, -1.0, 1.0)
         else:
             for m in range(3):
                 cj[m] = eC[m, row_j[rr]]
             val[rr] = _dot(e, cj)
-            _cross(e, cj, t3)
-            for c in range(nq):
-                s = 0.0
-                if a >= 0 and anc[a, c]:
-                    s += _dot(S[c, :3], t3)
-                if b >= 0 and anc[b, c]:
-                    s -= _dot(S[c, :3], t3)
-                J[rr, c] = s
+            _cross(e, cj, wa)
+            for m in range(3):
+                wb[m] = 0.0
+            if not with_drift:
+                _jrow(J, rr, wa, wb, S, anc, a, b, 1.0, -1.0)
         if with_drift:
             if a >= 0:
                 _cross(V[a, :3], e, ed)
@@ -347,9 +365,9 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
     tb = task_body
     for m in range(3):
         x[m] = p[tb, m] + R[tb, m, 0] * task_point[0] + R[tb, m, 1] * task_point[1] + R[tb, m, 2] * task_point[2]
-    ang = np.empty(3)
-    Em = np.empty((3, 3))
-    Ei = np.empty((3, 3))
+    ang = wk[3]
+    Em = eP
+    Ei = eC
     have_euler = False
     for t in range(task_kind.shape[0]):
         if task_kind[t] == 1:
@@ -369,31 +387,32 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
         m = task_index[t]
         if task_kind[t] == 0:
             val[rr] = x[m]
-            for c in range(nq):
-                if anc[tb, c]:
-                    _cross(S[c, :3], x, t3)
-                    J[rr, c] = S[c, 3 + m] + t3[m]
-                else:
-                    J[rr, c] = 0.0
+            # (x x e_m) . S_w + S_v[m]
+            for i in range(3):
+                t4[i] = 0.0
+                wb[i] = 0.0
+            t4[m] = 1.0
+            _cross(x, t4, wa)
+            wb[m] = 1.0
+            if not with_drift:
+                _jrow(J, rr, wa, wb, S, anc, -1, tb, 0.0, 1.0)
             if with_drift:
                 _point_motion(tb, x, V, A, vC, aC)
                 gamma[rr] = aC[m]
         else:
             val[rr] = ang[m]
-            for c in range(nq):
-                if anc[tb, c]:
-                    J[rr, c] = Ei[m, 0] * S[c, 0] + Ei[m, 1] * S[c, 1] + Ei[m, 2] * S[c, 2]
-                else:
-                    J[rr, c] = 0.0
+            for i in range(3):
+                wa[i] = Ei[m, i]
+                wb[i] = 0.0
+            if not with_drift:
+                _jrow(J, rr, wa, wb, S, anc, -1, tb, 0.0, 1.0)
             if with_drift:
                 # phi_dd = E^-1 (omega_dot - Edot phi_dot), Edot phi_dot = (k1 f1) x (e2 f2) + (k1 f1 + e2 f2) x (e3 f3)
                 w = V[tb, :3]
-                f = np.empty(3)
+                f = wk[10]
                 for i in range(3):
                     f[i] = Ei[i, 0] * w[0] + Ei[i, 1] * w[1] + Ei[i, 2] * w[2]
-                u1 = np.empty(3)
-                u2 = np.empty(3)
-                u12 = np.empty(3)
+                u1, u2, u12 = wk[11], wk[12], wk[13]
                 for i in range(3):
                     u1[i] = Em[i, 0] * f[0]
                     u2[i] = Em[i, 1] * f[1]
@@ -465,7 +484,7 @@ def lu_solve(M, piv, b):
         b[i] = s / M[i, i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _wrap(a):
     return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
 
@@ -483,13 +502,15 @@ def _fill(K, J, sel_rows, idle):
 
 
 @njit(cache=True)
-def solve_batch(x, xd, xdd, q_start,
+def solve_batch(tm, x, xd, xdd, q_start,
                 body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
                 tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
                 row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                 task_body, task_point, task_kind, task_index, euler_axes,
                 sel_rows, idle, q_ref, row_scale, tol, max_iter,
-                q_out, qd_out, qdd_out, R_out, p_out, V_out, A_out, G_out, res_out, status, worst):
+                com, pC_all,
+                q_out, qd_out, qdd_out, R_out, p_out, V_out, A_out, G_out, res_out, status, worst,
+                ov_out, oa_out, cp_out, cv_out, ca_out, jp_out, jv_out, ja_out):
     """Kinematics of every sample, warm-started along the motion.
 
     For sample s: Newton on the square system of the selected rows and the idle rows
@@ -502,7 +523,10 @@ def solve_batch(x, xd, xdd, q_start,
     ``K qd = (0; xd_s)``, ``K qdd = (-gamma_loops; xdd_s - gamma_task)`` and
     ``G = K^-1 (0; I; 0)`` (tree rates per task rate). Writes the per-sample outputs and
     ``status[s]`` (OK, NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN) with ``worst[s]``
-    the row of the largest residual; stops at the first failed sample.
+    the row of the largest residual; stops at the first failed sample. Also the classical
+    velocity and acceleration of every body origin (``ov_out, oa_out``), centre of mass
+    (``com`` (nb, 3) body frame -> ``cp_out, cv_out, ca_out``) and joint centre (the origin of
+    the joint frame on ``joint_child``, ``pC_all`` (nj, 3) -> ``jp_out, jv_out, ja_out``).
     """
     n = x.shape[0]
     nq = q_start.shape[0]
@@ -532,7 +556,11 @@ def solve_batch(x, xd, xdd, q_start,
     ires = np.empty(ni)
     G = np.zeros((nq, nt))
     for s in range(n):
-        if s > 0:
+        if s > 0 and tm.shape[0] == n:
+            dt = tm[s] - tm[s - 1]
+            for c in range(nq):
+                q[c] += qd[c] * dt + 0.5 * qdd[c] * dt * dt
+        elif s > 0:
             for c in range(nq):
                 acc = 0.0
                 for t in range(nt):
@@ -655,6 +683,22 @@ def solve_batch(x, xd, xdd, q_start,
             for i in range(6):
                 V_out[s, b, i] = V[b, i]
                 A_out[s, b, i] = A[b, i]
+            _point_motion(b, p[b], V, A, ov_out[s, b], oa_out[s, b])
+            for i in range(3):
+                cp_out[s, b, i] = p[b, i] + R[b, i, 0] * com[b, 0] + R[b, i, 1] * com[b, 1] + R[b, i, 2] * com[b, 2]
+            _point_motion(b, cp_out[s, b], V, A, cv_out[s, b], ca_out[s, b])
+        for k in range(joint_child.shape[0]):
+            b = joint_child[k]
+            if b < 0:
+                for i in range(3):
+                    jp_out[s, k, i] = pC_all[k, i]
+                    jv_out[s, k, i] = 0.0
+                    ja_out[s, k, i] = 0.0
+            else:
+                for i in range(3):
+                    jp_out[s, k, i] = (p[b, i] + R[b, i, 0] * pC_all[k, 0] + R[b, i, 1] * pC_all[k, 1]
+                                       + R[b, i, 2] * pC_all[k, 2])
+                _point_motion(b, jp_out[s, k], V, A, jv_out[s, k], ja_out[s, k])
         status[s] = OK
 
 

@@ -115,7 +115,7 @@ def loop_residuals(model: MechanismModel, q: Array) -> Array:
     return val[:, : model.row_loop.shape[0]]
 
 
-def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array) -> dict:
+def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array, t: Array | None = None) -> dict:
     n, nq, nb, nt = x.shape[0], model.nq, model.nb, model.nt
     out = {
         "q": np.zeros((n, nq)), "qd": np.zeros((n, nq)), "qdd": np.zeros((n, nq)),
@@ -123,15 +123,23 @@ def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array)
         "A": np.zeros((n, nb, 6)), "G": np.zeros((n, nq, nt)), "res": np.zeros(n),
         "status": np.full(n, -1, dtype=np.int64), "worst": np.zeros(n, dtype=np.int64),
     }
-    K.solve_batch(x, xd, xdd, q_start, model.body_parent, model.body_joint, model.joint_q0, model.joint_nq,
+    nj = len(model.joint_names)
+    for k in ("ov", "oa", "cp", "cv", "ca"):
+        out[k] = np.zeros((n, nb, 3))
+    for k in ("jp", "jv", "ja"):
+        out[k] = np.zeros((n, nj, 3))
+    tt = np.zeros(0) if t is None else np.ascontiguousarray(t, dtype=float)
+    K.solve_batch(tt, x, xd, xdd, q_start, model.body_parent, model.body_joint, model.joint_q0, model.joint_nq,
                   model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent,
                   model.tree_R_child, model.tree_p_child, model.joint_R_parent, model.joint_p_parent,
-                  model.joint_R_child, model.joint_p_child, model.ancestors, model.row_loop, model.row_kind,
+                  model.joint_R_child, model.joint_p_child, model.ancestor_list, model.row_loop, model.row_kind,
                   model.row_i, model.row_j, model.loop_joint, model.joint_parent, model.joint_child,
                   model.task_body, model.task_point, model.task_kind, model.task_index, model.euler_axes,
                   model.solver_rows, model.solver_idle, model.coord_offset, row_scale(model), TOLERANCE, MAX_ITER,
+                  model.com, model.joint_p_child,
                   out["q"], out["qd"], out["qdd"], out["R"], out["p"], out["V"], out["A"], out["G"], out["res"],
-                  out["status"], out["worst"])
+                  out["status"], out["worst"], out["ov"], out["oa"], out["cp"], out["cv"], out["ca"],
+                  out["jp"], out["jv"], out["ja"])
     return out
 
 
@@ -219,43 +227,19 @@ def solve_kinematics(model: MechanismModel, x: Array, xd: Array | None = None, x
     if n == 0:
         raise MotionError("x: the motion has no samples")
     q0 = _start(model, x[0]) if q_start is None else np.ascontiguousarray(as_array(q_start, (model.nq,), "q_start"))
-    out = _run(model, x, xd, xdd, q0)
+    out = _run(model, x, xd, xdd, q0, t)
     if np.any(out["status"] != K.OK):
         _fail(model, out, t, x)
     return _assemble(model, t, x, xd, xdd, out)
 
 
 def _assemble(model: MechanismModel, t: Array | None, x: Array, xd: Array, xdd: Array, out: dict) -> MechanismKinematics:
-    R, p, V, A = out["R"], out["p"], out["V"], out["A"]
-    w, wd = V[..., :3], A[..., :3]
-
-    def point(xw: Array, b: Array) -> tuple[Array, Array]:
-        """Velocity and acceleration of world points xw (n, k, 3) fixed in bodies b (k,)."""
-        Vb, Ab = V[:, b], A[:, b]
-        ww, wdw = Vb[..., :3], Ab[..., :3]
-        v = Vb[..., 3:] + np.cross(ww, xw)
-        a = Ab[..., 3:] + np.cross(wdw, xw) + np.cross(ww, v)
-        return v, a
-
-    allb = np.arange(model.nb)
-    ov, oa = point(p, allb)
-    com = p + np.einsum("nbij,bj->nbi", R, model.com)
-    cv, ca = point(com, allb)
-    child = model.joint_child
-    nj = child.shape[0]
-    jp = np.empty((x.shape[0], nj, 3))
-    jv = np.zeros_like(jp)
-    ja = np.zeros_like(jp)
-    moving = child >= 0
-    if np.any(moving):
-        b = child[moving]
-        jp[:, moving] = p[:, b] + np.einsum("nkij,kj->nki", R[:, b], model.joint_p_child[moving])
-        jv[:, moving], ja[:, moving] = point(jp[:, moving], b)
-    jp[:, ~moving] = model.joint_p_child[~moving]
+    V, A = out["V"], out["A"]
     ac = model.act_coord
     return MechanismKinematics(
-        t=t, x=x, xd=xd, xdd=xdd, q=out["q"], qd=out["qd"], qdd=out["qdd"], R=R, origin=p, origin_v=ov,
-        origin_a=oa, w=w, wd=wd, p=com, v=cv, a=ca, joint_point=jp, joint_point_v=jv, joint_point_a=ja,
+        t=t, x=x, xd=xd, xdd=xdd, q=out["q"], qd=out["qd"], qdd=out["qdd"], R=out["R"], origin=out["p"],
+        origin_v=out["ov"], origin_a=out["oa"], w=V[..., :3], wd=A[..., :3], p=out["cp"], v=out["cv"], a=out["ca"],
+        joint_point=out["jp"], joint_point_v=out["jv"], joint_point_a=out["ja"],
         act_q=out["q"][:, ac], act_qd=out["qd"][:, ac], act_qdd=out["qdd"][:, ac], J_ax=out["G"][:, ac, :],
         G=out["G"], residual=out["res"],
     )

@@ -81,7 +81,8 @@ class MechanismModel:
 
     Tree coordinates: ``coord_joint`` (nq,), ``coord_motion`` (nq,) elementary-motion codes
     (:data:`~.joint_types.MOTION_CODES`), ``coord_offset`` (nq,), ``coord_sign`` (nq,);
-    ``ancestors`` (nb, nq) bool: coordinate k moves body b. A tree joint reached from its
+    ``ancestors`` (nb, nq) bool: coordinate k moves body b; ``ancestor_list`` (nb, 1 + max)
+    the same as a count followed by the coordinates (what the kernels read). A tree joint reached from its
     child's side (``joint_flipped``) moves its description parent by the inverse motion
     ``M_k(-q_k) ... M_1(-q_1)``: its coordinates are stored in reverse order with sign -1,
     and ``tree_R_parent``/``tree_p_parent``/``tree_R_child``/``tree_p_child`` (nj, ...) hold
@@ -144,6 +145,7 @@ class MechanismModel:
     tree_R_child: Array
     tree_p_child: Array
     ancestors: NDArray[np.bool_]
+    ancestor_list: IntArray
     loops: tuple[LoopRecord, ...]
     loop_joint: IntArray
     row_loop: IntArray
@@ -373,7 +375,7 @@ def compile_model(desc: Description) -> MechanismModel:
         coord_joint=np.array(coord_joint, dtype=np.int64), coord_motion=np.array(coord_motion, dtype=np.int64),
         coord_offset=np.array(coord_offset, dtype=float), coord_sign=np.array(coord_sign, dtype=float),
         joint_flipped=np.isin(np.arange(nj), sorted(flipped)), tree_R_parent=tRP, tree_p_parent=tpP,
-        tree_R_child=tRC, tree_p_child=tpC, ancestors=anc,
+        tree_R_child=tRC, tree_p_child=tpC, ancestors=anc, ancestor_list=_ancestor_list(anc),
         loops=tuple(loops), loop_joint=np.array(cuts, dtype=np.int64),
         row_loop=np.array(row_loop, dtype=np.int64), row_kind=np.array(row_kind, dtype=np.int64),
         row_i=np.array(row_i, dtype=np.int64), row_j=np.array(row_j, dtype=np.int64),
@@ -393,6 +395,17 @@ def compile_model(desc: Description) -> MechanismModel:
 
     rows, idle, rep = solver_selection(model)
     return replace(model, solver_rows=rows, solver_idle=idle, topology=rep)
+
+
+def _ancestor_list(anc: NDArray[np.bool_]) -> IntArray:
+    """(nb, 1 + max count): per body the number of coordinates moving it, then their indices."""
+    counts = anc.sum(axis=1)
+    out = np.full((anc.shape[0], 1 + int(counts.max(initial=0))), -1, dtype=np.int64)
+    for b in range(anc.shape[0]):
+        idx = np.flatnonzero(anc[b])
+        out[b, 0] = idx.size
+        out[b, 1:1 + idx.size] = idx
+    return out
 
 
 def _loop_path(desc: Description, tree: list[int], child_of_joint: dict, parent_name: dict, a: str, b: str) -> tuple[str, ...]:

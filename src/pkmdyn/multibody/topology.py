@@ -109,7 +109,7 @@ def _args(model: MechanismModel) -> tuple:
     return (model.body_parent, model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion,
             model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,
             model.tree_p_child, model.joint_R_parent, model.joint_p_parent, model.joint_R_child,
-            model.joint_p_child, model.ancestors, model.row_loop, model.row_kind, model.row_i, model.row_j,
+            model.joint_p_child, model.ancestor_list, model.row_loop, model.row_kind, model.row_i, model.row_j,
             model.loop_joint, model.joint_parent, model.joint_child, model.task_body, model.task_point,
             model.task_kind, model.task_index, model.euler_axes)
 
