@@ -157,3 +157,19 @@ def test_unreachable_motion_is_refused_and_nothing_written(capsys, tmp_path):
     code, _, err = _run(capsys, "run", "--machine", "delta", "--motion", str(f), "--out", str(tmp_path / "o"))
     assert code == 2 and "sample 6 (t = 0.6 s)" in err and "unreachable" in err
     assert not (tmp_path / "o").exists()
+
+
+def test_the_worked_example_of_the_format_document_runs_as_documented(capsys, tmp_path):
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "mechanism_format.md").read_text(encoding="utf-8")
+    block = doc.split("## Worked example")[1].split("```toml\n")[1].split("```")[0]
+    f = tmp_path / "four_bar.toml"
+    f.write_text(block, encoding="utf-8")
+    code, out, err = _run(capsys, "describe", "--machine", str(f))
+    assert code == 0, err
+    assert "spanning tree: A, B, C" in out and "cut joints (independent loops 1): D" in out
+    assert "Grubler-Kutzbach mobility: -2" in out and "mobility (rank at the reference configuration): 1" in out
+    assert "over-constraints: 3 (D force_z, D couple_x, D couple_y)" in out
+    code, _, err = _run(capsys, "run", "--machine", str(f), "--out", str(tmp_path / "o"))
+    assert code == 0, err
