@@ -66,14 +66,12 @@ def _dot(a, b):
 
 @njit(cache=True)
 def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
-                      RP, pP, RC, pC, R, p, S):
+                      RP, pP, RC, pC, R, p, S, w33, w3):
     """Body poses ``R (nb, 3, 3)``, ``p (nb, 3)`` and coordinate twists ``S (nq, 6)`` at ``q``
-    (frames ``RP, pP, RC, pC`` in tree order; coordinate c moves by ``coord_sign[c] (q - offset)``)."""
-    Rf = np.empty((3, 3))
-    tmp = np.empty((3, 3))
-    E = np.empty((3, 3))
-    o = np.empty(3)
-    ax = np.empty(3)
+    (frames ``RP, pP, RC, pC`` in tree order; coordinate c moves by ``coord_sign[c] (q - offset)``;
+    ``w33 (5, 3, 3)``, ``w3 (20, 3)``: work space)."""
+    Rf, tmp, E = w33[0], w33[1], w33[2]
+    o, ax = w3[18], w3[19]
     for b in range(body_parent.shape[0]):
         k = body_joint[b]
         a = body_parent[b]
@@ -190,21 +188,24 @@ def euler_rate_map(ang, axes, E):
     i1, i2, i3 = axes[0], axes[1], axes[2]
     c1, s1 = math.cos(ang[0]), math.sin(ang[0])
     c2, s2 = math.cos(ang[1]), math.sin(ang[1])
-    # R1 k2: k2 turned about k1 by ang0; R1 R2 k3 = R1 (R2 k3)
-    k2 = np.zeros(3)
-    k2[i2] = 1.0
-    v = np.zeros(3)
-    _rotate_vec(i1, c1, s1, k2, v)
-    k3 = np.zeros(3)
-    k3[i3] = 1.0
-    w = np.zeros(3)
-    _rotate_vec(i2, c2, s2, k3, w)
-    u = np.zeros(3)
-    _rotate_vec(i1, c1, s1, w, u)
     for r in range(3):
         E[r, 0] = 1.0 if r == i1 else 0.0
-        E[r, 1] = v[r]
-        E[r, 2] = u[r]
+        E[r, 1] = 1.0 if r == i2 else 0.0
+        E[r, 2] = 1.0 if r == i3 else 0.0
+    # column 1: R1 k2
+    j, k = (i1 + 1) % 3, (i1 + 2) % 3
+    xj, xk = E[j, 1], E[k, 1]
+    E[j, 1] = c1 * xj - s1 * xk
+    E[k, 1] = s1 * xj + c1 * xk
+    # column 2: R1 (R2 k3)
+    j, k = (i2 + 1) % 3, (i2 + 2) % 3
+    xj, xk = E[j, 2], E[k, 2]
+    E[j, 2] = c2 * xj - s2 * xk
+    E[k, 2] = s2 * xj + c2 * xk
+    j, k = (i1 + 1) % 3, (i1 + 2) % 3
+    xj, xk = E[j, 2], E[k, 2]
+    E[j, 2] = c1 * xj - s1 * xk
+    E[k, 2] = s1 * xj + c1 * xk
 
 
 @njit(cache=True, inline="always")
@@ -285,7 +286,7 @@ def _jrow(J, rr, wa, wb, S, anc, a, b, coef_a, coef_b):
 @njit(cache=True)
 def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
          RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-         val, J, with_drift, V, A, gamma):
+         val, J, with_drift, V, A, gamma, w33, w3):
     """Values ``val (nr + nt,)`` and Jacobian ``J (nr + nt, nq)``; or, when ``with_drift``, the
     values and the drift ``gamma (nr + nt,)`` from the bias accelerations ``A`` (qdd = 0) and
     velocities ``V`` (``J`` untouched).
@@ -298,9 +299,9 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
 
     Returns False where an Euler task angle is at its sequence's singularity."""
     nr = row_loop.shape[0]
-    eP = np.empty((3, 3))
-    eC = np.empty((3, 3))
-    wk = np.empty((18, 3))
+    eP = w33[3]
+    eC = w33[4]
+    wk = w3
     oP, oC, r, t3, e, cj = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5]
     vP, aP, vC, aC, ed, edd = wk[6], wk[7], wk[8], wk[9], wk[10], wk[11]
     cd, cdd, x, wa, wb, t4 = wk[12], wk[13], wk[14], wk[15], wk[16], wk[17]
@@ -490,15 +491,92 @@ def _wrap(a):
 
 
 @njit(cache=True)
-def _fill(K, J, sel_rows, idle):
+def _fill(K, J, sel_rows, idle, prow, pcol):
+    """``K[i, j] = Kfull[prow[i], pcol[j]]`` with ``Kfull = [J[sel_rows]; idle]``."""
     m = sel_rows.shape[0]
-    nq = J.shape[1]
-    for i in range(m):
-        for j in range(nq):
-            K[i, j] = J[sel_rows[i], j]
-    for i in range(idle.shape[0]):
-        for j in range(nq):
-            K[m + i, j] = idle[i, j]
+    for i in range(K.shape[0]):
+        r = prow[i]
+        if r < m:
+            rr = sel_rows[r]
+            for j in range(K.shape[1]):
+                K[i, j] = J[rr, pcol[j]]
+        else:
+            for j in range(K.shape[1]):
+                K[i, j] = idle[r - m, pcol[j]]
+
+
+@njit(cache=True)
+def block_lu_factor(M, piv, blocks):
+    """LU with partial pivoting inside each diagonal block of a block lower-triangular ``M``
+    (``blocks``: block start rows, then ``n``); whole rows are swapped, the blocks left of the
+    diagonal are kept as they are. False when a pivot is below 1e-12 of the largest entry."""
+    n = M.shape[0]
+    big = 0.0
+    for i in range(n):
+        for j in range(n):
+            if abs(M[i, j]) > big:
+                big = abs(M[i, j])
+    tol = 1e-12 * big if big > 0 else 1e-300
+    for bk in range(blocks.shape[0] - 1):
+        s0, s1 = blocks[bk], blocks[bk + 1]
+        for k in range(s0, s1):
+            pr = k
+            pv = abs(M[k, k])
+            for i in range(k + 1, s1):
+                if abs(M[i, k]) > pv:
+                    pv = abs(M[i, k])
+                    pr = i
+            piv[k] = pr
+            if pv <= tol:
+                return False
+            if pr != k:
+                for j in range(n):
+                    tmp = M[k, j]
+                    M[k, j] = M[pr, j]
+                    M[pr, j] = tmp
+            inv = 1.0 / M[k, k]
+            for i in range(k + 1, s1):
+                f = M[i, k] * inv
+                M[i, k] = f
+                if f != 0.0:
+                    for j in range(k + 1, s1):
+                        M[i, j] -= f * M[k, j]
+    return True
+
+
+@njit(cache=True)
+def block_lu_solve(M, piv, blocks, prow, pcol, b, work):
+    """Solve ``Kfull x = b`` in place (``b`` in the rows of ``Kfull``, ``x`` in coordinate
+    order) with the factors of :func:`block_lu_factor` of the permuted ``K``: block by block,
+    ``A_kk x_k = b_k - A_k,<k x_<k``."""
+    n = M.shape[0]
+    for i in range(n):
+        work[i] = b[prow[i]]
+    for bk in range(blocks.shape[0] - 1):
+        s0, s1 = blocks[bk], blocks[bk + 1]
+        for k in range(s0, s1):
+            pr = piv[k]
+            if pr != k:
+                tmp = work[k]
+                work[k] = work[pr]
+                work[pr] = tmp
+        for i in range(s0, s1):
+            acc = work[i]
+            for j in range(s0):
+                acc -= M[i, j] * work[j]
+            work[i] = acc
+        for i in range(s0, s1):
+            acc = work[i]
+            for j in range(s0, i):
+                acc -= M[i, j] * work[j]
+            work[i] = acc
+        for i in range(s1 - 1, s0 - 1, -1):
+            acc = work[i]
+            for j in range(i + 1, s1):
+                acc -= M[i, j] * work[j]
+            work[i] = acc / M[i, i]
+    for j in range(n):
+        b[pcol[j]] = work[j]
 
 
 @njit(cache=True)
@@ -507,7 +585,7 @@ def solve_batch(tm, x, xd, xdd, q_start,
                 tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
                 row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                 task_body, task_point, task_kind, task_index, euler_axes,
-                sel_rows, idle, q_ref, row_scale, tol, max_iter,
+                sel_rows, idle, prow, pcol, blocks, q_ref, row_scale, tol, max_iter,
                 com, pC_all,
                 q_out, qd_out, qdd_out, R_out, p_out, V_out, A_out, G_out, res_out, status, worst,
                 ov_out, oa_out, cp_out, cv_out, ca_out, jp_out, jv_out, ja_out):
@@ -518,7 +596,9 @@ def solve_batch(tm, x, xd, xdd, q_start,
         rows(q) = 0 (loop closure),  task(q) - x_s = 0 (task coordinates, angles wrapped),
         idle (q - q_ref) = 0         (each idle freedom held along its direction at the reference),
 
-    ``K = [J[sel_rows]; idle]`` (nq, nq), starting from ``q_{s-1} + G_{s-1} (x_s - x_{s-1})`` (``q_start`` for the first), until
+    ``K = [J[sel_rows]; idle]`` (nq, nq), permuted (``prow``, ``pcol``) to block lower-triangular
+    form with diagonal blocks starting at ``blocks`` (legs that are independent once the
+    platform is placed are solved one by one), starting from ``q_{s-1} + G_{s-1} (x_s - x_{s-1})`` (``q_start`` for the first), until
     the scaled residual of every row (selected or not) is below ``tol``; then
     ``K qd = (0; xd_s)``, ``K qdd = (-gamma_loops; xdd_s - gamma_task)`` and
     ``G = K^-1 (0; I; 0)`` (tree rates per task rate). Writes the per-sample outputs and
@@ -554,7 +634,10 @@ def solve_batch(tm, x, xd, xdd, q_start,
     piv = np.empty(mk, dtype=np.int64)
     rhs = np.empty(mk)
     ires = np.empty(ni)
+    bwork = np.empty(mk)
     G = np.zeros((nq, nt))
+    w33 = np.empty((5, 3, 3))
+    w3 = np.empty((20, 3))
     for s in range(n):
         if s > 0 and tm.shape[0] == n:
             dt = tm[s] - tm[s - 1]
@@ -572,10 +655,10 @@ def solve_batch(tm, x, xd, xdd, q_start,
         converged = False
         for it in range(max_iter + 1):
             forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
-                              coord_sign, tRP, tpP, tRC, tpC, R, p, S)
+                              coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3)
             ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                       RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-                      val, J, False, V, A, gamma)
+                      val, J, False, V, A, gamma, w33, w3)
             if not ok:
                 status[s] = EULER_SINGULAR
                 worst[s] = nr
@@ -607,17 +690,17 @@ def solve_batch(tm, x, xd, xdd, q_start,
                 break
             if it == max_iter:
                 break
-            _fill(K, J, sel_rows, idle)
+            _fill(K, J, sel_rows, idle, prow, pcol)
             for i in range(m):
                 rhs[i] = -res[sel_rows[i]]
             for i in range(ni):
                 rhs[m + i] = -ires[i]
-            if not lu_factor(K, piv):
+            if not block_lu_factor(K, piv, blocks):
                 status[s] = SINGULAR
                 for c in range(nq):
                     q_out[s, c] = q[c]
                 return
-            lu_solve(K, piv, rhs)
+            block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
             for j in range(mk):
                 q[j] += rhs[j]
         if not converged:
@@ -631,8 +714,8 @@ def solve_batch(tm, x, xd, xdd, q_start,
             for c in range(nq):
                 q_out[s, c] = q[c]
             return
-        _fill(K, J, sel_rows, idle)
-        if not lu_factor(K, piv):
+        _fill(K, J, sel_rows, idle, prow, pcol)
+        if not block_lu_factor(K, piv, blocks):
             status[s] = SINGULAR
             for c in range(nq):
                 q_out[s, c] = q[c]
@@ -643,7 +726,7 @@ def solve_batch(tm, x, xd, xdd, q_start,
         for i in range(m):
             rr = sel_rows[i]
             rhs[i] = xd[s, rr - nr] if rr >= nr else 0.0
-        lu_solve(K, piv, rhs)
+        block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
         for j in range(nq):
             qd[j] = rhs[j]
         forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre)
@@ -652,13 +735,13 @@ def solve_batch(tm, x, xd, xdd, q_start,
         forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
         rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
              RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-             val, J, True, V, A, gamma)
+             val, J, True, V, A, gamma, w33, w3)
         for i in range(mk):
             rhs[i] = 0.0
         for i in range(m):
             rr = sel_rows[i]
             rhs[i] = (xdd[s, rr - nr] - gamma[rr]) if rr >= nr else -gamma[rr]
-        lu_solve(K, piv, rhs)
+        block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
         for j in range(nq):
             qdd[j] = rhs[j]
         forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
@@ -666,7 +749,7 @@ def solve_batch(tm, x, xd, xdd, q_start,
         for t in range(nt):
             for i in range(mk):
                 rhs[i] = 1.0 if (i < m and sel_rows[i] == nr + t) else 0.0
-            lu_solve(K, piv, rhs)
+            block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
             for j in range(nq):
                 G[j, t] = rhs[j]
         for c in range(nq):
@@ -716,9 +799,11 @@ def jacobians_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion
     V = np.zeros((nb, 6))
     A = np.zeros((nb, 6))
     gamma = np.zeros(val_out.shape[1])
+    w33 = np.empty((5, 3, 3))
+    w3 = np.empty((20, 3))
     for s in range(q.shape[0]):
         forward_positions(q[s], body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
-                          coord_sign, tRP, tpP, tRC, tpC, R, p, S)
+                          coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3)
         rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
              RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-             val_out[s], J_out[s], False, V, A, gamma)
+             val_out[s], J_out[s], False, V, A, gamma, w33, w3)

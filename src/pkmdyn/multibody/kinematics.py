@@ -98,7 +98,8 @@ def _poses(model: MechanismModel, q: Array) -> tuple[Array, Array, Array]:
     S = np.empty((model.nq, 6))
     K.forward_positions(np.ascontiguousarray(q, dtype=float), model.body_parent, model.body_joint, model.joint_q0,
                         model.joint_nq, model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent,
-                        model.tree_p_parent, model.tree_R_child, model.tree_p_child, R, p, S)
+                        model.tree_p_parent, model.tree_R_child, model.tree_p_child, R, p, S,
+                        np.empty((5, 3, 3)), np.empty((20, 3)))
     return R, p, S
 
 
@@ -135,7 +136,8 @@ def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array,
                   model.joint_R_child, model.joint_p_child, model.ancestor_list, model.row_loop, model.row_kind,
                   model.row_i, model.row_j, model.loop_joint, model.joint_parent, model.joint_child,
                   model.task_body, model.task_point, model.task_kind, model.task_index, model.euler_axes,
-                  model.solver_rows, model.solver_idle, model.coord_offset, row_scale(model), TOLERANCE, MAX_ITER,
+                  model.solver_rows, model.solver_idle, model.solver_prow, model.solver_pcol,
+                  model.solver_blocks, model.coord_offset, row_scale(model), TOLERANCE, MAX_ITER,
                   model.com, model.joint_p_child,
                   out["q"], out["qd"], out["qdd"], out["R"], out["p"], out["V"], out["A"], out["G"], out["res"],
                   out["status"], out["worst"], out["ov"], out["oa"], out["cp"], out["cv"], out["ca"],

@@ -102,7 +102,10 @@ class MechanismModel:
 
     Solver: ``solver_rows`` (m,) rows of the square Newton system (independent constraint
     rows, then every task row) and ``solver_idle`` (nq - m, nq) the directions of the idle
-    freedoms, held (``solver_idle (q - q_ref) = 0``), chosen at the reference configuration
+    freedoms, held (``solver_idle (q - q_ref) = 0``), chosen at the reference configuration;
+    ``solver_prow``, ``solver_pcol`` (nq,) the row and column order that makes the Newton
+    matrix block lower-triangular, ``solver_blocks`` the first row of each diagonal block
+    (then nq) (:func:`~.topology.block_structure`)
     (:func:`~.topology.solver_selection`); ``topology``: the
     :class:`~.topology.TopologyReport` there.
     """
@@ -171,6 +174,9 @@ class MechanismModel:
     motion: object
     solver_rows: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     solver_idle: Array = field(default_factory=lambda: np.zeros((0, 0)))
+    solver_prow: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    solver_pcol: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    solver_blocks: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     topology: object = None
 
     @property
@@ -391,10 +397,12 @@ def compile_model(desc: Description) -> MechanismModel:
     )
     from dataclasses import replace
 
-    from .topology import solver_selection
+    from .topology import block_structure, solver_selection
 
     rows, idle, rep = solver_selection(model)
-    return replace(model, solver_rows=rows, solver_idle=idle, topology=rep)
+    prow, pcol, blocks = block_structure(model, rows, idle)
+    return replace(model, solver_rows=rows, solver_idle=idle, solver_prow=prow, solver_pcol=pcol,
+                   solver_blocks=blocks, topology=rep)
 
 
 def _ancestor_list(anc: NDArray[np.bool_]) -> IntArray:

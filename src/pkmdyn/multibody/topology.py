@@ -195,6 +195,63 @@ def analyse_topology(model: MechanismModel, q: Array | None = None) -> TopologyR
     )
 
 
+def block_structure(model: MechanismModel, rows: Array, idle: Array) -> tuple[Array, Array, Array]:
+    """Row and column orders making the Newton matrix ``[J[rows]; idle]`` block lower-triangular.
+
+    From the structural pattern (a loop row depends on the coordinates that move either of
+    its bodies, a task row on those that move the task body, an idle row on its nonzero
+    entries): a perfect matching of rows to columns (``maximum_bipartite_matching``), the
+    strongly connected components of the row graph ``i -> j`` where row i uses the column
+    matched to row j (``connected_components``), put in an order where every block uses only
+    the columns of itself and of the blocks before it (the block triangular form of
+    Duff & Reid). For a Stewart platform: the six task rows with the six coordinates of the
+    leg that carries the platform, then each other leg's three closure rows with its three
+    coordinates. Returns ``(prow, pcol, blocks)``; a single block when no structure is found.
+    """
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
+
+    nq, m = model.nq, rows.size
+    n = m + idle.shape[0]
+    P = np.zeros((n, nq), dtype=bool)
+    nr = model.row_loop.shape[0]
+    for i, r in enumerate(rows):
+        if r < nr:
+            k = model.loop_joint[model.row_loop[r]]
+            for b in (model.joint_parent[k], model.joint_child[k]):
+                if b >= 0:
+                    P[i] |= model.ancestors[b]
+        else:
+            P[i] = model.ancestors[model.task_body]
+    P[m:] = np.abs(idle) > 1e-14 * max(float(np.abs(idle).max(initial=0.0)), 1e-300)
+    single = (np.arange(n, dtype=np.int64), np.arange(n, dtype=np.int64), np.array([0, n], dtype=np.int64))
+    if n != nq or n == 0:
+        return single
+    match = maximum_bipartite_matching(csr_matrix(P.astype(np.int8)), perm_type="column")
+    if np.any(match < 0):
+        return single
+    dep = P[:, match]  # dep[i, j]: row i uses the column matched to row j
+    ncomp, label = connected_components(csr_matrix(dep.astype(np.int8)), directed=True, connection="strong")
+    # order the components so that each comes after every component it depends on
+    needs = [set() for _ in range(ncomp)]
+    for i, j in zip(*np.nonzero(dep)):
+        if label[i] != label[j]:
+            needs[label[i]].add(label[j])
+    order, done = [], set()
+    while len(order) < ncomp:
+        ready = [c for c in range(ncomp) if c not in done and needs[c] <= done]
+        if not ready:  # pragma: no cover - the condensation of a graph is acyclic
+            return single
+        for c in ready:
+            order.append(c)
+            done.add(c)
+    prow = np.concatenate([np.flatnonzero(label == c) for c in order]).astype(np.int64)
+    pcol = match[prow].astype(np.int64)
+    sizes = [int(np.sum(label == c)) for c in order]
+    blocks = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    return prow, pcol, blocks
+
+
 def solver_selection(model: MechanismModel, q: Array | None = None) -> tuple[Array, Array, TopologyReport]:
     """Rows of the square Newton system and its idle rows, chosen at ``q`` (default: reference).
 
