@@ -95,9 +95,13 @@ def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_moti
                 S[c, 3] = sg * (o[1] * ax[2] - o[2] * ax[1])
                 S[c, 4] = sg * (o[2] * ax[0] - o[0] * ax[2])
                 S[c, 5] = sg * (o[0] * ax[1] - o[1] * ax[0])
-                _rot(m, qc, E)
-                _matmul3(Rf, E, tmp)
-                Rf[:, :] = tmp
+                # Rf <- Rf Rot_m(qc): only the two columns normal to axis m turn
+                cq, sq = math.cos(qc), math.sin(qc)
+                i1, j1 = (m + 1) % 3, (m + 2) % 3
+                for r in range(3):
+                    ci, cjv = Rf[r, i1], Rf[r, j1]
+                    Rf[r, i1] = cq * ci + sq * cjv
+                    Rf[r, j1] = -sq * ci + cq * cjv
             else:
                 for i in range(3):
                     ax[i] = Rf[i, m - 3]
@@ -305,12 +309,15 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
     oP, oC, r, t3, e, cj = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5]
     vP, aP, vC, aC, ed, edd = wk[6], wk[7], wk[8], wk[9], wk[10], wk[11]
     cd, cdd, x, wa, wb, t4 = wk[12], wk[13], wk[14], wk[15], wk[16], wk[17]
+    last = -1
     for rr in range(nr):
         k = loop_joint[row_loop[rr]]
         a = joint_parent[k]
         b = joint_child[k]
-        _frame(a, R, p, RP[k], pP[k], eP, oP)
-        _frame(b, R, p, RC[k], pC[k], eC, oC)
+        if k != last:
+            _frame(a, R, p, RP[k], pP[k], eP, oP)
+            _frame(b, R, p, RC[k], pC[k], eC, oC)
+            last = k
         i = row_i[rr]
         for m in range(3):
             e[m] = eP[m, i]
@@ -366,7 +373,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
     tb = task_body
     for m in range(3):
         x[m] = p[tb, m] + R[tb, m, 0] * task_point[0] + R[tb, m, 1] * task_point[1] + R[tb, m, 2] * task_point[2]
-    ang = wk[3]
+    ang = w33[2, 0]  # not shared with the row work space
     Em = eP
     Ei = eC
     have_euler = False
