@@ -131,3 +131,31 @@ def stewart_flipped_spheres():
             if j["name"] == "S":
                 j["parent"], j["child"] = j["child"], j["parent"]
     return d
+
+
+def sarrus():
+    """Sarrus linkage: two chains of three parallel revolutes with crossed axis directions;
+    the top moves straight up (Grübler-Kutzbach 0, mobility 1, one over-constraint)."""
+    return {
+        "mechanism": {"name": "sarrus"},
+        "bodies": [body("a1", (0.1, 0, 0.05)), body("a2", (0.1, 0, 0.15)), body("b1", (0, 0.1, 0.05)),
+                   body("b2", (0, 0.1, 0.15)), body("top", (0, 0, 0.2))],
+        "joints": [joint("A0", "revolute", "ground", "a1", (0.2, 0, 0), axis=[0, 1, 0], actuated=True),
+                   joint("A1", "revolute", "a1", "a2", (0.25, 0, 0.1), axis=[0, 1, 0]),
+                   joint("A2", "revolute", "a2", "top", (0.2, 0, 0.2), axis=[0, 1, 0]),
+                   joint("B0", "revolute", "ground", "b1", (0, 0.2, 0), axis=[1, 0, 0]),
+                   joint("B1", "revolute", "b1", "b2", (0, 0.25, 0.1), axis=[1, 0, 0]),
+                   joint("B2", "revolute", "b2", "top", (0, 0.2, 0.2), axis=[1, 0, 0])],
+        "task": {"body": "top", "position": ["z"], "point_m": [0, 0, 0.2]},
+    }
+
+
+def serial_arm():
+    """An open chain (no loop): a planar 2R arm with both joints driven."""
+    return {
+        "mechanism": {"name": "arm"},
+        "bodies": [body("l1", (0.25, 0, 0)), body("l2", (0.75, 0, 0))],
+        "joints": [joint("J1", "revolute", "ground", "l1", (0, 0, 0), axis=Z, actuated=True),
+                   joint("J2", "revolute", "l1", "l2", (0.5, 0.1, 0), axis=Z, actuated=True)],
+        "task": {"body": "l2", "point_m": [0.7, 0.6, 0.0], "position": ["x", "y"]},
+    }

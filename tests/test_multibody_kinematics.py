@@ -20,7 +20,7 @@ AMP = {"stewart": [0.05, 0.05, 0.05, 0.1, 0.1, 0.1], "delta": [0.15, 0.15, 0.1],
        "bennett": [0.5], "four_bar": [0.6], "slider_crank": [1.0], "rssr": [0.1], "stewart_sps": [0.05] * 6,
        "stewart_tool": [0.05, 0.05, 0.05, 0.1, 0.1, 0.1], "rrr3_planar": [0.04, 0.04, 0.2],
        "rrr3_planar_cut": [0.04, 0.04, 0.2], "slider_crank_c": [1.0], "four_bar_cut_b": [0.6],
-       "stewart_flipped": [0.05, 0.05, 0.05, 0.1, 0.1, 0.1]}
+       "stewart_flipped": [0.05, 0.05, 0.05, 0.1, 0.1, 0.1], "sarrus": [0.01], "serial_arm": [0.05, 0.05]}
 
 
 def _models():
@@ -28,7 +28,8 @@ def _models():
     out.update(four_bar=ex.four_bar(), slider_crank=ex.slider_crank(), rssr=ex.rssr(), stewart_sps=ex.stewart_sps(),
                stewart_tool=ex.stewart_with_tool(), rrr3_planar=ex.rrr3_planar_platform(),
                rrr3_planar_cut=ex.rrr3_planar_platform(cut_legs=True), slider_crank_c=ex.slider_crank("cylindrical"),
-               four_bar_cut_b=ex.four_bar_cut_b(), stewart_flipped=ex.stewart_flipped_spheres())
+               four_bar_cut_b=ex.four_bar_cut_b(), stewart_flipped=ex.stewart_flipped_spheres(),
+               sarrus=ex.sarrus(), serial_arm=ex.serial_arm())
     return out
 
 

@@ -22,6 +22,8 @@ KNOWN = {
     "rrr3": (lambda: ex.MACHINES / "rrr3" / "rrr3.toml", (-3, 3, 6, 0, 3, 2)),
     "bennett": (lambda: ex.MACHINES / "bennett" / "bennett.toml", (-2, 1, 3, 0, 1, 1)),
     "rrr3_planar": (ex.rrr3_planar_platform, (-6, 3, 9, 0, 3, 3)),
+    "sarrus": (ex.sarrus, (0, 1, 1, 0, 1, 1)),
+    "serial_arm": (ex.serial_arm, (2, 2, 0, 0, 2, 0)),
 }
 
 
