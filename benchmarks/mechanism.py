@@ -4,13 +4,14 @@ Runs in one process: the generic kinematics (every body, joint point, actuator r
 Jacobian; ``pkmdyn.multibody.solve_kinematics``) of the built-in 6-UPS Stewart platform on a
 smooth random motion, with its leg lengths, rates and accelerations compared with the
 closed-form vector-loop solution (``tests/oracles/stewart.py``); the same for the Delta robot;
-and the hip simulator's closed-form kinematics per sample for scale. Prints one JSON object;
+and the hip simulator's generic kinematics (its parameters turned into a description,
+``hip_simulator/description.py``) beside its closed form (Eq. 1-6), timed and compared (slider
+positions, rates, accelerations; every lever's centre motion and angular motion). Prints one JSON object;
 with ``--json`` nothing else is printed.
 
     python benchmarks/mechanism.py --json [--samples 4000]
 
-The hip and PDM machines have no description file yet: ``hip_kinematics_generic_us_per_sample``,
-``hip_max_rel_diff`` and ``pdm_max_rel_diff`` are null until they do.
+The PDM has no description yet: ``pdm_max_rel_diff`` is null until it does.
 """
 
 from __future__ import annotations
@@ -82,14 +83,33 @@ def main() -> None:
     from pkmdyn.machines.hip_simulator import inverse_kinematics, load_params
     from pkmdyn.profiles.iso14242 import iso14242_motion
 
+    from pkmdyn.machines.hip_simulator.description import hip_description
+
     hip = load_params()
     motion = iso14242_motion(cycles=n / 1000.0, samples_per_cycle=1000)
     sec = best_time(lambda: inverse_kinematics(hip, motion), args.repeat)
     out["hip_kinematics_closed_form_us_per_sample"] = sec / len(motion.t) * 1e6
-    out["hip_kinematics_generic_us_per_sample"] = None
-    out["hip_max_rel_diff"] = None
+    mh = load_mechanism(hip_description(hip))
+    sec = best_time(lambda: solve_kinematics(mh, motion.angles, motion.rates, motion.accels, motion.t), args.repeat)
+    out["hip_kinematics_generic_us_per_sample"] = sec / len(motion.t) * 1e6
+    ref = inverse_kinematics(hip, motion)
+    kin = solve_kinematics(mh, motion.angles, motion.rates, motion.accels, motion.t)
+    sl = [mh.actuator_names.index(f"P_{i + 1}") for i in range(3)]
+    diffs = [_rel(kin.act_q[:, sl], ref.L[:, 1]), _rel(kin.act_qd[:, sl], ref.Ld[:, 1]),
+             _rel(kin.act_qdd[:, sl], ref.Ldd[:, 1])]
+    for i in range(3):
+        for j, pname in enumerate(("upper", "lower")):
+            b = mh.body_names.index(f"lever_{pname}_{i + 1}")
+            diffs += [_rel(kin.p[:, b], ref.c_lever[:, j, i]), _rel(kin.v[:, b], ref.v_lever[:, i]),
+                      _rel(kin.a[:, b], ref.a_lever[:, i]), _rel(kin.w[:, b], ref.omega_lever[:, i]),
+                      _rel(kin.wd[:, b], ref.omega_lever_dot[:, i])]
+    out["hip_max_rel_diff"] = max(diffs)
+    out["hip_generic_over_closed_form"] = out["hip_kinematics_generic_us_per_sample"] / out[
+        "hip_kinematics_closed_form_us_per_sample"]
     out["pdm_max_rel_diff"] = None
-    out["targets"] = {"stewart_kinematics_us_per_sample<=20": out["stewart_kinematics_us_per_sample"] <= 20.0}
+    out["targets"] = {"stewart_kinematics_us_per_sample<=20": out["stewart_kinematics_us_per_sample"] <= 20.0,
+                      "hip_max_rel_diff<=1e-9": out["hip_max_rel_diff"] <= 1e-9,
+                      "hip_generic_within_10x_of_closed_form": out["hip_generic_over_closed_form"] <= 10.0}
     print(json.dumps(out, indent=None if args.json else 2))
 
 

@@ -173,3 +173,11 @@ def test_the_worked_example_of_the_format_document_runs_as_documented(capsys, tm
     assert "over-constraints: 3 (D force_z, D couple_x, D couple_y)" in out
     code, _, err = _run(capsys, "run", "--machine", str(f), "--out", str(tmp_path / "o"))
     assert code == 0, err
+
+
+def test_describe_the_hip_from_its_parameters(capsys):
+    code, out, _ = _run(capsys, "describe", "--machine", "hip")
+    assert code == 0
+    assert "moving bodies: 11" in out and "degrees of freedom: 3" in out and "over-constraints: 0" in out
+    code, out, _ = _run(capsys, "describe", "--machine", "pdm")
+    assert code == 0 and out.startswith("pdm: 4-DOF over-constrained parallel driving mechanism")

@@ -78,7 +78,7 @@ def test_unknown_key_and_wrong_types_name_the_item():
     _bad(d, r"\[joints\] B axsi: unknown key")
     d = ex.four_bar()
     d["bodies"][2]["mass_kg"] = -1.0
-    _bad(d, r"\[bodies\] rocker mass_kg: must be > 0")
+    _bad(d, r"\[bodies\] rocker mass_kg: must be >= 0")
     d = ex.four_bar()
     d["joints"][0]["type"] = "screw"
     _bad(d, r"\[joints\] A type:")

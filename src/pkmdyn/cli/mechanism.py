@@ -40,10 +40,16 @@ def describe(machine: str) -> None:
     """Print the topology, mobility and over-constraints of a machine."""
     from ..machines.registry import HAND_BUILT
 
+    from ..machines.registry import hand_built_description
+    from ..multibody import load_mechanism
+
     kind, model = _load(machine)
     if model is None:
-        click.echo(f"{machine}: {HAND_BUILT[kind]}")
-        return
+        desc = hand_built_description(kind)
+        if desc is None:
+            click.echo(f"{machine}: {HAND_BUILT[kind]}")
+            return
+        model = load_mechanism(desc)
     rep = model.topology
     counts = ", ".join(f"{c} {k}" for k, c in rep.joint_counts.items())
     lines = [

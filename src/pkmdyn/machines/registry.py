@@ -3,7 +3,9 @@
 A *described* machine is a folder under ``machines/`` holding ``<name>.toml`` (a mechanism
 description, :mod:`pkmdyn.multibody`): adding one is adding the folder and the file. The two
 papers' machines are hand-built (their own packages and commands, ``pkmdyn hip ...``,
-``pkmdyn pdm ...``); ``pkmdyn run --machine hip|pdm`` runs their default jobs.
+``pkmdyn pdm ...``); ``pkmdyn run --machine hip|pdm`` runs their default jobs. The hip's
+folder also turns its parameters into a description (``hip_simulator/description.py``), which
+``pkmdyn describe --machine hip`` uses.
 """
 
 from __future__ import annotations
@@ -12,7 +14,8 @@ from pathlib import Path
 
 from ..errors import ParameterError
 
-__all__ = ["HAND_BUILT", "described_machines", "builtin_names", "description_path", "resolve"]
+__all__ = ["HAND_BUILT", "described_machines", "builtin_names", "description_path", "resolve",
+           "hand_built_description"]
 
 _HERE = Path(__file__).resolve().parent
 
@@ -47,6 +50,17 @@ def description_path(name: str) -> Path:
         raise ParameterError(f"--machine {name}: a hand-built machine without a description file ({HAND_BUILT[name]})")
     raise ParameterError(f"--machine {name}: unknown machine (built-in: {', '.join(builtin_names())}; "
                          "or give a description FILE.toml)")
+
+
+def hand_built_description(name: str) -> dict | None:
+    """The description a hand-built machine's folder makes from its built-in parameters (the
+    hip simulator), or None (the PDM: not yet)."""
+    if name == "hip":
+        from .hip_simulator import load_params
+        from .hip_simulator.description import hip_description
+
+        return hip_description(load_params())
+    return None
 
 
 def resolve(machine: str) -> tuple[str, Path | None]:

@@ -62,7 +62,7 @@ class _Shape(Section):
 
 class _Body(Section):
     name: str = NAME
-    mass_kg: float = Field(gt=0)
+    mass_kg: float = Field(ge=0)
     com_m: Vec3
     inertia_kgm2: list[float] | list[list[float]]
     frame_origin_m: Vec3 = [0.0, 0.0, 0.0]
