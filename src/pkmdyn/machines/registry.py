@@ -3,9 +3,9 @@
 A *described* machine is a folder under ``machines/`` holding ``<name>.toml`` (a mechanism
 description, :mod:`pkmdyn.multibody`): adding one is adding the folder and the file. The two
 papers' machines are hand-built (their own packages and commands, ``pkmdyn hip ...``,
-``pkmdyn pdm ...``); ``pkmdyn run --machine hip|pdm`` runs their default jobs. The hip's
-folder also turns its parameters into a description (``hip_simulator/description.py``), which
-``pkmdyn describe --machine hip`` uses.
+``pkmdyn pdm ...``); ``pkmdyn run --machine hip|pdm`` runs their default jobs. Both
+folders also turn their parameters into a description (``hip_simulator/description.py``,
+``pdm4/description.py``), which ``pkmdyn describe --machine hip|pdm`` uses.
 """
 
 from __future__ import annotations
@@ -53,13 +53,17 @@ def description_path(name: str) -> Path:
 
 
 def hand_built_description(name: str) -> dict | None:
-    """The description a hand-built machine's folder makes from its built-in parameters (the
-    hip simulator), or None (the PDM: not yet)."""
+    """The description a hand-built machine's folder makes from its built-in parameters, or None."""
     if name == "hip":
         from .hip_simulator import load_params
         from .hip_simulator.description import hip_description
 
         return hip_description(load_params())
+    if name == "pdm":
+        from .pdm4 import load_params as load_pdm
+        from .pdm4.description import pdm_description
+
+        return pdm_description(load_pdm())
     return None
 
 
