@@ -163,3 +163,13 @@ def test_model_frames_put_both_sides_of_every_joint_at_one_point():
             R0, p0 = (np.eye(3), np.zeros(3)) if b < 0 else (m.R0[b], m.p0[b])
             sides.append((R0 @ R, R0 @ p + p0))
         assert np.allclose(sides[0][0], sides[1][0]) and np.allclose(sides[0][1], sides[1][1])
+
+
+def test_too_many_legs_are_refused_before_any_analysis():
+    d = ex.builtin_dict("delta")
+    d["legs"][0]["angles_deg"] = [float(a) for a in range(60)]
+    d2 = ex.deep(d)
+    d2["legs"] = [ex.deep(d["legs"][0]) for _ in range(6)]
+    for k, leg in enumerate(d2["legs"]):
+        leg["suffixes"] = [f"_{k}_{i}" for i in range(60)]
+    _bad(d2, "at most 300 bodies and 600 joints")

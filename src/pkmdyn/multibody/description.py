@@ -33,6 +33,10 @@ __all__ = ["Description", "BodySpec", "JointSpec", "TaskSpec", "LoadSpec", "Moti
 
 Array = NDArray[np.float64]
 GROUND = "ground"
+#: the largest mechanism a description may hold (after the legs are expanded); the topology
+#: takes singular value decompositions of matrices of up to 6 x joints rows
+MAX_BODIES = 300
+MAX_JOINTS = 600
 _TYPES = tuple(t.name for t in JOINT_TYPES)
 Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 Pair = Annotated[list[float], Field(min_length=2, max_length=2)]
@@ -143,8 +147,8 @@ class _Mechanism(Section):
 
 class _File(Section):
     mechanism: _Mechanism
-    bodies: list[_Body] = Field(default_factory=list, max_length=2000)
-    joints: list[_Joint] = Field(default_factory=list, max_length=2000)
+    bodies: list[_Body] = Field(default_factory=list, max_length=MAX_BODIES)
+    joints: list[_Joint] = Field(default_factory=list, max_length=MAX_JOINTS)
     legs: list[_Leg] = Field(default_factory=list, max_length=32)
     task: _Task
     loads: list[_Load] = Field(default_factory=list, max_length=2000)
@@ -466,6 +470,9 @@ def load_description(source: str | Path | dict[str, Any]) -> Description:
     data = _validate(raw, label)
     body_specs: dict[str, BodySpec] = {}
     expanded_bodies, expanded_joints = _expand_legs(data, label)
+    if len(expanded_bodies) > MAX_BODIES or len(expanded_joints) > MAX_JOINTS:
+        raise ParameterError(f"{label}: {len(expanded_bodies)} bodies and {len(expanded_joints)} joints with the legs "
+                             f"repeated; at most {MAX_BODIES} bodies and {MAX_JOINTS} joints")
     for b, where in expanded_bodies:
         if b.name == GROUND:
             raise ParameterError(f"{where} name: {GROUND!r} is reserved for the base")

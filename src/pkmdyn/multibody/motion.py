@@ -14,13 +14,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MotionError
-from ..io import DEFAULT_MAX_SAMPLES, read_csv_columns
+from ..io import read_csv_columns
 from ..profiles._columns import column_group, derivatives, require_increasing
 from .model import MechanismModel
 
-__all__ = ["TaskMotion", "task_columns", "default_motion", "read_task_motion"]
+__all__ = ["TaskMotion", "task_columns", "default_motion", "read_task_motion", "MAX_MOTION_ROWS"]
 
 Array = NDArray[np.float64]
+
+#: rows of a motion file for a described mechanism: every sample keeps the motion of every body
+#: and joint (about 6 kB for a Stewart platform), so a run is held in memory whole
+MAX_MOTION_ROWS = 200_000
 
 
 @dataclass(frozen=True)
@@ -62,7 +66,7 @@ def default_motion(model: MechanismModel) -> TaskMotion:
     return TaskMotion(t, x, amp * w * c, -amp * w * w * s)
 
 
-def read_task_motion(model: MechanismModel, path: str | Path, max_rows: int | None = DEFAULT_MAX_SAMPLES) -> TaskMotion:
+def read_task_motion(model: MechanismModel, path: str | Path, max_rows: int | None = MAX_MOTION_ROWS) -> TaskMotion:
     """Read a motion CSV for ``model`` (see the module docstring); errors name the file, row and column."""
     path = Path(path)
     pos, vel, acc = task_columns(model)
