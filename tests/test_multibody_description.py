@@ -173,3 +173,11 @@ def test_too_many_legs_are_refused_before_any_analysis():
     for k, leg in enumerate(d2["legs"]):
         leg["suffixes"] = [f"_{k}_{i}" for i in range(60)]
     _bad(d2, "at most 300 bodies and 600 joints")
+
+
+def test_task_point_defaults_to_the_centre_of_mass():
+    d = ex.slider_crank()
+    d["task"] = {"body": "slider", "position": ["x"]}
+    m = load_mechanism(d)
+    b = m.body_names.index("slider")
+    assert np.allclose(m.task_point, m.com[b])

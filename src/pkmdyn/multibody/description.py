@@ -198,7 +198,8 @@ class JointSpec:
 @dataclass(frozen=True)
 class TaskSpec:
     """Task coordinates: base-frame components of a point of ``body`` and Euler angles of its
-    frame. ``point (3,)`` [m] base frame, reference configuration; ``position``: component
+    frame. ``point (3,)`` [m] base frame, reference configuration (default: the body's centre
+    of mass); ``position``: component
     indices 0-2; ``sequence``: the Euler sequence; ``orientation``: angle indices 0-2."""
 
     body: str
@@ -446,7 +447,8 @@ def _task(t: _Task, where: str, bodies: dict[str, BodySpec]) -> TaskSpec:
         seq = check_sequence(t.euler_sequence)
     except ParameterError as exc:
         raise ParameterError(f"{where} {exc}") from None
-    point = np.array(t.point_m if t.point_m is not None else bodies[t.body].p0, dtype=float)
+    b = bodies[t.body]
+    point = np.array(t.point_m if t.point_m is not None else b.p0 + b.R0 @ b.com, dtype=float)
     names = tuple(t.position) + tuple(f"euler{k}" for k in t.orientation)
     units = ("m",) * len(t.position) + ("rad",) * len(t.orientation)
     return TaskSpec(body=t.body, point=point, position=tuple(_POS_NAMES[c] for c in t.position), sequence=seq,
