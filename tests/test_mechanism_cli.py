@@ -35,8 +35,6 @@ def test_describe_prints_topology(capsys):
 
 
 def test_describe_a_description_file(capsys, tmp_path):
-    import tomllib  # noqa: F401
-
     f = tmp_path / "bennett_copy.toml"
     f.write_text((ex.MACHINES / "bennett" / "bennett.toml").read_text(encoding="utf-8"), encoding="utf-8")
     code, out, _ = _run(capsys, "describe", "--machine", str(f))

@@ -91,7 +91,7 @@ class _Friction(Section):
 
 class _Joint(Section):
     name: str = NAME
-    type: Literal["revolute", "prismatic", "cylindrical", "universal", "spherical", "planar", "fixed"]
+    type: str
     parent: str = NAME
     child: str = NAME
     point_m: Vec3
@@ -104,6 +104,13 @@ class _Joint(Section):
     limits_m: Pair | None = None
     limits_rad: Pair | None = None
     friction: _Friction | None = None
+
+    @field_validator("type")
+    @classmethod
+    def _known_type(cls, v: str) -> str:
+        if v not in _TYPES:  # the joint-type table is the one list of types
+            raise ValueError(f"unknown joint type {v[:40]!r} (one of {', '.join(_TYPES)})")
+        return v
 
 
 class _Load(Section):
@@ -153,11 +160,6 @@ class _File(Section):
     task: _Task
     loads: list[_Load] = Field(default_factory=list, max_length=2000)
     default_motion: _Motion = _Motion()
-
-    @field_validator("bodies", "joints")
-    @classmethod
-    def _nonempty(cls, v: list) -> list:
-        return v
 
 
 @dataclass(frozen=True)

@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from ..errors import MotionError, SingularityError, UnreachablePoseError, as_array
 from . import _kernels as K
 from .model import MechanismModel
-from .topology import _args, constraint_jacobian, row_labels, row_scale
+from .topology import constraint_jacobian, row_labels, row_scale
 
 __all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals",
            "singularity_measures", "SingularityMeasures", "TOLERANCE"]
