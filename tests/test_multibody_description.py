@@ -181,3 +181,35 @@ def test_task_point_defaults_to_the_centre_of_mass():
     m = load_mechanism(d)
     b = m.body_names.index("slider")
     assert np.allclose(m.task_point, m.com[b])
+
+
+def test_adding_a_joint_type_is_adding_a_table_entry(monkeypatch):
+    """A new type (here a 'slot' joint: translation along x and rotation about z, cut with
+    the rows force_y, force_z, couple_x, couple_y) works end to end from one table entry."""
+    from pkmdyn.multibody import joint_types
+
+    slot = joint_types.JointType("slot", "L", ("TX", "RZ"), (("T", 1), ("T", 2), ("R", 1, 2), ("R", 0, 2)), 1)
+    table = joint_types.JOINT_TYPES + (slot,)
+    monkeypatch.setattr(joint_types, "JOINT_TYPES", table)
+    monkeypatch.setattr(joint_types, "_BY_NAME", {t.name: k for k, t in enumerate(table)})
+    import pkmdyn.multibody.description as description
+    import pkmdyn.multibody.model as model
+    import pkmdyn.multibody.topology as topology
+
+    monkeypatch.setattr(description, "_TYPES", tuple(t.name for t in table))
+    monkeypatch.setattr(model, "JOINT_TYPES", table)
+    monkeypatch.setattr(topology, "JOINT_TYPES", table)
+    d = ex.slider_crank()
+    d["joints"][3]["type"] = "slot"  # the slider may also turn about the base z axis ...
+    d["joints"][3]["axis"] = [0.0, 0.0, 1.0]
+    d["joints"][3]["x_axis"] = [1.0, 0.0, 0.0]  # ... and slide along x
+    m = load_mechanism(d)
+    # the slider's turn about z at the rod's pin is an idle freedom: mobility 2, one idle, t = 3
+    rep = m.topology
+    assert (rep.kutzbach, rep.mobility, rep.idle, rep.dof, rep.overconstraints) == (-1, 2, 1, 1, 3)
+    from pkmdyn.multibody import reference_task, solve_kinematics
+
+    x = reference_task(m) + np.linspace(0.0, 0.5, 20)[:, None]
+    kin = solve_kinematics(m, x)
+    slider = m.body_names.index("slider")
+    assert np.abs(kin.origin[:, slider, 1:]).max() < 1e-12  # it slides along x only

@@ -317,11 +317,8 @@ def _joint_frame(j: _Joint, where: str) -> Array:
         raise ParameterError(f"{where} a {j.type} joint takes no axes list (use axis)")
     if jt.axes == 1 and j.axis is None:
         raise ParameterError(f"{where} a {j.type} joint needs axis")
-    if j.axis is None:
-        if j.type == "spherical" or j.type == "fixed":
-            z = np.array([0.0, 0.0, 1.0])
-        else:  # pragma: no cover - every other type needs an axis
-            raise ParameterError(f"{where} missing axis")
+    if j.axis is None:  # a type that takes no axis: the joint frame's z is the base z
+        z = np.array([0.0, 0.0, 1.0])
     else:
         z = _unit(j.axis, f"{where} axis")
     if j.x_axis is not None:
