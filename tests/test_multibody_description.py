@@ -211,5 +211,6 @@ def test_adding_a_joint_type_is_adding_a_table_entry(monkeypatch):
 
     x = reference_task(m) + np.linspace(0.0, 0.5, 20)[:, None]
     kin = solve_kinematics(m, x)
-    slider = m.body_names.index("slider")
-    assert np.abs(kin.origin[:, slider, 1:]).max() < 1e-12  # it slides along x only
+    pin = m.joint_index("D")
+    assert np.abs(kin.joint_point[:, pin, 1:]).max() < 1e-12  # the slot's point moves along x only
+    assert np.ptp(kin.joint_point[:, pin, 0]) > 0.01
