@@ -193,3 +193,21 @@ def test_bad_motion_arrays_are_refused():
         solve_kinematics(m, np.zeros((5, 2)))
     with pytest.raises(MotionError, match="non-finite"):
         solve_kinematics(m, np.array([[np.nan]]))
+
+
+def test_a_coarsely_sampled_motion_is_bridged_and_matches_a_fine_one(monkeypatch):
+    """A Bennett crank stepped by 1.8 rad in one sample: one Newton solve does not get there,
+    the step is bridged, and the result is the fine path's (same assembly branch)."""
+    import pkmdyn.multibody.kinematics as kinematics
+
+    used = []
+    bridge = kinematics._bridge
+    monkeypatch.setattr(kinematics, "_bridge", lambda *a: used.append(a[3]) or bridge(*a))
+    m = load_mechanism(ex.MACHINES / "bennett" / "bennett.toml")
+    coarse = solve_kinematics(m, np.array([[1.047], [2.5], [-2.0]]))
+    assert used == [2]
+    fine_x = np.concatenate([np.linspace(1.047, 2.5, 100), np.linspace(2.5, 2.5 + (2 * np.pi - 4.5), 300)])
+    fine = solve_kinematics(m, ((fine_x + np.pi) % (2 * np.pi) - np.pi)[:, None])
+    wrap = lambda a: (a + np.pi) % (2 * np.pi) - np.pi  # noqa: E731
+    assert np.allclose(wrap(coarse.q[-1] - fine.q[-1]), 0.0, atol=1e-10)
+    assert np.allclose(coarse.R[-1], fine.R[-1], atol=1e-10)

@@ -592,7 +592,7 @@ def solve_batch(tm, x, xd, xdd, q_start,
                 tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
                 row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                 task_body, task_point, task_kind, task_index, euler_axes,
-                sel_rows, idle, prow, pcol, blocks, q_ref, row_scale, tol, max_iter,
+                sel_rows, idle, prow, pcol, blocks, q_ref, row_scale, tol, check_tol, max_iter,
                 com, pC_all,
                 q_out, qd_out, qdd_out, R_out, p_out, V_out, A_out, G_out, res_out, status, worst,
                 ov_out, oa_out, cp_out, cv_out, ca_out, jp_out, jv_out, ja_out):
@@ -605,8 +605,12 @@ def solve_batch(tm, x, xd, xdd, q_start,
 
     ``K = [J[sel_rows]; idle]`` (nq, nq), permuted (``prow``, ``pcol``) to block lower-triangular
     form with diagonal blocks starting at ``blocks`` (legs that are independent once the
-    platform is placed are solved one by one), starting from ``q_{s-1} + G_{s-1} (x_s - x_{s-1})`` (``q_start`` for the first), until
-    the scaled residual of every row (selected or not) is below ``tol``; then
+    platform is placed are solved one by one), starting from
+    ``q_{s-1} + qd_{s-1} dt + qdd_{s-1} dt^2 / 2`` (``dt = tm_s - tm_{s-1}``; the first-order
+    ``q_{s-1} + G_{s-1} (x_s - x_{s-1})`` when ``tm`` is empty; ``q_start`` for the first
+    sample), until the scaled residual of the solved rows is at most ``tol`` (or stalls within
+    a factor 1000 of it: the rounding floor of an ill-conditioned pose) and that of every row,
+    the redundant directions of an over-constrained loop included, at most ``check_tol``; then
     ``K qd = (0; xd_s)``, ``K qdd = (-gamma_loops; xdd_s - gamma_task)`` and
     ``G = K^-1 (0; I; 0)`` (tree rates per task rate). Writes the per-sample outputs and
     ``status[s]`` (OK, NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN) with ``worst[s]``
@@ -660,6 +664,8 @@ def solve_batch(tm, x, xd, xdd, q_start,
                     acc += G[c, t] * dx
                 q[c] += acc
         converged = False
+        open_loop = False
+        prev = 1e300
         for it in range(max_iter + 1):
             forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
                               coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3)
@@ -670,8 +676,6 @@ def solve_batch(tm, x, xd, xdd, q_start,
                 status[s] = EULER_SINGULAR
                 worst[s] = nr
                 return
-            big = 0.0
-            wr = 0
             for rr in range(nrow):
                 if rr < nr:
                     res[rr] = val[rr]
@@ -679,22 +683,39 @@ def solve_batch(tm, x, xd, xdd, q_start,
                     res[rr] = _wrap(val[rr] - x[s, rr - nr])
                 else:
                     res[rr] = val[rr] - x[s, rr - nr]
-                sc = abs(res[rr]) * row_scale[rr]
-                if sc > big:
-                    big = sc
-                    wr = rr
-            worst[s] = wr
-            res_out[s] = big
+            # the solved rows (selected and idle) and every row (redundant ones only checked)
+            big_sel = 0.0
+            wr = sel_rows[0] if m > 0 else 0
+            for i in range(m):
+                sc = abs(res[sel_rows[i]]) * row_scale[sel_rows[i]]
+                if sc > big_sel:
+                    big_sel = sc
+                    wr = sel_rows[i]
             for i in range(ni):
                 acc = 0.0
                 for c in range(nq):
                     acc += idle[i, c] * (q[c] - q_ref[c])
                 ires[i] = acc
-                if abs(acc) > big:
-                    big = abs(acc)
-            if big <= tol:
-                converged = True
+                if abs(acc) > big_sel:
+                    big_sel = abs(acc)
+            big_all = 0.0
+            wa = 0
+            for rr in range(nrow):
+                sc = abs(res[rr]) * row_scale[rr]
+                if sc > big_all:
+                    big_all = sc
+                    wa = rr
+            worst[s] = wr
+            res_out[s] = big_sel if big_sel > big_all else big_all
+            # converged: at the tolerance, or stalled at the rounding floor (no halving) near it
+            if big_sel <= tol or (big_sel <= 1e3 * tol and big_sel > 0.5 * prev):
+                if big_all <= check_tol:
+                    converged = True
+                else:
+                    open_loop = True
+                    worst[s] = wa
                 break
+            prev = big_sel
             if it == max_iter:
                 break
             _fill(K, J, sel_rows, idle, prow, pcol)
@@ -711,13 +732,8 @@ def solve_batch(tm, x, xd, xdd, q_start,
             for j in range(mk):
                 q[j] += rhs[j]
         if not converged:
-            # redundant (unselected) rows left open while the selected ones closed: the loop cannot close
-            sel_big = 0.0
-            for i in range(m):
-                sc = abs(res[sel_rows[i]]) * row_scale[sel_rows[i]]
-                if sc > sel_big:
-                    sel_big = sc
-            status[s] = LOOP_OPEN if sel_big <= tol else NOT_CONVERGED
+            # LOOP_OPEN: the solved rows closed but a redundant direction of a loop stays open
+            status[s] = LOOP_OPEN if open_loop else NOT_CONVERGED
             for c in range(nq):
                 q_out[s, c] = q[c]
             return

@@ -39,9 +39,11 @@ __all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_re
 
 Array = NDArray[np.float64]
 
-#: Newton stops when every row's dimensionless residual (lengths divided by the model's
-#: length scale) is at most this
+#: Newton stops when every solved row's dimensionless residual (lengths divided by the
+#: model's length scale) is at most this
 TOLERANCE = 1e-13
+#: every row, the redundant directions of an over-constrained loop included, must close to this
+CHECK_TOLERANCE = 1e-9
 MAX_ITER = 30
 
 
@@ -137,7 +139,7 @@ def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array,
                   model.row_i, model.row_j, model.loop_joint, model.joint_parent, model.joint_child,
                   model.task_body, model.task_point, model.task_kind, model.task_index, model.euler_axes,
                   model.solver_rows, model.solver_idle, model.solver_prow, model.solver_pcol,
-                  model.solver_blocks, model.coord_offset, row_scale(model), TOLERANCE, MAX_ITER,
+                  model.solver_blocks, model.coord_offset, row_scale(model), TOLERANCE, CHECK_TOLERANCE, MAX_ITER,
                   model.com, model.joint_p_child,
                   out["q"], out["qd"], out["qdd"], out["R"], out["p"], out["V"], out["A"], out["G"], out["res"],
                   out["status"], out["worst"], out["ov"], out["oa"], out["cp"], out["cv"], out["ca"],
@@ -210,8 +212,8 @@ def solve_kinematics(model: MechanismModel, x: Array, xd: Array | None = None, x
     ``xd``, ``xdd``: their time derivatives (zero when omitted); ``t`` (n,) [s]: times, only
     for messages and the result; ``q_start`` (nq,): tree coordinates near the first sample's
     solution (default: found from the reference configuration). Samples are solved in order,
-    each warm-started from the previous one, so a motion should be sampled finely enough for
-    Newton to follow it.
+    each warm-started from the previous one; where one Newton solve does not reach the next
+    sample (a coarsely sampled motion), the step is bridged by 8, then 64, small task steps.
 
     Raises :class:`~pkmdyn.errors.UnreachablePoseError` (a loop that does not close) or
     :class:`~pkmdyn.errors.SingularityError`, naming the sample, its time and the loop.
@@ -230,9 +232,33 @@ def solve_kinematics(model: MechanismModel, x: Array, xd: Array | None = None, x
         raise MotionError("x: the motion has no samples")
     q0 = _start(model, x[0]) if q_start is None else np.ascontiguousarray(as_array(q_start, (model.nq,), "q_start"))
     out = _run(model, x, xd, xdd, q0, t)
-    if np.any(out["status"] != K.OK):
-        _fail(model, out, t, x)
+    while np.any(out["status"] != K.OK):
+        s = int(np.flatnonzero(out["status"] != K.OK)[0])
+        q_s = _bridge(model, x, out, s)
+        if q_s is None:
+            _fail(model, out, t, x)
+        rest = _run(model, x[s:], xd[s:], xdd[s:], q_s, None if t is None else t[s:])
+        for key, arr in rest.items():
+            out[key][s:] = arr
     return _assemble(model, t, x, xd, xdd, out)
+
+
+def _bridge(model: MechanismModel, x: Array, out: dict, s: int) -> Array | None:
+    """Tree coordinates at sample ``s`` reached from the solved sample ``s - 1`` in 8, then 64,
+    small task steps (a motion sampled too coarsely for one Newton solve per sample), or None
+    when ``s`` is the first sample or the steps do not get there either (a real failure)."""
+    if s == 0 or out["status"][s] == K.EULER_SINGULAR:
+        return None
+    d = x[s] - x[s - 1]
+    ang = model.task_kind == 1
+    d[ang] = (d[ang] + np.pi) % (2 * np.pi) - np.pi
+    for steps in (8, 64):
+        path = np.ascontiguousarray(x[s - 1] + np.linspace(0.0, 1.0, steps + 1)[1:, None] * d)
+        zero = np.zeros_like(path)
+        b = _run(model, path, zero, zero, out["q"][s - 1].copy())
+        if b["status"][-1] == K.OK:
+            return b["q"][-1].copy()
+    return None
 
 
 def _assemble(model: MechanismModel, t: Array | None, x: Array, xd: Array, xdd: Array, out: dict) -> MechanismKinematics:
