@@ -179,3 +179,11 @@ def test_describe_the_hip_and_the_pdm_from_their_parameters(capsys):
     assert "moving bodies: 11" in out and "degrees of freedom: 3" in out and "over-constraints: 0" in out
     code, out, _ = _run(capsys, "describe", "--machine", "pdm")
     assert code == 0 and "moving bodies: 14" in out and "over-constraints: 9 (R21' force_z" in out
+
+
+@pytest.mark.parametrize("name, files", [("hip", {"results.csv", "summary.json"}),
+                                         ("pdm", {"results.csv", "model.json", "bodies.npz"})])
+def test_run_a_hand_built_machine_by_name(capsys, tmp_path, name, files):
+    code, _, err = _run(capsys, "run", "--machine", name, "--out", str(tmp_path / "o"))
+    assert code == 0, err
+    assert files <= {p.name for p in (tmp_path / "o").iterdir()}
