@@ -160,3 +160,26 @@ def test_bennett_against_oracle(seed):
     frames = bennett.joint_frames(th, a, alpha, b, beta)
     for k, name in enumerate(("J1", "J2", "J3", "J4")):
         _close(kin.joint_point[:, m.joint_index(name)], frames[:, k, :3, 3])
+
+
+def test_delta_workspace_against_the_closed_form_reach():
+    """Reachable task points of the Delta against the oracle's inverse kinematics (finite
+    angles on the elbow-out branch), away from the boundary by a margin."""
+    from pkmdyn.multibody import reachable
+
+    m = _model("delta")
+    g = delta.williams_irb360_geometry()
+    rng = np.random.default_rng(8)
+    pts = np.column_stack([rng.uniform(-0.9, 0.9, 120), rng.uniform(-0.9, 0.9, 120), rng.uniform(-1.8, -0.4, 120)])
+    with np.errstate(invalid="ignore"):
+        theta = delta.inverse_kinematics(pts, g["R_b"], g["R_p"], g["L_A"], g["L_B"])
+        inner = delta.inverse_kinematics(pts * np.array([1.03, 1.03, 1.0]) + [0, 0, -0.02], g["R_b"], g["R_p"],
+                                         g["L_A"], g["L_B"])
+        outer = delta.inverse_kinematics(pts * np.array([0.97, 0.97, 1.0]) + [0, 0, 0.02], g["R_b"], g["R_p"],
+                                         g["L_A"], g["L_B"])
+    ok = np.all(np.isfinite(theta), axis=1)
+    clear = ok & np.all(np.isfinite(inner), axis=1) & np.all(np.isfinite(outer), axis=1) & (np.abs(theta) < 1.2).all(axis=1)
+    out = ~ok & ~np.all(np.isfinite(inner), axis=1) & ~np.all(np.isfinite(outer), axis=1)
+    got = reachable(m, pts)
+    assert clear.sum() >= 10 and out.sum() >= 10
+    assert np.all(got[clear]) and not np.any(got[out])

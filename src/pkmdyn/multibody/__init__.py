@@ -16,6 +16,7 @@ from .kinematics import (
     MechanismKinematics,
     SingularityMeasures,
     loop_residuals,
+    reachable,
     reference_task,
     singularity_measures,
     solve_kinematics,
@@ -28,7 +29,7 @@ __all__ = [
     "Description", "load_description", "JOINT_TYPES", "JointType", "joint_type",
     "MechanismModel", "LoopRecord", "compile_model", "load_mechanism",
     "TopologyReport", "analyse_topology", "constraint_jacobian",
-    "MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals",
+    "MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals", "reachable",
     "SingularityMeasures", "singularity_measures",
     "TaskMotion", "default_motion", "read_task_motion", "task_columns",
 ]

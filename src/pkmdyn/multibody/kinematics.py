@@ -35,7 +35,7 @@ from .model import MechanismModel
 from .topology import constraint_jacobian, row_labels, row_scale
 
 __all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals",
-           "singularity_measures", "SingularityMeasures", "TOLERANCE"]
+           "singularity_measures", "SingularityMeasures", "reachable", "TOLERANCE"]
 
 Array = NDArray[np.float64]
 
@@ -271,6 +271,35 @@ def _assemble(model: MechanismModel, t: Array | None, x: Array, xd: Array, xdd: 
         act_q=out["q"][:, ac], act_qd=out["qd"][:, ac], act_qdd=out["qdd"][:, ac], J_ax=out["G"][:, ac, :],
         G=out["G"], residual=out["res"],
     )
+
+
+def reachable(model: MechanismModel, x: Array, steps: int = 16) -> NDArray[np.bool_]:
+    """Workspace test: whether each task pose ``x (n, nt)`` is reached from the reference
+    configuration along the straight task path in ``steps`` steps (each bridged further when
+    needed), without a singular or open loop on the way. Conservative: a pose reachable only
+    along another path, or only on another assembly branch, reads False. Returns (n,) bool."""
+    x = np.atleast_2d(np.asarray(x, dtype=float))
+    x_ref = reference_task(model)
+    q_ref = model.coord_offset.copy()
+    ang = model.task_kind == 1
+    out = np.zeros(x.shape[0], dtype=bool)
+    s = np.linspace(0.0, 1.0, steps + 1)[1:, None]
+    for k in range(x.shape[0]):
+        d = x[k] - x_ref
+        d[ang] = (d[ang] + np.pi) % (2 * np.pi) - np.pi
+        path = np.ascontiguousarray(x_ref + s * d)
+        zero = np.zeros_like(path)
+        res = _run(model, path, zero, zero, q_ref)
+        while not np.all(res["status"] == K.OK):
+            i = int(np.flatnonzero(res["status"] != K.OK)[0])
+            q_i = _bridge(model, path, res, i)
+            if q_i is None:
+                break
+            rest = _run(model, path[i:], zero[i:], zero[i:], q_i)
+            for key, arr in rest.items():
+                res[key][i:] = arr
+        out[k] = bool(np.all(res["status"] == K.OK))
+    return out
 
 
 @dataclass(frozen=True)
