@@ -7,8 +7,9 @@ loop over these arrays and know nothing else, so they are compiled once for ever
 
 Spanning tree and cut joints (automatic unless ``[mechanism] cut_joints`` names them): the
 tree is grown from the ground one joint at a time (Prim's order), always taking the frontier
-joint that is actuated first, then the one with the fewest freedoms, then the first in the
-file. Every joint left over closes a loop and is *cut*: it becomes a :class:`LoopRecord` (the
+joint that is actuated first, then one reached from its parent's side (a joint described
+child-to-parent is traversed backwards only when needed), then the one with the fewest
+freedoms, then the first in the file. Every joint left over closes a loop and is *cut*: it becomes a :class:`LoopRecord` (the
 two bodies, a frame on each, the constrained relative directions of its type). Preferring
 few freedoms in the tree cuts the joints with many (spherical first), which gives the fewest
 constraint equations and unknowns; actuated joints are always tree joints, so every actuator
