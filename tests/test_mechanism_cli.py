@@ -181,9 +181,13 @@ def test_describe_the_hip_and_the_pdm_from_their_parameters(capsys):
     assert code == 0 and "moving bodies: 14" in out and "over-constraints: 9 (R21' force_z" in out
 
 
-@pytest.mark.parametrize("name, files", [("hip", {"results.csv", "summary.json"}),
-                                         ("pdm", {"results.csv", "model.json", "bodies.npz"})])
-def test_run_a_hand_built_machine_by_name(capsys, tmp_path, name, files):
+@pytest.mark.parametrize("name, actuator", [("hip", "P_1_pos_m"), ("pdm", "P11_pos_m")])
+def test_run_a_hand_built_machine_writes_the_common_files(capsys, tmp_path, name, actuator):
+    from pkmdyn.machines.registry import hand_built_motion
+
     code, _, err = _run(capsys, "run", "--machine", name, "--out", str(tmp_path / "o"))
     assert code == 0, err
-    assert files <= {p.name for p in (tmp_path / "o").iterdir()}
+    assert {"results.csv", "model.json", "bodies.npz", "summary.json"} <= {p.name for p in (tmp_path / "o").iterdir()}
+    cols = np.genfromtxt(tmp_path / "o" / "results.csv", delimiter=",", names=True)
+    assert actuator in cols.dtype.names and "euler1_rad" in cols.dtype.names
+    assert np.allclose(cols["t_s"], hand_built_motion(name).t)

@@ -77,32 +77,29 @@ def describe(machine: str) -> None:
 @click.option("--machine", required=True, help=_MACHINE_HELP)
 @click.option("--motion", "motion_path", type=PATH_IN, default=None,
               help="Motion CSV: t_s and one column per task coordinate (<name>_<unit>), optional rates "
-                   "<name>d_<unit>_s and accelerations <name>dd_<unit>_s2 (default: the machine's default motion).")
+                   "<name>d_<unit>_s and accelerations <name>dd_<unit>_s2 (default: the machine's default motion; "
+                   "hip: the ISO 14242-1 cycle, pdm: the Eq. 84 motion).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
 def run(machine: str, motion_path: Path | None, out_dir: Path) -> None:
-    """Kinematics of every body and joint along a motion: results.csv, model.json, bodies.npz, summary.json."""
-    kind, model = _load(machine)
-    if kind == "hip":
-        from ..machines.hip_simulator.run import run_hip
+    """Kinematics of every body and joint along a motion: results.csv, model.json, bodies.npz, summary.json.
 
-        files, messages = run_hip(out_dir, None, motion_path, make_plots=False)
-        for m in messages:
-            click.echo(m, err=True)
-        for label, path in files.items():
-            click.echo(f"{label}: {path}")
-        return
-    if kind == "pdm":
-        from ..machines.pdm4.run import run_pdm
-
-        summary = run_pdm(None, motion_path, out_dir, plots=False)
-        for label, path in summary["files"].items():
-            click.echo(f"{label}: {path}")
-        return
-    from ..multibody import default_motion, read_task_motion
+    The same files for every machine; the hip's and the PDM's own jobs (dynamics, plots) are
+    pkmdyn hip run and pkmdyn pdm run."""
+    from ..machines.registry import hand_built_description, hand_built_motion
+    from ..multibody import default_motion, load_mechanism, read_task_motion
     from ..multibody.output import run_mechanism
 
-    motion = default_motion(model) if motion_path is None else read_task_motion(model, Path(motion_path).absolute())
+    kind, model = _load(machine)
+    default = None
+    if model is None:  # a hand-built machine: through the description its folder makes
+        model = load_mechanism(hand_built_description(kind))
+        default = hand_built_motion(kind)
+
+    if motion_path is not None:
+        motion = read_task_motion(model, Path(motion_path).absolute())
+    else:
+        motion = default if default is not None else default_motion(model)
     summary = run_mechanism(model, motion, out_dir)
     for label, path in summary["files"].items():
         click.echo(f"{label}: {path}")

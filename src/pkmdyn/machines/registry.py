@@ -3,9 +3,9 @@
 A *described* machine is a folder under ``machines/`` holding ``<name>.toml`` (a mechanism
 description, :mod:`pkmdyn.multibody`): adding one is adding the folder and the file. The two
 papers' machines are hand-built (their own packages and commands, ``pkmdyn hip ...``,
-``pkmdyn pdm ...``); ``pkmdyn run --machine hip|pdm`` runs their default jobs. Both
-folders also turn their parameters into a description (``hip_simulator/description.py``,
-``pdm4/description.py``), which ``pkmdyn describe --machine hip|pdm`` uses.
+``pkmdyn pdm ...``). Both folders also turn their parameters into a description
+(``hip_simulator/description.py``, ``pdm4/description.py``), which ``pkmdyn describe`` and
+``pkmdyn run --machine hip|pdm`` use: every machine's run writes the same files.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from pathlib import Path
 from ..errors import ParameterError
 
 __all__ = ["HAND_BUILT", "described_machines", "builtin_names", "description_path", "resolve",
-           "hand_built_description"]
+           "hand_built_description", "hand_built_motion"]
 
 _HERE = Path(__file__).resolve().parent
 
@@ -65,6 +65,25 @@ def hand_built_description(name: str) -> dict | None:
 
         return pdm_description(load_pdm())
     return None
+
+
+def hand_built_motion(name: str):
+    """The default task motion of a hand-built machine for ``pkmdyn run --machine``: the hip's
+    ISO 14242-1 cycle (one cycle, 1000 samples), the PDM's Eq. 84 motion of its parameters;
+    as a :class:`pkmdyn.multibody.TaskMotion` in the order of the description's task."""
+    from ..multibody import TaskMotion
+
+    if name == "hip":
+        from ..profiles.iso14242 import iso14242_motion
+
+        m = iso14242_motion(cycles=1, samples_per_cycle=1000)
+        return TaskMotion(m.t, m.angles, m.rates, m.accels)
+    from ..profiles.pdm_motion import cycloidal_motion
+    from .pdm4 import load_params as load_pdm
+
+    tr = load_pdm().trajectory
+    m = cycloidal_motion(tr.strokes, tr.period_s, tr.samples)
+    return TaskMotion(m.t, m.q, m.qd, m.qdd)
 
 
 def resolve(machine: str) -> tuple[str, Path | None]:
