@@ -1,0 +1,139 @@
+"""Speed and agreement of the generic kinematics of described mechanisms.
+
+Runs in one process: the generic kinematics (every body, joint point, actuator rate and
+Jacobian; ``pkmdyn.multibody.solve_kinematics``) of the built-in 6-UPS Stewart platform on a
+smooth random motion, with its leg lengths, rates and accelerations compared with the
+closed-form vector-loop solution (``tests/oracles/stewart.py``); the same for the Delta robot;
+and the hip simulator's generic kinematics (its parameters turned into a description,
+``hip_simulator/description.py``) beside its closed form (Eq. 1-6), timed and compared (slider
+positions, rates, accelerations; every lever's centre motion and angular motion). Prints one JSON object;
+with ``--json`` nothing else is printed.
+
+    python benchmarks/mechanism.py --json [--samples 4000]
+
+The PDM likewise (``pdm4/description.py``; every one of its 14 bodies' pose, velocity and
+acceleration on the Eq. 84 motion).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
+
+from _timing import best_time
+
+ROOT = Path(__file__).resolve().parents[1]
+MACHINES = ROOT / "src" / "pkmdyn" / "machines"
+
+
+def _motion(x0: np.ndarray, amp: np.ndarray, n: int, seed: int = 0):
+    """x0 + amp (sin(w t + ph) - sin ph) over 10 s, with exact rates and accelerations."""
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, 10.0, n)
+    w = rng.uniform(1.0, 3.0, x0.size)
+    ph = rng.uniform(0, 2 * np.pi, x0.size)
+    s, c = np.sin(w * t[:, None] + ph), np.cos(w * t[:, None] + ph)
+    return t, x0 + amp * (s - np.sin(ph)), amp * w * c, -amp * w**2 * s
+
+
+def _rel(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.abs(a - b).max() / max(np.abs(b).max(), 1e-300))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--json", action="store_true", help="print only the JSON object")
+    ap.add_argument("--samples", type=int, default=4000)
+    ap.add_argument("--repeat", type=int, default=5)
+    args = ap.parse_args()
+    sys.path.insert(0, str(ROOT / "tests"))
+    from oracles import delta as delta_oracle
+    from oracles import stewart as stewart_oracle
+
+    n = args.samples
+    out: dict = {"samples": n}
+
+    m = load_mechanism(MACHINES / "stewart" / "stewart.toml")
+    t, x, xd, xdd = _motion(reference_task(m), np.array([0.05, 0.05, 0.05, 0.1, 0.1, 0.1]), n)
+    sec = best_time(lambda: solve_kinematics(m, x, xd, xdd, t), args.repeat)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    a, b, _ = stewart_oracle.default_geometry()
+    ref = stewart_oracle.inverse_kinematics(a, b, x[:, :3], x[:, 3:], "XYZ", xd[:, :3], xd[:, 3:], xdd[:, :3], xdd[:, 3:])
+    legs = [m.actuator_names.index(f"P_{i + 1}") for i in range(6)]
+    out["stewart_kinematics_us_per_sample"] = sec / n * 1e6
+    out["stewart_max_rel_diff"] = max(_rel(kin.act_q[:, legs], ref["L"]), _rel(kin.act_qd[:, legs], ref["Ld"]),
+                                      _rel(kin.act_qdd[:, legs], ref["Ldd"]))
+
+    md = load_mechanism(MACHINES / "delta" / "delta.toml")
+    t, x, xd, xdd = _motion(reference_task(md), np.array([0.15, 0.15, 0.1]), n, seed=1)
+    sec = best_time(lambda: solve_kinematics(md, x, xd, xdd, t), args.repeat)
+    kin = solve_kinematics(md, x, xd, xdd, t)
+    g = delta_oracle.williams_irb360_geometry()
+    ref = delta_oracle.kinematics(x, g["R_b"], g["R_p"], g["L_A"], g["L_B"], xd, xdd)
+    legs = [md.actuator_names.index(f"R_{i + 1}") for i in range(3)]
+    out["delta_kinematics_us_per_sample"] = sec / n * 1e6
+    out["delta_max_rel_diff"] = max(_rel(kin.act_q[:, legs], ref["theta"]), _rel(kin.act_qd[:, legs], ref["thetad"]),
+                                    _rel(kin.act_qdd[:, legs], ref["thetadd"]))
+
+    from pkmdyn.machines.hip_simulator import inverse_kinematics, load_params
+    from pkmdyn.profiles.iso14242 import iso14242_motion
+
+    from pkmdyn.machines.hip_simulator.description import hip_description
+
+    hip = load_params()
+    motion = iso14242_motion(cycles=n / 1000.0, samples_per_cycle=1000)
+    sec = best_time(lambda: inverse_kinematics(hip, motion), args.repeat)
+    out["hip_kinematics_closed_form_us_per_sample"] = sec / len(motion.t) * 1e6
+    mh = load_mechanism(hip_description(hip))
+    sec = best_time(lambda: solve_kinematics(mh, motion.angles, motion.rates, motion.accels, motion.t), args.repeat)
+    out["hip_kinematics_generic_us_per_sample"] = sec / len(motion.t) * 1e6
+    ref = inverse_kinematics(hip, motion)
+    kin = solve_kinematics(mh, motion.angles, motion.rates, motion.accels, motion.t)
+    sl = [mh.actuator_names.index(f"P_{i + 1}") for i in range(3)]
+    diffs = [_rel(kin.act_q[:, sl], ref.L[:, 1]), _rel(kin.act_qd[:, sl], ref.Ld[:, 1]),
+             _rel(kin.act_qdd[:, sl], ref.Ldd[:, 1])]
+    for i in range(3):
+        for j, pname in enumerate(("upper", "lower")):
+            b = mh.body_names.index(f"lever_{pname}_{i + 1}")
+            diffs += [_rel(kin.p[:, b], ref.c_lever[:, j, i]), _rel(kin.v[:, b], ref.v_lever[:, i]),
+                      _rel(kin.a[:, b], ref.a_lever[:, i]), _rel(kin.w[:, b], ref.omega_lever[:, i]),
+                      _rel(kin.wd[:, b], ref.omega_lever_dot[:, i])]
+    out["hip_max_rel_diff"] = max(diffs)
+    out["hip_generic_over_closed_form"] = out["hip_kinematics_generic_us_per_sample"] / out[
+        "hip_kinematics_closed_form_us_per_sample"]
+    from pkmdyn.machines.pdm4 import BODY_NAMES
+    from pkmdyn.machines.pdm4 import inverse_kinematics as pdm_kinematics
+    from pkmdyn.machines.pdm4 import load_params as load_pdm
+    from pkmdyn.machines.pdm4.description import pdm_description
+    from pkmdyn.profiles.pdm_motion import cycloidal_motion
+
+    pm = load_pdm()
+    mp = load_mechanism(pdm_description(pm))
+    tr = pm.trajectory
+    motion = cycloidal_motion(tr.strokes, tr.period_s, n)
+    sec = best_time(lambda: solve_kinematics(mp, motion.q, motion.qd, motion.qdd, motion.t), args.repeat)
+    out["pdm_kinematics_generic_us_per_sample"] = sec / n * 1e6
+    sec = best_time(lambda: pdm_kinematics(pm, motion), args.repeat)
+    out["pdm_kinematics_closed_form_us_per_sample"] = sec / n * 1e6
+    ref = pdm_kinematics(pm, motion)
+    kin = solve_kinematics(mp, motion.q, motion.qd, motion.qdd, motion.t)
+    diffs = []
+    for b, name in enumerate(BODY_NAMES):
+        k = mp.body_names.index(name)
+        diffs += [_rel(getattr(kin, f)[:, k], getattr(ref.bodies[b], f)) for f in ("R", "p", "v", "a", "w", "wd")]
+    out["pdm_max_rel_diff"] = max(diffs)
+    out["targets"] = {"stewart_kinematics_us_per_sample<=20": out["stewart_kinematics_us_per_sample"] <= 20.0,
+                      "hip_max_rel_diff<=1e-9": out["hip_max_rel_diff"] <= 1e-9,
+                      "hip_generic_within_10x_of_closed_form": out["hip_generic_over_closed_form"] <= 10.0,
+                      "pdm_max_rel_diff<=1e-9": out["pdm_max_rel_diff"] <= 1e-9}
+    print(json.dumps(out, indent=None if args.json else 2))
+
+
+if __name__ == "__main__":
+    main()

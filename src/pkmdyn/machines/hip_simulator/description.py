@@ -1,0 +1,89 @@
+"""The hip simulator as a described mechanism: its parameter file turned into a description.
+
+The generic engine (:mod:`pkmdyn.multibody`) then computes the same kinematics as the
+closed form of :mod:`.kinematics` (Eq. 1-6), which stays the fast path and becomes the
+generic engine's test oracle. Described at the zero pose (R = I):
+
+* two platforms (``upper`` at o_1 = (0, 0, h1), ``lower`` at o_2 = (0, 0, h2)), each on a
+  spherical joint at its centre (``S0_upper``, ``S0_lower``, the "+S" of 2(3PUS+S));
+* per module i a ``slider_i`` on a prismatic joint along the screw through A_i (``P_i``,
+  actuated; its coordinate is the lower slider's position L_2i, Eq. 2; the upper slider is
+  the same body, h1 - h2 higher, as the two sliders of one screw move together);
+* per module and platform a lever (``lever_<platform>_i``, length l) on a universal joint at
+  the slider (first axis t_i fixed in the slider, second axis normal to t_i and to the lever)
+  and a spherical joint at the platform point o_j + R r_ai.
+
+Masses and inertias from Table 2: lever mass and principal inertia (x along the U joint's
+second axis, z along the lever), the two sliders of a module as one body of twice the slider
+mass, the platform's principal inertia in its frame; the lead screw's rotor inertia belongs to
+the actuator, not to a body of the mechanism. The task is the upper platform's Euler angles
+in the parameter file's sequence.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .params import HipModel
+
+__all__ = ["hip_description"]
+
+
+def _l(v: np.ndarray) -> list[float]:
+    return [float(x) for x in np.asarray(v, dtype=float)]
+
+
+def hip_description(model: HipModel) -> dict[str, Any]:
+    """The description (a dict in the format of ``docs/mechanism_format.md``) of ``model``."""
+    g, m = model.geometry, model.inertia
+    bodies: list[dict[str, Any]] = []
+    joints: list[dict[str, Any]] = []
+    inertia_platform = _l(m.I_m) + [0.0, 0.0, 0.0]
+    for j, pname in enumerate(("upper", "lower")):
+        o = g.o[j]
+        bodies.append({"name": pname, "mass_kg": float(m.m_m), "com_m": _l(o), "inertia_kgm2": inertia_platform})
+        joints.append({"name": f"S0_{pname}", "type": "spherical", "parent": "ground", "child": pname,
+                       "point_m": _l(o)})
+    dz_ref = []
+    for i in range(3):
+        a2 = g.o[1] + g.r_a[i]
+        d = np.array([a2[0] - g.A[i, 0], a2[1] - g.A[i, 1], 0.0])
+        d[2] = np.sqrt(g.l**2 - d[0] ** 2 - d[1] ** 2)
+        dz_ref.append(d)
+        b2 = a2 - d  # lower slider's U-joint centre at the zero pose
+        L2 = float(b2[2])
+        bodies.append({"name": f"slider_{i + 1}", "mass_kg": float(2.0 * m.m_L),
+                       "com_m": _l(b2 + 0.5 * (g.h[0] - g.h[1]) * np.array([0.0, 0.0, 1.0])),
+                       "inertia_kgm2": [1e-3, 1e-3, 1e-3, 0.0, 0.0, 0.0]})
+        joints.append({"name": f"P_{i + 1}", "type": "prismatic", "parent": "ground", "child": f"slider_{i + 1}",
+                       "point_m": _l(g.A[i]), "axis": [0.0, 0.0, 1.0], "actuated": True,
+                       "position_at_reference_m": L2})
+        e = d / g.l
+        t = g.t[i]
+        second = np.cross(t, e)
+        second /= np.linalg.norm(second)
+        Rl = np.column_stack([second, np.cross(e, second), e])  # lever frame (x, y, z)
+        Il = Rl @ np.diag(m.I_l) @ Rl.T
+        Il6 = [Il[0, 0], Il[1, 1], Il[2, 2], Il[0, 1], Il[0, 2], Il[1, 2]]
+        for j, pname in enumerate(("upper", "lower")):
+            a = g.o[j] + g.r_a[i]
+            b = a - d
+            lever = f"lever_{pname}_{i + 1}"
+            bodies.append({"name": lever, "mass_kg": float(m.m_l), "com_m": _l(b + 0.5 * d),
+                           "inertia_kgm2": [float(x) for x in Il6]})
+            joints.append({"name": f"U_{pname}_{i + 1}", "type": "universal", "parent": f"slider_{i + 1}",
+                           "child": lever, "point_m": _l(b), "axes": [_l(t), _l(second)]})
+            joints.append({"name": f"S_{pname}_{i + 1}", "type": "spherical", "parent": lever, "child": pname,
+                           "point_m": _l(a), "axis": _l(e)})
+    return {
+        "mechanism": {"name": "hip", "source": "2(3PUS+S) hip simulator, Chen, Cheng & Pang (2022), Tables 1-2"
+                      + (f"; parameters {model.source}" if getattr(model, "source", "") else ""),
+                      "gravity_m_s2": [0.0, 0.0, -float(m.g)]},
+        "bodies": bodies,
+        "joints": joints,
+        "task": {"body": "upper", "point_m": _l(g.o[0]), "euler_sequence": g.euler_sequence, "orientation": [1, 2, 3]},
+        "default_motion": {"period_s": 1.0, "samples": 201,
+                           "amplitude": {"euler1_rad": 0.3, "euler2_rad": 0.12, "euler3_rad": 0.1}},
+    }

@@ -1,0 +1,832 @@
+"""Compiled kernels of the multibody layer, driven by the model's arrays only.
+
+Nothing here knows a mechanism: every function takes the flat arrays of
+:class:`~.model.MechanismModel` and is compiled once (numba, ``cache=True``) for all of them.
+
+Notation (world = base frame): body b has rotation ``R[b]`` (3, 3) and frame origin ``p[b]``
+(3,) [m]; its spatial velocity ``V[b] = (omega; v_O)`` (6,) (angular velocity [rad/s] and the
+velocity [m/s] of the body point at the world origin, Plücker coordinates) and spatial
+acceleration ``A[b] = (omega_dot; a_O)`` (Featherstone 2008, ch. 2). Tree coordinate c has
+the world unit twist ``S[c]`` (6,); ``V[b] = V[parent] + sum_c S[c] qd[c]`` and
+``A[b] = A[parent] + sum_c (S[c] qdd[c] + V_pre[c] x S[c] qd[c])`` (Eq. 3.40 and 2.x of the
+book: the derivative of a twist fixed in a moving frame is ``V x S``), with ``V_pre[c]``
+the velocity of the frame in which ``S[c]`` is fixed. A point x fixed in body b moves with
+``v = v_O + omega x x`` and ``a = a_O + omega_dot x x + omega x v``.
+
+Rows: the constraint rows of the cut joints (``row_*`` arrays, residuals of
+:mod:`.joint_types`) followed by the task rows (``task_*``). ``_rows`` gives each row's
+value, its Jacobian row over the tree coordinates and, on request, its drift
+``gamma = d2/dt2 (row) at qdd = 0``, so that the acceleration equations are
+``J qdd = -gamma`` (loops) and ``J qdd = x_dd - gamma`` (task).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+OK, NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN = 0, 1, 2, 3, 4
+
+
+@njit(cache=True, inline="always")
+def _rot(m, ang, out):
+    """Elementary rotation about axis m (0, 1, 2) by ang [rad] into out (3, 3)."""
+    c, s = math.cos(ang), math.sin(ang)
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = 0.0
+    i, j = (m + 1) % 3, (m + 2) % 3
+    out[m, m] = 1.0
+    out[i, i] = c
+    out[j, j] = c
+    out[i, j] = -s
+    out[j, i] = s
+
+
+@njit(cache=True, inline="always")
+def _matmul3(a, b, out):
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j]
+
+
+@njit(cache=True, inline="always")
+def _cross(a, b, out):
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+
+
+@njit(cache=True, inline="always")
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@njit(cache=True)
+def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                      RP, pP, RC, pC, R, p, S, w33, w3):
+    """Body poses ``R (nb, 3, 3)``, ``p (nb, 3)`` and coordinate twists ``S (nq, 6)`` at ``q``
+    (frames ``RP, pP, RC, pC`` in tree order; coordinate c moves by ``coord_sign[c] (q - offset)``;
+    ``w33 (5, 3, 3)``, ``w3 (20, 3)``: work space)."""
+    Rf, tmp, E = w33[0], w33[1], w33[2]
+    o, ax = w3[18], w3[19]
+    for b in range(body_parent.shape[0]):
+        k = body_joint[b]
+        a = body_parent[b]
+        if a < 0:
+            for i in range(3):
+                o[i] = pP[k, i]
+                for j in range(3):
+                    Rf[i, j] = RP[k, i, j]
+        else:
+            _matmul3(R[a], RP[k], Rf)
+            for i in range(3):
+                o[i] = p[a, i] + R[a, i, 0] * pP[k, 0] + R[a, i, 1] * pP[k, 1] + R[a, i, 2] * pP[k, 2]
+        for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
+            m = coord_motion[c]
+            sg = coord_sign[c]
+            qc = sg * (q[c] - coord_offset[c])
+            if m < 3:
+                for i in range(3):
+                    ax[i] = Rf[i, m]
+                S[c, 0], S[c, 1], S[c, 2] = sg * ax[0], sg * ax[1], sg * ax[2]
+                S[c, 3] = sg * (o[1] * ax[2] - o[2] * ax[1])
+                S[c, 4] = sg * (o[2] * ax[0] - o[0] * ax[2])
+                S[c, 5] = sg * (o[0] * ax[1] - o[1] * ax[0])
+                # Rf <- Rf Rot_m(qc): only the two columns normal to axis m turn
+                cq, sq = math.cos(qc), math.sin(qc)
+                i1, j1 = (m + 1) % 3, (m + 2) % 3
+                for r in range(3):
+                    ci, cjv = Rf[r, i1], Rf[r, j1]
+                    Rf[r, i1] = cq * ci + sq * cjv
+                    Rf[r, j1] = -sq * ci + cq * cjv
+            else:
+                for i in range(3):
+                    ax[i] = Rf[i, m - 3]
+                S[c, 0] = 0.0
+                S[c, 1] = 0.0
+                S[c, 2] = 0.0
+                S[c, 3], S[c, 4], S[c, 5] = sg * ax[0], sg * ax[1], sg * ax[2]
+                for i in range(3):
+                    o[i] += ax[i] * qc
+        for i in range(3):
+            for j in range(3):
+                R[b, i, j] = Rf[i, 0] * RC[k, j, 0] + Rf[i, 1] * RC[k, j, 1] + Rf[i, 2] * RC[k, j, 2]
+        for i in range(3):
+            p[b, i] = o[i] - (R[b, i, 0] * pC[k, 0] + R[b, i, 1] * pC[k, 1] + R[b, i, 2] * pC[k, 2])
+
+
+@njit(cache=True)
+def forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre):
+    """Spatial velocities ``V (nb, 6)`` and the velocity ``Vpre (nq, 6)`` of the frame that
+    carries each coordinate's twist."""
+    cur = np.empty(6)
+    for b in range(body_parent.shape[0]):
+        k = body_joint[b]
+        a = body_parent[b]
+        for i in range(6):
+            cur[i] = V[a, i] if a >= 0 else 0.0
+        for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
+            for i in range(6):
+                Vpre[c, i] = cur[i]
+                cur[i] += S[c, i] * qd[c]
+        for i in range(6):
+            V[b, i] = cur[i]
+
+
+@njit(cache=True)
+def forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A):
+    """Spatial accelerations ``A (nb, 6)``; with ``qdd = 0`` the bias accelerations."""
+    cur = np.empty(6)
+    for b in range(body_parent.shape[0]):
+        k = body_joint[b]
+        a = body_parent[b]
+        for i in range(6):
+            cur[i] = A[a, i] if a >= 0 else 0.0
+        for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
+            w0, w1, w2 = Vpre[c, 0], Vpre[c, 1], Vpre[c, 2]
+            v0, v1, v2 = Vpre[c, 3], Vpre[c, 4], Vpre[c, 5]
+            s0, s1, s2 = S[c, 0], S[c, 1], S[c, 2]
+            t0, t1, t2 = S[c, 3], S[c, 4], S[c, 5]
+            d = qd[c]
+            cur[0] += S[c, 0] * qdd[c] + (w1 * s2 - w2 * s1) * d
+            cur[1] += S[c, 1] * qdd[c] + (w2 * s0 - w0 * s2) * d
+            cur[2] += S[c, 2] * qdd[c] + (w0 * s1 - w1 * s0) * d
+            cur[3] += S[c, 3] * qdd[c] + (w1 * t2 - w2 * t1 + v1 * s2 - v2 * s1) * d
+            cur[4] += S[c, 4] * qdd[c] + (w2 * t0 - w0 * t2 + v2 * s0 - v0 * s2) * d
+            cur[5] += S[c, 5] * qdd[c] + (w0 * t1 - w1 * t0 + v0 * s1 - v1 * s0) * d
+        for i in range(6):
+            A[b, i] = cur[i]
+
+
+@njit(cache=True, inline="always")
+def _parity(i, j, k):
+    return 1.0 if (i, j, k) in ((0, 1, 2), (1, 2, 0), (2, 0, 1)) else -1.0
+
+
+@njit(cache=True)
+def euler_angles(Rm, axes, out):
+    """Intrinsic Euler angles (3,) [rad] of ``Rm = R_a1(out0) R_a2(out1) R_a3(out2)``."""
+    i, j, k = axes[0], axes[1], axes[2]
+    if i != k:
+        eps = _parity(i, j, k)
+        x = eps * Rm[i, k]
+        x = min(1.0, max(-1.0, x))
+        out[1] = math.asin(x)
+        out[0] = math.atan2(-eps * Rm[j, k], Rm[k, k])
+        out[2] = math.atan2(-eps * Rm[i, j], Rm[i, i])
+    else:
+        kk = 3 - i - j
+        eps = _parity(i, j, kk)
+        x = min(1.0, max(-1.0, Rm[i, i]))
+        out[1] = math.acos(x)
+        out[0] = math.atan2(Rm[j, i], -eps * Rm[kk, i])
+        out[2] = math.atan2(Rm[i, j], eps * Rm[i, kk])
+
+
+@njit(cache=True)
+def euler_rate_map(ang, axes, E):
+    """``E (3, 3)``: omega = E phi_dot, columns ``k1, R1 k2, R1 R2 k3`` (base frame)."""
+    i1, i2, i3 = axes[0], axes[1], axes[2]
+    c1, s1 = math.cos(ang[0]), math.sin(ang[0])
+    c2, s2 = math.cos(ang[1]), math.sin(ang[1])
+    for r in range(3):
+        E[r, 0] = 1.0 if r == i1 else 0.0
+        E[r, 1] = 1.0 if r == i2 else 0.0
+        E[r, 2] = 1.0 if r == i3 else 0.0
+    # column 1: R1 k2
+    j, k = (i1 + 1) % 3, (i1 + 2) % 3
+    xj, xk = E[j, 1], E[k, 1]
+    E[j, 1] = c1 * xj - s1 * xk
+    E[k, 1] = s1 * xj + c1 * xk
+    # column 2: R1 (R2 k3)
+    j, k = (i2 + 1) % 3, (i2 + 2) % 3
+    xj, xk = E[j, 2], E[k, 2]
+    E[j, 2] = c2 * xj - s2 * xk
+    E[k, 2] = s2 * xj + c2 * xk
+    j, k = (i1 + 1) % 3, (i1 + 2) % 3
+    xj, xk = E[j, 2], E[k, 2]
+    E[j, 2] = c1 * xj - s1 * xk
+    E[k, 2] = s1 * xj + c1 * xk
+
+
+@njit(cache=True, inline="always")
+def _rotate_vec(m, c, s, x, out):
+    """``out = Rot_m(angle) x`` with ``c, s`` the cosine and sine of the angle."""
+    i, j = (m + 1) % 3, (m + 2) % 3
+    out[m] = x[m]
+    out[i] = c * x[i] - s * x[j]
+    out[j] = s * x[i] + c * x[j]
+
+
+@njit(cache=True, inline="always")
+def _inv3(M, out):
+    """Inverse of a 3 x 3 matrix; returns the determinant (out untouched when it is 0)."""
+    det = (M[0, 0] * (M[1, 1] * M[2, 2] - M[1, 2] * M[2, 1]) - M[0, 1] * (M[1, 0] * M[2, 2] - M[1, 2] * M[2, 0])
+           + M[0, 2] * (M[1, 0] * M[2, 1] - M[1, 1] * M[2, 0]))
+    if det == 0.0:
+        return det
+    out[0, 0] = (M[1, 1] * M[2, 2] - M[1, 2] * M[2, 1]) / det
+    out[0, 1] = (M[0, 2] * M[2, 1] - M[0, 1] * M[2, 2]) / det
+    out[0, 2] = (M[0, 1] * M[1, 2] - M[0, 2] * M[1, 1]) / det
+    out[1, 0] = (M[1, 2] * M[2, 0] - M[1, 0] * M[2, 2]) / det
+    out[1, 1] = (M[0, 0] * M[2, 2] - M[0, 2] * M[2, 0]) / det
+    out[1, 2] = (M[0, 2] * M[1, 0] - M[0, 0] * M[1, 2]) / det
+    out[2, 0] = (M[1, 0] * M[2, 1] - M[1, 1] * M[2, 0]) / det
+    out[2, 1] = (M[0, 1] * M[2, 0] - M[0, 0] * M[2, 1]) / det
+    out[2, 2] = (M[0, 0] * M[1, 1] - M[0, 1] * M[1, 0]) / det
+    return det
+
+
+@njit(cache=True, inline="always")
+def _frame(b, R, p, Rj, pj, e, o):
+    """Joint frame axes ``e (3, 3)`` (columns) and origin ``o (3,)`` in the world, on body b."""
+    if b < 0:
+        for i in range(3):
+            o[i] = pj[i]
+            for j in range(3):
+                e[i, j] = Rj[i, j]
+    else:
+        _matmul3(R[b], Rj, e)
+        for i in range(3):
+            o[i] = p[b, i] + R[b, i, 0] * pj[0] + R[b, i, 1] * pj[1] + R[b, i, 2] * pj[2]
+
+
+@njit(cache=True, inline="always")
+def _point_motion(b, x, V, A, v, a):
+    """Velocity ``v`` and acceleration ``a`` of the world point ``x`` fixed in body b."""
+    if b < 0:
+        for i in range(3):
+            v[i] = 0.0
+            a[i] = 0.0
+        return
+    w = V[b, :3]
+    wd = A[b, :3]
+    v[0] = V[b, 3] + w[1] * x[2] - w[2] * x[1]
+    v[1] = V[b, 4] + w[2] * x[0] - w[0] * x[2]
+    v[2] = V[b, 5] + w[0] * x[1] - w[1] * x[0]
+    a[0] = A[b, 3] + wd[1] * x[2] - wd[2] * x[1] + w[1] * v[2] - w[2] * v[1]
+    a[1] = A[b, 4] + wd[2] * x[0] - wd[0] * x[2] + w[2] * v[0] - w[0] * v[2]
+    a[2] = A[b, 5] + wd[0] * x[1] - wd[1] * x[0] + w[0] * v[1] - w[1] * v[0]
+
+
+@njit(cache=True, inline="always")
+def _jrow(J, rr, wa, wb, S, anc, a, b, coef_a, coef_b):
+    """Jacobian row ``J[rr, c] = (coef_b [c moves b] + coef_a [c moves a]) (wa . S_w + wb . S_v)``;
+    ``anc[b] = (count, coordinates moving body b...)``."""
+    for c in range(S.shape[0]):
+        J[rr, c] = 0.0
+    for body, coef in ((a, coef_a), (b, coef_b)):
+        if body < 0 or coef == 0.0:
+            continue
+        for k in range(1, anc[body, 0] + 1):
+            c = anc[body, k]
+            J[rr, c] += coef * (wa[0] * S[c, 0] + wa[1] * S[c, 1] + wa[2] * S[c, 2]
+                                + wb[0] * S[c, 3] + wb[1] * S[c, 4] + wb[2] * S[c, 5])
+
+
+@njit(cache=True)
+def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+         RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+         val, J, with_drift, V, A, gamma, w33, w3):
+    """Values ``val (nr + nt,)`` and Jacobian ``J (nr + nt, nq)``; or, when ``with_drift``, the
+    values and the drift ``gamma (nr + nt,)`` from the bias accelerations ``A`` (qdd = 0) and
+    velocities ``V`` (``J`` untouched).
+
+    Jacobian rows in Plücker form: a translation row ``e . (o_C - o_P)`` changes with tree
+    rate c by ``(s_b - s_a) (e . S_v - (e x o_C) . S_w)`` (s_a, s_b: 1 where c moves body a, b;
+    the terms of ``o_P`` and of the turning ``e`` cancel into this), a rotation row
+    ``e . c_j`` by ``(s_a - s_b) (e x c_j) . S_w``, a task position component m of point x by
+    ``S_v[m] + (x x e_m) . S_w``, a task Euler angle by ``(E^-1 S_w)[m]``.
+
+    Returns False where an Euler task angle is at its sequence's singularity."""
+    nr = row_loop.shape[0]
+    eP = w33[3]
+    eC = w33[4]
+    wk = w3
+    oP, oC, r, t3, e, cj = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5]
+    vP, aP, vC, aC, ed, edd = wk[6], wk[7], wk[8], wk[9], wk[10], wk[11]
+    cd, cdd, x, wa, wb, t4 = wk[12], wk[13], wk[14], wk[15], wk[16], wk[17]
+    last = -1
+    for rr in range(nr):
+        k = loop_joint[row_loop[rr]]
+        a = joint_parent[k]
+        b = joint_child[k]
+        if k != last:
+            _frame(a, R, p, RP[k], pP[k], eP, oP)
+            _frame(b, R, p, RC[k], pC[k], eC, oC)
+            last = k
+        i = row_i[rr]
+        for m in range(3):
+            e[m] = eP[m, i]
+            r[m] = oC[m] - oP[m]
+        if row_kind[rr] == 0:
+            val[rr] = _dot(e, r)
+            _cross(e, oC, t3)
+            for m in range(3):
+                wa[m] = -t3[m]
+                wb[m] = e[m]
+            if not with_drift:
+                _jrow(J, rr, wa, wb, S, anc, a, b, -1.0, 1.0)
+        else:
+            for m in range(3):
+                cj[m] = eC[m, row_j[rr]]
+            val[rr] = _dot(e, cj)
+            _cross(e, cj, wa)
+            for m in range(3):
+                wb[m] = 0.0
+            if not with_drift:
+                _jrow(J, rr, wa, wb, S, anc, a, b, 1.0, -1.0)
+        if with_drift:
+            if a >= 0:
+                _cross(V[a, :3], e, ed)
+                _cross(V[a, :3], ed, t3)
+                _cross(A[a, :3], e, edd)
+                for m in range(3):
+                    edd[m] += t3[m]
+            else:
+                for m in range(3):
+                    ed[m] = 0.0
+                    edd[m] = 0.0
+            if row_kind[rr] == 0:
+                _point_motion(a, oP, V, A, vP, aP)
+                _point_motion(b, oC, V, A, vC, aC)
+                g = _dot(edd, r)
+                for m in range(3):
+                    g += 2.0 * ed[m] * (vC[m] - vP[m]) + e[m] * (aC[m] - aP[m])
+                gamma[rr] = g
+            else:
+                if b >= 0:
+                    _cross(V[b, :3], cj, cd)
+                    _cross(V[b, :3], cd, t3)
+                    _cross(A[b, :3], cj, cdd)
+                    for m in range(3):
+                        cdd[m] += t3[m]
+                else:
+                    for m in range(3):
+                        cd[m] = 0.0
+                        cdd[m] = 0.0
+                gamma[rr] = _dot(edd, cj) + 2.0 * _dot(ed, cd) + _dot(e, cdd)
+    # task rows
+    tb = task_body
+    for m in range(3):
+        x[m] = p[tb, m] + R[tb, m, 0] * task_point[0] + R[tb, m, 1] * task_point[1] + R[tb, m, 2] * task_point[2]
+    ang = w33[2, 0]  # not shared with the row work space
+    Em = eP
+    Ei = eC
+    have_euler = False
+    for t in range(task_kind.shape[0]):
+        if task_kind[t] == 1:
+            have_euler = True
+    ok = True
+    if have_euler:
+        euler_angles(R[tb], euler_axes, ang)
+        euler_rate_map(ang, euler_axes, Em)
+        det = _inv3(Em, Ei)
+        if abs(det) < 1e-9:
+            ok = False
+            for i in range(3):
+                for j in range(3):
+                    Ei[i, j] = 0.0
+    for t in range(task_kind.shape[0]):
+        rr = nr + t
+        m = task_index[t]
+        if task_kind[t] == 0:
+            val[rr] = x[m]
+            # (x x e_m) . S_w + S_v[m]
+            for i in range(3):
+                t4[i] = 0.0
+                wb[i] = 0.0
+            t4[m] = 1.0
+            _cross(x, t4, wa)
+            wb[m] = 1.0
+            if not with_drift:
+                _jrow(J, rr, wa, wb, S, anc, -1, tb, 0.0, 1.0)
+            if with_drift:
+                _point_motion(tb, x, V, A, vC, aC)
+                gamma[rr] = aC[m]
+        else:
+            val[rr] = ang[m]
+            for i in range(3):
+                wa[i] = Ei[m, i]
+                wb[i] = 0.0
+            if not with_drift:
+                _jrow(J, rr, wa, wb, S, anc, -1, tb, 0.0, 1.0)
+            if with_drift:
+                # phi_dd = E^-1 (omega_dot - Edot phi_dot), Edot phi_dot = (k1 f1) x (e2 f2) + (k1 f1 + e2 f2) x (e3 f3)
+                w = V[tb, :3]
+                f = wk[10]
+                for i in range(3):
+                    f[i] = Ei[i, 0] * w[0] + Ei[i, 1] * w[1] + Ei[i, 2] * w[2]
+                u1, u2, u12 = wk[11], wk[12], wk[13]
+                for i in range(3):
+                    u1[i] = Em[i, 0] * f[0]
+                    u2[i] = Em[i, 1] * f[1]
+                    u12[i] = u1[i] + u2[i]
+                    e[i] = Em[i, 2] * f[2]
+                _cross(u1, u2, t3)
+                _cross(u12, e, cd)
+                for i in range(3):
+                    cdd[i] = A[tb, i] - t3[i] - cd[i]
+                gamma[rr] = Ei[m, 0] * cdd[0] + Ei[m, 1] * cdd[1] + Ei[m, 2] * cdd[2]
+    return ok
+
+
+@njit(cache=True)
+def lu_factor(M, piv):
+    """In-place LU with partial pivoting of square ``M``; False when a pivot is below
+    1e-12 of the largest entry (singular to working precision)."""
+    n = M.shape[0]
+    big = 0.0
+    for i in range(n):
+        for j in range(n):
+            if abs(M[i, j]) > big:
+                big = abs(M[i, j])
+    tol = 1e-12 * big if big > 0 else 1e-300
+    for k in range(n):
+        pr = k
+        pv = abs(M[k, k])
+        for i in range(k + 1, n):
+            if abs(M[i, k]) > pv:
+                pv = abs(M[i, k])
+                pr = i
+        piv[k] = pr
+        if pv <= tol:
+            return False
+        if pr != k:
+            for j in range(n):
+                tmp = M[k, j]
+                M[k, j] = M[pr, j]
+                M[pr, j] = tmp
+        inv = 1.0 / M[k, k]
+        for i in range(k + 1, n):
+            f = M[i, k] * inv
+            M[i, k] = f
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    M[i, j] -= f * M[k, j]
+    return True
+
+
+@njit(cache=True)
+def lu_solve(M, piv, b):
+    """Solve in place for ``b`` with the factors of :func:`lu_factor`."""
+    n = M.shape[0]
+    for k in range(n):
+        pr = piv[k]
+        if pr != k:
+            tmp = b[k]
+            b[k] = b[pr]
+            b[pr] = tmp
+    for i in range(n):
+        s = b[i]
+        for j in range(i):
+            s -= M[i, j] * b[j]
+        b[i] = s
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for j in range(i + 1, n):
+            s -= M[i, j] * b[j]
+        b[i] = s / M[i, i]
+
+
+@njit(cache=True, inline="always")
+def _wrap(a):
+    return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
+
+
+@njit(cache=True)
+def _fill(K, J, sel_rows, idle, prow, pcol):
+    """``K[i, j] = Kfull[prow[i], pcol[j]]`` with ``Kfull = [J[sel_rows]; idle]``."""
+    m = sel_rows.shape[0]
+    for i in range(K.shape[0]):
+        r = prow[i]
+        if r < m:
+            rr = sel_rows[r]
+            for j in range(K.shape[1]):
+                K[i, j] = J[rr, pcol[j]]
+        else:
+            for j in range(K.shape[1]):
+                K[i, j] = idle[r - m, pcol[j]]
+
+
+@njit(cache=True)
+def block_lu_factor(M, piv, blocks):
+    """LU with partial pivoting inside each diagonal block of a block lower-triangular ``M``
+    (``blocks``: block start rows, then ``n``); whole rows are swapped, the blocks left of the
+    diagonal are kept as they are. False when a pivot is below 1e-12 of the largest entry."""
+    n = M.shape[0]
+    big = 0.0
+    for i in range(n):
+        for j in range(n):
+            if abs(M[i, j]) > big:
+                big = abs(M[i, j])
+    tol = 1e-12 * big if big > 0 else 1e-300
+    for bk in range(blocks.shape[0] - 1):
+        s0, s1 = blocks[bk], blocks[bk + 1]
+        for k in range(s0, s1):
+            pr = k
+            pv = abs(M[k, k])
+            for i in range(k + 1, s1):
+                if abs(M[i, k]) > pv:
+                    pv = abs(M[i, k])
+                    pr = i
+            piv[k] = pr
+            if pv <= tol:
+                return False
+            if pr != k:
+                for j in range(n):
+                    tmp = M[k, j]
+                    M[k, j] = M[pr, j]
+                    M[pr, j] = tmp
+            inv = 1.0 / M[k, k]
+            for i in range(k + 1, s1):
+                f = M[i, k] * inv
+                M[i, k] = f
+                if f != 0.0:
+                    for j in range(k + 1, s1):
+                        M[i, j] -= f * M[k, j]
+    return True
+
+
+@njit(cache=True)
+def block_lu_solve(M, piv, blocks, prow, pcol, b, work):
+    """Solve ``Kfull x = b`` in place (``b`` in the rows of ``Kfull``, ``x`` in coordinate
+    order) with the factors of :func:`block_lu_factor` of the permuted ``K``: block by block,
+    ``A_kk x_k = b_k - A_k,<k x_<k``."""
+    n = M.shape[0]
+    for i in range(n):
+        work[i] = b[prow[i]]
+    for bk in range(blocks.shape[0] - 1):
+        s0, s1 = blocks[bk], blocks[bk + 1]
+        for k in range(s0, s1):
+            pr = piv[k]
+            if pr != k:
+                tmp = work[k]
+                work[k] = work[pr]
+                work[pr] = tmp
+        for i in range(s0, s1):
+            acc = work[i]
+            for j in range(s0):
+                acc -= M[i, j] * work[j]
+            work[i] = acc
+        for i in range(s0, s1):
+            acc = work[i]
+            for j in range(s0, i):
+                acc -= M[i, j] * work[j]
+            work[i] = acc
+        for i in range(s1 - 1, s0 - 1, -1):
+            acc = work[i]
+            for j in range(i + 1, s1):
+                acc -= M[i, j] * work[j]
+            work[i] = acc / M[i, i]
+    for j in range(n):
+        b[pcol[j]] = work[j]
+
+
+@njit(cache=True)
+def solve_batch(tm, x, xd, xdd, q_start,
+                body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
+                row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                task_body, task_point, task_kind, task_index, euler_axes,
+                sel_rows, idle, prow, pcol, blocks, q_ref, row_scale, tol, check_tol, max_iter,
+                com, pC_all,
+                q_out, qd_out, qdd_out, R_out, p_out, V_out, A_out, G_out, res_out, status, worst,
+                ov_out, oa_out, cp_out, cv_out, ca_out, jp_out, jv_out, ja_out):
+    """Kinematics of every sample, warm-started along the motion.
+
+    For sample s: Newton on the square system of the selected rows and the idle rows
+
+        rows(q) = 0 (loop closure),  task(q) - x_s = 0 (task coordinates, angles wrapped),
+        idle (q - q_ref) = 0         (each idle freedom held along its direction at the reference),
+
+    ``K = [J[sel_rows]; idle]`` (nq, nq), permuted (``prow``, ``pcol``) to block lower-triangular
+    form with diagonal blocks starting at ``blocks`` (legs that are independent once the
+    platform is placed are solved one by one), starting from
+    ``q_{s-1} + qd_{s-1} dt + qdd_{s-1} dt^2 / 2`` (``dt = tm_s - tm_{s-1}``; the first-order
+    ``q_{s-1} + G_{s-1} (x_s - x_{s-1})`` when ``tm`` is empty; ``q_start`` for the first
+    sample), until the scaled residual of the solved rows is at most ``tol`` (or stalls within
+    a factor 1000 of it: the rounding floor of an ill-conditioned pose) and that of every row,
+    the redundant directions of an over-constrained loop included, at most ``check_tol``; then
+    ``K qd = (0; xd_s)``, ``K qdd = (-gamma_loops; xdd_s - gamma_task)`` and
+    ``G = K^-1 (0; I; 0)`` (tree rates per task rate). Writes the per-sample outputs and
+    ``status[s]`` (OK, NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN) with ``worst[s]``
+    the row of the largest residual; stops at the first failed sample. Also the classical
+    velocity and acceleration of every body origin (``ov_out, oa_out``), centre of mass
+    (``com`` (nb, 3) body frame -> ``cp_out, cv_out, ca_out``) and joint centre (the origin of
+    the joint frame on ``joint_child``, ``pC_all`` (nj, 3) -> ``jp_out, jv_out, ja_out``).
+    """
+    n = x.shape[0]
+    nq = q_start.shape[0]
+    nb = body_parent.shape[0]
+    nr = row_loop.shape[0]
+    nt = task_kind.shape[0]
+    nrow = nr + nt
+    m = sel_rows.shape[0]
+    ni = idle.shape[0]
+    mk = m + ni
+    q = q_start.copy()
+    qd = np.zeros(nq)
+    qdd = np.zeros(nq)
+    R = np.empty((nb, 3, 3))
+    p = np.empty((nb, 3))
+    S = np.empty((nq, 6))
+    V = np.zeros((nb, 6))
+    Vpre = np.zeros((nq, 6))
+    A = np.zeros((nb, 6))
+    val = np.empty(nrow)
+    J = np.empty((nrow, nq))
+    gamma = np.zeros(nrow)
+    res = np.empty(nrow)
+    K = np.empty((mk, mk))
+    piv = np.empty(mk, dtype=np.int64)
+    rhs = np.empty(mk)
+    ires = np.empty(ni)
+    bwork = np.empty(mk)
+    G = np.zeros((nq, nt))
+    w33 = np.empty((5, 3, 3))
+    w3 = np.empty((20, 3))
+    for s in range(n):
+        if s > 0 and tm.shape[0] == n:
+            dt = tm[s] - tm[s - 1]
+            for c in range(nq):
+                q[c] += qd[c] * dt + 0.5 * qdd[c] * dt * dt
+        elif s > 0:
+            for c in range(nq):
+                acc = 0.0
+                for t in range(nt):
+                    dx = x[s, t] - x[s - 1, t]
+                    if task_kind[t] == 1:
+                        dx = _wrap(dx)
+                    acc += G[c, t] * dx
+                q[c] += acc
+        converged = False
+        open_loop = False
+        prev = 1e300
+        for it in range(max_iter + 1):
+            forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                              coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3)
+            ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                      RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+                      val, J, False, V, A, gamma, w33, w3)
+            if not ok:
+                status[s] = EULER_SINGULAR
+                worst[s] = nr
+                return
+            for rr in range(nrow):
+                if rr < nr:
+                    res[rr] = val[rr]
+                elif task_kind[rr - nr] == 1:
+                    res[rr] = _wrap(val[rr] - x[s, rr - nr])
+                else:
+                    res[rr] = val[rr] - x[s, rr - nr]
+            # the solved rows (selected and idle) and every row (redundant ones only checked)
+            big_sel = 0.0
+            wr = sel_rows[0] if m > 0 else 0
+            for i in range(m):
+                sc = abs(res[sel_rows[i]]) * row_scale[sel_rows[i]]
+                if sc > big_sel:
+                    big_sel = sc
+                    wr = sel_rows[i]
+            for i in range(ni):
+                acc = 0.0
+                for c in range(nq):
+                    acc += idle[i, c] * (q[c] - q_ref[c])
+                ires[i] = acc
+                if abs(acc) > big_sel:
+                    big_sel = abs(acc)
+            big_all = 0.0
+            wa = 0
+            for rr in range(nrow):
+                sc = abs(res[rr]) * row_scale[rr]
+                if sc > big_all:
+                    big_all = sc
+                    wa = rr
+            worst[s] = wr
+            res_out[s] = big_sel if big_sel > big_all else big_all
+            # converged: at the tolerance, or stalled at the rounding floor (no halving) near it
+            if big_sel <= tol or (big_sel <= 1e3 * tol and big_sel > 0.5 * prev):
+                if big_all <= check_tol:
+                    converged = True
+                else:
+                    open_loop = True
+                    worst[s] = wa
+                break
+            prev = big_sel
+            if it == max_iter:
+                break
+            _fill(K, J, sel_rows, idle, prow, pcol)
+            for i in range(m):
+                rhs[i] = -res[sel_rows[i]]
+            for i in range(ni):
+                rhs[m + i] = -ires[i]
+            if not block_lu_factor(K, piv, blocks):
+                status[s] = SINGULAR
+                for c in range(nq):
+                    q_out[s, c] = q[c]
+                return
+            block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
+            for j in range(mk):
+                q[j] += rhs[j]
+        if not converged:
+            # LOOP_OPEN: the solved rows closed but a redundant direction of a loop stays open
+            status[s] = LOOP_OPEN if open_loop else NOT_CONVERGED
+            for c in range(nq):
+                q_out[s, c] = q[c]
+            return
+        _fill(K, J, sel_rows, idle, prow, pcol)
+        if not block_lu_factor(K, piv, blocks):
+            status[s] = SINGULAR
+            for c in range(nq):
+                q_out[s, c] = q[c]
+            return
+        # velocities
+        for i in range(mk):
+            rhs[i] = 0.0
+        for i in range(m):
+            rr = sel_rows[i]
+            rhs[i] = xd[s, rr - nr] if rr >= nr else 0.0
+        block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
+        for j in range(nq):
+            qd[j] = rhs[j]
+        forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre)
+        for c in range(nq):
+            qdd[c] = 0.0
+        forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
+        rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+             RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+             val, J, True, V, A, gamma, w33, w3)
+        for i in range(mk):
+            rhs[i] = 0.0
+        for i in range(m):
+            rr = sel_rows[i]
+            rhs[i] = (xdd[s, rr - nr] - gamma[rr]) if rr >= nr else -gamma[rr]
+        block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
+        for j in range(nq):
+            qdd[j] = rhs[j]
+        forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
+        # G = K^-1 (0; I)
+        for t in range(nt):
+            for i in range(mk):
+                rhs[i] = 1.0 if (i < m and sel_rows[i] == nr + t) else 0.0
+            block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
+            for j in range(nq):
+                G[j, t] = rhs[j]
+        for c in range(nq):
+            q_out[s, c] = q[c]
+            qd_out[s, c] = qd[c]
+            qdd_out[s, c] = qdd[c]
+            for t in range(nt):
+                G_out[s, c, t] = G[c, t]
+        for b in range(nb):
+            for i in range(3):
+                p_out[s, b, i] = p[b, i]
+                for j in range(3):
+                    R_out[s, b, i, j] = R[b, i, j]
+            for i in range(6):
+                V_out[s, b, i] = V[b, i]
+                A_out[s, b, i] = A[b, i]
+            _point_motion(b, p[b], V, A, ov_out[s, b], oa_out[s, b])
+            for i in range(3):
+                cp_out[s, b, i] = p[b, i] + R[b, i, 0] * com[b, 0] + R[b, i, 1] * com[b, 1] + R[b, i, 2] * com[b, 2]
+            _point_motion(b, cp_out[s, b], V, A, cv_out[s, b], ca_out[s, b])
+        for k in range(joint_child.shape[0]):
+            b = joint_child[k]
+            if b < 0:
+                for i in range(3):
+                    jp_out[s, k, i] = pC_all[k, i]
+                    jv_out[s, k, i] = 0.0
+                    ja_out[s, k, i] = 0.0
+            else:
+                for i in range(3):
+                    jp_out[s, k, i] = (p[b, i] + R[b, i, 0] * pC_all[k, 0] + R[b, i, 1] * pC_all[k, 1]
+                                       + R[b, i, 2] * pC_all[k, 2])
+                _point_motion(b, jp_out[s, k], V, A, jv_out[s, k], ja_out[s, k])
+        status[s] = OK
+
+
+@njit(cache=True)
+def jacobians_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                    tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
+                    row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                    task_body, task_point, task_kind, task_index, euler_axes, val_out, J_out):
+    """Row values ``val_out (n, nr + nt)`` and Jacobians ``J_out (n, nr + nt, nq)`` at ``q (n, nq)``."""
+    nb = body_parent.shape[0]
+    nq = q.shape[1]
+    R = np.empty((nb, 3, 3))
+    p = np.empty((nb, 3))
+    S = np.empty((nq, 6))
+    V = np.zeros((nb, 6))
+    A = np.zeros((nb, 6))
+    gamma = np.zeros(val_out.shape[1])
+    w33 = np.empty((5, 3, 3))
+    w3 = np.empty((20, 3))
+    for s in range(q.shape[0]):
+        forward_positions(q[s], body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                          coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3)
+        rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+             RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+             val_out[s], J_out[s], False, V, A, gamma, w33, w3)

@@ -1,0 +1,589 @@
+"""The mechanism description: a TOML file validated into plain, immutable records.
+
+Format (``docs/mechanism_format.md``): ``[mechanism]`` (name, source, gravity, optional cut
+joints), ``[[bodies]]``, ``[[joints]]``, ``[task]``, optional ``[[loads]]``, ``[[legs]]``
+(a leg template repeated at given angles) and ``[default_motion]``. Every body, joint and
+point is given in the *reference configuration*, in the base frame: a joint's point and axes
+are given once and fixed in both bodies at that configuration, so the reference configuration
+is assembled by construction and every joint coordinate is zero there. SI units, angles in
+radians, except the keys that say ``_deg``.
+
+:func:`load_description` reads and validates a file (or a dict) and expands the legs;
+every failure is one :class:`~pkmdyn.errors.ParameterError` line naming the file, the table
+and the body, joint or key.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import Field, ValidationError, field_validator
+
+from ..errors import ParameterError
+from ..params_util import Section, _rule, read_toml
+from .joint_types import JOINT_TYPES, joint_type
+
+__all__ = ["Description", "BodySpec", "JointSpec", "TaskSpec", "LoadSpec", "MotionSpec",
+           "load_description", "GROUND", "inertia_matrix"]
+
+Array = NDArray[np.float64]
+GROUND = "ground"
+#: the largest mechanism a description may hold (after the legs are expanded); the topology
+#: takes singular value decompositions of matrices of up to 6 x joints rows
+MAX_BODIES = 300
+MAX_JOINTS = 600
+_TYPES = tuple(t.name for t in JOINT_TYPES)
+Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+Pair = Annotated[list[float], Field(min_length=2, max_length=2)]
+NAME = Field(min_length=1, max_length=64, pattern=r"^[A-Za-z_][A-Za-z0-9_'.-]*$")
+
+
+class _Section(Section):
+    """Link cross-section for compliance (stored for the dynamics)."""
+
+    outer_diameter_m: float = Field(gt=0)
+    inner_diameter_m: float = Field(default=0.0, ge=0)
+
+
+class _Material(Section):
+    youngs_modulus_Pa: float = Field(gt=0)
+    poisson_ratio: float = Field(default=0.3, gt=-1, lt=0.5)
+
+
+class _Shape(Section):
+    """Drawing hint: a rod or tube between points, a box, a sphere (base frame, reference)."""
+
+    kind: Literal["rod", "box", "sphere", "disc"]
+    points_m: list[Vec3] = Field(default_factory=list, max_length=16)
+    radius_m: float = Field(default=0.01, gt=0)
+    size_m: Vec3 | None = None
+
+
+class _Body(Section):
+    name: str = NAME
+    mass_kg: float = Field(ge=0)
+    com_m: Vec3
+    inertia_kgm2: list[float] | list[list[float]]
+    frame_origin_m: Vec3 = [0.0, 0.0, 0.0]
+    frame_euler_deg: Vec3 = [0.0, 0.0, 0.0]
+    section: _Section | None = None
+    material: _Material | None = None
+    shape: _Shape | None = None
+
+
+class _Friction(Section):
+    """Joint friction data, stored for the dynamics (units in every key)."""
+
+    coulomb_force_N: float = Field(default=0.0, ge=0)
+    coulomb_torque_Nm: float = Field(default=0.0, ge=0)
+    viscous_N_s_m: float = Field(default=0.0, ge=0)
+    viscous_Nm_s_rad: float = Field(default=0.0, ge=0)
+    coefficient: float = Field(default=0.0, ge=0)
+    pin_radius_m: float = Field(default=0.0, ge=0)
+    ball_radius_m: float = Field(default=0.0, ge=0)
+    mean_radius_m: float = Field(default=0.0, ge=0)
+
+
+class _Joint(Section):
+    name: str = NAME
+    type: str
+    parent: str = NAME
+    child: str = NAME
+    point_m: Vec3
+    axis: Vec3 | None = None
+    axes: list[Vec3] | None = None
+    x_axis: Vec3 | None = None
+    actuated: bool = False
+    position_at_reference_m: float | None = None
+    angle_at_reference_rad: float | None = None
+    limits_m: Pair | None = None
+    limits_rad: Pair | None = None
+    friction: _Friction | None = None
+
+    @field_validator("type")
+    @classmethod
+    def _known_type(cls, v: str) -> str:
+        if v not in _TYPES:  # the joint-type table is the one list of types
+            raise ValueError(f"unknown joint type {v[:40]!r} (one of {', '.join(_TYPES)})")
+        return v
+
+
+class _Load(Section):
+    body: str = NAME
+    force_N: Vec3 = [0.0, 0.0, 0.0]
+    moment_Nm: Vec3 = [0.0, 0.0, 0.0]
+    point_m: Vec3 | None = None
+
+
+class _Task(Section):
+    body: str = NAME
+    point_m: Vec3 | None = None
+    position: list[Literal["x", "y", "z"]] = Field(default_factory=list, max_length=3)
+    euler_sequence: str = "XYZ"
+    orientation: list[Literal[1, 2, 3]] = Field(default_factory=list, max_length=3)
+
+
+class _Motion(Section):
+    period_s: float = Field(default=2.0, gt=0)
+    samples: int = Field(default=201, ge=2, le=1_000_000)
+    offset: dict[str, float] = Field(default_factory=dict)
+    amplitude: dict[str, float] = Field(default_factory=dict)
+
+
+class _Leg(Section):
+    count: int | None = Field(default=None, ge=1, le=64)
+    angles_deg: list[float] | None = Field(default=None, min_length=1, max_length=64)
+    axis: Vec3 = [0.0, 0.0, 1.0]
+    origin_m: Vec3 = [0.0, 0.0, 0.0]
+    suffixes: list[str] | None = None
+    bodies: list[_Body] = Field(default_factory=list, max_length=64)
+    joints: list[_Joint] = Field(min_length=1, max_length=64)
+
+
+class _Mechanism(Section):
+    name: str = NAME
+    source: str = ""
+    gravity_m_s2: Vec3 = [0.0, 0.0, -9.80665]
+    cut_joints: list[str] | None = None
+
+
+class _File(Section):
+    mechanism: _Mechanism
+    bodies: list[_Body] = Field(default_factory=list, max_length=MAX_BODIES)
+    joints: list[_Joint] = Field(default_factory=list, max_length=MAX_JOINTS)
+    legs: list[_Leg] = Field(default_factory=list, max_length=32)
+    task: _Task
+    loads: list[_Load] = Field(default_factory=list, max_length=2000)
+    default_motion: _Motion = _Motion()
+
+
+@dataclass(frozen=True)
+class BodySpec:
+    """A validated body. ``R0 (3, 3)``, ``p0 (3,)`` [m]: its frame in the base frame at the
+    reference configuration; ``com (3,)`` [m] and ``inertia (3, 3)`` [kg m^2] (about the
+    centre of mass) in the body frame."""
+
+    name: str
+    mass: float
+    com: Array
+    inertia: Array
+    R0: Array
+    p0: Array
+    section: dict[str, float] | None = None
+    material: dict[str, float] | None = None
+    shape: dict[str, Any] | None = None
+
+
+@dataclass(frozen=True)
+class JointSpec:
+    """A validated joint: ``frame (3, 3)`` the joint frame's axes (columns) and ``point (3,)``
+    [m] its origin, base frame, reference configuration; ``offset``: the joint coordinate at
+    the reference configuration (reported coordinate = internal + offset)."""
+
+    name: str
+    type: str
+    parent: str
+    child: str
+    point: Array
+    frame: Array
+    actuated: bool
+    offset: float
+    limits: tuple[float, float] | None
+    friction: dict[str, float] | None
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """Task coordinates: base-frame components of a point of ``body`` and Euler angles of its
+    frame. ``point (3,)`` [m] base frame, reference configuration (default: the body's centre
+    of mass); ``position``: component
+    indices 0-2; ``sequence``: the Euler sequence; ``orientation``: angle indices 0-2."""
+
+    body: str
+    point: Array
+    position: tuple[int, ...]
+    sequence: str
+    orientation: tuple[int, ...]
+    names: tuple[str, ...]
+    units: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class LoadSpec:
+    """A constant external load on ``body``: force [N] at ``point`` (base frame, reference
+    configuration, fixed in the body) and moment [N m], both in the base frame."""
+
+    body: str
+    force: Array
+    moment: Array
+    point: Array
+
+
+@dataclass(frozen=True)
+class MotionSpec:
+    """The default motion: ``x(t) = x_ref + offset + amplitude sin(2 pi t / period)``,
+    ``samples`` points over one period; offsets and amplitudes keyed by task column name."""
+
+    period: float
+    samples: int
+    offset: dict[str, float]
+    amplitude: dict[str, float]
+
+
+@dataclass(frozen=True)
+class Description:
+    """A validated, leg-expanded mechanism description (see the module docstring)."""
+
+    name: str
+    source: str
+    gravity: Array
+    bodies: tuple[BodySpec, ...]
+    joints: tuple[JointSpec, ...]
+    task: TaskSpec
+    loads: tuple[LoadSpec, ...]
+    cut_joints: tuple[str, ...] | None
+    motion: MotionSpec
+    path: str = field(default="")
+
+
+def _rot(axis: Array, angle: float) -> Array:
+    """Rotation by ``angle`` [rad] about unit ``axis`` (Rodrigues)."""
+    k = axis / np.linalg.norm(axis)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+def _euler_xyz(deg: Vec3) -> Array:
+    a, b, c = np.radians(deg)
+    return _rot(np.array([1.0, 0, 0]), a) @ _rot(np.array([0, 1.0, 0]), b) @ _rot(np.array([0, 0, 1.0]), c)
+
+
+def inertia_matrix(values: list, where: str) -> Array:
+    """``[Ixx, Iyy, Izz, Ixy, Ixz, Iyz]`` or a 3 x 3 list -> symmetric (3, 3) [kg m^2], checked:
+    symmetric, positive definite, principal moments obeying the triangle inequality."""
+    if len(values) == 6 and all(isinstance(v, (int, float)) for v in values):
+        xx, yy, zz, xy, xz, yz = (float(v) for v in values)
+        inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    elif len(values) == 3 and all(isinstance(r, list) and len(r) == 3 for r in values):
+        inertia = np.array(values, dtype=float)
+    else:
+        raise ParameterError(f"{where} inertia_kgm2: give 6 values [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] or a 3 x 3 table")
+    if not np.all(np.isfinite(inertia)):
+        raise ParameterError(f"{where} inertia_kgm2: must be finite")
+    if not np.allclose(inertia, inertia.T, rtol=1e-9, atol=1e-15):
+        raise ParameterError(f"{where} inertia_kgm2: not symmetric")
+    ev = np.linalg.eigvalsh(inertia)
+    scale = max(float(np.abs(ev).max()), 1e-300)
+    if ev[0] <= 1e-12 * scale:
+        raise ParameterError(f"{where} inertia_kgm2: not positive definite (principal moments {', '.join(f'{e:.4g}' for e in ev)} kg m^2)")
+    if ev[0] + ev[1] < ev[2] * (1 - 1e-9):
+        raise ParameterError(f"{where} inertia_kgm2: principal moments {', '.join(f'{e:.4g}' for e in ev)} kg m^2 violate "
+                             "the triangle inequality (I1 + I2 >= I3)")
+    return inertia
+
+
+def _unit(v: Vec3 | None, where: str) -> Array:
+    a = np.asarray(v, dtype=float)
+    n = float(np.linalg.norm(a))
+    if not n > 1e-12:
+        raise ParameterError(f"{where}: axis of zero length")
+    return a / n
+
+
+def _perpendicular(z: Array) -> Array:
+    """A unit vector normal to unit ``z``: the base axis least aligned with it, made normal."""
+    e = np.eye(3)[int(np.argmin(np.abs(z)))]
+    x = e - (e @ z) * z
+    return x / np.linalg.norm(x)
+
+
+def _joint_frame(j: _Joint, where: str) -> Array:
+    """Joint frame axes (columns x, y, z) in the base frame at the reference configuration."""
+    jt = joint_type(j.type)
+    if jt.axes == 2:
+        if j.axes is None or len(j.axes) != 2 or j.axis is not None:
+            raise ParameterError(f"{where} a {j.type} joint needs axes = [[first], [second]] (and no axis)")
+        x, y = _unit(j.axes[0], f"{where} axes[0]"), _unit(j.axes[1], f"{where} axes[1]")
+        if abs(float(x @ y)) > 1e-6:
+            raise ParameterError(f"{where} axes: the two axes of a {j.type} joint must be perpendicular "
+                                 f"(cosine {float(x @ y):.3g})")
+        return np.column_stack([x, y, np.cross(x, y)])
+    if j.axes is not None:
+        raise ParameterError(f"{where} a {j.type} joint takes no axes list (use axis)")
+    if jt.axes == 1 and j.axis is None:
+        raise ParameterError(f"{where} a {j.type} joint needs axis")
+    if j.axis is None:  # a type that takes no axis: the joint frame's z is the base z
+        z = np.array([0.0, 0.0, 1.0])
+    else:
+        z = _unit(j.axis, f"{where} axis")
+    if j.x_axis is not None:
+        x0 = _unit(j.x_axis, f"{where} x_axis")
+        x = x0 - (x0 @ z) * z
+        if np.linalg.norm(x) < 1e-6:
+            raise ParameterError(f"{where} x_axis: parallel to axis")
+        x /= np.linalg.norm(x)
+    else:
+        x = _perpendicular(z)
+    return np.column_stack([x, np.cross(z, x), z])
+
+
+def _body(b: _Body, where: str) -> BodySpec:
+    return BodySpec(
+        name=b.name, mass=float(b.mass_kg), com=np.array(b.com_m, dtype=float),
+        inertia=inertia_matrix(b.inertia_kgm2, where), R0=_euler_xyz(b.frame_euler_deg),
+        p0=np.array(b.frame_origin_m, dtype=float),
+        section=b.section.model_dump() if b.section else None,
+        material=b.material.model_dump() if b.material else None,
+        shape=b.shape.model_dump() if b.shape else None,
+    )
+
+
+def _joint(j: _Joint, where: str) -> JointSpec:
+    jt = joint_type(j.type)
+    if j.parent == j.child:
+        raise ParameterError(f"{where} joins body {j.parent!r} to itself")
+    frame = _joint_frame(j, where)
+    unit = jt.units[0] if jt.freedoms == 1 else None
+    offset = 0.0
+    limits = None
+    for key, want in (("position_at_reference_m", "m"), ("limits_m", "m"),
+                      ("angle_at_reference_rad", "rad"), ("limits_rad", "rad")):
+        if getattr(j, key) is not None and unit != want:
+            raise ParameterError(f"{where} {key}: only for a joint with one {'angular' if want == 'rad' else 'linear'} "
+                                 f"coordinate, not a {j.type} joint")
+    if j.position_at_reference_m is not None:
+        offset = float(j.position_at_reference_m)
+    if j.angle_at_reference_rad is not None:
+        offset = float(j.angle_at_reference_rad)
+    lim = j.limits_m if j.limits_m is not None else j.limits_rad
+    if lim is not None:
+        if not lim[0] < lim[1]:
+            raise ParameterError(f"{where} limits: lower {lim[0]:g} must be below upper {lim[1]:g}")
+        limits = (float(lim[0]), float(lim[1]))
+    if j.actuated and jt.freedoms != 1:
+        raise ParameterError(f"{where} actuated: only a joint with one coordinate (revolute, prismatic) can be "
+                             f"actuated, not a {j.type} joint")
+    return JointSpec(name=j.name, type=j.type, parent=j.parent, child=j.child,
+                     point=np.array(j.point_m, dtype=float), frame=frame, actuated=bool(j.actuated),
+                     offset=offset, limits=limits, friction=j.friction.model_dump() if j.friction else None)
+
+
+def _expand_legs(data: _File, source: str) -> tuple[list[tuple[_Body, str]], list[tuple[_Joint, str]]]:
+    """Bodies and joints of the file with every ``[[legs]]`` template repeated."""
+    bodies = [(b, f"{source}: [bodies] {b.name}:") for b in data.bodies]
+    joints = [(j, f"{source}: [joints] {j.name}:") for j in data.joints]
+    for li, leg in enumerate(data.legs):
+        where = f"{source}: [legs][{li}]"
+        if leg.angles_deg is None and leg.count is None:
+            raise ParameterError(f"{where}: give count or angles_deg")
+        angles = leg.angles_deg if leg.angles_deg is not None else [360.0 * k / leg.count for k in range(leg.count)]
+        if leg.count is not None and leg.count != len(angles):
+            raise ParameterError(f"{where} count: {leg.count} but angles_deg has {len(angles)} entries")
+        suffixes = leg.suffixes if leg.suffixes is not None else [f"_{k + 1}" for k in range(len(angles))]
+        if len(suffixes) != len(angles) or len(set(suffixes)) != len(suffixes):
+            raise ParameterError(f"{where} suffixes: need {len(angles)} distinct suffixes")
+        axis = _unit(leg.axis, f"{where} axis")
+        origin = np.array(leg.origin_m)
+        own = {b.name for b in leg.bodies}
+        for ang, suf in zip(angles, suffixes):
+            Q = _rot(axis, math.radians(ang))
+
+            def move(p: Vec3) -> Vec3:
+                return list(float(v) for v in Q @ (np.array(p) - origin) + origin)
+
+            def turn(v: Vec3) -> Vec3:
+                return list(float(x) for x in Q @ np.array(v))
+
+            for b in leg.bodies:
+                R0 = Q @ _euler_xyz(b.frame_euler_deg)
+                eul = _matrix_to_xyz_deg(R0)
+                nb = b.model_copy(update={"name": b.name + suf, "frame_origin_m": move(b.frame_origin_m),
+                                          "frame_euler_deg": eul})
+                shape = b.shape
+                if shape is not None:
+                    nb = nb.model_copy(update={"shape": shape.model_copy(update={"points_m": [move(p) for p in shape.points_m]})})
+                bodies.append((nb, f"{where} body {b.name + suf}:"))
+            for j in leg.joints:
+                upd: dict[str, Any] = {"name": j.name + suf, "point_m": move(j.point_m),
+                                       "parent": j.parent + suf if j.parent in own else j.parent,
+                                       "child": j.child + suf if j.child in own else j.child}
+                if j.axis is not None:
+                    upd["axis"] = turn(j.axis)
+                if j.axes is not None:
+                    upd["axes"] = [turn(a) for a in j.axes]
+                if j.x_axis is not None:
+                    upd["x_axis"] = turn(j.x_axis)
+                joints.append((j.model_copy(update=upd), f"{where} joint {j.name + suf}:"))
+    return bodies, joints
+
+
+def _matrix_to_xyz_deg(R: Array) -> Vec3:
+    """Intrinsic XYZ angles [deg] of ``R = Rx(a) Ry(b) Rz(c)``."""
+    b = math.asin(max(-1.0, min(1.0, R[0, 2])))
+    a = math.atan2(-R[1, 2], R[2, 2])
+    c = math.atan2(-R[0, 1], R[0, 0])
+    return [math.degrees(a), math.degrees(b), math.degrees(c)]
+
+
+_POS_NAMES = {"x": 0, "y": 1, "z": 2}
+
+
+def _task(t: _Task, where: str, bodies: dict[str, BodySpec]) -> TaskSpec:
+    from ..spatial import check_sequence
+
+    if t.body not in bodies:
+        raise ParameterError(f"{where} body: {t.body!r} is not a body of the mechanism")
+    if not t.position and not t.orientation:
+        raise ParameterError(f"{where}: no task coordinate (give position and/or orientation)")
+    if len(set(t.position)) != len(t.position) or len(set(t.orientation)) != len(t.orientation):
+        raise ParameterError(f"{where}: a task coordinate is named twice")
+    try:
+        seq = check_sequence(t.euler_sequence)
+    except ParameterError as exc:
+        raise ParameterError(f"{where} {exc}") from None
+    b = bodies[t.body]
+    point = np.array(t.point_m if t.point_m is not None else b.p0 + b.R0 @ b.com, dtype=float)
+    names = tuple(t.position) + tuple(f"euler{k}" for k in t.orientation)
+    units = ("m",) * len(t.position) + ("rad",) * len(t.orientation)
+    return TaskSpec(body=t.body, point=point, position=tuple(_POS_NAMES[c] for c in t.position), sequence=seq,
+                    orientation=tuple(int(k) - 1 for k in t.orientation), names=names, units=units)
+
+
+def load_description(source: str | Path | dict[str, Any]) -> Description:
+    """Read (a path) or take (a dict) a description, validate it and expand its legs.
+
+    Raises :class:`~pkmdyn.errors.ParameterError` (one line naming the file, table, body,
+    joint or key) on: unknown or missing keys, wrong types, duplicate names, a joint naming a
+    missing body, a body joined to nothing or not connected to the ground, a zero-length axis,
+    non-perpendicular universal axes, an inertia that is not positive definite or violates the
+    triangle inequality, no actuated joint, an actuated joint with more than one coordinate.
+    """
+    if isinstance(source, dict):
+        raw, label, path = source, "description", ""
+    else:
+        path = str(Path(source).absolute())
+        raw, label = read_toml(source), str(source)
+    data = _validate(raw, label)
+    body_specs: dict[str, BodySpec] = {}
+    expanded_bodies, expanded_joints = _expand_legs(data, label)
+    if len(expanded_bodies) > MAX_BODIES or len(expanded_joints) > MAX_JOINTS:
+        raise ParameterError(f"{label}: {len(expanded_bodies)} bodies and {len(expanded_joints)} joints with the legs "
+                             f"repeated; at most {MAX_BODIES} bodies and {MAX_JOINTS} joints")
+    for b, where in expanded_bodies:
+        if b.name == GROUND:
+            raise ParameterError(f"{where} name: {GROUND!r} is reserved for the base")
+        if b.name in body_specs:
+            raise ParameterError(f"{where} name: body {b.name!r} is defined twice")
+        body_specs[b.name] = _body(b, where)
+    if not body_specs:
+        raise ParameterError(f"{label}: [bodies]: the mechanism has no body")
+    joints: list[JointSpec] = []
+    seen: set[str] = set()
+    for j, where in expanded_joints:
+        if j.name in seen:
+            raise ParameterError(f"{where} name: joint {j.name!r} is defined twice")
+        seen.add(j.name)
+        for key in ("parent", "child"):
+            nm = getattr(j, key)
+            if nm != GROUND and nm not in body_specs:
+                raise ParameterError(f"{where} {key}: body {nm!r} is not defined")
+        joints.append(_joint(j, where))
+    _check_connected(label, body_specs, joints)
+    if not any(j.actuated for j in joints):
+        raise ParameterError(f"{label}: [joints]: no joint is actuated (set actuated = true on the driven joints)")
+    task = _task(data.task, f"{label}: [task]", body_specs)
+    loads = []
+    for k, ld in enumerate(data.loads):
+        if ld.body not in body_specs:
+            raise ParameterError(f"{label}: [loads][{k}] body: {ld.body!r} is not a body of the mechanism")
+        pt = ld.point_m if ld.point_m is not None else body_specs[ld.body].p0 + body_specs[ld.body].R0 @ body_specs[ld.body].com
+        loads.append(LoadSpec(ld.body, np.array(ld.force_N, float), np.array(ld.moment_Nm, float), np.array(pt, float)))
+    cuts = None
+    if data.mechanism.cut_joints is not None:
+        names = {j.name: j for j in joints}
+        for c in data.mechanism.cut_joints:
+            if c not in names:
+                raise ParameterError(f"{label}: [mechanism] cut_joints: {c!r} is not a joint")
+            if names[c].actuated:
+                raise ParameterError(f"{label}: [mechanism] cut_joints: {c!r} is actuated; an actuated joint stays in the tree")
+        cuts = tuple(data.mechanism.cut_joints)
+    m = data.default_motion
+    for key in (*m.offset, *m.amplitude):
+        cols = [f"{n}_{u}" for n, u in zip(task.names, task.units)]
+        if key not in cols:
+            raise ParameterError(f"{label}: [default_motion] {key}: not a task coordinate (one of {', '.join(cols)})")
+    motion = MotionSpec(float(m.period_s), int(m.samples), dict(m.offset), dict(m.amplitude))
+    return Description(name=data.mechanism.name, source=data.mechanism.source,
+                       gravity=np.array(data.mechanism.gravity_m_s2, dtype=float),
+                       bodies=tuple(body_specs.values()), joints=tuple(joints), task=task, loads=tuple(loads),
+                       cut_joints=cuts, motion=motion, path=path)
+
+
+def _item_name(raw: Any, loc: tuple) -> str | None:
+    """The ``name`` of the table at ``loc`` (e.g. ``("legs", 0, "joints", 2)``) in the raw data."""
+    node = raw
+    try:
+        for part in loc:
+            node = node[part]
+    except (KeyError, IndexError, TypeError):
+        return None
+    name = node.get("name") if isinstance(node, dict) else None
+    return name if isinstance(name, str) and len(name) <= 64 else None
+
+
+def _validate(raw: Any, label: str) -> _File:
+    """Validate with one line per failing key; list items are named by their ``name`` when they
+    have one: ``[joints] U1 axis: ...`` rather than ``[joints] 3[axis]``."""
+    if not isinstance(raw, dict):
+        raise ParameterError(f"{label}: expected a description (a dict of tables), got {type(raw).__name__}")
+    try:
+        return _File.model_validate(raw)
+    except ValidationError as exc:
+        parts = []
+        for err in exc.errors():
+            loc = tuple(err["loc"])
+            rule = _rule(err)
+            if not loc:
+                parts.append(f"file: {rule}")
+                continue
+            words = [f"[{loc[0]}]"]
+            k = 1
+            while k < len(loc):
+                p = loc[k]
+                if isinstance(p, int):
+                    nm = _item_name(raw, loc[:k + 1])
+                    words.append(nm if nm is not None else f"#{p + 1}")
+                else:
+                    words.append(str(p))
+                k += 1
+            if len(loc) == 1:
+                rule = rule.replace("key", "section")
+                if err["type"] == "extra_forbidden":
+                    rule = "unknown section"
+            parts.append(" ".join(words) + f": {rule}")
+        raise ParameterError(f"{label}: " + "; ".join(parts[:5]) + (f"; and {len(parts) - 5} more" if len(parts) > 5 else "")) from None
+
+
+def _check_connected(label: str, bodies: dict[str, BodySpec], joints: list[JointSpec]) -> None:
+    """Every body is joined to something, and reaches the ground through joints."""
+    adj: dict[str, set[str]] = {b: set() for b in [GROUND, *bodies]}
+    for j in joints:
+        adj[j.parent].add(j.child)
+        adj[j.child].add(j.parent)
+    for b in bodies:
+        if not adj[b]:
+            raise ParameterError(f"{label}: [bodies] {b}: body is not joined to anything (unconnected body)")
+    seen, stack = {GROUND}, [GROUND]
+    while stack:
+        for nb in adj[stack.pop()]:
+            if nb not in seen:
+                seen.add(nb)
+                stack.append(nb)
+    for b in bodies:
+        if b not in seen:
+            raise ParameterError(f"{label}: [bodies] {b}: body is not connected to the ground through any chain of joints")

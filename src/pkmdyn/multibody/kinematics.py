@@ -1,0 +1,351 @@
+"""Kinematics of any described mechanism, batched over samples.
+
+Problem solved per sample s (tree coordinates q (nq,), task coordinates x_s (nt,)):
+
+    Phi(q) = 0                     loop closure: the constraint rows of every cut joint
+    tau(q) = x_s                   task: base-frame components of the task point and Euler
+                                   angles of the task body (angles wrapped to (-pi, pi])
+
+by Newton's method on the square system of the model's ``solver_rows`` (redundant
+constraint directions of an over-constrained mechanism are checked, not solved) and its
+``solver_idle`` rows (each idle freedom held, ``n_k . (q - q_ref) = 0`` along its direction
+at the reference configuration), warm-started along the motion by the first-order predictor
+``q_s = q_{s-1} + G_{s-1} (x_s - x_{s-1})``. Rates and accelerations follow from the
+linear systems ``[Phi_q; tau_q] qd = [0; xd]`` and
+``[Phi_q; tau_q] qdd = [-gamma_Phi; xdd - gamma_tau]`` with the drift
+``gamma = (d/dt [Phi_q; tau_q]) qd`` (the rows' second derivative at ``qdd = 0``), the
+gamma_q form of Featherstone (2008, section 8.2). ``G = dq/dx`` is the matrix of that
+solve; the actuator rates are its actuated rows (``J_ax = dq_a/dx``).
+
+The first sample starts from the reference configuration (all joint coordinates at their
+reference values), stepping the task from its reference value when one Newton solve does
+not reach it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import MotionError, SingularityError, UnreachablePoseError, as_array
+from . import _kernels as K
+from .model import MechanismModel
+from .topology import constraint_jacobian, row_labels, row_scale
+
+__all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals",
+           "singularity_measures", "SingularityMeasures", "reachable", "TOLERANCE"]
+
+Array = NDArray[np.float64]
+
+#: Newton stops when every solved row's dimensionless residual (lengths divided by the
+#: model's length scale) is at most this
+TOLERANCE = 1e-13
+#: every row, the redundant directions of an over-constrained loop included, must close to this
+CHECK_TOLERANCE = 1e-9
+MAX_ITER = 30
+
+
+@dataclass(frozen=True)
+class MechanismKinematics:
+    """Kinematics of every body and joint over n samples (base frame, SI units).
+
+    ``t`` (n,) [s] or None; ``x, xd, xdd`` (n, nt): the task coordinates ([m] or [rad]) and
+    their first and second time derivatives; ``q, qd, qdd`` (n, nq): tree coordinates
+    (reference offsets included) and derivatives; ``R`` (n, nb, 3, 3): body-to-base
+    rotation; ``origin, origin_v, origin_a`` (n, nb, 3): body frame origin [m], its velocity
+    [m/s] and acceleration [m/s^2]; ``w, wd`` (n, nb, 3): angular velocity [rad/s] and
+    acceleration [rad/s^2]; ``p, v, a`` (n, nb, 3): centre of mass and its velocity and
+    acceleration; ``joint_point, joint_point_v, joint_point_a`` (n, nj, 3): each joint's
+    centre (the origin of its frame on the child body) and that point's velocity and
+    acceleration; ``act_q, act_qd, act_qdd`` (n, na): actuator coordinates [m or rad] and
+    rates; ``J_ax`` (n, na, nt): actuator rates per task rate; ``G`` (n, nq, nt): tree rates
+    per task rate; ``residual`` (n,): the largest dimensionless loop/task residual."""
+
+    t: Array | None
+    x: Array
+    xd: Array
+    xdd: Array
+    q: Array
+    qd: Array
+    qdd: Array
+    R: Array
+    origin: Array
+    origin_v: Array
+    origin_a: Array
+    w: Array
+    wd: Array
+    p: Array
+    v: Array
+    a: Array
+    joint_point: Array
+    joint_point_v: Array
+    joint_point_a: Array
+    act_q: Array
+    act_qd: Array
+    act_qdd: Array
+    J_ax: Array
+    G: Array
+    residual: Array
+
+    def __len__(self) -> int:
+        return int(self.x.shape[0])
+
+
+def _poses(model: MechanismModel, q: Array) -> tuple[Array, Array, Array]:
+    """Body rotations (nb, 3, 3), origins (nb, 3) and coordinate twists (nq, 6) at ``q (nq,)``."""
+    R = np.empty((model.nb, 3, 3))
+    p = np.empty((model.nb, 3))
+    S = np.empty((model.nq, 6))
+    K.forward_positions(np.ascontiguousarray(q, dtype=float), model.body_parent, model.body_joint, model.joint_q0,
+                        model.joint_nq, model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent,
+                        model.tree_p_parent, model.tree_R_child, model.tree_p_child, R, p, S,
+                        np.empty((5, 3, 3)), np.empty((20, 3)))
+    return R, p, S
+
+
+def reference_task(model: MechanismModel) -> Array:
+    """Task coordinates (nt,) at the reference configuration."""
+    val, _ = constraint_jacobian(model, model.coord_offset)
+    return val[0, model.row_loop.shape[0]:].copy()
+
+
+def loop_residuals(model: MechanismModel, q: Array) -> Array:
+    """Constraint residuals (n, nr) of every cut joint's rows at ``q (n, nq)`` ([m] for
+    translation rows, dimensionless for rotation rows)."""
+    val, _ = constraint_jacobian(model, q)
+    return val[:, : model.row_loop.shape[0]]
+
+
+def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array, t: Array | None = None) -> dict:
+    n, nq, nb, nt = x.shape[0], model.nq, model.nb, model.nt
+    out = {
+        "q": np.zeros((n, nq)), "qd": np.zeros((n, nq)), "qdd": np.zeros((n, nq)),
+        "R": np.zeros((n, nb, 3, 3)), "p": np.zeros((n, nb, 3)), "V": np.zeros((n, nb, 6)),
+        "A": np.zeros((n, nb, 6)), "G": np.zeros((n, nq, nt)), "res": np.zeros(n),
+        "status": np.full(n, -1, dtype=np.int64), "worst": np.zeros(n, dtype=np.int64),
+    }
+    nj = len(model.joint_names)
+    for k in ("ov", "oa", "cp", "cv", "ca"):
+        out[k] = np.zeros((n, nb, 3))
+    for k in ("jp", "jv", "ja"):
+        out[k] = np.zeros((n, nj, 3))
+    tt = np.zeros(0) if t is None else np.ascontiguousarray(t, dtype=float)
+    K.solve_batch(tt, x, xd, xdd, q_start, model.body_parent, model.body_joint, model.joint_q0, model.joint_nq,
+                  model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent,
+                  model.tree_R_child, model.tree_p_child, model.joint_R_parent, model.joint_p_parent,
+                  model.joint_R_child, model.joint_p_child, model.ancestor_list, model.row_loop, model.row_kind,
+                  model.row_i, model.row_j, model.loop_joint, model.joint_parent, model.joint_child,
+                  model.task_body, model.task_point, model.task_kind, model.task_index, model.euler_axes,
+                  model.solver_rows, model.solver_idle, model.solver_prow, model.solver_pcol,
+                  model.solver_blocks, model.coord_offset, row_scale(model), TOLERANCE, CHECK_TOLERANCE, MAX_ITER,
+                  model.com, model.joint_p_child,
+                  out["q"], out["qd"], out["qdd"], out["R"], out["p"], out["V"], out["A"], out["G"], out["res"],
+                  out["status"], out["worst"], out["ov"], out["oa"], out["cp"], out["cv"], out["ca"],
+                  out["jp"], out["jv"], out["ja"])
+    return out
+
+
+def _start(model: MechanismModel, x0: Array) -> Array:
+    """Tree coordinates solving the first sample's task ``x0``: from the reference
+    configuration, in 1, then 8, then 64 steps along the straight task path."""
+    q_ref = model.coord_offset.copy()
+    x_ref = reference_task(model)
+    d = x0 - x_ref
+    ang = model.task_kind == 1
+    d[ang] = (d[ang] + np.pi) % (2 * np.pi) - np.pi
+    last = None
+    for steps in (1, 8, 64):
+        s = np.linspace(0.0, 1.0, steps + 1)[1:, None]
+        path = x_ref + s * d
+        zero = np.zeros_like(path)
+        out = _run(model, np.ascontiguousarray(path), zero, zero, q_ref)
+        if out["status"][-1] == K.OK:
+            return out["q"][-1]
+        last = out
+    return q_ref if last is None else q_ref
+
+
+def _fail(model: MechanismModel, out: dict, t: Array | None, x: Array, offset: int = 0) -> None:
+    """Raise the error of the first failed sample, naming the sample, its time and the loop."""
+    bad = int(np.flatnonzero(out["status"] != K.OK)[0])
+    st = int(out["status"][bad])
+    s = bad + offset
+    when = f"sample {s}" + (f" (t = {t[s]:.6g} s)" if t is not None else "")
+    pose = ", ".join(f"{nm} = {v:.6g} {u}" for nm, u, v in zip(model.task_names, model.task_units, x[s]))
+    labels = row_labels(model)
+    where = labels[int(out["worst"][bad])]
+    if st == K.EULER_SINGULAR:
+        raise SingularityError(f"{when}: the Euler angles ({model.euler_sequence}) of task body "
+                               f"{model.body_names[model.task_body]!r} are at their singularity (task pose {pose})")
+    if st == K.SINGULAR:
+        where = _singular_row(model, out["q"][bad])
+        raise SingularityError(f"{when}: singular configuration, the loop-closure and task equations lose rank "
+                               f"(at {where}; task pose {pose})")
+    if st == K.LOOP_OPEN:
+        raise UnreachablePoseError(f"{when}: {where} cannot close (residual {out['res'][bad]:.3g} of the length scale "
+                                   f"in a redundant direction): the geometry does not keep the over-constrained "
+                                   f"loop closed (task pose {pose})")
+    raise UnreachablePoseError(f"{when}: the task pose is unreachable: {where} does not close (residual "
+                               f"{out['res'][bad]:.3g} of the length scale after {MAX_ITER} Newton steps; task pose {pose})")
+
+
+def _singular_row(model: MechanismModel, q: Array) -> str:
+    """The row that carries the most of the null direction of the Newton matrix at ``q``."""
+    from .topology import column_scale
+
+    _, J = constraint_jacobian(model, q)
+    Ks = (J[0] * row_scale(model)[:, None] * column_scale(model)[None, :])[model.solver_rows]
+    Ks = np.concatenate([Ks, model.solver_idle * column_scale(model)[None, :]])
+    if not np.all(np.isfinite(Ks)):
+        return "an unknown row"
+    u, _, _ = np.linalg.svd(Ks)
+    return row_labels(model)[int(model.solver_rows[int(np.argmax(np.abs(u[:, -1])))])]
+
+
+def solve_kinematics(model: MechanismModel, x: Array, xd: Array | None = None, xdd: Array | None = None,
+                     t: Array | None = None, q_start: Array | None = None) -> MechanismKinematics:
+    """Kinematics of every body and joint for the task motion ``x, xd, xdd`` (n, nt).
+
+    ``x``: task coordinates in the order of ``model.task_names`` ([m], Euler angles [rad]);
+    ``xd``, ``xdd``: their time derivatives (zero when omitted); ``t`` (n,) [s]: times, only
+    for messages and the result; ``q_start`` (nq,): tree coordinates near the first sample's
+    solution (default: found from the reference configuration). Samples are solved in order,
+    each warm-started from the previous one; where one Newton solve does not reach the next
+    sample (a coarsely sampled motion), the step is bridged by 8, then 64, small task steps.
+
+    Raises :class:`~pkmdyn.errors.UnreachablePoseError` (a loop that does not close) or
+    :class:`~pkmdyn.errors.SingularityError`, naming the sample, its time and the loop.
+    """
+    nt = model.nt
+    x = np.ascontiguousarray(as_array(x, (None, nt), "x", MotionError))
+    n = x.shape[0]
+    xd = np.zeros_like(x) if xd is None else np.ascontiguousarray(as_array(xd, (n, nt), "xd", MotionError))
+    xdd = np.zeros_like(x) if xdd is None else np.ascontiguousarray(as_array(xdd, (n, nt), "xdd", MotionError))
+    if t is not None:
+        t = as_array(t, (n,), "t", MotionError)
+    for name, arr in (("x", x), ("xd", xd), ("xdd", xdd)):
+        if not np.all(np.isfinite(arr)):
+            raise MotionError(f"{name}: contains a non-finite value")
+    if n == 0:
+        raise MotionError("x: the motion has no samples")
+    q0 = _start(model, x[0]) if q_start is None else np.ascontiguousarray(as_array(q_start, (model.nq,), "q_start"))
+    out = _run(model, x, xd, xdd, q0, t)
+    while np.any(out["status"] != K.OK):
+        s = int(np.flatnonzero(out["status"] != K.OK)[0])
+        q_s = _bridge(model, x, out, s)
+        if q_s is None:
+            _fail(model, out, t, x)
+        rest = _run(model, x[s:], xd[s:], xdd[s:], q_s, None if t is None else t[s:])
+        for key, arr in rest.items():
+            out[key][s:] = arr
+    return _assemble(model, t, x, xd, xdd, out)
+
+
+def _bridge(model: MechanismModel, x: Array, out: dict, s: int) -> Array | None:
+    """Tree coordinates at sample ``s`` reached from the solved sample ``s - 1`` in 8, then 64,
+    small task steps (a motion sampled too coarsely for one Newton solve per sample), or None
+    when ``s`` is the first sample or the steps do not get there either (a real failure)."""
+    if s == 0 or out["status"][s] == K.EULER_SINGULAR:
+        return None
+    d = x[s] - x[s - 1]
+    ang = model.task_kind == 1
+    d[ang] = (d[ang] + np.pi) % (2 * np.pi) - np.pi
+    for steps in (8, 64):
+        path = np.ascontiguousarray(x[s - 1] + np.linspace(0.0, 1.0, steps + 1)[1:, None] * d)
+        zero = np.zeros_like(path)
+        b = _run(model, path, zero, zero, out["q"][s - 1].copy())
+        if b["status"][-1] == K.OK:
+            return b["q"][-1].copy()
+    return None
+
+
+def _assemble(model: MechanismModel, t: Array | None, x: Array, xd: Array, xdd: Array, out: dict) -> MechanismKinematics:
+    V, A = out["V"], out["A"]
+    ac = model.act_coord
+    return MechanismKinematics(
+        t=t, x=x, xd=xd, xdd=xdd, q=out["q"], qd=out["qd"], qdd=out["qdd"], R=out["R"], origin=out["p"],
+        origin_v=out["ov"], origin_a=out["oa"], w=V[..., :3], wd=A[..., :3], p=out["cp"], v=out["cv"], a=out["ca"],
+        joint_point=out["jp"], joint_point_v=out["jv"], joint_point_a=out["ja"],
+        act_q=out["q"][:, ac], act_qd=out["qd"][:, ac], act_qdd=out["qdd"][:, ac], J_ax=out["G"][:, ac, :],
+        G=out["G"], residual=out["res"],
+    )
+
+
+def reachable(model: MechanismModel, x: Array, steps: int = 16) -> NDArray[np.bool_]:
+    """Workspace test: whether each task pose ``x (n, nt)`` is reached from the reference
+    configuration along the straight task path in ``steps`` steps (each bridged further when
+    needed), without a singular or open loop on the way. Conservative: a pose reachable only
+    along another path, or only on another assembly branch, reads False. Returns (n,) bool."""
+    x = np.atleast_2d(np.asarray(x, dtype=float))
+    x_ref = reference_task(model)
+    q_ref = model.coord_offset.copy()
+    ang = model.task_kind == 1
+    out = np.zeros(x.shape[0], dtype=bool)
+    s = np.linspace(0.0, 1.0, steps + 1)[1:, None]
+    for k in range(x.shape[0]):
+        d = x[k] - x_ref
+        d[ang] = (d[ang] + np.pi) % (2 * np.pi) - np.pi
+        path = np.ascontiguousarray(x_ref + s * d)
+        zero = np.zeros_like(path)
+        res = _run(model, path, zero, zero, q_ref)
+        while not np.all(res["status"] == K.OK):
+            i = int(np.flatnonzero(res["status"] != K.OK)[0])
+            q_i = _bridge(model, path, res, i)
+            if q_i is None:
+                break
+            rest = _run(model, path[i:], zero[i:], zero[i:], q_i)
+            for key, arr in rest.items():
+                res[key][i:] = arr
+        out[k] = bool(np.all(res["status"] == K.OK))
+    return out
+
+
+@dataclass(frozen=True)
+class SingularityMeasures:
+    """Per-sample distance to the two kinds of singularity, each the ratio of the smallest
+    to the largest singular value (1 isotropic, 0 singular) of a dimensionless matrix:
+
+    ``inverse`` (n,): of ``[Phi_q; tau_q]`` (with the idle rows): zero where the task
+    coordinates no longer determine the joint coordinates (a leg stretched or folded, the
+    Gosselin-Angeles type I / serial singularity); ``direct`` (n,): of ``[Phi_q; E_a]``
+    (``E_a`` selecting the actuator coordinates): zero where the mechanism moves with its
+    actuators locked (type II / parallel singularity; only for as many actuators as
+    degrees of freedom, otherwise NaN); ``constraint`` (n,): of ``Phi_q`` (with the idle
+    rows) alone, the smallest of its ``nq - dof`` singular values: zero where the loops gain a
+    freedom (constraint singularity)."""
+
+    inverse: Array
+    direct: Array
+    constraint: Array
+
+
+def _ratio(M: Array) -> Array:
+    sv = np.linalg.svd(M, compute_uv=False)
+    return sv[..., -1] / np.maximum(sv[..., 0], 1e-300)
+
+
+def singularity_measures(model: MechanismModel, q: Array) -> SingularityMeasures:
+    """:class:`SingularityMeasures` at tree coordinates ``q (n, nq)`` (``kin.q``)."""
+    from .topology import column_scale
+
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    _, J = constraint_jacobian(model, q)
+    Js = J * row_scale(model)[None, :, None] * column_scale(model)[None, None, :]
+    rows = model.solver_rows
+    nr = model.row_loop.shape[0]
+    n = q.shape[0]
+    idle = np.broadcast_to(model.solver_idle * column_scale(model)[None, :], (n, *model.solver_idle.shape))
+    inverse = _ratio(np.concatenate([Js[:, rows], idle], axis=1))
+    cut = rows[rows < nr]
+    Phi = np.concatenate([Js[:, cut], idle], axis=1)
+    constraint = _ratio(Phi) if Phi.shape[1] else np.ones(n)
+    if model.na == model.nt:
+        Ea = np.zeros((n, model.na, model.nq))
+        for i, c in enumerate(model.act_coord):
+            Ea[:, i, c] = 1.0
+        direct = _ratio(np.concatenate([Phi, Ea], axis=1))
+    else:
+        direct = np.full(q.shape[0], np.nan)
+    return SingularityMeasures(inverse=inverse, direct=direct, constraint=constraint)

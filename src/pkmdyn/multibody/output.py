@@ -1,0 +1,161 @@
+"""Result files of a described mechanism's run: ``results.csv``, ``model.json``,
+``bodies.npz``, ``summary.json`` (formats: ``docs/mechanism_format.md``, "Outputs").
+
+``model.json`` is enough to rebuild the mechanism without pkmdyn: every body (mass, centre of
+mass and inertia in its own frame, its frame at the reference configuration), every joint
+(type, parent and child, its frame on both bodies, its elementary motions, actuated and cut
+flags), the loops, the task coordinates and gravity.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import PkmdynError
+from ..io import output_dir, write_csv, write_json
+from .joint_types import JOINT_TYPES
+from .kinematics import MechanismKinematics, singularity_measures, solve_kinematics
+from .model import MechanismModel
+from .motion import TaskMotion, task_columns
+
+__all__ = ["results_columns", "model_summary", "bodies_arrays", "run_mechanism"]
+
+Array = NDArray[np.float64]
+_MOTION_NAMES = ("RX", "RY", "RZ", "TX", "TY", "TZ")
+
+
+def results_columns(model: MechanismModel, kin: MechanismKinematics) -> dict[str, Array]:
+    """``t_s``, the task coordinates, and per actuated joint ``<joint>_pos_<u>``,
+    ``<joint>_vel_<u>_s``, ``<joint>_acc_<u>_s2`` (u = m or rad)."""
+    cols: dict[str, Array] = {}
+    cols["t_s"] = kin.t if kin.t is not None else np.arange(len(kin), dtype=float)
+    pos, _, _ = task_columns(model)
+    for k, c in enumerate(pos):
+        cols[c] = kin.x[:, k]
+    for i, (name, unit) in enumerate(zip(model.actuator_names, model.actuator_units)):
+        cols[f"{name}_pos_{unit}"] = kin.act_q[:, i]
+        cols[f"{name}_vel_{unit}_s"] = kin.act_qd[:, i]
+        cols[f"{name}_acc_{unit}_s2"] = kin.act_qdd[:, i]
+    return cols
+
+
+def _frame(R: Array, p: Array) -> dict[str, Any]:
+    return {"origin_m": p, "x_axis": R[:, 0], "y_axis": R[:, 1], "z_axis": R[:, 2]}
+
+
+def model_summary(model: MechanismModel) -> dict[str, Any]:
+    """The ``model.json`` document (see the module docstring)."""
+    bodies = []
+    for b, name in enumerate(model.body_names):
+        extra = model.body_extra[b]
+        bodies.append({
+            "name": name, "mass_kg": float(model.mass[b]), "com_m": model.com[b], "inertia_kgm2": model.inertia[b],
+            "reference_frame": _frame(model.R0[b], model.p0[b]),
+            **{k: v for k, v in extra.items() if v is not None},
+        })
+    joints = []
+    for k, name in enumerate(model.joint_names):
+        jt = JOINT_TYPES[model.joint_type[k]]
+        parent = "ground" if model.joint_parent[k] < 0 else model.body_names[model.joint_parent[k]]
+        child = "ground" if model.joint_child[k] < 0 else model.body_names[model.joint_child[k]]
+        entry: dict[str, Any] = {
+            "name": name, "type": jt.name, "letter": jt.letter, "parent": parent, "child": child,
+            "body_a": parent, "body_b": child,
+            "parent_frame": _frame(model.joint_R_parent[k], model.joint_p_parent[k]),
+            "child_frame": _frame(model.joint_R_child[k], model.joint_p_child[k]),
+            "motions": [m for m in jt.motions], "coordinate_units": list(jt.units),
+            "actuated": bool(model.joint_actuated[k]), "cut": bool(model.joint_cut[k]),
+            "traversed_backwards": bool(model.joint_flipped[k]),
+            "position_at_reference": float(model.joint_offset[k]),
+        }
+        if model.joint_cut[k]:
+            entry["constrained_directions"] = list(jt.directions)
+        if model.joint_limits[k] is not None:
+            entry["limits"] = list(model.joint_limits[k])
+        if model.joint_friction[k] is not None:
+            entry["friction"] = model.joint_friction[k]
+        joints.append(entry)
+    pos, _, _ = task_columns(model)
+    return {
+        "format": "pkmdyn mechanism model 1",
+        "name": model.name, "source": model.source, "gravity_m_s2": model.gravity,
+        "frames": ("every point and frame of a body is in that body's frame; reference_frame is the body frame in "
+                   "the base frame at the reference configuration, where every joint coordinate equals "
+                   "position_at_reference and each joint's parent_frame and child_frame coincide; a joint's "
+                   "relative motion is the product of its elementary motions (RX: rotation about the joint "
+                   "frame's x axis, TZ: translation along z, ...) applied to the child frame"),
+        "bodies": bodies, "joints": joints,
+        "loops": [{"cut_joint": lp.joint, "body_a": lp.body_a, "body_b": lp.body_b,
+                   "constrained_directions": list(lp.directions), "tree_path": list(lp.path)} for lp in model.loops],
+        "task": {"body": model.body_names[model.task_body], "point_m": model.task_point,
+                 "euler_sequence": model.euler_sequence,
+                 "coordinates": _task_coordinates(model, pos)},
+        "actuators": list(model.actuator_names),
+        "loads": [{"body": model.body_names[b], "force_N": f, "moment_Nm": mo, "point_m": p}
+                  for b, f, mo, p in zip(model.load_body, model.load_force, model.load_moment, model.load_point)],
+        "topology": model.topology.as_dict() if model.topology is not None else None,
+    }
+
+
+def _task_coordinates(model: MechanismModel, pos: list[str]) -> list[dict[str, Any]]:
+    """Each task coordinate: its column, and the base-frame component (0-2) of the task point
+    or the place (1-3) of the Euler angle in ``euler_sequence`` as written."""
+    out = []
+    inv = {int(v): k for k, v in enumerate(model.euler_perm)}
+    for c, kind, i in zip(pos, model.task_kind, model.task_index):
+        if kind == 0:
+            out.append({"column": c, "kind": "position", "component": int(i)})
+        else:
+            out.append({"column": c, "kind": "euler_angle", "angle": inv[int(i)] + 1})
+    return out
+
+
+def bodies_arrays(model: MechanismModel, kin: MechanismKinematics) -> dict[str, Array]:
+    """``bodies.npz`` arrays (base frame, SI): per body ``R``, ``p``/``v``/``a`` (centre of
+    mass), ``w``, ``wd``, ``origin``/``origin_v``/``origin_a`` (body frame origin); per joint
+    ``joint_point``/``joint_point_v``/``joint_point_a``; ``q, qd, qdd`` (tree coordinates),
+    ``x, xd, xdd`` (task), ``t``; ``body_names``, ``joint_names``, ``coordinate_joints``."""
+    out = {f: getattr(kin, f) for f in ("R", "p", "v", "a", "w", "wd", "origin", "origin_v", "origin_a",
+                                         "joint_point", "joint_point_v", "joint_point_a", "q", "qd", "qdd",
+                                         "x", "xd", "xdd")}
+    out["t"] = kin.t if kin.t is not None else np.arange(len(kin), dtype=float)
+    for k, v in out.items():
+        if not np.all(np.isfinite(v)):
+            raise PkmdynError(f"bodies.npz: {k} has a non-finite value; refusing to write it")
+    return out
+
+
+def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path) -> dict[str, Any]:
+    """Kinematics of ``model`` along ``motion``, written into ``out_dir`` (through
+    :func:`pkmdyn.io.output_dir`: nothing is written when anything fails). Returns the summary
+    with ``files`` as ``{label: path}``."""
+    kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
+    sm = singularity_measures(model, kin.q)
+    cols = results_columns(model, kin)
+    npz = bodies_arrays(model, kin)
+    summary = {
+        "mechanism": model.name, "samples": len(kin), "max_residual": float(kin.residual.max()),
+        "min_inverse_singularity_measure": float(sm.inverse.min()),
+        "min_direct_singularity_measure": None if np.isnan(sm.direct).all() else float(np.nanmin(sm.direct)),
+        "min_constraint_singularity_measure": float(sm.constraint.min()),
+        "topology": model.topology.as_dict() if model.topology is not None else None,
+    }
+    with output_dir(out_dir) as out:
+        files = {"results": out / "results.csv", "model": out / "model.json", "bodies": out / "bodies.npz",
+                 "summary": out / "summary.json"}
+        write_csv(files["results"], cols)
+        write_json(files["model"], model_summary(model))
+        try:
+            np.savez_compressed(files["bodies"], body_names=np.array(model.body_names),
+                                joint_names=np.array(model.joint_names),
+                                coordinate_joints=np.array([model.joint_names[j] for j in model.coord_joint]), **npz)
+        except OSError as exc:
+            raise PkmdynError(f"{files['bodies']}: cannot write file ({exc.strerror or type(exc).__name__})") from None
+        summary["files"] = sorted(p.name for p in files.values())
+        write_json(files["summary"], summary)
+    final = Path(out_dir)
+    return {**summary, "files": {k: final / v.name for k, v in files.items()}}

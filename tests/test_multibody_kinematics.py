@@ -1,0 +1,213 @@
+"""Every derivative of the generic kinematics against central finite differences, loop
+closure, batch independence and the Jacobians, on the built-in and textbook mechanisms."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import multibody_examples as ex
+from pkmdyn.errors import MotionError, SingularityError, UnreachablePoseError
+from pkmdyn.multibody import (
+    load_mechanism,
+    loop_residuals,
+    reference_task,
+    singularity_measures,
+    solve_kinematics,
+)
+
+AMP = {"stewart": [0.05, 0.05, 0.05, 0.1, 0.1, 0.1], "delta": [0.15, 0.15, 0.1], "rrr3": [0.04, 0.04, 0.2],
+       "bennett": [0.5], "four_bar": [0.6], "slider_crank": [1.0], "rssr": [0.1], "stewart_sps": [0.05] * 6,
+       "stewart_tool": [0.05, 0.05, 0.05, 0.1, 0.1, 0.1], "rrr3_planar": [0.04, 0.04, 0.2],
+       "rrr3_planar_cut": [0.04, 0.04, 0.2], "slider_crank_c": [1.0], "four_bar_cut_b": [0.6],
+       "stewart_flipped": [0.05, 0.05, 0.05, 0.1, 0.1, 0.1], "sarrus": [0.01], "serial_arm": [0.05, 0.05]}
+
+
+def _models():
+    out = {name: ex.MACHINES / name / f"{name}.toml" for name in ex.BUILTIN}
+    out.update(four_bar=ex.four_bar(), slider_crank=ex.slider_crank(), rssr=ex.rssr(), stewart_sps=ex.stewart_sps(),
+               stewart_tool=ex.stewart_with_tool(), rrr3_planar=ex.rrr3_planar_platform(),
+               rrr3_planar_cut=ex.rrr3_planar_platform(cut_legs=True), slider_crank_c=ex.slider_crank("cylindrical"),
+               four_bar_cut_b=ex.four_bar_cut_b(), stewart_flipped=ex.stewart_flipped_spheres(),
+               sarrus=ex.sarrus(), serial_arm=ex.serial_arm())
+    return out
+
+
+MODELS = _models()
+
+
+@pytest.fixture(scope="module", params=sorted(MODELS))
+def case(request):
+    name = request.param
+    return name, load_mechanism(MODELS[name])
+
+
+def _vee(S):
+    return np.stack([S[..., 2, 1], S[..., 0, 2], S[..., 1, 0]], axis=-1)
+
+
+def _motion(model, name, times, seed=0):
+    x0 = reference_task(model)
+    return ex.smooth_motion(x0, np.array(AMP[name]), times, seed)
+
+
+def test_every_derivative_against_finite_differences(case):
+    name, m = case
+    h = 1e-4
+    centres = np.array([0.13, 0.41, 0.77])
+    # a fine grid (Newton follows the motion from the reference pose) with (t - h, t, t + h) inserted
+    grid = np.linspace(0.0, 0.8, 161)
+    grid = grid[np.min(np.abs(grid[:, None] - centres[None]), axis=1) > 3 * h]
+    tt = np.sort(np.concatenate([grid, (centres[:, None] + np.array([-h, 0.0, h])).ravel()]))
+    x, xd, xdd = _motion(m, name, tt)
+    kin = solve_kinematics(m, x, xd, xdd, tt)
+    k = np.array([int(np.argmin(np.abs(tt - (c - h)))) for c in centres])  # index of t - h
+    mid = k + 1
+
+    def fd(a):
+        return (a[k + 2] - a[k]) / (2 * h)
+
+    def check(analytic, numeric, what):
+        scale = max(float(np.abs(analytic).max()), 1e-3)
+        err = float(np.abs(analytic - numeric).max())
+        assert err <= 2e-6 * scale, f"{name}: {what} differs from finite differences by {err:.3g} (scale {scale:.3g})"
+
+    check(kin.qd[mid], fd(kin.q), "qd")
+    check(kin.qdd[mid], fd(kin.qd), "qdd")
+    check(kin.origin_v[mid], fd(kin.origin), "origin velocity")
+    check(kin.origin_a[mid], fd(kin.origin_v), "origin acceleration")
+    check(kin.v[mid], fd(kin.p), "centre-of-mass velocity")
+    check(kin.a[mid], fd(kin.v), "centre-of-mass acceleration")
+    Rd = fd(kin.R)
+    check(kin.w[mid], _vee(np.einsum("nbij,nbkj->nbik", Rd, kin.R[mid])), "angular velocity")
+    check(kin.wd[mid], fd(kin.w), "angular acceleration")
+    check(kin.joint_point_v[mid], fd(kin.joint_point), "joint point velocity")
+    check(kin.joint_point_a[mid], fd(kin.joint_point_v), "joint point acceleration")
+    check(kin.act_qd[mid], fd(kin.act_q), "actuator rates")
+    check(kin.act_qdd[mid], fd(kin.act_qd), "actuator accelerations")
+    # the task rates are reproduced by the solved motion (task rows of J qd)
+    check(kin.xd[mid], fd(kin.x), "task rates (motion)")
+
+
+def test_actuator_jacobian_against_finite_differences(case):
+    name, m = case
+    x0 = reference_task(m)
+    x1 = x0 + 0.3 * np.array(AMP[name])
+    d = 1e-6
+    rows = [x1]
+    for i in range(m.nt):
+        for s in (1, -1):
+            xx = x1.copy()
+            xx[i] += s * d
+            rows.append(xx)
+    kin = solve_kinematics(m, np.array(rows))
+    for i in range(m.nt):
+        num = (kin.act_q[1 + 2 * i] - kin.act_q[2 + 2 * i]) / (2 * d)
+        assert np.allclose(kin.J_ax[0][:, i], num, rtol=1e-6, atol=1e-7), f"{name}: dq_a/dx_{i}"
+        num_q = (kin.q[1 + 2 * i] - kin.q[2 + 2 * i]) / (2 * d)
+        assert np.allclose(kin.G[0][:, i], num_q, rtol=1e-6, atol=1e-7), f"{name}: dq/dx_{i}"
+
+
+def test_loops_close_and_task_is_met(case):
+    name, m = case
+    t = np.linspace(0.0, 1.5, 120)
+    x, xd, xdd = _motion(m, name, t, seed=3)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    res = loop_residuals(m, kin.q)
+    assert np.abs(res).max(initial=0.0) <= 1e-11 * m.length_scale
+    assert kin.residual.max() <= 1e-12
+    assert np.all(np.isfinite(kin.R)) and np.all(np.isfinite(kin.joint_point_a))
+    # rotations stay orthonormal
+    RtR = np.einsum("nbji,nbjk->nbik", kin.R, kin.R)
+    assert np.abs(RtR - np.eye(3)).max() < 1e-12
+
+
+def test_batch_of_one_equals_batch_of_many(case):
+    name, m = case
+    t = np.linspace(0.0, 1.0, 60)
+    x, xd, xdd = _motion(m, name, t, seed=5)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    for s in (0, 17, 59):
+        one = solve_kinematics(m, x[s:s + 1], xd[s:s + 1], xdd[s:s + 1])
+        for field in ("q", "qd", "qdd", "R", "origin", "w", "wd", "a", "joint_point_a", "act_q", "J_ax"):
+            a, b = getattr(one, field)[0], getattr(kin, field)[s]
+            assert np.allclose(a, b, rtol=1e-9, atol=1e-10 * max(1.0, float(np.abs(b).max()))), f"{name}: {field}"
+
+
+def test_singularity_measures_are_in_range(case):
+    name, m = case
+    t = np.linspace(0.0, 1.0, 20)
+    x, xd, xdd = _motion(m, name, t, seed=6)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    sm = singularity_measures(m, kin.q)
+    for arr in (sm.inverse, sm.constraint):
+        assert np.all((arr > 0) & (arr <= 1))
+    if m.na == m.nt:
+        assert np.all((sm.direct > 0) & (sm.direct <= 1))
+
+
+def test_delta_direct_singularity_measure_falls_towards_a_stretched_arm():
+    """A Delta whose platform drops towards full reach: the forearm lines up with the upper arm
+    and the inverse-kinematic (type I) measure falls towards zero; then the pose is refused."""
+    m = load_mechanism(ex.MACHINES / "delta" / "delta.toml")
+    reach = -np.sqrt((0.524 + 1.244) ** 2 - (0.163678801315259 - 0.0219393102292058) ** 2)  # arm and forearm in line
+    z = np.linspace(-1.0, reach + 1e-4, 400)
+    x = np.stack([np.zeros_like(z), np.zeros_like(z), z], axis=-1)
+    kin = solve_kinematics(m, x)
+    sm = singularity_measures(m, kin.q)
+    assert sm.inverse[-1] < 0.2 * sm.inverse[0]
+    assert np.all(np.diff(sm.inverse[-50:]) < 0)
+    beyond = np.concatenate([x, [[0.0, 0.0, reach - 0.01]]])
+    with pytest.raises((UnreachablePoseError, SingularityError), match=r"sample 400\b"):
+        solve_kinematics(m, beyond)
+
+
+def test_unreachable_pose_names_the_sample_and_loop():
+    m = load_mechanism(ex.MACHINES / "delta" / "delta.toml")
+    x = np.tile(reference_task(m), (30, 1))
+    x[:, 2] -= np.linspace(0.0, 1.5, 30)  # below the reach of arm and forearm (1.768 m)
+    t = np.linspace(0.0, 1.0, 30)
+    with pytest.raises(UnreachablePoseError, match=r"sample \d+ \(t = [0-9.e-]+ s\).*loop \d+ \(cut \w+\)"):
+        solve_kinematics(m, x, t=t)
+
+
+def test_a_joint_traversed_backwards_gives_the_same_motion():
+    """Describing joints the other way round (the tree then inverts their motion) changes nothing."""
+    for plain, flipped in ((ex.four_bar(), ex.four_bar_cut_b()), (ex.builtin_dict("stewart"), ex.stewart_flipped_spheres())):
+        m1, m2 = load_mechanism(plain), load_mechanism(flipped)
+        assert m2.joint_flipped.any()
+        name = m1.name
+        t = np.linspace(0.0, 1.0, 50)
+        x, xd, xdd = ex.smooth_motion(reference_task(m1), np.array(AMP["stewart" if name == "stewart" else name]), t)
+        k1, k2 = solve_kinematics(m1, x, xd, xdd), solve_kinematics(m2, x, xd, xdd)
+        for b, nm in enumerate(m1.body_names):
+            b2 = m2.body_names.index(nm)
+            for f in ("R", "origin", "w", "wd", "origin_a"):
+                assert np.allclose(getattr(k1, f)[:, b], getattr(k2, f)[:, b2], atol=1e-10), (name, nm, f)
+        assert np.allclose(k1.act_q, k2.act_q, atol=1e-12) and np.allclose(k1.act_qdd, k2.act_qdd, atol=1e-9)
+
+
+def test_bad_motion_arrays_are_refused():
+    m = load_mechanism(ex.four_bar())
+    with pytest.raises(MotionError, match="x: expected shape"):
+        solve_kinematics(m, np.zeros((5, 2)))
+    with pytest.raises(MotionError, match="non-finite"):
+        solve_kinematics(m, np.array([[np.nan]]))
+
+
+def test_a_coarsely_sampled_motion_is_bridged_and_matches_a_fine_one(monkeypatch):
+    """A Bennett crank stepped by 1.8 rad in one sample: one Newton solve does not get there,
+    the step is bridged, and the result is the fine path's (same assembly branch)."""
+    import pkmdyn.multibody.kinematics as kinematics
+
+    used = []
+    bridge = kinematics._bridge
+    monkeypatch.setattr(kinematics, "_bridge", lambda *a: used.append(a[3]) or bridge(*a))
+    m = load_mechanism(ex.MACHINES / "bennett" / "bennett.toml")
+    coarse = solve_kinematics(m, np.array([[1.047], [2.5], [-2.0]]))
+    assert used == [2]
+    fine_x = np.concatenate([np.linspace(1.047, 2.5, 100), np.linspace(2.5, 2.5 + (2 * np.pi - 4.5), 300)])
+    fine = solve_kinematics(m, ((fine_x + np.pi) % (2 * np.pi) - np.pi)[:, None])
+    wrap = lambda a: (a + np.pi) % (2 * np.pi) - np.pi  # noqa: E731
+    assert np.allclose(wrap(coarse.q[-1] - fine.q[-1]), 0.0, atol=1e-10)
+    assert np.allclose(coarse.R[-1], fine.R[-1], atol=1e-10)
