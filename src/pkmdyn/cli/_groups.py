@@ -126,14 +126,10 @@ def write_default_file(machine: str, control: bool, out_path: Path) -> None:
         from ..control import default_settings_text
 
         text, what = default_settings_text(machine), "control settings"
-    elif machine == "hip":
-        from ..machines.hip_simulator.params import DEFAULT_PARAMS_TEXT
-
-        text, what = DEFAULT_PARAMS_TEXT, "parameters"
     else:
-        from ..machines.pdm4.params import default_params_path
+        from ..machines.registry import hand_built
 
-        text, what = default_params_path().read_text(encoding="utf-8"), "parameters"
+        text, what = hand_built(machine).default_params_text(), "parameters"
     with atomic_file(out_path) as tmp:
         tmp.write_text(text, encoding="utf-8")
         echo(f"{what}: {out_path}")

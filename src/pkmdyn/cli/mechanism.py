@@ -10,7 +10,7 @@ from pathlib import Path
 
 import click
 
-from ._groups import PATH_IN, cli
+from ._groups import PATH_IN, cli, list_files
 
 _MACHINE_HELP = "A built-in machine (see pkmdyn machines) or a mechanism description FILE.toml."
 
@@ -25,31 +25,20 @@ def machines() -> None:
 
 
 def _load(machine: str):
+    """The compiled mechanism of ``--machine`` (a hand-built machine through the description its
+    folder makes) and its registry entry (``None`` for a described one)."""
     from ..machines.registry import resolve
     from ..multibody import load_mechanism
 
-    kind, path = resolve(machine)
-    if kind != "described":
-        return kind, None
-    return kind, load_mechanism(path)
+    entry, path = resolve(machine)
+    return load_mechanism(path if entry is None else entry.description()), entry
 
 
 @cli.command("describe")
 @click.option("--machine", required=True, help=_MACHINE_HELP)
 def describe(machine: str) -> None:
     """Print the topology, mobility and over-constraints of a machine."""
-    from ..machines.registry import HAND_BUILT
-
-    from ..machines.registry import hand_built_description
-    from ..multibody import load_mechanism
-
-    kind, model = _load(machine)
-    if model is None:
-        desc = hand_built_description(kind)
-        if desc is None:
-            click.echo(f"{machine}: {HAND_BUILT[kind]}")
-            return
-        model = load_mechanism(desc)
+    model, _ = _load(machine)
     rep = model.topology
     counts = ", ".join(f"{c} {k}" for k, c in rep.joint_counts.items())
     lines = [
@@ -86,20 +75,17 @@ def run(machine: str, motion_path: Path | None, out_dir: Path) -> None:
 
     The same files for every machine; the hip's and the PDM's own jobs (dynamics, plots) are
     pkmdyn hip run and pkmdyn pdm run."""
-    from ..machines.registry import hand_built_description, hand_built_motion
-    from ..multibody import default_motion, load_mechanism, read_task_motion
+    from ..io import check_output_dir
+    from ..machines.registry import resolve
+    from ..multibody import default_motion, read_task_motion
     from ..multibody.output import run_mechanism
 
-    kind, model = _load(machine)
-    default = None
-    if model is None:  # a hand-built machine: through the description its folder makes
-        model = load_mechanism(hand_built_description(kind))
-        default = hand_built_motion(kind)
-
+    entry, path = resolve(machine)
+    inputs = {"--machine": path, "--motion": motion_path}
+    check_output_dir(out_dir, inputs)
+    model, entry = _load(machine)
     if motion_path is not None:
         motion = read_task_motion(model, Path(motion_path).absolute())
     else:
-        motion = default if default is not None else default_motion(model)
-    summary = run_mechanism(model, motion, out_dir)
-    for label, path in summary["files"].items():
-        click.echo(f"{label}: {path}")
+        motion = default_motion(model) if entry is None else entry.default_motion()
+    run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files)

@@ -1,7 +1,8 @@
 """Control settings files (``--gains G.toml``): timing, actuators, sensors, gains, mismatch.
 
-The built-in files ``hip.toml`` and ``pdm.toml`` beside this module hold every key a machine
-accepts, with its default; a user file overrides any subset of them. Rules (each violation is
+Each hand-built machine's folder holds its built-in settings file (``control.toml``, named by
+the machine's registry entry, :mod:`pkmdyn.machines.registry`) with every key it accepts and
+its default; a user file overrides any subset of them. Rules (each violation is
 a :class:`~pkmdyn.errors.ParameterError` naming the table and key): no table or key the
 built-in file lacks; a number where the default is a number, a list of the same length where
 it is a list; every value finite and >= 0; the keys in :data:`POSITIVE` > 0; the keys in
@@ -13,7 +14,6 @@ from __future__ import annotations
 
 import math
 import tomllib
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -22,10 +22,9 @@ import numpy as np
 from ..errors import ParameterError
 from ..params_util import read_toml
 
-__all__ = ["MACHINES", "default_settings_text", "load_settings", "loop_settings", "gains", "si", "scale_description",
+__all__ = ["default_settings_text", "load_settings", "loop_settings", "gains", "si", "scale_description",
            "POSITIVE", "INTEGER", "MAXIMUM"]
 
-MACHINES = ("hip", "pdm")
 #: keys (prefixes) whose values must be > 0
 POSITIVE = ("control_cycle_s", "integration_step_s", "effort_limit", "encoder_counts_per_turn",
             "encoder_travel_per_turn", "divergence_limit", "mass_factor", "friction_factor")
@@ -36,10 +35,10 @@ MAXIMUM = {"pose_delay_cycles": 10_000, "seed": 2**63 - 1, "pose_feedback_from_s
 
 
 def default_settings_text(machine: str) -> str:
-    """The built-in settings file of ``machine`` (``"hip"`` or ``"pdm"``) as text."""
-    if machine not in MACHINES:
-        raise ParameterError(f"settings: unknown machine {machine!r}")
-    return resources.files(__package__).joinpath(f"{machine}.toml").read_text(encoding="utf-8")
+    """The built-in settings file of the hand-built machine ``machine`` (a registry name) as text."""
+    from ..machines.registry import hand_built
+
+    return hand_built(machine).CONTROL_SETTINGS.read_text(encoding="utf-8")
 
 
 def _check_value(where: str, key: str, value: Any, default: Any) -> Any:

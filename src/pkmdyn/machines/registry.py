@@ -1,29 +1,32 @@
-"""The one list of built-in machines.
+"""The one list of built-in machines, read off the folders under ``machines/``.
 
-A *described* machine is a folder under ``machines/`` holding ``<name>.toml`` (a mechanism
-description, :mod:`pkmdyn.multibody`): adding one is adding the folder and the file. The two
-papers' machines are hand-built (their own packages and commands, ``pkmdyn hip ...``,
-``pkmdyn pdm ...``). Both folders also turn their parameters into a description
-(``hip_simulator/description.py``, ``pdm4/description.py``), which ``pkmdyn describe`` and
-``pkmdyn run --machine hip|pdm`` use: every machine's run writes the same files.
+Two kinds of folder make a built-in machine, and nothing else has to change to add one:
+
+- a *described* machine: ``machines/<name>/<name>.toml``, a mechanism description
+  (:mod:`pkmdyn.multibody`);
+- a *hand-built* machine (the two papers' machines, with closed forms of their own and commands
+  ``pkmdyn hip ...``, ``pkmdyn pdm ...``): a package ``machines/<folder>/`` with a module
+  ``machine.py`` that says ``NAME``, ``TITLE``, ``CONTROL_SETTINGS`` (a path) and provides
+  ``default_params_text()``, ``description()`` (its built-in parameters as a mechanism
+  description) and ``default_motion()`` (a :class:`pkmdyn.multibody.TaskMotion`).
+
+Every command that takes ``--machine`` resolves it here; an unknown name is refused, never
+routed to another machine's code.
 """
 
 from __future__ import annotations
 
+import functools
+import importlib
 from pathlib import Path
+from types import ModuleType
 
 from ..errors import ParameterError
 
-__all__ = ["HAND_BUILT", "described_machines", "builtin_names", "description_path", "resolve",
-           "hand_built_description", "hand_built_motion"]
+__all__ = ["described_machines", "hand_built_machines", "hand_built", "builtin_names", "description_path",
+           "resolve", "title"]
 
 _HERE = Path(__file__).resolve().parent
-
-#: hand-built machines: name -> what it is
-HAND_BUILT = {
-    "hip": "2(3PUS+S) dual-platform hip-joint wear simulator (Chen, Cheng & Pang 2022); see pkmdyn hip --help",
-    "pdm": "4-DOF over-constrained parallel driving mechanism (Huang et al. 2023); see pkmdyn pdm --help",
-}
 
 
 def described_machines() -> dict[str, Path]:
@@ -36,64 +39,56 @@ def described_machines() -> dict[str, Path]:
     return out
 
 
+@functools.cache
+def hand_built_machines() -> dict[str, ModuleType]:
+    """Every package ``machines/<folder>/`` with a ``machine.py``: its ``NAME`` -> that module."""
+    out: dict[str, ModuleType] = {}
+    for folder in sorted(_HERE.iterdir()):
+        if folder.is_dir() and (folder / "machine.py").is_file() and (folder / "__init__.py").is_file():
+            module = importlib.import_module(f"{__package__}.{folder.name}.machine")
+            out[module.NAME] = module
+    return out
+
+
+def hand_built(name: str) -> ModuleType:
+    """The registry entry (``machine.py`` module) of hand-built machine ``name``."""
+    machines = hand_built_machines()
+    if name not in machines:
+        raise ParameterError(f"machine {name!r}: not a hand-built machine (those are: {', '.join(sorted(machines))})")
+    return machines[name]
+
+
 def builtin_names() -> list[str]:
     """All built-in machine names, sorted."""
-    return sorted({*described_machines(), *HAND_BUILT})
+    return sorted({*described_machines(), *hand_built_machines()})
+
+
+def title(name: str) -> str:
+    """One line saying what built-in machine ``name`` is."""
+    if name in hand_built_machines():
+        return hand_built_machines()[name].TITLE
+    return f"described mechanism {description_path(name)}"
 
 
 def description_path(name: str) -> Path:
-    """The description file of built-in machine ``name``."""
+    """The description file of the described built-in machine ``name``."""
     described = described_machines()
     if name in described:
         return described[name]
-    if name in HAND_BUILT:
-        raise ParameterError(f"--machine {name}: a hand-built machine without a description file ({HAND_BUILT[name]})")
+    if name in hand_built_machines():
+        raise ParameterError(f"--machine {name}: a hand-built machine without a description file ({title(name)})")
     raise ParameterError(f"--machine {name}: unknown machine (built-in: {', '.join(builtin_names())}; "
                          "or give a description FILE.toml)")
 
 
-def hand_built_description(name: str) -> dict | None:
-    """The description a hand-built machine's folder makes from its built-in parameters, or None."""
-    if name == "hip":
-        from .hip_simulator import load_params
-        from .hip_simulator.description import hip_description
-
-        return hip_description(load_params())
-    if name == "pdm":
-        from .pdm4 import load_params as load_pdm
-        from .pdm4.description import pdm_description
-
-        return pdm_description(load_pdm())
-    return None
-
-
-def hand_built_motion(name: str):
-    """The default task motion of a hand-built machine for ``pkmdyn run --machine``: the hip's
-    ISO 14242-1 cycle (one cycle, 1000 samples), the PDM's Eq. 84 motion of its parameters;
-    as a :class:`pkmdyn.multibody.TaskMotion` in the order of the description's task."""
-    from ..multibody import TaskMotion
-
-    if name == "hip":
-        from ..profiles.iso14242 import iso14242_motion
-
-        m = iso14242_motion(cycles=1, samples_per_cycle=1000)
-        return TaskMotion(m.t, m.angles, m.rates, m.accels)
-    from ..profiles.pdm_motion import cycloidal_motion
-    from .pdm4 import load_params as load_pdm
-
-    tr = load_pdm().trajectory
-    m = cycloidal_motion(tr.strokes, tr.period_s, tr.samples)
-    return TaskMotion(m.t, m.q, m.qd, m.qdd)
-
-
-def resolve(machine: str) -> tuple[str, Path | None]:
-    """``("described", path)`` for a built-in description or a ``.toml`` file, ``("hip", None)`` or
-    ``("pdm", None)`` for a hand-built machine; anything else is refused, never guessed."""
-    if machine in HAND_BUILT:
-        return machine, None
+def resolve(machine: str) -> tuple[ModuleType | None, Path | None]:
+    """``(entry, None)`` for a hand-built machine (its ``machine.py`` module), ``(None, path)`` for
+    a described built-in or a description ``FILE.toml``; anything else is refused."""
+    if machine in hand_built_machines():
+        return hand_built_machines()[machine], None
     if machine in described_machines():
-        return "described", described_machines()[machine]
+        return None, described_machines()[machine]
     p = Path(machine)
     if p.suffix.lower() == ".toml" or p.exists():
-        return "described", p
-    return "described", description_path(machine)
+        return None, p
+    return None, description_path(machine)

@@ -9,6 +9,7 @@ flags), the loops, the task coordinates and gravity.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -129,10 +130,12 @@ def bodies_arrays(model: MechanismModel, kin: MechanismKinematics) -> dict[str, 
     return out
 
 
-def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path) -> dict[str, Any]:
+def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path, inputs: Any = (),
+                  report: Callable[[dict[str, Path]], None] | None = None) -> dict[str, Any]:
     """Kinematics of ``model`` along ``motion``, written into ``out_dir`` (through
-    :func:`pkmdyn.io.output_dir`: nothing is written when anything fails). Returns the summary
-    with ``files`` as ``{label: path}``."""
+    :func:`pkmdyn.io.output_dir` under the output rule, ``inputs`` the files the run read:
+    nothing is written when anything fails). ``report`` is called with the files' final paths
+    before they move into place. Returns the summary with ``files`` as ``{label: path}``."""
     kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
     sm = singularity_measures(model, kin.q)
     cols = results_columns(model, kin)
@@ -144,7 +147,8 @@ def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path
         "min_constraint_singularity_measure": float(sm.constraint.min()),
         "topology": model.topology.as_dict() if model.topology is not None else None,
     }
-    with output_dir(out_dir) as out:
+    final = Path(out_dir)
+    with output_dir(out_dir, inputs=inputs) as out:
         files = {"results": out / "results.csv", "model": out / "model.json", "bodies": out / "bodies.npz",
                  "summary": out / "summary.json"}
         write_csv(files["results"], cols)
@@ -157,5 +161,6 @@ def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path
             raise PkmdynError(f"{files['bodies']}: cannot write file ({exc.strerror or type(exc).__name__})") from None
         summary["files"] = sorted(p.name for p in files.values())
         write_json(files["summary"], summary)
-    final = Path(out_dir)
+        if report is not None:
+            report({k: final / v.name for k, v in files.items()})
     return {**summary, "files": {k: final / v.name for k, v in files.items()}}

@@ -1,0 +1,43 @@
+"""The hip simulator's entry in the machine registry (:mod:`pkmdyn.machines.registry`).
+
+What the machine-independent layers need to know of this machine, in one place: its name,
+its built-in parameter and control settings files, its description for the multibody layer
+and its default motion.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+NAME = "hip"
+TITLE = "2(3PUS+S) dual-platform hip-joint wear simulator (Chen, Cheng & Pang 2022); see pkmdyn hip --help"
+#: the built-in control settings (``--gains``; :mod:`pkmdyn.control`)
+CONTROL_SETTINGS = Path(__file__).with_name("control.toml")
+
+
+def default_params_text() -> str:
+    """The built-in parameter file, to edit and pass as ``--params``."""
+    from .params import DEFAULT_PARAMS_TEXT
+
+    return DEFAULT_PARAMS_TEXT
+
+
+def description() -> dict[str, Any]:
+    """The built-in machine as a mechanism description (:mod:`pkmdyn.multibody`)."""
+    from .description import hip_description
+    from .params import load_params
+
+    return hip_description(load_params())
+
+
+def default_motion() -> Any:
+    """One ISO 14242-1 cycle of the built-in parameters' cycle model (1000 samples), as a
+    :class:`pkmdyn.multibody.TaskMotion` in the description's task order."""
+    from ...multibody import TaskMotion
+    from ...profiles.iso14242 import iso14242_motion
+    from ...profiles.iso_fit import iso_cycle_preset
+    from .params import load_params
+
+    m = iso14242_motion(cycles=1, samples_per_cycle=1000, cycle=iso_cycle_preset(load_params().motion_model))
+    return TaskMotion(m.t, m.angles, m.rates, m.accels)
