@@ -71,7 +71,7 @@ def main() -> None:
 
     import pinocchio
 
-    from pkmdyn.validation.pinocchio_hip import reference_torques, spanning_tree_rnea_inputs
+    from pkmdyn.machines.hip_simulator.pinocchio_reference import reference_torques, spanning_tree_rnea_inputs
 
     model, t, R, w, wd, load = _inputs(args.samples)
     n = t.shape[0]

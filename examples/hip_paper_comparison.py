@@ -26,7 +26,7 @@ from pkmdyn.cli import main as cli_main
 from pkmdyn.machines.hip_simulator import inverse_dynamics, inverse_kinematics, load_params, model_from_dict
 from pkmdyn.machines.hip_simulator.params import default_params_dict, paper_params_path
 from pkmdyn.profiles.iso14242 import iso14242_motion
-from pkmdyn.profiles.iso_fit import PAPER_SLIDER_MAXIMA, fit_iso_cycle, iso_cycle_preset
+from pkmdyn.machines.hip_simulator.iso_fit import PAPER_SLIDER_MAXIMA, fit_iso_cycle, iso_cycle_preset
 
 PAPER_KINEMATICS = {  # §5.1, mm, mm/s, mm/s^2
     "max L, platform 1 [mm]": (665.58, 660.47, 624.42),

@@ -1,6 +1,7 @@
 import numpy as np
 
-from pkmdyn.friction import coulomb_viscous, hip_bearing_friction, regularised_sign
+from pkmdyn.friction import coulomb_viscous, regularised_sign
+from pkmdyn.machines.hip_simulator.dynamics import hip_bearing_friction
 
 
 def test_regularised_sign_is_bounded_smooth_and_zero_at_rest():

@@ -15,7 +15,7 @@ from pkmdyn.machines.hip_simulator import inverse_kinematics, load_params, model
 from pkmdyn.machines.hip_simulator.params import default_params_dict, paper_params_path
 from pkmdyn.params_util import read_toml
 from pkmdyn.profiles.iso14242 import iso14242_motion
-from pkmdyn.profiles.iso_fit import PAPER_SLIDER_MAXIMA, iso_cycle_preset
+from pkmdyn.machines.hip_simulator.iso_fit import PAPER_SLIDER_MAXIMA, iso_cycle_preset
 
 
 def test_paper_file_is_the_same_machine_with_fe_about_the_vertical_axis():

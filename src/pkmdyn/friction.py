@@ -1,4 +1,4 @@
-"""Friction laws: regularised sign, Coulomb plus viscous, load-dependent hip-joint friction.
+"""Friction laws of any machine: the regularised sign and Coulomb plus viscous friction.
 
 All laws oppose the relative velocity they are given and return the force or torque that
 the joint *resists with*, so the power they dissipate is ``velocity . friction >= 0``.
@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["regularised_sign", "coulomb_viscous", "hip_bearing_friction"]
+__all__ = ["regularised_sign", "coulomb_viscous"]
 
 Array = NDArray[np.float64]
 
@@ -33,26 +33,3 @@ def coulomb_viscous(w: Array, coulomb: float, viscous: float, eps: float, vector
     """
     w = np.asarray(w, dtype=float)
     return coulomb * regularised_sign(w, eps, vector) + viscous * w
-
-
-def hip_bearing_friction(
-    omega: Array,
-    load: Array,
-    platform_weight: float,
-    hip_radius: float,
-    hip_coefficient: float,
-    thrust_radius: float,
-    thrust_coefficient: float,
-    eps: float,
-) -> Array:
-    """Hip-joint plus thrust-bearing friction torque on a platform, Eq. (16) of the hip paper.
-
-        tau_mf = u(omega) (r_h mu_h F + r_t mu_t |F + m_m g|)
-
-    ``omega (n, 3)`` [rad/s] platform angular velocity, ``load (n,)`` [N] hydraulic force,
-    ``platform_weight`` = m_m g [N]. Returns ``(n, 3)`` [N m] in the base frame.
-    """
-    magnitude = hip_radius * hip_coefficient * np.abs(load) + thrust_radius * thrust_coefficient * np.abs(
-        load + platform_weight
-    )
-    return regularised_sign(omega, eps, vector=True) * magnitude[..., None]

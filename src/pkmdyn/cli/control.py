@@ -80,7 +80,7 @@ def _hip_setup(params: Path | None, plant_params: Path | None, motion: Path | No
     from ..machines.hip_simulator.params import default_params_dict, load_params, model_from_dict
     from ..params_util import read_toml
     from ..profiles.iso14242 import angle_wave, iso_load
-    from ..profiles.iso_fit import iso_cycle_preset
+    from ..machines.hip_simulator.iso_fit import iso_cycle_preset
 
     # each file is read once (it may be a pipe)
     description = read_toml(params) if params is not None else default_params_dict()

@@ -34,18 +34,41 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import MotionError, ParameterError, SingularityError, check_type
-from ...friction import coulomb_viscous, hip_bearing_friction
+from ...friction import coulomb_viscous, regularised_sign
 from ...profiles.orientation import check_load
 from ...spatial import cross0, dot0
 from .kinematics import HipKinematics
 from .params import HipModel
 
-__all__ = ["HipTorques", "inverse_dynamics", "lever_generalised_force", "PARTS"]
+__all__ = ["HipTorques", "inverse_dynamics", "lever_generalised_force", "hip_bearing_friction", "PARTS"]
 
 Array = NDArray[np.float64]
 
 #: names of the parts of Eq. (14) plus friction, in results-file order
 PARTS = ("platform", "lever", "slider", "screw", "friction")
+
+
+def hip_bearing_friction(
+    omega: Array,
+    load: Array,
+    platform_weight: float,
+    hip_radius: float,
+    hip_coefficient: float,
+    thrust_radius: float,
+    thrust_coefficient: float,
+    eps: float,
+) -> Array:
+    """Hip-joint plus thrust-bearing friction torque on a platform, Eq. (16) of the hip paper.
+
+        tau_mf = u(omega) (r_h mu_h F + r_t mu_t |F + m_m g|)
+
+    ``omega (n, 3)`` [rad/s] platform angular velocity, ``load (n,)`` [N] hydraulic force,
+    ``platform_weight`` = m_m g [N]. Returns ``(n, 3)`` [N m] in the base frame.
+    """
+    magnitude = hip_radius * hip_coefficient * np.abs(load) + thrust_radius * thrust_coefficient * np.abs(
+        load + platform_weight
+    )
+    return regularised_sign(omega, eps, vector=True) * magnitude[..., None]
 
 
 @dataclass(frozen=True)

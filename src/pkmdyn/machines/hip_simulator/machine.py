@@ -36,7 +36,7 @@ def default_motion() -> Any:
     :class:`pkmdyn.multibody.TaskMotion` in the description's task order."""
     from ...multibody import TaskMotion
     from ...profiles.iso14242 import iso14242_motion
-    from ...profiles.iso_fit import iso_cycle_preset
+    from .iso_fit import iso_cycle_preset
     from .params import load_params
 
     m = iso14242_motion(cycles=1, samples_per_cycle=1000, cycle=iso_cycle_preset(load_params().motion_model))

@@ -18,7 +18,7 @@ from pydantic import Field, field_validator, model_validator
 from ...errors import LimitError, ParameterError
 from ...io import DEFAULT_MAX_SAMPLES
 from ...params_util import Section, read_toml, validate
-from ...profiles.iso_fit import iso_cycle_preset
+from .iso_fit import iso_cycle_preset
 from ...spatial import check_sequence
 
 __all__ = [
@@ -235,7 +235,7 @@ class HipModel:
     friction: HipFriction
     limits: HipLimits = field(default_factory=HipLimits)
     #: the ISO 14242-1 cycle preset of the built-in motion (``[motion] iso_cycle``;
-    #: :func:`pkmdyn.profiles.iso_fit.iso_cycle_preset`)
+    #: :func:`pkmdyn.machines.hip_simulator.iso_fit.iso_cycle_preset`)
     motion_model: str = "default"
 
 

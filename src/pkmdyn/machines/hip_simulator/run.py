@@ -26,7 +26,7 @@ from tqdm import tqdm
 from ...errors import ParameterError, PkmdynError, SingularityWarning
 from ...io import TABLE_FORMATS, check_table_format, open_table_writer, output_dir, write_json
 from ...params_util import check_limit, parse_limit_options
-from ...profiles.iso_fit import iso_cycle_preset
+from .iso_fit import iso_cycle_preset
 from ...profiles.iso14242 import IsoCycle, iso14242_block, iso14242_samples, iso14242_times
 from ...profiles.orientation import OrientationMotion, read_motion_csv
 from ...spatial import euler_kinematics
@@ -332,7 +332,7 @@ def run_hip(
 
     ``fmt``: ``"csv"`` or ``"parquet"`` for ``results``; ``limits``: overrides of the
     ``[limits]`` table (``{key: value}`` or ``("key=value", ...)``); ``motion_model``: the named
-    ISO 14242-1 cycle model of the built-in motion (:func:`pkmdyn.profiles.iso_fit.iso_cycle_preset`;
+    ISO 14242-1 cycle model of the built-in motion (:func:`pkmdyn.machines.hip_simulator.iso_fit.iso_cycle_preset`;
     ``None``: the parameter file's ``[motion] iso_cycle``). Every input (parameters,
     motion, options, limits on load and angles) is checked before ``out_dir`` is touched; the
     slider speed and acceleration limits are checked block by block as the kinematics are

@@ -19,8 +19,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
-from ..errors import ParameterError
-from .iso14242 import AxisWave, IsoCycle, iso14242_motion
+from ...errors import ParameterError
+from ...profiles.iso14242 import AxisWave, IsoCycle, iso14242_motion
 
 __all__ = ["PAPER_SLIDER_MAXIMA", "PAPER_FIT", "PAPER_FIT_ZXY", "IsoFit", "slider_maxima", "fit_iso_cycle", "iso_cycle_preset"]
 
@@ -50,7 +50,7 @@ PAPER_FIT_ZXY = IsoCycle(
 
 def slider_maxima(model, cycle: IsoCycle, samples: int = 400) -> Array:
     """The nine §5.1 quantities of ``cycle`` on ``model`` (order of :data:`PAPER_SLIDER_MAXIMA`)."""
-    from ..machines.hip_simulator import inverse_kinematics
+    from .kinematics import inverse_kinematics
 
     kin = inverse_kinematics(model, iso14242_motion(1.0, samples, cycle))
     return np.concatenate([kin.L[:, 0].max(axis=0), np.abs(kin.Ld[:, 0]).max(axis=0), np.abs(kin.Ldd[:, 0]).max(axis=0)])
