@@ -326,12 +326,14 @@ def run_hip(
     limits: dict[str, Any] | tuple[str, ...] | None = None,
     chunk: int = RUN_CHUNK,
     motion_model: str = "default",
+    report: bool = True,
 ) -> tuple[dict[str, Path], list[str]]:
     """Run the whole job; returns the files written and the warnings raised on the way.
 
     ``fmt``: ``"csv"`` or ``"parquet"`` for ``results``; ``limits``: overrides of the
     ``[limits]`` table (``{key: value}`` or ``("key=value", ...)``); ``motion_model``: the named
-    ISO 14242-1 cycle model of the built-in motion (:func:`pkmdyn.profiles.iso_fit.iso_cycle_preset`). Every input (parameters,
+    ISO 14242-1 cycle model of the built-in motion (:func:`pkmdyn.profiles.iso_fit.iso_cycle_preset`); ``report``:
+    also write ``report.html`` (the machine animated over the plots' window). Every input (parameters,
     motion, options, limits on load and angles) is checked before ``out_dir`` is touched; the
     slider speed and acceleration limits are checked block by block as the kinematics are
     computed. On any error nothing is left at or beside ``out_dir``.
@@ -372,7 +374,13 @@ def run_hip(
     check_table_format(fmt)  # pyarrow present? (checked before any work)
 
     summ = SummaryAccumulator()
-    collect = _PlotCollector(window) if make_plots else None
+    collect = _PlotCollector(window) if make_plots or report else None
+    frames = None
+    if report:
+        from ...report import MAX_FRAMES
+        from .report import FrameCollector
+
+        frames = FrameCollector(window, MAX_FRAMES)
     near = 0
     worst = (0.0, 0.0, 0)  # cond, t, sample
     other: dict[str, None] = {}
@@ -405,6 +413,8 @@ def run_hip(
                               "Ld": kin.Ld[:, -1], "Ldd": kin.Ldd[:, -1], "tau": tq.tau,
                               **{p: getattr(tq, p) for p in PARTS}}
                     collect.add(s, curves, mb.load, tq.friction)
+                if frames is not None:
+                    frames.add(s, mb.t, kin.R, kin.L, tq.tau)
         messages = list(other)
         if near:
             cond, tw, kw = worst
@@ -416,16 +426,27 @@ def run_hip(
         doc["motion"] = source
         doc["limits"] = dataclasses.asdict(lim)
         doc["warnings"] = messages
+        if report:
+            files["report"] = tmp / "report.html"
         write_json(files["summary"], doc)
         if collect is not None:
             from . import plots
 
             data = collect.data(note)
+        if make_plots:
             files["motion_plot"] = plots.plot_motion_and_load(data, tmp / "motion_load.png")
             files["slider_plot"] = plots.plot_slider_motion(data, tmp / "slider_motion.png")
             files["torque_parts_plot"] = plots.plot_torque_parts(data, tmp / "torque_parts.png")
             files["torque_plot"] = plots.plot_torques(data, tmp / "torques.png")
             files["friction_plot"] = plots.plot_friction_vs_load(data, tmp / "friction_vs_load.png")
+        if frames is not None:
+            from .report import run_plots, write_run_report
+
+            write_run_report(tmp, title="2(3PUS+S) hip simulator: hip run", scene=frames.scene(model),
+                             plots=run_plots(data), summary=doc, params_path=params_path, warnings=messages,
+                             images=[p for p in files.values() if p.suffix == ".png"],
+                             notes=[f"parameters: {doc['parameters']}", f"motion: {source}"],
+                             scene_note=(f"The animation covers the plots' window: {note}." if note else ""))
     out = Path(out_dir)
     return {k: out / p.name for k, p in files.items()}, messages
 
