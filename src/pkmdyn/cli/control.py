@@ -23,7 +23,7 @@ from ..errors import MotionError, ParameterError
 from ._groups import PATH_IN, hip, pdm
 from ._groups import FiniteFloat
 
-__all__ = ["hip_closed_loop", "run_control", "HIP_CONTROLLERS", "PDM_CONTROLLERS", "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
+__all__ = ["hip_closed_loop", "run_control", "effort_label", "HIP_CONTROLLERS", "PDM_CONTROLLERS", "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
 
 HIP_CONTROLLERS = ("pd", "augmented-pd", "feedforward", "computed-torque")
 PDM_CONTROLLERS = ("pid", "feedforward", "computed-torque")
@@ -325,9 +325,12 @@ def _plots(setup: _Setup, tr: Any, tmp: Path) -> list[Path]:
         plt.close(fig)
         paths.append(p)
     fig, ax = plt.subplots(figsize=(7, 3.8))
-    for a, name in enumerate(setup.verbs.ACTUATORS):
-        ax.plot(r.t, r.u[:, a], label=name, lw=0.8)
-    ax.set(xlabel="t [s]", ylabel="effort [" + setup.verbs.ACTUATORS[0].split("_", 1)[1] + "]", title="Actuator efforts")
+    for a in range(len(setup.verbs.ACTUATORS)):
+        label, unit = effort_label(setup.machine, a)
+        ax.plot(r.t, r.u[:, a], label=f"{label} [{unit}]", lw=0.8)
+    quantity = "torque" if setup.machine == "hip" else "force"
+    ax.set(xlabel="t [s]", ylabel=f"{quantity} [{effort_label(setup.machine, 0)[1]}]",
+           title=f"Actuator efforts ({'motor torques' if setup.machine == 'hip' else 'limb forces'})")
     ax.legend()
     ax.grid(alpha=0.3)
     fig.tight_layout()
@@ -338,6 +341,67 @@ def _plots(setup: _Setup, tr: Any, tmp: Path) -> list[Path]:
     return paths
 
 
+def effort_label(machine: str, a: int) -> tuple[str, str]:
+    """The name and unit of actuator ``a`` (0-based) for plots: ``("motor 1 torque", "N m")``,
+    ``("limb l11 force", "N")``, not the column names ``tau1_Nm``, ``f1_N``."""
+    if machine == "hip":
+        return f"motor {a + 1} torque", "N m"
+    return f"limb {PDM_LIMBS[a]} force", "N"
+
+
+def _report(setup: _Setup, tr: Any, cols: dict[str, np.ndarray], summary: dict[str, Any], tmp: Path,
+            images: list[Path], gains_path: Path | None) -> Path:
+    """``report.html`` of a control run: the plant's measured motion animated (efforts as colours),
+    tracking, errors and efforts against time, the PNG figures, summary, parameters, warnings."""
+    from ..errors import PkmdynError
+    from ..report import MAX_FRAMES, Curve, TimePlot, frame_indices, write_report
+
+    r = tr.result
+    idx = frame_indices(r.t.shape[0], MAX_FRAMES)
+    warns = [f"{effort_label(setup.machine, a)[0]} hit its limit in {v['saturated_cycles']} control cycle(s)"
+             for a, v in enumerate(summary["actuators"].values()) if v["saturated_cycles"]]
+    scene = None
+    try:
+        if setup.machine == "hip":
+            from ..machines.hip_simulator.report import parameters_text
+            from ..machines.hip_simulator.scene import hip_scene_from_angles
+
+            scene = hip_scene_from_angles(setup.plant_model, r.t[idx], r.q[idx], r.u[idx])
+        else:
+            from ..machines.pdm4.report import parameters_text
+            from ..machines.pdm4.scene import pdm_scene_from_pose
+
+            scene = pdm_scene_from_pose(setup.plant_model, r.t[idx], r.q[idx], r.u[idx])
+    except PkmdynError as exc:  # the plant left the machine's reach: the page says so, the run stands
+        warns.append(f"report: the 3D view could not be built ({exc})")
+    t = cols["t_s"]
+    plots = []
+    units = {}
+    for name in setup.verbs.COORDINATES:
+        base, unit = name.rsplit("_", 1)
+        units.setdefault("deg" if unit == "rad" else "mm", []).append(base)
+    for unit, bases in units.items():
+        plots.append(TimePlot(f"Pose: reference and measured ({unit})", f"[{unit}]", t, tuple(
+            c for b in bases for c in (Curve(f"{b} reference", cols[f"{b}_ref_{unit}"]), Curve(b, cols[f"{b}_{unit}"])))))
+        plots.append(TimePlot(f"Tracking error ({unit})", f"error [{unit}]", t,
+                              tuple(Curve(b, cols[f"{b}_err_{unit}"]) for b in bases)))
+    plots.append(TimePlot("Actuator efforts", f"[{effort_label(setup.machine, 0)[1]}]", t, tuple(
+        Curve(effort_label(setup.machine, a)[0], r.u[:, a]) for a in range(len(setup.verbs.ACTUATORS)))))
+    params = parameters_text(None if setup.params_source == "built-in parameters" else setup.params_source)
+    if gains_path is not None:
+        try:
+            params += f"\n\n# control settings: {gains_path}\n" + Path(gains_path).read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError):
+            pass
+    name = "2(3PUS+S) hip simulator" if setup.machine == "hip" else "4-DOF PDM"
+    return write_report(tmp, title=f"{name}: {setup.machine} control, {tr.controller.kind}", scene=scene,
+                        plots=plots, summary=summary, parameters=params, warnings=warns, images=images,
+                        notes=[f"parameters: {setup.params_source}", f"plant: {setup.plant_source}",
+                               f"motion: {setup.motion_source}"],
+                        scene_note="The plant's true pose; actuated chains coloured by the held effort.",
+                        samples=r.t.shape[0])
+
+
 def _loop_method(settings: dict[str, Any]) -> str:
     """The plant's integration method of a run with these settings."""
     from ..control import loop_settings
@@ -345,7 +409,8 @@ def _loop_method(settings: dict[str, Any]) -> str:
     return str(loop_settings(settings).method)
 
 
-def _write(setup: _Setup, tr: Any, settings: dict[str, Any], out: Path, plots: bool, gains_path: Path | None) -> dict[str, Path]:
+def _write(setup: _Setup, tr: Any, settings: dict[str, Any], out: Path, plots: bool, gains_path: Path | None,
+           report: bool = True) -> dict[str, Path]:
     from ..io import output_dir, write_csv, write_json
 
     with warnings.catch_warnings():
@@ -378,6 +443,9 @@ def _write(setup: _Setup, tr: Any, settings: dict[str, Any], out: Path, plots: b
         names = ["control.csv", "summary.json"]
         if plots:
             names += [p.name for p in _plots(setup, tr, tmp)]
+        if report:
+            names.append(_report(setup, tr, cols, summary, tmp, [tmp / n for n in names if n.endswith(".png")],
+                                 gains_path).name)
     return {n: out / n for n in names}
 
 

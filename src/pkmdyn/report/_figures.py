@@ -24,6 +24,7 @@ MAX_PLOT_POINTS = 4000
 _EFFORT_SCALE = "RdBu_r"
 _LINK = "#34495e"
 _FACE = "#8fb3d9"
+_ACTUATOR = "#e67e22"
 
 
 @dataclass(frozen=True)
@@ -102,14 +103,17 @@ def _effort_range(scene: Scene) -> tuple[float, str, bool]:
     units = {a.unit for a in scene.actuators}
     if len(units) == 1:
         m = max(float(np.max(np.abs(a.effort))) for a in scene.actuators)
-        return (m if m > 0 else 1.0), f"effort [{units.pop()}]", False
+        return m, f"effort [{units.pop()}]", False
     return 1.0, "effort / peak", True
 
 
 def _actuator_colours(scene: Scene, k: int, m: float, normalised: bool) -> list[str]:
-    """The colour of each actuated chain at frame ``k`` on the diverging scale over ``[-m, m]``."""
+    """The colour of each actuated chain at frame ``k`` on the diverging scale over ``[-m, m]``
+    (one fixed colour when every effort is zero, e.g. a machine shown at rest)."""
     from plotly.colors import sample_colorscale
 
+    if m <= 0:
+        return [_ACTUATOR] * len(scene.actuators)
     vals = []
     for a in scene.actuators:
         e = float(a.effort[k])
@@ -166,7 +170,7 @@ def scene_figure(scene: Scene, title: str, frame_s: float | None = None) -> "go.
     lx, ly, lz = _coords(scene.points[0], ground_line)
     static.append(go.Scatter3d(x=lx, y=ly, z=lz, mode="lines", name="ground", line={"color": "#95a5a6", "width": 3},
                                hoverinfo="skip"))
-    if scene.actuators:  # the colour bar of the actuated chains (an invisible marker carries it)
+    if scene.actuators and m > 0:  # the colour bar of the actuated chains (an invisible marker carries it)
         static.append(go.Scatter3d(
             x=[float(scene.points[0, 0, 0]) * _MM], y=[float(scene.points[0, 0, 1]) * _MM],
             z=[float(scene.points[0, 0, 2]) * _MM], mode="markers", name="actuator effort", showlegend=False,
@@ -201,7 +205,7 @@ def scene_figure(scene: Scene, title: str, frame_s: float | None = None) -> "go.
     pause = {"label": "\u275a\u275a pause", "method": "animate",
              "args": [[None], {"frame": {"duration": 0, "redraw": False}, "mode": "immediate",
                                "transition": {"duration": 0}}]}
-    steps = [{"label": labels[k], "method": "animate",
+    steps = [{"label": labels[k], "value": str(k), "method": "animate",
               "args": [[str(k)], {"frame": {"duration": 0, "redraw": True}, "mode": "immediate",
                                   "transition": {"duration": 0}}]} for k in range(n)]
     fig.update_layout(

@@ -134,14 +134,15 @@ def _decimated_plot(plot: TimePlot) -> TimePlot:
 def write_report(out_folder: str | Path, *, title: str, scene: Scene | None, plots: Sequence[TimePlot] = (),
                  summary: Mapping[str, Any] | None = None, parameters: str = "", warnings: Sequence[str] = (),
                  images: Sequence[Path] = (), notes: Sequence[str] = (), max_frames: int = MAX_FRAMES,
-                 scene_note: str = "") -> Path:
+                 scene_note: str = "", samples: int | None = None) -> Path:
     """Write ``report.html`` into ``out_folder`` (a run's temporary output folder) and return it.
 
     ``scene``: the mechanism along the motion (animated at most ``max_frames`` frames, evenly
     spaced; the page says when samples were left out), or None; ``plots``: time plots, each
     marked at the slider's time; ``summary``: the run's summary (shown as tables);
     ``parameters``: the parameter file's text; ``warnings``: every warning of the run;
-    ``images``: PNG summary figures embedded in the page; ``notes``: lines under the title.
+    ``images``: PNG summary figures embedded in the page; ``notes``: lines under the title;
+    ``samples``: the samples of the motion when ``scene`` holds only some of them (already decimated).
     """
     folder = Path(out_folder)
     body: list[str] = []
@@ -152,14 +153,14 @@ def write_report(out_folder: str | Path, *, title: str, scene: Scene | None, plo
         frames = scene.at(idx)
         t0 = float(frames.t[0])
         fig = scene_figure(frames, "Mechanism along the motion")
-        info.update(scene="pkmdyn-scene", times=[float(v) for v in frames.t], frames=int(idx.size),
-                    samples=int(scene.t.shape[0]))
+        total = max(int(samples or 0), int(scene.t.shape[0]))
+        info.update(scene="pkmdyn-scene", times=[float(v) for v in frames.t], frames=int(idx.size), samples=total)
         lines = [scene_note] if scene_note else []
-        if idx.size < scene.t.shape[0]:
-            lines.append(f"Decimated: {idx.size} frames at evenly spaced samples of the {scene.t.shape[0]} samples "
-                         f"shown ({scene.t[0]:.6g} s to {scene.t[-1]:.6g} s).")
+        if idx.size < total:
+            lines.append(f"Decimated: {idx.size} frames at evenly spaced samples of the {total} samples "
+                         f"({scene.t[0]:.6g} s to {scene.t[-1]:.6g} s).")
         else:
-            lines.append(f"Every one of the {scene.t.shape[0]} samples is a frame.")
+            lines.append(f"Every one of the {total} samples is a frame.")
         speed = ("\u00d71 plays the motion in real time" if fig.layout.meta["realtime"]
                  else f"\u00d71 shows one frame every {fig.layout.meta['frame_ms']:.0f} ms")
         lines.append(f"Drag to orbit, scroll to zoom; {speed}. Actuated chains are coloured by their effort "
@@ -213,7 +214,7 @@ def write_view(path: str | Path, *, title: str, scene: Scene, topology: Topology
     info: dict[str, Any] = {"scene": "pkmdyn-scene", "plots": [], "times": [float(scene.t[0])], "frames": 1,
                             "samples": 1}
     fig = scene_figure(scene.at(np.array([0])), "Mechanism at its home pose")
-    fig.update_layout(updatemenus=[], sliders=[])
+    fig.layout.updatemenus, fig.layout.sliders, fig.frames = (), (), ()  # one pose: nothing to play
     counts = {"bodies (ground included)": len(topology.bodies), "joints": len(topology.joints),
               "actuated joints": ", ".join(topology.actuated) or "none", "cut joints": ", ".join(topology.cuts),
               "independent loops": len(loops), **mobility}

@@ -446,7 +446,8 @@ def run_hip(
                              plots=run_plots(data), summary=doc, params_path=params_path, warnings=messages,
                              images=[p for p in files.values() if p.suffix == ".png"],
                              notes=[f"parameters: {doc['parameters']}", f"motion: {source}"],
-                             scene_note=(f"The animation covers the plots' window: {note}." if note else ""))
+                             scene_note=(f"The animation covers the plots' window: {note}." if note else ""),
+                             samples=window)
     out = Path(out_dir)
     return {k: out / p.name for k, p in files.items()}, messages
 
