@@ -49,7 +49,8 @@ def _tree_paths(bodies: Sequence[str], edges: Sequence[tuple[str, str, str]], ro
 
 
 def fundamental_loops(top: Topology) -> list[list[str]]:
-    """The loop each cut joint closes: the cut joint and the tree path between its two bodies.
+    """The loop each cut joint closes: the cut joint, then the tree path from its second body back
+    to its first (the joints in the order of a walk round the loop).
 
     Without ``cuts`` the chords of a breadth-first spanning tree from ground are used. Raises
     :class:`~pkmdyn.errors.ParameterError` when the joints without the cuts are not a tree
@@ -83,7 +84,7 @@ def fundamental_loops(top: Topology) -> list[list[str]]:
         k = 0
         while k < min(len(pa), len(pb)) and pa[k] == pb[k]:
             k += 1
-        loops.append([c, *reversed(pa[k:]), *pb[k:]])
+        loops.append([c, *reversed(pb[k:]), *pa[k:]])  # a walk: cut a -> b, then b back round to a
     return loops
 
 
