@@ -123,12 +123,15 @@ def _actuator_colours(scene: Scene, k: int, m: float, normalised: bool) -> list[
     return sample_colorscale(_EFFORT_SCALE, vals) if vals else []
 
 
-def scene_figure(scene: Scene, title: str, frame_s: float | None = None) -> "go.Figure":  # noqa: F821
-    """The 3D figure of ``scene``: one frame per sample with a time slider, play buttons at three
-    speeds and pause; actuated chains coloured by their effort (diverging scale, zero white).
-    ``frame_s``: seconds of motion per frame at speed 1 (default: the mean sample spacing)."""
-    import plotly.graph_objects as go
+def scene_figure(scene: Scene, title: str, frame_s: float | None = None) -> dict:
+    """The 3D figure of ``scene`` as a plotly figure dictionary: one frame per sample with a time
+    slider, play buttons at three speeds and pause; actuated chains coloured by their effort
+    (diverging scale, zero white). ``frame_s``: seconds of motion per frame at speed 1 (default:
+    the mean sample spacing). ``layout.meta`` says whether speed 1 is real time.
 
+    Built as plain dictionaries (plotly's figure format), not validated objects: hundreds of
+    frames as ``graph_objects`` take seconds to build; the browser tests check what is drawn.
+    """
     n = scene.t.shape[0]
     moving = [b for b in scene.bodies if not b.ground and b.line]
     link_idx = _polylines(scene, [(b.points, b.closed) for b in moving])
@@ -138,54 +141,53 @@ def scene_figure(scene: Scene, title: str, frame_s: float | None = None) -> "go.
     ground = [b for b in scene.bodies if b.ground]
     ground_line = _polylines(scene, [(b.points, b.closed) for b in ground if b.line])
     ground_pts = np.asarray(sorted({p for b in ground for p in b.points}), dtype=int)
-    m, cbar_title, normalised = _effort_range(scene) if scene.actuators else (1.0, "", False)
-    names = np.asarray(scene.point_names)
+    m, cbar_title, normalised = _effort_range(scene) if scene.actuators else (0.0, "", False)
+    names = [scene.point_names[k] for k in joint_pts]
 
-    def moving_traces(k: int) -> list:
+    def moving_traces(k: int) -> list[dict]:
         P = scene.points[k]
         x, y, z = _coords(P, link_idx)
-        traces = [go.Scatter3d(x=x, y=y, z=z, mode="lines", line={"color": _LINK, "width": 7}, name="links",
-                               hoverinfo="skip")]
+        traces = [{"type": "scatter3d", "x": x, "y": y, "z": z, "mode": "lines", "name": "links",
+                   "line": {"color": _LINK, "width": 7}, "hoverinfo": "skip"}]
         vx, vy, vz = _coords(P, verts)
-        traces.append(go.Mesh3d(x=vx, y=vy, z=vz, i=fi, j=fj, k=fk, color=_FACE, opacity=0.55, name="platforms",
-                                hoverinfo="skip", showlegend=True, flatshading=True))
+        traces.append({"type": "mesh3d", "x": vx, "y": vy, "z": vz, "i": fi, "j": fj, "k": fk, "color": _FACE,
+                       "opacity": 0.55, "name": "platforms", "hoverinfo": "skip", "showlegend": True,
+                       "flatshading": True})
         # one trace per actuated chain in one colour: plotly.js draws a per-vertex colour array on a
         # gapped 3D line with warnings, so the colour is sampled here from the scale
         for a, idx, colour in zip(scene.actuators, act_idx, _actuator_colours(scene, k, m, normalised)):
             ax, ay, az = _coords(P, idx)
-            value = float(a.effort[k])
-            traces.append(go.Scatter3d(x=ax, y=ay, z=az, mode="lines", name=a.label, line={"width": 12, "color": colour},
-                                       hovertext=f"{a.label}: {value:.4g} {a.unit}", hoverinfo="text", showlegend=False))
+            traces.append({"type": "scatter3d", "x": ax, "y": ay, "z": az, "mode": "lines", "name": a.label,
+                           "line": {"width": 12, "color": colour}, "showlegend": False, "hoverinfo": "text",
+                           "hovertext": f"{a.label}: {float(a.effort[k]):.4g} {a.unit}"})
         jx, jy, jz = _coords(P, joint_pts)
-        traces.append(go.Scatter3d(x=jx, y=jy, z=jz, mode="markers", name="joints", text=names[joint_pts],
-                                   hovertemplate="%{text}<br>x %{x:.1f} mm<br>y %{y:.1f} mm<br>z %{z:.1f} mm<extra></extra>",
-                                   marker={"size": 3.5, "color": "#111111"}))
+        traces.append({"type": "scatter3d", "x": jx, "y": jy, "z": jz, "mode": "markers", "name": "joints",
+                       "text": names, "marker": {"size": 3.5, "color": "#111111"},
+                       "hovertemplate": "%{text}<br>x %{x:.1f} mm<br>y %{y:.1f} mm<br>z %{z:.1f} mm<extra></extra>"})
         return traces
 
-    static = []
     gx, gy, gz = _coords(scene.points[0], ground_pts)
-    static.append(go.Scatter3d(x=gx, y=gy, z=gz, mode="markers", name="ground joints", text=names[ground_pts],
-                               hovertemplate="%{text} (ground)<extra></extra>",
-                               marker={"size": 5, "symbol": "square", "color": "#7f8c8d"}))
+    static = [{"type": "scatter3d", "x": gx, "y": gy, "z": gz, "mode": "markers", "name": "ground joints",
+               "text": [scene.point_names[k] for k in ground_pts], "hovertemplate": "%{text} (ground)<extra></extra>",
+               "marker": {"size": 5, "symbol": "square", "color": "#7f8c8d"}}]
     lx, ly, lz = _coords(scene.points[0], ground_line)
-    static.append(go.Scatter3d(x=lx, y=ly, z=lz, mode="lines", name="ground", line={"color": "#95a5a6", "width": 3},
-                               hoverinfo="skip"))
+    static.append({"type": "scatter3d", "x": lx, "y": ly, "z": lz, "mode": "lines", "name": "ground",
+                   "line": {"color": "#95a5a6", "width": 3}, "hoverinfo": "skip"})
     if scene.actuators and m > 0:  # the colour bar of the actuated chains (an invisible marker carries it)
-        static.append(go.Scatter3d(
-            x=[float(scene.points[0, 0, 0]) * _MM], y=[float(scene.points[0, 0, 1]) * _MM],
-            z=[float(scene.points[0, 0, 2]) * _MM], mode="markers", name="actuator effort", showlegend=False,
-            hoverinfo="skip", marker={"size": 0.1, "opacity": 0.0, "color": [0.0], "colorscale": _EFFORT_SCALE,
-                                      "cmin": -m, "cmax": m, "showscale": True,
-                                      "colorbar": {"title": {"text": cbar_title}, "len": 0.6, "x": 1.0}}))
+        p0 = scene.points[0, 0] * _MM
+        static.append({"type": "scatter3d", "x": [float(p0[0])], "y": [float(p0[1])], "z": [float(p0[2])],
+                       "mode": "markers", "name": "actuator effort", "showlegend": False, "hoverinfo": "skip",
+                       "marker": {"size": 0.1, "opacity": 0.0, "color": [0.0], "colorscale": _EFFORT_SCALE,
+                                  "cmin": -m, "cmax": m, "showscale": True,
+                                  "colorbar": {"title": {"text": cbar_title}, "len": 0.6, "x": 1.0}}})
     if scene.path_point is not None:
         px, py, pz = _coords(scene.points[:, scene.path_point], np.arange(n))
-        static.append(go.Scatter3d(x=px, y=py, z=pz, mode="lines", name=f"path of {scene.point_names[scene.path_point]}",
-                                   line={"color": "#e67e22", "width": 2}, hoverinfo="skip"))
-    fig = go.Figure(data=[*static, *moving_traces(0)])
+        static.append({"type": "scatter3d", "x": px, "y": py, "z": pz, "mode": "lines",
+                       "name": f"path of {scene.point_names[scene.path_point]}",
+                       "line": {"color": "#e67e22", "width": 2}, "hoverinfo": "skip"})
     first = len(static)
     movers = list(range(first, first + 3 + len(scene.actuators)))
-    labels = [f"{v:.4g}" for v in scene.t]
-    fig.frames = [go.Frame(data=moving_traces(k), traces=movers, name=str(k)) for k in range(n)]
+    frames = [{"data": moving_traces(k), "traces": movers, "name": str(k)} for k in range(n)]
     lo = scene.points.reshape(-1, 3).min(axis=0) * _MM
     hi = scene.points.reshape(-1, 3).max(axis=0) * _MM
     span = np.maximum(hi - lo, 1e-3 * max(float(np.max(hi - lo)), 1.0))
@@ -205,29 +207,29 @@ def scene_figure(scene: Scene, title: str, frame_s: float | None = None) -> "go.
     pause = {"label": "\u275a\u275a pause", "method": "animate",
              "args": [[None], {"frame": {"duration": 0, "redraw": False}, "mode": "immediate",
                                "transition": {"duration": 0}}]}
-    steps = [{"label": labels[k], "value": str(k), "method": "animate",
+    steps = [{"label": f"{float(scene.t[k]):.4g}", "value": str(k), "method": "animate",
               "args": [[str(k)], {"frame": {"duration": 0, "redraw": True}, "mode": "immediate",
                                   "transition": {"duration": 0}}]} for k in range(n)]
-    fig.update_layout(
-        title={"text": title, "x": 0.02},
-        height=680,
-        margin={"l": 0, "r": 0, "t": 50, "b": 10},
-        legend={"x": 0.0, "y": 0.95, "bgcolor": "rgba(255,255,255,0.7)"},
-        scene={"xaxis": {"title": {"text": "x [mm]"}, "range": [lo[0], hi[0]], "autorange": False},
-               "yaxis": {"title": {"text": "y [mm]"}, "range": [lo[1], hi[1]], "autorange": False},
-               "zaxis": {"title": {"text": "z [mm]"}, "range": [lo[2], hi[2]], "autorange": False},
-               "aspectmode": "manual", "aspectratio": {"x": ratio[0], "y": ratio[1], "z": ratio[2]},
-               "camera": {"eye": {"x": 1.5, "y": -1.5, "z": 0.9}}, "uirevision": "keep"},
-        updatemenus=[{"type": "buttons", "direction": "left", "x": 0.02, "y": 0.02, "xanchor": "left",
-                      "yanchor": "bottom", "pad": {"r": 4, "t": 4}, "showactive": False,
-                      "buttons": [play(0.25), play(1.0), play(4.0), pause]}],
-        sliders=[{"active": 0, "x": 0.32, "len": 0.66, "y": 0.0, "yanchor": "bottom", "pad": {"t": 0, "b": 4},
-                  "currentvalue": {"prefix": "t = ", "suffix": " s", "visible": True},
-                  "transition": {"duration": 0}, "steps": steps}],
-        uirevision="keep",
-    )
-    fig.layout.meta = {"realtime": realtime, "frame_ms": base_ms}
-    return fig
+    axis = [{"title": {"text": f"{c} [mm]"}, "range": [float(lo[i]), float(hi[i])], "autorange": False}
+            for i, c in enumerate("xyz")]
+    layout = {
+        "title": {"text": title, "x": 0.02},
+        "height": 680,
+        "margin": {"l": 0, "r": 0, "t": 50, "b": 10},
+        "legend": {"x": 0.0, "y": 0.95, "bgcolor": "rgba(255,255,255,0.7)"},
+        "scene": {"xaxis": axis[0], "yaxis": axis[1], "zaxis": axis[2], "aspectmode": "manual",
+                  "aspectratio": {"x": float(ratio[0]), "y": float(ratio[1]), "z": float(ratio[2])},
+                  "camera": {"eye": {"x": 1.5, "y": -1.5, "z": 0.9}}, "uirevision": "keep"},
+        "updatemenus": [{"type": "buttons", "direction": "left", "x": 0.02, "y": 0.02, "xanchor": "left",
+                         "yanchor": "bottom", "pad": {"r": 4, "t": 4}, "showactive": False,
+                         "buttons": [play(0.25), play(1.0), play(4.0), pause]}],
+        "sliders": [{"active": 0, "x": 0.32, "len": 0.66, "y": 0.0, "yanchor": "bottom", "pad": {"t": 0, "b": 4},
+                     "currentvalue": {"prefix": "t = ", "suffix": " s", "visible": True},
+                     "transition": {"duration": 0}, "steps": steps}],
+        "uirevision": "keep",
+        "meta": {"realtime": realtime, "frame_ms": base_ms},
+    }
+    return {"data": [*static, *moving_traces(0)], "layout": layout, "frames": frames}
 
 
 def time_figure(plot: TimePlot, t0: float) -> "go.Figure":  # noqa: F821

@@ -98,7 +98,10 @@ def _table(obj: Any, depth: int = 0) -> str:
 
 
 def _div(fig: Any, div_id: str) -> str:
-    return fig.to_html(full_html=False, include_plotlyjs=False, div_id=div_id,
+    import plotly.io as pio
+
+    # a figure dictionary (the 3D scene) is written as built; a graph_objects figure was validated
+    return pio.to_html(fig, full_html=False, include_plotlyjs=False, div_id=div_id, validate=False,
                        config={"displaylogo": False, "responsive": True})
 
 
@@ -161,8 +164,9 @@ def write_report(out_folder: str | Path, *, title: str, scene: Scene | None, plo
                          f"({scene.t[0]:.6g} s to {scene.t[-1]:.6g} s).")
         else:
             lines.append(f"Every one of the {total} samples is a frame.")
-        speed = ("\u00d71 plays the motion in real time" if fig.layout.meta["realtime"]
-                 else f"\u00d71 shows one frame every {fig.layout.meta['frame_ms']:.0f} ms")
+        meta = fig["layout"]["meta"]
+        speed = ("\u00d71 plays the motion in real time" if meta["realtime"]
+                 else f"\u00d71 shows one frame every {meta['frame_ms']:.0f} ms")
         lines.append(f"Drag to orbit, scroll to zoom; {speed}. Actuated chains are coloured by their effort "
                      "(red pushing/positive, blue negative, white zero).")
         body.append("<section id=\"animation\"><h2>3D animation</h2>" + "".join(
@@ -214,7 +218,7 @@ def write_view(path: str | Path, *, title: str, scene: Scene, topology: Topology
     info: dict[str, Any] = {"scene": "pkmdyn-scene", "plots": [], "times": [float(scene.t[0])], "frames": 1,
                             "samples": 1}
     fig = scene_figure(scene.at(np.array([0])), "Mechanism at its home pose")
-    fig.layout.updatemenus, fig.layout.sliders, fig.frames = (), (), ()  # one pose: nothing to play
+    fig["layout"]["updatemenus"], fig["layout"]["sliders"], fig["frames"] = [], [], []  # one pose: nothing to play
     counts = {"bodies (ground included)": len(topology.bodies), "joints": len(topology.joints),
               "actuated joints": ", ".join(topology.actuated) or "none", "cut joints": ", ".join(topology.cuts),
               "independent loops": len(loops), **mobility}
