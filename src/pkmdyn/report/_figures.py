@@ -132,6 +132,8 @@ def scene_figure(scene: Scene, title: str, frame_s: float | None = None) -> dict
     Built as plain dictionaries (plotly's figure format), not validated objects: hundreds of
     frames as ``graph_objects`` take seconds to build; the browser tests check what is drawn.
     """
+    from plotly.colors import get_colorscale
+
     n = scene.t.shape[0]
     moving = [b for b in scene.bodies if not b.ground and b.line]
     link_idx = _polylines(scene, [(b.points, b.closed) for b in moving])
@@ -177,7 +179,8 @@ def scene_figure(scene: Scene, title: str, frame_s: float | None = None) -> dict
         p0 = scene.points[0, 0] * _MM
         static.append({"type": "scatter3d", "x": [float(p0[0])], "y": [float(p0[1])], "z": [float(p0[2])],
                        "mode": "markers", "name": "actuator effort", "showlegend": False, "hoverinfo": "skip",
-                       "marker": {"size": 0.1, "opacity": 0.0, "color": [0.0], "colorscale": _EFFORT_SCALE,
+                       "marker": {"size": 0.1, "opacity": 0.0, "color": [0.0],
+                                  "colorscale": get_colorscale(_EFFORT_SCALE),  # plotly.js knows no "_r" names
                                   "cmin": -m, "cmax": m, "showscale": True,
                                   "colorbar": {"title": {"text": cbar_title}, "len": 0.6, "x": 1.0}}})
     if scene.path_point is not None:
@@ -187,7 +190,10 @@ def scene_figure(scene: Scene, title: str, frame_s: float | None = None) -> dict
                        "line": {"color": "#e67e22", "width": 2}, "hoverinfo": "skip"})
     first = len(static)
     movers = list(range(first, first + 3 + len(scene.actuators)))
-    frames = [{"data": moving_traces(k), "traces": movers, "name": str(k)} for k in range(n)]
+    # a frame carries only what changes (plotly merges it into the traces): positions, colours, hover
+    keep = ("type", "x", "y", "z", "line", "hovertext")
+    frames = [{"data": [{key: v for key, v in tr.items() if key in keep} for tr in moving_traces(k)],
+               "traces": movers, "name": str(k)} for k in range(n)]
     lo = scene.points.reshape(-1, 3).min(axis=0) * _MM
     hi = scene.points.reshape(-1, 3).max(axis=0) * _MM
     span = np.maximum(hi - lo, 1e-3 * max(float(np.max(hi - lo)), 1.0))
@@ -210,7 +216,8 @@ def scene_figure(scene: Scene, title: str, frame_s: float | None = None) -> dict
     steps = [{"label": f"{float(scene.t[k]):.4g}", "value": str(k), "method": "animate",
               "args": [[str(k)], {"frame": {"duration": 0, "redraw": True}, "mode": "immediate",
                                   "transition": {"duration": 0}}]} for k in range(n)]
-    axis = [{"title": {"text": f"{c} [mm]"}, "range": [float(lo[i]), float(hi[i])], "autorange": False}
+    axis = [{"title": {"text": f"{c} [mm]"}, "range": [float(lo[i]), float(hi[i])], "autorange": False,
+             "showbackground": True, "backgroundcolor": "#e5ecf6", "gridcolor": "white", "zerolinecolor": "white"}
             for i, c in enumerate("xyz")]
     layout = {
         "title": {"text": title, "x": 0.02},
