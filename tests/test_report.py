@@ -18,7 +18,7 @@ from pkmdyn.machines.pdm4.dynamics import JOINTS
 from pkmdyn.machines.pdm4.params import load_params as pdm_params
 from pkmdyn.machines.pdm4.scene import pdm_scene_from_pose, pdm_topology
 from pkmdyn.report import (MAX_FRAMES, Curve, Scene, SceneBody, TimePlot, Topology, decimate_minmax,
-                           frame_indices, fundamental_loops, scene_from_files, write_report)
+                           frame_indices, fundamental_loops, scene_from_files, topology_from_model, write_report)
 
 
 def _info(page: str) -> dict:
@@ -80,6 +80,17 @@ def test_pdm_scene_from_poses_matches_the_exported_joint_points(tmp_path):
     chains = {a.name: [generic.point_names[p] for p in a.points] for a in pdm_scene_from_pose(
         pdm_params(), t[:1], q[:1], np.ones((1, 4))).actuators}
     assert chains["P11"] == ["R41", "P11", "R21'"] and chains["P24"] == ["S24", "P24", "U24"]
+    # a model.json that marks its actuated and cut joints (a described mechanism's) is read as such
+    doc = json.loads((out / "model.json").read_text())
+    for j in doc["joints"]:
+        j["actuated"] = j["name"] in ("P11", "P12", "P23", "P24")
+        j["cut"] = j["name"] in ("R21'", "R22'", "R32", "U23", "U24")
+    (out / "model.json").write_text(json.dumps(doc))
+    marked = scene_from_files(out / "model.json", out / "bodies.npz")
+    assert sorted(a.name for a in marked.actuators) == ["P11", "P12", "P23", "P24"]
+    top = topology_from_model(doc)
+    assert top.actuated == pdm_topology().actuated and set(top.cuts) == set(pdm_topology().cuts)
+    assert len(fundamental_loops(top)) == 5
 
 
 # ----------------------------------------------------------------------------- decimation, topology

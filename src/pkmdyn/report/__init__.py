@@ -10,7 +10,7 @@ parameters and warnings (``docs/report.md``).
 from ._figures import Curve, TimePlot, decimate_minmax
 from ._page import REPORT_NAME, write_report, write_view
 from ._scene import MAX_FRAMES, Scene, SceneActuator, SceneBody, frame_indices, scene_from_files, scene_from_joints
-from ._topology import Topology, fundamental_loops, layered_layout
+from ._topology import Topology, fundamental_loops, layered_layout, topology_from_model
 
 __all__ = [
     "Scene",
@@ -27,6 +27,7 @@ __all__ = [
     "write_view",
     "REPORT_NAME",
     "Topology",
+    "topology_from_model",
     "fundamental_loops",
     "layered_layout",
 ]

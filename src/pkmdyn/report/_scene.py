@@ -179,12 +179,22 @@ def scene_from_joints(t: Array, joint_point: Array, joints: Sequence[tuple[str, 
 def scene_from_files(model_json: str | Path, bodies_npz: str | Path,
                      actuated: Mapping[str, tuple[Array, str, str]] | None = None) -> Scene:
     """The scene of a run from its ``model.json`` (``joints``: name, type, body_a, body_b) and
-    ``bodies.npz`` (``t (n,)``, ``joint_point (n, J, 3)``), the files every multibody run writes."""
+    ``bodies.npz`` (``t (n,)``, ``joint_point (n, J, 3)``), the files every multibody run writes.
+
+    ``actuated``: ``{joint: (effort (n,), label, unit)}``; without it, joints marked
+    ``"actuated": true`` in ``model.json`` are drawn as actuated chains in one colour (no effort
+    known from a kinematics-only run)."""
     try:
         doc = json.loads(Path(model_json).read_text(encoding="utf-8"))
         with np.load(bodies_npz) as z:
             t, jp = np.asarray(z["t"]), np.asarray(z["joint_point"])
     except (OSError, ValueError, KeyError) as exc:
         raise PkmdynError(f"{model_json}, {bodies_npz}: cannot read the run's bodies ({exc})") from None
-    joints = [(j["name"], j["type"], j["body_a"], j["body_b"]) for j in doc["joints"]]
+    try:
+        joints = [(j["name"], j["type"], j["body_a"], j["body_b"]) for j in doc["joints"]]
+    except (KeyError, TypeError) as exc:
+        raise PkmdynError(f"{model_json}: a joint lacks {exc} (expected name, type, body_a, body_b)") from None
+    if actuated is None:
+        zero = np.zeros(np.asarray(t).shape[0])
+        actuated = {j["name"]: (zero, f"{j['name']} (actuated)", "-") for j in doc["joints"] if j.get("actuated")}
     return scene_from_joints(t, jp, joints, actuated)

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 from ..errors import ParameterError
 
-__all__ = ["Topology", "fundamental_loops", "layered_layout"]
+__all__ = ["Topology", "topology_from_model", "fundamental_loops", "layered_layout"]
 
 
 @dataclass(frozen=True)
@@ -29,6 +29,19 @@ class Topology:
             seen.setdefault(a, None)
             seen.setdefault(b, None)
         return tuple(seen)
+
+
+def topology_from_model(doc: dict, ground: str = "ground") -> Topology:
+    """The topology of a ``model.json`` document: ``joints`` with ``name``, ``type`` (a letter
+    R, P, C, U, S, or the joint's ``letter`` key), ``body_a``, ``body_b``, and optional
+    ``actuated`` / ``cut`` flags."""
+    try:
+        joints = tuple((j["name"], str(j.get("letter", j["type"])), j["body_a"], j["body_b"]) for j in doc["joints"])
+    except (KeyError, TypeError) as exc:
+        raise ParameterError(f"model: a joint lacks {exc} (expected name, type, body_a, body_b)") from None
+    actuated = tuple(j["name"] for j in doc["joints"] if j.get("actuated"))
+    cuts = tuple(j["name"] for j in doc["joints"] if j.get("cut"))
+    return Topology(joints, ground, actuated, cuts)
 
 
 def _tree_paths(bodies: Sequence[str], edges: Sequence[tuple[str, str, str]], root: str) -> dict[str, list[str]]:
