@@ -1,5 +1,5 @@
 """The reports in a real browser: headless Chromium (the distribution's package) opens the
-``report.html`` of ``hip run`` and ``pdm run`` and the ``view`` page, and checks that nothing
+``report.html`` of ``hip run``, ``pdm run`` and ``hip control`` and the ``view`` page, and checks that nothing
 fails on the console, that the 3D view draws the mechanism, that moving the time slider moves
 it (and the time marker of every plot), and that every plot is there.
 
@@ -53,8 +53,10 @@ def reports(tmp_path_factory):
     d = tmp_path_factory.mktemp("reports")
     assert main(["hip", "run", "--samples-per-cycle", "400", "--out", str(d / "hip")]) == 0
     assert main(["pdm", "run", "--out", str(d / "pdm")]) == 0
+    assert main(["hip", "control", "--controller", "augmented-pd", "--cycles", "0.4", "--out", str(d / "ctl")]) == 0
     assert main(["view", "--machine", "pdm", "--out", str(d / "view_pdm.html")]) == 0
-    return {"hip": d / "hip" / "report.html", "pdm": d / "pdm" / "report.html", "view": d / "view_pdm.html"}
+    return {"hip": d / "hip" / "report.html", "pdm": d / "pdm" / "report.html", "hip_control": d / "ctl" / "report.html",
+            "view": d / "view_pdm.html"}
 
 
 class _Page:
@@ -93,7 +95,7 @@ def _distinct(img: np.ndarray) -> int:
     return len(np.unique(img.reshape(-1, 3), axis=0))
 
 
-@pytest.mark.parametrize("which, n_plots, n_images", [("hip", 11, 5), ("pdm", 9, 5)])
+@pytest.mark.parametrize("which, n_plots, n_images", [("hip", 11, 5), ("pdm", 9, 5), ("hip_control", 3, 2)])
 def test_report_draws_moves_and_shows_every_plot(browser, reports, tmp_path, which, n_plots, n_images):
     page = _Page(browser, reports[which])
     try:
