@@ -15,20 +15,12 @@ import json
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
+
+from _timing import cli_peak_memory
 
 BOUND_MIB = 500.0
 SAMPLES_PER_CYCLE = 1000
-
-_CHILD = """
-import resource, sys, time
-from pkmdyn.cli import main
-t0 = time.perf_counter()
-rc = main(sys.argv[1:])
-dt = time.perf_counter() - t0
-print(f"{rc} {dt} {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}")
-"""
 
 
 def measure(samples: int, fmt: str) -> dict:
@@ -38,17 +30,9 @@ def measure(samples: int, fmt: str) -> dict:
         out = Path(tmp) / "out"
         args = ["hip", "run", "--no-plots", "--cycles", repr(cycles), "--samples-per-cycle", str(SAMPLES_PER_CYCLE),
                 "--format", fmt, "--limit", f"max_samples={max(samples, 1)}", "--out", str(out)]
-        t0 = time.perf_counter()
-        proc = subprocess.run([sys.executable, "-c", _CHILD, *args], capture_output=True, text=True)
-        wall = time.perf_counter() - t0
-        if proc.returncode != 0:
-            raise SystemExit(f"run failed: {proc.stderr.strip()}")
-        rc, run_s, maxrss_kib = proc.stdout.strip().splitlines()[-1].split()
-        if rc != "0":
-            raise SystemExit(f"run failed: {proc.stderr.strip()}")
+        peak, run_s, wall = cli_peak_memory(args)
         summary = json.loads((out / "summary.json").read_text())
         size = sum(p.stat().st_size for p in out.iterdir())
-    peak = int(maxrss_kib) / 1024.0
     return {
         "samples": summary["samples"],
         "format": fmt,

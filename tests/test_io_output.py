@@ -112,7 +112,8 @@ def test_unwritable_parent_is_one_error(tmp_path):
 
 def test_atomic_file_replaces_only_on_success(tmp_path):
     target = tmp_path / "m.csv"
-    target.write_text("old")
+    with atomic_file(target, notify=None) as tmp:
+        tmp.write_text("old")
     with pytest.raises(KeyboardInterrupt):
         with atomic_file(target, notify=None) as tmp:
             tmp.write_text("half")

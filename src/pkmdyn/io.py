@@ -15,16 +15,19 @@ write beside the target and move into place only on success.
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import os
 import shutil
 import signal
+import stat
 import sys
 import tempfile
 import threading
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +39,8 @@ from .errors import LimitError, MotionError, PkmdynError
 __all__ = [
     "output_dir",
     "atomic_file",
+    "check_output_dir",
+    "check_output_file",
     "RUN_MARKER",
     "DEFAULT_MAX_SAMPLES",
     "read_csv_columns",
@@ -62,7 +67,10 @@ TABLE_FORMATS = ("csv", "parquet")
 
 
 def _note(message: str) -> None:
-    print(f"pkmdyn: note: {message}", file=sys.stderr)
+    try:
+        print(f"pkmdyn: note: {message}", file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass  # the run has succeeded; a standard error that cannot be written does not undo it
 
 
 def _os_reason(exc: OSError) -> str:
@@ -115,46 +123,275 @@ def _signals_deferred() -> Iterator[None]:
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
-def _check_out(out: Path) -> bool:
-    """Refuse an ``--out`` that cannot be replaced; True when it holds an earlier run."""
-    if out.is_symlink() and not out.exists():
-        raise PkmdynError(f"--out {out}: is a broken symbolic link")
-    if out.exists() and not out.is_dir():
-        raise PkmdynError(f"--out {out}: exists and is a file, not a folder")
-    if not out.is_dir():
-        for p in out.parents:
-            if p.exists():
-                if not p.is_dir():
-                    raise PkmdynError(f"--out {out}: {p} is a file, not a folder")
-                break
-        return False
+# ----------------------------------------------------------------------------- the output rule
+#: extended attribute that marks a single output file as written by pkmdyn: its size and
+#: modification time when written, so that a file changed since is no longer pkmdyn's to replace
+_FILE_MARK = "user.pkmdyn.output"
+
+Inputs = Mapping[str, "str | Path | None"] | Iterable["str | Path | None"]
+
+_KINDS = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a named pipe"),
+          (stat.S_ISSOCK, "a socket"), (stat.S_ISLNK, "a symbolic link"))
+
+
+def _kind(mode: int) -> str:
+    for test, name in _KINDS:
+        if test(mode):
+            return name
+    return "not a regular file or folder"
+
+
+def _lstat(path: Path) -> os.stat_result | None:
     try:
-        entries = list(out.iterdir())
+        return os.lstat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        return None  # missing, or under a file: the parent check names the file
     except OSError as exc:
-        raise PkmdynError(f"--out {out}: cannot read folder ({_os_reason(exc)})") from None
-    earlier = (out / RUN_MARKER).is_file()
-    if entries and not earlier:
+        raise PkmdynError(f"--out {path}: cannot inspect it ({_os_reason(exc)})") from None
+
+
+def _write_protected(st: os.stat_result) -> bool:
+    """The permission bits say no writing: the owner's write bit for the owner and for root (whom
+    the operating system would let through), the system's answer for anyone else."""
+    uid = os.geteuid() if hasattr(os, "geteuid") else st.st_uid
+    if uid in (0, st.st_uid):
+        return not st.st_mode & stat.S_IWUSR
+    return not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
+
+
+@dataclass(frozen=True)
+class _Input:
+    label: str
+    real: Path
+    ident: tuple[int, int]
+
+
+def _inputs(inputs: Inputs) -> list[_Input]:
+    """The run's input files that exist, by resolved path and (device, inode)."""
+    items = inputs.items() if isinstance(inputs, Mapping) else ((str(p), p) for p in inputs)
+    found = []
+    for label, p in items:
+        if p is None:
+            continue
+        try:
+            st = os.stat(p)
+        except (OSError, ValueError):
+            continue  # cannot be read either: the reader says so
+        found.append(_Input(label, Path(os.path.realpath(p)), (st.st_dev, st.st_ino)))
+    return found
+
+
+def _check_parent(target: Path) -> None:
+    """The folder that will receive ``target`` (or, when it is missing, its nearest existing
+    ancestor) is a folder and is not write-protected."""
+    for p in target.absolute().parents:
+        try:
+            st = os.stat(p)
+        except (FileNotFoundError, NotADirectoryError):
+            continue
+        except OSError as exc:
+            raise PkmdynError(f"--out {target}: cannot inspect {p} ({_os_reason(exc)})") from None
+        if not stat.S_ISDIR(st.st_mode):
+            raise PkmdynError(f"--out {target}: {p} is a file, not a folder")
+        if _write_protected(st):
+            raise PkmdynError(f"--out {target}: folder {p} is write-protected; refusing to write in it")
+        return
+
+
+def _read_manifest(marker: Path) -> dict[str, list[int]] | None:
+    """The files an earlier run wrote, ``{relative path: [size, mtime_ns]}``; None for a marker of
+    an earlier pkmdyn version (plain text, no list)."""
+    try:
+        text = marker.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        raise PkmdynError(f"--out {marker.parent}: cannot read {marker.name} ({_os_reason(exc)})") from None
+    try:
+        doc = json.loads(text)
+    except ValueError:
+        return None
+    files = doc.get("files") if isinstance(doc, dict) else None
+    return files if isinstance(files, dict) else None
+
+
+@dataclass(frozen=True)
+class _Earlier:
+    """What ``--out`` holds now: nothing (``exists`` False), an empty folder, or an earlier run."""
+
+    exists: bool
+    files: int
+    run: bool = False
+
+
+def check_output_dir(path: str | Path, inputs: Inputs = ()) -> _Earlier:
+    """Apply the output rule to a folder ``--out`` (``docs/file_formats.md``, "The output rule").
+
+    Refused, each with one :class:`~pkmdyn.errors.PkmdynError` line: a symbolic link, a device,
+    a pipe, a socket or a file in the way; a write-protected folder (or a write-protected file or
+    folder inside it, or a write-protected folder to create it in); a non-empty folder without an
+    earlier run's marker; anything in an earlier run that the run did not write or that was
+    changed since (where the marker lists the files); an input of this run (same resolved path or
+    same device and inode) inside the folder. Call it before the work, so that a refused run
+    computes nothing; :func:`output_dir` applies it again.
+    """
+    out = Path(path)
+    st = _lstat(out)
+    if st is None:
+        _check_parent(out)
+        return _Earlier(False, 0)
+    if stat.S_ISREG(st.st_mode):
+        raise PkmdynError(f"--out {out}: exists and is a file, not a folder")
+    if not stat.S_ISDIR(st.st_mode):
+        raise PkmdynError(f"--out {out}: is {_kind(st.st_mode)}, not a folder pkmdyn wrote; refusing to replace it")
+    if _write_protected(st):
+        raise PkmdynError(f"--out {out}: folder is write-protected; refusing to replace it")
+    _check_parent(out)
+    real = Path(os.path.realpath(out))
+    given = _inputs(inputs)
+    for inp in given:
+        if inp.real == real or real in inp.real.parents:
+            raise PkmdynError(f"--out {out}: holds {inp.label} ({inp.real.relative_to(real)}), an input of this "
+                              "run; refusing to replace it (write to another --out)")
+    entries = _walk(out)
+    if not entries:
+        return _Earlier(True, 0)
+    marker = out / RUN_MARKER
+    mst = entries.get(RUN_MARKER)
+    if mst is None or not stat.S_ISREG(mst.st_mode):
         raise PkmdynError(
-            f"--out {out}: folder is not empty and holds no earlier pkmdyn run; refusing to overwrite it"
-        )
-    return earlier
+            f"--out {out}: folder is not empty and holds no earlier pkmdyn run; refusing to overwrite it")
+    manifest = _read_manifest(marker)
+    idents = {inp.ident: inp for inp in given}
+    files = 0
+    for rel, est in entries.items():
+        where = out / rel
+        if stat.S_ISLNK(est.st_mode) or not (stat.S_ISREG(est.st_mode) or stat.S_ISDIR(est.st_mode)):
+            raise PkmdynError(f"--out {out}: {where} is {_kind(est.st_mode)}, which pkmdyn never writes; "
+                              "refusing to replace the folder")
+        if (est.st_dev, est.st_ino) in idents:
+            raise PkmdynError(f"--out {out}: {where} is {idents[(est.st_dev, est.st_ino)].label}, an input of "
+                              "this run; refusing to replace it (write to another --out)")
+        if _write_protected(est):
+            raise PkmdynError(f"--out {out}: {where} is write-protected; refusing to replace the folder")
+        if stat.S_ISDIR(est.st_mode) or rel == RUN_MARKER:
+            continue
+        files += 1
+        if manifest is not None:
+            known = manifest.get(rel)
+            if known is None:
+                raise PkmdynError(f"--out {out}: {where} was not written by the earlier run there; refusing to "
+                                  "replace the folder (move the file away or choose another --out)")
+            if list(known) != [est.st_size, est.st_mtime_ns]:
+                raise PkmdynError(f"--out {out}: {where} was changed after the earlier run wrote it; refusing to "
+                                  "replace the folder (move the file away or choose another --out)")
+    return _Earlier(True, files, run=True)
+
+
+def _walk(folder: Path) -> dict[str, os.stat_result]:
+    """Every entry under ``folder`` (not following links), ``{relative path: lstat}``."""
+    found: dict[str, os.stat_result] = {}
+    pending = [folder]
+    try:
+        while pending:
+            d = pending.pop()
+            with os.scandir(d) as it:
+                for e in it:
+                    st = e.stat(follow_symlinks=False)
+                    rel = Path(e.path).relative_to(folder).as_posix()
+                    found[rel] = st
+                    if stat.S_ISDIR(st.st_mode):
+                        pending.append(Path(e.path))
+    except OSError as exc:
+        raise PkmdynError(f"--out {folder}: cannot read folder ({_os_reason(exc)})") from None
+    return found
+
+
+def _file_fingerprint(st: os.stat_result) -> bytes:
+    return f"{st.st_size} {st.st_mtime_ns}".encode()
+
+
+def check_output_file(path: str | Path, inputs: Inputs = ()) -> bool:
+    """Apply the output rule to a single-file ``--out``; True when it replaces an earlier file.
+
+    Refused: a folder, a symbolic link, a device, a pipe or a socket; an input of this run (same
+    resolved path or same device and inode); a write-protected file or a write-protected folder
+    to write it in; an existing file that pkmdyn did not write, or that was changed after pkmdyn
+    wrote it (pkmdyn marks what it writes with an extended attribute holding its size and
+    modification time; where the file system keeps no such attribute, an existing file is never
+    replaced).
+    """
+    target = Path(path)
+    st = _lstat(target)
+    if st is None:
+        _check_parent(target)
+        return False
+    if stat.S_ISDIR(st.st_mode):
+        raise PkmdynError(f"--out {target}: is a folder, expected a file name")
+    if not stat.S_ISREG(st.st_mode):
+        raise PkmdynError(f"--out {target}: is {_kind(st.st_mode)}, not a file pkmdyn wrote; refusing to replace it")
+    real = Path(os.path.realpath(target))
+    for inp in _inputs(inputs):
+        if inp.real == real or inp.ident == (st.st_dev, st.st_ino):
+            raise PkmdynError(f"--out {target}: is {inp.label}, an input of this run; refusing to replace it")
+    if _write_protected(st):
+        raise PkmdynError(f"--out {target}: file is write-protected; refusing to replace it")
+    _check_parent(target)
+    try:
+        mark = os.getxattr(target, _FILE_MARK, follow_symlinks=False)
+    except (OSError, AttributeError):
+        mark = None
+    if mark != _file_fingerprint(st):
+        said = "was changed after pkmdyn wrote it" if mark is not None else "was not written by pkmdyn"
+        raise PkmdynError(f"--out {target}: the file exists and {said}; refusing to replace it (remove it or "
+                          "choose another --out)")
+    return True
+
+
+def _mark_file(path: Path) -> None:
+    try:
+        os.setxattr(path, _FILE_MARK, _file_fingerprint(os.stat(path)), follow_symlinks=False)
+    except (OSError, AttributeError):
+        pass  # no extended attributes here: the file is simply never replaced by a later run
+
+
+def _write_marker(folder: Path) -> None:
+    """The run's marker, listing every file it wrote with its size and modification time."""
+    files = {rel: [st.st_size, st.st_mtime_ns] for rel, st in sorted(_walk(folder).items())
+             if stat.S_ISREG(st.st_mode)}
+    doc = {"pkmdyn_run": "output of one pkmdyn run; a rerun into this folder replaces it whole", "files": files}
+    (folder / RUN_MARKER).write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+
+
+def _commit_stdout() -> None:
+    """Flush what the run said on standard output before anything moves into place: a standard
+    output that cannot be written (a full device) fails the run while nothing is changed yet."""
+    stream = sys.stdout
+    if stream is None:
+        return
+    try:
+        stream.flush()
+    except OSError as exc:
+        raise PkmdynError(f"standard output: cannot write ({_os_reason(exc)}); --out left as it was") from None
+    except ValueError:
+        pass  # closed
 
 
 @contextmanager
-def output_dir(path: str | Path, notify: Callable[[str], None] | None = _note) -> Iterator[Path]:
-    """Write a run's files all at once: ``with output_dir(out) as tmp: write into tmp``.
+def output_dir(path: str | Path, notify: Callable[[str], None] | None = _note, inputs: Inputs = ()) -> Iterator[Path]:
+    """Write a run's files all at once: ``with output_dir(out, inputs=...) as tmp: write into tmp``.
 
-    The files go into a fresh temporary folder beside ``path`` (missing parent folders are
-    created, and removed again if the run fails); only when the block ends without an
-    exception is that folder moved into place, replacing an earlier pkmdyn run at ``path``
-    whole (``notify`` is told so; by default one note on stderr). A non-empty ``path`` that
-    holds no earlier run, a file in the way, or a folder that cannot be written is refused
-    before anything is written. On any failure, Ctrl-C included, the temporary folder is
-    removed and ``path`` is left as it was. The swap itself runs with SIGINT and SIGTERM held
-    back, so an interrupt cannot leave ``path`` missing.
+    ``--out`` must pass :func:`check_output_dir` (the output rule; ``inputs``, ``{label: path}``,
+    are the files this run reads, none of which may be inside ``path``), before the block and
+    again before the swap. The files go into a fresh temporary folder beside ``path`` (missing
+    parent folders are created, and removed again if the run fails); only when the block ends
+    without an exception, and what the run printed on standard output was written, is that
+    folder moved into place, replacing an earlier pkmdyn run at ``path`` whole (``notify`` is
+    told what was removed; by default one note on stderr). On any failure, Ctrl-C included, the
+    temporary folder is removed and ``path`` is left as it was. The swap itself runs with SIGINT
+    and SIGTERM held back, so an interrupt cannot leave ``path`` missing. The folder gets the
+    marker :data:`RUN_MARKER`, which lists every file written with its size and modification time.
     """
     out = Path(path)
-    _check_out(out)
+    check_output_dir(out, inputs)
     parent = out.absolute().parent
     created = _make_parents(out.absolute(), "--out")
     try:
@@ -169,11 +406,12 @@ def output_dir(path: str | Path, notify: Callable[[str], None] | None = _note) -
         os.umask(umask)
         tmp.chmod(0o777 & ~umask)
         yield tmp
-        (tmp / RUN_MARKER).write_text("pkmdyn run output; a rerun into this folder replaces it whole\n", encoding="utf-8")
-        earlier = _check_out(out)  # again: something may have appeared there while the run computed
+        _write_marker(tmp)
+        earlier = check_output_dir(out, inputs)  # again: something may have changed while the run computed
+        _commit_stdout()
         with _signals_deferred():
             try:
-                if out.exists():
+                if earlier.exists:
                     old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=parent))
                     old.rmdir()
                     out.rename(old)
@@ -184,38 +422,43 @@ def output_dir(path: str | Path, notify: Callable[[str], None] | None = _note) -
                     old.rename(out)
                     old = None
                 raise PkmdynError(f"--out {out}: cannot move the results into place ({_os_reason(exc)})") from None
-        if earlier and notify is not None:
-            notify(f"replaced an earlier run in {out} (every file of it removed)")
     except BaseException:
         if not swapped:
             shutil.rmtree(tmp, ignore_errors=True)
             _remove_created(created)
         raise
-    finally:
-        if swapped and old is not None:
-            if old.is_symlink():
-                old.unlink(missing_ok=True)  # --out was a link to a folder: the link is replaced
-            else:
-                shutil.rmtree(old, ignore_errors=True)
+    if old is None:
+        return
+    problem = ""
+    try:
+        shutil.rmtree(old)
+    except OSError as exc:
+        problem = f"{exc.filename}: {_os_reason(exc)}" if exc.filename else _os_reason(exc)
+    if notify is None:
+        return
+    if problem:
+        notify(f"replaced an earlier run in {out}, but its old files could not all be removed; they are in "
+               f"{old} ({problem}): delete that folder by hand")
+    elif earlier.run:
+        notify(f"replaced an earlier run in {out}: its {earlier.files} file(s) removed")
+    else:
+        notify(f"replaced the empty folder {out}")
 
 
 @contextmanager
-def atomic_file(path: str | Path, notify: Callable[[str], None] | None = _note) -> Iterator[Path]:
-    """Write one file atomically: ``with atomic_file(p) as tmp: write tmp``.
+def atomic_file(path: str | Path, notify: Callable[[str], None] | None = _note, inputs: Inputs = ()) -> Iterator[Path]:
+    """Write one file atomically: ``with atomic_file(p, inputs=...) as tmp: write tmp``.
 
-    The file is written under a temporary name in the target's folder and renamed over
-    ``path`` only when the block succeeds; on any failure (Ctrl-C included) the temporary
-    file is removed and ``path`` is left as it was. Missing parent folders are created
-    (``notify`` says which) and removed again on failure. A folder in the way is refused.
+    ``path`` must pass :func:`check_output_file` (the output rule), before the block and again
+    before the rename. The file is written under a temporary name in the target's folder,
+    marked as pkmdyn's, and renamed over ``path`` only when the block succeeds and what the run
+    printed on standard output was written; on any failure (Ctrl-C included) the temporary file
+    is removed and ``path`` is left as it was. Missing parent folders are created (``notify``
+    says which) and removed again on failure; ``notify`` also says when an earlier file was
+    replaced.
     """
     target = Path(path)
-    if target.is_dir():
-        raise PkmdynError(f"--out {target}: is a folder, expected a file name")
-    for p in target.parents:
-        if p.exists():
-            if not p.is_dir():
-                raise PkmdynError(f"--out {target}: {p} is a file, not a folder")
-            break
+    check_output_file(target, inputs)
     created = _make_parents(target.absolute(), "--out")
     try:
         fd, name = tempfile.mkstemp(prefix=f".{target.name}.partial-", dir=target.absolute().parent)
@@ -229,16 +472,22 @@ def atomic_file(path: str | Path, notify: Callable[[str], None] | None = _note) 
         os.umask(umask)
         tmp.chmod(0o666 & ~umask)
         yield tmp
+        replaced = check_output_file(target, inputs)  # again: something may have appeared meanwhile
+        _mark_file(tmp)
+        _commit_stdout()
         try:
             os.replace(tmp, target)
         except OSError as exc:
             raise PkmdynError(f"--out {target}: cannot move the file into place ({_os_reason(exc)})") from None
-        if created and notify is not None:
-            notify(f"created folder {created[-1] if len(created) == 1 else created[0]}")
     except BaseException:
         tmp.unlink(missing_ok=True)
         _remove_created(created)
         raise
+    if notify is not None:
+        if created:
+            notify(f"created folder {created[-1] if len(created) == 1 else created[0]}")
+        if replaced:
+            notify(f"replaced {target}, which an earlier pkmdyn run wrote")
 
 
 _BOMS = ((b"\x00\x00\xfe\xff", "UTF-32"), (b"\xff\xfe\x00\x00", "UTF-32"), (b"\xfe\xff", "UTF-16"), (b"\xff\xfe", "UTF-16"))
@@ -276,11 +525,16 @@ def read_csv_columns(
         raise MotionError(f"expected a file path, got {type(path).__name__}")
     path = Path(path)
     try:
-        fh = path.open("r", encoding="utf-8-sig", newline="")
-        with path.open("rb") as raw:
-            head = raw.read(4096)
+        # opened once and read once: a pipe (``--motion <(cat m.csv)``) can be read only once
+        raw = path.open("rb")
     except OSError as exc:
         raise MotionError(f"{path}: cannot read file ({_os_reason(exc)})") from None
+    try:
+        head = raw.peek(4096)[:4096]
+    except OSError as exc:
+        raw.close()
+        raise MotionError(f"{path}: cannot read file ({_os_reason(exc)})") from None
+    fh = io.TextIOWrapper(raw, encoding="utf-8-sig", newline="")
     with fh:
         check_text_encoding(path, head, MotionError)
         reader = csv.reader(fh)

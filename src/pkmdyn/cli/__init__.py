@@ -18,9 +18,13 @@ from . import export as _export_commands  # noqa: F401
 from . import identify as _identify_commands  # noqa: F401
 from . import control as _control_commands  # noqa: F401
 from . import view as _view_commands  # noqa: F401
-from ._groups import cli
+from ._groups import HELD_NOTES, cli
 
 __all__ = ["main", "cli", "run"]
+
+
+#: a group called without a command (click >= 8.2 raises this; older versions print the help)
+_NO_ARGS_IS_HELP: type[BaseException] = getattr(click.exceptions, "NoArgsIsHelpError", type("_Never", (Exception,), {}))
 
 
 def _sigterm(signum: int, frame: object) -> None:
@@ -30,8 +34,21 @@ def _sigterm(signum: int, frame: object) -> None:
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the exit status (0 ok, 2 user error, 130 interrupted).
 
-    Ctrl-C and SIGTERM end a run cleanly (its temporary output removed) with one line.
+    Ctrl-C and SIGTERM end a run cleanly (its temporary output removed) with one line; a run
+    that failed says nothing but its error line (notes held back are dropped).
     """
+    status = _main(argv)
+    notes = list(HELD_NOTES) if status == 0 else []
+    HELD_NOTES.clear()
+    for note in notes:
+        try:
+            click.echo(f"pkmdyn: note: {note}", err=True)
+        except OSError:
+            pass
+    return status
+
+
+def _main(argv: list[str] | None) -> int:
     import signal
     import threading
 
@@ -44,6 +61,9 @@ def main(argv: list[str] | None = None) -> int:
             cli.invoke(ctx)
     except click.exceptions.Exit as exc:
         return int(exc.exit_code)
+    except _NO_ARGS_IS_HELP as exc:  # `pkmdyn`, `pkmdyn hip`: the group's help, as --help prints it
+        click.echo(exc.ctx.get_help() if exc.ctx is not None else cli.get_help(click.Context(cli)))
+        return 0
     except (KeyboardInterrupt, click.exceptions.Abort):
         click.echo("pkmdyn: interrupted; --out holds either the whole new run or what it held before", err=True)
         return 130

@@ -4,11 +4,15 @@ the option types they share."""
 from __future__ import annotations
 
 import math
+import sys
+from collections.abc import Mapping
 from pathlib import Path
 
 import click
 
-__all__ = ["cli", "hip", "pdm", "PATH_IN", "FiniteFloat"]
+from ..errors import PkmdynError
+
+__all__ = ["cli", "hip", "pdm", "PATH_IN", "FiniteFloat", "list_files", "echo_lines", "echo"]
 
 #: an input file option (existence is checked by the readers, which name the file)
 PATH_IN = click.Path(dir_okay=False, path_type=Path)
@@ -52,3 +56,99 @@ class FiniteFloat(click.ParamType):
             bracket = "(" if self.lo_open else "["
             self.fail(f"{x:g} is not in {bracket}{self.lo:g}, {self.hi:g}]", param, ctx)
         return x
+
+
+def echo(line: str) -> None:
+    """One line on standard output; a standard output that cannot be written (a full device) is a
+    :class:`~pkmdyn.errors.PkmdynError` that says so."""
+    try:
+        click.echo(line)
+    except OSError as exc:
+        raise PkmdynError(f"standard output: cannot write ({exc.strerror or type(exc).__name__})") from None
+
+
+def list_files(files: Mapping[str, Path]) -> None:
+    """Print ``label: path`` for every file of a run; given to a run as its ``report``, so that the
+    listing is written before the files move into place (:func:`pkmdyn.io.output_dir`)."""
+    for name, path in files.items():
+        echo(f"{name}: {path}")
+
+
+def echo_lines(lines: list[str]) -> None:
+    """Print each line (a run's ``report``, like :func:`list_files`)."""
+    for line in lines:
+        echo(line)
+
+
+#: notes held back until the command has succeeded (stderr not a terminal: a failed run keeps to
+#: its one error line)
+HELD_NOTES: list[str] = []
+_COMPILE_NOTE = ("compiling the numerical kernels this command needs (once: later runs load them from the cache, "
+                 "in a second or two)")
+
+
+def announce_compiles() -> None:
+    """Say once, on stderr, when Numba compiles kernels (the first run after installing or
+    updating, some seconds): at once on a terminal, else at the end of a run that succeeded."""
+    global _LISTENING
+    if _LISTENING:
+        return
+    from numba.core import event
+
+    class _Say(event.Listener):
+        def on_start(self, ev: object) -> None:
+            global _TOLD
+            if _TOLD:
+                return
+            _TOLD = True
+            if sys.stderr is not None and sys.stderr.isatty():
+                click.echo(f"pkmdyn: note: {_COMPILE_NOTE}", err=True)
+            else:
+                HELD_NOTES.append(_COMPILE_NOTE)
+
+        def on_end(self, ev: object) -> None:
+            pass
+
+    event.register("numba:compile", _Say())
+    _LISTENING = True
+
+
+_LISTENING = False
+_TOLD = False
+
+
+def write_default_file(machine: str, control: bool, out_path: Path) -> None:
+    """Write a machine's built-in parameter file (or, with ``control``, its control settings) to
+    ``out_path`` for a user to edit, under the output rule (:func:`pkmdyn.io.atomic_file`)."""
+    from ..io import atomic_file
+
+    if control:
+        from ..control import default_settings_text
+
+        text, what = default_settings_text(machine), "control settings"
+    elif machine == "hip":
+        from ..machines.hip_simulator.params import DEFAULT_PARAMS_TEXT
+
+        text, what = DEFAULT_PARAMS_TEXT, "parameters"
+    else:
+        from ..machines.pdm4.params import default_params_path
+
+        text, what = default_params_path().read_text(encoding="utf-8"), "parameters"
+    with atomic_file(out_path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+        echo(f"{what}: {out_path}")
+
+
+def params_command(group: click.Group, machine: str, option: str) -> None:
+    """Register ``pkmdyn MACHINE params`` on ``group``."""
+
+    @group.command("params")
+    @click.option("--control", is_flag=True,
+                  help=f"Write the control settings ({option} control --gains) instead of the parameter file.")
+    @click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
+                  help="File to write (e.g. params.toml); an existing file is replaced only if pkmdyn wrote it and "
+                       "nobody changed it since.")
+    def params(control: bool, out_path: Path) -> None:
+        """Write the built-in parameter file (TOML), every key with its unit and a comment, to edit and pass
+        as --params (or, with --control, the control settings to pass as --gains)."""
+        write_default_file(machine, control, out_path)

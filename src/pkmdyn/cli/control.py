@@ -11,6 +11,7 @@ benchmark.
 
 from __future__ import annotations
 
+import copy
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,9 +20,10 @@ from typing import Any
 import click
 import numpy as np
 
-from ..errors import MotionError, ParameterError
-from ._groups import PATH_IN, hip, pdm
+from ..errors import MotionError, ParameterError, PkmdynError
+from ._groups import PATH_IN, announce_compiles, hip, list_files, pdm
 from ._groups import FiniteFloat
+from ._hip_options import paper_option
 
 __all__ = ["hip_closed_loop", "run_control", "effort_label", "HIP_CONTROLLERS", "PDM_CONTROLLERS", "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
 
@@ -31,7 +33,8 @@ PDM_CONTROLLERS = ("pid", "feedforward", "computed-torque")
 PDM_LIMBS = ("l11", "l12", "l23", "l24")
 #: most cycles of the built-in motion (``--cycles``)
 MAX_CYCLES = 1000.0
-#: most control cycles of one run (the loop stores every one of them)
+#: most control cycles of one run (streamed in spans, so memory does not grow with it; the bound keeps the
+#: run's time and files in reason)
 MAX_CONTROL_CYCLES = 2_000_000
 #: most plant integration steps per control cycle
 MAX_STEPS_PER_CYCLE = 1000
@@ -51,6 +54,8 @@ class _Setup:
     params_source: str
     plant_source: str
     motion_source: str
+    span_s: float = 0.0  #: the motion as a whole [s]: a full cycle of a built-in motion even for a part of one
+    fold_s: float = 0.0  #: the period a built-in motion repeats with [s] (plots fold the run by it); 0: none
 
 
 # ----------------------------------------------------------------------------- machines
@@ -74,21 +79,24 @@ def _hip_setup(params: Path | None, plant_params: Path | None, motion: Path | No
     from ..machines.hip_simulator import minimal
     from ..machines.hip_simulator.params import default_params_dict, load_params, model_from_dict
     from ..params_util import read_toml
-    from ..profiles.iso14242 import IsoCycle, angle_wave, iso_load
+    from ..profiles.iso14242 import angle_wave, iso_load
+    from ..profiles.iso_fit import iso_cycle_preset
 
-    model = load_params(params)
-    plant, plant_source = _plant_model(
-        load_params, model_from_dict, lambda: read_toml(params) if params is not None else default_params_dict(),
-        params, plant_params, settings)
+    # each file is read once (it may be a pipe)
+    description = read_toml(params) if params is not None else default_params_dict()
+    model = model_from_dict(copy.deepcopy(description), str(params) if params is not None else "built-in parameters")
+    plant, plant_source = _plant_model(load_params, model_from_dict, lambda: description, params, plant_params,
+                                       settings)
     if motion is None:
-        cyc = IsoCycle()
+        cyc = iso_cycle_preset(model.motion_model)
 
         def fn(t: np.ndarray) -> tuple:
             w = [angle_wave(t, cyc.period_s, x) for x in (cyc.fe, cyc.aa, cyc.ier)]
             return (np.stack([a[0] for a in w], -1), np.stack([a[1] for a in w], -1),
                     np.stack([a[2] for a in w], -1), iso_load(t, cyc))
 
-        duration, source = cycles * cyc.period_s, f"built-in ISO 14242-1 cycle model, {cycles:g} cycle(s)"
+        duration, source = (cycles * cyc.period_s,
+                            f"built-in ISO 14242-1 cycle model ({model.motion_model}), {cycles:g} cycle(s)")
     else:
         from ..control import hermite_motion
         from ..profiles.orientation import read_motion_csv
@@ -102,8 +110,10 @@ def _hip_setup(params: Path | None, plant_params: Path | None, motion: Path | No
                                   f"max_load_N = {lim:g} N ([limits] of the parameter file)")
         fn = hermite_motion(mo.t, mo.angles, mo.rates, mo.accels, mo.load)
         duration, source = float(mo.t[-1] - mo.t[0]), str(motion)
+    period = cyc.period_s if motion is None else 0.0
+    span = max(duration, period) if motion is None else duration
     return _Setup("hip", minimal, model, plant, fn, duration, True, str(params or "built-in parameters"),
-                  plant_source, source)
+                  plant_source, source, span, period)
 
 
 def _pdm_setup(params: Path | None, plant_params: Path | None, motion: Path | None, cycles: float,
@@ -113,10 +123,12 @@ def _pdm_setup(params: Path | None, plant_params: Path | None, motion: Path | No
     from ..params_util import read_toml
     from ..profiles.cycloidal import cycloidal
 
-    model = load_params(params)
-    plant, plant_source = _plant_model(
-        load_params, params_from_dict, lambda: read_toml(params if params is not None else default_params_path()),
-        params, plant_params, settings)
+    # each file is read once (it may be a pipe)
+    source = (default_params_path() if params is None else Path(params)).absolute()
+    description = read_toml(source)
+    model = params_from_dict(copy.deepcopy(description), str(source))
+    plant, plant_source = _plant_model(load_params, params_from_dict, lambda: description, params, plant_params,
+                                       settings)
     if motion is None:
         tr = model.trajectory
         S, P = np.asarray(tr.strokes, dtype=float), float(tr.period_s)
@@ -139,8 +151,9 @@ def _pdm_setup(params: Path | None, plant_params: Path | None, motion: Path | No
         mo = read_pdm_motion(motion)
         fn = hermite_motion(mo.t, mo.q, mo.qd, mo.qdd, None)
         duration, source = float(mo.t[-1] - mo.t[0]), str(motion)
+    span = max(duration, float(model.trajectory.period_s)) if motion is None else duration
     return _Setup("pdm", minimal, model, plant, fn, duration, False, str(params or "built-in parameters"),
-                  plant_source, source)
+                  plant_source, source, span, 2.0 * float(model.trajectory.period_s) if motion is None else 0.0)
 
 
 # ----------------------------------------------------------------------------- run
@@ -148,8 +161,29 @@ def run_control(machine: str, controller: str, params: Path | None = None, plant
                 motion: Path | None = None, cycles: float = 1.0, gains_path: Path | None = None,
                 progress: bool = False) -> tuple[_Setup, Any, dict[str, Any]]:
     """Set up and run one closed loop; returns the setup, the :class:`~pkmdyn.simulate.Tracking`
-    and the settings. Raises a :class:`~pkmdyn.errors.PkmdynError` on any bad input."""
-    from ..control import load_settings, loop_settings
+    and the settings. Raises a :class:`~pkmdyn.errors.PkmdynError` on any bad input. (The
+    commands stream the same run span by span: :func:`pkmdyn.simulate.track_spans`.)"""
+    from ..simulate import DivergenceError, track
+
+    with warnings.catch_warnings():
+        # a model whose values overflow ends as a PkmdynError (unreachable pose, divergence), not as
+        # numpy's warning lines on stderr
+        warnings.simplefilter("ignore", RuntimeWarning)
+        setup, settings, ls, g = _prepare(machine, controller, params, plant_params, motion, cycles, gains_path)
+        try:
+            tracking = track(setup.verbs, setup.model, setup.plant_model, setup.motion, setup.duration, controller,
+                             g, ls, setup.has_load, progress=progress, joint_accelerations=True)
+        except DivergenceError as exc:
+            raise DivergenceError(_divergence_message(setup, controller, exc), exc.coordinate, exc.error, exc.limit,
+                                  exc.t) from None
+    _warn_unstable(setup, controller)
+    return setup, tracking, settings
+
+
+def _prepare(machine: str, controller: str, params: Path | None, plant_params: Path | None, motion: Path | None,
+             cycles: float, gains_path: Path | None) -> tuple[_Setup, dict[str, Any], Any, Any]:
+    """Every check of a run, then its setup, settings, loop settings and gains."""
+    from ..control import gains, load_settings, loop_settings
     from ..simulate import check_timing
 
     allowed = HIP_CONTROLLERS if machine == "hip" else PDM_CONTROLLERS
@@ -160,34 +194,126 @@ def run_control(machine: str, controller: str, params: Path | None = None, plant
     settings = load_settings(machine, gains_path)
     ls = loop_settings(settings)
     steps = check_timing(ls.cycle_s, ls.step_s)
+    _check_filters(ls, gains_path)
     if steps > MAX_STEPS_PER_CYCLE:
         raise ParameterError(f"[timing] integration_step_s = {ls.step_s:g} s: {steps:g} steps per control cycle, above "
                              f"the limit {MAX_STEPS_PER_CYCLE}")
-    with warnings.catch_warnings():
-        # a model whose values overflow ends as a PkmdynError (unreachable pose, divergence), not as
-        # numpy's warning lines on stderr
-        warnings.simplefilter("ignore", RuntimeWarning)
-        return _run_control(machine, controller, params, plant_params, motion, cycles, gains_path, progress, settings,
-                            ls, steps)
-
-
-def _run_control(machine: str, controller: str, params: Path | None, plant_params: Path | None, motion: Path | None,
-                 cycles: float, gains_path: Path | None, progress: bool, settings: dict[str, Any], ls: Any,
-                 steps: int) -> tuple[_Setup, Any, dict[str, Any]]:
-    from ..control import gains
-    from ..simulate import track
-
     setup = (_hip_setup if machine == "hip" else _pdm_setup)(params, plant_params, motion, cycles, settings)
     n_cycles = setup.duration / ls.cycle_s
     if not np.isfinite(n_cycles) or n_cycles > MAX_CONTROL_CYCLES or n_cycles * steps > 50 * MAX_CONTROL_CYCLES:
         raise MotionError(f"motion: {setup.duration:g} s is {n_cycles:g} control cycles of {ls.cycle_s:g} s "
                           f"({n_cycles * steps:g} integration steps), above the limit {MAX_CONTROL_CYCLES:,} cycles "
                           f"({50 * MAX_CONTROL_CYCLES:,} steps)")
+    _check_encoder(setup, ls, settings, gains_path)
     n = len(setup.verbs.ACTUATORS) if controller == "pid" else len(setup.verbs.COORDINATES)
-    g = gains(settings, controller, n)
-    tracking = track(setup.verbs, setup.model, setup.plant_model, setup.motion, setup.duration, controller, g, ls,
-                     setup.has_load, progress=progress, joint_accelerations=True)
-    return setup, tracking, settings
+    return setup, settings, ls, gains(settings, controller, n)
+
+
+def _warn_unstable(setup: _Setup, controller: str) -> None:
+    if controller == "feedforward":
+        unstable = _open_loop_growth(setup)
+        if unstable is not None:
+            warnings.warn(f"feedforward alone: {unstable}; this run stayed within the divergence limits, a longer "
+                          "one may not (use a feedback controller)", ControlWarning, stacklevel=2)
+
+
+class ControlWarning(UserWarning):
+    """A run that succeeded but whose result should be read with care (printed by the command)."""
+
+
+#: clinical names of the hip's Euler angles (FE, AA, IER), for messages
+_HIP_NAMES = {"alpha": "alpha (FE)", "beta": "beta (AA)", "gamma": "gamma (IER)"}
+
+
+def _divergence_message(setup: _Setup, controller: str, exc: Any) -> str:
+    """The divergence said in the coordinate's name and in the unit of the settings file's
+    ``[run] divergence_limit_*`` key (deg for angles, m for lengths); with feedforward on an
+    open-loop unstable plant, why."""
+    if exc.coordinate is None:
+        text = str(exc)
+    else:
+        base, unit = setup.verbs.COORDINATES[exc.coordinate].rsplit("_", 1)
+        name = _HIP_NAMES.get(base, base) if setup.machine == "hip" else base
+        scale, shown, key = (180 / np.pi, "deg", "divergence_limit_deg") if unit == "rad" else (1.0, "m",
+                                                                                                  "divergence_limit_m")
+        err = f"{exc.error * scale:.4g} {shown}" if np.isfinite(exc.error) else "not finite"
+        text = (f"run diverged at t = {exc.t:.4f} s: the tracking error of {name} is {err}, beyond "
+                f"[run] {key} = {exc.limit * scale:.4g} {shown}")
+    if controller == "feedforward":
+        unstable = _open_loop_growth(setup)
+        if unstable is not None:
+            text += f"; feedforward alone cannot hold it: {unstable} (use a feedback controller)"
+    return text
+
+
+def _open_loop_growth(setup: _Setup) -> str | None:
+    """Whether the plant, held at the efforts that keep it at the start of the reference, is
+    open-loop unstable there: the eigenvalues of the linearised forward dynamics (central
+    differences of the ``forward_dynamics`` verb); a sentence naming the fastest growth, or None."""
+    v, model = setup.verbs, setup.plant_model
+    q, qd = (np.asarray(a, dtype=float)[:1] for a in setup.motion(np.zeros(1))[:2])
+    load_t = setup.motion(np.zeros(1))[3]
+    load = None if load_t is None else np.asarray(load_t, dtype=float)[:1]
+    zero = np.zeros_like(q)
+    try:
+        u = v.inverse_dynamics(model, q, zero, zero, load)
+        nq = q.shape[1]
+        A = np.zeros((2 * nq, 2 * nq))
+        A[:nq, nq:] = np.eye(nq)
+        for j in range(2 * nq):
+            h = 1e-6 * (1.0 + abs(float(q[0, j % nq])))
+            d = np.zeros_like(q)
+            d[0, j % nq] = h
+            if j < nq:
+                f = (v.forward_dynamics(model, q + d, zero, u, load) - v.forward_dynamics(model, q - d, zero, u, load))
+            else:
+                f = (v.forward_dynamics(model, q, zero + d, u, load) - v.forward_dynamics(model, q, zero - d, u, load))
+            A[nq:, j] = f[0] / (2 * h)
+        rate = float(np.max(np.linalg.eigvals(A).real))
+    except (PkmdynError, np.linalg.LinAlgError, FloatingPointError, ValueError):
+        return None
+    if not (np.isfinite(rate) and rate > 1e-6):
+        return None
+    return (f"the {setup.machine.upper() if setup.machine == 'pdm' else 'hip simulator'} is open-loop unstable at the "
+            f"start pose (an error grows by e every {1 / rate:.3g} s)")
+
+
+#: fewest encoder counts over the largest actuator travel of a run
+MIN_ENCODER_COUNTS = 10
+
+
+def _check_filters(ls: Any, gains_path: Path | None) -> None:
+    """The encoder filters must sit below the Nyquist frequency of the control cycle: a
+    first-order filter at or above it does not filter a signal sampled once per cycle."""
+    nyquist = 0.5 / ls.cycle_s
+    where = f"{gains_path}: [sensors]" if gains_path is not None else "built-in settings: [sensors]"
+    for key in ("velocity_cutoff_Hz", "acceleration_cutoff_Hz"):
+        fc = float(getattr(ls, key))
+        if fc >= nyquist:
+            raise ParameterError(f"{where} {key}: {fc:g} Hz is at or above {nyquist:g} Hz, the Nyquist frequency of the "
+                                 f"{ls.cycle_s:g} s control cycle, where a filter cannot act (lower it; 0: no filter)")
+
+
+def _check_encoder(setup: _Setup, ls: Any, settings: dict[str, Any], gains_path: Path | None) -> None:
+    """The encoders must resolve the motion: at least :data:`MIN_ENCODER_COUNTS` counts over the
+    largest actuator travel of the motion (a whole cycle of a built-in motion, even when the run
+    is a part of one; estimated on up to 2,001 samples)."""
+    span = max(setup.span_s, setup.duration)
+    n = int(min(2_001, max(3, span / ls.cycle_s + 1)))
+    t = np.linspace(0.0, span, n)
+    q, qd = setup.motion(t)[:2]
+    sd = np.einsum("kji,kj->ki", setup.verbs.actuator_map(setup.model, q), qd)
+    s = np.concatenate([np.zeros((1, sd.shape[1])), np.cumsum(0.5 * (sd[1:] + sd[:-1]) * np.diff(t)[:, None], axis=0)])
+    travel = float(np.max(np.ptp(s, axis=0)))
+    res = float(ls.encoder_resolution)
+    if travel > 0 and res * MIN_ENCODER_COUNTS > travel:
+        unit = "rad" if setup.machine == "hip" else "m"
+        where = f"{gains_path}: [sensors]" if gains_path is not None else "built-in settings: [sensors]"
+        counts = settings["sensors"]["encoder_counts_per_turn"]
+        raise ParameterError(
+            f"{where} encoder_counts_per_turn: {counts:g} counts per turn make one count {res:.3g} {unit} of actuator "
+            f"travel, while the motion moves an actuator at most {travel:.3g} {unit}: fewer than "
+            f"{MIN_ENCODER_COUNTS} counts, too coarse to measure it (raise encoder_counts_per_turn)")
 
 
 def hip_closed_loop(duration_s: float = 10.0, controller: str = "augmented-pd",
@@ -227,34 +353,34 @@ def _lag(ref: np.ndarray, meas: np.ndarray, T: float, max_shift: int) -> float:
     return (d + frac) * T
 
 
-def _columns(setup: _Setup, tr: Any) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+def _joint_names(setup: _Setup) -> tuple[list[str], float, str, str, str]:
+    """Actuator names in the columns, the scale to their file unit and the units of s, rate, acc."""
+    if setup.machine == "hip":
+        return [f"motor{a + 1}" for a in range(3)], 1.0, "rad", "rad_s", "rad_s2"
+    return list(PDM_LIMBS), 1e3, "mm", "mm_s", "mm_s2"
+
+
+def _coordinate_scale(name: str) -> tuple[str, float, str]:
+    base, unit = name.rsplit("_", 1)
+    return (base, 180 / np.pi, "deg") if unit == "rad" else (base, 1e3, "mm")
+
+
+def _columns(setup: _Setup, tr: Any) -> dict[str, np.ndarray]:
+    """The rows of ``control.csv`` of one span of a run (or of a whole run)."""
     ref, r, j = tr.reference, tr.result, tr.joint
     K = r.t.shape[0]
     cols: dict[str, np.ndarray] = {"t_s": r.t}
-    summary_coords: dict[str, Any] = {}
     for c, name in enumerate(setup.verbs.COORDINATES):
-        base, unit = name.rsplit("_", 1)
-        scale, out_unit = (180 / np.pi, "deg") if unit == "rad" else (1e3, "mm")
-        e = (ref.q[:K, c] - r.q[:, c]) * scale
+        base, scale, out_unit = _coordinate_scale(name)
         cols[f"{base}_ref_{out_unit}"] = ref.q[:K, c] * scale
         cols[f"{base}_{out_unit}"] = r.q[:, c] * scale
-        cols[f"{base}_err_{out_unit}"] = e
+        cols[f"{base}_err_{out_unit}"] = (ref.q[:K, c] - r.q[:, c]) * scale
         cols[f"{base}_sensed_{out_unit}"] = r.q_s[:, c] * scale
         if setup.machine == "hip":
             cols[f"{base}_attitude_{out_unit}"] = r.q_att[:, c] * scale
-        summary_coords[base] = {f"rms_err_{out_unit}": float(np.sqrt(np.mean(e**2))),
-                                f"max_abs_err_{out_unit}": float(np.max(np.abs(e)))}
-    efforts: dict[str, Any] = {}
     for a, name in enumerate(setup.verbs.ACTUATORS):
         cols[name] = r.u[:, a]
-        base, unit = name.split("_", 1)
-        efforts[base] = {f"peak_abs_{unit}": float(np.max(np.abs(r.u[:, a]))),
-                         "saturated_cycles": int(np.sum(r.saturated[:, a]))}
-    if setup.machine == "hip":
-        names, sc, u0, u1, u2 = [f"motor{a + 1}" for a in range(3)], 1.0, "rad", "rad_s", "rad_s2"
-    else:
-        names, sc, u0, u1, u2 = list(PDM_LIMBS), 1e3, "mm", "mm_s", "mm_s2"
-    joints: dict[str, Any] = {}
+    names, sc, u0, u1, u2 = _joint_names(setup)
     for a, nm in enumerate(names):
         cols[f"{nm}_ref_{u0}"] = j.s[:K, a] * sc
         cols[f"{nm}_{u0}"] = r.s[:, a] * sc
@@ -263,53 +389,208 @@ def _columns(setup: _Setup, tr: Any) -> tuple[dict[str, np.ndarray], dict[str, A
         cols[f"{nm}_rate_enc_{u1}"] = r.sd_enc[:, a] * sc
         cols[f"{nm}_acc_ref_{u2}"] = j.sdd[:K, a] * sc
         cols[f"{nm}_acc_enc_{u2}"] = r.sdd_enc[:, a] * sc
-        max_shift = int(round(0.2 / ref.T))
-        peak = float(np.max(np.abs(j.sdd[:K, a])))
-        acc_lag = _lag(j.sdd[:K, a], r.sdd_enc[:, a], ref.T, max_shift)
-        d = int(round(acc_lag / ref.T))
-        den = float(np.sum(j.sdd[:K - d, a] ** 2))
-        joints[nm] = {
-            "position_lag_ms": 1e3 * _lag(j.s[:K, a], r.s_enc[:, a], ref.T, max_shift),
-            "velocity_lag_ms": 1e3 * _lag(j.sd[:K, a], r.sd_enc[:, a], ref.T, max_shift),
-            "acceleration_lag_ms": 1e3 * acc_lag,
-            "acceleration_gain": float(np.sum(r.sdd_enc[d:, a] * j.sdd[:K - d, a]) / den) if den > 0 else 0.0,
-            "acceleration_peak_ratio": float(np.max(np.abs(r.sdd_enc[:, a])) / peak) if peak > 0 else 0.0,
-        }
     if ref.load is not None:
         cols["load_N"] = ref.load[:K]
-    return cols, {"coordinates": summary_coords, "actuators": efforts, "encoders": joints}
+    return cols
 
 
-def _plots(setup: _Setup, tr: Any, tmp: Path) -> list[Path]:
+#: control cycles of the start of a run from which the encoders' lags and gain are estimated
+ANALYSIS_CYCLES = 100_000
+
+
+class _Summary:
+    """The extremes and figures of ``summary.json``, gathered span by span (bounded memory):
+    errors and efforts over the whole run; the encoders' lags and acceleration gain over its
+    first :data:`ANALYSIS_CYCLES` cycles (least squares over shifts up to 0.2 s); the peak ratio
+    over the whole run."""
+
+    def __init__(self, setup: _Setup) -> None:
+        self.setup = setup
+        nq, nu = len(setup.verbs.COORDINATES), len(setup.verbs.ACTUATORS)
+        self.sq, self.mx, self.rows = np.zeros(nq), np.zeros(nq), 0
+        self.peak, self.sat = np.zeros(nu), np.zeros(nu, dtype=np.int64)
+        self.acc_ref_peak, self.acc_enc_peak = np.zeros(nu), np.zeros(nu)
+        self.buf: dict[str, list[np.ndarray]] = {k: [] for k in ("s", "s_enc", "sd", "sd_enc", "sdd", "sdd_enc")}
+        self.kept = 0
+        self.T = 0.0
+
+    def add(self, tr: Any) -> None:
+        ref, r, j = tr.reference, tr.result, tr.joint
+        K = r.t.shape[0]
+        self.T = ref.T
+        e = ref.q[:K] - r.q
+        self.sq += np.sum(e**2, axis=0)
+        self.mx = np.maximum(self.mx, np.max(np.abs(e), axis=0))
+        self.rows += K
+        self.peak = np.maximum(self.peak, np.max(np.abs(r.u), axis=0))
+        self.sat += np.sum(r.saturated, axis=0)
+        self.acc_ref_peak = np.maximum(self.acc_ref_peak, np.max(np.abs(j.sdd[:K]), axis=0))
+        self.acc_enc_peak = np.maximum(self.acc_enc_peak, np.max(np.abs(r.sdd_enc), axis=0))
+        take = min(K, ANALYSIS_CYCLES - self.kept)
+        if take > 0:
+            for key, v in (("s", j.s), ("s_enc", r.s_enc), ("sd", j.sd), ("sd_enc", r.sd_enc), ("sdd", j.sdd),
+                           ("sdd_enc", r.sdd_enc)):
+                self.buf[key].append(np.array(v[:take]))
+            self.kept += take
+
+    def result(self) -> dict[str, Any]:
+        coords: dict[str, Any] = {}
+        for c, name in enumerate(self.setup.verbs.COORDINATES):
+            base, scale, unit = _coordinate_scale(name)
+            coords[base] = {f"rms_err_{unit}": float(np.sqrt(self.sq[c] / self.rows)) * scale,
+                            f"max_abs_err_{unit}": float(self.mx[c]) * scale}
+        efforts: dict[str, Any] = {}
+        for a, name in enumerate(self.setup.verbs.ACTUATORS):
+            base, unit = name.split("_", 1)
+            efforts[base] = {f"peak_abs_{unit}": float(self.peak[a]), "saturated_cycles": int(self.sat[a])}
+        b = {k: np.concatenate(v) for k, v in self.buf.items()}
+        names = _joint_names(self.setup)[0]
+        T = self.T
+        K = b["s"].shape[0]
+        max_shift = int(round(0.2 / T))
+        joints: dict[str, Any] = {}
+        for a, nm in enumerate(names):
+            acc_lag = _lag(b["sdd"][:, a], b["sdd_enc"][:, a], T, max_shift)
+            d = int(round(acc_lag / T))
+            den = float(np.sum(b["sdd"][:K - d, a] ** 2))
+            peak = float(self.acc_ref_peak[a])
+            joints[nm] = {
+                "position_lag_ms": 1e3 * _lag(b["s"][:, a], b["s_enc"][:, a], T, max_shift),
+                "velocity_lag_ms": 1e3 * _lag(b["sd"][:, a], b["sd_enc"][:, a], T, max_shift),
+                "acceleration_lag_ms": 1e3 * acc_lag,
+                "acceleration_gain": float(np.sum(b["sdd_enc"][d:, a] * b["sdd"][:K - d, a]) / den) if den > 0 else 0.0,
+                "acceleration_peak_ratio": float(self.acc_enc_peak[a] / peak) if peak > 0 else 0.0,
+            }
+        return {"coordinates": coords, "actuators": efforts, "encoders": joints}
+
+
+#: up to this many control cycles a plot shows every one; beyond, the first cycle of a built-in
+#: motion with the band of every cycle (folded by the motion's period), or an envelope
+PLOT_RAW_MAX = 5000
+#: bins of an envelope plot; longest motion period (in control cycles) a plot folds by
+PLOT_BINS, FOLD_MAX = 1000, 20_000
+
+
+class _Curves:
+    """The plots' curves, gathered span by span with bounded memory: every sample of a short run;
+    for a longer run of a built-in motion the first cycle of its period and, at each phase of
+    the period, the minimum and maximum over every cycle (a band); otherwise the minimum and
+    maximum over :data:`PLOT_BINS` equal bins of cycles (an envelope)."""
+
+    def __init__(self, K: int, T: float, fold_s: float) -> None:
+        fold = int(round(fold_s / T)) if fold_s > 0 else 0
+        self.K, self.T = K, T
+        if K <= PLOT_RAW_MAX:
+            self.mode, self.size = "raw", K
+        elif 0 < fold <= FOLD_MAX:
+            self.mode, self.size = "fold", min(fold, K)
+        else:
+            self.mode, self.size = "bins", PLOT_BINS
+        self.first: dict[str, np.ndarray] = {}
+        self.lo: dict[str, np.ndarray] = {}
+        self.hi: dict[str, np.ndarray] = {}
+        self.t_sum = np.zeros(self.size)
+        self.t_n = np.zeros(self.size)
+
+    def add(self, start: int, t: np.ndarray, curves: dict[str, np.ndarray]) -> None:
+        n = t.shape[0]
+        g = np.arange(start, start + n)
+        if self.mode == "raw" or self.mode == "fold":
+            where = g % self.size if self.mode == "fold" else g
+        else:
+            where = g * self.size // self.K
+        head = g < self.size if self.mode != "bins" else np.zeros(n, dtype=bool)
+        if self.mode == "bins":
+            np.add.at(self.t_sum, where, t)
+            np.add.at(self.t_n, where, 1.0)
+        else:
+            self.t_sum[g[head]] = t[head]
+            self.t_n[g[head]] = 1.0
+        for key, v in curves.items():
+            v = v.reshape(n, -1)
+            if key not in self.lo:
+                m = v.shape[1]
+                self.first[key] = np.full((self.size, m), np.nan)
+                self.lo[key] = np.full((self.size, m), np.inf)
+                self.hi[key] = np.full((self.size, m), -np.inf)
+            self.first[key][g[head]] = v[head]
+            np.minimum.at(self.lo[key], where, v)
+            np.maximum.at(self.hi[key], where, v)
+
+    def data(self) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray], dict[str, np.ndarray], str]:
+        """``t``, the first cycle (or every sample), the band's low and high curves, and a note."""
+        used = self.t_n > 0
+        t = self.t_sum[used] / self.t_n[used]
+        first = {k: v[used] for k, v in self.first.items()}
+        lo = {k: v[used] for k, v in self.lo.items()}
+        hi = {k: v[used] for k, v in self.hi.items()}
+        if self.mode == "fold":
+            cycles = self.K / self.size
+            note = f"first of {cycles:.4g} motion cycles; band: every cycle (min-max at each phase)"
+        elif self.mode == "bins":
+            note = f"envelope (min-max) of {self.K} control cycles in {self.size} bins"
+        else:
+            note = ""
+        return t, first, lo, hi, note
+
+
+def _plot_curves(setup: _Setup, tr: Any) -> dict[str, np.ndarray]:
+    r, j = tr.result, tr.joint
+    K = r.t.shape[0]
+    out = {"u": r.u}
+    if setup.machine == "hip":
+        out["err_deg"] = np.rad2deg(tr.reference.q[:K] - r.q)
+    else:
+        for key, th, me in (("s", j.s, r.s_enc), ("sd", j.sd, r.sd_enc), ("sdd", j.sdd, r.sdd_enc)):
+            out[f"{key}_th"], out[f"{key}_me"] = th[:K] * 1e3, me * 1e3
+    return out
+
+
+def _draw(ax: Any, mode: str, t: np.ndarray, first: np.ndarray, lo: np.ndarray, hi: np.ndarray, label: str | None,
+          **kw: Any) -> None:
+    """One curve: every sample, or the first cycle over the band of all cycles, or the envelope."""
+    if mode == "raw":
+        ax.plot(t, first, label=label, **kw)
+        return
+    line = None
+    if mode == "fold":
+        (line,) = ax.plot(t, first, label=label, **kw)
+    ax.fill_between(t, lo, hi, alpha=0.25, lw=0, color=None if line is None else line.get_color(),
+                    label=label if line is None else None)
+
+
+def _plots(setup: _Setup, curves: _Curves, kind: str, tmp: Path) -> list[Path]:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    ref, r, j = tr.reference, tr.result, tr.joint
-    K = r.t.shape[0]
+    t, first, lo, hi, note = curves.data()
+    mode = curves.mode
+    suffix = f"\n{note}" if note else ""
     paths = []
     if setup.machine == "hip":
-        fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+        fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
         for ax, c, label in zip(axes, (1, 2, 0), ("(a) AA error", "(b) IER error", "(c) FE error")):
-            ax.plot(r.t, np.rad2deg(ref.q[:K, c] - r.q[:, c]), lw=0.8)
+            _draw(ax, mode, t, first["err_deg"][:, c], lo["err_deg"][:, c], hi["err_deg"][:, c], None, lw=0.8)
             ax.set(xlabel="t [s]", ylabel="error [deg]", title=label)
             ax.grid(alpha=0.3)
-        fig.suptitle(f"Posture-angle errors, {tr.controller.kind}")
+        fig.suptitle(f"Posture-angle errors, {kind}{suffix}")
         fig.tight_layout()
         p = tmp / "posture_errors.png"
         fig.savefig(p, dpi=110)
         plt.close(fig)
         paths.append(p)
     else:
-        fig, axes = plt.subplots(3, 4, figsize=(15, 9), sharex=True)
-        rows = ((j.s, r.s_enc, 1e3, "displacement [mm]"), (j.sd, r.sd_enc, 1e3, "velocity [mm/s]"),
-                (j.sdd, r.sdd_enc, 1e3, "acceleration [mm/s^2]"))
-        for i, (th, me, sc, lab) in enumerate(rows):
+        fig, axes = plt.subplots(3, 4, figsize=(15, 9.4), sharex=True)
+        rows = (("s", "displacement [mm]"), ("sd", "velocity [mm/s]"), ("sdd", "acceleration [mm/s^2]"))
+        for i, (key, lab) in enumerate(rows):
             for a in range(4):
                 ax = axes[i, a]
-                ax.plot(r.t, th[:K, a] * sc, label="theoretical", lw=1.0)
-                ax.plot(r.t, me[:, a] * sc, label="measured", lw=0.8, ls="--")
+                _draw(ax, mode, t, first[f"{key}_th"][:, a], lo[f"{key}_th"][:, a], hi[f"{key}_th"][:, a],
+                      "theoretical", lw=1.0)
+                _draw(ax, mode, t, first[f"{key}_me"][:, a], lo[f"{key}_me"][:, a], hi[f"{key}_me"][:, a],
+                      "measured", lw=0.8, ls="--")
                 ax.grid(alpha=0.3)
                 if i == 0:
                     ax.set_title(f"limb {PDM_LIMBS[a]}")
@@ -318,19 +599,19 @@ def _plots(setup: _Setup, tr: Any, tmp: Path) -> list[Path]:
                 if i == 2:
                     ax.set_xlabel("t [s]")
         axes[0, 0].legend()
-        fig.suptitle(f"Measured and theoretical limb motion, {tr.controller.kind}")
+        fig.suptitle(f"Measured and theoretical limb motion, {kind}{suffix}")
         fig.tight_layout()
         p = tmp / "limb_tracking.png"
         fig.savefig(p, dpi=100)
         plt.close(fig)
         paths.append(p)
-    fig, ax = plt.subplots(figsize=(7, 3.8))
+    fig, ax = plt.subplots(figsize=(7, 4.2))
     for a in range(len(setup.verbs.ACTUATORS)):
         label, unit = effort_label(setup.machine, a)
-        ax.plot(r.t, r.u[:, a], label=f"{label} [{unit}]", lw=0.8)
+        _draw(ax, mode, t, first["u"][:, a], lo["u"][:, a], hi["u"][:, a], f"{label} [{unit}]", lw=0.8)
     quantity = "torque" if setup.machine == "hip" else "force"
     ax.set(xlabel="t [s]", ylabel=f"{quantity} [{effort_label(setup.machine, 0)[1]}]",
-           title=f"Actuator efforts ({'motor torques' if setup.machine == 'hip' else 'limb forces'})")
+           title=f"Actuator efforts ({'motor torques' if setup.machine == 'hip' else 'limb forces'}){suffix}")
     ax.legend()
     ax.grid(alpha=0.3)
     fig.tight_layout()
@@ -349,44 +630,50 @@ def effort_label(machine: str, a: int) -> tuple[str, str]:
     return f"limb {PDM_LIMBS[a]} force", "N"
 
 
-def _report(setup: _Setup, tr: Any, cols: dict[str, np.ndarray], summary: dict[str, Any], tmp: Path,
-            images: list[Path], gains_path: Path | None) -> Path:
-    """``report.html`` of a control run: the plant's measured motion animated (efforts as colours),
-    tracking, errors and efforts against time, the PNG figures, summary, parameters, warnings."""
+def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dict[str, Any], tmp: Path,
+            images: list[Path], gains_path: Path | None, K: int) -> Path:
+    """``report.html`` of a control run: the plant's true motion animated (held efforts as colours),
+    tracking errors (hip) or limb motion (PDM) and efforts against time, the PNG figures, summary,
+    parameters and warnings."""
     from ..errors import PkmdynError
-    from ..report import MAX_FRAMES, Curve, TimePlot, frame_indices, write_report
+    from ..report import Curve, TimePlot, write_report
 
-    r = tr.result
-    idx = frame_indices(r.t.shape[0], MAX_FRAMES)
     warns = [f"{effort_label(setup.machine, a)[0]} hit its limit in {v['saturated_cycles']} control cycle(s)"
              for a, v in enumerate(summary["actuators"].values()) if v["saturated_cycles"]]
+    f = frames.arrays()
     scene = None
     try:
         if setup.machine == "hip":
             from ..machines.hip_simulator.report import parameters_text
             from ..machines.hip_simulator.scene import hip_scene_from_angles
 
-            scene = hip_scene_from_angles(setup.plant_model, r.t[idx], r.q[idx], r.u[idx])
+            scene = hip_scene_from_angles(setup.plant_model, f["t"], f["q"], f["u"])
         else:
             from ..machines.pdm4.report import parameters_text
             from ..machines.pdm4.scene import pdm_scene_from_pose
 
-            scene = pdm_scene_from_pose(setup.plant_model, r.t[idx], r.q[idx], r.u[idx])
+            scene = pdm_scene_from_pose(setup.plant_model, f["t"], f["q"], f["u"])
     except PkmdynError as exc:  # the plant left the machine's reach: the page says so, the run stands
         warns.append(f"report: the 3D view could not be built ({exc})")
-    t = cols["t_s"]
+    t, first, lo, hi, note = curves.data()
+
+    def curve(key: str, c: int, name: str) -> Curve:
+        if curves.mode == "bins":
+            return Curve(name, lo=lo[key][:, c], hi=hi[key][:, c])
+        return Curve(name, first[key][:, c])
+
     plots = []
-    units = {}
-    for name in setup.verbs.COORDINATES:
-        base, unit = name.rsplit("_", 1)
-        units.setdefault("deg" if unit == "rad" else "mm", []).append(base)
-    for unit, bases in units.items():
-        plots.append(TimePlot(f"Pose: reference and measured ({unit})", f"[{unit}]", t, tuple(
-            c for b in bases for c in (Curve(f"{b} reference", cols[f"{b}_ref_{unit}"]), Curve(b, cols[f"{b}_{unit}"])))))
-        plots.append(TimePlot(f"Tracking error ({unit})", f"error [{unit}]", t,
-                              tuple(Curve(b, cols[f"{b}_err_{unit}"]) for b in bases)))
+    if setup.machine == "hip":
+        plots.append(TimePlot("Posture-angle errors", "error [deg]", t,
+                              tuple(curve("err_deg", c, n) for c, n in enumerate(("alpha (FE)", "beta (AA)",
+                                                                                  "gamma (IER)"))), note))
+    else:
+        for key, lab, unit in (("s", "displacement", "mm"), ("sd", "velocity", "mm/s"), ("sdd", "acceleration", "mm/s^2")):
+            plots.append(TimePlot(f"Limb {lab}: theoretical and measured", f"{lab} [{unit}]", t, tuple(
+                c for a, nm in enumerate(PDM_LIMBS) for c in (curve(f"{key}_th", a, f"{nm} theoretical"),
+                                                              curve(f"{key}_me", a, f"{nm} measured"))), note))
     plots.append(TimePlot("Actuator efforts", f"[{effort_label(setup.machine, 0)[1]}]", t, tuple(
-        Curve(effort_label(setup.machine, a)[0], r.u[:, a]) for a in range(len(setup.verbs.ACTUATORS)))))
+        curve("u", a, effort_label(setup.machine, a)[0]) for a in range(len(setup.verbs.ACTUATORS))), note))
     params = parameters_text(None if setup.params_source == "built-in parameters" else setup.params_source)
     if gains_path is not None:
         try:
@@ -394,12 +681,11 @@ def _report(setup: _Setup, tr: Any, cols: dict[str, np.ndarray], summary: dict[s
         except (OSError, UnicodeDecodeError):
             pass
     name = "2(3PUS+S) hip simulator" if setup.machine == "hip" else "4-DOF PDM"
-    return write_report(tmp, title=f"{name}: {setup.machine} control, {tr.controller.kind}", scene=scene,
-                        plots=plots, summary=summary, parameters=params, warnings=warns, images=images,
+    return write_report(tmp, title=f"{name}: {setup.machine} control, {kind}", scene=scene, plots=plots,
+                        summary=summary, parameters=params, warnings=warns, images=images,
                         notes=[f"parameters: {setup.params_source}", f"plant: {setup.plant_source}",
                                f"motion: {setup.motion_source}"],
-                        scene_note="The plant's true pose; actuated chains coloured by the held effort.",
-                        samples=r.t.shape[0])
+                        scene_note="The plant's true pose; actuated chains coloured by the held effort.", samples=K)
 
 
 def _loop_method(settings: dict[str, Any]) -> str:
@@ -409,53 +695,99 @@ def _loop_method(settings: dict[str, Any]) -> str:
     return str(loop_settings(settings).method)
 
 
-def _write(setup: _Setup, tr: Any, settings: dict[str, Any], out: Path, plots: bool, gains_path: Path | None,
-           report: bool = True) -> dict[str, Path]:
-    from ..io import output_dir, write_csv, write_json
+def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str, Any], out: Path, plots: bool,
+            gains_path: Path | None, inputs: dict[str, Path | None], fmt: str, html_report: bool = True) -> dict[str, Path]:
+    """Run the loop span by span (:func:`pkmdyn.simulate.track_spans`) straight into the output
+    folder: the table is written span by span and the summary and plots gathered on the way, so
+    memory does not grow with the run; the folder moves into place only when the whole run
+    succeeded (:func:`pkmdyn.io.output_dir`). ``html_report``: also ``report.html``, its
+    animation's frames picked span by span (:class:`pkmdyn.report.FramePicker`)."""
+    from ..report import MAX_FRAMES, FramePicker
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        cols, parts = _columns(setup, tr)
-    for name, v in cols.items():  # checked before --out is touched
-        bad = np.flatnonzero(~np.isfinite(v))
-        if bad.size:
-            raise MotionError(f"run: column {name!r} is not finite at t = {cols['t_s'][bad[0]]:g} s "
-                              "(the model's values overflow)")
-    ls = tr.reference
-    summary = {
-        "machine": setup.machine,
-        "controller": tr.controller.kind,
-        "duration_s": float(setup.duration),
-        "cycles": int(ls.cycles),
-        "control_cycle_s": float(settings["timing"]["control_cycle_s"]),
-        "integration_step_s": float(settings["timing"]["integration_step_s"]),
-        "integration_method": _loop_method(settings),
-        "fast_path": bool(tr.fast_path),
-        **parts,
-        "parameters": setup.params_source,
-        "plant": setup.plant_source,
-        "motion": setup.motion_source,
-        "gains_file": str(gains_path) if gains_path else "built-in",
-    }
-    with output_dir(out) as tmp:
-        write_csv(tmp / "control.csv", cols)
+    from ..io import check_table_format, open_table_writer, output_dir, write_json
+    from ..simulate import DivergenceError, track_spans
+
+    check_table_format(fmt)
+    K = int(round(setup.duration / ls.cycle_s))
+    summ = _Summary(setup)
+    curves = _Curves(K, ls.cycle_s, setup.fold_s) if plots or html_report else None
+    frames = FramePicker(K, MAX_FRAMES) if html_report else None
+    table = "control.csv" if fmt == "csv" else "control.parquet"
+    kind, fast = controller, False
+    with output_dir(out, inputs=inputs) as tmp:
+        with open_table_writer(tmp / table, fmt) as writer:
+            start = 0
+            try:
+                for tr in track_spans(setup.verbs, setup.model, setup.plant_model, setup.motion, setup.duration,
+                                      controller, g, ls, setup.has_load, progress=True, joint_accelerations=True):
+                    kind, fast = tr.controller.kind, bool(tr.fast_path)
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore", RuntimeWarning)
+                        cols = _columns(setup, tr)
+                    for name, v in cols.items():
+                        bad = np.flatnonzero(~np.isfinite(v))
+                        if bad.size:
+                            raise MotionError(f"run: column {name!r} is not finite at t = {cols['t_s'][bad[0]]:g} s "
+                                              "(the model's values overflow)")
+                    writer.write(cols)
+                    summ.add(tr)
+                    if curves is not None:
+                        curves.add(start, tr.result.t, _plot_curves(setup, tr))
+                    if frames is not None:
+                        frames.add(start, t=tr.result.t, q=tr.result.q, u=tr.result.u)
+                    start += tr.result.t.shape[0]
+            except DivergenceError as exc:
+                raise DivergenceError(_divergence_message(setup, controller, exc), exc.coordinate, exc.error,
+                                      exc.limit, exc.t) from None
+        summary = {
+            "machine": setup.machine,
+            "controller": kind,
+            "duration_s": float(setup.duration),
+            "cycles": int(K),
+            "control_cycle_s": float(settings["timing"]["control_cycle_s"]),
+            "integration_step_s": float(settings["timing"]["integration_step_s"]),
+            "integration_method": _loop_method(settings),
+            "fast_path": fast,
+            **summ.result(),
+            "results_format": fmt,
+            "parameters": setup.params_source,
+            "plant": setup.plant_source,
+            "motion": setup.motion_source,
+            "gains_file": str(gains_path) if gains_path else "built-in",
+        }
         write_json(tmp / "summary.json", summary)
-        names = ["control.csv", "summary.json"]
-        if plots:
-            names += [p.name for p in _plots(setup, tr, tmp)]
-        if report:
-            names.append(_report(setup, tr, cols, summary, tmp, [tmp / n for n in names if n.endswith(".png")],
-                                 gains_path).name)
-    return {n: out / n for n in names}
+        names = [table, "summary.json"]
+        if curves is not None and plots:
+            names += [p.name for p in _plots(setup, curves, kind, tmp)]
+        if frames is not None and curves is not None:
+            names.append(_report(setup, kind, curves, frames, summary, tmp,
+                                 [tmp / n for n in names if n.endswith(".png")], gains_path, K).name)
+        files = {n: out / n for n in names}
+        list_files(files)
+    return files
 
 
-def _command(machine: str, controller: str, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir) -> None:
+def _command(machine: str, controller: str, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir,
+             fmt: str = "csv") -> None:
+    from ..io import check_output_dir, check_table_format
+
+    announce_compiles()
     if motion_path is not None and cycles != 1.0:
         raise click.UsageError("--cycles applies to the built-in motion, not to --motion")
-    setup, tr, settings = run_control(machine, controller, params_path, plant_path, motion_path, cycles, gains_path,
-                                      progress=True)
-    for name, path in _write(setup, tr, settings, out_dir, not no_plots, gains_path).items():
-        click.echo(f"{name}: {path}")
+    check_table_format(fmt)
+    inputs = {"--params": params_path, "--plant-params": plant_path, "--motion": motion_path, "--gains": gains_path}
+    check_output_dir(out_dir, inputs)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ControlWarning)
+        warnings.simplefilter("ignore", RuntimeWarning)
+        setup, settings, ls, g = _prepare(machine, controller, params_path, plant_path, motion_path, cycles, gains_path)
+        _stream(setup, controller, g, ls, settings, out_dir, not no_plots, gains_path, inputs, fmt)
+        _warn_unstable(setup, controller)
+    for w in caught:
+        if issubclass(w.category, ControlWarning):
+            click.echo(f"pkmdyn: warning: {w.message}", err=True)
+        elif not issubclass(w.category, RuntimeWarning):
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
 
 
 def _options(f: Any) -> Any:
@@ -468,25 +800,29 @@ def _options(f: Any) -> Any:
                      help=f"Cycles of the built-in motion (> 0, at most {MAX_CYCLES:g}; a run holds at most "
                           f"{MAX_CONTROL_CYCLES:,} control cycles)."),
         click.option("--gains", "gains_path", type=PATH_IN, help="Control settings (TOML), laid over the built-in ones."),
+        click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv", show_default=True,
+                     help="Table format of the per-cycle results: csv (text, any tool) or parquet (binary, compact; "
+                          "needs pyarrow)."),
         click.option("--no-plots", is_flag=True, help="Write no PNG plots."),
         click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-                     help="Output directory."),
+                     help="Output directory; an earlier run there is replaced whole, nothing else is."),
     )):
         f = opt(f)
     return f
 
 
 @hip.command("control")
+@paper_option
 @click.option("--controller", required=True, help="One of: " + ", ".join(HIP_CONTROLLERS) + ".")
 @_options
-def hip_control(controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir) -> None:
-    """Closed-loop tracking of a motion; writes control.csv, summary.json and plots."""
-    _command("hip", controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir)
+def hip_control(controller, params_path, plant_path, motion_path, cycles, gains_path, fmt, no_plots, out_dir) -> None:
+    """Closed-loop tracking of a motion; writes control.csv (or .parquet), summary.json and plots."""
+    _command("hip", controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir, fmt)
 
 
 @pdm.command("control")
 @click.option("--controller", required=True, help="One of: " + ", ".join(PDM_CONTROLLERS) + ".")
 @_options
-def pdm_control(controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir) -> None:
-    """Closed-loop tracking of a motion; writes control.csv, summary.json and plots."""
-    _command("pdm", controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir)
+def pdm_control(controller, params_path, plant_path, motion_path, cycles, gains_path, fmt, no_plots, out_dir) -> None:
+    """Closed-loop tracking of a motion; writes control.csv (or .parquet), summary.json and plots."""
+    _command("pdm", controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir, fmt)

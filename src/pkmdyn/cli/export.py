@@ -7,13 +7,15 @@ from pathlib import Path
 import click
 
 from ._groups import PATH_IN as _PATH_IN
-from ._groups import hip
+from ._groups import echo, hip
 from ._groups import FiniteFloat
+from ._hip_options import paper_option
 
 
 @hip.command("export")
 @click.option("--format", "fmt", type=click.Choice(["mjcf"]), required=True,
               help="mjcf: a MuJoCo model (kinematic tree, six connect loop constraints, slide motors, no friction).")
+@paper_option
 @click.option("--params", "params_path", type=_PATH_IN, help="Parameter file (TOML); default: the paper's Tables 1-2.")
 @click.option("--timestep", "timestep_s", type=FiniteFloat(1e-6, 1.0), default=1e-3,
               show_default=True, help="MuJoCo integration step [s], 1e-6 to 1.")
@@ -22,12 +24,14 @@ from ._groups import FiniteFloat
 def hip_export(fmt, params_path, timestep_s, out_path) -> None:
     """Write the machine in another engine's format (MuJoCo's MJCF); the file is written only
     when the whole model is valid."""
-    from ..io import atomic_file
+    from ..io import atomic_file, check_output_file
     from ..machines.hip_simulator import load_params
     from ..machines.hip_simulator.mjcf import mjcf_string
 
+    inputs = {"--params": params_path}
+    check_output_file(out_path, inputs)
     model = load_params(params_path)
     text = mjcf_string(model, timestep_s)
-    with atomic_file(out_path) as tmp:
+    with atomic_file(out_path, inputs=inputs) as tmp:
         tmp.write_text(text, encoding="utf-8")
-    click.echo(f"{fmt}: {out_path}")
+        echo(f"{fmt}: {out_path}")

@@ -11,23 +11,25 @@ from pathlib import Path
 import click
 
 from ._groups import PATH_IN as _PATH_IN
-from ._groups import FiniteFloat, hip
+from ._groups import FiniteFloat, echo, hip, list_files, params_command
+from ._hip_options import paper_option
 
 _LIMIT_HELP = ("Raise or lower a plausibility limit, KEY=VALUE (repeatable; overrides [limits] of the parameter "
                "file). Keys: max_samples, max_load_N, max_abs_angle_deg, max_slider_speed_m_s, "
-               "max_slider_acceleration_m_s2.")
+               "max_slider_acceleration_m_s2, max_duration_s.")
 
 
 @hip.command("run")
+@paper_option
 @click.option("--params", "params_path", type=_PATH_IN, help="Parameter file (TOML); default: the paper's Tables 1-2.")
 @click.option("--motion", "motion_path", type=_PATH_IN, help="Motion file (CSV); default: the built-in ISO 14242-1 cycle.")
 @click.option("--cycles", type=FiniteFloat(0.0, 1e12, lo_open=True), default=1.0, show_default=True,
               help="Cycles of the built-in motion (finite, > 0; with --samples-per-cycle at least 2 samples).")
 @click.option("--samples-per-cycle", type=click.IntRange(min=2), default=1000, show_default=True,
               help="Samples per cycle of the built-in motion.")
-@click.option("--motion-model", type=click.Choice(["default", "paper-fit", "paper-fit-zxy"]), default="default",
-              show_default=True,
-              help="Cycle model of the built-in motion: default (documented choices), paper-fit (phases fitted to the "
+@click.option("--motion-model", type=click.Choice(["default", "paper-fit", "paper-fit-zxy"]), default=None,
+              help="Cycle model of the built-in motion (default: the parameter file's [motion] iso_cycle, else "
+                   "default): default (documented choices), paper-fit (phases fitted to the "
                    "hip paper's slider maxima), paper-fit-zxy (the same for euler_sequence = \"ZXY\"); see "
                    "docs/identification.md.")
 @click.option("--singularity-threshold", type=FiniteFloat(0.0, 1.0), default=1e-3, show_default=True,
@@ -37,22 +39,24 @@ _LIMIT_HELP = ("Raise or lower a plausibility limit, KEY=VALUE (repeatable; over
 @click.option("--limit", "limits", multiple=True, metavar="KEY=VALUE", help=_LIMIT_HELP)
 @click.option("--no-plots", is_flag=True, help="Write no PNG plots.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
+              help="Output folder; an earlier run there is replaced whole, nothing else is (docs/file_formats.md, "
+                   "\"The output rule\").")
 def hip_run(params_path, motion_path, cycles, samples_per_cycle, motion_model, singularity_threshold, fmt, limits,
             no_plots, out_dir) -> None:
     """Kinematics and driving torques along a motion; writes results.csv (or .parquet), summary.json, plots."""
     from ..machines.hip_simulator.run import run_hip
 
-    if motion_path is not None and (cycles != 1.0 or samples_per_cycle != 1000 or motion_model != "default"):
+    if motion_path is not None and (cycles != 1.0 or samples_per_cycle != 1000 or motion_model is not None):
         raise click.UsageError(
             "--cycles, --samples-per-cycle and --motion-model apply to the built-in motion, not to --motion")
     files, messages = run_hip(out_dir, params_path, motion_path, cycles, samples_per_cycle,
                               make_plots=not no_plots, progress=True, singularity_threshold=singularity_threshold,
-                              fmt=fmt, limits=tuple(limits), motion_model=motion_model)
+                              fmt=fmt, limits=tuple(limits), motion_model=motion_model, report=list_files)
     for m in messages:
         click.echo(f"pkmdyn: warning: {m}", err=True)
-    for name, path in files.items():
-        click.echo(f"{name}: {path}")
+
+
+params_command(hip, "hip", "pkmdyn hip")
 
 
 @hip.command("profile")
@@ -75,4 +79,4 @@ def hip_profile(cycles, samples_per_cycle, limits, out_path) -> None:
     motion = iso14242_motion(cycles, samples_per_cycle, max_samples=max_samples)
     with atomic_file(out_path) as tmp:
         write_motion_csv(tmp, motion)
-    click.echo(f"motion: {out_path}")
+        echo(f"motion: {out_path}")

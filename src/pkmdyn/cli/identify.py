@@ -6,14 +6,16 @@ from pathlib import Path
 
 import click
 
-from ..identify import hip_excite as _ex
-from ..identify.hip_run import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW
+from ..identify import bounds as _ex
+from ..identify.bounds import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW
 from ._groups import PATH_IN as _PATH_IN
-from ._groups import hip
+from ._groups import announce_compiles, echo_lines, hip
 from ._groups import FiniteFloat
+from ._hip_options import paper_option
 
 
 @hip.command("identify")
+@paper_option
 @click.option("--measured", "measured_path", type=_PATH_IN, required=True,
               help="Measured run (CSV): motion columns plus tau1_Nm, tau2_Nm, tau3_Nm.")
 @click.option("--params", "params_path", type=_PATH_IN,
@@ -29,18 +31,16 @@ from ._groups import FiniteFloat
                    "(0 < rank-tol < 1).")
 @click.option("--no-plots", is_flag=True, help="Write no PNG plots.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output directory.")
+              help="Output directory; an earlier run there is replaced whole, nothing else is.")
 def hip_identify(measured_path, params_path, which, sg_window, sg_order, rank_tol, no_plots, out_dir) -> None:
     """Identify friction and/or inertia from measured motor torques; writes identified.toml,
     identification.json, torques.csv and plots."""
     from ..identify.hip_run import run_identify
 
-    files, lines = run_identify(out_dir, measured_path, params_path, which, sg_window, sg_order, rank_tol,
-                                make_plots=not no_plots)
-    for line in lines:
-        click.echo(line)
-    for name, path in files.items():
-        click.echo(f"{name}: {path}")
+    announce_compiles()
+
+    run_identify(out_dir, measured_path, params_path, which, sg_window, sg_order, rank_tol, make_plots=not no_plots,
+                 report=echo_lines)
 
 
 _ANGLE = FiniteFloat(-180.0, 180.0)
@@ -48,6 +48,7 @@ _LOAD = FiniteFloat(0.0, _ex.MAX_LOAD_N)
 
 
 @hip.command("excite")
+@paper_option
 @click.option("--params", "params_path", type=_PATH_IN, help="Parameter file (TOML); default: the paper's Tables 1-2.")
 @click.option("--identify", "which", type=click.Choice(["friction", "inertia", "all"]), default="all",
               show_default=True, help="Parameters the motion is designed to identify.")
@@ -94,10 +95,9 @@ def hip_excite(params_path, which, period_s, harmonics, cycles, samples_per_cycl
     from ..identify.hip_excite import ExcitationLimits
     from ..identify.hip_run import run_excite
 
+    announce_compiles()
+
     limits = ExcitationLimits(alpha_range_deg, beta_range_deg, gamma_range_deg, load_range, max_slider_speed_m_s,
                               max_slider_accel_m_s2, max_cond_j)
-    lines = run_excite(out_path, params_path, which, limits, period_s, harmonics, cycles, samples_per_cycle,
-                       iterations, starts, seed, design_samples, progress=True)
-    for line in lines:
-        click.echo(line)
-    click.echo(f"motion: {out_path}")
+    run_excite(out_path, params_path, which, limits, period_s, harmonics, cycles, samples_per_cycle,
+               iterations, starts, seed, design_samples, progress=True, report=echo_lines)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ._groups import PATH_IN, pdm
+from ._groups import PATH_IN, announce_compiles, list_files, params_command, pdm
 
 
 @pdm.command("run")
@@ -23,17 +23,26 @@ from ._groups import PATH_IN, pdm
 @click.option("--peak-y-accel", "peak_y_accel", type=float, default=None,
               help="Set the period so that the y acceleration peaks at this value [m/s^2] "
                    "(T = sqrt(2 pi |S_y| / a); e.g. 0.05, 0.5, 1.0 for the paper's Fig. 23).")
+@click.option("--limit", "limits", multiple=True, metavar="KEY=VALUE",
+              help="Raise or lower a plausibility limit, KEY=VALUE (repeatable; overrides [limits] of the parameter "
+                   "file). Keys: max_samples, max_limb_speed_m_s, max_limb_acceleration_m_s2, max_actuator_force_N, "
+                   "max_duration_s.")
 @click.option("--no-plots", is_flag=True, help="Skip the PNG plots and the schematic.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder (created if missing; an earlier pkmdyn run there is replaced whole).")
 def pdm_run(params_path: Path | None, motion_path: Path | None, stroke_x_m: float | None,
             stroke_y_m: float | None, stroke_alpha_deg: float | None, stroke_gamma_deg: float | None,
-            period_s: float | None, peak_y_accel: float | None, no_plots: bool, out_dir: Path) -> None:
+            period_s: float | None, peak_y_accel: float | None, limits: tuple[str, ...], no_plots: bool,
+            out_dir: Path) -> None:
     """Kinematics, Newton-Euler dynamics and unique joint reactions, mobility, workspace and plots of the PDM."""
     from ..machines.pdm4.run import run_pdm
 
+    announce_compiles()
+
     trajectory = {"stroke_x_m": stroke_x_m, "stroke_y_m": stroke_y_m, "stroke_alpha_deg": stroke_alpha_deg,
                   "stroke_gamma_deg": stroke_gamma_deg, "period_s": period_s, "peak_y_accel_m_s2": peak_y_accel}
-    summary = run_pdm(params_path, motion_path, out_dir, plots=not no_plots, trajectory=trajectory)
-    for label, path in summary["files"].items():
-        click.echo(f"{label}: {path}")
+    run_pdm(params_path, motion_path, out_dir, plots=not no_plots, trajectory=trajectory, report=list_files,
+            limits=tuple(limits))
+
+
+params_command(pdm, "pdm", "pkmdyn pdm")

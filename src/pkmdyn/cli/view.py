@@ -7,7 +7,11 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ._groups import PATH_IN, cli
+from ._groups import PATH_IN, cli, echo
+
+
+def _listing(path: Path) -> None:
+    echo(f"view: {path}")
 
 
 def _hip_page(params: Path | None, out: Path) -> Path:
@@ -20,7 +24,8 @@ def _hip_page(params: Path | None, out: Path) -> Path:
     scene = hip_scene_from_angles(model, np.zeros(1), np.zeros((1, 3)), np.zeros((1, 3)))
     return write_view(out, title="2(3PUS+S) hip simulator: machine view", scene=scene, topology=hip_topology(),
                       mobility=hip_mobility(model), parameters=parameters_text(params),
-                      notes=[f"parameters: {params or 'built-in (paper Tables 1-2)'}", "home pose: all angles zero"])
+                      notes=[f"parameters: {params or 'built-in (paper Tables 1-2)'}", "home pose: all angles zero"],
+                      inputs={"--params": params}, listing=_listing)
 
 
 def _pdm_page(params: Path | None, out: Path) -> Path:
@@ -33,7 +38,8 @@ def _pdm_page(params: Path | None, out: Path) -> Path:
     scene = pdm_scene_from_pose(model, np.zeros(1), np.zeros((1, 4)), np.zeros((1, 4)))
     return write_view(out, title="4-DOF PDM: machine view", scene=scene, topology=pdm_topology(),
                       mobility=pdm_mobility(model), parameters=parameters_text(params),
-                      notes=[f"parameters: {model.source}", "home pose: x = y = 0, alpha = gamma = 0"])
+                      notes=[f"parameters: {model.source}", "home pose: x = y = 0, alpha = gamma = 0"],
+                      inputs={"--params": params}, listing=_listing)
 
 
 @cli.command("view")
@@ -44,5 +50,7 @@ def _pdm_page(params: Path | None, out: Path) -> Path:
 def view(machine: str, params_path: Path | None, out_path: Path) -> None:
     """A self-contained HTML page of a machine: home pose in 3D, topology graph, mobility and
     over-constraint counts."""
-    path = (_hip_page if machine == "hip" else _pdm_page)(params_path, out_path)
-    click.echo(f"view: {path}")
+    from ..io import check_output_file
+
+    check_output_file(out_path, {"--params": params_path})  # the output rule, before any work
+    (_hip_page if machine == "hip" else _pdm_page)(params_path, out_path)

@@ -41,7 +41,8 @@ from numpy.typing import NDArray
 
 from ..errors import MotionError
 
-__all__ = ["Reference", "JointReference", "sample_reference", "joint_reference", "hermite_motion"]
+__all__ = ["Reference", "JointReference", "sample_reference", "reference_window", "joint_reference",
+           "hermite_motion"]
 
 Array = NDArray[np.float64]
 
@@ -98,7 +99,13 @@ def sample_reference(motion: MotionFn, duration: float, T: float) -> Reference:
     K = int(round(duration / T))
     if K < 1:
         raise MotionError(f"motion: {duration:g} s is shorter than one control cycle ({T:g} s)")
-    t = np.arange(K + 1) * T
+    return reference_window(motion, T, 0, K)
+
+
+def reference_window(motion: MotionFn, T: float, first: int, last: int) -> Reference:
+    """The reference on the cycle instants ``first .. last`` (``t = k T``) of a longer run and the
+    middles between them: a window of :func:`sample_reference`'s grid, with the same numbers."""
+    t = np.arange(first, last + 1) * T
     tm = t[:-1] + 0.5 * T
     q, qd, qdd, load = motion(t)
     mq, mqd, mqdd, mload = motion(tm)

@@ -7,11 +7,6 @@ constrained least squares with standard errors (:mod:`._solve`), bounded Fourier
 (:mod:`.hip`, :mod:`.hip_excite`, :mod:`.hip_run`). See ``docs/identification.md``.
 """
 
-from ._base import DEFAULT_RANK_TOL, BaseParameters, base_parameters
-from ._excite import bounded_fourier, minimize_excitation
-from ._regressor import Regressor, affine_regressor
-from ._solve import Estimate, constrained_least_squares
-
 __all__ = [
     "Regressor",
     "affine_regressor",
@@ -23,3 +18,17 @@ __all__ = [
     "bounded_fourier",
     "minimize_excitation",
 ]
+
+#: where each public name lives; loaded on first use (PEP 562), so that importing a light
+#: submodule (``pkmdyn.identify.bounds``) does not load the solvers
+_WHERE = {"Regressor": "._regressor", "affine_regressor": "._regressor", "BaseParameters": "._base",
+          "base_parameters": "._base", "DEFAULT_RANK_TOL": "._base", "Estimate": "._solve",
+          "constrained_least_squares": "._solve", "bounded_fourier": "._excite", "minimize_excitation": "._excite"}
+
+
+def __getattr__(name: str) -> object:
+    if name in _WHERE:
+        from importlib import import_module
+
+        return getattr(import_module(_WHERE[name], __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

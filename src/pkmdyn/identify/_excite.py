@@ -60,7 +60,9 @@ def minimize_excitation(
     """The coefficient vector with the lowest cost found: the best of ``4 starts`` random draws
     (normal, standard deviation ``scale``) refines ``starts`` of them by L-BFGS-B, each limited
     to ``iterations`` iterations and ``2 iterations (n_vars + 1)`` cost evaluations, so the work
-    is bounded by :func:`max_evaluations`."""
+    is bounded by :func:`max_evaluations` (L-BFGS-B checks its own ``maxfun`` only between
+    iterations; here the cost refuses the evaluation after the last, and the start ends with the
+    best point it saw)."""
     draws = [rng.normal(0.0, scale, n_vars) for _ in range(4 * starts)]
     costs = [cost(z) for z in draws]
     best_z, best_c = draws[int(np.argmin(costs))], float(np.min(costs))
@@ -68,8 +70,25 @@ def minimize_excitation(
         return best_z, best_c
     maxfun = 2 * iterations * (n_vars + 1)
     for k in np.argsort(costs)[:starts]:
-        res = minimize(cost, draws[k], method="L-BFGS-B",
-                       options={"maxiter": iterations, "maxfun": maxfun, "eps": 1e-5})
-        if res.fun < best_c:
-            best_z, best_c = res.x, float(res.fun)
+        seen: list[tuple[float, Array]] = []
+
+        def counted(z: Array) -> float:
+            if len(seen) >= maxfun:
+                raise _BudgetSpent
+            c = float(cost(z))
+            seen.append((c, np.array(z, dtype=float)))
+            return c
+
+        try:
+            res = minimize(counted, draws[k], method="L-BFGS-B",
+                           options={"maxiter": iterations, "maxfun": maxfun, "eps": 1e-5})
+            z_k, c_k = res.x, float(res.fun)
+        except _BudgetSpent:
+            c_k, z_k = min(seen, key=lambda p: p[0])
+        if c_k < best_c:
+            best_z, best_c = z_k, c_k
     return best_z, best_c
+
+
+class _BudgetSpent(Exception):
+    """The cost evaluations of one start are spent."""

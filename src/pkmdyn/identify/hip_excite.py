@@ -38,17 +38,8 @@ _DENSE = 4000  # samples per period of the final limit check
 _STRETCH_MAX = 1e6  # a period stretched further than this counts as unreachable
 
 #: bounds of the design, checked by :func:`design_excitation` (the command line states them)
-MAX_HARMONICS = 6
-MAX_DESIGN_SAMPLES = 1000
-MAX_ITERATIONS = 200
-MAX_STARTS = 5
-#: most cost evaluations x design samples of one design (:func:`~pkmdyn.identify._excite.max_evaluations`)
-MAX_WORK = 1_000_000
-MIN_PERIOD_S, MAX_PERIOD_S = 1e-3, 3600.0
-MAX_LOAD_N = 1e5
-MAX_SLIDER_SPEED_M_S = 100.0
-MAX_SLIDER_ACCEL_M_S2 = 1e5
-MAX_COND_J = 1e6
+from .bounds import (MAX_COND_J, MAX_DESIGN_SAMPLES, MAX_HARMONICS, MAX_ITERATIONS, MAX_LOAD_N,  # noqa: E402
+                     MAX_PERIOD_S, MAX_SLIDER_ACCEL_M_S2, MAX_SLIDER_SPEED_M_S, MAX_STARTS, MAX_WORK, MIN_PERIOD_S)
 
 
 @dataclass(frozen=True)
@@ -159,7 +150,8 @@ def design_excitation(
 
     Sizes are bounded (``harmonics <= MAX_HARMONICS``, ``samples <= MAX_DESIGN_SAMPLES``,
     ``iterations <= MAX_ITERATIONS``, ``starts <= MAX_STARTS``, :func:`design_work` <=
-    :data:`MAX_WORK`); ``progress``, if given, is called with 1 after each cost evaluation."""
+    :data:`MAX_WORK`); ``progress``, if given, is called with 1 before each evaluation of a
+    candidate motion, at most :func:`design_work` ``[0]`` times in all (a true bound)."""
     limits.check()
     _check_design(period_s, harmonics, samples, iterations, starts, seed)
     names = parameter_names(which)
@@ -169,6 +161,8 @@ def design_excitation(
 
     def evaluate(z: Array) -> tuple[float, Array | None, float, float]:
         """Penalty, stacked regressor, stretched period and max cond(J) of coefficients ``z``."""
+        if progress is not None:
+            progress(1)
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -204,8 +198,6 @@ def design_excitation(
         return float(np.log10(s[0] / s[-1])) if s[-1] > 0 else 1e3
 
     def cost(z: Array) -> float:
-        if progress is not None:
-            progress(1)
         pen, W, _, _ = evaluate(z)
         return pen if W is None else log_cond(W) + pen
 

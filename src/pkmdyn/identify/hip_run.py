@@ -10,26 +10,26 @@ from __future__ import annotations
 
 import copy
 import tomllib
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import LimitError, MotionError, ParameterError, PkmdynError
-from ..io import atomic_file, output_dir, write_csv, write_json
+from ..errors import LimitError, MotionError, ParameterError
+from ..io import atomic_file, check_output_dir, check_output_file, output_dir, write_csv, write_json
 from ..machines.hip_simulator import HipModel, load_params, model_from_dict
 from ..machines.hip_simulator.params import default_params_dict
 from ..params_util import read_toml
 from ..profiles.orientation import write_motion_csv
 from ._toml import dumps_tables
-from ._report import identification_report
+from ._report import MIN_EXPLAINED_PERCENT, explained_percent, fit_failure, identification_report
 from .hip import FRICTION_ATTR, TORQUE_COLUMNS, Which, consistency_transform, identified_description, identify_hip, read_measured_csv
 from .hip_excite import ExcitationLimits, design_excitation, excitation_motion
 
 __all__ = ["run_identify", "run_excite", "complete_description", "HELD_FIXED", "MAX_EXCITE_ROWS"]
 
-#: most rows of an excitation motion file
-MAX_EXCITE_ROWS = 2_000_000
+from .bounds import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW  # noqa: E402  (the bounds, stated by the CLI)
 
 #: what every identification holds at the parameter file's values
 HELD_FIXED = (
@@ -59,9 +59,6 @@ _KEY_OF = {
 }
 
 
-#: bounds of ``hip identify``'s options and of the measured values
-MAX_SG_WINDOW = 10001
-MAX_SG_ORDER = 20
 
 
 def _check_identify_options(which: str, sg_window: int, sg_order: int, rank_tol: float) -> None:
@@ -99,6 +96,7 @@ def run_identify(
     sg_order: int = 5,
     rank_tol: float = 1e-6,
     make_plots: bool = True,
+    report: Callable[[list[str]], None] | None = None,
     html_report: bool = True,
 ) -> tuple[dict[str, Path], list[str]]:
     """Identify and write the output folder (with ``html_report``, also ``report.html``: the machine
@@ -108,14 +106,24 @@ def run_identify(
     The options are checked first (``sg_window`` odd, 3 to :data:`MAX_SG_WINDOW`; ``sg_order``
     2 to :data:`MAX_SG_ORDER` and below the window; ``0 < rank_tol < 1``); the measured
     values by :func:`~pkmdyn.identify.hip.read_measured_csv`; a fit that still overflows is
-    refused, never written."""
+    refused, never written. ``out_dir`` must pass the output rule
+    (:func:`pkmdyn.io.check_output_dir`), checked first; ``report`` is called with the summary
+    lines and the files' final paths before they move into place."""
     import warnings
 
     _check_identify_options(which, sg_window, sg_order, rank_tol)
-    model = load_params(params_path)
+    inputs = {"--measured": measured_path, "--params": params_path}
+    check_output_dir(out_dir, inputs)
+    # the parameter file is read once (it may be a pipe)
     description = read_toml(params_path) if params_path is not None else default_params_dict()
+    model = model_from_dict(copy.deepcopy(description), str(params_path) if params_path is not None else
+                            "built-in parameters")
     description = complete_description(description, model)
     motion, tau, deriv = read_measured_csv(measured_path, sg_window, sg_order)
+    for i, name in enumerate(TORQUE_COLUMNS):
+        if not np.any(tau[:, i]):
+            raise MotionError(f"{measured_path}: column {name!r} is zero in every row: no measured torque to "
+                              "identify from")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
@@ -128,25 +136,30 @@ def run_identify(
     for w in caught:  # anything else the solvers said, not printed mid-run
         if not issubclass(w.category, RuntimeWarning):
             warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    failure = fit_failure(result.base, result.estimate, TORQUE_COLUMNS, tau, tau - result.tau_identified)
+    if failure is not None:  # a meaningless fit is an error, never a result
+        raise MotionError(f"{measured_path}: {failure}")
     identified = identified_description(description, result)
     T, _, _ = consistency_transform(result.names)
-    report = identification_report(
+    report_doc = identification_report(
         result.base, result.estimate, result.prior, TORQUE_COLUMNS,
         np.sqrt(np.mean(tau**2, axis=0)), result.residual_rms, T,
     )
-    report = {
+    report_doc = {
         "measured": str(measured_path),
         "parameters": str(params_path) if params_path is not None else "built-in (paper Tables 1-2)",
         "identify": which,
         "samples": len(motion),
         "derivatives": deriv,
-        **report,
+        **report_doc,
+        "explained_percent": dict(zip(TORQUE_COLUMNS, explained_percent(tau, tau - result.tau_identified).tolist())),
+        "minimum_explained_percent": MIN_EXPLAINED_PERCENT,
         "held_at_parameter_file_values": list(HELD_FIXED),
     }
     notes = {}
-    for name in report["not_separable"]:
+    for name in report_doc["not_separable"]:
         notes[_KEY_OF.get(name, name)] = "not separable from the data: only a combination is (identification.json)"
-    for name in report["not_excited"]:
+    for name in report_doc["not_excited"]:
         notes[_KEY_OF.get(name, name)] = "not excited by the measured motion: parameter file value"
     if "bearing_load_coeff_m" in result.names:
         split = "share of bearing_load_coeff_m; the data fix the split only through platform_mass_kg"
@@ -168,10 +181,19 @@ def run_identify(
         columns[f"{stem}_measured_Nm"] = tau[:, i]
         columns[f"{stem}_identified_Nm"] = result.tau_identified[:, i]
         columns[f"{stem}_residual_Nm"] = tau[:, i] - result.tau_identified[:, i]
+    lines = [f"rank {result.base.rank} of {len(result.names)} parameters, condition number {result.base.condition_number:.4g}"]
+    for name, v in report_doc["separable"].items():
+        lines.append(f"{name} = {v['estimate']:.6g} +- {v['standard_error']:.2g}")
+    for c in report_doc["combinations"]:
+        lines.append(f"{c['combination']} = {c['estimate']:.6g} +- {c['standard_error']:.2g}")
+    if report_doc["not_excited"]:
+        lines.append("not excited: " + ", ".join(report_doc["not_excited"]))
+    rms = ", ".join(f"{1e3 * v:.4g}" for v in result.residual_rms)
+    lines.append(f"residual RMS per motor [N mm]: {rms}")
     out = Path(out_dir)
-    with output_dir(out) as tmp:
+    with output_dir(out, inputs=inputs) as tmp:
         (tmp / "identified.toml").write_text(text, encoding="utf-8")
-        write_json(tmp / "identification.json", report)
+        write_json(tmp / "identification.json", report_doc)
         write_csv(tmp / "torques.csv", columns)
         names = ["identified.toml", "identification.json", "torques.csv"]
         if make_plots:
@@ -181,19 +203,13 @@ def run_identify(
             plot_residuals(motion.t, tau - result.tau_identified, tmp / "residuals.png")
             names += ["torque_fit.png", "residuals.png"]
         if html_report:
-            names.append(_report(tmp, model, motion, tau, result.tau_identified, report, params_path,
+            names.append(_report(tmp, model, motion, tau, result.tau_identified, report_doc, params_path,
                                  [tmp / n for n in names if n.endswith(".png")],
                                  [str(w.message) for w in caught if not issubclass(w.category, RuntimeWarning)]).name)
-    lines = [f"rank {result.base.rank} of {len(result.names)} parameters, condition number {result.base.condition_number:.4g}"]
-    for name, v in report["separable"].items():
-        lines.append(f"{name} = {v['estimate']:.6g} +- {v['standard_error']:.2g}")
-    for c in report["combinations"]:
-        lines.append(f"{c['combination']} = {c['estimate']:.6g} +- {c['standard_error']:.2g}")
-    if report["not_excited"]:
-        lines.append("not excited: " + ", ".join(report["not_excited"]))
-    rms = ", ".join(f"{1e3 * v:.4g}" for v in result.residual_rms)
-    lines.append(f"residual RMS per motor [N mm]: {rms}")
-    return {Path(n).stem.replace(".", "_"): out / n for n in names}, lines
+        files = {Path(n).stem.replace(".", "_"): out / n for n in names}
+        if report is not None:
+            report([*lines, *(f"{name}: {path}" for name, path in files.items())])
+    return files, lines
 
 
 def _report(tmp: Path, model: HipModel, motion: Any, tau: np.ndarray, tau_id: np.ndarray, doc: dict[str, Any],
@@ -233,20 +249,23 @@ def run_excite(
     seed: int,
     design_samples: int = 120,
     progress: bool = False,
+    report: Callable[[list[str]], None] | None = None,
 ) -> list[str]:
     """Design the excitation and write it as a motion CSV; returns summary lines.
 
     Every input is checked before the design starts (``cycles x samples_per_cycle + 1`` rows
     at most :data:`MAX_EXCITE_ROWS`); ``progress`` shows a bar of the cost evaluations on a
-    terminal. The file is written atomically (:func:`pkmdyn.io.atomic_file`)."""
+    terminal. The file is written atomically (:func:`pkmdyn.io.atomic_file`) and must pass the
+    output rule (:func:`pkmdyn.io.check_output_file`), checked first; ``report`` is called with
+    the summary lines before the file moves into place."""
     from tqdm import tqdm
 
     from .hip_excite import design_work
 
-    model = load_params(params_path)
+    inputs = {"--params": params_path}
     out = Path(out_path)
-    if out.is_dir():
-        raise PkmdynError(f"--out {out}: is a folder, expected a CSV file name")
+    check_output_file(out, inputs)
+    model = load_params(params_path)
     limits.check()
     for name, v, lo in (("cycles", cycles, 1), ("samples per cycle", samples_per_cycle, 16)):
         if isinstance(v, bool) or int(v) != v or v < lo:
@@ -262,9 +281,12 @@ def run_excite(
                                progress=bar.update)
     t = np.linspace(0.0, cycles * ex.period_s, n)
     motion = excitation_motion(ex.coeffs, ex.period_s, limits, t)
-    with atomic_file(out) as tmp:
-        write_motion_csv(tmp, motion)
-    return [
+    lines = [
         f"period {ex.period_s:.4g} s, {harmonics} harmonics; condition number {ex.condition_number:.4g} "
         f"over {len(ex.parameters)} parameters: {', '.join(ex.parameters)}"
     ]
+    with atomic_file(out, inputs=inputs) as tmp:
+        write_motion_csv(tmp, motion)
+        if report is not None:
+            report([*lines, f"motion: {out}"])
+    return lines

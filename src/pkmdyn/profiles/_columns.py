@@ -14,7 +14,7 @@ from scipy.interpolate import make_interp_spline
 
 from ..errors import MotionError
 
-__all__ = ["require_increasing", "column_group", "derivatives"]
+__all__ = ["require_increasing", "require_rows", "column_group", "derivatives"]
 
 Array = NDArray[np.float64]
 
@@ -27,6 +27,13 @@ def require_increasing(path: str | Path, t: Array) -> None:
         raise MotionError(
             f"{path}: row {r}, column 't_s': time must increase strictly ({t[r - 1]:g} s after {t[r - 2]:g} s)"
         )
+
+
+def require_rows(path: str | Path, t: Array) -> None:
+    """A motion has at least two rows (one sample has no duration)."""
+    if t.shape[0] < 2:
+        raise MotionError(f"{path}: a motion needs at least 2 data rows, found {t.shape[0]} (one sample has no "
+                          "duration)")
 
 
 def column_group(path: str | Path, cols: Mapping[str, Array], names: Sequence[str]) -> Array | None:
@@ -51,6 +58,7 @@ def derivatives(
     through the angles (both missing) or through the given rates (accelerations missing)."""
     if qd is None and qdd is not None:
         raise MotionError(f"{path}: acceleration columns need the rate columns ({', '.join(rate_names)})")
+    require_rows(path, t)
     if qd is not None and qdd is not None:
         return qd, qdd
     if t.shape[0] < 6:

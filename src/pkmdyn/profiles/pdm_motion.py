@@ -84,7 +84,8 @@ def read_pdm_motion(path: str | Path, max_rows: int | None = PDM_MAX_ROWS) -> Pd
     t = cols["t_s"]
     require_increasing(path, t)
     q = column_group(path, cols, POSE_COLUMNS)
-    qd, qdd = derivatives(path, t, q, column_group(path, cols, RATE_COLUMNS), column_group(path, cols, ACCEL_COLUMNS), RATE_COLUMNS)
+    rates, accels = column_group(path, cols, RATE_COLUMNS), column_group(path, cols, ACCEL_COLUMNS)
+    qd, qdd = derivatives(path, t, q, rates, accels, RATE_COLUMNS)
     return PdmMotion(t, q, qd, qdd)
 
 

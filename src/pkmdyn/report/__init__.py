@@ -9,7 +9,7 @@ parameters and warnings (``docs/report.md``).
 
 from ._figures import Curve, TimePlot, decimate_minmax
 from ._page import REPORT_NAME, write_report, write_view
-from ._scene import MAX_FRAMES, Scene, SceneActuator, SceneBody, frame_indices, scene_from_files, scene_from_joints
+from ._scene import MAX_FRAMES, FramePicker, Scene, SceneActuator, SceneBody, frame_indices, scene_from_files, scene_from_joints
 from ._topology import Topology, fundamental_loops, layered_layout, topology_from_model
 
 __all__ = [
@@ -19,6 +19,7 @@ __all__ = [
     "scene_from_joints",
     "scene_from_files",
     "frame_indices",
+    "FramePicker",
     "MAX_FRAMES",
     "Curve",
     "TimePlot",

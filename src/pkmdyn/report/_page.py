@@ -206,14 +206,16 @@ def write_report(out_folder: str | Path, *, title: str, scene: Scene | None, plo
 
 
 def write_view(path: str | Path, *, title: str, scene: Scene, topology: Topology, mobility: Mapping[str, Any],
-               parameters: str = "", notes: Sequence[str] = ()) -> Path:
-    """Write the ``view`` page of a machine to ``path`` (atomically; only a regular file that
-    pkmdyn wrote, or a new name, is replaced): the mechanism at one pose in 3D, the topology graph
-    with its loops, and the mobility and over-constraint counts (``mobility``)."""
+               parameters: str = "", notes: Sequence[str] = (), inputs: Mapping[str, Any] | None = None,
+               listing: Any = None) -> Path:
+    """Write the ``view`` page of a machine to ``path`` through :func:`pkmdyn.io.atomic_file` (the
+    output rule: only a new name or a file pkmdyn wrote is replaced, never one of ``inputs``):
+    the mechanism at one pose in 3D, the topology graph with its loops, and the mobility and
+    over-constraint counts (``mobility``). ``listing``, when given, is called with the path before
+    the file moves into place (the command line prints it there)."""
     from ..io import atomic_file
 
     target = Path(path)
-    _check_replaceable(target)
     loops = fundamental_loops(topology)
     info: dict[str, Any] = {"scene": "pkmdyn-scene", "plots": [], "times": [float(scene.t[0])], "frames": 1,
                             "samples": 1}
@@ -241,23 +243,8 @@ def write_view(path: str | Path, *, title: str, scene: Scene, topology: Topology
     if parameters:
         body.append(f"<section id=\"parameters\"><h2>Parameters used</h2><pre>{html.escape(parameters)}</pre></section>")
     text = _page(title, " | ".join(notes) if notes else "pkmdyn view", "".join(body), info)
-    with atomic_file(target) as tmp:
+    with atomic_file(target, inputs=dict(inputs or {})) as tmp:
         tmp.write_text(text, encoding="utf-8")
+        if listing is not None:
+            listing(target)
     return target
-
-
-def _check_replaceable(target: Path) -> None:
-    """Refuse to replace anything but a regular file that a pkmdyn page wrote (or nothing)."""
-    if target.is_symlink():
-        raise PkmdynError(f"--out {target}: is a symbolic link; refusing to replace it")
-    if not target.exists():
-        return
-    if not target.is_file():
-        raise PkmdynError(f"--out {target}: exists and is not a regular file; refusing to replace it")
-    try:
-        with target.open("rb") as fh:
-            head = fh.read(400)
-    except OSError as exc:
-        raise PkmdynError(f"--out {target}: cannot read it ({exc.strerror})") from None
-    if b"<meta name=\"generator\" content=\"pkmdyn\">" not in head:
-        raise PkmdynError(f"--out {target}: exists and was not written by pkmdyn; refusing to replace it")

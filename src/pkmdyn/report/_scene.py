@@ -20,8 +20,8 @@ from numpy.typing import NDArray
 
 from ..errors import ParameterError, PkmdynError
 
-__all__ = ["Scene", "SceneBody", "SceneActuator", "frame_indices", "scene_from_joints", "scene_from_files",
-           "MAX_FRAMES"]
+__all__ = ["Scene", "SceneBody", "SceneActuator", "FramePicker", "frame_indices", "scene_from_joints",
+           "scene_from_files", "MAX_FRAMES"]
 
 Array = NDArray[np.float64]
 
@@ -106,6 +106,26 @@ def frame_indices(n: int, max_frames: int = MAX_FRAMES) -> Array:
     if n <= max_frames:
         return np.arange(n)
     return np.unique(np.round(np.linspace(0, n - 1, max_frames)).astype(int))
+
+
+class FramePicker:
+    """The animation's samples of a run that streams block by block: at most ``max_frames`` evenly
+    spaced samples of ``0 .. n - 1`` (:func:`frame_indices`), picked from each block as it passes,
+    so memory does not grow with the run. ``add(start, t=..., q=...)`` takes one block's arrays
+    (leading sample axis, block starting at sample ``start``); ``arrays()`` the picked rows."""
+
+    def __init__(self, n: int, max_frames: int = MAX_FRAMES) -> None:
+        self.idx = frame_indices(n, max_frames)
+        self.parts: dict[str, list[Array]] = {}
+
+    def add(self, start: int, **arrays: Array) -> None:
+        k = next(iter(arrays.values())).shape[0]
+        pick = self.idx[(self.idx >= start) & (self.idx < start + k)] - start
+        for key, v in arrays.items():
+            self.parts.setdefault(key, []).append(np.asarray(v)[pick])
+
+    def arrays(self) -> dict[str, Array]:
+        return {k: np.concatenate(v) for k, v in self.parts.items()}
 
 
 def _plate(pts: Array) -> bool:

@@ -7,7 +7,7 @@ per control cycle. Nothing here imports a machine.
 """
 
 from ._loop import DivergenceError, LoopResult, LoopSettings, check_timing, closed_loop
-from ._run import Tracking, track
+from ._run import SPAN_CYCLES, Tracking, track, track_spans
 from ._plant import EXPLICIT_LIMIT, METHODS, ROS2_GAMMA, Plant, accelerations, hold_interval, make_plant, make_work
 
 __all__ = [
@@ -26,4 +26,6 @@ __all__ = [
     "check_timing",
     "Tracking",
     "track",
+    "track_spans",
+    "SPAN_CYCLES",
 ]

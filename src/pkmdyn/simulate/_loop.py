@@ -41,13 +41,23 @@ from numpy.typing import NDArray
 from ..errors import PkmdynError
 from ._plant import Plant, hold_interval, make_work
 
-__all__ = ["LoopSettings", "LoopResult", "DivergenceError", "closed_loop", "check_timing"]
+__all__ = ["LoopSettings", "LoopResult", "LoopState", "DivergenceError", "closed_loop", "run_span", "new_loop_state",
+           "check_timing"]
 
 Array = NDArray[np.float64]
 
 
 class DivergenceError(PkmdynError):
-    """A closed-loop run that went unstable; the message names the time."""
+    """A closed-loop run that went unstable; the message names the time.
+
+    Where a tracking error crossed its limit, ``coordinate`` is its index, ``error`` and
+    ``limit`` the values in SI (rad or m) and ``t`` the time [s], so that a caller who knows the
+    coordinates' names and units can say it in them."""
+
+    def __init__(self, message: str, coordinate: int | None = None, error: float = float("nan"),
+                 limit: float = float("nan"), t: float = float("nan")) -> None:
+        super().__init__(message)
+        self.coordinate, self.error, self.limit, self.t = coordinate, error, limit, t
 
 
 @dataclass(frozen=True)
@@ -123,29 +133,32 @@ def _alpha(fc: float, T: float) -> float:
 
 
 @numba.njit(cache=True)
-def _sense(k: int, q: Array, qd: Array, q_ref: Array, div: Array, s_ref_p: Array, Bt_p: Array,
-           s_ref_c: Array, rate_map: Array, res: float, T: float, a_v: float, a_a: float,
-           noise: Array, delay: int, pose_from_sensor: bool,
+def _sense(kr: int, k: int, j: int, first: bool, q: Array, qd: Array, q_ref: Array, div: Array, s_ref_p: Array,
+           Bt_p: Array, s_ref_c: Array, rate_map: Array, res: float, T: float, a_v: float, a_a: float,
+           noise: Array, pose_from_sensor: bool,
            s_prev: Array, sd_prev: Array, yq: Array, yqd: Array, ys: Array, ysd: Array, ysdd: Array,
            out_q: Array, out_qd: Array, out_att: Array, out_s: Array, out_qs: Array, out_qds: Array,
            out_se: Array, out_sde: Array, out_sdde: Array) -> int:  # pragma: no cover - compiled
-    """Sensors of cycle ``k`` (module docstring, items 1-2); records the true and sensed state.
-    Returns the index of a coordinate beyond its divergence limit (or not finite), else -1."""
+    """Sensors of a cycle (module docstring, items 1-2); records the true and sensed state.
+    ``kr`` is the cycle's row in the reference arrays, ``k`` in the records (and ``noise``),
+    ``j`` the record row the delayed pose sensor reads; ``first``: the run's first cycle (the
+    filters start there). Returns the index of a coordinate beyond its divergence limit (or
+    not finite), else -1."""
     nq = q.shape[0]
     nu = ys.shape[0]
     for i in range(nq):
-        e = q[i] - q_ref[k, i]
+        e = q[i] - q_ref[kr, i]
         if not (np.isfinite(e) and np.isfinite(qd[i]) and abs(e) <= div[i]):
             return i
         out_q[k, i] = q[i]
         out_qd[k, i] = qd[i]
     for a in range(nu):
-        s = s_ref_p[k, a]
+        s = s_ref_p[kr, a]
         for i in range(nq):
-            s += Bt_p[k, a, i] * (q[i] - q_ref[k, i])
+            s += Bt_p[kr, a, i] * (q[i] - q_ref[kr, i])
         out_s[k, a] = s
         se = res * np.floor(s / res) if res > 0 else s
-        if k > 0:
+        if not first:
             ysd[a] += a_v * ((se - s_prev[a]) / T - ysd[a])
             ysdd[a] += a_a * ((ysd[a] - sd_prev[a]) / T - ysdd[a])
         s_prev[a] = se
@@ -154,14 +167,13 @@ def _sense(k: int, q: Array, qd: Array, q_ref: Array, div: Array, s_ref_p: Array
         out_se[k, a] = se
         out_sde[k, a] = ysd[a]
         out_sdde[k, a] = ysdd[a]
-    j = k - delay if k >= delay else 0
     for i in range(nq):
         out_att[k, i] = out_q[j, i] + noise[k, i]
         r = 0.0
-        p = q_ref[k, i]
+        p = q_ref[kr, i]
         for a in range(nu):
-            r += rate_map[k, i, a] * ysd[a]
-            p += rate_map[k, i, a] * (ys[a] - s_ref_c[k, a])
+            r += rate_map[kr, i, a] * ysd[a]
+            p += rate_map[kr, i, a] * (ys[a] - s_ref_c[kr, a])
         yqd[i] = r
         yq[i] = out_att[k, i] if pose_from_sensor else p
         out_qs[k, i] = yq[i]
@@ -179,6 +191,40 @@ def _actuate(k: int, u_raw: Array, lim: Array, u: Array, out_u: Array, sat: Arra
         sat[k, a] = abs(u_raw[a]) >= lim[a]
 
 
+@dataclass
+class LoopState:
+    """What a closed loop carries from one cycle to the next (mutable; :func:`new_loop_state`):
+    the plant's ``q, qd``, the sensed buffers ``y``, the controller's ``memory``, the integrator's
+    ``work``, the encoder's previous reading and filtered rate, the noise generator, the pose
+    records the delayed pose sensor still needs (``history``, at most ``delay`` rows) and the
+    cycles done. With it a run can be computed span by span in bounded memory
+    (:func:`pkmdyn.simulate.track_spans`); the spans join exactly."""
+
+    q: Array
+    qd: Array
+    y: Any
+    memory: Array
+    work: Any
+    s_prev: Array
+    sd_prev: Array
+    rng: Any
+    history: Array
+    done: int = 0
+
+
+def new_loop_state(plant: Plant, controller: Any, ref: Any, ctrl_joint: Any, settings: LoopSettings) -> LoopState:
+    """The state at the start of a run: the plant on the reference's initial state, the filters
+    on the reference's rate and acceleration (the loop starts in steady state on it)."""
+    from ..control._laws import Sensed, new_memory
+
+    nq, nu = plant.nq, plant.nu
+    y = Sensed(np.empty(nq), np.empty(nq), np.empty(nu), ctrl_joint.sd[0].astype(float).copy(),
+               ctrl_joint.sdd[0].astype(float).copy())
+    return LoopState(ref.q[0].astype(float).copy(), ref.qd[0].astype(float).copy(), y, new_memory(controller, nu),
+                     make_work(plant, settings.method), np.zeros(nu), y.sd.copy(),
+                     np.random.default_rng(settings.seed), np.empty((0, nq)))
+
+
 def closed_loop(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_joint: Any, rate_map: Array,
                 settings: LoopSettings, loads: Array | None = None, progress: bool = False) -> LoopResult:
     """Run the loop over the reference's ``K`` cycles from the reference's initial state.
@@ -191,8 +237,27 @@ def closed_loop(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_
     ``j dt / 2`` (None: the reference load, linear within a cycle; zeros for a machine without
     load; :func:`pkmdyn.simulate.track` passes the motion's own load).
     """
-    from ..control._laws import Sensed, effort, new_memory
+    state = new_loop_state(plant, controller, ref, ctrl_joint, settings)
+    bar = None
+    if progress and ref.cycles >= 2000:
+        from tqdm import tqdm
 
+        bar = tqdm(total=ref.cycles, desc="closed loop", unit="cycle", leave=False, disable=None, mininterval=0.5)
+    try:
+        return run_span(plant, controller, ref, plant_joint, ctrl_joint, rate_map, settings, state, 0, ref.cycles,
+                        loads=loads, bar=bar, last=True)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def run_span(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_joint: Any, rate_map: Array,
+             settings: LoopSettings, state: LoopState, first: int, n: int, loads: Array | None = None,
+             bar: Any = None, last: bool = False) -> LoopResult:
+    """Run ``n`` cycles from ``state`` (updated in place), the first of them at row ``first`` of
+    the reference arrays (``ref``, the joint references, ``rate_map``, ``loads`` and the
+    controller's precomputed arrays all cover the same rows, e.g. a window of a longer run).
+    Returns the records of these cycles; ``last``: the run ends here (its end state is checked)."""
     T = settings.cycle_s
     steps = check_timing(T, settings.step_s)
     dt = T / steps
@@ -203,65 +268,60 @@ def closed_loop(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_
             loads = np.zeros(2 * K * steps + 1)
         else:
             tt = np.arange(2 * K * steps + 1) * (0.5 * dt)
-            loads = np.interp(tt, ref.t, ref.load)
+            loads = np.interp(tt, ref.t - ref.t[0], ref.load)
     loads = np.asarray(loads, dtype=float)
     if loads.shape != (2 * K * steps + 1,):
         raise ValueError(f"loads: expected {2 * K * steps + 1} values (step boundaries and middles), got {loads.shape}")
-    rng = np.random.default_rng(settings.seed)
-    noise = rng.standard_normal((K, nq)) * settings.pose_noise
+    if not (0 <= first and first + n <= K):
+        raise ValueError(f"cycles {first} to {first + n}: outside the reference's {K} cycles")
+    delay = int(settings.pose_delay_cycles)
+    pre = state.history.shape[0]
+    rows = pre + n
+    noise = np.zeros((rows, nq))
+    noise[pre:] = state.rng.standard_normal((n, nq)) * settings.pose_noise
     a_v = _alpha(settings.velocity_cutoff_Hz, T)
     a_a = _alpha(settings.acceleration_cutoff_Hz, T)
     res = float(settings.encoder_resolution)
     lim = np.asarray(settings.effort_limit, dtype=float)
     div = np.asarray(settings.divergence_limit, dtype=float)
-    delay = int(settings.pose_delay_cycles)
     from_sensor = bool(settings.pose_from_sensor)
 
-    out_q = np.empty((K, nq)); out_qd = np.empty((K, nq)); out_u = np.empty((K, nu))
-    out_att = np.empty((K, nq)); out_qds = np.empty((K, nq)); out_s = np.empty((K, nu))
-    out_se = np.empty((K, nu)); out_sde = np.empty((K, nu)); out_sdde = np.empty((K, nu))
-    out_qs = np.empty((K, nq))
-    sat = np.zeros((K, nu), dtype=bool)
-    q = ref.q[0].astype(float).copy()
-    qd = ref.qd[0].astype(float).copy()
-    # the filters start on the reference (the loop starts in steady state on it)
-    y = Sensed(np.empty(nq), np.empty(nq), np.empty(nu), ctrl_joint.sd[0].astype(float).copy(),
-               ctrl_joint.sdd[0].astype(float).copy())
-    memory = new_memory(controller, nu)
-    work = make_work(plant, settings.method)
-    s_prev = np.zeros(nu)
-    sd_prev = y.sd.copy()
+    out_q = np.empty((rows, nq)); out_qd = np.empty((rows, nq)); out_u = np.empty((rows, nu))
+    out_att = np.empty((rows, nq)); out_qds = np.empty((rows, nq)); out_s = np.empty((rows, nu))
+    out_se = np.empty((rows, nu)); out_sde = np.empty((rows, nu)); out_sdde = np.empty((rows, nu))
+    out_qs = np.empty((rows, nq))
+    sat = np.zeros((rows, nu), dtype=bool)
+    out_q[:pre] = state.history
+    from ..control._laws import effort
+
+    q, qd, y, memory, work = state.q, state.qd, state.y, state.memory, state.work
     u = np.empty(nu)
     q_ref = np.ascontiguousarray(ref.q)
-    args = (q_ref, div, np.ascontiguousarray(plant_joint.s), np.ascontiguousarray(plant_joint.Bt),
+    args = (q, qd, q_ref, div, np.ascontiguousarray(plant_joint.s), np.ascontiguousarray(plant_joint.Bt),
             np.ascontiguousarray(ctrl_joint.s), np.ascontiguousarray(rate_map), res, T, a_v, a_a, noise,
-            delay, from_sensor, s_prev, sd_prev, y.q, y.qd, y.s, y.sd, y.sdd, out_q, out_qd, out_att, out_s,
+            from_sensor, state.s_prev, state.sd_prev, y.q, y.qd, y.s, y.sd, y.sdd, out_q, out_qd, out_att, out_s,
             out_qs, out_qds, out_se, out_sde, out_sdde)
-
-    bar = None
-    if progress and K >= 2000:
-        from tqdm import tqdm
-
-        bar = tqdm(total=K, desc="closed loop", unit="cycle", leave=False, disable=None, mininterval=0.5)
-    try:
-        for k in range(K):
-            bad = _sense(k, q, qd, *args)
-            if bad >= 0:
-                e = q[bad] - q_ref[k, bad]
-                raise DivergenceError(
-                    f"run diverged at t = {ref.t[k]:.4f} s: tracking error of coordinate {bad + 1} is "
-                    f"{e:.3g}, beyond its divergence limit {div[bad]:g}")
-            _actuate(k, effort(controller, ref, k, y, memory), lim, u, out_u, sat)
-            try:
-                hold_interval(plant, q, qd, u, loads[2 * k * steps:2 * (k + 1) * steps + 1], dt, work)
-            except PkmdynError as exc:
-                raise DivergenceError(f"run diverged at t = {ref.t[k]:.4f} s: {exc}") from None
-            if bar is not None and (k + 1) % 1000 == 0:
-                bar.update(1000)
-    finally:
-        if bar is not None:
-            bar.close()
-    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
-        raise DivergenceError(f"run diverged at t = {ref.t[-1]:.4f} s: the state is not finite")
-    return LoopResult(ref.t[:-1].copy(), out_q, out_qd, out_u, out_qs, out_qds, out_att, out_s, out_se, out_sde,
-                      out_sdde, q, qd, sat)
+    done = state.done
+    for i in range(n):
+        kr, k, g = first + i, pre + i, done + i
+        bad = _sense(kr, k, k - delay if g >= delay else 0, g == 0, *args)
+        if bad >= 0:
+            e = q[bad] - q_ref[kr, bad]
+            raise DivergenceError(
+                f"run diverged at t = {ref.t[kr]:.4f} s: tracking error of coordinate {bad + 1} is "
+                f"{e:.3g}, beyond its divergence limit {div[bad]:g}", bad, float(e), float(div[bad]),
+                float(ref.t[kr]))
+        _actuate(k, effort(controller, ref, kr, y, memory), lim, u, out_u, sat)
+        try:
+            hold_interval(plant, q, qd, u, loads[2 * kr * steps:2 * (kr + 1) * steps + 1], dt, work)
+        except PkmdynError as exc:
+            raise DivergenceError(f"run diverged at t = {ref.t[kr]:.4f} s: {exc}") from None
+        if bar is not None and (g + 1) % 1000 == 0:
+            bar.update(1000)
+    state.done = done + n
+    state.history = out_q[max(0, rows - delay):rows].copy() if delay else np.empty((0, nq))
+    if last and not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+        raise DivergenceError(f"run diverged at t = {ref.t[first + n]:.4f} s: the state is not finite")
+    return LoopResult(ref.t[first:first + n].copy(), out_q[pre:], out_qd[pre:], out_u[pre:], out_qs[pre:],
+                      out_qds[pre:], out_att[pre:], out_s[pre:], out_se[pre:], out_sde[pre:], out_sdde[pre:],
+                      q.copy(), qd.copy(), sat[pre:])

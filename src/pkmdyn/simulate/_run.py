@@ -8,10 +8,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._loop import LoopResult, LoopSettings, closed_loop
+from collections.abc import Iterator
+from dataclasses import replace
+
+from ._loop import LoopResult, LoopSettings, closed_loop, new_loop_state, run_span
 from ._plant import make_plant
 
-__all__ = ["Tracking", "track"]
+__all__ = ["Tracking", "track", "track_spans", "SPAN_CYCLES"]
+
+#: control cycles of one span of :func:`track_spans` (its arrays: some megabytes)
+SPAN_CYCLES = 20_000
 
 Array = NDArray[np.float64]
 
@@ -63,3 +69,80 @@ def track(verbs: Any, model: Any, plant_model: Any, motion: Any, duration: float
             loads = np.asarray(motion(tt)[3], dtype=float)
     res = closed_loop(plant, ctrl, ref, plant_joint, joint, rate_map, settings, loads=loads, progress=progress)
     return Tracking(ref, joint, res, ctrl, plant.fast)
+
+
+def track_spans(verbs: Any, model: Any, plant_model: Any, motion: Any, duration: float, kind: str,
+                gains: Any, settings: LoopSettings, has_load: bool, progress: bool = False,
+                joint_accelerations: bool = False, span_cycles: int | None = None) -> Iterator[Tracking]:
+    """:func:`track`, computed and handed out span by span: yields one :class:`Tracking` per
+    ``span_cycles`` control cycles (default :data:`SPAN_CYCLES`; the last may be shorter), so that memory does not grow with
+    the run. Each span's ``reference`` and ``joint`` cover its own cycles (``K + 1`` instants,
+    as :func:`track`'s cover the whole run), its ``result`` holds its records.
+
+    Every span is computed on a window one cycle wider at each side, so that the interval
+    efforts and the actuator displacements (which use their neighbours) are those of the whole
+    run; the loop's state (plant, filters, controller memory, noise, the delayed pose) carries
+    over. The spans' records joined equal :func:`track`'s up to rounding.
+    """
+    from ..control._laws import make_controller
+    from ..control._reference import JointReference, Reference, joint_reference, reference_window
+    from ..errors import MotionError
+    from ._loop import check_timing
+
+    steps = check_timing(settings.cycle_s, settings.step_s)
+    T = settings.cycle_s
+    K = int(round(duration / T))
+    if K < 1:
+        raise MotionError(f"motion: {duration:g} s is shorter than one control cycle ({T:g} s)")
+    span_cycles = SPAN_CYCLES if span_cycles is None else int(span_cycles)
+    if span_cycles < 1:
+        raise ValueError(f"span_cycles: {span_cycles} must be >= 1")
+    plant = make_plant(verbs, plant_model, has_load)
+
+    def anchored(joint: JointReference, o: int, s0: Array | None) -> JointReference:
+        return joint if s0 is None else replace(joint, s=joint.s - joint.s[o] + s0)
+
+    def part(r: Reference, o: int, n: int) -> Reference:
+        mid = slice(o, o + n)
+        full = slice(o, o + n + 1)
+        return Reference(r.T, r.t[full], r.q[full], r.qd[full], r.qdd[full], None if r.load is None else r.load[full],
+                         r.mid_q[mid], r.mid_qd[mid], r.mid_qdd[mid], None if r.mid_load is None else r.mid_load[mid])
+
+    state = None
+    s_ctrl = s_plant = None
+    bar = None
+    if progress and K >= 2000:
+        from tqdm import tqdm
+
+        bar = tqdm(total=K, desc="closed loop", unit="cycle", leave=False, disable=None, mininterval=0.5)
+    try:
+        for k0 in range(0, K, span_cycles):
+            k1 = min(K, k0 + span_cycles)
+            w0, w1 = max(0, k0 - 1), min(K, k1 + 1)
+            o, n = k0 - w0, k1 - k0
+            ref = reference_window(motion, T, w0, w1)
+            joint = anchored(joint_reference(verbs, model, ref, motion, joint_accelerations), o, s_ctrl)
+            plant_joint = joint if plant_model is model else anchored(
+                joint_reference(verbs, plant_model, ref, motion, False), o, s_plant)
+            ctrl = make_controller(kind, gains, verbs, model, ref, joint)
+            rate_map = np.linalg.inv(joint.Bt)
+            loads = None
+            if ref.load is not None:
+                if steps == 1 and ref.mid_load is not None:
+                    loads = np.empty(2 * ref.cycles + 1)
+                    loads[0::2] = ref.load
+                    loads[1::2] = ref.mid_load
+                else:
+                    tt = (2 * w0 * steps + np.arange(2 * ref.cycles * steps + 1)) * (0.5 * T / steps)
+                    loads = np.asarray(motion(tt)[3], dtype=float)
+            if state is None:
+                state = new_loop_state(plant, ctrl, ref, joint, settings)
+            res = run_span(plant, ctrl, ref, plant_joint, joint, rate_map, settings, state, o, n, loads=loads, bar=bar,
+                           last=k1 == K)
+            s_ctrl, s_plant = joint.s[o + n].copy(), plant_joint.s[o + n].copy()
+            jp = slice(o, o + n + 1)
+            yield Tracking(part(ref, o, n), JointReference(joint.Bt[jp], joint.s[jp], joint.sd[jp], joint.sdd[jp]), res,
+                           ctrl, plant.fast)
+    finally:
+        if bar is not None:
+            bar.close()

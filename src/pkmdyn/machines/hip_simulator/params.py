@@ -15,9 +15,10 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field, field_validator, model_validator
 
-from ...errors import ParameterError
+from ...errors import LimitError, ParameterError
 from ...io import DEFAULT_MAX_SAMPLES
 from ...params_util import Section, read_toml, validate
+from ...profiles.iso_fit import iso_cycle_preset
 from ...spatial import check_sequence
 
 __all__ = [
@@ -30,6 +31,7 @@ __all__ = [
     "load_params",
     "model_from_dict",
     "default_params_dict",
+    "paper_params_path",
     "DEFAULT_PARAMS_TEXT",
 ]
 
@@ -119,6 +121,23 @@ class _Limits(Section):
     max_abs_angle_deg: Annotated[float, Field(gt=0.0, le=180.0)] = 45.0
     max_slider_speed_m_s: Pos = 2.0
     max_slider_acceleration_m_s2: Pos = 50.0
+    max_duration_s: Pos = 1e7
+    min_platform_gap_m: Pos = 0.05
+
+
+class _Motion(Section):
+    """The built-in motion a run takes when no motion file is given (``[motion]``, optional)."""
+
+    iso_cycle: str = "default"
+
+    @field_validator("iso_cycle")
+    @classmethod
+    def _preset(cls, v: str) -> str:
+        try:
+            iso_cycle_preset(v)
+        except ParameterError as exc:
+            raise ValueError(str(exc)) from None
+        return v
 
 
 class _HipFile(Section):
@@ -126,6 +145,7 @@ class _HipFile(Section):
     inertia: _Inertia
     friction: _Friction
     limits: _Limits = _Limits()
+    motion: _Motion = _Motion()
 
 
 @dataclass(frozen=True)
@@ -193,10 +213,17 @@ class HipLimits:
     max_abs_angle_deg: float = 45.0  #: |Euler angle| of the platforms [deg]
     max_slider_speed_m_s: float = 2.0  #: |slider velocity| [m/s]
     max_slider_acceleration_m_s2: float = 50.0  #: |slider acceleration| [m/s^2]
+    max_duration_s: float = 1e7  #: duration of a run's motion [s] (about 10 million ISO cycles)
+    #: least distance h1 - h2 of the platforms [m]: the two sliders of a module ride on one screw
+    #: ``L_1i - L_2i = h1 - h2`` apart, and a slider carriage is some centimetres long; checked
+    #: when the parameter file is read, so it is raised (lowered) in the file only
+    min_platform_gap_m: float = 0.05
 
 
-#: the ``[limits]`` keys and their types (for ``--limit KEY=VALUE``)
-LIMIT_KEYS: dict[str, type] = {f: (int if f == "max_samples" else float) for f in HipLimits.__dataclass_fields__}
+#: the ``[limits]`` keys and their types (for ``--limit KEY=VALUE``; ``min_platform_gap_m`` is a
+#: property of the parameter file and set there)
+LIMIT_KEYS: dict[str, type] = {f: (int if f == "max_samples" else float) for f in HipLimits.__dataclass_fields__
+                               if f != "min_platform_gap_m"}
 
 
 @dataclass(frozen=True)
@@ -207,6 +234,9 @@ class HipModel:
     inertia: HipInertia
     friction: HipFriction
     limits: HipLimits = field(default_factory=HipLimits)
+    #: the ISO 14242-1 cycle preset of the built-in motion (``[motion] iso_cycle``;
+    #: :func:`pkmdyn.profiles.iso_fit.iso_cycle_preset`)
+    motion_model: str = "default"
 
 
 def _build(d: _HipFile, source: str) -> HipModel:
@@ -217,6 +247,12 @@ def _build(d: _HipFile, source: str) -> HipModel:
     r_a = g.platform_radius_m * np.stack([np.cos(psi), np.sin(psi), np.zeros(3)], axis=-1)
     t = np.stack([-np.sin(phi), np.cos(phi), np.zeros(3)], axis=-1)
     h = np.array(g.platform_heights_m, dtype=float)
+    gap = float(h[0] - h[1])
+    if not gap >= d.limits.min_platform_gap_m:
+        raise LimitError(
+            f"{source}: [geometry] platform_heights_m: the platforms are {gap:.4g} m apart, closer than the limit "
+            f"min_platform_gap_m = {d.limits.min_platform_gap_m:g} m (the two sliders of a module ride on one screw "
+            "h1 - h2 apart; lower the limit with [limits] min_platform_gap_m in the parameter file)")
     o = np.stack([np.zeros(2), np.zeros(2), h], axis=-1)
     reach = np.linalg.norm((r_a - A)[:, :2], axis=-1)
     for i in range(3):
@@ -267,7 +303,7 @@ def _build(d: _HipFile, source: str) -> HipModel:
         universal_coulomb=f.universal_coulomb_Nm,
         universal_viscous=f.universal_viscous_Nms_rad,
     )
-    return HipModel(geom, inertia, friction, HipLimits(**d.limits.model_dump()))
+    return HipModel(geom, inertia, friction, HipLimits(**d.limits.model_dump()), d.motion.iso_cycle)
 
 
 def model_from_dict(data: dict[str, Any], source: str = "parameters") -> HipModel:
@@ -284,6 +320,13 @@ def load_params(path: str | Path | None = None) -> HipModel:
 
 def _default_resource() -> Any:
     return resources.files(__package__).joinpath("default.toml")
+
+
+def paper_params_path() -> Path:
+    """The built-in parameter file of the paper's own convention (``paper.toml``: the Euler
+    sequence and ISO cycle under which the paper's §5 figures are reproduced best;
+    ``docs/hip_simulator.md``, "The paper's own convention")."""
+    return Path(str(resources.files(__package__).joinpath("paper.toml")))
 
 
 DEFAULT_PARAMS_TEXT: str = _default_resource().read_text(encoding="utf-8")

@@ -325,18 +325,22 @@ def run_hip(
     fmt: str = "csv",
     limits: dict[str, Any] | tuple[str, ...] | None = None,
     chunk: int = RUN_CHUNK,
-    motion_model: str = "default",
-    report: bool = True,
+    motion_model: str | None = None,
+    report: Callable[[dict[str, Path]], None] | None = None,
+    html_report: bool = True,
 ) -> tuple[dict[str, Path], list[str]]:
     """Run the whole job; returns the files written and the warnings raised on the way.
 
     ``fmt``: ``"csv"`` or ``"parquet"`` for ``results``; ``limits``: overrides of the
     ``[limits]`` table (``{key: value}`` or ``("key=value", ...)``); ``motion_model``: the named
-    ISO 14242-1 cycle model of the built-in motion (:func:`pkmdyn.profiles.iso_fit.iso_cycle_preset`); ``report``:
-    also write ``report.html`` (the machine animated over the plots' window). Every input (parameters,
+    ISO 14242-1 cycle model of the built-in motion (:func:`pkmdyn.profiles.iso_fit.iso_cycle_preset`;
+    ``None``: the parameter file's ``[motion] iso_cycle``); ``html_report``: also write ``report.html``
+    (the machine animated over the plots' window). Every input (parameters,
     motion, options, limits on load and angles) is checked before ``out_dir`` is touched; the
     slider speed and acceleration limits are checked block by block as the kinematics are
-    computed. On any error nothing is left at or beside ``out_dir``.
+    computed. On any error nothing is left at or beside ``out_dir``. ``report`` is called with
+    the files' final paths before they move into place (:func:`pkmdyn.io.output_dir`), so that a
+    listing that cannot be printed leaves ``out_dir`` as it was.
     """
     singularity_threshold = _finite_option("--singularity-threshold", singularity_threshold, 0.0, 1.0)
     if fmt not in TABLE_FORMATS:
@@ -349,9 +353,11 @@ def run_hip(
         given = parse_limit_options(items, LIMIT_KEYS)
         model = dataclasses.replace(model, limits=dataclasses.replace(model.limits, **given))
     lim = model.limits
-    cycle = iso_cycle_preset(motion_model)
-    if motion_path is not None and motion_model != "default":
+    if motion_path is not None and motion_model is not None:
         raise ParameterError("--motion-model names a built-in motion; it cannot be combined with --motion")
+    if motion_model is None:
+        motion_model = model.motion_model
+    cycle = iso_cycle_preset(motion_model)
     if motion_path is None:
         n = iso14242_samples(cycles, samples_per_cycle, lim.max_samples)
         motion = None
@@ -361,12 +367,15 @@ def run_hip(
         for name, w in (("alpha", cycle.fe), ("beta", cycle.aa), ("gamma", cycle.ier)):
             check_limit(max(abs(w.max_deg), abs(w.min_deg)), lim.max_abs_angle_deg, f"built-in motion: |{name}|",
                         "max_abs_angle_deg", "deg")
+        check_limit(cycles * cycle.period_s, lim.max_duration_s, "built-in motion: duration", "max_duration_s", "s")
         window = min(n, samples_per_cycle + 1)
         source = f"built-in ISO 14242-1 model ({motion_model}), {cycles:g} cycle(s)"
         note = f"first cycle of {cycles:g} (every cycle is the same)" if cycles > 1 else ""
     else:
         motion = read_motion_csv(motion_path, max_rows=lim.max_samples)
         n = len(motion)
+        check_limit(float(motion.t[-1] - motion.t[0]), lim.max_duration_s, f"{motion_path}: duration",
+                    "max_duration_s", "s")
         _check_motion_limits(lambda k: f"{motion_path}: row {k + 1}", motion, lim)
         window = n
         source = str(motion_path)
@@ -374,9 +383,9 @@ def run_hip(
     check_table_format(fmt)  # pyarrow present? (checked before any work)
 
     summ = SummaryAccumulator()
-    collect = _PlotCollector(window) if make_plots or report else None
+    collect = _PlotCollector(window) if make_plots or html_report else None
     frames = None
-    if report:
+    if html_report:
         from ...report import MAX_FRAMES
         from .report import FrameCollector
 
@@ -384,7 +393,7 @@ def run_hip(
     near = 0
     worst = (0.0, 0.0, 0)  # cond, t, sample
     other: dict[str, None] = {}
-    with output_dir(out_dir) as tmp:
+    with output_dir(out_dir, inputs={"--params": params_path, "--motion": motion_path}) as tmp:
         files = {"results": tmp / ("results.csv" if fmt == "csv" else "results.parquet"), "summary": tmp / "summary.json"}
         blocks = _motion_blocks(motion, n, cycles, cycle, chunk)
         bar = tqdm(blocks, total=-(-n // chunk), desc="hip: kinematics + dynamics", unit="block",
@@ -426,7 +435,7 @@ def run_hip(
         doc["motion"] = source
         doc["limits"] = dataclasses.asdict(lim)
         doc["warnings"] = messages
-        if report:
+        if html_report:
             files["report"] = tmp / "report.html"
         write_json(files["summary"], doc)
         if collect is not None:
@@ -448,6 +457,8 @@ def run_hip(
                              notes=[f"parameters: {doc['parameters']}", f"motion: {source}"],
                              scene_note=(f"The animation covers the plots' window: {note}." if note else ""),
                              samples=window)
-    out = Path(out_dir)
-    return {k: out / p.name for k, p in files.items()}, messages
+        final = {k: Path(out_dir) / p.name for k, p in files.items()}
+        if report is not None:
+            report(final)
+    return final, messages
 

@@ -26,7 +26,11 @@ from ...errors import ParameterError
 from ...params_util import Section as _Section
 from ...params_util import check_limit, read_toml, validate
 
-__all__ = ["PdmModel", "TrajectorySettings", "WorkspaceSettings", "load_params", "default_params_path"]
+__all__ = ["PdmModel", "TrajectorySettings", "WorkspaceSettings", "load_params", "default_params_path", "LIMIT_KEYS"]
+
+#: the run limits ``--limit KEY=VALUE`` may override (``[limits]`` of the parameter file)
+LIMIT_KEYS: dict[str, type] = {"max_samples": int, "max_limb_speed_m_s": float, "max_limb_acceleration_m_s2": float,
+                               "max_actuator_force_N": float, "max_duration_s": float}
 
 Array = NDArray[np.float64]
 _Pos = Annotated[float, Field(gt=0, le=10)]  # a length [m]: > 0 and, for plausibility, at most 10 m
@@ -114,6 +118,10 @@ class _Limits(_Section):
 
     max_samples: int = Field(default=200_000, gt=0)  # trajectory samples or motion-file rows
     max_workspace_points: int = Field(default=5_000_000, gt=0)  # layers x directions x ray samples
+    max_limb_speed_m_s: float = Field(default=1.0, gt=0)  # |limb extension rate| of every sample
+    max_limb_acceleration_m_s2: float = Field(default=20.0, gt=0)
+    max_actuator_force_N: float = Field(default=5000.0, gt=0)  # |limb force| of every sample
+    max_duration_s: float = Field(default=1e6, gt=0)  # duration of the motion
 
 
 class _Description(_Section):
@@ -204,6 +212,12 @@ class PdmModel:
     body_length: Array
     #: ``[limits] max_samples``: trajectory samples or motion-file rows a run may hold
     max_samples: int = 200_000
+    #: ``[limits]`` plausibility of a run's motion and forces: |limb rate| [m/s], |limb
+    #: acceleration| [m/s^2], |actuator force| [N], motion duration [s] (``docs/file_formats.md``)
+    max_limb_speed_m_s: float = 1.0
+    max_limb_acceleration_m_s2: float = 20.0
+    max_actuator_force_N: float = 5000.0
+    max_duration_s: float = 1e6
 
     def __post_init__(self) -> None:
         for name in ("R1", "R4", "S", "U_local", "R3_local", "U1_local", "P_local",
@@ -285,6 +299,10 @@ def _build(d: _Description, name: str) -> PdmModel:
         ),
         source=name,
         max_samples=caps.max_samples,
+        max_limb_speed_m_s=caps.max_limb_speed_m_s,
+        max_limb_acceleration_m_s2=caps.max_limb_acceleration_m_s2,
+        max_actuator_force_N=caps.max_actuator_force_N,
+        max_duration_s=caps.max_duration_s,
         **props,
     )
 

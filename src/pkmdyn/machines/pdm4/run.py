@@ -13,7 +13,9 @@ computed before the output folder is touched, and the folder is written whole th
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -23,11 +25,12 @@ from tqdm import tqdm
 
 from ...analysis.mobility import analyse
 from ...errors import PkmdynError
-from ...io import output_dir, write_csv, write_json
+from ...io import check_output_dir, output_dir, write_csv, write_json
 from ...profiles.pdm_motion import PdmMotion, cycloidal_motion, read_pdm_motion
 from .dynamics import JOINTS, REDUNDANT_LABELS, PdmReactions, inverse_dynamics
-from .kinematics import BODY_NAMES, PdmKinematics, inverse_kinematics, mechanism_joints
-from .params import PdmModel, TrajectorySettings, load_params
+from .kinematics import BODY_NAMES, LIMB_LABELS, PdmKinematics, inverse_kinematics, mechanism_joints
+from ...params_util import check_limit, parse_limit_options
+from .params import LIMIT_KEYS, PdmModel, TrajectorySettings, load_params
 from .workspace import reachable_workspace, write_projection_csv, write_workspace_csv
 
 __all__ = ["run_pdm", "results_columns", "dynamics_columns", "mobility_summary", "geometry_summary",
@@ -219,6 +222,19 @@ def _compute(model: PdmModel, motion: PdmMotion) -> tuple[dict[str, Array], dict
     return cols, npz
 
 
+def _check_plausible(model: PdmModel, cols: dict[str, Array]) -> None:
+    """Limb speeds, accelerations and actuator forces of every sample against ``[limits]`` (a
+    motion squeezed into too short a time, or a unit error, is caught here)."""
+    t = cols["t_s"]
+    for fmt, key, what, unit in (("ld{}_m_s", "max_limb_speed_m_s", "speed", "m/s"),
+                                 ("ldd{}_m_s2", "max_limb_acceleration_m_s2", "acceleration", "m/s^2"),
+                                 ("f{}_N", "max_actuator_force_N", "actuator force", "N")):
+        a = np.abs(np.stack([cols[fmt.format(k)] for k in range(1, 5)], axis=-1))
+        r, k = np.unravel_index(int(np.argmax(a)), a.shape)
+        check_limit(float(a[r, k]), getattr(model, key),
+                    f"t = {t[r]:.6g} s (sample {r + 1}): {LIMB_LABELS[k]} {what}", key, unit)
+
+
 def _summary(cols: dict[str, Array], n: int, mob: dict[str, Any], files: dict[str, Path]) -> dict[str, Any]:
     def peak(name: str) -> float:
         return float(np.abs(cols[name]).max())
@@ -236,18 +252,29 @@ def _summary(cols: dict[str, Array], n: int, mob: dict[str, Any], files: dict[st
 
 def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_dir: str | Path,
             plots: bool = True, trajectory: dict[str, float | None] | None = None,
-            report: bool = True) -> dict[str, Any]:
+            report: Callable[[dict[str, Path]], None] | None = None,
+            limits: tuple[str, ...] | dict[str, Any] | None = None, html_report: bool = True) -> dict[str, Any]:
     """Run the PDM kinematics and dynamics and write every result file into ``out_dir``.
 
     ``params_path``: TOML parameters (None: built-in defaults); ``motion_path``: motion CSV
     (None: the Eq. 84 cycloidal motion of the ``[trajectory]`` section, with the overrides of
-    ``trajectory``, the keyword arguments of :func:`trajectory_with`); ``report``: also write
+    ``trajectory``, the keyword arguments of :func:`trajectory_with`); ``html_report``: also write
     ``report.html`` (:mod:`pkmdyn.report`). Returns the summary of
     ``summary.json`` with ``files`` as ``{label: path}``. User errors raise
     :class:`~pkmdyn.errors.PkmdynError` subclasses naming the file (full path), key, row,
-    sample time or limb; they are raised before ``out_dir`` is touched.
+    sample time or limb; they are raised before ``out_dir`` is touched (which must pass the output
+    rule, :func:`pkmdyn.io.check_output_dir`, checked first). ``report`` is called with the files'
+    final paths before they move into place. ``limits`` overrides ``[limits]`` of the parameter
+    file (``{key: value}`` or ``("key=value", ...)``, the keys of
+    :data:`~pkmdyn.machines.pdm4.params.LIMIT_KEYS`): the motion's duration, limb speeds and
+    accelerations and the actuator forces of every sample are checked against them.
     """
+    inputs = {"--params": params_path, "--motion": motion_path}
+    check_output_dir(out_dir, inputs)
     model = load_params(params_path)
+    if limits:
+        items = [f"{k}={v}" for k, v in limits.items()] if isinstance(limits, dict) else list(limits)
+        model = dataclasses.replace(model, **parse_limit_options(items, LIMIT_KEYS))
     overrides = {k: v for k, v in (trajectory or {}).items() if v is not None}
     if motion_path is None:
         tr = trajectory_with(model, **overrides) if overrides else model.trajectory
@@ -259,24 +286,29 @@ def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_
                               "apply to the built-in Eq. 84 motion only")
         motion = read_pdm_motion(Path(motion_path).absolute(), max_rows=model.max_samples)
         motion_source = str(motion_path)
+    source = "motion" if motion_path is None else str(Path(motion_path).absolute())
+    check_limit(float(motion.t[-1] - motion.t[0]), model.max_duration_s, f"{source}: duration", "max_duration_s", "s")
     cols, npz = _compute(model, motion)
+    _check_plausible(model, cols)
     mob = mobility_summary(model, motion.q[0])
     ws = reachable_workspace(model)
-    with output_dir(out_dir) as out:  # only now: a user error above leaves nothing behind
+    with output_dir(out_dir, inputs=inputs) as out:  # only now: a user error above leaves nothing behind
         files = _write(model, out, cols, npz, mob, ws, plots)
         summ = _summary(cols, len(motion), mob, files)
         files["summary"] = out / "summary.json"
         images = [p for k, p in files.items() if p.suffix == ".png"]
-        if report:
+        if html_report:
             files["report"] = out / "report.html"
         summ["files"] = sorted(p.name for p in files.values())
         write_json(files["summary"], summ)
-        if report:
+        if html_report:
             from .report import write_run_report
 
             write_run_report(out, model, params_path, motion_source, cols, npz, summ, images)
-    final = Path(out_dir)
-    return {**summ, "files": {k: final / v.name for k, v in files.items()}}
+        final = {k: Path(out_dir) / v.name for k, v in files.items()}
+        if report is not None:
+            report(final)
+    return {**summ, "files": final}
 
 
 def _write(model: PdmModel, out: Path, cols: dict[str, Array], npz: dict[str, Array], mob: dict[str, Any],
