@@ -95,7 +95,7 @@ def _distinct(img: np.ndarray) -> int:
     return len(np.unique(img.reshape(-1, 3), axis=0))
 
 
-@pytest.mark.parametrize("which, n_plots, n_images", [("hip", 11, 5), ("pdm", 9, 5), ("hip_control", 3, 2)])
+@pytest.mark.parametrize("which, n_plots, n_images", [("hip", 11, 5), ("pdm", 9, 5), ("hip_control", 2, 2)])
 def test_report_draws_moves_and_shows_every_plot(browser, reports, tmp_path, which, n_plots, n_images):
     page = _Page(browser, reports[which])
     try:
