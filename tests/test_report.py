@@ -178,12 +178,27 @@ def test_view_page_is_written_atomically_and_replaces_only_its_own_file(tmp_path
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link.html", "notes.html", "sub"]
 
 
-def test_control_run_report_names_the_actuators(tmp_path):
+def test_control_run_report_and_effort_plot_name_the_actuators(tmp_path, monkeypatch):
+    """The efforts PNG says "limb l11 force [N]", not the column name ``f1_N``; so does the page."""
+    import matplotlib.figure
+
+    seen = {}
+    savefig = matplotlib.figure.Figure.savefig
+
+    def spy(fig, fname, *args, **kwargs):
+        if str(fname).endswith("efforts.png"):
+            ax = fig.axes[0]
+            seen["legend"] = [t.get_text() for t in ax.get_legend().get_texts()]
+            seen["ylabel"] = ax.get_ylabel()
+        return savefig(fig, fname, *args, **kwargs)
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", spy)
     out = tmp_path / "ctl"
-    assert main(["hip", "control", "--controller", "feedforward", "--cycles", "0.1", "--no-plots",
-                 "--out", str(out)]) == 0
+    assert main(["pdm", "control", "--controller", "pid", "--cycles", "0.2", "--out", str(out)]) == 0
+    assert seen["legend"] == [f"limb {k} force [N]" for k in ("l11", "l12", "l23", "l24")]
+    assert seen["ylabel"] == "force [N]"
     page = (out / "report.html").read_text(encoding="utf-8")
-    assert "motor 1 torque" in page and "tau1_Nm\"" not in page.split("Summary")[0]
+    assert "limb l11 force" in page and _info(page)["frames"] > 100
 
 
 # ----------------------------------------------------------------------------- PNG fixes
