@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
 from .kinematics import inverse_position
-from .params import PdmModel, load_params
+from .params import PdmModel, default_params_path, load_params
 
 __all__ = ["draw_schematic", "schematic_figure"]
 
@@ -107,9 +107,12 @@ def schematic_figure(model: PdmModel, q: Array | None = None) -> Figure:
     deg = np.degrees(q[2:])
     # the parameter file by name in the title; its folder, however long, wrapped on its own lines
     source = Path(model.source)
-    where = "\n".join(textwrap.wrap(f"parameters: {model.source}", 150)) if source.name != model.source else ""
+    builtin = source == default_params_path()
+    name = f"built-in {source.name}" if builtin else source.name
+    where = "" if builtin or source.name == model.source else "\n".join(
+        textwrap.wrap(f"parameters: {model.source}", 150))
     fig.suptitle(
-        f"4-DOF PDM, reconstructed layout ({source.name}); pose x = {q[0] * _MM:g} mm, "
+        f"4-DOF PDM, reconstructed layout ({name}); pose x = {q[0] * _MM:g} mm, "
         f"y = {q[1] * _MM:g} mm, alpha = {deg[0]:g} deg, gamma = {deg[1]:g} deg\n"
         "squares: ground joints; base frame A at the home position of C; revolute axes R1i-R4i along z"
         + (f"\n{where}" if where else ""), fontsize=11)
