@@ -44,6 +44,20 @@ def test_frame_indices_are_evenly_spaced_with_both_ends(n):
     assert np.all(gaps >= 1) and (gaps.size == 0 or gaps.max() - gaps.min() <= 1)
 
 
+@pytest.mark.parametrize("block", [1, 7, 1000, 50_000])
+def test_frame_picker_over_blocks_equals_picking_from_the_whole(block):
+    from pkmdyn.report import FramePicker
+
+    n = 12_345
+    data = np.arange(3 * n, dtype=float).reshape(n, 3)
+    picker = FramePicker(n)
+    for s in range(0, n, block):
+        picker.add(s, t=data[s:s + block, 0], x=data[s:s + block])
+    got = picker.arrays()
+    idx = frame_indices(n)
+    assert np.array_equal(got["x"], data[idx]) and np.array_equal(got["t"], data[idx, 0])
+
+
 def test_hip_scene_closes_every_leg_on_the_lever_length():
     """The drawn levers join each slider to its platform joint at the lever length, sliders sit on
     their screws and platform joints at the platform radius: the scene is the machine's geometry."""

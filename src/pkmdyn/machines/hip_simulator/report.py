@@ -15,7 +15,7 @@ from ...report import Curve, Scene, TimePlot, write_report
 from .dynamics import PARTS
 from .params import DEFAULT_PARAMS_TEXT
 
-__all__ = ["parameters_text", "run_plots", "write_run_report", "FrameCollector"]
+__all__ = ["parameters_text", "run_plots", "write_run_report"]
 
 Array = NDArray[np.float64]
 
@@ -28,30 +28,6 @@ def parameters_text(params_path: str | Path | None) -> str:
         return f"# {params_path}\n" + Path(params_path).read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError):
         return f"# {params_path}\n# (the file could not be read again for the report)"
-
-
-class FrameCollector:
-    """The animation's samples of a streamed run: at most ``max_frames`` evenly spaced samples
-    of ``[0, window)``, picked block by block (``t``, platform ``R``, sliders ``L``, ``tau``)."""
-
-    def __init__(self, window: int, max_frames: int) -> None:
-        from ...report import frame_indices
-
-        self.window = window
-        self.idx = frame_indices(window, max_frames)
-        self.parts: list[tuple[Array, Array, Array, Array]] = []
-
-    def add(self, start: int, t: Array, R: Array, L: Array, tau: Array) -> None:
-        k = t.shape[0]
-        pick = self.idx[(self.idx >= start) & (self.idx < start + k)] - start
-        if pick.size:
-            self.parts.append((t[pick], R[pick], L[pick], tau[pick]))
-
-    def scene(self, model: Any) -> Scene:
-        from .scene import hip_scene
-
-        t, R, L, tau = (np.concatenate([p[c] for p in self.parts]) for c in range(4))
-        return hip_scene(model, t, R, L, tau)
 
 
 def run_plots(data: Any) -> list[TimePlot]:

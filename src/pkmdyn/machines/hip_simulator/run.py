@@ -386,10 +386,9 @@ def run_hip(
     collect = _PlotCollector(window) if make_plots or html_report else None
     frames = None
     if html_report:
-        from ...report import MAX_FRAMES
-        from .report import FrameCollector
+        from ...report import MAX_FRAMES, FramePicker
 
-        frames = FrameCollector(window, MAX_FRAMES)
+        frames = FramePicker(window, MAX_FRAMES)  # the animation's samples of the plots' window
     near = 0
     worst = (0.0, 0.0, 0)  # cond, t, sample
     other: dict[str, None] = {}
@@ -423,7 +422,7 @@ def run_hip(
                               **{p: getattr(tq, p) for p in PARTS}}
                     collect.add(s, curves, mb.load, tq.friction)
                 if frames is not None:
-                    frames.add(s, mb.t, kin.R, kin.L, tq.tau)
+                    frames.add(s, t=mb.t, R=kin.R, L=kin.L, tau=tq.tau)
         messages = list(other)
         if near:
             cond, tw, kw = worst
@@ -450,8 +449,11 @@ def run_hip(
             files["friction_plot"] = plots.plot_friction_vs_load(data, tmp / "friction_vs_load.png")
         if frames is not None:
             from .report import run_plots, write_run_report
+            from .scene import hip_scene
 
-            write_run_report(tmp, title="2(3PUS+S) hip simulator: hip run", scene=frames.scene(model),
+            f = frames.arrays()
+            write_run_report(tmp, title="2(3PUS+S) hip simulator: hip run",
+                             scene=hip_scene(model, f["t"], f["R"], f["L"], f["tau"]),
                              plots=run_plots(data), summary=doc, params_path=params_path, warnings=messages,
                              images=[p for p in files.values() if p.suffix == ".png"],
                              notes=[f"parameters: {doc['parameters']}", f"motion: {source}"],
