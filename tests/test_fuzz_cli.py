@@ -266,7 +266,7 @@ def test_rerun_into_an_earlier_run_leaves_none_of_its_files(tmp_path):
     assert (out / "torques.png").exists()
     rc, err = _run(["hip", "run", "--no-plots", "--samples-per-cycle", "20", "--format", "parquet", "--out", str(out)])
     assert rc == 0 and "replaced an earlier run" in err
-    assert sorted(p.name for p in out.iterdir()) == sorted([RUN_MARKER, "results.parquet", "summary.json"])
+    assert sorted(p.name for p in out.iterdir()) == sorted([RUN_MARKER, "report.html", "results.parquet", "summary.json"])
 
 
 def test_foreign_folder_is_refused_and_untouched(tmp_path):

@@ -57,7 +57,7 @@ def test_identify_round_trip_predicts_a_held_out_motion(measured, tmp_path, caps
     assert report["rank"] < len(report["parameters_asked"])
     assert "slider_viscous_Ns_m" in report["not_separable"]
     assert set(report["residual_rms_Nm"]) == {"tau1_Nm", "tau2_Nm", "tau3_Nm"}
-    for f in ("identified.toml", "torques.csv", "torque_fit.png", "residuals.png"):
+    for f in ("identified.toml", "torques.csv", "torque_fit.png", "residuals.png", "report.html"):
         assert (out / f).is_file()
     identified = load_params(out / "identified.toml")
     held = iso14242_motion(1.0, 200)

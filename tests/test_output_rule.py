@@ -220,7 +220,7 @@ def test_hip_identify_refuses_a_measurement_inside_its_out_folder(tmp_path, caps
     assert _tree(tmp_path) == before
 
 
-@pytest.mark.parametrize("command", [["hip", "export", "--format", "mjcf"], EXCITE_FAST])
+@pytest.mark.parametrize("command", [["hip", "export", "--format", "mjcf"], EXCITE_FAST, ["view", "--machine", "hip"]])
 def test_single_file_commands_refuse_their_own_parameter_file(tmp_path, capsys, command):
     params = tmp_path / "p.toml"
     from pkmdyn.machines.hip_simulator.params import DEFAULT_PARAMS_TEXT
@@ -233,7 +233,7 @@ def test_single_file_commands_refuse_their_own_parameter_file(tmp_path, capsys, 
 
 
 @pytest.mark.parametrize("command", [["hip", "profile", "--samples-per-cycle", "10"],
-                                     ["hip", "export", "--format", "mjcf"], EXCITE_FAST])
+                                     ["hip", "export", "--format", "mjcf"], EXCITE_FAST, ["view", "--machine", "pdm"]])
 def test_single_file_commands_refuse_a_device_a_pipe_and_a_link(tmp_path, capsys, command):
     os.mkfifo(tmp_path / "fifo")
     (tmp_path / "target.csv").write_text("mine")

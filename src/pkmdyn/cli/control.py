@@ -25,7 +25,7 @@ from ._groups import PATH_IN, announce_compiles, hip, list_files, pdm
 from ._groups import FiniteFloat
 from ._hip_options import paper_option
 
-__all__ = ["hip_closed_loop", "run_control", "HIP_CONTROLLERS", "PDM_CONTROLLERS", "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
+__all__ = ["hip_closed_loop", "run_control", "effort_label", "HIP_CONTROLLERS", "PDM_CONTROLLERS", "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
 
 HIP_CONTROLLERS = ("pd", "augmented-pd", "feedforward", "computed-torque")
 PDM_CONTROLLERS = ("pid", "feedforward", "computed-torque")
@@ -606,10 +606,12 @@ def _plots(setup: _Setup, curves: _Curves, kind: str, tmp: Path) -> list[Path]:
         plt.close(fig)
         paths.append(p)
     fig, ax = plt.subplots(figsize=(7, 4.2))
-    for a, name in enumerate(setup.verbs.ACTUATORS):
-        _draw(ax, mode, t, first["u"][:, a], lo["u"][:, a], hi["u"][:, a], name, lw=0.8)
-    ax.set(xlabel="t [s]", ylabel="effort [" + setup.verbs.ACTUATORS[0].split("_", 1)[1] + "]",
-           title=f"Actuator efforts{suffix}")
+    for a in range(len(setup.verbs.ACTUATORS)):
+        label, unit = effort_label(setup.machine, a)
+        _draw(ax, mode, t, first["u"][:, a], lo["u"][:, a], hi["u"][:, a], f"{label} [{unit}]", lw=0.8)
+    quantity = "torque" if setup.machine == "hip" else "force"
+    ax.set(xlabel="t [s]", ylabel=f"{quantity} [{effort_label(setup.machine, 0)[1]}]",
+           title=f"Actuator efforts ({'motor torques' if setup.machine == 'hip' else 'limb forces'}){suffix}")
     ax.legend()
     ax.grid(alpha=0.3)
     fig.tight_layout()
@@ -620,6 +622,72 @@ def _plots(setup: _Setup, curves: _Curves, kind: str, tmp: Path) -> list[Path]:
     return paths
 
 
+def effort_label(machine: str, a: int) -> tuple[str, str]:
+    """The name and unit of actuator ``a`` (0-based) for plots: ``("motor 1 torque", "N m")``,
+    ``("limb l11 force", "N")``, not the column names ``tau1_Nm``, ``f1_N``."""
+    if machine == "hip":
+        return f"motor {a + 1} torque", "N m"
+    return f"limb {PDM_LIMBS[a]} force", "N"
+
+
+def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dict[str, Any], tmp: Path,
+            images: list[Path], gains_path: Path | None, K: int) -> Path:
+    """``report.html`` of a control run: the plant's true motion animated (held efforts as colours),
+    tracking errors (hip) or limb motion (PDM) and efforts against time, the PNG figures, summary,
+    parameters and warnings."""
+    from ..errors import PkmdynError
+    from ..report import Curve, TimePlot, write_report
+
+    warns = [f"{effort_label(setup.machine, a)[0]} hit its limit in {v['saturated_cycles']} control cycle(s)"
+             for a, v in enumerate(summary["actuators"].values()) if v["saturated_cycles"]]
+    f = frames.arrays()
+    scene = None
+    try:
+        if setup.machine == "hip":
+            from ..machines.hip_simulator.report import parameters_text
+            from ..machines.hip_simulator.scene import hip_scene_from_angles
+
+            scene = hip_scene_from_angles(setup.plant_model, f["t"], f["q"], f["u"])
+        else:
+            from ..machines.pdm4.report import parameters_text
+            from ..machines.pdm4.scene import pdm_scene_from_pose
+
+            scene = pdm_scene_from_pose(setup.plant_model, f["t"], f["q"], f["u"])
+    except PkmdynError as exc:  # the plant left the machine's reach: the page says so, the run stands
+        warns.append(f"report: the 3D view could not be built ({exc})")
+    t, first, lo, hi, note = curves.data()
+
+    def curve(key: str, c: int, name: str) -> Curve:
+        if curves.mode == "bins":
+            return Curve(name, lo=lo[key][:, c], hi=hi[key][:, c])
+        return Curve(name, first[key][:, c])
+
+    plots = []
+    if setup.machine == "hip":
+        plots.append(TimePlot("Posture-angle errors", "error [deg]", t,
+                              tuple(curve("err_deg", c, n) for c, n in enumerate(("alpha (FE)", "beta (AA)",
+                                                                                  "gamma (IER)"))), note))
+    else:
+        for key, lab, unit in (("s", "displacement", "mm"), ("sd", "velocity", "mm/s"), ("sdd", "acceleration", "mm/s^2")):
+            plots.append(TimePlot(f"Limb {lab}: theoretical and measured", f"{lab} [{unit}]", t, tuple(
+                c for a, nm in enumerate(PDM_LIMBS) for c in (curve(f"{key}_th", a, f"{nm} theoretical"),
+                                                              curve(f"{key}_me", a, f"{nm} measured"))), note))
+    plots.append(TimePlot("Actuator efforts", f"[{effort_label(setup.machine, 0)[1]}]", t, tuple(
+        curve("u", a, effort_label(setup.machine, a)[0]) for a in range(len(setup.verbs.ACTUATORS))), note))
+    params = parameters_text(None if setup.params_source == "built-in parameters" else setup.params_source)
+    if gains_path is not None:
+        try:
+            params += f"\n\n# control settings: {gains_path}\n" + Path(gains_path).read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError):
+            pass
+    name = "2(3PUS+S) hip simulator" if setup.machine == "hip" else "4-DOF PDM"
+    return write_report(tmp, title=f"{name}: {setup.machine} control, {kind}", scene=scene, plots=plots,
+                        summary=summary, parameters=params, warnings=warns, images=images,
+                        notes=[f"parameters: {setup.params_source}", f"plant: {setup.plant_source}",
+                               f"motion: {setup.motion_source}"],
+                        scene_note="The plant's true pose; actuated chains coloured by the held effort.", samples=K)
+
+
 def _loop_method(settings: dict[str, Any]) -> str:
     """The plant's integration method of a run with these settings."""
     from ..control import loop_settings
@@ -628,18 +696,22 @@ def _loop_method(settings: dict[str, Any]) -> str:
 
 
 def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str, Any], out: Path, plots: bool,
-            gains_path: Path | None, inputs: dict[str, Path | None], fmt: str) -> dict[str, Path]:
+            gains_path: Path | None, inputs: dict[str, Path | None], fmt: str, html_report: bool = True) -> dict[str, Path]:
     """Run the loop span by span (:func:`pkmdyn.simulate.track_spans`) straight into the output
     folder: the table is written span by span and the summary and plots gathered on the way, so
     memory does not grow with the run; the folder moves into place only when the whole run
-    succeeded (:func:`pkmdyn.io.output_dir`)."""
+    succeeded (:func:`pkmdyn.io.output_dir`). ``html_report``: also ``report.html``, its
+    animation's frames picked span by span (:class:`pkmdyn.report.FramePicker`)."""
+    from ..report import MAX_FRAMES, FramePicker
+
     from ..io import check_table_format, open_table_writer, output_dir, write_json
     from ..simulate import DivergenceError, track_spans
 
     check_table_format(fmt)
     K = int(round(setup.duration / ls.cycle_s))
     summ = _Summary(setup)
-    curves = _Curves(K, ls.cycle_s, setup.fold_s) if plots else None
+    curves = _Curves(K, ls.cycle_s, setup.fold_s) if plots or html_report else None
+    frames = FramePicker(K, MAX_FRAMES) if html_report else None
     table = "control.csv" if fmt == "csv" else "control.parquet"
     kind, fast = controller, False
     with output_dir(out, inputs=inputs) as tmp:
@@ -661,6 +733,8 @@ def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str,
                     summ.add(tr)
                     if curves is not None:
                         curves.add(start, tr.result.t, _plot_curves(setup, tr))
+                    if frames is not None:
+                        frames.add(start, t=tr.result.t, q=tr.result.q, u=tr.result.u)
                     start += tr.result.t.shape[0]
             except DivergenceError as exc:
                 raise DivergenceError(_divergence_message(setup, controller, exc), exc.coordinate, exc.error,
@@ -683,8 +757,11 @@ def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str,
         }
         write_json(tmp / "summary.json", summary)
         names = [table, "summary.json"]
-        if curves is not None:
+        if curves is not None and plots:
             names += [p.name for p in _plots(setup, curves, kind, tmp)]
+        if frames is not None and curves is not None:
+            names.append(_report(setup, kind, curves, frames, summary, tmp,
+                                 [tmp / n for n in names if n.endswith(".png")], gains_path, K).name)
         files = {n: out / n for n in names}
         list_files(files)
     return files

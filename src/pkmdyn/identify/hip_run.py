@@ -97,8 +97,11 @@ def run_identify(
     rank_tol: float = 1e-6,
     make_plots: bool = True,
     report: Callable[[list[str]], None] | None = None,
+    html_report: bool = True,
 ) -> tuple[dict[str, Path], list[str]]:
-    """Identify and write the output folder; returns the files written and summary lines.
+    """Identify and write the output folder (with ``html_report``, also ``report.html``: the machine
+    along the measured motion coloured by the measured torques, measured and identified torques,
+    residuals); returns the files written and summary lines.
 
     The options are checked first (``sg_window`` odd, 3 to :data:`MAX_SG_WINDOW`; ``sg_order``
     2 to :data:`MAX_SG_ORDER` and below the window; ``0 < rank_tol < 1``); the measured
@@ -199,10 +202,37 @@ def run_identify(
             plot_torque_fit(motion.t, tau, result.tau_identified, tmp / "torque_fit.png")
             plot_residuals(motion.t, tau - result.tau_identified, tmp / "residuals.png")
             names += ["torque_fit.png", "residuals.png"]
+        if html_report:
+            names.append(_report(tmp, model, motion, tau, result.tau_identified, report_doc, params_path,
+                                 [tmp / n for n in names if n.endswith(".png")],
+                                 [str(w.message) for w in caught if not issubclass(w.category, RuntimeWarning)]).name)
         files = {Path(n).stem.replace(".", "_"): out / n for n in names}
         if report is not None:
             report([*lines, *(f"{name}: {path}" for name, path in files.items())])
     return files, lines
+
+
+def _report(tmp: Path, model: HipModel, motion: Any, tau: np.ndarray, tau_id: np.ndarray, doc: dict[str, Any],
+            params_path: str | Path | None, images: list[Path], warns: list[str]) -> Path:
+    from ..machines.hip_simulator.report import parameters_text
+    from ..machines.hip_simulator.scene import hip_scene_from_angles
+    from ..report import MAX_FRAMES, Curve, TimePlot, frame_indices, write_report
+
+    idx = frame_indices(len(motion), MAX_FRAMES)
+    scene = hip_scene_from_angles(model, motion.t[idx], motion.angles[idx], tau[idx])
+    t = motion.t
+    plots = [TimePlot(f"Motor {i + 1} torque: measured and identified", "torque [N m]", t,
+                      (Curve("measured", tau[:, i]), Curve("identified", tau_id[:, i]))) for i in range(3)]
+    plots.append(TimePlot("Residuals (measured - identified)", "torque [N m]", t,
+                          tuple(Curve(f"motor {i + 1}", tau[:, i] - tau_id[:, i]) for i in range(3))))
+    plots.append(TimePlot("Measured motion", "angle [deg]", t, tuple(
+        Curve(n, np.degrees(motion.angles[:, c])) for c, n in enumerate(("alpha (FE)", "beta (AA)", "gamma (IER)")))))
+    return write_report(tmp, title="2(3PUS+S) hip simulator: hip identify", scene=scene, plots=plots, summary=doc,
+                        parameters=parameters_text(params_path), warnings=warns, images=images,
+                        notes=[f"measured: {doc['measured']}", f"parameters: {doc['parameters']}",
+                               f"identify: {doc['identify']}"],
+                        scene_note="The measured motion; actuated carriages coloured by the measured motor torques.",
+                        samples=len(motion))
 
 
 def run_excite(

@@ -327,13 +327,15 @@ def run_hip(
     chunk: int = RUN_CHUNK,
     motion_model: str | None = None,
     report: Callable[[dict[str, Path]], None] | None = None,
+    html_report: bool = True,
 ) -> tuple[dict[str, Path], list[str]]:
     """Run the whole job; returns the files written and the warnings raised on the way.
 
     ``fmt``: ``"csv"`` or ``"parquet"`` for ``results``; ``limits``: overrides of the
     ``[limits]`` table (``{key: value}`` or ``("key=value", ...)``); ``motion_model``: the named
     ISO 14242-1 cycle model of the built-in motion (:func:`pkmdyn.machines.hip_simulator.iso_fit.iso_cycle_preset`;
-    ``None``: the parameter file's ``[motion] iso_cycle``). Every input (parameters,
+    ``None``: the parameter file's ``[motion] iso_cycle``); ``html_report``: also write ``report.html``
+    (the machine animated over the plots' window). Every input (parameters,
     motion, options, limits on load and angles) is checked before ``out_dir`` is touched; the
     slider speed and acceleration limits are checked block by block as the kinematics are
     computed. On any error nothing is left at or beside ``out_dir``. ``report`` is called with
@@ -381,7 +383,12 @@ def run_hip(
     check_table_format(fmt)  # pyarrow present? (checked before any work)
 
     summ = SummaryAccumulator()
-    collect = _PlotCollector(window) if make_plots else None
+    collect = _PlotCollector(window) if make_plots or html_report else None
+    frames = None
+    if html_report:
+        from ...report import MAX_FRAMES, FramePicker
+
+        frames = FramePicker(window, MAX_FRAMES)  # the animation's samples of the plots' window
     near = 0
     worst = (0.0, 0.0, 0)  # cond, t, sample
     other: dict[str, None] = {}
@@ -414,6 +421,8 @@ def run_hip(
                               "Ld": kin.Ld[:, -1], "Ldd": kin.Ldd[:, -1], "tau": tq.tau,
                               **{p: getattr(tq, p) for p in PARTS}}
                     collect.add(s, curves, mb.load, tq.friction)
+                if frames is not None:
+                    frames.add(s, t=mb.t, R=kin.R, L=kin.L, tau=tq.tau)
         messages = list(other)
         if near:
             cond, tw, kw = worst
@@ -425,16 +434,31 @@ def run_hip(
         doc["motion"] = source
         doc["limits"] = dataclasses.asdict(lim)
         doc["warnings"] = messages
+        if html_report:
+            files["report"] = tmp / "report.html"
         write_json(files["summary"], doc)
         if collect is not None:
             from . import plots
 
             data = collect.data(note)
+        if make_plots:
             files["motion_plot"] = plots.plot_motion_and_load(data, tmp / "motion_load.png")
             files["slider_plot"] = plots.plot_slider_motion(data, tmp / "slider_motion.png")
             files["torque_parts_plot"] = plots.plot_torque_parts(data, tmp / "torque_parts.png")
             files["torque_plot"] = plots.plot_torques(data, tmp / "torques.png")
             files["friction_plot"] = plots.plot_friction_vs_load(data, tmp / "friction_vs_load.png")
+        if frames is not None:
+            from .report import run_plots, write_run_report
+            from .scene import hip_scene
+
+            f = frames.arrays()
+            write_run_report(tmp, title="2(3PUS+S) hip simulator: hip run",
+                             scene=hip_scene(model, f["t"], f["R"], f["L"], f["tau"]),
+                             plots=run_plots(data), summary=doc, params_path=params_path, warnings=messages,
+                             images=[p for p in files.values() if p.suffix == ".png"],
+                             notes=[f"parameters: {doc['parameters']}", f"motion: {source}"],
+                             scene_note=(f"The animation covers the plots' window: {note}." if note else ""),
+                             samples=window)
         final = {k: Path(out_dir) / p.name for k, p in files.items()}
         if report is not None:
             report(final)

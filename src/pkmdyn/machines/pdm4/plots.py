@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from .workspace import Workspace
 
-__all__ = ["plot_limbs", "plot_workspace", "plot_forces", "plot_overconstraints"]
+__all__ = ["plot_limbs", "plot_workspace", "workspace_figure", "plot_forces", "plot_overconstraints"]
 
 Array = NDArray[np.float64]
 _LIMBS = ("$l_{11}$", "$l_{12}$", "$l_{23}$", "$l_{24}$")
@@ -49,16 +49,30 @@ def plot_limbs(t: Array, extension: Array, ld: Array, ldd: Array, path: str | Pa
 def plot_workspace(ws: Workspace, path: str | Path) -> Path:
     """Reachable workspace (Fig. 3): (a) boundary of every gamma layer at the parasitic height
     ``z = r0 cos(gamma)`` of P, (b) x-y projection. Returns the written path."""
+    return _save(workspace_figure(ws), path)
+
+
+def workspace_figure(ws: Workspace) -> Figure:
+    """The figure of :func:`plot_workspace`, not yet saved."""
+    from matplotlib import colormaps
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+
     fig = Figure(figsize=(13.5, 5.5), layout="constrained")
     grid = fig.add_gridspec(1, 3, width_ratios=(1.0, 0.12, 1.0))
     ax3 = fig.add_subplot(grid[0, 0], projection="3d")
     ax2 = fig.add_subplot(grid[0, 2])
+    # one colour per gamma layer from a continuous map (a 10-colour cycle repeats beyond 10 layers),
+    # the same in both views, read off one colour bar
+    deg = np.degrees(ws.gamma)
+    norm = Normalize(float(deg.min()), float(deg.max()) if deg.max() > deg.min() else float(deg.min()) + 1.0)
+    cmap = colormaps["viridis"]
     for k in np.flatnonzero(ws.valid):
         b = np.vstack([ws.boundary[k], ws.boundary[k, :1]]) * _MM
         z = np.full(b.shape[0], ws.z[k] * _MM)
-        label = f"$\\gamma$ = {np.degrees(ws.gamma[k]):.0f}°"
-        ax3.plot(b[:, 0], b[:, 1], z, lw=1.0)
-        ax2.plot(b[:, 0], b[:, 1], lw=0.6, alpha=0.6, label=label)
+        colour = cmap(norm(deg[k]))
+        ax3.plot(b[:, 0], b[:, 1], z, lw=1.0, color=colour)
+        ax2.plot(b[:, 0], b[:, 1], lw=0.8, alpha=0.85, color=colour)
     proj = np.vstack([ws.projection, ws.projection[:1]]) * _MM
     ax2.plot(proj[:, 0], proj[:, 1], "k", lw=2.0, label="projection boundary")
     ax3.set_xlabel("x [mm]")
@@ -70,8 +84,10 @@ def plot_workspace(ws: Workspace, path: str | Path) -> Path:
     ax2.set_aspect("equal")
     ax2.grid(True, alpha=0.3)
     ax2.set_title("(b) projection on the x-y plane")
-    ax2.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.0, 0.5))
-    return _save(fig, path)
+    ax2.legend(fontsize=8, loc="upper right")
+    bar = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax2, shrink=0.85)
+    bar.set_label("$\\gamma$ of the layer [deg]")
+    return fig
 
 
 def plot_forces(t: Array, force: Array, path: str | Path) -> Path:

@@ -253,12 +253,13 @@ def _summary(cols: dict[str, Array], n: int, mob: dict[str, Any], files: dict[st
 def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_dir: str | Path,
             plots: bool = True, trajectory: dict[str, float | None] | None = None,
             report: Callable[[dict[str, Path]], None] | None = None,
-            limits: tuple[str, ...] | dict[str, Any] | None = None) -> dict[str, Any]:
+            limits: tuple[str, ...] | dict[str, Any] | None = None, html_report: bool = True) -> dict[str, Any]:
     """Run the PDM kinematics and dynamics and write every result file into ``out_dir``.
 
     ``params_path``: TOML parameters (None: built-in defaults); ``motion_path``: motion CSV
     (None: the Eq. 84 cycloidal motion of the ``[trajectory]`` section, with the overrides of
-    ``trajectory``, the keyword arguments of :func:`trajectory_with`). Returns the summary of
+    ``trajectory``, the keyword arguments of :func:`trajectory_with`); ``html_report``: also write
+    ``report.html`` (:mod:`pkmdyn.report`). Returns the summary of
     ``summary.json`` with ``files`` as ``{label: path}``. User errors raise
     :class:`~pkmdyn.errors.PkmdynError` subclasses naming the file (full path), key, row,
     sample time or limb; they are raised before ``out_dir`` is touched (which must pass the output
@@ -278,11 +279,13 @@ def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_
     if motion_path is None:
         tr = trajectory_with(model, **overrides) if overrides else model.trajectory
         motion = cycloidal_motion(tr.strokes, tr.period_s, tr.samples)
+        motion_source = f"Eq. 84 cycloidal motion, strokes {tr.strokes}, period {tr.period_s:g} s"
     else:
         if overrides:
             raise PkmdynError("--motion: the trajectory options (--stroke-*, --period-s, --peak-y-accel) "
                               "apply to the built-in Eq. 84 motion only")
         motion = read_pdm_motion(Path(motion_path).absolute(), max_rows=model.max_samples)
+        motion_source = str(motion_path)
     source = "motion" if motion_path is None else str(Path(motion_path).absolute())
     check_limit(float(motion.t[-1] - motion.t[0]), model.max_duration_s, f"{source}: duration", "max_duration_s", "s")
     cols, npz = _compute(model, motion)
@@ -293,8 +296,15 @@ def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_
         files = _write(model, out, cols, npz, mob, ws, plots)
         summ = _summary(cols, len(motion), mob, files)
         files["summary"] = out / "summary.json"
+        images = [p for k, p in files.items() if p.suffix == ".png"]
+        if html_report:
+            files["report"] = out / "report.html"
         summ["files"] = sorted(p.name for p in files.values())
         write_json(files["summary"], summ)
+        if html_report:
+            from .report import write_run_report
+
+            write_run_report(out, model, params_path, motion_source, cols, npz, summ, images)
         final = {k: Path(out_dir) / v.name for k, v in files.items()}
         if report is not None:
             report(final)

@@ -8,6 +8,7 @@ always matches the parameters that produced it. Regenerate ``docs/pdm4_schematic
 from __future__ import annotations
 
 import sys
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -16,9 +17,9 @@ from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
 from .kinematics import inverse_position
-from .params import PdmModel, load_params
+from .params import PdmModel, default_params_path, load_params
 
-__all__ = ["draw_schematic"]
+__all__ = ["draw_schematic", "schematic_figure"]
 
 Array = NDArray[np.float64]
 _MM = 1e3
@@ -58,6 +59,13 @@ def draw_schematic(model: PdmModel, path: str | Path, q: Array | None = None) ->
     Colours: cranks r2i, couplers r3i, output link r4, RPR limbs, SPU limbs, platform (with
     the R4 axis and the offset r0 to P); grey: the ground line R11-R12.
     """
+    fig = schematic_figure(model, q)
+    fig.savefig(path, dpi=110)
+    return Path(path)
+
+
+def schematic_figure(model: PdmModel, q: Array | None = None) -> Figure:
+    """The figure of :func:`draw_schematic` (with its Agg canvas), not yet saved."""
     q = np.zeros(4) if q is None else np.asarray(q, dtype=float)
     pts, links, _ = _points(model, q)
     fig = Figure(figsize=(15.0, 8.0), layout="constrained")
@@ -94,16 +102,22 @@ def draw_schematic(model: PdmModel, path: str | Path, q: Array | None = None) ->
         ax.set_title(title)
         ax.set_aspect("equal")
         ax.grid(True, alpha=0.3)
-    axes[0].legend(fontsize=8, loc="upper left", bbox_to_anchor=(0.0, -0.08), ncol=3)
+    # the legend below every axis (constrained layout keeps room for it), never over an axis label
+    fig.legend(*axes[0].get_legend_handles_labels(), fontsize=8, loc="outside lower center", ncol=6)
     deg = np.degrees(q[2:])
+    # the parameter file by name in the title; its folder, however long, wrapped on its own lines
+    source = Path(model.source)
+    builtin = source == default_params_path()
+    name = f"built-in {source.name}" if builtin else source.name
+    where = "" if builtin or source.name == model.source else "\n".join(
+        textwrap.wrap(f"parameters: {model.source}", 150))
     fig.suptitle(
-        f"4-DOF PDM, reconstructed layout ({model.source}); pose x = {q[0] * _MM:g} mm, "
+        f"4-DOF PDM, reconstructed layout ({name}); pose x = {q[0] * _MM:g} mm, "
         f"y = {q[1] * _MM:g} mm, alpha = {deg[0]:g} deg, gamma = {deg[1]:g} deg\n"
         "squares: ground joints; base frame A at the home position of C; revolute axes R1i-R4i along z"
-    )
+        + (f"\n{where}" if where else ""), fontsize=11)
     FigureCanvasAgg(fig)
-    fig.savefig(path, dpi=110)
-    return Path(path)
+    return fig
 
 
 if __name__ == "__main__":  # pragma: no cover

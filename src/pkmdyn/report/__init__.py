@@ -1,0 +1,34 @@
+"""Self-contained HTML reports: the mechanism animated in 3D, interactive plots, the run's summary.
+
+A report is one file (``report.html`` in a run's output folder) that opens offline in any
+current browser: plotly's JavaScript is inlined once, every figure's data travels with it.
+The API knows no machine: a machine (or a described mechanism) gives a :class:`Scene` (joint
+points per sample and which points each body joins), :class:`TimePlot` curves, its summary,
+parameters and warnings (``docs/report.md``).
+"""
+
+from ._figures import Curve, TimePlot, decimate_minmax
+from ._page import REPORT_NAME, write_report, write_view
+from ._scene import MAX_FRAMES, FramePicker, Scene, SceneActuator, SceneBody, frame_indices, scene_from_files, scene_from_joints
+from ._topology import Topology, fundamental_loops, layered_layout, topology_from_model
+
+__all__ = [
+    "Scene",
+    "SceneBody",
+    "SceneActuator",
+    "scene_from_joints",
+    "scene_from_files",
+    "frame_indices",
+    "FramePicker",
+    "MAX_FRAMES",
+    "Curve",
+    "TimePlot",
+    "decimate_minmax",
+    "write_report",
+    "write_view",
+    "REPORT_NAME",
+    "Topology",
+    "topology_from_model",
+    "fundamental_loops",
+    "layered_layout",
+]
