@@ -17,6 +17,7 @@ from . import pdm as _pdm_commands  # noqa: F401
 from . import export as _export_commands  # noqa: F401
 from . import identify as _identify_commands  # noqa: F401
 from . import control as _control_commands  # noqa: F401
+from . import sweep as _sweep_commands  # noqa: F401
 from ._groups import cli
 
 __all__ = ["main", "cli", "run"]

@@ -13,6 +13,7 @@ bit-identical row whatever batch, worker or process computed it.
 
 from __future__ import annotations
 
+import importlib
 import logging
 import math
 import time
@@ -213,6 +214,8 @@ def _on_dask(job: BatchJob, batches: list[Array], X: Array, parts: Path, bar: An
     with dask.config.set({"distributed.scheduler.allowed-failures": max(retries, 0) + 3}):
         client, cluster = _client(workers, scheduler)
     try:
+        # start-up: every worker imports the machine's adapter (numpy, scipy, the model) once
+        client.run(importlib.import_module, job.evaluate.__module__)
         stats.cluster_start_s = time.perf_counter() - t0
         stats.workers = len(client.scheduler_info().get("workers", {}))
         t1 = time.perf_counter()
