@@ -4,12 +4,10 @@ The sweep knows no machine: it is handed the machine's adapter (a module with th
 of :class:`~pkmdyn.sweep.adapter.SweepAdapter`). Flow: space file -> validated
 :class:`SweepSpace` -> designs (grid, random, Latin hypercube or Sobol) -> batches evaluated in
 this process or on Dask -> Parquet part files -> ``designs.parquet``, Pareto set, best design as
-a parameter file, plots (``docs/sweep.md``).
+a parameter file, plots (``docs/sweep.md``). A machine's adapter comes from the machines'
+side (``pkmdyn.machines.sweep_adapters.sweep_adapter(name)``); then
 
-    from pkmdyn.machines.sweep_adapters import sweep_adapter
-    from pkmdyn.sweep import run_sweep
-
-    report = run_sweep(sweep_adapter("NAME"), "space.toml", "out", workers=2)
+    report = run_sweep(adapter, "space.toml", "out", workers=2)
 """
 
 from .adapter import STATUSES, DesignOutcome, MetricInfo, SweepAdapter
