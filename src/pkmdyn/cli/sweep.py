@@ -48,9 +48,10 @@ def sweep(machine: str, space_path: Path, params_path: Path | None, workers: int
         report = run_sweep(adapter, space_path, out_dir, workers=workers, scheduler=scheduler, params=params_path,
                            batch_size=batch_size, max_designs=max_designs, plots=not no_plots)
     except KeyboardInterrupt:
-        click.echo(f"pkmdyn: note: the finished batches are kept in {out_dir / 'parts'}; rerun the same command "
-                   "to resume", err=True)
-        raise
+        # not the generic line of a single run: a sweep's folder keeps what it finished
+        click.echo(f"pkmdyn: interrupted; the finished batches are kept in {out_dir / 'parts'}; rerun the same "
+                   "command to resume", err=True)
+        raise click.exceptions.Exit(130) from None
     counts = ", ".join(f"{k} {v}" for k, v in report.counts.items() if v)
     click.echo(f"designs: {report.designs} ({counts}); evaluated now: {report.evaluated}; "
                f"Pareto set: {report.pareto}; best: {report.best_design_id}")
