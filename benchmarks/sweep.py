@@ -16,7 +16,11 @@ evaluate_s_1_worker / evaluate_s_2_workers; dask_share = 1 - evaluate_s_in_proce
 evaluate_s_1_worker (the share of a 1-worker run's evaluation time that the same batches do not
 need in-process: scheduling, serialisation, transfer); dask_share_2_workers = 1 -
 evaluate_s_in_process / (2 x evaluate_s_2_workers) (also counts any imbalance or contention of
-the two workers); designs_per_s_2_workers; targets and whether each is met.
+the two workers); designs_per_s_2_workers; cpu_s_* (CPU seconds of the evaluation: the
+calling process, scheduler included, plus every worker process) and dask_share_cpu = 1 -
+cpu_s_in_process / cpu_s_1_worker, dask_share_cpu_2_workers likewise: the same shares by CPU
+time, which the other load of a shared machine does not inflate; the 1-minute load average
+before and after each run; targets and whether each is met.
 """
 
 from __future__ import annotations
@@ -68,7 +72,7 @@ def main() -> None:
     adapter = sweep_adapter("hip")
     batch = default_batch_size(args.designs, 2)
     result: dict[str, object] = {"designs": args.designs, "samples_per_design": 501, "batch_size": batch,
-                                 "cpu_count": os.cpu_count()}
+                                 "cpu_count": os.cpu_count(), "load_average_1min_before": os.getloadavg()[0]}
     with tempfile.TemporaryDirectory() as tmp:
         space = Path(tmp) / "space.toml"
         space.write_text(SPACE.format(designs=args.designs), encoding="utf-8")
@@ -80,8 +84,11 @@ def main() -> None:
             total = time.perf_counter() - t0
             if not args.json:
                 print(f"{label}: {total:.1f} s in all, evaluation {report.stats.evaluate_s:.1f} s", file=sys.stderr)
-            result[f"evaluate_s_{label}"] = report.stats.evaluate_s
-            result[f"cluster_start_s_{label}"] = report.stats.cluster_start_s
+            st = report.stats
+            result[f"evaluate_s_{label}"] = st.evaluate_s
+            result[f"cluster_start_s_{label}"] = st.cluster_start_s
+            result[f"cpu_s_{label}"] = (st.driver_cpu_s + st.worker_cpu_s) if st.worker_cpu_s is not None else None
+            result[f"load_average_1min_after_{label}"] = os.getloadavg()[0]
             result[f"seconds_{label}"] = total
             if workers == 2:
                 result["status_counts"] = report.counts
@@ -91,6 +98,10 @@ def main() -> None:
     result["dask_share"] = 1.0 - e0 / e1
     result["dask_share_2_workers"] = 1.0 - e0 / (2.0 * e2)
     result["designs_per_s_2_workers"] = args.designs / e2
+    c0, c1, c2 = (result[f"cpu_s_{k}"] for k in runs)
+    if c1 and c2:
+        result["dask_share_cpu"] = 1.0 - float(c0) / float(c1)  # type: ignore[arg-type]
+        result["dask_share_cpu_2_workers"] = 1.0 - float(c0) / float(c2)  # type: ignore[arg-type]
     result["targets"] = {"seconds_2_workers_max": 180.0, "throughput_ratio_2_vs_1_min": 1.7, "dask_share_max": 0.10}
     result["targets_met"] = {
         "seconds_2_workers": float(result["seconds_2_workers"]) <= 180.0,  # type: ignore[arg-type]

@@ -230,7 +230,8 @@ def _results(prep: PreparedSweep, out: Path, plots: bool, stats: ExecutionStats
         summary["best_design"] = None
         (out / "best_params.toml").unlink(missing_ok=True)
     summary["execution"] = {"mode": stats.mode, "workers": stats.workers, "batches": stats.batches,
-                            "cluster_start_s": stats.cluster_start_s, "evaluate_s": stats.evaluate_s}
+                            "cluster_start_s": stats.cluster_start_s, "evaluate_s": stats.evaluate_s,
+                            "driver_cpu_s": stats.driver_cpu_s, "worker_cpu_s": stats.worker_cpu_s}
     if plots:
         from . import plots as _plots
 
