@@ -99,16 +99,17 @@ def test_pdm_serial_and_dask_rows_bit_identical(tmp_path):
 
 
 def test_worker_killed_mid_run_every_design_exactly_once(tmp_path):
-    from distributed import Client, LocalCluster
+    from distributed import LocalCluster
 
     space = _space(tmp_path, 240, 6, 1500)
     ad = sweep_adapter("hip")
     run_sweep(ad, space, tmp_path / "serial", workers=0, plots=False)
     out = tmp_path / "dask"
     killed: dict[str, int] = {}
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-            Client(cluster) as client:
-        pids = client.run(os.getpid)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        # the worker processes' ids from their nannies (a second client in this process would
+        # share the sweep's event loop)
+        pids = {name: nanny.process.process.pid for name, nanny in cluster.workers.items()}
 
         def kill_one() -> None:
             deadline = time.monotonic() + 120
