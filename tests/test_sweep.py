@@ -447,3 +447,58 @@ def test_toml_writer_round_trips_nested_descriptions():
 def test_unknown_machine_is_a_parameter_error():
     with pytest.raises(ParameterError, match="unknown machine"):
         sweep_adapter("stewart")
+
+
+# ----------------------------------------------------------------------------- refinement
+REFINE = """
+[refine]
+rounds = 2
+designs = 12
+shrink = 0.5
+"""
+
+
+def test_refinement_rounds_sample_around_the_pareto_set(tmp_path):
+    from pkmdyn.sweep.space import load_space
+
+    space_file = _write(tmp_path, HIP_SPACE + REFINE)
+    ad = sweep_adapter("hip")
+    report = run_sweep(ad, space_file, tmp_path / "out", workers=0, plots=False)
+    rows = _rows(tmp_path / "out" / "designs.parquet")
+    assert report.designs == len(rows) == 32 + 2 * 12
+    assert [r["round"] for r in rows] == [0] * 32 + [1] * 12 + [2] * 12
+    space, _ = load_space(space_file, ad.base_description, ad.metrics)
+    keys = [p.key for p in space.parameters]
+    ranges = {p.key: (p.lo, p.hi) for p in space.parameters if p.values is None}
+    for r in (1, 2):
+        earlier = [x for x in rows if x["round"] < r and x["feasible"]]
+        F = np.array([[x["peak_drive_force_N"], -x["gci"]] for x in earlier])
+        front = [earlier[i] for i in np.flatnonzero(pareto_mask(F))]
+        half = 0.5 * 0.5**r
+        for new in (x for x in rows if x["round"] == r):
+            # within the box of half-width shrink^r / 2 of each range around some Pareto design
+            assert any(all(abs(new[k] - c[k]) <= half * (hi - lo) * (1 + 1e-12) for k, (lo, hi) in ranges.items())
+                       for c in front)
+            for k, (lo, hi) in ranges.items():
+                assert lo <= new[k] <= hi
+            assert new["geometry.platform_heights_m[1]"] in (0.45, 0.49)
+    # the Pareto set and the best design account for every round
+    first = min(x["peak_drive_force_N"] for x in rows if x["feasible"] and x["round"] == 0)
+    best = rows[report.best_design_id]
+    assert best["peak_drive_force_N"] == min(x["peak_drive_force_N"] for x in rows if x["feasible"]) <= first
+    assert set(keys) <= set(best)
+
+
+def test_refinement_resumes_after_an_interruption(tmp_path):
+    space_file = _write(tmp_path, HIP_SPACE + REFINE)
+    ad = sweep_adapter("hip")
+    # the sample takes 4 batches of 8; the first refinement round 2 batches: stop inside it
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(_interrupting(ad, 5), space_file, tmp_path / "cut", workers=0, plots=False)
+    ids = np.concatenate([pq.read_table(p).column("design_id").to_numpy()
+                          for p in (tmp_path / "cut" / "parts").iterdir()])
+    assert sorted(ids.tolist()) == list(range(32)) + list(range(32, 40))
+    report = run_sweep(ad, space_file, tmp_path / "cut", workers=0, plots=False)
+    assert report.evaluated == 56 - 40
+    run_sweep(ad, space_file, tmp_path / "clean", workers=0, plots=False)
+    assert pq.read_table(tmp_path / "cut" / "designs.parquet").equals(pq.read_table(tmp_path / "clean" / "designs.parquet"))

@@ -50,13 +50,23 @@ class BatchJob:
     parameters: tuple[Parameter, ...]
     metrics: tuple[MetricInfo, ...]
     constraints: tuple[Bound, ...]
+    #: designs of the first sample and of each refinement round (for the ``round`` column)
+    sample_designs: int = 0
+    round_designs: int = 0
+
+    def rounds(self, ids: Array) -> Array:
+        """The round that made each design: 0 the sample, 1.. the refinement rounds."""
+        ids = np.asarray(ids, dtype=np.int64)
+        if self.round_designs == 0:
+            return np.zeros_like(ids)
+        return np.where(ids < self.sample_designs, 0, 1 + (ids - self.sample_designs) // self.round_designs)
 
 
 def part_schema(job: BatchJob) -> Any:
     """The Arrow schema of every part file and of ``designs.parquet``."""
     import pyarrow as pa
 
-    fields = [pa.field("design_id", pa.int64(), nullable=False)]
+    fields = [pa.field("design_id", pa.int64(), nullable=False), pa.field("round", pa.int64(), nullable=False)]
     fields += [pa.field(p.key, pa.int64() if p.integer else pa.float64(), nullable=False) for p in job.parameters]
     fields += [pa.field("status", pa.string(), nullable=False), pa.field("reason", pa.string(), nullable=False),
                pa.field("reachable", pa.bool_(), nullable=False), pa.field("feasible", pa.bool_(), nullable=False)]
@@ -100,7 +110,7 @@ def run_batch(job: BatchJob, ids: Array, X: Array) -> Any:
     if len(outcomes) != len(descriptions):
         raise PkmdynError(f"internal error: {len(outcomes)} outcomes for {len(descriptions)} designs")
     rows = [_checked(job, o) for o in outcomes]
-    cols: dict[str, Any] = {"design_id": np.asarray(ids, dtype=np.int64)}
+    cols: dict[str, Any] = {"design_id": np.asarray(ids, dtype=np.int64), "round": job.rounds(ids)}
     for j, p in enumerate(job.parameters):
         cols[p.key] = X[:, j].astype(np.int64) if p.integer else X[:, j].astype(np.float64)
     cols["status"] = [r[0] for r in rows]

@@ -29,8 +29,8 @@ from ..errors import ParameterError, PkmdynError
 from ..io import atomic_file, write_json
 from .adapter import STATUSES, SweepAdapter
 from .execute import PARTS_DIR, BatchJob, ExecutionStats, execute, finished_ids, part_schema
-from .pareto import best_index, minimised, pareto_mask
-from .space import SweepSpace, design_description, load_space, sample_designs
+from .pareto import minimised, pareto_mask
+from .space import SweepSpace, design_description, load_space, refine_designs, sample_designs
 from .tomlwrite import to_toml
 
 __all__ = ["run_sweep", "SweepReport", "prepare_sweep", "PreparedSweep", "RECORD", "PREFLIGHT_DESIGNS"]
@@ -98,7 +98,8 @@ def prepare_sweep(adapter: Any, space_path: str | Path, params: str | Path | Non
     _preflight(adapter, space, base, X)
     metrics = tuple(adapter.metrics(space.motion))
     job = BatchJob(evaluate=adapter.evaluate, context=context, base=base, parameters=space.parameters,
-                   metrics=metrics, constraints=space.constraints)
+                   metrics=metrics, constraints=space.constraints, sample_designs=int(X.shape[0]),
+                   round_designs=space.refine_designs)
     record = {"machine": adapter.NAME, "space": space.record(), "base_description": base,
               "metrics": [m.name for m in metrics], "designs": int(X.shape[0])}
     return PreparedSweep(adapter.NAME, space, X, job, json.loads(json.dumps(record)))
@@ -126,8 +127,11 @@ def _open_out(out: Path, record: dict[str, Any]) -> None:
         write_json(tmp, record)
 
 
-def _collect(parts: Path, schema: Any, n: int) -> Any:
-    """Every part's rows as one table sorted by design_id; each design exactly once."""
+def _collect(parts: Path, schema: Any, n: int, later: bool = False) -> Any:
+    """Every part's rows as one table sorted by design_id; each design exactly once.
+
+    ``later``: rows of designs ``>= n`` (refinement rounds of an interrupted earlier run that
+    went further) are left out instead of refused."""
     import pyarrow as pa
     import pyarrow.compute as pc
     import pyarrow.parquet as pq
@@ -135,6 +139,8 @@ def _collect(parts: Path, schema: Any, n: int) -> Any:
     tables = [pq.read_table(p, schema=schema) for p in sorted(parts.glob("part-*.parquet"))]
     table = pa.concat_tables(tables) if tables else schema.empty_table()
     table = table.take(pc.sort_indices(table, sort_keys=[("design_id", "ascending")]))
+    if later:
+        table = table.filter(pc.less(table.column("design_id"), n))
     ids = table.column("design_id").to_numpy()
     if ids.shape[0] != n or not np.array_equal(ids, np.arange(n)):
         dup = ids[1:][ids[1:] == ids[:-1]]
@@ -181,41 +187,69 @@ def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: in
     n_workers = (os.cpu_count() or 1) if workers is None and scheduler is None else (workers or 0)
     size = batch_size or prep.space.batch_size
     stats = execute(prep.job, prep.X, todo, parts, n_workers, scheduler, size, progress, retries)
+    evaluated = int(todo.shape[0])
+    X, rounds = prep.X, 0
+    schema = part_schema(prep.job)
+    for r in range(1, prep.space.refine_rounds + 1):
+        _, front = _front(_collect(parts, schema, X.shape[0], later=True), prep.space.objectives)
+        if not front.size:
+            break  # nothing feasible to refine around
+        X = np.vstack([X, refine_designs(prep.space, X, np.sort(front), r)])
+        todo = np.setdiff1d(np.arange(X.shape[0] - prep.space.refine_designs, X.shape[0]), done)
+        _add(stats, execute(prep.job, X, todo, parts, n_workers, scheduler, size, progress, retries))
+        evaluated += int(todo.shape[0])
+        rounds = r
     t0 = time.perf_counter()
-    files, counts, n_pareto, best = _results(prep, out, plots, stats)
-    return SweepReport(out=out, designs=n, evaluated=int(todo.shape[0]), counts=counts, pareto=n_pareto,
+    files, counts, n_pareto, best = _results(prep, X, rounds, out, plots, stats)
+    return SweepReport(out=out, designs=int(X.shape[0]), evaluated=evaluated, counts=counts, pareto=n_pareto,
                        best_design_id=best, files=files, stats=stats, results_s=time.perf_counter() - t0)
 
 
-def _results(prep: PreparedSweep, out: Path, plots: bool, stats: ExecutionStats
-             ) -> tuple[dict[str, Path], dict[str, int], int, int | None]:
-    import pyarrow as pa
+def _add(total: ExecutionStats, more: ExecutionStats) -> None:
+    """Accumulate the statistics of a refinement round."""
+    total.batches += more.batches
+    total.cluster_start_s += more.cluster_start_s
+    total.evaluate_s += more.evaluate_s
+    total.driver_cpu_s += more.driver_cpu_s
+    total.worker_cpu_s = None if total.worker_cpu_s is None or more.worker_cpu_s is None \
+        else total.worker_cpu_s + more.worker_cpu_s
 
-    table = _collect(out / PARTS_DIR, part_schema(prep.job), prep.X.shape[0])
-    files = {"designs": _write_table(out / "designs.parquet", table)}
-    status = np.asarray(table.column("status").to_pylist(), dtype=object)
-    counts = {s: int(np.count_nonzero(status == s)) for s in STATUSES}
+
+def _front(table: Any, objectives: tuple[tuple[str, str], ...]) -> tuple[Any, Any]:
+    """Row indices of the feasible designs and of the Pareto set among them, the latter sorted
+    as the best design is chosen (first objective, then the next ones), plus ``F`` minimised."""
     feasible = np.flatnonzero(table.column("feasible").to_numpy(zero_copy_only=False))
-    objectives = prep.space.objectives
     F = np.column_stack([table.column(m).to_numpy(zero_copy_only=False)[feasible].astype(float)
                          for m, _ in objectives]) if feasible.size else np.zeros((0, len(objectives)))
     Fm = minimised(F, [s for _, s in objectives])
     mask = pareto_mask(Fm)
     Fp = Fm[mask]
-    # the Pareto set sorted like the best design is chosen: first objective, then the next ones
-    on_front = feasible[mask][np.lexsort(tuple(Fp[:, k] for k in range(Fp.shape[1] - 1, -1, -1)))]
+    return feasible, feasible[mask][np.lexsort(tuple(Fp[:, k] for k in range(Fp.shape[1] - 1, -1, -1)))]
+
+
+def _results(prep: PreparedSweep, X: Any, rounds: int, out: Path, plots: bool, stats: ExecutionStats
+             ) -> tuple[dict[str, Path], dict[str, int], int, int | None]:
+    import pyarrow as pa
+
+    table = _collect(out / PARTS_DIR, part_schema(prep.job), X.shape[0])
+    files = {"designs": _write_table(out / "designs.parquet", table)}
+    status = np.asarray(table.column("status").to_pylist(), dtype=object)
+    counts = {s: int(np.count_nonzero(status == s)) for s in STATUSES}
+    objectives = prep.space.objectives
+    feasible, on_front = _front(table, objectives)
     front = table.take(pa.array(on_front, type=pa.int64()))
     files["pareto"] = _write_table(out / "pareto.parquet", front)
     best: int | None = None
     summary: dict[str, Any] = {
-        "machine": prep.machine, "space": prep.space.source, "designs": int(prep.X.shape[0]),
+        "machine": prep.machine, "space": prep.space.source, "designs": int(X.shape[0]),
+        "sample_designs": int(prep.X.shape[0]), "refine_rounds": rounds,
         "status_counts": counts, "feasible": int(feasible.size), "pareto_designs": int(on_front.size),
         "objectives": [{"metric": m, "sense": s} for m, s in objectives],
         "constraints": [{"metric": b.metric, "min": b.lo, "max": b.hi} for b in prep.space.constraints],
     }
     if feasible.size:
-        best = int(feasible[best_index(Fm)])
-        row = prep.X[best]
+        best = int(on_front[0])  # best in the first objective, then the next ones: the front's first
+        row = X[best]
         desc = design_description(prep.job.base, prep.space.parameters, row)
         values = {m: float(table.column(m)[best].as_py()) for m, _ in objectives}
         header = (f"Best design {best} of the sweep {prep.space.source} ({prep.machine}),\n"

@@ -62,6 +62,7 @@ __all__ = [
     "sample_designs",
     "design_count",
     "design_description",
+    "refine_designs",
     "read_space",
     "DEFAULT_MAX_DESIGNS",
     "METHODS",
@@ -108,6 +109,12 @@ class _Sampling(Section):
     batch_size: Annotated[int, Field(ge=1, le=1_000_000)] | None = None
 
 
+class _Refine(Section):
+    rounds: Annotated[int, Field(ge=0, le=100)] = 0
+    designs: Annotated[int, Field(ge=1)] = 256
+    shrink: Annotated[float, Field(gt=0.0, le=1.0)] = 0.5
+
+
 class _Bound(Section):
     min: _FINITE | None = None
     max: _FINITE | None = None
@@ -128,6 +135,7 @@ class _SpaceFile(Section):
     parameters: dict[str, _Param]
     constraints: dict[str, _Bound] = Field(default_factory=dict)
     objectives: dict[str, Literal["min", "max"]]
+    refine: _Refine = _Refine()
 
 
 @dataclass(frozen=True)
@@ -180,6 +188,13 @@ class SweepSpace:
     parameters: tuple[Parameter, ...]
     constraints: tuple[Bound, ...]
     objectives: tuple[tuple[str, str], ...]
+    refine_rounds: int = 0
+    refine_designs: int = 0
+    refine_shrink: float = 0.5
+
+    def round_of(self, design_id: int) -> int:
+        """The round that made a design: 0 the sample, 1.. the refinement rounds."""
+        return 0 if design_id < self.designs else 1 + (design_id - self.designs) // self.refine_designs
 
     def record(self) -> dict[str, Any]:
         """A plain, JSON-able echo of the space (what a resumed run must match)."""
@@ -191,6 +206,7 @@ class SweepSpace:
                            for p in self.parameters],
             "constraints": [{"metric": b.metric, "min": b.lo, "max": b.hi} for b in self.constraints],
             "objectives": [list(o) for o in self.objectives],
+            "refine": {"rounds": self.refine_rounds, "designs": self.refine_designs, "shrink": self.refine_shrink},
         }
 
 
@@ -311,8 +327,10 @@ def space_from_dict(raw: Mapping[str, Any], description: Mapping[str, Any], metr
         batch_size=s.batch_size, motion=dict(d.motion), parameters=tuple(params),
         constraints=tuple(Bound(k, b.min, b.max) for k, b in d.constraints.items()),
         objectives=tuple(d.objectives.items()),
+        refine_rounds=d.refine.rounds, refine_designs=d.refine.designs if d.refine.rounds else 0,
+        refine_shrink=d.refine.shrink,
     )
-    n = design_count(space)
+    n = design_count(space) + space.refine_rounds * space.refine_designs
     if n > space.max_designs:
         raise LimitError(f"{source}: {n:,} designs exceed the limit max_designs = {space.max_designs:,} (raise it "
                          "with [sampling] max_designs in the space file or --limit max_designs=N)")
@@ -401,6 +419,43 @@ def sample_designs(space: SweepSpace) -> Array:
         return np.stack([m.reshape(-1) for m in mesh], axis=-1)
     u = _unit_sample(space)
     return np.stack([_from_unit(p, u[:, j]) for j, p in enumerate(space.parameters)], axis=-1)
+
+
+def refine_designs(space: SweepSpace, X: Array, centres: Array, round_index: int) -> Array:
+    """The ``refine_designs`` new designs of refinement round ``round_index`` (1, 2, ...).
+
+    New design k is drawn around the design ``X[centres[k mod len(centres)]]`` (``centres``:
+    the Pareto set so far, sorted by design id): each parameter moves by ``(2 u - 1) h`` with
+    ``u`` from a scrambled Sobol sequence (seeded by the space's seed and the round) and the
+    half-width ``h = shrink^r / 2`` of its range (of its log range for ``scale = "log"``; of
+    the index range for a ``values`` list), clipped to the range; integer keys are rounded.
+    """
+    from scipy.stats import qmc
+
+    m, d = space.refine_designs, len(space.parameters)
+    rng = np.random.default_rng([space.seed, round_index])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # any count, as for the first sample
+        s = 2.0 * qmc.Sobol(d, scramble=True, rng=rng).random(m) - 1.0
+    half = 0.5 * space.refine_shrink ** round_index
+    C = X[np.asarray(centres, dtype=np.int64)[np.arange(m) % len(centres)]]
+    out = np.empty((m, d))
+    for j, p in enumerate(space.parameters):
+        c, step = C[:, j], s[:, j] * half
+        if p.values is not None:
+            vals = np.asarray(p.values, dtype=float)
+            k = len(vals)
+            ci = np.array([int(np.flatnonzero(vals == v)[0]) for v in c])
+            out[:, j] = vals[np.clip(np.rint(ci + step * (k - 1)), 0, k - 1).astype(np.int64)]
+            continue
+        lo, hi = float(p.lo), float(p.hi)  # type: ignore[arg-type]
+        if p.scale == "log":
+            out[:, j] = np.exp(np.clip(np.log(c) + step * (math.log(hi) - math.log(lo)), math.log(lo), math.log(hi)))
+        else:
+            out[:, j] = np.clip(c + step * (hi - lo), lo, hi)
+        if p.integer:
+            out[:, j] = np.clip(np.rint(out[:, j]), math.ceil(lo), math.floor(hi))
+    return out
 
 
 def design_description(base: Mapping[str, Any], parameters: Sequence[Parameter], row: Array) -> dict[str, Any]:
