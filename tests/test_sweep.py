@@ -502,3 +502,20 @@ def test_refinement_resumes_after_an_interruption(tmp_path):
     assert report.evaluated == 56 - 40
     run_sweep(ad, space_file, tmp_path / "clean", workers=0, plots=False)
     assert pq.read_table(tmp_path / "cut" / "designs.parquet").equals(pq.read_table(tmp_path / "clean" / "designs.parquet"))
+
+
+def test_docs_worked_example_figures_of_the_paper_design():
+    """docs/sweep.md quotes these for the paper's design under examples/hip_table1_space.toml."""
+    from pkmdyn.machines.hip_simulator import sweep as hip_sweep_adapter
+    from pkmdyn.sweep.run import prepare_sweep
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "hip_table1_space.toml"
+    prep = prepare_sweep(sweep_adapter("hip"), example)
+    assert prep.X.shape == (4096, 4) and prep.space.refine_rounds == 2
+    base = hip_sweep_adapter.base_description(None)
+    outcome = hip_sweep_adapter.evaluate([base], prep.job.context)[0]
+    m = outcome.metrics
+    assert outcome.status == "ok"
+    assert (round(m["peak_drive_force_N"], 1), round(m["stroke_m"], 3), round(m["max_spherical_angle_deg"], 1),
+            round(m["gci"], 3), round(m["min_inverse_condition"], 3), round(m["orientation_workspace_fraction"], 3)) \
+        == (249.9, 0.118, 27.0, 0.518, 0.393, 0.996)
