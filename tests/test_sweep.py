@@ -519,3 +519,12 @@ def test_docs_worked_example_figures_of_the_paper_design():
     assert (round(m["peak_drive_force_N"], 1), round(m["stroke_m"], 3), round(m["max_spherical_angle_deg"], 1),
             round(m["gci"], 3), round(m["min_inverse_condition"], 3), round(m["orientation_workspace_fraction"], 3)) \
         == (249.9, 0.118, 27.0, 0.518, 0.392, 0.996)
+
+
+def test_interrupted_before_any_batch_leaves_no_folder(hip_sweep, tmp_path):
+    tmp, _ = hip_sweep
+    out = tmp_path / "new" / "out"
+    (tmp_path / "new").mkdir()
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(_interrupting(sweep_adapter("hip"), 0), tmp / "space.toml", out, workers=0, plots=False)
+    assert not out.exists()

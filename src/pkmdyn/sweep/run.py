@@ -127,6 +127,22 @@ def _open_out(out: Path, record: dict[str, Any]) -> None:
         write_json(tmp, record)
 
 
+def _remove_if_unused(out: Path) -> None:
+    """Remove a sweep folder this run created when it failed before finishing any batch (a
+    wrong scheduler address, Ctrl-C at once): nothing is left behind but what holds results."""
+    parts = out / PARTS_DIR
+    if parts.is_dir() and not any(p.name.startswith("part-") for p in parts.iterdir()):
+        for p in parts.iterdir():
+            p.unlink(missing_ok=True)
+        parts.rmdir()
+    if not parts.exists():
+        (out / RECORD).unlink(missing_ok=True)
+        try:
+            out.rmdir()
+        except OSError:
+            pass
+
+
 def _collect(parts: Path, schema: Any, n: int, later: bool = False) -> Any:
     """Every part's rows as one table sorted by design_id; each design exactly once.
 
@@ -179,6 +195,7 @@ def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: in
     check_table_format("parquet")
     prep = prepare_sweep(adapter, space_path, params, max_designs)
     out = Path(out)
+    fresh = not out.exists()
     _open_out(out, prep.record)
     parts = out / PARTS_DIR
     done = finished_ids(parts)
@@ -186,7 +203,12 @@ def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: in
     todo = np.setdiff1d(np.arange(n, dtype=np.int64), done)
     n_workers = (os.cpu_count() or 1) if workers is None and scheduler is None else (workers or 0)
     size = batch_size or prep.space.batch_size
-    stats = execute(prep.job, prep.X, todo, parts, n_workers, scheduler, size, progress, retries)
+    try:
+        stats = execute(prep.job, prep.X, todo, parts, n_workers, scheduler, size, progress, retries)
+    except BaseException:
+        if fresh:
+            _remove_if_unused(out)
+        raise
     evaluated = int(todo.shape[0])
     X, rounds = prep.X, 0
     schema = part_schema(prep.job)
