@@ -225,8 +225,10 @@ def _client(workers: int, scheduler: str | None) -> tuple[Any, Any]:
             return Client(scheduler, timeout="30s"), None
         except (OSError, TimeoutError) as exc:
             raise PkmdynError(f"--scheduler {scheduler}: cannot connect ({exc})") from None
+    # Dask's own log lines stay quiet (a worker that dies and is replaced is expected; the
+    # sweep reports what it cannot recover from itself, in one line)
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                           silence_logs=logging.ERROR)
+                           silence_logs=logging.CRITICAL)
     return Client(cluster), cluster
 
 
