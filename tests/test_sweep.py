@@ -528,3 +528,24 @@ def test_interrupted_before_any_batch_leaves_no_folder(hip_sweep, tmp_path):
     with pytest.raises(KeyboardInterrupt):
         run_sweep(_interrupting(sweep_adapter("hip"), 0), tmp / "space.toml", out, workers=0, plots=False)
     assert not out.exists()
+
+
+def test_base_parameters_from_the_space_file_and_from_params(tmp_path):
+    from pkmdyn.machines.hip_simulator.sweep import base_description
+
+    base = base_description(None)
+    base["geometry"]["screw_lead_m"] = 0.02
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "base.toml").write_text(to_toml(base), encoding="utf-8")
+    text = HIP_SPACE.replace("[sampling]", 'params = "sub/base.toml"\n\n[sampling]', 1)
+    space = _write(tmp_path, text)
+    run_sweep(sweep_adapter("hip"), space, tmp_path / "a", workers=0, plots=False)
+    best = tomllib.loads((tmp_path / "a" / "best_params.toml").read_text(encoding="utf-8"))
+    assert best["geometry"]["screw_lead_m"] == 0.02  # relative to the space file, unswept keys kept
+    # --params overrides the space file's params; a rerun into the same folder with another base is refused
+    plain = _write(tmp_path, HIP_SPACE, "plain.toml")
+    run_sweep(sweep_adapter("hip"), plain, tmp_path / "b", workers=0, plots=False,
+              params=tmp_path / "sub" / "base.toml")
+    assert tomllib.loads((tmp_path / "b" / "best_params.toml").read_text(encoding="utf-8"))["geometry"]["screw_lead_m"] == 0.02
+    with pytest.raises(Exception, match="different base description"):
+        run_sweep(sweep_adapter("hip"), plain, tmp_path / "b", workers=0, plots=False)
