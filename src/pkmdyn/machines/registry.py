@@ -8,7 +8,8 @@ Two kinds of folder make a built-in machine, and nothing else has to change to a
   ``pkmdyn hip ...``, ``pkmdyn pdm ...``): a package ``machines/<folder>/`` with a module
   ``machine.py`` that says ``NAME``, ``TITLE``, ``CONTROL_SETTINGS`` (a path) and provides
   ``default_params_text()``, ``description()`` (its built-in parameters as a mechanism
-  description) and ``default_motion()`` (a :class:`pkmdyn.multibody.TaskMotion`).
+  description) and ``default_motion()`` (a :class:`pkmdyn.multibody.TaskMotion`). A module
+  ``sweep.py`` beside it makes the machine sweepable (:mod:`pkmdyn.sweep_protocol`).
 
 Every command that takes ``--machine`` resolves it here; an unknown name is refused, never
 routed to another machine's code.
@@ -24,7 +25,7 @@ from types import ModuleType
 from ..errors import ParameterError
 
 __all__ = ["described_machines", "hand_built_machines", "hand_built", "builtin_names", "description_path",
-           "resolve", "title"]
+           "resolve", "title", "sweep_adapter"]
 
 _HERE = Path(__file__).resolve().parent
 
@@ -92,3 +93,21 @@ def resolve(machine: str) -> tuple[ModuleType | None, Path | None]:
     if p.suffix.lower() == ".toml" or p.exists():
         return None, p
     return None, description_path(machine)
+
+
+def sweep_adapter(name: str) -> ModuleType:
+    """The sweep adapter (``sweep.py`` of its folder, :class:`pkmdyn.sweep_protocol.SweepAdapter`)
+    of the built-in machine ``name``."""
+    machines = hand_built_machines()
+    shown = name if len(name) <= 60 else name[:60] + "..."
+    if name not in machines:
+        known = ", ".join(n for n in sorted(machines) if _has_sweep(machines[n]))
+        raise ParameterError(f"--machine {shown!r}: unknown machine for a sweep; known: {known} "
+                             "(machine description files are not sweepable yet)")
+    if not _has_sweep(machines[name]):
+        raise ParameterError(f"--machine {shown!r}: this machine has no sweep adapter")
+    return importlib.import_module(f"{machines[name].__package__}.sweep")
+
+
+def _has_sweep(entry: ModuleType) -> bool:
+    return (Path(entry.__file__).parent / "sweep.py").is_file()

@@ -1,0 +1,59 @@
+"""``pkmdyn sweep``: design sweeps of any machine with a sweep adapter, in this process or on Dask.
+
+Every check (machine, space file, base parameters, motion, design count, the designs'
+validity, the output folder) comes before any design is evaluated; a user error is one line
+and exit status 2. The output folder fills batch by batch; a rerun resumes it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ._groups import PATH_IN, cli
+
+_MACHINE_HELP = "Machine to sweep: hip (the 2(3PUS+S) hip simulator) or pdm (the 4-DOF PDM)."
+
+
+@cli.command("sweep")
+@click.option("--machine", required=True, metavar="NAME", help=_MACHINE_HELP)
+@click.option("--space", "space_path", type=PATH_IN, required=True,
+              help="Space file (TOML): swept keys, sampling, motion, constraints, objectives (docs/sweep.md).")
+@click.option("--params", "params_path", type=PATH_IN, default=None,
+              help="Base parameter file (overrides the space file's params; default: the machine's built-in one).")
+@click.option("--workers", type=click.IntRange(min=0, max=4096), default=None,
+              help="Local Dask worker processes (default: one per CPU core; 0: in this process, without Dask).")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Address of a running Dask scheduler (e.g. tcp://head:8786) instead of a local cluster.")
+@click.option("--batch-size", type=click.IntRange(min=1, max=1_000_000), default=None,
+              help="Designs per task (default: [sampling] batch_size, else about 8 tasks per worker, 10 to 250).")
+@click.option("--limit", "limits", multiple=True, metavar="max_designs=N",
+              help="Raise the design limit (default 100,000; also [sampling] max_designs).")
+@click.option("--no-plots", is_flag=True, help="Write no PNG plots.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
+              help="Output folder; a rerun on the same folder and space resumes, skipping finished designs.")
+def sweep(machine: str, space_path: Path, params_path: Path | None, workers: int | None, scheduler: str | None,
+          batch_size: int | None, limits: tuple[str, ...], no_plots: bool, out_dir: Path) -> None:
+    """Evaluate many designs of a machine; write designs.parquet, the Pareto set, the best design, plots."""
+    from ..machines.registry import sweep_adapter
+    from ..params_util import parse_limit_options
+    from ..sweep import run_sweep
+
+    if workers is not None and scheduler is not None:
+        raise click.UsageError("--workers and --scheduler: give one of them (a scheduler has its own workers)")
+    max_designs = parse_limit_options(limits, {"max_designs": int}).get("max_designs")
+    adapter = sweep_adapter(machine)
+    try:
+        report = run_sweep(adapter, space_path, out_dir, workers=workers, scheduler=scheduler, params=params_path,
+                           batch_size=batch_size, max_designs=max_designs, plots=not no_plots)
+    except KeyboardInterrupt:
+        # not the generic line of a single run: a sweep's folder keeps what it finished
+        click.echo(f"pkmdyn: interrupted; the finished batches are kept in {out_dir / 'parts'}; rerun the same "
+                   "command to resume", err=True)
+        raise click.exceptions.Exit(130) from None
+    counts = ", ".join(f"{k} {v}" for k, v in report.counts.items() if v)
+    click.echo(f"designs: {report.designs} ({counts}); evaluated now: {report.evaluated}; "
+               f"Pareto set: {report.pareto}; best: {report.best_design_id}")
+    for name, path in report.files.items():
+        click.echo(f"{name}: {path}")

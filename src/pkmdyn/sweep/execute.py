@@ -1,0 +1,313 @@
+"""Evaluating the designs in batches, in this process or on Dask, with Parquet part files.
+
+A *batch* is a list of design ids; one task evaluates one batch and returns its rows as a
+pyarrow table, which this process writes as one part file ``parts/part-<first id>.parquet``
+(atomically: written under a temporary name and renamed, so an interrupted run never leaves
+half a part). A rerun on the same output folder reads the design ids of the parts already
+there and evaluates only the others, so no design is lost or evaluated into the results twice.
+
+Rows depend on the design alone: each design is evaluated by itself from the same
+description, never vectorised across the designs of a batch, so the same design gives a
+bit-identical row whatever batch, worker or process computed it.
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+import os
+import math
+import time
+import uuid
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import PkmdynError
+from ..sweep_protocol import STATUSES, DesignOutcome, MetricInfo
+from .space import Bound, Parameter, design_description
+
+__all__ = ["BatchJob", "run_batch", "make_batches", "finished_ids", "execute", "part_schema", "PARTS_DIR",
+           "default_batch_size", "ExecutionStats"]
+
+Array = NDArray[np.float64]
+PARTS_DIR = "parts"
+#: statuses whose motion was followed to its end (every pose reached, no singularity)
+_REACHED = ("ok", "infeasible", "limit")
+
+
+@dataclass(frozen=True)
+class BatchJob:
+    """Everything a worker needs besides the batch itself; sent once to every worker."""
+
+    evaluate: Callable[[Sequence[Mapping[str, Any]], Any], list[DesignOutcome]]
+    context: Any
+    base: Mapping[str, Any]
+    parameters: tuple[Parameter, ...]
+    metrics: tuple[MetricInfo, ...]
+    constraints: tuple[Bound, ...]
+    #: designs of the first sample and of each refinement round (for the ``round`` column)
+    sample_designs: int = 0
+    round_designs: int = 0
+
+    def rounds(self, ids: Array) -> Array:
+        """The round that made each design: 0 the sample, 1.. the refinement rounds."""
+        ids = np.asarray(ids, dtype=np.int64)
+        if self.round_designs == 0:
+            return np.zeros_like(ids)
+        return np.where(ids < self.sample_designs, 0, 1 + (ids - self.sample_designs) // self.round_designs)
+
+
+def part_schema(job: BatchJob) -> Any:
+    """The Arrow schema of every part file and of ``designs.parquet``."""
+    import pyarrow as pa
+
+    fields = [pa.field("design_id", pa.int64(), nullable=False), pa.field("round", pa.int64(), nullable=False)]
+    fields += [pa.field(p.key, pa.int64() if p.integer else pa.float64(), nullable=False) for p in job.parameters]
+    fields += [pa.field("status", pa.string(), nullable=False), pa.field("reason", pa.string(), nullable=False),
+               pa.field("reachable", pa.bool_(), nullable=False), pa.field("feasible", pa.bool_(), nullable=False)]
+    fields += [pa.field(m.name, pa.float64()) for m in job.metrics]
+    return pa.schema(fields)
+
+
+def _checked(job: BatchJob, outcome: DesignOutcome) -> tuple[str, str, list[float | None]]:
+    """Status, reason and metric values of one design after the sweep's own checks: every
+    metric of a usable design finite, then the constraints."""
+    status, reason = outcome.status, outcome.reason
+    if status not in STATUSES or status == "infeasible":
+        raise PkmdynError(f"internal error: a machine adapter returned the status {status!r}")
+    values: list[float | None] = []
+    bad = ""
+    for m in job.metrics:
+        v = outcome.metrics.get(m.name)
+        v = None if v is None else float(v)
+        if v is not None and not math.isfinite(v):
+            bad = bad or m.name
+            v = None
+        elif v is None and status == "ok":
+            bad = bad or m.name
+        values.append(v)
+    if status == "ok" and bad:
+        return "nonfinite", f"{bad} is not finite", [None] * len(values)
+    if status == "ok":
+        by_name = dict(zip((m.name for m in job.metrics), values))
+        broken = [v for v in (b.violation(by_name[b.metric]) for b in job.constraints) if v]  # type: ignore[arg-type]
+        if broken:
+            return "infeasible", "; ".join(broken), values
+    return status, reason, values
+
+
+def run_batch(job: BatchJob, ids: Array, X: Array) -> Any:
+    """Evaluate one batch of designs (ids ``(k,)``, values ``(k, d)``) -> a pyarrow table of rows."""
+    import pyarrow as pa
+
+    descriptions = [design_description(job.base, job.parameters, row) for row in X]
+    outcomes = job.evaluate(descriptions, job.context)
+    if len(outcomes) != len(descriptions):
+        raise PkmdynError(f"internal error: {len(outcomes)} outcomes for {len(descriptions)} designs")
+    rows = [_checked(job, o) for o in outcomes]
+    cols: dict[str, Any] = {"design_id": np.asarray(ids, dtype=np.int64), "round": job.rounds(ids)}
+    for j, p in enumerate(job.parameters):
+        cols[p.key] = X[:, j].astype(np.int64) if p.integer else X[:, j].astype(np.float64)
+    cols["status"] = [r[0] for r in rows]
+    cols["reason"] = [" ".join(r[1].split()) for r in rows]
+    cols["reachable"] = [r[0] in _REACHED for r in rows]
+    cols["feasible"] = [r[0] == "ok" for r in rows]
+    for k, m in enumerate(job.metrics):
+        cols[m.name] = [r[2][k] for r in rows]
+    return pa.table(cols, schema=part_schema(job))
+
+
+def default_batch_size(todo: int, workers: int) -> int:
+    """About eight tasks per worker (load balance, cheap retries), 10 to 250 designs each."""
+    return max(10, min(250, math.ceil(todo / (8 * max(workers, 1)))))
+
+
+def make_batches(todo: Array, size: int) -> list[Array]:
+    """Consecutive runs of ``size`` ids of the sorted ``todo``."""
+    return [todo[s:s + size] for s in range(0, todo.shape[0], size)]
+
+
+def _part_name(ids: Array) -> str:
+    return f"part-{int(ids[0]):09d}.parquet"
+
+
+def finished_ids(parts: Path) -> Array:
+    """Sorted design ids held by the part files of an earlier run (empty when none).
+
+    Leftover temporary files of a killed run are removed; a part file that cannot be read is
+    an error naming it (it can only come from outside: parts are written atomically).
+    """
+    import pyarrow.parquet as pq
+
+    if not parts.is_dir():
+        return np.zeros(0, dtype=np.int64)
+    found = []
+    for p in sorted(parts.iterdir()):
+        if p.name.startswith(".") and ".partial-" in p.name:
+            p.unlink(missing_ok=True)
+            continue
+        if not (p.name.startswith("part-") and p.name.endswith(".parquet")):
+            continue
+        try:
+            found.append(pq.read_table(p, columns=["design_id"]).column(0).to_numpy())
+        except Exception as exc:  # pyarrow raises several types for a damaged file
+            raise PkmdynError(f"{p}: cannot read this part file ({type(exc).__name__}); delete it to "
+                              "evaluate its designs again") from None
+    if not found:
+        return np.zeros(0, dtype=np.int64)
+    return np.sort(np.concatenate(found))
+
+
+def _write_part(parts: Path, table: Any) -> None:
+    import pyarrow.parquet as pq
+
+    from ..io import atomic_file
+
+    ids = table.column("design_id").to_numpy()
+    with atomic_file(parts / _part_name(ids), notify=None) as tmp:
+        pq.write_table(table, str(tmp), compression="zstd")
+
+
+@dataclass
+class ExecutionStats:
+    """Where the time went and how the designs were run.
+
+    ``cluster_start_s``, ``evaluate_s``: wall-clock seconds of starting the cluster (and
+    importing the model on every worker) and of the evaluation (batches dispatched, computed,
+    part files written). ``driver_cpu_s``: CPU seconds of the calling process during the
+    evaluation (with a local cluster it includes the scheduler); ``worker_cpu_s``: CPU seconds
+    of all worker processes during the evaluation (0 in-process; ``None`` when a worker was
+    replaced meanwhile, or the workers' CPU time cannot be read). CPU time is what the other
+    load of a shared machine does not inflate.
+    """
+
+    mode: str = "serial"
+    workers: int = 0
+    batches: int = 0
+    cluster_start_s: float = 0.0
+    evaluate_s: float = 0.0
+    driver_cpu_s: float = 0.0
+    worker_cpu_s: float | None = 0.0
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+def _cpu_seconds() -> float:
+    """CPU seconds (user + system, all threads) of the calling process."""
+    t = os.times()
+    return t.user + t.system
+
+
+def _progress(total: int, done: int, enabled: bool | None) -> Any:
+    from tqdm import tqdm
+
+    return tqdm(total=total, initial=done, desc="sweep", unit="design", disable=None if enabled is None else not enabled,
+                leave=False, smoothing=0.1)
+
+
+def _serial(job: BatchJob, batches: list[Array], X: Array, parts: Path, bar: Any) -> None:
+    for ids in batches:
+        _write_part(parts, run_batch(job, ids, X[ids]))
+        bar.update(len(ids))
+
+
+def _client(workers: int, scheduler: str | None) -> tuple[Any, Any]:
+    """A distributed client: to ``scheduler``, or to a new local cluster of ``workers``
+    single-threaded worker processes. Returns ``(client, cluster or None)``."""
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            return Client(scheduler, timeout="30s"), None
+        except (OSError, TimeoutError) as exc:
+            raise PkmdynError(f"--scheduler {scheduler}: cannot connect ({exc})") from None
+    # Dask's own log lines stay quiet (a worker that dies and is replaced is expected; the
+    # sweep reports what it cannot recover from itself, in one line)
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                           silence_logs=logging.CRITICAL)
+    return Client(cluster), cluster
+
+
+def _on_dask(job: BatchJob, batches: list[Array], X: Array, parts: Path, bar: Any, workers: int,
+             scheduler: str | None, stats: ExecutionStats, retries: int) -> None:
+    import dask
+    from distributed import as_completed
+    from distributed.scheduler import KilledWorker
+
+    t0 = time.perf_counter()
+    # a task whose worker dies is moved to another worker up to this many times (then the
+    # sweep stops with KilledWorker; the finished batches stay for a rerun). Local workers keep
+    # glibc's own malloc trimming: Dask's default MALLOC_TRIM_THRESHOLD_ = 64 KiB returns memory
+    # to the system after every freed temporary, which costs the many small numpy arrays of an
+    # evaluation about a third more time (system time of brk calls)
+    environ = {k: v for k, v in dask.config.get("distributed.nanny.pre-spawn-environ", {}).items()
+               if k != "MALLOC_TRIM_THRESHOLD_"}
+    with dask.config.set({"distributed.scheduler.allowed-failures": max(retries, 0) + 3,
+                          "distributed.nanny.pre-spawn-environ": environ}):
+        client, cluster = _client(workers, scheduler)
+    try:
+        # start-up: every worker imports the machine's adapter (numpy, scipy, the model) once
+        client.run(importlib.import_module, job.evaluate.__module__)
+        stats.cluster_start_s = time.perf_counter() - t0
+        stats.workers = len(client.scheduler_info().get("workers", {}))
+        t1, c1 = time.perf_counter(), _cpu_seconds()
+        cpu_before = client.run(_cpu_seconds)
+        shared = client.scatter(job, broadcast=True, hash=False)
+        token = uuid.uuid4().hex[:12]
+        futures = [client.submit(run_batch, shared, ids, X[ids], key=f"pkmdyn-sweep-{token}-{int(ids[0])}",
+                                 retries=retries, pure=False) for ids in batches]
+        try:
+            for fut in as_completed(futures):
+                table = fut.result()
+                _write_part(parts, table)
+                bar.update(table.num_rows)
+                fut.release()
+        except KilledWorker as exc:
+            raise PkmdynError(f"a batch killed its worker repeatedly ({exc}); the finished batches are kept in "
+                              f"{parts}, rerun the same command to continue") from None
+        finally:
+            client.cancel(futures)
+        stats.evaluate_s = time.perf_counter() - t1
+        stats.driver_cpu_s = _cpu_seconds() - c1
+        cpu_after = client.run(_cpu_seconds)
+        stats.worker_cpu_s = (sum(cpu_after[w] - cpu_before[w] for w in cpu_after)
+                              if set(cpu_after) == set(cpu_before) else None)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def execute(job: BatchJob, X: Array, todo: Array, parts: Path, workers: int = 0, scheduler: str | None = None,
+            batch_size: int | None = None, progress: bool | None = None, retries: int = 2) -> ExecutionStats:
+    """Evaluate the designs ``todo`` (ids into ``X``) and write one part file per batch.
+
+    ``workers = 0`` and no ``scheduler``: in this process, batch after batch. Otherwise on Dask:
+    a local cluster of ``workers`` processes, or the cluster of ``scheduler``; ``retries``:
+    re-runs of a batch that raised (a worker that dies is handled by the scheduler, which
+    moves its tasks to the other workers).
+    """
+    parts.mkdir(parents=True, exist_ok=True)
+    total = X.shape[0]
+    on_dask = workers > 0 or scheduler is not None
+    size = batch_size or default_batch_size(todo.shape[0], workers if on_dask else 1)
+    batches = make_batches(todo, size)
+    stats = ExecutionStats(mode="dask" if on_dask else "serial", workers=workers, batches=len(batches))
+    bar = _progress(total, total - todo.shape[0], progress)
+    try:
+        if not batches:
+            return stats
+        if not on_dask:
+            t0, c0 = time.perf_counter(), _cpu_seconds()
+            _serial(job, batches, X, parts, bar)
+            stats.evaluate_s = time.perf_counter() - t0
+            stats.driver_cpu_s = _cpu_seconds() - c0
+        else:
+            _on_dask(job, batches, X, parts, bar, workers, scheduler, stats, retries)
+    finally:
+        bar.close()
+    return stats

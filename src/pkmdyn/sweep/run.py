@@ -1,0 +1,310 @@
+"""A whole sweep: space file -> designs -> evaluation (serial or Dask) -> results folder.
+
+The output folder of a sweep (``docs/sweep.md``)::
+
+    sweep.json          what is being swept (machine, space, base description): a rerun must match it
+    parts/part-*.parquet  one file per finished batch, rows keyed by design_id
+    designs.parquet     every design, one row each, sorted by design_id
+    pareto.parquet      the Pareto set of the objectives among the feasible designs
+    best_params.toml    the best design as a parameter file the machine's run accepts
+    summary.json        counts, the best design, timings
+    pareto_front.png, metric_vs_parameter.png, scatter_matrix.png
+
+Unlike a single run, a sweep's folder is filled as it goes and a rerun resumes it; the
+result files are each written atomically at the end.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import ParameterError, PkmdynError
+from ..io import atomic_file, write_json
+from ..sweep_protocol import STATUSES, SweepAdapter
+from .execute import PARTS_DIR, BatchJob, ExecutionStats, execute, finished_ids, part_schema
+from .pareto import minimised, pareto_mask
+from .space import SweepSpace, design_description, load_space, refine_designs, sample_designs
+from .tomlwrite import to_toml
+
+__all__ = ["run_sweep", "SweepReport", "prepare_sweep", "PreparedSweep", "RECORD", "PREFLIGHT_DESIGNS"]
+
+RECORD = "sweep.json"
+#: designs checked against the machine's parameter validation before any work (spread evenly
+#: over the sample): when every one of them is invalid the sweep is refused
+PREFLIGHT_DESIGNS = 1000
+
+
+@dataclass(frozen=True)
+class PreparedSweep:
+    """A checked sweep, ready to run: the space, every design's values ``X (n, d)``, the job."""
+
+    machine: str
+    space: SweepSpace
+    X: Any
+    job: BatchJob
+    record: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class SweepReport:
+    """What a sweep did: the folder, status counts, the Pareto set's size, the best design
+    (``None`` when no design is feasible), the files written and the timings."""
+
+    out: Path
+    designs: int
+    evaluated: int
+    counts: dict[str, int]
+    pareto: int
+    best_design_id: int | None
+    files: dict[str, Path]
+    stats: ExecutionStats
+    results_s: float
+
+
+def _preflight(adapter: SweepAdapter, space: SweepSpace, base: Mapping[str, Any], X: Any) -> None:
+    n = X.shape[0]
+    probe = np.unique(np.linspace(0, n - 1, min(n, PREFLIGHT_DESIGNS)).round().astype(np.int64))
+    first = ""
+    for i in probe:
+        try:
+            adapter.check_description(design_description(base, space.parameters, X[i]), f"design {i}")
+            return
+        except PkmdynError as exc:
+            first = first or str(exc)
+    what = "every design" if probe.size == n else f"all {probe.size} designs checked (spread over the {n})"
+    raise ParameterError(f"{space.source}: {what} invalid by the machine's parameter rules; the first: {first}")
+
+
+def prepare_sweep(adapter: Any, space_path: str | Path, params: str | Path | None = None,
+                  max_designs: int | None = None) -> PreparedSweep:
+    """Read and check everything (space file, base parameters, motion, designs) before any work.
+
+    ``adapter``: the machine's sweep module (``pkmdyn.machines.registry.sweep_adapter``);
+    ``params``: a base parameter file overriding the space file's ``params``.
+    """
+    def description_for(path: Path | None) -> dict[str, Any]:
+        return adapter.base_description(Path(params) if params is not None else path)
+
+    space, base = load_space(space_path, description_for, adapter.metrics, max_designs)
+    context = adapter.prepare(base, space.motion, space.base_dir)
+    X = sample_designs(space)
+    _preflight(adapter, space, base, X)
+    metrics = tuple(adapter.metrics(space.motion))
+    job = BatchJob(evaluate=adapter.evaluate, context=context, base=base, parameters=space.parameters,
+                   metrics=metrics, constraints=space.constraints, sample_designs=int(X.shape[0]),
+                   round_designs=space.refine_designs)
+    record = {"machine": adapter.NAME, "space": space.record(), "base_description": base,
+              "metrics": [m.name for m in metrics], "designs": int(X.shape[0])}
+    return PreparedSweep(adapter.NAME, space, X, job, json.loads(json.dumps(record)))
+
+
+def _open_out(out: Path, record: dict[str, Any]) -> None:
+    """Create ``out`` or check that it holds a sweep of the same space (to resume)."""
+    if out.exists() and not out.is_dir():
+        raise PkmdynError(f"--out {out}: exists and is a file, not a folder")
+    rec = out / RECORD
+    if out.is_dir() and any(out.iterdir()):
+        if not rec.is_file():
+            raise PkmdynError(f"--out {out}: folder is not empty and holds no pkmdyn sweep; refusing to write into it")
+        try:
+            earlier = json.loads(rec.read_text(encoding="utf-8"))
+        except (OSError, ValueError, UnicodeDecodeError):
+            raise PkmdynError(f"--out {out}: {RECORD} is unreadable; use a new --out") from None
+        if earlier != record:
+            diff = next((k for k in record if earlier.get(k) != record[k]), "?")
+            raise PkmdynError(f"--out {out}: holds a sweep of a different {diff.replace('_', ' ')}; use a new --out "
+                              "(a rerun resumes only the same machine, space and parameters)")
+        return
+    out.mkdir(parents=True, exist_ok=True)
+    with atomic_file(rec, notify=None) as tmp:
+        write_json(tmp, record)
+
+
+def _remove_if_unused(out: Path) -> None:
+    """Remove a sweep folder this run created when it failed before finishing any batch (a
+    wrong scheduler address, Ctrl-C at once): nothing is left behind but what holds results."""
+    parts = out / PARTS_DIR
+    if parts.is_dir() and not any(p.name.startswith("part-") for p in parts.iterdir()):
+        for p in parts.iterdir():
+            p.unlink(missing_ok=True)
+        parts.rmdir()
+    if not parts.exists():
+        (out / RECORD).unlink(missing_ok=True)
+        try:
+            out.rmdir()
+        except OSError:
+            pass
+
+
+def _collect(parts: Path, schema: Any, n: int, later: bool = False) -> Any:
+    """Every part's rows as one table sorted by design_id; each design exactly once.
+
+    ``later``: rows of designs ``>= n`` (refinement rounds of an interrupted earlier run that
+    went further) are left out instead of refused."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+    import pyarrow.parquet as pq
+
+    tables = [pq.read_table(p, schema=schema) for p in sorted(parts.glob("part-*.parquet"))]
+    table = pa.concat_tables(tables) if tables else schema.empty_table()
+    table = table.take(pc.sort_indices(table, sort_keys=[("design_id", "ascending")]))
+    if later:
+        table = table.filter(pc.less(table.column("design_id"), n))
+    ids = table.column("design_id").to_numpy()
+    if ids.shape[0] != n or not np.array_equal(ids, np.arange(n)):
+        dup = ids[1:][ids[1:] == ids[:-1]]
+        raise PkmdynError(f"{parts}: the part files hold {ids.shape[0]} rows for {n} designs"
+                          + (f" (design {int(dup[0])} twice)" if dup.size else "") + "; use a new --out")
+    return table
+
+
+def _write_table(path: Path, table: Any) -> Path:
+    import pyarrow.parquet as pq
+
+    with atomic_file(path, notify=None) as tmp:
+        pq.write_table(table, str(tmp), compression="zstd")
+    return path
+
+
+def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: int | None = None,
+              scheduler: str | None = None, params: str | Path | None = None, batch_size: int | None = None,
+              max_designs: int | None = None, plots: bool = True, progress: bool | None = None,
+              retries: int = 2) -> SweepReport:
+    """Run (or resume) a sweep and write its results into ``out``.
+
+    ``workers``: local Dask worker processes (``None``: one per CPU core; ``0``: evaluate in
+    this process without Dask); ``scheduler``: the address of a running Dask scheduler
+    instead. Every check (space file, parameters, motion, the designs' validity, ``out``) comes
+    before any design is evaluated; every user error is a :class:`~pkmdyn.errors.PkmdynError`.
+    """
+    import os
+
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 0):
+        raise ParameterError(f"--workers: must be an integer >= 0, got {workers!r}")
+    if workers is not None and scheduler is not None:
+        raise ParameterError("--workers and --scheduler: give one of them (a scheduler has its own workers)")
+    from ..io import check_table_format
+
+    check_table_format("parquet")
+    prep = prepare_sweep(adapter, space_path, params, max_designs)
+    out = Path(out)
+    fresh = not out.exists()
+    _open_out(out, prep.record)
+    parts = out / PARTS_DIR
+    done = finished_ids(parts)
+    n = prep.X.shape[0]
+    todo = np.setdiff1d(np.arange(n, dtype=np.int64), done)
+    n_workers = (os.cpu_count() or 1) if workers is None and scheduler is None else (workers or 0)
+    size = batch_size or prep.space.batch_size
+    try:
+        stats = execute(prep.job, prep.X, todo, parts, n_workers, scheduler, size, progress, retries)
+    except BaseException:
+        if fresh:
+            _remove_if_unused(out)
+        raise
+    evaluated = int(todo.shape[0])
+    X, rounds = prep.X, 0
+    schema = part_schema(prep.job)
+    for r in range(1, prep.space.refine_rounds + 1):
+        _, front = _front(_collect(parts, schema, X.shape[0], later=True), prep.space.objectives)
+        if not front.size:
+            break  # nothing feasible to refine around
+        X = np.vstack([X, refine_designs(prep.space, X, np.sort(front), r)])
+        todo = np.setdiff1d(np.arange(X.shape[0] - prep.space.refine_designs, X.shape[0]), done)
+        _add(stats, execute(prep.job, X, todo, parts, n_workers, scheduler, size, progress, retries))
+        evaluated += int(todo.shape[0])
+        rounds = r
+    t0 = time.perf_counter()
+    files, counts, n_pareto, best = _results(prep, X, rounds, out, plots, stats)
+    return SweepReport(out=out, designs=int(X.shape[0]), evaluated=evaluated, counts=counts, pareto=n_pareto,
+                       best_design_id=best, files=files, stats=stats, results_s=time.perf_counter() - t0)
+
+
+def _add(total: ExecutionStats, more: ExecutionStats) -> None:
+    """Accumulate the statistics of a refinement round."""
+    total.batches += more.batches
+    total.cluster_start_s += more.cluster_start_s
+    total.evaluate_s += more.evaluate_s
+    total.driver_cpu_s += more.driver_cpu_s
+    total.worker_cpu_s = None if total.worker_cpu_s is None or more.worker_cpu_s is None \
+        else total.worker_cpu_s + more.worker_cpu_s
+
+
+def _front(table: Any, objectives: tuple[tuple[str, str], ...]) -> tuple[Any, Any]:
+    """Row indices of the feasible designs and of the Pareto set among them, the latter sorted
+    as the best design is chosen (first objective, then the next ones), plus ``F`` minimised."""
+    feasible = np.flatnonzero(table.column("feasible").to_numpy(zero_copy_only=False))
+    F = np.column_stack([table.column(m).to_numpy(zero_copy_only=False)[feasible].astype(float)
+                         for m, _ in objectives]) if feasible.size else np.zeros((0, len(objectives)))
+    Fm = minimised(F, [s for _, s in objectives])
+    mask = pareto_mask(Fm)
+    Fp = Fm[mask]
+    return feasible, feasible[mask][np.lexsort(tuple(Fp[:, k] for k in range(Fp.shape[1] - 1, -1, -1)))]
+
+
+def _results(prep: PreparedSweep, X: Any, rounds: int, out: Path, plots: bool, stats: ExecutionStats
+             ) -> tuple[dict[str, Path], dict[str, int], int, int | None]:
+    import pyarrow as pa
+
+    table = _collect(out / PARTS_DIR, part_schema(prep.job), X.shape[0])
+    files = {"designs": _write_table(out / "designs.parquet", table)}
+    status = np.asarray(table.column("status").to_pylist(), dtype=object)
+    counts = {s: int(np.count_nonzero(status == s)) for s in STATUSES}
+    objectives = prep.space.objectives
+    feasible, on_front = _front(table, objectives)
+    front = table.take(pa.array(on_front, type=pa.int64()))
+    files["pareto"] = _write_table(out / "pareto.parquet", front)
+    best: int | None = None
+    summary: dict[str, Any] = {
+        "machine": prep.machine, "space": prep.space.source, "designs": int(X.shape[0]),
+        "sample_designs": int(prep.X.shape[0]), "refine_rounds": rounds,
+        "status_counts": counts, "feasible": int(feasible.size), "pareto_designs": int(on_front.size),
+        "objectives": [{"metric": m, "sense": s} for m, s in objectives],
+        "constraints": [{"metric": b.metric, "min": b.lo, "max": b.hi} for b in prep.space.constraints],
+    }
+    if feasible.size:
+        best = int(on_front[0])  # best in the first objective, then the next ones: the front's first
+        row = X[best]
+        desc = design_description(prep.job.base, prep.space.parameters, row)
+        values = {m: float(table.column(m)[best].as_py()) for m, _ in objectives}
+        header = (f"Best design {best} of the sweep {prep.space.source} ({prep.machine}),\n"
+                  "best in the first objective among the feasible designs; objectives:\n"
+                  + "\n".join(f"  {m} = {v:.9g} ({s})" for (m, s), v in zip(objectives, values.values())))
+        files["best_params"] = _write_best(out / "best_params.toml", desc, header)
+        summary["best_design"] = {"design_id": best,
+                                  "parameters": {p.key: (int(v) if p.integer else float(v))
+                                                 for p, v in zip(prep.space.parameters, row)},
+                                  "objectives": values}
+    else:
+        summary["best_design"] = None
+        (out / "best_params.toml").unlink(missing_ok=True)
+    summary["execution"] = {"mode": stats.mode, "workers": stats.workers, "batches": stats.batches,
+                            "cluster_start_s": stats.cluster_start_s, "evaluate_s": stats.evaluate_s,
+                            "driver_cpu_s": stats.driver_cpu_s, "worker_cpu_s": stats.worker_cpu_s}
+    if plots:
+        from . import plots as _plots
+
+        files.update(_plots.sweep_plots(out, table, prep.space, on_front))
+    files["summary"] = out / "summary.json"
+    summary["files"] = sorted(p.name for p in files.values())
+    with atomic_file(files["summary"], notify=None) as tmp:
+        write_json(tmp, summary)
+    return files, counts, int(on_front.size), best
+
+
+def _write_best(path: Path, description: dict[str, Any], header: str) -> Path:
+    import tomllib
+
+    text = to_toml(description, header)
+    if tomllib.loads(text) != description:  # the file must read back to the very same description
+        raise PkmdynError("internal error: the best design's parameter file does not read back identically")
+    with atomic_file(path, notify=None) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return path
