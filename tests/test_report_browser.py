@@ -1,5 +1,6 @@
 """The reports in a real browser: headless Chromium (the distribution's package) opens the
-``report.html`` of ``hip run``, ``pdm run`` and ``hip control`` and the ``view`` page, and checks that nothing
+``report.html`` of ``hip run``, ``pdm run``, ``hip control`` and of a described mechanism's
+``run --machine stewart``, and the ``view`` page, and checks that nothing
 fails on the console, that the 3D view draws the mechanism, that moving the time slider moves
 it (and the time marker of every plot), and that every plot is there.
 
@@ -55,8 +56,9 @@ def reports(tmp_path_factory):
     assert main(["pdm", "run", "--out", str(d / "pdm")]) == 0
     assert main(["hip", "control", "--controller", "augmented-pd", "--cycles", "0.4", "--out", str(d / "ctl")]) == 0
     assert main(["view", "--machine", "pdm", "--out", str(d / "view_pdm.html")]) == 0
+    assert main(["run", "--machine", "stewart", "--out", str(d / "stewart")]) == 0
     return {"hip": d / "hip" / "report.html", "pdm": d / "pdm" / "report.html", "hip_control": d / "ctl" / "report.html",
-            "view": d / "view_pdm.html"}
+            "view": d / "view_pdm.html", "stewart": d / "stewart" / "report.html"}
 
 
 class _Page:
@@ -95,8 +97,10 @@ def _distinct(img: np.ndarray) -> int:
     return len(np.unique(img.reshape(-1, 3), axis=0))
 
 
-@pytest.mark.parametrize("which, n_plots, n_images", [("hip", 11, 5), ("pdm", 9, 5), ("hip_control", 2, 2)])
-def test_report_draws_moves_and_shows_every_plot(browser, reports, tmp_path, which, n_plots, n_images):
+@pytest.mark.parametrize("which, n_plots, n_images, parameters", [
+    ("hip", 11, 5, "[geometry]"), ("pdm", 9, 5, "[geometry]"), ("hip_control", 2, 2, "[geometry]"),
+    ("stewart", 3, 0, "[[legs.joints]]")])
+def test_report_draws_moves_and_shows_every_plot(browser, reports, tmp_path, which, n_plots, n_images, parameters):
     page = _Page(browser, reports[which])
     try:
         info = page.info()
@@ -128,7 +132,7 @@ def test_report_draws_moves_and_shows_every_plot(browser, reports, tmp_path, whi
             assert x0 == pytest.approx(t_k)
         assert page.page.locator("#figures img").count() == n_images
         assert page.page.locator("#summary table").count() >= 1
-        assert "[geometry]" in page.page.locator("#parameters pre").inner_text()
+        assert parameters in page.page.locator("#parameters pre").inner_text()
         assert not page.errors, page.errors
     finally:
         page.page.close()

@@ -88,4 +88,5 @@ def run(machine: str, motion_path: Path | None, out_dir: Path) -> None:
         motion = read_task_motion(model, Path(motion_path).absolute())
     else:
         motion = default_motion(model) if entry is None else entry.default_motion()
-    run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files)
+    text = path.read_text(encoding="utf-8", errors="replace") if path is not None else ""
+    run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files, description_text=text)

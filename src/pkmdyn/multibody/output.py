@@ -130,12 +130,31 @@ def bodies_arrays(model: MechanismModel, kin: MechanismKinematics) -> dict[str, 
     return out
 
 
+def _write_report(out: Path, model: MechanismModel, files: dict[str, Path], cols: dict[str, Array],
+                  summary: dict[str, Any], description_text: str) -> Path:
+    """``report.html`` of a run (:mod:`pkmdyn.report`): the mechanism drawn from the files just
+    written (``model.json``, ``bodies.npz``), the task and actuator coordinates against time."""
+    from ..report import Curve, TimePlot, scene_from_files, write_report
+
+    t = cols["t_s"]
+    pos, _, _ = task_columns(model)
+    plots = [TimePlot("Task coordinates", "task coordinate [m or rad]", t, tuple(Curve(c, cols[c]) for c in pos))]
+    for kind, label in (("pos", "actuator coordinates"), ("vel", "actuator rates")):
+        names = [c for c in cols if f"_{kind}_" in c]
+        plots.append(TimePlot(label.capitalize(), f"{label} [SI]", t, tuple(Curve(c, cols[c]) for c in names)))
+    return write_report(out, title=f"{model.name}: pkmdyn run", scene=scene_from_files(files["model"], files["bodies"]),
+                        plots=plots, summary=summary, parameters=description_text,
+                        notes=[f"mechanism: {model.name}" + (f" ({model.source})" if model.source else "")],
+                        scene_note="Joint centres as in bodies.npz (joint_point); actuated joints drawn as chains.")
+
+
 def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path, inputs: Any = (),
-                  report: Callable[[dict[str, Path]], None] | None = None) -> dict[str, Any]:
+                  report: Callable[[dict[str, Path]], None] | None = None, description_text: str = "") -> dict[str, Any]:
     """Kinematics of ``model`` along ``motion``, written into ``out_dir`` (through
     :func:`pkmdyn.io.output_dir` under the output rule, ``inputs`` the files the run read:
-    nothing is written when anything fails). ``report`` is called with the files' final paths
-    before they move into place. Returns the summary with ``files`` as ``{label: path}``."""
+    nothing is written when anything fails), with ``report.html`` (``description_text``: the
+    description file's text, shown on the page). ``report`` is called with the files' final
+    paths before they move into place. Returns the summary with ``files`` as ``{label: path}``."""
     kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
     sm = singularity_measures(model, kin.q)
     cols = results_columns(model, kin)
@@ -159,6 +178,7 @@ def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path
                                 coordinate_joints=np.array([model.joint_names[j] for j in model.coord_joint]), **npz)
         except OSError as exc:
             raise PkmdynError(f"{files['bodies']}: cannot write file ({exc.strerror or type(exc).__name__})") from None
+        files["report"] = _write_report(out, model, files, cols, summary, description_text)
         summary["files"] = sorted(p.name for p in files.values())
         write_json(files["summary"], summary)
         if report is not None:
