@@ -21,7 +21,8 @@ from pkmdyn.machines.registry import sweep_adapter  # noqa: E402
 from pkmdyn.sweep import pareto_mask, run_sweep  # noqa: E402
 from pkmdyn.sweep.pareto import best_index, minimised  # noqa: E402
 from pkmdyn.sweep.space import parse_path, sample_designs  # noqa: E402
-from pkmdyn.sweep.tomlwrite import to_toml  # noqa: E402
+from pkmdyn.io import dumps_toml  # noqa: E402
+from pkmdyn.errors import PkmdynError  # noqa: E402
 
 HIP_SPACE = """
 [sampling]
@@ -439,9 +440,9 @@ def test_toml_writer_round_trips_nested_descriptions():
     d["inertia"]["bodies"] = {"platform": {"mass_kg": 5.0, "inertia_kgm2": [[0.01, 0, 0], [0, 0.02, 0], [0, 0, 0.02]]}}
     d["material"]["stiffness_diameters_m"] = {"coupler2": 0.04}
     d["geometry"]["platform_offset_m"] = 0.1 + 0.2  # not a short decimal
-    assert tomllib.loads(to_toml(d, "header\nline")) == d
-    with pytest.raises(ValueError, match="non-finite"):
-        to_toml({"a": {"x": float("nan")}})
+    assert tomllib.loads(dumps_toml(d, "header\nline")) == d
+    with pytest.raises(PkmdynError, match="non-finite"):
+        dumps_toml({"a": {"x": float("nan")}})
 
 
 def test_unknown_machine_is_a_parameter_error():
@@ -536,7 +537,7 @@ def test_base_parameters_from_the_space_file_and_from_params(tmp_path):
     base = base_description(None)
     base["geometry"]["screw_lead_m"] = 0.02
     (tmp_path / "sub").mkdir()
-    (tmp_path / "sub" / "base.toml").write_text(to_toml(base), encoding="utf-8")
+    (tmp_path / "sub" / "base.toml").write_text(dumps_toml(base), encoding="utf-8")
     text = HIP_SPACE.replace("[sampling]", 'params = "sub/base.toml"\n\n[sampling]', 1)
     space = _write(tmp_path, text)
     run_sweep(sweep_adapter("hip"), space, tmp_path / "a", workers=0, plots=False)

@@ -1,4 +1,4 @@
-"""Reading and writing unit-suffixed CSV, Parquet and JSON files, and whole output folders.
+"""Reading and writing unit-suffixed CSV, Parquet, JSON and TOML files, and whole output folders.
 
 File conventions (see ``docs/file_formats.md``): comma-separated, one header row, every
 column name carries its unit as a suffix (``t_s``, ``L11_m``, ``tau1_Nm``); JSON keys do the
@@ -46,6 +46,7 @@ __all__ = [
     "read_csv_columns",
     "write_csv",
     "write_json",
+    "dumps_toml",
     "TableWriter",
     "open_table_writer",
     "check_table_format",
@@ -758,6 +759,48 @@ def _plain(obj: Any) -> Any:
     if isinstance(obj, (np.floating, np.integer)):
         return obj.item()
     raise TypeError(f"cannot write {type(obj).__name__} as JSON")
+
+
+def _check_toml_values(value: Any, where: str) -> None:
+    """Refuse what a parameter file cannot hold: non-finite numbers, and types other than
+    tables, strings, booleans, integers, floats and lists of them."""
+    if isinstance(value, Mapping):
+        for k, v in value.items():
+            _check_toml_values(v, f"{where}.{k}" if where else str(k))
+    elif isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            _check_toml_values(v, f"{where}[{i}]")
+    elif isinstance(value, float):
+        if not math.isfinite(value):
+            raise PkmdynError(f"{where}: refusing to write the non-finite value {value} into a TOML file")
+    elif not isinstance(value, (str, bool, int)):
+        raise PkmdynError(f"{where}: cannot write a {type(value).__name__} into a TOML file")
+
+
+def dumps_toml(data: Mapping[str, Any], header: str = "", notes: Mapping[str, str] | None = None) -> str:
+    """TOML text (written by ``tomlkit``) of nested tables of strings, booleans, numbers and
+    lists: ``header`` lines become comments at the top, ``notes[key]`` a comment after every
+    ``key`` of that name. Floats are written in their shortest round-trip form, so reading
+    the file back gives the same doubles; a non-finite number is refused."""
+    import tomlkit
+
+    _check_toml_values(data, "")
+    notes = notes or {}
+
+    def table(values: Mapping[str, Any]) -> Any:
+        t = tomlkit.table()
+        for k, v in values.items():
+            t.add(k, table(v) if isinstance(v, Mapping) else v)
+            if k in notes and not isinstance(v, Mapping):
+                t[k].comment(notes[k])
+        return t
+
+    doc = tomlkit.document()
+    for line in header.splitlines():
+        doc.add(tomlkit.comment(line))
+    for k, v in data.items():
+        doc.add(k, table(v) if isinstance(v, Mapping) else v)
+    return tomlkit.dumps(doc)
 
 
 def write_json(path: str | Path, data: Mapping[str, Any]) -> None:

@@ -17,12 +17,11 @@ from typing import Any
 import numpy as np
 
 from ..errors import LimitError, MotionError, ParameterError
-from ..io import atomic_file, check_output_dir, check_output_file, output_dir, write_csv, write_json
+from ..io import atomic_file, check_output_dir, check_output_file, dumps_toml, output_dir, write_csv, write_json
 from ..machines.hip_simulator import HipModel, load_params, model_from_dict
 from ..machines.hip_simulator.params import default_params_dict
 from ..params_util import read_toml
 from ..profiles.orientation import write_motion_csv
-from ._toml import dumps_tables
 from ._report import MIN_EXPLAINED_PERCENT, explained_percent, fit_failure, identification_report
 from .hip import FRICTION_ATTR, TORQUE_COLUMNS, Which, consistency_transform, identified_description, identify_hip, read_measured_csv
 from .hip_excite import ExcitationLimits, design_excitation, excitation_motion
@@ -172,7 +171,7 @@ def run_identify(
         "by pkmdyn hip identify; estimates, standard errors and base parameters in identification.json.\n"
         "A value marked 'not separable' is one split of a combination that the data fix as a whole."
     )
-    text = dumps_tables(identified, header, notes)
+    text = dumps_toml(identified, header, notes)
     check = model_from_dict(tomllib.loads(text), "identified.toml")  # loadable, as `hip run --params` needs
     del check
     columns: dict[str, Any] = {"t_s": motion.t}

@@ -26,12 +26,11 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError, PkmdynError
-from ..io import atomic_file, write_json
+from ..io import atomic_file, dumps_toml, write_json
 from ..sweep_protocol import STATUSES, SweepAdapter
 from .execute import PARTS_DIR, BatchJob, ExecutionStats, execute, finished_ids, part_schema
 from .pareto import minimised, pareto_mask
 from .space import SweepSpace, design_description, load_space, refine_designs, sample_designs
-from .tomlwrite import to_toml
 
 __all__ = ["run_sweep", "SweepReport", "prepare_sweep", "PreparedSweep", "RECORD", "PREFLIGHT_DESIGNS"]
 
@@ -302,7 +301,7 @@ def _results(prep: PreparedSweep, X: Any, rounds: int, out: Path, plots: bool, s
 def _write_best(path: Path, description: dict[str, Any], header: str) -> Path:
     import tomllib
 
-    text = to_toml(description, header)
+    text = dumps_toml(description, header)
     if tomllib.loads(text) != description:  # the file must read back to the very same description
         raise PkmdynError("internal error: the best design's parameter file does not read back identically")
     with atomic_file(path, notify=None) as tmp:
