@@ -192,6 +192,31 @@ def test_view_page_is_written_atomically_and_replaces_only_its_own_file(tmp_path
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link.html", "notes.html", "sub"]
 
 
+def test_view_page_of_a_described_mechanism(tmp_path, capsys):
+    """``view --machine`` takes every machine the registry knows and any description file: the
+    Bennett linkage's page states its rank mobility 1 and its 3 over-constraints, draws its
+    four joints at the reference configuration, and holds the description; ``--params``
+    belongs to the hand-built machines and an unknown name is refused, nothing written."""
+    import re
+
+    from pkmdyn.machines.registry import described_machines
+    from pkmdyn.multibody import load_mechanism
+
+    page = tmp_path / "bennett.html"
+    assert main(["view", "--machine", "bennett", "--out", str(page)]) == 0
+    text = page.read_text(encoding="utf-8")
+    rep = load_mechanism(described_machines()["bennett"]).topology
+    assert (rep.mobility, rep.overconstraints) == (1, 3)
+    assert re.search(r"mobility \(rank, reference configuration\)</th><td>1<", text)
+    assert re.search(r"over-constraints</th><td>3<", text)
+    assert described_machines()["bennett"].read_text(encoding="utf-8").splitlines()[0] in text
+    capsys.readouterr()
+    for args in (["--machine", "stewart", "--params", str(page)], ["--machine", "no-such-machine"]):
+        out = tmp_path / "refused.html"
+        assert main(["view", *args, "--out", str(out)]) == 2
+        assert len(capsys.readouterr().err.strip().splitlines()) == 1 and not out.exists()
+
+
 def test_control_run_report_and_effort_plot_name_the_actuators(tmp_path, monkeypatch):
     """The efforts PNG says "limb l11 force [N]", not the column name ``f1_N``; so does the page."""
     import matplotlib.figure

@@ -1,11 +1,10 @@
-"""``pkmdyn view``: a page for a machine without running a motion."""
+"""``pkmdyn view``: a page for any machine without running a motion."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import click
-import numpy as np
 
 from ._groups import PATH_IN, cli, echo
 
@@ -14,43 +13,49 @@ def _listing(path: Path) -> None:
     echo(f"view: {path}")
 
 
-def _hip_page(params: Path | None, out: Path) -> Path:
-    from ..machines.hip_simulator import load_params
-    from ..machines.hip_simulator.report import parameters_text
-    from ..machines.hip_simulator.scene import hip_mobility, hip_scene_from_angles, hip_topology
-    from ..report import write_view
+def _described_page(path: Path, out: Path) -> Path:
+    """A described mechanism at its reference configuration: the scene from its joint points,
+    the topology from its model document, mobility and over-constraints by rank."""
+    import numpy as np
 
-    model = load_params(params)
-    scene = hip_scene_from_angles(model, np.zeros(1), np.zeros((1, 3)), np.zeros((1, 3)))
-    return write_view(out, title="2(3PUS+S) hip simulator: machine view", scene=scene, topology=hip_topology(),
-                      mobility=hip_mobility(model), parameters=parameters_text(params),
-                      notes=[f"parameters: {params or 'built-in (paper Tables 1-2)'}", "home pose: all angles zero"],
-                      inputs={"--params": params}, listing=_listing)
+    from ..multibody import load_mechanism, reference_task, solve_kinematics
+    from ..multibody.output import model_summary
+    from ..report import scene_from_joints, topology_from_model, write_view
 
-
-def _pdm_page(params: Path | None, out: Path) -> Path:
-    from ..machines.pdm4.params import load_params
-    from ..machines.pdm4.report import parameters_text
-    from ..machines.pdm4.scene import pdm_mobility, pdm_scene_from_pose, pdm_topology
-    from ..report import write_view
-
-    model = load_params(params)
-    scene = pdm_scene_from_pose(model, np.zeros(1), np.zeros((1, 4)), np.zeros((1, 4)))
-    return write_view(out, title="4-DOF PDM: machine view", scene=scene, topology=pdm_topology(),
-                      mobility=pdm_mobility(model), parameters=parameters_text(params),
-                      notes=[f"parameters: {model.source}", "home pose: x = y = 0, alpha = gamma = 0"],
-                      inputs={"--params": params}, listing=_listing)
+    model = load_mechanism(path)
+    x = reference_task(model)[None]
+    kin = solve_kinematics(model, x, np.zeros_like(x), np.zeros_like(x), np.zeros(1))
+    doc = model_summary(model)
+    joints = [(j["name"], j["type"], j["body_a"], j["body_b"]) for j in doc["joints"]]
+    zero = np.zeros(1)
+    actuated = {j["name"]: (zero, f"{j['name']} (actuated)", "-") for j in doc["joints"] if j.get("actuated")}
+    scene = scene_from_joints(np.zeros(1), kin.joint_point, joints, actuated)
+    rep = model.topology
+    mobility = {"Kutzbach-Gruebler mobility": rep.kutzbach, "mobility (rank, reference configuration)": rep.mobility,
+                "idle freedoms": rep.idle, "degrees of freedom": rep.dof, "over-constraints": rep.overconstraints}
+    return write_view(out, title=f"{model.name}: machine view", scene=scene, topology=topology_from_model(doc),
+                      mobility=mobility, parameters=Path(path).read_text(encoding="utf-8", errors="replace"),
+                      notes=[f"description: {path}", "reference configuration (every joint coordinate at its reference)"],
+                      inputs={"--machine": path}, listing=_listing)
 
 
 @cli.command("view")
-@click.option("--machine", type=click.Choice(["hip", "pdm"]), required=True, help="The machine to show.")
-@click.option("--params", "params_path", type=PATH_IN, help="Parameter file (TOML); default: the built-in one.")
+@click.option("--machine", required=True, help="A built-in machine (see pkmdyn machines) or a description FILE.toml.")
+@click.option("--params", "params_path", type=PATH_IN,
+              help="Parameter file (TOML) of a hand-built machine (hip, pdm); default: the built-in one.")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="HTML file to write (atomically; only a page pkmdyn wrote is replaced).")
 def view(machine: str, params_path: Path | None, out_path: Path) -> None:
     """A self-contained HTML page of a machine: home pose in 3D, topology graph, mobility and
     over-constraint counts."""
     from ..io import check_output_file
+    from ..machines.registry import resolve
 
-    check_output_file(out_path, {"--params": params_path})  # the output rule, before any work
-    (_hip_page if machine == "hip" else _pdm_page)(params_path, out_path)
+    entry, path = resolve(machine)
+    check_output_file(out_path, {"--params": params_path, "--machine": path})  # the output rule, before any work
+    if entry is not None:
+        entry.view_page(params_path, out_path, _listing)
+    elif params_path is not None:
+        raise click.UsageError("--params applies to the hand-built machines (hip, pdm); a described mechanism is its file")
+    else:
+        _described_page(path, out_path)

@@ -8,7 +8,8 @@ Two kinds of folder make a built-in machine, and nothing else has to change to a
   ``pkmdyn hip ...``, ``pkmdyn pdm ...``): a package ``machines/<folder>/`` with a module
   ``machine.py`` that says ``NAME``, ``TITLE``, ``CONTROL_SETTINGS`` (a path) and provides
   ``default_params_text()``, ``description()`` (its built-in parameters as a mechanism
-  description) and ``default_motion()`` (a :class:`pkmdyn.multibody.TaskMotion`). A module
+  description), ``default_motion()`` (a :class:`pkmdyn.multibody.TaskMotion`) and
+  ``view_page(params, out, listing)`` (its ``pkmdyn view`` page). A module
   ``sweep.py`` beside it makes the machine sweepable (:mod:`pkmdyn.sweep_protocol`).
 
 Every command that takes ``--machine`` resolves it here; an unknown name is refused, never

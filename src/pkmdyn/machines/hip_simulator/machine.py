@@ -41,3 +41,20 @@ def default_motion() -> Any:
 
     m = iso14242_motion(cycles=1, samples_per_cycle=1000, cycle=iso_cycle_preset(load_params().motion_model))
     return TaskMotion(m.t, m.angles, m.rates, m.accels)
+
+
+def view_page(params: Path | None, out: Path, listing: Any) -> Path:
+    """The ``pkmdyn view`` page of this machine (:func:`pkmdyn.report.write_view`) at its home pose."""
+    import numpy as np
+
+    from ...report import write_view
+    from .params import load_params
+    from .report import parameters_text
+    from .scene import hip_mobility, hip_scene_from_angles, hip_topology
+
+    model = load_params(params)
+    scene = hip_scene_from_angles(model, np.zeros(1), np.zeros((1, 3)), np.zeros((1, 3)))
+    return write_view(out, title="2(3PUS+S) hip simulator: machine view", scene=scene, topology=hip_topology(),
+                      mobility=hip_mobility(model), parameters=parameters_text(params),
+                      notes=[f"parameters: {params or 'built-in (paper Tables 1-2)'}", "home pose: all angles zero"],
+                      inputs={"--params": params}, listing=listing)

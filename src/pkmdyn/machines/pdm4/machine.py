@@ -37,3 +37,20 @@ def default_motion() -> Any:
     tr = load_params().trajectory
     m = cycloidal_motion(tr.strokes, tr.period_s, tr.samples)
     return TaskMotion(m.t, m.q, m.qd, m.qdd)
+
+
+def view_page(params: Path | None, out: Path, listing: Any) -> Path:
+    """The ``pkmdyn view`` page of this machine (:func:`pkmdyn.report.write_view`) at its home pose."""
+    import numpy as np
+
+    from ...report import write_view
+    from .params import load_params
+    from .report import parameters_text
+    from .scene import pdm_mobility, pdm_scene_from_pose, pdm_topology
+
+    model = load_params(params)
+    scene = pdm_scene_from_pose(model, np.zeros(1), np.zeros((1, 4)), np.zeros((1, 4)))
+    return write_view(out, title="4-DOF PDM: machine view", scene=scene, topology=pdm_topology(),
+                      mobility=pdm_mobility(model), parameters=parameters_text(params),
+                      notes=[f"parameters: {model.source}", "home pose: x = y = 0, alpha = gamma = 0"],
+                      inputs={"--params": params}, listing=listing)
