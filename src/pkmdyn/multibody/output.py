@@ -133,16 +133,22 @@ def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path
     """Kinematics of ``model`` along ``motion``, written into ``out_dir`` (through
     :func:`pkmdyn.io.output_dir`: nothing is written when anything fails). Returns the summary
     with ``files`` as ``{label: path}``."""
+    from .dynamics import dynamics_outputs
+
     kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
     sm = singularity_measures(model, kin.q)
     cols = results_columns(model, kin)
     npz = bodies_arrays(model, kin)
+    dyn_cols, dyn_npz, dyn_summary = dynamics_outputs(model, kin)
+    cols.update(dyn_cols)
+    npz.update(dyn_npz)
     summary = {
         "mechanism": model.name, "samples": len(kin), "max_residual": float(kin.residual.max()),
         "min_inverse_singularity_measure": float(sm.inverse.min()),
         "min_direct_singularity_measure": None if np.isnan(sm.direct).all() else float(np.nanmin(sm.direct)),
         "min_constraint_singularity_measure": float(sm.constraint.min()),
         "topology": model.topology.as_dict() if model.topology is not None else None,
+        **dyn_summary,
     }
     with output_dir(out_dir) as out:
         files = {"results": out / "results.csv", "model": out / "model.json", "bodies": out / "bodies.npz",

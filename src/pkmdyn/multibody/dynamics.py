@@ -1,0 +1,339 @@
+"""Inverse dynamics and joint reactions of any described mechanism, batched over samples.
+
+Notation (base frame, SI). Spatial vectors are Plücker coordinates at the base origin O: a
+twist ``V = [w; v_O]`` (angular velocity, velocity of the body point at O) and a wrench
+``W = [n_O; f]`` (moment about O, force); power is ``V . W``. ``S_c`` (6,) is the unit
+twist of tree coordinate c (the kernels' ``forward_positions``), so that body b moves with
+``V_b = sum_{c in anc(b)} S_c qd_c`` (Featherstone 2008, Eq. 3.40 in world coordinates).
+
+**Required body wrench** (Newton-Euler, what the joints must supply to body b so that it
+follows the motion):
+
+    f_b   = m_b (a_b - g) - sum_loads F
+    n_O,b = I_b wd_b + w_b x I_b w_b + p_b x m_b (a_b - g) - sum_loads (M + r x F)       (1)
+
+with ``a_b, p_b`` the centre of mass's acceleration and position, ``I_b = R_b I'_b R_b^T``.
+
+**Actuator efforts** (natural orthogonal complement; Featherstone's gamma_q form,
+``IDgq``): the generalised tree forces are ``Q_c = S_c . sum_{b: c in anc(b)} W_b`` (2);
+the loop closure gives the tree rates as ``qd = G xd`` (``G`` from the kinematics), so by
+virtual work the actuator efforts ``u`` satisfy
+
+    J_ax^T u = G^T (Q + Q_f)                                                                 (3)
+
+(``J_ax = dq_a/dx``, ``Q_f`` the friction's generalised forces, zero here). With as many
+actuators as task coordinates (3) is square; a redundantly actuated mechanism takes the
+minimum-norm solution ``u = pinv(J_ax^T) G^T Q``.
+
+**Joint reactions.** Unknown: the wrench ``W_j = [n_O; f]`` (6,) that joint j's parent
+exerts on its child, every joint (tree and cut). Equations, per sample:
+
+    sum_{j: child b} W_j - sum_{j: parent b} W_j = W_b               (6 per body, Eq. 1)
+    s_j T_i . W_j = e_i          for every free twist T_i of joint j (power balance of the joint)
+
+with ``e_i`` the actuator effort of an actuated coordinate and zero otherwise (``s_j = -1``
+for a tree joint traversed from its child, whose twist is the parent's relative to the
+child). For a tree joint ``T_i = S_c``; for a cut joint the free twists are those of its
+type at its frames (rotation axes through the child frame's origin; the last elementary
+motion about the child frame's axis, the others about the parent frame's). The solution is
+unique when the mechanism is not over-constrained; otherwise ``t`` self-stress states remain
+(the null space of the matrix), which :mod:`.reactions` fixes by link compliance.
+Reported as ``joint_force`` (n, nj, 3) [N] and ``joint_moment`` (n, nj, 3) [N m] about the
+joint point (``kin.joint_point``), the PDM's schema.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import ParameterError, SingularityError
+from . import _kernels as K
+from .joint_types import JOINT_TYPES
+from .kinematics import MechanismKinematics
+from .model import MechanismModel
+
+__all__ = ["body_wrenches", "coordinate_twists", "generalised_forces", "actuator_efforts",
+           "InverseDynamics", "inverse_dynamics", "free_twists", "equilibrium_system",
+           "JointReactions", "joint_reactions", "energies", "SINGULAR_ACTUATION"]
+
+Array = NDArray[np.float64]
+
+#: the actuator map is singular on a sample where the smallest singular value of ``J_ax^T``
+#: (dimensionless, after scaling its columns) falls below this times the largest
+SINGULAR_ACTUATION = 1e-9
+
+
+def _cross(a: Array, b: Array) -> Array:
+    return np.cross(a, b)
+
+
+def coordinate_twists(model: MechanismModel, q: Array) -> Array:
+    """World unit twists ``S (n, nq, 6)`` ``[w; v_O]`` of every tree coordinate at ``q (n, nq)``."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    n = q.shape[0]
+    S = np.empty((n, model.nq, 6))
+    R = np.empty((model.nb, 3, 3))
+    p = np.empty((model.nb, 3))
+    w33, w3 = np.empty((5, 3, 3)), np.empty((20, 3))
+    for s in range(n):
+        K.forward_positions(np.ascontiguousarray(q[s]), model.body_parent, model.body_joint, model.joint_q0,
+                            model.joint_nq, model.coord_motion, model.coord_offset, model.coord_sign,
+                            model.tree_R_parent, model.tree_p_parent, model.tree_R_child, model.tree_p_child,
+                            R, p, S[s], w33, w3)
+    return S
+
+
+def body_wrenches(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None) -> Array:
+    """Required wrench ``W (n, nb, 6)`` ``[n_O; f]`` [N m, N] of every body, Eq. (1).
+
+    ``loads``: optional extra external loads per sample, ``{body name: (F (n, 3) [N],
+    M (n, 3) [N m] about the centre of mass)}``, base frame, on top of the description's
+    ``[[loads]]`` (constant, base frame, at their point)."""
+    m = model.mass[None, :, None]
+    acc = kin.a - model.gravity[None, None, :]
+    f = m * acc
+    Iw = np.einsum("nbij,bjk,nblk->nbil", kin.R, model.inertia, kin.R)
+    Lw = np.einsum("nbij,nbj->nbi", Iw, kin.w)
+    nc = np.einsum("nbij,nbj->nbi", Iw, kin.wd) + _cross(kin.w, Lw)
+    n_O = nc + _cross(kin.p, f)
+    for b, F, M, pt in zip(model.load_body, model.load_force, model.load_moment, model.load_point):
+        r = kin.origin[:, b] + np.einsum("nij,j->ni", kin.R[:, b], pt)
+        f[:, b] -= F
+        n_O[:, b] -= M + _cross(r, np.broadcast_to(F, r.shape))
+    for name, (F, M) in (loads or {}).items():
+        b = model.body_index(name)
+        F = np.broadcast_to(np.asarray(F, dtype=float), f[:, b].shape)
+        M = np.broadcast_to(np.asarray(M, dtype=float), f[:, b].shape)
+        f[:, b] -= F
+        n_O[:, b] -= M + _cross(kin.p[:, b], F)
+    return np.concatenate([n_O, f], axis=-1)
+
+
+def generalised_forces(model: MechanismModel, S: Array, W: Array) -> Array:
+    """``Q (n, nq)``, Eq. (2): ``Q_c = S_c . sum of W_b over the bodies that coordinate c moves``."""
+    Wsub = np.einsum("bc,nbk->nck", model.ancestors.astype(float), W)
+    return np.einsum("nck,nck->nc", S, Wsub)
+
+
+def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array) -> Array:
+    """Efforts ``u (n, na)`` [N or N m] from the generalised tree forces ``Q (n, nq)``, Eq. (3).
+
+    Raises :class:`~pkmdyn.errors.SingularityError` naming the first sample where the
+    actuator map ``J_ax`` is singular (the actuators cannot move the mechanism there)."""
+    rhs = np.einsum("nct,nc->nt", kin.G, Q)
+    JT = np.swapaxes(kin.J_ax, 1, 2)  # (n, nt, na)
+    scale = np.maximum(np.abs(JT).max(axis=(0, 1)), 1e-300)
+    sv = np.linalg.svd(JT / scale, compute_uv=False)
+    ratio = sv[:, -1] / np.maximum(sv[:, 0], 1e-300) if sv.shape[1] else np.ones(len(rhs))
+    bad = np.flatnonzero(~(ratio > SINGULAR_ACTUATION))
+    if bad.size:
+        s = int(bad[0])
+        when = f"sample {s}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
+        raise SingularityError(f"{when}: the actuator map is singular (smallest/largest singular value "
+                               f"{ratio[s]:.3g}): the actuators {', '.join(model.actuator_names)} cannot move "
+                               f"mechanism {model.name!r} there")
+    if model.na == model.nt:
+        return np.linalg.solve(JT, rhs[..., None])[..., 0]
+    return np.einsum("nat,nt->na", np.linalg.pinv(JT), rhs)
+
+
+@dataclass(frozen=True)
+class InverseDynamics:
+    """``u`` (n, na) actuator efforts [N (prismatic) or N m (revolute)], order of
+    ``model.actuator_names``; ``Q`` (n, nq) generalised tree forces of Eq. (2); ``W`` (n, nb,
+    6) required body wrenches of Eq. (1); ``S`` (n, nq, 6) coordinate twists."""
+
+    u: Array
+    Q: Array
+    W: Array
+    S: Array
+
+
+def inverse_dynamics(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None) -> InverseDynamics:
+    """Actuator efforts along a solved motion (module docstring, Eq. 1-3)."""
+    W = body_wrenches(model, kin, loads)
+    S = coordinate_twists(model, kin.q)
+    Q = generalised_forces(model, S, W)
+    u = actuator_efforts(model, kin, Q)
+    return InverseDynamics(u=u, Q=Q, W=W, S=S)
+
+
+def _plucker(axis: Array, point: Array, rotation: bool) -> Array:
+    """Unit twist of a rotation about ``axis`` through ``point`` or a translation along it (n, 6)."""
+    if rotation:
+        return np.concatenate([axis, _cross(point, axis)], axis=-1)
+    return np.concatenate([np.zeros_like(axis), axis], axis=-1)
+
+
+def _joint_frames(model: MechanismModel, kin: MechanismKinematics, j: int) -> tuple[Array, Array, Array, Array]:
+    """World frames of joint j on its parent (R_P (n,3,3), o_P (n,3)) and child."""
+    n = len(kin)
+    out = []
+    for body, Rl, pl in ((model.joint_parent[j], model.joint_R_parent[j], model.joint_p_parent[j]),
+                         (model.joint_child[j], model.joint_R_child[j], model.joint_p_child[j])):
+        if body < 0:
+            out += [np.broadcast_to(Rl, (n, 3, 3)), np.broadcast_to(pl, (n, 3))]
+        else:
+            out += [kin.R[:, body] @ Rl, kin.origin[:, body] + np.einsum("nij,j->ni", kin.R[:, body], pl)]
+    return out[0], out[1], out[2], out[3]
+
+
+def free_twists(model: MechanismModel, kin: MechanismKinematics, S: Array, j: int) -> tuple[Array, Array]:
+    """Free twists ``T (n, f, 6)`` of joint j (child relative to parent, description sense)
+    and the index of its tree coordinate for each (-1 for a cut joint)."""
+    jt = JOINT_TYPES[model.joint_type[j]]
+    f = jt.freedoms
+    if not model.joint_cut[j]:
+        q0 = model.joint_q0[j]
+        sign = -1.0 if model.joint_flipped[j] else 1.0
+        return sign * S[:, q0:q0 + f], np.arange(q0, q0 + f)
+    RP, oP, RC, oC = _joint_frames(model, kin, j)
+    T = []
+    for k, mname in enumerate(jt.motions):
+        axis_i = "XYZ".index(mname[1])
+        frame = RC if (k == f - 1 and jt.name != "spherical") else RP
+        T.append(_plucker(frame[:, :, axis_i], oC, mname[0] == "R"))
+    return (np.stack(T, axis=1) if T else np.zeros((len(kin), 0, 6))), np.full(f, -1)
+
+
+def equilibrium_system(model: MechanismModel, kin: MechanismKinematics, W: Array, S: Array,
+                       coord_effort: Array) -> tuple[Array, Array]:
+    """The linear equations ``A z = b`` of the joint wrenches ``z (n, 6 nj)`` (module docstring):
+    ``A (n, 6 nb + nf, 6 nj)``, ``b (n, 6 nb + nf)``; ``coord_effort (n, nq)`` the effort along
+    each tree coordinate (actuators; zero for passive coordinates)."""
+    n, nb, nj = len(kin), model.nb, len(model.joint_names)
+    blocks, rhs = [], []
+    A_body = np.zeros((n, 6 * nb, 6 * nj))
+    eye = np.eye(6)
+    for j in range(nj):
+        c, p = model.joint_child[j], model.joint_parent[j]
+        if c >= 0:
+            A_body[:, 6 * c:6 * c + 6, 6 * j:6 * j + 6] += eye
+        if p >= 0:
+            A_body[:, 6 * p:6 * p + 6, 6 * j:6 * j + 6] -= eye
+    blocks.append(A_body)
+    rhs.append(W.reshape(n, 6 * nb))
+    for j in range(nj):
+        T, coords = free_twists(model, kin, S, j)
+        if T.shape[1] == 0:
+            continue
+        Aj = np.zeros((n, T.shape[1], 6 * nj))
+        Aj[:, :, 6 * j:6 * j + 6] = T
+        e = np.zeros((n, T.shape[1]))
+        for i, c in enumerate(coords):
+            if c >= 0:
+                e[:, i] = coord_effort[:, c]
+        blocks.append(Aj)
+        rhs.append(e)
+    return np.concatenate(blocks, axis=1), np.concatenate(rhs, axis=1)
+
+
+@dataclass(frozen=True)
+class JointReactions:
+    """Actuator efforts and every joint's reaction along a motion.
+
+    ``u`` (n, na) actuator efforts; ``joint_point`` (n, nj, 3) [m]; ``joint_force`` (n, nj,
+    3) [N] and ``joint_moment`` (n, nj, 3) [N m] about ``joint_point``: the wrench that each
+    joint's parent body exerts on its child body (order of ``model.joint_names``; a joint on
+    the ground: the ground is the parent or the child as described), base frame;
+    ``residual`` (n,) the largest equilibrium residual [N, N m]; ``self_stress`` the number
+    of self-stress states (over-constraints) made unique by compliance (0 when rigid
+    equilibrium decides them); ``method``: ``"rigid"`` or ``"compliance"``."""
+
+    u: Array
+    joint_point: Array
+    joint_force: Array
+    joint_moment: Array
+    residual: Array
+    self_stress: int
+    method: str
+
+
+def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
+                    rtol: float = 1e-10) -> JointReactions:
+    """Actuator efforts (Eq. 3) and every joint reaction (module docstring).
+
+    An over-constrained mechanism's reactions are made unique by link compliance
+    (:func:`pkmdyn.multibody.reactions.compliant_reactions`, from the bodies' ``section`` and
+    ``material``); raises :class:`~pkmdyn.errors.ParameterError` naming the bodies when that
+    data is missing."""
+    idyn = inverse_dynamics(model, kin, loads)
+    n = len(kin)
+    eff = np.zeros((n, model.nq))
+    eff[:, model.act_coord] = idyn.u
+    A, b = equilibrium_system(model, kin, idyn.W, idyn.S, eff)
+    scale = _column_scale(model)
+    As = A * scale[None, None, :]
+    U, sv, Vt = np.linalg.svd(As, full_matrices=False)
+    ranks = (sv > rtol * sv[:, :1]).sum(axis=1)
+    r = int(ranks.min())
+    k = A.shape[2]
+    if r < k:
+        from .reactions import compliant_reactions
+
+        z = compliant_reactions(model, kin, A, b, r)
+        method, t = "compliance", k - r
+    else:
+        coef = np.einsum("nmr,nm->nr", U, b) / sv
+        z = np.einsum("nrk,nr->nk", Vt, coef) * scale[None, :]
+        method, t = "rigid", 0
+    res = np.abs(np.einsum("nmk,nk->nm", A, z) - b).max(axis=1)
+    Wj = z.reshape(n, -1, 6)
+    pts = kin.joint_point
+    force = Wj[..., 3:]
+    moment = Wj[..., :3] - _cross(pts, force)
+    return JointReactions(u=idyn.u, joint_point=pts, joint_force=force, joint_moment=moment, residual=res,
+                          self_stress=t, method=method)
+
+
+def _column_scale(model: MechanismModel) -> Array:
+    """Column scaling of the joint-wrench unknowns: moments about O divided by the length scale."""
+    s = np.ones((len(model.joint_names), 6))
+    s[:, :3] = model.length_scale
+    return s.reshape(-1)
+
+
+def energies(model: MechanismModel, kin: MechanismKinematics) -> tuple[Array, Array]:
+    """Kinetic energy ``T (n,)`` and gravitational potential energy ``V (n,)`` [J] of all bodies,
+    from their poses and velocities alone: ``T = sum 1/2 m v.v + 1/2 w.(R I' R^T) w``,
+    ``V = -sum m g . p``."""
+    Iw = np.einsum("nbij,bjk,nblk->nbil", kin.R, model.inertia, kin.R)
+    T = 0.5 * np.einsum("b,nbi,nbi->n", model.mass, kin.v, kin.v) + 0.5 * np.einsum(
+        "nbi,nbij,nbj->n", kin.w, Iw, kin.w)
+    V = -np.einsum("b,i,nbi->n", model.mass, model.gravity, kin.p)
+    return T, V
+
+
+def _check_model(model: MechanismModel) -> None:  # pragma: no cover - description validates
+    if model.na == 0:
+        raise ParameterError(f"mechanism {model.name!r}: no actuated joint")
+
+
+def effort_unit(model: MechanismModel, i: int) -> str:
+    """Unit of actuator i's effort: ``N`` (prismatic) or ``Nm`` (revolute)."""
+    return "N" if model.actuator_units[i] == "m" else "Nm"
+
+
+def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics) -> tuple[dict, dict, dict]:
+    """The dynamics' part of a run's files: ``results.csv`` columns ``<joint>_effort_<N|Nm>``,
+    ``bodies.npz`` arrays ``joint_force``, ``joint_moment`` (n, nj, 3) (module docstring) and
+    ``body_wrench`` (n, nb, 6) (Eq. 1, ``[n_O; f]``), and ``summary.json`` entries.
+
+    An over-constrained mechanism whose bodies carry no section and material gets its efforts
+    (they do not depend on the self-stress) but no reactions; the summary says why."""
+    summary: dict = {}
+    try:
+        reac = joint_reactions(model, kin)
+        u = reac.u
+        npz = {"joint_force": reac.joint_force, "joint_moment": reac.joint_moment}
+        summary["reactions"] = {"method": reac.method, "self_stress_states": reac.self_stress,
+                                "max_equilibrium_residual": float(reac.residual.max())}
+    except ParameterError as exc:
+        u = inverse_dynamics(model, kin).u
+        npz = {}
+        summary["reactions"] = {"method": None, "reason": str(exc)}
+    cols = {f"{name}_effort_{effort_unit(model, i)}": u[:, i] for i, name in enumerate(model.actuator_names)}
+    return cols, npz, summary
