@@ -56,7 +56,7 @@ from .kinematics import MechanismKinematics
 from .model import MechanismModel
 
 __all__ = ["body_wrenches", "coordinate_twists", "generalised_forces", "actuator_efforts",
-           "InverseDynamics", "inverse_dynamics", "free_twists", "equilibrium_system",
+           "InverseDynamics", "inverse_dynamics", "idle_dynamics", "dynamics_outputs", "effort_unit", "free_twists", "equilibrium_system",
            "JointReactions", "joint_reactions", "energies", "SINGULAR_ACTUATION"]
 
 Array = NDArray[np.float64]
@@ -144,21 +144,76 @@ def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array) 
 class InverseDynamics:
     """``u`` (n, na) actuator efforts [N (prismatic) or N m (revolute)], order of
     ``model.actuator_names``; ``Q`` (n, nq) generalised tree forces of Eq. (2); ``W`` (n, nb,
-    6) required body wrenches of Eq. (1); ``S`` (n, nq, 6) coordinate twists."""
+    6) required body wrenches of Eq. (1); ``S`` (n, nq, 6) coordinate twists; ``kin``: the
+    kinematics they hold for (idle accelerations made dynamic, :func:`idle_dynamics`)."""
 
     u: Array
     Q: Array
     W: Array
     S: Array
+    kin: MechanismKinematics
 
 
-def inverse_dynamics(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None) -> InverseDynamics:
-    """Actuator efforts along a solved motion (module docstring, Eq. 1-3)."""
+def idle_dynamics(model: MechanismModel, kin: MechanismKinematics, S: Array, loads: dict | None = None
+                  ) -> MechanismKinematics:
+    """The kinematics with each idle freedom's acceleration set by its own dynamics.
+
+    The kinematics hold an idle freedom (a rod's spin between two spherical joints) by a
+    linear equation, which fixes its acceleration by geometry, not by dynamics; no joint can
+    then supply the moment that acceleration needs. With ``N (nq, k)`` the idle motions (the
+    null space of the solved loop and task rows, ``[Phi_q; tau_q] N = 0``), ``M_NN = N^T M N``
+    (from the body kinetic energy of the twists ``T_b = sum S_c N_c``) and ``Q_N = N^T Q``
+    (Eq. 2), the idle accelerations change by ``beta = -M_NN^-1 Q_N`` so that ``N^T Q = 0``
+    (nothing acts along an idle freedom): ``qdd += N beta`` and every body's acceleration by
+    ``T_b beta``. Rates and positions are unchanged; a mechanism without idle freedoms is
+    returned as is."""
+    if model.solver_idle.shape[0] == 0:
+        return kin
+    from dataclasses import replace
+
+    from .topology import constraint_jacobian
+
+    _, J = constraint_jacobian(model, kin.q)
+    K_ = J[:, model.solver_rows]
+    _, _, Vt = np.linalg.svd(K_)
+    N = np.swapaxes(Vt[:, K_.shape[1]:], 1, 2)  # (n, nq, k)
+    anc = model.ancestors.astype(float)
+    T = np.einsum("bc,nck,ncz->nbkz", anc, S, N)  # (n, nb, 6, k)
+    w, vO = T[:, :, :3], T[:, :, 3:]
+    vc = vO + np.cross(w, kin.p[:, :, :, None], axis=2)
+    Iw = np.einsum("nbij,bjk,nblk->nbil", kin.R, model.inertia, kin.R)
+    M_NN = np.einsum("b,nbiz,nbiy->nzy", model.mass, vc, vc) + np.einsum("nbiz,nbij,nbjy->nzy", w, Iw, w)
     W = body_wrenches(model, kin, loads)
+    Q_N = np.einsum("nbkz,nbk->nz", T, W)
+    beta = -np.linalg.solve(M_NN, Q_N[..., None])[..., 0]
+    dA = np.einsum("nbkz,nz->nbk", T, beta)
+    dwd, daO = dA[..., :3], dA[..., 3:]
+    qdd = kin.qdd + np.einsum("ncz,nz->nc", N, beta)
+    jb = model.joint_child
+    jpa = kin.joint_point_a.copy()
+    on = jb >= 0
+    jpa[:, on] += daO[:, jb[on]] + np.cross(dwd[:, jb[on]], kin.joint_point[:, on])
+    return replace(kin, qdd=qdd, act_qdd=qdd[:, model.act_coord], wd=kin.wd + dwd,
+                   a=kin.a + daO + np.cross(dwd, kin.p), origin_a=kin.origin_a + daO + np.cross(dwd, kin.origin),
+                   joint_point_a=jpa)
+
+
+def inverse_dynamics(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
+                     idle: str = "dynamic") -> InverseDynamics:
+    """Actuator efforts along a solved motion (module docstring, Eq. 1-3).
+
+    ``idle="dynamic"`` (default) first gives the idle freedoms the accelerations of their own
+    dynamics (:func:`idle_dynamics`), so that every body's balance can be met;
+    ``idle="held"`` keeps the kinematics' (the efforts then balance the held motion's energy)."""
     S = coordinate_twists(model, kin.q)
+    if idle == "dynamic":
+        kin = idle_dynamics(model, kin, S, loads)
+    elif idle != "held":
+        raise ParameterError(f"idle: {idle!r} is not 'dynamic' or 'held'")
+    W = body_wrenches(model, kin, loads)
     Q = generalised_forces(model, S, W)
     u = actuator_efforts(model, kin, Q)
-    return InverseDynamics(u=u, Q=Q, W=W, S=S)
+    return InverseDynamics(u=u, Q=Q, W=W, S=S, kin=kin)
 
 
 def _plucker(axis: Array, point: Array, rotation: bool) -> Array:
@@ -250,6 +305,7 @@ class JointReactions:
     residual: Array
     self_stress: int
     method: str
+    kin: MechanismKinematics
 
 
 def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
@@ -261,6 +317,7 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     ``material``); raises :class:`~pkmdyn.errors.ParameterError` naming the bodies when that
     data is missing."""
     idyn = inverse_dynamics(model, kin, loads)
+    kin = idyn.kin
     n = len(kin)
     eff = np.zeros((n, model.nq))
     eff[:, model.act_coord] = idyn.u
@@ -286,7 +343,7 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     force = Wj[..., 3:]
     moment = Wj[..., :3] - _cross(pts, force)
     return JointReactions(u=idyn.u, joint_point=pts, joint_force=force, joint_moment=moment, residual=res,
-                          self_stress=t, method=method)
+                          self_stress=t, method=method, kin=kin)
 
 
 def _column_scale(model: MechanismModel) -> Array:
@@ -329,6 +386,9 @@ def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics) -> tuple[d
         reac = joint_reactions(model, kin)
         u = reac.u
         npz = {"joint_force": reac.joint_force, "joint_moment": reac.joint_moment}
+        k2 = reac.kin
+        if k2 is not kin:  # idle accelerations made dynamic: the files carry the motion the forces balance
+            npz.update(qdd=k2.qdd, wd=k2.wd, a=k2.a, origin_a=k2.origin_a, joint_point_a=k2.joint_point_a)
         summary["reactions"] = {"method": reac.method, "self_stress_states": reac.self_stress,
                                 "max_equilibrium_residual": float(reac.residual.max())}
     except ParameterError as exc:

@@ -9,7 +9,7 @@ general dense solver :func:`pkmdyn.analysis.compliance.unique_reactions`, the on
 Beam model of body b (the PDM's, section 4.2 and Eq. 63-64, generalised): the beam axis is
 the line through the two joint centres of the body that lie farthest apart (at the sample's
 pose); the nodes are every joint centre on the body and its centre of mass, projected onto
-that axis; the loads at the nodes are the joint wrenches acting on the body (``+W_j`` as the
+that axis (a body whose joints all lie at one point stays rigid); the loads at the nodes are the joint wrenches acting on the body (``+W_j`` as the
 child, ``-W_j`` as the parent) and, at the centre of mass, the gravity and d'Alembert load
 ``-W_b`` (Eq. 1 of :mod:`.dynamics`), each reduced to its node (moment transported along the
 offset from the axis). Each segment between consecutive nodes is a cantilever of uniform
@@ -84,6 +84,8 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
         pts = np.stack([kin.joint_point[:, j] for j, _ in joints], axis=1)  # (n, N, 3)
         d = np.linalg.norm(pts[:, :, None] - pts[:, None], axis=-1)[0]
         i0, i1 = np.unravel_index(int(np.argmax(d)), d.shape)
+        if d[i0, i1] <= 1e-9 * model.length_scale:
+            continue  # every joint at one point: no beam, the body stays rigid
         Rb = _beam_frame(pts[:, i1] - pts[:, i0])
         origin = pts[:, i0]
         nodes = np.concatenate([pts, kin.p[:, bi][:, None]], axis=1)  # (n, N+1, 3)
