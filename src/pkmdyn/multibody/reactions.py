@@ -8,8 +8,10 @@ general dense solver :func:`pkmdyn.analysis.compliance.unique_reactions`, the on
 
 Beam model of body b (the PDM's, section 4.2 and Eq. 63-64, generalised): the beam axis is
 the line through the two joint centres of the body that lie farthest apart (at the sample's
-pose); the nodes are every joint centre on the body and its centre of mass, projected onto
-that axis (a body whose joints all lie at one point stays rigid); the loads at the nodes are the joint wrenches acting on the body (``+W_j`` as the
+pose), or with ``section.beam_axis = "body_x"`` the body frame's x axis through the centre of
+mass (the PDM's choice); the nodes are every joint centre on the body and its centre of mass, projected onto
+that axis (a joint's centre is its frame's origin on the joint's parent body: for a prismatic
+joint the point fixed in the guiding body, e.g. a cylinder's mouth, on both of its bodies) (a body whose joints all lie at one point stays rigid); the loads at the nodes are the joint wrenches acting on the body (``+W_j`` as the
 child, ``-W_j`` as the parent) and, at the centre of mass, the gravity and d'Alembert load
 ``-W_b`` (Eq. 1 of :mod:`.dynamics`), each reduced to its node (moment transported along the
 offset from the axis). Each segment between consecutive nodes is a cantilever of uniform
@@ -57,6 +59,14 @@ def _beam_frame(axis: Array) -> Array:
     return np.stack([x, y, z], axis=2)
 
 
+def _parent_point(model: MechanismModel, kin: MechanismKinematics, j: int) -> Array:
+    """Joint j's frame origin on its (description) parent body, base frame (n, 3)."""
+    b = model.joint_parent[j]
+    if b < 0:
+        return np.broadcast_to(model.joint_p_parent[j], (len(kin), 3))
+    return kin.origin[:, b] + np.einsum("nij,j->ni", kin.R[:, b], model.joint_p_parent[j])
+
+
 def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Array, b: Array, rank: int,
                         W: Array | None = None) -> Array:
     """Joint wrenches ``z (n, 6 nj)`` (Plücker at the origin, see :mod:`.dynamics`) solving
@@ -81,13 +91,17 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
         joints += [(j, -1.0) for j in range(nj) if model.joint_parent[j] == bi]
         if len(joints) < 2:
             continue
-        pts = np.stack([kin.joint_point[:, j] for j, _ in joints], axis=1)  # (n, N, 3)
-        d = np.linalg.norm(pts[:, :, None] - pts[:, None], axis=-1)[0]
-        i0, i1 = np.unravel_index(int(np.argmax(d)), d.shape)
-        if d[i0, i1] <= 1e-9 * model.length_scale:
-            continue  # every joint at one point: no beam, the body stays rigid
-        Rb = _beam_frame(pts[:, i1] - pts[:, i0])
-        origin = pts[:, i0]
+        pts = np.stack([_parent_point(model, kin, j) for j, _ in joints], axis=1)  # (n, N, 3)
+        if model.body_extra[bi]["section"].get("beam_axis", "joints") == "body_x":
+            Rb = kin.R[:, bi]
+            origin = kin.p[:, bi]
+        else:
+            d = np.linalg.norm(pts[:, :, None] - pts[:, None], axis=-1)[0]
+            i0, i1 = np.unravel_index(int(np.argmax(d)), d.shape)
+            if d[i0, i1] <= 1e-9 * model.length_scale:
+                continue  # every joint at one point: no beam, the body stays rigid
+            Rb = _beam_frame(pts[:, i1] - pts[:, i0])
+            origin = pts[:, i0]
         nodes = np.concatenate([pts, kin.p[:, bi][:, None]], axis=1)  # (n, N+1, 3)
         s = np.einsum("nmi,ni->nm", nodes - origin[:, None], Rb[:, :, 0])
         on_axis = origin[:, None] + s[..., None] * Rb[:, None, :, 0]
