@@ -154,8 +154,8 @@ class InverseDynamics:
     kin: MechanismKinematics
 
 
-def idle_dynamics(model: MechanismModel, kin: MechanismKinematics, S: Array, loads: dict | None = None
-                  ) -> MechanismKinematics:
+def idle_dynamics(model: MechanismModel, kin: MechanismKinematics, S: Array, loads: dict | None = None,
+                  Q_extra: Array | None = None) -> MechanismKinematics:
     """The kinematics with each idle freedom's acceleration set by its own dynamics.
 
     The kinematics hold an idle freedom (a rod's spin between two spherical joints) by a
@@ -164,7 +164,8 @@ def idle_dynamics(model: MechanismModel, kin: MechanismKinematics, S: Array, loa
     null space of the solved loop and task rows, ``[Phi_q; tau_q] N = 0``), ``M_NN = N^T M N``
     (from the body kinetic energy of the twists ``T_b = sum S_c N_c``) and ``Q_N = N^T Q``
     (Eq. 2), the idle accelerations change by ``beta = -M_NN^-1 Q_N`` so that ``N^T Q = 0``
-    (nothing acts along an idle freedom): ``qdd += N beta`` and every body's acceleration by
+    (nothing acts along an idle freedom; ``Q_extra (n, nq)``: generalised friction forces,
+    resisting, included in ``Q``): ``qdd += N beta`` and every body's acceleration by
     ``T_b beta``. Rates and positions are unchanged; a mechanism without idle freedoms is
     returned as is."""
     if model.solver_idle.shape[0] == 0:
@@ -185,6 +186,8 @@ def idle_dynamics(model: MechanismModel, kin: MechanismKinematics, S: Array, loa
     M_NN = np.einsum("b,nbiz,nbiy->nzy", model.mass, vc, vc) + np.einsum("nbiz,nbij,nbjy->nzy", w, Iw, w)
     W = body_wrenches(model, kin, loads)
     Q_N = np.einsum("nbkz,nbk->nz", T, W)
+    if Q_extra is not None:  # friction's generalised forces (resisting) act along the idle motion too
+        Q_N = Q_N + np.einsum("ncz,nc->nz", N, Q_extra)
     beta = -np.linalg.solve(M_NN, Q_N[..., None])[..., 0]
     dA = np.einsum("nbkz,nz->nbk", T, beta)
     dwd, daO = dA[..., :3], dA[..., 3:]
@@ -254,36 +257,62 @@ def free_twists(model: MechanismModel, kin: MechanismKinematics, S: Array, j: in
     return (np.stack(T, axis=1) if T else np.zeros((len(kin), 0, 6))), np.full(f, -1)
 
 
-def equilibrium_system(model: MechanismModel, kin: MechanismKinematics, W: Array, S: Array,
-                       coord_effort: Array) -> tuple[Array, Array]:
-    """The linear equations ``A z = b`` of the joint wrenches ``z (n, 6 nj)`` (module docstring):
-    ``A (n, 6 nb + nf, 6 nj)``, ``b (n, 6 nb + nf)``; ``coord_effort (n, nq)`` the effort along
-    each tree coordinate (actuators; zero for passive coordinates)."""
-    n, nb, nj = len(kin), model.nb, len(model.joint_names)
-    blocks, rhs = [], []
-    A_body = np.zeros((n, 6 * nb, 6 * nj))
+def free_blocks(model: MechanismModel, kin: MechanismKinematics, S: Array) -> list[tuple[int, Array, Array]]:
+    """``(joint, T (n, f, 6), coordinates (f,))`` for every joint with freedoms (:func:`free_twists`)."""
+    out = []
+    for j in range(len(model.joint_names)):
+        T, coords = free_twists(model, kin, S, j)
+        if T.shape[1]:
+            out.append((j, T, coords))
+    return out
+
+
+def equilibrium_matrix(model: MechanismModel, blocks: list) -> Array:
+    """``A (n, 6 nb + nf, 6 nj)`` of the joint-wrench equations (module docstring): the body
+    rows, then each joint's free-twist rows in the order of ``blocks``."""
+    n = blocks[0][1].shape[0] if blocks else 1
+    nb, nj = model.nb, len(model.joint_names)
+    nf = sum(T.shape[1] for _, T, _ in blocks)
+    A = np.zeros((n, 6 * nb + nf, 6 * nj))
     eye = np.eye(6)
     for j in range(nj):
         c, p = model.joint_child[j], model.joint_parent[j]
         if c >= 0:
-            A_body[:, 6 * c:6 * c + 6, 6 * j:6 * j + 6] += eye
+            A[:, 6 * c:6 * c + 6, 6 * j:6 * j + 6] += eye
         if p >= 0:
-            A_body[:, 6 * p:6 * p + 6, 6 * j:6 * j + 6] -= eye
-    blocks.append(A_body)
-    rhs.append(W.reshape(n, 6 * nb))
-    for j in range(nj):
-        T, coords = free_twists(model, kin, S, j)
-        if T.shape[1] == 0:
-            continue
-        Aj = np.zeros((n, T.shape[1], 6 * nj))
-        Aj[:, :, 6 * j:6 * j + 6] = T
+            A[:, 6 * p:6 * p + 6, 6 * j:6 * j + 6] -= eye
+    row = 6 * nb
+    for j, T, _ in blocks:
+        A[:, row:row + T.shape[1], 6 * j:6 * j + 6] = T
+        row += T.shape[1]
+    return A
+
+
+def equilibrium_rhs(model: MechanismModel, blocks: list, W: Array, coord_effort: Array,
+                    friction: dict | None = None) -> Array:
+    """``b (n, 6 nb + nf)``: the required body wrenches ``W (n, nb, 6)``, then per free twist
+    the effort along it: ``coord_effort (n, nq)`` for a tree coordinate, less the friction
+    ``friction[j] (n, f)`` (generalised resisting forces of joint j along its free twists)."""
+    n = W.shape[0]
+    parts = [W.reshape(n, -1)]
+    for j, T, coords in blocks:
         e = np.zeros((n, T.shape[1]))
         for i, c in enumerate(coords):
             if c >= 0:
                 e[:, i] = coord_effort[:, c]
-        blocks.append(Aj)
-        rhs.append(e)
-    return np.concatenate(blocks, axis=1), np.concatenate(rhs, axis=1)
+        if friction is not None and j in friction:
+            e = e - friction[j]
+        parts.append(e)
+    return np.concatenate(parts, axis=1)
+
+
+def equilibrium_system(model: MechanismModel, kin: MechanismKinematics, W: Array, S: Array,
+                       coord_effort: Array) -> tuple[Array, Array]:
+    """The linear equations ``A z = b`` of the joint wrenches ``z (n, 6 nj)`` (module docstring):
+    ``A (n, 6 nb + nf, 6 nj)``, ``b (n, 6 nb + nf)``; ``coord_effort (n, nq)`` the effort along
+    each tree coordinate (actuators; zero for passive coordinates); no friction."""
+    blocks = free_blocks(model, kin, S)
+    return equilibrium_matrix(model, blocks), equilibrium_rhs(model, blocks, W, coord_effort)
 
 
 @dataclass(frozen=True)
@@ -306,44 +335,88 @@ class JointReactions:
     self_stress: int
     method: str
     kin: MechanismKinematics
+    friction: dict
+    iterations: int
+    dissipation: Array
 
 
 def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
-                    rtol: float = 1e-10) -> JointReactions:
-    """Actuator efforts (Eq. 3) and every joint reaction (module docstring).
+                    rtol: float = 1e-10, friction: bool = True, tol: float = 1e-11,
+                    max_iter: int = 100) -> JointReactions:
+    """Actuator efforts (Eq. 3) and every joint reaction (module docstring), with the joints'
+    friction (:mod:`.friction`) when the description gives any and ``friction`` is true.
 
     An over-constrained mechanism's reactions are made unique by link compliance
     (:func:`pkmdyn.multibody.reactions.compliant_reactions`, from the bodies' ``section`` and
     ``material``); raises :class:`~pkmdyn.errors.ParameterError` naming the bodies when that
-    data is missing."""
-    idyn = inverse_dynamics(model, kin, loads)
-    kin = idyn.kin
+    data is missing. Load-dependent friction couples the reactions and the efforts: solved by
+    fixed-point iteration (friction from the last reactions, then efforts and reactions again)
+    until the friction changes by at most ``tol`` times its scale; a
+    :class:`~pkmdyn.errors.ParameterError` names the joint and sample where it diverges or does
+    not settle within ``max_iter`` iterations (friction that locks the mechanism)."""
+    from .friction import JointFriction, friction_diverges
+
+    S = coordinate_twists(model, kin.q)
     n = len(kin)
-    eff = np.zeros((n, model.nq))
-    eff[:, model.act_coord] = idyn.u
-    A, b = equilibrium_system(model, kin, idyn.W, idyn.S, eff)
+    blocks = free_blocks(model, kin, S)
+    A = equilibrium_matrix(model, blocks)
     scale = _column_scale(model)
-    As = A * scale[None, None, :]
-    U, sv, Vt = np.linalg.svd(As, full_matrices=False)
+    U, sv, Vt = np.linalg.svd(A * scale[None, None, :], full_matrices=False)
     ranks = (sv > rtol * sv[:, :1]).sum(axis=1)
     r = int(ranks.min())
     k = A.shape[2]
-    if r < k:
-        from .reactions import compliant_reactions
+    fr = JointFriction(model, kin, S, blocks) if friction and fr_any(model) else None
+    F: dict | None = fr.initial() if fr is not None else None
+    Qf = fr.generalised(F) if fr is not None else None
+    history: list[float] = []
+    it = 0
+    kin0 = kin
+    while True:
+        kin = idle_dynamics(model, kin0, S, loads, Qf)
+        W = body_wrenches(model, kin, loads)
+        Q = generalised_forces(model, S, W)
+        u = actuator_efforts(model, kin, Q if Qf is None else Q + Qf)
+        eff = np.zeros((n, model.nq))
+        eff[:, model.act_coord] = u
+        b = equilibrium_rhs(model, blocks, W, eff, F)
+        if r < k:
+            from .reactions import compliant_reactions
 
-        z = compliant_reactions(model, kin, A, b, r)
-        method, t = "compliance", k - r
-    else:
-        coef = np.einsum("nmr,nm->nr", U, b) / sv
-        z = np.einsum("nrk,nr->nk", Vt, coef) * scale[None, :]
-        method, t = "rigid", 0
+            z = compliant_reactions(model, kin, A, b, r, W)
+            method, t = "compliance", k - r
+        else:
+            coef = np.einsum("nmr,nm->nr", U, b) / sv
+            z = np.einsum("nrk,nr->nk", Vt, coef) * scale[None, :]
+            method, t = "rigid", 0
+        if fr is None:
+            break
+        F_new = fr.forces(z.reshape(n, -1, 6))
+        change, worst_joint, worst_sample = fr.change(F, F_new)
+        size = max(fr.scale(F_new), float(np.abs(u).max()), 1e-12)
+        history.append(change / size)
+        F = F_new
+        Qf = fr.generalised(F)
+        it += 1
+        if history[-1] <= tol:
+            break
+        if it >= max_iter or friction_diverges(history):
+            when = f"sample {worst_sample}" + (f" (t = {kin.t[worst_sample]:.6g} s)" if kin.t is not None else "")
+            raise ParameterError(f"joint {model.joint_names[worst_joint]}: the load-dependent friction does not "
+                                 f"converge at {when} (relative change {history[-1]:.3g} after {it} iterations): "
+                                 "the friction coefficients lock the mechanism")
     res = np.abs(np.einsum("nmk,nk->nm", A, z) - b).max(axis=1)
     Wj = z.reshape(n, -1, 6)
     pts = kin.joint_point
     force = Wj[..., 3:]
     moment = Wj[..., :3] - _cross(pts, force)
-    return JointReactions(u=idyn.u, joint_point=pts, joint_force=force, joint_moment=moment, residual=res,
-                          self_stress=t, method=method, kin=kin)
+    return JointReactions(u=u, joint_point=pts, joint_force=force, joint_moment=moment, residual=res,
+                          self_stress=t, method=method, kin=kin, friction=F or {}, iterations=it,
+                          dissipation=fr.dissipation(F) if fr is not None else np.zeros(n))
+
+
+def fr_any(model: MechanismModel) -> bool:
+    """Whether any joint of the description has friction data."""
+    return any(f is not None and any(v for v in f.values()) for f in model.joint_friction)
 
 
 def _column_scale(model: MechanismModel) -> Array:
