@@ -428,3 +428,95 @@ def test_pdm_description_reproduces_the_hand_built_efforts_and_all_reactions(see
         M_ref = ref.joint_moment[:, j] + np.cross(ref.joint_point[:, j] - r.joint_point[:, k], ref.joint_force[:, j])
         assert np.abs(sg * r.joint_force[:, k] - ref.joint_force[:, j]).max() < 1e-9 * fs, name
         assert np.abs(sg * r.joint_moment[:, k] - M_ref).max() < 1e-9 * ms, name
+
+
+def _stewart_with_friction(mu=0.1):
+    d = ex.builtin_dict("stewart")
+    for leg in d["legs"]:
+        for j in leg["joints"]:
+            if j["type"] == "spherical":
+                j["friction"] = {"coefficient": mu, "ball_radius_m": 0.02, "coulomb_torque_Nm": 0.1,
+                                 "viscous_Nm_s_rad": 0.05}
+            if j["type"] == "universal":
+                j["friction"] = {"coefficient": mu, "pin_radius_m": 0.01, "viscous_Nm_s_rad": 0.2,
+                                 "coulomb_torque_Nm": 0.05}
+            if j["type"] == "prismatic":
+                j["friction"] = {"coefficient": mu, "coulomb_force_N": 5.0, "viscous_N_s_m": 20.0}
+    return d
+
+
+def _power_error(m, r):
+    k = r.kin
+    Iw = np.einsum("nbij,bjk,nblk->nbil", k.R, m.inertia, k.R)
+    dT = np.einsum("b,nbi,nbi->n", m.mass, k.v, k.a) + np.einsum("nbi,nbij,nbj->n", k.w, Iw, k.wd)
+    dV = -np.einsum("b,i,nbi->n", m.mass, m.gravity, k.v)
+    P = np.einsum("na,na->n", r.u, k.act_qd)
+    return np.abs(P - dT - dV - r.dissipation).max() / np.abs(P).max()
+
+
+def test_friction_power_balance_and_reactions():
+    """Every friction family on (Coulomb, viscous, pin, ball, sliding guide; cut spherical
+    joints included): actuator power = d(T + V)/dt + dissipation, dissipation >= 0, the fixed
+    point converged, every body balances."""
+    m, kin = _kin(_stewart_with_friction())
+    r = joint_reactions(m, kin)
+    assert 1 <= r.iterations < 50
+    assert _power_error(m, r) < 1e-9
+    assert r.dissipation.min() > 0.0
+    r0 = joint_reactions(m, kin, friction=False)
+    assert np.abs(r.u - r0.u).max() > 1.0  # friction changes the efforts
+    _check_newton_euler(m.body_names, m.mass, m.inertia, m.gravity, r.kin, r.joint_force, r.joint_moment,
+                        m.joint_parent, m.joint_child, _loads(m, r.kin))
+
+
+def test_load_dependent_friction_uses_the_joints_own_reaction():
+    """Recompute the pin and ball friction torques from the converged reactions (law F1)."""
+    from pkmdyn.friction import regularised_sign
+    from pkmdyn.multibody.dynamics import coordinate_twists, free_twists
+    from pkmdyn.multibody.friction import EPS_ROTATION
+
+    m, kin = _kin(_stewart_with_friction(0.3))
+    r = joint_reactions(m, kin)
+    S = coordinate_twists(m, r.kin.q)
+    for name in ("U_1", "S_2"):
+        j = m.joint_index(name)
+        T, _ = free_twists(m, r.kin, S, j)
+        f = r.joint_force[:, j]
+        c, p = m.joint_child[j], m.joint_parent[j]
+        w = (r.kin.w[:, c] if c >= 0 else 0.0) - (r.kin.w[:, p] if p >= 0 else 0.0)
+        if name.startswith("U"):
+            # the universal joint has two rotation axes: no single pin axis, so only Coulomb + viscous
+            tau = 0.05 * regularised_sign(w, EPS_ROTATION, True) + 0.2 * w
+        else:
+            mag = 0.1 + 0.3 * 0.02 * np.linalg.norm(f, axis=1)
+            tau = mag[:, None] * regularised_sign(w, EPS_ROTATION, True) + 0.05 * w
+        expect = np.einsum("nfk,nk->nf", T[:, :, :3], tau)
+        assert np.abs(r.friction[j] - expect).max() <= 1e-8 * max(np.abs(expect).max(), 1e-6), name
+
+
+def test_friction_in_an_overconstrained_mechanism():
+    d = _with_sections(ex.builtin_dict("bennett"))
+    for j in d["joints"]:
+        j["friction"] = {"coefficient": 0.2, "pin_radius_m": 0.01, "mean_radius_m": 0.015, "viscous_Nm_s_rad": 0.01}
+    m, kin = _kin(d)
+    r = joint_reactions(m, kin)
+    assert r.method == "compliance" and r.iterations >= 1
+    assert _power_error(m, r) < 1e-9
+
+
+def test_locking_friction_is_refused_naming_the_joint():
+    m, kin = _kin(_stewart_with_friction(200.0), n=5)
+    with pytest.raises(ParameterError, match=r"joint P_\d: the load-dependent friction does not converge at sample"):
+        joint_reactions(m, kin)
+
+
+def test_cli_refuses_locking_friction_and_writes_nothing(tmp_path, capsys):
+    from pkmdyn.cli import main
+
+    src = tmp_path / "locked.toml"
+    src.write_text(_toml(_stewart_with_friction(200.0)))
+    out = tmp_path / "out"
+    assert main(["run", "--machine", str(src), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "joint P_" in err[0] and "lock" in err[0]
+    assert not out.exists()

@@ -453,7 +453,10 @@ def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics) -> tuple[d
     ``body_wrench`` (n, nb, 6) (Eq. 1, ``[n_O; f]``), and ``summary.json`` entries.
 
     An over-constrained mechanism whose bodies carry no section and material gets its efforts
-    (they do not depend on the self-stress) but no reactions; the summary says why."""
+    (they do not depend on the self-stress) but no reactions; the summary says why. Friction
+    that does not converge raises (nothing is written)."""
+    from .reactions import ComplianceDataMissing
+
     summary: dict = {}
     try:
         reac = joint_reactions(model, kin)
@@ -464,7 +467,7 @@ def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics) -> tuple[d
             npz.update(qdd=k2.qdd, wd=k2.wd, a=k2.a, origin_a=k2.origin_a, joint_point_a=k2.joint_point_a)
         summary["reactions"] = {"method": reac.method, "self_stress_states": reac.self_stress,
                                 "max_equilibrium_residual": float(reac.residual.max())}
-    except ParameterError as exc:
+    except ComplianceDataMissing as exc:
         u = inverse_dynamics(model, kin).u
         npz = {}
         summary["reactions"] = {"method": None, "reason": str(exc)}

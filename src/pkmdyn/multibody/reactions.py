@@ -31,9 +31,14 @@ from ..errors import ParameterError, SingularityError
 from .kinematics import MechanismKinematics
 from .model import MechanismModel
 
-__all__ = ["elastic_bodies", "compliant_reactions"]
+__all__ = ["elastic_bodies", "compliant_reactions", "ComplianceDataMissing"]
 
 Array = NDArray[np.float64]
+
+
+class ComplianceDataMissing(ParameterError):
+    """An over-constrained mechanism whose bodies lack the section and material that would make
+    its reactions unique."""
 
 
 def elastic_bodies(model: MechanismModel) -> list[int]:
@@ -82,8 +87,8 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
     elastic = elastic_bodies(model)
     t = k - rank
     if not elastic:
-        raise ParameterError(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no body "
-                             "carries a section and a material: the joint reactions cannot be made unique "
+        raise ComplianceDataMissing(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no "
+                                    "body carries a section and a material: the joint reactions cannot be made unique "
                              "(give [[bodies]] section and material)")
     G_list, w0_list, C_list = [], [], []
     for bi in elastic:
@@ -128,8 +133,8 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
         w0_list.append(w0)
         C_list.append(C)
     if not G_list:
-        raise ParameterError(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no elastic "
-                             "body joins two joints: the joint reactions cannot be made unique")
+        raise ComplianceDataMissing(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no "
+                                    "elastic body joins two joints: the joint reactions cannot be made unique")
     G = np.concatenate(G_list, axis=1)
     w0 = np.concatenate(w0_list, axis=1)
     C = np.concatenate(C_list, axis=1)
@@ -143,7 +148,7 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
         res = unique_reactions(A * scale, b, G * scale, w0, C)
     except SingularityError:
         missing = [model.body_names[i] for i in range(nb) if i not in elastic]
-        raise ParameterError(f"mechanism {model.name!r}: a self-stress state strains no elastic body; give a section "
+        raise ComplianceDataMissing(f"mechanism {model.name!r}: a self-stress state strains no elastic body; give a section "
                              f"and a material to the bodies of the over-constrained loops (without: "
                              f"{', '.join(missing[:8])}{' ...' if len(missing) > 8 else ''})") from None
     return res.lam * scale
