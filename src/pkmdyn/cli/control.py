@@ -252,10 +252,16 @@ def _columns(setup: _Setup, tr: Any) -> tuple[dict[str, np.ndarray], dict[str, A
                          "saturated_cycles": int(np.sum(r.saturated[:, a]))}
     if setup.machine == "hip":
         names, sc, u0, u1, u2 = [f"motor{a + 1}" for a in range(3)], 1.0, "rad", "rad_s", "rad_s2"
-    else:
+    elif setup.machine == "pdm":
         names, sc, u0, u1, u2 = list(PDM_LIMBS), 1e3, "mm", "mm_s", "mm_s2"
+    else:  # a described mechanism: its actuated joints, in SI (m or rad by the effort's unit)
+        names = [a.rsplit("_", 1)[0] for a in setup.verbs.ACTUATORS]
+        sc = 1.0
     joints: dict[str, Any] = {}
     for a, nm in enumerate(names):
+        if setup.machine not in ("hip", "pdm"):
+            lin = setup.verbs.ACTUATORS[a].endswith("_N")
+            u0, u1, u2 = ("m", "m_s", "m_s2") if lin else ("rad", "rad_s", "rad_s2")
         cols[f"{nm}_ref_{u0}"] = j.s[:K, a] * sc
         cols[f"{nm}_{u0}"] = r.s[:, a] * sc
         cols[f"{nm}_enc_{u0}"] = r.s_enc[:, a] * sc

@@ -118,12 +118,14 @@ def generalised_forces(model: MechanismModel, S: Array, W: Array) -> Array:
     return np.einsum("nck,nck->nc", S, Wsub)
 
 
-def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array) -> Array:
-    """Efforts ``u (n, na)`` [N or N m] from the generalised tree forces ``Q (n, nq)``, Eq. (3).
+def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, rhs_task: Array | None = None
+                     ) -> Array:
+    """Efforts ``u (n, na)`` [N or N m] from the generalised tree forces ``Q (n, nq)``, Eq. (3)
+    (or from the task-space forces ``rhs_task = G^T Q (n, nt)`` when given).
 
     Raises :class:`~pkmdyn.errors.SingularityError` naming the first sample where the
     actuator map ``J_ax`` is singular (the actuators cannot move the mechanism there)."""
-    rhs = np.einsum("nct,nc->nt", kin.G, Q)
+    rhs = np.einsum("nct,nc->nt", kin.G, Q) if rhs_task is None else rhs_task
     JT = np.swapaxes(kin.J_ax, 1, 2)  # (n, nt, na)
     scale = np.maximum(np.abs(JT).max(axis=(0, 1)), 1e-300)
     sv = np.linalg.svd(JT / scale, compute_uv=False)
