@@ -520,3 +520,18 @@ def test_cli_refuses_locking_friction_and_writes_nothing(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "joint P_" in err[0] and "lock" in err[0]
     assert not out.exists()
+
+
+@pytest.mark.parametrize("name", sorted(RIGID) + ["stewart_friction"])
+def test_cut_route_equals_the_dense_equations(name):
+    """The cut-wrench route and the dense equations of every joint wrench give the same
+    reactions (friction included)."""
+    d = _stewart_with_friction() if name == "stewart_friction" else RIGID[name]()
+    m, kin = _kin(d, n=20)
+    a = joint_reactions(m, kin)
+    b = joint_reactions(m, kin, solver="dense")
+    fs = max(np.abs(b.joint_force).max(), 1.0)
+    assert np.abs(a.joint_force - b.joint_force).max() <= 1e-9 * fs
+    assert np.abs(a.joint_moment - b.joint_moment).max() <= 1e-9 * fs * max(m.length_scale, 1.0)
+    assert np.abs(a.u - b.u).max() <= 1e-9 * np.abs(b.u).max()
+    assert a.residual.max() <= 1e-9 * fs * max(m.length_scale, 1.0)

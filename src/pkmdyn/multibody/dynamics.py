@@ -344,7 +344,7 @@ class JointReactions:
 
 def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
                     rtol: float = 1e-10, friction: bool = True, tol: float = 1e-11,
-                    max_iter: int = 100) -> JointReactions:
+                    max_iter: int = 100, solver: str = "auto") -> JointReactions:
     """Actuator efforts (Eq. 3) and every joint reaction (module docstring), with the joints'
     friction (:mod:`.friction`) when the description gives any and ``friction`` is true.
 
@@ -355,18 +355,31 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     fixed-point iteration (friction from the last reactions, then efforts and reactions again)
     until the friction changes by at most ``tol`` times its scale; a
     :class:`~pkmdyn.errors.ParameterError` names the joint and sample where it diverges or does
-    not settle within ``max_iter`` iterations (friction that locks the mechanism)."""
+    not settle within ``max_iter`` iterations (friction that locks the mechanism).
+
+    ``solver="auto"`` takes the cut-wrench route (:class:`_CutRoute`) where the cut joints'
+    reactions are determined by the tree's equations, else (over-constrained) the dense
+    equations of every joint wrench; ``"dense"`` always the latter (the two agree, tested)."""
     from .friction import JointFriction, friction_diverges
+
+    if solver not in ("auto", "dense"):
+        raise ParameterError(f"solver: {solver!r} is not 'auto' or 'dense'")
 
     S = coordinate_twists(model, kin.q)
     n = len(kin)
     blocks = free_blocks(model, kin, S)
-    A = equilibrium_matrix(model, blocks)
     scale = _column_scale(model)
-    U, sv, Vt = np.linalg.svd(A * scale[None, None, :], full_matrices=False)
-    ranks = (sv > rtol * sv[:, :1]).sum(axis=1)
-    r = int(ranks.min())
-    k = A.shape[2]
+    k = 6 * len(model.joint_names)
+    cuts = None if solver == "dense" else _CutRoute(model, S, blocks, rtol)
+    A = None
+    if cuts is None or not cuts.full_rank:
+        A = equilibrium_matrix(model, blocks)
+        U, sv, Vt = np.linalg.svd(A * scale[None, None, :], full_matrices=False)
+        ranks = (sv > rtol * sv[:, :1]).sum(axis=1)
+        r = int(ranks.min())
+        cuts = None
+    else:
+        r = k
     fr = JointFriction(model, kin, S, blocks) if friction and fr_any(model) else None
     F: dict | None = fr.initial() if fr is not None else None
     Qf = fr.generalised(F) if fr is not None else None
@@ -381,7 +394,10 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
         eff = np.zeros((n, model.nq))
         eff[:, model.act_coord] = u
         b = equilibrium_rhs(model, blocks, W, eff, F)
-        if r < k:
+        if cuts is not None:
+            z = cuts.solve(model, W, Q if Qf is None else Q + Qf, eff, F)
+            method, t = "rigid", 0
+        elif r < k:
             from .reactions import compliant_reactions
 
             z = compliant_reactions(model, kin, A, b, r, W)
@@ -406,7 +422,7 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
             raise ParameterError(f"joint {model.joint_names[worst_joint]}: the load-dependent friction does not "
                                  f"converge at {when} (relative change {history[-1]:.3g} after {it} iterations): "
                                  "the friction coefficients lock the mechanism")
-    res = np.abs(np.einsum("nmk,nk->nm", A, z) - b).max(axis=1)
+    res = _residual(model, blocks, z, b)
     Wj = z.reshape(n, -1, 6)
     pts = kin.joint_point
     force = Wj[..., 3:]
@@ -414,6 +430,135 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     return JointReactions(u=u, joint_point=pts, joint_force=force, joint_moment=moment, residual=res,
                           self_stress=t, method=method, kin=kin, friction=F or {}, iterations=it,
                           dissipation=fr.dissipation(F) if fr is not None else np.zeros(n))
+
+
+def _centre(T: Array) -> Array:
+    """The common point (n, 3) of rotation twists ``T (n, f, 6)`` whose axes all pass through it:
+    ``v = o x w`` for each, solved in least squares (``[w]x o = -v``)."""
+    n = T.shape[0]
+    A = np.zeros((n, 3 * T.shape[1], 3))
+    b = np.zeros((n, 3 * T.shape[1]))
+    for i in range(T.shape[1]):
+        w, v = T[:, i, :3], T[:, i, 3:]
+        # v = o x w = -[w]x o
+        A[:, 3 * i:3 * i + 3] = np.stack([np.stack([0 * w[:, 0], w[:, 2], -w[:, 1]], 1),
+                                          np.stack([-w[:, 2], 0 * w[:, 0], w[:, 0]], 1),
+                                          np.stack([w[:, 1], -w[:, 0], 0 * w[:, 0]], 1)], 1)
+        b[:, 3 * i:3 * i + 3] = v
+    AtA = np.swapaxes(A, 1, 2) @ A
+    return np.linalg.solve(AtA, np.einsum("nmk,nm->nk", A, b)[..., None])[..., 0]
+
+
+def _residual(model: MechanismModel, blocks: list, z: Array, b: Array) -> Array:
+    """``max |A z - b|`` per sample (n,) without forming ``A`` (:func:`equilibrium_matrix`)."""
+    n, nb = z.shape[0], model.nb
+    Wj = z.reshape(n, -1, 6)
+    body = np.zeros((n, nb, 6))
+    for j in range(Wj.shape[1]):
+        if model.joint_child[j] >= 0:
+            body[:, model.joint_child[j]] += Wj[:, j]
+        if model.joint_parent[j] >= 0:
+            body[:, model.joint_parent[j]] -= Wj[:, j]
+    parts = [body.reshape(n, -1)]
+    for j, T, _ in blocks:
+        parts.append(np.einsum("nfk,nk->nf", T, Wj[:, j]))
+    return np.abs(np.concatenate(parts, axis=1) - b).max(axis=1)
+
+
+class _CutRoute:
+    """Reactions through the cut joints' constraint wrenches (Featherstone's loop-closure form).
+
+    Each cut joint j carries ``W_j = C_j lambda_j - D_j F_j``: ``C_j (6, 6 - f)`` spans the
+    wrenches that do no work in its free twists (``T_j^T C_j = 0``), ``D_j = T_j (T_j^T T_j)^-1``
+    puts its friction ``F_j`` along them. The tree's equations, one per tree coordinate,
+
+        sum_j (J_c,j - J_p,j)^T C_j lambda_j = Q + Q_f - E_a u
+
+    (``J_c,j``, ``J_p,j`` the child's and parent's twist Jacobians, ``E_a u`` the actuator
+    efforts on their coordinates) give the ``lambda`` by QR (least squares; consistent where
+    the efforts come from Eq. 3); every tree joint's wrench then follows leaves first,
+    ``W_tree(b) = W_b + sum_children W_tree(child) - (cut wrenches on b)``. When the columns are
+    rank deficient (an over-constrained mechanism) ``full_rank`` is false and the dense
+    equations decide."""
+
+    def __init__(self, model: MechanismModel, S: Array, blocks: list, rtol: float) -> None:
+        n = S.shape[0]
+        St = np.swapaxes(S, 1, 2)  # (n, 6, nq)
+        anc = model.ancestors.astype(float)
+
+        def Jb(b: int) -> Array:
+            return St * anc[b][None, None, :] if b >= 0 else 0.0
+
+        self.cut = []
+        cols = []
+        sph = JOINT_TYPES.index(next(t for t in JOINT_TYPES if t.name == "spherical"))
+        for j, T, coords in blocks:
+            if coords[0] >= 0:
+                continue
+            c, p = model.joint_child[j], model.joint_parent[j]
+            Jrel = np.broadcast_to(Jb(c) - Jb(p), (n, 6, model.nq))
+            if model.joint_type[j] == sph:
+                # three forces through the centre: [o x e_i; e_i] (T's rotations all pass through o)
+                o = _centre(T)
+                C = np.zeros((n, 6, 3))
+                for i in range(3):
+                    e = np.zeros(3)
+                    e[i] = 1.0
+                    C[:, :3, i] = np.cross(o, e)
+                    C[:, 3:, i] = e
+            else:
+                _, _, Vt = np.linalg.svd(T)  # T (n, f, 6): rows f.. of Vt span its annihilator
+                C = np.swapaxes(Vt[:, T.shape[1]:], 1, 2)  # (n, 6, 6 - f)
+            Tc = np.swapaxes(T, 1, 2)
+            D = Tc @ np.linalg.inv(T @ Tc)
+            self.cut.append((j, C, D, Jrel))
+            cols.append(np.einsum("nkc,nkl->ncl", Jrel, C))
+        for j in range(len(model.joint_names)):  # fixed cut joints have no free twist: no block
+            if model.joint_cut[j] and not any(j == c[0] for c in self.cut):
+                c, p = model.joint_child[j], model.joint_parent[j]
+                Jrel = np.broadcast_to(Jb(c) - Jb(p), (n, 6, model.nq))
+                C = np.broadcast_to(np.eye(6), (n, 6, 6))
+                self.cut.append((j, C, np.zeros((n, 6, 0)), Jrel))
+                cols.append(np.einsum("nkc,nkl->ncl", Jrel, C))
+        self.A = np.concatenate(cols, axis=2) if cols else np.zeros((n, model.nq, 0))
+        if self.A.shape[2] > self.A.shape[1]:
+            self.full_rank = False
+            return
+        self.Qm, self.R = np.linalg.qr(self.A)
+        d = np.abs(np.diagonal(self.R, axis1=1, axis2=2)) if self.A.shape[2] else np.ones((n, 1))
+        colmax = np.abs(self.A).max(axis=1).max(axis=1) if self.A.shape[2] else np.ones(n)
+        self.full_rank = bool(np.all(d > rtol * 1e2 * np.maximum(colmax[:, None], 1e-300)))
+
+    def solve(self, model: MechanismModel, W: Array, Qtot: Array, eff: Array, F: dict | None) -> Array:
+        n = W.shape[0]
+        nj = len(model.joint_names)
+        rhs = Qtot - eff
+        if self.A.shape[2]:
+            lam = np.linalg.solve(self.R, np.einsum("nck,nc->nk", self.Qm, rhs)[..., None])[..., 0]
+        else:
+            lam = np.zeros((n, 0))
+        z = np.zeros((n, nj, 6))
+        pos = 0
+        onbody = np.zeros((n, model.nb, 6))  # sum of cut wrenches acting on each body
+        for j, C, D, _ in self.cut:
+            m_ = C.shape[2]
+            Wc = np.einsum("nkl,nl->nk", C, lam[:, pos:pos + m_])
+            pos += m_
+            if F is not None and j in F and D.shape[2]:
+                Wc = Wc - np.einsum("nkf,nf->nk", D, F[j])
+            z[:, j] = Wc
+            if model.joint_child[j] >= 0:
+                onbody[:, model.joint_child[j]] += Wc
+            if model.joint_parent[j] >= 0:
+                onbody[:, model.joint_parent[j]] -= Wc
+        Wt = W - onbody
+        for b in range(model.nb - 1, -1, -1):
+            par = model.body_parent[b]
+            if par >= 0:
+                Wt[:, par] += Wt[:, b]
+            k = model.body_joint[b]
+            z[:, k] = -Wt[:, b] if model.joint_flipped[k] else Wt[:, b]
+        return z.reshape(n, -1)
 
 
 def fr_any(model: MechanismModel) -> bool:
