@@ -535,3 +535,42 @@ def test_cut_route_equals_the_dense_equations(name):
     assert np.abs(a.joint_moment - b.joint_moment).max() <= 1e-9 * fs * max(m.length_scale, 1.0)
     assert np.abs(a.u - b.u).max() <= 1e-9 * np.abs(b.u).max()
     assert a.residual.max() <= 1e-9 * fs * max(m.length_scale, 1.0)
+
+
+@pytest.mark.parametrize("seed", [None, 7])
+def test_hip_description_reproduces_the_closed_form_with_joint_friction(seed):
+    """Coulomb and viscous friction of the S, U joints and the sliders (Table 2 families) through
+    the description, against Eq. 7-16 with the same coefficients; the lead screws' friction and
+    rotor inertia are added to the slider forces as the motor sees them (no bodies of the
+    description), the load-dependent hip-joint and thrust-bearing terms (Eq. 16, driven by the
+    hydraulic load) are off in both."""
+    from pkmdyn.friction import coulomb_viscous
+    from pkmdyn.machines.hip_simulator import inverse_kinematics, model_from_dict
+    from pkmdyn.machines.hip_simulator.description import hip_description
+    from pkmdyn.machines.hip_simulator.dynamics import inverse_dynamics as hip_inverse_dynamics
+    from pkmdyn.machines.hip_simulator.params import default_params_dict
+    from pkmdyn.profiles.iso14242 import iso14242_motion
+
+    rng = np.random.default_rng(seed)
+    d = default_params_dict()
+    fr = d["friction"]
+    fr["hip_coefficient"] = fr["thrust_coefficient"] = 0.0
+    for key in ("slider_coulomb_N", "slider_viscous_Ns_m", "screw_coulomb_Nm", "screw_viscous_Nms_rad",
+                "spherical_coulomb_Nm", "spherical_viscous_Nms_rad", "universal_coulomb_Nm",
+                "universal_viscous_Nms_rad"):
+        fr[key] = float(rng.uniform(0.05, 0.5)) * (20.0 if "slider" in key else 1.0)
+    hip = model_from_dict(d, f"friction {seed}")
+    motion = iso14242_motion(cycles=1, samples_per_cycle=200)
+    ref = hip_inverse_dynamics(hip, inverse_kinematics(hip, motion), np.zeros(len(motion.t)))
+    m = load_mechanism(hip_description(hip))
+    kin = solve_kinematics(m, motion.angles, motion.rates, motion.accels, motion.t)
+    r = joint_reactions(m, kin)
+    assert r.iterations >= 1
+    gear = hip.geometry.p / (2 * np.pi)
+    f = hip.friction
+    sl = [m.actuator_names.index(f"P_{i + 1}") for i in range(3)]
+    theta_dot = kin.act_qd[:, sl] / gear
+    tau = (gear * r.u[:, sl] + hip.inertia.I_L * kin.act_qdd[:, sl] / gear
+           + coulomb_viscous(theta_dot, f.screw_coulomb, f.screw_viscous, f.eps_w, vector=False))
+    assert _rel(tau, ref.tau) < 1e-9
+    assert _power_error(m, r) < 1e-9
