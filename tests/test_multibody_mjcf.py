@@ -58,3 +58,30 @@ def test_cut_joints_that_mujoco_cannot_express_are_refused():
         pytest.skip("the universal joint is in the tree")
     with pytest.raises(ParameterError, match=r"\[joints\] D: a cut universal joint cannot be written"):
         mechanism_mjcf(m)
+
+
+def test_export_command_writes_a_model_mujoco_loads(tmp_path, capsys):
+    from pkmdyn.cli import main
+
+    out = tmp_path / "stewart.xml"
+    assert main(["export", "--machine", "stewart", "--format", "mjcf", "--out", str(out)]) == 0
+    mm = mujoco.MjModel.from_xml_path(str(out))
+    assert mm.neq == 5 and mm.nu == 6
+
+
+def test_export_command_refuses_an_inexpressible_cut_joint(tmp_path, capsys):
+    import test_multibody_dynamics as td
+
+    from pkmdyn.cli import main
+
+    d = ex.four_bar()
+    d["joints"][3]["type"] = "universal"
+    d["joints"][3]["axes"] = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]
+    del d["joints"][3]["axis"]
+    src = tmp_path / "fb.toml"
+    src.write_text(td._toml(d))
+    out = tmp_path / "fb.xml"
+    assert main(["export", "--machine", str(src), "--format", "mjcf", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "D: a cut universal joint" in err[0]
+    assert not out.exists()

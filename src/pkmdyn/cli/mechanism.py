@@ -167,3 +167,28 @@ def control(machine: str, controller: str, duration_s: float, out_dir: Path) -> 
                    "the controller's model", "the default motion")
     for label, path in _write(setup, tr, settings, out_dir, False, None).items():
         click.echo(f"{label}: {path}")
+
+
+@cli.command("export")
+@click.option("--machine", required=True, help=_MACHINE_HELP)
+@click.option("--format", "fmt", type=click.Choice(["mjcf"]), required=True,
+              help="mjcf: a MuJoCo model (the spanning tree; spherical, revolute and fixed cut joints as "
+                   "equality constraints; motors on the actuated joints; no friction, no loads).")
+@click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
+              help="File to write (e.g. machine.xml).")
+def export(machine: str, fmt: str, out_path: Path) -> None:
+    """Write a described mechanism in another engine's format; the file is written only when the
+    whole model can be written (a cut joint MuJoCo cannot express is an error naming it)."""
+    from ..io import atomic_file
+    from ..multibody.mjcf import mechanism_mjcf
+
+    kind, model = _load(machine)
+    if model is None:
+        from ..machines.registry import hand_built_description
+        from ..multibody import load_mechanism
+
+        model = load_mechanism(hand_built_description(kind))
+    text = mechanism_mjcf(model)
+    with atomic_file(out_path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    click.echo(f"{fmt}: {out_path}")
