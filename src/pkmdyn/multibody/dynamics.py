@@ -72,17 +72,13 @@ def _cross(a: Array, b: Array) -> Array:
 
 def coordinate_twists(model: MechanismModel, q: Array) -> Array:
     """World unit twists ``S (n, nq, 6)`` ``[w; v_O]`` of every tree coordinate at ``q (n, nq)``."""
-    q = np.atleast_2d(np.asarray(q, dtype=float))
-    n = q.shape[0]
-    S = np.empty((n, model.nq, 6))
-    R = np.empty((model.nb, 3, 3))
-    p = np.empty((model.nb, 3))
-    w33, w3 = np.empty((5, 3, 3)), np.empty((20, 3))
-    for s in range(n):
-        K.forward_positions(np.ascontiguousarray(q[s]), model.body_parent, model.body_joint, model.joint_q0,
-                            model.joint_nq, model.coord_motion, model.coord_offset, model.coord_sign,
-                            model.tree_R_parent, model.tree_p_parent, model.tree_R_child, model.tree_p_child,
-                            R, p, S[s], w33, w3)
+    from ._dyn_kernels import twists_batch
+
+    q = np.ascontiguousarray(np.atleast_2d(np.asarray(q, dtype=float)))
+    S = np.empty((q.shape[0], model.nq, 6))
+    twists_batch(q, model.body_parent, model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion,
+                 model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,
+                 model.tree_p_child, S)
     return S
 
 
@@ -92,13 +88,13 @@ def body_wrenches(model: MechanismModel, kin: MechanismKinematics, loads: dict |
     ``loads``: optional extra external loads per sample, ``{body name: (F (n, 3) [N],
     M (n, 3) [N m] about the centre of mass)}``, base frame, on top of the description's
     ``[[loads]]`` (constant, base frame, at their point)."""
-    m = model.mass[None, :, None]
-    acc = kin.a - model.gravity[None, None, :]
-    f = m * acc
-    Iw = np.einsum("nbij,bjk,nblk->nbil", kin.R, model.inertia, kin.R)
-    Lw = np.einsum("nbij,nbj->nbi", Iw, kin.w)
-    nc = np.einsum("nbij,nbj->nbi", Iw, kin.wd) + _cross(kin.w, Lw)
-    n_O = nc + _cross(kin.p, f)
+    from ._dyn_kernels import body_wrench_batch
+
+    Wr = np.empty(kin.p.shape[:2] + (6,))
+    body_wrench_batch(np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.w), np.ascontiguousarray(kin.wd),
+                      np.ascontiguousarray(kin.p), np.ascontiguousarray(kin.a), model.mass, model.inertia,
+                      model.gravity, Wr)
+    n_O, f = Wr[..., :3], Wr[..., 3:]
     for b, F, M, pt in zip(model.load_body, model.load_force, model.load_moment, model.load_point):
         r = kin.origin[:, b] + np.einsum("nij,j->ni", kin.R[:, b], pt)
         f[:, b] -= F
@@ -109,13 +105,16 @@ def body_wrenches(model: MechanismModel, kin: MechanismKinematics, loads: dict |
         M = np.broadcast_to(np.asarray(M, dtype=float), f[:, b].shape)
         f[:, b] -= F
         n_O[:, b] -= M + _cross(kin.p[:, b], F)
-    return np.concatenate([n_O, f], axis=-1)
+    return Wr
 
 
 def generalised_forces(model: MechanismModel, S: Array, W: Array) -> Array:
     """``Q (n, nq)``, Eq. (2): ``Q_c = S_c . sum of W_b over the bodies that coordinate c moves``."""
-    Wsub = np.einsum("bc,nbk->nck", model.ancestors.astype(float), W)
-    return np.einsum("nck,nck->nc", S, Wsub)
+    from ._dyn_kernels import generalised_batch
+
+    Q = np.empty(S.shape[:2])
+    generalised_batch(np.ascontiguousarray(S), np.ascontiguousarray(W), model.ancestor_list, Q)
+    return Q
 
 
 def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, rhs_task: Array | None = None

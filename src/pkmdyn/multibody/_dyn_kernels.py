@@ -1,0 +1,79 @@
+"""Compiled kernels of the dynamics (once for every mechanism, driven by the model's arrays)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ._kernels import forward_positions
+
+
+@njit(cache=True)
+def twists_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                 RP, pP, RC, pC, S_out):  # pragma: no cover - compiled
+    """World unit twists ``S_out (n, nq, 6)`` of every tree coordinate at ``q (n, nq)``."""
+    nb = body_parent.shape[0]
+    R = np.empty((nb, 3, 3))
+    p = np.empty((nb, 3))
+    w33 = np.empty((5, 3, 3))
+    w3 = np.empty((20, 3))
+    for s in range(q.shape[0]):
+        forward_positions(q[s], body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                          RP, pP, RC, pC, R, p, S_out[s], w33, w3)
+
+
+@njit(cache=True)
+def body_wrench_batch(R, w, wd, p, a, mass, inertia, gravity, W_out):  # pragma: no cover - compiled
+    """Required body wrenches ``W_out (n, nb, 6)`` ``[n_O; f]`` of Eq. (1) (no loads): per body
+    ``f = m (a - g)``, ``n_O = I_w wd + w x I_w w + p x f`` with ``I_w = R I' R^T``."""
+    n, nb = R.shape[0], R.shape[1]
+    Iw = np.empty((3, 3))
+    tmp = np.empty((3, 3))
+    for s in range(n):
+        for b in range(nb):
+            for i in range(3):
+                for j in range(3):
+                    acc = 0.0
+                    for k in range(3):
+                        acc += R[s, b, i, k] * inertia[b, k, j]
+                    tmp[i, j] = acc
+            for i in range(3):
+                for j in range(3):
+                    acc = 0.0
+                    for k in range(3):
+                        acc += tmp[i, k] * R[s, b, j, k]
+                    Iw[i, j] = acc
+            L0 = Iw[0, 0] * w[s, b, 0] + Iw[0, 1] * w[s, b, 1] + Iw[0, 2] * w[s, b, 2]
+            L1 = Iw[1, 0] * w[s, b, 0] + Iw[1, 1] * w[s, b, 1] + Iw[1, 2] * w[s, b, 2]
+            L2 = Iw[2, 0] * w[s, b, 0] + Iw[2, 1] * w[s, b, 1] + Iw[2, 2] * w[s, b, 2]
+            m = mass[b]
+            f0 = m * (a[s, b, 0] - gravity[0])
+            f1 = m * (a[s, b, 1] - gravity[1])
+            f2 = m * (a[s, b, 2] - gravity[2])
+            x0, x1, x2 = p[s, b, 0], p[s, b, 1], p[s, b, 2]
+            w0, w1, w2 = w[s, b, 0], w[s, b, 1], w[s, b, 2]
+            for i in range(3):
+                W_out[s, b, i] = Iw[i, 0] * wd[s, b, 0] + Iw[i, 1] * wd[s, b, 1] + Iw[i, 2] * wd[s, b, 2]
+            W_out[s, b, 0] += w1 * L2 - w2 * L1 + x1 * f2 - x2 * f1
+            W_out[s, b, 1] += w2 * L0 - w0 * L2 + x2 * f0 - x0 * f2
+            W_out[s, b, 2] += w0 * L1 - w1 * L0 + x0 * f1 - x1 * f0
+            W_out[s, b, 3] = f0
+            W_out[s, b, 4] = f1
+            W_out[s, b, 5] = f2
+
+
+@njit(cache=True)
+def generalised_batch(S, W, anc_list, Q_out):  # pragma: no cover - compiled
+    """``Q_out (n, nq)``, Eq. (2): ``Q_c = S_c . sum of W_b over the bodies c moves``; ``anc_list``
+    the model's ``ancestor_list`` (per body: a count, then its coordinates)."""
+    n, nb = W.shape[0], W.shape[1]
+    for s in range(n):
+        for c in range(Q_out.shape[1]):
+            Q_out[s, c] = 0.0
+        for b in range(nb):
+            for k in range(anc_list[b, 0]):
+                c = anc_list[b, 1 + k]
+                acc = 0.0
+                for i in range(6):
+                    acc += S[s, c, i] * W[s, b, i]
+                Q_out[s, c] += acc
