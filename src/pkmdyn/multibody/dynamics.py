@@ -127,8 +127,19 @@ def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, 
     rhs = np.einsum("nct,nc->nt", kin.G, Q) if rhs_task is None else rhs_task
     JT = np.swapaxes(kin.J_ax, 1, 2)  # (n, nt, na)
     scale = np.maximum(np.abs(JT).max(axis=(0, 1)), 1e-300)
-    sv = np.linalg.svd(JT / scale, compute_uv=False)
-    ratio = sv[:, -1] / np.maximum(sv[:, 0], 1e-300) if sv.shape[1] else np.ones(len(rhs))
+    A = JT / scale
+    if model.na == model.nt and model.na:
+        # cheap screen (Hadamard ratio |det A| / prod |a_k| <= 1, zero when singular); the SVD
+        # ratio decides on the samples it flags
+        norms = np.prod(np.linalg.norm(A, axis=1), axis=1)
+        had = np.abs(np.linalg.det(A)) / np.where(norms > 0.0, norms, np.inf)
+        cand = np.flatnonzero(~(had > SINGULAR_ACTUATION))
+    else:
+        cand = np.arange(A.shape[0])
+    ratio = np.ones(A.shape[0])
+    if cand.size and A.shape[1] and A.shape[2]:
+        sv = np.linalg.svd(A[cand], compute_uv=False)
+        ratio[cand] = sv[:, -1] / np.maximum(sv[:, 0], 1e-300)
     bad = np.flatnonzero(~(ratio > SINGULAR_ACTUATION))
     if bad.size:
         s = int(bad[0])
@@ -474,8 +485,9 @@ class _CutRoute:
         sum_j (J_c,j - J_p,j)^T C_j lambda_j = Q + Q_f - E_a u
 
     (``J_c,j``, ``J_p,j`` the child's and parent's twist Jacobians, ``E_a u`` the actuator
-    efforts on their coordinates) give the ``lambda`` by QR (least squares; consistent where
-    the efforts come from Eq. 3); every tree joint's wrench then follows leaves first,
+    efforts on their coordinates) give the ``lambda`` by least squares (normal equations; the
+    system is consistent where the efforts come from Eq. 3; its full column rank is checked by
+    QR on three samples); every tree joint's wrench then follows leaves first,
     ``W_tree(b) = W_b + sum_children W_tree(child) - (cut wrenches on b)``. When the columns are
     rank deficient (an over-constrained mechanism) ``full_rank`` is false and the dense
     equations decide."""
@@ -485,8 +497,11 @@ class _CutRoute:
         St = np.swapaxes(S, 1, 2)  # (n, 6, nq)
         anc = model.ancestors.astype(float)
 
-        def Jb(b: int) -> Array:
-            return St * anc[b][None, None, :] if b >= 0 else 0.0
+        def rel(c: int, p: int) -> Array:
+            """``J_c - J_p`` (n, 6, nq): the coordinates that move the child and not the parent, less
+            those that move the parent and not the child."""
+            mask = (anc[c] if c >= 0 else 0.0) - (anc[p] if p >= 0 else 0.0)
+            return St * np.asarray(mask)[None, None, :] if np.ndim(mask) else np.zeros_like(St)
 
         self.cut = []
         cols = []
@@ -495,7 +510,7 @@ class _CutRoute:
             if coords[0] >= 0:
                 continue
             c, p = model.joint_child[j], model.joint_parent[j]
-            Jrel = np.broadcast_to(Jb(c) - Jb(p), (n, 6, model.nq))
+            Jrel = rel(c, p)
             if model.joint_type[j] == sph:
                 # three forces through the centre: [o x e_i; e_i] (T's rotations all pass through o)
                 o = _centre(T)
@@ -511,11 +526,11 @@ class _CutRoute:
             Tc = np.swapaxes(T, 1, 2)
             D = Tc @ np.linalg.inv(T @ Tc)
             self.cut.append((j, C, D, Jrel))
-            cols.append(np.einsum("nkc,nkl->ncl", Jrel, C))
+            cols.append(np.swapaxes(Jrel, 1, 2) @ C)
         for j in range(len(model.joint_names)):  # fixed cut joints have no free twist: no block
             if model.joint_cut[j] and not any(j == c[0] for c in self.cut):
                 c, p = model.joint_child[j], model.joint_parent[j]
-                Jrel = np.broadcast_to(Jb(c) - Jb(p), (n, 6, model.nq))
+                Jrel = rel(c, p)
                 C = np.broadcast_to(np.eye(6), (n, 6, 6))
                 self.cut.append((j, C, np.zeros((n, 6, 0)), Jrel))
                 cols.append(np.einsum("nkc,nkl->ncl", Jrel, C))
@@ -523,17 +538,25 @@ class _CutRoute:
         if self.A.shape[2] > self.A.shape[1]:
             self.full_rank = False
             return
-        self.Qm, self.R = np.linalg.qr(self.A)
-        d = np.abs(np.diagonal(self.R, axis1=1, axis2=2)) if self.A.shape[2] else np.ones((n, 1))
-        colmax = np.abs(self.A).max(axis=1).max(axis=1) if self.A.shape[2] else np.ones(n)
-        self.full_rank = bool(np.all(d > rtol * 1e2 * np.maximum(colmax[:, None], 1e-300)))
+        # the rank is the topology's: checked by QR on the first, middle and last samples;
+        # the solve is by the normal equations (A^T A is small and, with full column rank, SPD)
+        some = np.unique([0, n // 2, n - 1])
+        if self.A.shape[2]:
+            _, R = np.linalg.qr(self.A[some])
+            d = np.abs(np.diagonal(R, axis1=1, axis2=2))
+            colmax = np.abs(self.A[some]).max(axis=(1, 2))
+            self.full_rank = bool(np.all(d > rtol * 1e2 * np.maximum(colmax[:, None], 1e-300)))
+            self.At = np.swapaxes(self.A, 1, 2)
+            self.AtA = self.At @ self.A
+        else:
+            self.full_rank = True
 
     def solve(self, model: MechanismModel, W: Array, Qtot: Array, eff: Array, F: dict | None) -> Array:
         n = W.shape[0]
         nj = len(model.joint_names)
         rhs = Qtot - eff
         if self.A.shape[2]:
-            lam = np.linalg.solve(self.R, np.einsum("nck,nc->nk", self.Qm, rhs)[..., None])[..., 0]
+            lam = np.linalg.solve(self.AtA, self.At @ rhs[..., None])[..., 0]
         else:
             lam = np.zeros((n, 0))
         z = np.zeros((n, nj, 6))
