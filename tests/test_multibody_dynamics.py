@@ -574,3 +574,16 @@ def test_hip_description_reproduces_the_closed_form_with_joint_friction(seed):
            + coulomb_viscous(theta_dot, f.screw_coulomb, f.screw_viscous, f.eps_w, vector=False))
     assert _rel(tau, ref.tau) < 1e-9
     assert _power_error(m, r) < 1e-9
+
+
+@pytest.mark.parametrize("name", ["bennett", "rrr3", "sarrus", "four_bar_cut_b"])
+def test_compliance_in_cut_unknowns_equals_the_dense_equations(name):
+    """Over-constrained: least complementary energy written in the cut joints' unknowns and in
+    every joint wrench give the same reactions."""
+    m, kin = _kin(_with_sections(ALL[name]()), n=20)
+    a = joint_reactions(m, kin)
+    b = joint_reactions(m, kin, solver="dense")
+    assert a.method == b.method == "compliance" and a.self_stress == b.self_stress == m.topology.overconstraints
+    fs = max(np.abs(b.joint_force).max(), 1.0)
+    assert np.abs(a.joint_force - b.joint_force).max() <= 1e-9 * fs
+    assert np.abs(a.joint_moment - b.joint_moment).max() <= 1e-9 * fs * max(m.length_scale, 1.0)

@@ -381,14 +381,19 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     scale = _column_scale(model)
     k = 6 * len(model.joint_names)
     cuts = None if solver == "dense" else _CutRoute(model, S, blocks, rtol)
+    over = cuts is not None and not cuts.full_rank and model.topology is not None and \
+        model.topology.overconstraints > 0 and cuts.A.shape[2] > 0
     A = None
-    if cuts is None or not cuts.full_rank:
+    if over:  # compliance in the cut joints' unknowns (no dense SVD)
+        r = -1
+    elif cuts is None or not cuts.full_rank:
+        cuts = None
         A = equilibrium_matrix(model, blocks)
         U, sv, Vt = np.linalg.svd(A * scale[None, None, :], full_matrices=False)
         ranks = (sv > rtol * sv[:, :1]).sum(axis=1)
         r = int(ranks.min())
         cuts = None
-    else:
+    elif cuts is not None:
         r = k
     fr = JointFriction(model, kin, S, blocks) if friction and fr_any(model) else None
     F: dict | None = fr.initial() if fr is not None else None
@@ -404,14 +409,21 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
         eff = np.zeros((n, model.nq))
         eff[:, model.act_coord] = u
         b = equilibrium_rhs(model, blocks, W, eff, F)
-        if cuts is not None:
+        if over:
+            from .reactions import compliant_reactions
+
+            z0, Z = cuts.affine(model, W, F)
+            z, t = compliant_reactions(model, kin, cuts.A, (Q if Qf is None else Q + Qf) - eff, -1, W,
+                                       affine=(z0, Z))
+            method = "compliance"
+        elif cuts is not None:
             z = cuts.solve(model, W, Q if Qf is None else Q + Qf, eff, F)
             method, t = "rigid", 0
         elif r < k:
             from .reactions import compliant_reactions
 
-            z = compliant_reactions(model, kin, A, b, r, W)
-            method, t = "compliance", k - r
+            z, t = compliant_reactions(model, kin, A, b, r, W)
+            method = "compliance"
         else:
             coef = np.einsum("nmr,nm->nr", U, b) / sv
             z = np.einsum("nrk,nr->nk", Vt, coef) * scale[None, :]
@@ -552,22 +564,29 @@ class _CutRoute:
             self.full_rank = True
 
     def solve(self, model: MechanismModel, W: Array, Qtot: Array, eff: Array, F: dict | None) -> Array:
+        """Every joint wrench ``z (n, 6 nj)`` (full column rank)."""
         n = W.shape[0]
-        nj = len(model.joint_names)
         rhs = Qtot - eff
         if self.A.shape[2]:
             lam = np.linalg.solve(self.AtA, self.At @ rhs[..., None])[..., 0]
         else:
             lam = np.zeros((n, 0))
+        return self.assemble(model, W, lam, F)
+
+    def assemble(self, model: MechanismModel, W: Array, lam: Array, F: dict | None) -> Array:
+        """Every joint wrench ``z (n, 6 nj)`` from the cut joints' ``lam (n, K)``: the cut wrenches,
+        then the tree joints' leaves first (linear in ``W``, ``lam`` and ``F`` together)."""
+        n = W.shape[0]
+        nj = len(model.joint_names)
         z = np.zeros((n, nj, 6))
         pos = 0
         onbody = np.zeros((n, model.nb, 6))  # sum of cut wrenches acting on each body
         for j, C, D, _ in self.cut:
             m_ = C.shape[2]
-            Wc = np.einsum("nkl,nl->nk", C, lam[:, pos:pos + m_])
+            Wc = (C @ lam[:, pos:pos + m_, None])[..., 0]
             pos += m_
             if F is not None and j in F and D.shape[2]:
-                Wc = Wc - np.einsum("nkf,nf->nk", D, F[j])
+                Wc = Wc - (D @ F[j][..., None])[..., 0]
             z[:, j] = Wc
             if model.joint_child[j] >= 0:
                 onbody[:, model.joint_child[j]] += Wc
@@ -581,6 +600,19 @@ class _CutRoute:
             k = model.body_joint[b]
             z[:, k] = -Wt[:, b] if model.joint_flipped[k] else Wt[:, b]
         return z.reshape(n, -1)
+
+    def affine(self, model: MechanismModel, W: Array, F: dict | None) -> tuple[Array, Array]:
+        """``z = z0 + Z lam``: ``z0 (n, 6 nj)`` (the loads and friction, ``lam = 0``) and
+        ``Z (n, 6 nj, K)`` (one column per cut-wrench component)."""
+        n, K = W.shape[0], self.A.shape[2]
+        z0 = self.assemble(model, W, np.zeros((n, K)), F)
+        zero = np.zeros_like(W)
+        Z = np.empty((n, z0.shape[1], K))
+        for col in range(K):
+            e = np.zeros((n, K))
+            e[:, col] = 1.0
+            Z[:, :, col] = self.assemble(model, zero, e, None)
+        return z0, Z
 
 
 def fr_any(model: MechanismModel) -> bool:

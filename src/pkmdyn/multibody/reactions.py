@@ -73,19 +73,23 @@ def _parent_point(model: MechanismModel, kin: MechanismKinematics, j: int) -> Ar
 
 
 def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Array, b: Array, rank: int,
-                        W: Array | None = None) -> Array:
+                        W: Array | None = None, affine: tuple[Array, Array] | None = None) -> tuple[Array, int]:
     """Joint wrenches ``z (n, 6 nj)`` (Plücker at the origin, see :mod:`.dynamics`) solving
     ``A z = b`` with least complementary energy of the elastic bodies (module docstring).
 
     ``W`` (n, nb, 6): the required body wrenches (``b``'s first ``6 nb`` entries when omitted).
+    ``affine = (z0, Z)``: the equations are in other unknowns ``lam`` (the cut joints'
+    constraint-wrench components) with ``z = z0 + Z lam``; the energy is then written in them.
+    Returns ``z`` and the number of self-stress states.
     Raises :class:`~pkmdyn.errors.ParameterError` when the mechanism is over-constrained and
     the bodies that would decide the self-stress carry no section or material."""
-    n, _, k = A.shape
+    n = A.shape[0]
     nb, nj = model.nb, len(model.joint_names)
+    k = 6 * nj
     if W is None:
         W = b[:, : 6 * nb].reshape(n, nb, 6)
     elastic = elastic_bodies(model)
-    t = k - rank
+    t = (A.shape[2] - rank) if rank >= 0 else int(model.topology.overconstraints)
     if not elastic:
         raise ComplianceDataMissing(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no "
                                     "body carries a section and a material: the joint reactions cannot be made unique "
@@ -141,9 +145,15 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
     # the compatibility equations are homogeneous in the flexibilities: normalise them (no change
     # in the result, O(1) numbers for any modulus)
     C = C / np.abs(C).max()
-    scale = np.ones((nj, 6))
-    scale[:, :3] = model.length_scale
-    scale = scale.reshape(-1)
+    if affine is not None:
+        z0, Z = affine
+        w0 = w0 + np.einsum("nsak,nk->nsa", G, z0)
+        G = np.einsum("nsak,nkl->nsal", G, Z)
+        scale = np.ones(A.shape[2])
+    else:
+        scale = np.ones((nj, 6))
+        scale[:, :3] = model.length_scale
+        scale = scale.reshape(-1)
     try:
         res = unique_reactions(A * scale, b, G * scale, w0, C)
     except SingularityError:
@@ -151,4 +161,8 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
         raise ComplianceDataMissing(f"mechanism {model.name!r}: a self-stress state strains no elastic body; give a section "
                              f"and a material to the bodies of the over-constrained loops (without: "
                              f"{', '.join(missing[:8])}{' ...' if len(missing) > 8 else ''})") from None
-    return res.lam * scale
+    lam = res.lam * scale
+    t = int(A.shape[2] - res.rank.min())
+    if affine is not None:
+        return affine[0] + np.einsum("nkl,nl->nk", affine[1], lam), t
+    return lam, t
