@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -77,3 +79,61 @@ def generalised_batch(S, W, anc_list, Q_out):  # pragma: no cover - compiled
                 for i in range(6):
                     acc += S[s, c, i] * W[s, b, i]
                 Q_out[s, c] += acc
+
+
+@njit(cache=True)
+def square_efforts_batch(G, Q, JT, scale, had_out, u_out):  # pragma: no cover - compiled
+    """Eq. (3) with as many actuators as task coordinates: ``u_out (n, na)`` solving
+    ``J_ax^T u = G^T Q`` by LU with partial pivoting, and ``had_out (n,)`` the Hadamard ratio
+    ``|det A| / prod |a_k|`` of ``A = J_ax^T / scale`` (rows a_k; 1 orthogonal, 0 singular)."""
+    n, nq, nt = G.shape
+    na = JT.shape[2]
+    A = np.empty((nt, na))
+    r = np.empty(nt)
+    for s in range(n):
+        for t in range(nt):
+            acc = 0.0
+            for c in range(nq):
+                acc += G[s, c, t] * Q[s, c]
+            r[t] = acc
+        prod = 1.0
+        for i in range(nt):
+            nrm = 0.0
+            for j in range(na):
+                A[i, j] = JT[s, i, j] / scale[j]
+                nrm += A[i, j] * A[i, j]
+            prod *= math.sqrt(nrm)
+        det = 1.0
+        for k in range(nt):
+            piv = k
+            best = abs(A[k, k])
+            for i in range(k + 1, nt):
+                if abs(A[i, k]) > best:
+                    best = abs(A[i, k])
+                    piv = i
+            if piv != k:
+                for j in range(na):
+                    A[k, j], A[piv, j] = A[piv, j], A[k, j]
+                r[k], r[piv] = r[piv], r[k]
+                det = -det
+            d = A[k, k]
+            det *= d
+            if d == 0.0:
+                break
+            for i in range(k + 1, nt):
+                f = A[i, k] / d
+                for j in range(k, na):
+                    A[i, j] -= f * A[k, j]
+                r[i] -= f * r[k]
+        had_out[s] = abs(det) / prod if prod > 0.0 else 0.0
+        if det == 0.0 or not (had_out[s] > 0.0):
+            for j in range(na):
+                u_out[s, j] = np.nan
+            continue
+        for k in range(nt - 1, -1, -1):
+            acc = r[k]
+            for j in range(k + 1, na):
+                acc -= A[k, j] * u_out[s, j]
+            u_out[s, k] = acc / A[k, k]
+        for j in range(na):
+            u_out[s, j] /= scale[j]

@@ -124,21 +124,37 @@ def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, 
 
     Raises :class:`~pkmdyn.errors.SingularityError` naming the first sample where the
     actuator map ``J_ax`` is singular (the actuators cannot move the mechanism there)."""
-    rhs = np.einsum("nct,nc->nt", kin.G, Q) if rhs_task is None else rhs_task
     JT = np.swapaxes(kin.J_ax, 1, 2)  # (n, nt, na)
     scale = np.maximum(np.abs(JT).max(axis=(0, 1)), 1e-300)
-    A = JT / scale
-    if model.na == model.nt and model.na:
-        # cheap screen (Hadamard ratio |det A| / prod |a_k| <= 1, zero when singular); the SVD
-        # ratio decides on the samples it flags
+    u_fast = None
+    if model.na == model.nt and model.na and rhs_task is None:
+        # compiled: G^T Q, LU solve and the Hadamard ratio |det A| / prod |a_k| (<= 1, zero when
+        # singular) as a cheap screen; the SVD ratio decides on the samples it flags
+        from ._dyn_kernels import square_efforts_batch
+
+        had = np.empty(JT.shape[0])
+        u_fast = np.empty((JT.shape[0], model.na))
+        square_efforts_batch(np.ascontiguousarray(kin.G), np.ascontiguousarray(Q), np.ascontiguousarray(JT),
+                             scale, had, u_fast)
+        rhs = None
+    else:
+        rhs = (np.swapaxes(kin.G, 1, 2) @ Q[..., None])[..., 0] if rhs_task is None else rhs_task
+    if u_fast is not None:
+        cand = np.flatnonzero(~(had > SINGULAR_ACTUATION))
+        A = JT[cand] / scale
+    elif model.na == model.nt and model.na:
+        A = JT / scale
         norms = np.prod(np.linalg.norm(A, axis=1), axis=1)
         had = np.abs(np.linalg.det(A)) / np.where(norms > 0.0, norms, np.inf)
         cand = np.flatnonzero(~(had > SINGULAR_ACTUATION))
     else:
+        A = JT / scale
         cand = np.arange(A.shape[0])
-    ratio = np.ones(A.shape[0])
+    if u_fast is None:
+        A = A[cand]
+    ratio = np.ones(JT.shape[0])
     if cand.size and A.shape[1] and A.shape[2]:
-        sv = np.linalg.svd(A[cand], compute_uv=False)
+        sv = np.linalg.svd(A, compute_uv=False)
         ratio[cand] = sv[:, -1] / np.maximum(sv[:, 0], 1e-300)
     bad = np.flatnonzero(~(ratio > SINGULAR_ACTUATION))
     if bad.size:
@@ -147,6 +163,8 @@ def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, 
         raise SingularityError(f"{when}: the actuator map is singular (smallest/largest singular value "
                                f"{ratio[s]:.3g}): the actuators {', '.join(model.actuator_names)} cannot move "
                                f"mechanism {model.name!r} there")
+    if u_fast is not None:
+        return u_fast
     if model.na == model.nt:
         return np.linalg.solve(JT, rhs[..., None])[..., 0]
     return np.einsum("nat,nt->na", np.linalg.pinv(JT), rhs)
