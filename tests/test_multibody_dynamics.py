@@ -587,3 +587,11 @@ def test_compliance_in_cut_unknowns_equals_the_dense_equations(name):
     fs = max(np.abs(b.joint_force).max(), 1.0)
     assert np.abs(a.joint_force - b.joint_force).max() <= 1e-9 * fs
     assert np.abs(a.joint_moment - b.joint_moment).max() <= 1e-9 * fs * max(m.length_scale, 1.0)
+
+
+@pytest.mark.parametrize("name", sorted(ALL))
+def test_twists_from_the_solved_poses_equal_those_from_q(name):
+    from pkmdyn.multibody.dynamics import coordinate_twists
+
+    m, kin = _kin(ALL[name](), n=10)
+    assert np.abs(coordinate_twists(m, kin.q, kin) - coordinate_twists(m, kin.q)).max() < 1e-13

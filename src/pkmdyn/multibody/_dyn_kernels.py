@@ -137,3 +137,75 @@ def square_efforts_batch(G, Q, JT, scale, had_out, u_out):  # pragma: no cover -
             u_out[s, k] = acc / A[k, k]
         for j in range(na):
             u_out[s, j] /= scale[j]
+
+
+@njit(cache=True)
+def twists_from_poses(q, Rb, ob, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                      coord_sign, RP, pP, RC, pC, S_out):  # pragma: no cover - compiled
+    """World unit twists ``S_out (n, nq, 6)`` from the solved body poses ``Rb (n, nb, 3, 3)``,
+    ``ob (n, nb, 3)`` (what :func:`twists_batch` computes from ``q`` alone): a joint's last
+    coordinate turns or slides along its child frame's axis, the earlier ones along the parent
+    frame's axes turned by the coordinates before them, so only those turns need the angle."""
+    nb = body_parent.shape[0]
+    Rf = np.empty((3, 3))
+    o = np.empty(3)
+    for s in range(q.shape[0]):
+        for b in range(nb):
+            k = body_joint[b]
+            a = body_parent[b]
+            if a < 0:
+                for i in range(3):
+                    o[i] = pP[k, i]
+                    for j in range(3):
+                        Rf[i, j] = RP[k, i, j]
+            else:
+                for i in range(3):
+                    o[i] = ob[s, a, i] + Rb[s, a, i, 0] * pP[k, 0] + Rb[s, a, i, 1] * pP[k, 1] + Rb[s, a, i, 2] * pP[k, 2]
+                    for j in range(3):
+                        Rf[i, j] = Rb[s, a, i, 0] * RP[k, 0, j] + Rb[s, a, i, 1] * RP[k, 1, j] + Rb[s, a, i, 2] * RP[k, 2, j]
+            last = joint_q0[k] + joint_nq[k] - 1
+            for c in range(joint_q0[k], last + 1):
+                m = coord_motion[c]
+                sg = coord_sign[c]
+                if c == last:
+                    # the child frame: Rc = Rb RC, origin oc = ob + Rb pC
+                    mm = m % 3
+                    a0 = Rb[s, b, 0, 0] * RC[k, 0, mm] + Rb[s, b, 0, 1] * RC[k, 1, mm] + Rb[s, b, 0, 2] * RC[k, 2, mm]
+                    a1 = Rb[s, b, 1, 0] * RC[k, 0, mm] + Rb[s, b, 1, 1] * RC[k, 1, mm] + Rb[s, b, 1, 2] * RC[k, 2, mm]
+                    a2 = Rb[s, b, 2, 0] * RC[k, 0, mm] + Rb[s, b, 2, 1] * RC[k, 1, mm] + Rb[s, b, 2, 2] * RC[k, 2, mm]
+                    if m < 3:
+                        c0 = ob[s, b, 0] + Rb[s, b, 0, 0] * pC[k, 0] + Rb[s, b, 0, 1] * pC[k, 1] + Rb[s, b, 0, 2] * pC[k, 2]
+                        c1 = ob[s, b, 1] + Rb[s, b, 1, 0] * pC[k, 0] + Rb[s, b, 1, 1] * pC[k, 1] + Rb[s, b, 1, 2] * pC[k, 2]
+                        c2 = ob[s, b, 2] + Rb[s, b, 2, 0] * pC[k, 0] + Rb[s, b, 2, 1] * pC[k, 1] + Rb[s, b, 2, 2] * pC[k, 2]
+                        S_out[s, c, 0], S_out[s, c, 1], S_out[s, c, 2] = sg * a0, sg * a1, sg * a2
+                        S_out[s, c, 3] = sg * (c1 * a2 - c2 * a1)
+                        S_out[s, c, 4] = sg * (c2 * a0 - c0 * a2)
+                        S_out[s, c, 5] = sg * (c0 * a1 - c1 * a0)
+                    else:
+                        S_out[s, c, 0] = 0.0
+                        S_out[s, c, 1] = 0.0
+                        S_out[s, c, 2] = 0.0
+                        S_out[s, c, 3], S_out[s, c, 4], S_out[s, c, 5] = sg * a0, sg * a1, sg * a2
+                    continue
+                qc = sg * (q[s, c] - coord_offset[c])
+                if m < 3:
+                    a0, a1, a2 = Rf[0, m], Rf[1, m], Rf[2, m]
+                    S_out[s, c, 0], S_out[s, c, 1], S_out[s, c, 2] = sg * a0, sg * a1, sg * a2
+                    S_out[s, c, 3] = sg * (o[1] * a2 - o[2] * a1)
+                    S_out[s, c, 4] = sg * (o[2] * a0 - o[0] * a2)
+                    S_out[s, c, 5] = sg * (o[0] * a1 - o[1] * a0)
+                    cq, sq = math.cos(qc), math.sin(qc)
+                    i1, j1 = (m + 1) % 3, (m + 2) % 3
+                    for r in range(3):
+                        ci, cj = Rf[r, i1], Rf[r, j1]
+                        Rf[r, i1] = cq * ci + sq * cj
+                        Rf[r, j1] = -sq * ci + cq * cj
+                else:
+                    a0, a1, a2 = Rf[0, m - 3], Rf[1, m - 3], Rf[2, m - 3]
+                    S_out[s, c, 0] = 0.0
+                    S_out[s, c, 1] = 0.0
+                    S_out[s, c, 2] = 0.0
+                    S_out[s, c, 3], S_out[s, c, 4], S_out[s, c, 5] = sg * a0, sg * a1, sg * a2
+                    o[0] += a0 * qc
+                    o[1] += a1 * qc
+                    o[2] += a2 * qc

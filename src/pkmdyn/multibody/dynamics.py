@@ -70,12 +70,19 @@ def _cross(a: Array, b: Array) -> Array:
     return np.cross(a, b)
 
 
-def coordinate_twists(model: MechanismModel, q: Array) -> Array:
-    """World unit twists ``S (n, nq, 6)`` ``[w; v_O]`` of every tree coordinate at ``q (n, nq)``."""
-    from ._dyn_kernels import twists_batch
+def coordinate_twists(model: MechanismModel, q: Array, kin: MechanismKinematics | None = None) -> Array:
+    """World unit twists ``S (n, nq, 6)`` ``[w; v_O]`` of every tree coordinate at ``q (n, nq)``;
+    from the solved body poses of ``kin`` when given (fewer angles to turn; same values)."""
+    from ._dyn_kernels import twists_batch, twists_from_poses
 
     q = np.ascontiguousarray(np.atleast_2d(np.asarray(q, dtype=float)))
     S = np.empty((q.shape[0], model.nq, 6))
+    if kin is not None:
+        twists_from_poses(q, np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.origin), model.body_parent,
+                          model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion, model.coord_offset,
+                          model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,
+                          model.tree_p_child, S)
+        return S
     twists_batch(q, model.body_parent, model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion,
                  model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,
                  model.tree_p_child, S)
@@ -238,7 +245,7 @@ def inverse_dynamics(model: MechanismModel, kin: MechanismKinematics, loads: dic
     ``idle="dynamic"`` (default) first gives the idle freedoms the accelerations of their own
     dynamics (:func:`idle_dynamics`), so that every body's balance can be met;
     ``idle="held"`` keeps the kinematics' (the efforts then balance the held motion's energy)."""
-    S = coordinate_twists(model, kin.q)
+    S = coordinate_twists(model, kin.q, kin)
     if idle == "dynamic":
         kin = idle_dynamics(model, kin, S, loads)
     elif idle != "held":
@@ -393,7 +400,7 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     if solver not in ("auto", "dense"):
         raise ParameterError(f"solver: {solver!r} is not 'auto' or 'dense'")
 
-    S = coordinate_twists(model, kin.q)
+    S = coordinate_twists(model, kin.q, kin)
     n = len(kin)
     blocks = free_blocks(model, kin, S)
     scale = _column_scale(model)
