@@ -595,3 +595,20 @@ def test_twists_from_the_solved_poses_equal_those_from_q(name):
 
     m, kin = _kin(ALL[name](), n=10)
     assert np.abs(coordinate_twists(m, kin.q, kin) - coordinate_twists(m, kin.q)).max() < 1e-13
+
+
+def test_run_without_sections_writes_minimum_norm_reactions_flagged(tmp_path):
+    """An over-constrained description without sections: the run writes reactions that balance
+    every body (minimum norm), flagged as not unique in summary.json."""
+    import json
+
+    from pkmdyn.cli import main
+
+    src = tmp_path / "bennett.toml"
+    src.write_text(_toml(ex.builtin_dict("bennett")))
+    out = tmp_path / "out"
+    assert main(["run", "--machine", str(src), "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["reactions"]["method"] == "minimum-norm" and s["reactions"]["unique"] is False
+    assert "section" in s["reactions"]["reason"]
+    _balance_from_files(out)

@@ -379,7 +379,8 @@ class JointReactions:
 
 def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
                     rtol: float = 1e-10, friction: bool = True, tol: float = 1e-11,
-                    max_iter: int = 100, solver: str = "auto") -> JointReactions:
+                    max_iter: int = 100, solver: str = "auto", overconstrained: str = "compliance"
+                    ) -> JointReactions:
     """Actuator efforts (Eq. 3) and every joint reaction (module docstring), with the joints'
     friction (:mod:`.friction`) when the description gives any and ``friction`` is true.
 
@@ -394,11 +395,19 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
 
     ``solver="auto"`` takes the cut-wrench route (:class:`_CutRoute`) where the cut joints'
     reactions are determined by the tree's equations, else (over-constrained) the dense
-    equations of every joint wrench; ``"dense"`` always the latter (the two agree, tested)."""
+    equations of every joint wrench; ``"dense"`` always the latter (the two agree, tested).
+    ``overconstrained="minimum-norm"``: an over-constrained mechanism's reactions are the
+    minimum-norm solution of the rigid equations (moments scaled by the length scale) instead
+    of the compliance-unique ones: they balance every body but are one choice among the
+    self-stress states (``method = "minimum-norm"``)."""
     from .friction import JointFriction, friction_diverges
 
     if solver not in ("auto", "dense"):
         raise ParameterError(f"solver: {solver!r} is not 'auto' or 'dense'")
+    if overconstrained not in ("compliance", "minimum-norm"):
+        raise ParameterError(f"overconstrained: {overconstrained!r} is not 'compliance' or 'minimum-norm'")
+    if overconstrained == "minimum-norm":
+        solver = "dense"
 
     S = coordinate_twists(model, kin.q, kin)
     n = len(kin)
@@ -444,6 +453,10 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
         elif cuts is not None:
             z = cuts.solve(model, W, Q if Qf is None else Q + Qf, eff, F)
             method, t = "rigid", 0
+        elif r < k and overconstrained == "minimum-norm":
+            coef = np.einsum("nmr,nm->nr", U[:, :, :r], b) / sv[:, :r]
+            z = np.einsum("nrk,nr->nk", Vt[:, :r], coef) * scale[None, :]
+            method, t = "minimum-norm", k - r
         elif r < k:
             from .reactions import compliant_reactions
 
@@ -678,9 +691,10 @@ def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics) -> tuple[d
     ``bodies.npz`` arrays ``joint_force``, ``joint_moment`` (n, nj, 3) (module docstring) and
     ``body_wrench`` (n, nb, 6) (Eq. 1, ``[n_O; f]``), and ``summary.json`` entries.
 
-    An over-constrained mechanism whose bodies carry no section and material gets its efforts
-    (they do not depend on the self-stress) but no reactions; the summary says why. Friction
-    that does not converge raises (nothing is written)."""
+    An over-constrained mechanism whose bodies carry no section and material gets the
+    minimum-norm reactions (they balance every body; which self-stress state is one choice),
+    flagged ``"unique": false`` with the reason in the summary. Friction that does not converge
+    raises (nothing is written)."""
     from .reactions import ComplianceDataMissing
 
     summary: dict = {}
@@ -692,10 +706,16 @@ def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics) -> tuple[d
         if k2 is not kin:  # idle accelerations made dynamic: the files carry the motion the forces balance
             npz.update(qdd=k2.qdd, wd=k2.wd, a=k2.a, origin_a=k2.origin_a, joint_point_a=k2.joint_point_a)
         summary["reactions"] = {"method": reac.method, "self_stress_states": reac.self_stress,
-                                "max_equilibrium_residual": float(reac.residual.max())}
+                                "max_equilibrium_residual": float(reac.residual.max()), "unique": True}
     except ComplianceDataMissing as exc:
-        u = inverse_dynamics(model, kin).u
-        npz = {}
-        summary["reactions"] = {"method": None, "reason": str(exc)}
+        reac = joint_reactions(model, kin, overconstrained="minimum-norm")
+        u = reac.u
+        npz = {"joint_force": reac.joint_force, "joint_moment": reac.joint_moment}
+        k2 = reac.kin
+        if k2 is not kin:
+            npz.update(qdd=k2.qdd, wd=k2.wd, a=k2.a, origin_a=k2.origin_a, joint_point_a=k2.joint_point_a)
+        summary["reactions"] = {"method": "minimum-norm", "self_stress_states": reac.self_stress,
+                                "max_equilibrium_residual": float(reac.residual.max()),
+                                "unique": False, "reason": str(exc)}
     cols = {f"{name}_effort_{effort_unit(model, i)}": u[:, i] for i, name in enumerate(model.actuator_names)}
     return cols, npz, summary
