@@ -62,7 +62,9 @@ __all__ = ["body_wrenches", "coordinate_twists", "generalised_forces", "actuator
 Array = NDArray[np.float64]
 
 #: the actuator map is singular on a sample where the smallest singular value of ``J_ax^T``
-#: (dimensionless, after scaling its columns) falls below this times the largest
+#: (dimensionless, after scaling its columns) falls below this times the largest (samples
+#: are screened first by the Hadamard ratio ``|det| / prod |rows|``, which is at most the
+#: product of those ratios, against the same bound)
 SINGULAR_ACTUATION = 1e-9
 
 
@@ -674,11 +676,6 @@ def energies(model: MechanismModel, kin: MechanismKinematics) -> tuple[Array, Ar
         "nbi,nbij,nbj->n", kin.w, Iw, kin.w)
     V = -np.einsum("b,i,nbi->n", model.mass, model.gravity, kin.p)
     return T, V
-
-
-def _check_model(model: MechanismModel) -> None:  # pragma: no cover - description validates
-    if model.na == 0:
-        raise ParameterError(f"mechanism {model.name!r}: no actuated joint")
 
 
 def effort_unit(model: MechanismModel, i: int) -> str:
