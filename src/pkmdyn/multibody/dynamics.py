@@ -61,10 +61,11 @@ __all__ = ["body_wrenches", "coordinate_twists", "generalised_forces", "actuator
 
 Array = NDArray[np.float64]
 
-#: the actuator map is singular on a sample where the smallest singular value of ``J_ax^T``
-#: (dimensionless, after scaling its columns) falls below this times the largest (samples
-#: are screened first by the Hadamard ratio ``|det| / prod |rows|``, which is at most the
-#: product of those ratios, against the same bound)
+#: the actuator map is singular on a sample where the rows of ``J_ax^T`` (columns scaled) are
+#: nearly dependent: its Hadamard ratio ``|det| / prod |rows|`` (0 singular, 1 orthogonal rows)
+#: falls below this, and the smallest singular value is below this times the largest (the
+#: SVD confirms the flagged samples; rows of very different size but independent directions
+#: are not a singularity)
 SINGULAR_ACTUATION = 1e-9
 
 
