@@ -209,3 +209,61 @@ def twists_from_poses(q, Rb, ob, body_parent, body_joint, joint_q0, joint_nq, co
                     o[0] += a0 * qc
                     o[1] += a1 * qc
                     o[2] += a2 * qc
+
+
+@njit(cache=True)
+def task_mass_batch(S, G, anc_list, R, p, mass, inertia, M_out):  # pragma: no cover - compiled
+    """``M_out (n, nt, nt) = sum_b T_b^T I_b T_b`` with ``T_b = sum_{c in anc(b)} S_c G_c``: the
+    bodies' kinetic energy in the task rates (centre-of-mass velocity ``v_O + w x p``)."""
+    n, nq, nt = G.shape
+    nb = R.shape[1]
+    T = np.empty((6, nt))
+    Iw = np.empty((3, 3))
+    tmp = np.empty((3, 3))
+    vc = np.empty((3, nt))
+    Iwt = np.empty((3, nt))
+    for s in range(n):
+        for i in range(nt):
+            for j in range(nt):
+                M_out[s, i, j] = 0.0
+        for b in range(nb):
+            for r in range(6):
+                for t in range(nt):
+                    T[r, t] = 0.0
+            for kk in range(anc_list[b, 0]):
+                c = anc_list[b, 1 + kk]
+                for r in range(6):
+                    sc = S[s, c, r]
+                    if sc != 0.0:
+                        for t in range(nt):
+                            T[r, t] += sc * G[s, c, t]
+            for t in range(nt):
+                w0, w1, w2 = T[0, t], T[1, t], T[2, t]
+                vc[0, t] = T[3, t] + w1 * p[s, b, 2] - w2 * p[s, b, 1]
+                vc[1, t] = T[4, t] + w2 * p[s, b, 0] - w0 * p[s, b, 2]
+                vc[2, t] = T[5, t] + w0 * p[s, b, 1] - w1 * p[s, b, 0]
+            for i in range(3):
+                for j in range(3):
+                    acc = 0.0
+                    for k in range(3):
+                        acc += R[s, b, i, k] * inertia[b, k, j]
+                    tmp[i, j] = acc
+            for i in range(3):
+                for j in range(3):
+                    acc = 0.0
+                    for k in range(3):
+                        acc += tmp[i, k] * R[s, b, j, k]
+                    Iw[i, j] = acc
+            for i in range(3):
+                for t in range(nt):
+                    Iwt[i, t] = Iw[i, 0] * T[0, t] + Iw[i, 1] * T[1, t] + Iw[i, 2] * T[2, t]
+            m = mass[b]
+            for i in range(nt):
+                for j in range(nt):
+                    M_out[s, i, j] += m * (vc[0, i] * vc[0, j] + vc[1, i] * vc[1, j] + vc[2, i] * vc[2, j]) + (
+                        T[0, i] * Iwt[0, j] + T[1, i] * Iwt[1, j] + T[2, i] * Iwt[2, j])
+        for i in range(nt):
+            for j in range(i + 1, nt):
+                v = 0.5 * (M_out[s, i, j] + M_out[s, j, i])
+                M_out[s, i, j] = v
+                M_out[s, j, i] = v

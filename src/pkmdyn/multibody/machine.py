@@ -69,17 +69,30 @@ class MechanismVerbs:
             raise ParameterError("a described mechanism takes its loads from the description ([[loads]]); "
                                  "load must be None")
 
-    def _twists(self, model: MechanismModel, kin: MechanismKinematics) -> tuple[Array, Array]:
-        S = coordinate_twists(model, kin.q)
-        T = np.einsum("bc,nck,nct->nbkt", model.ancestors.astype(float), S, kin.G)  # (n, nb, 6, nt)
-        return S, T
+    def _state_one(self, model: MechanismModel, x: Array, xd: Array) -> MechanismKinematics:
+        """One sample's kinematics straight from the compiled solver, warm-started (the checked,
+        bridging route when that solve does not converge or nothing is known yet)."""
+        from . import _kernels as K
+        from .kinematics import _assemble, _run
 
-    def _mass(self, model: MechanismModel, kin: MechanismKinematics, T: Array) -> Array:
-        w, vO = T[:, :, :3], T[:, :, 3:]
-        vc = vO + np.cross(w, kin.p[:, :, :, None], axis=2)
-        Iw = np.einsum("nbij,bjk,nblk->nbil", kin.R, model.inertia, kin.R)
-        M = np.einsum("b,nbiz,nbiy->nzy", model.mass, vc, vc) + np.einsum("nbiz,nbij,nbjy->nzy", w, Iw, w)
-        return 0.5 * (M + np.swapaxes(M, 1, 2))
+        if self._q_last is None or model is not self.model:
+            return self._kin(model, x[None], xd[None])
+        x1 = np.ascontiguousarray(x, dtype=float).reshape(1, -1)
+        xd1 = np.ascontiguousarray(xd, dtype=float).reshape(1, -1)
+        zero = np.zeros_like(x1)
+        out = _run(model, x1, xd1, zero, self._q_last)
+        if out["status"][0] != K.OK or not (np.all(np.isfinite(x1)) and np.all(np.isfinite(xd1))):
+            return self._kin(model, x1, xd1)
+        self._q_last = out["q"][0].copy()
+        return _assemble(model, None, x1, xd1, zero, out)
+
+    def _mass(self, model: MechanismModel, kin: MechanismKinematics, S: Array) -> Array:
+        from ._dyn_kernels import task_mass_batch
+
+        M = np.empty((len(kin), model.nt, model.nt))
+        task_mass_batch(np.ascontiguousarray(S), np.ascontiguousarray(kin.G), model.ancestor_list,
+                        np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.p), model.mass, model.inertia, M)
+        return M
 
     def _bias(self, model: MechanismModel, kin: MechanismKinematics, S: Array) -> Array:
         if _load_dependent(model):
@@ -99,7 +112,7 @@ class MechanismVerbs:
         """``M(x) (n, nt, nt)``."""
         x = self._x(q)
         kin = self._kin(model, x)
-        return self._mass(model, kin, self._twists(model, kin)[1])
+        return self._mass(model, kin, coordinate_twists(model, kin.q, kin))
 
     def actuator_map(self, model: MechanismModel, q: Array) -> Array:
         """``B(x) = J_ax^T (n, nt, na)``."""
@@ -111,13 +124,16 @@ class MechanismVerbs:
         self._check_load(load)
         x = self._x(q)
         kin = self._kin(model, x, self._x(qd, "qd"))
-        return self._bias(model, kin, coordinate_twists(model, kin.q))
+        return self._bias(model, kin, coordinate_twists(model, kin.q, kin))
 
-    def _all(self, model: MechanismModel, q: Array, qd: Array) -> tuple[Array, Array, Array, MechanismKinematics]:
-        x = self._x(q)
-        kin = self._kin(model, x, self._x(qd, "qd"))
-        S, T = self._twists(model, kin)
-        return self._mass(model, kin, T), self._bias(model, kin, S), np.swapaxes(kin.J_ax, 1, 2), kin
+    def _all(self, model: MechanismModel, q: Array, qd: Array, one: bool = False
+             ) -> tuple[Array, Array, Array, MechanismKinematics]:
+        if one:
+            kin = self._state_one(model, np.asarray(q, dtype=float), np.asarray(qd, dtype=float))
+        else:
+            kin = self._kin(model, self._x(q), self._x(qd, "qd"))
+        S = coordinate_twists(model, kin.q, kin)
+        return self._mass(model, kin, S), self._bias(model, kin, S), np.swapaxes(kin.J_ax, 1, 2), kin
 
     def inverse_dynamics(self, model: MechanismModel, q: Array, qd: Array, qdd: Array,
                          load: Array | None = None) -> Array:
@@ -138,13 +154,19 @@ class MechanismVerbs:
 
     def inverse_dynamics_one(self, model: MechanismModel, q: Array, qd: Array, qdd: Array,
                              load: float | None = None) -> Array:
-        return self.inverse_dynamics(model, np.asarray(q)[None], np.asarray(qd)[None], np.asarray(qdd)[None],
-                                     None if not load else np.array([load]))[0]
+        """One sample of :meth:`inverse_dynamics` (the single-sample path: the compiled solver
+        warm-started from the previous call, no batch checks)."""
+        self._check_load(load)
+        M, h, B, kin = self._all(model, q, qd, one=True)
+        rhs = M[0] @ np.asarray(qdd, dtype=float) + h[0]
+        return actuator_efforts(model, kin, np.zeros((1, 0)), rhs_task=rhs[None])[0]
 
     def forward_dynamics_one(self, model: MechanismModel, q: Array, qd: Array, u: Array,
                              load: float | None = None) -> Array:
-        return self.forward_dynamics(model, np.asarray(q)[None], np.asarray(qd)[None], np.asarray(u)[None],
-                                     None if not load else np.array([load]))[0]
+        """One sample of :meth:`forward_dynamics` (the single-sample path)."""
+        self._check_load(load)
+        M, h, B, _ = self._all(model, q, qd, one=True)
+        return np.linalg.solve(M[0], B[0] @ np.asarray(u, dtype=float) - h[0])
 
 
 def machine_verbs(model: MechanismModel) -> MechanismVerbs:
