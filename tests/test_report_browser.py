@@ -99,7 +99,7 @@ def _distinct(img: np.ndarray) -> int:
 
 @pytest.mark.parametrize("which, n_plots, n_images, parameters", [
     ("hip", 11, 5, "[geometry]"), ("pdm", 9, 5, "[geometry]"), ("hip_control", 2, 2, "[geometry]"),
-    ("stewart", 3, 0, "[[legs.joints]]")])
+    ("stewart", 4, 0, "[[legs.joints]]")])
 def test_report_draws_moves_and_shows_every_plot(browser, reports, tmp_path, which, n_plots, n_images, parameters):
     page = _Page(browser, reports[which])
     try:

@@ -353,11 +353,19 @@ def _lag(ref: np.ndarray, meas: np.ndarray, T: float, max_shift: int) -> float:
     return (d + frac) * T
 
 
-def _joint_names(setup: _Setup) -> tuple[list[str], float, str, str, str]:
-    """Actuator names in the columns, the scale to their file unit and the units of s, rate, acc."""
+def _joint_columns(setup: _Setup) -> list[tuple[str, float, str, str, str]]:
+    """Per actuator: its name in the columns, the scale to its file unit and the units of its
+    displacement, rate and acceleration (a described mechanism: its actuated joints in SI, m or
+    rad by the effort's unit)."""
     if setup.machine == "hip":
-        return [f"motor{a + 1}" for a in range(3)], 1.0, "rad", "rad_s", "rad_s2"
-    return list(PDM_LIMBS), 1e3, "mm", "mm_s", "mm_s2"
+        return [(f"motor{a + 1}", 1.0, "rad", "rad_s", "rad_s2") for a in range(3)]
+    if setup.machine == "pdm":
+        return [(n, 1e3, "mm", "mm_s", "mm_s2") for n in PDM_LIMBS]
+    out = []
+    for act in setup.verbs.ACTUATORS:
+        units = ("m", "m_s", "m_s2") if act.endswith("_N") else ("rad", "rad_s", "rad_s2")
+        out.append((act.rsplit("_", 1)[0], 1.0, *units))
+    return out
 
 
 def _coordinate_scale(name: str) -> tuple[str, float, str]:
@@ -380,8 +388,7 @@ def _columns(setup: _Setup, tr: Any) -> dict[str, np.ndarray]:
             cols[f"{base}_attitude_{out_unit}"] = r.q_att[:, c] * scale
     for a, name in enumerate(setup.verbs.ACTUATORS):
         cols[name] = r.u[:, a]
-    names, sc, u0, u1, u2 = _joint_names(setup)
-    for a, nm in enumerate(names):
+    for a, (nm, sc, u0, u1, u2) in enumerate(_joint_columns(setup)):
         cols[f"{nm}_ref_{u0}"] = j.s[:K, a] * sc
         cols[f"{nm}_{u0}"] = r.s[:, a] * sc
         cols[f"{nm}_enc_{u0}"] = r.s_enc[:, a] * sc
@@ -444,7 +451,7 @@ class _Summary:
             base, unit = name.split("_", 1)
             efforts[base] = {f"peak_abs_{unit}": float(self.peak[a]), "saturated_cycles": int(self.sat[a])}
         b = {k: np.concatenate(v) for k, v in self.buf.items()}
-        names = _joint_names(self.setup)[0]
+        names = [c[0] for c in _joint_columns(self.setup)]
         T = self.T
         K = b["s"].shape[0]
         max_shift = int(round(0.2 / T))

@@ -90,3 +90,93 @@ def run(machine: str, motion_path: Path | None, out_dir: Path) -> None:
         motion = default_motion(model) if entry is None else entry.default_motion()
     text = path.read_text(encoding="utf-8", errors="replace") if path is not None else ""
     run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files, description_text=text)
+
+
+#: controllers a described mechanism takes (task space, from its dynamics verbs)
+DESCRIBED_CONTROLLERS = ("feedforward", "computed-torque")
+
+
+def described_control_settings(model) -> dict:
+    """Control settings of a described mechanism (no settings file): 2 ms cycle, 1 ms plant step,
+    exact pose feedback, computed-torque gains for 5 Hz at damping 0.7 in every task coordinate,
+    effort limits far away, divergence at 0.05 m or 0.2 rad of tracking error."""
+    import numpy as np
+
+    nt, na = model.nt, model.na
+    wn, zeta = 2 * np.pi * 5.0, 0.7
+    return {
+        "timing": {"control_cycle_s": 0.002, "integration_step_s": 0.001},
+        "actuators": {"effort_limit_si": [1e9] * na},
+        "sensors": {"encoder_counts_per_turn": 1000000, "encoder_travel_per_turn_m": 0.001,
+                    "velocity_cutoff_Hz": 200.0, "acceleration_cutoff_Hz": 50.0, "pose_noise_si": [0.0] * nt,
+                    "pose_delay_cycles": 0, "pose_feedback_from_sensor": 1, "seed": 1},
+        "run": {"divergence_limit_si": [0.2 if k == 1 else 0.05 for k in model.task_kind]},
+        "mismatch": {"mass_factor": 1.0, "friction_factor": 1.0},
+        "computed-torque": {"kp_1_s2": [wn * wn] * nt, "kd_1_s": [2 * zeta * wn] * nt},
+    }
+
+
+@cli.command("control")
+@click.option("--machine", required=True, help=_MACHINE_HELP)
+@click.option("--controller", type=click.Choice(DESCRIBED_CONTROLLERS), default="computed-torque", show_default=True,
+              help="Task-space controller on the mechanism's dynamics.")
+@click.option("--duration", "duration_s", type=float, default=1.0, show_default=True,
+              help="Seconds of the machine's default motion to track.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
+              help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
+def control(machine: str, controller: str, duration_s: float, out_dir: Path) -> None:
+    """Closed-loop tracking of a described mechanism's default motion: control.csv, summary.json.
+
+    The plant is the mechanism's forward dynamics (pkmdyn.multibody.machine), the controller
+    the same model; the hip and the PDM keep pkmdyn hip control and pkmdyn pdm control."""
+    import numpy as np
+
+    from ..control import gains, hermite_motion, loop_settings
+    from ..errors import MotionError, ParameterError
+    from ..io import check_output_dir
+    from ..machines.registry import resolve
+    from ..multibody import default_motion
+    from ..multibody.machine import machine_verbs
+    from .control import _Setup, _stream
+
+    entry, path = resolve(machine)
+    if entry is not None:
+        raise ParameterError(f"--machine {machine}: a hand-built machine; its closed loop is pkmdyn {machine} control")
+    inputs = {"--machine": path}
+    check_output_dir(out_dir, inputs)
+    model, _ = _load(machine)
+    motion = default_motion(model)
+    if not (np.isfinite(duration_s) and 0.0 < duration_s <= float(motion.t[-1] - motion.t[0])):
+        raise MotionError(f"--duration: {duration_s:g} s must be > 0 and at most the default motion's "
+                          f"{float(motion.t[-1] - motion.t[0]):g} s")
+    settings = described_control_settings(model)
+    verbs = machine_verbs(model)
+    fn = hermite_motion(motion.t, motion.x, motion.xd, motion.xdd, None)
+    setup = _Setup(model.name, verbs, model, model, fn, duration_s, False, str(path), "the controller's model",
+                   "the default motion", span_s=float(motion.t[-1] - motion.t[0]))
+    _stream(setup, controller, gains(settings, controller, model.nt), loop_settings(settings), settings, out_dir,
+            False, None, inputs, "csv", html_report=False)
+
+
+@cli.command("export")
+@click.option("--machine", required=True, help=_MACHINE_HELP)
+@click.option("--format", "fmt", type=click.Choice(["mjcf"]), required=True,
+              help="mjcf: a MuJoCo model (the spanning tree; spherical, revolute and fixed cut joints as "
+                   "equality constraints; motors on the actuated joints; no friction, no loads).")
+@click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
+              help="File to write (e.g. machine.xml).")
+def export(machine: str, fmt: str, out_path: Path) -> None:
+    """Write a described mechanism in another engine's format; the file is written only when the
+    whole model can be written (a cut joint MuJoCo cannot express is an error naming it)."""
+    from ..io import atomic_file, check_output_file
+    from ..machines.registry import resolve
+    from ..multibody.mjcf import mechanism_mjcf
+
+    entry, path = resolve(machine)
+    inputs = {"--machine": path}
+    check_output_file(out_path, inputs)
+    model, _ = _load(machine)
+    text = mechanism_mjcf(model)
+    with atomic_file(out_path, inputs=inputs) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+        click.echo(f"{fmt}: {out_path}")

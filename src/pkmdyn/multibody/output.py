@@ -139,10 +139,17 @@ def _write_report(out: Path, model: MechanismModel, files: dict[str, Path], cols
     t = cols["t_s"]
     pos, _, _ = task_columns(model)
     plots = [TimePlot("Task coordinates", "task coordinate [m or rad]", t, tuple(Curve(c, cols[c]) for c in pos))]
-    for kind, label in (("pos", "actuator coordinates"), ("vel", "actuator rates")):
+    for kind, label in (("pos", "actuator coordinates"), ("vel", "actuator rates"), ("effort", "actuator efforts")):
         names = [c for c in cols if f"_{kind}_" in c]
-        plots.append(TimePlot(label.capitalize(), f"{label} [SI]", t, tuple(Curve(c, cols[c]) for c in names)))
-    return write_report(out, title=f"{model.name}: pkmdyn run", scene=scene_from_files(files["model"], files["bodies"]),
+        if names:
+            plots.append(TimePlot(label.capitalize(), f"{label} [SI]", t, tuple(Curve(c, cols[c]) for c in names)))
+    efforts = {}
+    for name in model.actuator_names:
+        col = next((c for c in cols if c.startswith(f"{name}_effort_")), None)
+        if col is not None:
+            efforts[name] = (cols[col], f"{name} effort", col.rsplit("_effort_", 1)[1])
+    scene = scene_from_files(files["model"], files["bodies"], actuated=efforts or None)
+    return write_report(out, title=f"{model.name}: pkmdyn run", scene=scene,
                         plots=plots, summary=summary, parameters=description_text,
                         notes=[f"mechanism: {model.name}" + (f" ({model.source})" if model.source else "")],
                         scene_note="Joint centres as in bodies.npz (joint_point); actuated joints drawn as chains.")
@@ -155,16 +162,22 @@ def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path
     nothing is written when anything fails), with ``report.html`` (``description_text``: the
     description file's text, shown on the page). ``report`` is called with the files' final
     paths before they move into place. Returns the summary with ``files`` as ``{label: path}``."""
+    from .dynamics import dynamics_outputs
+
     kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
     sm = singularity_measures(model, kin.q)
     cols = results_columns(model, kin)
     npz = bodies_arrays(model, kin)
+    dyn_cols, dyn_npz, dyn_summary = dynamics_outputs(model, kin)
+    cols.update(dyn_cols)
+    npz.update(dyn_npz)
     summary = {
         "mechanism": model.name, "samples": len(kin), "max_residual": float(kin.residual.max()),
         "min_inverse_singularity_measure": float(sm.inverse.min()),
         "min_direct_singularity_measure": None if np.isnan(sm.direct).all() else float(np.nanmin(sm.direct)),
         "min_constraint_singularity_measure": float(sm.constraint.min()),
         "topology": model.topology.as_dict() if model.topology is not None else None,
+        **dyn_summary,
     }
     final = Path(out_dir)
     with output_dir(out_dir, inputs=inputs) as out:

@@ -37,7 +37,15 @@ def _l(v: np.ndarray) -> list[float]:
 
 def hip_description(model: HipModel) -> dict[str, Any]:
     """The description (a dict in the format of ``docs/mechanism_format.md``) of ``model``."""
-    g, m = model.geometry, model.inertia
+    g, m, f = model.geometry, model.inertia, model.friction
+
+    def friction(**keys: float) -> dict[str, Any]:
+        """The joint's friction entry when any value is nonzero (Coulomb and viscous of Table 2;
+        the hip-joint and thrust-bearing law of Eq. 16 depends on the hydraulic load, which the
+        description cannot name, and the lead screws are no bodies of it)."""
+        vals = {k: float(v) for k, v in keys.items() if v}
+        return {"friction": vals} if vals else {}
+
     bodies: list[dict[str, Any]] = []
     joints: list[dict[str, Any]] = []
     inertia_platform = _l(m.I_m) + [0.0, 0.0, 0.0]
@@ -59,7 +67,9 @@ def hip_description(model: HipModel) -> dict[str, Any]:
                        "inertia_kgm2": [1e-3, 1e-3, 1e-3, 0.0, 0.0, 0.0]})
         joints.append({"name": f"P_{i + 1}", "type": "prismatic", "parent": "ground", "child": f"slider_{i + 1}",
                        "point_m": _l(g.A[i]), "axis": [0.0, 0.0, 1.0], "actuated": True,
-                       "position_at_reference_m": L2})
+                       "position_at_reference_m": L2,
+                       # one body for the module's two carriages: twice each carriage's friction
+                       **friction(coulomb_force_N=2.0 * f.slider_coulomb, viscous_N_s_m=2.0 * f.slider_viscous)})
         e = d / g.l
         t = g.t[i]
         second = np.cross(t, e)
@@ -74,9 +84,11 @@ def hip_description(model: HipModel) -> dict[str, Any]:
             bodies.append({"name": lever, "mass_kg": float(m.m_l), "com_m": _l(b + 0.5 * d),
                            "inertia_kgm2": [float(x) for x in Il6]})
             joints.append({"name": f"U_{pname}_{i + 1}", "type": "universal", "parent": f"slider_{i + 1}",
-                           "child": lever, "point_m": _l(b), "axes": [_l(t), _l(second)]})
+                           "child": lever, "point_m": _l(b), "axes": [_l(t), _l(second)],
+                           **friction(coulomb_torque_Nm=f.universal_coulomb, viscous_Nm_s_rad=f.universal_viscous)})
             joints.append({"name": f"S_{pname}_{i + 1}", "type": "spherical", "parent": lever, "child": pname,
-                           "point_m": _l(a), "axis": _l(e)})
+                           "point_m": _l(a), "axis": _l(e),
+                           **friction(coulomb_torque_Nm=f.spherical_coulomb, viscous_Nm_s_rad=f.spherical_viscous)})
     return {
         "mechanism": {"name": "hip", "source": "2(3PUS+S) hip simulator, Chen, Cheng & Pang (2022), Tables 1-2"
                       + (f"; parameters {model.source}" if getattr(model, "source", "") else ""),

@@ -10,7 +10,10 @@ prismatic joints actuated, each coordinate the limb length (fixed to moving join
 task: x, y of the platform point P and the angles alpha (about the base z axis) and gamma
 (about the platform x axis), i.e. the first two angles of the intrinsic sequence ZXY since
 ``T = Rz(alpha) Rx(gamma)`` (Eq. 3). The cut joints are the paper's, R21', R22', R32, U23
-and U24, so the nine over-constrained directions come out at R21', R22' and R32.
+and U24, so the nine over-constrained directions come out at R21', R22' and R32. The nine
+elastic links carry their sections and material (beams along their x axis, section 4.2) and
+the prismatic joints sit at the cylinders' mouths, so that the generic reactions made unique
+by compliance are the paper's (Eq. 63-83).
 """
 
 from __future__ import annotations
@@ -20,11 +23,14 @@ from typing import Any
 
 import numpy as np
 
+from .dynamics import JOINTS, joint_points
+from .inertia import ELASTIC_BODIES
 from .kinematics import BODY_NAMES, inverse_kinematics, mechanism_joints
 from .params import PdmModel
 
 __all__ = ["pdm_description", "CUT_JOINTS"]
 
+_JOINT_NAMES = [j[0] for j in JOINTS]
 CUT_JOINTS = ("R21'", "R22'", "R32", "U23", "U24")
 _TYPES = {"R": "revolute", "P": "prismatic", "S": "spherical", "U": "universal"}
 
@@ -52,11 +58,20 @@ def pdm_description(model: PdmModel, q_ref: np.ndarray | None = None) -> dict[st
         bodies.append({"name": name, "mass_kg": float(model.mass[b]), "com_m": [0.0, 0.0, 0.0],
                        "inertia_kgm2": [[float(v) for v in row] for row in I],
                        "frame_origin_m": [float(v) for v in st.p[0]], "frame_euler_deg": _xyz_deg(st.R[0])})
+        if name in ELASTIC_BODIES:  # the links of the over-constrained loops, beams along their x axis
+            bodies[-1]["section"] = {"outer_diameter_m": float(model.section_outer[b]),
+                                     "inner_diameter_m": float(model.section_inner[b]), "beam_axis": "body_x"}
+            bodies[-1]["material"] = {"youngs_modulus_Pa": float(model.youngs_modulus_Pa),
+                                      "poisson_ratio": float(model.poisson_ratio)}
+    # the prismatic joints' centres at the cylinder's mouth, 2 c1 from its fixed joint (as the
+    # reactions of .dynamics.joint_points): the node of the cylinder and piston beams
+    mouth = joint_points(model, kin)[0]
     lengths = {"P11": kin.pos.l[0, 0], "P12": kin.pos.l[0, 1], "P23": kin.pos.l[0, 2], "P24": kin.pos.l[0, 3]}
     joints = []
     for j in mechanism_joints(model, q):
+        point = mouth[_JOINT_NAMES.index(j.name)] if j.kind == "P" else j.point
         entry: dict[str, Any] = {"name": j.name, "type": _TYPES[j.kind], "parent": j.body_a, "child": j.body_b,
-                                 "point_m": [float(v) for v in j.point]}
+                                 "point_m": [float(v) for v in point]}
         if j.kind in ("R", "P"):
             entry["axis"] = [float(v) for v in j.axes[0]]
         elif j.kind == "U":

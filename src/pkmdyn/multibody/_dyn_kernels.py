@@ -1,0 +1,269 @@
+"""Compiled kernels of the dynamics (once for every mechanism, driven by the model's arrays)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ._kernels import forward_positions
+
+
+@njit(cache=True)
+def twists_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                 RP, pP, RC, pC, S_out):  # pragma: no cover - compiled
+    """World unit twists ``S_out (n, nq, 6)`` of every tree coordinate at ``q (n, nq)``."""
+    nb = body_parent.shape[0]
+    R = np.empty((nb, 3, 3))
+    p = np.empty((nb, 3))
+    w33 = np.empty((5, 3, 3))
+    w3 = np.empty((20, 3))
+    for s in range(q.shape[0]):
+        forward_positions(q[s], body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                          RP, pP, RC, pC, R, p, S_out[s], w33, w3)
+
+
+@njit(cache=True)
+def body_wrench_batch(R, w, wd, p, a, mass, inertia, gravity, W_out):  # pragma: no cover - compiled
+    """Required body wrenches ``W_out (n, nb, 6)`` ``[n_O; f]`` of Eq. (1) (no loads): per body
+    ``f = m (a - g)``, ``n_O = I_w wd + w x I_w w + p x f`` with ``I_w = R I' R^T``."""
+    n, nb = R.shape[0], R.shape[1]
+    Iw = np.empty((3, 3))
+    tmp = np.empty((3, 3))
+    for s in range(n):
+        for b in range(nb):
+            for i in range(3):
+                for j in range(3):
+                    acc = 0.0
+                    for k in range(3):
+                        acc += R[s, b, i, k] * inertia[b, k, j]
+                    tmp[i, j] = acc
+            for i in range(3):
+                for j in range(3):
+                    acc = 0.0
+                    for k in range(3):
+                        acc += tmp[i, k] * R[s, b, j, k]
+                    Iw[i, j] = acc
+            L0 = Iw[0, 0] * w[s, b, 0] + Iw[0, 1] * w[s, b, 1] + Iw[0, 2] * w[s, b, 2]
+            L1 = Iw[1, 0] * w[s, b, 0] + Iw[1, 1] * w[s, b, 1] + Iw[1, 2] * w[s, b, 2]
+            L2 = Iw[2, 0] * w[s, b, 0] + Iw[2, 1] * w[s, b, 1] + Iw[2, 2] * w[s, b, 2]
+            m = mass[b]
+            f0 = m * (a[s, b, 0] - gravity[0])
+            f1 = m * (a[s, b, 1] - gravity[1])
+            f2 = m * (a[s, b, 2] - gravity[2])
+            x0, x1, x2 = p[s, b, 0], p[s, b, 1], p[s, b, 2]
+            w0, w1, w2 = w[s, b, 0], w[s, b, 1], w[s, b, 2]
+            for i in range(3):
+                W_out[s, b, i] = Iw[i, 0] * wd[s, b, 0] + Iw[i, 1] * wd[s, b, 1] + Iw[i, 2] * wd[s, b, 2]
+            W_out[s, b, 0] += w1 * L2 - w2 * L1 + x1 * f2 - x2 * f1
+            W_out[s, b, 1] += w2 * L0 - w0 * L2 + x2 * f0 - x0 * f2
+            W_out[s, b, 2] += w0 * L1 - w1 * L0 + x0 * f1 - x1 * f0
+            W_out[s, b, 3] = f0
+            W_out[s, b, 4] = f1
+            W_out[s, b, 5] = f2
+
+
+@njit(cache=True)
+def generalised_batch(S, W, anc_list, Q_out):  # pragma: no cover - compiled
+    """``Q_out (n, nq)``, Eq. (2): ``Q_c = S_c . sum of W_b over the bodies c moves``; ``anc_list``
+    the model's ``ancestor_list`` (per body: a count, then its coordinates)."""
+    n, nb = W.shape[0], W.shape[1]
+    for s in range(n):
+        for c in range(Q_out.shape[1]):
+            Q_out[s, c] = 0.0
+        for b in range(nb):
+            for k in range(anc_list[b, 0]):
+                c = anc_list[b, 1 + k]
+                acc = 0.0
+                for i in range(6):
+                    acc += S[s, c, i] * W[s, b, i]
+                Q_out[s, c] += acc
+
+
+@njit(cache=True)
+def square_efforts_batch(G, Q, JT, scale, had_out, u_out):  # pragma: no cover - compiled
+    """Eq. (3) with as many actuators as task coordinates: ``u_out (n, na)`` solving
+    ``J_ax^T u = G^T Q`` by LU with partial pivoting, and ``had_out (n,)`` the Hadamard ratio
+    ``|det A| / prod |a_k|`` of ``A = J_ax^T / scale`` (rows a_k; 1 orthogonal, 0 singular)."""
+    n, nq, nt = G.shape
+    na = JT.shape[2]
+    A = np.empty((nt, na))
+    r = np.empty(nt)
+    for s in range(n):
+        for t in range(nt):
+            acc = 0.0
+            for c in range(nq):
+                acc += G[s, c, t] * Q[s, c]
+            r[t] = acc
+        prod = 1.0
+        for i in range(nt):
+            nrm = 0.0
+            for j in range(na):
+                A[i, j] = JT[s, i, j] / scale[j]
+                nrm += A[i, j] * A[i, j]
+            prod *= math.sqrt(nrm)
+        det = 1.0
+        for k in range(nt):
+            piv = k
+            best = abs(A[k, k])
+            for i in range(k + 1, nt):
+                if abs(A[i, k]) > best:
+                    best = abs(A[i, k])
+                    piv = i
+            if piv != k:
+                for j in range(na):
+                    A[k, j], A[piv, j] = A[piv, j], A[k, j]
+                r[k], r[piv] = r[piv], r[k]
+                det = -det
+            d = A[k, k]
+            det *= d
+            if d == 0.0:
+                break
+            for i in range(k + 1, nt):
+                f = A[i, k] / d
+                for j in range(k, na):
+                    A[i, j] -= f * A[k, j]
+                r[i] -= f * r[k]
+        had_out[s] = abs(det) / prod if prod > 0.0 else 0.0
+        if det == 0.0 or not (had_out[s] > 0.0):
+            for j in range(na):
+                u_out[s, j] = np.nan
+            continue
+        for k in range(nt - 1, -1, -1):
+            acc = r[k]
+            for j in range(k + 1, na):
+                acc -= A[k, j] * u_out[s, j]
+            u_out[s, k] = acc / A[k, k]
+        for j in range(na):
+            u_out[s, j] /= scale[j]
+
+
+@njit(cache=True)
+def twists_from_poses(q, Rb, ob, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                      coord_sign, RP, pP, RC, pC, S_out):  # pragma: no cover - compiled
+    """World unit twists ``S_out (n, nq, 6)`` from the solved body poses ``Rb (n, nb, 3, 3)``,
+    ``ob (n, nb, 3)`` (what :func:`twists_batch` computes from ``q`` alone): a joint's last
+    coordinate turns or slides along its child frame's axis, the earlier ones along the parent
+    frame's axes turned by the coordinates before them, so only those turns need the angle."""
+    nb = body_parent.shape[0]
+    Rf = np.empty((3, 3))
+    o = np.empty(3)
+    for s in range(q.shape[0]):
+        for b in range(nb):
+            k = body_joint[b]
+            a = body_parent[b]
+            if a < 0:
+                for i in range(3):
+                    o[i] = pP[k, i]
+                    for j in range(3):
+                        Rf[i, j] = RP[k, i, j]
+            else:
+                for i in range(3):
+                    o[i] = ob[s, a, i] + Rb[s, a, i, 0] * pP[k, 0] + Rb[s, a, i, 1] * pP[k, 1] + Rb[s, a, i, 2] * pP[k, 2]
+                    for j in range(3):
+                        Rf[i, j] = Rb[s, a, i, 0] * RP[k, 0, j] + Rb[s, a, i, 1] * RP[k, 1, j] + Rb[s, a, i, 2] * RP[k, 2, j]
+            last = joint_q0[k] + joint_nq[k] - 1
+            for c in range(joint_q0[k], last + 1):
+                m = coord_motion[c]
+                sg = coord_sign[c]
+                if c == last:
+                    # the child frame: Rc = Rb RC, origin oc = ob + Rb pC
+                    mm = m % 3
+                    a0 = Rb[s, b, 0, 0] * RC[k, 0, mm] + Rb[s, b, 0, 1] * RC[k, 1, mm] + Rb[s, b, 0, 2] * RC[k, 2, mm]
+                    a1 = Rb[s, b, 1, 0] * RC[k, 0, mm] + Rb[s, b, 1, 1] * RC[k, 1, mm] + Rb[s, b, 1, 2] * RC[k, 2, mm]
+                    a2 = Rb[s, b, 2, 0] * RC[k, 0, mm] + Rb[s, b, 2, 1] * RC[k, 1, mm] + Rb[s, b, 2, 2] * RC[k, 2, mm]
+                    if m < 3:
+                        c0 = ob[s, b, 0] + Rb[s, b, 0, 0] * pC[k, 0] + Rb[s, b, 0, 1] * pC[k, 1] + Rb[s, b, 0, 2] * pC[k, 2]
+                        c1 = ob[s, b, 1] + Rb[s, b, 1, 0] * pC[k, 0] + Rb[s, b, 1, 1] * pC[k, 1] + Rb[s, b, 1, 2] * pC[k, 2]
+                        c2 = ob[s, b, 2] + Rb[s, b, 2, 0] * pC[k, 0] + Rb[s, b, 2, 1] * pC[k, 1] + Rb[s, b, 2, 2] * pC[k, 2]
+                        S_out[s, c, 0], S_out[s, c, 1], S_out[s, c, 2] = sg * a0, sg * a1, sg * a2
+                        S_out[s, c, 3] = sg * (c1 * a2 - c2 * a1)
+                        S_out[s, c, 4] = sg * (c2 * a0 - c0 * a2)
+                        S_out[s, c, 5] = sg * (c0 * a1 - c1 * a0)
+                    else:
+                        S_out[s, c, 0] = 0.0
+                        S_out[s, c, 1] = 0.0
+                        S_out[s, c, 2] = 0.0
+                        S_out[s, c, 3], S_out[s, c, 4], S_out[s, c, 5] = sg * a0, sg * a1, sg * a2
+                    continue
+                qc = sg * (q[s, c] - coord_offset[c])
+                if m < 3:
+                    a0, a1, a2 = Rf[0, m], Rf[1, m], Rf[2, m]
+                    S_out[s, c, 0], S_out[s, c, 1], S_out[s, c, 2] = sg * a0, sg * a1, sg * a2
+                    S_out[s, c, 3] = sg * (o[1] * a2 - o[2] * a1)
+                    S_out[s, c, 4] = sg * (o[2] * a0 - o[0] * a2)
+                    S_out[s, c, 5] = sg * (o[0] * a1 - o[1] * a0)
+                    cq, sq = math.cos(qc), math.sin(qc)
+                    i1, j1 = (m + 1) % 3, (m + 2) % 3
+                    for r in range(3):
+                        ci, cj = Rf[r, i1], Rf[r, j1]
+                        Rf[r, i1] = cq * ci + sq * cj
+                        Rf[r, j1] = -sq * ci + cq * cj
+                else:
+                    a0, a1, a2 = Rf[0, m - 3], Rf[1, m - 3], Rf[2, m - 3]
+                    S_out[s, c, 0] = 0.0
+                    S_out[s, c, 1] = 0.0
+                    S_out[s, c, 2] = 0.0
+                    S_out[s, c, 3], S_out[s, c, 4], S_out[s, c, 5] = sg * a0, sg * a1, sg * a2
+                    o[0] += a0 * qc
+                    o[1] += a1 * qc
+                    o[2] += a2 * qc
+
+
+@njit(cache=True)
+def task_mass_batch(S, G, anc_list, R, p, mass, inertia, M_out):  # pragma: no cover - compiled
+    """``M_out (n, nt, nt) = sum_b T_b^T I_b T_b`` with ``T_b = sum_{c in anc(b)} S_c G_c``: the
+    bodies' kinetic energy in the task rates (centre-of-mass velocity ``v_O + w x p``)."""
+    n, nq, nt = G.shape
+    nb = R.shape[1]
+    T = np.empty((6, nt))
+    Iw = np.empty((3, 3))
+    tmp = np.empty((3, 3))
+    vc = np.empty((3, nt))
+    Iwt = np.empty((3, nt))
+    for s in range(n):
+        for i in range(nt):
+            for j in range(nt):
+                M_out[s, i, j] = 0.0
+        for b in range(nb):
+            for r in range(6):
+                for t in range(nt):
+                    T[r, t] = 0.0
+            for kk in range(anc_list[b, 0]):
+                c = anc_list[b, 1 + kk]
+                for r in range(6):
+                    sc = S[s, c, r]
+                    if sc != 0.0:
+                        for t in range(nt):
+                            T[r, t] += sc * G[s, c, t]
+            for t in range(nt):
+                w0, w1, w2 = T[0, t], T[1, t], T[2, t]
+                vc[0, t] = T[3, t] + w1 * p[s, b, 2] - w2 * p[s, b, 1]
+                vc[1, t] = T[4, t] + w2 * p[s, b, 0] - w0 * p[s, b, 2]
+                vc[2, t] = T[5, t] + w0 * p[s, b, 1] - w1 * p[s, b, 0]
+            for i in range(3):
+                for j in range(3):
+                    acc = 0.0
+                    for k in range(3):
+                        acc += R[s, b, i, k] * inertia[b, k, j]
+                    tmp[i, j] = acc
+            for i in range(3):
+                for j in range(3):
+                    acc = 0.0
+                    for k in range(3):
+                        acc += tmp[i, k] * R[s, b, j, k]
+                    Iw[i, j] = acc
+            for i in range(3):
+                for t in range(nt):
+                    Iwt[i, t] = Iw[i, 0] * T[0, t] + Iw[i, 1] * T[1, t] + Iw[i, 2] * T[2, t]
+            m = mass[b]
+            for i in range(nt):
+                for j in range(nt):
+                    M_out[s, i, j] += m * (vc[0, i] * vc[0, j] + vc[1, i] * vc[1, j] + vc[2, i] * vc[2, j]) + (
+                        T[0, i] * Iwt[0, j] + T[1, i] * Iwt[1, j] + T[2, i] * Iwt[2, j])
+        for i in range(nt):
+            for j in range(i + 1, nt):
+                v = 0.5 * (M_out[s, i, j] + M_out[s, j, i])
+                M_out[s, i, j] = v
+                M_out[s, j, i] = v

@@ -1,0 +1,719 @@
+"""Inverse dynamics and joint reactions of any described mechanism, batched over samples.
+
+Notation (base frame, SI). Spatial vectors are Plücker coordinates at the base origin O: a
+twist ``V = [w; v_O]`` (angular velocity, velocity of the body point at O) and a wrench
+``W = [n_O; f]`` (moment about O, force); power is ``V . W``. ``S_c`` (6,) is the unit
+twist of tree coordinate c (the kernels' ``forward_positions``), so that body b moves with
+``V_b = sum_{c in anc(b)} S_c qd_c`` (Featherstone 2008, Eq. 3.40 in world coordinates).
+
+**Required body wrench** (Newton-Euler, what the joints must supply to body b so that it
+follows the motion):
+
+    f_b   = m_b (a_b - g) - sum_loads F
+    n_O,b = I_b wd_b + w_b x I_b w_b + p_b x m_b (a_b - g) - sum_loads (M + r x F)       (1)
+
+with ``a_b, p_b`` the centre of mass's acceleration and position, ``I_b = R_b I'_b R_b^T``.
+
+**Actuator efforts** (natural orthogonal complement; Featherstone's gamma_q form,
+``IDgq``): the generalised tree forces are ``Q_c = S_c . sum_{b: c in anc(b)} W_b`` (2);
+the loop closure gives the tree rates as ``qd = G xd`` (``G`` from the kinematics), so by
+virtual work the actuator efforts ``u`` satisfy
+
+    J_ax^T u = G^T (Q + Q_f)                                                                 (3)
+
+(``J_ax = dq_a/dx``, ``Q_f`` the friction's generalised forces, zero here). With as many
+actuators as task coordinates (3) is square; a redundantly actuated mechanism takes the
+minimum-norm solution ``u = pinv(J_ax^T) G^T Q``.
+
+**Joint reactions.** Unknown: the wrench ``W_j = [n_O; f]`` (6,) that joint j's parent
+exerts on its child, every joint (tree and cut). Equations, per sample:
+
+    sum_{j: child b} W_j - sum_{j: parent b} W_j = W_b               (6 per body, Eq. 1)
+    s_j T_i . W_j = e_i          for every free twist T_i of joint j (power balance of the joint)
+
+with ``e_i`` the actuator effort of an actuated coordinate and zero otherwise (``s_j = -1``
+for a tree joint traversed from its child, whose twist is the parent's relative to the
+child). For a tree joint ``T_i = S_c``; for a cut joint the free twists are those of its
+type at its frames (rotation axes through the child frame's origin; the last elementary
+motion about the child frame's axis, the others about the parent frame's). The solution is
+unique when the mechanism is not over-constrained; otherwise ``t`` self-stress states remain
+(the null space of the matrix), which :mod:`.reactions` fixes by link compliance.
+Reported as ``joint_force`` (n, nj, 3) [N] and ``joint_moment`` (n, nj, 3) [N m] about the
+joint point (``kin.joint_point``), the PDM's schema.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import ParameterError, SingularityError
+from . import _kernels as K
+from .joint_types import JOINT_TYPES
+from .kinematics import MechanismKinematics
+from .model import MechanismModel
+
+__all__ = ["body_wrenches", "coordinate_twists", "generalised_forces", "actuator_efforts",
+           "InverseDynamics", "inverse_dynamics", "idle_dynamics", "dynamics_outputs", "effort_unit", "free_twists", "equilibrium_system",
+           "JointReactions", "joint_reactions", "energies", "SINGULAR_ACTUATION"]
+
+Array = NDArray[np.float64]
+
+#: the actuator map is singular on a sample where the rows of ``J_ax^T`` (columns scaled) are
+#: nearly dependent: its Hadamard ratio ``|det| / prod |rows|`` (0 singular, 1 orthogonal rows)
+#: falls below this, and the smallest singular value is below this times the largest (the
+#: SVD confirms the flagged samples; rows of very different size but independent directions
+#: are not a singularity)
+SINGULAR_ACTUATION = 1e-9
+
+
+def _cross(a: Array, b: Array) -> Array:
+    return np.cross(a, b)
+
+
+def coordinate_twists(model: MechanismModel, q: Array, kin: MechanismKinematics | None = None) -> Array:
+    """World unit twists ``S (n, nq, 6)`` ``[w; v_O]`` of every tree coordinate at ``q (n, nq)``;
+    from the solved body poses of ``kin`` when given (fewer angles to turn; same values)."""
+    from ._dyn_kernels import twists_batch, twists_from_poses
+
+    q = np.ascontiguousarray(np.atleast_2d(np.asarray(q, dtype=float)))
+    S = np.empty((q.shape[0], model.nq, 6))
+    if kin is not None:
+        twists_from_poses(q, np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.origin), model.body_parent,
+                          model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion, model.coord_offset,
+                          model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,
+                          model.tree_p_child, S)
+        return S
+    twists_batch(q, model.body_parent, model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion,
+                 model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,
+                 model.tree_p_child, S)
+    return S
+
+
+def body_wrenches(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None) -> Array:
+    """Required wrench ``W (n, nb, 6)`` ``[n_O; f]`` [N m, N] of every body, Eq. (1).
+
+    ``loads``: optional extra external loads per sample, ``{body name: (F (n, 3) [N],
+    M (n, 3) [N m] about the centre of mass)}``, base frame, on top of the description's
+    ``[[loads]]`` (constant, base frame, at their point)."""
+    from ._dyn_kernels import body_wrench_batch
+
+    Wr = np.empty(kin.p.shape[:2] + (6,))
+    body_wrench_batch(np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.w), np.ascontiguousarray(kin.wd),
+                      np.ascontiguousarray(kin.p), np.ascontiguousarray(kin.a), model.mass, model.inertia,
+                      model.gravity, Wr)
+    n_O, f = Wr[..., :3], Wr[..., 3:]
+    for b, F, M, pt in zip(model.load_body, model.load_force, model.load_moment, model.load_point):
+        r = kin.origin[:, b] + np.einsum("nij,j->ni", kin.R[:, b], pt)
+        f[:, b] -= F
+        n_O[:, b] -= M + _cross(r, np.broadcast_to(F, r.shape))
+    for name, (F, M) in (loads or {}).items():
+        b = model.body_index(name)
+        F = np.broadcast_to(np.asarray(F, dtype=float), f[:, b].shape)
+        M = np.broadcast_to(np.asarray(M, dtype=float), f[:, b].shape)
+        f[:, b] -= F
+        n_O[:, b] -= M + _cross(kin.p[:, b], F)
+    return Wr
+
+
+def generalised_forces(model: MechanismModel, S: Array, W: Array) -> Array:
+    """``Q (n, nq)``, Eq. (2): ``Q_c = S_c . sum of W_b over the bodies that coordinate c moves``."""
+    from ._dyn_kernels import generalised_batch
+
+    Q = np.empty(S.shape[:2])
+    generalised_batch(np.ascontiguousarray(S), np.ascontiguousarray(W), model.ancestor_list, Q)
+    return Q
+
+
+def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, rhs_task: Array | None = None
+                     ) -> Array:
+    """Efforts ``u (n, na)`` [N or N m] from the generalised tree forces ``Q (n, nq)``, Eq. (3)
+    (or from the task-space forces ``rhs_task = G^T Q (n, nt)`` when given).
+
+    Raises :class:`~pkmdyn.errors.SingularityError` naming the first sample where the
+    actuator map ``J_ax`` is singular (the actuators cannot move the mechanism there)."""
+    JT = np.swapaxes(kin.J_ax, 1, 2)  # (n, nt, na)
+    scale = np.maximum(np.abs(JT).max(axis=(0, 1)), 1e-300)
+    u_fast = None
+    if model.na == model.nt and model.na and rhs_task is None:
+        # compiled: G^T Q, LU solve and the Hadamard ratio |det A| / prod |a_k| (<= 1, zero when
+        # singular) as a cheap screen; the SVD ratio decides on the samples it flags
+        from ._dyn_kernels import square_efforts_batch
+
+        had = np.empty(JT.shape[0])
+        u_fast = np.empty((JT.shape[0], model.na))
+        square_efforts_batch(np.ascontiguousarray(kin.G), np.ascontiguousarray(Q), np.ascontiguousarray(JT),
+                             scale, had, u_fast)
+        rhs = None
+    else:
+        rhs = (np.swapaxes(kin.G, 1, 2) @ Q[..., None])[..., 0] if rhs_task is None else rhs_task
+    if u_fast is not None:
+        cand = np.flatnonzero(~(had > SINGULAR_ACTUATION))
+        A = JT[cand] / scale
+    elif model.na == model.nt and model.na:
+        A = JT / scale
+        norms = np.prod(np.linalg.norm(A, axis=1), axis=1)
+        had = np.abs(np.linalg.det(A)) / np.where(norms > 0.0, norms, np.inf)
+        cand = np.flatnonzero(~(had > SINGULAR_ACTUATION))
+    else:
+        A = JT / scale
+        cand = np.arange(A.shape[0])
+    if u_fast is None:
+        A = A[cand]
+    ratio = np.ones(JT.shape[0])
+    if cand.size and A.shape[1] and A.shape[2]:
+        sv = np.linalg.svd(A, compute_uv=False)
+        ratio[cand] = sv[:, -1] / np.maximum(sv[:, 0], 1e-300)
+    bad = np.flatnonzero(~(ratio > SINGULAR_ACTUATION))
+    if bad.size:
+        s = int(bad[0])
+        when = f"sample {s}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
+        raise SingularityError(f"{when}: the actuator map is singular (smallest/largest singular value "
+                               f"{ratio[s]:.3g}): the actuators {', '.join(model.actuator_names)} cannot move "
+                               f"mechanism {model.name!r} there")
+    if u_fast is not None:
+        return u_fast
+    if model.na == model.nt:
+        return np.linalg.solve(JT, rhs[..., None])[..., 0]
+    return np.einsum("nat,nt->na", np.linalg.pinv(JT), rhs)
+
+
+@dataclass(frozen=True)
+class InverseDynamics:
+    """``u`` (n, na) actuator efforts [N (prismatic) or N m (revolute)], order of
+    ``model.actuator_names``; ``Q`` (n, nq) generalised tree forces of Eq. (2); ``W`` (n, nb,
+    6) required body wrenches of Eq. (1); ``S`` (n, nq, 6) coordinate twists; ``kin``: the
+    kinematics they hold for (idle accelerations made dynamic, :func:`idle_dynamics`)."""
+
+    u: Array
+    Q: Array
+    W: Array
+    S: Array
+    kin: MechanismKinematics
+
+
+def idle_dynamics(model: MechanismModel, kin: MechanismKinematics, S: Array, loads: dict | None = None,
+                  Q_extra: Array | None = None) -> MechanismKinematics:
+    """The kinematics with each idle freedom's acceleration set by its own dynamics.
+
+    The kinematics hold an idle freedom (a rod's spin between two spherical joints) by a
+    linear equation, which fixes its acceleration by geometry, not by dynamics; no joint can
+    then supply the moment that acceleration needs. With ``N (nq, k)`` the idle motions (the
+    null space of the solved loop and task rows, ``[Phi_q; tau_q] N = 0``), ``M_NN = N^T M N``
+    (from the body kinetic energy of the twists ``T_b = sum S_c N_c``) and ``Q_N = N^T Q``
+    (Eq. 2), the idle accelerations change by ``beta = -M_NN^-1 Q_N`` so that ``N^T Q = 0``
+    (nothing acts along an idle freedom; ``Q_extra (n, nq)``: generalised friction forces,
+    resisting, included in ``Q``): ``qdd += N beta`` and every body's acceleration by
+    ``T_b beta``. Rates and positions are unchanged; a mechanism without idle freedoms is
+    returned as is."""
+    if model.solver_idle.shape[0] == 0:
+        return kin
+    from dataclasses import replace
+
+    from .topology import constraint_jacobian
+
+    _, J = constraint_jacobian(model, kin.q)
+    K_ = J[:, model.solver_rows]
+    _, _, Vt = np.linalg.svd(K_)
+    N = np.swapaxes(Vt[:, K_.shape[1]:], 1, 2)  # (n, nq, k)
+    anc = model.ancestors.astype(float)
+    T = np.einsum("bc,nck,ncz->nbkz", anc, S, N)  # (n, nb, 6, k)
+    w, vO = T[:, :, :3], T[:, :, 3:]
+    vc = vO + np.cross(w, kin.p[:, :, :, None], axis=2)
+    Iw = np.einsum("nbij,bjk,nblk->nbil", kin.R, model.inertia, kin.R)
+    M_NN = np.einsum("b,nbiz,nbiy->nzy", model.mass, vc, vc) + np.einsum("nbiz,nbij,nbjy->nzy", w, Iw, w)
+    W = body_wrenches(model, kin, loads)
+    Q_N = np.einsum("nbkz,nbk->nz", T, W)
+    if Q_extra is not None:  # friction's generalised forces (resisting) act along the idle motion too
+        Q_N = Q_N + np.einsum("ncz,nc->nz", N, Q_extra)
+    beta = -np.linalg.solve(M_NN, Q_N[..., None])[..., 0]
+    dA = np.einsum("nbkz,nz->nbk", T, beta)
+    dwd, daO = dA[..., :3], dA[..., 3:]
+    qdd = kin.qdd + np.einsum("ncz,nz->nc", N, beta)
+    jb = model.joint_child
+    jpa = kin.joint_point_a.copy()
+    on = jb >= 0
+    jpa[:, on] += daO[:, jb[on]] + np.cross(dwd[:, jb[on]], kin.joint_point[:, on])
+    return replace(kin, qdd=qdd, act_qdd=qdd[:, model.act_coord], wd=kin.wd + dwd,
+                   a=kin.a + daO + np.cross(dwd, kin.p), origin_a=kin.origin_a + daO + np.cross(dwd, kin.origin),
+                   joint_point_a=jpa)
+
+
+def inverse_dynamics(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
+                     idle: str = "dynamic") -> InverseDynamics:
+    """Actuator efforts along a solved motion (module docstring, Eq. 1-3).
+
+    ``idle="dynamic"`` (default) first gives the idle freedoms the accelerations of their own
+    dynamics (:func:`idle_dynamics`), so that every body's balance can be met;
+    ``idle="held"`` keeps the kinematics' (the efforts then balance the held motion's energy)."""
+    S = coordinate_twists(model, kin.q, kin)
+    if idle == "dynamic":
+        kin = idle_dynamics(model, kin, S, loads)
+    elif idle != "held":
+        raise ParameterError(f"idle: {idle!r} is not 'dynamic' or 'held'")
+    W = body_wrenches(model, kin, loads)
+    Q = generalised_forces(model, S, W)
+    u = actuator_efforts(model, kin, Q)
+    return InverseDynamics(u=u, Q=Q, W=W, S=S, kin=kin)
+
+
+def _plucker(axis: Array, point: Array, rotation: bool) -> Array:
+    """Unit twist of a rotation about ``axis`` through ``point`` or a translation along it (n, 6)."""
+    if rotation:
+        return np.concatenate([axis, _cross(point, axis)], axis=-1)
+    return np.concatenate([np.zeros_like(axis), axis], axis=-1)
+
+
+def _joint_frames(model: MechanismModel, kin: MechanismKinematics, j: int) -> tuple[Array, Array, Array, Array]:
+    """World frames of joint j on its parent (R_P (n,3,3), o_P (n,3)) and child."""
+    n = len(kin)
+    out = []
+    for body, Rl, pl in ((model.joint_parent[j], model.joint_R_parent[j], model.joint_p_parent[j]),
+                         (model.joint_child[j], model.joint_R_child[j], model.joint_p_child[j])):
+        if body < 0:
+            out += [np.broadcast_to(Rl, (n, 3, 3)), np.broadcast_to(pl, (n, 3))]
+        else:
+            out += [kin.R[:, body] @ Rl, kin.origin[:, body] + np.einsum("nij,j->ni", kin.R[:, body], pl)]
+    return out[0], out[1], out[2], out[3]
+
+
+def free_twists(model: MechanismModel, kin: MechanismKinematics, S: Array, j: int) -> tuple[Array, Array]:
+    """Free twists ``T (n, f, 6)`` of joint j (child relative to parent, description sense)
+    and the index of its tree coordinate for each (-1 for a cut joint)."""
+    jt = JOINT_TYPES[model.joint_type[j]]
+    f = jt.freedoms
+    if not model.joint_cut[j]:
+        q0 = model.joint_q0[j]
+        sign = -1.0 if model.joint_flipped[j] else 1.0
+        return sign * S[:, q0:q0 + f], np.arange(q0, q0 + f)
+    RP, oP, RC, oC = _joint_frames(model, kin, j)
+    T = []
+    for k, mname in enumerate(jt.motions):
+        axis_i = "XYZ".index(mname[1])
+        frame = RC if (k == f - 1 and jt.name != "spherical") else RP
+        T.append(_plucker(frame[:, :, axis_i], oC, mname[0] == "R"))
+    return (np.stack(T, axis=1) if T else np.zeros((len(kin), 0, 6))), np.full(f, -1)
+
+
+def free_blocks(model: MechanismModel, kin: MechanismKinematics, S: Array) -> list[tuple[int, Array, Array]]:
+    """``(joint, T (n, f, 6), coordinates (f,))`` for every joint with freedoms (:func:`free_twists`)."""
+    out = []
+    for j in range(len(model.joint_names)):
+        T, coords = free_twists(model, kin, S, j)
+        if T.shape[1]:
+            out.append((j, T, coords))
+    return out
+
+
+def equilibrium_matrix(model: MechanismModel, blocks: list) -> Array:
+    """``A (n, 6 nb + nf, 6 nj)`` of the joint-wrench equations (module docstring): the body
+    rows, then each joint's free-twist rows in the order of ``blocks``."""
+    n = blocks[0][1].shape[0] if blocks else 1
+    nb, nj = model.nb, len(model.joint_names)
+    nf = sum(T.shape[1] for _, T, _ in blocks)
+    A = np.zeros((n, 6 * nb + nf, 6 * nj))
+    eye = np.eye(6)
+    for j in range(nj):
+        c, p = model.joint_child[j], model.joint_parent[j]
+        if c >= 0:
+            A[:, 6 * c:6 * c + 6, 6 * j:6 * j + 6] += eye
+        if p >= 0:
+            A[:, 6 * p:6 * p + 6, 6 * j:6 * j + 6] -= eye
+    row = 6 * nb
+    for j, T, _ in blocks:
+        A[:, row:row + T.shape[1], 6 * j:6 * j + 6] = T
+        row += T.shape[1]
+    return A
+
+
+def equilibrium_rhs(model: MechanismModel, blocks: list, W: Array, coord_effort: Array,
+                    friction: dict | None = None) -> Array:
+    """``b (n, 6 nb + nf)``: the required body wrenches ``W (n, nb, 6)``, then per free twist
+    the effort along it: ``coord_effort (n, nq)`` for a tree coordinate, less the friction
+    ``friction[j] (n, f)`` (generalised resisting forces of joint j along its free twists)."""
+    n = W.shape[0]
+    parts = [W.reshape(n, -1)]
+    for j, T, coords in blocks:
+        e = np.zeros((n, T.shape[1]))
+        for i, c in enumerate(coords):
+            if c >= 0:
+                e[:, i] = coord_effort[:, c]
+        if friction is not None and j in friction:
+            e = e - friction[j]
+        parts.append(e)
+    return np.concatenate(parts, axis=1)
+
+
+def equilibrium_system(model: MechanismModel, kin: MechanismKinematics, W: Array, S: Array,
+                       coord_effort: Array) -> tuple[Array, Array]:
+    """The linear equations ``A z = b`` of the joint wrenches ``z (n, 6 nj)`` (module docstring):
+    ``A (n, 6 nb + nf, 6 nj)``, ``b (n, 6 nb + nf)``; ``coord_effort (n, nq)`` the effort along
+    each tree coordinate (actuators; zero for passive coordinates); no friction."""
+    blocks = free_blocks(model, kin, S)
+    return equilibrium_matrix(model, blocks), equilibrium_rhs(model, blocks, W, coord_effort)
+
+
+@dataclass(frozen=True)
+class JointReactions:
+    """Actuator efforts and every joint's reaction along a motion.
+
+    ``u`` (n, na) actuator efforts; ``joint_point`` (n, nj, 3) [m]; ``joint_force`` (n, nj,
+    3) [N] and ``joint_moment`` (n, nj, 3) [N m] about ``joint_point``: the wrench that each
+    joint's parent body exerts on its child body (order of ``model.joint_names``; a joint on
+    the ground: the ground is the parent or the child as described), base frame;
+    ``residual`` (n,) the largest equilibrium residual [N, N m]; ``self_stress`` the number
+    of self-stress states (over-constraints) made unique by compliance (0 when rigid
+    equilibrium decides them); ``method``: ``"rigid"`` or ``"compliance"``."""
+
+    u: Array
+    joint_point: Array
+    joint_force: Array
+    joint_moment: Array
+    residual: Array
+    self_stress: int
+    method: str
+    kin: MechanismKinematics
+    friction: dict
+    iterations: int
+    dissipation: Array
+
+
+def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
+                    rtol: float = 1e-10, friction: bool = True, tol: float = 1e-11,
+                    max_iter: int = 100, solver: str = "auto", overconstrained: str = "compliance"
+                    ) -> JointReactions:
+    """Actuator efforts (Eq. 3) and every joint reaction (module docstring), with the joints'
+    friction (:mod:`.friction`) when the description gives any and ``friction`` is true.
+
+    An over-constrained mechanism's reactions are made unique by link compliance
+    (:func:`pkmdyn.multibody.reactions.compliant_reactions`, from the bodies' ``section`` and
+    ``material``); raises :class:`~pkmdyn.errors.ParameterError` naming the bodies when that
+    data is missing. Load-dependent friction couples the reactions and the efforts: solved by
+    fixed-point iteration (friction from the last reactions, then efforts and reactions again)
+    until the friction changes by at most ``tol`` times its scale; a
+    :class:`~pkmdyn.errors.ParameterError` names the joint and sample where it diverges or does
+    not settle within ``max_iter`` iterations (friction that locks the mechanism).
+
+    ``solver="auto"`` takes the cut-wrench route (:class:`_CutRoute`) where the cut joints'
+    reactions are determined by the tree's equations, else (over-constrained) the dense
+    equations of every joint wrench; ``"dense"`` always the latter (the two agree, tested).
+    ``overconstrained="minimum-norm"``: an over-constrained mechanism's reactions are the
+    minimum-norm solution of the rigid equations (moments scaled by the length scale) instead
+    of the compliance-unique ones: they balance every body but are one choice among the
+    self-stress states (``method = "minimum-norm"``)."""
+    from .friction import JointFriction, friction_diverges
+
+    if solver not in ("auto", "dense"):
+        raise ParameterError(f"solver: {solver!r} is not 'auto' or 'dense'")
+    if overconstrained not in ("compliance", "minimum-norm"):
+        raise ParameterError(f"overconstrained: {overconstrained!r} is not 'compliance' or 'minimum-norm'")
+    if overconstrained == "minimum-norm":
+        solver = "dense"
+
+    S = coordinate_twists(model, kin.q, kin)
+    n = len(kin)
+    blocks = free_blocks(model, kin, S)
+    scale = _column_scale(model)
+    k = 6 * len(model.joint_names)
+    cuts = None if solver == "dense" else _CutRoute(model, S, blocks, rtol)
+    over = cuts is not None and not cuts.full_rank and model.topology is not None and \
+        model.topology.overconstraints > 0 and cuts.A.shape[2] > 0
+    A = None
+    if over:  # compliance in the cut joints' unknowns (no dense SVD)
+        r = -1
+    elif cuts is None or not cuts.full_rank:
+        cuts = None
+        A = equilibrium_matrix(model, blocks)
+        U, sv, Vt = np.linalg.svd(A * scale[None, None, :], full_matrices=False)
+        ranks = (sv > rtol * sv[:, :1]).sum(axis=1)
+        r = int(ranks.min())
+        cuts = None
+    elif cuts is not None:
+        r = k
+    fr = JointFriction(model, kin, S, blocks) if friction and fr_any(model) else None
+    F: dict | None = fr.initial() if fr is not None else None
+    Qf = fr.generalised(F) if fr is not None else None
+    history: list[float] = []
+    it = 0
+    kin0 = kin
+    while True:
+        kin = idle_dynamics(model, kin0, S, loads, Qf)
+        W = body_wrenches(model, kin, loads)
+        Q = generalised_forces(model, S, W)
+        u = actuator_efforts(model, kin, Q if Qf is None else Q + Qf)
+        eff = np.zeros((n, model.nq))
+        eff[:, model.act_coord] = u
+        b = equilibrium_rhs(model, blocks, W, eff, F)
+        if over:
+            from .reactions import compliant_reactions
+
+            z0, Z = cuts.affine(model, W, F)
+            z, t = compliant_reactions(model, kin, cuts.A, (Q if Qf is None else Q + Qf) - eff, -1, W,
+                                       affine=(z0, Z))
+            method = "compliance"
+        elif cuts is not None:
+            z = cuts.solve(model, W, Q if Qf is None else Q + Qf, eff, F)
+            method, t = "rigid", 0
+        elif r < k and overconstrained == "minimum-norm":
+            coef = np.einsum("nmr,nm->nr", U[:, :, :r], b) / sv[:, :r]
+            z = np.einsum("nrk,nr->nk", Vt[:, :r], coef) * scale[None, :]
+            method, t = "minimum-norm", k - r
+        elif r < k:
+            from .reactions import compliant_reactions
+
+            z, t = compliant_reactions(model, kin, A, b, r, W)
+            method = "compliance"
+        else:
+            coef = np.einsum("nmr,nm->nr", U, b) / sv
+            z = np.einsum("nrk,nr->nk", Vt, coef) * scale[None, :]
+            method, t = "rigid", 0
+        if fr is None:
+            break
+        F_new = fr.forces(z.reshape(n, -1, 6))
+        change, worst_joint, worst_sample = fr.change(F, F_new)
+        size = max(fr.scale(F_new), float(np.abs(u).max()), 1e-12)
+        history.append(change / size)
+        F = F_new
+        Qf = fr.generalised(F)
+        it += 1
+        if history[-1] <= tol:
+            break
+        if it >= max_iter or friction_diverges(history):
+            when = f"sample {worst_sample}" + (f" (t = {kin.t[worst_sample]:.6g} s)" if kin.t is not None else "")
+            raise ParameterError(f"joint {model.joint_names[worst_joint]}: the load-dependent friction does not "
+                                 f"converge at {when} (relative change {history[-1]:.3g} after {it} iterations): "
+                                 "the friction coefficients lock the mechanism")
+    res = _residual(model, blocks, z, b)
+    Wj = z.reshape(n, -1, 6)
+    pts = kin.joint_point
+    force = Wj[..., 3:]
+    moment = Wj[..., :3] - _cross(pts, force)
+    return JointReactions(u=u, joint_point=pts, joint_force=force, joint_moment=moment, residual=res,
+                          self_stress=t, method=method, kin=kin, friction=F or {}, iterations=it,
+                          dissipation=fr.dissipation(F) if fr is not None else np.zeros(n))
+
+
+def _centre(T: Array) -> Array:
+    """The common point (n, 3) of rotation twists ``T (n, f, 6)`` whose axes all pass through it:
+    ``v = o x w`` for each, solved in least squares (``[w]x o = -v``)."""
+    n = T.shape[0]
+    A = np.zeros((n, 3 * T.shape[1], 3))
+    b = np.zeros((n, 3 * T.shape[1]))
+    for i in range(T.shape[1]):
+        w, v = T[:, i, :3], T[:, i, 3:]
+        # v = o x w = -[w]x o
+        A[:, 3 * i:3 * i + 3] = np.stack([np.stack([0 * w[:, 0], w[:, 2], -w[:, 1]], 1),
+                                          np.stack([-w[:, 2], 0 * w[:, 0], w[:, 0]], 1),
+                                          np.stack([w[:, 1], -w[:, 0], 0 * w[:, 0]], 1)], 1)
+        b[:, 3 * i:3 * i + 3] = v
+    AtA = np.swapaxes(A, 1, 2) @ A
+    return np.linalg.solve(AtA, np.einsum("nmk,nm->nk", A, b)[..., None])[..., 0]
+
+
+def _residual(model: MechanismModel, blocks: list, z: Array, b: Array) -> Array:
+    """``max |A z - b|`` per sample (n,) without forming ``A`` (:func:`equilibrium_matrix`)."""
+    n, nb = z.shape[0], model.nb
+    Wj = z.reshape(n, -1, 6)
+    body = np.zeros((n, nb, 6))
+    for j in range(Wj.shape[1]):
+        if model.joint_child[j] >= 0:
+            body[:, model.joint_child[j]] += Wj[:, j]
+        if model.joint_parent[j] >= 0:
+            body[:, model.joint_parent[j]] -= Wj[:, j]
+    parts = [body.reshape(n, -1)]
+    for j, T, _ in blocks:
+        parts.append(np.einsum("nfk,nk->nf", T, Wj[:, j]))
+    return np.abs(np.concatenate(parts, axis=1) - b).max(axis=1)
+
+
+class _CutRoute:
+    """Reactions through the cut joints' constraint wrenches (Featherstone's loop-closure form).
+
+    Each cut joint j carries ``W_j = C_j lambda_j - D_j F_j``: ``C_j (6, 6 - f)`` spans the
+    wrenches that do no work in its free twists (``T_j^T C_j = 0``), ``D_j = T_j (T_j^T T_j)^-1``
+    puts its friction ``F_j`` along them. The tree's equations, one per tree coordinate,
+
+        sum_j (J_c,j - J_p,j)^T C_j lambda_j = Q + Q_f - E_a u
+
+    (``J_c,j``, ``J_p,j`` the child's and parent's twist Jacobians, ``E_a u`` the actuator
+    efforts on their coordinates) give the ``lambda`` by least squares (normal equations; the
+    system is consistent where the efforts come from Eq. 3; its full column rank is checked by
+    QR on three samples); every tree joint's wrench then follows leaves first,
+    ``W_tree(b) = W_b + sum_children W_tree(child) - (cut wrenches on b)``. When the columns are
+    rank deficient (an over-constrained mechanism) ``full_rank`` is false and the dense
+    equations decide."""
+
+    def __init__(self, model: MechanismModel, S: Array, blocks: list, rtol: float) -> None:
+        n = S.shape[0]
+        St = np.swapaxes(S, 1, 2)  # (n, 6, nq)
+        anc = model.ancestors.astype(float)
+
+        def rel(c: int, p: int) -> Array:
+            """``J_c - J_p`` (n, 6, nq): the coordinates that move the child and not the parent, less
+            those that move the parent and not the child."""
+            mask = (anc[c] if c >= 0 else 0.0) - (anc[p] if p >= 0 else 0.0)
+            return St * np.asarray(mask)[None, None, :] if np.ndim(mask) else np.zeros_like(St)
+
+        self.cut = []
+        cols = []
+        sph = JOINT_TYPES.index(next(t for t in JOINT_TYPES if t.name == "spherical"))
+        for j, T, coords in blocks:
+            if coords[0] >= 0:
+                continue
+            c, p = model.joint_child[j], model.joint_parent[j]
+            Jrel = rel(c, p)
+            if model.joint_type[j] == sph:
+                # three forces through the centre: [o x e_i; e_i] (T's rotations all pass through o)
+                o = _centre(T)
+                C = np.zeros((n, 6, 3))
+                for i in range(3):
+                    e = np.zeros(3)
+                    e[i] = 1.0
+                    C[:, :3, i] = np.cross(o, e)
+                    C[:, 3:, i] = e
+            else:
+                _, _, Vt = np.linalg.svd(T)  # T (n, f, 6): rows f.. of Vt span its annihilator
+                C = np.swapaxes(Vt[:, T.shape[1]:], 1, 2)  # (n, 6, 6 - f)
+            Tc = np.swapaxes(T, 1, 2)
+            D = Tc @ np.linalg.inv(T @ Tc)
+            self.cut.append((j, C, D, Jrel))
+            cols.append(np.swapaxes(Jrel, 1, 2) @ C)
+        for j in range(len(model.joint_names)):  # fixed cut joints have no free twist: no block
+            if model.joint_cut[j] and not any(j == c[0] for c in self.cut):
+                c, p = model.joint_child[j], model.joint_parent[j]
+                Jrel = rel(c, p)
+                C = np.broadcast_to(np.eye(6), (n, 6, 6))
+                self.cut.append((j, C, np.zeros((n, 6, 0)), Jrel))
+                cols.append(np.einsum("nkc,nkl->ncl", Jrel, C))
+        self.A = np.concatenate(cols, axis=2) if cols else np.zeros((n, model.nq, 0))
+        if self.A.shape[2] > self.A.shape[1]:
+            self.full_rank = False
+            return
+        # the rank is the topology's: checked by QR on the first, middle and last samples;
+        # the solve is by the normal equations (A^T A is small and, with full column rank, SPD)
+        some = np.unique([0, n // 2, n - 1])
+        if self.A.shape[2]:
+            _, R = np.linalg.qr(self.A[some])
+            d = np.abs(np.diagonal(R, axis1=1, axis2=2))
+            colmax = np.abs(self.A[some]).max(axis=(1, 2))
+            self.full_rank = bool(np.all(d > rtol * 1e2 * np.maximum(colmax[:, None], 1e-300)))
+            self.At = np.swapaxes(self.A, 1, 2)
+            self.AtA = self.At @ self.A
+        else:
+            self.full_rank = True
+
+    def solve(self, model: MechanismModel, W: Array, Qtot: Array, eff: Array, F: dict | None) -> Array:
+        """Every joint wrench ``z (n, 6 nj)`` (full column rank)."""
+        n = W.shape[0]
+        rhs = Qtot - eff
+        if self.A.shape[2]:
+            lam = np.linalg.solve(self.AtA, self.At @ rhs[..., None])[..., 0]
+        else:
+            lam = np.zeros((n, 0))
+        return self.assemble(model, W, lam, F)
+
+    def assemble(self, model: MechanismModel, W: Array, lam: Array, F: dict | None) -> Array:
+        """Every joint wrench ``z (n, 6 nj)`` from the cut joints' ``lam (n, K)``: the cut wrenches,
+        then the tree joints' leaves first (linear in ``W``, ``lam`` and ``F`` together)."""
+        n = W.shape[0]
+        nj = len(model.joint_names)
+        z = np.zeros((n, nj, 6))
+        pos = 0
+        onbody = np.zeros((n, model.nb, 6))  # sum of cut wrenches acting on each body
+        for j, C, D, _ in self.cut:
+            m_ = C.shape[2]
+            Wc = (C @ lam[:, pos:pos + m_, None])[..., 0]
+            pos += m_
+            if F is not None and j in F and D.shape[2]:
+                Wc = Wc - (D @ F[j][..., None])[..., 0]
+            z[:, j] = Wc
+            if model.joint_child[j] >= 0:
+                onbody[:, model.joint_child[j]] += Wc
+            if model.joint_parent[j] >= 0:
+                onbody[:, model.joint_parent[j]] -= Wc
+        Wt = W - onbody
+        for b in range(model.nb - 1, -1, -1):
+            par = model.body_parent[b]
+            if par >= 0:
+                Wt[:, par] += Wt[:, b]
+            k = model.body_joint[b]
+            z[:, k] = -Wt[:, b] if model.joint_flipped[k] else Wt[:, b]
+        return z.reshape(n, -1)
+
+    def affine(self, model: MechanismModel, W: Array, F: dict | None) -> tuple[Array, Array]:
+        """``z = z0 + Z lam``: ``z0 (n, 6 nj)`` (the loads and friction, ``lam = 0``) and
+        ``Z (n, 6 nj, K)`` (one column per cut-wrench component)."""
+        n, K = W.shape[0], self.A.shape[2]
+        z0 = self.assemble(model, W, np.zeros((n, K)), F)
+        zero = np.zeros_like(W)
+        Z = np.empty((n, z0.shape[1], K))
+        for col in range(K):
+            e = np.zeros((n, K))
+            e[:, col] = 1.0
+            Z[:, :, col] = self.assemble(model, zero, e, None)
+        return z0, Z
+
+
+def fr_any(model: MechanismModel) -> bool:
+    """Whether any joint of the description has friction data."""
+    return any(f is not None and any(v for v in f.values()) for f in model.joint_friction)
+
+
+def _column_scale(model: MechanismModel) -> Array:
+    """Column scaling of the joint-wrench unknowns: moments about O divided by the length scale."""
+    s = np.ones((len(model.joint_names), 6))
+    s[:, :3] = model.length_scale
+    return s.reshape(-1)
+
+
+def energies(model: MechanismModel, kin: MechanismKinematics) -> tuple[Array, Array]:
+    """Kinetic energy ``T (n,)`` and gravitational potential energy ``V (n,)`` [J] of all bodies,
+    from their poses and velocities alone: ``T = sum 1/2 m v.v + 1/2 w.(R I' R^T) w``,
+    ``V = -sum m g . p``."""
+    Iw = np.einsum("nbij,bjk,nblk->nbil", kin.R, model.inertia, kin.R)
+    T = 0.5 * np.einsum("b,nbi,nbi->n", model.mass, kin.v, kin.v) + 0.5 * np.einsum(
+        "nbi,nbij,nbj->n", kin.w, Iw, kin.w)
+    V = -np.einsum("b,i,nbi->n", model.mass, model.gravity, kin.p)
+    return T, V
+
+
+def effort_unit(model: MechanismModel, i: int) -> str:
+    """Unit of actuator i's effort: ``N`` (prismatic) or ``Nm`` (revolute)."""
+    return "N" if model.actuator_units[i] == "m" else "Nm"
+
+
+def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics) -> tuple[dict, dict, dict]:
+    """The dynamics' part of a run's files: ``results.csv`` columns ``<joint>_effort_<N|Nm>``,
+    ``bodies.npz`` arrays ``joint_force``, ``joint_moment`` (n, nj, 3) (module docstring) and
+    ``body_wrench`` (n, nb, 6) (Eq. 1, ``[n_O; f]``), and ``summary.json`` entries.
+
+    An over-constrained mechanism whose bodies carry no section and material gets the
+    minimum-norm reactions (they balance every body; which self-stress state is one choice),
+    flagged ``"unique": false`` with the reason in the summary. Friction that does not converge
+    raises (nothing is written)."""
+    from .reactions import ComplianceDataMissing
+
+    summary: dict = {}
+    try:
+        reac = joint_reactions(model, kin)
+        u = reac.u
+        npz = {"joint_force": reac.joint_force, "joint_moment": reac.joint_moment}
+        k2 = reac.kin
+        if k2 is not kin:  # idle accelerations made dynamic: the files carry the motion the forces balance
+            npz.update(qdd=k2.qdd, wd=k2.wd, a=k2.a, origin_a=k2.origin_a, joint_point_a=k2.joint_point_a)
+        summary["reactions"] = {"method": reac.method, "self_stress_states": reac.self_stress,
+                                "max_equilibrium_residual": float(reac.residual.max()), "unique": True}
+    except ComplianceDataMissing as exc:
+        reac = joint_reactions(model, kin, overconstrained="minimum-norm")
+        u = reac.u
+        npz = {"joint_force": reac.joint_force, "joint_moment": reac.joint_moment}
+        k2 = reac.kin
+        if k2 is not kin:
+            npz.update(qdd=k2.qdd, wd=k2.wd, a=k2.a, origin_a=k2.origin_a, joint_point_a=k2.joint_point_a)
+        summary["reactions"] = {"method": "minimum-norm", "self_stress_states": reac.self_stress,
+                                "max_equilibrium_residual": float(reac.residual.max()),
+                                "unique": False, "reason": str(exc)}
+    cols = {f"{name}_effort_{effort_unit(model, i)}": u[:, i] for i, name in enumerate(model.actuator_names)}
+    return cols, npz, summary

@@ -1,0 +1,146 @@
+"""Joint friction of described mechanisms: Coulomb, viscous and load-dependent (from the
+joint's own reaction), in the free directions of every joint, tree or cut.
+
+Relative motion of joint j (child relative to parent): the twist ``V_rel = V_c - V_p``
+(Plücker at the base origin, :mod:`.dynamics`), with ``V_rel = T r`` in the joint's free
+twists ``T (f, 6)`` (:func:`.dynamics.free_twists`), ``r = T^+ V_rel`` its free rates (for a
+tree joint, its coordinate rates). The relative angular velocity is ``w = V_rel[:3]``, the
+relative velocity of the child's point at the joint centre ``p`` is ``v = V_rel[3:] + w x p``.
+
+Resisting torque and force (base frame), with ``f`` the reaction force the joint carries
+(``joint_force``) and ``a`` its rotation axis (revolute, cylindrical: the joint frame's z):
+
+    tau = (C_t + mu (r_pin |f - (f.a) a| + r_ball |f| + r_mean |f.a|)) u(w) + b_t w      (F1)
+    phi = (C_f + mu_s |f - (f.e) e|) u(v) + b_f v                                         (F2)
+
+``C_t = coulomb_torque_Nm``, ``b_t = viscous_Nm_s_rad``, ``C_f = coulomb_force_N``,
+``b_f = viscous_N_s_m``, ``mu = coefficient`` with ``r_pin = pin_radius_m`` (a journal: the
+radial force on the pin), ``r_ball = ball_radius_m`` (a ball joint: the whole force),
+``r_mean = mean_radius_m`` (a thrust face: the axial force); ``mu_s = coefficient`` for a
+joint that slides and gives no radius (a prismatic guide: the force normal to its axis ``e``).
+``u(x) = x / sqrt(|x|^2 + eps^2)`` is the regularised sign of :func:`pkmdyn.friction.regularised_sign`
+(``eps`` = :data:`EPS_ROTATION` rad/s, :data:`EPS_TRANSLATION` m/s), a vector law for a joint
+with several rotations (the hip paper's Eq. 16 form). The generalised resisting forces along
+the free twists are ``F_i = T_i . [tau + p x phi; phi]`` (their power ``F . r`` is the
+dissipation, >= 0), mapped to the tree coordinates by ``Q_f = B^T F`` with ``r = B qd``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..friction import regularised_sign
+from .model import MechanismModel
+
+__all__ = ["JointFriction", "friction_diverges", "EPS_ROTATION", "EPS_TRANSLATION"]
+
+Array = NDArray[np.float64]
+
+#: regularisation of the sign at rest [rad/s] and [m/s]
+EPS_ROTATION = 1e-3
+EPS_TRANSLATION = 1e-4
+
+
+def friction_diverges(history: list[float]) -> bool:
+    """Whether the fixed point's relative changes grow: four successive increases, or a change
+    above 1e6 (the friction feeds the reactions faster than it settles)."""
+    if history and (history[-1] > 1e6 or not np.isfinite(history[-1])):
+        return True
+    return len(history) >= 5 and all(history[-k] > history[-k - 1] for k in range(1, 5))
+
+
+class JointFriction:
+    """The friction of every joint with friction data along one motion (module docstring)."""
+
+    def __init__(self, model: MechanismModel, kin, S: Array, blocks: list) -> None:
+        self.model = model
+        n = S.shape[0]
+        anc = model.ancestors.astype(float)
+        V = np.einsum("bc,nck,nc->nbk", anc, S, kin.qd)  # body twists (n, nb, 6)
+        Jb = np.einsum("bc,nck->nbkc", anc, S)  # (n, nb, 6, nq)
+        self.joints = []
+        for j, T, _ in blocks:
+            data = model.joint_friction[j]
+            if data is None or not any(v for v in data.values()):
+                continue
+            c, p = model.joint_child[j], model.joint_parent[j]
+            Vrel = (V[:, c] if c >= 0 else 0.0) - (V[:, p] if p >= 0 else 0.0)
+            Jrel = (Jb[:, c] if c >= 0 else 0.0) - (Jb[:, p] if p >= 0 else 0.0)
+            Tp = np.linalg.pinv(np.swapaxes(T, 1, 2))  # (n, f, 6): r = Tp V_rel
+            r = np.einsum("nfk,nk->nf", Tp, np.broadcast_to(Vrel, (n, 6)))
+            B = np.einsum("nfk,nkc->nfc", Tp, np.broadcast_to(Jrel, (n, 6, model.nq)))
+            rot = np.abs(T[:, :, :3]).max(axis=(0, 2)) > 0.5
+            axis = T[:, int(np.flatnonzero(rot)[0]), :3] if rot.sum() == 1 else None
+            slide = np.flatnonzero(~rot)
+            e = T[:, int(slide[0]), 3:] if len(slide) == 1 else None
+            pt = kin.joint_point[:, j]
+            w = np.einsum("nfk,nf->nk", T[:, :, :3], r)
+            v = np.einsum("nfk,nf->nk", T[:, :, 3:], r) + np.cross(w, pt)
+            self.joints.append(dict(j=j, T=T, r=r, B=B, axis=axis, e=e, pt=pt, w=w, v=v, d=data,
+                                    has_rot=bool(rot.any()), has_slide=bool((~rot).any())))
+
+    def _forces_one(self, jd: dict, f: Array) -> Array:
+        d = jd["d"]
+        n = f.shape[0]
+        mu = d.get("coefficient", 0.0)
+        tau = np.zeros((n, 3))
+        phi = np.zeros((n, 3))
+        if jd["has_rot"]:
+            mag = np.full(n, d.get("coulomb_torque_Nm", 0.0))
+            if mu:
+                a = jd["axis"]
+                if a is not None:
+                    fa = np.einsum("ni,ni->n", f, a)
+                    mag = mag + mu * d.get("pin_radius_m", 0.0) * np.linalg.norm(f - fa[:, None] * a, axis=1)
+                    mag = mag + mu * d.get("mean_radius_m", 0.0) * np.abs(fa)
+                mag = mag + mu * d.get("ball_radius_m", 0.0) * np.linalg.norm(f, axis=1)
+            tau = mag[:, None] * regularised_sign(jd["w"], EPS_ROTATION, True) + d.get("viscous_Nm_s_rad", 0.0) * jd["w"]
+        if jd["has_slide"]:
+            mag = np.full(n, d.get("coulomb_force_N", 0.0))
+            radii = d.get("pin_radius_m", 0.0) or d.get("ball_radius_m", 0.0) or d.get("mean_radius_m", 0.0)
+            if mu and not radii and jd["e"] is not None:
+                e = jd["e"]
+                fe = np.einsum("ni,ni->n", f, e)
+                mag = mag + mu * np.linalg.norm(f - fe[:, None] * e, axis=1)
+            phi = mag[:, None] * regularised_sign(jd["v"], EPS_TRANSLATION, True) + d.get("viscous_N_s_m", 0.0) * jd["v"]
+        Wf = np.concatenate([tau + np.cross(jd["pt"], phi), phi], axis=1)
+        return np.einsum("nfk,nk->nf", jd["T"], Wf)
+
+    def initial(self) -> dict:
+        """Friction with zero reactions (the load-independent part)."""
+        n = self.joints[0]["r"].shape[0] if self.joints else 0
+        return {jd["j"]: self._forces_one(jd, np.zeros((n, 3))) for jd in self.joints}
+
+    def forces(self, Wj: Array) -> dict:
+        """Generalised resisting forces ``{joint: (n, f)}`` from joint wrenches ``Wj (n, nj, 6)``."""
+        return {jd["j"]: self._forces_one(jd, Wj[:, jd["j"], 3:]) for jd in self.joints}
+
+    def generalised(self, F: dict) -> Array:
+        """``Q_f (n, nq)`` = sum over joints of ``B^T F``."""
+        n = next(iter(F.values())).shape[0] if F else 0
+        Q = np.zeros((n, self.model.nq))
+        for jd in self.joints:
+            Q += np.einsum("nfc,nf->nc", jd["B"], F[jd["j"]])
+        return Q
+
+    def dissipation(self, F: dict) -> Array:
+        """Power dissipated by friction (n,) [W] = sum over joints of ``F . r``."""
+        n = next(iter(F.values())).shape[0] if F else 0
+        out = np.zeros(n)
+        for jd in self.joints:
+            out += np.einsum("nf,nf->n", F[jd["j"]], jd["r"])
+        return out
+
+    def change(self, old: dict, new: dict) -> tuple[float, int, int]:
+        """Largest change between two friction sets, its joint and sample."""
+        best, bj, bs = 0.0, -1, 0
+        for j in new:
+            d = np.abs(new[j] - old[j]).max(axis=1) if new[j].size else np.zeros(1)
+            s = int(np.argmax(d))
+            if d[s] >= best:
+                best, bj, bs = float(d[s]), j, s
+        return best, bj, bs
+
+    def scale(self, F: dict) -> float:
+        return max((float(np.abs(v).max()) for v in F.values() if v.size), default=0.0)

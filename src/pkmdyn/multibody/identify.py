@@ -1,0 +1,140 @@
+"""The dynamics of a described mechanism as a regressor: efforts linear in its inertial and
+friction parameters, for identification.
+
+Per body b, the ten barycentric parameters in its own frame (about its frame origin O_b):
+
+    theta_b = [m, m c_x, m c_y, m c_z, J_xx, J_yy, J_zz, J_xy, J_xz, J_yz]
+
+with ``h = m c`` the first moment and ``J = I_c + m (|c|^2 1 - c c^T)`` the inertia about
+O_b (tensor entries, ``J_xy = -∫ x y dm``). The required body wrench (Eq. 1 of
+:mod:`.dynamics`) is linear in them: with ``R`` the body's rotation, ``o`` its origin, ``a_o``
+its origin's acceleration and ``g`` gravity, ``h_w = R h``, ``J_w = R J R^T``,
+
+    f   = m (a_o - g) + wd x h_w + w x (w x h_w)
+    n_O = o x f + J_w wd + w x J_w w + h_w x (a_o - g).
+
+Per joint with friction data, two parameters: its Coulomb and its viscous coefficient
+(``coulomb_torque_Nm``/``viscous_Nm_s_rad`` for rotations, ``coulomb_force_N``/
+``viscous_N_s_m`` for translations): the friction of law F1-F2 without the load-dependent part,
+``u(w)`` and ``w`` per unit coefficient. The efforts are ``u = Y theta + u_0`` (``u_0`` the
+description's ``[[loads]]``), every column of ``Y`` the projection (Eq. 2-3) of the wrenches or
+friction of one unit parameter. Idle freedoms are held (the kinematics' accelerations).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import ParameterError
+from .dynamics import actuator_efforts, coordinate_twists, free_blocks, generalised_forces
+from .kinematics import MechanismKinematics
+from .model import MechanismModel
+
+__all__ = ["Regressor", "regressor", "inertial_parameters", "BODY_PARAMETERS"]
+
+Array = NDArray[np.float64]
+
+BODY_PARAMETERS = ("m_kg", "mcx_kgm", "mcy_kgm", "mcz_kgm", "Jxx_kgm2", "Jyy_kgm2", "Jzz_kgm2", "Jxy_kgm2",
+                   "Jxz_kgm2", "Jyz_kgm2")
+
+
+@dataclass(frozen=True)
+class Regressor:
+    """``Y`` (n, na, p) and ``u0`` (n, na): efforts ``u = Y theta + u0``; ``names`` (p,)
+    ``<body>_<parameter>`` or ``<joint>_coulomb`` / ``<joint>_viscous``; ``theta`` (p,) the
+    description's values."""
+
+    Y: Array
+    u0: Array
+    names: tuple[str, ...]
+    theta: Array
+
+
+def inertial_parameters(model: MechanismModel) -> Array:
+    """The description's barycentric parameters (nb, 10) in the order of :data:`BODY_PARAMETERS`."""
+    out = np.zeros((model.nb, 10))
+    for b in range(model.nb):
+        m, c, Ic = model.mass[b], model.com[b], model.inertia[b]
+        J = Ic + m * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
+        out[b] = [m, *(m * c), J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2]]
+    return out
+
+
+def _unit_wrenches(model: MechanismModel, kin: MechanismKinematics, b: int) -> Array:
+    """Required wrench of body b per unit barycentric parameter (n, 10, 6)."""
+    n = len(kin)
+    R, o, w, wd = kin.R[:, b], kin.origin[:, b], kin.w[:, b], kin.wd[:, b]
+    ag = kin.origin_a[:, b] - model.gravity
+    out = np.zeros((n, 10, 6))
+    # mass
+    out[:, 0, 3:] = ag
+    out[:, 0, :3] = np.cross(o, ag)
+    # first moments (body frame axis k)
+    for k in range(3):
+        hw = R[:, :, k]
+        f = np.cross(wd, hw) + np.cross(w, np.cross(w, hw))
+        out[:, 1 + k, 3:] = f
+        out[:, 1 + k, :3] = np.cross(o, f) + np.cross(hw, ag)
+    # inertia about the origin
+    pairs = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+    for i, (p, q) in enumerate(pairs):
+        E = np.zeros((3, 3))
+        E[p, q] = E[q, p] = 1.0
+        Jw = R @ E @ np.swapaxes(R, 1, 2)
+        out[:, 4 + i, :3] = (Jw @ wd[..., None])[..., 0] + np.cross(w, (Jw @ w[..., None])[..., 0])
+    return out
+
+
+def regressor(model: MechanismModel, kin: MechanismKinematics) -> Regressor:
+    """The regressor of the efforts along a solved motion (module docstring)."""
+    from .friction import EPS_ROTATION, EPS_TRANSLATION, JointFriction
+    from ..friction import regularised_sign
+
+    n = len(kin)
+    S = coordinate_twists(model, kin.q)
+    cols, names, theta = [], [], []
+    theta_b = inertial_parameters(model)
+    for b in range(model.nb):
+        U = _unit_wrenches(model, kin, b)
+        for k in range(10):
+            W = np.zeros((n, model.nb, 6))
+            W[:, b] = U[:, k]
+            cols.append(actuator_efforts(model, kin, generalised_forces(model, S, W)))
+            names.append(f"{model.body_names[b]}_{BODY_PARAMETERS[k]}")
+            theta.append(theta_b[b, k])
+    fr = JointFriction(model, kin, S, free_blocks(model, kin, S))
+    for jd in fr.joints:
+        d = jd["d"]
+        for law in ("coulomb", "viscous"):
+            tau = np.zeros((n, 3))
+            phi = np.zeros((n, 3))
+            if jd["has_rot"]:
+                tau = regularised_sign(jd["w"], EPS_ROTATION, True) if law == "coulomb" else jd["w"]
+            if jd["has_slide"]:
+                phi = regularised_sign(jd["v"], EPS_TRANSLATION, True) if law == "coulomb" else jd["v"]
+            Wf = np.concatenate([tau + np.cross(jd["pt"], phi), phi], axis=1)
+            F = np.einsum("nfk,nk->nf", jd["T"], Wf)
+            Qf = np.einsum("nfc,nf->nc", jd["B"], F)
+            cols.append(actuator_efforts(model, kin, Qf))
+            name = model.joint_names[jd["j"]]
+            names.append(f"{name}_{law}")
+            rot = d.get("coulomb_torque_Nm" if law == "coulomb" else "viscous_Nm_s_rad", 0.0)
+            tr = d.get("coulomb_force_N" if law == "coulomb" else "viscous_N_s_m", 0.0)
+            if jd["has_rot"] and jd["has_slide"] and rot != tr:
+                # one parameter per law: a joint that turns and slides needs the two equal to be linear in it
+                raise ParameterError(f"joint {name}: rotation and translation {law} coefficients differ; "
+                                 "the regressor takes one coefficient per law and joint")
+            theta.append(rot if jd["has_rot"] else tr)
+    Y = np.stack(cols, axis=2)
+    from dataclasses import replace
+
+    from .dynamics import body_wrenches
+
+    unloaded = replace(model, load_body=model.load_body[:0], load_force=model.load_force[:0],
+                       load_moment=model.load_moment[:0], load_point=model.load_point[:0])
+    W0 = body_wrenches(model, kin) - body_wrenches(unloaded, kin)  # the [[loads]] alone
+    u0 = actuator_efforts(model, kin, generalised_forces(model, S, W0))
+    return Regressor(Y=Y, u0=u0, names=tuple(names), theta=np.array(theta))

@@ -1,0 +1,174 @@
+"""Any described mechanism as a machine: the verbs of :class:`pkmdyn.machine.MachineDynamics`
+in its task coordinates.
+
+Coordinates ``q (n, nt)`` are the task coordinates of the description (``x_m`` ...,
+``euler1_rad`` ...), ``qd, qdd`` their rates; efforts ``u (n, na)`` the actuated joints' forces
+[N] or torques [N m] (order of ``model.actuator_names``). With ``G = dq_tree/dx`` and
+``J_ax = dq_a/dx`` from the kinematics and the body twists per task rate
+``T_b = sum_{c in anc(b)} S_c G_c`` (6, nt):
+
+    M(x) = sum_b T_b^T I_b T_b            (from T = 1/2 sum m |v_c|^2 + w . I w; symmetric, PD)
+    h(x, xd) = G^T (Q + Q_f) at xdd = 0   (velocity terms, gravity, loads, friction; Eq. 2-3 of .dynamics)
+    B(x) = J_ax^T                         (virtual work of the actuators)
+
+so that ``M xdd + h = B u`` is the equation of motion projected on the task coordinates (the
+idle freedoms held, as the kinematics hold them). The friction in ``h`` is Coulomb and
+viscous; load-dependent friction is evaluated with the reactions of the state at ``xdd = 0``
+(its exact coupled value along a motion is :func:`.dynamics.joint_reactions`). ``load`` is
+accepted and must be None (the description's ``[[loads]]`` are always applied).
+
+Redundantly actuated mechanisms (``na > nt``, where the description allows it) take the
+minimum-norm efforts ``u = B^+ (M xdd + h)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import MotionError, ParameterError, as_array
+from .dynamics import actuator_efforts, body_wrenches, coordinate_twists, effort_unit, fr_any, free_blocks, \
+    generalised_forces, joint_reactions
+from .kinematics import MechanismKinematics, solve_kinematics
+from .model import MechanismModel
+
+__all__ = ["MechanismVerbs", "machine_verbs"]
+
+Array = NDArray[np.float64]
+
+
+def _load_dependent(model: MechanismModel) -> bool:
+    return any(f is not None and f.get("coefficient", 0.0) for f in model.joint_friction)
+
+
+class MechanismVerbs:
+    """The machine verbs of one described mechanism (module docstring). Solves are warm-started
+    from the previous call's last configuration, as a control loop calls them."""
+
+    def __init__(self, model: MechanismModel) -> None:
+        self.model = model
+        self.COORDINATES = tuple(f"{n}_{u}" for n, u in zip(model.task_names, model.task_units))
+        self.ACTUATORS = tuple(f"{a}_{effort_unit(model, i)}" for i, a in enumerate(model.actuator_names))
+        self._q_last: Array | None = None
+
+    # ------------------------------------------------------------------ helpers
+    def _x(self, q: object, name: str = "q") -> Array:
+        return np.atleast_2d(as_array(q, (None, self.model.nt) if np.ndim(q) == 2 else (self.model.nt,), name,
+                                      MotionError))
+
+    def _kin(self, model: MechanismModel, x: Array, xd: Array | None = None) -> MechanismKinematics:
+        if model is not self.model:
+            raise ParameterError("these verbs belong to mechanism " + repr(self.model.name))
+        kin = solve_kinematics(model, x, xd, None, q_start=self._q_last)
+        self._q_last = kin.q[-1].copy()
+        return kin
+
+    @staticmethod
+    def _check_load(load: object) -> None:
+        if load is not None and np.any(np.asarray(load, dtype=float) != 0.0):
+            raise ParameterError("a described mechanism takes its loads from the description ([[loads]]); "
+                                 "load must be None")
+
+    def _state_one(self, model: MechanismModel, x: Array, xd: Array) -> MechanismKinematics:
+        """One sample's kinematics straight from the compiled solver, warm-started (the checked,
+        bridging route when that solve does not converge or nothing is known yet)."""
+        from . import _kernels as K
+        from .kinematics import _assemble, _run
+
+        if self._q_last is None or model is not self.model:
+            return self._kin(model, x[None], xd[None])
+        x1 = np.ascontiguousarray(x, dtype=float).reshape(1, -1)
+        xd1 = np.ascontiguousarray(xd, dtype=float).reshape(1, -1)
+        zero = np.zeros_like(x1)
+        out = _run(model, x1, xd1, zero, self._q_last)
+        if out["status"][0] != K.OK or not (np.all(np.isfinite(x1)) and np.all(np.isfinite(xd1))):
+            return self._kin(model, x1, xd1)
+        self._q_last = out["q"][0].copy()
+        return _assemble(model, None, x1, xd1, zero, out)
+
+    def _mass(self, model: MechanismModel, kin: MechanismKinematics, S: Array) -> Array:
+        from ._dyn_kernels import task_mass_batch
+
+        M = np.empty((len(kin), model.nt, model.nt))
+        task_mass_batch(np.ascontiguousarray(S), np.ascontiguousarray(kin.G), model.ancestor_list,
+                        np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.p), model.mass, model.inertia, M)
+        return M
+
+    def _bias(self, model: MechanismModel, kin: MechanismKinematics, S: Array) -> Array:
+        if _load_dependent(model):
+            u = joint_reactions(model, kin).u
+            return np.einsum("nat,na->nt", kin.J_ax, u)
+        W = body_wrenches(model, kin)
+        Q = generalised_forces(model, S, W)
+        if fr_any(model):
+            from .friction import JointFriction
+
+            fr = JointFriction(model, kin, S, free_blocks(model, kin, S))
+            Q = Q + fr.generalised(fr.initial())
+        return np.einsum("nct,nc->nt", kin.G, Q)
+
+    # ------------------------------------------------------------------ verbs
+    def mass_matrix(self, model: MechanismModel, q: Array) -> Array:
+        """``M(x) (n, nt, nt)``."""
+        x = self._x(q)
+        kin = self._kin(model, x)
+        return self._mass(model, kin, coordinate_twists(model, kin.q, kin))
+
+    def actuator_map(self, model: MechanismModel, q: Array) -> Array:
+        """``B(x) = J_ax^T (n, nt, na)``."""
+        kin = self._kin(model, self._x(q))
+        return np.swapaxes(kin.J_ax, 1, 2).copy()
+
+    def bias_forces(self, model: MechanismModel, q: Array, qd: Array, load: Array | None = None) -> Array:
+        """``h(x, xd) (n, nt)``."""
+        self._check_load(load)
+        x = self._x(q)
+        kin = self._kin(model, x, self._x(qd, "qd"))
+        return self._bias(model, kin, coordinate_twists(model, kin.q, kin))
+
+    def _all(self, model: MechanismModel, q: Array, qd: Array, one: bool = False
+             ) -> tuple[Array, Array, Array, MechanismKinematics]:
+        if one:
+            kin = self._state_one(model, np.asarray(q, dtype=float), np.asarray(qd, dtype=float))
+        else:
+            kin = self._kin(model, self._x(q), self._x(qd, "qd"))
+        S = coordinate_twists(model, kin.q, kin)
+        return self._mass(model, kin, S), self._bias(model, kin, S), np.swapaxes(kin.J_ax, 1, 2), kin
+
+    def inverse_dynamics(self, model: MechanismModel, q: Array, qd: Array, qdd: Array,
+                         load: Array | None = None) -> Array:
+        """Efforts ``u (n, na)`` with ``B u = M xdd + h`` (minimum norm when redundant)."""
+        self._check_load(load)
+        M, h, B, kin = self._all(model, q, qd)
+        rhs = np.einsum("nij,nj->ni", M, self._x(qdd, "qdd")) + h
+        # actuator_efforts checks the actuator map's rank and names the sample
+        return actuator_efforts(model, kin, np.zeros((len(kin), 0)), rhs_task=rhs)
+
+    def forward_dynamics(self, model: MechanismModel, q: Array, qd: Array, u: Array,
+                         load: Array | None = None) -> Array:
+        """Accelerations ``xdd (n, nt)`` with ``M xdd = B u - h``."""
+        self._check_load(load)
+        M, h, B, _ = self._all(model, q, qd)
+        uu = np.atleast_2d(as_array(u, (None, model.na) if np.ndim(u) == 2 else (model.na,), "u", MotionError))
+        return np.linalg.solve(M, (np.einsum("nta,na->nt", B, uu) - h)[..., None])[..., 0]
+
+    def inverse_dynamics_one(self, model: MechanismModel, q: Array, qd: Array, qdd: Array,
+                             load: float | None = None) -> Array:
+        """One sample of :meth:`inverse_dynamics` (the single-sample path: the compiled solver
+        warm-started from the previous call, no batch checks)."""
+        self._check_load(load)
+        M, h, B, kin = self._all(model, q, qd, one=True)
+        rhs = M[0] @ np.asarray(qdd, dtype=float) + h[0]
+        return actuator_efforts(model, kin, np.zeros((1, 0)), rhs_task=rhs[None])[0]
+
+    def forward_dynamics_one(self, model: MechanismModel, q: Array, qd: Array, u: Array,
+                             load: float | None = None) -> Array:
+        """One sample of :meth:`forward_dynamics` (the single-sample path)."""
+        self._check_load(load)
+        M, h, B, _ = self._all(model, q, qd, one=True)
+        return np.linalg.solve(M[0], B[0] @ np.asarray(u, dtype=float) - h[0])
+
+
+def machine_verbs(model: MechanismModel) -> MechanismVerbs:
+    """The :class:`pkmdyn.machine.MachineDynamics` verbs of a described mechanism."""
+    return MechanismVerbs(model)

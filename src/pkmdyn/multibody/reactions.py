@@ -1,0 +1,168 @@
+"""Unique joint reactions of an over-constrained described mechanism from link compliance.
+
+The rigid equilibrium equations ``A z = b`` of :func:`.dynamics.equilibrium_system` leave
+``t = k - rank A`` self-stress states of the joint wrenches ``z`` undetermined. Every body
+that carries a ``section`` and a ``material`` in the description is an elastic straight beam;
+the reactions are the admissible ones of least complementary energy (Menabrea), solved by the
+general dense solver :func:`pkmdyn.analysis.compliance.unique_reactions`, the one the PDM uses.
+
+Beam model of body b (the PDM's, section 4.2 and Eq. 63-64, generalised): the beam axis is
+the line through the two joint centres of the body that lie farthest apart (at the sample's
+pose), or with ``section.beam_axis = "body_x"`` the body frame's x axis through the centre of
+mass (the PDM's choice); the nodes are every joint centre on the body and its centre of mass, projected onto
+that axis (a joint's centre is its frame's origin on the joint's parent body: for a prismatic
+joint the point fixed in the guiding body, e.g. a cylinder's mouth, on both of its bodies) (a body whose joints all lie at one point stays rigid); the loads at the nodes are the joint wrenches acting on the body (``+W_j`` as the
+child, ``-W_j`` as the parent) and, at the centre of mass, the gravity and d'Alembert load
+``-W_b`` (Eq. 1 of :mod:`.dynamics`), each reduced to its node (moment transported along the
+offset from the axis). Each segment between consecutive nodes is a cantilever of uniform
+circular section (tension, torsion, bending; shear neglected, Eq. 64) carrying the resultant
+of the loads beyond it. Only bending, torsion and tension of the links strain: the joints are
+rigid. The compatibility equations are homogeneous in the compliances, so the reactions do
+not change when every Young's modulus is scaled by one factor (tested).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..analysis.compliance import beam_flexibility, circular_section, segment_wrenches, unique_reactions
+from ..errors import ParameterError, SingularityError
+from .kinematics import MechanismKinematics
+from .model import MechanismModel
+
+__all__ = ["elastic_bodies", "compliant_reactions", "ComplianceDataMissing"]
+
+Array = NDArray[np.float64]
+
+
+class ComplianceDataMissing(ParameterError):
+    """An over-constrained mechanism whose bodies lack the section and material that would make
+    its reactions unique."""
+
+
+def elastic_bodies(model: MechanismModel) -> list[int]:
+    """Indices of the bodies with both a ``section`` and a ``material``."""
+    return [b for b, ex in enumerate(model.body_extra) if ex.get("section") and ex.get("material")]
+
+
+def _section(model: MechanismModel, b: int):
+    sec, mat = model.body_extra[b]["section"], model.body_extra[b]["material"]
+    return circular_section(float(mat["youngs_modulus_Pa"]), float(mat["poisson_ratio"]),
+                            float(sec["outer_diameter_m"]), float(sec.get("inner_diameter_m", 0.0) or 0.0))
+
+
+def _beam_frame(axis: Array) -> Array:
+    """A rotation (n, 3, 3) whose x column is ``axis`` (n, 3) (unit)."""
+    x = axis / np.linalg.norm(axis, axis=1, keepdims=True)
+    helper = np.zeros_like(x)
+    pick = np.argmin(np.abs(x), axis=1)
+    helper[np.arange(len(x)), pick] = 1.0
+    y = np.cross(x, helper)
+    y /= np.linalg.norm(y, axis=1, keepdims=True)
+    z = np.cross(x, y)
+    return np.stack([x, y, z], axis=2)
+
+
+def _parent_point(model: MechanismModel, kin: MechanismKinematics, j: int) -> Array:
+    """Joint j's frame origin on its (description) parent body, base frame (n, 3)."""
+    b = model.joint_parent[j]
+    if b < 0:
+        return np.broadcast_to(model.joint_p_parent[j], (len(kin), 3))
+    return kin.origin[:, b] + np.einsum("nij,j->ni", kin.R[:, b], model.joint_p_parent[j])
+
+
+def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Array, b: Array, rank: int,
+                        W: Array | None = None, affine: tuple[Array, Array] | None = None) -> tuple[Array, int]:
+    """Joint wrenches ``z (n, 6 nj)`` (Plücker at the origin, see :mod:`.dynamics`) solving
+    ``A z = b`` with least complementary energy of the elastic bodies (module docstring).
+
+    ``W`` (n, nb, 6): the required body wrenches (``b``'s first ``6 nb`` entries when omitted).
+    ``affine = (z0, Z)``: the equations are in other unknowns ``lam`` (the cut joints'
+    constraint-wrench components) with ``z = z0 + Z lam``; the energy is then written in them.
+    Returns ``z`` and the number of self-stress states.
+    Raises :class:`~pkmdyn.errors.ParameterError` when the mechanism is over-constrained and
+    the bodies that would decide the self-stress carry no section or material."""
+    n = A.shape[0]
+    nb, nj = model.nb, len(model.joint_names)
+    k = 6 * nj
+    if W is None:
+        W = b[:, : 6 * nb].reshape(n, nb, 6)
+    elastic = elastic_bodies(model)
+    t = (A.shape[2] - rank) if rank >= 0 else int(model.topology.overconstraints)
+    if not elastic:
+        raise ComplianceDataMissing(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no "
+                                    "body carries a section and a material: the joint reactions cannot be made unique "
+                             "(give [[bodies]] section and material)")
+    G_list, w0_list, C_list = [], [], []
+    for bi in elastic:
+        joints = [(j, 1.0) for j in range(nj) if model.joint_child[j] == bi]
+        joints += [(j, -1.0) for j in range(nj) if model.joint_parent[j] == bi]
+        if len(joints) < 2:
+            continue
+        pts = np.stack([_parent_point(model, kin, j) for j, _ in joints], axis=1)  # (n, N, 3)
+        if model.body_extra[bi]["section"].get("beam_axis", "joints") == "body_x":
+            Rb = kin.R[:, bi]
+            origin = kin.p[:, bi]
+        else:
+            d = np.linalg.norm(pts[:, :, None] - pts[:, None], axis=-1)[0]
+            i0, i1 = np.unravel_index(int(np.argmax(d)), d.shape)
+            if d[i0, i1] <= 1e-9 * model.length_scale:
+                continue  # every joint at one point: no beam, the body stays rigid
+            Rb = _beam_frame(pts[:, i1] - pts[:, i0])
+            origin = pts[:, i0]
+        nodes = np.concatenate([pts, kin.p[:, bi][:, None]], axis=1)  # (n, N+1, 3)
+        s = np.einsum("nmi,ni->nm", nodes - origin[:, None], Rb[:, :, 0])
+        on_axis = origin[:, None] + s[..., None] * Rb[:, None, :, 0]
+        N = nodes.shape[1]
+        L = np.zeros((n, N, 6, k))
+        L0 = np.zeros((n, N, 6))
+        for m_, (j, sg) in enumerate(joints):
+            # wrench sg W_j about O -> [f; moment about the node on the axis], beam frame
+            for c in range(6):
+                e = np.zeros(6)
+                e[c] = sg
+                f = np.broadcast_to(e[3:], (n, 3))
+                mom = np.broadcast_to(e[:3], (n, 3)) - np.cross(on_axis[:, m_], f)
+                L[:, m_, :3, 6 * j + c] = np.einsum("nji,nj->ni", Rb, f)
+                L[:, m_, 3:, 6 * j + c] = np.einsum("nji,nj->ni", Rb, mom)
+        f0 = -W[:, bi, 3:]
+        m0 = -W[:, bi, :3] - np.cross(on_axis[:, -1], f0)
+        L0[:, -1, :3] = np.einsum("nji,nj->ni", Rb, f0)
+        L0[:, -1, 3:] = np.einsum("nji,nj->ni", Rb, m0)
+        lengths, Gs = segment_wrenches(s, L)
+        _, w0 = segment_wrenches(s, L0)
+        C = beam_flexibility(lengths, _section(model, bi))
+        G_list.append(Gs)
+        w0_list.append(w0)
+        C_list.append(C)
+    if not G_list:
+        raise ComplianceDataMissing(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no "
+                                    "elastic body joins two joints: the joint reactions cannot be made unique")
+    G = np.concatenate(G_list, axis=1)
+    w0 = np.concatenate(w0_list, axis=1)
+    C = np.concatenate(C_list, axis=1)
+    # the compatibility equations are homogeneous in the flexibilities: normalise them (no change
+    # in the result, O(1) numbers for any modulus)
+    C = C / np.abs(C).max()
+    if affine is not None:
+        z0, Z = affine
+        w0 = w0 + np.einsum("nsak,nk->nsa", G, z0)
+        G = np.einsum("nsak,nkl->nsal", G, Z)
+        scale = np.ones(A.shape[2])
+    else:
+        scale = np.ones((nj, 6))
+        scale[:, :3] = model.length_scale
+        scale = scale.reshape(-1)
+    try:
+        res = unique_reactions(A * scale, b, G * scale, w0, C)
+    except SingularityError:
+        missing = [model.body_names[i] for i in range(nb) if i not in elastic]
+        raise ComplianceDataMissing(f"mechanism {model.name!r}: a self-stress state strains no elastic body; give a section "
+                             f"and a material to the bodies of the over-constrained loops (without: "
+                             f"{', '.join(missing[:8])}{' ...' if len(missing) > 8 else ''})") from None
+    lam = res.lam * scale
+    t = int(A.shape[2] - res.rank.min())
+    if affine is not None:
+        return affine[0] + np.einsum("nkl,nl->nk", affine[1], lam), t
+    return lam, t
