@@ -247,7 +247,11 @@ def test_overconstrained_reactions_are_unique_by_compliance(name):
 
 
 def test_overconstrained_without_sections_is_refused_by_name():
-    m, kin = _kin(ex.builtin_dict("bennett"))
+    d = ex.builtin_dict("bennett")
+    for b in d["bodies"]:
+        b.pop("section", None)
+        b.pop("material", None)
+    m, kin = _kin(d)
     with pytest.raises(ParameterError, match="bennett.*over-constrained.*section"):
         joint_reactions(m, kin)
 
@@ -597,17 +601,27 @@ def test_twists_from_the_solved_poses_equal_those_from_q(name):
     assert np.abs(coordinate_twists(m, kin.q, kin) - coordinate_twists(m, kin.q)).max() < 1e-13
 
 
-def test_run_without_sections_writes_minimum_norm_reactions_flagged(tmp_path):
-    """An over-constrained description without sections: the run writes reactions that balance
-    every body (minimum norm), flagged as not unique in summary.json."""
+def test_run_without_sections_is_refused_or_writes_flagged_minimum_norm_reactions(tmp_path, capsys):
+    """An over-constrained description without sections: the run is refused (one line naming the
+    missing compliance data, exit 2, nothing written); with --minimum-norm-reactions it writes
+    reactions that balance every body (minimum norm), flagged as not unique in summary.json."""
     import json
 
     from pkmdyn.cli import main
 
+    d = ex.builtin_dict("bennett")
+    for b in d["bodies"]:
+        b.pop("section", None)
+        b.pop("material", None)
     src = tmp_path / "bennett.toml"
-    src.write_text(_toml(ex.builtin_dict("bennett")))
+    src.write_text(_toml(d))
     out = tmp_path / "out"
-    assert main(["run", "--machine", str(src), "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["run", "--machine", str(src), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "over-constrained" in err[0] and "section" in err[0]
+    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["bennett.toml"]
+    assert main(["run", "--machine", str(src), "--minimum-norm-reactions", "--out", str(out)]) == 0
     s = json.loads((out / "summary.json").read_text())
     assert s["reactions"]["method"] == "minimum-norm" and s["reactions"]["unique"] is False
     assert "section" in s["reactions"]["reason"]

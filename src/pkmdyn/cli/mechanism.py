@@ -68,10 +68,15 @@ def describe(machine: str) -> None:
               help="Motion CSV: t_s and one column per task coordinate (<name>_<unit>), optional rates "
                    "<name>d_<unit>_s and accelerations <name>dd_<unit>_s2 (default: the machine's default motion; "
                    "hip: the ISO 14242-1 cycle, pdm: the Eq. 84 motion).")
+@click.option("--minimum-norm-reactions", is_flag=True,
+              help="An over-constrained mechanism without section and material data: write the minimum-norm "
+                   "joint reactions (they balance every body but are not unique; summary.json says so) instead "
+                   "of refusing.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
-def run(machine: str, motion_path: Path | None, out_dir: Path) -> None:
-    """Kinematics of every body and joint along a motion: results.csv, model.json, bodies.npz, summary.json.
+def run(machine: str, motion_path: Path | None, minimum_norm_reactions: bool, out_dir: Path) -> None:
+    """Kinematics, actuator efforts and every joint reaction along a motion: results.csv,
+    model.json, bodies.npz, summary.json, report.html.
 
     The same files for every machine; the hip's and the PDM's own jobs (dynamics, plots) are
     pkmdyn hip run and pkmdyn pdm run."""
@@ -89,7 +94,8 @@ def run(machine: str, motion_path: Path | None, out_dir: Path) -> None:
     else:
         motion = default_motion(model) if entry is None else entry.default_motion()
     text = path.read_text(encoding="utf-8", errors="replace") if path is not None else ""
-    run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files, description_text=text)
+    run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files, description_text=text,
+                  minimum_norm_reactions=minimum_norm_reactions)
 
 
 #: controllers a described mechanism takes (task space, from its dynamics verbs)

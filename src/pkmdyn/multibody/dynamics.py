@@ -684,15 +684,17 @@ def effort_unit(model: MechanismModel, i: int) -> str:
     return "N" if model.actuator_units[i] == "m" else "Nm"
 
 
-def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics) -> tuple[dict, dict, dict]:
+def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics,
+                     minimum_norm: bool = False) -> tuple[dict, dict, dict]:
     """The dynamics' part of a run's files: ``results.csv`` columns ``<joint>_effort_<N|Nm>``,
     ``bodies.npz`` arrays ``joint_force``, ``joint_moment`` (n, nj, 3) (module docstring) and
     ``body_wrench`` (n, nb, 6) (Eq. 1, ``[n_O; f]``), and ``summary.json`` entries.
 
-    An over-constrained mechanism whose bodies carry no section and material gets the
-    minimum-norm reactions (they balance every body; which self-stress state is one choice),
-    flagged ``"unique": false`` with the reason in the summary. Friction that does not converge
-    raises (nothing is written)."""
+    An over-constrained mechanism whose bodies carry no section and material is refused
+    (:class:`~pkmdyn.multibody.reactions.ComplianceDataMissing`, naming what is missing) unless
+    ``minimum_norm``: then it gets the minimum-norm reactions (they balance every body; which
+    self-stress state is one choice), flagged ``"unique": false`` with the reason in the summary.
+    Friction that does not converge raises (nothing is written)."""
     from .reactions import ComplianceDataMissing
 
     summary: dict = {}
@@ -706,6 +708,9 @@ def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics) -> tuple[d
         summary["reactions"] = {"method": reac.method, "self_stress_states": reac.self_stress,
                                 "max_equilibrium_residual": float(reac.residual.max()), "unique": True}
     except ComplianceDataMissing as exc:
+        if not minimum_norm:
+            raise ComplianceDataMissing(f"{exc}; or run with --minimum-norm-reactions for reactions that balance "
+                                        "every body but are not unique") from None
         reac = joint_reactions(model, kin, overconstrained="minimum-norm")
         u = reac.u
         npz = {"joint_force": reac.joint_force, "joint_moment": reac.joint_moment}
