@@ -211,3 +211,21 @@ def test_registry_reads_the_machine_folders():
         registry.resolve("no-such-machine")
     with pytest.raises(ParameterError, match="not a hand-built machine"):
         registry.hand_built("stewart")
+
+
+def test_control_takes_every_machine_of_the_registry(capsys, tmp_path):
+    """``pkmdyn control --machine hip`` is ``pkmdyn hip control`` (the same table, byte for byte);
+    a described mechanism tracks its default motion; options of the other kind are refused."""
+    args = ["--controller", "augmented-pd", "--cycles", "0.05", "--no-plots"]
+    assert _run(capsys, "control", "--machine", "hip", *args, "--out", str(tmp_path / "a"))[0] == 0
+    assert _run(capsys, "hip", "control", *args, "--out", str(tmp_path / "b"))[0] == 0
+    assert (tmp_path / "a" / "control.csv").read_bytes() == (tmp_path / "b" / "control.csv").read_bytes()
+    code, _, err = _run(capsys, "control", "--machine", "stewart", "--duration", "0.05", "--out", str(tmp_path / "s"))
+    assert code == 0, err
+    cols = np.genfromtxt(tmp_path / "s" / "control.csv", delimiter=",", names=True)
+    assert cols.shape[0] >= 20 and all(np.isfinite(cols[n]).all() for n in cols.dtype.names)
+    for bad in (["--machine", "stewart", "--cycles", "2"], ["--machine", "hip"],
+                ["--machine", "hip", "--controller", "pd", "--duration", "1"],
+                ["--machine", "stewart", "--controller", "pd"]):
+        code, _, err = _run(capsys, "control", *bad, "--out", str(tmp_path / "refused"))
+        assert code == 2 and len(err.strip().splitlines()) == 1 and not (tmp_path / "refused").exists()

@@ -10,7 +10,8 @@ from pathlib import Path
 
 import click
 
-from ._groups import PATH_IN, cli, list_files
+from ._groups import PATH_IN, FiniteFloat, cli, list_files
+from .control import MAX_CYCLES
 
 _MACHINE_HELP = "A built-in machine (see pkmdyn machines) or a mechanism description FILE.toml."
 
@@ -124,36 +125,64 @@ def described_control_settings(model) -> dict:
 
 @cli.command("control")
 @click.option("--machine", required=True, help=_MACHINE_HELP)
-@click.option("--controller", type=click.Choice(DESCRIBED_CONTROLLERS), default="computed-torque", show_default=True,
-              help="Task-space controller on the mechanism's dynamics.")
-@click.option("--duration", "duration_s", type=float, default=1.0, show_default=True,
-              help="Seconds of the machine's default motion to track.")
+@click.option("--controller", default=None,
+              help="hip: pd, augmented-pd, feedforward, computed-torque; pdm: pid, feedforward, computed-torque; a "
+                   "described mechanism: " + ", ".join(DESCRIBED_CONTROLLERS) + " (default computed-torque).")
+@click.option("--params", "params_path", type=PATH_IN, help="Hand-built machines: the controller model's parameter file.")
+@click.option("--plant-params", "plant_path", type=PATH_IN, help="Hand-built machines: the plant's parameter file.")
+@click.option("--motion", "motion_path", type=PATH_IN, help="Hand-built machines: a motion file (CSV).")
+@click.option("--cycles", type=FiniteFloat(0.0, MAX_CYCLES, lo_open=True), default=None,
+              help="Hand-built machines: cycles of the built-in motion (default 1).")
+@click.option("--gains", "gains_path", type=PATH_IN, help="Hand-built machines: control settings (TOML).")
+@click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv", show_default=True,
+              help="Table format of the per-cycle results.")
+@click.option("--no-plots", is_flag=True, help="Hand-built machines: write no PNG plots.")
+@click.option("--duration", "duration_s", type=FiniteFloat(0.0, 1e6, lo_open=True), default=None,
+              help="Described mechanisms: seconds of the default motion to track (default 1 s).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
-def control(machine: str, controller: str, duration_s: float, out_dir: Path) -> None:
-    """Closed-loop tracking of a described mechanism's default motion: control.csv, summary.json.
+def control(machine: str, controller: str | None, params_path: Path | None, plant_path: Path | None,
+            motion_path: Path | None, cycles: float | None, gains_path: Path | None, fmt: str, no_plots: bool,
+            duration_s: float | None, out_dir: Path) -> None:
+    """Closed-loop tracking for any machine: control.csv (or .parquet), summary.json.
 
-    The plant is the mechanism's forward dynamics (pkmdyn.multibody.machine), the controller
-    the same model; the hip and the PDM keep pkmdyn hip control and pkmdyn pdm control."""
+    A hand-built machine runs its own control job (the same as pkmdyn hip control / pkmdyn pdm
+    control, with every option of those); a described mechanism tracks its default motion in
+    task space on its own dynamics (pkmdyn.multibody.machine), the controller the same model."""
     import numpy as np
 
     from ..control import gains, hermite_motion, loop_settings
-    from ..errors import MotionError, ParameterError
+    from ..errors import MotionError
     from ..io import check_output_dir
     from ..machines.registry import resolve
     from ..multibody import default_motion
     from ..multibody.machine import machine_verbs
-    from .control import _Setup, _stream
+    from .control import _command, _Setup, _stream
 
     entry, path = resolve(machine)
     if entry is not None:
-        raise ParameterError(f"--machine {machine}: a hand-built machine; its closed loop is pkmdyn {machine} control")
+        if controller is None:
+            raise click.UsageError(f"--controller is required for --machine {machine}")
+        if duration_s is not None:
+            raise click.UsageError("--duration applies to a described mechanism; a hand-built machine takes --cycles")
+        _command(entry.NAME, controller, params_path, plant_path, motion_path, 1.0 if cycles is None else cycles,
+                 gains_path, no_plots, out_dir, fmt)
+        return
+    given = [o for o, v in (("--params", params_path), ("--plant-params", plant_path), ("--motion", motion_path),
+                            ("--cycles", cycles), ("--gains", gains_path)) if v is not None]
+    if given:
+        raise click.UsageError(f"{given[0]} applies to the hand-built machines (hip, pdm), not to a described mechanism")
+    controller = controller or "computed-torque"
+    if controller not in DESCRIBED_CONTROLLERS:
+        raise click.UsageError(f"--controller {controller!r}: a described mechanism takes "
+                               + ", ".join(DESCRIBED_CONTROLLERS))
+    duration_s = 1.0 if duration_s is None else duration_s
     inputs = {"--machine": path}
     check_output_dir(out_dir, inputs)
     model, _ = _load(machine)
     motion = default_motion(model)
-    if not (np.isfinite(duration_s) and 0.0 < duration_s <= float(motion.t[-1] - motion.t[0])):
-        raise MotionError(f"--duration: {duration_s:g} s must be > 0 and at most the default motion's "
+    if not duration_s <= float(motion.t[-1] - motion.t[0]):
+        raise MotionError(f"--duration: {duration_s:g} s must be at most the default motion's "
                           f"{float(motion.t[-1] - motion.t[0]):g} s")
     settings = described_control_settings(model)
     verbs = machine_verbs(model)
@@ -161,7 +190,7 @@ def control(machine: str, controller: str, duration_s: float, out_dir: Path) -> 
     setup = _Setup(model.name, verbs, model, model, fn, duration_s, False, str(path), "the controller's model",
                    "the default motion", span_s=float(motion.t[-1] - motion.t[0]))
     _stream(setup, controller, gains(settings, controller, model.nt), loop_settings(settings), settings, out_dir,
-            False, None, inputs, "csv", html_report=False)
+            False, None, inputs, fmt, html_report=False)  # its plots and page are the hand-built machines' own
 
 
 @cli.command("export")
