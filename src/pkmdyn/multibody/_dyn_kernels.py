@@ -25,6 +25,24 @@ def twists_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, c
 
 
 @njit(cache=True)
+def _inertia_in_base(R, inertia, tmp, Iw):  # pragma: no cover - compiled
+    """``Iw = R I' R^T``: the inertia ``I' (3, 3)`` of a body frame expressed in the base frame
+    (``tmp (3, 3)`` work space)."""
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for k in range(3):
+                acc += R[i, k] * inertia[k, j]
+            tmp[i, j] = acc
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for k in range(3):
+                acc += tmp[i, k] * R[j, k]
+            Iw[i, j] = acc
+
+
+@njit(cache=True)
 def body_wrench_batch(R, w, wd, p, a, mass, inertia, gravity, W_out):  # pragma: no cover - compiled
     """Required body wrenches ``W_out (n, nb, 6)`` ``[n_O; f]`` of Eq. (1) (no loads): per body
     ``f = m (a - g)``, ``n_O = I_w wd + w x I_w w + p x f`` with ``I_w = R I' R^T``."""
@@ -33,18 +51,7 @@ def body_wrench_batch(R, w, wd, p, a, mass, inertia, gravity, W_out):  # pragma:
     tmp = np.empty((3, 3))
     for s in range(n):
         for b in range(nb):
-            for i in range(3):
-                for j in range(3):
-                    acc = 0.0
-                    for k in range(3):
-                        acc += R[s, b, i, k] * inertia[b, k, j]
-                    tmp[i, j] = acc
-            for i in range(3):
-                for j in range(3):
-                    acc = 0.0
-                    for k in range(3):
-                        acc += tmp[i, k] * R[s, b, j, k]
-                    Iw[i, j] = acc
+            _inertia_in_base(R[s, b], inertia[b], tmp, Iw)
             L0 = Iw[0, 0] * w[s, b, 0] + Iw[0, 1] * w[s, b, 1] + Iw[0, 2] * w[s, b, 2]
             L1 = Iw[1, 0] * w[s, b, 0] + Iw[1, 1] * w[s, b, 1] + Iw[1, 2] * w[s, b, 2]
             L2 = Iw[2, 0] * w[s, b, 0] + Iw[2, 1] * w[s, b, 1] + Iw[2, 2] * w[s, b, 2]
@@ -242,18 +249,7 @@ def task_mass_batch(S, G, anc_list, R, p, mass, inertia, M_out):  # pragma: no c
                 vc[0, t] = T[3, t] + w1 * p[s, b, 2] - w2 * p[s, b, 1]
                 vc[1, t] = T[4, t] + w2 * p[s, b, 0] - w0 * p[s, b, 2]
                 vc[2, t] = T[5, t] + w0 * p[s, b, 1] - w1 * p[s, b, 0]
-            for i in range(3):
-                for j in range(3):
-                    acc = 0.0
-                    for k in range(3):
-                        acc += R[s, b, i, k] * inertia[b, k, j]
-                    tmp[i, j] = acc
-            for i in range(3):
-                for j in range(3):
-                    acc = 0.0
-                    for k in range(3):
-                        acc += tmp[i, k] * R[s, b, j, k]
-                    Iw[i, j] = acc
+            _inertia_in_base(R[s, b], inertia[b], tmp, Iw)
             for i in range(3):
                 for t in range(nt):
                     Iwt[i, t] = Iw[i, 0] * T[0, t] + Iw[i, 1] * T[1, t] + Iw[i, 2] * T[2, t]

@@ -435,69 +435,6 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
 
 
 @njit(cache=True)
-def lu_factor(M, piv):
-    """In-place LU with partial pivoting of square ``M``; False when a pivot is below
-    1e-12 of the largest entry (singular to working precision)."""
-    n = M.shape[0]
-    big = 0.0
-    for i in range(n):
-        for j in range(n):
-            if abs(M[i, j]) > big:
-                big = abs(M[i, j])
-    tol = 1e-12 * big if big > 0 else 1e-300
-    for k in range(n):
-        pr = k
-        pv = abs(M[k, k])
-        for i in range(k + 1, n):
-            if abs(M[i, k]) > pv:
-                pv = abs(M[i, k])
-                pr = i
-        piv[k] = pr
-        if pv <= tol:
-            return False
-        if pr != k:
-            for j in range(n):
-                tmp = M[k, j]
-                M[k, j] = M[pr, j]
-                M[pr, j] = tmp
-        inv = 1.0 / M[k, k]
-        for i in range(k + 1, n):
-            f = M[i, k] * inv
-            M[i, k] = f
-            if f != 0.0:
-                for j in range(k + 1, n):
-                    M[i, j] -= f * M[k, j]
-    return True
-
-
-@njit(cache=True)
-def lu_solve(M, piv, b):
-    """Solve in place for ``b`` with the factors of :func:`lu_factor`."""
-    n = M.shape[0]
-    for k in range(n):
-        pr = piv[k]
-        if pr != k:
-            tmp = b[k]
-            b[k] = b[pr]
-            b[pr] = tmp
-    for i in range(n):
-        s = b[i]
-        for j in range(i):
-            s -= M[i, j] * b[j]
-        b[i] = s
-    for i in range(n - 1, -1, -1):
-        s = b[i]
-        for j in range(i + 1, n):
-            s -= M[i, j] * b[j]
-        b[i] = s / M[i, i]
-
-
-@njit(cache=True, inline="always")
-def _wrap(a):
-    return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
-
-
-@njit(cache=True)
 def _fill(K, J, sel_rows, idle, prow, pcol):
     """``K[i, j] = Kfull[prow[i], pcol[j]]`` with ``Kfull = [J[sel_rows]; idle]``."""
     m = sel_rows.shape[0]
@@ -510,6 +447,11 @@ def _fill(K, J, sel_rows, idle, prow, pcol):
         else:
             for j in range(K.shape[1]):
                 K[i, j] = idle[r - m, pcol[j]]
+
+
+@njit(cache=True, inline="always")
+def _wrap(a):
+    return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
 
 
 @njit(cache=True)
