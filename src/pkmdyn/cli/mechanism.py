@@ -69,13 +69,13 @@ def describe(machine: str) -> None:
               help="Motion CSV: t_s and one column per task coordinate (<name>_<unit>), optional rates "
                    "<name>d_<unit>_s and accelerations <name>dd_<unit>_s2 (default: the machine's default motion; "
                    "hip: the ISO 14242-1 cycle, pdm: the Eq. 84 motion).")
-@click.option("--minimum-norm-reactions", is_flag=True,
-              help="An over-constrained mechanism without section and material data: write the minimum-norm "
-                   "joint reactions (they balance every body but are not unique; summary.json says so) instead "
-                   "of refusing.")
+@click.option("--unique-reactions", is_flag=True,
+              help="Refuse an over-constrained mechanism whose bodies lack the section and material data that make "
+                   "its joint reactions unique (without it such a run writes minimum-norm reactions, which balance "
+                   "every body but are one choice, says so on stderr and in summary.json).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
-def run(machine: str, motion_path: Path | None, minimum_norm_reactions: bool, out_dir: Path) -> None:
+def run(machine: str, motion_path: Path | None, unique_reactions: bool, out_dir: Path) -> None:
     """Kinematics, actuator efforts and every joint reaction along a motion: results.csv,
     model.json, bodies.npz, summary.json, report.html.
 
@@ -95,8 +95,12 @@ def run(machine: str, motion_path: Path | None, minimum_norm_reactions: bool, ou
     else:
         motion = default_motion(model) if entry is None else entry.default_motion()
     text = path.read_text(encoding="utf-8", errors="replace") if path is not None else ""
-    run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files, description_text=text,
-                  minimum_norm_reactions=minimum_norm_reactions)
+    summary = run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files, description_text=text,
+                            unique_reactions=unique_reactions)
+    reactions = summary.get("reactions", {})
+    if reactions.get("unique") is False:
+        click.echo(f"pkmdyn: warning: joint reactions are the minimum-norm ones, not unique: {reactions.get('reason')}",
+                   err=True)
 
 
 #: controllers a described mechanism takes (task space, from its dynamics verbs)

@@ -709,8 +709,7 @@ def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics,
                                 "max_equilibrium_residual": float(reac.residual.max()), "unique": True}
     except ComplianceDataMissing as exc:
         if not minimum_norm:
-            raise ComplianceDataMissing(f"{exc}; or run with --minimum-norm-reactions for reactions that balance "
-                                        "every body but are not unique") from None
+            raise ComplianceDataMissing(str(exc)) from None
         reac = joint_reactions(model, kin, overconstrained="minimum-norm")
         u = reac.u
         npz = {"joint_force": reac.joint_force, "joint_moment": reac.joint_moment}

@@ -157,14 +157,15 @@ def _write_report(out: Path, model: MechanismModel, files: dict[str, Path], cols
 
 def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path, inputs: Any = (),
                   report: Callable[[dict[str, Path]], None] | None = None, description_text: str = "",
-                  minimum_norm_reactions: bool = False) -> dict[str, Any]:
+                  unique_reactions: bool = False) -> dict[str, Any]:
     """Kinematics of ``model`` along ``motion``, written into ``out_dir`` (through
     :func:`pkmdyn.io.output_dir` under the output rule, ``inputs`` the files the run read:
     nothing is written when anything fails), with ``report.html`` (``description_text``: the
     description file's text, shown on the page). ``report`` is called with the files' final
     paths before they move into place. An over-constrained mechanism needs the section and
-    material that make its reactions unique, unless ``minimum_norm_reactions``
-    (:func:`pkmdyn.multibody.dynamics.dynamics_outputs`). Returns the summary with ``files`` as
+    material that make its reactions unique: without them its run writes the minimum-norm
+    reactions flagged ``"unique": false`` (kinematics and efforts are unique all the same), or,
+    with ``unique_reactions``, is refused (:func:`pkmdyn.multibody.dynamics.dynamics_outputs`). Returns the summary with ``files`` as
     ``{label: path}``."""
     from .dynamics import dynamics_outputs
 
@@ -172,7 +173,7 @@ def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path
     sm = singularity_measures(model, kin.q)
     cols = results_columns(model, kin)
     npz = bodies_arrays(model, kin)
-    dyn_cols, dyn_npz, dyn_summary = dynamics_outputs(model, kin, minimum_norm_reactions)
+    dyn_cols, dyn_npz, dyn_summary = dynamics_outputs(model, kin, minimum_norm=not unique_reactions)
     cols.update(dyn_cols)
     npz.update(dyn_npz)
     summary = {
