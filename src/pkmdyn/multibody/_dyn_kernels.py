@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._kernels import forward_positions
+from ._kernels import _matmul3, forward_positions
 
 
 @njit(cache=True)
@@ -166,10 +166,9 @@ def twists_from_poses(q, Rb, ob, body_parent, body_joint, joint_q0, joint_nq, co
                     for j in range(3):
                         Rf[i, j] = RP[k, i, j]
             else:
+                _matmul3(Rb[s, a], RP[k], Rf)
                 for i in range(3):
                     o[i] = ob[s, a, i] + Rb[s, a, i, 0] * pP[k, 0] + Rb[s, a, i, 1] * pP[k, 1] + Rb[s, a, i, 2] * pP[k, 2]
-                    for j in range(3):
-                        Rf[i, j] = Rb[s, a, i, 0] * RP[k, 0, j] + Rb[s, a, i, 1] * RP[k, 1, j] + Rb[s, a, i, 2] * RP[k, 2, j]
             last = joint_q0[k] + joint_nq[k] - 1
             for c in range(joint_q0[k], last + 1):
                 m = coord_motion[c]

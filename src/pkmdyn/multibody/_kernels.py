@@ -255,6 +255,23 @@ def _frame(b, R, p, Rj, pj, e, o):
 
 
 @njit(cache=True, inline="always")
+def _direction_motion(b, u, V, A, ud, udd, t3):  # pragma: no cover - compiled
+    """Rate ``ud = w x u`` and acceleration ``udd = wd x u + w x (w x u)`` of a direction ``u``
+    fixed in body ``b`` (twist ``V[b]``, its rate ``A[b]``, angular part first); zero for the
+    ground (``b < 0``). ``t3``: work space."""
+    if b >= 0:
+        _cross(V[b, :3], u, ud)
+        _cross(V[b, :3], ud, t3)
+        _cross(A[b, :3], u, udd)
+        for m in range(3):
+            udd[m] += t3[m]
+    else:
+        for m in range(3):
+            ud[m] = 0.0
+            udd[m] = 0.0
+
+
+@njit(cache=True, inline="always")
 def _point_motion(b, x, V, A, v, a):
     """Velocity ``v`` and acceleration ``a`` of the world point ``x`` fixed in body b."""
     if b < 0:
@@ -340,16 +357,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
             if not with_drift:
                 _jrow(J, rr, wa, wb, S, anc, a, b, 1.0, -1.0)
         if with_drift:
-            if a >= 0:
-                _cross(V[a, :3], e, ed)
-                _cross(V[a, :3], ed, t3)
-                _cross(A[a, :3], e, edd)
-                for m in range(3):
-                    edd[m] += t3[m]
-            else:
-                for m in range(3):
-                    ed[m] = 0.0
-                    edd[m] = 0.0
+            _direction_motion(a, e, V, A, ed, edd, t3)
             if row_kind[rr] == 0:
                 _point_motion(a, oP, V, A, vP, aP)
                 _point_motion(b, oC, V, A, vC, aC)
@@ -358,16 +366,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
                     g += 2.0 * ed[m] * (vC[m] - vP[m]) + e[m] * (aC[m] - aP[m])
                 gamma[rr] = g
             else:
-                if b >= 0:
-                    _cross(V[b, :3], cj, cd)
-                    _cross(V[b, :3], cd, t3)
-                    _cross(A[b, :3], cj, cdd)
-                    for m in range(3):
-                        cdd[m] += t3[m]
-                else:
-                    for m in range(3):
-                        cd[m] = 0.0
-                        cdd[m] = 0.0
+                _direction_motion(b, cj, V, A, cd, cdd, t3)
                 gamma[rr] = _dot(edd, cj) + 2.0 * _dot(ed, cd) + _dot(e, cdd)
     # task rows
     tb = task_body
