@@ -105,10 +105,10 @@ def test_bias_forces_by_finite_differences_of_the_energy():
     assert np.abs(h - dV).max() <= 1e-6 * np.abs(dV).max()
 
 
-def test_a_load_argument_is_refused():
+def test_a_load_argument_is_refused_without_named_loads():
     m = load_mechanism(ex.builtin_dict("stewart"))
     V = machine_verbs(m)
-    with pytest.raises(ParameterError, match="loads from the description"):
+    with pytest.raises(ParameterError, match="has no named load"):
         V.bias_forces(m, reference_task(m)[None], np.zeros((1, m.nt)), np.ones(1))
 
 

@@ -26,6 +26,7 @@ from pydantic import Field, ValidationError, field_validator
 
 from ..errors import ParameterError
 from ..params_util import Section, _rule, read_toml
+from .joint_types import joint_type
 from .joint_types import JOINT_TYPES, joint_type
 
 __all__ = ["Description", "BodySpec", "JointSpec", "TaskSpec", "LoadSpec", "MotionSpec",
@@ -79,6 +80,18 @@ class _Body(Section):
     shape: _Shape | None = None
 
 
+class _ExternalFriction(Section):
+    """Friction whose normal force is a named external load (``[[loads]]`` with a ``name``):
+    ``coefficient * radius_m * |F + offset_N|`` added to the joint's Coulomb torque (a joint
+    that rotates), ``coefficient * |F + offset_N|`` to its Coulomb force (one that only slides,
+    no radius); ``F`` [N] the load's magnitude at the sample (the hip paper's Eq. 16 form)."""
+
+    load: str = NAME
+    coefficient: float = Field(ge=0)
+    radius_m: float = Field(default=0.0, ge=0)
+    offset_N: float = 0.0
+
+
 class _Friction(Section):
     """Joint friction data, stored for the dynamics (units in every key)."""
 
@@ -90,6 +103,7 @@ class _Friction(Section):
     pin_radius_m: float = Field(default=0.0, ge=0)
     ball_radius_m: float = Field(default=0.0, ge=0)
     mean_radius_m: float = Field(default=0.0, ge=0)
+    external: list[_ExternalFriction] = Field(default_factory=list, max_length=16)
 
 
 class _Joint(Section):
@@ -117,10 +131,13 @@ class _Joint(Section):
 
 
 class _Load(Section):
+    name: str | None = Field(default=None, min_length=3, max_length=64, pattern=r"^[A-Za-z][A-Za-z0-9_]*_N$")
     body: str = NAME
-    force_N: Vec3 = [0.0, 0.0, 0.0]
-    moment_Nm: Vec3 = [0.0, 0.0, 0.0]
+    force_N: Vec3 | None = None
+    moment_Nm: Vec3 | None = None
     point_m: Vec3 | None = None
+    direction: Vec3 | None = None
+    magnitude_N: float | None = None
 
 
 class _Task(Section):
@@ -218,13 +235,19 @@ class TaskSpec:
 
 @dataclass(frozen=True)
 class LoadSpec:
-    """A constant external load on ``body``: force [N] at ``point`` (base frame, reference
-    configuration, fixed in the body) and moment [N m], both in the base frame."""
+    """An external load on ``body``: force [N] at ``point`` (base frame, reference
+    configuration, fixed in the body) and moment [N m], both in the base frame. A named load
+    (``name``, e.g. ``hydraulic_N``) is the force ``magnitude * direction`` (unit ``direction``,
+    base frame) whose magnitude [N] a motion gives per sample (its column ``name``);
+    ``force`` is then its force at the default ``magnitude``."""
 
     body: str
     force: Array
     moment: Array
     point: Array
+    name: str | None = None
+    direction: Array | None = None
+    magnitude: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -376,6 +399,52 @@ def _joint(j: _Joint, where: str) -> JointSpec:
                      offset=offset, limits=limits, friction=j.friction.model_dump() if j.friction else None)
 
 
+def _load(ld: _Load, where: str, body_specs: dict[str, BodySpec], task: TaskSpec) -> LoadSpec:
+    """A validated load: constant (``force_N``, ``moment_Nm``) or named (``name``,
+    ``direction``, ``magnitude_N``)."""
+    if ld.body not in body_specs:
+        raise ParameterError(f"{where} body: {ld.body!r} is not a body of the mechanism")
+    b = body_specs[ld.body]
+    pt = np.array(ld.point_m if ld.point_m is not None else b.p0 + b.R0 @ b.com, dtype=float)
+    if ld.name is None:
+        for key in ("direction", "magnitude_N"):
+            if getattr(ld, key) is not None:
+                raise ParameterError(f"{where} {key}: only for a named load (give it a name such as 'push_N'), "
+                                     "or give force_N")
+        return LoadSpec(ld.body, np.array(ld.force_N or [0.0] * 3, float), np.array(ld.moment_Nm or [0.0] * 3, float),
+                        pt)
+    for key in ("force_N", "moment_Nm"):
+        if getattr(ld, key) is not None:
+            raise ParameterError(f"{where} {key}: a named load ({ld.name!r}) is a force along direction with a "
+                                 "magnitude per sample; give direction and magnitude_N instead")
+    cols = {f"{n}_{u}" for n, u in zip(task.names, task.units)} | {"t_s"}
+    if ld.name in cols:
+        raise ParameterError(f"{where} name: {ld.name!r} is a task column; name the load otherwise")
+    if ld.direction is None or not np.linalg.norm(ld.direction) > 0:
+        raise ParameterError(f"{where} direction: a named load needs a nonzero direction")
+    d = np.array(ld.direction, float) / np.linalg.norm(ld.direction)
+    mag = float(ld.magnitude_N or 0.0)
+    return LoadSpec(ld.body, d * mag, np.zeros(3), pt, name=ld.name, direction=d, magnitude=mag)
+
+
+def _check_external_friction(label: str, joints: list[JointSpec], names: set[str]) -> None:
+    """Each joint's ``friction.external`` names a named load; a radius exactly where the joint
+    rotates."""
+    for j in joints:
+        for k, e in enumerate((j.friction or {}).get("external", [])):
+            where = f"{label}: [joints] {j.name} friction external[{k}]"
+            if e["load"] not in names:
+                known = ", ".join(sorted(names)) or "none"
+                raise ParameterError(f"{where} load: {e['load']!r} is not a named load (named loads: {known})")
+            rotates = any(m.startswith("R") for m in joint_type(j.type).motions)
+            if rotates and not e["radius_m"] > 0:
+                raise ParameterError(f"{where} radius_m: a {j.type} joint rotates; give the radius at which the "
+                                     "load's friction acts")
+            if not rotates and e["radius_m"] > 0:
+                raise ParameterError(f"{where} radius_m: a {j.type} joint only slides; its friction is "
+                                     "coefficient x the load, without a radius")
+
+
 def _expand_legs(data: _File, source: str) -> tuple[list[tuple[_Body, str]], list[tuple[_Joint, str]]]:
     """Bodies and joints of the file with every ``[[legs]]`` template repeated."""
     bodies = [(b, f"{source}: [bodies] {b.name}:") for b in data.bodies]
@@ -500,12 +569,8 @@ def load_description(source: str | Path | dict[str, Any]) -> Description:
     if not any(j.actuated for j in joints):
         raise ParameterError(f"{label}: [joints]: no joint is actuated (set actuated = true on the driven joints)")
     task = _task(data.task, f"{label}: [task]", body_specs)
-    loads = []
-    for k, ld in enumerate(data.loads):
-        if ld.body not in body_specs:
-            raise ParameterError(f"{label}: [loads][{k}] body: {ld.body!r} is not a body of the mechanism")
-        pt = ld.point_m if ld.point_m is not None else body_specs[ld.body].p0 + body_specs[ld.body].R0 @ body_specs[ld.body].com
-        loads.append(LoadSpec(ld.body, np.array(ld.force_N, float), np.array(ld.moment_Nm, float), np.array(pt, float)))
+    loads = [_load(ld, f"{label}: [loads][{k}]", body_specs, task) for k, ld in enumerate(data.loads)]
+    _check_external_friction(label, joints, {ld.name for ld in loads if ld.name is not None})
     cuts = None
     if data.mechanism.cut_joints is not None:
         names = {j.name: j for j in joints}

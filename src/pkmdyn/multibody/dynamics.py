@@ -44,6 +44,7 @@ joint point (``kin.joint_point``), the PDM's schema.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -55,7 +56,7 @@ from .joint_types import JOINT_TYPES
 from .kinematics import MechanismKinematics
 from .model import MechanismModel
 
-__all__ = ["body_wrenches", "coordinate_twists", "generalised_forces", "actuator_efforts",
+__all__ = ["body_wrenches", "named_magnitudes", "load_forces", "coordinate_twists", "generalised_forces", "actuator_efforts",
            "InverseDynamics", "inverse_dynamics", "idle_dynamics", "dynamics_outputs", "effort_unit", "free_twists", "equilibrium_system",
            "JointReactions", "joint_reactions", "energies", "SINGULAR_ACTUATION"]
 
@@ -92,12 +93,55 @@ def coordinate_twists(model: MechanismModel, q: Array, kin: MechanismKinematics 
     return S
 
 
-def body_wrenches(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None) -> Array:
+def named_magnitudes(model: MechanismModel, n: int, named: Mapping[str, object] | None = None) -> dict[str, Array]:
+    """Magnitude (n,) [N] of every named load (``model.named_loads``) per sample: from
+    ``named`` (``{name: scalar or (n,)}``), else the description's ``magnitude_N``. Unknown
+    names, wrong lengths and non-finite values are a :class:`~pkmdyn.errors.ParameterError`
+    naming the load."""
+    out: dict[str, Array] = {}
+    given = dict(named or {})
+    for nm in given:
+        if nm not in model.named_loads:
+            known = ", ".join(model.named_loads) or "none"
+            raise ParameterError(f"load {nm!r}: not a named load of mechanism {model.name!r} (named loads: {known})")
+    for k, nm in enumerate(model.load_name):
+        if nm is None or nm in out:
+            continue
+        if nm in given:
+            v = np.asarray(given[nm], dtype=float)
+            if v.ndim > 1 or (v.ndim == 1 and v.shape[0] != n):
+                raise ParameterError(f"load {nm!r}: expected one value or {n} values, got shape {v.shape}")
+            bad = np.flatnonzero(~np.isfinite(np.broadcast_to(v, (n,))))
+            if bad.size:
+                raise ParameterError(f"load {nm!r}: sample {int(bad[0])} is not finite")
+            out[nm] = np.array(np.broadcast_to(v, (n,)), dtype=float)
+        else:
+            out[nm] = np.full(n, float(np.linalg.norm(model.load_force[k])))
+    return out
+
+
+def load_forces(model: MechanismModel, n: int, named: Mapping[str, object] | None = None) -> tuple[Array, Array]:
+    """Force (n, nl, 3) [N] and moment (n, nl, 3) [N m] (base frame) of every ``[[loads]]``
+    entry per sample: constant, or a named load's direction times its magnitude
+    (:func:`named_magnitudes`)."""
+    F = np.broadcast_to(model.load_force, (n,) + model.load_force.shape).copy()
+    M = np.broadcast_to(model.load_moment, (n,) + model.load_moment.shape).copy()
+    if model.named_loads:
+        mags = named_magnitudes(model, n, named)
+        for k, nm in enumerate(model.load_name):
+            if nm is not None:
+                F[:, k] = mags[nm][:, None] * model.load_direction[k]
+    return F, M
+
+
+def body_wrenches(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
+                  named: Mapping[str, object] | None = None) -> Array:
     """Required wrench ``W (n, nb, 6)`` ``[n_O; f]`` [N m, N] of every body, Eq. (1).
 
     ``loads``: optional extra external loads per sample, ``{body name: (F (n, 3) [N],
     M (n, 3) [N m] about the centre of mass)}``, base frame, on top of the description's
-    ``[[loads]]`` (constant, base frame, at their point)."""
+    ``[[loads]]`` (base frame, at their point; a named load's magnitude per sample from
+    ``named``, :func:`named_magnitudes`)."""
     from ._dyn_kernels import body_wrench_batch
 
     Wr = np.empty(kin.p.shape[:2] + (6,))
@@ -105,10 +149,12 @@ def body_wrenches(model: MechanismModel, kin: MechanismKinematics, loads: dict |
                       np.ascontiguousarray(kin.p), np.ascontiguousarray(kin.a), model.mass, model.inertia,
                       model.gravity, Wr)
     n_O, f = Wr[..., :3], Wr[..., 3:]
-    for b, F, M, pt in zip(model.load_body, model.load_force, model.load_moment, model.load_point):
-        r = kin.origin[:, b] + np.einsum("nij,j->ni", kin.R[:, b], pt)
-        f[:, b] -= F
-        n_O[:, b] -= M + _cross(r, np.broadcast_to(F, r.shape))
+    if len(model.load_body):
+        LF, LM = load_forces(model, len(kin), named)
+        for k, (b, pt) in enumerate(zip(model.load_body, model.load_point)):
+            r = kin.origin[:, b] + np.einsum("nij,j->ni", kin.R[:, b], pt)
+            f[:, b] -= LF[:, k]
+            n_O[:, b] -= LM[:, k] + _cross(r, LF[:, k])
     for name, (F, M) in (loads or {}).items():
         b = model.body_index(name)
         F = np.broadcast_to(np.asarray(F, dtype=float), f[:, b].shape)
@@ -195,7 +241,7 @@ class InverseDynamics:
 
 
 def idle_dynamics(model: MechanismModel, kin: MechanismKinematics, S: Array, loads: dict | None = None,
-                  Q_extra: Array | None = None) -> MechanismKinematics:
+                  Q_extra: Array | None = None, named: Mapping[str, object] | None = None) -> MechanismKinematics:
     """The kinematics with each idle freedom's acceleration set by its own dynamics.
 
     The kinematics hold an idle freedom (a rod's spin between two spherical joints) by a
@@ -224,7 +270,7 @@ def idle_dynamics(model: MechanismModel, kin: MechanismKinematics, S: Array, loa
     vc = vO + np.cross(w, kin.p[:, :, :, None], axis=2)
     Iw = np.einsum("nbij,bjk,nblk->nbil", kin.R, model.inertia, kin.R)
     M_NN = np.einsum("b,nbiz,nbiy->nzy", model.mass, vc, vc) + np.einsum("nbiz,nbij,nbjy->nzy", w, Iw, w)
-    W = body_wrenches(model, kin, loads)
+    W = body_wrenches(model, kin, loads, named)
     Q_N = np.einsum("nbkz,nbk->nz", T, W)
     if Q_extra is not None:  # friction's generalised forces (resisting) act along the idle motion too
         Q_N = Q_N + np.einsum("ncz,nc->nz", N, Q_extra)
@@ -242,7 +288,7 @@ def idle_dynamics(model: MechanismModel, kin: MechanismKinematics, S: Array, loa
 
 
 def inverse_dynamics(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
-                     idle: str = "dynamic") -> InverseDynamics:
+                     idle: str = "dynamic", named: Mapping[str, object] | None = None) -> InverseDynamics:
     """Actuator efforts along a solved motion (module docstring, Eq. 1-3).
 
     ``idle="dynamic"`` (default) first gives the idle freedoms the accelerations of their own
@@ -250,10 +296,10 @@ def inverse_dynamics(model: MechanismModel, kin: MechanismKinematics, loads: dic
     ``idle="held"`` keeps the kinematics' (the efforts then balance the held motion's energy)."""
     S = coordinate_twists(model, kin.q, kin)
     if idle == "dynamic":
-        kin = idle_dynamics(model, kin, S, loads)
+        kin = idle_dynamics(model, kin, S, loads, named=named)
     elif idle != "held":
         raise ParameterError(f"idle: {idle!r} is not 'dynamic' or 'held'")
-    W = body_wrenches(model, kin, loads)
+    W = body_wrenches(model, kin, loads, named)
     Q = generalised_forces(model, S, W)
     u = actuator_efforts(model, kin, Q)
     return InverseDynamics(u=u, Q=Q, W=W, S=S, kin=kin)
@@ -382,8 +428,8 @@ class JointReactions:
 
 def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
                     rtol: float = 1e-10, friction: bool = True, tol: float = 1e-11,
-                    max_iter: int = 100, solver: str = "auto", overconstrained: str = "compliance"
-                    ) -> JointReactions:
+                    max_iter: int = 100, solver: str = "auto", overconstrained: str = "compliance",
+                    named: Mapping[str, object] | None = None) -> JointReactions:
     """Actuator efforts (Eq. 3) and every joint reaction (module docstring), with the joints'
     friction (:mod:`.friction`) when the description gives any and ``friction`` is true.
 
@@ -432,15 +478,15 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
         cuts = None
     elif cuts is not None:
         r = k
-    fr = JointFriction(model, kin, S, blocks) if friction and fr_any(model) else None
+    fr = JointFriction(model, kin, S, blocks, named) if friction and fr_any(model) else None
     F: dict | None = fr.initial() if fr is not None else None
     Qf = fr.generalised(F) if fr is not None else None
     history: list[float] = []
     it = 0
     kin0 = kin
     while True:
-        kin = idle_dynamics(model, kin0, S, loads, Qf)
-        W = body_wrenches(model, kin, loads)
+        kin = idle_dynamics(model, kin0, S, loads, Qf, named)
+        W = body_wrenches(model, kin, loads, named)
         Q = generalised_forces(model, S, W)
         u = actuator_efforts(model, kin, Q if Qf is None else Q + Qf)
         eff = np.zeros((n, model.nq))
@@ -685,7 +731,7 @@ def effort_unit(model: MechanismModel, i: int) -> str:
 
 
 def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics,
-                     minimum_norm: bool = False) -> tuple[dict, dict, dict]:
+                     minimum_norm: bool = False, named: Mapping[str, object] | None = None) -> tuple[dict, dict, dict]:
     """The dynamics' part of a run's files: ``results.csv`` columns ``<joint>_effort_<N|Nm>``,
     ``bodies.npz`` arrays ``joint_force``, ``joint_moment`` (n, nj, 3) (module docstring) and
     ``body_wrench`` (n, nb, 6) (Eq. 1, ``[n_O; f]``), and ``summary.json`` entries.
@@ -699,7 +745,7 @@ def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics,
 
     summary: dict = {}
     try:
-        reac = joint_reactions(model, kin)
+        reac = joint_reactions(model, kin, named=named)
         u = reac.u
         npz = {"joint_force": reac.joint_force, "joint_moment": reac.joint_moment}
         k2 = reac.kin
@@ -710,7 +756,7 @@ def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics,
     except ComplianceDataMissing as exc:
         if not minimum_norm:
             raise ComplianceDataMissing(str(exc)) from None
-        reac = joint_reactions(model, kin, overconstrained="minimum-norm")
+        reac = joint_reactions(model, kin, overconstrained="minimum-norm", named=named)
         u = reac.u
         npz = {"joint_force": reac.joint_force, "joint_moment": reac.joint_moment}
         k2 = reac.kin
@@ -720,4 +766,11 @@ def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics,
                                 "max_equilibrium_residual": float(reac.residual.max()),
                                 "unique": False, "reason": str(exc)}
     cols = {f"{name}_effort_{effort_unit(model, i)}": u[:, i] for i, name in enumerate(model.actuator_names)}
+    if len(model.load_body):
+        # the external loads as applied at every sample, so that the balance can be recomputed
+        LF, LM = load_forces(model, len(kin), named)
+        npz["load_force"], npz["load_moment"] = LF, LM
+        npz["load_point"] = kin.origin[:, model.load_body] + np.einsum("nlij,lj->nli", kin.R[:, model.load_body],
+                                                                       model.load_point)
+        cols.update(named_magnitudes(model, len(kin), named))
     return cols, npz, summary

@@ -13,6 +13,11 @@ Resisting torque and force (base frame), with ``f`` the reaction force the joint
     tau = (C_t + mu (r_pin |f - (f.a) a| + r_ball |f| + r_mean |f.a|)) u(w) + b_t w      (F1)
     phi = (C_f + mu_s |f - (f.e) e|) u(v) + b_f v                                         (F2)
 
+A named external load adds to the Coulomb parts (``external``, the hip paper's Eq. 16 form: a
+hip joint and a thrust bearing loaded by the test force): ``C_t += sum mu_k r_k |F_k + o_k|``
+for a joint that rotates, ``C_f += sum mu_k |F_k + o_k|`` for one that only slides, with
+``F_k`` [N] the named load's magnitude at the sample and ``o_k = offset_N``.
+
 ``C_t = coulomb_torque_Nm``, ``b_t = viscous_Nm_s_rad``, ``C_f = coulomb_force_N``,
 ``b_f = viscous_N_s_m``, ``mu = coefficient`` with ``r_pin = pin_radius_m`` (a journal: the
 radial force on the pin), ``r_ball = ball_radius_m`` (a ball joint: the whole force),
@@ -27,10 +32,13 @@ dissipation, >= 0), mapped to the tree coordinates by ``Q_f = B^T F`` with ``r =
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 from numpy.typing import NDArray
 
 from ..friction import regularised_sign
+from .dynamics import named_magnitudes
 from .model import MechanismModel
 
 __all__ = ["JointFriction", "friction_diverges", "EPS_ROTATION", "EPS_TRANSLATION"]
@@ -53,23 +61,33 @@ def friction_diverges(history: list[float]) -> bool:
 class JointFriction:
     """The friction of every joint with friction data along one motion (module docstring)."""
 
-    def __init__(self, model: MechanismModel, kin, S: Array, blocks: list) -> None:
+    def __init__(self, model: MechanismModel, kin, S: Array, blocks: list,
+                 named: Mapping[str, object] | None = None) -> None:
         self.model = model
         n = S.shape[0]
-        anc = model.ancestors.astype(float)
-        V = np.einsum("bc,nck,nc->nbk", anc, S, kin.qd)  # body twists (n, nb, 6)
-        Jb = np.einsum("bc,nck->nbkc", anc, S)  # (n, nb, 6, nq)
+        mags = named_magnitudes(model, n, named) if model.named_loads else {}
         self.joints = []
-        for j, T, _ in blocks:
+        for j, T, coords in blocks:
             data = model.joint_friction[j]
             if data is None or not any(v for v in data.values()):
                 continue
-            c, p = model.joint_child[j], model.joint_parent[j]
-            Vrel = (V[:, c] if c >= 0 else 0.0) - (V[:, p] if p >= 0 else 0.0)
-            Jrel = (Jb[:, c] if c >= 0 else 0.0) - (Jb[:, p] if p >= 0 else 0.0)
-            Tp = np.linalg.pinv(np.swapaxes(T, 1, 2))  # (n, f, 6): r = Tp V_rel
-            r = np.einsum("nfk,nk->nf", Tp, np.broadcast_to(Vrel, (n, 6)))
-            B = np.einsum("nfk,nkc->nfc", Tp, np.broadcast_to(Jrel, (n, 6, model.nq)))
+            if coords[0] >= 0:
+                # a tree joint: its free twists are +-S_c, its free rates the coordinate rates
+                r = kin.qd[:, coords]
+                B = None
+            else:
+                c, p = model.joint_child[j], model.joint_parent[j]
+                # V_rel = sum_c s_c S_c qd_c (s_c = +1 moves the child only, -1 the parent only)
+                sgn = (model.ancestors[c].astype(float) if c >= 0 else 0.0) - \
+                    (model.ancestors[p].astype(float) if p >= 0 else 0.0)
+                idx = np.flatnonzero(sgn)
+                TJ = np.einsum("nfk,nck->nfc", T, S[:, idx]) * sgn[idx]
+                # V_rel = T^T r: r = (T T^T)^-1 T V_rel (the free twists are independent)
+                gram = np.einsum("nfk,ngk->nfg", T, T)
+                Bi = np.linalg.solve(gram, TJ)
+                B = np.zeros((n, T.shape[1], model.nq))
+                B[:, :, idx] = Bi
+                r = np.einsum("nfc,nc->nf", Bi, kin.qd[:, idx])
             rot = np.abs(T[:, :, :3]).max(axis=(0, 2)) > 0.5
             axis = T[:, int(np.flatnonzero(rot)[0]), :3] if rot.sum() == 1 else None
             slide = np.flatnonzero(~rot)
@@ -77,8 +95,11 @@ class JointFriction:
             pt = kin.joint_point[:, j]
             w = np.einsum("nfk,nf->nk", T[:, :, :3], r)
             v = np.einsum("nfk,nf->nk", T[:, :, 3:], r) + np.cross(w, pt)
-            self.joints.append(dict(j=j, T=T, r=r, B=B, axis=axis, e=e, pt=pt, w=w, v=v, d=data,
-                                    has_rot=bool(rot.any()), has_slide=bool((~rot).any())))
+            ext = np.zeros(n)  # the named loads' Coulomb part [N m or N]
+            for term in data.get("external", []):
+                ext = ext + term["coefficient"] * (term["radius_m"] or 1.0) * np.abs(mags[term["load"]] + term["offset_N"])
+            self.joints.append(dict(j=j, T=T, r=r, B=B, coords=coords, axis=axis, e=e, pt=pt, w=w, v=v, d=data,
+                                    ext=ext, has_rot=bool(rot.any()), has_slide=bool((~rot).any())))
 
     def _forces_one(self, jd: dict, f: Array) -> Array:
         d = jd["d"]
@@ -87,7 +108,7 @@ class JointFriction:
         tau = np.zeros((n, 3))
         phi = np.zeros((n, 3))
         if jd["has_rot"]:
-            mag = np.full(n, d.get("coulomb_torque_Nm", 0.0))
+            mag = d.get("coulomb_torque_Nm", 0.0) + jd["ext"]
             if mu:
                 a = jd["axis"]
                 if a is not None:
@@ -97,7 +118,7 @@ class JointFriction:
                 mag = mag + mu * d.get("ball_radius_m", 0.0) * np.linalg.norm(f, axis=1)
             tau = mag[:, None] * regularised_sign(jd["w"], EPS_ROTATION, True) + d.get("viscous_Nm_s_rad", 0.0) * jd["w"]
         if jd["has_slide"]:
-            mag = np.full(n, d.get("coulomb_force_N", 0.0))
+            mag = d.get("coulomb_force_N", 0.0) + (0.0 if jd["has_rot"] else jd["ext"])
             radii = d.get("pin_radius_m", 0.0) or d.get("ball_radius_m", 0.0) or d.get("mean_radius_m", 0.0)
             if mu and not radii and jd["e"] is not None:
                 e = jd["e"]
@@ -121,8 +142,16 @@ class JointFriction:
         n = next(iter(F.values())).shape[0] if F else 0
         Q = np.zeros((n, self.model.nq))
         for jd in self.joints:
-            Q += np.einsum("nfc,nf->nc", jd["B"], F[jd["j"]])
+            self.add_generalised(Q, jd, F[jd["j"]])
         return Q
+
+    @staticmethod
+    def add_generalised(Q: Array, jd: dict, F: Array) -> None:
+        """``Q += B^T F`` for one joint's resisting forces ``F (n, f)``."""
+        if jd["B"] is None:  # a tree joint: r = qd of its coordinates
+            Q[:, jd["coords"]] += F
+        else:
+            Q += np.einsum("nfc,nf->nc", jd["B"], F)
 
     def dissipation(self, F: dict) -> Array:
         """Power dissipated by friction (n,) [W] = sum over joints of ``F . r``."""

@@ -117,7 +117,8 @@ def regressor(model: MechanismModel, kin: MechanismKinematics) -> Regressor:
                 phi = regularised_sign(jd["v"], EPS_TRANSLATION, True) if law == "coulomb" else jd["v"]
             Wf = np.concatenate([tau + np.cross(jd["pt"], phi), phi], axis=1)
             F = np.einsum("nfk,nk->nf", jd["T"], Wf)
-            Qf = np.einsum("nfc,nf->nc", jd["B"], F)
+            Qf = np.zeros((n, model.nq))
+            fr.add_generalised(Qf, jd, F)
             cols.append(actuator_efforts(model, kin, Qf))
             name = model.joint_names[jd["j"]]
             names.append(f"{name}_{law}")

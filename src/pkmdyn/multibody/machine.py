@@ -14,8 +14,11 @@ Coordinates ``q (n, nt)`` are the task coordinates of the description (``x_m`` .
 so that ``M xdd + h = B u`` is the equation of motion projected on the task coordinates (the
 idle freedoms held, as the kinematics hold them). The friction in ``h`` is Coulomb and
 viscous; load-dependent friction is evaluated with the reactions of the state at ``xdd = 0``
-(its exact coupled value along a motion is :func:`.dynamics.joint_reactions`). ``load`` is
-accepted and must be None (the description's ``[[loads]]`` are always applied).
+(its exact coupled value along a motion is :func:`.dynamics.joint_reactions`). The
+description's constant ``[[loads]]`` are always applied; ``load`` gives the magnitudes [N] of
+its named loads (``model.named_loads``): ``(n,)`` (or one value per call of a ``*_one`` verb)
+for a mechanism with one named load, ``(n, k)`` (``(k,)``) for k; None takes the
+description's ``magnitude_N``. A mechanism without named loads takes None (or zeros).
 
 Redundantly actuated mechanisms (``na > nt``, where the description allows it) take the
 minimum-norm efforts ``u = B^+ (M xdd + h)``.
@@ -63,11 +66,28 @@ class MechanismVerbs:
         self._q_last = kin.q[-1].copy()
         return kin
 
-    @staticmethod
-    def _check_load(load: object) -> None:
-        if load is not None and np.any(np.asarray(load, dtype=float) != 0.0):
-            raise ParameterError("a described mechanism takes its loads from the description ([[loads]]); "
-                                 "load must be None")
+    def _named(self, load: object, n: int) -> dict | None:
+        """The named loads' magnitudes ``{name: (n,)}`` from the verbs' ``load`` (module docstring)."""
+        names = self.model.named_loads
+        if load is None:
+            return None
+        v = np.asarray(load, dtype=float)
+        if not names:
+            if np.any(v != 0.0):
+                raise ParameterError(f"mechanism {self.model.name!r} has no named load ([[loads]] with a name); "
+                                     "load must be None")
+            return None
+        k = len(names)
+        if v.ndim == 0 and k == 1:
+            v = np.full((n, 1), float(v))
+        elif v.ndim == 1 and k == 1 and v.shape[0] == n:
+            v = v[:, None]
+        elif v.ndim == 1 and v.shape[0] == k and n == 1:
+            v = v[None]
+        if v.shape != (n, k):
+            raise ParameterError(f"load: expected the magnitudes of {', '.join(names)} for {n} samples "
+                                 f"({'(n,)' if k == 1 else '(n, %d)' % k}), got shape {np.shape(load)}")
+        return {nm: v[:, i] for i, nm in enumerate(names)}
 
     def _state_one(self, model: MechanismModel, x: Array, xd: Array) -> MechanismKinematics:
         """One sample's kinematics straight from the compiled solver, warm-started (the checked,
@@ -94,16 +114,16 @@ class MechanismVerbs:
                         np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.p), model.mass, model.inertia, M)
         return M
 
-    def _bias(self, model: MechanismModel, kin: MechanismKinematics, S: Array) -> Array:
+    def _bias(self, model: MechanismModel, kin: MechanismKinematics, S: Array, named: dict | None = None) -> Array:
         if _load_dependent(model):
-            u = joint_reactions(model, kin).u
+            u = joint_reactions(model, kin, named=named).u
             return np.einsum("nat,na->nt", kin.J_ax, u)
-        W = body_wrenches(model, kin)
+        W = body_wrenches(model, kin, named=named)
         Q = generalised_forces(model, S, W)
         if fr_any(model):
             from .friction import JointFriction
 
-            fr = JointFriction(model, kin, S, free_blocks(model, kin, S))
+            fr = JointFriction(model, kin, S, free_blocks(model, kin, S), named)
             Q = Q + fr.generalised(fr.initial())
         return np.einsum("nct,nc->nt", kin.G, Q)
 
@@ -121,25 +141,24 @@ class MechanismVerbs:
 
     def bias_forces(self, model: MechanismModel, q: Array, qd: Array, load: Array | None = None) -> Array:
         """``h(x, xd) (n, nt)``."""
-        self._check_load(load)
         x = self._x(q)
         kin = self._kin(model, x, self._x(qd, "qd"))
-        return self._bias(model, kin, coordinate_twists(model, kin.q, kin))
+        return self._bias(model, kin, coordinate_twists(model, kin.q, kin), self._named(load, len(kin)))
 
-    def _all(self, model: MechanismModel, q: Array, qd: Array, one: bool = False
+    def _all(self, model: MechanismModel, q: Array, qd: Array, load: object, one: bool = False
              ) -> tuple[Array, Array, Array, MechanismKinematics]:
         if one:
             kin = self._state_one(model, np.asarray(q, dtype=float), np.asarray(qd, dtype=float))
         else:
             kin = self._kin(model, self._x(q), self._x(qd, "qd"))
+        named = self._named(load, len(kin))
         S = coordinate_twists(model, kin.q, kin)
-        return self._mass(model, kin, S), self._bias(model, kin, S), np.swapaxes(kin.J_ax, 1, 2), kin
+        return self._mass(model, kin, S), self._bias(model, kin, S, named), np.swapaxes(kin.J_ax, 1, 2), kin
 
     def inverse_dynamics(self, model: MechanismModel, q: Array, qd: Array, qdd: Array,
                          load: Array | None = None) -> Array:
         """Efforts ``u (n, na)`` with ``B u = M xdd + h`` (minimum norm when redundant)."""
-        self._check_load(load)
-        M, h, B, kin = self._all(model, q, qd)
+        M, h, B, kin = self._all(model, q, qd, load)
         rhs = np.einsum("nij,nj->ni", M, self._x(qdd, "qdd")) + h
         # actuator_efforts checks the actuator map's rank and names the sample
         return actuator_efforts(model, kin, np.zeros((len(kin), 0)), rhs_task=rhs)
@@ -147,8 +166,7 @@ class MechanismVerbs:
     def forward_dynamics(self, model: MechanismModel, q: Array, qd: Array, u: Array,
                          load: Array | None = None) -> Array:
         """Accelerations ``xdd (n, nt)`` with ``M xdd = B u - h``."""
-        self._check_load(load)
-        M, h, B, _ = self._all(model, q, qd)
+        M, h, B, _ = self._all(model, q, qd, load)
         uu = np.atleast_2d(as_array(u, (None, model.na) if np.ndim(u) == 2 else (model.na,), "u", MotionError))
         return np.linalg.solve(M, (np.einsum("nta,na->nt", B, uu) - h)[..., None])[..., 0]
 
@@ -156,16 +174,14 @@ class MechanismVerbs:
                              load: float | None = None) -> Array:
         """One sample of :meth:`inverse_dynamics` (the single-sample path: the compiled solver
         warm-started from the previous call, no batch checks)."""
-        self._check_load(load)
-        M, h, B, kin = self._all(model, q, qd, one=True)
+        M, h, B, kin = self._all(model, q, qd, load, one=True)
         rhs = M[0] @ np.asarray(qdd, dtype=float) + h[0]
         return actuator_efforts(model, kin, np.zeros((1, 0)), rhs_task=rhs[None])[0]
 
     def forward_dynamics_one(self, model: MechanismModel, q: Array, qd: Array, u: Array,
                              load: float | None = None) -> Array:
         """One sample of :meth:`forward_dynamics` (the single-sample path)."""
-        self._check_load(load)
-        M, h, B, _ = self._all(model, q, qd, one=True)
+        M, h, B, _ = self._all(model, q, qd, load, one=True)
         return np.linalg.solve(M[0], B[0] @ np.asarray(u, dtype=float) - h[0])
 
 

@@ -173,6 +173,11 @@ class MechanismModel:
     load_point: Array
     length_scale: float
     motion: object
+    #: per load: its name when it is a named load (magnitude per sample), else None; its unit
+    #: direction (base frame; zero for a constant load); the distinct names in order
+    load_name: tuple[str | None, ...] = ()
+    load_direction: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    named_loads: tuple[str, ...] = ()
     solver_rows: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     solver_idle: Array = field(default_factory=lambda: np.zeros((0, 0)))
     solver_prow: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
@@ -395,6 +400,10 @@ def compile_model(desc: Description) -> MechanismModel:
         load_moment=np.array([ld.moment for ld in desc.loads]).reshape(-1, 3),
         load_point=np.array([bspec[ld.body].R0.T @ (ld.point - bspec[ld.body].p0) for ld in desc.loads]).reshape(-1, 3),
         length_scale=scale, motion=desc.motion,
+        load_name=tuple(ld.name for ld in desc.loads),
+        load_direction=np.array([ld.direction if ld.direction is not None else np.zeros(3)
+                                 for ld in desc.loads]).reshape(-1, 3),
+        named_loads=tuple(dict.fromkeys(ld.name for ld in desc.loads if ld.name is not None)),
     )
     from dataclasses import replace
 

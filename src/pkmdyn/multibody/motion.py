@@ -2,12 +2,15 @@
 
 Motion CSV: ``t_s`` and one column per task coordinate, ``<name>_<unit>`` (``x_m``,
 ``euler3_rad``); optional rates ``<name>d_<unit>_s`` and accelerations ``<name>dd_<unit>_s2``
-(each group all or none; missing derivatives from a quintic spline, as for the PDM's files).
+(each group all or none; missing derivatives from a quintic spline, as for the PDM's files);
+optional: one column per named load of the description (``[[loads]]`` with a ``name`` such as
+``push_N``), its magnitude [N] at each sample (the description's ``magnitude_N`` where the
+column is absent).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -30,12 +33,14 @@ MAX_MOTION_ROWS = 200_000
 @dataclass(frozen=True)
 class TaskMotion:
     """``t`` (n,) [s]; ``x, xd, xdd`` (n, nt): task coordinates ([m], [rad]) in the model's
-    ``task_names`` order and their first and second time derivatives."""
+    ``task_names`` order and their first and second time derivatives; ``loads``: magnitudes
+    (n,) [N] of named loads given by the motion (``{name: values}``)."""
 
     t: Array
     x: Array
     xd: Array
     xdd: Array
+    loads: dict[str, Array] = field(default_factory=dict)
 
     def __len__(self) -> int:
         return int(self.t.shape[0])
@@ -70,11 +75,12 @@ def read_task_motion(model: MechanismModel, path: str | Path, max_rows: int | No
     """Read a motion CSV for ``model`` (see the module docstring); errors name the file, row and column."""
     path = Path(path)
     pos, vel, acc = task_columns(model)
-    cols = read_csv_columns(path, ("t_s", *pos), (*vel, *acc), max_rows=max_rows)
+    cols = read_csv_columns(path, ("t_s", *pos), (*vel, *acc, *model.named_loads), max_rows=max_rows)
     t = cols["t_s"]
     require_increasing(path, t)
     x = column_group(path, cols, pos)
     if x is None:  # pragma: no cover - required columns
         raise MotionError(f"{path}: no task columns")
     xd, xdd = derivatives(path, t, x, column_group(path, cols, vel), column_group(path, cols, acc), vel)
-    return TaskMotion(t, np.ascontiguousarray(x), np.ascontiguousarray(xd), np.ascontiguousarray(xdd))
+    loads = {nm: np.asarray(cols[nm], dtype=float) for nm in model.named_loads if cols.get(nm) is not None}
+    return TaskMotion(t, np.ascontiguousarray(x), np.ascontiguousarray(xd), np.ascontiguousarray(xdd), loads)

@@ -96,10 +96,20 @@ def model_summary(model: MechanismModel) -> dict[str, Any]:
                  "euler_sequence": model.euler_sequence,
                  "coordinates": _task_coordinates(model, pos)},
         "actuators": list(model.actuator_names),
-        "loads": [{"body": model.body_names[b], "force_N": f, "moment_Nm": mo, "point_m": p}
-                  for b, f, mo, p in zip(model.load_body, model.load_force, model.load_moment, model.load_point)],
+        "loads": [_load_entry(model, k) for k in range(len(model.load_body))],
         "topology": model.topology.as_dict() if model.topology is not None else None,
     }
+
+
+def _load_entry(model: MechanismModel, k: int) -> dict[str, Any]:
+    """One ``[[loads]]`` entry of model.json: body, force and moment (base frame) and point (body
+    frame); a named load adds its name and direction, its force being the one at the
+    description's magnitude (a run's per-sample forces are in bodies.npz, ``load_force``)."""
+    entry: dict[str, Any] = {"body": model.body_names[model.load_body[k]], "force_N": model.load_force[k],
+                             "moment_Nm": model.load_moment[k], "point_m": model.load_point[k]}
+    if model.load_name[k] is not None:
+        entry.update(name=model.load_name[k], direction=model.load_direction[k])
+    return entry
 
 
 def _task_coordinates(model: MechanismModel, pos: list[str]) -> list[dict[str, Any]]:
@@ -173,7 +183,8 @@ def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path
     sm = singularity_measures(model, kin.q)
     cols = results_columns(model, kin)
     npz = bodies_arrays(model, kin)
-    dyn_cols, dyn_npz, dyn_summary = dynamics_outputs(model, kin, minimum_norm=not unique_reactions)
+    dyn_cols, dyn_npz, dyn_summary = dynamics_outputs(model, kin, minimum_norm=not unique_reactions,
+                                                      named=motion.loads)
     cols.update(dyn_cols)
     npz.update(dyn_npz)
     summary = {

@@ -18,6 +18,11 @@ second axis, z along the lever), the two sliders of a module as one body of twic
 mass, the platform's principal inertia in its frame; the lead screw's rotor inertia belongs to
 the actuator, not to a body of the mechanism. The task is the upper platform's Euler angles
 in the parameter file's sequence.
+
+The hydraulic load is the named load ``hydraulic_N`` (one magnitude per sample for both
+platforms, along -Z through each centre o_j), and the hip-joint and thrust-bearing friction of
+Eq. 16 the ``external`` friction of ``S0_upper`` and ``S0_lower`` driven by it; the S, U and
+slider friction of Table 2 are the joints' Coulomb and viscous entries.
 """
 
 from __future__ import annotations
@@ -41,19 +46,25 @@ def hip_description(model: HipModel) -> dict[str, Any]:
 
     def friction(**keys: float) -> dict[str, Any]:
         """The joint's friction entry when any value is nonzero (Coulomb and viscous of Table 2;
-        the hip-joint and thrust-bearing law of Eq. 16 depends on the hydraulic load, which the
-        description cannot name, and the lead screws are no bodies of it)."""
+        the lead screws are no bodies of the description: their friction and rotor inertia
+        belong to the motors)."""
         vals = {k: float(v) for k, v in keys.items() if v}
         return {"friction": vals} if vals else {}
 
     bodies: list[dict[str, Any]] = []
     joints: list[dict[str, Any]] = []
+    loads: list[dict[str, Any]] = []
     inertia_platform = _l(m.I_m) + [0.0, 0.0, 0.0]
     for j, pname in enumerate(("upper", "lower")):
         o = g.o[j]
         bodies.append({"name": pname, "mass_kg": float(m.m_m), "com_m": _l(o), "inertia_kgm2": inertia_platform})
+        # the hip joint and thrust bearing at the platform centre, Eq. (16): friction torque
+        # u(omega) (r_h mu_h |F| + r_t mu_t |F + m_m g|) driven by the hydraulic load F
+        ext = [{"load": "hydraulic_N", "coefficient": float(mu), "radius_m": float(r), "offset_N": float(off)}
+               for mu, r, off in ((f.mu_h, f.r_h, 0.0), (f.mu_t, f.r_t, m.m_m * m.g)) if mu and r]
         joints.append({"name": f"S0_{pname}", "type": "spherical", "parent": "ground", "child": pname,
-                       "point_m": _l(o)})
+                       "point_m": _l(o), **({"friction": {"external": ext}} if ext else {})})
+        loads.append({"name": "hydraulic_N", "body": pname, "direction": [0.0, 0.0, -1.0], "point_m": _l(o)})
     dz_ref = []
     for i in range(3):
         a2 = g.o[1] + g.r_a[i]
@@ -95,6 +106,7 @@ def hip_description(model: HipModel) -> dict[str, Any]:
                       "gravity_m_s2": [0.0, 0.0, -float(m.g)]},
         "bodies": bodies,
         "joints": joints,
+        "loads": loads,
         "task": {"body": "upper", "point_m": _l(g.o[0]), "euler_sequence": g.euler_sequence, "orientation": [1, 2, 3]},
         "default_motion": {"period_s": 1.0, "samples": 201,
                            "amplitude": {"euler1_rad": 0.3, "euler2_rad": 0.12, "euler3_rad": 0.1}},
