@@ -226,6 +226,6 @@ def test_control_takes_every_machine_of_the_registry(capsys, tmp_path):
     assert cols.shape[0] >= 20 and all(np.isfinite(cols[n]).all() for n in cols.dtype.names)
     for bad in (["--machine", "stewart", "--cycles", "2"], ["--machine", "hip"],
                 ["--machine", "hip", "--controller", "pd", "--duration", "1"],
-                ["--machine", "stewart", "--controller", "pd"]):
+                ["--machine", "stewart", "--controller", "pdx"]):
         code, _, err = _run(capsys, "control", *bad, "--out", str(tmp_path / "refused"))
         assert code == 2 and len(err.strip().splitlines()) == 1 and not (tmp_path / "refused").exists()

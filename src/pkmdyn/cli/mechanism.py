@@ -103,18 +103,37 @@ def run(machine: str, motion_path: Path | None, unique_reactions: bool, out_dir:
                    err=True)
 
 
-#: controllers a described mechanism takes (task space, from its dynamics verbs)
-DESCRIBED_CONTROLLERS = ("feedforward", "computed-torque")
+#: controllers a described mechanism takes (from its dynamics verbs; pkmdyn.control)
+DESCRIBED_CONTROLLERS = ("computed-torque", "augmented-pd", "pd", "pid", "feedforward")
 
 
 def described_control_settings(model) -> dict:
-    """Control settings of a described mechanism (no settings file): 2 ms cycle, 1 ms plant step,
-    exact pose feedback, computed-torque gains for 5 Hz at damping 0.7 in every task coordinate,
-    effort limits far away, divergence at 0.05 m or 0.2 rad of tracking error."""
+    """Control settings of a described mechanism, laid under ``--gains``: 2 ms cycle, 1 ms plant
+    step, exact pose feedback, effort limits far away, divergence at 0.05 m or 0.2 rad of
+    tracking error; every controller tuned for 5 Hz at damping 0.7 on the mechanism's inertia
+    at its reference pose: computed torque ``kp = wn^2``, ``kd = 2 zeta wn`` [1/s^2, 1/s]; the
+    task-space PD (and augmented PD) ``kp = wn^2 M_ii``, ``kd = 2 zeta wn M_ii`` with ``M`` the
+    task mass matrix [N/m or N m/rad, ...]; the actuators' PID ``kp = wn^2 Ma_ii``,
+    ``kd = 2 zeta wn Ma_ii``, ``ki = wn kp / 10`` with ``Ma = J_ax^-T M J_ax^-1`` the inertia
+    seen by each actuator. Keys ending ``_si`` are in SI units of their coordinate."""
     import numpy as np
+
+    from ..multibody import reference_task
+    from ..multibody.machine import machine_verbs
 
     nt, na = model.nt, model.na
     wn, zeta = 2 * np.pi * 5.0, 0.7
+    verbs = machine_verbs(model)
+    x0 = reference_task(model)[None]
+    M = verbs.mass_matrix(model, x0)[0]
+    B = verbs.actuator_map(model, x0)[0]  # J_ax^T (nt, na)
+    Ma = np.linalg.pinv(B) @ M @ np.linalg.pinv(B.T) if na else np.zeros((0, 0))
+    dm, da = np.abs(np.diag(M)), np.abs(np.diag(Ma))
+
+    def lst(v) -> list[float]:
+        return [float(f"{x:.6g}") for x in v]
+
+    pd = {"kp_si": lst(wn * wn * dm), "kd_si": lst(2 * zeta * wn * dm)}
     return {
         "timing": {"control_cycle_s": 0.002, "integration_step_s": 0.001},
         "actuators": {"effort_limit_si": [1e9] * na},
@@ -124,6 +143,9 @@ def described_control_settings(model) -> dict:
         "run": {"divergence_limit_si": [0.2 if k == 1 else 0.05 for k in model.task_kind]},
         "mismatch": {"mass_factor": 1.0, "friction_factor": 1.0},
         "computed-torque": {"kp_1_s2": [wn * wn] * nt, "kd_1_s": [2 * zeta * wn] * nt},
+        "pd": dict(pd),
+        "augmented-pd": dict(pd),
+        "pid": {"kp_si": lst(wn * wn * da), "ki_si": lst(wn * wn * wn * da / 10.0), "kd_si": lst(2 * zeta * wn * da)},
     }
 
 
@@ -134,15 +156,19 @@ def described_control_settings(model) -> dict:
                    "described mechanism: " + ", ".join(DESCRIBED_CONTROLLERS) + " (default computed-torque).")
 @click.option("--params", "params_path", type=PATH_IN, help="Hand-built machines: the controller model's parameter file.")
 @click.option("--plant-params", "plant_path", type=PATH_IN, help="Hand-built machines: the plant's parameter file.")
-@click.option("--motion", "motion_path", type=PATH_IN, help="Hand-built machines: a motion file (CSV).")
+@click.option("--motion", "motion_path", type=PATH_IN,
+              help="A motion file (CSV): the machine's own format; a described mechanism's task motion "
+                   "(docs/mechanism_format.md). Default: the built-in motion.")
 @click.option("--cycles", type=FiniteFloat(0.0, MAX_CYCLES, lo_open=True), default=None,
               help="Hand-built machines: cycles of the built-in motion (default 1).")
-@click.option("--gains", "gains_path", type=PATH_IN, help="Hand-built machines: control settings (TOML).")
+@click.option("--gains", "gains_path", type=PATH_IN,
+              help="Control settings (TOML) laid over the machine's defaults (docs/control.md; a described "
+                   "mechanism's defaults are tuned from its inertia, docs/multibody_dynamics.md).")
 @click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv", show_default=True,
               help="Table format of the per-cycle results.")
 @click.option("--no-plots", is_flag=True, help="Hand-built machines: write no PNG plots.")
 @click.option("--duration", "duration_s", type=FiniteFloat(0.0, 1e6, lo_open=True), default=None,
-              help="Described mechanisms: seconds of the default motion to track (default 1 s).")
+              help="Described mechanisms: seconds of the motion to track (default 1 s or the motion's length).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
 def control(machine: str, controller: str | None, params_path: Path | None, plant_path: Path | None,
@@ -155,12 +181,13 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     task space on its own dynamics (pkmdyn.multibody.machine), the controller the same model."""
     import numpy as np
 
-    from ..control import gains, hermite_motion, loop_settings
+    from ..control import gains, hermite_motion, loop_settings, overlay_settings
     from ..errors import MotionError
     from ..io import check_output_dir
     from ..machines.registry import resolve
-    from ..multibody import default_motion
+    from ..multibody import default_motion, read_task_motion
     from ..multibody.machine import machine_verbs
+    from ..simulate import check_timing
     from .control import _command, _Setup, _stream
 
     entry, path = resolve(machine)
@@ -172,29 +199,37 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
         _command(entry.NAME, controller, params_path, plant_path, motion_path, 1.0 if cycles is None else cycles,
                  gains_path, no_plots, out_dir, fmt)
         return
-    given = [o for o, v in (("--params", params_path), ("--plant-params", plant_path), ("--motion", motion_path),
-                            ("--cycles", cycles), ("--gains", gains_path)) if v is not None]
+    given = [o for o, v in (("--params", params_path), ("--plant-params", plant_path), ("--cycles", cycles))
+             if v is not None]
     if given:
         raise click.UsageError(f"{given[0]} applies to the hand-built machines (hip, pdm), not to a described mechanism")
     controller = controller or "computed-torque"
     if controller not in DESCRIBED_CONTROLLERS:
         raise click.UsageError(f"--controller {controller!r}: a described mechanism takes "
                                + ", ".join(DESCRIBED_CONTROLLERS))
-    duration_s = 1.0 if duration_s is None else duration_s
-    inputs = {"--machine": path}
+    inputs = {"--machine": path, "--motion": motion_path, "--gains": gains_path}
     check_output_dir(out_dir, inputs)
     model, _ = _load(machine)
-    motion = default_motion(model)
-    if not duration_s <= float(motion.t[-1] - motion.t[0]):
-        raise MotionError(f"--duration: {duration_s:g} s must be at most the default motion's "
-                          f"{float(motion.t[-1] - motion.t[0]):g} s")
-    settings = described_control_settings(model)
+    if motion_path is not None:
+        motion = read_task_motion(model, Path(motion_path).absolute())
+        what = str(motion_path)
+    else:
+        motion = default_motion(model)
+        what = "the default motion"
+    span = float(motion.t[-1] - motion.t[0])
+    duration_s = min(1.0, span) if duration_s is None else duration_s
+    if not duration_s <= span:
+        raise MotionError(f"--duration: {duration_s:g} s must be at most the motion's {span:g} s")
+    settings = overlay_settings(described_control_settings(model), gains_path)
+    ls = loop_settings(settings)
+    check_timing(ls.cycle_s, ls.step_s)
     verbs = machine_verbs(model)
     fn = hermite_motion(motion.t, motion.x, motion.xd, motion.xdd, None)
     setup = _Setup(model.name, verbs, model, model, fn, duration_s, False, str(path), "the controller's model",
-                   "the default motion", span_s=float(motion.t[-1] - motion.t[0]))
-    _stream(setup, controller, gains(settings, controller, model.nt), loop_settings(settings), settings, out_dir,
-            False, None, inputs, fmt, html_report=False)  # its plots and page are the hand-built machines' own
+                   what, span_s=span)
+    n = model.na if controller == "pid" else model.nt
+    _stream(setup, controller, gains(settings, controller, n), ls, settings, out_dir,
+            False, gains_path, inputs, fmt, html_report=False)  # its plots and page are the hand-built machines' own
 
 
 @cli.command("export")

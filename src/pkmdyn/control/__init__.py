@@ -8,7 +8,7 @@ PDM paper's joint-space PID, computed torque) behind one function, :func:`effort
 
 from ._laws import (CONTROLLERS, Controller, Gains, Sensed, check_gains, effort, held_efforts, make_controller,
                     new_memory)
-from ._settings import default_settings_text, gains, load_settings, loop_settings, scale_description
+from ._settings import default_settings_text, gains, load_settings, loop_settings, overlay_settings, scale_description
 from ._reference import JointReference, Reference, hermite_motion, joint_reference, sample_reference
 
 __all__ = [
@@ -28,6 +28,7 @@ __all__ = [
     "hermite_motion",
     "default_settings_text",
     "load_settings",
+    "overlay_settings",
     "loop_settings",
     "gains",
     "scale_description",

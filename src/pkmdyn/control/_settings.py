@@ -65,7 +65,12 @@ def _check_value(where: str, key: str, value: Any, default: Any) -> Any:
 
 def load_settings(machine: str, path: str | Path | None = None) -> dict[str, dict[str, Any]]:
     """The built-in settings of ``machine`` with the tables of ``path`` (if given) laid over."""
-    default = tomllib.loads(default_settings_text(machine))
+    return overlay_settings(tomllib.loads(default_settings_text(machine)), path)
+
+
+def overlay_settings(default: dict[str, dict[str, Any]], path: str | Path | None) -> dict[str, dict[str, Any]]:
+    """``default`` settings with the tables of the file ``path`` (if given) laid over; every key
+    of the file must be one of ``default``'s, with a value of its kind (errors name the key)."""
     if path is None:
         return default
     user = read_toml(path)
