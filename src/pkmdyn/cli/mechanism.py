@@ -1,4 +1,5 @@
-"""Machine-independent commands: ``pkmdyn machines``, ``pkmdyn describe``, ``pkmdyn run``.
+"""Machine-independent commands: ``pkmdyn machines``, ``describe``, ``run``, ``control``,
+``identify``, ``export``.
 
 ``--machine`` takes a built-in name (``pkmdyn machines``) or a description ``FILE.toml``; an
 unknown name is refused, never routed to another machine's code.
@@ -230,6 +231,33 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     n = model.na if controller == "pid" else model.nt
     _stream(setup, controller, gains(settings, controller, n), ls, settings, out_dir,
             False, gains_path, inputs, fmt, html_report=False)  # its plots and page are the hand-built machines' own
+
+
+@cli.command("identify")
+@click.option("--machine", required=True, help=_MACHINE_HELP)
+@click.option("--measured", "measured_path", type=PATH_IN, required=True,
+              help="Measured run (CSV): t_s, the task columns and one <joint>_effort_<N|Nm> column per actuator "
+                   "(a pkmdyn run results.csv works as it is); optional: rates, accelerations, named loads.")
+@click.option("--rank-tol", type=FiniteFloat(0.0, 1.0, lo_open=True), default=1e-6, show_default=True,
+              help="Singular values of the column-scaled regressor below this fraction of the largest count as zero.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
+              help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
+def identify(machine: str, measured_path: Path, rank_tol: float, out_dir: Path) -> None:
+    """Identify a mechanism's inertial parameters and joint friction coefficients from measured
+    actuator efforts: identification.json, efforts.csv (docs/identification.md)."""
+    from ..identify.mechanism import identify_mechanism
+    from ..io import check_output_dir
+    from ..machines.registry import resolve
+
+    entry, path = resolve(machine)
+    inputs = {"--machine": path, "--measured": measured_path}
+    check_output_dir(out_dir, inputs)
+    model, _ = _load(machine)
+    rep = identify_mechanism(model, Path(measured_path).absolute(), out_dir, rank_tol, inputs=inputs)
+    list_files(rep["files"])
+    worst = min((v for v in rep["explained_percent"].values() if v is not None), default=None)
+    click.echo(f"rank {rep['rank']} of {len(rep['parameters_asked'])} parameters; "
+               + (f"least explained actuator {worst:.4g} %" if worst is not None else "no effort explained"))
 
 
 @cli.command("export")

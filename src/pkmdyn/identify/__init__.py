@@ -13,6 +13,9 @@ __all__ = [
     "BaseParameters",
     "base_parameters",
     "DEFAULT_RANK_TOL",
+    "fit_regressor",
+    "identification_report",
+    "explained_percent",
     "Estimate",
     "constrained_least_squares",
     "bounded_fourier",
@@ -23,7 +26,8 @@ __all__ = [
 #: submodule (``pkmdyn.identify.bounds``) does not load the solvers
 _WHERE = {"Regressor": "._regressor", "affine_regressor": "._regressor", "BaseParameters": "._base",
           "base_parameters": "._base", "DEFAULT_RANK_TOL": "._base", "Estimate": "._solve",
-          "constrained_least_squares": "._solve", "bounded_fourier": "._excite", "minimize_excitation": "._excite"}
+          "constrained_least_squares": "._solve", "bounded_fourier": "._excite", "minimize_excitation": "._excite",
+          "fit_regressor": "._identify", "identification_report": "._report", "explained_percent": "._report"}
 
 
 def __getattr__(name: str) -> object:

@@ -28,7 +28,7 @@ from ._base import DEFAULT_RANK_TOL, BaseParameters, base_parameters
 from ._regressor import Regressor, affine_regressor
 from ._solve import Estimate, constrained_least_squares
 
-__all__ = ["Identification", "identify_efforts"]
+__all__ = ["Identification", "identify_efforts", "fit_regressor"]
 
 Array = NDArray[np.float64]
 
@@ -81,6 +81,17 @@ def identify_efforts(
     if n < p or n * nu < 2 * p:
         raise MotionError(f"{source}: {n} samples are too few to identify {p} {what}; give at least {max(p, -(-2 * p // nu))}")
     reg = affine_regressor(lambda th: machine.inverse_dynamics(model_with(th), q, qd, qdd, load), names)
+    return fit_regressor(reg, u, prior, consistency, rank_tol, source, what)
+
+
+def fit_regressor(reg: Regressor, u_measured: Array, prior: Array, consistency: tuple[Array, Array, Array],
+                  rank_tol: float = DEFAULT_RANK_TOL, source: str = "measured",
+                  what: str = "parameters") -> Identification:
+    """Steps 2-3 of the module docstring for a regressor ``u = Y theta + u_0`` given directly
+    (e.g. the analytic one of a described mechanism, :func:`pkmdyn.multibody.identify.regressor`)."""
+    u = np.asarray(u_measured, dtype=float)
+    n, nu = u.shape
+    names = reg.names
     W = reg.stacked()
     base = base_parameters(W, names, rank_tol)
     if base.rank == 0:

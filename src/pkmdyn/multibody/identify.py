@@ -17,8 +17,11 @@ Per joint with friction data, two parameters: its Coulomb and its viscous coeffi
 (``coulomb_torque_Nm``/``viscous_Nm_s_rad`` for rotations, ``coulomb_force_N``/
 ``viscous_N_s_m`` for translations): the friction of law F1-F2 without the load-dependent part,
 ``u(w)`` and ``w`` per unit coefficient. The efforts are ``u = Y theta + u_0`` (``u_0`` the
-description's ``[[loads]]``), every column of ``Y`` the projection (Eq. 2-3) of the wrenches or
-friction of one unit parameter. Idle freedoms are held (the kinematics' accelerations).
+description's ``[[loads]]`` and the friction its named loads drive, ``friction.external``,
+with the magnitudes ``named``), every column of ``Y`` the projection (Eq. 2-3) of the wrenches
+or friction of one unit parameter. Idle freedoms are held (the kinematics' accelerations).
+Friction that depends on the joints' own reactions (``coefficient`` with a radius or a guide)
+is not linear in the parameters: such a description is refused, naming the joint.
 """
 
 from __future__ import annotations
@@ -88,7 +91,7 @@ def _unit_wrenches(model: MechanismModel, kin: MechanismKinematics, b: int) -> A
     return out
 
 
-def regressor(model: MechanismModel, kin: MechanismKinematics) -> Regressor:
+def regressor(model: MechanismModel, kin: MechanismKinematics, named: dict | None = None) -> Regressor:
     """The regressor of the efforts along a solved motion (module docstring)."""
     from .friction import EPS_ROTATION, EPS_TRANSLATION, JointFriction
     from ..friction import regularised_sign
@@ -105,9 +108,20 @@ def regressor(model: MechanismModel, kin: MechanismKinematics) -> Regressor:
             cols.append(actuator_efforts(model, kin, generalised_forces(model, S, W)))
             names.append(f"{model.body_names[b]}_{BODY_PARAMETERS[k]}")
             theta.append(theta_b[b, k])
-    fr = JointFriction(model, kin, S, free_blocks(model, kin, S))
+    for j, d in enumerate(model.joint_friction):
+        if d and d.get("coefficient", 0.0):
+            raise ParameterError(f"joint {model.joint_names[j]}: its friction depends on its own reaction "
+                                 "(coefficient), which is not linear in the parameters; set it to 0 to identify")
+    fr = JointFriction(model, kin, S, free_blocks(model, kin, S), named)
+    Q_ext = np.zeros((n, model.nq))  # the friction the named loads drive: known, in u_0
     for jd in fr.joints:
         d = jd["d"]
+        if np.any(jd["ext"]):
+            tau = jd["ext"][:, None] * regularised_sign(jd["w"], EPS_ROTATION, True) if jd["has_rot"] else np.zeros((n, 3))
+            phi = (jd["ext"][:, None] * regularised_sign(jd["v"], EPS_TRANSLATION, True)
+                   if jd["has_slide"] and not jd["has_rot"] else np.zeros((n, 3)))
+            Wf = np.concatenate([tau + np.cross(jd["pt"], phi), phi], axis=1)
+            fr.add_generalised(Q_ext, jd, np.einsum("nfk,nk->nf", jd["T"], Wf))
         for law in ("coulomb", "viscous"):
             tau = np.zeros((n, 3))
             phi = np.zeros((n, 3))
@@ -135,7 +149,8 @@ def regressor(model: MechanismModel, kin: MechanismKinematics) -> Regressor:
     from .dynamics import body_wrenches
 
     unloaded = replace(model, load_body=model.load_body[:0], load_force=model.load_force[:0],
-                       load_moment=model.load_moment[:0], load_point=model.load_point[:0])
-    W0 = body_wrenches(model, kin) - body_wrenches(unloaded, kin)  # the [[loads]] alone
-    u0 = actuator_efforts(model, kin, generalised_forces(model, S, W0))
+                       load_moment=model.load_moment[:0], load_point=model.load_point[:0], load_name=(),
+                       load_direction=model.load_direction[:0], named_loads=())
+    W0 = body_wrenches(model, kin, named=named) - body_wrenches(unloaded, kin)  # the [[loads]] alone
+    u0 = actuator_efforts(model, kin, generalised_forces(model, S, W0) + Q_ext)
     return Regressor(Y=Y, u0=u0, names=tuple(names), theta=np.array(theta))

@@ -1,0 +1,118 @@
+"""Identification of any described mechanism (``pkmdyn identify --machine``) from measured
+actuator efforts.
+
+The efforts are linear in every body's ten barycentric parameters and every joint's Coulomb
+and viscous coefficients (:func:`pkmdyn.multibody.identify.regressor`); the known part (the
+description's loads and the friction its named loads drive) is the offset. The fit is the
+generic one of :func:`._identify.fit_regressor`: base parameters by a rank-revealing
+decomposition, then least squares with the description's values as a vanishing prior (they
+fix only what the motion cannot show), masses and friction coefficients kept >= 0.
+
+Measured file (CSV): ``t_s``, the task columns of the description (``x_m`` ... as ``pkmdyn
+run`` writes them; rates and accelerations optional, else from a quintic spline), one effort
+column per actuator ``<joint>_effort_<N|Nm>`` and, optional, a column per named load. Other
+columns (a ``pkmdyn run`` results file carries joint columns too) are ignored. Writes
+``identification.json`` (the report of ``docs/identification.md`` with every parameter's
+description value) and ``efforts.csv`` (measured and identified efforts).
+"""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import MotionError
+from ..io import output_dir, read_csv_columns, write_csv, write_json
+from ..multibody.dynamics import effort_unit
+from ..multibody.identify import regressor
+from ..multibody.kinematics import solve_kinematics
+from ..multibody.model import MechanismModel
+from ..multibody.motion import MAX_MOTION_ROWS, task_columns
+from ..profiles._columns import column_group, derivatives, require_increasing
+from ._base import DEFAULT_RANK_TOL
+from ._identify import fit_regressor
+from ._regressor import Regressor
+from ._report import explained_percent, identification_report
+
+__all__ = ["identify_mechanism", "effort_columns"]
+
+Array = NDArray[np.float64]
+
+
+def effort_columns(model: MechanismModel) -> list[str]:
+    """The measured file's effort columns, in actuator order."""
+    return [f"{a}_effort_{effort_unit(model, i)}" for i, a in enumerate(model.actuator_names)]
+
+
+def _header(path: Path) -> list[str]:
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as fh:
+            return next(csv.reader(fh), [])
+    except (OSError, UnicodeDecodeError) as exc:
+        raise MotionError(f"{path}: cannot read file ({type(exc).__name__})") from None
+
+
+def read_measured(model: MechanismModel, path: Path) -> tuple[Array, Array, Array, Array, Array, dict[str, Array]]:
+    """``t, x, xd, xdd, u, named loads`` from a measured file (module docstring)."""
+    pos, vel, acc = task_columns(model)
+    eff = effort_columns(model)
+    known = {"t_s", *pos, *eff}
+    extra = [c for c in _header(path) if c not in known]
+    cols = read_csv_columns(path, ("t_s", *pos, *eff), tuple(dict.fromkeys(extra)), max_rows=MAX_MOTION_ROWS)
+    t = cols["t_s"]
+    require_increasing(path, t)
+    x = column_group(path, cols, pos)
+    xd, xdd = derivatives(path, t, x, column_group(path, cols, vel), column_group(path, cols, acc), vel)
+    u = np.column_stack([cols[c] for c in eff])
+    named = {nm: cols[nm] for nm in model.named_loads if nm in cols}
+    return t, np.ascontiguousarray(x), np.ascontiguousarray(xd), np.ascontiguousarray(xdd), u, named
+
+
+def _consistency(reg: Regressor) -> tuple[Array, Array, Array]:
+    """``theta = s``; masses and friction coefficients >= 0, the rest free."""
+    p = len(reg.names)
+    lower = np.full(p, -np.inf)
+    for k, nm in enumerate(reg.names):
+        if nm.endswith(("_m_kg", "_coulomb", "_viscous")):
+            lower[k] = 0.0
+    return np.eye(p), lower, np.full(p, np.inf)
+
+
+def identify_mechanism(model: MechanismModel, measured: str | Path, out_dir: str | Path,
+                       rank_tol: float = DEFAULT_RANK_TOL, inputs: Any = ()) -> dict[str, Any]:
+    """Identify ``model``'s parameters from the measured file; write ``out_dir`` (module
+    docstring). Returns the report with ``files``."""
+    path = Path(measured)
+    t, x, xd, xdd, u, named = read_measured(model, path)
+    kin = solve_kinematics(model, x, xd, xdd, t)
+    reg0 = regressor(model, kin, named or None)
+    reg = Regressor(reg0.Y, reg0.u0, reg0.names)
+    fit = fit_regressor(reg, u, reg0.theta, _consistency(reg), rank_tol, source=str(path))
+    actuators = tuple(effort_columns(model))
+    report = identification_report(fit.base, fit.estimate, reg0.theta, actuators,
+                                   np.sqrt(np.mean(u ** 2, axis=0)), fit.residual_rms, fit.T)
+    # the effort unit of each actuator (the shared report names its keys after the hip's torques)
+    for key in ("residual_rms_Nm", "measured_rms_Nm"):
+        report[key.replace("_Nm", "_si")] = report.pop(key)
+    report["explained_percent"] = {a: (float(v) if np.isfinite(v) else None)
+                                   for a, v in zip(actuators, explained_percent(u, u - fit.u_identified))}
+    report["mechanism"] = model.name
+    report["samples"] = int(len(t))
+    report["parameters"] = {nm: {"description_value": float(p0), "estimate": float(th)}
+                            for nm, p0, th in zip(reg0.names, reg0.theta, fit.estimate.theta)}
+    report["note"] = ("estimate: the fit, with the description's values along directions the motion does not "
+                      "show (see separable and combinations for what the data determine)")
+    cols: dict[str, Array] = {"t_s": t}
+    for k, a in enumerate(actuators):
+        cols[f"measured_{a}"] = u[:, k]
+        cols[f"identified_{a}"] = fit.u_identified[:, k]
+    with output_dir(out_dir, inputs=inputs) as out:
+        files = {"identification": out / "identification.json", "efforts": out / "efforts.csv"}
+        write_csv(files["efforts"], cols)
+        write_json(files["identification"], report)
+    final = Path(out_dir)
+    return {**report, "files": {k: final / v.name for k, v in files.items()}}

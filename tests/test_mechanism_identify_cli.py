@@ -1,0 +1,106 @@
+"""``pkmdyn identify --machine``: a mechanism's inertial parameters and joint friction from
+measured efforts (``pkmdyn.identify.mechanism``)."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+import tomlkit
+
+import multibody_examples as ex
+from pkmdyn.cli import main
+from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
+from pkmdyn.multibody.dynamics import joint_reactions
+from pkmdyn.multibody.identify import regressor
+
+AMP = np.array([0.04, 0.04, 0.04, 0.12, 0.12, 0.12])
+
+
+def _files(tmp_path):
+    """The true Stewart platform (masses changed, guide friction) and the prior description
+    the identification starts from."""
+    d = ex.builtin_dict("stewart")
+    for b in d["bodies"]:
+        b["mass_kg"] *= 1.3
+    for leg in d["legs"]:
+        for b in leg["bodies"]:
+            b["mass_kg"] *= 0.8
+        for j in leg["joints"]:
+            if j["type"] == "prismatic":
+                j["friction"] = {"coulomb_force_N": 3.0, "viscous_N_s_m": 15.0}
+    (tmp_path / "true.toml").write_text(tomlkit.dumps(d))
+    for leg in d["legs"]:
+        for j in leg["joints"]:
+            if j["type"] == "prismatic":
+                j["friction"] = {"coulomb_force_N": 1.0, "viscous_N_s_m": 1.0}
+    for b in d["bodies"]:
+        b["mass_kg"] /= 1.3
+    (tmp_path / "prior.toml").write_text(tomlkit.dumps(d))
+    return tmp_path / "true.toml", tmp_path / "prior.toml"
+
+
+def _motion_file(m, path, seed, n=400):
+    t = np.linspace(0.0, 4.0, n)
+    x, xd, xdd = ex.smooth_motion(reference_task(m), AMP, t, seed)
+    cols = ["t_s"] + [f"{a}_{u}" for a, u in zip(m.task_names, m.task_units)]
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(cols)
+        for i in range(n):
+            w.writerow([repr(float(v)) for v in (t[i], *x[i])])
+    return t, x, xd, xdd
+
+
+def test_identification_recovers_friction_and_predicts_another_motion(tmp_path):
+    """Efforts of the true mechanism (``pkmdyn run``) identified from the prior description:
+    every effort explained, the guides' Coulomb and viscous coefficients found, and the
+    identified parameters predict the efforts of a motion not used in the fit."""
+    true, prior = _files(tmp_path)
+    mt = load_mechanism(true)
+    _motion_file(mt, tmp_path / "excite.csv", seed=11)
+    assert main(["run", "--machine", str(true), "--motion", str(tmp_path / "excite.csv"),
+                 "--out", str(tmp_path / "run")]) == 0
+    assert main(["identify", "--machine", str(prior), "--measured", str(tmp_path / "run" / "results.csv"),
+                 "--out", str(tmp_path / "id")]) == 0
+    rep = json.loads((tmp_path / "id" / "identification.json").read_text())
+    assert min(rep["explained_percent"].values()) > 99.9999
+    for k in (1, 2, 3, 4, 5, 6):
+        for law, want in (("coulomb", 3.0), ("viscous", 15.0)):
+            name = f"P_{k}_{law}"
+            assert name in rep["separable"], (name, sorted(rep["separable"]))
+            assert rep["separable"][name]["estimate"] == pytest.approx(want, rel=1e-6)
+    # prediction on another motion: Y theta_hat + u0 against the true mechanism's efforts
+    theta = np.array([rep["parameters"][nm]["estimate"] for nm in rep["parameters_asked"]])
+    mp = load_mechanism(prior)
+    t, x, xd, xdd = _motion_file(mp, tmp_path / "check.csv", seed=5, n=120)
+    reg = regressor(mp, solve_kinematics(mp, x, xd, xdd, t))
+    assert list(reg.names) == rep["parameters_asked"]
+    u_true = joint_reactions(mt, solve_kinematics(mt, x, xd, xdd, t)).u
+    u_hat = np.einsum("nap,p->na", reg.Y, theta) + reg.u0
+    assert np.abs(u_hat - u_true).max() <= 1e-6 * np.abs(u_true).max()
+    u_prior = np.einsum("nap,p->na", reg.Y, reg.theta) + reg.u0
+    assert np.abs(u_prior - u_true).max() > 1e-2 * np.abs(u_true).max()  # the prior alone is wrong
+
+
+def test_identify_refuses_what_it_cannot_fit(tmp_path, capsys):
+    true, prior = _files(tmp_path)
+    m = load_mechanism(true)
+    _motion_file(m, tmp_path / "motion.csv", seed=1, n=50)
+    # no effort columns
+    code = main(["identify", "--machine", str(prior), "--measured", str(tmp_path / "motion.csv"),
+                 "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "P_1_effort_N" in err and len(err.splitlines()) == 1 and not (tmp_path / "o").exists()
+    # reaction-dependent friction is not linear in the parameters
+    d = ex.builtin_dict("stewart")
+    d["legs"][0]["joints"][-1]["friction"] = {"coefficient": 0.1, "ball_radius_m": 0.01}
+    (tmp_path / "mu.toml").write_text(tomlkit.dumps(d))
+    assert main(["run", "--machine", str(true), "--motion", str(tmp_path / "motion.csv"),
+                 "--out", str(tmp_path / "run")]) == 0
+    code = main(["identify", "--machine", str(tmp_path / "mu.toml"), "--measured",
+                 str(tmp_path / "run" / "results.csv"), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "coefficient" in err and len(err.splitlines()) == 1 and not (tmp_path / "o").exists()
