@@ -104,3 +104,19 @@ def test_identify_refuses_what_it_cannot_fit(tmp_path, capsys):
                  str(tmp_path / "run" / "results.csv"), "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err.strip()
     assert code == 2 and "coefficient" in err and len(err.splitlines()) == 1 and not (tmp_path / "o").exists()
+
+
+def test_identify_never_replaces_its_input(tmp_path, capsys):
+    """The folder holding the measured file (an earlier pkmdyn run) and a device are refused
+    as --out, with one line and nothing changed."""
+    true, prior = _files(tmp_path)
+    _motion_file(load_mechanism(true), tmp_path / "motion.csv", seed=2, n=60)
+    run = tmp_path / "run"
+    assert main(["run", "--machine", str(true), "--motion", str(tmp_path / "motion.csv"), "--out", str(run)]) == 0
+    capsys.readouterr()
+    before = {p: p.read_bytes() for p in run.iterdir()}
+    for out in (run, "/dev/null"):
+        code = main(["identify", "--machine", str(prior), "--measured", str(run / "results.csv"), "--out", str(out)])
+        err = capsys.readouterr().err.strip()
+        assert code == 2 and len(err.splitlines()) == 1, err
+    assert {p: p.read_bytes() for p in run.iterdir()} == before
