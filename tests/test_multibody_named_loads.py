@@ -238,3 +238,25 @@ def test_run_reads_the_load_column_and_writes_the_loads(tmp_path):
     assert main(["run", "--machine", str(src), "--motion", str(mot2), "--out", str(out2)]) == 0
     z2 = np.load(out2 / "bodies.npz")
     assert np.allclose(z2["load_force"][:, 0], 250.0 * u, rtol=1e-12)
+
+
+def test_inverse_dynamics_includes_the_friction():
+    """Efforts from inverse_dynamics (friction of known magnitude added to the tree forces)
+    equal those of the reaction solver, which balances every joint with its friction; without
+    friction they differ."""
+    from pkmdyn.multibody.dynamics import inverse_dynamics
+
+    d = _stewart(0.08, 0.05, 20.0)
+    for leg in d["legs"]:
+        for j in leg["joints"]:
+            if j["type"] == "universal":
+                j["friction"] = {"coulomb_torque_Nm": 0.3, "viscous_Nm_s_rad": 0.1}
+    m = load_mechanism(d)
+    t, x, xd, xdd = _motion(m, n=40)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    F = {"push_N": _push(t)}
+    a = inverse_dynamics(m, kin, named=F).u
+    b = joint_reactions(m, kin, named=F).u
+    assert np.abs(a - b).max() <= 1e-10 * np.abs(b).max()
+    c = inverse_dynamics(m, kin, named=F, friction=False).u
+    assert np.abs(c - b).max() > 1e-3 * np.abs(b).max()

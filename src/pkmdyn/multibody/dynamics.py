@@ -288,19 +288,36 @@ def idle_dynamics(model: MechanismModel, kin: MechanismKinematics, S: Array, loa
 
 
 def inverse_dynamics(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
-                     idle: str = "dynamic", named: Mapping[str, object] | None = None) -> InverseDynamics:
-    """Actuator efforts along a solved motion (module docstring, Eq. 1-3).
+                     idle: str = "dynamic", named: Mapping[str, object] | None = None,
+                     friction: bool = True) -> InverseDynamics:
+    """Actuator efforts along a solved motion (module docstring, Eq. 1-3), with the joints'
+    friction when the description gives any and ``friction`` is true: Coulomb, viscous and
+    the friction named loads drive directly (``Q`` then includes the friction's generalised
+    forces); friction that depends on the joints' own reactions through
+    :func:`joint_reactions` (``Q`` is then the rigid-body part alone).
 
     ``idle="dynamic"`` (default) first gives the idle freedoms the accelerations of their own
     dynamics (:func:`idle_dynamics`), so that every body's balance can be met;
     ``idle="held"`` keeps the kinematics' (the efforts then balance the held motion's energy)."""
     S = coordinate_twists(model, kin.q, kin)
-    if idle == "dynamic":
-        kin = idle_dynamics(model, kin, S, loads, named=named)
-    elif idle != "held":
+    if idle not in ("dynamic", "held"):
         raise ParameterError(f"idle: {idle!r} is not 'dynamic' or 'held'")
+    Qf = None
+    if friction and fr_any(model):
+        if any(f and f.get("coefficient", 0.0) for f in model.joint_friction):
+            r = joint_reactions(model, kin, loads, named=named)
+            W = body_wrenches(model, r.kin, loads, named)
+            return InverseDynamics(u=r.u, Q=generalised_forces(model, S, W), W=W, S=S, kin=r.kin)
+        from .friction import JointFriction
+
+        fr = JointFriction(model, kin, S, free_blocks(model, kin, S), named)
+        Qf = fr.generalised(fr.initial())
+    if idle == "dynamic":
+        kin = idle_dynamics(model, kin, S, loads, Qf, named)
     W = body_wrenches(model, kin, loads, named)
     Q = generalised_forces(model, S, W)
+    if Qf is not None:
+        Q = Q + Qf
     u = actuator_efforts(model, kin, Q)
     return InverseDynamics(u=u, Q=Q, W=W, S=S, kin=kin)
 
