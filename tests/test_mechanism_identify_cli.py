@@ -120,3 +120,22 @@ def test_identify_never_replaces_its_input(tmp_path, capsys):
         err = capsys.readouterr().err.strip()
         assert code == 2 and len(err.splitlines()) == 1, err
     assert {p: p.read_bytes() for p in run.iterdir()} == before
+
+
+def test_identify_refuses_a_misspelt_column_and_too_few_samples(tmp_path, capsys):
+    true, prior = _files(tmp_path)
+    m = load_mechanism(true)
+    _motion_file(m, tmp_path / "motion.csv", seed=3, n=300)
+    run = tmp_path / "run"
+    assert main(["run", "--machine", str(true), "--motion", str(tmp_path / "motion.csv"), "--out", str(run)]) == 0
+    rows = (run / "results.csv").read_text().splitlines()
+    bad = tmp_path / "bad.csv"
+    bad.write_text("\n".join([rows[0] + ",psuh_N"] + [r + ",1.0" for r in rows[1:]]) + "\n")
+    few = tmp_path / "few.csv"
+    few.write_text("\n".join(rows[:9]) + "\n")
+    capsys.readouterr()
+    for measured, word in ((bad, "psuh_N"), (few, "too few")):
+        code = main(["identify", "--machine", str(prior), "--measured", str(measured), "--out", str(tmp_path / "o")])
+        err = capsys.readouterr().err.strip()
+        assert code == 2 and word in err and len(err.splitlines()) == 1, err
+        assert not (tmp_path / "o").exists()

@@ -168,9 +168,11 @@ def test_every_controller_tracks_a_described_mechanism(tmp_path):
 def test_described_control_refuses_bad_settings_by_key(tmp_path, capsys):
     from pkmdyn.cli import main
 
-    bad = tmp_path / "bad.toml"
-    bad.write_text("[pd]\nkp_N_m = [1.0]\n")
-    code = main(["control", "--machine", "stewart", "--controller", "pd", "--gains", str(bad),
-                 "--out", str(tmp_path / "o")])
-    err = capsys.readouterr().err.strip()
-    assert code == 2 and "kp_N_m" in err and len(err.splitlines()) == 1 and not (tmp_path / "o").exists()
+    for text, word in (("[pd]\nkp_N_m = [1.0]\n", "kp_N_m"), ("[pd]\nkp_si = [1.0]\n", "kp_si"),
+                       ("[mismatch]\nmass_factor = 2.0\n", "mismatch")):  # the plant is the model itself
+        bad = tmp_path / "bad.toml"
+        bad.write_text(text)
+        code = main(["control", "--machine", "stewart", "--controller", "pd", "--gains", str(bad),
+                     "--out", str(tmp_path / "o")])
+        err = capsys.readouterr().err.strip()
+        assert code == 2 and word in err and len(err.splitlines()) == 1 and not (tmp_path / "o").exists(), err

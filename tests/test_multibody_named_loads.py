@@ -260,3 +260,64 @@ def test_inverse_dynamics_includes_the_friction():
     assert np.abs(a - b).max() <= 1e-10 * np.abs(b).max()
     c = inverse_dynamics(m, kin, named=F, friction=False).u
     assert np.abs(c - b).max() > 1e-3 * np.abs(b).max()
+
+
+def test_a_negative_default_magnitude_keeps_its_sign():
+    """``magnitude_N`` below zero is a force against ``direction``, the same with or without a
+    per-sample value."""
+    m = load_mechanism(_stewart(magnitude=-120.0))
+    F, _ = load_forces(m, 3)
+    u = PUSH_DIR / np.linalg.norm(PUSH_DIR)
+    assert np.allclose(F[:, 0], -120.0 * u, rtol=1e-15)
+    F2, _ = load_forces(m, 3, {"push_N": -120.0})
+    assert np.array_equal(F, F2)
+
+
+@pytest.mark.parametrize("edit, match", [
+    (lambda d: d["loads"].append(dict(d["loads"][0], magnitude_N=3.0)), "share one magnitude"),
+    (lambda d: d["loads"][0].update(name="P_1_effort_N"), "column"),
+    (lambda d: d["loads"][0].update(direction=[1e308, 1e308, 0.0]), None),
+])
+def test_named_loads_shared_colliding_or_huge(edit, match):
+    d = _stewart(magnitude=0.0)
+    edit(d)
+    if match is None:  # a huge direction is only a direction
+        m = load_mechanism(d)
+        assert np.allclose(m.load_direction[0], [2 ** -0.5, 2 ** -0.5, 0.0], rtol=1e-15)
+        return
+    with pytest.raises(ParameterError, match=match):
+        load_mechanism(d)
+
+
+def test_friction_of_a_joint_that_turns_and_slides():
+    """A cylindrical joint's Coulomb torque and force (laws F1 and F2 together): its dissipation
+    is 0.3 |w|^2 / sqrt(|w|^2 + eps^2) + 2 |v|^2 / sqrt(|v|^2 + eps_t^2) from its relative
+    rates, and the efforts of inverse_dynamics carry it (power balance)."""
+    from pkmdyn.multibody.dynamics import coordinate_twists, free_blocks, inverse_dynamics
+    from pkmdyn.multibody.friction import JointFriction
+
+    d = ex.slider_crank("cylindrical")
+    for j in d["joints"]:
+        if j["type"] == "cylindrical":
+            j["friction"] = {"coulomb_force_N": 2.0, "coulomb_torque_Nm": 0.3}
+            name = j["name"]
+    m = load_mechanism(d)
+    t = np.linspace(0.0, 1.0, 30)
+    x, xd, xdd = ex.smooth_motion(reference_task(m), np.full(m.nt, 0.3), t, 1)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    S = coordinate_twists(m, kin.q, kin)
+    fr = JointFriction(m, kin, S, free_blocks(m, kin, S))
+    F = fr.initial()
+    jd = next(jd for jd in fr.joints if m.joint_names[jd["j"]] == name)
+    w2 = np.einsum("ni,ni->n", jd["w"], jd["w"])
+    v2 = np.einsum("ni,ni->n", jd["v"], jd["v"])
+    expect = 0.3 * w2 / np.sqrt(w2 + EPS_ROTATION**2) + 2.0 * v2 / np.sqrt(v2 + EPS_TRANSLATION**2)
+    got = fr.dissipation(F)
+    assert expect.max() > 0.1 and np.abs(got - expect).max() <= 1e-12 * expect.max()
+    idyn = inverse_dynamics(m, kin, idle="held")
+    k = idyn.kin
+    Iw = np.einsum("nbij,bjk,nblk->nbil", k.R, m.inertia, k.R)
+    dT = np.einsum("b,nbi,nbi->n", m.mass, k.v, k.a) + np.einsum("nbi,nbij,nbj->n", k.w, Iw, k.wd)
+    dV = -np.einsum("b,i,nbi->n", m.mass, m.gravity, k.v)
+    P = np.einsum("na,na->n", idyn.u, k.act_qd)
+    assert np.abs(P - dT - dV - got).max() <= 1e-9 * np.abs(P).max()

@@ -76,5 +76,5 @@ class MachineDynamics(Protocol):
         ``forward(p, q, qd, u, load, out) -> status`` write into ``out``; ``load`` is a float (0.0
         for a machine without one); nothing is checked; a nonzero status means the sample is
         invalid, and the caller repeats it through the checked ``*_one`` verb, which raises the
-        machine's own error."""
+        machine's own error. None where a machine has no such kernels for this model."""
         ...

@@ -109,8 +109,8 @@ DESCRIBED_CONTROLLERS = ("computed-torque", "augmented-pd", "pd", "pid", "feedfo
 
 
 def described_control_settings(model) -> dict:
-    """Control settings of a described mechanism, laid under ``--gains``: 2 ms cycle, 1 ms plant
-    step, exact pose feedback, effort limits far away, divergence at 0.05 m or 0.2 rad of
+    """Control settings of a described mechanism, laid under ``--gains`` (no ``[mismatch]``: the
+    plant is the controller's own model): 2 ms cycle, 1 ms plant step, exact pose feedback, effort limits far away, divergence at 0.05 m or 0.2 rad of
     tracking error; every controller tuned for 5 Hz at damping 0.7 on the mechanism's inertia
     at its reference pose: computed torque ``kp = wn^2``, ``kd = 2 zeta wn`` [1/s^2, 1/s]; the
     task-space PD (and augmented PD) ``kp = wn^2 M_ii``, ``kd = 2 zeta wn M_ii`` with ``M`` the
@@ -142,7 +142,6 @@ def described_control_settings(model) -> dict:
                     "velocity_cutoff_Hz": 200.0, "acceleration_cutoff_Hz": 50.0, "pose_noise_si": [0.0] * nt,
                     "pose_delay_cycles": 0, "pose_feedback_from_sensor": 1, "seed": 1},
         "run": {"divergence_limit_si": [0.2 if k == 1 else 0.05 for k in model.task_kind]},
-        "mismatch": {"mass_factor": 1.0, "friction_factor": 1.0},
         "computed-torque": {"kp_1_s2": [wn * wn] * nt, "kd_1_s": [2 * zeta * wn] * nt},
         "pd": dict(pd),
         "augmented-pd": dict(pd),

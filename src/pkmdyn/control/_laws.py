@@ -101,8 +101,9 @@ class Controller:
 def _id_one(verbs: Any, model: Any, has_load: bool) -> Any:
     one = getattr(verbs, "inverse_dynamics_one", None)
     kernels = getattr(verbs, "one_sample_kernels", None)
-    if one is not None and kernels is not None:
-        p, inverse, _ = kernels(model)
+    compiled = kernels(model) if one is not None and kernels is not None else None
+    if compiled is not None:
+        p, inverse, _ = compiled
         nu = len(verbs.ACTUATORS)
 
         def id_kernel(q: Array, qd: Array, qdd: Array, load: float) -> Array:

@@ -99,8 +99,10 @@ def fit_regressor(reg: Regressor, u_measured: Array, prior: Array, consistency: 
             f"{source}: the motion excites none of the {what} (regressor of rank 0); the machine must move, "
             "and its load vary, for them to show"
         )
-    if n * nu <= base.rank:
-        raise MotionError(f"{source}: {n} samples leave no degree of freedom for the residual")
+    if n * nu < 2 * base.rank:
+        raise MotionError(f"{source}: {n} samples are too few for the {base.rank} base {what} the motion shows "
+                          f"(twice as many equations as base parameters needed); give at least "
+                          f"{-(-2 * base.rank // nu)}")
     T, lower, upper = consistency
     y = (u - reg.offset).reshape(-1)
     est = constrained_least_squares(W, y, base, T, lower, upper, prior)

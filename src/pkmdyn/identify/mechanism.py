@@ -10,15 +10,15 @@ fix only what the motion cannot show), masses and friction coefficients kept >= 
 
 Measured file (CSV): ``t_s``, the task columns of the description (``x_m`` ... as ``pkmdyn
 run`` writes them; rates and accelerations optional, else from a quintic spline), one effort
-column per actuator ``<joint>_effort_<N|Nm>`` and, optional, a column per named load. Other
-columns (a ``pkmdyn run`` results file carries joint columns too) are ignored. Writes
+column per actuator ``<joint>_effort_<N|Nm>`` and, optional, a column per named load and the
+actuated joints' ``<joint>_pos/vel/acc_*`` columns a ``pkmdyn run`` results file carries (not
+used); any other column is refused by name, as a misspelt one would be. Writes
 ``identification.json`` (the report of ``docs/identification.md`` with every parameter's
 description value) and ``efforts.csv`` (measured and identified efforts).
 """
 
 from __future__ import annotations
 
-import csv
 from pathlib import Path
 from typing import Any
 
@@ -48,21 +48,15 @@ def effort_columns(model: MechanismModel) -> list[str]:
     return [f"{a}_effort_{effort_unit(model, i)}" for i, a in enumerate(model.actuator_names)]
 
 
-def _header(path: Path) -> list[str]:
-    try:
-        with path.open(newline="", encoding="utf-8-sig") as fh:
-            return next(csv.reader(fh), [])
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MotionError(f"{path}: cannot read file ({type(exc).__name__})") from None
-
-
 def read_measured(model: MechanismModel, path: Path) -> tuple[Array, Array, Array, Array, Array, dict[str, Array]]:
     """``t, x, xd, xdd, u, named loads`` from a measured file (module docstring)."""
     pos, vel, acc = task_columns(model)
     eff = effort_columns(model)
-    known = {"t_s", *pos, *eff}
-    extra = [c for c in _header(path) if c not in known]
-    cols = read_csv_columns(path, ("t_s", *pos, *eff), tuple(dict.fromkeys(extra)), max_rows=MAX_MOTION_ROWS)
+    # what a pkmdyn run results file carries besides: the actuated joints' coordinates
+    run_cols = [f"{a}_{kind}_{u}{suffix}" for a, u in zip(model.actuator_names, model.actuator_units)
+                for kind, suffix in (("pos", ""), ("vel", "_s"), ("acc", "_s2"))]
+    optional = (*vel, *acc, *model.named_loads, *run_cols)
+    cols = read_csv_columns(path, ("t_s", *pos, *eff), optional, max_rows=MAX_MOTION_ROWS)
     t = cols["t_s"]
     require_increasing(path, t)
     x = column_group(path, cols, pos)

@@ -24,7 +24,7 @@ def twists_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, c
                           RP, pP, RC, pC, R, p, S_out[s], w33, w3)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _inertia_in_base(R, inertia, tmp, Iw):  # pragma: no cover - compiled
     """``Iw = R I' R^T``: the inertia ``I' (3, 3)`` of a body frame expressed in the base frame
     (``tmp (3, 3)`` work space)."""
@@ -42,50 +42,64 @@ def _inertia_in_base(R, inertia, tmp, Iw):  # pragma: no cover - compiled
             Iw[i, j] = acc
 
 
+@njit(cache=True, _nrt=False)
+def body_wrench(R, w, wd, p, a, m, inertia, gravity, W, tmp, Iw):  # pragma: no cover - compiled
+    """One body's required wrench ``W (6,)`` ``[n_O; f]`` of Eq. (1) (no loads):
+    ``f = m (a - g)``, ``n_O = I_w wd + w x I_w w + p x f`` with ``I_w = R I' R^T`` (``R (3, 3)``,
+    ``w, wd, p, a (3,)``; ``tmp, Iw (3, 3)`` work space)."""
+    _inertia_in_base(R, inertia, tmp, Iw)
+    L0 = Iw[0, 0] * w[0] + Iw[0, 1] * w[1] + Iw[0, 2] * w[2]
+    L1 = Iw[1, 0] * w[0] + Iw[1, 1] * w[1] + Iw[1, 2] * w[2]
+    L2 = Iw[2, 0] * w[0] + Iw[2, 1] * w[1] + Iw[2, 2] * w[2]
+    f0 = m * (a[0] - gravity[0])
+    f1 = m * (a[1] - gravity[1])
+    f2 = m * (a[2] - gravity[2])
+    x0, x1, x2 = p[0], p[1], p[2]
+    w0, w1, w2 = w[0], w[1], w[2]
+    for i in range(3):
+        W[i] = Iw[i, 0] * wd[0] + Iw[i, 1] * wd[1] + Iw[i, 2] * wd[2]
+    W[0] += w1 * L2 - w2 * L1 + x1 * f2 - x2 * f1
+    W[1] += w2 * L0 - w0 * L2 + x2 * f0 - x0 * f2
+    W[2] += w0 * L1 - w1 * L0 + x0 * f1 - x1 * f0
+    W[3] = f0
+    W[4] = f1
+    W[5] = f2
+
+
 @njit(cache=True)
 def body_wrench_batch(R, w, wd, p, a, mass, inertia, gravity, W_out):  # pragma: no cover - compiled
-    """Required body wrenches ``W_out (n, nb, 6)`` ``[n_O; f]`` of Eq. (1) (no loads): per body
-    ``f = m (a - g)``, ``n_O = I_w wd + w x I_w w + p x f`` with ``I_w = R I' R^T``."""
+    """Required body wrenches ``W_out (n, nb, 6)`` ``[n_O; f]`` of Eq. (1) (no loads), every
+    sample and body (:func:`body_wrench`)."""
     n, nb = R.shape[0], R.shape[1]
     Iw = np.empty((3, 3))
     tmp = np.empty((3, 3))
     for s in range(n):
         for b in range(nb):
-            _inertia_in_base(R[s, b], inertia[b], tmp, Iw)
-            L0 = Iw[0, 0] * w[s, b, 0] + Iw[0, 1] * w[s, b, 1] + Iw[0, 2] * w[s, b, 2]
-            L1 = Iw[1, 0] * w[s, b, 0] + Iw[1, 1] * w[s, b, 1] + Iw[1, 2] * w[s, b, 2]
-            L2 = Iw[2, 0] * w[s, b, 0] + Iw[2, 1] * w[s, b, 1] + Iw[2, 2] * w[s, b, 2]
-            m = mass[b]
-            f0 = m * (a[s, b, 0] - gravity[0])
-            f1 = m * (a[s, b, 1] - gravity[1])
-            f2 = m * (a[s, b, 2] - gravity[2])
-            x0, x1, x2 = p[s, b, 0], p[s, b, 1], p[s, b, 2]
-            w0, w1, w2 = w[s, b, 0], w[s, b, 1], w[s, b, 2]
-            for i in range(3):
-                W_out[s, b, i] = Iw[i, 0] * wd[s, b, 0] + Iw[i, 1] * wd[s, b, 1] + Iw[i, 2] * wd[s, b, 2]
-            W_out[s, b, 0] += w1 * L2 - w2 * L1 + x1 * f2 - x2 * f1
-            W_out[s, b, 1] += w2 * L0 - w0 * L2 + x2 * f0 - x0 * f2
-            W_out[s, b, 2] += w0 * L1 - w1 * L0 + x0 * f1 - x1 * f0
-            W_out[s, b, 3] = f0
-            W_out[s, b, 4] = f1
-            W_out[s, b, 5] = f2
+            body_wrench(R[s, b], w[s, b], wd[s, b], p[s, b], a[s, b], mass[b], inertia[b], gravity, W_out[s, b],
+                        tmp, Iw)
+
+
+@njit(cache=True, _nrt=False)
+def generalised(S, W, anc_list, Q):  # pragma: no cover - compiled
+    """One sample of Eq. (2): ``Q (nq,)``, ``Q_c = S_c . sum of W_b over the bodies c moves``
+    (``S (nq, 6)``, ``W (nb, 6)``; ``anc_list`` the model's ``ancestor_list``: per body a count,
+    then its coordinates)."""
+    for c in range(Q.shape[0]):
+        Q[c] = 0.0
+    for b in range(W.shape[0]):
+        for k in range(anc_list[b, 0]):
+            c = anc_list[b, 1 + k]
+            acc = 0.0
+            for i in range(6):
+                acc += S[c, i] * W[b, i]
+            Q[c] += acc
 
 
 @njit(cache=True)
 def generalised_batch(S, W, anc_list, Q_out):  # pragma: no cover - compiled
-    """``Q_out (n, nq)``, Eq. (2): ``Q_c = S_c . sum of W_b over the bodies c moves``; ``anc_list``
-    the model's ``ancestor_list`` (per body: a count, then its coordinates)."""
-    n, nb = W.shape[0], W.shape[1]
-    for s in range(n):
-        for c in range(Q_out.shape[1]):
-            Q_out[s, c] = 0.0
-        for b in range(nb):
-            for k in range(anc_list[b, 0]):
-                c = anc_list[b, 1 + k]
-                acc = 0.0
-                for i in range(6):
-                    acc += S[s, c, i] * W[s, b, i]
-                Q_out[s, c] += acc
+    """``Q_out (n, nq)``, Eq. (2), every sample (:func:`generalised`)."""
+    for s in range(W.shape[0]):
+        generalised(S[s], W[s], anc_list, Q_out[s])
 
 
 @njit(cache=True)
@@ -217,48 +231,56 @@ def twists_from_poses(q, Rb, ob, body_parent, body_joint, joint_q0, joint_nq, co
                     o[2] += a2 * qc
 
 
+@njit(cache=True, _nrt=False)
+def task_mass(S, G, anc_list, R, p, mass, inertia, M, T, Iw, tmp, vc, Iwt):  # pragma: no cover - compiled
+    """One sample's ``M (nt, nt) = sum_b T_b^T I_b T_b`` with ``T_b = sum_{c in anc(b)} S_c G_c``:
+    the bodies' kinetic energy in the task rates (centre-of-mass velocity ``v_O + w x p``;
+    ``S (nq, 6)``, ``G (nq, nt)``, ``R (nb, 3, 3)``, ``p (nb, 3)`` the centres of mass; ``T (6,
+    nt)``, ``Iw, tmp (3, 3)``, ``vc, Iwt (3, nt)`` work space)."""
+    nt = G.shape[1]
+    for i in range(nt):
+        for j in range(nt):
+            M[i, j] = 0.0
+    for b in range(R.shape[0]):
+        for r in range(6):
+            for t in range(nt):
+                T[r, t] = 0.0
+        for kk in range(anc_list[b, 0]):
+            c = anc_list[b, 1 + kk]
+            for r in range(6):
+                sc = S[c, r]
+                if sc != 0.0:
+                    for t in range(nt):
+                        T[r, t] += sc * G[c, t]
+        for t in range(nt):
+            w0, w1, w2 = T[0, t], T[1, t], T[2, t]
+            vc[0, t] = T[3, t] + w1 * p[b, 2] - w2 * p[b, 1]
+            vc[1, t] = T[4, t] + w2 * p[b, 0] - w0 * p[b, 2]
+            vc[2, t] = T[5, t] + w0 * p[b, 1] - w1 * p[b, 0]
+        _inertia_in_base(R[b], inertia[b], tmp, Iw)
+        for i in range(3):
+            for t in range(nt):
+                Iwt[i, t] = Iw[i, 0] * T[0, t] + Iw[i, 1] * T[1, t] + Iw[i, 2] * T[2, t]
+        m = mass[b]
+        for i in range(nt):
+            for j in range(nt):
+                M[i, j] += m * (vc[0, i] * vc[0, j] + vc[1, i] * vc[1, j] + vc[2, i] * vc[2, j]) + (
+                    T[0, i] * Iwt[0, j] + T[1, i] * Iwt[1, j] + T[2, i] * Iwt[2, j])
+    for i in range(nt):
+        for j in range(i + 1, nt):
+            v = 0.5 * (M[i, j] + M[j, i])
+            M[i, j] = v
+            M[j, i] = v
+
+
 @njit(cache=True)
 def task_mass_batch(S, G, anc_list, R, p, mass, inertia, M_out):  # pragma: no cover - compiled
-    """``M_out (n, nt, nt) = sum_b T_b^T I_b T_b`` with ``T_b = sum_{c in anc(b)} S_c G_c``: the
-    bodies' kinetic energy in the task rates (centre-of-mass velocity ``v_O + w x p``)."""
-    n, nq, nt = G.shape
-    nb = R.shape[1]
+    """``M_out (n, nt, nt)``, every sample (:func:`task_mass`)."""
+    nt = G.shape[2]
     T = np.empty((6, nt))
     Iw = np.empty((3, 3))
     tmp = np.empty((3, 3))
     vc = np.empty((3, nt))
     Iwt = np.empty((3, nt))
-    for s in range(n):
-        for i in range(nt):
-            for j in range(nt):
-                M_out[s, i, j] = 0.0
-        for b in range(nb):
-            for r in range(6):
-                for t in range(nt):
-                    T[r, t] = 0.0
-            for kk in range(anc_list[b, 0]):
-                c = anc_list[b, 1 + kk]
-                for r in range(6):
-                    sc = S[s, c, r]
-                    if sc != 0.0:
-                        for t in range(nt):
-                            T[r, t] += sc * G[s, c, t]
-            for t in range(nt):
-                w0, w1, w2 = T[0, t], T[1, t], T[2, t]
-                vc[0, t] = T[3, t] + w1 * p[s, b, 2] - w2 * p[s, b, 1]
-                vc[1, t] = T[4, t] + w2 * p[s, b, 0] - w0 * p[s, b, 2]
-                vc[2, t] = T[5, t] + w0 * p[s, b, 1] - w1 * p[s, b, 0]
-            _inertia_in_base(R[s, b], inertia[b], tmp, Iw)
-            for i in range(3):
-                for t in range(nt):
-                    Iwt[i, t] = Iw[i, 0] * T[0, t] + Iw[i, 1] * T[1, t] + Iw[i, 2] * T[2, t]
-            m = mass[b]
-            for i in range(nt):
-                for j in range(nt):
-                    M_out[s, i, j] += m * (vc[0, i] * vc[0, j] + vc[1, i] * vc[1, j] + vc[2, i] * vc[2, j]) + (
-                        T[0, i] * Iwt[0, j] + T[1, i] * Iwt[1, j] + T[2, i] * Iwt[2, j])
-        for i in range(nt):
-            for j in range(i + 1, nt):
-                v = 0.5 * (M_out[s, i, j] + M_out[s, j, i])
-                M_out[s, i, j] = v
-                M_out[s, j, i] = v
+    for s in range(G.shape[0]):
+        task_mass(S[s], G[s], anc_list, R[s], p[s], mass, inertia, M_out[s], T, Iw, tmp, vc, Iwt)

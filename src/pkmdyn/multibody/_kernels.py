@@ -2,6 +2,10 @@
 
 Nothing here knows a mechanism: every function takes the flat arrays of
 :class:`~.model.MechanismModel` and is compiled once (numba, ``cache=True``) for all of them.
+The per-sample kernels allocate nothing (their work space comes in as arguments) and are
+compiled without reference counting (``_nrt=False``): passing an array or taking a view of
+one then costs nothing, where a counted view costs some 15 ns, more than a row of the loop
+equations.
 
 Notation (world = base frame): body b has rotation ``R[b]`` (3, 3) and frame origin ``p[b]``
 (3,) [m]; its spatial velocity ``V[b] = (omega; v_O)`` (6,) (angular velocity [rad/s] and the
@@ -64,7 +68,7 @@ def _dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
                       RP, pP, RC, pC, R, p, S, w33, w3):
     """Body poses ``R (nb, 3, 3)``, ``p (nb, 3)`` and coordinate twists ``S (nq, 6)`` at ``q``
@@ -118,47 +122,41 @@ def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_moti
             p[b, i] = o[i] - (R[b, i, 0] * pC[k, 0] + R[b, i, 1] * pC[k, 1] + R[b, i, 2] * pC[k, 2])
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre):
     """Spatial velocities ``V (nb, 6)`` and the velocity ``Vpre (nq, 6)`` of the frame that
     carries each coordinate's twist."""
-    cur = np.empty(6)
     for b in range(body_parent.shape[0]):
         k = body_joint[b]
         a = body_parent[b]
         for i in range(6):
-            cur[i] = V[a, i] if a >= 0 else 0.0
+            V[b, i] = V[a, i] if a >= 0 else 0.0
         for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
             for i in range(6):
-                Vpre[c, i] = cur[i]
-                cur[i] += S[c, i] * qd[c]
-        for i in range(6):
-            V[b, i] = cur[i]
+                Vpre[c, i] = V[b, i]
+                V[b, i] += S[c, i] * qd[c]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A):
     """Spatial accelerations ``A (nb, 6)``; with ``qdd = 0`` the bias accelerations."""
-    cur = np.empty(6)
     for b in range(body_parent.shape[0]):
         k = body_joint[b]
         a = body_parent[b]
         for i in range(6):
-            cur[i] = A[a, i] if a >= 0 else 0.0
+            A[b, i] = A[a, i] if a >= 0 else 0.0
         for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
             w0, w1, w2 = Vpre[c, 0], Vpre[c, 1], Vpre[c, 2]
             v0, v1, v2 = Vpre[c, 3], Vpre[c, 4], Vpre[c, 5]
             s0, s1, s2 = S[c, 0], S[c, 1], S[c, 2]
             t0, t1, t2 = S[c, 3], S[c, 4], S[c, 5]
             d = qd[c]
-            cur[0] += S[c, 0] * qdd[c] + (w1 * s2 - w2 * s1) * d
-            cur[1] += S[c, 1] * qdd[c] + (w2 * s0 - w0 * s2) * d
-            cur[2] += S[c, 2] * qdd[c] + (w0 * s1 - w1 * s0) * d
-            cur[3] += S[c, 3] * qdd[c] + (w1 * t2 - w2 * t1 + v1 * s2 - v2 * s1) * d
-            cur[4] += S[c, 4] * qdd[c] + (w2 * t0 - w0 * t2 + v2 * s0 - v0 * s2) * d
-            cur[5] += S[c, 5] * qdd[c] + (w0 * t1 - w1 * t0 + v0 * s1 - v1 * s0) * d
-        for i in range(6):
-            A[b, i] = cur[i]
+            A[b, 0] += S[c, 0] * qdd[c] + (w1 * s2 - w2 * s1) * d
+            A[b, 1] += S[c, 1] * qdd[c] + (w2 * s0 - w0 * s2) * d
+            A[b, 2] += S[c, 2] * qdd[c] + (w0 * s1 - w1 * s0) * d
+            A[b, 3] += S[c, 3] * qdd[c] + (w1 * t2 - w2 * t1 + v1 * s2 - v2 * s1) * d
+            A[b, 4] += S[c, 4] * qdd[c] + (w2 * t0 - w0 * t2 + v2 * s0 - v0 * s2) * d
+            A[b, 5] += S[c, 5] * qdd[c] + (w0 * t1 - w1 * t0 + v0 * s1 - v1 * s0) * d
 
 
 @njit(cache=True, inline="always")
@@ -166,7 +164,7 @@ def _parity(i, j, k):
     return 1.0 if (i, j, k) in ((0, 1, 2), (1, 2, 0), (2, 0, 1)) else -1.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def euler_angles(Rm, axes, out):
     """Intrinsic Euler angles (3,) [rad] of ``Rm = R_a1(out0) R_a2(out1) R_a3(out2)``."""
     i, j, k = axes[0], axes[1], axes[2]
@@ -186,7 +184,7 @@ def euler_angles(Rm, axes, out):
         out[2] = math.atan2(Rm[i, j], eps * Rm[i, kk])
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def euler_rate_map(ang, axes, E):
     """``E (3, 3)``: omega = E phi_dot, columns ``k1, R1 k2, R1 R2 k3`` (base frame)."""
     i1, i2, i3 = axes[0], axes[1], axes[2]
@@ -304,7 +302,7 @@ def _jrow(J, rr, wa, wb, S, anc, a, b, coef_a, coef_b):
                                 + wb[0] * S[c, 3] + wb[1] * S[c, 4] + wb[2] * S[c, 5])
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
          RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
          val, J, with_drift, V, A, gamma, w33, w3):
@@ -433,7 +431,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
     return ok
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _fill(K, J, sel_rows, idle, prow, pcol):
     """``K[i, j] = Kfull[prow[i], pcol[j]]`` with ``Kfull = [J[sel_rows]; idle]``."""
     m = sel_rows.shape[0]
@@ -453,7 +451,7 @@ def _wrap(a):
     return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def block_lu_factor(M, piv, blocks):
     """LU with partial pivoting inside each diagonal block of a block lower-triangular ``M``
     (``blocks``: block start rows, then ``n``); whole rows are swapped, the blocks left of the
@@ -492,7 +490,7 @@ def block_lu_factor(M, piv, blocks):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def block_lu_solve(M, piv, blocks, prow, pcol, b, work):
     """Solve ``Kfull x = b`` in place (``b`` in the rows of ``Kfull``, ``x`` in coordinate
     order) with the factors of :func:`block_lu_factor` of the permuted ``K``: block by block,
@@ -525,6 +523,133 @@ def block_lu_solve(M, piv, blocks, prow, pcol, b, work):
             work[i] = acc / M[i, i]
     for j in range(n):
         b[pcol[j]] = work[j]
+
+
+@njit(cache=True, _nrt=False)
+def newton_sample(xs, q, q_ref, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                  tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
+                  row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                  task_body, task_point, task_kind, task_index, euler_axes,
+                  sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter,
+                  R, p, S, val, J, res, K, piv, rhs, ires, bwork, V, A, gamma, w33, w3, info):
+    """Newton on one sample's square system (see :func:`solve_batch`) from ``q`` (updated in
+    place). Returns the status; ``info[0]`` the worst row, ``info[1]`` the scaled residual. On
+    OK the poses ``R, p``, twists ``S`` and Jacobian ``J`` are those of the converged ``q``."""
+    nq = q.shape[0]
+    nr = row_loop.shape[0]
+    nrow = nr + task_kind.shape[0]
+    m = sel_rows.shape[0]
+    ni = idle.shape[0]
+    mk = m + ni
+    prev = 1e300
+    for it in range(max_iter + 1):
+        forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                          coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3)
+        ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                  RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+                  val, J, False, V, A, gamma, w33, w3)
+        if not ok:
+            info[0] = nr
+            return EULER_SINGULAR
+        for rr in range(nrow):
+            if rr < nr:
+                res[rr] = val[rr]
+            elif task_kind[rr - nr] == 1:
+                res[rr] = _wrap(val[rr] - xs[rr - nr])
+            else:
+                res[rr] = val[rr] - xs[rr - nr]
+        # the solved rows (selected and idle) and every row (redundant ones only checked)
+        big_sel = 0.0
+        wr = sel_rows[0] if m > 0 else 0
+        for i in range(m):
+            sc = abs(res[sel_rows[i]]) * row_scale[sel_rows[i]]
+            if sc > big_sel:
+                big_sel = sc
+                wr = sel_rows[i]
+        for i in range(ni):
+            acc = 0.0
+            for c in range(nq):
+                acc += idle[i, c] * (q[c] - q_ref[c])
+            ires[i] = acc
+            if abs(acc) > big_sel:
+                big_sel = abs(acc)
+        big_all = 0.0
+        wa = 0
+        for rr in range(nrow):
+            sc = abs(res[rr]) * row_scale[rr]
+            if sc > big_all:
+                big_all = sc
+                wa = rr
+        info[0] = wr
+        info[1] = big_sel if big_sel > big_all else big_all
+        # converged: at the tolerance, or stalled at the rounding floor (no halving) near it
+        if big_sel <= tol or (big_sel <= 1e3 * tol and big_sel > 0.5 * prev):
+            if big_all <= check_tol:
+                return OK
+            # LOOP_OPEN: the solved rows closed but a redundant direction of a loop stays open
+            info[0] = wa
+            return LOOP_OPEN
+        prev = big_sel
+        if it == max_iter:
+            break
+        _fill(K, J, sel_rows, idle, prow, pcol)
+        for i in range(m):
+            rhs[i] = -res[sel_rows[i]]
+        for i in range(ni):
+            rhs[m + i] = -ires[i]
+        if not block_lu_factor(K, piv, blocks):
+            return SINGULAR
+        block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
+        for j in range(mk):
+            q[j] += rhs[j]
+    return NOT_CONVERGED
+
+
+@njit(cache=True, _nrt=False)
+def rates_sample(xds, xdds, q, body_parent, body_joint, joint_q0, joint_nq, anc,
+                 row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child, RP, pP, RC, pC,
+                 task_body, task_point, task_kind, task_index, euler_axes, sel_rows, idle, prow, pcol, blocks,
+                 R, p, S, val, J, K, piv, rhs, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3):
+    """Rates of one solved sample (``R, p, S, J`` at the converged ``q``): ``K qd = (0; xd)``,
+    ``K qdd = (-gamma_loops; xdd - gamma_task)``, ``G = K^-1 (0; I; 0)``, with the bodies'
+    velocities ``V`` and accelerations ``A``. False where ``K`` is singular."""
+    nq = q.shape[0]
+    nr = row_loop.shape[0]
+    nt = task_kind.shape[0]
+    m = sel_rows.shape[0]
+    mk = m + idle.shape[0]
+    _fill(K, J, sel_rows, idle, prow, pcol)
+    if not block_lu_factor(K, piv, blocks):
+        return False
+    # G = K^-1 (0; I), then qd = G xd
+    for t in range(nt):
+        for i in range(mk):
+            rhs[i] = 1.0 if (i < m and sel_rows[i] == nr + t) else 0.0
+        block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
+        for j in range(nq):
+            G[j, t] = rhs[j]
+    for j in range(nq):
+        acc = 0.0
+        for t in range(nt):
+            acc += G[j, t] * xds[t]
+        qd[j] = acc
+    forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre)
+    for c in range(nq):
+        qdd[c] = 0.0
+    forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
+    rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+         RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+         val, J, True, V, A, gamma, w33, w3)
+    for i in range(mk):
+        rhs[i] = 0.0
+    for i in range(m):
+        rr = sel_rows[i]
+        rhs[i] = (xdds[rr - nr] - gamma[rr]) if rr >= nr else -gamma[rr]
+    block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
+    for j in range(nq):
+        qdd[j] = rhs[j]
+    forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
+    return True
 
 
 @njit(cache=True)
@@ -566,9 +691,7 @@ def solve_batch(tm, x, xd, xdd, q_start,
     nr = row_loop.shape[0]
     nt = task_kind.shape[0]
     nrow = nr + nt
-    m = sel_rows.shape[0]
-    ni = idle.shape[0]
-    mk = m + ni
+    mk = sel_rows.shape[0] + idle.shape[0]
     q = q_start.copy()
     qd = np.zeros(nq)
     qdd = np.zeros(nq)
@@ -585,11 +708,12 @@ def solve_batch(tm, x, xd, xdd, q_start,
     K = np.empty((mk, mk))
     piv = np.empty(mk, dtype=np.int64)
     rhs = np.empty(mk)
-    ires = np.empty(ni)
+    ires = np.empty(idle.shape[0])
     bwork = np.empty(mk)
     G = np.zeros((nq, nt))
     w33 = np.empty((5, 3, 3))
     w3 = np.empty((20, 3))
+    info = np.zeros(2)
     for s in range(n):
         if s > 0 and tm.shape[0] == n:
             dt = tm[s] - tm[s - 1]
@@ -604,118 +728,28 @@ def solve_batch(tm, x, xd, xdd, q_start,
                         dx = _wrap(dx)
                     acc += G[c, t] * dx
                 q[c] += acc
-        converged = False
-        open_loop = False
-        prev = 1e300
-        for it in range(max_iter + 1):
-            forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
-                              coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3)
-            ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-                      RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-                      val, J, False, V, A, gamma, w33, w3)
-            if not ok:
-                status[s] = EULER_SINGULAR
-                worst[s] = nr
-                return
-            for rr in range(nrow):
-                if rr < nr:
-                    res[rr] = val[rr]
-                elif task_kind[rr - nr] == 1:
-                    res[rr] = _wrap(val[rr] - x[s, rr - nr])
-                else:
-                    res[rr] = val[rr] - x[s, rr - nr]
-            # the solved rows (selected and idle) and every row (redundant ones only checked)
-            big_sel = 0.0
-            wr = sel_rows[0] if m > 0 else 0
-            for i in range(m):
-                sc = abs(res[sel_rows[i]]) * row_scale[sel_rows[i]]
-                if sc > big_sel:
-                    big_sel = sc
-                    wr = sel_rows[i]
-            for i in range(ni):
-                acc = 0.0
-                for c in range(nq):
-                    acc += idle[i, c] * (q[c] - q_ref[c])
-                ires[i] = acc
-                if abs(acc) > big_sel:
-                    big_sel = abs(acc)
-            big_all = 0.0
-            wa = 0
-            for rr in range(nrow):
-                sc = abs(res[rr]) * row_scale[rr]
-                if sc > big_all:
-                    big_all = sc
-                    wa = rr
-            worst[s] = wr
-            res_out[s] = big_sel if big_sel > big_all else big_all
-            # converged: at the tolerance, or stalled at the rounding floor (no halving) near it
-            if big_sel <= tol or (big_sel <= 1e3 * tol and big_sel > 0.5 * prev):
-                if big_all <= check_tol:
-                    converged = True
-                else:
-                    open_loop = True
-                    worst[s] = wa
-                break
-            prev = big_sel
-            if it == max_iter:
-                break
-            _fill(K, J, sel_rows, idle, prow, pcol)
-            for i in range(m):
-                rhs[i] = -res[sel_rows[i]]
-            for i in range(ni):
-                rhs[m + i] = -ires[i]
-            if not block_lu_factor(K, piv, blocks):
-                status[s] = SINGULAR
+        info[1] = 0.0
+        st = newton_sample(x[s], q, q_ref, body_parent, body_joint, joint_q0, joint_nq, coord_motion,
+                           coord_offset, coord_sign, tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
+                           row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                           task_body, task_point, task_kind, task_index, euler_axes,
+                           sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter,
+                           R, p, S, val, J, res, K, piv, rhs, ires, bwork, V, A, gamma, w33, w3, info)
+        worst[s] = int(info[0])
+        res_out[s] = info[1]
+        if st == OK:
+            if not rates_sample(xd[s], xdd[s], q, body_parent, body_joint, joint_q0, joint_nq, anc,
+                                row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                                RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+                                sel_rows, idle, prow, pcol, blocks, R, p, S, val, J, K, piv, rhs, bwork,
+                                qd, qdd, V, Vpre, A, gamma, G, w33, w3):
+                st = SINGULAR
+        if st != OK:
+            status[s] = st
+            if st != EULER_SINGULAR:
                 for c in range(nq):
                     q_out[s, c] = q[c]
-                return
-            block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
-            for j in range(mk):
-                q[j] += rhs[j]
-        if not converged:
-            # LOOP_OPEN: the solved rows closed but a redundant direction of a loop stays open
-            status[s] = LOOP_OPEN if open_loop else NOT_CONVERGED
-            for c in range(nq):
-                q_out[s, c] = q[c]
             return
-        _fill(K, J, sel_rows, idle, prow, pcol)
-        if not block_lu_factor(K, piv, blocks):
-            status[s] = SINGULAR
-            for c in range(nq):
-                q_out[s, c] = q[c]
-            return
-        # velocities
-        for i in range(mk):
-            rhs[i] = 0.0
-        for i in range(m):
-            rr = sel_rows[i]
-            rhs[i] = xd[s, rr - nr] if rr >= nr else 0.0
-        block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
-        for j in range(nq):
-            qd[j] = rhs[j]
-        forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre)
-        for c in range(nq):
-            qdd[c] = 0.0
-        forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
-        rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-             RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-             val, J, True, V, A, gamma, w33, w3)
-        for i in range(mk):
-            rhs[i] = 0.0
-        for i in range(m):
-            rr = sel_rows[i]
-            rhs[i] = (xdd[s, rr - nr] - gamma[rr]) if rr >= nr else -gamma[rr]
-        block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
-        for j in range(nq):
-            qdd[j] = rhs[j]
-        forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
-        # G = K^-1 (0; I)
-        for t in range(nt):
-            for i in range(mk):
-                rhs[i] = 1.0 if (i < m and sel_rows[i] == nr + t) else 0.0
-            block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
-            for j in range(nq):
-                G[j, t] = rhs[j]
         for c in range(nq):
             q_out[s, c] = q[c]
             qd_out[s, c] = qd[c]

@@ -26,7 +26,6 @@ from pydantic import Field, ValidationError, field_validator
 
 from ..errors import ParameterError
 from ..params_util import Section, _rule, read_toml
-from .joint_types import joint_type
 from .joint_types import JOINT_TYPES, joint_type
 
 __all__ = ["Description", "BodySpec", "JointSpec", "TaskSpec", "LoadSpec", "MotionSpec",
@@ -418,11 +417,15 @@ def _load(ld: _Load, where: str, body_specs: dict[str, BodySpec], task: TaskSpec
             raise ParameterError(f"{where} {key}: a named load ({ld.name!r}) is a force along direction with a "
                                  "magnitude per sample; give direction and magnitude_N instead")
     cols = {f"{n}_{u}" for n, u in zip(task.names, task.units)} | {"t_s"}
-    if ld.name in cols:
-        raise ParameterError(f"{where} name: {ld.name!r} is a task column; name the load otherwise")
-    if ld.direction is None or not np.linalg.norm(ld.direction) > 0:
-        raise ParameterError(f"{where} direction: a named load needs a nonzero direction")
-    d = np.array(ld.direction, float) / np.linalg.norm(ld.direction)
+    if ld.name in cols or any(k in ld.name for k in ("_pos_", "_vel_", "_acc_", "_effort_")):
+        raise ParameterError(f"{where} name: {ld.name!r} reads as a task or joint column of the results; "
+                             "name the load otherwise")
+    d = np.array(ld.direction if ld.direction is not None else [0.0] * 3, float)
+    big = float(np.abs(d).max())
+    if not (np.isfinite(big) and big > 0):
+        raise ParameterError(f"{where} direction: a named load needs a finite nonzero direction")
+    d = d / big
+    d = d / np.linalg.norm(d)
     mag = float(ld.magnitude_N or 0.0)
     return LoadSpec(ld.body, d * mag, np.zeros(3), pt, name=ld.name, direction=d, magnitude=mag)
 
@@ -570,6 +573,14 @@ def load_description(source: str | Path | dict[str, Any]) -> Description:
         raise ParameterError(f"{label}: [joints]: no joint is actuated (set actuated = true on the driven joints)")
     task = _task(data.task, f"{label}: [task]", body_specs)
     loads = [_load(ld, f"{label}: [loads][{k}]", body_specs, task) for k, ld in enumerate(data.loads)]
+    first: dict[str, tuple[int, float]] = {}
+    for k, ld in enumerate(loads):
+        if ld.name is not None:
+            k0, m0 = first.setdefault(ld.name, (k, ld.magnitude))
+            if ld.magnitude != m0:
+                raise ParameterError(f"{label}: [loads][{k}] magnitude_N: {ld.magnitude:g} differs from "
+                                     f"{m0:g} of [loads][{k0}]; entries of one named load ({ld.name!r}) share "
+                                     "one magnitude")
     _check_external_friction(label, joints, {ld.name for ld in loads if ld.name is not None})
     cuts = None
     if data.mechanism.cut_joints is not None:

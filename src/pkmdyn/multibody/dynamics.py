@@ -116,7 +116,7 @@ def named_magnitudes(model: MechanismModel, n: int, named: Mapping[str, object] 
                 raise ParameterError(f"load {nm!r}: sample {int(bad[0])} is not finite")
             out[nm] = np.array(np.broadcast_to(v, (n,)), dtype=float)
         else:
-            out[nm] = np.full(n, float(np.linalg.norm(model.load_force[k])))
+            out[nm] = np.full(n, float(model.load_magnitude[k]))
     return out
 
 

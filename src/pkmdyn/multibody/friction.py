@@ -108,7 +108,7 @@ class JointFriction:
         tau = np.zeros((n, 3))
         phi = np.zeros((n, 3))
         if jd["has_rot"]:
-            mag = d.get("coulomb_torque_Nm", 0.0) + jd["ext"]
+            mag = np.full(n, d.get("coulomb_torque_Nm", 0.0)) + jd["ext"]
             if mu:
                 a = jd["axis"]
                 if a is not None:
@@ -118,7 +118,7 @@ class JointFriction:
                 mag = mag + mu * d.get("ball_radius_m", 0.0) * np.linalg.norm(f, axis=1)
             tau = mag[:, None] * regularised_sign(jd["w"], EPS_ROTATION, True) + d.get("viscous_Nm_s_rad", 0.0) * jd["w"]
         if jd["has_slide"]:
-            mag = d.get("coulomb_force_N", 0.0) + (0.0 if jd["has_rot"] else jd["ext"])
+            mag = np.full(n, d.get("coulomb_force_N", 0.0)) + (0.0 if jd["has_rot"] else jd["ext"])
             radii = d.get("pin_radius_m", 0.0) or d.get("ball_radius_m", 0.0) or d.get("mean_radius_m", 0.0)
             if mu and not radii and jd["e"] is not None:
                 e = jd["e"]

@@ -49,10 +49,14 @@ class MechanismVerbs:
     from the previous call's last configuration, as a control loop calls them."""
 
     def __init__(self, model: MechanismModel) -> None:
+        from . import _one
+
         self.model = model
         self.COORDINATES = tuple(f"{n}_{u}" for n, u in zip(model.task_names, model.task_units))
         self.ACTUATORS = tuple(f"{a}_{effort_unit(model, i)}" for i, a in enumerate(model.actuator_names))
         self._q_last: Array | None = None
+        # the compiled single-sample path (:mod:`._one`), where it answers for this mechanism
+        self._pk = (*_one.pack(model), *_one.new_state(model)) if _one.supported(model) else None
 
     # ------------------------------------------------------------------ helpers
     def _x(self, q: object, name: str = "q") -> Array:
@@ -63,8 +67,16 @@ class MechanismVerbs:
         if model is not self.model:
             raise ParameterError("these verbs belong to mechanism " + repr(self.model.name))
         kin = solve_kinematics(model, x, xd, None, q_start=self._q_last)
-        self._q_last = kin.q[-1].copy()
+        self._remember(kin)
         return kin
+
+    def _remember(self, kin: MechanismKinematics) -> None:
+        """The last solved sample: the next solve's start, and the compiled path's state."""
+        self._q_last = kin.q[-1].copy()
+        if self._pk is not None:
+            from . import _one
+
+            _one.prime(self._pk[2], kin.q[-1], kin.x[-1], kin.G[-1])
 
     def _named(self, load: object, n: int) -> dict | None:
         """The named loads' magnitudes ``{name: (n,)}`` from the verbs' ``load`` (module docstring)."""
@@ -103,8 +115,9 @@ class MechanismVerbs:
         out = _run(model, x1, xd1, zero, self._q_last)
         if out["status"][0] != K.OK or not (np.all(np.isfinite(x1)) and np.all(np.isfinite(xd1))):
             return self._kin(model, x1, xd1)
-        self._q_last = out["q"][0].copy()
-        return _assemble(model, None, x1, xd1, zero, out)
+        kin = _assemble(model, None, x1, xd1, zero, out)
+        self._remember(kin)
+        return kin
 
     def _mass(self, model: MechanismModel, kin: MechanismKinematics, S: Array) -> Array:
         from ._dyn_kernels import task_mass_batch
@@ -170,10 +183,43 @@ class MechanismVerbs:
         uu = np.atleast_2d(as_array(u, (None, model.na) if np.ndim(u) == 2 else (model.na,), "u", MotionError))
         return np.linalg.solve(M, (np.einsum("nta,na->nt", B, uu) - h)[..., None])[..., 0]
 
+    def one_sample_kernels(self, model: MechanismModel) -> tuple[tuple, object, object] | None:
+        """``(p, inverse, forward)``: the compiled single-sample kernels (:mod:`._one`) for
+        callers in a loop (``pkmdyn.machine``), or None where they do not answer for this
+        mechanism (joint friction, named loads, redundant actuation): the ``*_one`` verbs
+        then take the general route."""
+        from . import _one
+
+        if self._pk is None or model is not self.model:
+            return None
+        return self._pk, _one.inverse_one, _one.forward_one
+
+    def _kernel(self, model: MechanismModel, forward: bool, q: object, qd: object, v: object,
+                load: object) -> Array | None:
+        """The compiled path's answer, or None (then the general route answers and primes it)."""
+        if self._pk is None or model is not self.model or (load is not None and np.any(np.asarray(load) != 0.0)):
+            return None
+        from . import _one
+
+        x = np.ascontiguousarray(q, dtype=float)
+        xd = np.ascontiguousarray(qd, dtype=float)
+        vv = np.ascontiguousarray(v, dtype=float)
+        nt = self.model.nt
+        if x.shape != (nt,) or xd.shape != (nt,) or vv.shape != (nt,) or not (
+                np.all(np.isfinite(x)) and np.all(np.isfinite(xd)) and np.all(np.isfinite(vv))):
+            return None  # the general route names what is wrong
+        out = np.empty(nt)
+        status = (_one.forward_one if forward else _one.inverse_one)(self._pk, x, xd, vv, 0.0, out)
+        return out if status == 0 else None
+
     def inverse_dynamics_one(self, model: MechanismModel, q: Array, qd: Array, qdd: Array,
                              load: float | None = None) -> Array:
-        """One sample of :meth:`inverse_dynamics` (the single-sample path: the compiled solver
-        warm-started from the previous call, no batch checks)."""
+        """One sample of :meth:`inverse_dynamics` (the single-sample path: one compiled call
+        where :mod:`._one` answers, else the compiled solver warm-started from the previous
+        call, no batch checks)."""
+        u = self._kernel(model, False, q, qd, qdd, load)
+        if u is not None:
+            return u
         M, h, B, kin = self._all(model, q, qd, load, one=True)
         rhs = M[0] @ np.asarray(qdd, dtype=float) + h[0]
         return actuator_efforts(model, kin, np.zeros((1, 0)), rhs_task=rhs[None])[0]
@@ -181,6 +227,9 @@ class MechanismVerbs:
     def forward_dynamics_one(self, model: MechanismModel, q: Array, qd: Array, u: Array,
                              load: float | None = None) -> Array:
         """One sample of :meth:`forward_dynamics` (the single-sample path)."""
+        a = self._kernel(model, True, q, qd, u, load)
+        if a is not None:
+            return a
         M, h, B, _ = self._all(model, q, qd, load, one=True)
         return np.linalg.solve(M[0], B[0] @ np.asarray(u, dtype=float) - h[0])
 

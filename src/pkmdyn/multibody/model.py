@@ -177,6 +177,7 @@ class MechanismModel:
     #: direction (base frame; zero for a constant load); the distinct names in order
     load_name: tuple[str | None, ...] = ()
     load_direction: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    load_magnitude: Array = field(default_factory=lambda: np.zeros(0))
     named_loads: tuple[str, ...] = ()
     solver_rows: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     solver_idle: Array = field(default_factory=lambda: np.zeros((0, 0)))
@@ -403,6 +404,7 @@ def compile_model(desc: Description) -> MechanismModel:
         load_name=tuple(ld.name for ld in desc.loads),
         load_direction=np.array([ld.direction if ld.direction is not None else np.zeros(3)
                                  for ld in desc.loads]).reshape(-1, 3),
+        load_magnitude=np.array([ld.magnitude for ld in desc.loads], dtype=float),
         named_loads=tuple(dict.fromkeys(ld.name for ld in desc.loads if ld.name is not None)),
     )
     from dataclasses import replace

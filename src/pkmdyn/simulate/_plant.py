@@ -122,8 +122,9 @@ def make_plant(verbs: Any, model: Any, has_load: bool) -> Plant:
     nq, nu = len(verbs.COORDINATES), len(verbs.ACTUATORS)
     one = getattr(verbs, "forward_dynamics_one", None)
     kernels = getattr(verbs, "one_sample_kernels", None)
-    if one is not None and kernels is not None:
-        p, _, forward = kernels(model)
+    compiled = kernels(model) if one is not None and kernels is not None else None
+    if compiled is not None:
+        p, _, forward = compiled
 
         def f(q: Array, qd: Array, u: Array, load: float) -> Array:
             out = np.empty(nq)

@@ -1,0 +1,329 @@
+"""One sample of a described mechanism's dynamics in one compiled call: the real-time path
+behind :meth:`.machine.MechanismVerbs.forward_dynamics_one` and ``inverse_dynamics_one``.
+
+The model's arrays are packed once into one integer and one float array (:func:`pack`), so
+that a call passes a handful of arguments whatever the mechanism; the kernel unpacks them as
+views and runs, for task pose ``x`` and rate ``xd``:
+
+1. the tree coordinates: Newton from the predictor ``q_prev + G_prev (x - x_prev)`` (the
+   previous call's solution; :func:`._kernels.newton_sample`, the batched solver's own step);
+2. the rates at ``xdd = 0``: ``G = dq/dx``, ``qd = G xd``, the bias accelerations
+   (:func:`._kernels.rates_sample`);
+3. the bodies' required wrenches at the bias motion with gravity and loads (Eq. 1 of
+   :mod:`.dynamics`), the tree forces (Eq. 2) and ``h = G^T Q``;
+4. the task mass matrix ``M = sum_b T_b^T I_b T_b``;
+5. forward: ``M xdd = J_ax^T u - h``; inverse: ``J_ax^T u = M xdd + h``.
+
+These are the verbs' definitions (idle freedoms held, as the kinematics hold them). Friction
+and named loads are not in the kernel: a mechanism with joint friction, a named load or more
+actuators than task coordinates takes the verbs' own route (:func:`supported`). A call returns a
+nonzero status where it cannot answer (no previous solution yet, Newton failed, a singular
+matrix); the caller then repeats the sample through the checked verb, which raises the error
+or primes the kernel's state (:func:`prime`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from .._dense import solve_in_place
+from ._dyn_kernels import body_wrench, generalised, task_mass
+from ._kernels import OK, _point_motion, _wrap, newton_sample, rates_sample
+from .model import MechanismModel
+
+__all__ = ["pack", "supported", "new_state", "prime", "forward_one", "inverse_one", "COLD"]
+
+Array = NDArray[np.float64]
+
+#: status of a call without a previous solution to start from
+COLD = 10
+#: status of a singular mass matrix or actuator map
+SINGULAR_DYNAMICS = 11
+
+_INT = ("body_parent", "body_joint", "joint_q0", "joint_nq", "coord_motion", "ancestor_list", "row_loop", "row_kind",
+        "row_i", "row_j", "loop_joint", "joint_parent", "joint_child", "task_kind", "task_index", "euler_axes",
+        "solver_rows", "solver_prow", "solver_pcol", "solver_blocks", "act_coord", "load_body")
+_FLOAT = ("coord_offset", "coord_sign", "tree_R_parent", "tree_p_parent", "tree_R_child", "tree_p_child",
+          "joint_R_parent", "joint_p_parent", "joint_R_child", "joint_p_child", "task_point", "solver_idle",
+          "row_scale", "mass", "inertia", "com", "gravity", "load_point", "load_force", "load_moment")
+_HEAD = 6  # n_int, n_float, task_body, max_iter, nq, nt
+
+
+def supported(model: MechanismModel) -> bool:
+    """Whether the kernel answers for ``model`` (module docstring)."""
+    no_friction = all(not f or not any(v for v in f.values()) for f in model.joint_friction)
+    return no_friction and model.na == model.nt and not model.named_loads
+
+
+def pack(model: MechanismModel) -> tuple[NDArray[np.int64], Array]:
+    """The model's arrays as ``(ints, floats)`` with a header of offsets and shapes."""
+    from .kinematics import CHECK_TOLERANCE, MAX_ITER, TOLERANCE, row_scale
+
+    arrays = {k: getattr(model, k) for k in _INT + _FLOAT if hasattr(model, k)}
+    arrays["row_scale"] = row_scale(model)
+    n_head = _HEAD + 4 * (len(_INT) + len(_FLOAT))
+    ints: list[int] = []
+    floats: list[float] = [TOLERANCE, CHECK_TOLERANCE]
+    head = [len(_INT), len(_FLOAT), int(model.task_body), int(MAX_ITER), int(model.nq), int(model.nt)]
+    for k in _INT:
+        a = np.ascontiguousarray(arrays[k], dtype=np.int64)
+        shape = list(a.shape) + [1] * (3 - a.ndim)
+        head += [n_head + len(ints), *shape]
+        ints += a.ravel().tolist()
+    for k in _FLOAT:
+        a = np.ascontiguousarray(arrays[k], dtype=float)
+        shape = list(a.shape) + [1] * (3 - a.ndim)
+        head += [len(floats), *shape]
+        floats += a.ravel().tolist()
+    return np.array(head + ints, dtype=np.int64), np.array(floats, dtype=float)
+
+
+def new_state(model: MechanismModel) -> tuple[Array, Array, NDArray[np.int64]]:
+    """``(state, work, int work)``: ``state = [valid, q (nq), x (nt), G (nq nt)]`` of the last
+    solved sample, and the kernel's work space."""
+    nq, nt, nb = model.nq, model.nt, model.nb
+    nrow = model.row_loop.shape[0] + nt
+    mk = nq
+    state = np.zeros(1 + nq + nt + nq * nt)
+    nwork = (nb * 9 + nb * 3 + nq * 6 + nrow + nrow * nq + nrow + mk * mk + mk + mk + mk + 2 * nq + nb * 6
+             + nq * 6 + nb * 6 + nrow + 45 + 60 + nb * 6 + nq + 6 * nt + 9 + 9 + 3 * nt + 3 * nt + nt * nt + nt * nt
+             + 2 * nt + 12 + 2)
+    return state, np.zeros(nwork), np.zeros(mk, dtype=np.int64)
+
+
+def prime(state: Array, q: Array, x: Array, G: Array) -> None:
+    """Set the kernel's previous solution (after the checked route solved a sample)."""
+    nq, nt = q.shape[0], x.shape[0]
+    state[0] = 1.0
+    state[1:1 + nq] = q
+    state[1 + nq:1 + nq + nt] = x
+    state[1 + nq + nt:] = G.ravel()
+
+
+@njit(cache=True, inline="always")
+def _i(ib, k):  # pragma: no cover - compiled
+    h = _HEAD + 4 * k
+    o = ib[h]
+    return ib[o:o + ib[h + 1] * ib[h + 2] * ib[h + 3]]
+
+
+@njit(cache=True, inline="always")
+def _f(ib, fb, k):  # pragma: no cover - compiled
+    h = _HEAD + 4 * (ib[0] + k)
+    o = ib[h]
+    return fb[o:o + ib[h + 1] * ib[h + 2] * ib[h + 3]]
+
+
+@njit(cache=True, inline="always")
+def _f2(ib, fb, k):  # pragma: no cover - compiled
+    h = _HEAD + 4 * (ib[0] + k)
+    return _f(ib, fb, k).reshape((ib[h + 1], ib[h + 2]))
+
+
+@njit(cache=True, inline="always")
+def _f3(ib, fb, k):  # pragma: no cover - compiled
+    h = _HEAD + 4 * (ib[0] + k)
+    return _f(ib, fb, k).reshape((ib[h + 1], ib[h + 2], ib[h + 3]))
+
+
+@njit(cache=True, _nrt=False)
+def _dynamics(ib, fb, st, wf, wi, x, xd, v, forward, out):  # pragma: no cover - compiled
+    """The kernel (module docstring): ``v`` is ``u`` (forward) or ``xdd`` (inverse); writes the
+    other into ``out``; returns the status (0 OK)."""
+    if st[0] == 0.0:
+        return COLD
+    nI = ib[0]
+    nq, nt = ib[4], ib[5]
+    # ---- the model's arrays (views of the packed buffers)
+    body_parent, body_joint, joint_q0, joint_nq, coord_motion = _i(ib, 0), _i(ib, 1), _i(ib, 2), _i(ib, 3), _i(ib, 4)
+    anc = _i(ib, 5).reshape((ib[_HEAD + 4 * 5 + 1], ib[_HEAD + 4 * 5 + 2]))
+    row_loop, row_kind, row_i, row_j = _i(ib, 6), _i(ib, 7), _i(ib, 8), _i(ib, 9)
+    loop_joint, joint_parent, joint_child = _i(ib, 10), _i(ib, 11), _i(ib, 12)
+    task_kind, task_index, euler_axes = _i(ib, 13), _i(ib, 14), _i(ib, 15)
+    sel_rows, prow, pcol, blocks = _i(ib, 16), _i(ib, 17), _i(ib, 18), _i(ib, 19)
+    act_coord, load_body = _i(ib, 20), _i(ib, 21)
+    nb = body_parent.shape[0]
+    nl = load_body.shape[0]
+    coord_offset, coord_sign = _f(ib, fb, 0), _f(ib, fb, 1)
+    tRP, tpP, tRC, tpC = _f3(ib, fb, 2), _f2(ib, fb, 3), _f3(ib, fb, 4), _f2(ib, fb, 5)
+    RP, pP, RC, pC = _f3(ib, fb, 6), _f2(ib, fb, 7), _f3(ib, fb, 8), _f2(ib, fb, 9)
+    task_point = _f(ib, fb, 10)
+    idle = _f2(ib, fb, 11)
+    row_scale, mass = _f(ib, fb, 12), _f(ib, fb, 13)
+    inertia, com, gravity = _f3(ib, fb, 14), _f2(ib, fb, 15), _f(ib, fb, 16)
+    load_point, load_force, load_moment = _f2(ib, fb, 17), _f2(ib, fb, 18), _f2(ib, fb, 19)
+    tol, check_tol = fb[0], fb[1]
+    task_body, max_iter = ib[2], ib[3]
+    nr = row_loop.shape[0]
+    nrow = nr + nt
+    mk = nq
+    # ---- work space
+    o = 0
+    R = wf[o:o + nb * 9].reshape((nb, 3, 3))
+    o += nb * 9
+    p = wf[o:o + nb * 3].reshape((nb, 3))
+    o += nb * 3
+    S = wf[o:o + nq * 6].reshape((nq, 6))
+    o += nq * 6
+    val = wf[o:o + nrow]
+    o += nrow
+    J = wf[o:o + nrow * nq].reshape((nrow, nq))
+    o += nrow * nq
+    res = wf[o:o + nrow]
+    o += nrow
+    K = wf[o:o + mk * mk].reshape((mk, mk))
+    o += mk * mk
+    rhs = wf[o:o + mk]
+    o += mk
+    ires = wf[o:o + idle.shape[0]]
+    o += mk
+    bwork = wf[o:o + mk]
+    o += mk
+    qd = wf[o:o + nq]
+    o += nq
+    qdd = wf[o:o + nq]
+    o += nq
+    V = wf[o:o + nb * 6].reshape((nb, 6))
+    o += nb * 6
+    Vpre = wf[o:o + nq * 6].reshape((nq, 6))
+    o += nq * 6
+    A = wf[o:o + nb * 6].reshape((nb, 6))
+    o += nb * 6
+    gamma = wf[o:o + nrow]
+    o += nrow
+    w33 = wf[o:o + 45].reshape((5, 3, 3))
+    o += 45
+    w3 = wf[o:o + 60].reshape((20, 3))
+    o += 60
+    W = wf[o:o + nb * 6].reshape((nb, 6))
+    o += nb * 6
+    Q = wf[o:o + nq]
+    o += nq
+    T = wf[o:o + 6 * nt].reshape((6, nt))
+    o += 6 * nt
+    Iw = wf[o:o + 9].reshape((3, 3))
+    o += 9
+    tmp = wf[o:o + 9].reshape((3, 3))
+    o += 9
+    vc = wf[o:o + 3 * nt].reshape((3, nt))
+    o += 3 * nt
+    Iwt = wf[o:o + 3 * nt].reshape((3, nt))
+    o += 3 * nt
+    M = wf[o:o + nt * nt].reshape((nt, nt))
+    o += nt * nt
+    Bm = wf[o:o + nt * nt].reshape((nt, nt))
+    o += nt * nt
+    h = wf[o:o + nt]
+    o += nt
+    r = wf[o:o + nt]
+    o += nt
+    c3 = wf[o:o + 3]
+    v3 = wf[o + 3:o + 6]
+    a3 = wf[o + 6:o + 9]
+    f3 = wf[o + 9:o + 12]
+    o += 12
+    info = wf[o:o + 2]
+    # ---- 1. tree coordinates from the previous solution
+    q = st[1:1 + nq]
+    xp = st[1 + nq:1 + nq + nt]
+    Gp = st[1 + nq + nt:1 + nq + nt + nq * nt].reshape((nq, nt))
+    for c in range(nq):
+        acc = 0.0
+        for t in range(nt):
+            dx = x[t] - xp[t]
+            if task_kind[t] == 1:
+                dx = _wrap(dx)
+            acc += Gp[c, t] * dx
+        q[c] += acc
+    status = newton_sample(x, q, coord_offset, body_parent, body_joint, joint_q0, joint_nq, coord_motion,
+                           coord_offset, coord_sign, tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
+                           row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                           task_body, task_point, task_kind, task_index, euler_axes,
+                           sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter,
+                           R, p, S, val, J, res, K, wi, rhs, ires, bwork, V, A, gamma, w33, w3, info)
+    if status != OK:
+        st[0] = 0.0
+        return status
+    # ---- 2. rates at xdd = 0 (G written into the state: the next call's predictor)
+    for t in range(nt):
+        r[t] = 0.0
+    if not rates_sample(xd, r, q, body_parent, body_joint, joint_q0, joint_nq, anc,
+                        row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                        RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+                        sel_rows, idle, prow, pcol, blocks, R, p, S, val, J, K, wi, rhs, bwork,
+                        qd, qdd, V, Vpre, A, gamma, Gp, w33, w3):
+        st[0] = 0.0
+        return SINGULAR_DYNAMICS
+    for t in range(nt):
+        xp[t] = x[t]
+    # ---- 3. required wrenches of the bias motion, loads, h = G^T Q
+    for b in range(nb):
+        for i in range(3):
+            c3[i] = p[b, i] + R[b, i, 0] * com[b, 0] + R[b, i, 1] * com[b, 1] + R[b, i, 2] * com[b, 2]
+        _point_motion(b, c3, V, A, v3, a3)
+        body_wrench(R[b], V[b, :3], A[b, :3], c3, a3, mass[b], inertia[b], gravity, W[b], tmp, Iw)
+        for i in range(3):
+            p[b, i] = c3[i]  # the centres of mass, for the mass matrix
+    for k in range(nl):
+        b = load_body[k]
+        for i in range(3):
+            f3[i] = load_force[k, i]
+        for i in range(3):  # the load's point in the base frame (p now holds the centre of mass)
+            v3[i] = R[b, i, 0] * (load_point[k, 0] - com[b, 0]) + R[b, i, 1] * (load_point[k, 1] - com[b, 1]) \
+                + R[b, i, 2] * (load_point[k, 2] - com[b, 2]) + p[b, i]
+        W[b, 0] -= load_moment[k, 0] + v3[1] * f3[2] - v3[2] * f3[1]
+        W[b, 1] -= load_moment[k, 1] + v3[2] * f3[0] - v3[0] * f3[2]
+        W[b, 2] -= load_moment[k, 2] + v3[0] * f3[1] - v3[1] * f3[0]
+        for i in range(3):
+            W[b, 3 + i] -= f3[i]
+    generalised(S, W, anc, Q)
+    for t in range(nt):
+        acc = 0.0
+        for c in range(nq):
+            acc += Gp[c, t] * Q[c]
+        h[t] = acc
+    # ---- 4. the task mass matrix
+    task_mass(S, Gp, anc, R, p, mass, inertia, M, T, Iw, tmp, vc, Iwt)
+    # ---- 5. the equation of motion, M xdd + h = J_ax^T u
+    if forward:
+        for t in range(nt):
+            acc = -h[t]
+            for a in range(nt):
+                acc += Gp[act_coord[a], t] * v[a]
+            out[t] = acc
+        big = 0.0
+        for t in range(nt):
+            for j in range(nt):
+                big = max(big, abs(M[t, j]))
+        det, small = solve_in_place(M, out)
+    else:
+        for t in range(nt):
+            acc = h[t]
+            for j in range(nt):
+                acc += M[t, j] * v[j]
+            out[t] = acc
+            for a in range(nt):
+                Bm[t, a] = Gp[act_coord[a], t]
+        big = 0.0
+        for t in range(nt):
+            for a in range(nt):
+                big = max(big, abs(Bm[t, a]))
+        det, small = solve_in_place(Bm, out)
+    if not small > 1e-9 * big:  # singular (the checked verb names the sample)
+        return SINGULAR_DYNAMICS
+    return OK
+
+
+@njit(cache=True)
+def forward_one(pk, x, xd, u, load, out):  # pragma: no cover - compiled
+    """``out = xdd (nt,)`` of one sample (``pk`` from :func:`pack` and :func:`new_state`;
+    ``load`` is ignored); returns the status (0 OK)."""
+    return _dynamics(pk[0], pk[1], pk[2], pk[3], pk[4], x, xd, u, True, out)
+
+
+@njit(cache=True)
+def inverse_one(pk, x, xd, xdd, load, out):  # pragma: no cover - compiled
+    """``out = u (na,)`` of one sample; returns the status (0 OK)."""
+    return _dynamics(pk[0], pk[1], pk[2], pk[3], pk[4], x, xd, xdd, False, out)

@@ -1,0 +1,97 @@
+"""The compiled single-sample dynamics of described mechanisms (``pkmdyn.multibody._one``):
+one call per sample, equal to the batched verbs, falling back where it cannot answer."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import multibody_examples as ex
+from pkmdyn.multibody import load_mechanism, reference_task
+from pkmdyn.multibody import _one
+from pkmdyn.multibody.machine import machine_verbs
+
+CASES = {"stewart": lambda: ex.builtin_dict("stewart"), "delta": lambda: ex.builtin_dict("delta"),
+         "bennett": lambda: ex.builtin_dict("bennett"), "rrr3": lambda: ex.builtin_dict("rrr3"),
+         "four_bar": ex.four_bar, "stewart_sps": ex.stewart_sps, "stewart_with_tool": ex.stewart_with_tool}
+
+
+def _motion(m, n=40, seed=4):
+    t = np.linspace(0.0, 1.0, n)
+    amp = np.where(m.task_kind == 1, 0.05, 0.03 * m.length_scale)
+    return ex.smooth_motion(reference_task(m), amp, t, seed)
+
+
+def _with_load(d):
+    d = ex.deep(d)
+    body = d["task"]["body"]
+    d["loads"] = [{"body": body, "force_N": [3.0, -2.0, -40.0], "moment_Nm": [0.5, 0.2, -0.3]}]
+    return d
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_the_compiled_sample_equals_the_batched_verbs(name):
+    """Along a motion, sample after sample (each call starting from the previous solution), the
+    compiled forward and inverse dynamics equal the batched verbs (a constant load on the task
+    body included); the first call has no previous solution and takes the general route."""
+    m = load_mechanism(_with_load(CASES[name]()))
+    assert _one.supported(m)
+    x, xd, xdd = _motion(m)
+    ref = machine_verbs(m)
+    u = ref.inverse_dynamics(m, x, xd, xdd)
+    a_ref = ref.forward_dynamics(m, x, xd, u)
+    V = machine_verbs(m)
+    p, inverse, forward = V.one_sample_kernels(m)
+    out = np.empty(m.nt)
+    assert forward(p, x[0], xd[0], u[0], 0.0, out) == _one.COLD  # nothing solved yet
+    scale_a = max(np.abs(a_ref).max(), 1e-9)
+    scale_u = max(np.abs(u).max(), 1e-9)
+    for i in range(len(x)):
+        a = V.forward_dynamics_one(m, x[i], xd[i], u[i])
+        assert np.abs(a - a_ref[i]).max() <= 1e-9 * scale_a, (name, i)
+        assert forward(p, x[i], xd[i], u[i], 0.0, out) == 0
+        assert np.abs(out - a_ref[i]).max() <= 1e-9 * scale_a, (name, i)
+        assert inverse(p, x[i], xd[i], xdd[i], 0.0, out) == 0
+        assert np.abs(out - u[i]).max() <= 1e-9 * scale_u, (name, i)
+    assert np.abs(a_ref - xdd).max() <= 1e-8 * max(np.abs(xdd).max(), 1e-9)
+
+
+def test_a_far_jump_and_a_failed_solve_fall_back():
+    """A pose far from the last one still comes out exact (Newton from a poor start, or the
+    general route); a pose the mechanism cannot reach gives the general route's error."""
+    from pkmdyn.errors import PkmdynError
+
+    m = load_mechanism(ex.builtin_dict("stewart"))
+    x, xd, xdd = _motion(m)
+    V = machine_verbs(m)
+    u = V.inverse_dynamics(m, x, xd, xdd)
+    V.forward_dynamics_one(m, x[0], xd[0], u[0])
+    far = x[-1].copy()
+    far[2] += 0.5 * m.length_scale
+    far[3] += 0.2
+    ref = machine_verbs(m).forward_dynamics(m, far[None], xd[-1:], u[-1:])[0]
+    a = V.forward_dynamics_one(m, far, xd[-1], u[-1])
+    assert np.abs(a - ref).max() <= 1e-9 * np.abs(ref).max()
+    md = load_mechanism(ex.builtin_dict("delta"))
+    x, xd, xdd = _motion(md)
+    Vd = machine_verbs(md)
+    u = Vd.inverse_dynamics(md, x, xd, xdd)
+    Vd.forward_dynamics_one(md, x[0], xd[0], u[0])
+    out_of_reach = x[0] + 10.0 * md.length_scale
+    with pytest.raises(PkmdynError):
+        Vd.forward_dynamics_one(md, out_of_reach, xd[0], u[0])
+    a = Vd.forward_dynamics_one(md, x[1], xd[1], u[1])  # and it goes on from there
+    assert np.abs(a - xdd[1]).max() <= 1e-8 * np.abs(xdd).max()
+
+
+def test_mechanisms_with_friction_take_the_general_route():
+    d = ex.builtin_dict("stewart")
+    d["legs"][0]["joints"][1]["friction"] = {"coulomb_force_N": 2.0}
+    m = load_mechanism(d)
+    assert not _one.supported(m)
+    V = machine_verbs(m)
+    assert V.one_sample_kernels(m) is None
+    x, xd, xdd = _motion(m, n=5)
+    u = V.inverse_dynamics(m, x, xd, xdd)
+    a = V.forward_dynamics_one(m, x[2], xd[2], u[2])
+    assert np.abs(a - xdd[2]).max() <= 1e-8 * np.abs(xdd).max()
