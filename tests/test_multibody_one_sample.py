@@ -95,3 +95,38 @@ def test_mechanisms_with_friction_take_the_general_route():
     u = V.inverse_dynamics(m, x, xd, xdd)
     a = V.forward_dynamics_one(m, x[2], xd[2], u[2])
     assert np.abs(a - xdd[2]).max() <= 1e-8 * np.abs(xdd).max()
+
+
+def _every_joint_with_friction(d):
+    d = ex.deep(d)
+    joints = list(d.get("joints", []))
+    for leg in d.get("legs", []):
+        joints += leg["joints"]
+    for k, j in enumerate(joints):
+        if j["type"] != "fixed":
+            j["friction"] = {"coulomb_torque_Nm": 0.1 + 0.01 * k, "viscous_Nm_s_rad": 0.05 + 0.002 * k,
+                             "coulomb_force_N": 2.0 + 0.1 * k, "viscous_N_s_m": 3.0}
+    return d
+
+
+FRICTION_CASES = {**CASES, "four_bar_cut_b": ex.four_bar_cut_b, "cylindrical": lambda: ex.slider_crank("cylindrical"),
+                  "sarrus": ex.sarrus, "flipped": ex.stewart_flipped_spheres, "rssr": ex.rssr}
+
+
+@pytest.mark.parametrize("name", sorted(FRICTION_CASES))
+def test_compiled_friction_equals_the_joint_by_joint_route(name):
+    """The compiled friction of every joint (tree and cut; revolute, prismatic, cylindrical,
+    universal, spherical) equals the joint-by-joint route of JointFriction."""
+    from pkmdyn.multibody import solve_kinematics
+    from pkmdyn.multibody.dynamics import coordinate_twists, free_blocks
+    from pkmdyn.multibody.friction import JointFriction, known_friction
+
+    m = load_mechanism(_every_joint_with_friction(FRICTION_CASES[name]()))
+    x, xd, xdd = _motion(m, n=25)
+    kin = solve_kinematics(m, x, xd, xdd, np.linspace(0.0, 1.0, 25))
+    S = coordinate_twists(m, kin.q, kin)
+    jf = JointFriction(m, kin, S, free_blocks(m, kin, S))
+    a = jf.generalised(jf.initial())
+    b = known_friction(m, kin, S)
+    assert np.abs(a).max() > 0.05
+    assert np.abs(a - b).max() <= 1e-12 * np.abs(a).max()

@@ -150,11 +150,11 @@ def body_wrenches(model: MechanismModel, kin: MechanismKinematics, loads: dict |
                       model.gravity, Wr)
     n_O, f = Wr[..., :3], Wr[..., 3:]
     if len(model.load_body):
+        from ._dyn_kernels import apply_loads
+
         LF, LM = load_forces(model, len(kin), named)
-        for k, (b, pt) in enumerate(zip(model.load_body, model.load_point)):
-            r = kin.origin[:, b] + np.einsum("nij,j->ni", kin.R[:, b], pt)
-            f[:, b] -= LF[:, k]
-            n_O[:, b] -= LM[:, k] + _cross(r, LF[:, k])
+        apply_loads(np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.origin), model.load_body,
+                    np.ascontiguousarray(model.load_point), LF, LM, Wr)
     for name, (F, M) in (loads or {}).items():
         b = model.body_index(name)
         F = np.broadcast_to(np.asarray(F, dtype=float), f[:, b].shape)
@@ -308,10 +308,9 @@ def inverse_dynamics(model: MechanismModel, kin: MechanismKinematics, loads: dic
             r = joint_reactions(model, kin, loads, named=named)
             W = body_wrenches(model, r.kin, loads, named)
             return InverseDynamics(u=r.u, Q=generalised_forces(model, S, W), W=W, S=S, kin=r.kin)
-        from .friction import JointFriction
+        from .friction import known_friction
 
-        fr = JointFriction(model, kin, S, free_blocks(model, kin, S), named)
-        Qf = fr.generalised(fr.initial())
+        Qf = known_friction(model, kin, S, named)
     if idle == "dynamic":
         kin = idle_dynamics(model, kin, S, loads, Qf, named)
     W = body_wrenches(model, kin, loads, named)

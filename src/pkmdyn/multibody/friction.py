@@ -41,7 +41,7 @@ from ..friction import regularised_sign
 from .dynamics import named_magnitudes
 from .model import MechanismModel
 
-__all__ = ["JointFriction", "friction_diverges", "EPS_ROTATION", "EPS_TRANSLATION"]
+__all__ = ["JointFriction", "known_friction", "friction_diverges", "EPS_ROTATION", "EPS_TRANSLATION"]
 
 Array = NDArray[np.float64]
 
@@ -173,3 +173,57 @@ class JointFriction:
 
     def scale(self, F: dict) -> float:
         return max((float(np.abs(v).max()) for v in F.values() if v.size), default=0.0)
+
+
+def known_friction(model: MechanismModel, kin, S: Array, named: Mapping[str, object] | None = None) -> Array:
+    """Generalised forces ``Q_f (n, nq)`` of the friction that does not depend on the joints'
+    reactions (Coulomb, viscous and the named loads' part of laws F1-F2), compiled
+    (:func:`._dyn_kernels.friction_batch`); equal to ``JointFriction(...).generalised(initial())``
+    for such a description. A ``coefficient`` (reaction-dependent) is a ``ValueError``."""
+    from ._dyn_kernels import friction_batch
+    from .joint_types import JOINT_TYPES, MOTION_CODES
+
+    n = S.shape[0]
+    mags = named_magnitudes(model, n, named) if model.named_loads else {}
+    fj, fmot, fn, flast, coef, ext = [], [], [], [], [], []
+    for j, d in enumerate(model.joint_friction):
+        if not d or not any(v for v in d.values()):
+            continue
+        if d.get("coefficient", 0.0):
+            raise ValueError(f"joint {model.joint_names[j]}: reaction-dependent friction")
+        jt = JOINT_TYPES[model.joint_type[j]]
+        if not jt.freedoms:
+            continue
+        fj.append(j)
+        fmot.append([MOTION_CODES[mname] for mname in jt.motions] + [0] * (3 - jt.freedoms))
+        fn.append(jt.freedoms)
+        flast.append(jt.name != "spherical")
+        coef.append([d.get("coulomb_torque_Nm", 0.0), d.get("viscous_Nm_s_rad", 0.0), d.get("coulomb_force_N", 0.0),
+                     d.get("viscous_N_s_m", 0.0)])
+        e = np.zeros(n)
+        for term in d.get("external", []):
+            e = e + term["coefficient"] * (term["radius_m"] or 1.0) * np.abs(mags[term["load"]] + term["offset_N"])
+        ext.append(e)
+    Q = np.zeros((n, model.nq))
+    if not fj:
+        return Q
+    # per joint: the coordinates that move its child but not its parent (+1) or the reverse (-1)
+    fsc = np.zeros((len(fj), model.nq))
+    fidx = np.zeros((len(fj), model.nq), dtype=np.int64)
+    fcnt = np.zeros(len(fj), dtype=np.int64)
+    for k, j in enumerate(fj):
+        ch, pa = model.joint_child[j], model.joint_parent[j]
+        sc = (model.ancestors[ch].astype(float) if ch >= 0 else 0.0) - \
+            (model.ancestors[pa].astype(float) if pa >= 0 else 0.0)
+        idx = np.flatnonzero(sc)
+        fcnt[k] = idx.size
+        fidx[k, :idx.size] = idx
+        fsc[k, :idx.size] = np.asarray(sc)[idx] if np.ndim(sc) else 0.0
+    friction_batch(np.ascontiguousarray(S), np.ascontiguousarray(kin.qd), np.ascontiguousarray(kin.R),
+                   np.ascontiguousarray(kin.origin), np.ascontiguousarray(kin.joint_point), fsc, fidx, fcnt,
+                   np.array(fj, dtype=np.int64), np.array(fmot, dtype=np.int64), np.array(fn, dtype=np.int64),
+                   np.array(flast, dtype=np.bool_), np.array(coef, dtype=float), np.ascontiguousarray(np.stack(ext, 1)),
+                   EPS_ROTATION, EPS_TRANSLATION, model.joint_cut, model.joint_q0, model.joint_flipped,
+                   model.joint_parent, model.joint_child, model.joint_R_parent, model.joint_R_child,
+                   model.joint_p_child, Q)
+    return Q

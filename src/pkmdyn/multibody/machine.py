@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MotionError, ParameterError, as_array
-from .dynamics import actuator_efforts, body_wrenches, coordinate_twists, effort_unit, fr_any, free_blocks, \
+from .dynamics import actuator_efforts, body_wrenches, coordinate_twists, effort_unit, fr_any, \
     generalised_forces, joint_reactions
 from .kinematics import MechanismKinematics, solve_kinematics
 from .model import MechanismModel
@@ -134,10 +134,9 @@ class MechanismVerbs:
         W = body_wrenches(model, kin, named=named)
         Q = generalised_forces(model, S, W)
         if fr_any(model):
-            from .friction import JointFriction
+            from .friction import known_friction
 
-            fr = JointFriction(model, kin, S, free_blocks(model, kin, S), named)
-            Q = Q + fr.generalised(fr.initial())
+            Q = Q + known_friction(model, kin, S, named)
         return np.einsum("nct,nc->nt", kin.G, Q)
 
     # ------------------------------------------------------------------ verbs
