@@ -611,11 +611,11 @@ def test_twists_from_the_solved_poses_equal_those_from_q(name):
     assert np.abs(coordinate_twists(m, kin.q, kin) - coordinate_twists(m, kin.q)).max() < 1e-13
 
 
-def test_run_without_sections_writes_flagged_minimum_norm_reactions_or_is_refused(tmp_path, capsys):
-    """An over-constrained description without sections: with --unique-reactions the run is
-    refused (one line naming the missing compliance data, exit 2, nothing written); without it
-    the run writes its kinematics and efforts and reactions that balance every body (minimum
-    norm), flagged as not unique in summary.json and on stderr."""
+def test_run_without_sections_is_refused_or_writes_flagged_minimum_norm_reactions(tmp_path, capsys):
+    """An over-constrained description without sections: the run is refused (one line naming
+    the missing compliance data and the bodies, exit 2, nothing written); with
+    --minimum-norm-reactions it writes its kinematics and efforts and reactions that balance
+    every body (minimum norm), flagged as not unique in summary.json and on stderr."""
     import json
 
     from pkmdyn.cli import main
@@ -628,11 +628,12 @@ def test_run_without_sections_writes_flagged_minimum_norm_reactions_or_is_refuse
     src.write_text(_toml(d))
     out = tmp_path / "out"
     capsys.readouterr()
-    assert main(["run", "--machine", str(src), "--unique-reactions", "--out", str(out)]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "over-constrained" in err[0] and "section" in err[0]
-    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["bennett.toml"]
-    assert main(["run", "--machine", str(src), "--out", str(out)]) == 0
+    for extra in ([], ["--unique-reactions"]):
+        assert main(["run", "--machine", str(src), *extra, "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "over-constrained" in err[0] and "section" in err[0] and d["bodies"][0]["name"] in err[0]
+        assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["bennett.toml"]
+    assert main(["run", "--machine", str(src), "--minimum-norm-reactions", "--out", str(out)]) == 0
     assert "not unique" in capsys.readouterr().err
     s = json.loads((out / "summary.json").read_text())
     assert s["reactions"]["method"] == "minimum-norm" and s["reactions"]["unique"] is False

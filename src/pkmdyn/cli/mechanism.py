@@ -70,13 +70,17 @@ def describe(machine: str) -> None:
               help="Motion CSV: t_s and one column per task coordinate (<name>_<unit>), optional rates "
                    "<name>d_<unit>_s and accelerations <name>dd_<unit>_s2 (default: the machine's default motion; "
                    "hip: the ISO 14242-1 cycle, pdm: the Eq. 84 motion).")
-@click.option("--unique-reactions", is_flag=True,
-              help="Refuse an over-constrained mechanism whose bodies lack the section and material data that make "
-                   "its joint reactions unique (without it such a run writes minimum-norm reactions, which balance "
-                   "every body but are one choice, says so on stderr and in summary.json).")
+@click.option("--minimum-norm-reactions", is_flag=True,
+              help="For an over-constrained mechanism whose bodies lack the section and material data that make "
+                   "its joint reactions unique (refused without this flag): write its kinematics and efforts "
+                   "(unique all the same) with the minimum-norm reactions, which balance every body but are one "
+                   "choice among its self-stress states; said on stderr and in summary.json.")
+@click.option("--unique-reactions", is_flag=True, hidden=True,
+              help="The default: refuse reactions that are not unique.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
-def run(machine: str, motion_path: Path | None, unique_reactions: bool, out_dir: Path) -> None:
+def run(machine: str, motion_path: Path | None, minimum_norm_reactions: bool, unique_reactions: bool,
+        out_dir: Path) -> None:
     """Kinematics, actuator efforts and every joint reaction along a motion: results.csv,
     model.json, bodies.npz, summary.json, report.html.
 
@@ -96,8 +100,16 @@ def run(machine: str, motion_path: Path | None, unique_reactions: bool, out_dir:
     else:
         motion = default_motion(model) if entry is None else entry.default_motion()
     text = path.read_text(encoding="utf-8", errors="replace") if path is not None else ""
-    summary = run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files, description_text=text,
-                            unique_reactions=unique_reactions)
+    if minimum_norm_reactions and unique_reactions:
+        raise click.UsageError("--minimum-norm-reactions and --unique-reactions contradict each other")
+    from ..multibody.reactions import ComplianceDataMissing
+
+    try:
+        summary = run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files, description_text=text,
+                                unique_reactions=not minimum_norm_reactions)
+    except ComplianceDataMissing as exc:
+        raise ComplianceDataMissing(f"{exc}; or --minimum-norm-reactions for reactions that balance every body "
+                                    "but are not unique") from None
     reactions = summary.get("reactions", {})
     if reactions.get("unique") is False:
         click.echo(f"pkmdyn: warning: joint reactions are the minimum-norm ones, not unique: {reactions.get('reason')}",

@@ -91,9 +91,10 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
     elastic = elastic_bodies(model)
     t = (A.shape[2] - rank) if rank >= 0 else int(model.topology.overconstraints)
     if not elastic:
+        names = ", ".join(model.body_names[:4]) + (", ..." if len(model.body_names) > 4 else "")
         raise ComplianceDataMissing(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no "
-                                    "body carries a section and a material: the joint reactions cannot be made unique "
-                             "(give [[bodies]] section and material)")
+                                    f"body carries a section and a material ({names}): the joint reactions cannot be "
+                                    "made unique (give [[bodies]] section and material)")
     G_list, w0_list, C_list = [], [], []
     for bi in elastic:
         joints = [(j, 1.0) for j in range(nj) if model.joint_child[j] == bi]
