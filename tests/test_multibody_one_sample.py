@@ -116,9 +116,12 @@ FRICTION_CASES = {**CASES, "four_bar_cut_b": ex.four_bar_cut_b, "cylindrical": l
 @pytest.mark.parametrize("name", sorted(FRICTION_CASES))
 def test_compiled_friction_equals_the_joint_by_joint_route(name):
     """The compiled friction of every joint (tree and cut; revolute, prismatic, cylindrical,
-    universal, spherical) equals the joint-by-joint route of JointFriction."""
+    universal, spherical): its generalised forces projected on the task rates (``G^T Q``, what
+    the efforts see) equal those of the joint-by-joint route of JointFriction, and the efforts
+    of inverse_dynamics equal those of the reaction solver (which balances each joint's
+    friction along its free twists)."""
     from pkmdyn.multibody import solve_kinematics
-    from pkmdyn.multibody.dynamics import coordinate_twists, free_blocks
+    from pkmdyn.multibody.dynamics import coordinate_twists, free_blocks, inverse_dynamics, joint_reactions
     from pkmdyn.multibody.friction import JointFriction, known_friction
 
     m = load_mechanism(_every_joint_with_friction(FRICTION_CASES[name]()))
@@ -126,7 +129,10 @@ def test_compiled_friction_equals_the_joint_by_joint_route(name):
     kin = solve_kinematics(m, x, xd, xdd, np.linspace(0.0, 1.0, 25))
     S = coordinate_twists(m, kin.q, kin)
     jf = JointFriction(m, kin, S, free_blocks(m, kin, S))
-    a = jf.generalised(jf.initial())
-    b = known_friction(m, kin, S)
+    a = np.einsum("nct,nc->nt", kin.G, jf.generalised(jf.initial()))
+    b = np.einsum("nct,nc->nt", kin.G, known_friction(m, kin, S))
     assert np.abs(a).max() > 0.05
     assert np.abs(a - b).max() <= 1e-12 * np.abs(a).max()
+    u = inverse_dynamics(m, kin).u
+    r = joint_reactions(m, kin, overconstrained="minimum-norm").u
+    assert np.abs(u - r).max() <= 1e-10 * np.abs(r).max()

@@ -289,177 +289,67 @@ def _task_mass_loop(S, G, anc_list, R, p, mass, inertia, M_out, T, Iw, tmp, vc, 
         task_mass(S[s], G[s], anc_list, R[s], p[s], mass, inertia, M_out[s], T, Iw, tmp, vc, Iwt)
 
 
-@njit(cache=True, _nrt=False, inline="always")
-def _spd_solve(G, b, f, L):  # pragma: no cover - compiled
-    """``b <- G^-1 b`` for the symmetric positive definite leading ``f x f`` block of ``G`` (f <= 3)
-    by Cholesky into ``L`` (``G`` kept)."""
-    for i in range(f):
-        for j in range(i + 1):
-            acc = G[i, j]
-            for k in range(j):
-                acc -= L[i, k] * L[j, k]
-            L[i, j] = math.sqrt(acc) if i == j else acc / L[j, j]
-    for i in range(f):
-        acc = b[i]
-        for k in range(i):
-            acc -= L[i, k] * b[k]
-        b[i] = acc / L[i, i]
-    for i in range(f - 1, -1, -1):
-        acc = b[i]
-        for k in range(i + 1, f):
-            acc -= L[k, i] * b[k]
-        b[i] = acc / L[i, i]
-
-
-@njit(cache=True)
-def friction_batch(S, qd, R, origin, jpt, fsc, fidx, fcnt, fj, fmot, fn, flast, coef, ext, eps_r, eps_t,
-                   joint_cut, joint_q0, joint_flipped, joint_parent, joint_child, joint_R_parent, joint_R_child,
-                   joint_p_child, Q_out):  # pragma: no cover - compiled
+@njit(cache=True, _nrt=False)
+def friction_batch(w, ov, org, jpt, S, fsc, fidx, fcnt, fj, fch, fpa, frot, fslide, coef, ext, eps_r, eps_t,
+                   Q_out):  # pragma: no cover - compiled
     """Generalised forces ``Q_out (n, nq)`` of the friction that does not depend on the
     reactions (laws F1-F2 of :mod:`.friction` with ``mu = 0``): per joint ``fj[k]`` with
     ``coef[k] = (C_t, b_t, C_f, b_f)`` and the named loads' Coulomb part ``ext[:, k]``.
 
-    The joint's free twists ``T_i``: a tree joint's ``+-S_c`` (its rates ``r = qd_c``), a cut
-    joint's by its type (``fmot[k, :fn[k]]`` motion codes 0-2 rotations, 3-5 translations about
-    the joint frame's axes; the last about the child frame's when ``flast[k]``, the others
-    about the parent frame's, rotations through the child frame's origin) with
-    ``r = (T T^T)^-1 T V_rel``, ``V_rel = sum_c s_c S_c qd_c`` (``s_c`` = moves the child - moves
-    the parent; ``fidx[k, :fcnt[k]]`` the coordinates with ``fsc[k] = s_c`` nonzero). Then ``w = sum T_i,w r_i``, ``v = sum T_i,v r_i + w x p``,
-    ``tau = (C_t + ext) u(w) + b_t w`` (a joint that rotates), ``phi = (C_f [+ ext]) u(v) + b_f v``
-    (one that slides; ``ext`` only without rotation), ``F_i = T_i . [tau + p x phi; phi]`` and
-    ``Q += B^T F``: ``Q_c += F_i`` for a tree joint, ``Q_c += s_c S_c . sum_i y_i T_i`` with
-    ``y = (T T^T)^-1 F`` for a cut joint."""
-    n, nq = qd.shape
-    T = np.zeros((3, 6))
-    gram = np.zeros((3, 3))
-    r = np.zeros(3)
-    y = np.zeros(3)
-    E = np.zeros((3, 3))
-    oC = np.zeros(3)
-    Vr = np.zeros(6)
-    Wf = np.zeros(6)
-    Fi = np.zeros(3)
-    L = np.zeros((3, 3))
+    The joint's relative twist ``V_rel = V_child - V_parent`` (child ``fch[k]``, parent
+    ``fpa[k]``, -1 the ground at rest) from the bodies' angular velocities ``w`` and the
+    velocities ``ov`` of their frame origins ``org`` (``n, nb, 3``): ``w_rel``, and
+    ``v = vO_rel + w_rel x p`` at the joint point ``p`` (``vO = ov - w x org``). Then
+    ``tau = (C_t + ext) u(w) + b_t w`` (a joint that rotates, ``frot``),
+    ``phi = (C_f [+ ext]) u(v) + b_f v`` (one that slides, ``fslide``; ``ext`` only without
+    rotation), the resisting wrench ``W_f = [tau + p x phi; phi]`` and ``Q_c += s_c S_c . W_f``
+    (``s_c`` = 1 for a coordinate that moves the child and not the parent, -1 for the reverse;
+    ``fidx[k, :fcnt[k]]`` those coordinates, ``fsc`` their signs): the virtual power of the
+    friction. For a tree joint these are its own coordinates and ``Q`` is the joint-by-joint
+    route's exactly; for a cut joint the two differ by constraint forces only (the same
+    efforts and idle accelerations, ``G^T Q``)."""
+    n = w.shape[0]
     for s in range(n):
-        for c in range(nq):
+        for c in range(Q_out.shape[1]):
             Q_out[s, c] = 0.0
         for k in range(fj.shape[0]):
             j = fj[k]
-            f = fn[k]
-            pa, ch = joint_parent[j], joint_child[j]
-            if not joint_cut[j]:
-                sg = -1.0 if joint_flipped[j] else 1.0
-                for i in range(f):
-                    c = joint_q0[j] + i
-                    r[i] = qd[s, c]
-                    for m in range(6):
-                        T[i, m] = sg * S[s, c, m]
-            else:
-                # child frame origin and the parent's (or child's) joint frame axes, world
-                for a in range(3):
-                    if ch >= 0:
-                        oC[a] = origin[s, ch, a] + R[s, ch, a, 0] * joint_p_child[j, 0] + \
-                            R[s, ch, a, 1] * joint_p_child[j, 1] + R[s, ch, a, 2] * joint_p_child[j, 2]
-                    else:
-                        oC[a] = joint_p_child[j, a]
-                for i in range(f):
-                    use_child = flast[k] and i == f - 1
-                    body = ch if use_child else pa
-                    mot = fmot[k, i]
-                    col = mot % 3
-                    for a in range(3):
-                        if body >= 0:
-                            ax = 0.0
-                            for b in range(3):
-                                ax += R[s, body, a, b] * (joint_R_child[j, b, col] if use_child
-                                                          else joint_R_parent[j, b, col])
-                        else:
-                            ax = joint_R_child[j, a, col] if use_child else joint_R_parent[j, a, col]
-                        E[i, a] = ax
-                    if mot < 3:
-                        T[i, 0], T[i, 1], T[i, 2] = E[i, 0], E[i, 1], E[i, 2]
-                        T[i, 3] = oC[1] * E[i, 2] - oC[2] * E[i, 1]
-                        T[i, 4] = oC[2] * E[i, 0] - oC[0] * E[i, 2]
-                        T[i, 5] = oC[0] * E[i, 1] - oC[1] * E[i, 0]
-                    else:
-                        T[i, 0] = T[i, 1] = T[i, 2] = 0.0
-                        T[i, 3], T[i, 4], T[i, 5] = E[i, 0], E[i, 1], E[i, 2]
-                for m in range(6):
-                    Vr[m] = 0.0
-                for ic in range(fcnt[k]):
-                    c = fidx[k, ic]
-                    sq = fsc[k, ic] * qd[s, c]
-                    for m in range(6):
-                        Vr[m] += sq * S[s, c, m]
-                for i in range(f):
-                    acc = 0.0
-                    for m in range(6):
-                        acc += T[i, m] * Vr[m]
-                    r[i] = acc
-                    for i2 in range(f):
-                        g = 0.0
-                        for m in range(6):
-                            g += T[i, m] * T[i2, m]
-                        gram[i, i2] = g
-                _spd_solve(gram, r, f, L)
-            # relative angular velocity, velocity of the child's point at the joint centre
             w0 = w1 = w2 = 0.0
-            v0 = v1 = v2 = 0.0
-            rot = False
-            slide = False
-            for i in range(f):
-                w0 += T[i, 0] * r[i]
-                w1 += T[i, 1] * r[i]
-                w2 += T[i, 2] * r[i]
-                v0 += T[i, 3] * r[i]
-                v1 += T[i, 4] * r[i]
-                v2 += T[i, 5] * r[i]
-                if abs(T[i, 0]) + abs(T[i, 1]) + abs(T[i, 2]) > 0.5:
-                    rot = True
-                else:
-                    slide = True
+            u0 = u1 = u2 = 0.0
+            for b, sg in ((fch[k], 1.0), (fpa[k], -1.0)):
+                if b >= 0:
+                    a0, a1, a2 = w[s, b, 0], w[s, b, 1], w[s, b, 2]
+                    o0, o1, o2 = org[s, b, 0], org[s, b, 1], org[s, b, 2]
+                    w0 += sg * a0
+                    w1 += sg * a1
+                    w2 += sg * a2
+                    u0 += sg * (ov[s, b, 0] - (a1 * o2 - a2 * o1))
+                    u1 += sg * (ov[s, b, 1] - (a2 * o0 - a0 * o2))
+                    u2 += sg * (ov[s, b, 2] - (a0 * o1 - a1 * o0))
             p0, p1, p2 = jpt[s, j, 0], jpt[s, j, 1], jpt[s, j, 2]
-            v0 += w1 * p2 - w2 * p1
-            v1 += w2 * p0 - w0 * p2
-            v2 += w0 * p1 - w1 * p0
+            v0 = u0 + w1 * p2 - w2 * p1
+            v1 = u1 + w2 * p0 - w0 * p2
+            v2 = u2 + w0 * p1 - w1 * p0
             t0 = t1 = t2 = 0.0
             f0 = f1 = f2 = 0.0
-            if rot:
+            if frot[k]:
                 mag = (coef[k, 0] + ext[s, k]) / math.sqrt(w0 * w0 + w1 * w1 + w2 * w2 + eps_r * eps_r)
-                t0 = mag * w0 + coef[k, 1] * w0
-                t1 = mag * w1 + coef[k, 1] * w1
-                t2 = mag * w2 + coef[k, 1] * w2
-            if slide:
-                mag = (coef[k, 2] + (0.0 if rot else ext[s, k])) / math.sqrt(v0 * v0 + v1 * v1 + v2 * v2 + eps_t * eps_t)
-                f0 = mag * v0 + coef[k, 3] * v0
-                f1 = mag * v1 + coef[k, 3] * v1
-                f2 = mag * v2 + coef[k, 3] * v2
-            Wf[0] = t0 + p1 * f2 - p2 * f1
-            Wf[1] = t1 + p2 * f0 - p0 * f2
-            Wf[2] = t2 + p0 * f1 - p1 * f0
-            Wf[3], Wf[4], Wf[5] = f0, f1, f2
-            for i in range(f):
-                acc = 0.0
-                for m in range(6):
-                    acc += T[i, m] * Wf[m]
-                Fi[i] = acc
-            if not joint_cut[j]:
-                for i in range(f):
-                    Q_out[s, joint_q0[j] + i] += Fi[i]
-            else:
-                for i in range(f):
-                    y[i] = Fi[i]
-                _spd_solve(gram, y, f, L)
-                for m in range(6):
-                    Vr[m] = 0.0
-                    for i in range(f):
-                        Vr[m] += y[i] * T[i, m]
-                for ic in range(fcnt[k]):
-                    c = fidx[k, ic]
-                    acc = 0.0
-                    for m in range(6):
-                        acc += S[s, c, m] * Vr[m]
-                    Q_out[s, c] += fsc[k, ic] * acc
+                t0 = (mag + coef[k, 1]) * w0
+                t1 = (mag + coef[k, 1]) * w1
+                t2 = (mag + coef[k, 1]) * w2
+            if fslide[k]:
+                mag = (coef[k, 2] + (0.0 if frot[k] else ext[s, k])) / math.sqrt(v0 * v0 + v1 * v1 + v2 * v2
+                                                                                  + eps_t * eps_t)
+                f0 = (mag + coef[k, 3]) * v0
+                f1 = (mag + coef[k, 3]) * v1
+                f2 = (mag + coef[k, 3]) * v2
+            W0 = t0 + p1 * f2 - p2 * f1
+            W1 = t1 + p2 * f0 - p0 * f2
+            W2 = t2 + p0 * f1 - p1 * f0
+            for ic in range(fcnt[k]):
+                c = fidx[k, ic]
+                Q_out[s, c] += fsc[k, ic] * (S[s, c, 0] * W0 + S[s, c, 1] * W1 + S[s, c, 2] * W2
+                                             + S[s, c, 3] * f0 + S[s, c, 4] * f1 + S[s, c, 5] * f2)
 
 
 @njit(cache=True, _nrt=False)

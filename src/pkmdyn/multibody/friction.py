@@ -178,14 +178,17 @@ class JointFriction:
 def known_friction(model: MechanismModel, kin, S: Array, named: Mapping[str, object] | None = None) -> Array:
     """Generalised forces ``Q_f (n, nq)`` of the friction that does not depend on the joints'
     reactions (Coulomb, viscous and the named loads' part of laws F1-F2), compiled
-    (:func:`._dyn_kernels.friction_batch`); equal to ``JointFriction(...).generalised(initial())``
-    for such a description. A ``coefficient`` (reaction-dependent) is a ``ValueError``."""
+    (:func:`._dyn_kernels.friction_batch`, the virtual power of each joint's resisting wrench
+    in its relative twist). Equal to ``JointFriction(...).generalised(initial())`` for tree
+    joints; for cut joints up to constraint forces, so that the efforts and idle accelerations
+    (``G^T Q``, ``N^T Q``) are the same. A ``coefficient`` (reaction-dependent) is a
+    ``ValueError``."""
     from ._dyn_kernels import friction_batch
-    from .joint_types import JOINT_TYPES, MOTION_CODES
+    from .joint_types import JOINT_TYPES
 
     n = S.shape[0]
     mags = named_magnitudes(model, n, named) if model.named_loads else {}
-    fj, fmot, fn, flast, coef, ext = [], [], [], [], [], []
+    fj, frot, fslide, coef, ext = [], [], [], [], []
     for j, d in enumerate(model.joint_friction):
         if not d or not any(v for v in d.values()):
             continue
@@ -195,9 +198,8 @@ def known_friction(model: MechanismModel, kin, S: Array, named: Mapping[str, obj
         if not jt.freedoms:
             continue
         fj.append(j)
-        fmot.append([MOTION_CODES[mname] for mname in jt.motions] + [0] * (3 - jt.freedoms))
-        fn.append(jt.freedoms)
-        flast.append(jt.name != "spherical")
+        frot.append(any(mn[0] == "R" for mn in jt.motions))
+        fslide.append(any(mn[0] == "T" for mn in jt.motions))
         coef.append([d.get("coulomb_torque_Nm", 0.0), d.get("viscous_Nm_s_rad", 0.0), d.get("coulomb_force_N", 0.0),
                      d.get("viscous_N_s_m", 0.0)])
         e = np.zeros(n)
@@ -213,17 +215,16 @@ def known_friction(model: MechanismModel, kin, S: Array, named: Mapping[str, obj
     fcnt = np.zeros(len(fj), dtype=np.int64)
     for k, j in enumerate(fj):
         ch, pa = model.joint_child[j], model.joint_parent[j]
-        sc = (model.ancestors[ch].astype(float) if ch >= 0 else 0.0) - \
-            (model.ancestors[pa].astype(float) if pa >= 0 else 0.0)
+        sc = (model.ancestors[ch].astype(float) if ch >= 0 else np.zeros(model.nq)) - \
+            (model.ancestors[pa].astype(float) if pa >= 0 else np.zeros(model.nq))
         idx = np.flatnonzero(sc)
         fcnt[k] = idx.size
         fidx[k, :idx.size] = idx
-        fsc[k, :idx.size] = np.asarray(sc)[idx] if np.ndim(sc) else 0.0
-    friction_batch(np.ascontiguousarray(S), np.ascontiguousarray(kin.qd), np.ascontiguousarray(kin.R),
-                   np.ascontiguousarray(kin.origin), np.ascontiguousarray(kin.joint_point), fsc, fidx, fcnt,
-                   np.array(fj, dtype=np.int64), np.array(fmot, dtype=np.int64), np.array(fn, dtype=np.int64),
-                   np.array(flast, dtype=np.bool_), np.array(coef, dtype=float), np.ascontiguousarray(np.stack(ext, 1)),
-                   EPS_ROTATION, EPS_TRANSLATION, model.joint_cut, model.joint_q0, model.joint_flipped,
-                   model.joint_parent, model.joint_child, model.joint_R_parent, model.joint_R_child,
-                   model.joint_p_child, Q)
+        fsc[k, :idx.size] = sc[idx]
+    fjj = np.array(fj, dtype=np.int64)
+    friction_batch(np.ascontiguousarray(kin.w), np.ascontiguousarray(kin.origin_v), np.ascontiguousarray(kin.origin),
+                   np.ascontiguousarray(kin.joint_point), np.ascontiguousarray(S), fsc, fidx, fcnt, fjj,
+                   model.joint_child[fjj], model.joint_parent[fjj], np.array(frot, dtype=np.bool_),
+                   np.array(fslide, dtype=np.bool_), np.array(coef, dtype=float), np.ascontiguousarray(np.stack(ext, 1)),
+                   EPS_ROTATION, EPS_TRANSLATION, Q)
     return Q
