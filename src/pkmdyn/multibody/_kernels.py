@@ -526,6 +526,50 @@ def block_lu_solve(M, piv, blocks, prow, pcol, b, work):
 
 
 @njit(cache=True, _nrt=False)
+def block_lu_solve_columns(M, piv, blocks, prow, pcol, B, X, work):
+    """:func:`block_lu_solve` for every column of ``B (n, k)`` at once into ``X (n, k)`` (rows of
+    ``B`` in the rows of ``Kfull``, of ``X`` in coordinate order; ``work (n, k)``)."""
+    n = M.shape[0]
+    k = B.shape[1]
+    for i in range(n):
+        for t in range(k):
+            work[i, t] = B[prow[i], t]
+    for bk in range(blocks.shape[0] - 1):
+        s0, s1 = blocks[bk], blocks[bk + 1]
+        for r in range(s0, s1):
+            pr = piv[r]
+            if pr != r:
+                for t in range(k):
+                    tmp = work[r, t]
+                    work[r, t] = work[pr, t]
+                    work[pr, t] = tmp
+        for i in range(s0, s1):
+            for j in range(s0):
+                m = M[i, j]
+                if m != 0.0:
+                    for t in range(k):
+                        work[i, t] -= m * work[j, t]
+        for i in range(s0, s1):
+            for j in range(s0, i):
+                m = M[i, j]
+                if m != 0.0:
+                    for t in range(k):
+                        work[i, t] -= m * work[j, t]
+        for i in range(s1 - 1, s0 - 1, -1):
+            for j in range(i + 1, s1):
+                m = M[i, j]
+                if m != 0.0:
+                    for t in range(k):
+                        work[i, t] -= m * work[j, t]
+            d = 1.0 / M[i, i]
+            for t in range(k):
+                work[i, t] *= d
+    for j in range(n):
+        for t in range(k):
+            X[pcol[j], t] = work[j, t]
+
+
+@njit(cache=True, _nrt=False)
 def newton_sample(xs, q, q_ref, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
                   tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
                   row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
@@ -609,10 +653,11 @@ def newton_sample(xs, q, q_ref, body_parent, body_joint, joint_q0, joint_nq, coo
 def rates_sample(xds, xdds, q, body_parent, body_joint, joint_q0, joint_nq, anc,
                  row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child, RP, pP, RC, pC,
                  task_body, task_point, task_kind, task_index, euler_axes, sel_rows, idle, prow, pcol, blocks,
-                 R, p, S, val, J, K, piv, rhs, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3):
+                 R, p, S, val, J, K, piv, rhs, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2):
     """Rates of one solved sample (``R, p, S, J`` at the converged ``q``): ``K qd = (0; xd)``,
     ``K qdd = (-gamma_loops; xdd - gamma_task)``, ``G = K^-1 (0; I; 0)``, with the bodies'
-    velocities ``V`` and accelerations ``A``. False where ``K`` is singular."""
+    velocities ``V`` and accelerations ``A`` (``Gw, Gw2 (nq, nt)`` work space). False where
+    ``K`` is singular."""
     nq = q.shape[0]
     nr = row_loop.shape[0]
     nt = task_kind.shape[0]
@@ -621,13 +666,11 @@ def rates_sample(xds, xdds, q, body_parent, body_joint, joint_q0, joint_nq, anc,
     _fill(K, J, sel_rows, idle, prow, pcol)
     if not block_lu_factor(K, piv, blocks):
         return False
-    # G = K^-1 (0; I), then qd = G xd
-    for t in range(nt):
-        for i in range(mk):
-            rhs[i] = 1.0 if (i < m and sel_rows[i] == nr + t) else 0.0
-        block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
-        for j in range(nq):
-            G[j, t] = rhs[j]
+    # G = K^-1 (0; I) (all task columns in one pass), then qd = G xd
+    for i in range(mk):
+        for t in range(nt):
+            Gw[i, t] = 1.0 if (i < m and sel_rows[i] == nr + t) else 0.0
+    block_lu_solve_columns(K, piv, blocks, prow, pcol, Gw, G, Gw2)
     for j in range(nq):
         acc = 0.0
         for t in range(nt):
@@ -714,6 +757,8 @@ def solve_batch(tm, x, xd, xdd, q_start,
     w33 = np.empty((5, 3, 3))
     w3 = np.empty((20, 3))
     info = np.zeros(2)
+    Gw = np.empty((mk, nt))
+    Gw2 = np.empty((mk, nt))
     for s in range(n):
         if s > 0 and tm.shape[0] == n:
             dt = tm[s] - tm[s - 1]
@@ -742,7 +787,7 @@ def solve_batch(tm, x, xd, xdd, q_start,
                                 row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                                 RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
                                 sel_rows, idle, prow, pcol, blocks, R, p, S, val, J, K, piv, rhs, bwork,
-                                qd, qdd, V, Vpre, A, gamma, G, w33, w3):
+                                qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2):
                 st = SINGULAR
         if st != OK:
             status[s] = st

@@ -89,7 +89,7 @@ def new_state(model: MechanismModel) -> tuple[Array, Array, NDArray[np.int64]]:
     state = np.zeros(1 + nq + nt + nq * nt)
     nwork = (nb * 9 + nb * 3 + nq * 6 + nrow + nrow * nq + nrow + mk * mk + mk + mk + mk + 2 * nq + nb * 6
              + nq * 6 + nb * 6 + nrow + 45 + 60 + nb * 6 + nq + 6 * nt + 9 + 9 + 3 * nt + 3 * nt + nt * nt + nt * nt
-             + 2 * nt + 12 + 2)
+             + 2 * nt + 12 + 2 + 2 * mk * nt)
     return state, np.zeros(nwork), np.zeros(mk, dtype=np.int64)
 
 
@@ -225,6 +225,10 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, forward, out):  # pragma: no cover -
     f3 = wf[o + 9:o + 12]
     o += 12
     info = wf[o:o + 2]
+    o += 2
+    Gw = wf[o:o + mk * nt].reshape((mk, nt))
+    o += mk * nt
+    Gw2 = wf[o:o + mk * nt].reshape((mk, nt))
     # ---- 1. tree coordinates from the previous solution
     q = st[1:1 + nq]
     xp = st[1 + nq:1 + nq + nt]
@@ -253,7 +257,7 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, forward, out):  # pragma: no cover -
                         row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                         RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
                         sel_rows, idle, prow, pcol, blocks, R, p, S, val, J, K, wi, rhs, bwork,
-                        qd, qdd, V, Vpre, A, gamma, Gp, w33, w3):
+                        qd, qdd, V, Vpre, A, gamma, Gp, w33, w3, Gw, Gw2):
         st[0] = 0.0
         return SINGULAR_DYNAMICS
     for t in range(nt):
