@@ -114,8 +114,24 @@ def _dynamics(out: dict, n: int, repeat: int, m, hip, mh, pm) -> None:
         kk[0] += 1
         hip_minimal.forward_dynamics_one(hf, motion.angles[i], motion.rates[i], th[i], float(motion.load[i]))
 
-    out["hip_fd_generic_single_us"] = best_time(lambda: [hip_generic() for _ in range(20)], repeat) / 20 * 1e6
-    out["hip_fd_hand_built_single_us"] = best_time(lambda: [hip_hand() for _ in range(200)], repeat) / 200 * 1e6
+    out["hip_fd_generic_single_verb_us"] = best_time(lambda: [hip_generic() for _ in range(200)], repeat) / 200 * 1e6
+    out["hip_fd_hand_built_single_verb_us"] = best_time(lambda: [hip_hand() for _ in range(200)], repeat) / 200 * 1e6
+    # the compiled kernels as the plant integrator calls them, consecutive ISO samples (1 kHz)
+    pg, _, fg = Vh.one_sample_kernels(mf)
+    ph, _, fh = hip_minimal.one_sample_kernels(hf)
+    mo = iso14242_motion(cycles=2.0, samples_per_cycle=1000)
+    ug = Vh.inverse_dynamics(mf, mo.angles, mo.rates, mo.accels, mo.load)
+    uh = hip_minimal.inverse_dynamics(hf, mo.angles, mo.rates, mo.accels, mo.load)
+    acc = np.empty(3)
+    Vh.forward_dynamics_one(mf, mo.angles[0], mo.rates[0], ug[0], float(mo.load[0]))
+
+    def kernel(f, p, u) -> None:
+        for i in range(len(mo.t)):
+            if f(p, mo.angles[i], mo.rates[i], u[i], float(mo.load[i]), acc):
+                Vh.forward_dynamics_one(mf, mo.angles[i], mo.rates[i], u[i], float(mo.load[i]))
+
+    out["hip_fd_generic_single_us"] = best_time(lambda: kernel(fg, pg, ug), repeat) / len(mo.t) * 1e6
+    out["hip_fd_hand_built_single_us"] = best_time(lambda: kernel(fh, ph, uh), repeat) / len(mo.t) * 1e6
     out["hip_fd_generic_over_hand_built"] = out["hip_fd_generic_single_us"] / out["hip_fd_hand_built_single_us"]
 
     # PDM: efforts and all 19 joint wrenches (nine redundants by compliance) through its description

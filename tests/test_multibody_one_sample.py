@@ -84,9 +84,9 @@ def test_a_far_jump_and_a_failed_solve_fall_back():
     assert np.abs(a - xdd[1]).max() <= 1e-8 * np.abs(xdd).max()
 
 
-def test_mechanisms_with_friction_take_the_general_route():
+def test_friction_that_depends_on_the_reactions_takes_the_general_route():
     d = ex.builtin_dict("stewart")
-    d["legs"][0]["joints"][1]["friction"] = {"coulomb_force_N": 2.0}
+    d["legs"][0]["joints"][1]["friction"] = {"coefficient": 0.1}
     m = load_mechanism(d)
     assert not _one.supported(m)
     V = machine_verbs(m)
@@ -95,6 +95,51 @@ def test_mechanisms_with_friction_take_the_general_route():
     u = V.inverse_dynamics(m, x, xd, xdd)
     a = V.forward_dynamics_one(m, x[2], xd[2], u[2])
     assert np.abs(a - xdd[2]).max() <= 1e-8 * np.abs(xdd).max()
+
+
+def test_the_compiled_sample_with_friction_and_a_named_load():
+    """Coulomb and viscous friction on every joint, friction driven by a named load and the
+    load itself, varying along the motion: the compiled sample equals the batched verbs; the
+    hip's description (every friction family, the ISO load) likewise."""
+    from pkmdyn.machines.hip_simulator import model_from_dict
+    from pkmdyn.machines.hip_simulator.description import hip_description
+    from pkmdyn.machines.hip_simulator.params import default_params_dict
+    from pkmdyn.profiles.iso14242 import iso14242_motion
+
+    d = _every_joint_with_friction(ex.builtin_dict("stewart"))
+    plat = next(b for b in d["bodies"] if b["name"] == "platform")
+    d["loads"] = [{"name": "push_N", "body": "platform", "direction": [0.2, 0.1, -1.0],
+                   "point_m": (np.array(plat["com_m"]) + [0.03, 0.0, 0.0]).tolist()}]
+    d["legs"][0]["joints"][-1]["friction"]["external"] = [{"load": "push_N", "coefficient": 0.1, "radius_m": 0.02,
+                                                           "offset_N": -50.0}]
+    m = load_mechanism(d)
+    x, xd, xdd = _motion(m)
+    F = 300.0 + 200.0 * np.sin(np.linspace(0.0, 6.0, len(x)))
+    hd = default_params_dict()
+    for key, v in (("slider_coulomb_N", 5.0), ("slider_viscous_Ns_m", 20.0), ("spherical_coulomb_Nm", 0.1),
+                   ("spherical_viscous_Nms_rad", 0.01), ("universal_coulomb_Nm", 0.1),
+                   ("universal_viscous_Nms_rad", 0.01)):
+        hd["friction"][key] = v
+    hd["inertia"]["platform_mass_kg"] = 2.0
+    mh = load_mechanism(hip_description(model_from_dict(hd, "friction")))
+    mo = iso14242_motion(cycles=0.1, samples_per_cycle=400)
+    for mech, (x, xd, xdd, F) in ((m, (x, xd, xdd, F)), (mh, (mo.angles, mo.rates, mo.accels, mo.load))):
+        assert _one.supported(mech)
+        ref = machine_verbs(mech)
+        u = ref.inverse_dynamics(mech, x, xd, xdd, F)
+        a_ref = ref.forward_dynamics(mech, x, xd, u, F)
+        V = machine_verbs(mech)
+        p, inverse, forward = (*V._pk,), _one.inverse_one, _one.forward_one
+        out = np.empty(mech.nt)
+        V.forward_dynamics_one(mech, x[0], xd[0], u[0], float(F[0]))  # primes the kernel
+        for i in range(1, len(x)):
+            assert forward(p, x[i], xd[i], u[i], float(F[i]), out) == 0
+            assert np.abs(out - a_ref[i]).max() <= 1e-9 * np.abs(a_ref).max(), (mech.name, i)
+            assert inverse(p, x[i], xd[i], xdd[i], float(F[i]), out) == 0
+            assert np.abs(out - u[i]).max() <= 1e-9 * np.abs(u).max(), (mech.name, i)
+            a = V.forward_dynamics_one(mech, x[i], xd[i], u[i], float(F[i]))
+            assert np.abs(a - a_ref[i]).max() <= 1e-9 * np.abs(a_ref).max()
+        assert np.abs(a_ref - xdd).max() <= 1e-8 * np.abs(xdd).max()
 
 
 def _every_joint_with_friction(d):

@@ -289,27 +289,51 @@ def _task_mass_loop(S, G, anc_list, R, p, mass, inertia, M_out, T, Iw, tmp, vc, 
         task_mass(S[s], G[s], anc_list, R[s], p[s], mass, inertia, M_out[s], T, Iw, tmp, vc, Iwt)
 
 
+@njit(cache=True, _nrt=False, inline="always")
+def joint_friction(w0, w1, w2, u0, u1, u2, p0, p1, p2, rot, slide, coef, ext, eps_r, eps_t, S, sc, idx, cnt,
+                   Q):  # pragma: no cover - compiled
+    """Add one joint's friction to ``Q (nq,)``: relative angular velocity ``w``, velocity ``u`` of
+    the relative motion at the origin (the relative twist ``[w; u]``), joint point ``p``;
+    ``coef = (C_t, b_t, C_f, b_f)``, ``ext`` the named loads' Coulomb part; ``v = u + w x p``,
+    ``tau = (C_t + ext) u(w) + b_t w`` (``rot``), ``phi = (C_f [+ ext]) u(v) + b_f v`` (``slide``;
+    ``ext`` only without rotation), ``W_f = [tau + p x phi; phi]``, ``Q_c += s_c S_c . W_f`` for
+    the coordinates ``idx[:cnt]`` with signs ``sc`` (:func:`friction_batch`)."""
+    v0 = u0 + w1 * p2 - w2 * p1
+    v1 = u1 + w2 * p0 - w0 * p2
+    v2 = u2 + w0 * p1 - w1 * p0
+    t0 = t1 = t2 = 0.0
+    f0 = f1 = f2 = 0.0
+    if rot:
+        mag = (coef[0] + ext) / math.sqrt(w0 * w0 + w1 * w1 + w2 * w2 + eps_r * eps_r) + coef[1]
+        t0, t1, t2 = mag * w0, mag * w1, mag * w2
+    if slide:
+        mag = (coef[2] + (0.0 if rot else ext)) / math.sqrt(v0 * v0 + v1 * v1 + v2 * v2 + eps_t * eps_t) + coef[3]
+        f0, f1, f2 = mag * v0, mag * v1, mag * v2
+    W0 = t0 + p1 * f2 - p2 * f1
+    W1 = t1 + p2 * f0 - p0 * f2
+    W2 = t2 + p0 * f1 - p1 * f0
+    for ic in range(cnt):
+        c = idx[ic]
+        Q[c] += sc[ic] * (S[c, 0] * W0 + S[c, 1] * W1 + S[c, 2] * W2 + S[c, 3] * f0 + S[c, 4] * f1 + S[c, 5] * f2)
+
+
 @njit(cache=True, _nrt=False)
 def friction_batch(w, ov, org, jpt, S, fsc, fidx, fcnt, fj, fch, fpa, frot, fslide, coef, ext, eps_r, eps_t,
                    Q_out):  # pragma: no cover - compiled
     """Generalised forces ``Q_out (n, nq)`` of the friction that does not depend on the
     reactions (laws F1-F2 of :mod:`.friction` with ``mu = 0``): per joint ``fj[k]`` with
-    ``coef[k] = (C_t, b_t, C_f, b_f)`` and the named loads' Coulomb part ``ext[:, k]``.
+    ``coef[k] = (C_t, b_t, C_f, b_f)`` and the named loads' Coulomb part ``ext[:, k]``
+    (:func:`joint_friction`).
 
     The joint's relative twist ``V_rel = V_child - V_parent`` (child ``fch[k]``, parent
     ``fpa[k]``, -1 the ground at rest) from the bodies' angular velocities ``w`` and the
-    velocities ``ov`` of their frame origins ``org`` (``n, nb, 3``): ``w_rel``, and
-    ``v = vO_rel + w_rel x p`` at the joint point ``p`` (``vO = ov - w x org``). Then
-    ``tau = (C_t + ext) u(w) + b_t w`` (a joint that rotates, ``frot``),
-    ``phi = (C_f [+ ext]) u(v) + b_f v`` (one that slides, ``fslide``; ``ext`` only without
-    rotation), the resisting wrench ``W_f = [tau + p x phi; phi]`` and ``Q_c += s_c S_c . W_f``
-    (``s_c`` = 1 for a coordinate that moves the child and not the parent, -1 for the reverse;
-    ``fidx[k, :fcnt[k]]`` those coordinates, ``fsc`` their signs): the virtual power of the
-    friction. For a tree joint these are its own coordinates and ``Q`` is the joint-by-joint
-    route's exactly; for a cut joint the two differ by constraint forces only (the same
-    efforts and idle accelerations, ``G^T Q``)."""
-    n = w.shape[0]
-    for s in range(n):
+    velocities ``ov`` of their frame origins ``org`` (``n, nb, 3``; ``v_O = ov - w x org``), at
+    the joint point ``jpt``; ``Q_c += s_c S_c . W_f`` with ``s_c`` = 1 for a coordinate that moves
+    the child and not the parent, -1 for the reverse (``fidx[k, :fcnt[k]]``, signs ``fsc``): the
+    virtual power of the friction. For a tree joint these are its own coordinates and ``Q`` is
+    the joint-by-joint route's exactly; for a cut joint the two differ by constraint forces only
+    (the same efforts and idle accelerations, ``G^T Q``)."""
+    for s in range(w.shape[0]):
         for c in range(Q_out.shape[1]):
             Q_out[s, c] = 0.0
         for k in range(fj.shape[0]):
@@ -326,30 +350,8 @@ def friction_batch(w, ov, org, jpt, S, fsc, fidx, fcnt, fj, fch, fpa, frot, fsli
                     u0 += sg * (ov[s, b, 0] - (a1 * o2 - a2 * o1))
                     u1 += sg * (ov[s, b, 1] - (a2 * o0 - a0 * o2))
                     u2 += sg * (ov[s, b, 2] - (a0 * o1 - a1 * o0))
-            p0, p1, p2 = jpt[s, j, 0], jpt[s, j, 1], jpt[s, j, 2]
-            v0 = u0 + w1 * p2 - w2 * p1
-            v1 = u1 + w2 * p0 - w0 * p2
-            v2 = u2 + w0 * p1 - w1 * p0
-            t0 = t1 = t2 = 0.0
-            f0 = f1 = f2 = 0.0
-            if frot[k]:
-                mag = (coef[k, 0] + ext[s, k]) / math.sqrt(w0 * w0 + w1 * w1 + w2 * w2 + eps_r * eps_r)
-                t0 = (mag + coef[k, 1]) * w0
-                t1 = (mag + coef[k, 1]) * w1
-                t2 = (mag + coef[k, 1]) * w2
-            if fslide[k]:
-                mag = (coef[k, 2] + (0.0 if frot[k] else ext[s, k])) / math.sqrt(v0 * v0 + v1 * v1 + v2 * v2
-                                                                                  + eps_t * eps_t)
-                f0 = (mag + coef[k, 3]) * v0
-                f1 = (mag + coef[k, 3]) * v1
-                f2 = (mag + coef[k, 3]) * v2
-            W0 = t0 + p1 * f2 - p2 * f1
-            W1 = t1 + p2 * f0 - p0 * f2
-            W2 = t2 + p0 * f1 - p1 * f0
-            for ic in range(fcnt[k]):
-                c = fidx[k, ic]
-                Q_out[s, c] += fsc[k, ic] * (S[s, c, 0] * W0 + S[s, c, 1] * W1 + S[s, c, 2] * W2
-                                             + S[s, c, 3] * f0 + S[s, c, 4] * f1 + S[s, c, 5] * f2)
+            joint_friction(w0, w1, w2, u0, u1, u2, jpt[s, j, 0], jpt[s, j, 1], jpt[s, j, 2], frot[k], fslide[k],
+                           coef[k], ext[s, k], eps_r, eps_t, S[s], fsc[k], fidx[k], fcnt[k], Q_out[s])
 
 
 @njit(cache=True, _nrt=False)

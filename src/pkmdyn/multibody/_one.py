@@ -14,9 +14,11 @@ views and runs, for task pose ``x`` and rate ``xd``:
 4. the task mass matrix ``M = sum_b T_b^T I_b T_b``;
 5. forward: ``M xdd = J_ax^T u - h``; inverse: ``J_ax^T u = M xdd + h``.
 
-These are the verbs' definitions (idle freedoms held, as the kinematics hold them). Friction
-and named loads are not in the kernel: a mechanism with joint friction, a named load or more
-actuators than task coordinates takes the verbs' own route (:func:`supported`). A call returns a
+These are the verbs' definitions (idle freedoms held, as the kinematics hold them), with the
+joints' Coulomb, viscous and named-load friction (:func:`._dyn_kernels.joint_friction`) and
+at most one named load, whose magnitude is the call's ``load``. A mechanism with friction
+that depends on the joints' reactions, several named loads or more actuators than task
+coordinates takes the verbs' own route (:func:`supported`). A call returns a
 nonzero status where it cannot answer (no previous solution yet, Newton failed, a singular
 matrix); the caller then repeats the sample through the checked verb, which raises the error
 or primes the kernel's state (:func:`prime`).
@@ -29,8 +31,10 @@ from numba import njit
 from numpy.typing import NDArray
 
 from .._dense import solve_in_place
-from ._dyn_kernels import body_wrench, generalised, task_mass
+from ._dyn_kernels import body_wrench, generalised, joint_friction, task_mass
 from ._kernels import OK, _point_motion, _wrap, newton_sample, rates_sample
+from .friction import EPS_ROTATION as EPS_R
+from .friction import EPS_TRANSLATION as EPS_T
 from .model import MechanismModel
 
 __all__ = ["pack", "supported", "new_state", "prime", "forward_one", "inverse_one", "COLD"]
@@ -44,25 +48,31 @@ SINGULAR_DYNAMICS = 11
 
 _INT = ("body_parent", "body_joint", "joint_q0", "joint_nq", "coord_motion", "ancestor_list", "row_loop", "row_kind",
         "row_i", "row_j", "loop_joint", "joint_parent", "joint_child", "task_kind", "task_index", "euler_axes",
-        "solver_rows", "solver_prow", "solver_pcol", "solver_blocks", "act_coord", "load_body")
+        "solver_rows", "solver_prow", "solver_pcol", "solver_blocks", "act_coord", "load_body",
+        "fj", "fch", "fpa", "frot", "fslide", "fidx", "fcnt", "eload", "load_named")
 _FLOAT = ("coord_offset", "coord_sign", "tree_R_parent", "tree_p_parent", "tree_R_child", "tree_p_child",
           "joint_R_parent", "joint_p_parent", "joint_R_child", "joint_p_child", "task_point", "solver_idle",
-          "row_scale", "mass", "inertia", "com", "gravity", "load_point", "load_force", "load_moment")
+          "row_scale", "mass", "inertia", "com", "gravity", "load_point", "load_force", "load_moment",
+          "coef", "fsc", "ecoef", "eoff", "load_direction")
 _HEAD = 6  # n_int, n_float, task_body, max_iter, nq, nt
 
 
 def supported(model: MechanismModel) -> bool:
     """Whether the kernel answers for ``model`` (module docstring)."""
-    no_friction = all(not f or not any(v for v in f.values()) for f in model.joint_friction)
-    return no_friction and model.na == model.nt and not model.named_loads
+    known = all(not f or not f.get("coefficient", 0.0) for f in model.joint_friction)
+    return known and model.na == model.nt and len(model.named_loads) <= 1
 
 
 def pack(model: MechanismModel) -> tuple[NDArray[np.int64], Array]:
     """The model's arrays as ``(ints, floats)`` with a header of offsets and shapes."""
     from .kinematics import CHECK_TOLERANCE, MAX_ITER, TOLERANCE, row_scale
 
+    from .friction import friction_arrays
+
     arrays = {k: getattr(model, k) for k in _INT + _FLOAT if hasattr(model, k)}
     arrays["row_scale"] = row_scale(model)
+    arrays.update(friction_arrays(model))
+    arrays["load_named"] = np.array([nm is not None for nm in model.load_name], dtype=np.int64)
     n_head = _HEAD + 4 * (len(_INT) + len(_FLOAT))
     ints: list[int] = []
     floats: list[float] = [TOLERANCE, CHECK_TOLERANCE]
@@ -89,7 +99,7 @@ def new_state(model: MechanismModel) -> tuple[Array, Array, NDArray[np.int64]]:
     state = np.zeros(1 + nq + nt + nq * nt)
     nwork = (nb * 9 + nb * 3 + nq * 6 + nrow + nrow * nq + nrow + mk * mk + mk + mk + mk + 2 * nq + nb * 6
              + nq * 6 + nb * 6 + nrow + 45 + 60 + nb * 6 + nq + 6 * nt + 9 + 9 + 3 * nt + 3 * nt + nt * nt + nt * nt
-             + 2 * nt + 12 + 2 + 2 * mk * nt)
+             + 2 * nt + 12 + 2 + 2 * mk * nt + nq)
     return state, np.zeros(nwork), np.zeros(mk, dtype=np.int64)
 
 
@@ -129,7 +139,7 @@ def _f3(ib, fb, k):  # pragma: no cover - compiled
 
 
 @njit(cache=True, _nrt=False)
-def _dynamics(ib, fb, st, wf, wi, x, xd, v, forward, out):  # pragma: no cover - compiled
+def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     """The kernel (module docstring): ``v`` is ``u`` (forward) or ``xdd`` (inverse); writes the
     other into ``out``; returns the status (0 OK)."""
     if st[0] == 0.0:
@@ -144,6 +154,11 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, forward, out):  # pragma: no cover -
     task_kind, task_index, euler_axes = _i(ib, 13), _i(ib, 14), _i(ib, 15)
     sel_rows, prow, pcol, blocks = _i(ib, 16), _i(ib, 17), _i(ib, 18), _i(ib, 19)
     act_coord, load_body = _i(ib, 20), _i(ib, 21)
+    fj, fch, fpa, frot, fslide = _i(ib, 22), _i(ib, 23), _i(ib, 24), _i(ib, 25), _i(ib, 26)
+    fidx = _i(ib, 27).reshape((ib[_HEAD + 4 * 27 + 1], ib[_HEAD + 4 * 27 + 2]))
+    fcnt = _i(ib, 28)
+    eload = _i(ib, 29).reshape((ib[_HEAD + 4 * 29 + 1], ib[_HEAD + 4 * 29 + 2]))
+    load_named = _i(ib, 30)
     nb = body_parent.shape[0]
     nl = load_body.shape[0]
     coord_offset, coord_sign = _f(ib, fb, 0), _f(ib, fb, 1)
@@ -154,6 +169,8 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, forward, out):  # pragma: no cover -
     row_scale, mass = _f(ib, fb, 12), _f(ib, fb, 13)
     inertia, com, gravity = _f3(ib, fb, 14), _f2(ib, fb, 15), _f(ib, fb, 16)
     load_point, load_force, load_moment = _f2(ib, fb, 17), _f2(ib, fb, 18), _f2(ib, fb, 19)
+    fcoef, fsc, ecoef, eoff, load_direction = _f2(ib, fb, 20), _f2(ib, fb, 21), _f2(ib, fb, 22), _f2(ib, fb, 23), \
+        _f2(ib, fb, 24)
     tol, check_tol = fb[0], fb[1]
     task_body, max_iter = ib[2], ib[3]
     nr = row_loop.shape[0]
@@ -229,6 +246,8 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, forward, out):  # pragma: no cover -
     Gw = wf[o:o + mk * nt].reshape((mk, nt))
     o += mk * nt
     Gw2 = wf[o:o + mk * nt].reshape((mk, nt))
+    o += mk * nt
+    Qf = wf[o:o + nq]
     # ---- 1. tree coordinates from the previous solution
     q = st[1:1 + nq]
     xp = st[1 + nq:1 + nq + nt]
@@ -262,6 +281,32 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, forward, out):  # pragma: no cover -
         return SINGULAR_DYNAMICS
     for t in range(nt):
         xp[t] = x[t]
+    # ---- 2b. friction that does not depend on the reactions, from the rates (V = [w; v_O])
+    for c in range(nq):
+        Qf[c] = 0.0
+    for k in range(fj.shape[0]):
+        j, ch, pa = fj[k], fch[k], fpa[k]
+        ext = 0.0
+        for t in range(eload.shape[1]):
+            if eload[k, t] >= 0:
+                ext += ecoef[k, t] * abs(load + eoff[k, t])
+        w0 = w1 = w2 = u0 = u1 = u2 = 0.0
+        if ch >= 0:
+            w0, w1, w2, u0, u1, u2 = V[ch, 0], V[ch, 1], V[ch, 2], V[ch, 3], V[ch, 4], V[ch, 5]
+            for i in range(3):
+                c3[i] = p[ch, i] + R[ch, i, 0] * pC[j, 0] + R[ch, i, 1] * pC[j, 1] + R[ch, i, 2] * pC[j, 2]
+        else:
+            for i in range(3):
+                c3[i] = pC[j, i]
+        if pa >= 0:
+            w0 -= V[pa, 0]
+            w1 -= V[pa, 1]
+            w2 -= V[pa, 2]
+            u0 -= V[pa, 3]
+            u1 -= V[pa, 4]
+            u2 -= V[pa, 5]
+        joint_friction(w0, w1, w2, u0, u1, u2, c3[0], c3[1], c3[2], frot[k] != 0, fslide[k] != 0, fcoef[k], ext,
+                       EPS_R, EPS_T, S, fsc[k], fidx[k], fcnt[k], Qf)
     # ---- 3. required wrenches of the bias motion, loads, h = G^T Q
     for b in range(nb):
         for i in range(3):
@@ -273,7 +318,7 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, forward, out):  # pragma: no cover -
     for k in range(nl):
         b = load_body[k]
         for i in range(3):
-            f3[i] = load_force[k, i]
+            f3[i] = load_direction[k, i] * load if load_named[k] else load_force[k, i]
         for i in range(3):  # the load's point in the base frame (p now holds the centre of mass)
             v3[i] = R[b, i, 0] * (load_point[k, 0] - com[b, 0]) + R[b, i, 1] * (load_point[k, 1] - com[b, 1]) \
                 + R[b, i, 2] * (load_point[k, 2] - com[b, 2]) + p[b, i]
@@ -283,6 +328,8 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, forward, out):  # pragma: no cover -
         for i in range(3):
             W[b, 3 + i] -= f3[i]
     generalised(S, W, anc, Q)
+    for c in range(nq):
+        Q[c] += Qf[c]
     for t in range(nt):
         acc = 0.0
         for c in range(nq):
@@ -323,11 +370,11 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, forward, out):  # pragma: no cover -
 @njit(cache=True)
 def forward_one(pk, x, xd, u, load, out):  # pragma: no cover - compiled
     """``out = xdd (nt,)`` of one sample (``pk`` from :func:`pack` and :func:`new_state`;
-    ``load`` is ignored); returns the status (0 OK)."""
-    return _dynamics(pk[0], pk[1], pk[2], pk[3], pk[4], x, xd, u, True, out)
+    ``load`` the named load's magnitude [N], if the mechanism has one); returns the status (0 OK)."""
+    return _dynamics(pk[0], pk[1], pk[2], pk[3], pk[4], x, xd, u, load, True, out)
 
 
 @njit(cache=True)
 def inverse_one(pk, x, xd, xdd, load, out):  # pragma: no cover - compiled
     """``out = u (na,)`` of one sample; returns the status (0 OK)."""
-    return _dynamics(pk[0], pk[1], pk[2], pk[3], pk[4], x, xd, xdd, False, out)
+    return _dynamics(pk[0], pk[1], pk[2], pk[3], pk[4], x, xd, xdd, load, False, out)

@@ -175,6 +175,51 @@ class JointFriction:
         return max((float(np.abs(v).max()) for v in F.values() if v.size), default=0.0)
 
 
+def friction_arrays(model: MechanismModel) -> dict[str, np.ndarray]:
+    """The compiled friction's per-joint arrays (joints with Coulomb, viscous or named-load
+    friction and no reaction-dependent part): ``fj`` joints, ``fch``/``fpa`` child and parent,
+    ``frot``/``fslide`` whether the joint rotates / slides, ``coef (k, 4) = (C_t, b_t, C_f,
+    b_f)``, ``fidx (k, nq)``/``fsc``/``fcnt`` the coordinates moving the child but not the parent
+    (+1) or the reverse (-1), and per named-load term ``ecoef (k, E) = mu r``
+    (``mu`` for a sliding joint), ``eoff`` the offset [N], ``eload`` the named load's index
+    (-1 unused). A ``coefficient`` (reaction-dependent) is a ``ValueError``."""
+    from .joint_types import JOINT_TYPES
+
+    rows = []
+    for j, d in enumerate(model.joint_friction):
+        if not d or not any(v for v in d.values()):
+            continue
+        if d.get("coefficient", 0.0):
+            raise ValueError(f"joint {model.joint_names[j]}: reaction-dependent friction")
+        jt = JOINT_TYPES[model.joint_type[j]]
+        if jt.freedoms:
+            rows.append((j, jt, d))
+    k, nq = len(rows), model.nq
+    E = max([1] + [len(d.get("external", [])) for _, _, d in rows])
+    out = {"fj": np.zeros(k, dtype=np.int64), "fch": np.zeros(k, dtype=np.int64), "fpa": np.zeros(k, dtype=np.int64),
+           "frot": np.zeros(k, dtype=np.int64), "fslide": np.zeros(k, dtype=np.int64), "coef": np.zeros((k, 4)),
+           "fidx": np.zeros((k, nq), dtype=np.int64), "fsc": np.zeros((k, nq)), "fcnt": np.zeros(k, dtype=np.int64),
+           "ecoef": np.zeros((k, E)), "eoff": np.zeros((k, E)), "eload": np.full((k, E), -1, dtype=np.int64)}
+    for i, (j, jt, d) in enumerate(rows):
+        ch, pa = model.joint_child[j], model.joint_parent[j]
+        out["fj"][i], out["fch"][i], out["fpa"][i] = j, ch, pa
+        out["frot"][i] = any(mn[0] == "R" for mn in jt.motions)
+        out["fslide"][i] = any(mn[0] == "T" for mn in jt.motions)
+        out["coef"][i] = [d.get("coulomb_torque_Nm", 0.0), d.get("viscous_Nm_s_rad", 0.0),
+                          d.get("coulomb_force_N", 0.0), d.get("viscous_N_s_m", 0.0)]
+        sc = (model.ancestors[ch].astype(float) if ch >= 0 else np.zeros(nq)) - \
+            (model.ancestors[pa].astype(float) if pa >= 0 else np.zeros(nq))
+        idx = np.flatnonzero(sc)
+        out["fcnt"][i] = idx.size
+        out["fidx"][i, :idx.size] = idx
+        out["fsc"][i, :idx.size] = sc[idx]
+        for t, term in enumerate(d.get("external", [])):
+            out["ecoef"][i, t] = term["coefficient"] * (term["radius_m"] or 1.0)
+            out["eoff"][i, t] = term["offset_N"]
+            out["eload"][i, t] = model.named_loads.index(term["load"])
+    return out
+
+
 def known_friction(model: MechanismModel, kin, S: Array, named: Mapping[str, object] | None = None) -> Array:
     """Generalised forces ``Q_f (n, nq)`` of the friction that does not depend on the joints'
     reactions (Coulomb, viscous and the named loads' part of laws F1-F2), compiled
@@ -184,47 +229,21 @@ def known_friction(model: MechanismModel, kin, S: Array, named: Mapping[str, obj
     (``G^T Q``, ``N^T Q``) are the same. A ``coefficient`` (reaction-dependent) is a
     ``ValueError``."""
     from ._dyn_kernels import friction_batch
-    from .joint_types import JOINT_TYPES
 
     n = S.shape[0]
-    mags = named_magnitudes(model, n, named) if model.named_loads else {}
-    fj, frot, fslide, coef, ext = [], [], [], [], []
-    for j, d in enumerate(model.joint_friction):
-        if not d or not any(v for v in d.values()):
-            continue
-        if d.get("coefficient", 0.0):
-            raise ValueError(f"joint {model.joint_names[j]}: reaction-dependent friction")
-        jt = JOINT_TYPES[model.joint_type[j]]
-        if not jt.freedoms:
-            continue
-        fj.append(j)
-        frot.append(any(mn[0] == "R" for mn in jt.motions))
-        fslide.append(any(mn[0] == "T" for mn in jt.motions))
-        coef.append([d.get("coulomb_torque_Nm", 0.0), d.get("viscous_Nm_s_rad", 0.0), d.get("coulomb_force_N", 0.0),
-                     d.get("viscous_N_s_m", 0.0)])
-        e = np.zeros(n)
-        for term in d.get("external", []):
-            e = e + term["coefficient"] * (term["radius_m"] or 1.0) * np.abs(mags[term["load"]] + term["offset_N"])
-        ext.append(e)
+    fa = friction_arrays(model)
     Q = np.zeros((n, model.nq))
-    if not fj:
+    if not fa["fj"].size:
         return Q
-    # per joint: the coordinates that move its child but not its parent (+1) or the reverse (-1)
-    fsc = np.zeros((len(fj), model.nq))
-    fidx = np.zeros((len(fj), model.nq), dtype=np.int64)
-    fcnt = np.zeros(len(fj), dtype=np.int64)
-    for k, j in enumerate(fj):
-        ch, pa = model.joint_child[j], model.joint_parent[j]
-        sc = (model.ancestors[ch].astype(float) if ch >= 0 else np.zeros(model.nq)) - \
-            (model.ancestors[pa].astype(float) if pa >= 0 else np.zeros(model.nq))
-        idx = np.flatnonzero(sc)
-        fcnt[k] = idx.size
-        fidx[k, :idx.size] = idx
-        fsc[k, :idx.size] = sc[idx]
-    fjj = np.array(fj, dtype=np.int64)
+    mags = named_magnitudes(model, n, named) if model.named_loads else {}
+    F = np.stack([mags[nm] for nm in model.named_loads], axis=1) if model.named_loads else np.zeros((n, 0))
+    ext = np.zeros((n, fa["fj"].size))
+    for t in range(fa["eload"].shape[1]):
+        use = fa["eload"][:, t] >= 0
+        if use.any():
+            ext[:, use] += fa["ecoef"][use, t] * np.abs(F[:, fa["eload"][use, t]] + fa["eoff"][use, t])
     friction_batch(np.ascontiguousarray(kin.w), np.ascontiguousarray(kin.origin_v), np.ascontiguousarray(kin.origin),
-                   np.ascontiguousarray(kin.joint_point), np.ascontiguousarray(S), fsc, fidx, fcnt, fjj,
-                   model.joint_child[fjj], model.joint_parent[fjj], np.array(frot, dtype=np.bool_),
-                   np.array(fslide, dtype=np.bool_), np.array(coef, dtype=float), np.ascontiguousarray(np.stack(ext, 1)),
-                   EPS_ROTATION, EPS_TRANSLATION, Q)
+                   np.ascontiguousarray(kin.joint_point), np.ascontiguousarray(S), fa["fsc"], fa["fidx"], fa["fcnt"],
+                   fa["fj"], fa["fch"], fa["fpa"], fa["frot"].astype(np.bool_), fa["fslide"].astype(np.bool_),
+                   fa["coef"], ext, EPS_ROTATION, EPS_TRANSLATION, Q)
     return Q

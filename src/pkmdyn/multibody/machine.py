@@ -184,21 +184,33 @@ class MechanismVerbs:
 
     def one_sample_kernels(self, model: MechanismModel) -> tuple[tuple, object, object] | None:
         """``(p, inverse, forward)``: the compiled single-sample kernels (:mod:`._one`) for
-        callers in a loop (``pkmdyn.machine``), or None where they do not answer for this
-        mechanism (joint friction, named loads, redundant actuation): the ``*_one`` verbs
-        then take the general route."""
+        callers in a loop (``pkmdyn.machine``; ``load`` the named load's magnitude), or None
+        where they do not answer for this mechanism (friction that depends on the reactions,
+        several named loads, redundant actuation, a named load with a nonzero default
+        magnitude): the ``*_one`` verbs then take the general route."""
         from . import _one
 
-        if self._pk is None or model is not self.model:
-            return None
+        if self._pk is None or model is not self.model or np.any(self.model.load_magnitude != 0.0):
+            return None  # (a caller without a load passes 0.0: right only for a zero default magnitude)
         return self._pk, _one.inverse_one, _one.forward_one
 
     def _kernel(self, model: MechanismModel, forward: bool, q: object, qd: object, v: object,
                 load: object) -> Array | None:
         """The compiled path's answer, or None (then the general route answers and primes it)."""
-        if self._pk is None or model is not self.model or (load is not None and np.any(np.asarray(load) != 0.0)):
+        if self._pk is None or model is not self.model:
             return None
         from . import _one
+
+        if self.model.named_loads:
+            mag = float(self.model.load_magnitude[list(self.model.load_name).index(self.model.named_loads[0])])
+            lv = np.asarray(mag if load is None else load, dtype=float)
+            if lv.size != 1 or not np.isfinite(lv).all():
+                return None  # the general route names what is wrong
+            magnitude = float(lv.reshape(()))
+        elif load is not None and np.any(np.asarray(load) != 0.0):
+            return None
+        else:
+            magnitude = 0.0
 
         x = np.ascontiguousarray(q, dtype=float)
         xd = np.ascontiguousarray(qd, dtype=float)
@@ -208,7 +220,7 @@ class MechanismVerbs:
                 np.all(np.isfinite(x)) and np.all(np.isfinite(xd)) and np.all(np.isfinite(vv))):
             return None  # the general route names what is wrong
         out = np.empty(nt)
-        status = (_one.forward_one if forward else _one.inverse_one)(self._pk, x, xd, vv, 0.0, out)
+        status = (_one.forward_one if forward else _one.inverse_one)(self._pk, x, xd, vv, magnitude, out)
         return out if status == 0 else None
 
     def inverse_dynamics_one(self, model: MechanismModel, q: Array, qd: Array, qdd: Array,
