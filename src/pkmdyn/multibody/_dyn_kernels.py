@@ -265,14 +265,13 @@ def task_mass(S, G, anc_list, R, p, mass, inertia, M, T, Iw, tmp, vc, Iwt):  # p
                 Iwt[i, t] = Iw[i, 0] * T[0, t] + Iw[i, 1] * T[1, t] + Iw[i, 2] * T[2, t]
         m = mass[b]
         for i in range(nt):
-            for j in range(nt):
-                M[i, j] += m * (vc[0, i] * vc[0, j] + vc[1, i] * vc[1, j] + vc[2, i] * vc[2, j]) + (
-                    T[0, i] * Iwt[0, j] + T[1, i] * Iwt[1, j] + T[2, i] * Iwt[2, j])
+            for j in range(i, nt):
+                M[i, j] += m * (vc[0, i] * vc[0, j] + vc[1, i] * vc[1, j] + vc[2, i] * vc[2, j]) + 0.5 * (
+                    T[0, i] * Iwt[0, j] + T[1, i] * Iwt[1, j] + T[2, i] * Iwt[2, j]
+                    + T[0, j] * Iwt[0, i] + T[1, j] * Iwt[1, i] + T[2, j] * Iwt[2, i])
     for i in range(nt):
         for j in range(i + 1, nt):
-            v = 0.5 * (M[i, j] + M[j, i])
-            M[i, j] = v
-            M[j, i] = v
+            M[j, i] = M[i, j]
 
 
 @njit(cache=True)
