@@ -46,13 +46,16 @@ def test_the_compiled_sample_equals_the_batched_verbs(name):
     assert forward(p, x[0], xd[0], u[0], 0.0, out) == _one.COLD  # nothing solved yet
     scale_a = max(np.abs(a_ref).max(), 1e-9)
     scale_u = max(np.abs(u).max(), 1e-9)
-    for i in range(len(x)):
-        a = V.forward_dynamics_one(m, x[i], xd[i], u[i])
-        assert np.abs(a - a_ref[i]).max() <= 1e-9 * scale_a, (name, i)
-        assert forward(p, x[i], xd[i], u[i], 0.0, out) == 0
+    a = V.forward_dynamics_one(m, x[0], xd[0], u[0])  # the general route, which primes the kernel
+    assert np.abs(a - a_ref[0]).max() <= 1e-9 * scale_a
+    for i in range(1, len(x)):
+        # the kernel itself, from the previous sample's solution (predictor and Newton)
+        assert forward(p, x[i], xd[i], u[i], 0.0, out) == 0, (name, i)
         assert np.abs(out - a_ref[i]).max() <= 1e-9 * scale_a, (name, i)
         assert inverse(p, x[i], xd[i], xdd[i], 0.0, out) == 0
         assert np.abs(out - u[i]).max() <= 1e-9 * scale_u, (name, i)
+        a = V.forward_dynamics_one(m, x[i], xd[i], u[i])
+        assert np.abs(a - a_ref[i]).max() <= 1e-9 * scale_a, (name, i)
     assert np.abs(a_ref - xdd).max() <= 1e-8 * max(np.abs(xdd).max(), 1e-9)
 
 
@@ -181,3 +184,57 @@ def test_compiled_friction_equals_the_joint_by_joint_route(name):
     u = inverse_dynamics(m, kin).u
     r = joint_reactions(m, kin, overconstrained="minimum-norm").u
     assert np.abs(u - r).max() <= 1e-10 * np.abs(r).max()
+
+
+def test_the_general_route_starts_where_the_kernel_left_off():
+    """After a run of compiled samples, a batched verb solves the same assembly branch as a
+    fresh set of verbs that followed the motion itself (the kernel's solution is the start)."""
+    m = load_mechanism(ex.builtin_dict("rrr3"))
+    x0 = reference_task(m)
+    steps = np.linspace(0.0, 1.0, 200)[:, None]
+    amp = np.where(m.task_kind == 1, 0.3, 0.15 * m.length_scale)
+    x = x0 + steps * amp
+    zero = np.zeros(m.nt)
+    V = machine_verbs(m)
+    for xi in x:
+        V.forward_dynamics_one(m, xi, zero, zero)
+    assert V._pk[2][0] == 1.0
+    ref = machine_verbs(m)
+    from pkmdyn.multibody import solve_kinematics
+
+    q_ref = solve_kinematics(m, x).q[-1]
+    assert np.abs(V._last_q() - q_ref).max() <= 1e-8
+    assert np.allclose(V.mass_matrix(m, x[-1:]), ref.mass_matrix(m, solve_kinematics(m, x).x[-1:]), rtol=1e-9)
+
+
+def test_non_finite_input_goes_to_the_checked_verb():
+    from pkmdyn.errors import MotionError
+
+    m = load_mechanism(ex.builtin_dict("stewart"))
+    x, xd, xdd = _motion(m, n=5)
+    V = machine_verbs(m)
+    u = V.inverse_dynamics(m, x, xd, xdd)
+    V.forward_dynamics_one(m, x[0], xd[0], u[0])
+    p, _, forward = V.one_sample_kernels(m)
+    bad = xd[1].copy()
+    bad[2] = np.nan
+    out = np.empty(m.nt)
+    assert forward(p, x[1], bad, u[1], 0.0, out) != 0
+    with pytest.raises(MotionError):
+        V.forward_dynamics_one(m, x[1], bad, u[1])
+
+
+def test_no_kernels_for_a_plant_that_would_pass_a_wrong_load():
+    """A caller without a load passes 0.0: with a named load whose default magnitude is not
+    zero the kernels are withheld (the verbs still answer, with the default)."""
+    d = ex.builtin_dict("stewart")
+    d["loads"] = [{"name": "push_N", "body": "platform", "direction": [0.0, 0.0, -1.0], "magnitude_N": 100.0}]
+    m = load_mechanism(d)
+    V = machine_verbs(m)
+    assert V.one_sample_kernels(m) is None
+    x, xd, xdd = _motion(m, n=3)
+    u = V.inverse_dynamics(m, x, xd, xdd)
+    assert np.allclose(V.forward_dynamics_one(m, x[1], xd[1], u[1]), xdd[1], rtol=1e-8, atol=1e-10)
+    d["loads"][0]["magnitude_N"] = 0.0
+    m0 = load_mechanism(d)
+    assert machine_verbs(m0).one_sample_kernels(m0) is not None

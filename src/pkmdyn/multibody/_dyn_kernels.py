@@ -374,3 +374,13 @@ def apply_loads(R, origin, load_body, load_point, LF, LM, W):  # pragma: no cove
             W[s, b, 3] -= F0
             W[s, b, 4] -= F1
             W[s, b, 5] -= F2
+
+
+def _refresh_cache() -> None:
+    """The twist kernels link the kinematics kernels' ``forward_positions`` (:mod:`._cache`)."""
+    from . import _cache, _kernels
+
+    _cache.refresh((twists_batch, twists_from_poses), (_kernels,))
+
+
+_refresh_cache()

@@ -26,6 +26,8 @@ or primes the kernel's state (:func:`prime`).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
@@ -33,6 +35,7 @@ from numpy.typing import NDArray
 from .._dense import solve_in_place
 from ._dyn_kernels import body_wrench, generalised, joint_friction, task_mass
 from ._kernels import OK, _point_motion, _wrap, newton_sample, rates_sample
+from .dynamics import SINGULAR_ACTUATION
 from .friction import EPS_ROTATION as EPS_R
 from .friction import EPS_TRANSLATION as EPS_T
 from .model import MechanismModel
@@ -45,6 +48,8 @@ Array = NDArray[np.float64]
 COLD = 10
 #: status of a singular mass matrix or actuator map
 SINGULAR_DYNAMICS = 11
+#: status of a non-finite input
+BAD_INPUT = 12
 
 _INT = ("body_parent", "body_joint", "joint_q0", "joint_nq", "coord_motion", "ancestor_list", "row_loop", "row_kind",
         "row_i", "row_j", "loop_joint", "joint_parent", "joint_child", "task_kind", "task_index", "euler_axes",
@@ -144,6 +149,9 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no c
     other into ``out``; returns the status (0 OK)."""
     if st[0] == 0.0:
         return COLD
+    for t in range(x.shape[0]):
+        if not (np.isfinite(x[t]) and np.isfinite(xd[t]) and np.isfinite(v[t])):
+            return BAD_INPUT  # the checked verb names it
     nI = ib[0]
     nq, nt = ib[4], ib[5]
     # ---- the model's arrays (views of the packed buffers)
@@ -357,12 +365,26 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no c
             out[t] = acc
             for a in range(nt):
                 Bm[t, a] = Gp[act_coord[a], t]
-        big = 0.0
-        for t in range(nt):
-            for a in range(nt):
+        # the checked verb's screen: Hadamard ratio |det A| / prod |a_i| of the column-scaled map
+        for a in range(nt):
+            big = 0.0
+            for t in range(nt):
                 big = max(big, abs(Bm[t, a]))
+            r[a] = big if big > 0.0 else 1.0
+        prod = 1.0
+        for t in range(nt):
+            nrm = 0.0
+            for a in range(nt):
+                Bm[t, a] /= r[a]
+                nrm += Bm[t, a] * Bm[t, a]
+            prod *= math.sqrt(nrm)
         det, small = solve_in_place(Bm, out)
-    if not small > 1e-9 * big:  # singular (the checked verb names the sample)
+        for a in range(nt):
+            out[a] /= r[a]
+        if not abs(det) > SINGULAR_ACTUATION * prod:  # the checked verb decides (SVD) and names the sample
+            return SINGULAR_DYNAMICS
+        return OK
+    if not small > 1e-12 * big:
         return SINGULAR_DYNAMICS
     return OK
 
@@ -378,3 +400,14 @@ def forward_one(pk, x, xd, u, load, out):  # pragma: no cover - compiled
 def inverse_one(pk, x, xd, xdd, load, out):  # pragma: no cover - compiled
     """``out = u (na,)`` of one sample; returns the status (0 OK)."""
     return _dynamics(pk[0], pk[1], pk[2], pk[3], pk[4], x, xd, xdd, load, False, out)
+
+
+def _refresh_cache() -> None:
+    """The kernels above inline and link functions of other modules (:mod:`._cache`)."""
+    from .. import _dense
+    from . import _cache, _dyn_kernels, _kernels, dynamics, friction
+
+    _cache.refresh((_dynamics, forward_one, inverse_one), (_kernels, _dyn_kernels, _dense, friction, dynamics))
+
+
+_refresh_cache()

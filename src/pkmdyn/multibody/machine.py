@@ -66,9 +66,16 @@ class MechanismVerbs:
     def _kin(self, model: MechanismModel, x: Array, xd: Array | None = None) -> MechanismKinematics:
         if model is not self.model:
             raise ParameterError("these verbs belong to mechanism " + repr(self.model.name))
-        kin = solve_kinematics(model, x, xd, None, q_start=self._q_last)
+        kin = solve_kinematics(model, x, xd, None, q_start=self._last_q())
         self._remember(kin)
         return kin
+
+    def _last_q(self) -> Array | None:
+        """The last solved tree coordinates: the compiled path's when it holds a solution (it
+        advances without this object), else the general route's."""
+        if self._pk is not None and self._pk[2][0] == 1.0:
+            return self._pk[2][1:1 + self.model.nq].copy()
+        return self._q_last
 
     def _remember(self, kin: MechanismKinematics) -> None:
         """The last solved sample: the next solve's start, and the compiled path's state."""
@@ -107,12 +114,13 @@ class MechanismVerbs:
         from . import _kernels as K
         from .kinematics import _assemble, _run
 
-        if self._q_last is None or model is not self.model:
+        q_last = self._last_q()
+        if q_last is None or model is not self.model:
             return self._kin(model, x[None], xd[None])
         x1 = np.ascontiguousarray(x, dtype=float).reshape(1, -1)
         xd1 = np.ascontiguousarray(xd, dtype=float).reshape(1, -1)
         zero = np.zeros_like(x1)
-        out = _run(model, x1, xd1, zero, self._q_last)
+        out = _run(model, x1, xd1, zero, q_last)
         if out["status"][0] != K.OK or not (np.all(np.isfinite(x1)) and np.all(np.isfinite(xd1))):
             return self._kin(model, x1, xd1)
         kin = _assemble(model, None, x1, xd1, zero, out)
