@@ -143,6 +143,21 @@ def _f3(ib, fb, k):  # pragma: no cover - compiled
     return _f(ib, fb, k).reshape((ib[h + 1], ib[h + 2], ib[h + 3]))
 
 
+@njit(cache=True, inline="always")
+def _take1(wf, o, n):  # pragma: no cover - compiled
+    return wf[o:o + n], o + n
+
+
+@njit(cache=True, inline="always")
+def _take2(wf, o, a, b):  # pragma: no cover - compiled
+    return wf[o:o + a * b].reshape((a, b)), o + a * b
+
+
+@njit(cache=True, inline="always")
+def _take3(wf, o, a, b, c):  # pragma: no cover - compiled
+    return wf[o:o + a * b * c].reshape((a, b, c)), o + a * b * c
+
+
 @njit(cache=True, _nrt=False)
 def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     """The kernel (module docstring): ``v`` is ``u`` (forward) or ``xdd`` (inverse); writes the
@@ -184,78 +199,46 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no c
     nr = row_loop.shape[0]
     nrow = nr + nt
     mk = nq
-    # ---- work space
+    # ---- work space (consecutive views of wf)
     o = 0
-    R = wf[o:o + nb * 9].reshape((nb, 3, 3))
-    o += nb * 9
-    p = wf[o:o + nb * 3].reshape((nb, 3))
-    o += nb * 3
-    S = wf[o:o + nq * 6].reshape((nq, 6))
-    o += nq * 6
-    val = wf[o:o + nrow]
-    o += nrow
-    J = wf[o:o + nrow * nq].reshape((nrow, nq))
-    o += nrow * nq
-    res = wf[o:o + nrow]
-    o += nrow
-    K = wf[o:o + mk * mk].reshape((mk, mk))
-    o += mk * mk
-    rhs = wf[o:o + mk]
-    o += mk
+    R, o = _take3(wf, o, nb, 3, 3)
+    p, o = _take2(wf, o, nb, 3)
+    S, o = _take2(wf, o, nq, 6)
+    val, o = _take1(wf, o, nrow)
+    J, o = _take2(wf, o, nrow, nq)
+    res, o = _take1(wf, o, nrow)
+    K, o = _take2(wf, o, mk, mk)
+    rhs, o = _take1(wf, o, mk)
     ires = wf[o:o + idle.shape[0]]
     o += mk
-    bwork = wf[o:o + mk]
-    o += mk
-    qd = wf[o:o + nq]
-    o += nq
-    qdd = wf[o:o + nq]
-    o += nq
-    V = wf[o:o + nb * 6].reshape((nb, 6))
-    o += nb * 6
-    Vpre = wf[o:o + nq * 6].reshape((nq, 6))
-    o += nq * 6
-    A = wf[o:o + nb * 6].reshape((nb, 6))
-    o += nb * 6
-    gamma = wf[o:o + nrow]
-    o += nrow
-    w33 = wf[o:o + 45].reshape((5, 3, 3))
-    o += 45
-    w3 = wf[o:o + 60].reshape((20, 3))
-    o += 60
-    W = wf[o:o + nb * 6].reshape((nb, 6))
-    o += nb * 6
-    Q = wf[o:o + nq]
-    o += nq
-    T = wf[o:o + 6 * nt].reshape((6, nt))
-    o += 6 * nt
-    Iw = wf[o:o + 9].reshape((3, 3))
-    o += 9
-    tmp = wf[o:o + 9].reshape((3, 3))
-    o += 9
-    vc = wf[o:o + 3 * nt].reshape((3, nt))
-    o += 3 * nt
-    Iwt = wf[o:o + 3 * nt].reshape((3, nt))
-    o += 3 * nt
-    M = wf[o:o + nt * nt].reshape((nt, nt))
-    o += nt * nt
-    Bm = wf[o:o + nt * nt].reshape((nt, nt))
-    o += nt * nt
-    h = wf[o:o + nt]
-    o += nt
-    r = wf[o:o + nt]
-    o += nt
-    c3 = wf[o:o + 3]
-    v3 = wf[o + 3:o + 6]
-    a3 = wf[o + 6:o + 9]
-    f3 = wf[o + 9:o + 12]
-    o += 12
-    info = wf[o:o + 2]
-    o += 2
-    Gw = wf[o:o + mk * nt].reshape((mk, nt))
-    o += mk * nt
-    Gw2 = wf[o:o + mk * nt].reshape((mk, nt))
-    o += mk * nt
-    Qf = wf[o:o + nq]
+    bwork, o = _take1(wf, o, mk)
+    qd, o = _take1(wf, o, nq)
+    qdd, o = _take1(wf, o, nq)
+    V, o = _take2(wf, o, nb, 6)
+    Vpre, o = _take2(wf, o, nq, 6)
+    A, o = _take2(wf, o, nb, 6)
+    gamma, o = _take1(wf, o, nrow)
+    w33, o = _take3(wf, o, 5, 3, 3)
+    w3, o = _take2(wf, o, 20, 3)
+    W, o = _take2(wf, o, nb, 6)
+    Q, o = _take1(wf, o, nq)
+    T, o = _take2(wf, o, 6, nt)
+    Iw, o = _take2(wf, o, 3, 3)
+    tmp, o = _take2(wf, o, 3, 3)
+    vc, o = _take2(wf, o, 3, nt)
+    Iwt, o = _take2(wf, o, 3, nt)
+    M, o = _take2(wf, o, nt, nt)
+    Bm, o = _take2(wf, o, nt, nt)
+    h, o = _take1(wf, o, nt)
+    r, o = _take1(wf, o, nt)
+    c3, o = _take1(wf, o, 3)
+    v3, o = _take1(wf, o, 3)
+    a3, o = _take1(wf, o, 3)
+    f3, o = _take1(wf, o, 3)
+    info, o = _take1(wf, o, 2)
+    Gw, o = _take2(wf, o, mk, nt)
+    Gw2, o = _take2(wf, o, mk, nt)
+    Qf, o = _take1(wf, o, nq)
     # ---- 1. tree coordinates from the previous solution
     q = st[1:1 + nq]
     xp = st[1 + nq:1 + nq + nt]
