@@ -229,3 +229,29 @@ def test_control_takes_every_machine_of_the_registry(capsys, tmp_path):
                 ["--machine", "stewart", "--controller", "pdx"]):
         code, _, err = _run(capsys, "control", *bad, "--out", str(tmp_path / "refused"))
         assert code == 2 and len(err.strip().splitlines()) == 1 and not (tmp_path / "refused").exists()
+
+
+def test_run_machine_hip_carries_the_iso_load_and_matches_the_hip_job(tmp_path, capsys):
+    """``pkmdyn run --machine hip``: the ISO cycle with its load as the named load hydraulic_N;
+    the slider efforts, taken to the motors (lead screw rotor and friction added, none in the
+    default file), equal the torques of ``pkmdyn hip run`` on the same cycle (every friction
+    family of the default file, Eq. 16 under the load included)."""
+    import csv
+
+    from pkmdyn.machines.hip_simulator import load_params
+
+    assert _run(capsys, "run", "--machine", "hip", "--out", str(tmp_path / "g"))[0] == 0
+    assert _run(capsys, "hip", "run", "--no-plots", "--out", str(tmp_path / "h"))[0] == 0
+    g = list(csv.DictReader((tmp_path / "g" / "results.csv").open()))
+    h = list(csv.DictReader((tmp_path / "h" / "results.csv").open()))
+    load = np.array([float(r["hydraulic_N"]) for r in g])
+    assert load.max() > 1000.0
+    hip = load_params()
+    assert hip.friction.screw_coulomb == 0.0 and hip.friction.screw_viscous == 0.0
+    gear = hip.geometry.p / (2 * np.pi)
+    tg = np.array([[gear * float(r[f"P_{i}_effort_N"]) + hip.inertia.I_L * float(r[f"P_{i}_acc_m_s2"]) / gear
+                    for i in (1, 2, 3)] for r in g])
+    tcols = ["tau1_Nm", "tau2_Nm", "tau3_Nm"]
+    th = np.array([[float(r[c]) for c in tcols] for r in h])
+    assert tg.shape == th.shape
+    assert np.abs(tg - th).max() <= 1e-8 * np.abs(th).max()

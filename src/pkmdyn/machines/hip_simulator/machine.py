@@ -33,14 +33,15 @@ def description() -> dict[str, Any]:
 
 def default_motion() -> Any:
     """One ISO 14242-1 cycle of the built-in parameters' cycle model (1000 samples), as a
-    :class:`pkmdyn.multibody.TaskMotion` in the description's task order."""
+    :class:`pkmdyn.multibody.TaskMotion` in the description's task order, with its hydraulic
+    load as the description's named load ``hydraulic_N``."""
     from ...multibody import TaskMotion
     from ...profiles.iso14242 import iso14242_motion
     from .iso_fit import iso_cycle_preset
     from .params import load_params
 
     m = iso14242_motion(cycles=1, samples_per_cycle=1000, cycle=iso_cycle_preset(load_params().motion_model))
-    return TaskMotion(m.t, m.angles, m.rates, m.accels)
+    return TaskMotion(m.t, m.angles, m.rates, m.accels, {"hydraulic_N": m.load})
 
 
 def view_page(params: Path | None, out: Path, listing: Any) -> Path:
