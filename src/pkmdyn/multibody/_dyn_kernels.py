@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._kernels import _matmul3, forward_positions
+from ._kernels import _frame, forward_positions
 
 
 @njit(cache=True)
@@ -169,22 +169,18 @@ def twists_from_poses(q, Rb, ob, body_parent, body_joint, joint_q0, joint_nq, co
     ``ob (n, nb, 3)`` (what :func:`twists_batch` computes from ``q`` alone): a joint's last
     coordinate turns or slides along its child frame's axis, the earlier ones along the parent
     frame's axes turned by the coordinates before them, so only those turns need the angle."""
+    _twists_from_poses_loop(q, Rb, ob, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                            coord_sign, RP, pP, RC, pC, S_out, np.empty((3, 3)), np.empty(3))
+
+
+@njit(cache=True, _nrt=False)
+def _twists_from_poses_loop(q, Rb, ob, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                            coord_sign, RP, pP, RC, pC, S_out, Rf, o):  # pragma: no cover - compiled
     nb = body_parent.shape[0]
-    Rf = np.empty((3, 3))
-    o = np.empty(3)
     for s in range(q.shape[0]):
         for b in range(nb):
             k = body_joint[b]
-            a = body_parent[b]
-            if a < 0:
-                for i in range(3):
-                    o[i] = pP[k, i]
-                    for j in range(3):
-                        Rf[i, j] = RP[k, i, j]
-            else:
-                _matmul3(Rb[s, a], RP[k], Rf)
-                for i in range(3):
-                    o[i] = ob[s, a, i] + Rb[s, a, i, 0] * pP[k, 0] + Rb[s, a, i, 1] * pP[k, 1] + Rb[s, a, i, 2] * pP[k, 2]
+            _frame(body_parent[b], Rb[s], ob[s], RP[k], pP[k], Rf, o)  # the joint frame on the parent, world
             last = joint_q0[k] + joint_nq[k] - 1
             for c in range(joint_q0[k], last + 1):
                 m = coord_motion[c]
@@ -353,34 +349,40 @@ def friction_batch(w, ov, org, jpt, S, fsc, fidx, fcnt, fj, fch, fpa, frot, fsli
                            coef[k], ext[s, k], eps_r, eps_t, S[s], fsc[k], fidx[k], fcnt[k], Q_out[s])
 
 
+@njit(cache=True, _nrt=False, inline="always")
+def load_wrench(Rb, ob, pt, F0, F1, F2, M, W):  # pragma: no cover - compiled
+    """Subtract one external load from a body's required wrench ``W (6,)`` (Eq. 1): force ``F``
+    at the body point ``pt`` (body frame; the body at ``Rb``, origin ``ob``) and moment ``M``
+    (base frame): ``f -= F``, ``n_O -= M + r x F``."""
+    r0 = ob[0] + Rb[0, 0] * pt[0] + Rb[0, 1] * pt[1] + Rb[0, 2] * pt[2]
+    r1 = ob[1] + Rb[1, 0] * pt[0] + Rb[1, 1] * pt[1] + Rb[1, 2] * pt[2]
+    r2 = ob[2] + Rb[2, 0] * pt[0] + Rb[2, 1] * pt[1] + Rb[2, 2] * pt[2]
+    W[0] -= M[0] + r1 * F2 - r2 * F1
+    W[1] -= M[1] + r2 * F0 - r0 * F2
+    W[2] -= M[2] + r0 * F1 - r1 * F0
+    W[3] -= F0
+    W[4] -= F1
+    W[5] -= F2
+
+
 @njit(cache=True, _nrt=False)
 def apply_loads(R, origin, load_body, load_point, LF, LM, W):  # pragma: no cover - compiled
     """Subtract the external loads from the required wrenches ``W (n, nb, 6)`` (Eq. 1): load k
     acts on body ``load_body[k]`` with force ``LF[s, k]`` at the body point ``load_point[k]``
-    (body frame) and moment ``LM[s, k]`` (base frame): ``f -= F``, ``n_O -= M + r x F``."""
+    (body frame) and moment ``LM[s, k]`` (base frame) (:func:`load_wrench`)."""
     for s in range(W.shape[0]):
         for k in range(load_body.shape[0]):
             b = load_body[k]
-            r0 = origin[s, b, 0] + R[s, b, 0, 0] * load_point[k, 0] + R[s, b, 0, 1] * load_point[k, 1] \
-                + R[s, b, 0, 2] * load_point[k, 2]
-            r1 = origin[s, b, 1] + R[s, b, 1, 0] * load_point[k, 0] + R[s, b, 1, 1] * load_point[k, 1] \
-                + R[s, b, 1, 2] * load_point[k, 2]
-            r2 = origin[s, b, 2] + R[s, b, 2, 0] * load_point[k, 0] + R[s, b, 2, 1] * load_point[k, 1] \
-                + R[s, b, 2, 2] * load_point[k, 2]
-            F0, F1, F2 = LF[s, k, 0], LF[s, k, 1], LF[s, k, 2]
-            W[s, b, 0] -= LM[s, k, 0] + r1 * F2 - r2 * F1
-            W[s, b, 1] -= LM[s, k, 1] + r2 * F0 - r0 * F2
-            W[s, b, 2] -= LM[s, k, 2] + r0 * F1 - r1 * F0
-            W[s, b, 3] -= F0
-            W[s, b, 4] -= F1
-            W[s, b, 5] -= F2
+            load_wrench(R[s, b], origin[s, b], load_point[k], LF[s, k, 0], LF[s, k, 1], LF[s, k, 2], LM[s, k],
+                        W[s, b])
 
 
 def _refresh_cache() -> None:
-    """The twist kernels link the kinematics kernels' ``forward_positions`` (:mod:`._cache`)."""
+    """The twist kernels link or inline the kinematics kernels' ``forward_positions`` and
+    ``_frame`` (:mod:`._cache`)."""
     from . import _cache, _kernels
 
-    _cache.refresh((twists_batch, twists_from_poses), (_kernels,))
+    _cache.refresh((twists_batch, twists_from_poses, _twists_from_poses_loop), (_kernels,))
 
 
 _refresh_cache()

@@ -78,16 +78,7 @@ def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_moti
     o, ax = w3[18], w3[19]
     for b in range(body_parent.shape[0]):
         k = body_joint[b]
-        a = body_parent[b]
-        if a < 0:
-            for i in range(3):
-                o[i] = pP[k, i]
-                for j in range(3):
-                    Rf[i, j] = RP[k, i, j]
-        else:
-            _matmul3(R[a], RP[k], Rf)
-            for i in range(3):
-                o[i] = p[a, i] + R[a, i, 0] * pP[k, 0] + R[a, i, 1] * pP[k, 1] + R[a, i, 2] * pP[k, 2]
+        _frame(body_parent[b], R, p, RP[k], pP[k], Rf, o)  # the joint frame on the parent, world
         for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
             m = coord_motion[c]
             sg = coord_sign[c]

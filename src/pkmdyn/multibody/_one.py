@@ -33,7 +33,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from .._dense import solve_in_place
-from ._dyn_kernels import body_wrench, generalised, joint_friction, task_mass
+from ._dyn_kernels import body_wrench, generalised, joint_friction, load_wrench, task_mass
 from ._kernels import OK, _point_motion, _wrap, newton_sample, rates_sample
 from .dynamics import SINGULAR_ACTUATION
 from .friction import EPS_ROTATION as EPS_R
@@ -104,7 +104,7 @@ def new_state(model: MechanismModel) -> tuple[Array, Array, NDArray[np.int64]]:
     state = np.zeros(1 + nq + nt + nq * nt)
     nwork = (nb * 9 + nb * 3 + nq * 6 + nrow + nrow * nq + nrow + mk * mk + mk + mk + mk + 2 * nq + nb * 6
              + nq * 6 + nb * 6 + nrow + 45 + 60 + nb * 6 + nq + 6 * nt + 9 + 9 + 3 * nt + 3 * nt + nt * nt + nt * nt
-             + 2 * nt + 12 + 2 + 2 * mk * nt + nq)
+             + 2 * nt + 12 + 2 + 2 * mk * nt + nq + nb * 3)
     return state, np.zeros(nwork), np.zeros(mk, dtype=np.int64)
 
 
@@ -232,6 +232,7 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no c
     h, o = _take1(wf, o, nt)
     r, o = _take1(wf, o, nt)
     c3, o = _take1(wf, o, 3)
+    pc, o = _take2(wf, o, nb, 3)
     v3, o = _take1(wf, o, 3)
     a3, o = _take1(wf, o, 3)
     f3, o = _take1(wf, o, 3)
@@ -301,23 +302,14 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no c
     # ---- 3. required wrenches of the bias motion, loads, h = G^T Q
     for b in range(nb):
         for i in range(3):
-            c3[i] = p[b, i] + R[b, i, 0] * com[b, 0] + R[b, i, 1] * com[b, 1] + R[b, i, 2] * com[b, 2]
-        _point_motion(b, c3, V, A, v3, a3)
-        body_wrench(R[b], V[b, :3], A[b, :3], c3, a3, mass[b], inertia[b], gravity, W[b], tmp, Iw)
-        for i in range(3):
-            p[b, i] = c3[i]  # the centres of mass, for the mass matrix
+            pc[b, i] = p[b, i] + R[b, i, 0] * com[b, 0] + R[b, i, 1] * com[b, 1] + R[b, i, 2] * com[b, 2]
+        _point_motion(b, pc[b], V, A, v3, a3)
+        body_wrench(R[b], V[b, :3], A[b, :3], pc[b], a3, mass[b], inertia[b], gravity, W[b], tmp, Iw)
     for k in range(nl):
         b = load_body[k]
         for i in range(3):
             f3[i] = load_direction[k, i] * load if load_named[k] else load_force[k, i]
-        for i in range(3):  # the load's point in the base frame (p now holds the centre of mass)
-            v3[i] = R[b, i, 0] * (load_point[k, 0] - com[b, 0]) + R[b, i, 1] * (load_point[k, 1] - com[b, 1]) \
-                + R[b, i, 2] * (load_point[k, 2] - com[b, 2]) + p[b, i]
-        W[b, 0] -= load_moment[k, 0] + v3[1] * f3[2] - v3[2] * f3[1]
-        W[b, 1] -= load_moment[k, 1] + v3[2] * f3[0] - v3[0] * f3[2]
-        W[b, 2] -= load_moment[k, 2] + v3[0] * f3[1] - v3[1] * f3[0]
-        for i in range(3):
-            W[b, 3 + i] -= f3[i]
+        load_wrench(R[b], p[b], load_point[k], f3[0], f3[1], f3[2], load_moment[k], W[b])
     generalised(S, W, anc, Q)
     for c in range(nq):
         Q[c] += Qf[c]
@@ -327,7 +319,7 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no c
             acc += Gp[c, t] * Q[c]
         h[t] = acc
     # ---- 4. the task mass matrix
-    task_mass(S, Gp, anc, R, p, mass, inertia, M, T, Iw, tmp, vc, Iwt)
+    task_mass(S, Gp, anc, R, pc, mass, inertia, M, T, Iw, tmp, vc, Iwt)
     # ---- 5. the equation of motion, M xdd + h = J_ax^T u
     if forward:
         for t in range(nt):

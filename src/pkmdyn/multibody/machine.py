@@ -224,9 +224,8 @@ class MechanismVerbs:
         xd = np.ascontiguousarray(qd, dtype=float)
         vv = np.ascontiguousarray(v, dtype=float)
         nt = self.model.nt
-        if x.shape != (nt,) or xd.shape != (nt,) or vv.shape != (nt,) or not (
-                np.all(np.isfinite(x)) and np.all(np.isfinite(xd)) and np.all(np.isfinite(vv))):
-            return None  # the general route names what is wrong
+        if x.shape != (nt,) or xd.shape != (nt,) or vv.shape != (nt,):
+            return None  # the general route names what is wrong (the kernel refuses non-finite input)
         out = np.empty(nt)
         status = (_one.forward_one if forward else _one.inverse_one)(self._pk, x, xd, vv, magnitude, out)
         return out if status == 0 else None
