@@ -32,6 +32,8 @@ import numpy as np
 from numba import njit
 
 OK, NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN = 0, 1, 2, 3, 4
+#: what :func:`rows` computes beside the values: the Jacobian, the drift, or nothing
+ROWS_JACOBIAN, ROWS_DRIFT, ROWS_VALUES = 0, 1, 2
 
 
 @njit(cache=True, inline="always")
@@ -296,10 +298,10 @@ def _jrow(J, rr, wa, wb, S, anc, a, b, coef_a, coef_b):
 @njit(cache=True, _nrt=False)
 def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
          RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-         val, J, with_drift, V, A, gamma, w33, w3):
-    """Values ``val (nr + nt,)`` and Jacobian ``J (nr + nt, nq)``; or, when ``with_drift``, the
-    values and the drift ``gamma (nr + nt,)`` from the bias accelerations ``A`` (qdd = 0) and
-    velocities ``V`` (``J`` untouched).
+         val, J, mode, V, A, gamma, w33, w3):
+    """Values ``val (nr + nt,)`` and, by ``mode``: the Jacobian ``J (nr + nt, nq)``
+    (``ROWS_JACOBIAN``); the drift ``gamma (nr + nt,)`` from the bias accelerations ``A``
+    (qdd = 0) and velocities ``V`` (``ROWS_DRIFT``); nothing more (``ROWS_VALUES``).
 
     Jacobian rows in Plücker form: a translation row ``e . (o_C - o_P)`` changes with tree
     rate c by ``(s_b - s_a) (e . S_v - (e x o_C) . S_w)`` (s_a, s_b: 1 where c moves body a, b;
@@ -334,7 +336,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
             for m in range(3):
                 wa[m] = -t3[m]
                 wb[m] = e[m]
-            if not with_drift:
+            if mode == ROWS_JACOBIAN:
                 _jrow(J, rr, wa, wb, S, anc, a, b, -1.0, 1.0)
         else:
             for m in range(3):
@@ -343,9 +345,9 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
             _cross(e, cj, wa)
             for m in range(3):
                 wb[m] = 0.0
-            if not with_drift:
+            if mode == ROWS_JACOBIAN:
                 _jrow(J, rr, wa, wb, S, anc, a, b, 1.0, -1.0)
-        if with_drift:
+        if mode == ROWS_DRIFT:
             _direction_motion(a, e, V, A, ed, edd, t3)
             if row_kind[rr] == 0:
                 _point_motion(a, oP, V, A, vP, aP)
@@ -371,6 +373,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
     ok = True
     if have_euler:
         euler_angles(R[tb], euler_axes, ang)
+    if have_euler and mode != ROWS_VALUES:
         euler_rate_map(ang, euler_axes, Em)
         det = _inv3(Em, Ei)
         if abs(det) < 1e-9:
@@ -390,9 +393,9 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
             t4[m] = 1.0
             _cross(x, t4, wa)
             wb[m] = 1.0
-            if not with_drift:
+            if mode == ROWS_JACOBIAN:
                 _jrow(J, rr, wa, wb, S, anc, -1, tb, 0.0, 1.0)
-            if with_drift:
+            if mode == ROWS_DRIFT:
                 _point_motion(tb, x, V, A, vC, aC)
                 gamma[rr] = aC[m]
         else:
@@ -400,9 +403,9 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
             for i in range(3):
                 wa[i] = Ei[m, i]
                 wb[i] = 0.0
-            if not with_drift:
+            if mode == ROWS_JACOBIAN:
                 _jrow(J, rr, wa, wb, S, anc, -1, tb, 0.0, 1.0)
-            if with_drift:
+            if mode == ROWS_DRIFT:
                 # phi_dd = E^-1 (omega_dot - Edot phi_dot), Edot phi_dot = (k1 f1) x (e2 f2) + (k1 f1 + e2 f2) x (e3 f3)
                 w = V[tb, :3]
                 f = wk[10]
@@ -560,130 +563,157 @@ def block_lu_solve_columns(M, piv, blocks, prow, pcol, B, X, work):
             X[pcol[j], t] = work[j, t]
 
 
+@njit(cache=True, inline="always")
+def _residuals(xs, val, nr, task_kind, res):
+    """Residuals ``res`` of the rows: loop rows as they are, task rows less the task pose
+    ``xs`` (angles wrapped)."""
+    for rr in range(val.shape[0]):
+        if rr < nr:
+            res[rr] = val[rr]
+        elif task_kind[rr - nr] == 1:
+            res[rr] = _wrap(val[rr] - xs[rr - nr])
+        else:
+            res[rr] = val[rr] - xs[rr - nr]
+
+
+@njit(cache=True, inline="always")
+def _idle_residuals(q, q_ref, idle, ires):
+    """``ires = idle (q - q_ref)``: how far each idle freedom has moved from its reference."""
+    for i in range(idle.shape[0]):
+        acc = 0.0
+        for c in range(q.shape[0]):
+            acc += idle[i, c] * (q[c] - q_ref[c])
+        ires[i] = acc
+
+
+#: the phases of :func:`solve_sample`
+_CHORD, _NEWTON, _RATES = 0, 1, 2
+
+
 @njit(cache=True, _nrt=False)
-def newton_sample(xs, q, q_ref, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
-                  tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
-                  row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-                  task_body, task_point, task_kind, task_index, euler_axes,
-                  sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter,
-                  R, p, S, val, J, res, K, piv, rhs, ires, bwork, V, A, gamma, w33, w3, info):
-    """Newton on one sample's square system (see :func:`solve_batch`) from ``q`` (updated in
-    place). Returns the status; ``info[0]`` the worst row, ``info[1]`` the scaled residual. On
-    OK the poses ``R, p``, twists ``S`` and Jacobian ``J`` are those of the converged ``q``."""
+def solve_sample(xs, xds, xdds, q, q_ref, chord, body_parent, body_joint, joint_q0, joint_nq, coord_motion,
+                 coord_offset, coord_sign, tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
+                 row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                 task_body, task_point, task_kind, task_index, euler_axes,
+                 sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter,
+                 R, p, S, val, J, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2,
+                 info):
+    """One sample's kinematics (see :func:`solve_batch`) from the predictor ``q`` (updated in
+    place), in three phases that share one evaluation of the rows:
+
+    1. when ``chord``: one simplified Newton step with the factors ``K, piv`` left by the
+       previous sample (rows' values only, no Jacobian, no factorisation); from a close
+       predictor it leaves ``q`` within rounding of the solution;
+    2. Newton on the square system until the scaled residual of the solved rows is at most
+       ``tol`` (or stalls within a factor 1000 of it: the rounding floor of an
+       ill-conditioned pose) and that of every row, the redundant directions of an
+       over-constrained loop included, at most ``check_tol``;
+    3. the rates at the solution: ``K qd = (0; xd)``, ``K qdd = (-gamma_loops; xdd -
+       gamma_task)``, ``G = K^-1 (0; I; 0)``, the bodies' velocities ``V`` and accelerations
+       ``A`` (``K, piv`` are left holding the factors at the solution).
+
+    Returns the status (OK, NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN); ``info[0]``
+    the worst row, ``info[1]`` the scaled residual. On OK the poses ``R, p``, twists ``S`` and
+    Jacobian ``J`` are those of the converged ``q``. Each kernel it calls is called from one
+    place, so that the compiled sample stays small."""
     nq = q.shape[0]
     nr = row_loop.shape[0]
-    nrow = nr + task_kind.shape[0]
+    nt = task_kind.shape[0]
+    nrow = nr + nt
     m = sel_rows.shape[0]
     ni = idle.shape[0]
     mk = m + ni
     prev = 1e300
-    for it in range(max_iter + 1):
-        forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
-                          coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3)
+    phase = _CHORD if chord else _NEWTON
+    it = 0
+    while True:
+        # ---- evaluate the rows at q (their values with the Jacobian, or the drift)
+        if phase == _RATES:
+            # G = K^-1 (0; I) (all task columns in one pass), qd = G xd, bias motion
+            for i in range(mk):
+                for t in range(nt):
+                    Gw[i, t] = 1.0 if (i < m and sel_rows[i] == nr + t) else 0.0
+            block_lu_solve_columns(K, piv, blocks, prow, pcol, Gw, G, Gw2)
+            for j in range(nq):
+                acc = 0.0
+                for t in range(nt):
+                    acc += G[j, t] * xds[t]
+                qd[j] = acc
+                qdd[j] = 0.0
+            forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre)
+            forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
+            mode = ROWS_DRIFT
+        else:
+            forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                              coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3)
+            mode = ROWS_VALUES if phase == _CHORD else ROWS_JACOBIAN
         ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                   RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-                  val, J, False, V, A, gamma, w33, w3)
-        if not ok:
-            info[0] = nr
-            return EULER_SINGULAR
-        for rr in range(nrow):
-            if rr < nr:
-                res[rr] = val[rr]
-            elif task_kind[rr - nr] == 1:
-                res[rr] = _wrap(val[rr] - xs[rr - nr])
-            else:
-                res[rr] = val[rr] - xs[rr - nr]
-        # the solved rows (selected and idle) and every row (redundant ones only checked)
-        big_sel = 0.0
-        wr = sel_rows[0] if m > 0 else 0
-        for i in range(m):
-            sc = abs(res[sel_rows[i]]) * row_scale[sel_rows[i]]
-            if sc > big_sel:
-                big_sel = sc
-                wr = sel_rows[i]
-        for i in range(ni):
-            acc = 0.0
-            for c in range(nq):
-                acc += idle[i, c] * (q[c] - q_ref[c])
-            ires[i] = acc
-            if abs(acc) > big_sel:
-                big_sel = abs(acc)
-        big_all = 0.0
-        wa = 0
-        for rr in range(nrow):
-            sc = abs(res[rr]) * row_scale[rr]
-            if sc > big_all:
-                big_all = sc
-                wa = rr
-        info[0] = wr
-        info[1] = big_sel if big_sel > big_all else big_all
-        # converged: at the tolerance, or stalled at the rounding floor (no halving) near it
-        if big_sel <= tol or (big_sel <= 1e3 * tol and big_sel > 0.5 * prev):
-            if big_all <= check_tol:
-                return OK
-            # LOOP_OPEN: the solved rows closed but a redundant direction of a loop stays open
-            info[0] = wa
-            return LOOP_OPEN
-        prev = big_sel
-        if it == max_iter:
-            break
-        _fill(K, J, sel_rows, idle, prow, pcol)
-        for i in range(m):
-            rhs[i] = -res[sel_rows[i]]
-        for i in range(ni):
-            rhs[m + i] = -ires[i]
-        if not block_lu_factor(K, piv, blocks):
-            return SINGULAR
+                  val, J, mode, V, A, gamma, w33, w3)
+        # ---- the right-hand side
+        if phase == _RATES:
+            for i in range(mk):
+                rhs[i] = 0.0
+            for i in range(m):
+                rr = sel_rows[i]
+                rhs[i] = (xdds[rr - nr] - gamma[rr]) if rr >= nr else -gamma[rr]
+        else:
+            if phase == _NEWTON and not ok:
+                info[0] = nr
+                return EULER_SINGULAR
+            _residuals(xs, val, nr, task_kind, res)
+            _idle_residuals(q, q_ref, idle, ires)
+            for i in range(m):
+                rhs[i] = -res[sel_rows[i]]
+            for i in range(ni):
+                rhs[m + i] = -ires[i]
+            if phase == _NEWTON:
+                # the solved rows (selected and idle) and every row (redundant ones only checked)
+                big_sel = 0.0
+                wr = sel_rows[0] if m > 0 else 0
+                for i in range(m):
+                    sc = abs(res[sel_rows[i]]) * row_scale[sel_rows[i]]
+                    if sc > big_sel:
+                        big_sel = sc
+                        wr = sel_rows[i]
+                for i in range(ni):
+                    if abs(ires[i]) > big_sel:
+                        big_sel = abs(ires[i])
+                big_all = 0.0
+                wa = 0
+                for rr in range(nrow):
+                    sc = abs(res[rr]) * row_scale[rr]
+                    if sc > big_all:
+                        big_all = sc
+                        wa = rr
+                info[0] = wr
+                info[1] = big_sel if big_sel > big_all else big_all
+                # converged: at the tolerance, or stalled at the rounding floor (no halving) near it
+                done = big_sel <= tol or (big_sel <= 1e3 * tol and big_sel > 0.5 * prev)
+                if done and big_all > check_tol:
+                    # LOOP_OPEN: the solved rows closed but a redundant direction of a loop stays open
+                    info[0] = wa
+                    return LOOP_OPEN
+                prev = big_sel
+                if not done and it == max_iter:
+                    return NOT_CONVERGED
+                it += 1
+                _fill(K, J, sel_rows, idle, prow, pcol)
+                if not block_lu_factor(K, piv, blocks):
+                    return SINGULAR
+                if done:
+                    phase = _RATES
+                    continue
+        # ---- one solve with the factors in K, piv
         block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
+        if phase == _RATES:
+            for j in range(nq):
+                qdd[j] = rhs[j]
+            forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
+            return OK
         for j in range(mk):
             q[j] += rhs[j]
-    return NOT_CONVERGED
-
-
-@njit(cache=True, _nrt=False)
-def rates_sample(xds, xdds, q, body_parent, body_joint, joint_q0, joint_nq, anc,
-                 row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child, RP, pP, RC, pC,
-                 task_body, task_point, task_kind, task_index, euler_axes, sel_rows, idle, prow, pcol, blocks,
-                 R, p, S, val, J, K, piv, rhs, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2):
-    """Rates of one solved sample (``R, p, S, J`` at the converged ``q``): ``K qd = (0; xd)``,
-    ``K qdd = (-gamma_loops; xdd - gamma_task)``, ``G = K^-1 (0; I; 0)``, with the bodies'
-    velocities ``V`` and accelerations ``A`` (``Gw, Gw2 (nq, nt)`` work space). False where
-    ``K`` is singular."""
-    nq = q.shape[0]
-    nr = row_loop.shape[0]
-    nt = task_kind.shape[0]
-    m = sel_rows.shape[0]
-    mk = m + idle.shape[0]
-    _fill(K, J, sel_rows, idle, prow, pcol)
-    if not block_lu_factor(K, piv, blocks):
-        return False
-    # G = K^-1 (0; I) (all task columns in one pass), then qd = G xd
-    for i in range(mk):
-        for t in range(nt):
-            Gw[i, t] = 1.0 if (i < m and sel_rows[i] == nr + t) else 0.0
-    block_lu_solve_columns(K, piv, blocks, prow, pcol, Gw, G, Gw2)
-    for j in range(nq):
-        acc = 0.0
-        for t in range(nt):
-            acc += G[j, t] * xds[t]
-        qd[j] = acc
-    forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre)
-    for c in range(nq):
-        qdd[c] = 0.0
-    forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
-    rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-         RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-         val, J, True, V, A, gamma, w33, w3)
-    for i in range(mk):
-        rhs[i] = 0.0
-    for i in range(m):
-        rr = sel_rows[i]
-        rhs[i] = (xdds[rr - nr] - gamma[rr]) if rr >= nr else -gamma[rr]
-    block_lu_solve(K, piv, blocks, prow, pcol, rhs, bwork)
-    for j in range(nq):
-        qdd[j] = rhs[j]
-    forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
-    return True
+        phase = _NEWTON
 
 
 @njit(cache=True)
@@ -765,21 +795,17 @@ def solve_batch(tm, x, xd, xdd, q_start,
                     acc += G[c, t] * dx
                 q[c] += acc
         info[1] = 0.0
-        st = newton_sample(x[s], q, q_ref, body_parent, body_joint, joint_q0, joint_nq, coord_motion,
-                           coord_offset, coord_sign, tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
-                           row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-                           task_body, task_point, task_kind, task_index, euler_axes,
-                           sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter,
-                           R, p, S, val, J, res, K, piv, rhs, ires, bwork, V, A, gamma, w33, w3, info)
+        # the second-order predictor is close enough for a first step with the previous factors
+        chord = s > 0 and tm.shape[0] == n
+        st = solve_sample(x[s], xd[s], xdd[s], q, q_ref, chord, body_parent, body_joint,
+                          joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC, RP, pP,
+                          RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                          task_body, task_point, task_kind, task_index, euler_axes,
+                          sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter,
+                          R, p, S, val, J, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3,
+                          Gw, Gw2, info)
         worst[s] = int(info[0])
         res_out[s] = info[1]
-        if st == OK:
-            if not rates_sample(xd[s], xdd[s], q, body_parent, body_joint, joint_q0, joint_nq, anc,
-                                row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-                                RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-                                sel_rows, idle, prow, pcol, blocks, R, p, S, val, J, K, piv, rhs, bwork,
-                                qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2):
-                st = SINGULAR
         if st != OK:
             status[s] = st
             if st != EULER_SINGULAR:
@@ -840,4 +866,4 @@ def jacobians_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion
                           coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3)
         rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
              RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-             val_out[s], J_out[s], False, V, A, gamma, w33, w3)
+             val_out[s], J_out[s], ROWS_JACOBIAN, V, A, gamma, w33, w3)

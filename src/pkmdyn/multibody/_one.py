@@ -5,10 +5,14 @@ The model's arrays are packed once into one integer and one float array (:func:`
 that a call passes a handful of arguments whatever the mechanism; the kernel unpacks them as
 views and runs, for task pose ``x`` and rate ``xd``:
 
-1. the tree coordinates: Newton from the predictor ``q_prev + G_prev (x - x_prev)`` (the
-   previous call's solution; :func:`._kernels.newton_sample`, the batched solver's own step);
-2. the rates at ``xdd = 0``: ``G = dq/dx``, ``qd = G xd``, the bias accelerations
-   (:func:`._kernels.rates_sample`);
+1. the tree coordinates and rates at ``xdd = 0`` (:func:`._kernels.solve_sample`, the batched
+   solver's own sample): from the previous call's solution, the predictor
+   ``q_prev + G_prev dx + s^2 qdd_prev / 2`` (``dx = x - x_prev``; ``qdd_prev`` the previous
+   call's bias accelerations at ``xd_prev``, ``s = dx . xd_prev / |xd_prev|^2``: the second
+   order along the previous motion), one simplified Newton step with the previous call's
+   factors, Newton, which checks the solution with one evaluation, then ``G = dq/dx``,
+   ``qd = G xd`` and the bias accelerations;
+2. the joints' friction of known magnitude from the relative twists;
 3. the bodies' required wrenches at the bias motion with gravity and loads (Eq. 1 of
    :mod:`.dynamics`), the tree forces (Eq. 2) and ``h = G^T Q``;
 4. the task mass matrix ``M = sum_b T_b^T I_b T_b``;
@@ -34,13 +38,13 @@ from numpy.typing import NDArray
 
 from .._dense import solve_in_place
 from ._dyn_kernels import body_wrench, generalised, joint_friction, load_wrench, task_mass
-from ._kernels import OK, _point_motion, _wrap, newton_sample, rates_sample
+from ._kernels import OK, _point_motion, _wrap, solve_sample
 from .dynamics import SINGULAR_ACTUATION
 from .friction import EPS_ROTATION as EPS_R
 from .friction import EPS_TRANSLATION as EPS_T
 from .model import MechanismModel
 
-__all__ = ["pack", "supported", "new_state", "prime", "forward_one", "inverse_one", "COLD"]
+__all__ = ["pack", "supported", "new_state", "prime", "has_solution", "forward_one", "inverse_one", "COLD"]
 
 Array = NDArray[np.float64]
 
@@ -95,13 +99,19 @@ def pack(model: MechanismModel) -> tuple[NDArray[np.int64], Array]:
     return np.array(head + ints, dtype=np.int64), np.array(floats, dtype=float)
 
 
+#: the state's first entry: nothing known, a solution (:func:`prime`), a solution with the
+#: factors of its Jacobian in the work space and its bias accelerations (after a call)
+COLD_STATE, PRIMED, FACTORED = 0.0, 1.0, 2.0
+
+
 def new_state(model: MechanismModel) -> tuple[Array, Array, NDArray[np.int64]]:
-    """``(state, work, int work)``: ``state = [valid, q (nq), x (nt), G (nq nt)]`` of the last
-    solved sample, and the kernel's work space."""
+    """``(state, work, int work)``: ``state = [flag, q (nq), x (nt), G (nq nt), qdd (nq),
+    xd (nt)]`` of the last solved sample (``flag`` :data:`COLD_STATE`, :data:`PRIMED` or
+    :data:`FACTORED`; ``qdd`` its bias accelerations at ``xd``), and the kernel's work space."""
     nq, nt, nb = model.nq, model.nt, model.nb
     nrow = model.row_loop.shape[0] + nt
     mk = nq
-    state = np.zeros(1 + nq + nt + nq * nt)
+    state = np.zeros(1 + nq + nt + nq * nt + nq + nt)
     nwork = (nb * 9 + nb * 3 + nq * 6 + nrow + nrow * nq + nrow + mk * mk + mk + mk + mk + 2 * nq + nb * 6
              + nq * 6 + nb * 6 + nrow + 45 + 60 + nb * 6 + nq + 6 * nt + 9 + 9 + 3 * nt + 3 * nt + nt * nt + nt * nt
              + 2 * nt + 12 + 2 + 2 * mk * nt + nq + nb * 3)
@@ -111,10 +121,15 @@ def new_state(model: MechanismModel) -> tuple[Array, Array, NDArray[np.int64]]:
 def prime(state: Array, q: Array, x: Array, G: Array) -> None:
     """Set the kernel's previous solution (after the checked route solved a sample)."""
     nq, nt = q.shape[0], x.shape[0]
-    state[0] = 1.0
+    state[0] = PRIMED
     state[1:1 + nq] = q
     state[1 + nq:1 + nq + nt] = x
-    state[1 + nq + nt:] = G.ravel()
+    state[1 + nq + nt:1 + nq + nt + nq * nt] = G.ravel()
+
+
+def has_solution(state: Array) -> bool:
+    """Whether the kernel holds a solved sample (its ``q`` is ``state[1:1 + nq]``)."""
+    return bool(state[0] != COLD_STATE)
 
 
 @njit(cache=True, inline="always")
@@ -162,7 +177,7 @@ def _take3(wf, o, a, b, c):  # pragma: no cover - compiled
 def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     """The kernel (module docstring): ``v`` is ``u`` (forward) or ``xdd`` (inverse); writes the
     other into ``out``; returns the status (0 OK)."""
-    if st[0] == 0.0:
+    if st[0] == COLD_STATE:
         return COLD
     for t in range(x.shape[0]):
         if not (np.isfinite(x[t]) and np.isfinite(xd[t]) and np.isfinite(v[t])):
@@ -241,38 +256,46 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no c
     Gw2, o = _take2(wf, o, mk, nt)
     Qf, o = _take1(wf, o, nq)
     # ---- 1. tree coordinates from the previous solution
+    o2 = 1 + nq + nt + nq * nt
     q = st[1:1 + nq]
     xp = st[1 + nq:1 + nq + nt]
-    Gp = st[1 + nq + nt:1 + nq + nt + nq * nt].reshape((nq, nt))
-    for c in range(nq):
-        acc = 0.0
-        for t in range(nt):
-            dx = x[t] - xp[t]
-            if task_kind[t] == 1:
-                dx = _wrap(dx)
-            acc += Gp[c, t] * dx
-        q[c] += acc
-    status = newton_sample(x, q, coord_offset, body_parent, body_joint, joint_q0, joint_nq, coord_motion,
-                           coord_offset, coord_sign, tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
-                           row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-                           task_body, task_point, task_kind, task_index, euler_axes,
-                           sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter,
-                           R, p, S, val, J, res, K, wi, rhs, ires, bwork, V, A, gamma, w33, w3, info)
-    if status != OK:
-        st[0] = 0.0
-        return status
-    # ---- 2. rates at xdd = 0 (G written into the state: the next call's predictor)
+    Gp = st[1 + nq + nt:o2].reshape((nq, nt))
+    qddp = st[o2:o2 + nq]
+    xdp = st[o2 + nq:o2 + nq + nt]
+    factored = st[0] == FACTORED
+    ss = 0.0
+    vv = 0.0
     for t in range(nt):
-        r[t] = 0.0
-    if not rates_sample(xd, r, q, body_parent, body_joint, joint_q0, joint_nq, anc,
-                        row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-                        RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-                        sel_rows, idle, prow, pcol, blocks, R, p, S, val, J, K, wi, rhs, bwork,
-                        qd, qdd, V, Vpre, A, gamma, Gp, w33, w3, Gw, Gw2):
-        st[0] = 0.0
-        return SINGULAR_DYNAMICS
+        dx = x[t] - xp[t]
+        if task_kind[t] == 1:
+            dx = _wrap(dx)
+        r[t] = dx
+        ss += dx * xdp[t]
+        vv += xdp[t] * xdp[t]
+    ss = ss / vv if factored and vv > 0.0 else 0.0
+    for c in range(nq):
+        acc = 0.5 * ss * ss * qddp[c]
+        for t in range(nt):
+            acc += Gp[c, t] * r[t]
+        q[c] += acc
+    for t in range(nt):
+        r[t] = 0.0  # the rates at xdd = 0
+    status = solve_sample(x, xd, r, q, coord_offset, factored, body_parent, body_joint, joint_q0, joint_nq,
+                          coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
+                          row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                          task_body, task_point, task_kind, task_index, euler_axes,
+                          sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter,
+                          R, p, S, val, J, res, K, wi, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, Gp, w33, w3,
+                          Gw, Gw2, info)
+    if status != OK:
+        st[0] = COLD_STATE
+        return status
     for t in range(nt):
         xp[t] = x[t]
+        xdp[t] = xd[t]
+    for c in range(nq):
+        qddp[c] = qdd[c]
+    st[0] = FACTORED  # solve_sample left the factors of K at q in K, wi
     # ---- 2b. friction that does not depend on the reactions, from the rates (V = [w; v_O])
     for c in range(nq):
         Qf[c] = 0.0

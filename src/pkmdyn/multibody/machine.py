@@ -73,7 +73,9 @@ class MechanismVerbs:
     def _last_q(self) -> Array | None:
         """The last solved tree coordinates: the compiled path's when it holds a solution (it
         advances without this object), else the general route's."""
-        if self._pk is not None and self._pk[2][0] == 1.0:
+        from . import _one
+
+        if self._pk is not None and _one.has_solution(self._pk[2]):
             return self._pk[2][1:1 + self.model.nq].copy()
         return self._q_last
 
