@@ -588,6 +588,18 @@ def _idle_residuals(q, q_ref, idle, ires):
 
 #: the phases of :func:`solve_sample`
 _CHORD, _NEWTON, _RATES = 0, 1, 2
+#: samples without the simplified step after one that still needed a Newton step (the
+#: predictor is then too far for it to pay: larger time steps, faster motion)
+CHORD_PAUSE = 8
+
+
+@njit(cache=True, inline="always")
+def chord_pause(chord, info, pause):
+    """The next sample's count of samples left without the simplified step of
+    :func:`solve_sample` (0: take it), from this sample's (``info[2]``: Newton evaluations)."""
+    if chord and info[2] > 1.0:
+        return CHORD_PAUSE
+    return pause - 1 if pause > 0 else 0
 
 
 @njit(cache=True, _nrt=False)
@@ -613,7 +625,8 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, body_parent, body_joint, joint_
        ``A`` (``K, piv`` are left holding the factors at the solution).
 
     Returns the status (OK, NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN); ``info[0]``
-    the worst row, ``info[1]`` the scaled residual. On OK the poses ``R, p``, twists ``S`` and
+    the worst row, ``info[1]`` the scaled residual, ``info[2]`` the Newton evaluations (1:
+    the first closed the loops). On OK the poses ``R, p``, twists ``S`` and
     Jacobian ``J`` are those of the converged ``q``. Each kernel it calls is called from one
     place, so that the compiled sample stays small."""
     nq = q.shape[0]
@@ -698,6 +711,7 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, body_parent, body_joint, joint_
                 if not done and it == max_iter:
                     return NOT_CONVERGED
                 it += 1
+                info[2] = it
                 _fill(K, J, sel_rows, idle, prow, pcol)
                 if not block_lu_factor(K, piv, blocks):
                     return SINGULAR
@@ -777,7 +791,8 @@ def solve_batch(tm, x, xd, xdd, q_start,
     G = np.zeros((nq, nt))
     w33 = np.empty((5, 3, 3))
     w3 = np.empty((20, 3))
-    info = np.zeros(2)
+    info = np.zeros(3)
+    pause = 0
     Gw = np.empty((mk, nt))
     Gw2 = np.empty((mk, nt))
     for s in range(n):
@@ -796,7 +811,7 @@ def solve_batch(tm, x, xd, xdd, q_start,
                 q[c] += acc
         info[1] = 0.0
         # the second-order predictor is close enough for a first step with the previous factors
-        chord = s > 0 and tm.shape[0] == n
+        chord = s > 0 and tm.shape[0] == n and pause == 0
         st = solve_sample(x[s], xd[s], xdd[s], q, q_ref, chord, body_parent, body_joint,
                           joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC, RP, pP,
                           RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
@@ -804,6 +819,7 @@ def solve_batch(tm, x, xd, xdd, q_start,
                           sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter,
                           R, p, S, val, J, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3,
                           Gw, Gw2, info)
+        pause = chord_pause(chord, info, pause)
         worst[s] = int(info[0])
         res_out[s] = info[1]
         if st != OK:

@@ -10,7 +10,8 @@ views and runs, for task pose ``x`` and rate ``xd``:
    ``q_prev + G_prev dx + s^2 qdd_prev / 2`` (``dx = x - x_prev``; ``qdd_prev`` the previous
    call's bias accelerations at ``xd_prev``, ``s = dx . xd_prev / |xd_prev|^2``: the second
    order along the previous motion), one simplified Newton step with the previous call's
-   factors, Newton, which checks the solution with one evaluation, then ``G = dq/dx``,
+   factors (left out for a few calls after one where it fell short), Newton, which checks
+   the solution with one evaluation, then ``G = dq/dx``,
    ``qd = G xd`` and the bias accelerations;
 2. the joints' friction of known magnitude from the relative twists;
 3. the bodies' required wrenches at the bias motion with gravity and loads (Eq. 1 of
@@ -38,7 +39,7 @@ from numpy.typing import NDArray
 
 from .._dense import solve_in_place
 from ._dyn_kernels import body_wrench, generalised, joint_friction, load_wrench, task_mass
-from ._kernels import OK, _point_motion, _wrap, solve_sample
+from ._kernels import OK, _point_motion, _wrap, chord_pause, solve_sample
 from .dynamics import SINGULAR_ACTUATION
 from .friction import EPS_ROTATION as EPS_R
 from .friction import EPS_TRANSLATION as EPS_T
@@ -106,15 +107,17 @@ COLD_STATE, PRIMED, FACTORED = 0.0, 1.0, 2.0
 
 def new_state(model: MechanismModel) -> tuple[Array, Array, NDArray[np.int64]]:
     """``(state, work, int work)``: ``state = [flag, q (nq), x (nt), G (nq nt), qdd (nq),
-    xd (nt)]`` of the last solved sample (``flag`` :data:`COLD_STATE`, :data:`PRIMED` or
-    :data:`FACTORED`; ``qdd`` its bias accelerations at ``xd``), and the kernel's work space."""
+    xd (nt), pause]`` of the last solved sample (``flag`` :data:`COLD_STATE`, :data:`PRIMED` or
+    :data:`FACTORED`; ``qdd`` its bias accelerations at ``xd``; ``pause`` the calls left
+    without the simplified Newton step, :func:`._kernels.chord_pause`), and the kernel's work
+    space."""
     nq, nt, nb = model.nq, model.nt, model.nb
     nrow = model.row_loop.shape[0] + nt
     mk = nq
-    state = np.zeros(1 + nq + nt + nq * nt + nq + nt)
+    state = np.zeros(1 + nq + nt + nq * nt + nq + nt + 1)
     nwork = (nb * 9 + nb * 3 + nq * 6 + nrow + nrow * nq + nrow + mk * mk + mk + mk + mk + 2 * nq + nb * 6
              + nq * 6 + nb * 6 + nrow + 45 + 60 + nb * 6 + nq + 6 * nt + 9 + 9 + 3 * nt + 3 * nt + nt * nt + nt * nt
-             + 2 * nt + 12 + 2 + 2 * mk * nt + nq + nb * 3)
+             + 2 * nt + 12 + 3 + 2 * mk * nt + nq + nb * 3)
     return state, np.zeros(nwork), np.zeros(mk, dtype=np.int64)
 
 
@@ -251,7 +254,7 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no c
     v3, o = _take1(wf, o, 3)
     a3, o = _take1(wf, o, 3)
     f3, o = _take1(wf, o, 3)
-    info, o = _take1(wf, o, 2)
+    info, o = _take1(wf, o, 3)
     Gw, o = _take2(wf, o, mk, nt)
     Gw2, o = _take2(wf, o, mk, nt)
     Qf, o = _take1(wf, o, nq)
@@ -262,7 +265,9 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no c
     Gp = st[1 + nq + nt:o2].reshape((nq, nt))
     qddp = st[o2:o2 + nq]
     xdp = st[o2 + nq:o2 + nq + nt]
+    pause = int(st[o2 + nq + nt])
     factored = st[0] == FACTORED
+    chord = factored and pause == 0
     ss = 0.0
     vv = 0.0
     for t in range(nt):
@@ -280,7 +285,7 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no c
         q[c] += acc
     for t in range(nt):
         r[t] = 0.0  # the rates at xdd = 0
-    status = solve_sample(x, xd, r, q, coord_offset, factored, body_parent, body_joint, joint_q0, joint_nq,
+    status = solve_sample(x, xd, r, q, coord_offset, chord, body_parent, body_joint, joint_q0, joint_nq,
                           coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
                           row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                           task_body, task_point, task_kind, task_index, euler_axes,
@@ -290,6 +295,7 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no c
     if status != OK:
         st[0] = COLD_STATE
         return status
+    st[o2 + nq + nt] = chord_pause(chord, info, pause)
     for t in range(nt):
         xp[t] = x[t]
         xdp[t] = xd[t]
