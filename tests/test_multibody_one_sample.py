@@ -243,7 +243,7 @@ def test_no_kernels_for_a_plant_that_would_pass_a_wrong_load():
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
-def test_consecutive_samples_need_no_newton_step_after_the_chord_step(name):
+def test_consecutive_samples_need_no_newton_step_after_the_simplified_step(name):
     """On the consecutive samples of a 1 kHz loop, the second-order predictor and one
     simplified Newton step with the previous sample's factors close the loops to the solver's
     tolerance: with the Newton steps limited to none (header entry 3 of the packed integers),

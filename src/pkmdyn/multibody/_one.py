@@ -302,7 +302,7 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no c
     for c in range(nq):
         qddp[c] = qdd[c]
     st[0] = FACTORED  # solve_sample left the factors of K at q in K, wi
-    # ---- 2b. friction that does not depend on the reactions, from the rates (V = [w; v_O])
+    # ---- 2. friction that does not depend on the reactions, from the rates (V = [w; v_O])
     for c in range(nq):
         Qf[c] = 0.0
     for k in range(fj.shape[0]):
