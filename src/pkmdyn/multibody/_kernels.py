@@ -627,8 +627,9 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, body_parent, body_joint, joint_
     Returns the status (OK, NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN); ``info[0]``
     the worst row, ``info[1]`` the scaled residual, ``info[2]`` the Newton evaluations (1:
     the first closed the loops). On OK the poses ``R, p``, twists ``S`` and
-    Jacobian ``J`` are those of the converged ``q``. Each kernel it calls is called from one
-    place, so that the compiled sample stays small."""
+    Jacobian ``J`` are those of the converged ``q``. The poses, the rows, the factorisation
+    and the solve are each called from one place, so that the compiled sample carries one
+    copy of each."""
     nq = q.shape[0]
     nr = row_loop.shape[0]
     nt = task_kind.shape[0]
