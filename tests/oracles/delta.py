@@ -38,16 +38,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._batch import as_batch as _as_batch
+
 Z_UP = np.array([0.0, 0.0, 1.0])
-
-
-def _as_batch(x, width):
-    x = np.asarray(x, dtype=float)
-    if x.ndim == 1:
-        x = x[None, :]
-    if x.shape[-1] != width:
-        raise ValueError(f"expected trailing dimension {width}, got {x.shape}")
-    return x
 
 
 def leg_directions(offset=0.0):
@@ -63,6 +56,19 @@ def elbow_points(theta, R_b, L_A, offset=0.0):
     return (R_b + L_A * np.cos(theta))[..., None] * e - (L_A * np.sin(theta))[..., None] * Z_UP
 
 
+def _coefficients(p, R_b, R_p, L_A, L_B, offset):
+    """``E, F, G (n, 3)`` of each leg's equation ``E cos theta + F sin theta + G = 0``
+    (:func:`inverse_kinematics`), from the platform centre ``p`` in each leg's plane."""
+    p = _as_batch(p, 3)
+    e = leg_directions(offset)
+    t_dir = np.cross(Z_UP, e)
+    q = p[:, None, :] + (R_p - R_b) * e[None]
+    x = np.einsum("nki,ki->nk", q, e)
+    y = np.einsum("nki,ki->nk", q, t_dir)
+    z = q[..., 2]
+    return -2.0 * L_A * x, 2.0 * L_A * z, x**2 + y**2 + z**2 + L_A**2 - L_B**2
+
+
 def inverse_kinematics(p, R_b, R_p, L_A, L_B, offset=0.0):
     """Closed-form IK, elbow-out branch.  p (n,3) [m] -> theta (n,3) [rad].
 
@@ -75,16 +81,7 @@ def inverse_kinematics(p, R_b, R_p, L_A, L_B, offset=0.0):
     theta = 2 atan(t) in (-pi, pi).  Points out of reach (negative
     discriminant) give NaN.
     """
-    p = _as_batch(p, 3)
-    e = leg_directions(offset)
-    t_dir = np.cross(Z_UP, e)
-    q = p[:, None, :] + (R_p - R_b) * e[None]
-    x = np.einsum("nki,ki->nk", q, e)
-    y = np.einsum("nki,ki->nk", q, t_dir)
-    z = q[..., 2]
-    E = -2.0 * L_A * x
-    F = 2.0 * L_A * z
-    G = x**2 + y**2 + z**2 + L_A**2 - L_B**2
+    E, F, G = _coefficients(p, R_b, R_p, L_A, L_B, offset)
     disc = E**2 + F**2 - G**2
     with np.errstate(invalid="ignore", divide="ignore"):
         sq = np.sqrt(disc)
@@ -100,16 +97,7 @@ def inverse_kinematics_atan2(p, R_b, R_p, L_A, L_B, offset=0.0):
 
     theta = atan2(F, E) + acos(-G / sqrt(E^2 + F^2)), wrapped to (-pi, pi].
     """
-    p = _as_batch(p, 3)
-    e = leg_directions(offset)
-    t_dir = np.cross(Z_UP, e)
-    q = p[:, None, :] + (R_p - R_b) * e[None]
-    x = np.einsum("nki,ki->nk", q, e)
-    y = np.einsum("nki,ki->nk", q, t_dir)
-    z = q[..., 2]
-    E = -2.0 * L_A * x
-    F = 2.0 * L_A * z
-    G = x**2 + y**2 + z**2 + L_A**2 - L_B**2
+    E, F, G = _coefficients(p, R_b, R_p, L_A, L_B, offset)
     with np.errstate(invalid="ignore"):
         th = np.arctan2(F, E) + np.arccos(-G / np.hypot(E, F))
     return np.angle(np.exp(1j * th))

@@ -32,14 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-
-def _as_batch(x, width):
-    x = np.asarray(x, dtype=float)
-    if x.ndim == 1:
-        x = x[None, :]
-    if x.shape[-1] != width:
-        raise ValueError(f"expected trailing dimension {width}, got {x.shape}")
-    return x
+from ._batch import as_batch as _as_batch
 
 
 def _wrap(a):

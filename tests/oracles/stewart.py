@@ -21,16 +21,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._batch import as_batch as _as_batch
+
 _AXES = {"X": 0, "Y": 1, "Z": 2}
-
-
-def _as_batch(x, width):
-    x = np.asarray(x, dtype=float)
-    if x.ndim == 1:
-        x = x[None, :]
-    if x.shape[-1] != width:
-        raise ValueError(f"expected trailing dimension {width}, got {x.shape}")
-    return x
 
 
 def axis_rotation(axis, angle):
