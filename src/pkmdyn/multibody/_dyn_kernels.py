@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._kernels import _frame, forward_positions
+from ._kernels import _advance, _frame, _unit_twist, forward_positions
 
 
 @njit(cache=True)
@@ -191,42 +191,16 @@ def _twists_from_poses_loop(q, Rb, ob, body_parent, body_joint, joint_q0, joint_
                     a0 = Rb[s, b, 0, 0] * RC[k, 0, mm] + Rb[s, b, 0, 1] * RC[k, 1, mm] + Rb[s, b, 0, 2] * RC[k, 2, mm]
                     a1 = Rb[s, b, 1, 0] * RC[k, 0, mm] + Rb[s, b, 1, 1] * RC[k, 1, mm] + Rb[s, b, 1, 2] * RC[k, 2, mm]
                     a2 = Rb[s, b, 2, 0] * RC[k, 0, mm] + Rb[s, b, 2, 1] * RC[k, 1, mm] + Rb[s, b, 2, 2] * RC[k, 2, mm]
+                    c0 = c1 = c2 = 0.0
                     if m < 3:
                         c0 = ob[s, b, 0] + Rb[s, b, 0, 0] * pC[k, 0] + Rb[s, b, 0, 1] * pC[k, 1] + Rb[s, b, 0, 2] * pC[k, 2]
                         c1 = ob[s, b, 1] + Rb[s, b, 1, 0] * pC[k, 0] + Rb[s, b, 1, 1] * pC[k, 1] + Rb[s, b, 1, 2] * pC[k, 2]
                         c2 = ob[s, b, 2] + Rb[s, b, 2, 0] * pC[k, 0] + Rb[s, b, 2, 1] * pC[k, 1] + Rb[s, b, 2, 2] * pC[k, 2]
-                        S_out[s, c, 0], S_out[s, c, 1], S_out[s, c, 2] = sg * a0, sg * a1, sg * a2
-                        S_out[s, c, 3] = sg * (c1 * a2 - c2 * a1)
-                        S_out[s, c, 4] = sg * (c2 * a0 - c0 * a2)
-                        S_out[s, c, 5] = sg * (c0 * a1 - c1 * a0)
-                    else:
-                        S_out[s, c, 0] = 0.0
-                        S_out[s, c, 1] = 0.0
-                        S_out[s, c, 2] = 0.0
-                        S_out[s, c, 3], S_out[s, c, 4], S_out[s, c, 5] = sg * a0, sg * a1, sg * a2
+                    _unit_twist(S_out[s], c, sg, m < 3, a0, a1, a2, c0, c1, c2)
                     continue
-                qc = sg * (q[s, c] - coord_offset[c])
-                if m < 3:
-                    a0, a1, a2 = Rf[0, m], Rf[1, m], Rf[2, m]
-                    S_out[s, c, 0], S_out[s, c, 1], S_out[s, c, 2] = sg * a0, sg * a1, sg * a2
-                    S_out[s, c, 3] = sg * (o[1] * a2 - o[2] * a1)
-                    S_out[s, c, 4] = sg * (o[2] * a0 - o[0] * a2)
-                    S_out[s, c, 5] = sg * (o[0] * a1 - o[1] * a0)
-                    cq, sq = math.cos(qc), math.sin(qc)
-                    i1, j1 = (m + 1) % 3, (m + 2) % 3
-                    for r in range(3):
-                        ci, cj = Rf[r, i1], Rf[r, j1]
-                        Rf[r, i1] = cq * ci + sq * cj
-                        Rf[r, j1] = -sq * ci + cq * cj
-                else:
-                    a0, a1, a2 = Rf[0, m - 3], Rf[1, m - 3], Rf[2, m - 3]
-                    S_out[s, c, 0] = 0.0
-                    S_out[s, c, 1] = 0.0
-                    S_out[s, c, 2] = 0.0
-                    S_out[s, c, 3], S_out[s, c, 4], S_out[s, c, 5] = sg * a0, sg * a1, sg * a2
-                    o[0] += a0 * qc
-                    o[1] += a1 * qc
-                    o[2] += a2 * qc
+                mm = m % 3
+                _unit_twist(S_out[s], c, sg, m < 3, Rf[0, mm], Rf[1, mm], Rf[2, mm], o[0], o[1], o[2])
+                _advance(Rf, o, m, sg * (q[s, c] - coord_offset[c]))
 
 
 @njit(cache=True, _nrt=False)
@@ -378,8 +352,8 @@ def apply_loads(R, origin, load_body, load_point, LF, LM, W):  # pragma: no cove
 
 
 def _refresh_cache() -> None:
-    """The twist kernels link or inline the kinematics kernels' ``forward_positions`` and
-    ``_frame`` (:mod:`._cache`)."""
+    """The twist kernels link or inline the kinematics kernels' ``forward_positions``,
+    ``_frame``, ``_unit_twist`` and ``_advance`` (:mod:`._cache`)."""
     from . import _cache, _kernels
 
     _cache.refresh((twists_batch, twists_from_poses, _twists_from_poses_loop), (_kernels,))

@@ -70,44 +70,55 @@ def _dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
+@njit(cache=True, inline="always")
+def _unit_twist(S, c, sg, turns, a0, a1, a2, o0, o1, o2):
+    """``S[c] (6,)``: the world unit twist of coordinate c, which turns about (``turns``) or
+    slides along the unit axis ``a`` through the point ``o``, with the sign ``sg``."""
+    if turns:
+        S[c, 0], S[c, 1], S[c, 2] = sg * a0, sg * a1, sg * a2
+        S[c, 3] = sg * (o1 * a2 - o2 * a1)
+        S[c, 4] = sg * (o2 * a0 - o0 * a2)
+        S[c, 5] = sg * (o0 * a1 - o1 * a0)
+    else:
+        S[c, 0] = 0.0
+        S[c, 1] = 0.0
+        S[c, 2] = 0.0
+        S[c, 3], S[c, 4], S[c, 5] = sg * a0, sg * a1, sg * a2
+
+
+@njit(cache=True, inline="always")
+def _advance(Rf, o, m, qc):
+    """Move a joint's frame (axes ``Rf (3, 3)``, origin ``o (3,)``) by one coordinate of motion
+    ``m`` through ``qc``: ``Rf <- Rf Rot_m(qc)`` (m < 3; only the two columns normal to axis m
+    turn), or ``o += qc Rf[:, m - 3]`` (a slide)."""
+    if m < 3:
+        cq, sq = math.cos(qc), math.sin(qc)
+        i1, j1 = (m + 1) % 3, (m + 2) % 3
+        for r in range(3):
+            ci, cj = Rf[r, i1], Rf[r, j1]
+            Rf[r, i1] = cq * ci + sq * cj
+            Rf[r, j1] = -sq * ci + cq * cj
+    else:
+        for i in range(3):
+            o[i] += Rf[i, m - 3] * qc
+
+
 @njit(cache=True, _nrt=False)
 def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
                       RP, pP, RC, pC, R, p, S, w33, w3):
     """Body poses ``R (nb, 3, 3)``, ``p (nb, 3)`` and coordinate twists ``S (nq, 6)`` at ``q``
     (frames ``RP, pP, RC, pC`` in tree order; coordinate c moves by ``coord_sign[c] (q - offset)``;
     ``w33 (5, 3, 3)``, ``w3 (20, 3)``: work space)."""
-    Rf, tmp, E = w33[0], w33[1], w33[2]
-    o, ax = w3[18], w3[19]
+    Rf = w33[0]
+    o = w3[18]
     for b in range(body_parent.shape[0]):
         k = body_joint[b]
         _frame(body_parent[b], R, p, RP[k], pP[k], Rf, o)  # the joint frame on the parent, world
         for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
             m = coord_motion[c]
-            sg = coord_sign[c]
-            qc = sg * (q[c] - coord_offset[c])
-            if m < 3:
-                for i in range(3):
-                    ax[i] = Rf[i, m]
-                S[c, 0], S[c, 1], S[c, 2] = sg * ax[0], sg * ax[1], sg * ax[2]
-                S[c, 3] = sg * (o[1] * ax[2] - o[2] * ax[1])
-                S[c, 4] = sg * (o[2] * ax[0] - o[0] * ax[2])
-                S[c, 5] = sg * (o[0] * ax[1] - o[1] * ax[0])
-                # Rf <- Rf Rot_m(qc): only the two columns normal to axis m turn
-                cq, sq = math.cos(qc), math.sin(qc)
-                i1, j1 = (m + 1) % 3, (m + 2) % 3
-                for r in range(3):
-                    ci, cjv = Rf[r, i1], Rf[r, j1]
-                    Rf[r, i1] = cq * ci + sq * cjv
-                    Rf[r, j1] = -sq * ci + cq * cjv
-            else:
-                for i in range(3):
-                    ax[i] = Rf[i, m - 3]
-                S[c, 0] = 0.0
-                S[c, 1] = 0.0
-                S[c, 2] = 0.0
-                S[c, 3], S[c, 4], S[c, 5] = sg * ax[0], sg * ax[1], sg * ax[2]
-                for i in range(3):
-                    o[i] += ax[i] * qc
+            mm = m % 3
+            _unit_twist(S, c, coord_sign[c], m < 3, Rf[0, mm], Rf[1, mm], Rf[2, mm], o[0], o[1], o[2])
+            _advance(Rf, o, m, coord_sign[c] * (q[c] - coord_offset[c]))
         for i in range(3):
             for j in range(3):
                 R[b, i, j] = Rf[i, 0] * RC[k, j, 0] + Rf[i, 1] * RC[k, j, 1] + Rf[i, 2] * RC[k, j, 2]
