@@ -38,6 +38,14 @@ def _smooth(rng, x0, amp, n=300, period=1.5):
     return t, x, xd, xdd
 
 
+def _motion(m, seed, x0, amp):
+    """The mechanism's default motion (``seed`` None), or :func:`_smooth` about ``x0``."""
+    if seed is None:
+        mo = default_motion(m)
+        return mo.t, mo.x, mo.xd, mo.xdd
+    return _smooth(np.random.default_rng(seed), x0, amp)
+
+
 def _close(a, b, rel=1e-9):
     scale = max(float(np.abs(b).max()), 1e-12)
     assert float(np.abs(np.asarray(a) - np.asarray(b)).max()) <= rel * scale
@@ -51,12 +59,8 @@ def stewart_model():
 @pytest.mark.parametrize("seed", [None, 1, 2])
 def test_stewart_against_oracle(stewart_model, seed):
     m = stewart_model
-    if seed is None:
-        mo = default_motion(m)
-        t, x, xd, xdd = mo.t, mo.x, mo.xd, mo.xdd
-    else:
-        x0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
-        t, x, xd, xdd = _smooth(np.random.default_rng(seed), x0, np.array([0.06, 0.06, 0.06, 0.08, 0.08, 0.1]))
+    t, x, xd, xdd = _motion(m, seed, np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0]),
+                            np.array([0.06, 0.06, 0.06, 0.08, 0.08, 0.1]))
     kin = solve_kinematics(m, x, xd, xdd, t)
     a, b, _ = stewart.default_geometry()
     ref = stewart.inverse_kinematics(a, b, x[:, :3], x[:, 3:], "XYZ", xd[:, :3], xd[:, 3:], xdd[:, :3], xdd[:, 3:])
@@ -88,11 +92,7 @@ def test_stewart_against_oracle(stewart_model, seed):
 @pytest.mark.parametrize("seed", [None, 3, 4])
 def test_delta_against_oracle(seed):
     m = _model("delta")
-    if seed is None:
-        mo = default_motion(m)
-        t, x, xd, xdd = mo.t, mo.x, mo.xd, mo.xdd
-    else:
-        t, x, xd, xdd = _smooth(np.random.default_rng(seed), np.array([0.0, 0.0, -1.0]), np.array([0.2, 0.2, 0.15]))
+    t, x, xd, xdd = _motion(m, seed, np.array([0.0, 0.0, -1.0]), np.array([0.2, 0.2, 0.15]))
     kin = solve_kinematics(m, x, xd, xdd, t)
     g = delta.williams_irb360_geometry()
     ref = delta.kinematics(x, g["R_b"], g["R_p"], g["L_A"], g["L_B"], xd, xdd)
@@ -113,11 +113,7 @@ def test_delta_against_oracle(seed):
 @pytest.mark.parametrize("seed", [None, 5, 6])
 def test_rrr3_against_oracle(seed):
     m = _model("rrr3")
-    if seed is None:
-        mo = default_motion(m)
-        t, x, xd, xdd = mo.t, mo.x, mo.xd, mo.xdd
-    else:
-        t, x, xd, xdd = _smooth(np.random.default_rng(seed), np.zeros(3), np.array([0.05, 0.05, 0.25]))
+    t, x, xd, xdd = _motion(m, seed, np.zeros(3), np.array([0.05, 0.05, 0.25]))
     kin = solve_kinematics(m, x, xd, xdd, t)
     g = rrr3.symmetric_geometry()
     ref = rrr3.inverse_kinematics(x, g["A"], g["c"], g["l1"], g["l2"], (1, 1, 1), xd, xdd)
@@ -142,11 +138,7 @@ def test_rrr3_against_oracle(seed):
 @pytest.mark.parametrize("seed", [None, 7])
 def test_bennett_against_oracle(seed):
     m = _model("bennett")
-    if seed is None:
-        mo = default_motion(m)
-        t, x, xd, xdd = mo.t, mo.x, mo.xd, mo.xdd
-    else:
-        t, x, xd, xdd = _smooth(np.random.default_rng(seed), np.array([np.pi / 3]), np.array([0.5]))
+    t, x, xd, xdd = _motion(m, seed, np.array([np.pi / 3]), np.array([0.5]))
     kin = solve_kinematics(m, x, xd, xdd, t)
     a, alpha, beta = 0.2, np.radians(30.0), np.radians(60.0)
     b = bennett.bennett_b(a, alpha, beta)
