@@ -81,7 +81,7 @@ def body_wrench_batch(R, w, wd, p, a, mass, inertia, gravity, W_out):  # pragma:
     _body_wrench_loop(R, w, wd, p, a, mass, inertia, gravity, W_out, np.empty((3, 3)), np.empty((3, 3)))
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def generalised(S, W, anc_list, Q):  # pragma: no cover - compiled
     """One sample of Eq. (2): ``Q (nq,)``, ``Q_c = S_c . sum of W_b over the bodies c moves``
     (``S (nq, 6)``, ``W (nb, 6)``; ``anc_list`` the model's ``ancestor_list``: per body a count,
@@ -203,59 +203,76 @@ def _twists_from_poses_loop(q, Rb, ob, body_parent, body_joint, joint_q0, joint_
                 _advance(Rf, o, m, sg * (q[s, c] - coord_offset[c]))
 
 
-@njit(cache=True, _nrt=False)
-def task_mass(S, G, anc_list, R, p, mass, inertia, M, T, Iw, tmp, vc, Iwt):  # pragma: no cover - compiled
-    """One sample's ``M (nt, nt) = sum_b T_b^T I_b T_b`` with ``T_b = sum_{c in anc(b)} S_c G_c``:
-    the bodies' kinetic energy in the task rates (centre-of-mass velocity ``v_O + w x p``;
-    ``S (nq, 6)``, ``G (nq, nt)``, ``R (nb, 3, 3)``, ``p (nb, 3)`` the centres of mass; ``T (6,
-    nt)``, ``Iw, tmp (3, 3)``, ``vc, Iwt (3, nt)`` work space)."""
+@njit(cache=True, _nrt=False, inline="always")
+def task_mass(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, factor, M, T, Z):  # pragma: no cover
+    """One sample's ``M (nt, nt) = sum_b T_b^T I_b T_b``: the bodies' kinetic energy in the task
+    rates, with ``T_b (6, nt)`` the twist of body b per task rate, built down the tree as
+    ``T_b = T_parent + sum_{c of b's joint} S_c G_c`` (Eq. 3.40 of Featherstone 2008 per task
+    rate). Each body adds ``Z^T Z`` with ``Z = [sqrt(m) v_c; (R L)^T w]`` (``v_c = v_O + w x
+    p`` the centre-of-mass rows, ``I' = L L^T`` the body-frame inertia's constant factor):
+    ``m |v_c|^2 + w^T R I' R^T w = |Z xd|^2``. ``S (nq, 6)``, ``G (nq, nt)``, ``R (nb, 3, 3)``,
+    ``p (nb, 3)`` the centres of mass, ``factor (nb, 3, 3)`` (:func:`.dynamics.inertia_factors`);
+    ``T (nb, 6, nt)``, ``Z (6, nt)`` work space."""
     nt = G.shape[1]
     for i in range(nt):
         for j in range(nt):
             M[i, j] = 0.0
     for b in range(R.shape[0]):
+        a = body_parent[b]
         for r in range(6):
             for t in range(nt):
-                T[r, t] = 0.0
-        for kk in range(anc_list[b, 0]):
-            c = anc_list[b, 1 + kk]
+                T[b, r, t] = T[a, r, t] if a >= 0 else 0.0
+        k = body_joint[b]
+        for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
             for r in range(6):
                 sc = S[c, r]
                 if sc != 0.0:
                     for t in range(nt):
-                        T[r, t] += sc * G[c, t]
+                        T[b, r, t] += sc * G[c, t]
+        sm = math.sqrt(mass[b])
+        p0, p1, p2 = p[b, 0], p[b, 1], p[b, 2]
+        L = factor[b]
+        # (R L)^T: row i of Z[3 + i] = sum_m (R L)[m, i] w_m
+        l00 = R[b, 0, 0] * L[0, 0] + R[b, 0, 1] * L[1, 0] + R[b, 0, 2] * L[2, 0]
+        l10 = R[b, 1, 0] * L[0, 0] + R[b, 1, 1] * L[1, 0] + R[b, 1, 2] * L[2, 0]
+        l20 = R[b, 2, 0] * L[0, 0] + R[b, 2, 1] * L[1, 0] + R[b, 2, 2] * L[2, 0]
+        l01 = R[b, 0, 0] * L[0, 1] + R[b, 0, 1] * L[1, 1] + R[b, 0, 2] * L[2, 1]
+        l11 = R[b, 1, 0] * L[0, 1] + R[b, 1, 1] * L[1, 1] + R[b, 1, 2] * L[2, 1]
+        l21 = R[b, 2, 0] * L[0, 1] + R[b, 2, 1] * L[1, 1] + R[b, 2, 2] * L[2, 1]
+        l02 = R[b, 0, 0] * L[0, 2] + R[b, 0, 1] * L[1, 2] + R[b, 0, 2] * L[2, 2]
+        l12 = R[b, 1, 0] * L[0, 2] + R[b, 1, 1] * L[1, 2] + R[b, 1, 2] * L[2, 2]
+        l22 = R[b, 2, 0] * L[0, 2] + R[b, 2, 1] * L[1, 2] + R[b, 2, 2] * L[2, 2]
         for t in range(nt):
-            w0, w1, w2 = T[0, t], T[1, t], T[2, t]
-            vc[0, t] = T[3, t] + w1 * p[b, 2] - w2 * p[b, 1]
-            vc[1, t] = T[4, t] + w2 * p[b, 0] - w0 * p[b, 2]
-            vc[2, t] = T[5, t] + w0 * p[b, 1] - w1 * p[b, 0]
-        _inertia_in_base(R[b], inertia[b], tmp, Iw)
-        for i in range(3):
-            for t in range(nt):
-                Iwt[i, t] = Iw[i, 0] * T[0, t] + Iw[i, 1] * T[1, t] + Iw[i, 2] * T[2, t]
-        m = mass[b]
+            w0, w1, w2 = T[b, 0, t], T[b, 1, t], T[b, 2, t]
+            Z[0, t] = sm * (T[b, 3, t] + w1 * p2 - w2 * p1)
+            Z[1, t] = sm * (T[b, 4, t] + w2 * p0 - w0 * p2)
+            Z[2, t] = sm * (T[b, 5, t] + w0 * p1 - w1 * p0)
+            Z[3, t] = l00 * w0 + l10 * w1 + l20 * w2
+            Z[4, t] = l01 * w0 + l11 * w1 + l21 * w2
+            Z[5, t] = l02 * w0 + l12 * w1 + l22 * w2
         for i in range(nt):
             for j in range(i, nt):
-                M[i, j] += m * (vc[0, i] * vc[0, j] + vc[1, i] * vc[1, j] + vc[2, i] * vc[2, j]) + 0.5 * (
-                    T[0, i] * Iwt[0, j] + T[1, i] * Iwt[1, j] + T[2, i] * Iwt[2, j]
-                    + T[0, j] * Iwt[0, i] + T[1, j] * Iwt[1, i] + T[2, j] * Iwt[2, i])
+                M[i, j] += (Z[0, i] * Z[0, j] + Z[1, i] * Z[1, j] + Z[2, i] * Z[2, j]
+                            + Z[3, i] * Z[3, j] + Z[4, i] * Z[4, j] + Z[5, i] * Z[5, j])
     for i in range(nt):
         for j in range(i + 1, nt):
             M[j, i] = M[i, j]
 
 
 @njit(cache=True)
-def task_mass_batch(S, G, anc_list, R, p, mass, inertia, M_out):  # pragma: no cover - compiled
+def task_mass_batch(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, factor,
+                    M_out):  # pragma: no cover - compiled
     """``M_out (n, nt, nt)``, every sample (:func:`task_mass`)."""
     nt = G.shape[2]
-    _task_mass_loop(S, G, anc_list, R, p, mass, inertia, M_out, np.empty((6, nt)), np.empty((3, 3)),
-                    np.empty((3, 3)), np.empty((3, nt)), np.empty((3, nt)))
+    _task_mass_loop(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, factor, M_out,
+                    np.empty((R.shape[1], 6, nt)), np.empty((6, nt)))
 
 
 @njit(cache=True, _nrt=False)
-def _task_mass_loop(S, G, anc_list, R, p, mass, inertia, M_out, T, Iw, tmp, vc, Iwt):  # pragma: no cover - compiled
+def _task_mass_loop(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, factor, M_out, T,
+                    Z):  # pragma: no cover - compiled
     for s in range(G.shape[0]):
-        task_mass(S[s], G[s], anc_list, R[s], p[s], mass, inertia, M_out[s], T, Iw, tmp, vc, Iwt)
+        task_mass(S[s], G[s], body_parent, body_joint, joint_q0, joint_nq, R[s], p[s], mass, factor, M_out[s], T, Z)
 
 
 @njit(cache=True, _nrt=False, inline="always")

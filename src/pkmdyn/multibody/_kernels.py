@@ -103,7 +103,7 @@ def _advance(Rf, o, m, qc):
             o[i] += Rf[i, m - 3] * qc
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
                       RP, pP, RC, pC, R, p, S, w33, w3):
     """Body poses ``R (nb, 3, 3)``, ``p (nb, 3)`` and coordinate twists ``S (nq, 6)`` at ``q``
@@ -126,7 +126,7 @@ def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_moti
             p[b, i] = o[i] - (R[b, i, 0] * pC[k, 0] + R[b, i, 1] * pC[k, 1] + R[b, i, 2] * pC[k, 2])
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre):
     """Spatial velocities ``V (nb, 6)`` and the velocity ``Vpre (nq, 6)`` of the frame that
     carries each coordinate's twist."""
@@ -141,7 +141,7 @@ def forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vp
                 V[b, i] += S[c, i] * qd[c]
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A):
     """Spatial accelerations ``A (nb, 6)``; with ``qdd = 0`` the bias accelerations."""
     for b in range(body_parent.shape[0]):
@@ -306,7 +306,7 @@ def _jrow(J, rr, wa, wb, S, anc, a, b, coef_a, coef_b):
                                 + wb[0] * S[c, 3] + wb[1] * S[c, 4] + wb[2] * S[c, 5])
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
          RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
          val, J, mode, V, A, gamma, w33, w3):
@@ -436,7 +436,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
     return ok
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def _fill(K, J, sel_rows, idle, prow, pcol):
     """``K[i, j] = Kfull[prow[i], pcol[j]]`` with ``Kfull = [J[sel_rows]; idle]``."""
     m = sel_rows.shape[0]
@@ -456,7 +456,7 @@ def _wrap(a):
     return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def block_lu_factor(M, piv, blocks):
     """LU with partial pivoting inside each diagonal block of a block lower-triangular ``M``
     (``blocks``: block start rows, then ``n``); whole rows are swapped, the blocks left of the
@@ -495,7 +495,7 @@ def block_lu_factor(M, piv, blocks):
     return True
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def block_lu_solve(M, piv, blocks, prow, pcol, b, work):
     """Solve ``Kfull x = b`` in place (``b`` in the rows of ``Kfull``, ``x`` in coordinate
     order) with the factors of :func:`block_lu_factor` of the permuted ``K``: block by block,
@@ -530,7 +530,7 @@ def block_lu_solve(M, piv, blocks, prow, pcol, b, work):
         b[pcol[j]] = work[j]
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def block_lu_solve_columns(M, piv, blocks, prow, pcol, B, X, work):
     """:func:`block_lu_solve` for every column of ``B (n, k)`` at once into ``X (n, k)`` (rows of
     ``B`` in the rows of ``Kfull``, of ``X`` in coordinate order; ``work (n, k)``)."""

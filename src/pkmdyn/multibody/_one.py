@@ -1,9 +1,9 @@
 """One sample of a described mechanism's dynamics in one compiled call: the real-time path
 behind :meth:`.machine.MechanismVerbs.forward_dynamics_one` and ``inverse_dynamics_one``.
 
-The model's arrays are packed once into one integer and one float array (:func:`pack`), so
-that a call passes a handful of arguments whatever the mechanism; the kernel unpacks them as
-views and runs, for task pose ``x`` and rate ``xd``:
+The model's arrays, the kernel's state and its work space are packed once into one buffer
+(:func:`pack`), so that a call passes a handful of arguments whatever the mechanism; the
+kernel takes them as views and runs, for task pose ``x`` and rate ``xd``:
 
 1. the tree coordinates and rates at ``xdd = 0`` (:func:`._kernels.solve_sample`, the batched
    solver's own sample): from the previous call's solution, the predictor
@@ -34,18 +34,21 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.core import cgutils
+from numba.extending import intrinsic
+from numba.np.arrayobj import make_array, populate_array
 from numpy.typing import NDArray
 
 from .._dense import solve_in_place
 from ._dyn_kernels import body_wrench, generalised, joint_friction, load_wrench, task_mass
 from ._kernels import OK, _point_motion, _wrap, chord_pause, solve_sample
-from .dynamics import SINGULAR_ACTUATION
+from .dynamics import SINGULAR_ACTUATION, inertia_factors
 from .friction import EPS_ROTATION as EPS_R
 from .friction import EPS_TRANSLATION as EPS_T
 from .model import MechanismModel
 
-__all__ = ["pack", "supported", "new_state", "prime", "has_solution", "forward_one", "inverse_one", "COLD"]
+__all__ = ["pack", "supported", "state", "prime", "solution", "forward_one", "inverse_one", "COLD"]
 
 Array = NDArray[np.float64]
 
@@ -55,6 +58,8 @@ COLD = 10
 SINGULAR_DYNAMICS = 11
 #: status of a non-finite input
 BAD_INPUT = 12
+#: status of a work space shorter than the kernel's views (a defect of :func:`_sizes`)
+SHORT_WORK = 13
 
 _INT = ("body_parent", "body_joint", "joint_q0", "joint_nq", "coord_motion", "ancestor_list", "row_loop", "row_kind",
         "row_i", "row_j", "loop_joint", "joint_parent", "joint_child", "task_kind", "task_index", "euler_axes",
@@ -63,8 +68,10 @@ _INT = ("body_parent", "body_joint", "joint_q0", "joint_nq", "coord_motion", "an
 _FLOAT = ("coord_offset", "coord_sign", "tree_R_parent", "tree_p_parent", "tree_R_child", "tree_p_child",
           "joint_R_parent", "joint_p_parent", "joint_R_child", "joint_p_child", "task_point", "solver_idle",
           "row_scale", "mass", "inertia", "com", "gravity", "load_point", "load_force", "load_moment",
-          "coef", "fsc", "ecoef", "eoff", "load_direction")
-_HEAD = 6  # n_int, n_float, task_body, max_iter, nq, nt
+          "coef", "fsc", "ecoef", "eoff", "load_direction", "inertia_factor")
+#: header of the packed buffer: n_int, n_float, task_body, max_iter, nq, nt, and the offsets
+#: of the two tolerances, the state, the work space and the integer work space
+_HEAD = 10
 
 
 def supported(model: MechanismModel) -> bool:
@@ -73,31 +80,54 @@ def supported(model: MechanismModel) -> bool:
     return known and model.na == model.nt and len(model.named_loads) <= 1
 
 
-def pack(model: MechanismModel) -> tuple[NDArray[np.int64], Array]:
-    """The model's arrays as ``(ints, floats)`` with a header of offsets and shapes."""
+def _sizes(model: MechanismModel) -> tuple[int, int, int]:
+    """Lengths of the state, the work space and the integer work space (:func:`pack`)."""
+    nq, nt, nb = model.nq, model.nt, model.nb
+    nrow = model.row_loop.shape[0] + nt
+    mk = nq
+    nstate = 1 + nq + nt + nq * nt + nq + nt + 1
+    nwork = (nb * 9 + nb * 3 + nq * 6 + nrow + nrow * nq + nrow + mk * mk + mk + mk + mk + 2 * nq + nb * 6
+             + nq * 6 + nb * 6 + nrow + 45 + 60 + nb * 6 + nq + nb * 6 * nt + 9 + 9 + 6 * nt + nt * nt + nt * nt
+             + 2 * nt + 12 + 3 + 2 * mk * nt + nq + nb * 3)
+    return nstate, nwork, mk
+
+
+def pack(model: MechanismModel) -> NDArray[np.int64]:
+    """One buffer ``pk`` (int64) with everything a call reads and writes: a header of offsets
+    and shapes, the model's integer arrays, its float arrays (their bits), the kernel's state
+    (:func:`state`) and its work space. One buffer makes a call pass few arguments, and the
+    kernel takes its views by pointer arithmetic (:func:`_fview`), with no allocation."""
     from .kinematics import CHECK_TOLERANCE, MAX_ITER, TOLERANCE, row_scale
 
     from .friction import friction_arrays
 
     arrays = {k: getattr(model, k) for k in _INT + _FLOAT if hasattr(model, k)}
     arrays["row_scale"] = row_scale(model)
+    arrays["inertia_factor"] = inertia_factors(model)
     arrays.update(friction_arrays(model))
     arrays["load_named"] = np.array([nm is not None for nm in model.load_name], dtype=np.int64)
-    n_head = _HEAD + 4 * (len(_INT) + len(_FLOAT))
-    ints: list[int] = []
-    floats: list[float] = [TOLERANCE, CHECK_TOLERANCE]
-    head = [len(_INT), len(_FLOAT), int(model.task_body), int(MAX_ITER), int(model.nq), int(model.nt)]
+    nstate, nwork, nwi = _sizes(model)
+    head = [len(_INT), len(_FLOAT), int(model.task_body), int(MAX_ITER), int(model.nq), int(model.nt), 0, 0, 0, 0]
+    parts: list[NDArray[np.int64]] = []
+    at = _HEAD + 4 * (len(_INT) + len(_FLOAT))
+
+    def put(a: NDArray) -> int:
+        nonlocal at
+        parts.append(a.ravel().view(np.int64))
+        at += a.size
+        return at - a.size
+
     for k in _INT:
         a = np.ascontiguousarray(arrays[k], dtype=np.int64)
-        shape = list(a.shape) + [1] * (3 - a.ndim)
-        head += [n_head + len(ints), *shape]
-        ints += a.ravel().tolist()
+        head += [put(a), *(list(a.shape) + [1] * (3 - a.ndim))]
     for k in _FLOAT:
         a = np.ascontiguousarray(arrays[k], dtype=float)
-        shape = list(a.shape) + [1] * (3 - a.ndim)
-        head += [len(floats), *shape]
-        floats += a.ravel().tolist()
-    return np.array(head + ints, dtype=np.int64), np.array(floats, dtype=float)
+        head += [put(a), *(list(a.shape) + [1] * (3 - a.ndim))]
+    head[6] = put(np.array([TOLERANCE, CHECK_TOLERANCE]))
+    head[7] = put(np.zeros(nstate))
+    head[8] = put(np.zeros(nwork))
+    head[9] = put(np.zeros(nwi, dtype=np.int64))
+    return np.concatenate([np.array(head, dtype=np.int64), *parts])
 
 
 #: the state's first entry: nothing known, a solution (:func:`prime`), a solution with the
@@ -105,166 +135,207 @@ def pack(model: MechanismModel) -> tuple[NDArray[np.int64], Array]:
 COLD_STATE, PRIMED, FACTORED = 0.0, 1.0, 2.0
 
 
-def new_state(model: MechanismModel) -> tuple[Array, Array, NDArray[np.int64]]:
-    """``(state, work, int work)``: ``state = [flag, q (nq), x (nt), G (nq nt), qdd (nq),
+def state(pk: NDArray[np.int64]) -> Array:
+    """The kernel's state in ``pk`` (a view): ``[flag, q (nq), x (nt), G (nq nt), qdd (nq),
     xd (nt), pause]`` of the last solved sample (``flag`` :data:`COLD_STATE`, :data:`PRIMED` or
     :data:`FACTORED`; ``qdd`` its bias accelerations at ``xd``; ``pause`` the calls left
-    without the simplified Newton step, :func:`._kernels.chord_pause`), and the kernel's work
-    space."""
-    nq, nt, nb = model.nq, model.nt, model.nb
-    nrow = model.row_loop.shape[0] + nt
-    mk = nq
-    state = np.zeros(1 + nq + nt + nq * nt + nq + nt + 1)
-    nwork = (nb * 9 + nb * 3 + nq * 6 + nrow + nrow * nq + nrow + mk * mk + mk + mk + mk + 2 * nq + nb * 6
-             + nq * 6 + nb * 6 + nrow + 45 + 60 + nb * 6 + nq + 6 * nt + 9 + 9 + 3 * nt + 3 * nt + nt * nt + nt * nt
-             + 2 * nt + 12 + 3 + 2 * mk * nt + nq + nb * 3)
-    return state, np.zeros(nwork), np.zeros(mk, dtype=np.int64)
+    without the simplified Newton step, :func:`._kernels.chord_pause`)."""
+    nq, nt = int(pk[4]), int(pk[5])
+    o = int(pk[7])
+    return pk[o:o + 1 + nq + nt + nq * nt + nq + nt + 1].view(np.float64)
 
 
-def prime(state: Array, q: Array, x: Array, G: Array) -> None:
+def prime(pk: NDArray[np.int64], q: Array, x: Array, G: Array) -> None:
     """Set the kernel's previous solution (after the checked route solved a sample)."""
+    st = state(pk)
     nq, nt = q.shape[0], x.shape[0]
-    state[0] = PRIMED
-    state[1:1 + nq] = q
-    state[1 + nq:1 + nq + nt] = x
-    state[1 + nq + nt:1 + nq + nt + nq * nt] = G.ravel()
+    st[0] = PRIMED
+    st[1:1 + nq] = q
+    st[1 + nq:1 + nq + nt] = x
+    st[1 + nq + nt:1 + nq + nt + nq * nt] = G.ravel()
 
 
-def has_solution(state: Array) -> bool:
-    """Whether the kernel holds a solved sample (its ``q`` is ``state[1:1 + nq]``)."""
-    return bool(state[0] != COLD_STATE)
+def solution(pk: NDArray[np.int64]) -> Array | None:
+    """The tree coordinates of the solved sample the kernel holds (a copy), or None."""
+    st = state(pk)
+    return st[1:1 + int(pk[4])].copy() if st[0] != COLD_STATE else None
+
+
+def _view_codegen(nd: int, dtype: types.Type):  # pragma: no cover - compiled
+    """Code of a C-contiguous ``nd``-dimensional ``dtype`` view of a buffer from an element
+    offset and a shape (:func:`_fview`, :func:`_iview`)."""
+    ret = types.Array(dtype, nd, "C")
+
+    def codegen(context, builder, sig, args):
+        src = make_array(sig.args[0])(context, builder, value=args[0])
+        lty = context.get_data_type(dtype)
+        data = builder.bitcast(builder.gep(src.data, [args[1]]), lty.as_pointer())
+        shape = cgutils.unpack_tuple(builder, args[2], nd)
+        itemsize = context.get_constant(types.intp, context.get_abi_sizeof(lty))
+        strides = [itemsize]
+        for n in reversed(shape[1:]):
+            strides.insert(0, builder.mul(strides[0], n))
+        view = make_array(ret)(context, builder)
+        populate_array(view, data=data, shape=shape, strides=strides, itemsize=itemsize, meminfo=None)
+        return view._getvalue()
+
+    return ret, codegen
+
+
+@intrinsic
+def _fview(typingctx, buf, offset, shape):  # pragma: no cover - compiled
+    """A float64 view of the 8-byte buffer ``buf`` from element ``offset``, of ``shape`` (a
+    tuple): pointer arithmetic only, where a slice and ``reshape`` call numba's helpers (some
+    10 ns per view, and a call takes some 60 views). The caller keeps it within ``buf``."""
+    ret, codegen = _view_codegen(len(shape), types.float64)
+    return ret(buf, offset, shape), codegen
+
+
+@intrinsic
+def _iview(typingctx, buf, offset, shape):  # pragma: no cover - compiled
+    """:func:`_fview` as an int64 view."""
+    ret, codegen = _view_codegen(len(shape), types.int64)
+    return ret(buf, offset, shape), codegen
 
 
 @njit(cache=True, inline="always")
-def _i(ib, k):  # pragma: no cover - compiled
+def _i(pk, k):  # pragma: no cover - compiled
     h = _HEAD + 4 * k
-    o = ib[h]
-    return ib[o:o + ib[h + 1] * ib[h + 2] * ib[h + 3]]
+    return _iview(pk, pk[h], (pk[h + 1] * pk[h + 2] * pk[h + 3],))
 
 
 @njit(cache=True, inline="always")
-def _f(ib, fb, k):  # pragma: no cover - compiled
-    h = _HEAD + 4 * (ib[0] + k)
-    o = ib[h]
-    return fb[o:o + ib[h + 1] * ib[h + 2] * ib[h + 3]]
+def _i2(pk, k):  # pragma: no cover - compiled
+    h = _HEAD + 4 * k
+    return _iview(pk, pk[h], (pk[h + 1], pk[h + 2]))
 
 
 @njit(cache=True, inline="always")
-def _f2(ib, fb, k):  # pragma: no cover - compiled
-    h = _HEAD + 4 * (ib[0] + k)
-    return _f(ib, fb, k).reshape((ib[h + 1], ib[h + 2]))
+def _f(pk, k):  # pragma: no cover - compiled
+    h = _HEAD + 4 * (pk[0] + k)
+    return _fview(pk, pk[h], (pk[h + 1] * pk[h + 2] * pk[h + 3],))
 
 
 @njit(cache=True, inline="always")
-def _f3(ib, fb, k):  # pragma: no cover - compiled
-    h = _HEAD + 4 * (ib[0] + k)
-    return _f(ib, fb, k).reshape((ib[h + 1], ib[h + 2], ib[h + 3]))
+def _f2(pk, k):  # pragma: no cover - compiled
+    h = _HEAD + 4 * (pk[0] + k)
+    return _fview(pk, pk[h], (pk[h + 1], pk[h + 2]))
 
 
 @njit(cache=True, inline="always")
-def _take1(wf, o, n):  # pragma: no cover - compiled
-    return wf[o:o + n], o + n
+def _f3(pk, k):  # pragma: no cover - compiled
+    h = _HEAD + 4 * (pk[0] + k)
+    return _fview(pk, pk[h], (pk[h + 1], pk[h + 2], pk[h + 3]))
 
 
 @njit(cache=True, inline="always")
-def _take2(wf, o, a, b):  # pragma: no cover - compiled
-    return wf[o:o + a * b].reshape((a, b)), o + a * b
+def _take1(pk, o, n):  # pragma: no cover - compiled
+    return _fview(pk, o, (n,)), o + n
 
 
 @njit(cache=True, inline="always")
-def _take3(wf, o, a, b, c):  # pragma: no cover - compiled
-    return wf[o:o + a * b * c].reshape((a, b, c)), o + a * b * c
+def _take2(pk, o, a, b):  # pragma: no cover - compiled
+    return _fview(pk, o, (a, b)), o + a * b
+
+
+@njit(cache=True, inline="always")
+def _take3(pk, o, a, b, c):  # pragma: no cover - compiled
+    return _fview(pk, o, (a, b, c)), o + a * b * c
 
 
 @njit(cache=True, _nrt=False)
-def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no cover - compiled
+def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     """The kernel (module docstring): ``v`` is ``u`` (forward) or ``xdd`` (inverse); writes the
     other into ``out``; returns the status (0 OK)."""
+    nq, nt = pk[4], pk[5]
+    st = _fview(pk, pk[7], (1 + nq + nt + nq * nt + nq + nt + 1,))
     if st[0] == COLD_STATE:
         return COLD
     for t in range(x.shape[0]):
         if not (np.isfinite(x[t]) and np.isfinite(xd[t]) and np.isfinite(v[t])):
             return BAD_INPUT  # the checked verb names it
-    nI = ib[0]
-    nq, nt = ib[4], ib[5]
     # ---- the model's arrays (views of the packed buffers)
-    body_parent, body_joint, joint_q0, joint_nq, coord_motion = _i(ib, 0), _i(ib, 1), _i(ib, 2), _i(ib, 3), _i(ib, 4)
-    anc = _i(ib, 5).reshape((ib[_HEAD + 4 * 5 + 1], ib[_HEAD + 4 * 5 + 2]))
-    row_loop, row_kind, row_i, row_j = _i(ib, 6), _i(ib, 7), _i(ib, 8), _i(ib, 9)
-    loop_joint, joint_parent, joint_child = _i(ib, 10), _i(ib, 11), _i(ib, 12)
-    task_kind, task_index, euler_axes = _i(ib, 13), _i(ib, 14), _i(ib, 15)
-    sel_rows, prow, pcol, blocks = _i(ib, 16), _i(ib, 17), _i(ib, 18), _i(ib, 19)
-    act_coord, load_body = _i(ib, 20), _i(ib, 21)
-    fj, fch, fpa, frot, fslide = _i(ib, 22), _i(ib, 23), _i(ib, 24), _i(ib, 25), _i(ib, 26)
-    fidx = _i(ib, 27).reshape((ib[_HEAD + 4 * 27 + 1], ib[_HEAD + 4 * 27 + 2]))
-    fcnt = _i(ib, 28)
-    eload = _i(ib, 29).reshape((ib[_HEAD + 4 * 29 + 1], ib[_HEAD + 4 * 29 + 2]))
-    load_named = _i(ib, 30)
+    body_parent, body_joint, joint_q0, joint_nq, coord_motion = _i(pk, 0), _i(pk, 1), _i(pk, 2), _i(pk, 3), _i(pk, 4)
+    anc = _i2(pk, 5)
+    row_loop, row_kind, row_i, row_j = _i(pk, 6), _i(pk, 7), _i(pk, 8), _i(pk, 9)
+    loop_joint, joint_parent, joint_child = _i(pk, 10), _i(pk, 11), _i(pk, 12)
+    task_kind, task_index, euler_axes = _i(pk, 13), _i(pk, 14), _i(pk, 15)
+    sel_rows, prow, pcol, blocks = _i(pk, 16), _i(pk, 17), _i(pk, 18), _i(pk, 19)
+    act_coord, load_body = _i(pk, 20), _i(pk, 21)
+    fj, fch, fpa, frot, fslide = _i(pk, 22), _i(pk, 23), _i(pk, 24), _i(pk, 25), _i(pk, 26)
+    fidx = _i2(pk, 27)
+    fcnt = _i(pk, 28)
+    eload = _i2(pk, 29)
+    load_named = _i(pk, 30)
     nb = body_parent.shape[0]
     nl = load_body.shape[0]
-    coord_offset, coord_sign = _f(ib, fb, 0), _f(ib, fb, 1)
-    tRP, tpP, tRC, tpC = _f3(ib, fb, 2), _f2(ib, fb, 3), _f3(ib, fb, 4), _f2(ib, fb, 5)
-    RP, pP, RC, pC = _f3(ib, fb, 6), _f2(ib, fb, 7), _f3(ib, fb, 8), _f2(ib, fb, 9)
-    task_point = _f(ib, fb, 10)
-    idle = _f2(ib, fb, 11)
-    row_scale, mass = _f(ib, fb, 12), _f(ib, fb, 13)
-    inertia, com, gravity = _f3(ib, fb, 14), _f2(ib, fb, 15), _f(ib, fb, 16)
-    load_point, load_force, load_moment = _f2(ib, fb, 17), _f2(ib, fb, 18), _f2(ib, fb, 19)
-    fcoef, fsc, ecoef, eoff, load_direction = _f2(ib, fb, 20), _f2(ib, fb, 21), _f2(ib, fb, 22), _f2(ib, fb, 23), \
-        _f2(ib, fb, 24)
-    tol, check_tol = fb[0], fb[1]
-    task_body, max_iter = ib[2], ib[3]
+    coord_offset, coord_sign = _f(pk, 0), _f(pk, 1)
+    tRP, tpP, tRC, tpC = _f3(pk, 2), _f2(pk, 3), _f3(pk, 4), _f2(pk, 5)
+    RP, pP, RC, pC = _f3(pk, 6), _f2(pk, 7), _f3(pk, 8), _f2(pk, 9)
+    task_point = _f(pk, 10)
+    idle = _f2(pk, 11)
+    row_scale, mass = _f(pk, 12), _f(pk, 13)
+    inertia, com, gravity = _f3(pk, 14), _f2(pk, 15), _f(pk, 16)
+    load_point, load_force, load_moment = _f2(pk, 17), _f2(pk, 18), _f2(pk, 19)
+    fcoef, fsc, ecoef, eoff, load_direction = _f2(pk, 20), _f2(pk, 21), _f2(pk, 22), _f2(pk, 23), \
+        _f2(pk, 24)
+    inertia_factor = _f3(pk, 25)
+    tol, check_tol = _fview(pk, pk[6], (2,))
+    task_body, max_iter = pk[2], pk[3]
     nr = row_loop.shape[0]
     nrow = nr + nt
     mk = nq
-    # ---- work space (consecutive views of wf)
-    o = 0
-    R, o = _take3(wf, o, nb, 3, 3)
-    p, o = _take2(wf, o, nb, 3)
-    S, o = _take2(wf, o, nq, 6)
-    val, o = _take1(wf, o, nrow)
-    J, o = _take2(wf, o, nrow, nq)
-    res, o = _take1(wf, o, nrow)
-    K, o = _take2(wf, o, mk, mk)
-    rhs, o = _take1(wf, o, mk)
-    ires = wf[o:o + idle.shape[0]]
+    # ---- work space (consecutive views of the buffer)
+    o = pk[8]
+    R, o = _take3(pk, o, nb, 3, 3)
+    p, o = _take2(pk, o, nb, 3)
+    S, o = _take2(pk, o, nq, 6)
+    val, o = _take1(pk, o, nrow)
+    J, o = _take2(pk, o, nrow, nq)
+    res, o = _take1(pk, o, nrow)
+    K, o = _take2(pk, o, mk, mk)
+    rhs, o = _take1(pk, o, mk)
+    ires = _fview(pk, o, (idle.shape[0],))
     o += mk
-    bwork, o = _take1(wf, o, mk)
-    qd, o = _take1(wf, o, nq)
-    qdd, o = _take1(wf, o, nq)
-    V, o = _take2(wf, o, nb, 6)
-    Vpre, o = _take2(wf, o, nq, 6)
-    A, o = _take2(wf, o, nb, 6)
-    gamma, o = _take1(wf, o, nrow)
-    w33, o = _take3(wf, o, 5, 3, 3)
-    w3, o = _take2(wf, o, 20, 3)
-    W, o = _take2(wf, o, nb, 6)
-    Q, o = _take1(wf, o, nq)
-    T, o = _take2(wf, o, 6, nt)
-    Iw, o = _take2(wf, o, 3, 3)
-    tmp, o = _take2(wf, o, 3, 3)
-    vc, o = _take2(wf, o, 3, nt)
-    Iwt, o = _take2(wf, o, 3, nt)
-    M, o = _take2(wf, o, nt, nt)
-    Bm, o = _take2(wf, o, nt, nt)
-    h, o = _take1(wf, o, nt)
-    r, o = _take1(wf, o, nt)
-    c3, o = _take1(wf, o, 3)
-    pc, o = _take2(wf, o, nb, 3)
-    v3, o = _take1(wf, o, 3)
-    a3, o = _take1(wf, o, 3)
-    f3, o = _take1(wf, o, 3)
-    info, o = _take1(wf, o, 3)
-    Gw, o = _take2(wf, o, mk, nt)
-    Gw2, o = _take2(wf, o, mk, nt)
-    Qf, o = _take1(wf, o, nq)
+    bwork, o = _take1(pk, o, mk)
+    qd, o = _take1(pk, o, nq)
+    qdd, o = _take1(pk, o, nq)
+    V, o = _take2(pk, o, nb, 6)
+    Vpre, o = _take2(pk, o, nq, 6)
+    A, o = _take2(pk, o, nb, 6)
+    gamma, o = _take1(pk, o, nrow)
+    w33, o = _take3(pk, o, 5, 3, 3)
+    w3, o = _take2(pk, o, 20, 3)
+    W, o = _take2(pk, o, nb, 6)
+    Q, o = _take1(pk, o, nq)
+    T, o = _take3(pk, o, nb, 6, nt)
+    Iw, o = _take2(pk, o, 3, 3)
+    tmp, o = _take2(pk, o, 3, 3)
+    Z, o = _take2(pk, o, 6, nt)
+    M, o = _take2(pk, o, nt, nt)
+    Bm, o = _take2(pk, o, nt, nt)
+    h, o = _take1(pk, o, nt)
+    r, o = _take1(pk, o, nt)
+    c3, o = _take1(pk, o, 3)
+    pc, o = _take2(pk, o, nb, 3)
+    v3, o = _take1(pk, o, 3)
+    a3, o = _take1(pk, o, 3)
+    f3, o = _take1(pk, o, 3)
+    info, o = _take1(pk, o, 3)
+    Gw, o = _take2(pk, o, mk, nt)
+    Gw2, o = _take2(pk, o, mk, nt)
+    Qf, o = _take1(pk, o, nq)
+    if o > pk[9]:
+        return SHORT_WORK  # the views would run past the work space
+    wi = _iview(pk, pk[9], (mk,))
     # ---- 1. tree coordinates from the previous solution
     o2 = 1 + nq + nt + nq * nt
-    q = st[1:1 + nq]
-    xp = st[1 + nq:1 + nq + nt]
-    Gp = st[1 + nq + nt:o2].reshape((nq, nt))
-    qddp = st[o2:o2 + nq]
-    xdp = st[o2 + nq:o2 + nq + nt]
+    so = pk[7]
+    q = _fview(pk, so + 1, (nq,))
+    xp = _fview(pk, so + 1 + nq, (nt,))
+    Gp = _fview(pk, so + 1 + nq + nt, (nq, nt))
+    qddp = _fview(pk, so + o2, (nq,))
+    xdp = _fview(pk, so + o2 + nq, (nt,))
     pause = int(st[o2 + nq + nt])
     factored = st[0] == FACTORED
     chord = factored and pause == 0
@@ -348,7 +419,7 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no c
             acc += Gp[c, t] * Q[c]
         h[t] = acc
     # ---- 4. the task mass matrix
-    task_mass(S, Gp, anc, R, pc, mass, inertia, M, T, Iw, tmp, vc, Iwt)
+    task_mass(S, Gp, body_parent, body_joint, joint_q0, joint_nq, R, pc, mass, inertia_factor, M, T, Z)
     # ---- 5. the equation of motion, M xdd + h = J_ax^T u
     if forward:
         for t in range(nt):
@@ -395,15 +466,15 @@ def _dynamics(ib, fb, st, wf, wi, x, xd, v, load, forward, out):  # pragma: no c
 
 @njit(cache=True)
 def forward_one(pk, x, xd, u, load, out):  # pragma: no cover - compiled
-    """``out = xdd (nt,)`` of one sample (``pk`` from :func:`pack` and :func:`new_state`;
+    """``out = xdd (nt,)`` of one sample (``pk`` from :func:`pack`;
     ``load`` the named load's magnitude [N], if the mechanism has one); returns the status (0 OK)."""
-    return _dynamics(pk[0], pk[1], pk[2], pk[3], pk[4], x, xd, u, load, True, out)
+    return _dynamics(pk, x, xd, u, load, True, out)
 
 
 @njit(cache=True)
 def inverse_one(pk, x, xd, xdd, load, out):  # pragma: no cover - compiled
     """``out = u (na,)`` of one sample; returns the status (0 OK)."""
-    return _dynamics(pk[0], pk[1], pk[2], pk[3], pk[4], x, xd, xdd, load, False, out)
+    return _dynamics(pk, x, xd, xdd, load, False, out)
 
 
 def _refresh_cache() -> None:

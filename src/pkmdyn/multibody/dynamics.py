@@ -58,7 +58,7 @@ from .model import MechanismModel
 
 __all__ = ["body_wrenches", "named_magnitudes", "load_forces", "coordinate_twists", "generalised_forces", "actuator_efforts",
            "InverseDynamics", "inverse_dynamics", "idle_dynamics", "dynamics_outputs", "effort_unit", "free_twists", "equilibrium_system",
-           "JointReactions", "joint_reactions", "energies", "SINGULAR_ACTUATION"]
+           "JointReactions", "joint_reactions", "energies", "SINGULAR_ACTUATION", "inertia_factors"]
 
 Array = NDArray[np.float64]
 
@@ -68,6 +68,15 @@ Array = NDArray[np.float64]
 #: SVD confirms the flagged samples; rows of very different size but independent directions
 #: are not a singularity)
 SINGULAR_ACTUATION = 1e-9
+
+
+def inertia_factors(model: MechanismModel) -> Array:
+    """``L (nb, 3, 3)`` with ``I' = L L^T`` for each body's inertia about its centre of mass in
+    its frame (``L = V diag(sqrt(lambda))`` from the eigenvectors ``V`` and principal moments
+    ``lambda``, which the description's check keeps non-negative; a rounding excursion below
+    zero counts as zero): the mass matrix kernels build ``w^T I w`` as ``|L^T w|^2``."""
+    lam, vec = np.linalg.eigh(np.asarray(model.inertia, dtype=float))
+    return np.ascontiguousarray(vec * np.sqrt(np.clip(lam, 0.0, None))[:, None, :])
 
 
 def _cross(a: Array, b: Array) -> Array:

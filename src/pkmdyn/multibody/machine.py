@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MotionError, ParameterError, as_array
-from .dynamics import actuator_efforts, body_wrenches, coordinate_twists, effort_unit, fr_any, \
+from .dynamics import actuator_efforts, body_wrenches, inertia_factors, coordinate_twists, effort_unit, fr_any, \
     generalised_forces, joint_reactions
 from .kinematics import MechanismKinematics, solve_kinematics
 from .model import MechanismModel
@@ -56,7 +56,7 @@ class MechanismVerbs:
         self.ACTUATORS = tuple(f"{a}_{effort_unit(model, i)}" for i, a in enumerate(model.actuator_names))
         self._q_last: Array | None = None
         # the compiled single-sample path (:mod:`._one`), where it answers for this mechanism
-        self._pk = (*_one.pack(model), *_one.new_state(model)) if _one.supported(model) else None
+        self._pk = _one.pack(model) if _one.supported(model) else None
 
     # ------------------------------------------------------------------ helpers
     def _x(self, q: object, name: str = "q") -> Array:
@@ -75,9 +75,8 @@ class MechanismVerbs:
         advances without this object), else the general route's."""
         from . import _one
 
-        if self._pk is not None and _one.has_solution(self._pk[2]):
-            return self._pk[2][1:1 + self.model.nq].copy()
-        return self._q_last
+        q = _one.solution(self._pk) if self._pk is not None else None
+        return q if q is not None else self._q_last
 
     def _remember(self, kin: MechanismKinematics) -> None:
         """The last solved sample: the next solve's start, and the compiled path's state."""
@@ -85,7 +84,7 @@ class MechanismVerbs:
         if self._pk is not None:
             from . import _one
 
-            _one.prime(self._pk[2], kin.q[-1], kin.x[-1], kin.G[-1])
+            _one.prime(self._pk, kin.q[-1], kin.x[-1], kin.G[-1])
 
     def _named(self, load: object, n: int) -> dict | None:
         """The named loads' magnitudes ``{name: (n,)}`` from the verbs' ``load`` (module docstring)."""
@@ -133,8 +132,9 @@ class MechanismVerbs:
         from ._dyn_kernels import task_mass_batch
 
         M = np.empty((len(kin), model.nt, model.nt))
-        task_mass_batch(np.ascontiguousarray(S), np.ascontiguousarray(kin.G), model.ancestor_list,
-                        np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.p), model.mass, model.inertia, M)
+        task_mass_batch(np.ascontiguousarray(S), np.ascontiguousarray(kin.G), model.body_parent, model.body_joint,
+                        model.joint_q0, model.joint_nq, np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.p),
+                        model.mass, inertia_factors(model), M)
         return M
 
     def _bias(self, model: MechanismModel, kin: MechanismKinematics, S: Array, named: dict | None = None) -> Array:
@@ -192,7 +192,7 @@ class MechanismVerbs:
         uu = np.atleast_2d(as_array(u, (None, model.na) if np.ndim(u) == 2 else (model.na,), "u", MotionError))
         return np.linalg.solve(M, (np.einsum("nta,na->nt", B, uu) - h)[..., None])[..., 0]
 
-    def one_sample_kernels(self, model: MechanismModel) -> tuple[tuple, object, object] | None:
+    def one_sample_kernels(self, model: MechanismModel) -> tuple[NDArray[np.int64], object, object] | None:
         """``(p, inverse, forward)``: the compiled single-sample kernels (:mod:`._one`) for
         callers in a loop (``pkmdyn.machine``; ``load`` the named load's magnitude), or None
         where they do not answer for this mechanism (friction that depends on the reactions,
