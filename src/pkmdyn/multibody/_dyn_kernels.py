@@ -203,36 +203,40 @@ def _twists_from_poses_loop(q, Rb, ob, body_parent, body_joint, joint_q0, joint_
                 _advance(Rf, o, m, sg * (q[s, c] - coord_offset[c]))
 
 
+@njit(cache=True, _nrt=False, fastmath={"reassoc", "contract"})
+def _gram(Z, M):  # pragma: no cover - compiled
+    """``M = Z Z^T`` (``Z (nt, k)``): sums over the long rows in any order, so that they run
+    several lanes at once."""
+    nt = Z.shape[0]
+    for i in range(nt):
+        for j in range(i, nt):
+            acc = 0.0
+            for k in range(Z.shape[1]):
+                acc += Z[i, k] * Z[j, k]
+            M[i, j] = acc
+            M[j, i] = acc
+
+
 @njit(cache=True, _nrt=False, inline="always")
 def task_mass(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, factor, M, T, Z):  # pragma: no cover
     """One sample's ``M (nt, nt) = sum_b T_b^T I_b T_b``: the bodies' kinetic energy in the task
-    rates, with ``T_b (6, nt)`` the twist of body b per task rate, built down the tree as
-    ``T_b = T_parent + sum_{c of b's joint} S_c G_c`` (Eq. 3.40 of Featherstone 2008 per task
-    rate). Each body adds ``Z^T Z`` with ``Z = [sqrt(m) v_c; (R L)^T w]`` (``v_c = v_O + w x
-    p`` the centre-of-mass rows, ``I' = L L^T`` the body-frame inertia's constant factor):
-    ``m |v_c|^2 + w^T R I' R^T w = |Z xd|^2``. ``S (nq, 6)``, ``G (nq, nt)``, ``R (nb, 3, 3)``,
-    ``p (nb, 3)`` the centres of mass, ``factor (nb, 3, 3)`` (:func:`.dynamics.inertia_factors`);
-    ``T (nb, 6, nt)``, ``Z (6, nt)`` work space."""
+    rates, with ``T_b`` the twist of body b per task rate, built down the tree as ``T_b =
+    T_parent + sum_{c of b's joint} S_c G_c`` (Eq. 3.40 of Featherstone 2008 per task rate).
+    With ``I' = L L^T`` the body-frame inertia's constant factor, ``m |v_c|^2 + w^T R I' R^T w
+    = |Z_b^T xd|^2`` where row t of ``Z_b (nt, 6)`` is the body's ``[sqrt(m) v_c; (R L)^T w]``
+    per unit task rate t (``v_c = v_O + w x p`` the centre-of-mass velocity); the bodies' blocks
+    side by side make ``Z (nt, 6 nb)`` and ``M = Z Z^T``. ``S (nq, 6)``, ``G (nq, nt)``, ``R
+    (nb, 3, 3)``, ``p (nb, 3)`` the centres of mass, ``factor (nb, 3, 3)``
+    (:func:`.dynamics.inertia_factors`); ``T (nb, nt, 6)`` (row t of body b: its twist per unit
+    task rate t), ``Z (nt, 6 nb)`` work space."""
     nt = G.shape[1]
-    for i in range(nt):
-        for j in range(nt):
-            M[i, j] = 0.0
     for b in range(R.shape[0]):
         a = body_parent[b]
-        for r in range(6):
-            for t in range(nt):
-                T[b, r, t] = T[a, r, t] if a >= 0 else 0.0
         k = body_joint[b]
-        for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
-            for r in range(6):
-                sc = S[c, r]
-                if sc != 0.0:
-                    for t in range(nt):
-                        T[b, r, t] += sc * G[c, t]
         sm = math.sqrt(mass[b])
         p0, p1, p2 = p[b, 0], p[b, 1], p[b, 2]
         L = factor[b]
-        # (R L)^T: row i of Z[3 + i] = sum_m (R L)[m, i] w_m
+        # the columns of R L
         l00 = R[b, 0, 0] * L[0, 0] + R[b, 0, 1] * L[1, 0] + R[b, 0, 2] * L[2, 0]
         l10 = R[b, 1, 0] * L[0, 0] + R[b, 1, 1] * L[1, 0] + R[b, 1, 2] * L[2, 0]
         l20 = R[b, 2, 0] * L[0, 0] + R[b, 2, 1] * L[1, 0] + R[b, 2, 2] * L[2, 0]
@@ -242,21 +246,23 @@ def task_mass(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, fac
         l02 = R[b, 0, 0] * L[0, 2] + R[b, 0, 1] * L[1, 2] + R[b, 0, 2] * L[2, 2]
         l12 = R[b, 1, 0] * L[0, 2] + R[b, 1, 1] * L[1, 2] + R[b, 1, 2] * L[2, 2]
         l22 = R[b, 2, 0] * L[0, 2] + R[b, 2, 1] * L[1, 2] + R[b, 2, 2] * L[2, 2]
+        o = 6 * b
         for t in range(nt):
-            w0, w1, w2 = T[b, 0, t], T[b, 1, t], T[b, 2, t]
-            Z[0, t] = sm * (T[b, 3, t] + w1 * p2 - w2 * p1)
-            Z[1, t] = sm * (T[b, 4, t] + w2 * p0 - w0 * p2)
-            Z[2, t] = sm * (T[b, 5, t] + w0 * p1 - w1 * p0)
-            Z[3, t] = l00 * w0 + l10 * w1 + l20 * w2
-            Z[4, t] = l01 * w0 + l11 * w1 + l21 * w2
-            Z[5, t] = l02 * w0 + l12 * w1 + l22 * w2
-        for i in range(nt):
-            for j in range(i, nt):
-                M[i, j] += (Z[0, i] * Z[0, j] + Z[1, i] * Z[1, j] + Z[2, i] * Z[2, j]
-                            + Z[3, i] * Z[3, j] + Z[4, i] * Z[4, j] + Z[5, i] * Z[5, j])
-    for i in range(nt):
-        for j in range(i + 1, nt):
-            M[j, i] = M[i, j]
+            Tb = T[b, t]
+            for r in range(6):
+                Tb[r] = T[a, t, r] if a >= 0 else 0.0
+            for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
+                g = G[c, t]
+                for r in range(6):
+                    Tb[r] += S[c, r] * g
+            w0, w1, w2 = Tb[0], Tb[1], Tb[2]
+            Z[t, o] = sm * (Tb[3] + w1 * p2 - w2 * p1)
+            Z[t, o + 1] = sm * (Tb[4] + w2 * p0 - w0 * p2)
+            Z[t, o + 2] = sm * (Tb[5] + w0 * p1 - w1 * p0)
+            Z[t, o + 3] = l00 * w0 + l10 * w1 + l20 * w2
+            Z[t, o + 4] = l01 * w0 + l11 * w1 + l21 * w2
+            Z[t, o + 5] = l02 * w0 + l12 * w1 + l22 * w2
+    _gram(Z, M)
 
 
 @njit(cache=True)
@@ -265,7 +271,7 @@ def task_mass_batch(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mas
     """``M_out (n, nt, nt)``, every sample (:func:`task_mass`)."""
     nt = G.shape[2]
     _task_mass_loop(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, factor, M_out,
-                    np.empty((R.shape[1], 6, nt)), np.empty((6, nt)))
+                    np.empty((R.shape[1], nt, 6)), np.empty((nt, 6 * R.shape[1])))
 
 
 @njit(cache=True, _nrt=False)

@@ -336,6 +336,9 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
         if k != last:
             _frame(a, R, p, RP[k], pP[k], eP, oP)
             _frame(b, R, p, RC[k], pC[k], eC, oC)
+            if mode == ROWS_DRIFT:  # the joint points' motion, shared by the joint's rows
+                _point_motion(a, oP, V, A, vP, aP)
+                _point_motion(b, oC, V, A, vC, aC)
             last = k
         i = row_i[rr]
         for m in range(3):
@@ -361,8 +364,6 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
         if mode == ROWS_DRIFT:
             _direction_motion(a, e, V, A, ed, edd, t3)
             if row_kind[rr] == 0:
-                _point_motion(a, oP, V, A, vP, aP)
-                _point_motion(b, oC, V, A, vC, aC)
                 g = _dot(edd, r)
                 for m in range(3):
                     g += 2.0 * ed[m] * (vC[m] - vP[m]) + e[m] * (aC[m] - aP[m])
@@ -460,13 +461,16 @@ def _wrap(a):
 def block_lu_factor(M, piv, blocks):
     """LU with partial pivoting inside each diagonal block of a block lower-triangular ``M``
     (``blocks``: block start rows, then ``n``); whole rows are swapped, the blocks left of the
-    diagonal are kept as they are. False when a pivot is below 1e-12 of the largest entry."""
+    diagonal are kept as they are. ``piv (2 n,)``: the row swaps, then each row's extent left
+    of its block (the solves skip the zeros past its last nonzero there). False when a pivot
+    is below 1e-12 of the largest entry."""
     n = M.shape[0]
     big = 0.0
-    for i in range(n):
-        for j in range(n):
-            if abs(M[i, j]) > big:
-                big = abs(M[i, j])
+    for bk in range(blocks.shape[0] - 1):
+        for i in range(blocks[bk], blocks[bk + 1]):
+            for j in range(blocks[bk + 1]):
+                if abs(M[i, j]) > big:
+                    big = abs(M[i, j])
     tol = 1e-12 * big if big > 0 else 1e-300
     for bk in range(blocks.shape[0] - 1):
         s0, s1 = blocks[bk], blocks[bk + 1]
@@ -481,7 +485,7 @@ def block_lu_factor(M, piv, blocks):
             if pv <= tol:
                 return False
             if pr != k:
-                for j in range(n):
+                for j in range(s1):
                     tmp = M[k, j]
                     M[k, j] = M[pr, j]
                     M[pr, j] = tmp
@@ -492,6 +496,11 @@ def block_lu_factor(M, piv, blocks):
                 if f != 0.0:
                     for j in range(k + 1, s1):
                         M[i, j] -= f * M[k, j]
+        for i in range(s0, s1):
+            e = s0
+            while e > 0 and M[i, e - 1] == 0.0:
+                e -= 1
+            piv[n + i] = e
     return True
 
 
@@ -513,11 +522,8 @@ def block_lu_solve(M, piv, blocks, prow, pcol, b, work):
                 work[pr] = tmp
         for i in range(s0, s1):
             acc = work[i]
-            for j in range(s0):
+            for j in range(piv[n + i]):
                 acc -= M[i, j] * work[j]
-            work[i] = acc
-        for i in range(s0, s1):
-            acc = work[i]
             for j in range(s0, i):
                 acc -= M[i, j] * work[j]
             work[i] = acc
@@ -549,12 +555,11 @@ def block_lu_solve_columns(M, piv, blocks, prow, pcol, B, X, work):
                     work[r, t] = work[pr, t]
                     work[pr, t] = tmp
         for i in range(s0, s1):
-            for j in range(s0):
+            for j in range(piv[n + i]):
                 m = M[i, j]
                 if m != 0.0:
                     for t in range(k):
                         work[i, t] -= m * work[j, t]
-        for i in range(s0, s1):
             for j in range(s0, i):
                 m = M[i, j]
                 if m != 0.0:
@@ -796,7 +801,7 @@ def solve_batch(tm, x, xd, xdd, q_start,
     gamma = np.zeros(nrow)
     res = np.empty(nrow)
     K = np.empty((mk, mk))
-    piv = np.empty(mk, dtype=np.int64)
+    piv = np.empty(2 * mk, dtype=np.int64)
     rhs = np.empty(mk)
     ires = np.empty(idle.shape[0])
     bwork = np.empty(mk)

@@ -87,9 +87,9 @@ def _sizes(model: MechanismModel) -> tuple[int, int, int]:
     mk = nq
     nstate = 1 + nq + nt + nq * nt + nq + nt + 1
     nwork = (nb * 9 + nb * 3 + nq * 6 + nrow + nrow * nq + nrow + mk * mk + mk + mk + mk + 2 * nq + nb * 6
-             + nq * 6 + nb * 6 + nrow + 45 + 60 + nb * 6 + nq + nb * 6 * nt + 9 + 9 + 6 * nt + nt * nt + nt * nt
+             + nq * 6 + nb * 6 + nrow + 45 + 60 + nb * 6 + nq + nb * 6 * nt + 9 + 9 + 6 * nb * nt + nt * nt + nt * nt
              + 2 * nt + 12 + 3 + 2 * mk * nt + nq + nb * 3)
-    return nstate, nwork, mk
+    return nstate, nwork, 2 * mk
 
 
 def pack(model: MechanismModel) -> NDArray[np.int64]:
@@ -308,10 +308,10 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     w3, o = _take2(pk, o, 20, 3)
     W, o = _take2(pk, o, nb, 6)
     Q, o = _take1(pk, o, nq)
-    T, o = _take3(pk, o, nb, 6, nt)
+    T, o = _take3(pk, o, nb, nt, 6)
     Iw, o = _take2(pk, o, 3, 3)
     tmp, o = _take2(pk, o, 3, 3)
-    Z, o = _take2(pk, o, 6, nt)
+    Z, o = _take2(pk, o, nt, 6 * nb)
     M, o = _take2(pk, o, nt, nt)
     Bm, o = _take2(pk, o, nt, nt)
     h, o = _take1(pk, o, nt)
@@ -327,7 +327,7 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     Qf, o = _take1(pk, o, nq)
     if o > pk[9]:
         return SHORT_WORK  # the views would run past the work space
-    wi = _iview(pk, pk[9], (mk,))
+    wi = _iview(pk, pk[9], (2 * mk,))
     # ---- 1. tree coordinates from the previous solution
     o2 = 1 + nq + nt + nq * nt
     so = pk[7]
