@@ -321,3 +321,63 @@ def test_friction_of_a_joint_that_turns_and_slides():
     dV = -np.einsum("b,i,nbi->n", m.mass, m.gravity, k.v)
     P = np.einsum("na,na->n", idyn.u, k.act_qd)
     assert np.abs(P - dT - dV - got).max() <= 1e-9 * np.abs(P).max()
+
+
+def _write_motion(path, m, t, x, columns=None):
+    """A task motion CSV (positions only) with extra named-load ``columns {name: (n,)}``."""
+    columns = columns or {}
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["t_s"] + [f"{n}_{u}" for n, u in zip(m.task_names, m.task_units)] + list(columns))
+        for i in range(len(t)):
+            w.writerow([repr(float(v)) for v in (t[i], *x[i], *(c[i] for c in columns.values()))])
+
+
+def test_control_drives_the_named_load_of_the_motion(tmp_path):
+    """``pkmdyn control --machine FILE --motion M.csv`` with a ``push_N`` column: the plant and
+    the controller feel the column's load (written beside the efforts); a column equal to the
+    description's magnitude_N runs as the file without the column; another load moves the
+    efforts."""
+    import tomlkit
+
+    d = _stewart(0.08, 0.05, magnitude=250.0)
+    src = tmp_path / "stewart_push.toml"
+    src.write_text(tomlkit.dumps(d))
+    m = load_mechanism(src)
+    t, x, _, _ = _motion(m, n=200)
+    runs = {}
+    for name, cols in (("none", {}), ("same", {"push_N": np.full(len(t), 250.0)}), ("push", {"push_N": _push(t)})):
+        mot = tmp_path / f"{name}.csv"
+        _write_motion(mot, m, t, x, cols)
+        out = tmp_path / name
+        assert main(["control", "--machine", str(src), "--motion", str(mot), "--duration", "0.1", "--out",
+                     str(out)]) == 0
+        with (out / "control.csv").open() as fh:
+            runs[name] = list(csv.DictReader(fh))
+    eff = [f"{a}_N" for a in m.actuator_names]
+    assert "push_N" not in runs["none"][0] and "push_N" in runs["push"][0]
+    tk = np.array([float(r["t_s"]) for r in runs["push"]])
+    assert np.allclose([float(r["push_N"]) for r in runs["push"]], np.interp(tk, t, _push(t)), rtol=1e-12)
+    u = {k: np.array([[float(r[c]) for c in eff] for r in v]) for k, v in runs.items()}
+    scale = np.abs(u["none"]).max()
+    assert np.abs(u["same"] - u["none"]).max() <= 1e-9 * scale
+    assert np.abs(u["push"] - u["none"]).max() >= 1e-2 * scale  # 150 to 700 N against 250 N on the platform
+
+
+def test_control_refuses_named_load_columns_it_cannot_drive(tmp_path, capsys):
+    """Two named loads and their columns in the motion: exit 2 naming the column, nothing written."""
+    import tomlkit
+
+    d = _stewart()
+    d["loads"].append({**d["loads"][0], "name": "pull_N"})
+    src = tmp_path / "two.toml"
+    src.write_text(tomlkit.dumps(d))
+    m = load_mechanism(src)
+    t, x, _, _ = _motion(m, n=50)
+    mot = tmp_path / "m.csv"
+    _write_motion(mot, m, t, x, {"push_N": _push(t)})
+    out = tmp_path / "out"
+    assert main(["control", "--machine", str(src), "--motion", str(mot), "--duration", "0.05", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "'push_N'" in err and "2 (push_N, pull_N)" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()

@@ -56,6 +56,7 @@ class _Setup:
     motion_source: str
     span_s: float = 0.0  #: the motion as a whole [s]: a full cycle of a built-in motion even for a part of one
     fold_s: float = 0.0  #: the period a built-in motion repeats with [s] (plots fold the run by it); 0: none
+    load_column: str = "load_N"  #: the column of the motion's load in control.csv (``has_load``)
 
 
 # ----------------------------------------------------------------------------- machines
@@ -397,7 +398,7 @@ def _columns(setup: _Setup, tr: Any) -> dict[str, np.ndarray]:
         cols[f"{nm}_acc_ref_{u2}"] = j.sdd[:K, a] * sc
         cols[f"{nm}_acc_enc_{u2}"] = r.sdd_enc[:, a] * sc
     if ref.load is not None:
-        cols["load_N"] = ref.load[:K]
+        cols[setup.load_column] = ref.load[:K]
     return cols
 
 

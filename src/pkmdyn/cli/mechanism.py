@@ -236,12 +236,31 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     ls = loop_settings(settings)
     check_timing(ls.cycle_s, ls.step_s)
     verbs = machine_verbs(model)
-    fn = hermite_motion(motion.t, motion.x, motion.xd, motion.xdd, None)
-    setup = _Setup(model.name, verbs, model, model, fn, duration_s, False, str(path), "the controller's model",
-                   what, span_s=span)
+    load, column = _control_load(model, motion, what)
+    fn = hermite_motion(motion.t, motion.x, motion.xd, motion.xdd, load)
+    setup = _Setup(model.name, verbs, model, model, fn, duration_s, load is not None, str(path),
+                   "the controller's model", what, span_s=span, load_column=column)
     n = model.na if controller == "pid" else model.nt
     _stream(setup, controller, gains(settings, controller, n), ls, settings, out_dir,
             False, gains_path, inputs, fmt, html_report=False)  # its plots and page are the hand-built machines' own
+
+
+def _control_load(model, motion, what: str):
+    """The named load that a control run drives from its motion: ``(magnitudes [N] per sample,
+    column)`` where the motion has the column of the mechanism's one named load, else ``(None,
+    "")`` (the description's ``magnitude_N`` then holds, on the plant and in the controller
+    alike). The loop carries one load: a motion with named-load columns for a mechanism with
+    several is refused rather than run without them."""
+    from ..errors import MotionError
+
+    given = [nm for nm in model.named_loads if nm in motion.loads]
+    if not given:
+        return None, ""
+    if len(model.named_loads) > 1:
+        raise MotionError(f"{what}: column {given[0]!r}: control drives one named load from the motion, and "
+                          f"{model.name!r} has {len(model.named_loads)} ({', '.join(model.named_loads)}); "
+                          "remove the named-load columns to run on the description's magnitude_N")
+    return motion.loads[given[0]], given[0]
 
 
 @cli.command("identify")
