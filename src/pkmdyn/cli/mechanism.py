@@ -170,7 +170,8 @@ def described_control_settings(model) -> dict:
 @click.option("--plant-params", "plant_path", type=PATH_IN, help="Hand-built machines: the plant's parameter file.")
 @click.option("--motion", "motion_path", type=PATH_IN,
               help="A motion file (CSV): the machine's own format; a described mechanism's task motion "
-                   "(docs/mechanism_format.md). Default: the built-in motion.")
+                   "(docs/mechanism_format.md), its named load's column driving the load. Default: the built-in "
+                   "motion.")
 @click.option("--cycles", type=FiniteFloat(0.0, MAX_CYCLES, lo_open=True), default=None,
               help="Hand-built machines: cycles of the built-in motion (default 1).")
 @click.option("--gains", "gains_path", type=PATH_IN,
