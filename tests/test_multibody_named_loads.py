@@ -381,3 +381,24 @@ def test_control_refuses_named_load_columns_it_cannot_drive(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "'push_N'" in err and "2 (push_N, pull_N)" in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_control_refuses_a_load_named_like_an_effort_column(tmp_path, capsys):
+    """A named load ``P_1_N`` (actuator P_1's effort column in control.csv) driven by the
+    motion: exit 2 naming the column, nothing written, rather than a table without the effort."""
+    import tomlkit
+
+    d = _stewart()
+    d["loads"][0]["name"] = "P_1_N"
+    src = tmp_path / "clash.toml"
+    src.write_text(tomlkit.dumps(d))
+    m = load_mechanism(src)
+    assert "P_1_N" in machine_verbs(m).ACTUATORS
+    t, x, _, _ = _motion(m, n=50)
+    mot = tmp_path / "m.csv"
+    _write_motion(mot, m, t, x, {"P_1_N": _push(t)})
+    out = tmp_path / "out"
+    assert main(["control", "--machine", str(src), "--motion", str(mot), "--duration", "0.05", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "'P_1_N'" in err and "effort column" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()

@@ -237,7 +237,7 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     ls = loop_settings(settings)
     check_timing(ls.cycle_s, ls.step_s)
     verbs = machine_verbs(model)
-    load, column = _control_load(model, motion, what)
+    load, column = _control_load(model, motion, what, verbs.ACTUATORS)
     fn = hermite_motion(motion.t, motion.x, motion.xd, motion.xdd, load)
     setup = _Setup(model.name, verbs, model, model, fn, duration_s, load is not None, str(path),
                    "the controller's model", what, span_s=span, load_column=column)
@@ -246,12 +246,13 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
             False, gains_path, inputs, fmt, html_report=False)  # its plots and page are the hand-built machines' own
 
 
-def _control_load(model, motion, what: str):
+def _control_load(model, motion, what: str, efforts: tuple[str, ...]):
     """The named load that a control run drives from its motion: ``(magnitudes [N] per sample,
     column)`` where the motion has the column of the mechanism's one named load, else ``(None,
     "")`` (the description's ``magnitude_N`` then holds, on the plant and in the controller
     alike). The loop carries one load: a motion with named-load columns for a mechanism with
-    several is refused rather than run without them."""
+    several is refused rather than run without them; so is a load whose name is that of an
+    actuator's effort column of ``control.csv`` (``efforts``), which it would replace."""
     from ..errors import MotionError
 
     given = [nm for nm in model.named_loads if nm in motion.loads]
@@ -261,6 +262,9 @@ def _control_load(model, motion, what: str):
         raise MotionError(f"{what}: column {given[0]!r}: control drives one named load from the motion, and "
                           f"{model.name!r} has {len(model.named_loads)} ({', '.join(model.named_loads)}); "
                           "remove the named-load columns to run on the description's magnitude_N")
+    if given[0] in efforts:
+        raise MotionError(f"{what}: column {given[0]!r}: the named load has the name of an actuator's effort column "
+                          "of control.csv; rename the load (its [[loads]] name and the motion's column)")
     return motion.loads[given[0]], given[0]
 
 

@@ -460,8 +460,9 @@ def _wrap(a):
 @njit(cache=True, _nrt=False, inline='always')
 def block_lu_factor(M, piv, blocks):
     """LU with partial pivoting inside each diagonal block of a block lower-triangular ``M``
-    (``blocks``: block start rows, then ``n``); whole rows are swapped, the blocks left of the
-    diagonal are kept as they are. ``piv (2 n,)``: the row swaps, then each row's extent left
+    (``blocks``: block start rows, then ``n``); rows are swapped up to the block's last column
+    (right of it the entries are zero), the blocks left of the diagonal are kept as they are
+    (swapped with their rows). ``piv (2 n,)``: the row swaps, then each row's extent left
     of its block (the solves skip the zeros past its last nonzero there). False when a pivot
     is below 1e-12 of the largest entry."""
     n = M.shape[0]
