@@ -364,41 +364,34 @@ def test_control_drives_the_named_load_of_the_motion(tmp_path):
     assert np.abs(u["push"] - u["none"]).max() >= 1e-2 * scale  # 150 to 700 N against 250 N on the platform
 
 
-def test_control_refuses_named_load_columns_it_cannot_drive(tmp_path, capsys):
-    """Two named loads and their columns in the motion: exit 2 naming the column, nothing written."""
-    import tomlkit
-
-    d = _stewart()
+def _second_load(d):
     d["loads"].append({**d["loads"][0], "name": "pull_N"})
-    src = tmp_path / "two.toml"
-    src.write_text(tomlkit.dumps(d))
-    m = load_mechanism(src)
-    t, x, _, _ = _motion(m, n=50)
-    mot = tmp_path / "m.csv"
-    _write_motion(mot, m, t, x, {"push_N": _push(t)})
-    out = tmp_path / "out"
-    assert main(["control", "--machine", str(src), "--motion", str(mot), "--duration", "0.05", "--out", str(out)]) == 2
-    err = capsys.readouterr().err
-    assert "'push_N'" in err and "2 (push_N, pull_N)" in err and len(err.strip().splitlines()) == 1
-    assert not out.exists()
+    return "push_N"
 
 
-def test_control_refuses_a_load_named_like_an_effort_column(tmp_path, capsys):
-    """A named load ``P_1_N`` (actuator P_1's effort column in control.csv) driven by the
-    motion: exit 2 naming the column, nothing written, rather than a table without the effort."""
+def _effort_name(d):
+    d["loads"][0]["name"] = "P_1_N"  # actuator P_1's effort column in control.csv
+    return "P_1_N"
+
+
+@pytest.mark.parametrize("edit, words", [(_second_load, "2 (push_N, pull_N)"), (_effort_name, "effort column")],
+                         ids=["two-named-loads", "named-like-an-effort"])
+def test_control_refuses_named_load_columns_it_cannot_drive(tmp_path, capsys, edit, words):
+    """A load column the loop cannot drive as it stands (the mechanism has two named loads; the
+    load has the name of an actuator's effort column, which it would replace in control.csv):
+    exit 2 naming the column, nothing written."""
     import tomlkit
 
     d = _stewart()
-    d["loads"][0]["name"] = "P_1_N"
-    src = tmp_path / "clash.toml"
+    column = edit(d)
+    src = tmp_path / "m.toml"
     src.write_text(tomlkit.dumps(d))
     m = load_mechanism(src)
-    assert "P_1_N" in machine_verbs(m).ACTUATORS
     t, x, _, _ = _motion(m, n=50)
     mot = tmp_path / "m.csv"
-    _write_motion(mot, m, t, x, {"P_1_N": _push(t)})
+    _write_motion(mot, m, t, x, {column: _push(t)})
     out = tmp_path / "out"
     assert main(["control", "--machine", str(src), "--motion", str(mot), "--duration", "0.05", "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert "'P_1_N'" in err and "effort column" in err and len(err.strip().splitlines()) == 1
+    assert f"'{column}'" in err and words in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
