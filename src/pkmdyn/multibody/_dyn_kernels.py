@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._kernels import _advance, _frame, _unit_twist, forward_positions
+from ._kernels import _advance, _frame, _matmul3, _unit_twist, forward_positions
 
 
 @njit(cache=True)
@@ -218,7 +218,8 @@ def _gram(Z, M):  # pragma: no cover - compiled
 
 
 @njit(cache=True, _nrt=False, inline="always")
-def task_mass(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, factor, M, T, Z):  # pragma: no cover
+def task_mass(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, factor, M, T, Z,
+              RL):  # pragma: no cover - compiled
     """One sample's ``M (nt, nt) = sum_b T_b^T I_b T_b``: the bodies' kinetic energy in the task
     rates, with ``T_b`` the twist of body b per task rate, built down the tree as ``T_b =
     T_parent + sum_{c of b's joint} S_c G_c`` (Eq. 3.40 of Featherstone 2008 per task rate).
@@ -228,24 +229,14 @@ def task_mass(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, fac
     side by side make ``Z (nt, 6 nb)`` and ``M = Z Z^T``. ``S (nq, 6)``, ``G (nq, nt)``, ``R
     (nb, 3, 3)``, ``p (nb, 3)`` the centres of mass, ``factor (nb, 3, 3)``
     (:func:`.dynamics.inertia_factors`); ``T (nb, nt, 6)`` (row t of body b: its twist per unit
-    task rate t), ``Z (nt, 6 nb)`` work space."""
+    task rate t), ``Z (nt, 6 nb)``, ``RL (3, 3)`` work space."""
     nt = G.shape[1]
     for b in range(R.shape[0]):
         a = body_parent[b]
         k = body_joint[b]
         sm = math.sqrt(mass[b])
         p0, p1, p2 = p[b, 0], p[b, 1], p[b, 2]
-        L = factor[b]
-        # the columns of R L
-        l00 = R[b, 0, 0] * L[0, 0] + R[b, 0, 1] * L[1, 0] + R[b, 0, 2] * L[2, 0]
-        l10 = R[b, 1, 0] * L[0, 0] + R[b, 1, 1] * L[1, 0] + R[b, 1, 2] * L[2, 0]
-        l20 = R[b, 2, 0] * L[0, 0] + R[b, 2, 1] * L[1, 0] + R[b, 2, 2] * L[2, 0]
-        l01 = R[b, 0, 0] * L[0, 1] + R[b, 0, 1] * L[1, 1] + R[b, 0, 2] * L[2, 1]
-        l11 = R[b, 1, 0] * L[0, 1] + R[b, 1, 1] * L[1, 1] + R[b, 1, 2] * L[2, 1]
-        l21 = R[b, 2, 0] * L[0, 1] + R[b, 2, 1] * L[1, 1] + R[b, 2, 2] * L[2, 1]
-        l02 = R[b, 0, 0] * L[0, 2] + R[b, 0, 1] * L[1, 2] + R[b, 0, 2] * L[2, 2]
-        l12 = R[b, 1, 0] * L[0, 2] + R[b, 1, 1] * L[1, 2] + R[b, 1, 2] * L[2, 2]
-        l22 = R[b, 2, 0] * L[0, 2] + R[b, 2, 1] * L[1, 2] + R[b, 2, 2] * L[2, 2]
+        _matmul3(R[b], factor[b], RL)
         o = 6 * b
         for t in range(nt):
             Tb = T[b, t]
@@ -259,9 +250,8 @@ def task_mass(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, fac
             Z[t, o] = sm * (Tb[3] + w1 * p2 - w2 * p1)
             Z[t, o + 1] = sm * (Tb[4] + w2 * p0 - w0 * p2)
             Z[t, o + 2] = sm * (Tb[5] + w0 * p1 - w1 * p0)
-            Z[t, o + 3] = l00 * w0 + l10 * w1 + l20 * w2
-            Z[t, o + 4] = l01 * w0 + l11 * w1 + l21 * w2
-            Z[t, o + 5] = l02 * w0 + l12 * w1 + l22 * w2
+            for i in range(3):
+                Z[t, o + 3 + i] = RL[0, i] * w0 + RL[1, i] * w1 + RL[2, i] * w2
     _gram(Z, M)
 
 
@@ -271,14 +261,15 @@ def task_mass_batch(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mas
     """``M_out (n, nt, nt)``, every sample (:func:`task_mass`)."""
     nt = G.shape[2]
     _task_mass_loop(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, factor, M_out,
-                    np.empty((R.shape[1], nt, 6)), np.empty((nt, 6 * R.shape[1])))
+                    np.empty((R.shape[1], nt, 6)), np.empty((nt, 6 * R.shape[1])), np.empty((3, 3)))
 
 
 @njit(cache=True, _nrt=False)
-def _task_mass_loop(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, factor, M_out, T,
-                    Z):  # pragma: no cover - compiled
+def _task_mass_loop(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, factor, M_out, T, Z,
+                    RL):  # pragma: no cover - compiled
     for s in range(G.shape[0]):
-        task_mass(S[s], G[s], body_parent, body_joint, joint_q0, joint_nq, R[s], p[s], mass, factor, M_out[s], T, Z)
+        task_mass(S[s], G[s], body_parent, body_joint, joint_q0, joint_nq, R[s], p[s], mass, factor, M_out[s], T, Z,
+                  RL)
 
 
 @njit(cache=True, _nrt=False, inline="always")
@@ -376,10 +367,12 @@ def apply_loads(R, origin, load_body, load_point, LF, LM, W):  # pragma: no cove
 
 def _refresh_cache() -> None:
     """The twist kernels link or inline the kinematics kernels' ``forward_positions``,
-    ``_frame``, ``_unit_twist`` and ``_advance`` (:mod:`._cache`)."""
+    ``_frame``, ``_unit_twist`` and ``_advance``, the mass matrix kernels ``_matmul3``
+    (:mod:`._cache`)."""
     from . import _cache, _kernels
 
-    _cache.refresh((twists_batch, twists_from_poses, _twists_from_poses_loop), (_kernels,))
+    _cache.refresh((twists_batch, twists_from_poses, _twists_from_poses_loop, task_mass_batch, _task_mass_loop),
+                   (_kernels,))
 
 
 _refresh_cache()

@@ -603,6 +603,16 @@ def _idle_residuals(q, q_ref, idle, ires):
         ires[i] = acc
 
 
+@njit(cache=True, _nrt=False)
+def task_unit_rhs(sel_rows, nr, Gw):
+    """``Gw (mk, nt)``: the right-hand sides ``(0; I; 0)`` of ``G = K^-1 (0; I; 0)`` in the rows
+    of the solved system (selected rows, then idle rows): 1 where selected row i is the task
+    row of coordinate t."""
+    for i in range(Gw.shape[0]):
+        for t in range(Gw.shape[1]):
+            Gw[i, t] = 1.0 if (i < sel_rows.shape[0] and sel_rows[i] == nr + t) else 0.0
+
+
 #: the phases of :func:`solve_sample`
 _CHORD, _NEWTON, _RATES = 0, 1, 2
 #: samples without the simplified step after one that still needed a Newton step (the
@@ -641,7 +651,9 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, body_parent, body_joint, joint_
        gamma_task)``, ``G = K^-1 (0; I; 0)``, the bodies' velocities ``V`` and accelerations
        ``A`` (``K, piv`` are left holding the factors at the solution).
 
-    Returns the status (OK, NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN); ``info[0]``
+    ``Gw (mk, nt)``: the constant right-hand sides ``(0; I; 0)`` (:func:`task_unit_rhs`);
+    ``Gw2 (mk, nt)`` work space. Returns the status (OK, NOT_CONVERGED, SINGULAR,
+    EULER_SINGULAR, LOOP_OPEN); ``info[0]``
     the worst row, ``info[1]`` the scaled residual, ``info[2]`` the Newton evaluations (1:
     the first closed the loops). On OK the poses ``R, p``, twists ``S`` and
     Jacobian ``J`` are those of the converged ``q``. The poses, the rows, the factorisation
@@ -661,9 +673,6 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, body_parent, body_joint, joint_
         # ---- evaluate the rows at q (their values with the Jacobian, or the drift)
         if phase == _RATES:
             # G = K^-1 (0; I) (all task columns in one pass), qd = G xd, bias motion
-            for i in range(mk):
-                for t in range(nt):
-                    Gw[i, t] = 1.0 if (i < m and sel_rows[i] == nr + t) else 0.0
             block_lu_solve_columns(K, piv, blocks, prow, pcol, Gw, G, Gw2)
             for j in range(nq):
                 acc = 0.0
@@ -812,6 +821,7 @@ def solve_batch(tm, x, xd, xdd, q_start,
     info = np.zeros(3)
     pause = 0
     Gw = np.empty((mk, nt))
+    task_unit_rhs(sel_rows, nr, Gw)
     Gw2 = np.empty((mk, nt))
     for s in range(n):
         if s > 0 and tm.shape[0] == n:

@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 
 from .._dense import solve_in_place
 from ._dyn_kernels import body_wrench, generalised, joint_friction, load_wrench, task_mass
-from ._kernels import OK, _point_motion, _wrap, chord_pause, solve_sample
+from ._kernels import OK, _point_motion, _wrap, chord_pause, solve_sample, task_unit_rhs
 from .dynamics import SINGULAR_ACTUATION, inertia_factors
 from .friction import EPS_ROTATION as EPS_R
 from .friction import EPS_TRANSLATION as EPS_T
@@ -68,7 +68,7 @@ _INT = ("body_parent", "body_joint", "joint_q0", "joint_nq", "coord_motion", "an
 _FLOAT = ("coord_offset", "coord_sign", "tree_R_parent", "tree_p_parent", "tree_R_child", "tree_p_child",
           "joint_R_parent", "joint_p_parent", "joint_R_child", "joint_p_child", "task_point", "solver_idle",
           "row_scale", "mass", "inertia", "com", "gravity", "load_point", "load_force", "load_moment",
-          "coef", "fsc", "ecoef", "eoff", "load_direction", "inertia_factor")
+          "coef", "fsc", "ecoef", "eoff", "load_direction", "inertia_factor", "task_rhs")
 #: header of the packed buffer: n_int, n_float, task_body, max_iter, nq, nt, and the offsets
 #: of the two tolerances, the state, the work space and the integer work space
 _HEAD = 10
@@ -88,7 +88,7 @@ def _sizes(model: MechanismModel) -> tuple[int, int, int]:
     nstate = 1 + nq + nt + nq * nt + nq + nt + 1
     nwork = (nb * 9 + nb * 3 + nq * 6 + nrow + nrow * nq + nrow + mk * mk + mk + mk + mk + 2 * nq + nb * 6
              + nq * 6 + nb * 6 + nrow + 45 + 60 + nb * 6 + nq + nb * 6 * nt + 9 + 9 + 6 * nb * nt + nt * nt + nt * nt
-             + 2 * nt + 12 + 3 + 2 * mk * nt + nq + nb * 3)
+             + 2 * nt + 12 + 3 + mk * nt + nq + nb * 3)
     return nstate, nwork, 2 * mk
 
 
@@ -104,6 +104,8 @@ def pack(model: MechanismModel) -> NDArray[np.int64]:
     arrays = {k: getattr(model, k) for k in _INT + _FLOAT if hasattr(model, k)}
     arrays["row_scale"] = row_scale(model)
     arrays["inertia_factor"] = inertia_factors(model)
+    arrays["task_rhs"] = np.empty((model.nq, model.nt))
+    task_unit_rhs(model.solver_rows, model.row_loop.shape[0], arrays["task_rhs"])
     arrays.update(friction_arrays(model))
     arrays["load_named"] = np.array([nm is not None for nm in model.load_name], dtype=np.int64)
     nstate, nwork, nwi = _sizes(model)
@@ -280,6 +282,7 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     fcoef, fsc, ecoef, eoff, load_direction = _f2(pk, 20), _f2(pk, 21), _f2(pk, 22), _f2(pk, 23), \
         _f2(pk, 24)
     inertia_factor = _f3(pk, 25)
+    Gw = _f2(pk, 26)
     tol, check_tol = _fview(pk, pk[6], (2,))
     task_body, max_iter = pk[2], pk[3]
     nr = row_loop.shape[0]
@@ -322,7 +325,6 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     a3, o = _take1(pk, o, 3)
     f3, o = _take1(pk, o, 3)
     info, o = _take1(pk, o, 3)
-    Gw, o = _take2(pk, o, mk, nt)
     Gw2, o = _take2(pk, o, mk, nt)
     Qf, o = _take1(pk, o, nq)
     if o > pk[9]:
@@ -419,7 +421,7 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
             acc += Gp[c, t] * Q[c]
         h[t] = acc
     # ---- 4. the task mass matrix
-    task_mass(S, Gp, body_parent, body_joint, joint_q0, joint_nq, R, pc, mass, inertia_factor, M, T, Z)
+    task_mass(S, Gp, body_parent, body_joint, joint_q0, joint_nq, R, pc, mass, inertia_factor, M, T, Z, tmp)
     # ---- 5. the equation of motion, M xdd + h = J_ax^T u
     if forward:
         for t in range(nt):

@@ -55,6 +55,7 @@ class MechanismVerbs:
         self.COORDINATES = tuple(f"{n}_{u}" for n, u in zip(model.task_names, model.task_units))
         self.ACTUATORS = tuple(f"{a}_{effort_unit(model, i)}" for i, a in enumerate(model.actuator_names))
         self._q_last: Array | None = None
+        self._inertia_factors = inertia_factors(model)  # the mass matrix's constant factors
         # the compiled single-sample path (:mod:`._one`), where it answers for this mechanism
         self._pk = _one.pack(model) if _one.supported(model) else None
 
@@ -134,7 +135,7 @@ class MechanismVerbs:
         M = np.empty((len(kin), model.nt, model.nt))
         task_mass_batch(np.ascontiguousarray(S), np.ascontiguousarray(kin.G), model.body_parent, model.body_joint,
                         model.joint_q0, model.joint_nq, np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.p),
-                        model.mass, inertia_factors(model), M)
+                        model.mass, self._inertia_factors, M)
         return M
 
     def _bias(self, model: MechanismModel, kin: MechanismKinematics, S: Array, named: dict | None = None) -> Array:
