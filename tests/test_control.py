@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import toy_machine as toy
-from pkmdyn.cli.control import _pdm_setup, hip_closed_loop
+from pkmdyn.cli.control import hip_closed_loop, machine_setup
 from pkmdyn.control import Gains, effort, gains, load_settings, loop_settings, make_controller, sample_reference
 from pkmdyn.errors import ParameterError
 from pkmdyn.simulate import DivergenceError, LoopSettings, track
@@ -48,9 +48,7 @@ def test_hip_replay_error_is_the_hold_not_the_integrator():
     base = hip_closed_loop(1.0, "feedforward", exact_plant=True)
     fine = hip_closed_loop(1.0, "feedforward", integration_step_s=1e-4, exact_plant=True)
     assert np.rad2deg(np.abs(base.result.q - fine.result.q)).max() < 1e-4
-    import pkmdyn.cli.control as cc
-
-    su = cc._hip_setup(None, None, None, 1.0, s)
+    su = machine_setup("hip", None, None, None, 1.0, s)
     ros2 = track(su.verbs, su.model, su.model, su.motion, 1.0, "feedforward", gains(s, "feedforward", 3),
                  replace(ls, method="ros2"), True)
     K = base.result.t.shape[0]
@@ -98,7 +96,7 @@ def test_pdm_feedforward_replay_on_exact_plant():
     tests the feedforward and the hold, and the error falls faster than the cycle (as its
     cube with the held effort of ``held_efforts``)."""
     s = load_settings("pdm")
-    su = _pdm_setup(None, None, None, 1.0, s)
+    su = machine_setup("pdm", None, None, None, 1.0, s)
     errs = []
     for T in (2e-3, 1e-3):
         ls = replace(loop_settings(s), cycle_s=T, step_s=T / 2, encoder_resolution=0.0)

@@ -12,17 +12,17 @@ import pyarrow.parquet as pq
 import pytest
 
 from pkmdyn.cli import main
-from pkmdyn.cli.control import PLOT_RAW_MAX, _Curves, _hip_setup, _pdm_setup
+from pkmdyn.cli.control import PLOT_RAW_MAX, _Curves, machine_setup
 from pkmdyn.control import gains, load_settings, loop_settings
 from pkmdyn.simulate import _run, track, track_spans
 
 
-@pytest.mark.parametrize("machine, kind, setup, n", [("hip", "augmented-pd", _hip_setup, 3), ("hip", "computed-torque", _hip_setup, 3),
-                                                     ("pdm", "pid", _pdm_setup, 4)])
-def test_spans_join_to_the_whole_run(machine, kind, setup, n):
+@pytest.mark.parametrize("machine, kind, n", [("hip", "augmented-pd", 3), ("hip", "computed-torque", 3),
+                                              ("pdm", "pid", 4)])
+def test_spans_join_to_the_whole_run(machine, kind, n):
     s = load_settings(machine)
     ls = loop_settings(s)  # the hip's pose sensor: noise and a delay of 2 cycles, carried across spans
-    su = setup(None, None, None, 0.4, s)
+    su = machine_setup(machine, None, None, None, 0.4, s)
     g = gains(s, kind, n)
     whole = track(su.verbs, su.model, su.plant_model, su.motion, 0.25, kind, g, ls, su.has_load,
                   joint_accelerations=True)

@@ -176,3 +176,20 @@ def test_described_control_refuses_bad_settings_by_key(tmp_path, capsys):
                      "--out", str(tmp_path / "o")])
         err = capsys.readouterr().err.strip()
         assert code == 2 and word in err and len(err.splitlines()) == 1 and not (tmp_path / "o").exists(), err
+
+
+@pytest.mark.parametrize("name", ["hip", "pdm"])
+def test_a_described_mechanism_named_like_a_hand_built_machine_controls_as_itself(tmp_path, name):
+    """The control job takes a described mechanism's columns from its description, whatever its
+    name: a copy of rrr3 renamed after a hand-built machine writes the same control.csv as rrr3
+    (before, the name routed it to that machine's columns and the run failed)."""
+    from pkmdyn.cli import main
+
+    text = (ex.MACHINES / "rrr3" / "rrr3.toml").read_text(encoding="utf-8")
+    assert 'name = "rrr3"' in text
+    renamed = tmp_path / "renamed.toml"
+    renamed.write_text(text.replace('name = "rrr3"', f'name = "{name}"', 1), encoding="utf-8")
+    for machine, out in (("rrr3", tmp_path / "a"), (str(renamed), tmp_path / "b")):
+        assert main(["control", "--machine", machine, "--duration", "0.04", "--out", str(out)]) == 0
+    assert (tmp_path / "a" / "control.csv").read_bytes() == (tmp_path / "b" / "control.csv").read_bytes()
+    assert json.loads((tmp_path / "b" / "summary.json").read_text())["machine"] == name

@@ -1,17 +1,19 @@
-"""Closed-loop control commands: ``pkmdyn hip control`` and ``pkmdyn pdm control``.
+"""Closed-loop control commands: ``pkmdyn hip control``, ``pkmdyn pdm control`` and the control
+job of ``pkmdyn control``.
 
-This module wires a machine (its parameter loader, its ``minimal`` verbs, its motions) to the
-machine-independent layers :mod:`pkmdyn.control` and :mod:`pkmdyn.simulate`, and writes the
-files: ``control.csv`` (one row per control cycle), ``summary.json`` and the plots (posture
-errors as the hip paper's Fig. 7; measured and theoretical limb displacement, velocity and
-acceleration as the PDM paper's Fig. 26). Everything is computed and checked before the
-output folder is touched. :func:`hip_closed_loop` is the public entry of the real-time
-benchmark.
+This module wires a machine to the machine-independent layers :mod:`pkmdyn.control` and
+:mod:`pkmdyn.simulate`, and writes the files: ``control.csv`` (one row per control cycle),
+``summary.json``, the plots and ``report.html``. What is a hand-built machine's own (its
+parameter loader, ``minimal`` verbs, motions, column names, figures such as the hip paper's
+Fig. 7 posture errors or the PDM paper's Fig. 26 limb motion, its 3D scene) comes from its
+control adapter in the registry (:mod:`pkmdyn.control_protocol`); a described mechanism has
+none and gets the generic columns of its description. Everything is computed and checked
+before the output folder is touched. :func:`hip_closed_loop` is the public entry of the
+real-time benchmark.
 """
 
 from __future__ import annotations
 
-import copy
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,16 +23,14 @@ import click
 import numpy as np
 
 from ..errors import MotionError, ParameterError, PkmdynError
+from ..machines.hip_simulator import control_job as _hip_job
+from ..machines.pdm4 import control_job as _pdm_job
 from ._groups import PATH_IN, announce_compiles, hip, list_files, pdm
 from ._groups import FiniteFloat
 from ._hip_options import paper_option
 
-__all__ = ["hip_closed_loop", "run_control", "effort_label", "HIP_CONTROLLERS", "PDM_CONTROLLERS", "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
+__all__ = ["hip_closed_loop", "run_control", "machine_setup", "effort_label", "hand_built_controllers", "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
 
-HIP_CONTROLLERS = ("pd", "augmented-pd", "feedforward", "computed-torque")
-PDM_CONTROLLERS = ("pid", "feedforward", "computed-torque")
-#: PDM limb names, in the order of the actuators (``l{k}_m`` columns)
-PDM_LIMBS = ("l11", "l12", "l23", "l24")
 #: most cycles of the built-in motion (``--cycles``)
 MAX_CYCLES = 1000.0
 #: most control cycles of one run (streamed in spans, so memory does not grow with it; the bound keeps the
@@ -42,7 +42,9 @@ MAX_STEPS_PER_CYCLE = 1000
 
 @dataclass(frozen=True)
 class _Setup:
-    """A machine ready to run: verbs, controller and plant models, motion, duration, labels."""
+    """A machine ready to run: verbs, controller and plant models, motion, duration, labels;
+    ``job``: a hand-built machine's control adapter (:class:`pkmdyn.control_protocol.ControlJob`),
+    None for a described mechanism."""
 
     machine: str
     verbs: Any
@@ -57,104 +59,40 @@ class _Setup:
     span_s: float = 0.0  #: the motion as a whole [s]: a full cycle of a built-in motion even for a part of one
     fold_s: float = 0.0  #: the period a built-in motion repeats with [s] (plots fold the run by it); 0: none
     load_column: str = "load_N"  #: the column of the motion's load in control.csv (``has_load``)
+    job: Any = None
 
 
 # ----------------------------------------------------------------------------- machines
-def _plant_model(load: Any, from_dict: Any, description: Any, params: Path | None, plant_params: Path | None,
-                 settings: dict[str, Any]) -> tuple[Any, str]:
-    """The plant's model and a line saying where it came from: ``--plant-params`` when given, else
-    the controller's description (``description()``) with the ``[mismatch]`` factors applied."""
-    from ..control import scale_description
+def machine_setup(machine: str, params: Path | None, plant_params: Path | None, motion: Path | None, cycles: float,
+                  settings: dict[str, Any]) -> _Setup:
+    """The hand-built machine ``machine`` (a registry name) ready to run: the controller's model
+    from ``params`` (None: built-in), the plant's from ``plant_params`` or else the controller's
+    parameters with the ``[mismatch]`` factors of ``settings``, and ``cycles`` of the built-in
+    motion or the motion file ``motion``."""
+    from ..control import hermite_motion, scale_description
+    from ..machines.registry import control_adapter
 
+    job = control_adapter(machine)
+    description, source = job.read_description(params)  # each file is read once (it may be a pipe)
+    model = job.model_from_dict(description, source)
     if plant_params is not None:
-        return load(plant_params), str(plant_params)
-    mm = settings["mismatch"]
-    plant = from_dict(scale_description(description(), mm["mass_factor"], mm["friction_factor"]),
-                      "plant (parameters with the [mismatch] factors)")
-    return plant, (f"{params or 'built-in parameters'} with masses x {mm['mass_factor']:g}, "
-                   f"friction x {mm['friction_factor']:g}")
-
-
-def _hip_setup(params: Path | None, plant_params: Path | None, motion: Path | None, cycles: float,
-               settings: dict[str, Any]) -> _Setup:
-    from ..machines.hip_simulator import minimal
-    from ..machines.hip_simulator.params import default_params_dict, load_params, model_from_dict
-    from ..params_util import read_toml
-    from ..profiles.iso14242 import angle_wave, iso_load
-    from ..machines.hip_simulator.iso_fit import iso_cycle_preset
-
-    # each file is read once (it may be a pipe)
-    description = read_toml(params) if params is not None else default_params_dict()
-    model = model_from_dict(copy.deepcopy(description), str(params) if params is not None else "built-in parameters")
-    plant, plant_source = _plant_model(load_params, model_from_dict, lambda: description, params, plant_params,
-                                       settings)
-    if motion is None:
-        cyc = iso_cycle_preset(model.motion_model)
-
-        def fn(t: np.ndarray) -> tuple:
-            w = [angle_wave(t, cyc.period_s, x) for x in (cyc.fe, cyc.aa, cyc.ier)]
-            return (np.stack([a[0] for a in w], -1), np.stack([a[1] for a in w], -1),
-                    np.stack([a[2] for a in w], -1), iso_load(t, cyc))
-
-        duration, source = (cycles * cyc.period_s,
-                            f"built-in ISO 14242-1 cycle model ({model.motion_model}), {cycles:g} cycle(s)")
+        plant, plant_source = job.load_params(plant_params), str(plant_params)
     else:
-        from ..control import hermite_motion
-        from ..profiles.orientation import read_motion_csv
-
-        mo = read_motion_csv(motion)
-        if mo.load is not None:
-            lim = float(model.limits.max_load_N)
-            big = np.flatnonzero(np.abs(mo.load) > lim)
-            if big.size:
-                raise MotionError(f"{motion}: row {big[0] + 1}, column 'load_N': {mo.load[big[0]]:g} N is above "
-                                  f"max_load_N = {lim:g} N ([limits] of the parameter file)")
-        fn = hermite_motion(mo.t, mo.angles, mo.rates, mo.accels, mo.load)
-        duration, source = float(mo.t[-1] - mo.t[0]), str(motion)
-    period = cyc.period_s if motion is None else 0.0
-    span = max(duration, period) if motion is None else duration
-    return _Setup("hip", minimal, model, plant, fn, duration, True, str(params or "built-in parameters"),
-                  plant_source, source, span, period)
-
-
-def _pdm_setup(params: Path | None, plant_params: Path | None, motion: Path | None, cycles: float,
-               settings: dict[str, Any]) -> _Setup:
-    from ..machines.pdm4 import minimal
-    from ..machines.pdm4.params import default_params_path, load_params, params_from_dict
-    from ..params_util import read_toml
-    from ..profiles.cycloidal import cycloidal
-
-    # each file is read once (it may be a pipe)
-    source = (default_params_path() if params is None else Path(params)).absolute()
-    description = read_toml(source)
-    model = params_from_dict(copy.deepcopy(description), str(source))
-    plant, plant_source = _plant_model(load_params, params_from_dict, lambda: description, params, plant_params,
-                                       settings)
+        mm = settings["mismatch"]
+        plant = job.model_from_dict(scale_description(description, mm["mass_factor"], mm["friction_factor"]),
+                                    "plant (parameters with the [mismatch] factors)")
+        plant_source = (f"{params or 'built-in parameters'} with masses x {mm['mass_factor']:g}, "
+                        f"friction x {mm['friction_factor']:g}")
     if motion is None:
-        tr = model.trajectory
-        S, P = np.asarray(tr.strokes, dtype=float), float(tr.period_s)
-        n_cyc = max(1, int(np.ceil(cycles - 1e-9)))
-
-        def fn(t: np.ndarray) -> tuple:
-            t = np.asarray(t, dtype=float)
-            c = np.clip(np.floor(t / P), 0, n_cyc - 1)
-            tau = np.clip(t - c * P, 0.0, P)
-            s, sd, sdd = cycloidal(tau, S, P)
-            back = (c % 2 == 1)[:, None]
-            return (np.where(back, S - s, s), np.where(back, -sd, sd), np.where(back, -sdd, sdd), None)
-
-        duration = cycles * P
-        source = f"Eq. 84 cycloidal motion of the parameter file, {cycles:g} stroke(s), alternately out and back"
+        bm = job.builtin_motion(model, cycles)
+        fn, duration, motion_source, span, fold = bm.fn, bm.duration_s, bm.source, bm.span_s, bm.fold_s
     else:
-        from ..control import hermite_motion
-        from ..profiles.pdm_motion import read_pdm_motion
-
-        mo = read_pdm_motion(motion)
-        fn = hermite_motion(mo.t, mo.q, mo.qd, mo.qdd, None)
-        duration, source = float(mo.t[-1] - mo.t[0]), str(motion)
-    span = max(duration, float(model.trajectory.period_s)) if motion is None else duration
-    return _Setup("pdm", minimal, model, plant, fn, duration, False, str(params or "built-in parameters"),
-                  plant_source, source, span, 2.0 * float(model.trajectory.period_s) if motion is None else 0.0)
+        mo = job.read_motion(model, motion)
+        fn = hermite_motion(mo.t, mo.q, mo.qd, mo.qdd, mo.load)
+        duration = float(mo.t[-1] - mo.t[0])
+        motion_source, span, fold = str(motion), duration, 0.0
+    return _Setup(job.NAME, job.verbs(), model, plant, fn, duration, job.HAS_LOAD, str(params or "built-in parameters"),
+                  plant_source, motion_source, span, fold, job=job)
 
 
 # ----------------------------------------------------------------------------- run
@@ -187,7 +125,9 @@ def _prepare(machine: str, controller: str, params: Path | None, plant_params: P
     from ..control import gains, load_settings, loop_settings
     from ..simulate import check_timing
 
-    allowed = HIP_CONTROLLERS if machine == "hip" else PDM_CONTROLLERS
+    from ..machines.registry import control_adapter
+
+    allowed = control_adapter(machine).CONTROLLERS
     if controller not in allowed:
         raise ParameterError(f"--controller {controller!r}: unknown for the {machine} (choose from {', '.join(allowed)})")
     if not (np.isfinite(cycles) and 0 < cycles <= MAX_CYCLES):
@@ -199,7 +139,7 @@ def _prepare(machine: str, controller: str, params: Path | None, plant_params: P
     if steps > MAX_STEPS_PER_CYCLE:
         raise ParameterError(f"[timing] integration_step_s = {ls.step_s:g} s: {steps:g} steps per control cycle, above "
                              f"the limit {MAX_STEPS_PER_CYCLE}")
-    setup = (_hip_setup if machine == "hip" else _pdm_setup)(params, plant_params, motion, cycles, settings)
+    setup = machine_setup(machine, params, plant_params, motion, cycles, settings)
     n_cycles = setup.duration / ls.cycle_s
     if not np.isfinite(n_cycles) or n_cycles > MAX_CONTROL_CYCLES or n_cycles * steps > 50 * MAX_CONTROL_CYCLES:
         raise MotionError(f"motion: {setup.duration:g} s is {n_cycles:g} control cycles of {ls.cycle_s:g} s "
@@ -222,10 +162,6 @@ class ControlWarning(UserWarning):
     """A run that succeeded but whose result should be read with care (printed by the command)."""
 
 
-#: clinical names of the hip's Euler angles (FE, AA, IER), for messages
-_HIP_NAMES = {"alpha": "alpha (FE)", "beta": "beta (AA)", "gamma": "gamma (IER)"}
-
-
 def _divergence_message(setup: _Setup, controller: str, exc: Any) -> str:
     """The divergence said in the coordinate's name and in the unit of the settings file's
     ``[run] divergence_limit_*`` key (deg for angles, m for lengths); with feedforward on an
@@ -234,7 +170,7 @@ def _divergence_message(setup: _Setup, controller: str, exc: Any) -> str:
         text = str(exc)
     else:
         base, unit = setup.verbs.COORDINATES[exc.coordinate].rsplit("_", 1)
-        name = _HIP_NAMES.get(base, base) if setup.machine == "hip" else base
+        name = base if setup.job is None else setup.job.COORDINATE_NAMES.get(base, base)
         scale, shown, key = (180 / np.pi, "deg", "divergence_limit_deg") if unit == "rad" else (1.0, "m",
                                                                                                   "divergence_limit_m")
         err = f"{exc.error * scale:.4g} {shown}" if np.isfinite(exc.error) else "not finite"
@@ -275,8 +211,8 @@ def _open_loop_growth(setup: _Setup) -> str | None:
         return None
     if not (np.isfinite(rate) and rate > 1e-6):
         return None
-    return (f"the {setup.machine.upper() if setup.machine == 'pdm' else 'hip simulator'} is open-loop unstable at the "
-            f"start pose (an error grows by e every {1 / rate:.3g} s)")
+    subject = f"mechanism {setup.machine}" if setup.job is None else setup.job.SUBJECT
+    return f"{subject} is open-loop unstable at the start pose (an error grows by e every {1 / rate:.3g} s)"
 
 
 #: fewest encoder counts over the largest actuator travel of a run
@@ -308,13 +244,35 @@ def _check_encoder(setup: _Setup, ls: Any, settings: dict[str, Any], gains_path:
     travel = float(np.max(np.ptp(s, axis=0)))
     res = float(ls.encoder_resolution)
     if travel > 0 and res * MIN_ENCODER_COUNTS > travel:
-        unit = "rad" if setup.machine == "hip" else "m"
+        unit = _travel_unit(setup)
         where = f"{gains_path}: [sensors]" if gains_path is not None else "built-in settings: [sensors]"
         counts = settings["sensors"]["encoder_counts_per_turn"]
         raise ParameterError(
             f"{where} encoder_counts_per_turn: {counts:g} counts per turn make one count {res:.3g} {unit} of actuator "
             f"travel, while the motion moves an actuator at most {travel:.3g} {unit}: fewer than "
             f"{MIN_ENCODER_COUNTS} counts, too coarse to measure it (raise encoder_counts_per_turn)")
+
+
+def hand_built_controllers() -> dict[str, tuple[str, ...]]:
+    """The controllers of every hand-built machine with a control job, by machine name."""
+    from ..machines.registry import control_adapter, hand_built_machines
+
+    out = {}
+    for name in sorted(hand_built_machines()):
+        try:
+            out[name] = control_adapter(name).CONTROLLERS
+        except ParameterError:  # a machine without a control job
+            continue
+    return out
+
+
+def _travel_unit(setup: _Setup) -> str:
+    """The unit of an actuator's travel: the machine's, or a described mechanism's by its
+    actuators' effort columns (forces: m, torques: rad)."""
+    if setup.job is not None:
+        return setup.job.TRAVEL_UNIT
+    units = {"m" if a.endswith("_N") else "rad" for a in setup.verbs.ACTUATORS}
+    return units.pop() if len(units) == 1 else "m or rad"
 
 
 def hip_closed_loop(duration_s: float = 10.0, controller: str = "augmented-pd",
@@ -328,11 +286,11 @@ def hip_closed_loop(duration_s: float = 10.0, controller: str = "augmented-pd",
     from ..control import gains, load_settings, loop_settings
     from ..simulate import track
 
-    settings = load_settings("hip")
+    settings = load_settings(_hip_job.NAME)
     ls = loop_settings(settings)
     if integration_step_s is not None:
         ls = replace(ls, step_s=float(integration_step_s))
-    setup = _hip_setup(None, None, None, duration_s, settings)
+    setup = machine_setup(_hip_job.NAME, None, None, None, duration_s, settings)
     plant = setup.model if exact_plant else setup.plant_model
     return track(setup.verbs, setup.model, plant, setup.motion, duration_s, controller,
                  gains(settings, controller, 3), ls, True, joint_accelerations=False)
@@ -358,10 +316,8 @@ def _joint_columns(setup: _Setup) -> list[tuple[str, float, str, str, str]]:
     """Per actuator: its name in the columns, the scale to its file unit and the units of its
     displacement, rate and acceleration (a described mechanism: its actuated joints in SI, m or
     rad by the effort's unit)."""
-    if setup.machine == "hip":
-        return [(f"motor{a + 1}", 1.0, "rad", "rad_s", "rad_s2") for a in range(3)]
-    if setup.machine == "pdm":
-        return [(n, 1e3, "mm", "mm_s", "mm_s2") for n in PDM_LIMBS]
+    if setup.job is not None:
+        return setup.job.joint_columns()
     out = []
     for act in setup.verbs.ACTUATORS:
         units = ("m", "m_s", "m_s2") if act.endswith("_N") else ("rad", "rad_s", "rad_s2")
@@ -385,7 +341,7 @@ def _columns(setup: _Setup, tr: Any) -> dict[str, np.ndarray]:
         cols[f"{base}_{out_unit}"] = r.q[:, c] * scale
         cols[f"{base}_err_{out_unit}"] = (ref.q[:K, c] - r.q[:, c]) * scale
         cols[f"{base}_sensed_{out_unit}"] = r.q_s[:, c] * scale
-        if setup.machine == "hip":
+        if setup.job is not None and setup.job.ATTITUDE_COLUMNS:
             cols[f"{base}_attitude_{out_unit}"] = r.q_att[:, c] * scale
     for a, name in enumerate(setup.verbs.ACTUATORS):
         cols[name] = r.u[:, a]
@@ -543,14 +499,9 @@ class _Curves:
 
 
 def _plot_curves(setup: _Setup, tr: Any) -> dict[str, np.ndarray]:
-    r, j = tr.result, tr.joint
-    K = r.t.shape[0]
-    out = {"u": r.u}
-    if setup.machine == "hip":
-        out["err_deg"] = np.rad2deg(tr.reference.q[:K] - r.q)
-    else:
-        for key, th, me in (("s", j.s, r.s_enc), ("sd", j.sd, r.sd_enc), ("sdd", j.sdd, r.sdd_enc)):
-            out[f"{key}_th"], out[f"{key}_me"] = th[:K] * 1e3, me * 1e3
+    out = {"u": tr.result.u}
+    if setup.job is not None:
+        out.update(setup.job.plot_curves(tr.reference.q, tr.result, tr.joint))
     return out
 
 
@@ -577,49 +528,18 @@ def _plots(setup: _Setup, curves: _Curves, kind: str, tmp: Path) -> list[Path]:
     mode = curves.mode
     suffix = f"\n{note}" if note else ""
     paths = []
-    if setup.machine == "hip":
-        fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
-        for ax, c, label in zip(axes, (1, 2, 0), ("(a) AA error", "(b) IER error", "(c) FE error")):
-            _draw(ax, mode, t, first["err_deg"][:, c], lo["err_deg"][:, c], hi["err_deg"][:, c], None, lw=0.8)
-            ax.set(xlabel="t [s]", ylabel="error [deg]", title=label)
-            ax.grid(alpha=0.3)
-        fig.suptitle(f"Posture-angle errors, {kind}{suffix}")
-        fig.tight_layout()
-        p = tmp / "posture_errors.png"
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        paths.append(p)
-    else:
-        fig, axes = plt.subplots(3, 4, figsize=(15, 9.4), sharex=True)
-        rows = (("s", "displacement [mm]"), ("sd", "velocity [mm/s]"), ("sdd", "acceleration [mm/s^2]"))
-        for i, (key, lab) in enumerate(rows):
-            for a in range(4):
-                ax = axes[i, a]
-                _draw(ax, mode, t, first[f"{key}_th"][:, a], lo[f"{key}_th"][:, a], hi[f"{key}_th"][:, a],
-                      "theoretical", lw=1.0)
-                _draw(ax, mode, t, first[f"{key}_me"][:, a], lo[f"{key}_me"][:, a], hi[f"{key}_me"][:, a],
-                      "measured", lw=0.8, ls="--")
-                ax.grid(alpha=0.3)
-                if i == 0:
-                    ax.set_title(f"limb {PDM_LIMBS[a]}")
-                if a == 0:
-                    ax.set_ylabel(lab)
-                if i == 2:
-                    ax.set_xlabel("t [s]")
-        axes[0, 0].legend()
-        fig.suptitle(f"Measured and theoretical limb motion, {kind}{suffix}")
-        fig.tight_layout()
-        p = tmp / "limb_tracking.png"
-        fig.savefig(p, dpi=100)
-        plt.close(fig)
-        paths.append(p)
+    if setup.job is not None:
+        def draw(ax: Any, *args: Any, **kw: Any) -> None:
+            _draw(ax, mode, *args, **kw)
+
+        paths += setup.job.figures(draw, t, first, lo, hi, f"{kind}{suffix}", tmp)
     fig, ax = plt.subplots(figsize=(7, 4.2))
     for a in range(len(setup.verbs.ACTUATORS)):
-        label, unit = effort_label(setup.machine, a)
+        label, unit = _effort_label(setup, a)
         _draw(ax, mode, t, first["u"][:, a], lo["u"][:, a], hi["u"][:, a], f"{label} [{unit}]", lw=0.8)
-    quantity = "torque" if setup.machine == "hip" else "force"
-    ax.set(xlabel="t [s]", ylabel=f"{quantity} [{effort_label(setup.machine, 0)[1]}]",
-           title=f"Actuator efforts ({'motor torques' if setup.machine == 'hip' else 'limb forces'}){suffix}")
+    quantity, title = (("effort", "Actuator efforts") if setup.job is None else
+                       (setup.job.EFFORT_QUANTITY, f"Actuator efforts ({setup.job.EFFORTS_TITLE})"))
+    ax.set(xlabel="t [s]", ylabel=f"{quantity} [{_effort_label(setup, 0)[1]}]", title=f"{title}{suffix}")
     ax.legend()
     ax.grid(alpha=0.3)
     fig.tight_layout()
@@ -631,36 +551,38 @@ def _plots(setup: _Setup, curves: _Curves, kind: str, tmp: Path) -> list[Path]:
 
 
 def effort_label(machine: str, a: int) -> tuple[str, str]:
-    """The name and unit of actuator ``a`` (0-based) for plots: ``("motor 1 torque", "N m")``,
-    ``("limb l11 force", "N")``, not the column names ``tau1_Nm``, ``f1_N``."""
-    if machine == "hip":
-        return f"motor {a + 1} torque", "N m"
-    return f"limb {PDM_LIMBS[a]} force", "N"
+    """The name and unit of actuator ``a`` (0-based) of the hand-built machine ``machine`` for
+    plots: ``("motor 1 torque", "N m")``, ``("limb l11 force", "N")``, not the column names
+    ``tau1_Nm``, ``f1_N``."""
+    from ..machines.registry import control_adapter
+
+    return control_adapter(machine).effort_label(a)
+
+
+def _effort_label(setup: _Setup, a: int) -> tuple[str, str]:
+    """:func:`effort_label` of the run's machine; a described mechanism's from its effort column
+    (``P_1_N`` -> ``("P_1 force", "N")``)."""
+    if setup.job is not None:
+        return setup.job.effort_label(a)
+    base, unit = setup.verbs.ACTUATORS[a].rsplit("_", 1)
+    return (f"{base} force", "N") if unit == "N" else (f"{base} torque", "N m")
 
 
 def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dict[str, Any], tmp: Path,
             images: list[Path], gains_path: Path | None, K: int) -> Path:
     """``report.html`` of a control run: the plant's true motion animated (held efforts as colours),
-    tracking errors (hip) or limb motion (PDM) and efforts against time, the PNG figures, summary,
+    the machine's own curves (:meth:`~pkmdyn.control_protocol.ControlJob.report_plots`) and efforts against time, the PNG figures, summary,
     parameters and warnings."""
     from ..errors import PkmdynError
     from ..report import Curve, TimePlot, write_report
 
-    warns = [f"{effort_label(setup.machine, a)[0]} hit its limit in {v['saturated_cycles']} control cycle(s)"
+    warns = [f"{_effort_label(setup, a)[0]} hit its limit in {v['saturated_cycles']} control cycle(s)"
              for a, v in enumerate(summary["actuators"].values()) if v["saturated_cycles"]]
     f = frames.arrays()
+    job = setup.job
     scene = None
     try:
-        if setup.machine == "hip":
-            from ..machines.hip_simulator.report import parameters_text
-            from ..machines.hip_simulator.scene import hip_scene_from_angles
-
-            scene = hip_scene_from_angles(setup.plant_model, f["t"], f["q"], f["u"])
-        else:
-            from ..machines.pdm4.report import parameters_text
-            from ..machines.pdm4.scene import pdm_scene_from_pose
-
-            scene = pdm_scene_from_pose(setup.plant_model, f["t"], f["q"], f["u"])
+        scene = job.scene(setup.plant_model, f["t"], f["q"], f["u"])
     except PkmdynError as exc:  # the plant left the machine's reach: the page says so, the run stands
         warns.append(f"report: the 3D view could not be built ({exc})")
     t, first, lo, hi, note = curves.data()
@@ -670,26 +592,16 @@ def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dic
             return Curve(name, lo=lo[key][:, c], hi=hi[key][:, c])
         return Curve(name, first[key][:, c])
 
-    plots = []
-    if setup.machine == "hip":
-        plots.append(TimePlot("Posture-angle errors", "error [deg]", t,
-                              tuple(curve("err_deg", c, n) for c, n in enumerate(("alpha (FE)", "beta (AA)",
-                                                                                  "gamma (IER)"))), note))
-    else:
-        for key, lab, unit in (("s", "displacement", "mm"), ("sd", "velocity", "mm/s"), ("sdd", "acceleration", "mm/s^2")):
-            plots.append(TimePlot(f"Limb {lab}: theoretical and measured", f"{lab} [{unit}]", t, tuple(
-                c for a, nm in enumerate(PDM_LIMBS) for c in (curve(f"{key}_th", a, f"{nm} theoretical"),
-                                                              curve(f"{key}_me", a, f"{nm} measured"))), note))
-    plots.append(TimePlot("Actuator efforts", f"[{effort_label(setup.machine, 0)[1]}]", t, tuple(
-        curve("u", a, effort_label(setup.machine, a)[0]) for a in range(len(setup.verbs.ACTUATORS))), note))
-    params = parameters_text(None if setup.params_source == "built-in parameters" else setup.params_source)
+    plots = job.report_plots(curve, t, note)
+    plots.append(TimePlot("Actuator efforts", f"[{_effort_label(setup, 0)[1]}]", t, tuple(
+        curve("u", a, _effort_label(setup, a)[0]) for a in range(len(setup.verbs.ACTUATORS))), note))
+    params = job.parameters_text(None if setup.params_source == "built-in parameters" else setup.params_source)
     if gains_path is not None:
         try:
             params += f"\n\n# control settings: {gains_path}\n" + Path(gains_path).read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError):
             pass
-    name = "2(3PUS+S) hip simulator" if setup.machine == "hip" else "4-DOF PDM"
-    return write_report(tmp, title=f"{name}: {setup.machine} control, {kind}", scene=scene, plots=plots,
+    return write_report(tmp, title=f"{job.REPORT_NAME}: {setup.machine} control, {kind}", scene=scene, plots=plots,
                         summary=summary, parameters=params, warnings=warns, images=images,
                         notes=[f"parameters: {setup.params_source}", f"plant: {setup.plant_source}",
                                f"motion: {setup.motion_source}"],
@@ -821,16 +733,16 @@ def _options(f: Any) -> Any:
 
 @hip.command("control")
 @paper_option
-@click.option("--controller", required=True, help="One of: " + ", ".join(HIP_CONTROLLERS) + ".")
+@click.option("--controller", required=True, help="One of: " + ", ".join(_hip_job.CONTROLLERS) + ".")
 @_options
 def hip_control(controller, params_path, plant_path, motion_path, cycles, gains_path, fmt, no_plots, out_dir) -> None:
     """Closed-loop tracking of a motion; writes control.csv (or .parquet), summary.json and plots."""
-    _command("hip", controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir, fmt)
+    _command(_hip_job.NAME, controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir, fmt)
 
 
 @pdm.command("control")
-@click.option("--controller", required=True, help="One of: " + ", ".join(PDM_CONTROLLERS) + ".")
+@click.option("--controller", required=True, help="One of: " + ", ".join(_pdm_job.CONTROLLERS) + ".")
 @_options
 def pdm_control(controller, params_path, plant_path, motion_path, cycles, gains_path, fmt, no_plots, out_dir) -> None:
     """Closed-loop tracking of a motion; writes control.csv (or .parquet), summary.json and plots."""
-    _command("pdm", controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir, fmt)
+    _command(_pdm_job.NAME, controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir, fmt)

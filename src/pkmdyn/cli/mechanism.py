@@ -12,7 +12,7 @@ from pathlib import Path
 import click
 
 from ._groups import PATH_IN, FiniteFloat, cli, list_files
-from .control import MAX_CYCLES
+from .control import MAX_CYCLES, hand_built_controllers
 
 _MACHINE_HELP = "A built-in machine (see pkmdyn machines) or a mechanism description FILE.toml."
 
@@ -164,8 +164,8 @@ def described_control_settings(model) -> dict:
 @cli.command("control")
 @click.option("--machine", required=True, help=_MACHINE_HELP)
 @click.option("--controller", default=None,
-              help="hip: pd, augmented-pd, feedforward, computed-torque; pdm: pid, feedforward, computed-torque; a "
-                   "described mechanism: " + ", ".join(DESCRIBED_CONTROLLERS) + " (default computed-torque).")
+              help="; ".join(f"{n}: {', '.join(c)}" for n, c in hand_built_controllers().items()) + "; a described "
+                   "mechanism: " + ", ".join(DESCRIBED_CONTROLLERS) + " (default computed-torque).")
 @click.option("--params", "params_path", type=PATH_IN, help="Hand-built machines: the controller model's parameter file.")
 @click.option("--plant-params", "plant_path", type=PATH_IN, help="Hand-built machines: the plant's parameter file.")
 @click.option("--motion", "motion_path", type=PATH_IN,

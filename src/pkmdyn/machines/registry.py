@@ -10,7 +10,8 @@ Two kinds of folder make a built-in machine, and nothing else has to change to a
   ``default_params_text()``, ``description()`` (its built-in parameters as a mechanism
   description), ``default_motion()`` (a :class:`pkmdyn.multibody.TaskMotion`) and
   ``view_page(params, out, listing)`` (its ``pkmdyn view`` page). A module
-  ``sweep.py`` beside it makes the machine sweepable (:mod:`pkmdyn.sweep_protocol`).
+  ``sweep.py`` beside it makes the machine sweepable (:mod:`pkmdyn.sweep_protocol`), a module
+  ``control_job.py`` gives it a control job (:mod:`pkmdyn.control_protocol`).
 
 Every command that takes ``--machine`` resolves it here; an unknown name is refused, never
 routed to another machine's code.
@@ -26,7 +27,7 @@ from types import ModuleType
 from ..errors import ParameterError
 
 __all__ = ["described_machines", "hand_built_machines", "hand_built", "builtin_names", "description_path",
-           "resolve", "title", "sweep_adapter"]
+           "resolve", "title", "sweep_adapter", "control_adapter"]
 
 _HERE = Path(__file__).resolve().parent
 
@@ -112,3 +113,12 @@ def sweep_adapter(name: str) -> ModuleType:
 
 def _has_sweep(entry: ModuleType) -> bool:
     return (Path(entry.__file__).parent / "sweep.py").is_file()
+
+
+def control_adapter(name: str) -> ModuleType:
+    """The control adapter (``control_job.py`` of its folder,
+    :class:`pkmdyn.control_protocol.ControlJob`) of the hand-built machine ``name``."""
+    entry = hand_built(name)
+    if not (Path(entry.__file__).parent / "control_job.py").is_file():
+        raise ParameterError(f"machine {name!r}: this machine has no control job")
+    return importlib.import_module(f"{entry.__package__}.control_job")

@@ -5,17 +5,29 @@ the revolute joint R4. Data flows one way: TOML -> :class:`PdmModel` -> motion -
 :func:`inverse_kinematics` -> results and plots.
 """
 
-from . import minimal  # the MachineDynamics verbs in (x, y, alpha, gamma)
-from .kinematics import (
-    BODY_NAMES,
-    BodyState,
-    PdmKinematics,
-    PdmPositions,
-    inverse_kinematics,
-    inverse_position,
-    reachable,
-)
-from .params import PdmModel, default_params_path, load_params
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from . import minimal  # the MachineDynamics verbs in (x, y, alpha, gamma)
+    from .kinematics import (
+        BODY_NAMES,
+        BodyState,
+        PdmKinematics,
+        PdmPositions,
+        inverse_kinematics,
+        inverse_position,
+        reachable,
+    )
+    from .params import PdmModel, default_params_path, load_params
+
+#: the package's names and their modules, imported on first use (so that the registry and the
+#: command line can read the machine's entry without loading its dynamics)
+_LAZY = {"PdmModel": "params", "load_params": "params", "default_params_path": "params",
+         **dict.fromkeys(("BODY_NAMES", "BodyState", "PdmPositions", "PdmKinematics", "inverse_position",
+                          "inverse_kinematics", "reachable"), "kinematics")}
 
 __all__ = [
     "PdmModel",
@@ -29,3 +41,11 @@ __all__ = [
     "inverse_kinematics",
     "reachable",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+    if name == "minimal":
+        return importlib.import_module(".minimal", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,0 +1,135 @@
+"""The hip simulator's control adapter (:class:`pkmdyn.control_protocol.ControlJob`): its models
+and motions, the columns and labels of ``control.csv`` and its plots, the posture-error figure
+(the paper's Fig. 7) and the 3D scene of ``pkmdyn hip control``."""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ...control_protocol import BuiltinMotion, JointColumn, MotionTable
+from ...errors import MotionError
+
+NAME = "hip"
+CONTROLLERS = ("pd", "augmented-pd", "feedforward", "computed-torque")
+SUBJECT = "the hip simulator"
+REPORT_NAME = "2(3PUS+S) hip simulator"
+HAS_LOAD = True
+ATTITUDE_COLUMNS = True
+TRAVEL_UNIT = "rad"
+EFFORT_QUANTITY = "torque"
+EFFORTS_TITLE = "motor torques"
+#: clinical names of the Euler angles (FE, AA, IER)
+COORDINATE_NAMES = {"alpha": "alpha (FE)", "beta": "beta (AA)", "gamma": "gamma (IER)"}
+
+
+def verbs() -> Any:
+    from . import minimal
+
+    return minimal
+
+
+def read_description(params: Path | None) -> tuple[dict[str, Any], str]:
+    from ...params_util import read_toml
+    from .params import default_params_dict
+
+    if params is None:
+        return default_params_dict(), "built-in parameters"
+    return read_toml(params), str(params)
+
+
+def model_from_dict(description: dict[str, Any], source: str) -> Any:
+    from .params import model_from_dict as from_dict
+
+    return from_dict(copy.deepcopy(description), source)
+
+
+def load_params(path: Path) -> Any:
+    from .params import load_params as load
+
+    return load(path)
+
+
+def builtin_motion(model: Any, cycles: float) -> BuiltinMotion:
+    """``cycles`` ISO 14242-1 cycles of the model's cycle model, with the hydraulic load."""
+    from ...profiles.iso14242 import angle_wave, iso_load
+    from .iso_fit import iso_cycle_preset
+
+    cyc = iso_cycle_preset(model.motion_model)
+
+    def fn(t: np.ndarray) -> tuple:
+        w = [angle_wave(t, cyc.period_s, x) for x in (cyc.fe, cyc.aa, cyc.ier)]
+        return (np.stack([a[0] for a in w], -1), np.stack([a[1] for a in w], -1),
+                np.stack([a[2] for a in w], -1), iso_load(t, cyc))
+
+    duration = cycles * cyc.period_s
+    return BuiltinMotion(fn, duration, f"built-in ISO 14242-1 cycle model ({model.motion_model}), {cycles:g} cycle(s)",
+                         max(duration, cyc.period_s), cyc.period_s)
+
+
+def read_motion(model: Any, path: Path) -> MotionTable:
+    """A posture-angle motion file (:func:`pkmdyn.profiles.orientation.read_motion_csv`); its
+    load may not exceed the model's ``max_load_N``."""
+    from ...profiles.orientation import read_motion_csv
+
+    mo = read_motion_csv(path)
+    if mo.load is not None:
+        lim = float(model.limits.max_load_N)
+        big = np.flatnonzero(np.abs(mo.load) > lim)
+        if big.size:
+            raise MotionError(f"{path}: row {big[0] + 1}, column 'load_N': {mo.load[big[0]]:g} N is above "
+                              f"max_load_N = {lim:g} N ([limits] of the parameter file)")
+    return MotionTable(mo.t, mo.angles, mo.rates, mo.accels, mo.load)
+
+
+def joint_columns() -> list[JointColumn]:
+    return [(f"motor{a + 1}", 1.0, "rad", "rad_s", "rad_s2") for a in range(3)]
+
+
+def effort_label(a: int) -> tuple[str, str]:
+    return f"motor {a + 1} torque", "N m"
+
+
+def plot_curves(reference_q: np.ndarray, result: Any, joint: Any) -> dict[str, np.ndarray]:
+    return {"err_deg": np.rad2deg(reference_q[:result.t.shape[0]] - result.q)}
+
+
+def figures(draw: Callable[..., None], t: np.ndarray, first: dict[str, np.ndarray], lo: dict[str, np.ndarray],
+            hi: dict[str, np.ndarray], heading: str, folder: Path) -> list[Path]:
+    """``posture_errors.png``: the AA, IER and FE errors (the paper's Fig. 7 order)."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
+    for ax, c, label in zip(axes, (1, 2, 0), ("(a) AA error", "(b) IER error", "(c) FE error")):
+        draw(ax, t, first["err_deg"][:, c], lo["err_deg"][:, c], hi["err_deg"][:, c], None, lw=0.8)
+        ax.set(xlabel="t [s]", ylabel="error [deg]", title=label)
+        ax.grid(alpha=0.3)
+    fig.suptitle(f"Posture-angle errors, {heading}")
+    fig.tight_layout()
+    p = folder / "posture_errors.png"
+    fig.savefig(p, dpi=110)
+    plt.close(fig)
+    return [p]
+
+
+def report_plots(curve: Callable[[str, int, str], Any], t: np.ndarray, note: str) -> list[Any]:
+    from ...report import TimePlot
+
+    return [TimePlot("Posture-angle errors", "error [deg]", t,
+                     tuple(curve("err_deg", c, n) for c, n in enumerate(COORDINATE_NAMES.values())), note)]
+
+
+def scene(model: Any, t: np.ndarray, q: np.ndarray, u: np.ndarray) -> Any:
+    from .scene import hip_scene_from_angles
+
+    return hip_scene_from_angles(model, t, q, u)
+
+
+def parameters_text(params: str | None) -> str:
+    from .report import parameters_text as text
+
+    return text(params)
