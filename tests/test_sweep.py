@@ -447,7 +447,7 @@ def test_toml_writer_round_trips_nested_descriptions():
 
 def test_unknown_machine_is_a_parameter_error():
     with pytest.raises(ParameterError, match="unknown machine"):
-        sweep_adapter("stewart")
+        sweep_adapter("no_such_machine")
 
 
 # ----------------------------------------------------------------------------- refinement

@@ -63,8 +63,9 @@ class SweepAdapter(Protocol):
         """Validate a description as the machine's ``run`` would; raise a ``PkmdynError`` naming the key."""
         ...
 
-    def metrics(self, options: Mapping[str, Any]) -> tuple[MetricInfo, ...]:
-        """The metrics computed under these motion options, in column order."""
+    def metrics(self, options: Mapping[str, Any], description: Mapping[str, Any]) -> tuple[MetricInfo, ...]:
+        """The metrics computed under these motion options for designs of the base
+        ``description`` (a described mechanism names them after its joints), in column order."""
         ...
 
     def prepare(self, description: Mapping[str, Any], options: Mapping[str, Any], base_dir: Path) -> Any:

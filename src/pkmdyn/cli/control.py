@@ -29,7 +29,8 @@ from ._groups import PATH_IN, announce_compiles, hip, list_files, pdm
 from ._groups import FiniteFloat
 from ._hip_options import paper_option
 
-__all__ = ["hip_closed_loop", "run_control", "machine_setup", "effort_label", "hand_built_controllers", "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
+__all__ = ["hip_closed_loop", "run_control", "machine_setup", "effort_label", "hand_built_controllers", "MAX_CYCLES",
+           "MAX_CONTROL_CYCLES"]
 
 #: most cycles of the built-in motion (``--cycles``)
 MAX_CYCLES = 1000.0
@@ -571,7 +572,8 @@ def _effort_label(setup: _Setup, a: int) -> tuple[str, str]:
 def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dict[str, Any], tmp: Path,
             images: list[Path], gains_path: Path | None, K: int) -> Path:
     """``report.html`` of a control run: the plant's true motion animated (held efforts as colours),
-    the machine's own curves (:meth:`~pkmdyn.control_protocol.ControlJob.report_plots`) and efforts against time, the PNG figures, summary,
+    the machine's own curves (:meth:`~pkmdyn.control_protocol.ControlJob.report_plots`) and efforts
+    against time, the PNG figures, summary,
     parameters and warnings."""
     from ..errors import PkmdynError
     from ..report import Curve, TimePlot, write_report
@@ -737,7 +739,8 @@ def _options(f: Any) -> Any:
 @_options
 def hip_control(controller, params_path, plant_path, motion_path, cycles, gains_path, fmt, no_plots, out_dir) -> None:
     """Closed-loop tracking of a motion; writes control.csv (or .parquet), summary.json and plots."""
-    _command(_hip_job.NAME, controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir, fmt)
+    _command(_hip_job.NAME, controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir,
+             fmt)
 
 
 @pdm.command("control")
@@ -745,4 +748,5 @@ def hip_control(controller, params_path, plant_path, motion_path, cycles, gains_
 @_options
 def pdm_control(controller, params_path, plant_path, motion_path, cycles, gains_path, fmt, no_plots, out_dir) -> None:
     """Closed-loop tracking of a motion; writes control.csv (or .parquet), summary.json and plots."""
-    _command(_pdm_job.NAME, controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir, fmt)
+    _command(_pdm_job.NAME, controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir,
+             fmt)

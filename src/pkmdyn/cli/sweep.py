@@ -13,7 +13,8 @@ import click
 
 from ._groups import PATH_IN, cli
 
-_MACHINE_HELP = "Machine to sweep: hip (the 2(3PUS+S) hip simulator) or pdm (the 4-DOF PDM)."
+_MACHINE_HELP = ("Machine to sweep: hip, pdm, a described built-in machine (see pkmdyn machines) or a mechanism "
+                 "description FILE.toml.")
 
 
 @cli.command("sweep")

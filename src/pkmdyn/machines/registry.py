@@ -23,6 +23,7 @@ import functools
 import importlib
 from pathlib import Path
 from types import ModuleType
+from typing import Any
 
 from ..errors import ParameterError
 
@@ -97,15 +98,18 @@ def resolve(machine: str) -> tuple[ModuleType | None, Path | None]:
     return None, description_path(machine)
 
 
-def sweep_adapter(name: str) -> ModuleType:
-    """The sweep adapter (``sweep.py`` of its folder, :class:`pkmdyn.sweep_protocol.SweepAdapter`)
-    of the built-in machine ``name``."""
+def sweep_adapter(name: str) -> Any:
+    """The sweep adapter (:class:`pkmdyn.sweep_protocol.SweepAdapter`) of ``name``: a hand-built
+    machine's ``sweep.py`` module, or for a described machine (a built-in name or a description
+    ``FILE.toml``) the generic adapter of its description (:mod:`pkmdyn.multibody.sweep`)."""
     machines = hand_built_machines()
     shown = name if len(name) <= 60 else name[:60] + "..."
     if name not in machines:
-        known = ", ".join(n for n in sorted(machines) if _has_sweep(machines[n]))
-        raise ParameterError(f"--machine {shown!r}: unknown machine for a sweep; known: {known} "
-                             "(machine description files are not sweepable yet)")
+        from ..multibody.sweep import DescribedSweep
+
+        entry, path = resolve(name)
+        assert entry is None and path is not None
+        return DescribedSweep.from_file(path)
     if not _has_sweep(machines[name]):
         raise ParameterError(f"--machine {shown!r}: this machine has no sweep adapter")
     return importlib.import_module(f"{machines[name].__package__}.sweep")

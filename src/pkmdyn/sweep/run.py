@@ -95,7 +95,7 @@ def prepare_sweep(adapter: Any, space_path: str | Path, params: str | Path | Non
     context = adapter.prepare(base, space.motion, space.base_dir)
     X = sample_designs(space)
     _preflight(adapter, space, base, X)
-    metrics = tuple(adapter.metrics(space.motion))
+    metrics = tuple(adapter.metrics(space.motion, base))
     job = BatchJob(evaluate=adapter.evaluate, context=context, base=base, parameters=space.parameters,
                    metrics=metrics, constraints=space.constraints, sample_designs=int(X.shape[0]),
                    round_designs=space.refine_designs)

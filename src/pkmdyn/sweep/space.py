@@ -348,7 +348,7 @@ def read_space(path: str | Path) -> dict[str, Any]:
 def load_space(path: str | Path, description_for: Any, metrics_for: Any,
                max_designs: int | None = None) -> tuple[SweepSpace, dict[str, Any]]:
     """Read and validate a space file. ``description_for(params_path)`` returns the base
-    description (``params`` of the space file, or ``None``), ``metrics_for(motion_options)``
+    description (``params`` of the space file, or ``None``), ``metrics_for(motion_options, description)``
     the metrics; returns the space and the base description."""
     p = Path(path)
     raw = read_space(p)
@@ -359,7 +359,8 @@ def load_space(path: str | Path, description_for: Any, metrics_for: Any,
         params_path = Path(params) if Path(params).is_absolute() else base_dir / params
     description = description_for(params_path)
     motion = raw.get("motion", {}) if isinstance(raw.get("motion", {}), dict) else {}
-    space = space_from_dict(raw, description, metrics_for(motion), str(p), base_dir, max_designs)
+    space = space_from_dict(raw, description, metrics_for(motion, description), str(p), base_dir,
+                            max_designs)
     return space, description
 
 

@@ -118,7 +118,7 @@ def _options(options: Mapping[str, Any]) -> _Motion:
     return validate(_Motion, dict(options), "[motion]")
 
 
-def metrics(options: Mapping[str, Any]) -> tuple[MetricInfo, ...]:
+def metrics(options: Mapping[str, Any], description: Mapping[str, Any] | None = None) -> tuple[MetricInfo, ...]:
     """Every metric; the orientation workspace only when ``workspace_points`` > 0."""
     points = options.get("workspace_points", 256)
     if points == 0 and not isinstance(points, bool):

@@ -100,7 +100,7 @@ def check_description(description: Mapping[str, Any], source: str) -> None:
     params_from_dict(dict(description), source)
 
 
-def metrics(options: Mapping[str, Any]) -> tuple[MetricInfo, ...]:
+def metrics(options: Mapping[str, Any], description: Mapping[str, Any] | None = None) -> tuple[MetricInfo, ...]:
     """Every metric; the workspace only with ``workspace = true`` in ``[motion]``."""
     extra = (_WORKSPACE_METRIC,) if options.get("workspace") is True else ()
     return _BASE_METRICS + extra + _JOINT_METRICS

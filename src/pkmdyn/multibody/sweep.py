@@ -1,0 +1,257 @@
+"""The sweep adapter of a described mechanism: what ``pkmdyn sweep --machine NAME|FILE.toml``
+evaluates per design of any mechanism description (:class:`pkmdyn.sweep_protocol.SweepAdapter`).
+
+A design is the description with some numbers changed (masses, inertias, joint points and
+axes, friction coefficients, the default motion...). Each design performs its own
+``[default_motion]`` (so its amplitudes and period can be swept too) or one task-motion file
+for all designs. Per design: the validated, compiled model (:func:`pkmdyn.multibody.load_mechanism`),
+the kinematics along the motion (:func:`~pkmdyn.multibody.solve_kinematics`, which refuses a loop
+that does not close), the singularity measures (:func:`~pkmdyn.multibody.singularity_measures`),
+and the actuator efforts with every joint reaction and the joints' friction
+(:func:`pkmdyn.multibody.dynamics.joint_reactions`; with ``reactions = false`` the efforts
+alone, :func:`pkmdyn.multibody.dynamics.inverse_dynamics`). The metrics are named after the
+description's actuators and joints; formulas and units: ``docs/sweep.md``.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import Field
+
+from ..errors import ParameterError, PkmdynError, SingularityError, UnreachablePoseError
+from ..params_util import Section, read_toml, validate
+from ..sweep_protocol import DesignOutcome, MetricInfo
+
+__all__ = ["DescribedSweep", "DescribedSweepContext"]
+
+Array = NDArray[np.float64]
+
+
+class _Motion(Section):
+    file: str | None = None
+    singularity_threshold: Annotated[float, Field(ge=0.0, le=1.0)] = 1e-3
+    reactions: bool = True
+
+
+@dataclass(frozen=True)
+class DescribedSweepContext:
+    """Design-independent data: the motion of a motion file (None: each design's own
+    ``[default_motion]``), the threshold on the singularity measures and whether the joint
+    reactions are computed."""
+
+    motion: Any
+    threshold: float
+    reactions: bool
+
+
+def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[str]]:
+    """The actuators (name, effort unit ``N`` or ``Nm``) and the joints of a description, as
+    the compiled model names them."""
+    from . import load_mechanism
+    from .dynamics import effort_unit
+
+    model = load_mechanism(copy.deepcopy(dict(description)))
+    acts = [(name, effort_unit(model, i)) for i, name in enumerate(model.actuator_names)]
+    return acts, list(model.joint_names)
+
+
+def _speed_unit(effort_unit: str) -> str:
+    return "m_s" if effort_unit == "N" else "rad_s"
+
+
+def _integral(x: Array, t: Array) -> Array:
+    dt = np.diff(t).reshape((-1,) + (1,) * (x.ndim - 1))
+    return np.sum(0.5 * (x[1:] + x[:-1]) * dt, axis=0)
+
+
+@dataclass(frozen=True)
+class DescribedSweep:
+    """The sweep adapter of the mechanism described by ``path`` (``NAME``: its
+    ``[mechanism] name``). The file is read once, here (it may be a pipe)."""
+
+    path: Path
+    raw: dict[str, Any] = field(repr=False)
+    NAME: str = ""
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> DescribedSweep:
+        raw = read_toml(path)
+        mech = raw.get("mechanism")
+        name = mech.get("name") if isinstance(mech, dict) else None
+        if not isinstance(name, str):
+            raise ParameterError(f"{path}: [mechanism] name: missing (a described mechanism names itself)")
+        return cls(Path(path), raw, name)
+
+    def base_description(self, params_path: Path | None) -> dict[str, Any]:
+        """The description to vary: ``params_path`` (a description file) or the machine's own."""
+        return copy.deepcopy(self.raw) if params_path is None else read_toml(params_path)
+
+    def check_description(self, description: Mapping[str, Any], source: str) -> None:
+        """The validation of :func:`pkmdyn.multibody.load_mechanism` (and the model's compilation)."""
+        from . import load_mechanism
+
+        try:
+            load_mechanism(copy.deepcopy(dict(description)))
+        except PkmdynError as exc:
+            raise ParameterError(f"{source}: {exc}") from None
+
+    def metrics(self, options: Mapping[str, Any], description: Mapping[str, Any] | None = None
+                ) -> tuple[MetricInfo, ...]:
+        """The metrics of the base ``description`` (named after its actuators and joints); the
+        joint reactions only with ``reactions = true`` (the default) in ``[motion]``."""
+        acts, joints = _names(self.raw if description is None else description)
+        out = [
+            MetricInfo("gci", "-", "(1/T) int mu(t) dt, mu = the direct singularity measure where there are as "
+                                   "many actuators as task coordinates, else the inverse one"),
+            MetricInfo("min_inverse_measure", "-", "min over samples of sigma_min/sigma_max of the scaled "
+                                                   "[Phi_q; tau_q] (serial / type I singularity at 0)"),
+            MetricInfo("min_direct_measure", "-", "min over samples of sigma_min/sigma_max of the scaled "
+                                                  "[Phi_q; E_a] (parallel / type II singularity at 0; "
+                                                  "null without as many actuators as task coordinates)"),
+            MetricInfo("min_constraint_measure", "-", "min over samples of sigma_min/sigma_max of the scaled "
+                                                      "Phi_q (constraint singularity at 0)"),
+        ]
+        for unit in sorted({u for _, u in acts}):
+            kind = "force" if unit == "N" else "torque"
+            out.append(MetricInfo(f"peak_effort_{unit}", unit.replace("Nm", "N m"),
+                                  f"max over samples and actuators with a {kind} of |u_k|"))
+        for name, unit in acts:
+            shown = unit.replace("Nm", "N m")
+            sp = _speed_unit(unit)
+            out += [
+                MetricInfo(f"peak_effort_{name}_{unit}", shown, f"max over samples of |u| of actuator {name}"),
+                MetricInfo(f"rms_effort_{name}_{unit}", shown, f"sqrt((1/T) int u^2 dt) of actuator {name}"),
+                MetricInfo(f"peak_speed_{name}_{sp}", sp.replace("_", "/"), f"max over samples of |s_dot| of {name}"),
+                MetricInfo(f"rms_speed_{name}_{sp}", sp.replace("_", "/"), f"sqrt((1/T) int s_dot^2 dt) of {name}"),
+            ]
+        out += [
+            MetricInfo("peak_power_W", "W", "max over samples of sum_k u_k s_dot_k"),
+            MetricInfo("motor_energy_per_cycle_J", "J", "int sum_k |u_k s_dot_k| dt over the motion"),
+        ]
+        if options.get("reactions", True) is True:
+            out.append(MetricInfo("friction_energy_per_cycle_J", "J",
+                                  "int (power dissipated by the joints' friction) dt over the motion"))
+            for j in joints:
+                out += [MetricInfo(f"peak_force_{j}_N", "N", f"max over samples of |f| at joint {j}"),
+                        MetricInfo(f"peak_moment_{j}_Nm", "N m",
+                                   f"max over samples of |m| at joint {j}, about the joint point")]
+        return tuple(out)
+
+    def prepare(self, description: Mapping[str, Any], options: Mapping[str, Any], base_dir: Path
+                ) -> DescribedSweepContext:
+        """Check the ``[motion]`` options; read the motion file, if any, against the base
+        description's task; with reactions, an over-constrained base needs its bodies' sections
+        and materials (one line naming what is missing, or ``reactions = false``)."""
+        from . import load_mechanism
+        from .motion import read_task_motion
+        from .reactions import ComplianceDataMissing
+
+        opt = validate(_Motion, dict(options), "[motion]")
+        try:
+            model = load_mechanism(copy.deepcopy(dict(description)))
+        except PkmdynError as exc:
+            raise ParameterError(f"base description: {exc}") from None
+        motion = None
+        if opt.file is not None:
+            path = Path(opt.file) if Path(opt.file).is_absolute() else base_dir / opt.file
+            motion = read_task_motion(model, path)
+        if opt.reactions:
+            from . import solve_kinematics
+            from .dynamics import joint_reactions
+            from .motion import default_motion
+
+            mo = motion if motion is not None else default_motion(model)
+            try:
+                kin = solve_kinematics(model, mo.x[:1], mo.xd[:1], mo.xdd[:1], mo.t[:1])
+                joint_reactions(model, kin, named={k: v[:1] for k, v in mo.loads.items()})
+            except ComplianceDataMissing as exc:
+                raise ComplianceDataMissing(f"[motion] reactions: {exc}; or set reactions = false") from None
+            except PkmdynError:
+                pass  # the base design's own trouble is its row's, not the sweep's
+        return DescribedSweepContext(motion=motion, threshold=opt.singularity_threshold, reactions=opt.reactions)
+
+    def evaluate(self, descriptions: Sequence[Mapping[str, Any]], context: DescribedSweepContext
+                 ) -> list[DesignOutcome]:
+        """Each design of a batch by itself (:func:`evaluate_one`): rows never depend on the batch."""
+        with np.errstate(all="ignore"):  # a non-finite metric becomes the status "nonfinite", not a warning
+            return [evaluate_one(d, context) for d in descriptions]
+
+
+def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> DesignOutcome:
+    """One design: model -> motion -> kinematics and singularity measures -> efforts (and every
+    joint reaction with the friction) -> metrics."""
+    from . import load_mechanism, singularity_measures, solve_kinematics
+    from .dynamics import effort_unit, inverse_dynamics, joint_reactions
+    from .motion import default_motion
+
+    try:
+        model = load_mechanism(copy.deepcopy(dict(description)))
+        motion = ctx.motion if ctx.motion is not None else default_motion(model)
+    except PkmdynError as exc:
+        return DesignOutcome("invalid", str(exc))
+    try:
+        kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
+    except UnreachablePoseError as exc:
+        return DesignOutcome("unreachable", str(exc))
+    except SingularityError as exc:
+        return DesignOutcome("singular", str(exc))
+    except PkmdynError as exc:
+        return DesignOutcome("invalid", str(exc))
+    sm = singularity_measures(model, kin.q)
+    t = motion.t
+    T = float(t[-1] - t[0])
+    direct = model.na == model.nt
+    mu = sm.direct if direct else sm.inverse
+    m: dict[str, float] = {
+        "gci": float(_integral(mu, t) / T) if T > 0 else float(mu.mean()),
+        "min_inverse_measure": float(sm.inverse.min()),
+        "min_constraint_measure": float(sm.constraint.min()),
+    }
+    if direct:
+        m["min_direct_measure"] = float(sm.direct.min())
+    worst = np.minimum(sm.inverse, sm.direct) if direct else sm.inverse
+    k = int(np.argmin(worst))
+    if not worst[k] >= ctx.threshold:
+        return DesignOutcome("singular", f"t = {t[k]:.6g} s (sample {k + 1}): the singularity measure "
+                                         f"{worst[k]:.3g} is below the threshold {ctx.threshold:g}", m)
+    try:
+        if ctx.reactions:
+            reac = joint_reactions(model, kin, named=motion.loads)
+            u = reac.u
+        else:
+            u = inverse_dynamics(model, kin, named=motion.loads).u
+    except SingularityError as exc:
+        return DesignOutcome("singular", str(exc), m)
+    except PkmdynError as exc:  # friction that locks the mechanism, a load it cannot carry
+        return DesignOutcome("limit", str(exc), m)
+    sd = kin.act_qd
+    power = u * sd
+    units = [effort_unit(model, i) for i in range(model.na)]
+    for unit in set(units):
+        cols = [i for i, x in enumerate(units) if x == unit]
+        m[f"peak_effort_{unit}"] = float(np.abs(u[:, cols]).max())
+    for i, (name, unit) in enumerate(zip(model.actuator_names, units)):
+        sp = _speed_unit(unit)
+        m[f"peak_effort_{name}_{unit}"] = float(np.abs(u[:, i]).max())
+        m[f"rms_effort_{name}_{unit}"] = float(np.sqrt(_integral(u[:, i] ** 2, t) / T)) if T > 0 else float(
+            np.sqrt(np.mean(u[:, i] ** 2)))
+        m[f"peak_speed_{name}_{sp}"] = float(np.abs(sd[:, i]).max())
+        m[f"rms_speed_{name}_{sp}"] = float(np.sqrt(_integral(sd[:, i] ** 2, t) / T)) if T > 0 else float(
+            np.sqrt(np.mean(sd[:, i] ** 2)))
+    m["peak_power_W"] = float(power.sum(axis=1).max())
+    m["motor_energy_per_cycle_J"] = float(_integral(np.abs(power).sum(axis=1), t))
+    if ctx.reactions:
+        m["friction_energy_per_cycle_J"] = float(_integral(reac.dissipation, t))
+        force = np.linalg.norm(reac.joint_force, axis=-1).max(axis=0)
+        moment = np.linalg.norm(reac.joint_moment, axis=-1).max(axis=0)
+        for j, name in enumerate(model.joint_names):
+            m[f"peak_force_{name}_N"] = float(force[j])
+            m[f"peak_moment_{name}_Nm"] = float(moment[j])
+    return DesignOutcome("ok", "", m)

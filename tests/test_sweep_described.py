@@ -1,0 +1,169 @@
+"""Design sweeps of described mechanisms (``pkmdyn sweep --machine NAME|FILE.toml``): a
+design's metrics are those its own ``pkmdyn run`` writes (efforts, rates and reactions), its
+friction energy is the work of the actuators over a closed cycle (power balance), bad designs
+are rows with their status, an over-constrained mechanism without compliance data is refused
+before any work unless its reactions are off, and Dask gives the serial rows."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+
+import numpy as np
+import pytest
+
+import multibody_examples as ex
+from pkmdyn.cli import main
+from pkmdyn.io import dumps_toml
+from pkmdyn.machines.registry import sweep_adapter
+from pkmdyn.sweep import run_sweep
+
+pq = pytest.importorskip("pyarrow.parquet")
+
+
+def _stewart_with_friction():
+    """The built-in Stewart platform with friction in every leg joint: load-dependent in the
+    universal and spherical joints, Coulomb and viscous in the prismatic actuators."""
+    d = ex.builtin_dict("stewart")
+    for leg in d["legs"]:
+        for j in leg["joints"]:
+            j["friction"] = {"universal": {"coefficient": 0.08, "pin_radius_m": 0.012},
+                             "prismatic": {"coulomb_force_N": 4.0, "viscous_N_s_m": 30.0},
+                             "spherical": {"coefficient": 0.06, "ball_radius_m": 0.015}}[j["type"]]
+    return d
+
+
+SPACE = """
+[sampling]
+method = "random"
+designs = 3
+seed = 5
+
+[motion]
+singularity_threshold = 1e-4
+
+[parameters]
+"bodies[0].mass_kg" = { min = 5.0, max = 25.0 }
+"legs[0].joints[1].friction.viscous_N_s_m" = { min = 10.0, max = 80.0 }
+"default_motion.amplitude.z_m" = { min = 0.02, max = 0.08 }
+
+[objectives]
+peak_effort_N = "min"
+"""
+
+
+def _trapz(y, t):
+    return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(t)))
+
+
+def test_a_designs_metrics_are_those_of_its_own_run(tmp_path):
+    machine = tmp_path / "stewart_friction.toml"
+    machine.write_text(dumps_toml(_stewart_with_friction()), encoding="utf-8")
+    space = tmp_path / "space.toml"
+    space.write_text(SPACE, encoding="utf-8")
+    report = run_sweep(sweep_adapter(str(machine)), space, tmp_path / "out", workers=0, plots=False)
+    rows = pq.read_table(tmp_path / "out" / "designs.parquet").to_pylist()
+    assert [r["status"] for r in rows] == ["ok"] * 3
+    best = next(r for r in rows if r["design_id"] == report.best_design_id)
+    design = tmp_path / "out" / "best_params.toml"
+    d = tomllib.loads(design.read_text(encoding="utf-8"))
+    assert d["bodies"][0]["mass_kg"] == best["bodies[0].mass_kg"]  # the swept values went into the design
+    assert d["default_motion"]["amplitude"]["z_m"] == best["default_motion.amplitude.z_m"]
+    assert main(["run", "--machine", str(design), "--out", str(tmp_path / "run")]) == 0
+    cols = np.genfromtxt(tmp_path / "run" / "results.csv", delimiter=",", names=True)
+    npz = np.load(tmp_path / "run" / "bodies.npz")
+    t = cols["t_s"]
+    acts = [n[: -len("_effort_N")] for n in cols.dtype.names if n.endswith("_effort_N")]
+    assert len(acts) == 6
+    power = np.zeros_like(t)
+    for a in acts:
+        u, sd = cols[f"{a}_effort_N"], cols[f"{a}_vel_m_s"]
+        power += u * sd
+        T = t[-1] - t[0]
+        np.testing.assert_allclose(best[f"peak_effort_{a}_N"], np.abs(u).max(), rtol=1e-9)
+        np.testing.assert_allclose(best[f"rms_effort_{a}_N"], np.sqrt(_trapz(u * u, t) / T), rtol=1e-9)
+        np.testing.assert_allclose(best[f"peak_speed_{a}_m_s"], np.abs(sd).max(), rtol=1e-9)
+    np.testing.assert_allclose(best["peak_power_W"], power.max(), rtol=1e-9)
+    names = [str(n) for n in npz["joint_names"]]
+    force = np.linalg.norm(npz["joint_force"], axis=-1).max(axis=0)
+    moment = np.linalg.norm(npz["joint_moment"], axis=-1).max(axis=0)
+    for j, name in enumerate(names):
+        np.testing.assert_allclose(best[f"peak_force_{name}_N"], force[j], rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(best[f"peak_moment_{name}_Nm"], moment[j], rtol=1e-9, atol=1e-9)
+    # power balance over the closed cycle of the default motion: the actuators' work is what
+    # the friction dissipates (the mechanical energy returns to its start)
+    work = _trapz(power, t)
+    assert best["friction_energy_per_cycle_J"] > 0.5
+    np.testing.assert_allclose(best["friction_energy_per_cycle_J"], work, rtol=1e-6)
+    assert d["legs"][0]["joints"][1]["friction"]["viscous_N_s_m"] == best["legs[0].joints[1].friction.viscous_N_s_m"]
+    assert json.loads((tmp_path / "out" / "summary.json").read_text())["machine"] == "stewart"
+
+
+def test_bad_designs_are_rows_with_their_status(tmp_path, capsys):
+    space = tmp_path / "space.toml"
+    space.write_text("""
+[sampling]
+method = "grid"
+
+[parameters]
+"default_motion.amplitude.z_m" = { values = [0.05, 3.0] }
+"bodies[0].mass_kg" = { values = [1.0, -1.0] }
+
+[objectives]
+peak_effort_Nm = "min"
+""", encoding="utf-8")
+    assert main(["sweep", "--machine", "delta", "--space", str(space), "--workers", "0", "--no-plots",
+                 "--out", str(tmp_path / "out")]) == 0
+    rows = sorted(pq.read_table(tmp_path / "out" / "designs.parquet").to_pylist(), key=lambda r: r["design_id"])
+    assert [r["status"] for r in rows] == ["ok", "invalid", "unreachable", "invalid"]
+    assert "mass_kg" in rows[1]["reason"] and "does not close" in rows[2]["reason"]
+    assert rows[0]["peak_effort_Nm"] > 0 and rows[2]["peak_effort_Nm"] is None
+
+
+def test_overconstrained_without_sections_refused_unless_reactions_are_off(tmp_path, capsys):
+    d = ex.builtin_dict("bennett")
+    for b in d["bodies"]:
+        b.pop("section", None)
+        b.pop("material", None)
+    machine = tmp_path / "bare.toml"
+    machine.write_text(dumps_toml(d), encoding="utf-8")
+    body = '[parameters]\n"bodies[0].mass_kg" = { min = 0.5, max = 2.0 }\n[objectives]\ngci = "max"\n'
+    head = '[sampling]\nmethod = "random"\ndesigns = 2\n'
+    space = tmp_path / "space.toml"
+    space.write_text(head + body, encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["sweep", "--machine", str(machine), "--space", str(space), "--workers", "0", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "reactions = false" in err and "section" in err, err
+    assert not out.exists()
+    space.write_text(head + "[motion]\nreactions = false\n" + body, encoding="utf-8")
+    assert main(["sweep", "--machine", str(machine), "--space", str(space), "--workers", "0", "--no-plots",
+                 "--out", str(out)]) == 0
+    t = pq.read_table(out / "designs.parquet")
+    assert t.column("status").to_pylist() == ["ok", "ok"]
+    assert not any(c.startswith("peak_force_") for c in t.column_names)
+
+
+def test_described_sweep_on_dask_gives_the_serial_rows(tmp_path):
+    pytest.importorskip("distributed")
+    space = tmp_path / "space.toml"
+    space.write_text("""
+[sampling]
+method = "sobol"
+designs = 8
+seed = 2
+batch_size = 3
+
+[parameters]
+"bodies[0].mass_kg" = { min = 5.0, max = 20.0 }
+"legs[1].bodies[0].mass_kg" = { min = 1.0, max = 4.0 }
+
+[objectives]
+peak_effort_N = "min"
+""", encoding="utf-8")
+    ad = sweep_adapter("stewart")
+    run_sweep(ad, space, tmp_path / "serial", workers=0, plots=False)
+    run_sweep(ad, space, tmp_path / "dask", workers=2, plots=False)
+    a = pq.read_table(tmp_path / "serial" / "designs.parquet")
+    b = pq.read_table(tmp_path / "dask" / "designs.parquet")
+    assert a.num_rows == 8 and a.equals(b)
