@@ -629,14 +629,7 @@ def chord_pause(chord, info, pause):
     return pause - 1 if pause > 0 else 0
 
 
-@njit(cache=True, _nrt=False)
-def solve_sample(xs, xds, xdds, q, q_ref, chord, body_parent, body_joint, joint_q0, joint_nq, coord_motion,
-                 coord_offset, coord_sign, tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
-                 row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-                 task_body, task_point, task_kind, task_index, euler_axes,
-                 sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter,
-                 R, p, S, val, J, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2,
-                 info):
+def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work, info):
     """One sample's kinematics (see :func:`solve_batch`) from the predictor ``q`` (updated in
     place), in three phases that share one evaluation of the rows:
 
@@ -651,14 +644,23 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, body_parent, body_joint, joint_
        gamma_task)``, ``G = K^-1 (0; I; 0)``, the bodies' velocities ``V`` and accelerations
        ``A`` (``K, piv`` are left holding the factors at the solution).
 
-    ``Gw (mk, nt)``: the constant right-hand sides ``(0; I; 0)`` (:func:`task_unit_rhs`);
-    ``Gw2 (mk, nt)`` work space. Returns the status (OK, NOT_CONVERGED, SINGULAR,
+    The model's arrays and the work space come as five tuples (``tree``, ``loops``, ``task``,
+    ``solver``, ``work``, unpacked below in :func:`solve_batch`'s names), so that the call
+    stays short enough to be inlined. ``Gw (mk, nt)``: the constant right-hand sides
+    ``(0; I; 0)`` (:func:`task_unit_rhs`); ``Gw2 (mk, nt)`` work space. Returns the status (OK, NOT_CONVERGED, SINGULAR,
     EULER_SINGULAR, LOOP_OPEN); ``info[0]``
     the worst row, ``info[1]`` the scaled residual, ``info[2]`` the Newton evaluations (1:
     the first closed the loops). On OK the poses ``R, p``, twists ``S`` and
     Jacobian ``J`` are those of the converged ``q``. The poses, the rows, the factorisation
     and the solve are each called from one place, so that the compiled sample carries one
     copy of each."""
+    (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC,
+     tpC) = tree
+    RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child = loops
+    task_body, task_point, task_kind, task_index, euler_axes = task
+    sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter = solver
+    (R, p, S, val, J, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw,
+     Gw2) = work
     nq = q.shape[0]
     nr = row_loop.shape[0]
     nt = task_kind.shape[0]
@@ -757,6 +759,13 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, body_parent, body_joint, joint_
         phase = _NEWTON
 
 
+#: :func:`solve_sample` inlined where it is called (the single-sample kernel, :mod:`._one`: its
+#: ~60 arrays then need no passing, which keeps the compiled sample smaller and faster); the
+#: batched loop (:func:`solve_batch`) calls it as a function, which keeps that loop faster
+solve_sample_inline = njit(cache=True, _nrt=False, inline="always")(solve_sample)
+solve_sample = njit(cache=True, _nrt=False)(solve_sample)
+
+
 @njit(cache=True)
 def solve_batch(tm, x, xd, xdd, q_start,
                 body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
@@ -823,6 +832,11 @@ def solve_batch(tm, x, xd, xdd, q_start,
     Gw = np.empty((mk, nt))
     task_unit_rhs(sel_rows, nr, Gw)
     Gw2 = np.empty((mk, nt))
+    tree = (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC)
+    loops = (RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child)
+    task = (task_body, task_point, task_kind, task_index, euler_axes)
+    solver = (sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter)
+    work = (R, p, S, val, J, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2)
     for s in range(n):
         if s > 0 and tm.shape[0] == n:
             dt = tm[s] - tm[s - 1]
@@ -840,13 +854,7 @@ def solve_batch(tm, x, xd, xdd, q_start,
         info[1] = 0.0
         # the second-order predictor is close enough for a first step with the previous factors
         chord = s > 0 and tm.shape[0] == n and pause == 0
-        st = solve_sample(x[s], xd[s], xdd[s], q, q_ref, chord, body_parent, body_joint,
-                          joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC, RP, pP,
-                          RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-                          task_body, task_point, task_kind, task_index, euler_axes,
-                          sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter,
-                          R, p, S, val, J, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3,
-                          Gw, Gw2, info)
+        st = solve_sample(x[s], xd[s], xdd[s], q, q_ref, chord, tree, loops, task, solver, work, info)
         pause = chord_pause(chord, info, pause)
         worst[s] = int(info[0])
         res_out[s] = info[1]

@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 
 from .._dense import solve_in_place
 from ._dyn_kernels import body_wrench, generalised, joint_friction, load_wrench, task_mass
-from ._kernels import OK, _point_motion, _wrap, chord_pause, solve_sample, task_unit_rhs
+from ._kernels import OK, _point_motion, _wrap, chord_pause, solve_sample_inline, task_unit_rhs
 from .dynamics import SINGULAR_ACTUATION, inertia_factors
 from .friction import EPS_ROTATION as EPS_R
 from .friction import EPS_TRANSLATION as EPS_T
@@ -358,13 +358,15 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
         q[c] += acc
     for t in range(nt):
         r[t] = 0.0  # the rates at xdd = 0
-    status = solve_sample(x, xd, r, q, coord_offset, chord, body_parent, body_joint, joint_q0, joint_nq,
-                          coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
-                          row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-                          task_body, task_point, task_kind, task_index, euler_axes,
-                          sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter,
-                          R, p, S, val, J, res, K, wi, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, Gp, w33, w3,
-                          Gw, Gw2, info)
+    status = solve_sample_inline(x, xd, r, q, coord_offset, chord,
+                          (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP,
+                           tpP, tRC, tpC),
+                          (RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent,
+                           joint_child),
+                          (task_body, task_point, task_kind, task_index, euler_axes),
+                          (sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter),
+                          (R, p, S, val, J, res, K, wi, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, Gp, w33, w3,
+                           Gw, Gw2), info)
     if status != OK:
         st[0] = COLD_STATE
         return status
