@@ -142,8 +142,9 @@ def forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vp
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A):
-    """Spatial accelerations ``A (nb, 6)``; with ``qdd = 0`` the bias accelerations."""
+def forward_accelerations(qd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A):
+    """The bias accelerations ``A (nb, 6)`` (those at ``qdd = 0``; :func:`add_joint_accelerations`
+    adds the rest)."""
     for b in range(body_parent.shape[0]):
         k = body_joint[b]
         a = body_parent[b]
@@ -155,12 +156,28 @@ def forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, 
             s0, s1, s2 = S[c, 0], S[c, 1], S[c, 2]
             t0, t1, t2 = S[c, 3], S[c, 4], S[c, 5]
             d = qd[c]
-            A[b, 0] += S[c, 0] * qdd[c] + (w1 * s2 - w2 * s1) * d
-            A[b, 1] += S[c, 1] * qdd[c] + (w2 * s0 - w0 * s2) * d
-            A[b, 2] += S[c, 2] * qdd[c] + (w0 * s1 - w1 * s0) * d
-            A[b, 3] += S[c, 3] * qdd[c] + (w1 * t2 - w2 * t1 + v1 * s2 - v2 * s1) * d
-            A[b, 4] += S[c, 4] * qdd[c] + (w2 * t0 - w0 * t2 + v2 * s0 - v0 * s2) * d
-            A[b, 5] += S[c, 5] * qdd[c] + (w0 * t1 - w1 * t0 + v0 * s1 - v1 * s0) * d
+            A[b, 0] += (w1 * s2 - w2 * s1) * d
+            A[b, 1] += (w2 * s0 - w0 * s2) * d
+            A[b, 2] += (w0 * s1 - w1 * s0) * d
+            A[b, 3] += (w1 * t2 - w2 * t1 + v1 * s2 - v2 * s1) * d
+            A[b, 4] += (w2 * t0 - w0 * t2 + v2 * s0 - v0 * s2) * d
+            A[b, 5] += (w0 * t1 - w1 * t0 + v0 * s1 - v1 * s0) * d
+
+
+@njit(cache=True, _nrt=False, inline='always')
+def add_joint_accelerations(qdd, body_parent, body_joint, joint_q0, joint_nq, S, A):
+    """``A += `` the accelerations that ``qdd`` adds to the bias accelerations ``A (nb, 6)`` of
+    :func:`forward_accelerations` (``sum S_c qdd_c`` over the coordinates of every joint from
+    the body down to the ground)."""
+    for b in range(body_parent.shape[0]):
+        a = b
+        while a >= 0:
+            k = body_joint[a]
+            for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
+                d = qdd[c]
+                for i in range(6):
+                    A[b, i] += S[c, i] * d
+            a = body_parent[a]
 
 
 @njit(cache=True, inline="always")
@@ -681,9 +698,8 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
                 for t in range(nt):
                     acc += G[j, t] * xds[t]
                 qd[j] = acc
-                qdd[j] = 0.0
             forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre)
-            forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
+            forward_accelerations(qd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
             mode = ROWS_DRIFT
         else:
             forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
@@ -752,7 +768,7 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
         if phase == _RATES:
             for j in range(nq):
                 qdd[j] = rhs[j]
-            forward_accelerations(qd, qdd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
+            add_joint_accelerations(qdd, body_parent, body_joint, joint_q0, joint_nq, S, A)
             return OK
         for j in range(mk):
             q[j] += rhs[j]
