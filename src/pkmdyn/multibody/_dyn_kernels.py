@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._kernels import _advance, _frame, _matmul3, _unit_twist, forward_positions
+from ._kernels import _advance, _frame, _matmul3, _nn, _unit_twist, forward_positions
 
 
 @njit(cache=True)
@@ -89,8 +89,8 @@ def generalised(S, W, anc_list, Q):  # pragma: no cover - compiled
     for c in range(Q.shape[0]):
         Q[c] = 0.0
     for b in range(W.shape[0]):
-        for k in range(anc_list[b, 0]):
-            c = anc_list[b, 1 + k]
+        for k in range(_nn(anc_list[b, 0])):
+            c = _nn(anc_list[b, 1 + k])
             acc = 0.0
             for i in range(6):
                 acc += S[c, i] * W[b, i]
@@ -233,7 +233,7 @@ def task_mass(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, fac
     nt = G.shape[1]
     for b in range(R.shape[0]):
         a = body_parent[b]
-        k = body_joint[b]
+        k = _nn(body_joint[b])
         sm = math.sqrt(mass[b])
         p0, p1, p2 = p[b, 0], p[b, 1], p[b, 2]
         _matmul3(R[b], factor[b], RL)
@@ -241,8 +241,8 @@ def task_mass(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, fac
         for t in range(nt):
             Tb = T[b, t]
             for r in range(6):
-                Tb[r] = T[a, t, r] if a >= 0 else 0.0
-            for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
+                Tb[r] = T[_nn(a), t, r] if a >= 0 else 0.0
+            for c in range(_nn(joint_q0[k]), _nn(joint_q0[k] + joint_nq[k])):
                 g = G[c, t]
                 for r in range(6):
                     Tb[r] += S[c, r] * g

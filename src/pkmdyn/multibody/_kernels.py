@@ -30,10 +30,23 @@ import math
 
 import numpy as np
 from numba import njit
+from numba.extending import intrinsic
 
 OK, NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN = 0, 1, 2, 3, 4
 #: what :func:`rows` computes beside the values: the Jacobian, the drift, or nothing
 ROWS_JACOBIAN, ROWS_DRIFT, ROWS_VALUES = 0, 1, 2
+
+
+@intrinsic
+def _nn(typingctx, i):  # pragma: no cover - compiled
+    """``i``, an index the model guarantees to be >= 0, with the compiler told so: indexing
+    with it then needs no code for negative (from the end) indices."""
+    def codegen(context, builder, sig, args):
+        v = args[0]
+        builder.assume(builder.icmp_signed(">=", v, v.type(0)))
+        return v
+
+    return i(i), codegen
 
 
 @njit(cache=True, inline="always")
@@ -100,7 +113,7 @@ def _advance(Rf, o, m, qc):
             Rf[r, j1] = -sq * ci + cq * cj
     else:
         for i in range(3):
-            o[i] += Rf[i, m - 3] * qc
+            o[i] += Rf[i, _nn(m - 3)] * qc
 
 
 @njit(cache=True, _nrt=False, inline='always')
@@ -112,10 +125,10 @@ def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_moti
     Rf = w33[0]
     o = w3[18]
     for b in range(body_parent.shape[0]):
-        k = body_joint[b]
+        k = _nn(body_joint[b])
         _frame(body_parent[b], R, p, RP[k], pP[k], Rf, o)  # the joint frame on the parent, world
-        for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
-            m = coord_motion[c]
+        for c in range(_nn(joint_q0[k]), _nn(joint_q0[k] + joint_nq[k])):
+            m = _nn(coord_motion[c])
             mm = m % 3
             _unit_twist(S, c, coord_sign[c], m < 3, Rf[0, mm], Rf[1, mm], Rf[2, mm], o[0], o[1], o[2])
             _advance(Rf, o, m, coord_sign[c] * (q[c] - coord_offset[c]))
@@ -131,11 +144,11 @@ def forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vp
     """Spatial velocities ``V (nb, 6)`` and the velocity ``Vpre (nq, 6)`` of the frame that
     carries each coordinate's twist."""
     for b in range(body_parent.shape[0]):
-        k = body_joint[b]
+        k = _nn(body_joint[b])
         a = body_parent[b]
         for i in range(6):
-            V[b, i] = V[a, i] if a >= 0 else 0.0
-        for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
+            V[b, i] = V[_nn(a), i] if a >= 0 else 0.0
+        for c in range(_nn(joint_q0[k]), _nn(joint_q0[k] + joint_nq[k])):
             for i in range(6):
                 Vpre[c, i] = V[b, i]
                 V[b, i] += S[c, i] * qd[c]
@@ -146,11 +159,11 @@ def forward_accelerations(qd, body_parent, body_joint, joint_q0, joint_nq, S, Vp
     """The bias accelerations ``A (nb, 6)`` (those at ``qdd = 0``; :func:`add_joint_accelerations`
     adds the rest)."""
     for b in range(body_parent.shape[0]):
-        k = body_joint[b]
+        k = _nn(body_joint[b])
         a = body_parent[b]
         for i in range(6):
-            A[b, i] = A[a, i] if a >= 0 else 0.0
-        for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
+            A[b, i] = A[_nn(a), i] if a >= 0 else 0.0
+        for c in range(_nn(joint_q0[k]), _nn(joint_q0[k] + joint_nq[k])):
             w0, w1, w2 = Vpre[c, 0], Vpre[c, 1], Vpre[c, 2]
             v0, v1, v2 = Vpre[c, 3], Vpre[c, 4], Vpre[c, 5]
             s0, s1, s2 = S[c, 0], S[c, 1], S[c, 2]
@@ -172,8 +185,8 @@ def add_joint_accelerations(qdd, body_parent, body_joint, joint_q0, joint_nq, S,
     for b in range(body_parent.shape[0]):
         a = b
         while a >= 0:
-            k = body_joint[a]
-            for c in range(joint_q0[k], joint_q0[k] + joint_nq[k]):
+            k = _nn(body_joint[_nn(a)])
+            for c in range(_nn(joint_q0[k]), _nn(joint_q0[k] + joint_nq[k])):
                 d = qdd[c]
                 for i in range(6):
                     A[b, i] += S[c, i] * d
@@ -188,7 +201,7 @@ def _parity(i, j, k):
 @njit(cache=True, _nrt=False)
 def euler_angles(Rm, axes, out):
     """Intrinsic Euler angles (3,) [rad] of ``Rm = R_a1(out0) R_a2(out1) R_a3(out2)``."""
-    i, j, k = axes[0], axes[1], axes[2]
+    i, j, k = _nn(axes[0]), _nn(axes[1]), _nn(axes[2])
     if i != k:
         eps = _parity(i, j, k)
         x = eps * Rm[i, k]
@@ -208,7 +221,7 @@ def euler_angles(Rm, axes, out):
 @njit(cache=True, _nrt=False)
 def euler_rate_map(ang, axes, E):
     """``E (3, 3)``: omega = E phi_dot, columns ``k1, R1 k2, R1 R2 k3`` (base frame)."""
-    i1, i2, i3 = axes[0], axes[1], axes[2]
+    i1, i2, i3 = _nn(axes[0]), _nn(axes[1]), _nn(axes[2])
     c1, s1 = math.cos(ang[0]), math.sin(ang[0])
     c2, s2 = math.cos(ang[1]), math.sin(ang[1])
     for r in range(3):
@@ -268,6 +281,7 @@ def _frame(b, R, p, Rj, pj, e, o):
             for j in range(3):
                 e[i, j] = Rj[i, j]
     else:
+        b = _nn(b)
         _matmul3(R[b], Rj, e)
         for i in range(3):
             o[i] = p[b, i] + R[b, i, 0] * pj[0] + R[b, i, 1] * pj[1] + R[b, i, 2] * pj[2]
@@ -279,6 +293,7 @@ def _direction_motion(b, u, V, A, ud, udd, t3):  # pragma: no cover - compiled
     fixed in body ``b`` (twist ``V[b]``, its rate ``A[b]``, angular part first); zero for the
     ground (``b < 0``). ``t3``: work space."""
     if b >= 0:
+        b = _nn(b)
         _cross(V[b, :3], u, ud)
         _cross(V[b, :3], ud, t3)
         _cross(A[b, :3], u, udd)
@@ -298,6 +313,7 @@ def _point_motion(b, x, V, A, v, a):
             v[i] = 0.0
             a[i] = 0.0
         return
+    b = _nn(b)
     w = V[b, :3]
     wd = A[b, :3]
     v[0] = V[b, 3] + w[1] * x[2] - w[2] * x[1]
@@ -317,8 +333,9 @@ def _jrow(J, rr, wa, wb, S, anc, a, b, coef_a, coef_b):
     for body, coef in ((a, coef_a), (b, coef_b)):
         if body < 0 or coef == 0.0:
             continue
-        for k in range(1, anc[body, 0] + 1):
-            c = anc[body, k]
+        body = _nn(body)
+        for k in range(1, _nn(anc[body, 0] + 1)):
+            c = _nn(anc[body, k])
             J[rr, c] += coef * (wa[0] * S[c, 0] + wa[1] * S[c, 1] + wa[2] * S[c, 2]
                                 + wb[0] * S[c, 3] + wb[1] * S[c, 4] + wb[2] * S[c, 5])
 
@@ -347,7 +364,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
     cd, cdd, x, wa, wb, t4 = wk[12], wk[13], wk[14], wk[15], wk[16], wk[17]
     last = -1
     for rr in range(nr):
-        k = loop_joint[row_loop[rr]]
+        k = _nn(loop_joint[_nn(row_loop[rr])])
         a = joint_parent[k]
         b = joint_child[k]
         if k != last:
@@ -357,7 +374,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
                 _point_motion(a, oP, V, A, vP, aP)
                 _point_motion(b, oC, V, A, vC, aC)
             last = k
-        i = row_i[rr]
+        i = _nn(row_i[rr])
         for m in range(3):
             e[m] = eP[m, i]
             r[m] = oC[m] - oP[m]
@@ -371,7 +388,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
                 _jrow(J, rr, wa, wb, S, anc, a, b, -1.0, 1.0)
         else:
             for m in range(3):
-                cj[m] = eC[m, row_j[rr]]
+                cj[m] = eC[m, _nn(row_j[rr])]
             val[rr] = _dot(e, cj)
             _cross(e, cj, wa)
             for m in range(3):
@@ -389,7 +406,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
                 _direction_motion(b, cj, V, A, cd, cdd, t3)
                 gamma[rr] = _dot(edd, cj) + 2.0 * _dot(ed, cd) + _dot(e, cdd)
     # task rows
-    tb = task_body
+    tb = _nn(task_body)
     for m in range(3):
         x[m] = p[tb, m] + R[tb, m, 0] * task_point[0] + R[tb, m, 1] * task_point[1] + R[tb, m, 2] * task_point[2]
     ang = w33[2, 0]  # not shared with the row work space
@@ -412,7 +429,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
                     Ei[i, j] = 0.0
     for t in range(task_kind.shape[0]):
         rr = nr + t
-        m = task_index[t]
+        m = _nn(task_index[t])
         if task_kind[t] == 0:
             val[rr] = x[m]
             # (x x e_m) . S_w + S_v[m]
@@ -459,14 +476,14 @@ def _fill(K, J, sel_rows, idle, prow, pcol):
     """``K[i, j] = Kfull[prow[i], pcol[j]]`` with ``Kfull = [J[sel_rows]; idle]``."""
     m = sel_rows.shape[0]
     for i in range(K.shape[0]):
-        r = prow[i]
+        r = _nn(prow[i])
         if r < m:
-            rr = sel_rows[r]
+            rr = _nn(sel_rows[r])
             for j in range(K.shape[1]):
-                K[i, j] = J[rr, pcol[j]]
+                K[i, j] = J[rr, _nn(pcol[j])]
         else:
             for j in range(K.shape[1]):
-                K[i, j] = idle[r - m, pcol[j]]
+                K[i, j] = idle[_nn(r - m), _nn(pcol[j])]
 
 
 @njit(cache=True, inline="always")
@@ -485,13 +502,13 @@ def block_lu_factor(M, piv, blocks):
     n = M.shape[0]
     big = 0.0
     for bk in range(blocks.shape[0] - 1):
-        for i in range(blocks[bk], blocks[bk + 1]):
-            for j in range(blocks[bk + 1]):
+        for i in range(_nn(blocks[bk]), _nn(blocks[bk + 1])):
+            for j in range(_nn(blocks[bk + 1])):
                 if abs(M[i, j]) > big:
                     big = abs(M[i, j])
     tol = 1e-12 * big if big > 0 else 1e-300
     for bk in range(blocks.shape[0] - 1):
-        s0, s1 = blocks[bk], blocks[bk + 1]
+        s0, s1 = _nn(blocks[bk]), _nn(blocks[bk + 1])
         for k in range(s0, s1):
             pr = k
             pv = abs(M[k, k])
@@ -529,18 +546,18 @@ def block_lu_solve(M, piv, blocks, prow, pcol, b, work):
     ``A_kk x_k = b_k - A_k,<k x_<k``."""
     n = M.shape[0]
     for i in range(n):
-        work[i] = b[prow[i]]
+        work[i] = b[_nn(prow[i])]
     for bk in range(blocks.shape[0] - 1):
-        s0, s1 = blocks[bk], blocks[bk + 1]
+        s0, s1 = _nn(blocks[bk]), _nn(blocks[bk + 1])
         for k in range(s0, s1):
-            pr = piv[k]
+            pr = _nn(piv[k])
             if pr != k:
                 tmp = work[k]
                 work[k] = work[pr]
                 work[pr] = tmp
         for i in range(s0, s1):
             acc = work[i]
-            for j in range(piv[n + i]):
+            for j in range(_nn(piv[n + i])):
                 acc -= M[i, j] * work[j]
             for j in range(s0, i):
                 acc -= M[i, j] * work[j]
@@ -551,7 +568,7 @@ def block_lu_solve(M, piv, blocks, prow, pcol, b, work):
                 acc -= M[i, j] * work[j]
             work[i] = acc / M[i, i]
     for j in range(n):
-        b[pcol[j]] = work[j]
+        b[_nn(pcol[j])] = work[j]
 
 
 @njit(cache=True, _nrt=False, inline='always')
@@ -562,18 +579,18 @@ def block_lu_solve_columns(M, piv, blocks, prow, pcol, B, X, work):
     k = B.shape[1]
     for i in range(n):
         for t in range(k):
-            work[i, t] = B[prow[i], t]
+            work[i, t] = B[_nn(prow[i]), t]
     for bk in range(blocks.shape[0] - 1):
-        s0, s1 = blocks[bk], blocks[bk + 1]
+        s0, s1 = _nn(blocks[bk]), _nn(blocks[bk + 1])
         for r in range(s0, s1):
-            pr = piv[r]
+            pr = _nn(piv[r])
             if pr != r:
                 for t in range(k):
                     tmp = work[r, t]
                     work[r, t] = work[pr, t]
                     work[pr, t] = tmp
         for i in range(s0, s1):
-            for j in range(piv[n + i]):
+            for j in range(_nn(piv[n + i])):
                 m = M[i, j]
                 if m != 0.0:
                     for t in range(k):
@@ -594,7 +611,7 @@ def block_lu_solve_columns(M, piv, blocks, prow, pcol, B, X, work):
                 work[i, t] *= d
     for j in range(n):
         for t in range(k):
-            X[pcol[j], t] = work[j, t]
+            X[_nn(pcol[j]), t] = work[j, t]
 
 
 @njit(cache=True, inline="always")
@@ -713,8 +730,8 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
             for i in range(mk):
                 rhs[i] = 0.0
             for i in range(m):
-                rr = sel_rows[i]
-                rhs[i] = (xdds[rr - nr] - gamma[rr]) if rr >= nr else -gamma[rr]
+                rr = _nn(sel_rows[i])
+                rhs[i] = (xdds[_nn(rr - nr)] - gamma[rr]) if rr >= nr else -gamma[rr]
         else:
             if phase == _NEWTON and not ok:
                 info[0] = nr
@@ -722,7 +739,7 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
             _residuals(xs, val, nr, task_kind, res)
             _idle_residuals(q, q_ref, idle, ires)
             for i in range(m):
-                rhs[i] = -res[sel_rows[i]]
+                rhs[i] = -res[_nn(sel_rows[i])]
             for i in range(ni):
                 rhs[m + i] = -ires[i]
             if phase == _NEWTON:
@@ -730,7 +747,8 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
                 big_sel = 0.0
                 wr = sel_rows[0] if m > 0 else 0
                 for i in range(m):
-                    sc = abs(res[sel_rows[i]]) * row_scale[sel_rows[i]]
+                    sr = _nn(sel_rows[i])
+                    sc = abs(res[sr]) * row_scale[sr]
                     if sc > big_sel:
                         big_sel = sc
                         wr = sel_rows[i]

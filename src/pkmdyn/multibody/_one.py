@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 
 from .._dense import solve_in_place
 from ._dyn_kernels import body_wrench, generalised, joint_friction, load_wrench, task_mass
-from ._kernels import OK, _point_motion, _wrap, chord_pause, solve_sample_inline, task_unit_rhs
+from ._kernels import OK, _nn, _point_motion, _wrap, chord_pause, solve_sample_inline, task_unit_rhs
 from .dynamics import SINGULAR_ACTUATION, inertia_factors
 from .friction import EPS_ROTATION as EPS_R
 from .friction import EPS_TRANSLATION as EPS_T
@@ -410,7 +410,7 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
         _point_motion(b, pc[b], V, A, v3, a3)
         body_wrench(R[b], V[b, :3], A[b, :3], pc[b], a3, mass[b], inertia[b], gravity, W[b], tmp, Iw)
     for k in range(nl):
-        b = load_body[k]
+        b = _nn(load_body[k])
         for i in range(3):
             f3[i] = load_direction[k, i] * load if load_named[k] else load_force[k, i]
         load_wrench(R[b], p[b], load_point[k], f3[0], f3[1], f3[2], load_moment[k], W[b])
@@ -429,7 +429,7 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
         for t in range(nt):
             acc = -h[t]
             for a in range(nt):
-                acc += Gp[act_coord[a], t] * v[a]
+                acc += Gp[_nn(act_coord[a]), t] * v[a]
             out[t] = acc
         big = 0.0
         for t in range(nt):
@@ -443,7 +443,7 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
                 acc += M[t, j] * v[j]
             out[t] = acc
             for a in range(nt):
-                Bm[t, a] = Gp[act_coord[a], t]
+                Bm[t, a] = Gp[_nn(act_coord[a]), t]
         # the checked verb's screen: Hadamard ratio |det A| / prod |a_i| of the column-scaled map
         for a in range(nt):
             big = 0.0
