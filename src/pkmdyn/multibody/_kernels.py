@@ -325,27 +325,32 @@ def _point_motion(b, x, V, A, v, a):
 
 
 @njit(cache=True, inline="always")
-def _jrow(J, rr, wa, wb, S, anc, a, b, coef_a, coef_b):
-    """Jacobian row ``J[rr, c] = (coef_b [c moves b] + coef_a [c moves a]) (wa . S_w + wb . S_v)``;
-    ``anc[b] = (count, coordinates moving body b...)``."""
-    for c in range(S.shape[0]):
-        J[rr, c] = 0.0
+def _jrow(J, i, colpos, wa, wb, S, anc, a, b, coef_a, coef_b):
+    """Jacobian row ``J[i, colpos[c]] = (coef_b [c moves b] + coef_a [c moves a]) (wa . S_w + wb .
+    S_v)`` (nothing where ``i < 0``: a row the Newton system leaves out); ``anc[b] = (count,
+    coordinates moving body b...)``."""
+    if i < 0:
+        return
+    i = _nn(i)
+    for j in range(J.shape[1]):
+        J[i, j] = 0.0
     for body, coef in ((a, coef_a), (b, coef_b)):
         if body < 0 or coef == 0.0:
             continue
         body = _nn(body)
         for k in range(1, _nn(anc[body, 0] + 1)):
             c = _nn(anc[body, k])
-            J[rr, c] += coef * (wa[0] * S[c, 0] + wa[1] * S[c, 1] + wa[2] * S[c, 2]
-                                + wb[0] * S[c, 3] + wb[1] * S[c, 4] + wb[2] * S[c, 5])
+            J[i, _nn(colpos[c])] += coef * (wa[0] * S[c, 0] + wa[1] * S[c, 1] + wa[2] * S[c, 2]
+                                             + wb[0] * S[c, 3] + wb[1] * S[c, 4] + wb[2] * S[c, 5])
 
 
 @njit(cache=True, _nrt=False, inline='always')
 def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
          RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-         val, J, mode, V, A, gamma, w33, w3):
-    """Values ``val (nr + nt,)`` and, by ``mode``: the Jacobian ``J (nr + nt, nq)``
-    (``ROWS_JACOBIAN``); the drift ``gamma (nr + nt,)`` from the bias accelerations ``A``
+         val, J, rowpos, colpos, mode, V, A, gamma, w33, w3):
+    """Values ``val (nr + nt,)`` and, by ``mode``: the Jacobian (``ROWS_JACOBIAN``), row ``rr``
+    and column ``c`` at ``J[rowpos[rr], colpos[c]]`` (rows with ``rowpos < 0`` left out: the
+    solver writes the rows it solves straight into its permuted matrix); the drift ``gamma (nr + nt,)`` from the bias accelerations ``A``
     (qdd = 0) and velocities ``V`` (``ROWS_DRIFT``); nothing more (``ROWS_VALUES``).
 
     Jacobian rows in Plücker form: a translation row ``e . (o_C - o_P)`` changes with tree
@@ -385,7 +390,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
                 wa[m] = -t3[m]
                 wb[m] = e[m]
             if mode == ROWS_JACOBIAN:
-                _jrow(J, rr, wa, wb, S, anc, a, b, -1.0, 1.0)
+                _jrow(J, rowpos[rr], colpos, wa, wb, S, anc, a, b, -1.0, 1.0)
         else:
             for m in range(3):
                 cj[m] = eC[m, _nn(row_j[rr])]
@@ -394,7 +399,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
             for m in range(3):
                 wb[m] = 0.0
             if mode == ROWS_JACOBIAN:
-                _jrow(J, rr, wa, wb, S, anc, a, b, 1.0, -1.0)
+                _jrow(J, rowpos[rr], colpos, wa, wb, S, anc, a, b, 1.0, -1.0)
         if mode == ROWS_DRIFT:
             _direction_motion(a, e, V, A, ed, edd, t3)
             if row_kind[rr] == 0:
@@ -440,7 +445,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
             _cross(x, t4, wa)
             wb[m] = 1.0
             if mode == ROWS_JACOBIAN:
-                _jrow(J, rr, wa, wb, S, anc, -1, tb, 0.0, 1.0)
+                _jrow(J, rowpos[rr], colpos, wa, wb, S, anc, -1, tb, 0.0, 1.0)
             if mode == ROWS_DRIFT:
                 _point_motion(tb, x, V, A, vC, aC)
                 gamma[rr] = aC[m]
@@ -450,7 +455,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
                 wa[i] = Ei[m, i]
                 wb[i] = 0.0
             if mode == ROWS_JACOBIAN:
-                _jrow(J, rr, wa, wb, S, anc, -1, tb, 0.0, 1.0)
+                _jrow(J, rowpos[rr], colpos, wa, wb, S, anc, -1, tb, 0.0, 1.0)
             if mode == ROWS_DRIFT:
                 # phi_dd = E^-1 (omega_dot - Edot phi_dot), Edot phi_dot = (k1 f1) x (e2 f2) + (k1 f1 + e2 f2) x (e3 f3)
                 w = V[tb, :3]
@@ -472,18 +477,31 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def _fill(K, J, sel_rows, idle, prow, pcol):
-    """``K[i, j] = Kfull[prow[i], pcol[j]]`` with ``Kfull = [J[sel_rows]; idle]``."""
+def _fill_idle(K, idle, idlepos, colpos):
+    """The idle rows of the permuted Newton matrix: ``K[idlepos[i], colpos[c]] = idle[i, c]``."""
+    for i in range(idle.shape[0]):
+        r = _nn(idlepos[i])
+        for c in range(idle.shape[1]):
+            K[r, _nn(colpos[c])] = idle[i, c]
+
+
+@njit(cache=True, _nrt=False)
+def solver_positions(sel_rows, prow, pcol, rowpos, colpos, idlepos):
+    """Where the Newton system's rows and columns sit in its permuted matrix ``K[i, j] =
+    Kfull[prow[i], pcol[j]]`` (``Kfull = [J[sel_rows]; idle]``): ``rowpos (nr + nt,)`` the row
+    of each constraint or task row (-1: not solved, only checked), ``colpos (nq,)`` the column
+    of each coordinate, ``idlepos (ni,)`` the row of each idle freedom."""
     m = sel_rows.shape[0]
-    for i in range(K.shape[0]):
-        r = _nn(prow[i])
+    for rr in range(rowpos.shape[0]):
+        rowpos[rr] = -1
+    for i in range(prow.shape[0]):
+        r = prow[i]
         if r < m:
-            rr = _nn(sel_rows[r])
-            for j in range(K.shape[1]):
-                K[i, j] = J[rr, _nn(pcol[j])]
+            rowpos[sel_rows[r]] = i
         else:
-            for j in range(K.shape[1]):
-                K[i, j] = idle[_nn(r - m), _nn(pcol[j])]
+            idlepos[r - m] = i
+    for j in range(pcol.shape[0]):
+        colpos[pcol[j]] = j
 
 
 @njit(cache=True, inline="always")
@@ -684,17 +702,17 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
     ``(0; I; 0)`` (:func:`task_unit_rhs`); ``Gw2 (mk, nt)`` work space. Returns the status (OK, NOT_CONVERGED, SINGULAR,
     EULER_SINGULAR, LOOP_OPEN); ``info[0]``
     the worst row, ``info[1]`` the scaled residual, ``info[2]`` the Newton evaluations (1:
-    the first closed the loops). On OK the poses ``R, p``, twists ``S`` and
-    Jacobian ``J`` are those of the converged ``q``. The poses, the rows, the factorisation
+    the first closed the loops). On OK the poses ``R, p`` and twists ``S`` are those of the
+    converged ``q``. The Jacobian's solved rows go straight into ``K`` at their permuted places
+    (``rowpos``, ``colpos``, ``idlepos`` of :func:`solver_positions`, in ``solver``). The poses, the rows, the factorisation
     and the solve are each called from one place, so that the compiled sample carries one
     copy of each."""
     (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC,
      tpC) = tree
     RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child = loops
     task_body, task_point, task_kind, task_index, euler_axes = task
-    sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter = solver
-    (R, p, S, val, J, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw,
-     Gw2) = work
+    sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter, rowpos, colpos, idlepos = solver
+    R, p, S, val, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2 = work
     nq = q.shape[0]
     nr = row_loop.shape[0]
     nt = task_kind.shape[0]
@@ -724,7 +742,7 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
             mode = ROWS_VALUES if phase == _CHORD else ROWS_JACOBIAN
         ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                   RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-                  val, J, mode, V, A, gamma, w33, w3)
+                  val, K, rowpos, colpos, mode, V, A, gamma, w33, w3)
         # ---- the right-hand side
         if phase == _RATES:
             for i in range(mk):
@@ -775,7 +793,7 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
                     return NOT_CONVERGED
                 it += 1
                 info[2] = it
-                _fill(K, J, sel_rows, idle, prow, pcol)
+                _fill_idle(K, idle, idlepos, colpos)
                 if not block_lu_factor(K, piv, blocks):
                     return SINGULAR
                 if done:
@@ -850,7 +868,6 @@ def solve_batch(tm, x, xd, xdd, q_start,
     Vpre = np.zeros((nq, 6))
     A = np.zeros((nb, 6))
     val = np.empty(nrow)
-    J = np.empty((nrow, nq))
     gamma = np.zeros(nrow)
     res = np.empty(nrow)
     K = np.empty((mk, mk))
@@ -869,8 +886,12 @@ def solve_batch(tm, x, xd, xdd, q_start,
     tree = (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC)
     loops = (RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child)
     task = (task_body, task_point, task_kind, task_index, euler_axes)
-    solver = (sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter)
-    work = (R, p, S, val, J, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2)
+    rowpos = np.empty(nrow, dtype=np.int64)
+    colpos = np.empty(nq, dtype=np.int64)
+    idlepos = np.empty(idle.shape[0], dtype=np.int64)
+    solver_positions(sel_rows, prow, pcol, rowpos, colpos, idlepos)
+    solver = (sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter, rowpos, colpos, idlepos)
+    work = (R, p, S, val, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2)
     for s in range(n):
         if s > 0 and tm.shape[0] == n:
             dt = tm[s] - tm[s - 1]
@@ -947,9 +968,11 @@ def jacobians_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion
     gamma = np.zeros(val_out.shape[1])
     w33 = np.empty((5, 3, 3))
     w3 = np.empty((20, 3))
+    rowpos = np.arange(val_out.shape[1])
+    colpos = np.arange(nq)
     for s in range(q.shape[0]):
         forward_positions(q[s], body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
                           coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3)
         rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
              RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-             val_out[s], J_out[s], ROWS_JACOBIAN, V, A, gamma, w33, w3)
+             val_out[s], J_out[s], rowpos, colpos, ROWS_JACOBIAN, V, A, gamma, w33, w3)

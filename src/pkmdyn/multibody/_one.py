@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 
 from .._dense import solve_in_place
 from ._dyn_kernels import body_wrench, generalised, joint_friction, load_wrench, task_mass
-from ._kernels import OK, _nn, _point_motion, _wrap, chord_pause, solve_sample_inline, task_unit_rhs
+from ._kernels import OK, _nn, _point_motion, _wrap, chord_pause, solve_sample_inline, solver_positions, task_unit_rhs
 from .dynamics import SINGULAR_ACTUATION, inertia_factors
 from .friction import EPS_ROTATION as EPS_R
 from .friction import EPS_TRANSLATION as EPS_T
@@ -64,7 +64,8 @@ SHORT_WORK = 13
 _INT = ("body_parent", "body_joint", "joint_q0", "joint_nq", "coord_motion", "ancestor_list", "row_loop", "row_kind",
         "row_i", "row_j", "loop_joint", "joint_parent", "joint_child", "task_kind", "task_index", "euler_axes",
         "solver_rows", "solver_prow", "solver_pcol", "solver_blocks", "act_coord", "load_body",
-        "fj", "fch", "fpa", "frot", "fslide", "fidx", "fcnt", "eload", "load_named")
+        "fj", "fch", "fpa", "frot", "fslide", "fidx", "fcnt", "eload", "load_named", "solver_rowpos",
+        "solver_colpos", "solver_idlepos")
 _FLOAT = ("coord_offset", "coord_sign", "tree_R_parent", "tree_p_parent", "tree_R_child", "tree_p_child",
           "joint_R_parent", "joint_p_parent", "joint_R_child", "joint_p_child", "task_point", "solver_idle",
           "row_scale", "mass", "inertia", "com", "gravity", "load_point", "load_force", "load_moment",
@@ -86,7 +87,7 @@ def _sizes(model: MechanismModel) -> tuple[int, int, int]:
     nrow = model.row_loop.shape[0] + nt
     mk = nq
     nstate = 1 + nq + nt + nq * nt + nq + nt + 1
-    nwork = (nb * 9 + nb * 3 + nq * 6 + nrow + nrow * nq + nrow + mk * mk + mk + mk + mk + 2 * nq + nb * 6
+    nwork = (nb * 9 + nb * 3 + nq * 6 + nrow + nrow + mk * mk + mk + mk + mk + 2 * nq + nb * 6
              + nq * 6 + nb * 6 + nrow + 45 + 60 + nb * 6 + nq + nb * 6 * nt + 9 + 9 + 6 * nb * nt + nt * nt + nt * nt
              + 2 * nt + 12 + 3 + mk * nt + nq + nb * 3)
     return nstate, nwork, 2 * mk
@@ -108,6 +109,11 @@ def pack(model: MechanismModel) -> NDArray[np.int64]:
     task_unit_rhs(model.solver_rows, model.row_loop.shape[0], arrays["task_rhs"])
     arrays.update(friction_arrays(model))
     arrays["load_named"] = np.array([nm is not None for nm in model.load_name], dtype=np.int64)
+    arrays["solver_rowpos"] = np.empty(model.row_loop.shape[0] + model.nt, dtype=np.int64)
+    arrays["solver_colpos"] = np.empty(model.nq, dtype=np.int64)
+    arrays["solver_idlepos"] = np.empty(model.solver_idle.shape[0], dtype=np.int64)
+    solver_positions(model.solver_rows, model.solver_prow, model.solver_pcol, arrays["solver_rowpos"],
+                     arrays["solver_colpos"], arrays["solver_idlepos"])
     nstate, nwork, nwi = _sizes(model)
     head = [len(_INT), len(_FLOAT), int(model.task_body), int(MAX_ITER), int(model.nq), int(model.nt), 0, 0, 0, 0]
     parts: list[NDArray[np.int64]] = []
@@ -269,6 +275,7 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     fcnt = _i(pk, 28)
     eload = _i2(pk, 29)
     load_named = _i(pk, 30)
+    rowpos, colpos, idlepos = _i(pk, 31), _i(pk, 32), _i(pk, 33)
     nb = body_parent.shape[0]
     nl = load_body.shape[0]
     coord_offset, coord_sign = _f(pk, 0), _f(pk, 1)
@@ -294,7 +301,6 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     p, o = _take2(pk, o, nb, 3)
     S, o = _take2(pk, o, nq, 6)
     val, o = _take1(pk, o, nrow)
-    J, o = _take2(pk, o, nrow, nq)
     res, o = _take1(pk, o, nrow)
     K, o = _take2(pk, o, mk, mk)
     rhs, o = _take1(pk, o, mk)
@@ -364,9 +370,10 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
                           (RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent,
                            joint_child),
                           (task_body, task_point, task_kind, task_index, euler_axes),
-                          (sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter),
-                          (R, p, S, val, J, res, K, wi, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, Gp, w33, w3,
-                           Gw, Gw2), info)
+                          (sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter, rowpos, colpos,
+                           idlepos),
+                          (R, p, S, val, res, K, wi, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, Gp, w33, w3, Gw,
+                           Gw2), info)
     if status != OK:
         st[0] = COLD_STATE
         return status
