@@ -237,6 +237,21 @@ def _f3(pk, k):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
+def _f33(pk, k):  # pragma: no cover - compiled
+    """:func:`_f3` of an (n, 3, 3) array, its 3s constants of the compiled code (the compiler
+    then folds them into the indexing)."""
+    h = _HEAD + 4 * (pk[0] + k)
+    return _fview(pk, pk[h], (pk[h + 1], 3, 3))
+
+
+@njit(cache=True, inline="always")
+def _fn3(pk, k):  # pragma: no cover - compiled
+    """:func:`_f2` of an (n, 3) array, its 3 a constant of the compiled code."""
+    h = _HEAD + 4 * (pk[0] + k)
+    return _fview(pk, pk[h], (pk[h + 1], 3))
+
+
+@njit(cache=True, inline="always")
 def _take1(pk, o, n):  # pragma: no cover - compiled
     return _fview(pk, o, (n,)), o + n
 
@@ -279,16 +294,16 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     nb = body_parent.shape[0]
     nl = load_body.shape[0]
     coord_offset, coord_sign = _f(pk, 0), _f(pk, 1)
-    tRP, tpP, tRC, tpC = _f3(pk, 2), _f2(pk, 3), _f3(pk, 4), _f2(pk, 5)
-    RP, pP, RC, pC = _f3(pk, 6), _f2(pk, 7), _f3(pk, 8), _f2(pk, 9)
+    tRP, tpP, tRC, tpC = _f33(pk, 2), _fn3(pk, 3), _f33(pk, 4), _fn3(pk, 5)
+    RP, pP, RC, pC = _f33(pk, 6), _fn3(pk, 7), _f33(pk, 8), _fn3(pk, 9)
     task_point = _f(pk, 10)
     idle = _f2(pk, 11)
     row_scale, mass = _f(pk, 12), _f(pk, 13)
-    inertia, com, gravity = _f3(pk, 14), _f2(pk, 15), _f(pk, 16)
-    load_point, load_force, load_moment = _f2(pk, 17), _f2(pk, 18), _f2(pk, 19)
+    inertia, com, gravity = _f33(pk, 14), _fn3(pk, 15), _f(pk, 16)
+    load_point, load_force, load_moment = _fn3(pk, 17), _fn3(pk, 18), _fn3(pk, 19)
     fcoef, fsc, ecoef, eoff, load_direction = _f2(pk, 20), _f2(pk, 21), _f2(pk, 22), _f2(pk, 23), \
         _f2(pk, 24)
-    inertia_factor = _f3(pk, 25)
+    inertia_factor = _f33(pk, 25)
     Gw = _f2(pk, 26)
     tol, check_tol = _fview(pk, pk[6], (2,))
     task_body, max_iter = pk[2], pk[3]
