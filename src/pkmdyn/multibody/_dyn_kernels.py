@@ -19,9 +19,10 @@ def twists_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, c
     p = np.empty((nb, 3))
     w33 = np.empty((5, 3, 3))
     w3 = np.empty((20, 3))
+    trig = np.empty((q.shape[1], 3))
     for s in range(q.shape[0]):
         forward_positions(q[s], body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
-                          RP, pP, RC, pC, R, p, S_out[s], w33, w3)
+                          RP, pP, RC, pC, R, p, S_out[s], w33, w3, trig, False)
 
 
 @njit(cache=True, _nrt=False, inline="always")

@@ -100,28 +100,57 @@ def _unit_twist(S, c, sg, turns, a0, a1, a2, o0, o1, o2):
 
 
 @njit(cache=True, inline="always")
+def _turn(Rf, m, cq, sq):
+    """``Rf <- Rf Rot_m(q)`` (m < 3) from ``cq, sq = cos q, sin q``: only the two columns normal
+    to axis m turn."""
+    i1, j1 = (m + 1) % 3, (m + 2) % 3
+    for r in range(3):
+        ci, cj = Rf[r, i1], Rf[r, j1]
+        Rf[r, i1] = cq * ci + sq * cj
+        Rf[r, j1] = -sq * ci + cq * cj
+
+
+@njit(cache=True, inline="always")
 def _advance(Rf, o, m, qc):
     """Move a joint's frame (axes ``Rf (3, 3)``, origin ``o (3,)``) by one coordinate of motion
-    ``m`` through ``qc``: ``Rf <- Rf Rot_m(qc)`` (m < 3; only the two columns normal to axis m
-    turn), or ``o += qc Rf[:, m - 3]`` (a slide)."""
+    ``m`` through ``qc``: ``Rf <- Rf Rot_m(qc)`` (m < 3, :func:`_turn`), or ``o += qc Rf[:, m -
+    3]`` (a slide)."""
     if m < 3:
-        cq, sq = math.cos(qc), math.sin(qc)
-        i1, j1 = (m + 1) % 3, (m + 2) % 3
-        for r in range(3):
-            ci, cj = Rf[r, i1], Rf[r, j1]
-            Rf[r, i1] = cq * ci + sq * cj
-            Rf[r, j1] = -sq * ci + cq * cj
+        _turn(Rf, m, math.cos(qc), math.sin(qc))
     else:
         for i in range(3):
             o[i] += Rf[i, _nn(m - 3)] * qc
 
 
+@njit(cache=True, inline="always")
+def _cos_sin(trig, c, qc, reuse):
+    """``cos qc, sin qc`` of coordinate c, kept in ``trig[c] = (cos, sin, qc)``. With ``reuse``
+    and ``qc`` within 1e-3 of the kept angle, from the kept values by the angle-addition
+    formulas with the series of ``cos d``, ``sin d`` to ``d^4``, ``d^5`` (left out: below
+    ``d^6 / 720 < 2e-21``): exact to rounding, without the library's sine and cosine."""
+    if reuse:
+        d = qc - trig[c, 2]
+        if abs(d) < 1e-3:
+            d2 = d * d
+            cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0))
+            sd = d * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0)))
+            c0, s0 = trig[c, 0], trig[c, 1]
+            cq, sq = c0 * cd - s0 * sd, s0 * cd + c0 * sd
+            trig[c, 0], trig[c, 1], trig[c, 2] = cq, sq, qc
+            return cq, sq
+    cq, sq = math.cos(qc), math.sin(qc)
+    trig[c, 0], trig[c, 1], trig[c, 2] = cq, sq, qc
+    return cq, sq
+
+
 @njit(cache=True, _nrt=False, inline='always')
 def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
-                      RP, pP, RC, pC, R, p, S, w33, w3):
+                      RP, pP, RC, pC, R, p, S, w33, w3, trig, reuse):
     """Body poses ``R (nb, 3, 3)``, ``p (nb, 3)`` and coordinate twists ``S (nq, 6)`` at ``q``
     (frames ``RP, pP, RC, pC`` in tree order; coordinate c moves by ``coord_sign[c] (q - offset)``;
-    ``w33 (5, 3, 3)``, ``w3 (20, 3)``: work space)."""
+    ``w33 (5, 3, 3)``, ``w3 (20, 3)``: work space). ``trig (nq, 3)`` keeps each turning
+    coordinate's cosine and sine (:func:`_cos_sin`); with ``reuse`` they are taken from the last
+    pass where ``q`` moved little since (a Newton step)."""
     Rf = w33[0]
     o = w3[18]
     for b in range(body_parent.shape[0]):
@@ -131,7 +160,13 @@ def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_moti
             m = _nn(coord_motion[c])
             mm = m % 3
             _unit_twist(S, c, coord_sign[c], m < 3, Rf[0, mm], Rf[1, mm], Rf[2, mm], o[0], o[1], o[2])
-            _advance(Rf, o, m, coord_sign[c] * (q[c] - coord_offset[c]))
+            qc = coord_sign[c] * (q[c] - coord_offset[c])
+            if m < 3:
+                cq, sq = _cos_sin(trig, c, qc, reuse)
+                _turn(Rf, m, cq, sq)
+            else:
+                for i in range(3):
+                    o[i] += Rf[i, _nn(m - 3)] * qc
         for i in range(3):
             for j in range(3):
                 R[b, i, j] = Rf[i, 0] * RC[k, j, 0] + Rf[i, 1] * RC[k, j, 1] + Rf[i, 2] * RC[k, j, 2]
@@ -712,7 +747,7 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
     RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child = loops
     task_body, task_point, task_kind, task_index, euler_axes = task
     sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter, rowpos, colpos, idlepos = solver
-    R, p, S, val, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2 = work
+    R, p, S, val, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2, trig = work
     nq = q.shape[0]
     nr = row_loop.shape[0]
     nt = task_kind.shape[0]
@@ -723,6 +758,7 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
     prev = 1e300
     phase = _CHORD if chord else _NEWTON
     it = 0
+    again = False
     while True:
         # ---- evaluate the rows at q (their values with the Jacobian, or the drift)
         if phase == _RATES:
@@ -738,7 +774,10 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
             mode = ROWS_DRIFT
         else:
             forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
-                              coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3)
+                              coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, again)
+            # the pass after the simplified step (a step within rounding of the solution) starts from this
+            # one's sines and cosines; a Newton step computes them afresh
+            again = phase == _CHORD
             mode = ROWS_VALUES if phase == _CHORD else ROWS_JACOBIAN
         ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                   RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
@@ -891,7 +930,8 @@ def solve_batch(tm, x, xd, xdd, q_start,
     idlepos = np.empty(idle.shape[0], dtype=np.int64)
     solver_positions(sel_rows, prow, pcol, rowpos, colpos, idlepos)
     solver = (sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter, rowpos, colpos, idlepos)
-    work = (R, p, S, val, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2)
+    work = (R, p, S, val, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2,
+            np.zeros((nq, 3)))
     for s in range(n):
         if s > 0 and tm.shape[0] == n:
             dt = tm[s] - tm[s - 1]
@@ -970,9 +1010,10 @@ def jacobians_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion
     w3 = np.empty((20, 3))
     rowpos = np.arange(val_out.shape[1])
     colpos = np.arange(nq)
+    trig = np.empty((nq, 3))
     for s in range(q.shape[0]):
         forward_positions(q[s], body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
-                          coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3)
+                          coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, False)
         rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
              RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
              val_out[s], J_out[s], rowpos, colpos, ROWS_JACOBIAN, V, A, gamma, w33, w3)

@@ -89,7 +89,7 @@ def _sizes(model: MechanismModel) -> tuple[int, int, int]:
     nstate = 1 + nq + nt + nq * nt + nq + nt + 1
     nwork = (nb * 9 + nb * 3 + nq * 6 + nrow + nrow + mk * mk + mk + mk + mk + 2 * nq + nb * 6
              + nq * 6 + nb * 6 + nrow + 45 + 60 + nb * 6 + nq + nb * 6 * nt + 9 + 9 + 6 * nb * nt + nt * nt + nt * nt
-             + 2 * nt + 12 + 3 + mk * nt + nq + nb * 3)
+             + 2 * nt + 12 + 3 + mk * nt + nq + nb * 3 + 3 * nq)
     return nstate, nwork, 2 * mk
 
 
@@ -348,6 +348,7 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     info, o = _take1(pk, o, 3)
     Gw2, o = _take2(pk, o, mk, nt)
     Qf, o = _take1(pk, o, nq)
+    trig, o = _take2(pk, o, nq, 3)
     if o > pk[9]:
         return SHORT_WORK  # the views would run past the work space
     wi = _iview(pk, pk[9], (2 * mk,))
@@ -388,7 +389,7 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
                           (sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter, rowpos, colpos,
                            idlepos),
                           (R, p, S, val, res, K, wi, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, Gp, w33, w3, Gw,
-                           Gw2), info)
+                           Gw2, trig), info)
     if status != OK:
         st[0] = COLD_STATE
         return status

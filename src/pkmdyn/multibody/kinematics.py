@@ -101,7 +101,7 @@ def _poses(model: MechanismModel, q: Array) -> tuple[Array, Array, Array]:
     K.forward_positions(np.ascontiguousarray(q, dtype=float), model.body_parent, model.body_joint, model.joint_q0,
                         model.joint_nq, model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent,
                         model.tree_p_parent, model.tree_R_child, model.tree_p_child, R, p, S,
-                        np.empty((5, 3, 3)), np.empty((20, 3)))
+                        np.empty((5, 3, 3)), np.empty((20, 3)), np.empty((model.nq, 3)), False)
     return R, p, S
 
 
