@@ -71,7 +71,7 @@ def _integral(x: Array, t: Array) -> Array:
     return np.sum(0.5 * (x[1:] + x[:-1]) * dt, axis=0)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class DescribedSweep:
     """The sweep adapter of the mechanism described by ``path`` (``NAME``: its
     ``[mechanism] name``). The file is read once, here (it may be a pipe)."""
