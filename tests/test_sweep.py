@@ -20,7 +20,7 @@ from pkmdyn.errors import LimitError, ParameterError  # noqa: E402
 from pkmdyn.machines.registry import sweep_adapter  # noqa: E402
 from pkmdyn.sweep import pareto_mask, run_sweep  # noqa: E402
 from pkmdyn.sweep.pareto import best_index, minimised  # noqa: E402
-from pkmdyn.sweep.space import parse_path, sample_designs  # noqa: E402
+from pkmdyn.sweep.space import get_value, parse_path, sample_designs  # noqa: E402
 from pkmdyn.io import dumps_toml  # noqa: E402
 from pkmdyn.errors import PkmdynError  # noqa: E402
 
@@ -81,6 +81,17 @@ def test_pareto_against_brute_force_with_a_maximised_objective():
 # ----------------------------------------------------------------------------- space files
 def test_parse_path_and_grid_order(tmp_path):
     assert parse_path("geometry.platform_heights_m[1]") == ("geometry", "platform_heights_m", 1)
+    from pkmdyn.sweep.space import ByName, index_path
+
+    d = {"bodies": [{"name": "base", "m": 1.0}, {"name": "arm.2", "m": 2.0, "c": [0.0, 3.0]}]}
+    path = parse_path("bodies[arm.2].c[1]")
+    assert path == ("bodies", "arm.2", "c", 1) and isinstance(path[1], ByName)
+    assert index_path(d, path) == ("bodies", 1, "c", 1) and get_value(d, path) == 3.0
+    with pytest.raises(KeyError, match="no entries named 'arm' in bodies .names: base, arm.2"):
+        get_value(d, parse_path("bodies[arm].m"))
+    for bad in ("bodies[arm].", "bodies..m", "bodies[arm]x"):
+        with pytest.raises(ParameterError, match="not a dotted key path"):
+            parse_path(bad)
     space_file = _write(tmp_path, """
         [sampling]
         method = "grid"

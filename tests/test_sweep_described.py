@@ -43,8 +43,8 @@ seed = 5
 singularity_threshold = 1e-4
 
 [parameters]
-"bodies[0].mass_kg" = { min = 5.0, max = 25.0 }
-"legs[0].joints[1].friction.viscous_N_s_m" = { min = 10.0, max = 80.0 }
+"bodies[platform].mass_kg" = { min = 5.0, max = 25.0 }
+"legs[0].joints[P].friction.viscous_N_s_m" = { min = 10.0, max = 80.0 }
 "default_motion.amplitude.z_m" = { min = 0.02, max = 0.08 }
 
 [objectives]
@@ -67,7 +67,8 @@ def test_a_designs_metrics_are_those_of_its_own_run(tmp_path):
     best = next(r for r in rows if r["design_id"] == report.best_design_id)
     design = tmp_path / "out" / "best_params.toml"
     d = tomllib.loads(design.read_text(encoding="utf-8"))
-    assert d["bodies"][0]["mass_kg"] == best["bodies[0].mass_kg"]  # the swept values went into the design
+    assert d["bodies"][0]["name"] == "platform" and d["legs"][0]["joints"][1]["name"] == "P"
+    assert d["bodies"][0]["mass_kg"] == best["bodies[platform].mass_kg"]  # the swept values went into the design
     assert d["default_motion"]["amplitude"]["z_m"] == best["default_motion.amplitude.z_m"]
     assert main(["run", "--machine", str(design), "--out", str(tmp_path / "run")]) == 0
     cols = np.genfromtxt(tmp_path / "run" / "results.csv", delimiter=",", names=True)
@@ -95,7 +96,7 @@ def test_a_designs_metrics_are_those_of_its_own_run(tmp_path):
     work = _trapz(power, t)
     assert best["friction_energy_per_cycle_J"] > 0.5
     np.testing.assert_allclose(best["friction_energy_per_cycle_J"], work, rtol=1e-6)
-    assert d["legs"][0]["joints"][1]["friction"]["viscous_N_s_m"] == best["legs[0].joints[1].friction.viscous_N_s_m"]
+    assert d["legs"][0]["joints"][1]["friction"]["viscous_N_s_m"] == best["legs[0].joints[P].friction.viscous_N_s_m"]
     assert json.loads((tmp_path / "out" / "summary.json").read_text())["machine"] == "stewart"
 
 

@@ -27,7 +27,7 @@ Format (``docs/sweep.md``)::
     gci = "max"
 
 A parameter is any numeric key of the machine's description by its dotted path; list entries
-by a zero-based index in brackets. Everything is checked before any design is evaluated; every
+by a zero-based index in brackets, or by their ``name`` (``bodies[platform].mass_kg``). Everything is checked before any design is evaluated; every
 error is one :class:`~pkmdyn.errors.ParameterError` line that names the file and the key.
 """
 
@@ -57,6 +57,7 @@ __all__ = [
     "load_space",
     "space_from_dict",
     "parse_path",
+    "index_path",
     "get_value",
     "set_value",
     "sample_designs",
@@ -210,40 +211,78 @@ class SweepSpace:
         }
 
 
-_SEGMENT = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)$")
+_SEGMENT = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[[^\[\]]+\])*)")
+
+
+class ByName(str):
+    """A path part that picks the entry of a list of tables whose ``name`` it is
+    (``bodies[platform]``)."""
 
 
 def parse_path(key: str) -> tuple[str | int, ...]:
-    """``"geometry.platform_heights_m[1]"`` -> ``("geometry", "platform_heights_m", 1)``."""
+    """``"geometry.platform_heights_m[1]"`` -> ``("geometry", "platform_heights_m", 1)``; a
+    bracket that is not a number names a list entry by its ``name`` key: ``"bodies[platform].mass_kg"``
+    -> ``("bodies", ByName("platform"), "mass_kg")``."""
     parts: list[str | int] = []
-    for seg in key.split("."):
-        m = _SEGMENT.match(seg)
+    pos = 0
+    while True:
+        m = _SEGMENT.match(key, pos)
         if m is None:
-            raise ParameterError(f"{key!r}: not a dotted key path (table.key, list entries as key[i])")
+            raise ParameterError(f"{key!r}: not a dotted key path (table.key, list entries as key[i] or "
+                                 "key[name])")
         parts.append(m.group(1))
-        parts.extend(int(i) for i in re.findall(r"\[(\d+)\]", m.group(2)))
-    return tuple(parts)
+        for sel in re.findall(r"\[([^\[\]]+)\]", m.group(2)):
+            parts.append(int(sel) if sel.isdigit() else ByName(sel))
+        pos = m.end()
+        if pos == len(key):
+            return tuple(parts)
+        if key[pos] != "." or pos + 1 == len(key):
+            raise ParameterError(f"{key!r}: not a dotted key path (table.key, list entries as key[i] or "
+                                 "key[name])")
+        pos += 1
+
+
+def _named(node: Any, name: str, where: str) -> int:
+    """The index of the entry of the list ``node`` whose ``name`` is ``name``."""
+    if not isinstance(node, list):
+        raise KeyError(f"{where} is not a list")
+    found = [i for i, e in enumerate(node) if isinstance(e, Mapping) and e.get("name") == name]
+    if len(found) != 1:
+        names = [e.get("name") for e in node if isinstance(e, Mapping) and isinstance(e.get("name"), str)]
+        raise KeyError(f"{len(found) or 'no'} entries named {name!r} in {where} (names: {', '.join(names) or 'none'})")
+    return found[0]
+
+
+def index_path(description: Mapping[str, Any], path: Sequence[str | int]) -> tuple[str | int, ...]:
+    """``path`` with every :class:`ByName` part replaced by its entry's index in
+    ``description`` (``KeyError`` naming the part that is missing)."""
+    out: list[str | int] = []
+    node: Any = description
+    for k, part in enumerate(path):
+        if isinstance(part, ByName):
+            part = _named(node, str(part), _show(path[:k]))
+        elif isinstance(part, int):
+            if not isinstance(node, list) or part >= len(node):
+                size = len(node) if isinstance(node, list) else 0
+                raise KeyError(f"index [{part}] out of range (the list has {size} entries)"
+                               if isinstance(node, list) else f"{_show(path[:k])} is not a list")
+        elif not isinstance(node, Mapping) or part not in node:
+            raise KeyError(f"no key {_show(path[:k + 1])}")
+        out.append(part)
+        node = node[part]
+    return tuple(out)
 
 
 def get_value(description: Mapping[str, Any], path: Sequence[str | int]) -> Any:
     """The value at ``path``; ``KeyError`` naming the first missing part."""
     node: Any = description
-    for k, part in enumerate(path):
-        if isinstance(part, int):
-            if not isinstance(node, list) or part >= len(node):
-                size = len(node) if isinstance(node, list) else 0
-                raise KeyError(f"index [{part}] out of range (the list has {size} entries)"
-                               if isinstance(node, list) else f"{_show(path[:k])} is not a list")
-            node = node[part]
-        else:
-            if not isinstance(node, Mapping) or part not in node:
-                raise KeyError(f"no key {_show(path[:k + 1])}")
-            node = node[part]
+    for part in index_path(description, path):
+        node = node[part]
     return node
 
 
 def set_value(description: dict[str, Any], path: Sequence[str | int], value: Any) -> None:
-    """Set the value at an existing ``path`` in place."""
+    """Set the value at an existing ``path`` (list entries by index) in place."""
     node: Any = description
     for part in path[:-1]:
         node = node[part]
@@ -253,7 +292,7 @@ def set_value(description: dict[str, Any], path: Sequence[str | int], value: Any
 def _show(path: Sequence[str | int]) -> str:
     out = ""
     for p in path:
-        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else p)
+        out += f"[{p}]" if isinstance(p, (int, ByName)) else (f".{p}" if out else p)
     return out
 
 
@@ -282,7 +321,7 @@ def space_from_dict(raw: Mapping[str, Any], description: Mapping[str, Any], metr
     params = []
     for key, spec in d.parameters.items():
         try:
-            path = parse_path(key)
+            path = index_path(description, parse_path(key))
             value = get_value(description, path)
         except KeyError as exc:
             raise ParameterError(f"{source}: [parameters] {key}: unknown key of the machine's description "
