@@ -111,15 +111,21 @@ def _turn(Rf, m, cq, sq):
 
 
 @njit(cache=True, inline="always")
+def _slide(Rf, o, m, qc):
+    """``o += qc Rf[:, m - 3]`` (m >= 3): the origin slides along axis m - 3."""
+    for i in range(3):
+        o[i] += Rf[i, _nn(m - 3)] * qc
+
+
+@njit(cache=True, inline="always")
 def _advance(Rf, o, m, qc):
     """Move a joint's frame (axes ``Rf (3, 3)``, origin ``o (3,)``) by one coordinate of motion
-    ``m`` through ``qc``: ``Rf <- Rf Rot_m(qc)`` (m < 3, :func:`_turn`), or ``o += qc Rf[:, m -
-    3]`` (a slide)."""
+    ``m`` through ``qc``: ``Rf <- Rf Rot_m(qc)`` (m < 3, :func:`_turn`), or a slide
+    (:func:`_slide`)."""
     if m < 3:
         _turn(Rf, m, math.cos(qc), math.sin(qc))
     else:
-        for i in range(3):
-            o[i] += Rf[i, _nn(m - 3)] * qc
+        _slide(Rf, o, m, qc)
 
 
 @njit(cache=True, inline="always")
@@ -165,8 +171,7 @@ def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_moti
                 cq, sq = _cos_sin(trig, c, qc, reuse)
                 _turn(Rf, m, cq, sq)
             else:
-                for i in range(3):
-                    o[i] += Rf[i, _nn(m - 3)] * qc
+                _slide(Rf, o, m, qc)
         for i in range(3):
             for j in range(3):
                 R[b, i, j] = Rf[i, 0] * RC[k, j, 0] + Rf[i, 1] * RC[k, j, 1] + Rf[i, 2] * RC[k, j, 2]
@@ -385,8 +390,9 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
          val, J, rowpos, colpos, mode, V, A, gamma, w33, w3):
     """Values ``val (nr + nt,)`` and, by ``mode``: the Jacobian (``ROWS_JACOBIAN``), row ``rr``
     and column ``c`` at ``J[rowpos[rr], colpos[c]]`` (rows with ``rowpos < 0`` left out: the
-    solver writes the rows it solves straight into its permuted matrix); the drift ``gamma (nr + nt,)`` from the bias accelerations ``A``
-    (qdd = 0) and velocities ``V`` (``ROWS_DRIFT``); nothing more (``ROWS_VALUES``).
+    solver writes the rows it solves straight into its permuted matrix); the drift ``gamma
+    (nr + nt,)`` from the bias accelerations ``A`` (qdd = 0) and velocities ``V``
+    (``ROWS_DRIFT``); nothing more (``ROWS_VALUES``).
 
     Jacobian rows in Plücker form: a translation row ``e . (o_C - o_P)`` changes with tree
     rate c by ``(s_b - s_a) (e . S_v - (e x o_C) . S_w)`` (s_a, s_b: 1 where c moves body a, b;
@@ -734,14 +740,15 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
     The model's arrays and the work space come as five tuples (``tree``, ``loops``, ``task``,
     ``solver``, ``work``, unpacked below in :func:`solve_batch`'s names), so that the call
     stays short enough to be inlined. ``Gw (mk, nt)``: the constant right-hand sides
-    ``(0; I; 0)`` (:func:`task_unit_rhs`); ``Gw2 (mk, nt)`` work space. Returns the status (OK, NOT_CONVERGED, SINGULAR,
-    EULER_SINGULAR, LOOP_OPEN); ``info[0]``
-    the worst row, ``info[1]`` the scaled residual, ``info[2]`` the Newton evaluations (1:
-    the first closed the loops). On OK the poses ``R, p`` and twists ``S`` are those of the
-    converged ``q``. The Jacobian's solved rows go straight into ``K`` at their permuted places
-    (``rowpos``, ``colpos``, ``idlepos`` of :func:`solver_positions`, in ``solver``). The poses, the rows, the factorisation
-    and the solve are each called from one place, so that the compiled sample carries one
-    copy of each."""
+    ``(0; I; 0)`` (:func:`task_unit_rhs`); ``Gw2 (mk, nt)`` work space; ``trig (nq, 3)`` the
+    turning coordinates' cosines and sines (:func:`_cos_sin`). Returns the status (OK,
+    NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN); ``info[0]`` the worst row, ``info[1]``
+    the scaled residual, ``info[2]`` the Newton evaluations (1: the first closed the loops).
+    On OK the poses ``R, p`` and twists ``S`` are those of the converged ``q``. The Jacobian's
+    solved rows go straight into ``K`` at their permuted places (``rowpos``, ``colpos``,
+    ``idlepos`` of :func:`solver_positions`, in ``solver``). The poses, the rows, the
+    factorisation and the solve are each called from one place, so that the compiled sample
+    carries one copy of each."""
     (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC,
      tpC) = tree
     RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child = loops

@@ -380,16 +380,12 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
         q[c] += acc
     for t in range(nt):
         r[t] = 0.0  # the rates at xdd = 0
-    status = solve_sample_inline(x, xd, r, q, coord_offset, chord,
-                          (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP,
-                           tpP, tRC, tpC),
-                          (RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent,
-                           joint_child),
-                          (task_body, task_point, task_kind, task_index, euler_axes),
-                          (sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter, rowpos, colpos,
-                           idlepos),
-                          (R, p, S, val, res, K, wi, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, Gp, w33, w3, Gw,
-                           Gw2, trig), info)
+    tree = (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC)
+    loops = (RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child)
+    task = (task_body, task_point, task_kind, task_index, euler_axes)
+    solver = (sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter, rowpos, colpos, idlepos)
+    work = (R, p, S, val, res, K, wi, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, Gp, w33, w3, Gw, Gw2, trig)
+    status = solve_sample_inline(x, xd, r, q, coord_offset, chord, tree, loops, task, solver, work, info)
     if status != OK:
         st[0] = COLD_STATE
         return status
