@@ -15,7 +15,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
-__all__ = ["SweepAdapter", "DesignOutcome", "STATUSES", "MetricInfo"]
+import numpy as np
+
+__all__ = ["SweepAdapter", "DesignOutcome", "STATUSES", "MetricInfo", "time_integral", "time_mean"]
 
 #: every value of the ``status`` column, in the order of the summary
 #:
@@ -78,3 +80,15 @@ class SweepAdapter(Protocol):
         """Evaluate a batch of designs. Never raises for a bad design: that is an outcome.
         Each design's outcome must depend on that design alone (not on the batch)."""
         ...
+
+
+def time_integral(x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """``int x dt`` over a motion sampled at times ``t``: the trapezoid rule along axis 0 (the
+    adapters' energies and means)."""
+    dt = np.diff(t).reshape((-1,) + (1,) * (x.ndim - 1))
+    return np.sum(0.5 * (x[1:] + x[:-1]) * dt, axis=0)
+
+
+def time_mean(x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """``(1/T) int x dt`` over the motion (:func:`time_integral`, ``T`` its duration)."""
+    return time_integral(x, t) / (t[-1] - t[0])

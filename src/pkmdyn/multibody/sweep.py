@@ -16,6 +16,7 @@ description's actuators and joints; formulas and units: ``docs/sweep.md``.
 from __future__ import annotations
 
 import copy
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,7 +28,7 @@ from pydantic import Field
 
 from ..errors import ParameterError, PkmdynError, SingularityError, UnreachablePoseError
 from ..params_util import Section, read_toml, validate
-from ..sweep_protocol import DesignOutcome, MetricInfo
+from ..sweep_protocol import DesignOutcome, MetricInfo, time_integral, time_mean
 
 __all__ = ["DescribedSweep", "DescribedSweepContext"]
 
@@ -66,9 +67,10 @@ def _speed_unit(effort_unit: str) -> str:
     return "m_s" if effort_unit == "N" else "rad_s"
 
 
-def _integral(x: Array, t: Array) -> Array:
-    dt = np.diff(t).reshape((-1,) + (1,) * (x.ndim - 1))
-    return np.sum(0.5 * (x[1:] + x[:-1]) * dt, axis=0)
+def _mean(x: Array, t: Array) -> float:
+    """The time average of ``x (n,)`` over the motion (:func:`~pkmdyn.sweep_protocol.time_mean`);
+    the plain mean of a motion of one instant."""
+    return float(time_mean(x, t)) if t[-1] > t[0] else float(x.mean())
 
 
 @dataclass(frozen=True, eq=False)
@@ -206,11 +208,10 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
         return DesignOutcome("invalid", str(exc))
     sm = singularity_measures(model, kin.q)
     t = motion.t
-    T = float(t[-1] - t[0])
     direct = model.na == model.nt
     mu = sm.direct if direct else sm.inverse
     m: dict[str, float] = {
-        "gci": float(_integral(mu, t) / T) if T > 0 else float(mu.mean()),
+        "gci": _mean(mu, t),
         "min_inverse_measure": float(sm.inverse.min()),
         "min_constraint_measure": float(sm.constraint.min()),
     }
@@ -240,15 +241,13 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
     for i, (name, unit) in enumerate(zip(model.actuator_names, units)):
         sp = _speed_unit(unit)
         m[f"peak_effort_{name}_{unit}"] = float(np.abs(u[:, i]).max())
-        m[f"rms_effort_{name}_{unit}"] = float(np.sqrt(_integral(u[:, i] ** 2, t) / T)) if T > 0 else float(
-            np.sqrt(np.mean(u[:, i] ** 2)))
+        m[f"rms_effort_{name}_{unit}"] = math.sqrt(_mean(u[:, i] ** 2, t))
         m[f"peak_speed_{name}_{sp}"] = float(np.abs(sd[:, i]).max())
-        m[f"rms_speed_{name}_{sp}"] = float(np.sqrt(_integral(sd[:, i] ** 2, t) / T)) if T > 0 else float(
-            np.sqrt(np.mean(sd[:, i] ** 2)))
+        m[f"rms_speed_{name}_{sp}"] = math.sqrt(_mean(sd[:, i] ** 2, t))
     m["peak_power_W"] = float(power.sum(axis=1).max())
-    m["motor_energy_per_cycle_J"] = float(_integral(np.abs(power).sum(axis=1), t))
+    m["motor_energy_per_cycle_J"] = float(time_integral(np.abs(power).sum(axis=1), t))
     if ctx.reactions:
-        m["friction_energy_per_cycle_J"] = float(_integral(reac.dissipation, t))
+        m["friction_energy_per_cycle_J"] = float(time_integral(reac.dissipation, t))
         force = np.linalg.norm(reac.joint_force, axis=-1).max(axis=0)
         moment = np.linalg.norm(reac.joint_moment, axis=-1).max(axis=0)
         for j, name in enumerate(model.joint_names):

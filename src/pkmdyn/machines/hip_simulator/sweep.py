@@ -28,7 +28,7 @@ from .iso_fit import iso_cycle_preset
 from ...profiles.iso14242 import iso14242_block, iso14242_samples, iso14242_times
 from ...profiles.orientation import OrientationMotion, read_motion_csv
 from ...spatial import euler_kinematics, euler_to_matrix
-from ...sweep_protocol import DesignOutcome, MetricInfo
+from ...sweep_protocol import DesignOutcome, MetricInfo, time_integral, time_mean
 from .dynamics import inverse_dynamics
 from .kinematics import _platform_kinematics
 from .params import HipModel, default_params_dict, model_from_dict
@@ -225,17 +225,6 @@ def _workspace_fraction(model: HipModel, R_ws: Array, threshold: float) -> float
     return float(np.count_nonzero(good)) / R_ws.shape[0]
 
 
-def _integral(x: Array, t: Array) -> Array:
-    """int x dt over the motion, trapezoid rule along axis 0."""
-    dt = np.diff(t).reshape((-1,) + (1,) * (x.ndim - 1))
-    return np.sum(0.5 * (x[1:] + x[:-1]) * dt, axis=0)
-
-
-def _time_mean(x: Array, t: Array) -> Array:
-    """(1/T) int x dt over the motion."""
-    return _integral(x, t) / (t[-1] - t[0])
-
-
 def evaluate_one(description: Mapping[str, Any], ctx: HipSweepContext) -> DesignOutcome:
     """One design: validated model -> kinematics -> dynamics -> metrics (``docs/sweep.md``)."""
     try:
@@ -261,7 +250,7 @@ def evaluate_one(description: Mapping[str, Any], ctx: HipSweepContext) -> Design
     peak_tau = float(np.abs(tq.tau).max())
     power = np.sum(tq.tau * theta_dot, axis=1)
     m: dict[str, float] = {
-        "gci": float(_time_mean(inv_cond, t)),
+        "gci": float(time_mean(inv_cond, t)),
         "min_inverse_condition": float(inv_cond.min()),
         "max_spherical_angle_deg": math.degrees(float(_angle(e_platform, e0).max())),
         "max_universal_angle_deg": math.degrees(float(_angle(kin.e_lever, e0).max())),
@@ -269,15 +258,15 @@ def evaluate_one(description: Mapping[str, Any], ctx: HipSweepContext) -> Design
         "slider_min_m": float(L[:, 1].min()),
         "slider_max_m": float(L[:, 0].max()),
         "peak_torque_Nm": peak_tau,
-        "rms_torque_Nm": float(np.sqrt(_time_mean(tq.tau**2, t)).max()),
+        "rms_torque_Nm": float(np.sqrt(time_mean(tq.tau**2, t)).max()),
         "peak_drive_force_N": peak_tau / gear,
         "peak_slider_speed_m_s": float(np.abs(Ld).max()),
         "peak_slider_acceleration_m_s2": float(np.abs(Ldd).max()),
         "peak_motor_speed_rad_s": float(np.abs(theta_dot).max()),
-        "rms_motor_speed_rad_s": float(np.sqrt(_time_mean(theta_dot**2, t)).max()),
+        "rms_motor_speed_rad_s": float(np.sqrt(time_mean(theta_dot**2, t)).max()),
         "peak_power_W": float(power.max()),
-        "motor_energy_per_cycle_J": float(_integral(np.abs(tq.tau * theta_dot).sum(axis=1), t)) / ctx.cycles,
-        "friction_energy_per_cycle_J": float(_integral(np.sum(tq.friction * theta_dot, axis=1), t)) / ctx.cycles,
+        "motor_energy_per_cycle_J": float(time_integral(np.abs(tq.tau * theta_dot).sum(axis=1), t)) / ctx.cycles,
+        "friction_energy_per_cycle_J": float(time_integral(np.sum(tq.friction * theta_dot, axis=1), t)) / ctx.cycles,
     }
     if ctx.R_ws.shape[0]:
         m["orientation_workspace_fraction"] = _workspace_fraction(model, ctx.R_ws, ctx.threshold)

@@ -26,7 +26,7 @@ from pydantic import Field
 from ...errors import PkmdynError, SingularityError, UnreachablePoseError
 from ...params_util import Section, read_toml, validate
 from ...profiles.pdm_motion import PdmMotion, cycloidal_motion, read_pdm_motion
-from ...sweep_protocol import DesignOutcome, MetricInfo
+from ...sweep_protocol import DesignOutcome, MetricInfo, time_integral
 from . import minimal
 from .dynamics import JOINTS, inverse_dynamics
 from .kinematics import inverse_kinematics
@@ -126,11 +126,6 @@ def scaled_limb_jacobian(model: PdmModel, q: Array, length: float) -> Array:
     return J * np.array([1.0, 1.0, 1.0 / length, 1.0 / length])
 
 
-def _integral(x: Array, t: Array) -> Array:
-    dt = np.diff(t).reshape((-1,) + (1,) * (x.ndim - 1))
-    return np.sum(0.5 * (x[1:] + x[:-1]) * dt, axis=0)
-
-
 def evaluate_one(description: Mapping[str, Any], ctx: PdmSweepContext) -> DesignOutcome:
     """One design: validated model -> motion -> kinematics -> dynamics and reactions -> metrics."""
     try:
@@ -154,18 +149,18 @@ def evaluate_one(description: Mapping[str, Any], ctx: PdmSweepContext) -> Design
     f, ld, l = reac.force, kin.ld, kin.pos.l
     power = np.sum(f * ld, axis=1)
     m: dict[str, float] = {
-        "gci": float(_integral(inv_cond, t) / T),
+        "gci": float(time_integral(inv_cond, t) / T),
         "min_inverse_condition": float(inv_cond.min()),
         "stroke_m": float((l.max(axis=0) - l.min(axis=0)).max()),
         "max_extension_m": float(np.abs(l - model.home_lengths).max()),
         "min_transmission_angle_deg": math.degrees(float(np.arcsin(np.minimum(
             np.abs(np.sin(kin.pos.theta2 - kin.pos.theta1)), 1.0)).min())),
         "peak_force_N": float(np.abs(f).max()),
-        "rms_force_N": float(np.sqrt(_integral(f * f, t) / T).max()),
+        "rms_force_N": float(np.sqrt(time_integral(f * f, t) / T).max()),
         "peak_limb_speed_m_s": float(np.abs(ld).max()),
-        "rms_limb_speed_m_s": float(np.sqrt(_integral(ld * ld, t) / T).max()),
+        "rms_limb_speed_m_s": float(np.sqrt(time_integral(ld * ld, t) / T).max()),
         "peak_power_W": float(power.max()),
-        "motor_energy_per_cycle_J": float(_integral(np.abs(f * ld).sum(axis=1), t)),
+        "motor_energy_per_cycle_J": float(time_integral(np.abs(f * ld).sum(axis=1), t)),
     }
     force = np.linalg.norm(reac.joint_force, axis=-1).max(axis=0)
     moment = np.linalg.norm(reac.joint_moment, axis=-1).max(axis=0)
