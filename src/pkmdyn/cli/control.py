@@ -272,7 +272,7 @@ def _travel_unit(setup: _Setup) -> str:
     actuators' effort columns (forces: m, torques: rad)."""
     if setup.job is not None:
         return setup.job.TRAVEL_UNIT
-    units = {"m" if a.endswith("_N") else "rad" for a in setup.verbs.ACTUATORS}
+    units = {unit for _, _, unit, _, _ in _joint_columns(setup)}
     return units.pop() if len(units) == 1 else "m or rad"
 
 
