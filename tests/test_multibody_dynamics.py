@@ -639,3 +639,50 @@ def test_run_without_sections_is_refused_or_writes_flagged_minimum_norm_reaction
     assert s["reactions"]["method"] == "minimum-norm" and s["reactions"]["unique"] is False
     assert "section" in s["reactions"]["reason"]
     _balance_from_files(out)
+
+
+def test_normal_equation_kernel_equals_least_squares_and_flags_dependent_columns():
+    """The cut route's compiled least squares (normal equations, Cholesky) equals numpy's
+    least squares on consistent and inconsistent systems, and flags a sample whose columns
+    are dependent instead of returning a number for it."""
+    from pkmdyn.multibody._dyn_kernels import normal_solve_batch
+
+    rng = np.random.default_rng(3)
+    n, m, k = 6, 21, 15
+    A = rng.normal(size=(n, m, k))
+    r = rng.normal(size=(n, m))
+    r[:3] = np.einsum("nmk,nk->nm", A[:3], rng.normal(size=(3, k)))  # three consistent systems
+    A[4, :, 7] = 2.0 * A[4, :, 2] - A[4, :, 5]  # sample 4: a dependent column
+    lam, ok = np.full((n, k), np.nan), np.ones(n, dtype=np.bool_)
+    normal_solve_batch(np.ascontiguousarray(np.swapaxes(A, 1, 2)), r, np.empty((k, k)), lam, ok)
+    assert ok.tolist() == [True, True, True, True, False, True]
+    for s in np.flatnonzero(ok):
+        ref = np.linalg.lstsq(A[s], r[s], rcond=None)[0]
+        assert np.abs(lam[s] - ref).max() <= 1e-10 * np.abs(ref).max()
+
+
+def test_cut_route_solves_a_sample_with_dependent_columns_by_least_squares():
+    """Where the cut joints' columns become dependent at one sample, the cut route still returns
+    wrenches that satisfy that sample's equations (least squares, not a failed factorisation),
+    and the other samples are untouched."""
+    from pkmdyn.multibody.dynamics import _CutRoute, coordinate_twists, free_blocks
+
+    m, kin = _kin(ex.builtin_dict("stewart"), n=5)
+    S = coordinate_twists(m, kin.q, kin)
+    cuts = _CutRoute(m, kin, S, free_blocks(m, kin, S), 1e-10)
+    W = np.zeros((5, m.nb, 6))
+    rng = np.random.default_rng(0)
+    lam = rng.normal(size=(5, cuts.A.shape[2]))
+    before = cuts.solve(m, W, np.einsum("nqk,nk->nq", cuts.A, lam), np.zeros((5, m.nq)), None)
+    cuts.A[2, :, 7] = cuts.A[2, :, 2] - 0.5 * cuts.A[2, :, 4]
+    rhs = np.einsum("nqk,nk->nq", cuts.A, lam)
+    z = cuts.solve(m, W, rhs, np.zeros((5, m.nq)), None)
+    assert np.all(np.isfinite(z))
+    keep = [0, 1, 3, 4]
+    assert np.abs(z[keep] - before[keep]).max() <= 1e-9 * np.abs(before).max()
+    # sample 2: the least-squares multipliers of its (now rank-deficient) equations
+    expect = lam.copy()
+    expect[2] = np.linalg.lstsq(cuts.A[2], rhs[2], rcond=None)[0]
+    assert np.abs(cuts.A[2] @ expect[2] - rhs[2]).max() <= 1e-9 * np.abs(rhs[2]).max()
+    ref = cuts.assemble(m, W, expect, None)
+    assert np.abs(z - ref).max() <= 1e-9 * np.abs(ref).max()

@@ -80,7 +80,11 @@ def inertia_factors(model: MechanismModel) -> Array:
 
 
 def _cross(a: Array, b: Array) -> Array:
-    return np.cross(a, b)
+    """``a x b`` over the last axis (length 3), broadcast (numpy's ``cross`` without its axis
+    handling)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def coordinate_twists(model: MechanismModel, q: Array, kin: MechanismKinematics | None = None) -> Array:
@@ -330,26 +334,6 @@ def inverse_dynamics(model: MechanismModel, kin: MechanismKinematics, loads: dic
     return InverseDynamics(u=u, Q=Q, W=W, S=S, kin=kin)
 
 
-def _plucker(axis: Array, point: Array, rotation: bool) -> Array:
-    """Unit twist of a rotation about ``axis`` through ``point`` or a translation along it (n, 6)."""
-    if rotation:
-        return np.concatenate([axis, _cross(point, axis)], axis=-1)
-    return np.concatenate([np.zeros_like(axis), axis], axis=-1)
-
-
-def _joint_frames(model: MechanismModel, kin: MechanismKinematics, j: int) -> tuple[Array, Array, Array, Array]:
-    """World frames of joint j on its parent (R_P (n,3,3), o_P (n,3)) and child."""
-    n = len(kin)
-    out = []
-    for body, Rl, pl in ((model.joint_parent[j], model.joint_R_parent[j], model.joint_p_parent[j]),
-                         (model.joint_child[j], model.joint_R_child[j], model.joint_p_child[j])):
-        if body < 0:
-            out += [np.broadcast_to(Rl, (n, 3, 3)), np.broadcast_to(pl, (n, 3))]
-        else:
-            out += [kin.R[:, body] @ Rl, kin.origin[:, body] + np.einsum("nij,j->ni", kin.R[:, body], pl)]
-    return out[0], out[1], out[2], out[3]
-
-
 def free_twists(model: MechanismModel, kin: MechanismKinematics, S: Array, j: int) -> tuple[Array, Array]:
     """Free twists ``T (n, f, 6)`` of joint j (child relative to parent, description sense)
     and the index of its tree coordinate for each (-1 for a cut joint)."""
@@ -359,13 +343,26 @@ def free_twists(model: MechanismModel, kin: MechanismKinematics, S: Array, j: in
         q0 = model.joint_q0[j]
         sign = -1.0 if model.joint_flipped[j] else 1.0
         return sign * S[:, q0:q0 + f], np.arange(q0, q0 + f)
-    RP, oP, RC, oC = _joint_frames(model, kin, j)
-    T = []
+    n = len(kin)
+    T = np.zeros((n, f, 6))
+    if not f:
+        return T, np.full(0, -1)
+    # unit twist of each elementary motion: a rotation about the axis through the child frame's
+    # origin or a translation along it; the axis is the parent frame's, the last one the child
+    # frame's (all the parent's for a spherical joint)
+    parent, child = model.joint_parent[j], model.joint_child[j]
+    RP = model.joint_R_parent[j] if parent < 0 else kin.R[:, parent] @ model.joint_R_parent[j]
+    RC = model.joint_R_child[j] if child < 0 else kin.R[:, child] @ model.joint_R_child[j]
+    oC = _frame_origin(model, kin, child, model.joint_p_child[j])
     for k, mname in enumerate(jt.motions):
-        axis_i = "XYZ".index(mname[1])
         frame = RC if (k == f - 1 and jt.name != "spherical") else RP
-        T.append(_plucker(frame[:, :, axis_i], oC, mname[0] == "R"))
-    return (np.stack(T, axis=1) if T else np.zeros((len(kin), 0, 6))), np.full(f, -1)
+        axis = frame[..., "XYZ".index(mname[1])]
+        if mname[0] == "R":
+            T[:, k, :3] = axis
+            T[:, k, 3:] = _cross(oC, axis)
+        else:
+            T[:, k, 3:] = axis
+    return T, np.full(f, -1)
 
 
 def free_blocks(model: MechanismModel, kin: MechanismKinematics, S: Array) -> list[tuple[int, Array, Array]]:
@@ -488,7 +485,7 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     blocks = free_blocks(model, kin, S)
     scale = _column_scale(model)
     k = 6 * len(model.joint_names)
-    cuts = None if solver == "dense" else _CutRoute(model, S, blocks, rtol)
+    cuts = None if solver == "dense" else _CutRoute(model, kin, S, blocks, rtol)
     over = cuts is not None and not cuts.full_rank and model.topology is not None and \
         model.topology.overconstraints > 0 and cuts.A.shape[2] > 0
     A = None
@@ -566,37 +563,30 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
                           dissipation=fr.dissipation(F) if fr is not None else np.zeros(n))
 
 
-def _centre(T: Array) -> Array:
-    """The common point (n, 3) of rotation twists ``T (n, f, 6)`` whose axes all pass through it:
-    ``v = o x w`` for each, solved in least squares (``[w]x o = -v``)."""
-    n = T.shape[0]
-    A = np.zeros((n, 3 * T.shape[1], 3))
-    b = np.zeros((n, 3 * T.shape[1]))
-    for i in range(T.shape[1]):
-        w, v = T[:, i, :3], T[:, i, 3:]
-        # v = o x w = -[w]x o
-        A[:, 3 * i:3 * i + 3] = np.stack([np.stack([0 * w[:, 0], w[:, 2], -w[:, 1]], 1),
-                                          np.stack([-w[:, 2], 0 * w[:, 0], w[:, 0]], 1),
-                                          np.stack([w[:, 1], -w[:, 0], 0 * w[:, 0]], 1)], 1)
-        b[:, 3 * i:3 * i + 3] = v
-    AtA = np.swapaxes(A, 1, 2) @ A
-    return np.linalg.solve(AtA, np.einsum("nmk,nm->nk", A, b)[..., None])[..., 0]
+def _frame_origin(model: MechanismModel, kin: MechanismKinematics, body: int, p_local: Array) -> Array:
+    """The base-frame position (n, 3) of the point ``p_local`` of ``body`` (-1: the ground)."""
+    if body < 0:
+        return np.broadcast_to(p_local, (len(kin), 3))
+    return kin.origin[:, body] + kin.R[:, body] @ p_local
 
 
 def _residual(model: MechanismModel, blocks: list, z: Array, b: Array) -> Array:
     """``max |A z - b|`` per sample (n,) without forming ``A`` (:func:`equilibrium_matrix`)."""
     n, nb = z.shape[0], model.nb
-    Wj = z.reshape(n, -1, 6)
-    body = np.zeros((n, nb, 6))
-    for j in range(Wj.shape[1]):
+    nj = len(model.joint_names)
+    Wj = z.reshape(n, nj, 6)
+    E = np.zeros((nb, nj))  # body b's equations: + the joints of which it is the child, - the parent
+    for j in range(nj):
         if model.joint_child[j] >= 0:
-            body[:, model.joint_child[j]] += Wj[:, j]
+            E[model.joint_child[j], j] += 1.0
         if model.joint_parent[j] >= 0:
-            body[:, model.joint_parent[j]] -= Wj[:, j]
-    parts = [body.reshape(n, -1)]
-    for j, T, _ in blocks:
-        parts.append(np.einsum("nfk,nk->nf", T, Wj[:, j]))
-    return np.abs(np.concatenate(parts, axis=1) - b).max(axis=1)
+            E[model.joint_parent[j], j] -= 1.0
+    r = np.abs((E @ Wj).reshape(n, -1) - b[:, :6 * nb]).max(axis=1)
+    if blocks:
+        T = np.concatenate([T for _, T, _ in blocks], axis=1)
+        rows = np.concatenate([np.full(T.shape[1], j) for j, T, _ in blocks])
+        r = np.maximum(r, np.abs((T * Wj[:, rows]).sum(axis=2) - b[:, 6 * nb:]).max(axis=1))
+    return r
 
 
 class _CutRoute:
@@ -616,49 +606,51 @@ class _CutRoute:
     rank deficient (an over-constrained mechanism) ``full_rank`` is false and the dense
     equations decide."""
 
-    def __init__(self, model: MechanismModel, S: Array, blocks: list, rtol: float) -> None:
-        n = S.shape[0]
-        St = np.swapaxes(S, 1, 2)  # (n, 6, nq)
+    def __init__(self, model: MechanismModel, kin: MechanismKinematics, S: Array, blocks: list,
+                 rtol: float) -> None:
+        n, nq = S.shape[0], S.shape[1]
         anc = model.ancestors.astype(float)
 
-        def rel(c: int, p: int) -> Array:
-            """``J_c - J_p`` (n, 6, nq): the coordinates that move the child and not the parent, less
-            those that move the parent and not the child."""
-            mask = (anc[c] if c >= 0 else 0.0) - (anc[p] if p >= 0 else 0.0)
-            return St * np.asarray(mask)[None, None, :] if np.ndim(mask) else np.zeros_like(St)
+        def rel(c: int, p: int) -> tuple[Array, Array]:
+            """The rows of ``J_c - J_p``: the coordinates that move the child and not the parent
+            (sign +1), less those that move the parent and not the child (-1)."""
+            mask = (anc[c] if c >= 0 else np.zeros(nq)) - (anc[p] if p >= 0 else np.zeros(nq))
+            rows = np.flatnonzero(mask)
+            return rows, mask[rows]
 
-        self.cut = []
+        self.cut = []  # (joint, C (n, 6, m), free twists T (n, f, 6))
+        self._D: dict[int, Array] = {}
         cols = []
         sph = JOINT_TYPES.index(next(t for t in JOINT_TYPES if t.name == "spherical"))
         for j, T, coords in blocks:
             if coords[0] >= 0:
                 continue
             c, p = model.joint_child[j], model.joint_parent[j]
-            Jrel = rel(c, p)
             if model.joint_type[j] == sph:
-                # three forces through the centre: [o x e_i; e_i] (T's rotations all pass through o)
-                o = _centre(T)
+                # three forces through the centre o (the child frame's origin, where every free
+                # rotation axis passes): C = [[o]x; 1]
+                o = _frame_origin(model, kin, c, model.joint_p_child[j])
                 C = np.zeros((n, 6, 3))
-                for i in range(3):
-                    e = np.zeros(3)
-                    e[i] = 1.0
-                    C[:, :3, i] = np.cross(o, e)
-                    C[:, 3:, i] = e
+                C[:, 0, 1], C[:, 0, 2] = -o[:, 2], o[:, 1]
+                C[:, 1, 0], C[:, 1, 2] = o[:, 2], -o[:, 0]
+                C[:, 2, 0], C[:, 2, 1] = -o[:, 1], o[:, 0]
+                C[:, 3, 0] = C[:, 4, 1] = C[:, 5, 2] = 1.0
             else:
                 _, _, Vt = np.linalg.svd(T)  # T (n, f, 6): rows f.. of Vt span its annihilator
                 C = np.swapaxes(Vt[:, T.shape[1]:], 1, 2)  # (n, 6, 6 - f)
-            Tc = np.swapaxes(T, 1, 2)
-            D = Tc @ np.linalg.inv(T @ Tc)
-            self.cut.append((j, C, D, Jrel))
-            cols.append(np.swapaxes(Jrel, 1, 2) @ C)
+            self.cut.append((j, C, T))
+            cols.append(rel(c, p))
         for j in range(len(model.joint_names)):  # fixed cut joints have no free twist: no block
             if model.joint_cut[j] and not any(j == c[0] for c in self.cut):
-                c, p = model.joint_child[j], model.joint_parent[j]
-                Jrel = rel(c, p)
                 C = np.broadcast_to(np.eye(6), (n, 6, 6))
-                self.cut.append((j, C, np.zeros((n, 6, 0)), Jrel))
-                cols.append(np.einsum("nkc,nkl->ncl", Jrel, C))
-        self.A = np.concatenate(cols, axis=2) if cols else np.zeros((n, model.nq, 0))
+                self.cut.append((j, C, np.zeros((n, 0, 6))))
+                cols.append(rel(model.joint_child[j], model.joint_parent[j]))
+        # column block of each cut joint: (J_c - J_p)^T C (n, nq, m), nonzero on its rows only
+        self.A = np.zeros((n, nq, sum(C.shape[2] for _, C, _ in self.cut)))
+        pos = 0
+        for (_, C, _), (rows, sign) in zip(self.cut, cols):
+            self.A[:, rows, pos:pos + C.shape[2]] = (S[:, rows] @ C) * sign[None, :, None]
+            pos += C.shape[2]
         if self.A.shape[2] > self.A.shape[1]:
             self.full_rank = False
             return
@@ -670,19 +662,28 @@ class _CutRoute:
             d = np.abs(np.diagonal(R, axis1=1, axis2=2))
             colmax = np.abs(self.A[some]).max(axis=(1, 2))
             self.full_rank = bool(np.all(d > rtol * 1e2 * np.maximum(colmax[:, None], 1e-300)))
-            self.At = np.swapaxes(self.A, 1, 2)
-            self.AtA = self.At @ self.A
         else:
             self.full_rank = True
 
+    def _friction_map(self, j: int, T: Array) -> Array:
+        """``D_j = T_j (T_j^T T_j)^-1`` (n, 6, f) of cut joint j (class docstring), on first use."""
+        if j not in self._D:
+            Tc = np.swapaxes(T, 1, 2)
+            self._D[j] = Tc @ np.linalg.inv(T @ Tc)
+        return self._D[j]
+
     def solve(self, model: MechanismModel, W: Array, Qtot: Array, eff: Array, F: dict | None) -> Array:
         """Every joint wrench ``z (n, 6 nj)`` (full column rank)."""
-        n = W.shape[0]
-        rhs = Qtot - eff
-        if self.A.shape[2]:
-            lam = np.linalg.solve(self.AtA, self.At @ rhs[..., None])[..., 0]
-        else:
-            lam = np.zeros((n, 0))
+        n, K = W.shape[0], self.A.shape[2]
+        rhs = np.ascontiguousarray(Qtot - eff)
+        lam = np.zeros((n, K))
+        if K:
+            from ._dyn_kernels import normal_solve_batch
+
+            ok = np.ones(n, dtype=np.bool_)
+            normal_solve_batch(np.ascontiguousarray(np.swapaxes(self.A, 1, 2)), rhs, np.empty((K, K)), lam, ok)
+            for s in np.flatnonzero(~ok):  # columns dependent at this sample: least squares
+                lam[s] = np.linalg.lstsq(self.A[s], rhs[s], rcond=None)[0]
         return self.assemble(model, W, lam, F)
 
     def assemble(self, model: MechanismModel, W: Array, lam: Array, F: dict | None) -> Array:
@@ -693,12 +694,12 @@ class _CutRoute:
         z = np.zeros((n, nj, 6))
         pos = 0
         onbody = np.zeros((n, model.nb, 6))  # sum of cut wrenches acting on each body
-        for j, C, D, _ in self.cut:
+        for j, C, T in self.cut:
             m_ = C.shape[2]
             Wc = (C @ lam[:, pos:pos + m_, None])[..., 0]
             pos += m_
-            if F is not None and j in F and D.shape[2]:
-                Wc = Wc - (D @ F[j][..., None])[..., 0]
+            if F is not None and j in F and T.shape[1]:
+                Wc = Wc - (self._friction_map(j, T) @ F[j][..., None])[..., 0]
             z[:, j] = Wc
             if model.joint_child[j] >= 0:
                 onbody[:, model.joint_child[j]] += Wc

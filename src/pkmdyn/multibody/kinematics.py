@@ -120,17 +120,21 @@ def loop_residuals(model: MechanismModel, q: Array) -> Array:
 
 def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array, t: Array | None = None) -> dict:
     n, nq, nb, nt = x.shape[0], model.nq, model.nb, model.nt
-    out = {
-        "q": np.zeros((n, nq)), "qd": np.zeros((n, nq)), "qdd": np.zeros((n, nq)),
-        "R": np.zeros((n, nb, 3, 3)), "p": np.zeros((n, nb, 3)), "V": np.zeros((n, nb, 6)),
-        "A": np.zeros((n, nb, 6)), "G": np.zeros((n, nq, nt)), "res": np.zeros(n),
-        "status": np.full(n, -1, dtype=np.int64), "worst": np.zeros(n, dtype=np.int64),
-    }
     nj = len(model.joint_names)
-    for k in ("ov", "oa", "cp", "cv", "ca"):
-        out[k] = np.zeros((n, nb, 3))
-    for k in ("jp", "jv", "ja"):
-        out[k] = np.zeros((n, nj, 3))
+    shapes = {"q": (nq,), "qd": (nq,), "qdd": (nq,), "R": (nb, 3, 3), "p": (nb, 3), "V": (nb, 6), "A": (nb, 6),
+              "G": (nq, nt), "res": (), "ov": (nb, 3), "oa": (nb, 3), "cp": (nb, 3), "cv": (nb, 3), "ca": (nb, 3),
+              "jp": (nj, 3), "jv": (nj, 3), "ja": (nj, 3)}
+    # the outputs are views of one buffer: one large allocation is mapped in few (huge) pages
+    # where the system allows, where many separate arrays of a long motion cost a page fault
+    # every 4 KiB on first write
+    size = {k: n * int(np.prod(sh)) for k, sh in shapes.items()}
+    buf = np.zeros(sum(size.values()))
+    out, pos = {}, 0
+    for k, sh in shapes.items():
+        out[k] = buf[pos:pos + size[k]].reshape((n, *sh))
+        pos += size[k]
+    out["status"] = np.full(n, -1, dtype=np.int64)
+    out["worst"] = np.zeros(n, dtype=np.int64)
     tt = np.zeros(0) if t is None else np.ascontiguousarray(t, dtype=float)
     K.solve_batch(tt, x, xd, xdd, q_start, model.body_parent, model.body_joint, model.joint_q0, model.joint_nq,
                   model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent,
