@@ -211,3 +211,129 @@ def test_a_coarsely_sampled_motion_is_bridged_and_matches_a_fine_one(monkeypatch
     wrap = lambda a: (a + np.pi) % (2 * np.pi) - np.pi  # noqa: E731
     assert np.allclose(wrap(coarse.q[-1] - fine.q[-1]), 0.0, atol=1e-10)
     assert np.allclose(coarse.R[-1], fine.R[-1], atol=1e-10)
+
+
+def _planar_angle(v):
+    return np.arctan2(v[..., 1], v[..., 0])
+
+
+@pytest.mark.parametrize("cut", ["B", "C", "D"])
+def test_joint_coordinates_of_cut_and_tree_joints_follow_the_links_angles(cut):
+    """Each revolute joint's coordinate, whether the joint is in the tree or cut, equals the
+    relative angle of its two links computed from the joint centres alone (child link's
+    angle less the parent link's, the ground's being zero)."""
+    from pkmdyn.multibody.kinematics import joint_coordinates
+
+    d = ex.four_bar()
+    d["mechanism"]["cut_joints"] = [cut]
+    m = load_mechanism(d)
+    assert m.joint_cut[m.joint_index(cut)]
+    t = np.linspace(0.0, 2.0, 40)
+    x, xd, xdd = _motion(m, "four_bar", t)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    names = ["A", "B", "C", "D"]
+    P = {nm: kin.joint_point[:, m.joint_index(nm)] for nm in names}
+    link = {"crank": _planar_angle(P["B"] - P["A"]), "coupler": _planar_angle(P["C"] - P["B"]),
+            "rocker": _planar_angle(P["C"] - P["D"])}
+    link = {k: np.unwrap(v) - v[0] for k, v in link.items()}  # change from the first sample
+    expect = {"A": link["crank"], "B": link["coupler"] - link["crank"], "C": link["rocker"] - link["coupler"],
+              "D": -link["rocker"]}  # D: child ground relative to parent rocker
+    c = joint_coordinates(m, kin, [m.joint_index(nm) for nm in names])
+    for i, nm in enumerate(names):
+        assert np.abs((c[:, i] - c[0, i]) - expect[nm]).max() < 1e-10, nm
+
+
+@pytest.mark.parametrize("cut", ["C", "D"])
+def test_a_sliding_joints_coordinate_is_its_displacement_whether_cut_or_not(cut):
+    from pkmdyn.multibody.kinematics import joint_coordinates
+
+    d = ex.slider_crank()
+    d["mechanism"]["cut_joints"] = [cut]
+    m = load_mechanism(d)
+    t = np.linspace(0.0, 2.0, 30)
+    x, xd, xdd = _motion(m, "slider_crank", t)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    j = m.joint_index("D")
+    c = joint_coordinates(m, kin, [j])[:, 0]
+    slider_x = kin.joint_point[:, m.joint_index("C"), 0]  # the pin on the slider
+    assert np.abs(c - (slider_x - 0.3354101966249684)).max() < 1e-12
+
+
+def _stewart_motion(m, n=30):
+    t = np.linspace(0.0, 1.0, n)
+    x = np.tile(reference_task(m), (n, 1))
+    x[:, 2] += 0.3 * t  # rise by 0.3 m: the legs lengthen
+    x[:, 3] += 0.1 * t
+    return t, x
+
+
+def test_a_motion_beyond_a_joint_limit_is_refused_naming_the_joint_and_the_sample():
+    from pkmdyn.multibody.kinematics import joint_coordinates
+
+    d = ex.builtin_dict("stewart")
+    m = load_mechanism(d)
+    t, x = _stewart_motion(m)
+    free = solve_kinematics(m, x, t=t, limits=False)
+    legs = joint_coordinates(m, free)
+    longest = float(legs.max())
+    worst = [m.joint_names[j] for j in range(len(m.joint_names)) if m.joint_limits[j]][int(np.argmax(legs.max(axis=0)))]
+    first = int(np.flatnonzero(legs.max(axis=1) > longest - 1e-6)[0])
+    for leg in d["legs"]:
+        for jd in leg["joints"]:
+            if "limits_m" in jd:
+                jd["limits_m"] = [0.9, longest + 1e-6]
+    within = load_mechanism(d)
+    kin = solve_kinematics(within, x, t=t, limits=True)  # within the limits by 1 um: solved
+    assert np.array_equal(kin.q, free.q)
+    for leg in d["legs"]:
+        for jd in leg["joints"]:
+            if "limits_m" in jd:
+                jd["limits_m"] = [0.9, longest - 1e-6]
+    beyond = load_mechanism(d)
+    with pytest.raises(UnreachablePoseError) as e:
+        solve_kinematics(beyond, x, t=t, limits=True)
+    msg = str(e.value)
+    assert f"sample {first} " in msg and f"joint {worst!r}" in msg and "limits" in msg
+    from pkmdyn.multibody.kinematics import limit_violation
+
+    kin = solve_kinematics(beyond, x, t=t)  # without limits=True: solved, the violation told apart
+    assert np.array_equal(kin.q, free.q)
+    s, j, v = limit_violation(beyond, kin)
+    assert (s, beyond.joint_names[j]) == (first, worst) and v > longest - 1e-6
+    assert limit_violation(within, kin) is None
+    from pkmdyn.multibody import reachable
+
+    ok = reachable(beyond, x[[0, first]])
+    assert ok.tolist() == [True, False]
+    assert reachable(within, x[[0, first]]).tolist() == [True, True]
+
+
+@pytest.mark.parametrize("command", ["run", "control"])
+def test_cli_warns_where_the_motion_leaves_the_limits(tmp_path, capsys, command):
+    """The run goes on (the kinematics hold beyond a limit) and says where the motion leaves the
+    limits: one warning line on stderr and, for run, in summary.json; none within them."""
+    import json
+
+    from pkmdyn.cli import main
+
+    m = load_mechanism(ex.MACHINES / "stewart" / "stewart.toml")
+    t = np.linspace(0.0, 1.0, 21)
+    for rise, beyond in ((0.5, True), (0.05, False)):
+        x = np.tile(reference_task(m), (21, 1))
+        x[:, 2] += rise * t  # legs 1.22 m at the reference, limits 0.9 to 1.6 m
+        f = tmp_path / f"m{rise}.csv"
+        cols = [f"{nm}_{u}" for nm, u in zip(m.task_names, m.task_units)]
+        f.write_text("t_s," + ",".join(cols) + "\n" + "".join(f"{a:.17g}," + ",".join(f"{v:.17g}" for v in r) + "\n"
+                                                            for a, r in zip(t, x)), encoding="utf-8")
+        out = tmp_path / f"o{rise}"
+        code = main([command, "--machine", "stewart", "--motion", str(f), "--out", str(out)])
+        warn = [ln for ln in capsys.readouterr().err.splitlines() if "joint limits" in ln]
+        assert code == 0
+        if beyond:
+            assert len(warn) == 1 and "joint 'P_" in warn[0] and "beyond its limits [0.9, 1.6] m" in warn[0]
+        else:
+            assert warn == []
+        if command == "run":
+            lim = json.loads((out / "summary.json").read_text())["joint_limits"]
+            assert lim["kept"] is (not beyond)
+            assert (lim["first_beyond"] is not None) is beyond

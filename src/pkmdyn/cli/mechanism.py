@@ -110,6 +110,9 @@ def run(machine: str, motion_path: Path | None, minimum_norm_reactions: bool, un
     except ComplianceDataMissing as exc:
         raise ComplianceDataMissing(f"{exc}; or --minimum-norm-reactions for reactions that balance every body "
                                     "but are not unique") from None
+    beyond = summary["joint_limits"]["first_beyond"]
+    if beyond is not None:
+        click.echo(f"pkmdyn: warning: the motion leaves the joint limits: {beyond}", err=True)
     reactions = summary.get("reactions", {})
     if reactions.get("unique") is False:
         click.echo(f"pkmdyn: warning: joint reactions are the minimum-norm ones, not unique: {reactions.get('reason')}",
@@ -198,7 +201,8 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     from ..errors import MotionError
     from ..io import check_output_dir
     from ..machines.registry import resolve
-    from ..multibody import default_motion, read_task_motion
+    from ..multibody import default_motion, read_task_motion, solve_kinematics
+    from ..multibody.kinematics import limit_message, limited_joints
     from ..multibody.machine import machine_verbs
     from ..simulate import check_timing
     from .control import _command, _Setup, _stream
@@ -233,6 +237,12 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     duration_s = min(1.0, span) if duration_s is None else duration_s
     if not duration_s <= span:
         raise MotionError(f"--duration: {duration_s:g} s must be at most the motion's {span:g} s")
+    if limited_joints(model):  # the plant has no end stops: say where the reference leaves the joint limits
+        run = motion.t <= motion.t[0] + duration_s
+        beyond = limit_message(model, solve_kinematics(model, motion.x[run], motion.xd[run], motion.xdd[run],
+                                                       motion.t[run]))
+        if beyond is not None:
+            click.echo(f"pkmdyn: warning: the reference motion leaves the joint limits: {beyond}", err=True)
     settings = overlay_settings(described_control_settings(model), gains_path)
     ls = loop_settings(settings)
     check_timing(ls.cycle_s, ls.step_s)

@@ -20,6 +20,13 @@ solve; the actuator rates are its actuated rows (``J_ax = dq_a/dx``).
 The first sample starts from the reference configuration (all joint coordinates at their
 reference values), stepping the task from its reference value when one Newton solve does
 not reach it.
+
+Joint limits (``limits_m`` / ``limits_rad`` of a revolute or prismatic joint) bound the joint's
+coordinate: a tree joint's is its tree coordinate, a cut joint's the reference value plus
+the child frame's rotation about (displacement along) the joint axis relative to the parent
+frame (:func:`joint_coordinates`). :func:`limit_violation` finds the first sample beyond a
+limit; :func:`reachable` counts such a pose as out of the workspace, and
+:func:`solve_kinematics` refuses it when asked (``limits=True``).
 """
 
 from __future__ import annotations
@@ -31,11 +38,13 @@ from numpy.typing import NDArray
 
 from ..errors import MotionError, SingularityError, UnreachablePoseError, as_array
 from . import _kernels as K
+from .joint_types import JOINT_TYPES
 from .model import MechanismModel
 from .topology import constraint_jacobian, row_labels, row_scale
 
 __all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals",
-           "singularity_measures", "SingularityMeasures", "reachable", "TOLERANCE"]
+           "singularity_measures", "SingularityMeasures", "reachable", "TOLERANCE", "joint_coordinates",
+           "limited_joints", "limit_violation", "limit_message"]
 
 Array = NDArray[np.float64]
 
@@ -45,6 +54,10 @@ TOLERANCE = 1e-13
 #: every row, the redundant directions of an over-constrained loop included, must close to this
 CHECK_TOLERANCE = 1e-9
 MAX_ITER = 30
+#: a joint coordinate may pass its limit by this (times the length scale for a sliding
+#: joint; radians for a turning one) before the sample counts as beyond it: rounding at a
+#: limit reached exactly is not a violation
+LIMIT_TOLERANCE = 1e-9
 
 
 @dataclass(frozen=True)
@@ -209,7 +222,7 @@ def _singular_row(model: MechanismModel, q: Array) -> str:
 
 
 def solve_kinematics(model: MechanismModel, x: Array, xd: Array | None = None, xdd: Array | None = None,
-                     t: Array | None = None, q_start: Array | None = None) -> MechanismKinematics:
+                     t: Array | None = None, q_start: Array | None = None, limits: bool = False) -> MechanismKinematics:
     """Kinematics of every body and joint for the task motion ``x, xd, xdd`` (n, nt).
 
     ``x``: task coordinates in the order of ``model.task_names`` ([m], Euler angles [rad]);
@@ -219,8 +232,10 @@ def solve_kinematics(model: MechanismModel, x: Array, xd: Array | None = None, x
     each warm-started from the previous one; where one Newton solve does not reach the next
     sample (a coarsely sampled motion), the step is bridged by 8, then 64, small task steps.
 
-    Raises :class:`~pkmdyn.errors.UnreachablePoseError` (a loop that does not close) or
-    :class:`~pkmdyn.errors.SingularityError`, naming the sample, its time and the loop.
+    Raises :class:`~pkmdyn.errors.UnreachablePoseError` (a loop that does not close, or with
+    ``limits`` a joint beyond its limits, module docstring; without, :func:`limit_violation`
+    tells) or
+    :class:`~pkmdyn.errors.SingularityError`, naming the sample, its time and the loop or joint.
     """
     nt = model.nt
     x = np.ascontiguousarray(as_array(x, (None, nt), "x", MotionError))
@@ -244,7 +259,10 @@ def solve_kinematics(model: MechanismModel, x: Array, xd: Array | None = None, x
         rest = _run(model, x[s:], xd[s:], xdd[s:], q_s, None if t is None else t[s:])
         for key, arr in rest.items():
             out[key][s:] = arr
-    return _assemble(model, t, x, xd, xdd, out)
+    kin = _assemble(model, t, x, xd, xdd, out)
+    if limits:
+        _limit_error(model, kin)
+    return kin
 
 
 def _bridge(model: MechanismModel, x: Array, out: dict, s: int) -> Array | None:
@@ -277,11 +295,90 @@ def _assemble(model: MechanismModel, t: Array | None, x: Array, xd: Array, xdd: 
     )
 
 
+def limited_joints(model: MechanismModel) -> list[int]:
+    """The joints with limits (revolute and prismatic joints only carry them)."""
+    return [j for j, lim in enumerate(model.joint_limits) if lim is not None]
+
+
+def joint_coordinates(model: MechanismModel, kin: MechanismKinematics, joints: list[int] | None = None) -> Array:
+    """Coordinate (n, k) of each one-coordinate joint in ``joints`` (default:
+    :func:`limited_joints`), [rad] for a revolute, [m] for a prismatic joint, the description's
+    sense and reference value included. A tree joint's is its tree coordinate; a cut joint's
+    is its reference value plus the child frame's rotation about (displacement along) the
+    joint frame's z axis relative to the parent frame, the angle unwrapped along the samples
+    from the first sample's, taken within pi of the reference value."""
+    joints = limited_joints(model) if joints is None else list(joints)
+    n = len(kin)
+    out = np.empty((n, len(joints)))
+    for i, j in enumerate(joints):
+        if model.joint_nq[j] != 1:
+            raise ValueError(f"joint {model.joint_names[j]!r} has {int(model.joint_nq[j])} coordinates, not one")
+        if not model.joint_cut[j]:
+            out[:, i] = kin.q[:, model.joint_q0[j]]
+            continue
+        frames = []
+        for body, Rl, pl in ((model.joint_parent[j], model.joint_R_parent[j], model.joint_p_parent[j]),
+                             (model.joint_child[j], model.joint_R_child[j], model.joint_p_child[j])):
+            if body < 0:
+                frames.append((np.broadcast_to(Rl, (n, 3, 3)), np.broadcast_to(pl, (n, 3))))
+            else:
+                frames.append((kin.R[:, body] @ Rl, kin.origin[:, body] + kin.R[:, body] @ pl))
+        (RP, oP), (RC, oC) = frames
+        if JOINT_TYPES[model.joint_type[j]].motions[0] == "RZ":
+            rel = np.einsum("nki,nkj->nij", RP, RC)  # child frame in the parent frame
+            ang = np.arctan2(rel[:, 1, 0], rel[:, 0, 0])
+            out[:, i] = model.joint_offset[j] + np.unwrap(ang)
+        else:
+            out[:, i] = model.joint_offset[j] + np.einsum("ni,ni->n", RP[:, :, 2], oC - oP)
+    return out
+
+
+def limit_violation(model: MechanismModel, kin: MechanismKinematics) -> tuple[int, int, float] | None:
+    """The first sample and joint whose coordinate lies beyond the joint's limits (by more than
+    :data:`LIMIT_TOLERANCE`), and the coordinate: ``(sample, joint, value)``, or None."""
+    joints = limited_joints(model)
+    if not joints:
+        return None
+    c = joint_coordinates(model, kin, joints)
+    lo = np.array([model.joint_limits[j][0] for j in joints])
+    hi = np.array([model.joint_limits[j][1] for j in joints])
+    tol = np.array([LIMIT_TOLERANCE * (model.length_scale if JOINT_TYPES[model.joint_type[j]].units[0] == "m" else 1.0)
+                    for j in joints])
+    bad = (c < lo - tol) | (c > hi + tol)
+    if not bad.any():
+        return None
+    s = int(np.flatnonzero(bad.any(axis=1))[0])
+    k = int(np.flatnonzero(bad[s])[0])
+    return s, joints[k], float(c[s, k])
+
+
+def limit_message(model: MechanismModel, kin: MechanismKinematics) -> str | None:
+    """One line naming the first sample and joint beyond the joint's limits, or None."""
+    hit = limit_violation(model, kin)
+    if hit is None:
+        return None
+    s, j, v = hit
+    unit = JOINT_TYPES[model.joint_type[j]].units[0]
+    lo, hi = model.joint_limits[j]
+    when = f"sample {s}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
+    pose = ", ".join(f"{nm} = {x:.6g} {u}" for nm, u, x in zip(model.task_names, model.task_units, kin.x[s]))
+    return (f"{when}: joint {model.joint_names[j]!r} is at {v:.6g} {unit}, beyond its limits [{lo:g}, {hi:g}] {unit} "
+            f"(task pose {pose})")
+
+
+def _limit_error(model: MechanismModel, kin: MechanismKinematics) -> None:
+    """Raise :class:`~pkmdyn.errors.UnreachablePoseError` naming the first joint beyond its limits."""
+    msg = limit_message(model, kin)
+    if msg is not None:
+        raise UnreachablePoseError(f"unreachable within the joint limits: {msg}")
+
+
 def reachable(model: MechanismModel, x: Array, steps: int = 16) -> NDArray[np.bool_]:
     """Workspace test: whether each task pose ``x (n, nt)`` is reached from the reference
     configuration along the straight task path in ``steps`` steps (each bridged further when
-    needed), without a singular or open loop on the way. Conservative: a pose reachable only
-    along another path, or only on another assembly branch, reads False. Returns (n,) bool."""
+    needed), without a singular or open loop or a joint beyond its limits on the way.
+    Conservative: a pose reachable only along another path, or only on another assembly
+    branch, reads False. Returns (n,) bool."""
     x = np.atleast_2d(np.asarray(x, dtype=float))
     x_ref = reference_task(model)
     q_ref = model.coord_offset.copy()
@@ -303,6 +400,9 @@ def reachable(model: MechanismModel, x: Array, steps: int = 16) -> NDArray[np.bo
             for key, arr in rest.items():
                 res[key][i:] = arr
         out[k] = bool(np.all(res["status"] == K.OK))
+        if out[k] and limited_joints(model):  # every pose on the way within the joint limits
+            kin = _assemble(model, None, path, zero, zero, res)
+            out[k] = limit_violation(model, kin) is None
     return out
 
 

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from ..errors import PkmdynError
 from ..io import output_dir, write_csv, write_json
 from .joint_types import JOINT_TYPES
-from .kinematics import MechanismKinematics, singularity_measures, solve_kinematics
+from .kinematics import MechanismKinematics, limit_message, singularity_measures, solve_kinematics
 from .model import MechanismModel
 from .motion import TaskMotion, task_columns
 
@@ -181,6 +181,7 @@ def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path
 
     kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
     sm = singularity_measures(model, kin.q)
+    beyond = limit_message(model, kin)
     cols = results_columns(model, kin)
     npz = bodies_arrays(model, kin)
     dyn_cols, dyn_npz, dyn_summary = dynamics_outputs(model, kin, minimum_norm=not unique_reactions,
@@ -192,6 +193,8 @@ def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path
         "min_inverse_singularity_measure": float(sm.inverse.min()),
         "min_direct_singularity_measure": None if np.isnan(sm.direct).all() else float(np.nanmin(sm.direct)),
         "min_constraint_singularity_measure": float(sm.constraint.min()),
+        # the motion against the joints' limits (stored in the description; the run goes on beyond them)
+        "joint_limits": {"kept": beyond is None, "first_beyond": beyond},
         "topology": model.topology.as_dict() if model.topology is not None else None,
         **dyn_summary,
     }
