@@ -337,3 +337,23 @@ def test_cli_warns_where_the_motion_leaves_the_limits(tmp_path, capsys, command)
             lim = json.loads((out / "summary.json").read_text())["joint_limits"]
             assert lim["kept"] is (not beyond)
             assert (lim["first_beyond"] is not None) is beyond
+
+
+@pytest.mark.parametrize("ref", [0.4, -0.7])
+def test_a_cut_joints_coordinate_carries_its_reference_value_as_the_same_joint_in_the_tree(ref):
+    """The same joint with the same reference angle gives the same absolute coordinate whether
+    the tree holds it or it is cut (its reference value included, not only its changes)."""
+    from pkmdyn.multibody.kinematics import joint_coordinates
+
+    values = []
+    for cut in ("B", "C"):
+        d = ex.four_bar()
+        d["mechanism"]["cut_joints"] = [cut]
+        next(j for j in d["joints"] if j["name"] == "B")["angle_at_reference_rad"] = ref
+        m = load_mechanism(d)
+        t = np.linspace(0.0, 2.0, 30)
+        x, xd, xdd = _motion(m, "four_bar", t)
+        kin = solve_kinematics(m, x, xd, xdd, t)
+        values.append(joint_coordinates(m, kin, [m.joint_index("B")])[:, 0])
+    assert np.abs(values[0] - values[1]).max() < 1e-10
+    assert abs(values[0][0] - ref) < 1e-12 and np.abs(values[0] - ref).max() > 0.1  # it starts at ref and moves

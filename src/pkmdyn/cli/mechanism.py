@@ -238,9 +238,9 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     if not duration_s <= span:
         raise MotionError(f"--duration: {duration_s:g} s must be at most the motion's {span:g} s")
     if limited_joints(model):  # the plant has no end stops: say where the reference leaves the joint limits
-        run = motion.t <= motion.t[0] + duration_s
-        beyond = limit_message(model, solve_kinematics(model, motion.x[run], motion.xd[run], motion.xdd[run],
-                                                       motion.t[run]))
+        span_mask = motion.t <= motion.t[0] + duration_s
+        beyond = limit_message(model, solve_kinematics(model, motion.x[span_mask], motion.xd[span_mask],
+                                                       motion.xdd[span_mask], motion.t[span_mask]))
         if beyond is not None:
             click.echo(f"pkmdyn: warning: the reference motion leaves the joint limits: {beyond}", err=True)
     settings = overlay_settings(described_control_settings(model), gains_path)

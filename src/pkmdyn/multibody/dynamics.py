@@ -682,7 +682,8 @@ class _CutRoute:
 
             ok = np.ones(n, dtype=np.bool_)
             normal_solve_batch(np.ascontiguousarray(np.swapaxes(self.A, 1, 2)), rhs, np.empty((K, K)), lam, ok)
-            for s in np.flatnonzero(~ok):  # columns dependent at this sample: least squares
+            for s in np.flatnonzero(~ok):  # columns dependent at this sample (a constraint singularity):
+                # the minimum-norm multipliers, which balance every body but are one choice of many
                 lam[s] = np.linalg.lstsq(self.A[s], rhs[s], rcond=None)[0]
         return self.assemble(model, W, lam, F)
 
