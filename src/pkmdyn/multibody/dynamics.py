@@ -53,7 +53,7 @@ from numpy.typing import NDArray
 from ..errors import ParameterError, SingularityError
 from . import _kernels as K
 from .joint_types import JOINT_TYPES
-from .kinematics import MechanismKinematics
+from .kinematics import MechanismKinematics, joint_frames
 from .model import MechanismModel
 
 __all__ = ["body_wrenches", "named_magnitudes", "load_forces", "coordinate_twists", "generalised_forces", "actuator_efforts",
@@ -350,10 +350,7 @@ def free_twists(model: MechanismModel, kin: MechanismKinematics, S: Array, j: in
     # unit twist of each elementary motion: a rotation about the axis through the child frame's
     # origin or a translation along it; the axis is the parent frame's, the last one the child
     # frame's (all the parent's for a spherical joint)
-    parent, child = model.joint_parent[j], model.joint_child[j]
-    RP = model.joint_R_parent[j] if parent < 0 else kin.R[:, parent] @ model.joint_R_parent[j]
-    RC = model.joint_R_child[j] if child < 0 else kin.R[:, child] @ model.joint_R_child[j]
-    oC = _frame_origin(model, kin, child, model.joint_p_child[j])
+    RP, _, RC, oC = joint_frames(model, kin, j)
     for k, mname in enumerate(jt.motions):
         frame = RC if (k == f - 1 and jt.name != "spherical") else RP
         axis = frame[..., "XYZ".index(mname[1])]
@@ -563,13 +560,6 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
                           dissipation=fr.dissipation(F) if fr is not None else np.zeros(n))
 
 
-def _frame_origin(model: MechanismModel, kin: MechanismKinematics, body: int, p_local: Array) -> Array:
-    """The base-frame position (n, 3) of the point ``p_local`` of ``body`` (-1: the ground)."""
-    if body < 0:
-        return np.broadcast_to(p_local, (len(kin), 3))
-    return kin.origin[:, body] + kin.R[:, body] @ p_local
-
-
 def _residual(model: MechanismModel, blocks: list, z: Array, b: Array) -> Array:
     """``max |A z - b|`` per sample (n,) without forming ``A`` (:func:`equilibrium_matrix`)."""
     n, nb = z.shape[0], model.nb
@@ -629,7 +619,7 @@ class _CutRoute:
             if model.joint_type[j] == sph:
                 # three forces through the centre o (the child frame's origin, where every free
                 # rotation axis passes): C = [[o]x; 1]
-                o = _frame_origin(model, kin, c, model.joint_p_child[j])
+                o = joint_frames(model, kin, j)[3]
                 C = np.zeros((n, 6, 3))
                 C[:, 0, 1], C[:, 0, 2] = -o[:, 2], o[:, 1]
                 C[:, 1, 0], C[:, 1, 2] = o[:, 2], -o[:, 0]
