@@ -53,7 +53,7 @@ from numpy.typing import NDArray
 from ..errors import ParameterError, SingularityError
 from . import _kernels as K
 from .joint_types import JOINT_TYPES
-from .kinematics import MechanismKinematics, joint_frames
+from .kinematics import MechanismKinematics, joint_frame
 from .model import MechanismModel
 
 __all__ = ["body_wrenches", "named_magnitudes", "load_forces", "coordinate_twists", "generalised_forces", "actuator_efforts",
@@ -350,7 +350,8 @@ def free_twists(model: MechanismModel, kin: MechanismKinematics, S: Array, j: in
     # unit twist of each elementary motion: a rotation about the axis through the child frame's
     # origin or a translation along it; the axis is the parent frame's, the last one the child
     # frame's (all the parent's for a spherical joint)
-    RP, _, RC, oC = joint_frames(model, kin, j)
+    RP, _ = joint_frame(model, kin, j, child=False)
+    RC, oC = joint_frame(model, kin, j, child=True)
     for k, mname in enumerate(jt.motions):
         frame = RC if (k == f - 1 and jt.name != "spherical") else RP
         axis = frame[..., "XYZ".index(mname[1])]
@@ -619,7 +620,7 @@ class _CutRoute:
             if model.joint_type[j] == sph:
                 # three forces through the centre o (the child frame's origin, where every free
                 # rotation axis passes): C = [[o]x; 1]
-                o = joint_frames(model, kin, j)[3]
+                o = joint_frame(model, kin, j, child=True)[1]
                 C = np.zeros((n, 6, 3))
                 C[:, 0, 1], C[:, 0, 2] = -o[:, 2], o[:, 1]
                 C[:, 1, 0], C[:, 1, 2] = o[:, 2], -o[:, 0]

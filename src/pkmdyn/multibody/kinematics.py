@@ -44,7 +44,7 @@ from .topology import constraint_jacobian, row_labels, row_scale
 
 __all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals",
            "singularity_measures", "SingularityMeasures", "reachable", "TOLERANCE", "joint_coordinates",
-           "limited_joints", "limit_violation", "limit_message", "joint_frames"]
+           "limited_joints", "limit_violation", "limit_message", "joint_frame"]
 
 Array = NDArray[np.float64]
 
@@ -300,18 +300,17 @@ def limited_joints(model: MechanismModel) -> list[int]:
     return [j for j, lim in enumerate(model.joint_limits) if lim is not None]
 
 
-def joint_frames(model: MechanismModel, kin: MechanismKinematics, j: int) -> tuple[Array, Array, Array, Array]:
-    """Joint j's frame on its parent body and on its child body in the base frame, every
-    sample: ``R_P (n, 3, 3), o_P (n, 3), R_C (n, 3, 3), o_C (n, 3)`` (the ground's fixed)."""
-    n = len(kin)
-    out = []
-    for body, Rl, pl in ((model.joint_parent[j], model.joint_R_parent[j], model.joint_p_parent[j]),
-                         (model.joint_child[j], model.joint_R_child[j], model.joint_p_child[j])):
-        if body < 0:
-            out += [np.broadcast_to(Rl, (n, 3, 3)), np.broadcast_to(pl, (n, 3))]
-        else:
-            out += [kin.R[:, body] @ Rl, kin.origin[:, body] + kin.R[:, body] @ pl]
-    return out[0], out[1], out[2], out[3]
+def joint_frame(model: MechanismModel, kin: MechanismKinematics, j: int, child: bool) -> tuple[Array, Array]:
+    """Joint j's frame on its child body (``child``) or its parent body in the base frame, every
+    sample: ``R (n, 3, 3), o (n, 3)`` (the ground's fixed)."""
+    if child:
+        body, Rl, pl = model.joint_child[j], model.joint_R_child[j], model.joint_p_child[j]
+    else:
+        body, Rl, pl = model.joint_parent[j], model.joint_R_parent[j], model.joint_p_parent[j]
+    if body < 0:
+        n = len(kin)
+        return np.broadcast_to(Rl, (n, 3, 3)), np.broadcast_to(pl, (n, 3))
+    return kin.R[:, body] @ Rl, kin.origin[:, body] + kin.R[:, body] @ pl
 
 
 def joint_coordinates(model: MechanismModel, kin: MechanismKinematics, joints: list[int] | None = None) -> Array:
@@ -330,7 +329,8 @@ def joint_coordinates(model: MechanismModel, kin: MechanismKinematics, joints: l
         if not model.joint_cut[j]:
             out[:, i] = kin.q[:, model.joint_q0[j]]
             continue
-        RP, oP, RC, oC = joint_frames(model, kin, j)
+        RP, oP = joint_frame(model, kin, j, child=False)
+        RC, oC = joint_frame(model, kin, j, child=True)
         if JOINT_TYPES[model.joint_type[j]].motions[0] == "RZ":
             rel = np.einsum("nki,nkj->nij", RP, RC)  # child frame in the parent frame
             ang = np.arctan2(rel[:, 1, 0], rel[:, 0, 0])
