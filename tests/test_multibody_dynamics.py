@@ -285,25 +285,6 @@ def test_loads_and_per_sample_loads_enter_the_balance():
     assert np.abs(np.einsum("na,na->n", u1 - u0, kin.act_qd) + P_load).max() < 1e-9 * np.abs(P_load).max()
 
 
-@pytest.mark.parametrize("name", ["rssr", "delta", "stewart_sps"])
-def test_idle_freedoms_follow_their_own_dynamics(name):
-    """With idle freedoms (a rod's spin between spherical joints) the default makes nothing act
-    along them (N^T Q = 0); the held variant keeps the kinematics' accelerations and its
-    efforts balance the held motion's energy exactly."""
-    from pkmdyn.multibody.topology import constraint_jacobian
-
-    m, kin = _kin(ALL[name]())
-    assert m.topology.idle > 0
-    idyn = inverse_dynamics(m, kin)
-    _, J = constraint_jacobian(m, kin.q)
-    N = np.linalg.svd(J[:, m.solver_rows])[2][:, len(m.solver_rows):]
-    assert np.abs(np.einsum("nzc,nc->nz", N, idyn.Q)).max() <= 1e-9 * np.abs(idyn.Q).max()
-    assert np.array_equal(idyn.kin.v, kin.v)
-    assert np.abs(idyn.kin.act_qdd - kin.act_qdd).max() <= 1e-9 * np.abs(kin.act_qdd).max()
-    held = inverse_dynamics(m, kin, idle="held")
-    assert held.kin is kin
-
-
 def _balance_from_files(folder):
     """Every body's Newton-Euler balance recomputed from model.json and bodies.npz alone."""
     import json

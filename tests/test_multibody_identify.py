@@ -12,9 +12,9 @@ from pkmdyn.multibody.dynamics import fr_any, joint_reactions
 from pkmdyn.multibody.dynamics import inverse_dynamics as _inverse_dynamics
 
 
-def inverse_dynamics(m, kin, idle="held"):
+def inverse_dynamics(m, kin):
     """Efforts with the joints' friction (the reactions route) or without any (Eq. 3)."""
-    return joint_reactions(m, kin) if fr_any(m) else _inverse_dynamics(m, kin, idle=idle)
+    return joint_reactions(m, kin) if fr_any(m) else _inverse_dynamics(m, kin)
 from pkmdyn.multibody.identify import regressor
 
 
@@ -47,7 +47,7 @@ def test_regressor_reproduces_the_efforts(name):
     m = load_mechanism(CASES[name]())
     kin = _kin(m)
     reg = regressor(m, kin)
-    u = inverse_dynamics(m, kin, idle="held").u
+    u = inverse_dynamics(m, kin).u
     assert np.abs(np.einsum("nap,p->na", reg.Y, reg.theta) + reg.u0 - u).max() <= 1e-10 * np.abs(u).max()
 
 
@@ -67,8 +67,8 @@ def test_regressor_columns_are_the_derivatives_by_finite_differences():
                 j["friction"]["viscous_N_s_m"] = 35.0
     m2 = load_mechanism(d2)
     reg2 = regressor(m2, solve_kinematics(m2, kin.x, kin.xd, kin.xdd, kin.t))
-    du = inverse_dynamics(m2, solve_kinematics(m2, kin.x, kin.xd, kin.xdd, kin.t), idle="held").u - inverse_dynamics(
-        m, kin, idle="held").u
+    du = inverse_dynamics(m2, solve_kinematics(m2, kin.x, kin.xd, kin.xdd, kin.t)).u - inverse_dynamics(
+        m, kin).u
     assert np.abs(np.einsum("nap,p->na", reg.Y, reg2.theta - reg.theta) - du).max() <= 1e-9 * np.abs(du).max()
 
 
@@ -85,7 +85,7 @@ def test_least_squares_recovers_a_changed_model():
         for b in leg["bodies"]:
             b["mass_kg"] *= 1.2
     m2 = load_mechanism(d2)
-    u2 = inverse_dynamics(m2, solve_kinematics(m2, kin.x, kin.xd, kin.xdd, kin.t), idle="held").u
+    u2 = inverse_dynamics(m2, solve_kinematics(m2, kin.x, kin.xd, kin.xdd, kin.t)).u
     A = reg.Y.reshape(-1, reg.Y.shape[2])
     th, *_ = np.linalg.lstsq(A, (u2 - reg.u0).reshape(-1), rcond=None)
     assert np.abs(A @ th - (u2 - reg.u0).reshape(-1)).max() <= 1e-8 * np.abs(u2).max()
@@ -93,7 +93,7 @@ def test_least_squares_recovers_a_changed_model():
     # identifiable) predict the changed machine's efforts on another motion
     kin_b = _kin(m, n=60, seed=9)
     reg_b = regressor(m, kin_b)
-    u2_b = inverse_dynamics(m2, solve_kinematics(m2, kin_b.x, kin_b.xd, kin_b.xdd, kin_b.t), idle="held").u
+    u2_b = inverse_dynamics(m2, solve_kinematics(m2, kin_b.x, kin_b.xd, kin_b.xdd, kin_b.t)).u
     pred = np.einsum("nap,p->na", reg_b.Y, th) + reg_b.u0
     # (weakly excited directions of the fit amplify round-off: measured ~1e-7, allowed 1e-5)
     assert np.abs(pred - u2_b).max() <= 1e-5 * np.abs(u2_b).max()

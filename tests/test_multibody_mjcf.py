@@ -29,7 +29,7 @@ def test_export_matches_in_mujoco(name):
     amp = np.where(m.task_kind == 1, 0.04, 0.02 * m.length_scale)
     x, xd, xdd = ex.smooth_motion(reference_task(m), amp, t, 0)
     kin = solve_kinematics(m, x, xd, xdd, t)
-    Q = inverse_dynamics(m, kin, idle="held").Q
+    Q = inverse_dynamics(m, kin).Q
     ids = [mm.body(nm).id for nm in m.body_names]
     for s in range(len(t)):
         md.qpos[:] = mujoco_qpos(m, kin.q[s], mm)

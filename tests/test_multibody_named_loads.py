@@ -314,7 +314,7 @@ def test_friction_of_a_joint_that_turns_and_slides():
     expect = 0.3 * w2 / np.sqrt(w2 + EPS_ROTATION**2) + 2.0 * v2 / np.sqrt(v2 + EPS_TRANSLATION**2)
     got = fr.dissipation(F)
     assert expect.max() > 0.1 and np.abs(got - expect).max() <= 1e-12 * expect.max()
-    idyn = inverse_dynamics(m, kin, idle="held")
+    idyn = inverse_dynamics(m, kin)
     k = idyn.kin
     Iw = np.einsum("nbij,bjk,nblk->nbil", k.R, m.inertia, k.R)
     dT = np.einsum("b,nbi,nbi->n", m.mass, k.v, k.a) + np.einsum("nbi,nbij,nbj->n", k.w, Iw, k.wd)

@@ -49,6 +49,7 @@ __all__ = [
     "dumps_toml",
     "TableWriter",
     "open_table_writer",
+    "NpzWriter",
     "check_table_format",
     "TABLE_FORMATS",
 ]
@@ -730,6 +731,76 @@ class TableWriter:
 def open_table_writer(path: str | Path, fmt: str = "csv", precision: int = 17) -> TableWriter:
     """A :class:`TableWriter` for ``path`` in ``fmt`` (``"csv"`` or ``"parquet"``)."""
     return TableWriter(Path(path), fmt, precision)
+
+
+class NpzWriter:
+    """Writes a NumPy ``.npz`` archive whose per-sample arrays arrive block by block along their
+    first axis, so that memory stays bounded: each array streams into its own ``.npy`` file
+    beside ``path`` (its header written first, with the final ``rows``), and :meth:`close` packs
+    them into the archive (deflate) and removes them. ``write({name: (k, ...) array})`` takes the
+    next ``k`` rows of every per-sample array (the same names each block); ``put(name, array)``
+    an array stored whole. Non-finite values are refused, naming the array and the row."""
+
+    def __init__(self, path: str | Path, rows: int) -> None:
+        self.path, self.rows = Path(path), int(rows)
+        self._files: dict[str, tuple[Path, Any]] = {}
+        self._done: dict[str, int] = {}
+        self._whole: list[tuple[str, Path]] = []
+
+    def _member(self, name: str) -> Path:
+        return self.path.with_name(f".{self.path.name}.{name}.npy")
+
+    def put(self, name: str, array: Array) -> None:
+        tmp = self._member(name)
+        np.save(tmp, np.asarray(array), allow_pickle=False)
+        self._whole.append((name, tmp))
+
+    def write(self, arrays: Mapping[str, Array]) -> None:
+        for name, a in arrays.items():
+            a = np.ascontiguousarray(a)
+            if a.dtype.kind == "f" and not np.all(np.isfinite(a)):
+                row = int(np.flatnonzero(~np.isfinite(a.reshape(a.shape[0], -1)).all(axis=1))[0])
+                raise PkmdynError(f"{self.path.name}: {name} has a non-finite value at sample "
+                                  f"{self._done.get(name, 0) + row}; refusing to write it")
+            if name not in self._files:
+                tmp = self._member(name)
+                fh = tmp.open("wb")
+                np.lib.format.write_array_header_2_0(fh, {"descr": np.lib.format.dtype_to_descr(a.dtype),
+                                                          "fortran_order": False,
+                                                          "shape": (self.rows, *a.shape[1:])})
+                self._files[name] = (tmp, fh)
+                self._done[name] = 0
+            if self._done[name] + a.shape[0] > self.rows:
+                raise PkmdynError(f"internal error: {self.path.name}: {name} gets more than {self.rows} rows")
+            self._files[name][1].write(a.tobytes())
+            self._done[name] += a.shape[0]
+
+    def close(self) -> None:
+        """Pack the archive (every per-sample array must have its ``rows``) and remove the parts."""
+        import zipfile
+
+        for _, fh in self._files.values():
+            fh.close()
+        short = [n for n, k in self._done.items() if k != self.rows]
+        if short:
+            raise PkmdynError(f"internal error: {self.path.name}: {short[0]} has {self._done[short[0]]} of "
+                              f"{self.rows} rows")
+        try:
+            with zipfile.ZipFile(self.path, "w", compression=zipfile.ZIP_DEFLATED, compresslevel=1,
+                                 allowZip64=True) as zf:
+                for name, tmp in [*self._whole, *((n, f[0]) for n, f in self._files.items())]:
+                    zf.write(tmp, arcname=f"{name}.npy")
+        except OSError as exc:
+            raise PkmdynError(f"{self.path}: cannot write file ({_os_reason(exc)})") from None
+        finally:
+            self.discard()
+
+    def discard(self) -> None:
+        """Remove the parts (after :meth:`close`, or when the run failed)."""
+        for _, fh in self._files.values():
+            fh.close()
+        for tmp in [t for _, t in self._whole] + [f[0] for f in self._files.values()]:
+            tmp.unlink(missing_ok=True)
 
 
 def _check_finite(obj: Any, where: str) -> None:

@@ -61,6 +61,8 @@ class _Setup:
     fold_s: float = 0.0  #: the period a built-in motion repeats with [s] (plots fold the run by it); 0: none
     load_column: str = "load_N"  #: the column of the motion's load in control.csv (``has_load``)
     job: Any = None
+    #: per actuator: the name of the drive whose own encoder it reads ([[actuators]]), or None
+    drive_encoders: tuple = ()
 
 
 # ----------------------------------------------------------------------------- machines
@@ -242,10 +244,19 @@ def _check_encoder(setup: _Setup, ls: Any, settings: dict[str, Any], gains_path:
     q, qd = setup.motion(t)[:2]
     sd = np.einsum("kji,kj->ki", setup.verbs.actuator_map(setup.model, q), qd)
     s = np.concatenate([np.zeros((1, sd.shape[1])), np.cumsum(0.5 * (sd[1:] + sd[:-1]) * np.diff(t)[:, None], axis=0)])
-    travel = float(np.max(np.ptp(s, axis=0)))
-    res = float(ls.encoder_resolution)
-    if travel > 0 and res * MIN_ENCODER_COUNTS > travel:
+    travel_each = np.ptp(s, axis=0)
+    res_each = np.broadcast_to(np.asarray(ls.encoder_resolution, dtype=float), travel_each.shape)
+    coarse = np.flatnonzero((travel_each > 0) & (res_each * MIN_ENCODER_COUNTS > travel_each))
+    if coarse.size:
+        a = int(coarse[np.argmax(res_each[coarse] / travel_each[coarse])])
+        travel, res = float(travel_each[a]), float(res_each[a])
         unit = _travel_unit(setup)
+        drive = setup.drive_encoders[a] if setup.drive_encoders else None
+        if drive is not None:
+            raise ParameterError(
+                f"[[actuators]] {drive}: encoder_counts_per_turn makes one count {res:.3g} rad of motor travel, while "
+                f"the motion turns the motor at most {travel:.3g} rad: fewer than {MIN_ENCODER_COUNTS} counts, too "
+                "coarse to measure it (raise its encoder_counts_per_turn)")
         where = f"{gains_path}: [sensors]" if gains_path is not None else "built-in settings: [sensors]"
         counts = settings["sensors"]["encoder_counts_per_turn"]
         raise ParameterError(

@@ -70,6 +70,16 @@ def describe(machine: str) -> None:
               help="Motion CSV: t_s and one column per task coordinate (<name>_<unit>), optional rates "
                    "<name>d_<unit>_s and accelerations <name>dd_<unit>_s2 (default: the machine's default motion; "
                    "hip: the ISO 14242-1 cycle, pdm: the Eq. 84 motion).")
+@click.option("--cycles", type=FiniteFloat(0.0, 1e9, lo_open=True), default=None,
+              help="Cycles of the default motion (default 1; a periodic default motion repeats).")
+@click.option("--samples-per-cycle", type=click.IntRange(1, 100_000_000), default=None,
+              help="A described mechanism's default motion: samples per cycle (default: its [default_motion] "
+                   "samples - 1).")
+@click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv", show_default=True,
+              help="Format of the results table (results.csv or results.parquet).")
+@click.option("--limit", "limit_items", multiple=True, metavar="KEY=VALUE",
+              help="Raise a plausibility limit of the description's [limits] (max_samples, max_body_samples, "
+                   "max_task_speed_m_s, max_joint_acceleration_rad_s2, ...; docs/mechanism_format.md). Repeatable.")
 @click.option("--minimum-norm-reactions", is_flag=True,
               help="For an over-constrained mechanism whose bodies lack the section and material data that make "
                    "its joint reactions unique (refused without this flag): write its kinematics and efforts "
@@ -79,40 +89,66 @@ def describe(machine: str) -> None:
               help="The default: refuse reactions that are not unique.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
-def run(machine: str, motion_path: Path | None, minimum_norm_reactions: bool, unique_reactions: bool,
-        out_dir: Path) -> None:
-    """Kinematics, actuator efforts and every joint reaction along a motion: results.csv,
-    model.json, bodies.npz, summary.json, report.html.
+def run(machine: str, motion_path: Path | None, cycles: float | None, samples_per_cycle: int | None, fmt: str,
+        limit_items: tuple[str, ...], minimum_norm_reactions: bool, unique_reactions: bool, out_dir: Path) -> None:
+    """Kinematics, actuator and motor efforts, the effort split and every joint reaction along a
+    motion, streamed in chunks: results.csv (or .parquet), model.json, bodies.npz, summary.json,
+    report.html.
 
     The same files for every machine; the hip's and the PDM's own jobs (dynamics, plots) are
     pkmdyn hip run and pkmdyn pdm run."""
-    from ..io import check_output_dir
+    from ..io import check_output_dir, check_table_format
     from ..machines.registry import resolve
-    from ..multibody import default_motion, read_task_motion
-    from ..multibody.output import run_mechanism
+    from ..multibody import read_task_motion
+    from ..multibody.actuators import effective_limits
+    from ..multibody.description import LIMIT_KEYS
+    from ..multibody.motion import periodic_motion, repeated_motion
+    from ..multibody.run import run_mechanism
+    from ..params_util import parse_limit_options
 
     entry, path = resolve(machine)
     inputs = {"--machine": path, "--motion": motion_path}
     check_output_dir(out_dir, inputs)
-    model, entry = _load(machine)
-    if motion_path is not None:
-        motion = read_task_motion(model, Path(motion_path).absolute())
-    else:
-        motion = default_motion(model) if entry is None else entry.default_motion()
-    text = path.read_text(encoding="utf-8", errors="replace") if path is not None else ""
+    check_table_format(fmt)
+    limits = parse_limit_options(limit_items, LIMIT_KEYS)
     if minimum_norm_reactions and unique_reactions:
         raise click.UsageError("--minimum-norm-reactions and --unique-reactions contradict each other")
+    model, entry = _load(machine)
+    lim = effective_limits(model, limits)
+    window = None
+    if motion_path is not None:
+        for opt, v in (("--cycles", cycles), ("--samples-per-cycle", samples_per_cycle)):
+            if v is not None:
+                raise click.UsageError(f"{opt} applies to the default motion, not to --motion")
+        motion = read_task_motion(model, Path(motion_path).absolute())
+    elif entry is None:
+        motion = periodic_motion(model, 1.0 if cycles is None else cycles, samples_per_cycle,
+                                 max_samples=int(lim["max_samples"]))
+        window = motion.samples_per_cycle + 1  # the plots and the animation show the first cycle
+    else:
+        if samples_per_cycle is not None:
+            raise click.UsageError(f"--samples-per-cycle applies to a described mechanism's default motion; "
+                                   f"{machine}'s is fixed")
+        cycle = entry.default_motion()
+        motion = repeated_motion(cycle, 1.0 if cycles is None else cycles, f"{machine}'s default motion",
+                                 max_samples=int(lim["max_samples"]))
+        window = len(cycle)
+    text = path.read_text(encoding="utf-8", errors="replace") if path is not None else ""
     from ..multibody.reactions import ComplianceDataMissing
 
     try:
         summary = run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files, description_text=text,
-                                unique_reactions=not minimum_norm_reactions)
+                                unique_reactions=not minimum_norm_reactions, fmt=fmt, limits=limits, progress=True,
+                                plot_window=window)
     except ComplianceDataMissing as exc:
         raise ComplianceDataMissing(f"{exc}; or --minimum-norm-reactions for reactions that balance every body "
                                     "but are not unique") from None
     beyond = summary["joint_limits"]["first_beyond"]
     if beyond is not None:
         click.echo(f"pkmdyn: warning: the motion leaves the joint limits: {beyond}", err=True)
+    over = summary["actuator_effort_limits"]["first_beyond"]
+    if over is not None:
+        click.echo(f"pkmdyn: warning: the motion needs more than an actuator's rated effort: {over}", err=True)
     reactions = summary.get("reactions", {})
     if reactions.get("unique") is False:
         click.echo(f"pkmdyn: warning: joint reactions are the minimum-norm ones, not unique: {reactions.get('reason')}",
@@ -125,7 +161,9 @@ DESCRIBED_CONTROLLERS = ("computed-torque", "augmented-pd", "pd", "pid", "feedfo
 
 def described_control_settings(model) -> dict:
     """Control settings of a described mechanism, laid under ``--gains`` (no ``[mismatch]``: the
-    plant is the controller's own model): 2 ms cycle, 1 ms plant step, exact pose feedback, effort limits far away, divergence at 0.05 m or 0.2 rad of
+    plant is the controller's own model): 2 ms cycle, 1 ms plant step, exact pose feedback, effort
+    limits the drives' rated efforts (``[[actuators]]`` ``max_torque_Nm``; far away without
+    one), the efforts being the drives' motor efforts, divergence at 0.05 m or 0.2 rad of
     tracking error; every controller tuned for 5 Hz at damping 0.7 on the mechanism's inertia
     at its reference pose: computed torque ``kp = wn^2``, ``kd = 2 zeta wn`` [1/s^2, 1/s]; the
     task-space PD (and augmented PD) ``kp = wn^2 M_ii``, ``kd = 2 zeta wn M_ii`` with ``M`` the
@@ -150,9 +188,10 @@ def described_control_settings(model) -> dict:
         return [float(f"{x:.6g}") for x in v]
 
     pd = {"kp_si": lst(wn * wn * dm), "kd_si": lst(2 * zeta * wn * dm)}
+    limits = [float(v) if np.isfinite(v) else 1e9 for v in model.drive_max_effort]
     return {
         "timing": {"control_cycle_s": 0.002, "integration_step_s": 0.001},
-        "actuators": {"effort_limit_si": [1e9] * na},
+        "actuators": {"effort_limit_si": limits},
         "sensors": {"encoder_counts_per_turn": 1000000, "encoder_travel_per_turn_m": 0.001,
                     "velocity_cutoff_Hz": 200.0, "acceleration_cutoff_Hz": 50.0, "pose_noise_si": [0.0] * nt,
                     "pose_delay_cycles": 0, "pose_feedback_from_sensor": 1, "seed": 1},
@@ -245,12 +284,18 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
             click.echo(f"pkmdyn: warning: the reference motion leaves the joint limits: {beyond}", err=True)
     settings = overlay_settings(described_control_settings(model), gains_path)
     ls = loop_settings(settings)
+    if np.any(model.drive_encoder > 0):  # a drive's own encoder, counts per motor turn, in motor radians
+        from dataclasses import replace
+
+        ls = replace(ls, encoder_resolution=np.where(model.drive_encoder > 0, model.drive_encoder,
+                                                     float(ls.encoder_resolution)))
     check_timing(ls.cycle_s, ls.step_s)
     verbs = machine_verbs(model)
     load, column = _control_load(model, motion, what, verbs.ACTUATORS)
     fn = hermite_motion(motion.t, motion.x, motion.xd, motion.xdd, load)
     setup = _Setup(model.name, verbs, model, model, fn, duration_s, load is not None, str(path),
-                   "the controller's model", what, span_s=span, load_column=column)
+                   "the controller's model", what, span_s=span, load_column=column,
+                   drive_encoders=tuple(d if r > 0 else None for d, r in zip(model.drive_name, model.drive_encoder)))
     n = model.na if controller == "pid" else model.nt
     _stream(setup, controller, gains(settings, controller, n), ls, settings, out_dir,
             False, gains_path, inputs, fmt, html_report=False)  # its plots and page are the hand-built machines' own

@@ -10,9 +10,12 @@ fix only what the motion cannot show), masses and friction coefficients kept >= 
 
 Measured file (CSV): ``t_s``, the task columns of the description (``x_m`` ... as ``pkmdyn
 run`` writes them; rates and accelerations optional, else from a quintic spline), one effort
-column per actuator ``<joint>_effort_<N|Nm>`` and, optional, a column per named load and the
-actuated joints' ``<joint>_pos/vel/acc_*`` columns a ``pkmdyn run`` results file carries (not
-used); any other column is refused by name, as a misspelt one would be. Writes
+column per actuator, its motor effort ``<actuator>_torque_Nm`` for a drive (``[[actuators]]``:
+what a real machine's motor currents give) or the joint's ``<joint>_effort_<N|Nm>`` for an
+actuated joint without one, and, optional, a column per named load and every other column a
+``pkmdyn run`` results file carries (not used); any other column is refused by name, as a
+misspelt one would be. With drives, the rotor inertias and motor friction coefficients are
+parameters too; the friction named loads drive (``friction.external``) has its coefficients. Writes
 ``identification.json`` (the report of ``docs/identification.md`` with every parameter's
 description value) and ``efforts.csv`` (measured and identified efforts).
 """
@@ -27,11 +30,13 @@ from numpy.typing import NDArray
 
 from ..errors import MotionError
 from ..io import output_dir, read_csv_columns, write_csv, write_json
+from ..multibody.actuators import motor_effort_column
 from ..multibody.dynamics import effort_unit
 from ..multibody.identify import regressor
 from ..multibody.kinematics import solve_kinematics
 from ..multibody.model import MechanismModel
 from ..multibody.motion import MAX_MOTION_ROWS, task_columns
+from ..multibody.run import results_column_names
 from ..profiles._columns import column_group, derivatives, require_increasing
 from ._base import DEFAULT_RANK_TOL
 from ._identify import fit_regressor
@@ -44,17 +49,19 @@ Array = NDArray[np.float64]
 
 
 def effort_columns(model: MechanismModel) -> list[str]:
-    """The measured file's effort columns, in actuator order."""
-    return [f"{a}_effort_{effort_unit(model, i)}" for i, a in enumerate(model.actuator_names)]
+    """The measured file's effort columns, in actuator order: a drive's motor effort
+    (``<actuator>_torque_Nm``), else the joint's (``<joint>_effort_<N|Nm>``)."""
+    return [motor_effort_column(model, i) if model.drive_name[i] is not None else f"{a}_effort_{effort_unit(model, i)}"
+            for i, a in enumerate(model.actuator_names)]
 
 
 def read_measured(model: MechanismModel, path: Path) -> tuple[Array, Array, Array, Array, Array, dict[str, Array]]:
     """``t, x, xd, xdd, u, named loads`` from a measured file (module docstring)."""
     pos, vel, acc = task_columns(model)
     eff = effort_columns(model)
-    # what a pkmdyn run results file carries besides: the actuated joints' coordinates
-    run_cols = [f"{a}_{kind}_{u}{suffix}" for a, u in zip(model.actuator_names, model.actuator_units)
-                for kind, suffix in (("pos", ""), ("vel", "_s"), ("acc", "_s2"))]
+    # what a pkmdyn run results file carries besides (joint and motor coordinates, the other
+    # efforts, the effort split): accepted, not used
+    run_cols = [c for c in results_column_names(model) if c not in ("t_s", *pos, *eff, *model.named_loads)]
     optional = (*vel, *acc, *model.named_loads, *run_cols)
     cols = read_csv_columns(path, ("t_s", *pos, *eff), optional, max_rows=MAX_MOTION_ROWS)
     t = cols["t_s"]
@@ -71,7 +78,7 @@ def _consistency(reg: Regressor) -> tuple[Array, Array, Array]:
     p = len(reg.names)
     lower = np.full(p, -np.inf)
     for k, nm in enumerate(reg.names):
-        if nm.endswith(("_m_kg", "_coulomb", "_viscous")):
+        if nm.endswith(("_m_kg", "_coulomb", "_viscous", "_coefficient", "_rotor_inertia_kgm2", "_rotor_inertia_kg")):
             lower[k] = 0.0
     return np.eye(p), lower, np.full(p, np.inf)
 

@@ -17,7 +17,10 @@ kernel takes them as views and runs, for task pose ``x`` and rate ``xd``:
 3. the bodies' required wrenches at the bias motion with gravity and loads (Eq. 1 of
    :mod:`.dynamics`), the tree forces (Eq. 2) and ``h = G^T Q``;
 4. the task mass matrix ``M = sum_b T_b^T I_b T_b``;
-5. forward: ``M xdd = J_ax^T u - h``; inverse: ``J_ax^T u = M xdd + h``.
+5. the drives' rotor inertia, bias and motor friction (:mod:`.actuators`, Eq. A1) added to
+   ``M`` and ``h``;
+6. forward: ``M xdd = J_ax^T k tau - h``; inverse: ``J_ax^T k tau = M xdd + h`` (``tau`` the
+   motor efforts, ``k`` the transmission ratios: 1 for a joint without a drive).
 
 These are the verbs' definitions (idle freedoms held, as the kinematics hold them), with the
 joints' Coulomb, viscous and named-load friction (:func:`._dyn_kernels.joint_friction`) and
@@ -69,7 +72,8 @@ _INT = ("body_parent", "body_joint", "joint_q0", "joint_nq", "coord_motion", "an
 _FLOAT = ("coord_offset", "coord_sign", "tree_R_parent", "tree_p_parent", "tree_R_child", "tree_p_child",
           "joint_R_parent", "joint_p_parent", "joint_R_child", "joint_p_child", "task_point", "solver_idle",
           "row_scale", "mass", "inertia", "com", "gravity", "load_point", "load_force", "load_moment",
-          "coef", "fsc", "ecoef", "eoff", "load_direction", "inertia_factor", "task_rhs")
+          "coef", "fsc", "ecoef", "eoff", "load_direction", "inertia_factor", "task_rhs", "drive_ratio", "drive_rotor",
+          "drive_coulomb", "drive_viscous", "drive_eps")
 #: header of the packed buffer: n_int, n_float, task_body, max_iter, nq, nt, and the offsets
 #: of the two tolerances, the state, the work space and the integer work space
 _HEAD = 10
@@ -109,6 +113,7 @@ def pack(model: MechanismModel) -> NDArray[np.int64]:
     task_unit_rhs(model.solver_rows, model.row_loop.shape[0], arrays["task_rhs"])
     arrays.update(friction_arrays(model))
     arrays["load_named"] = np.array([nm is not None for nm in model.load_name], dtype=np.int64)
+    arrays["drive_eps"] = np.array([EPS_R if u == "rad" else EPS_T for u in model.motor_units])
     arrays["solver_rowpos"] = np.empty(model.row_loop.shape[0] + model.nt, dtype=np.int64)
     arrays["solver_colpos"] = np.empty(model.nq, dtype=np.int64)
     arrays["solver_idlepos"] = np.empty(model.solver_idle.shape[0], dtype=np.int64)
@@ -305,6 +310,7 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
         _f2(pk, 24)
     inertia_factor = _f33(pk, 25)
     Gw = _f2(pk, 26)
+    ratio, rotor, mcoul, mvisc, meps = _f(pk, 27), _f(pk, 28), _f(pk, 29), _f(pk, 30), _f(pk, 31)
     tol, check_tol = _fview(pk, pk[6], (2,))
     task_body, max_iter = pk[2], pk[3]
     nr = row_loop.shape[0]
@@ -443,12 +449,26 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
         h[t] = acc
     # ---- 4. the task mass matrix
     task_mass(S, Gp, body_parent, body_joint, joint_q0, joint_nq, R, pc, mass, inertia_factor, M, T, Z, tmp)
-    # ---- 5. the equation of motion, M xdd + h = J_ax^T u
+    # ---- 4b. the drives (multibody.actuators, Eq. A1): rotor inertia k^2 I_r along each actuator's
+    # row of J_ax, its bias acceleration and the motor friction, in the motor's effort
+    for a in range(nt):
+        ca = _nn(act_coord[a])
+        ka = ratio[a]
+        thd = ka * qd[ca]
+        tf = mcoul[a] * thd / math.sqrt(thd * thd + meps[a] * meps[a]) + mvisc[a] * thd
+        ext = ka * (rotor[a] * ka * qdd[ca] + tf)
+        ir = rotor[a] * ka * ka
+        for t in range(nt):
+            h[t] += Gp[ca, t] * ext
+            if ir != 0.0:
+                for j in range(nt):
+                    M[t, j] += ir * Gp[ca, t] * Gp[ca, j]
+    # ---- 5. the equation of motion, M xdd + h = J_ax^T k tau (tau the motor efforts)
     if forward:
         for t in range(nt):
             acc = -h[t]
             for a in range(nt):
-                acc += Gp[_nn(act_coord[a]), t] * v[a]
+                acc += Gp[_nn(act_coord[a]), t] * ratio[a] * v[a]
             out[t] = acc
         big = 0.0
         for t in range(nt):
@@ -462,7 +482,7 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
                 acc += M[t, j] * v[j]
             out[t] = acc
             for a in range(nt):
-                Bm[t, a] = Gp[_nn(act_coord[a]), t]
+                Bm[t, a] = Gp[_nn(act_coord[a]), t] * ratio[a]
         # the checked verb's screen: Hadamard ratio |det A| / prod |a_i| of the column-scaled map
         for a in range(nt):
             big = 0.0

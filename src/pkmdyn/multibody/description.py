@@ -28,8 +28,8 @@ from ..errors import ParameterError
 from ..params_util import Section, _rule, read_toml
 from .joint_types import JOINT_TYPES, joint_type
 
-__all__ = ["Description", "BodySpec", "JointSpec", "TaskSpec", "LoadSpec", "MotionSpec",
-           "load_description", "GROUND", "inertia_matrix"]
+__all__ = ["Description", "BodySpec", "JointSpec", "TaskSpec", "LoadSpec", "MotionSpec", "ActuatorSpec",
+           "load_description", "GROUND", "inertia_matrix", "LIMIT_KEYS", "RESERVED_PARTS"]
 
 Array = NDArray[np.float64]
 GROUND = "ground"
@@ -154,6 +154,59 @@ class _Motion(Section):
     amplitude: dict[str, float] = Field(default_factory=dict)
 
 
+class _Actuator(Section):
+    """A drive on an actuated joint (``docs/mechanism_format.md``, ``[[actuators]]``): the
+    transmission, the rotor and the motor-side friction, limits and encoder. The keys carry the
+    motor coordinate's unit: a rotary motor (a revolute joint, or a prismatic joint driven by a
+    screw) in rad, N m; a linear motor (a prismatic joint without a screw) in m, N."""
+
+    name: str | None = NAME
+    joint: str = NAME
+    gear_ratio: float | None = None
+    screw_lead_m: float | None = None
+    rotor_inertia_kgm2: float | None = None
+    moving_mass_kg: float | None = None
+    coulomb_torque_Nm: float | None = None
+    viscous_Nm_s_rad: float | None = None
+    coulomb_force_N: float | None = None
+    viscous_N_s_m: float | None = None
+    max_torque_Nm: float | None = None
+    max_force_N: float | None = None
+    max_speed_rad_s: float | None = None
+    max_speed_m_s: float | None = None
+    max_acceleration_rad_s2: float | None = None
+    max_acceleration_m_s2: float | None = None
+    encoder_counts_per_turn: int | None = Field(default=None, ge=1, le=10**12)
+    encoder_counts_per_m: float | None = None
+
+
+class _Group(Section):
+    """A named group of bodies whose share of the efforts is reported (``[[groups]]``)."""
+
+    name: str = Field(min_length=1, max_length=40, pattern=r"^[A-Za-z][A-Za-z0-9_]*$")
+    bodies: list[str] = Field(min_length=1, max_length=MAX_BODIES)
+
+
+class _Limits(Section):
+    """Plausibility limits of motions (``[limits]``); a user raises them here or with
+    ``--limit KEY=VALUE``."""
+
+    max_samples: int = Field(default=20_000_000, gt=0)
+    max_body_samples: int = Field(default=200_000, gt=0)
+    max_task_speed_m_s: float = Field(default=10.0, gt=0)
+    max_task_acceleration_m_s2: float = Field(default=1000.0, gt=0)
+    max_task_speed_rad_s: float = Field(default=100.0, gt=0)
+    max_task_acceleration_rad_s2: float = Field(default=1e4, gt=0)
+    max_joint_speed_m_s: float = Field(default=10.0, gt=0)
+    max_joint_acceleration_m_s2: float = Field(default=1000.0, gt=0)
+    max_joint_speed_rad_s: float = Field(default=100.0, gt=0)
+    max_joint_acceleration_rad_s2: float = Field(default=1e4, gt=0)
+
+
+#: the plausibility limits of motions and their types (``[limits]``, ``--limit KEY=VALUE``)
+LIMIT_KEYS: dict[str, type] = {k: (int if k == "max_samples" else float) for k in _Limits.model_fields}
+
+
 class _Leg(Section):
     count: int | None = Field(default=None, ge=1, le=64)
     angles_deg: list[float] | None = Field(default=None, min_length=1, max_length=64)
@@ -162,6 +215,7 @@ class _Leg(Section):
     suffixes: list[str] | None = None
     bodies: list[_Body] = Field(default_factory=list, max_length=64)
     joints: list[_Joint] = Field(min_length=1, max_length=64)
+    actuators: list[_Actuator] = Field(default_factory=list, max_length=64)
 
 
 class _Mechanism(Section):
@@ -179,6 +233,9 @@ class _File(Section):
     task: _Task
     loads: list[_Load] = Field(default_factory=list, max_length=2000)
     default_motion: _Motion = _Motion()
+    actuators: list[_Actuator] = Field(default_factory=list, max_length=MAX_JOINTS)
+    groups: list[_Group] = Field(default_factory=list, max_length=MAX_BODIES)
+    limits: _Limits = _Limits()
 
 
 @dataclass(frozen=True)
@@ -250,6 +307,32 @@ class LoadSpec:
 
 
 @dataclass(frozen=True)
+class ActuatorSpec:
+    """A validated drive of an actuated joint. ``kind``: ``"rotary"`` (motor coordinate [rad],
+    effort [N m]) or ``"linear"`` ([m], [N]); ``ratio`` k: motor coordinate per joint coordinate
+    (a revolute joint's gear ratio [rad/rad]; a screw's ``gear_ratio * 2 pi / lead`` [rad/m];
+    1 for a linear motor), so that ``theta = k q`` and the joint's effort is ``k`` times the
+    motor's net effort; ``rotor`` [kg m^2, or kg for a linear motor] the motor's moving
+    inertia; ``coulomb``, ``viscous`` its friction [N m, N m s/rad or N, N s/m]; limits
+    ``max_effort``, ``max_speed``, ``max_acceleration`` (motor side, ``inf`` when not given);
+    ``encoder_resolution`` the motor displacement per encoder count (0: not given)."""
+
+    name: str
+    joint: str
+    kind: str
+    ratio: float
+    rotor: float
+    coulomb: float
+    viscous: float
+    max_effort: float
+    max_speed: float
+    max_acceleration: float
+    encoder_resolution: float
+    lead: float | None = None
+    gear_ratio: float = 1.0
+
+
+@dataclass(frozen=True)
 class MotionSpec:
     """The default motion: ``x(t) = x_ref + offset + amplitude sin(2 pi t / period)``,
     ``samples`` points over one period; offsets and amplitudes keyed by task column name."""
@@ -274,6 +357,12 @@ class Description:
     cut_joints: tuple[str, ...] | None
     motion: MotionSpec
     path: str = field(default="")
+    #: the drives of actuated joints (``[[actuators]]``; a joint without one drives itself)
+    actuators: tuple[ActuatorSpec, ...] = ()
+    #: the effort split's body groups: ``(name, body names)`` covering every body
+    groups: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    #: the plausibility limits of motions (``[limits]``, keys of :data:`LIMIT_KEYS`)
+    limits: dict[str, float] = field(default_factory=dict)
 
 
 def _rot(axis: Array, angle: float) -> Array:
@@ -448,10 +537,26 @@ def _check_external_friction(label: str, joints: list[JointSpec], names: set[str
                                      "coefficient x the load, without a radius")
 
 
-def _expand_legs(data: _File, source: str) -> tuple[list[tuple[_Body, str]], list[tuple[_Joint, str]]]:
-    """Bodies and joints of the file with every ``[[legs]]`` template repeated."""
+@dataclass
+class _Expanded:
+    """The file's bodies, joints and actuators with every ``[[legs]]`` template repeated (each
+    with the text that names it in messages), and per leg copy its bodies (``legs``: ``(leg
+    table, suffix, body names)``) and per template body name its copies (``copies``)."""
+
+    bodies: list[tuple[_Body, str]]
+    joints: list[tuple[_Joint, str]]
+    actuators: list[tuple[_Actuator, str]]
+    legs: list[tuple[int, str, list[str]]]
+    copies: dict[str, list[str]]
+
+
+def _expand_legs(data: _File, source: str) -> _Expanded:
+    """Bodies, joints and actuators of the file with every ``[[legs]]`` template repeated."""
     bodies = [(b, f"{source}: [bodies] {b.name}:") for b in data.bodies]
     joints = [(j, f"{source}: [joints] {j.name}:") for j in data.joints]
+    actuators = [(a, f"{source}: [actuators] {a.name or a.joint}:") for a in data.actuators]
+    legs: list[tuple[int, str, list[str]]] = []
+    copies: dict[str, list[str]] = {}
     for li, leg in enumerate(data.legs):
         where = f"{source}: [legs][{li}]"
         if leg.angles_deg is None and leg.count is None:
@@ -465,7 +570,11 @@ def _expand_legs(data: _File, source: str) -> tuple[list[tuple[_Body, str]], lis
         axis = _unit(leg.axis, f"{where} axis")
         origin = np.array(leg.origin_m)
         own = {b.name for b in leg.bodies}
+        own_joints = {j.name for j in leg.joints}
         for ang, suf in zip(angles, suffixes):
+            legs.append((li, suf, [b.name + suf for b in leg.bodies]))
+            for b in leg.bodies:
+                copies.setdefault(b.name, []).append(b.name + suf)
             Q = _rot(axis, math.radians(ang))
 
             def move(p: Vec3) -> Vec3:
@@ -494,7 +603,13 @@ def _expand_legs(data: _File, source: str) -> tuple[list[tuple[_Body, str]], lis
                 if j.x_axis is not None:
                     upd["x_axis"] = turn(j.x_axis)
                 joints.append((j.model_copy(update=upd), f"{where} joint {j.name + suf}:"))
-    return bodies, joints
+            for a in leg.actuators:
+                if a.joint not in own_joints:
+                    raise ParameterError(f"{where} actuators: joint {a.joint!r} is not a joint of the leg template "
+                                         f"({', '.join(sorted(own_joints))})")
+                upd_a = {"joint": a.joint + suf, "name": None if a.name is None else a.name + suf}
+                actuators.append((a.model_copy(update=upd_a), f"{where} actuator {(a.name or a.joint) + suf}:"))
+    return _Expanded(bodies, joints, actuators, legs, copies)
 
 
 def _matrix_to_xyz_deg(R: Array) -> Vec3:
@@ -545,7 +660,8 @@ def load_description(source: str | Path | dict[str, Any]) -> Description:
         raw, label = read_toml(source), str(source)
     data = _validate(raw, label)
     body_specs: dict[str, BodySpec] = {}
-    expanded_bodies, expanded_joints = _expand_legs(data, label)
+    expanded = _expand_legs(data, label)
+    expanded_bodies, expanded_joints = expanded.bodies, expanded.joints
     if len(expanded_bodies) > MAX_BODIES or len(expanded_joints) > MAX_JOINTS:
         raise ParameterError(f"{label}: {len(expanded_bodies)} bodies and {len(expanded_joints)} joints with the legs "
                              f"repeated; at most {MAX_BODIES} bodies and {MAX_JOINTS} joints")
@@ -597,10 +713,172 @@ def load_description(source: str | Path | dict[str, Any]) -> Description:
         if key not in cols:
             raise ParameterError(f"{label}: [default_motion] {key}: not a task coordinate (one of {', '.join(cols)})")
     motion = MotionSpec(float(m.period_s), int(m.samples), dict(m.offset), dict(m.amplitude))
+    actuators = _actuators(label, expanded.actuators, joints, body_specs)
+    groups = _groups(label, data, expanded, body_specs, task)
     return Description(name=data.mechanism.name, source=data.mechanism.source,
                        gravity=np.array(data.mechanism.gravity_m_s2, dtype=float),
                        bodies=tuple(body_specs.values()), joints=tuple(joints), task=task, loads=tuple(loads),
-                       cut_joints=cuts, motion=motion, path=path)
+                       cut_joints=cuts, motion=motion, path=path, actuators=actuators, groups=groups,
+                       limits=data.limits.model_dump())
+
+
+#: the keys of an actuator entry for each kind of motor (rotary, linear), by role
+_MOTOR_KEYS = {
+    "rotary": {"rotor": "rotor_inertia_kgm2", "coulomb": "coulomb_torque_Nm", "viscous": "viscous_Nm_s_rad",
+               "max_effort": "max_torque_Nm", "max_speed": "max_speed_rad_s",
+               "max_acceleration": "max_acceleration_rad_s2", "encoder": "encoder_counts_per_turn"},
+    "linear": {"rotor": "moving_mass_kg", "coulomb": "coulomb_force_N", "viscous": "viscous_N_s_m",
+               "max_effort": "max_force_N", "max_speed": "max_speed_m_s", "max_acceleration": "max_acceleration_m_s2",
+               "encoder": "encoder_counts_per_m"},
+}
+#: the largest transmission ratio (motor coordinate per joint coordinate) and rotor inertia taken
+_MAX_RATIO = 1e6
+_MAX_ROTOR = 1e3
+
+
+def _actuators(label: str, entries: list[tuple[_Actuator, str]], joints: list[JointSpec],
+               bodies: dict[str, BodySpec]) -> tuple[ActuatorSpec, ...]:
+    """Validated ``[[actuators]]`` entries (see :class:`ActuatorSpec`): one per actuated joint at
+    most, the transmission that fits the joint, the motor's keys in its own units."""
+    by_name = {j.name: j for j in joints}
+    out: list[ActuatorSpec] = []
+    seen_joint: dict[str, str] = {}
+    seen_name: set[str] = set()
+    for a, where in entries:
+        if a.joint not in by_name:
+            raise ParameterError(f"{where} joint: {a.joint!r} is not a joint of the mechanism")
+        j = by_name[a.joint]
+        if not j.actuated:
+            raise ParameterError(f"{where} joint: {a.joint!r} is not actuated (set actuated = true on it, or drive "
+                                 "another joint)")
+        name = a.name if a.name is not None else f"{a.joint}_motor"
+        if a.joint in seen_joint:
+            raise ParameterError(f"{where} joint: {a.joint!r} is driven by {seen_joint[a.joint]!r} already")
+        if name in seen_name:
+            raise ParameterError(f"{where} name: actuator {name!r} is defined twice")
+        if name in by_name or name in bodies:
+            raise ParameterError(f"{where} name: {name!r} is the name of a joint or body; name the actuator "
+                                 "otherwise (its columns would read as the joint's)")
+        seen_joint[a.joint] = name
+        seen_name.add(name)
+        for key in ("gear_ratio", "screw_lead_m"):
+            v = getattr(a, key)
+            if v is not None and not (math.isfinite(v) and v > 0):
+                raise ParameterError(f"{where} {key}: must be a finite number > 0, got {v!r}")
+        gear = 1.0 if a.gear_ratio is None else float(a.gear_ratio)
+        if j.type == "revolute":
+            if a.screw_lead_m is not None:
+                raise ParameterError(f"{where} screw_lead_m: joint {a.joint!r} is revolute; a screw drives a "
+                                     "prismatic joint (give gear_ratio)")
+            kind, ratio = "rotary", gear
+        elif a.screw_lead_m is not None:
+            kind, ratio = "rotary", gear * 2.0 * math.pi / float(a.screw_lead_m)
+        else:
+            if a.gear_ratio is not None:
+                raise ParameterError(f"{where} gear_ratio: joint {a.joint!r} is prismatic; give screw_lead_m for a "
+                                     "rotary motor on a screw (gear_ratio then is motor turns per screw turn), or "
+                                     "neither for a linear motor")
+            kind, ratio = "linear", 1.0
+        if not ratio <= _MAX_RATIO:
+            raise ParameterError(f"{where}: the transmission ratio {ratio:.4g} (motor coordinate per joint "
+                                 f"coordinate) exceeds {_MAX_RATIO:g}")
+        keys = _MOTOR_KEYS[kind]
+        other = _MOTOR_KEYS["linear" if kind == "rotary" else "rotary"]
+        for key in other.values():
+            if getattr(a, key) is not None and key not in keys.values():
+                raise ParameterError(f"{where} {key}: the motor of joint {a.joint!r} is {kind}; give "
+                                     f"{keys[next(r for r, k in other.items() if k == key)]} instead")
+        vals: dict[str, float] = {}
+        for role, key in keys.items():
+            v = getattr(a, key)
+            if v is None:
+                vals[role] = 0.0 if role in ("rotor", "coulomb", "viscous", "encoder") else math.inf
+                continue
+            v = float(v)
+            if not math.isfinite(v):
+                raise ParameterError(f"{where} {key}: must be finite, got {v!r}")
+            if role in ("rotor", "coulomb", "viscous") and v < 0:
+                raise ParameterError(f"{where} {key}: must be >= 0, got {v:g}")
+            if role.startswith("max_") or role == "encoder":
+                if not v > 0:
+                    raise ParameterError(f"{where} {key}: must be > 0, got {v:g}")
+            if role == "rotor" and v > _MAX_ROTOR:
+                raise ParameterError(f"{where} {key}: {v:g} exceeds the plausibility bound {_MAX_ROTOR:g}")
+            vals[role] = v
+        res = 0.0
+        if vals["encoder"]:
+            res = (2.0 * math.pi if kind == "rotary" else 1.0) / vals["encoder"]
+        out.append(ActuatorSpec(name=name, joint=a.joint, kind=kind, ratio=float(ratio), rotor=vals["rotor"],
+                                coulomb=vals["coulomb"], viscous=vals["viscous"], max_effort=vals["max_effort"],
+                                max_speed=vals["max_speed"], max_acceleration=vals["max_acceleration"],
+                                encoder_resolution=res,
+                                lead=None if a.screw_lead_m is None else float(a.screw_lead_m), gear_ratio=gear))
+    return tuple(out)
+
+
+#: part names of the effort split that a body group may not take
+RESERVED_PARTS = ("rotor", "friction", "total")
+
+
+def _groups(label: str, data: _File, expanded: _Expanded, bodies: dict[str, BodySpec],
+            task: TaskSpec) -> tuple[tuple[str, tuple[str, ...]], ...]:
+    """The effort split's body groups (``[[groups]]``; a leg template's body name stands for
+    all its copies). Without ``[[groups]]``: one group per leg copy (``leg_1`` ... by its
+    suffix; ``legs2_1`` ... by leg table and suffix when two copies share a suffix), one for
+    the task body (its name), and ``other`` for the remaining bodies. Bodies no group names
+    go to ``other``."""
+    out: list[tuple[str, tuple[str, ...]]] = []
+    owner: dict[str, str] = {}
+    if data.groups:
+        for gi, g in enumerate(data.groups):
+            where = f"{label}: [groups] {g.name}:"
+            if g.name in RESERVED_PARTS:
+                raise ParameterError(f"{where} name: {g.name!r} is a part of the split of its own; name the group "
+                                     "otherwise")
+            if any(g.name == o for o, _ in out):
+                raise ParameterError(f"{where} name: group {g.name!r} is defined twice")
+            names: list[str] = []
+            for b in g.bodies:
+                members = [b] if b in bodies else expanded.copies.get(b, [])
+                if not members:
+                    raise ParameterError(f"{where} bodies: {b!r} is not a body of the mechanism")
+                for m in members:
+                    if m in owner:
+                        raise ParameterError(f"{where} bodies: body {m!r} is in group {owner[m]!r} already")
+                    owner[m] = g.name
+                    names.append(m)
+            out.append((g.name, tuple(names)))
+    else:
+        sufs = [suf for _, suf, _ in expanded.legs]
+        distinct = len(set(sufs)) == len(sufs)
+        for li, suf, names in expanded.legs:
+            tag = suf.lstrip("_") or str(li + 1)
+            gname = f"leg_{tag}" if distinct else f"legs{li + 1}_{tag}"
+            gname = "".join(c if c.isalnum() or c == "_" else "_" for c in gname)
+            members = [m for m in names if m not in owner and m != task.body]
+            if members:
+                for m in members:
+                    owner[m] = gname
+                out.append((gname, tuple(members)))
+        if task.body not in owner:
+            gname = "".join(c if c.isalnum() or c == "_" else "_" for c in task.body)
+            gname = gname if gname[:1].isalpha() else "task_" + gname
+            if gname in RESERVED_PARTS:
+                gname = "task_" + gname
+            owner[task.body] = gname
+            out.append((gname, (task.body,)))
+    rest = tuple(b for b in bodies if b not in owner)
+    if rest:
+        if any(n == "other" for n, _ in out):
+            raise ParameterError(f"{label}: [groups] other: bodies {', '.join(rest[:4])} are in no group, and 'other' "
+                                 "(their group) is a group of the file; name every body or rename the group")
+        out.append(("other", rest))
+    names = [n for n, _ in out]
+    dup = next((n for n in names if names.count(n) > 1), None)
+    if dup is not None:
+        raise ParameterError(f"{label}: [groups]: group name {dup!r} is taken twice (a leg's and a body's); give "
+                             "[[groups]]")
+    return tuple(out)
 
 
 def _item_name(raw: Any, loc: tuple) -> str | None:

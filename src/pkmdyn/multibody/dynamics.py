@@ -57,7 +57,7 @@ from .kinematics import MechanismKinematics, joint_frame
 from .model import MechanismModel
 
 __all__ = ["body_wrenches", "named_magnitudes", "load_forces", "coordinate_twists", "generalised_forces", "actuator_efforts",
-           "InverseDynamics", "inverse_dynamics", "idle_dynamics", "dynamics_outputs", "effort_unit", "free_twists", "equilibrium_system",
+           "InverseDynamics", "inverse_dynamics", "idle_holding", "EffortShares", "effort_shares", "effort_unit", "free_twists", "equilibrium_system",
            "JointReactions", "joint_reactions", "energies", "SINGULAR_ACTUATION", "inertia_factors"]
 
 Array = NDArray[np.float64]
@@ -253,85 +253,48 @@ class InverseDynamics:
     kin: MechanismKinematics
 
 
-def idle_dynamics(model: MechanismModel, kin: MechanismKinematics, S: Array, loads: dict | None = None,
-                  Q_extra: Array | None = None, named: Mapping[str, object] | None = None) -> MechanismKinematics:
-    """The kinematics with each idle freedom's acceleration set by its own dynamics.
-
-    The kinematics hold an idle freedom (a rod's spin between two spherical joints) by a
-    linear equation, which fixes its acceleration by geometry, not by dynamics; no joint can
-    then supply the moment that acceleration needs. With ``N (nq, k)`` the idle motions (the
-    null space of the solved loop and task rows, ``[Phi_q; tau_q] N = 0``), ``M_NN = N^T M N``
-    (from the body kinetic energy of the twists ``T_b = sum S_c N_c``) and ``Q_N = N^T Q``
-    (Eq. 2), the idle accelerations change by ``beta = -M_NN^-1 Q_N`` so that ``N^T Q = 0``
-    (nothing acts along an idle freedom; ``Q_extra (n, nq)``: generalised friction forces,
-    resisting, included in ``Q``): ``qdd += N beta`` and every body's acceleration by
-    ``T_b beta``. Rates and positions are unchanged; a mechanism without idle freedoms is
-    returned as is."""
-    if model.solver_idle.shape[0] == 0:
-        return kin
-    from dataclasses import replace
-
-    from .topology import constraint_jacobian
-
-    _, J = constraint_jacobian(model, kin.q)
-    K_ = J[:, model.solver_rows]
-    _, _, Vt = np.linalg.svd(K_)
-    N = np.swapaxes(Vt[:, K_.shape[1]:], 1, 2)  # (n, nq, k)
-    anc = model.ancestors.astype(float)
-    T = np.einsum("bc,nck,ncz->nbkz", anc, S, N)  # (n, nb, 6, k)
-    w, vO = T[:, :, :3], T[:, :, 3:]
-    vc = vO + np.cross(w, kin.p[:, :, :, None], axis=2)
-    Iw = np.einsum("nbij,bjk,nblk->nbil", kin.R, model.inertia, kin.R)
-    M_NN = np.einsum("b,nbiz,nbiy->nzy", model.mass, vc, vc) + np.einsum("nbiz,nbij,nbjy->nzy", w, Iw, w)
-    W = body_wrenches(model, kin, loads, named)
-    Q_N = np.einsum("nbkz,nbk->nz", T, W)
-    if Q_extra is not None:  # friction's generalised forces (resisting) act along the idle motion too
-        Q_N = Q_N + np.einsum("ncz,nc->nz", N, Q_extra)
-    beta = -np.linalg.solve(M_NN, Q_N[..., None])[..., 0]
-    dA = np.einsum("nbkz,nz->nbk", T, beta)
-    dwd, daO = dA[..., :3], dA[..., 3:]
-    qdd = kin.qdd + np.einsum("ncz,nz->nc", N, beta)
-    jb = model.joint_child
-    jpa = kin.joint_point_a.copy()
-    on = jb >= 0
-    jpa[:, on] += daO[:, jb[on]] + np.cross(dwd[:, jb[on]], kin.joint_point[:, on])
-    return replace(kin, qdd=qdd, act_qdd=qdd[:, model.act_coord], wd=kin.wd + dwd,
-                   a=kin.a + daO + np.cross(dwd, kin.p), origin_a=kin.origin_a + daO + np.cross(dwd, kin.origin),
-                   joint_point_a=jpa)
-
-
 def inverse_dynamics(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
-                     idle: str = "dynamic", named: Mapping[str, object] | None = None,
-                     friction: bool = True) -> InverseDynamics:
+                     named: Mapping[str, object] | None = None, friction: bool = True) -> InverseDynamics:
     """Actuator efforts along a solved motion (module docstring, Eq. 1-3), with the joints'
     friction when the description gives any and ``friction`` is true: Coulomb, viscous and
     the friction named loads drive directly (``Q`` then includes the friction's generalised
     forces); friction that depends on the joints' own reactions through
     :func:`joint_reactions` (``Q`` is then the rigid-body part alone).
 
-    ``idle="dynamic"`` (default) first gives the idle freedoms the accelerations of their own
-    dynamics (:func:`idle_dynamics`), so that every body's balance can be met;
-    ``idle="held"`` keeps the kinematics' (the efforts then balance the held motion's energy)."""
+    Idle freedoms are held as the kinematics hold them (:func:`idle_holding`): the efforts
+    balance the held motion's energy exactly."""
     S = coordinate_twists(model, kin.q, kin)
-    if idle not in ("dynamic", "held"):
-        raise ParameterError(f"idle: {idle!r} is not 'dynamic' or 'held'")
     Qf = None
     if friction and fr_any(model):
         if any(f and f.get("coefficient", 0.0) for f in model.joint_friction):
             r = joint_reactions(model, kin, loads, named=named)
-            W = body_wrenches(model, r.kin, loads, named)
-            return InverseDynamics(u=r.u, Q=generalised_forces(model, S, W), W=W, S=S, kin=r.kin)
+            W = body_wrenches(model, kin, loads, named)
+            return InverseDynamics(u=r.u, Q=generalised_forces(model, S, W), W=W, S=S, kin=kin)
         from .friction import known_friction
 
         Qf = known_friction(model, kin, S, named)
-    if idle == "dynamic":
-        kin = idle_dynamics(model, kin, S, loads, Qf, named)
     W = body_wrenches(model, kin, loads, named)
     Q = generalised_forces(model, S, W)
     if Qf is not None:
         Q = Q + Qf
     u = actuator_efforts(model, kin, Q)
     return InverseDynamics(u=u, Q=Q, W=W, S=S, kin=kin)
+
+
+def idle_holding(model: MechanismModel) -> Array:
+    """``H (nq, k)``: the generalised-force directions of the rules that hold the idle freedoms.
+
+    **Convention.** An idle freedom (a rod's spin between two spherical joints: a motion that
+    moves no joint centre and no task coordinate) is held by its rule ``n_k . (q - q_ref) = 0``
+    (``model.solver_idle``), an ideal constraint: positions, rates and accelerations are those
+    of the held motion, each the exact time derivative of the one before, and the rule's
+    reaction ``H mu`` (``mu (k,)``) is the generalised force that holds it, carried by the
+    tree joints whose coordinates the rule involves (the rod's own joint), in their free
+    directions. It does no work (``n_k . qd = 0``), so the efforts are those of the held
+    motion (``G^T H = 0``) and every body's balance holds with it. Its size is the rod's
+    spin inertia times the held spin acceleration (and the spin's friction): small, and
+    reported (:attr:`JointReactions.holding`)."""
+    return np.ascontiguousarray(np.asarray(model.solver_idle, dtype=float).T)
 
 
 def free_twists(model: MechanismModel, kin: MechanismKinematics, S: Array, j: int) -> tuple[Array, Array]:
@@ -374,12 +337,15 @@ def free_blocks(model: MechanismModel, kin: MechanismKinematics, S: Array) -> li
 
 
 def equilibrium_matrix(model: MechanismModel, blocks: list) -> Array:
-    """``A (n, 6 nb + nf, 6 nj)`` of the joint-wrench equations (module docstring): the body
-    rows, then each joint's free-twist rows in the order of ``blocks``."""
+    """``A (n, 6 nb + nf, 6 nj + k)`` of the joint-wrench equations (module docstring): the body
+    rows, then each joint's free-twist rows in the order of ``blocks``; the last ``k`` columns
+    are the idle freedoms' holding forces ``mu`` (:func:`idle_holding`), which enter the
+    free-twist rows of the tree coordinates their rules involve: ``T_i . W_j - (H mu)_c = e_c - F_c``."""
     n = blocks[0][1].shape[0] if blocks else 1
     nb, nj = model.nb, len(model.joint_names)
     nf = sum(T.shape[1] for _, T, _ in blocks)
-    A = np.zeros((n, 6 * nb + nf, 6 * nj))
+    H = idle_holding(model)
+    A = np.zeros((n, 6 * nb + nf, 6 * nj + H.shape[1]))
     eye = np.eye(6)
     for j in range(nj):
         c, p = model.joint_child[j], model.joint_parent[j]
@@ -388,8 +354,11 @@ def equilibrium_matrix(model: MechanismModel, blocks: list) -> Array:
         if p >= 0:
             A[:, 6 * p:6 * p + 6, 6 * j:6 * j + 6] -= eye
     row = 6 * nb
-    for j, T, _ in blocks:
+    for j, T, coords in blocks:
         A[:, row:row + T.shape[1], 6 * j:6 * j + 6] = T
+        for i, c in enumerate(coords):
+            if c >= 0 and H.shape[1]:
+                A[:, row + i, 6 * nj:] = -H[c]
         row += T.shape[1]
     return A
 
@@ -444,12 +413,18 @@ class JointReactions:
     friction: dict
     iterations: int
     dissipation: Array
+    #: (n, nq): the generalised force holding the idle freedoms, ``H mu`` (:func:`idle_holding`;
+    #: zero without idle freedoms) [N or N m per tree coordinate]
+    holding: Array | None = None
+    #: with ``split``: the efforts' shares (:func:`effort_shares`), else None
+    shares: "EffortShares | None" = None
 
 
 def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
                     rtol: float = 1e-10, friction: bool = True, tol: float = 1e-11,
                     max_iter: int = 100, solver: str = "auto", overconstrained: str = "compliance",
-                    named: Mapping[str, object] | None = None) -> JointReactions:
+                    named: Mapping[str, object] | None = None, split: bool = False,
+                    sample_offset: int = 0) -> JointReactions:
     """Actuator efforts (Eq. 3) and every joint reaction (module docstring), with the joints'
     friction (:mod:`.friction`) when the description gives any and ``friction`` is true.
 
@@ -468,7 +443,12 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     ``overconstrained="minimum-norm"``: an over-constrained mechanism's reactions are the
     minimum-norm solution of the rigid equations (moments scaled by the length scale) instead
     of the compliance-unique ones: they balance every body but are one choice among the
-    self-stress states (``method = "minimum-norm"``)."""
+    self-stress states (``method = "minimum-norm"``).
+
+    Idle freedoms are held by their rules (:func:`idle_holding`); ``holding`` gives the
+    generalised force that holds them. ``split``: also the efforts' shares of every body group
+    and joint's friction (:func:`effort_shares`). ``sample_offset``: the first sample's number
+    in the whole motion, for messages (a motion processed in chunks)."""
     from .friction import JointFriction, friction_diverges
 
     if solver not in ("auto", "dense"):
@@ -503,11 +483,9 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     Qf = fr.generalised(F) if fr is not None else None
     history: list[float] = []
     it = 0
-    kin0 = kin
+    W = body_wrenches(model, kin, loads, named)
+    Q = generalised_forces(model, S, W)
     while True:
-        kin = idle_dynamics(model, kin0, S, loads, Qf, named)
-        W = body_wrenches(model, kin, loads, named)
-        Q = generalised_forces(model, S, W)
         u = actuator_efforts(model, kin, Q if Qf is None else Q + Qf)
         eff = np.zeros((n, model.nq))
         eff[:, model.act_coord] = u
@@ -522,18 +500,18 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
         elif cuts is not None:
             z = cuts.solve(model, W, Q if Qf is None else Q + Qf, eff, F)
             method, t = "rigid", 0
-        elif r < k and overconstrained == "minimum-norm":
+        elif r < A.shape[2] and overconstrained == "minimum-norm":
             coef = np.einsum("nmr,nm->nr", U[:, :, :r], b) / sv[:, :r]
-            z = np.einsum("nrk,nr->nk", Vt[:, :r], coef) * scale[None, :]
-            method, t = "minimum-norm", k - r
-        elif r < k:
+            z = (np.einsum("nrk,nr->nk", Vt[:, :r], coef) * scale[None, :])[:, :k]
+            method, t = "minimum-norm", A.shape[2] - r
+        elif r < A.shape[2]:
             from .reactions import compliant_reactions
 
             z, t = compliant_reactions(model, kin, A, b, r, W)
             method = "compliance"
         else:
             coef = np.einsum("nmr,nm->nr", U, b) / sv
-            z = np.einsum("nrk,nr->nk", Vt, coef) * scale[None, :]
+            z = (np.einsum("nrk,nr->nk", Vt, coef) * scale[None, :])[:, :k]
             method, t = "rigid", 0
         if fr is None:
             break
@@ -547,22 +525,65 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
         if history[-1] <= tol:
             break
         if it >= max_iter or friction_diverges(history):
-            when = f"sample {worst_sample}" + (f" (t = {kin.t[worst_sample]:.6g} s)" if kin.t is not None else "")
+            when = f"sample {worst_sample + sample_offset}" + (f" (t = {kin.t[worst_sample]:.6g} s)"
+                                                                if kin.t is not None else "")
             raise ParameterError(f"joint {model.joint_names[worst_joint]}: the load-dependent friction does not "
                                  f"converge at {when} (relative change {history[-1]:.3g} after {it} iterations): "
                                  "the friction coefficients lock the mechanism")
-    res = _residual(model, blocks, z, b)
+    res, hold = _residual(model, blocks, z, b)
     Wj = z.reshape(n, -1, 6)
     pts = kin.joint_point
     force = Wj[..., 3:]
     moment = Wj[..., :3] - _cross(pts, force)
+    shares = effort_shares(model, kin, S, W, fr, F, u) if split else None
     return JointReactions(u=u, joint_point=pts, joint_force=force, joint_moment=moment, residual=res,
                           self_stress=t, method=method, kin=kin, friction=F or {}, iterations=it,
-                          dissipation=fr.dissipation(F) if fr is not None else np.zeros(n))
+                          dissipation=fr.dissipation(F) if fr is not None else np.zeros(n), holding=hold,
+                          shares=shares)
 
 
-def _residual(model: MechanismModel, blocks: list, z: Array, b: Array) -> Array:
-    """``max |A z - b|`` per sample (n,) without forming ``A`` (:func:`equilibrium_matrix`)."""
+@dataclass(frozen=True)
+class EffortShares:
+    """The actuator efforts split by what they drive (efforts are linear in the bodies' required
+    wrenches and in the joints' friction, Eq. 1-3, so every share is exact): ``groups`` (n, na,
+    ng) the share of each body group (``model.group_names``: its bodies' inertia, gravity and
+    loads), ``friction`` (n, na, nj) each joint's friction share (zero for a joint without
+    friction); ``sum(groups) + sum(friction) = u`` to rounding. Joint-side units [N or N m]."""
+
+    groups: Array
+    friction: Array
+
+
+def effort_shares(model: MechanismModel, kin: MechanismKinematics, S: Array, W: Array, fr, F: dict | None,
+                  u: Array | None = None) -> EffortShares:
+    """:class:`EffortShares` from the required body wrenches ``W (n, nb, 6)`` and the joints'
+    friction ``F`` (``fr``: the :class:`~.friction.JointFriction` that made it, or None):
+    ``u_part = (J_ax^T)^-1 G^T Q_part`` for ``Q_part`` the generalised forces (Eq. 2) of one
+    group's wrenches or of one joint's friction."""
+    n, nq = S.shape[0], model.nq
+    ng, nj = len(model.group_names), len(model.joint_names)
+    rhs = np.zeros((n, nq, ng + nj))
+    for g in range(ng):
+        Wg = np.where((model.body_group == g)[None, :, None], W, 0.0)
+        rhs[:, :, g] = generalised_forces(model, S, Wg)
+    if fr is not None and F:
+        for jd in fr.joints:
+            Qj = np.zeros((n, nq))
+            fr.add_generalised(Qj, jd, F[jd["j"]])
+            rhs[:, :, ng + jd["j"]] = Qj
+    task = np.einsum("nct,ncp->ntp", kin.G, rhs)
+    JT = np.swapaxes(kin.J_ax, 1, 2)
+    if model.na == model.nt:
+        parts = np.linalg.solve(JT, task)
+    else:
+        parts = np.einsum("nat,ntp->nap", np.linalg.pinv(JT), task)
+    return EffortShares(groups=parts[:, :, :ng], friction=parts[:, :, ng:])
+
+
+def _residual(model: MechanismModel, blocks: list, z: Array, b: Array) -> tuple[Array, Array]:
+    """``max |A z - b|`` per sample (n,) without forming ``A`` (:func:`equilibrium_matrix`), the
+    idle freedoms' holding forces taken out of the free-twist rows (the least-squares ``mu`` of
+    :func:`idle_holding`), and that holding force ``H mu (n, nq)``."""
     n, nb = z.shape[0], model.nb
     nj = len(model.joint_names)
     Wj = z.reshape(n, nj, 6)
@@ -573,11 +594,20 @@ def _residual(model: MechanismModel, blocks: list, z: Array, b: Array) -> Array:
         if model.joint_parent[j] >= 0:
             E[model.joint_parent[j], j] -= 1.0
     r = np.abs((E @ Wj).reshape(n, -1) - b[:, :6 * nb]).max(axis=1)
+    hold = np.zeros((n, model.nq))
     if blocks:
         T = np.concatenate([T for _, T, _ in blocks], axis=1)
         rows = np.concatenate([np.full(T.shape[1], j) for j, T, _ in blocks])
-        r = np.maximum(r, np.abs((T * Wj[:, rows]).sum(axis=2) - b[:, 6 * nb:]).max(axis=1))
-    return r
+        coords = np.concatenate([c for _, _, c in blocks])
+        rt = (T * Wj[:, rows]).sum(axis=2) - b[:, 6 * nb:]
+        H = idle_holding(model)
+        if H.shape[1]:
+            Hr = np.where((coords >= 0)[:, None], H[np.maximum(coords, 0)], 0.0)  # (nf, k)
+            mu = rt @ np.linalg.pinv(Hr).T
+            rt = rt - mu @ Hr.T
+            hold = mu @ H.T
+        r = np.maximum(r, np.abs(rt).max(axis=1))
+    return r, hold
 
 
 class _CutRoute:
@@ -587,8 +617,9 @@ class _CutRoute:
     wrenches that do no work in its free twists (``T_j^T C_j = 0``), ``D_j = T_j (T_j^T T_j)^-1``
     puts its friction ``F_j`` along them. The tree's equations, one per tree coordinate,
 
-        sum_j (J_c,j - J_p,j)^T C_j lambda_j = Q + Q_f - E_a u
+        sum_j (J_c,j - J_p,j)^T C_j lambda_j + H mu = Q + Q_f - E_a u
 
+    (``H mu`` the idle freedoms' holding forces, :func:`idle_holding`)
     (``J_c,j``, ``J_p,j`` the child's and parent's twist Jacobians, ``E_a u`` the actuator
     efforts on their coordinates) give the ``lambda`` by least squares (normal equations; the
     system is consistent where the efforts come from Eq. 3; its full column rank is checked by
@@ -636,12 +667,16 @@ class _CutRoute:
                 C = np.broadcast_to(np.eye(6), (n, 6, 6))
                 self.cut.append((j, C, np.zeros((n, 0, 6))))
                 cols.append(rel(model.joint_child[j], model.joint_parent[j]))
-        # column block of each cut joint: (J_c - J_p)^T C (n, nq, m), nonzero on its rows only
-        self.A = np.zeros((n, nq, sum(C.shape[2] for _, C, _ in self.cut)))
+        # column block of each cut joint: (J_c - J_p)^T C (n, nq, m), nonzero on its rows only;
+        # then the idle freedoms' holding forces H (idle_holding), which the assembly leaves out
+        H = idle_holding(model)
+        self.n_cut = sum(C.shape[2] for _, C, _ in self.cut)
+        self.A = np.zeros((n, nq, self.n_cut + H.shape[1]))
         pos = 0
         for (_, C, _), (rows, sign) in zip(self.cut, cols):
             self.A[:, rows, pos:pos + C.shape[2]] = (S[:, rows] @ C) * sign[None, :, None]
             pos += C.shape[2]
+        self.A[:, :, pos:] = H[None]
         if self.A.shape[2] > self.A.shape[1]:
             self.full_rank = False
             return
@@ -726,10 +761,11 @@ def fr_any(model: MechanismModel) -> bool:
 
 
 def _column_scale(model: MechanismModel) -> Array:
-    """Column scaling of the joint-wrench unknowns: moments about O divided by the length scale."""
+    """Column scaling of the joint-wrench unknowns (moments about O divided by the length
+    scale), then of the idle freedoms' holding forces (1)."""
     s = np.ones((len(model.joint_names), 6))
     s[:, :3] = model.length_scale
-    return s.reshape(-1)
+    return np.concatenate([s.reshape(-1), np.ones(model.solver_idle.shape[0])])
 
 
 def energies(model: MechanismModel, kin: MechanismKinematics) -> tuple[Array, Array]:
@@ -746,49 +782,3 @@ def energies(model: MechanismModel, kin: MechanismKinematics) -> tuple[Array, Ar
 def effort_unit(model: MechanismModel, i: int) -> str:
     """Unit of actuator i's effort: ``N`` (prismatic) or ``Nm`` (revolute)."""
     return "N" if model.actuator_units[i] == "m" else "Nm"
-
-
-def dynamics_outputs(model: MechanismModel, kin: MechanismKinematics,
-                     minimum_norm: bool = False, named: Mapping[str, object] | None = None) -> tuple[dict, dict, dict]:
-    """The dynamics' part of a run's files: ``results.csv`` columns ``<joint>_effort_<N|Nm>``,
-    ``bodies.npz`` arrays ``joint_force``, ``joint_moment`` (n, nj, 3) (module docstring) and
-    ``body_wrench`` (n, nb, 6) (Eq. 1, ``[n_O; f]``), and ``summary.json`` entries.
-
-    An over-constrained mechanism whose bodies carry no section and material is refused
-    (:class:`~pkmdyn.multibody.reactions.ComplianceDataMissing`, naming what is missing) unless
-    ``minimum_norm``: then it gets the minimum-norm reactions (they balance every body; which
-    self-stress state is one choice), flagged ``"unique": false`` with the reason in the summary.
-    Friction that does not converge raises (nothing is written)."""
-    from .reactions import ComplianceDataMissing
-
-    summary: dict = {}
-    try:
-        reac = joint_reactions(model, kin, named=named)
-        u = reac.u
-        npz = {"joint_force": reac.joint_force, "joint_moment": reac.joint_moment}
-        k2 = reac.kin
-        if k2 is not kin:  # idle accelerations made dynamic: the files carry the motion the forces balance
-            npz.update(qdd=k2.qdd, wd=k2.wd, a=k2.a, origin_a=k2.origin_a, joint_point_a=k2.joint_point_a)
-        summary["reactions"] = {"method": reac.method, "self_stress_states": reac.self_stress,
-                                "max_equilibrium_residual": float(reac.residual.max()), "unique": True}
-    except ComplianceDataMissing as exc:
-        if not minimum_norm:
-            raise ComplianceDataMissing(str(exc)) from None
-        reac = joint_reactions(model, kin, overconstrained="minimum-norm", named=named)
-        u = reac.u
-        npz = {"joint_force": reac.joint_force, "joint_moment": reac.joint_moment}
-        k2 = reac.kin
-        if k2 is not kin:
-            npz.update(qdd=k2.qdd, wd=k2.wd, a=k2.a, origin_a=k2.origin_a, joint_point_a=k2.joint_point_a)
-        summary["reactions"] = {"method": "minimum-norm", "self_stress_states": reac.self_stress,
-                                "max_equilibrium_residual": float(reac.residual.max()),
-                                "unique": False, "reason": str(exc)}
-    cols = {f"{name}_effort_{effort_unit(model, i)}": u[:, i] for i, name in enumerate(model.actuator_names)}
-    if len(model.load_body):
-        # the external loads as applied at every sample, so that the balance can be recomputed
-        LF, LM = load_forces(model, len(kin), named)
-        npz["load_force"], npz["load_moment"] = LF, LM
-        npz["load_point"] = kin.origin[:, model.load_body] + np.einsum("nlij,lj->nli", kin.R[:, model.load_body],
-                                                                       model.load_point)
-        cols.update(named_magnitudes(model, len(kin), named))
-    return cols, npz, summary

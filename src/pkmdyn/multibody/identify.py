@@ -16,10 +16,15 @@ its origin's acceleration and ``g`` gravity, ``h_w = R h``, ``J_w = R J R^T``,
 Per joint with friction data, two parameters: its Coulomb and its viscous coefficient
 (``coulomb_torque_Nm``/``viscous_Nm_s_rad`` for rotations, ``coulomb_force_N``/
 ``viscous_N_s_m`` for translations): the friction of law F1-F2 without the load-dependent part,
-``u(w)`` and ``w`` per unit coefficient. The efforts are ``u = Y theta + u_0`` (``u_0`` the
-description's ``[[loads]]`` and the friction its named loads drive, ``friction.external``,
-with the magnitudes ``named``), every column of ``Y`` the projection (Eq. 2-3) of the wrenches
-or friction of one unit parameter. Idle freedoms are held (the kinematics' accelerations).
+``u(w)`` and ``w`` per unit coefficient; per term of the friction a named load drives
+(``friction.external``, the hip paper's Eq. 16: ``mu_k r_k |F_k + o_k| u(w)``) its
+coefficient ``mu_k`` (``<joint>_external<k>_<load>_coefficient``, the magnitudes ``named``).
+The efforts are ``u = Y theta + u_0`` (``u_0`` the description's ``[[loads]]``), every column
+of ``Y`` the projection (Eq. 2-3) of the wrenches or friction of one unit parameter. With
+drives (``[[actuators]]``) the efforts are the motor efforts of :mod:`.actuators` (Eq. A1):
+every column divided by the transmission ratio ``k``, and per drive three more parameters,
+its rotor inertia (column ``theta_ddot``), its motor's Coulomb (``u(theta_dot)``) and viscous
+(``theta_dot``) coefficients. Idle freedoms are held (the kinematics' accelerations).
 Friction that depends on the joints' own reactions (``coefficient`` with a radius or a guide)
 is not linear in the parameters: such a description is refused, naming the joint.
 """
@@ -32,7 +37,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ParameterError
-from .dynamics import actuator_efforts, coordinate_twists, free_blocks, generalised_forces
+from .actuators import motor_coordinates
+from .dynamics import actuator_efforts, coordinate_twists, free_blocks, generalised_forces, named_magnitudes
 from .kinematics import MechanismKinematics
 from .model import MechanismModel
 
@@ -113,15 +119,22 @@ def regressor(model: MechanismModel, kin: MechanismKinematics, named: dict | Non
             raise ParameterError(f"joint {model.joint_names[j]}: its friction depends on its own reaction "
                                  "(coefficient), which is not linear in the parameters; set it to 0 to identify")
     fr = JointFriction(model, kin, S, free_blocks(model, kin, S), named)
-    Q_ext = np.zeros((n, model.nq))  # the friction the named loads drive: known, in u_0
+    mags = named_magnitudes(model, n, named) if model.named_loads else {}
     for jd in fr.joints:
         d = jd["d"]
-        if np.any(jd["ext"]):
-            tau = jd["ext"][:, None] * regularised_sign(jd["w"], EPS_ROTATION, True) if jd["has_rot"] else np.zeros((n, 3))
-            phi = (jd["ext"][:, None] * regularised_sign(jd["v"], EPS_TRANSLATION, True)
+        # the friction a named load drives (friction.external, the hip paper's Eq. 16): one column
+        # per term, its coefficient mu_k the parameter (radius and offset known)
+        for k_, term in enumerate(d.get("external", [])):
+            mag = (term["radius_m"] or 1.0) * np.abs(mags[term["load"]] + term["offset_N"])
+            tau = mag[:, None] * regularised_sign(jd["w"], EPS_ROTATION, True) if jd["has_rot"] else np.zeros((n, 3))
+            phi = (mag[:, None] * regularised_sign(jd["v"], EPS_TRANSLATION, True)
                    if jd["has_slide"] and not jd["has_rot"] else np.zeros((n, 3)))
             Wf = np.concatenate([tau + np.cross(jd["pt"], phi), phi], axis=1)
-            fr.add_generalised(Q_ext, jd, np.einsum("nfk,nk->nf", jd["T"], Wf))
+            Qf = np.zeros((n, model.nq))
+            fr.add_generalised(Qf, jd, np.einsum("nfk,nk->nf", jd["T"], Wf))
+            cols.append(actuator_efforts(model, kin, Qf))
+            names.append(f"{model.joint_names[jd['j']]}_external{k_ + 1}_{term['load']}_coefficient")
+            theta.append(float(term["coefficient"]))
         for law in ("coulomb", "viscous"):
             tau = np.zeros((n, 3))
             phi = np.zeros((n, 3))
@@ -153,5 +166,29 @@ def regressor(model: MechanismModel, kin: MechanismKinematics, named: dict | Non
                        load_direction=model.load_direction[:0], load_magnitude=model.load_magnitude[:0],
                        named_loads=())
     W0 = body_wrenches(model, kin, named=named) - body_wrenches(unloaded, kin)  # the [[loads]] alone
-    u0 = actuator_efforts(model, kin, generalised_forces(model, S, W0) + Q_ext)
-    return Regressor(Y=Y, u0=u0, names=tuple(names), theta=np.array(theta))
+    u0 = actuator_efforts(model, kin, generalised_forces(model, S, W0))
+    if not model.has_drives:
+        return Regressor(Y=Y, u0=u0, names=tuple(names), theta=np.array(theta))
+    # the motor efforts (multibody.actuators, Eq. A1): the joint's columns through the transmission,
+    # then per drive its rotor inertia and its motor's Coulomb and viscous coefficients
+    k = model.drive_ratio
+    Y = Y / k[None, :, None]
+    u0 = u0 / k[None, :]
+    th, thd, thdd = motor_coordinates(model, kin.act_q, kin.act_qd, kin.act_qdd)
+    eps = np.array([EPS_ROTATION if u == "rad" else EPS_TRANSLATION for u in model.motor_units])
+    extra, extra_names, extra_theta = [], [], []
+    for i, name in enumerate(model.drive_name):
+        if name is None:
+            continue
+        rot = model.motor_units[i] == "rad"
+        for label, col, value in ((f"{name}_rotor_inertia_{'kgm2' if rot else 'kg'}", thdd[:, i], model.drive_rotor[i]),
+                                  (f"{name}_motor_coulomb", regularised_sign(thd[:, i], eps[i], False),
+                                   model.drive_coulomb[i]),
+                                  (f"{name}_motor_viscous", thd[:, i], model.drive_viscous[i])):
+            c = np.zeros((n, model.na))
+            c[:, i] = col
+            extra.append(c)
+            extra_names.append(label)
+            extra_theta.append(float(value))
+    Y = np.concatenate([Y, np.stack(extra, axis=2)], axis=2)
+    return Regressor(Y=Y, u0=u0, names=tuple(names) + tuple(extra_names), theta=np.array(theta + extra_theta))

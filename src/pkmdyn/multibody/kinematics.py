@@ -105,6 +105,14 @@ class MechanismKinematics:
     def __len__(self) -> int:
         return int(self.x.shape[0])
 
+    def rows(self, start: int, stop: int | None = None) -> "MechanismKinematics":
+        """Samples ``start .. stop - 1`` (views of the arrays)."""
+        from dataclasses import fields, replace
+
+        sl = slice(start, stop)
+        return replace(self, **{f.name: getattr(self, f.name)[sl] for f in fields(self)
+                                if getattr(self, f.name) is not None})
+
 
 def _poses(model: MechanismModel, q: Array) -> tuple[Array, Array, Array]:
     """Body rotations (nb, 3, 3), origins (nb, 3) and coordinate twists (nq, 6) at ``q (nq,)``."""
@@ -188,9 +196,8 @@ def _fail(model: MechanismModel, out: dict, t: Array | None, x: Array, offset: i
     """Raise the error of the first failed sample, naming the sample, its time and the loop."""
     bad = int(np.flatnonzero(out["status"] != K.OK)[0])
     st = int(out["status"][bad])
-    s = bad + offset
-    when = f"sample {s}" + (f" (t = {t[s]:.6g} s)" if t is not None else "")
-    pose = ", ".join(f"{nm} = {v:.6g} {u}" for nm, u, v in zip(model.task_names, model.task_units, x[s]))
+    when = f"sample {bad + offset}" + (f" (t = {t[bad]:.6g} s)" if t is not None else "")
+    pose = ", ".join(f"{nm} = {v:.6g} {u}" for nm, u, v in zip(model.task_names, model.task_units, x[bad]))
     labels = row_labels(model)
     where = labels[int(out["worst"][bad])]
     if st == K.EULER_SINGULAR:
@@ -222,7 +229,8 @@ def _singular_row(model: MechanismModel, q: Array) -> str:
 
 
 def solve_kinematics(model: MechanismModel, x: Array, xd: Array | None = None, xdd: Array | None = None,
-                     t: Array | None = None, q_start: Array | None = None, limits: bool = False) -> MechanismKinematics:
+                     t: Array | None = None, q_start: Array | None = None, limits: bool = False,
+                     sample_offset: int = 0) -> MechanismKinematics:
     """Kinematics of every body and joint for the task motion ``x, xd, xdd`` (n, nt).
 
     ``x``: task coordinates in the order of ``model.task_names`` ([m], Euler angles [rad]);
@@ -235,7 +243,9 @@ def solve_kinematics(model: MechanismModel, x: Array, xd: Array | None = None, x
     Raises :class:`~pkmdyn.errors.UnreachablePoseError` (a loop that does not close, or with
     ``limits`` a joint beyond its limits, module docstring; without, :func:`limit_violation`
     tells) or
-    :class:`~pkmdyn.errors.SingularityError`, naming the sample, its time and the loop or joint.
+    :class:`~pkmdyn.errors.SingularityError`, naming the sample, its time and the loop or joint;
+    ``sample_offset``: the number of the first sample in a longer motion (for the messages of
+    a motion solved in chunks).
     """
     nt = model.nt
     x = np.ascontiguousarray(as_array(x, (None, nt), "x", MotionError))
@@ -255,7 +265,7 @@ def solve_kinematics(model: MechanismModel, x: Array, xd: Array | None = None, x
         s = int(np.flatnonzero(out["status"] != K.OK)[0])
         q_s = _bridge(model, x, out, s)
         if q_s is None:
-            _fail(model, out, t, x)
+            _fail(model, out, t, x, sample_offset)
         rest = _run(model, x[s:], xd[s:], xdd[s:], q_s, None if t is None else t[s:])
         for key, arr in rest.items():
             out[key][s:] = arr
@@ -313,13 +323,15 @@ def joint_frame(model: MechanismModel, kin: MechanismKinematics, j: int, child: 
     return kin.R[:, body] @ Rl, kin.origin[:, body] + kin.R[:, body] @ pl
 
 
-def joint_coordinates(model: MechanismModel, kin: MechanismKinematics, joints: list[int] | None = None) -> Array:
+def joint_coordinates(model: MechanismModel, kin: MechanismKinematics, joints: list[int] | None = None,
+                      previous: Array | None = None) -> Array:
     """Coordinate (n, k) of each one-coordinate joint in ``joints`` (default:
     :func:`limited_joints`), [rad] for a revolute, [m] for a prismatic joint, the description's
     sense and reference value included. A tree joint's is its tree coordinate; a cut joint's
     is its reference value plus the child frame's rotation about (displacement along) the
     joint frame's z axis relative to the parent frame, the angle unwrapped along the samples
-    from the first sample's, taken within pi of the reference value."""
+    from the first sample's, taken within pi of the reference value, or within pi of
+    ``previous`` (k,), the coordinates of the sample before (a motion taken in chunks)."""
     joints = limited_joints(model) if joints is None else list(joints)
     n = len(kin)
     out = np.empty((n, len(joints)))
@@ -334,7 +346,11 @@ def joint_coordinates(model: MechanismModel, kin: MechanismKinematics, joints: l
         if JOINT_TYPES[model.joint_type[j]].motions[0] == "RZ":
             rel = np.einsum("nki,nkj->nij", RP, RC)  # child frame in the parent frame
             ang = np.arctan2(rel[:, 1, 0], rel[:, 0, 0])
-            out[:, i] = model.joint_offset[j] + np.unwrap(ang)
+            if previous is None:
+                out[:, i] = model.joint_offset[j] + np.unwrap(ang)
+            else:
+                before = float(previous[i]) - model.joint_offset[j]
+                out[:, i] = model.joint_offset[j] + np.unwrap(np.concatenate([[before], ang]))[1:]
         else:
             out[:, i] = model.joint_offset[j] + np.einsum("ni,ni->n", RP[:, :, 2], oC - oP)
     return out

@@ -2,14 +2,17 @@
 in its task coordinates.
 
 Coordinates ``q (n, nt)`` are the task coordinates of the description (``x_m`` ...,
-``euler1_rad`` ...), ``qd, qdd`` their rates; efforts ``u (n, na)`` the actuated joints' forces
-[N] or torques [N m] (order of ``model.actuator_names``). With ``G = dq_tree/dx`` and
-``J_ax = dq_a/dx`` from the kinematics and the body twists per task rate
-``T_b = sum_{c in anc(b)} S_c G_c`` (6, nt):
+``euler1_rad`` ...), ``qd, qdd`` their rates; efforts ``u (n, na)`` the motor efforts of the
+drives (``[[actuators]]``: torque [N m] of a rotary motor, force [N] of a linear one) and the
+joint efforts of actuated joints without one (forces [N] or torques [N m]), order of
+``model.actuator_names``. With ``G = dq_tree/dx`` and ``J_ax = dq_a/dx`` from the kinematics,
+the body twists per task rate ``T_b = sum_{c in anc(b)} S_c G_c`` (6, nt) and the drives'
+ratios ``k`` (``K = diag k``, 1 without a drive), rotor inertias ``I_r`` and motor friction
+``tau_f`` (:mod:`.actuators`, Eq. A1):
 
-    M(x) = sum_b T_b^T I_b T_b            (from T = 1/2 sum m |v_c|^2 + w . I w; symmetric, PD)
-    h(x, xd) = G^T (Q + Q_f) at xdd = 0   (velocity terms, gravity, loads, friction; Eq. 2-3 of .dynamics)
-    B(x) = J_ax^T                         (virtual work of the actuators)
+    M(x) = sum_b T_b^T I_b T_b + J_ax^T K I_r K J_ax      (kinetic energy of bodies and rotors)
+    h(x, xd) = G^T (Q + Q_f) + J_ax^T K (I_r K qdd_a,bias + tau_f)   at xdd = 0 (Eq. 2-3 of .dynamics)
+    B(x) = J_ax^T K                                       (virtual work of the motors)
 
 so that ``M xdd + h = B u`` is the equation of motion projected on the task coordinates (the
 idle freedoms held, as the kinematics hold them). The friction in ``h`` is Coulomb and
@@ -32,6 +35,7 @@ from numpy.typing import NDArray
 from ..errors import MotionError, ParameterError, as_array
 from .dynamics import actuator_efforts, body_wrenches, inertia_factors, coordinate_twists, effort_unit, fr_any, \
     generalised_forces, joint_reactions
+from .actuators import motor_effort_unit, motor_efforts
 from .kinematics import MechanismKinematics, solve_kinematics
 from .model import MechanismModel
 
@@ -53,7 +57,9 @@ class MechanismVerbs:
 
         self.model = model
         self.COORDINATES = tuple(f"{n}_{u}" for n, u in zip(model.task_names, model.task_units))
-        self.ACTUATORS = tuple(f"{a}_{effort_unit(model, i)}" for i, a in enumerate(model.actuator_names))
+        # a drive's efforts are its motor's ([[actuators]]): <actuator>_Nm; a joint's own, <joint>_N or _Nm
+        self.ACTUATORS = tuple(f"{model.drive_name[i]}_{motor_effort_unit(model, i)}" if model.drive_name[i] is not None
+                               else f"{a}_{effort_unit(model, i)}" for i, a in enumerate(model.actuator_names))
         self._q_last: Array | None = None
         self._inertia_factors = inertia_factors(model)  # the mass matrix's constant factors
         # the compiled single-sample path (:mod:`._one`), where it answers for this mechanism
@@ -136,19 +142,26 @@ class MechanismVerbs:
         task_mass_batch(np.ascontiguousarray(S), np.ascontiguousarray(kin.G), model.body_parent, model.body_joint,
                         model.joint_q0, model.joint_nq, np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.p),
                         model.mass, self._inertia_factors, M)
+        if np.any(model.drive_rotor):  # the rotors' inertia k^2 I_r along each actuator's row of J_ax
+            M += np.einsum("nat,a,nas->nts", kin.J_ax, model.drive_rotor * model.drive_ratio ** 2, kin.J_ax)
         return M
 
     def _bias(self, model: MechanismModel, kin: MechanismKinematics, S: Array, named: dict | None = None) -> Array:
         if _load_dependent(model):
             u = joint_reactions(model, kin, named=named).u
-            return np.einsum("nat,na->nt", kin.J_ax, u)
-        W = body_wrenches(model, kin, named=named)
-        Q = generalised_forces(model, S, W)
-        if fr_any(model):
-            from .friction import known_friction
+            h = np.einsum("nat,na->nt", kin.J_ax, u)
+        else:
+            W = body_wrenches(model, kin, named=named)
+            Q = generalised_forces(model, S, W)
+            if fr_any(model):
+                from .friction import known_friction
 
-            Q = Q + known_friction(model, kin, S, named)
-        return np.einsum("nct,nc->nt", kin.G, Q)
+                Q = Q + known_friction(model, kin, S, named)
+            h = np.einsum("nct,nc->nt", kin.G, Q)
+        if model.has_drives:  # the motors' bias (rotor at the bias acceleration, friction), Eq. A1
+            mot = motor_efforts(model, kin.act_q, kin.act_qd, kin.act_qdd, np.zeros_like(kin.act_q))
+            h = h + np.einsum("nat,na->nt", kin.J_ax, model.drive_ratio * (mot.rotor + mot.friction))
+        return h
 
     # ------------------------------------------------------------------ verbs
     def mass_matrix(self, model: MechanismModel, q: Array) -> Array:
@@ -158,9 +171,9 @@ class MechanismVerbs:
         return self._mass(model, kin, coordinate_twists(model, kin.q, kin))
 
     def actuator_map(self, model: MechanismModel, q: Array) -> Array:
-        """``B(x) = J_ax^T (n, nt, na)``."""
+        """``B(x) = J_ax^T k (n, nt, na)`` (``k`` the drives' transmission ratios, 1 without a drive)."""
         kin = self._kin(model, self._x(q))
-        return np.swapaxes(kin.J_ax, 1, 2).copy()
+        return np.swapaxes(kin.J_ax, 1, 2) * model.drive_ratio
 
     def bias_forces(self, model: MechanismModel, q: Array, qd: Array, load: Array | None = None) -> Array:
         """``h(x, xd) (n, nt)``."""
@@ -176,15 +189,16 @@ class MechanismVerbs:
             kin = self._kin(model, self._x(q), self._x(qd, "qd"))
         named = self._named(load, len(kin))
         S = coordinate_twists(model, kin.q, kin)
-        return self._mass(model, kin, S), self._bias(model, kin, S, named), np.swapaxes(kin.J_ax, 1, 2), kin
+        B = np.swapaxes(kin.J_ax, 1, 2) * model.drive_ratio
+        return self._mass(model, kin, S), self._bias(model, kin, S, named), B, kin
 
     def inverse_dynamics(self, model: MechanismModel, q: Array, qd: Array, qdd: Array,
                          load: Array | None = None) -> Array:
         """Efforts ``u (n, na)`` with ``B u = M xdd + h`` (minimum norm when redundant)."""
         M, h, B, kin = self._all(model, q, qd, load)
         rhs = np.einsum("nij,nj->ni", M, self._x(qdd, "qdd")) + h
-        # actuator_efforts checks the actuator map's rank and names the sample
-        return actuator_efforts(model, kin, np.zeros((len(kin), 0)), rhs_task=rhs)
+        # actuator_efforts checks the actuator map's rank and names the sample; J_ax^T (k tau) = rhs
+        return actuator_efforts(model, kin, np.zeros((len(kin), 0)), rhs_task=rhs) / model.drive_ratio
 
     def forward_dynamics(self, model: MechanismModel, q: Array, qd: Array, u: Array,
                          load: Array | None = None) -> Array:
@@ -243,7 +257,7 @@ class MechanismVerbs:
             return u
         M, h, B, kin = self._all(model, q, qd, load, one=True)
         rhs = M[0] @ np.asarray(qdd, dtype=float) + h[0]
-        return actuator_efforts(model, kin, np.zeros((1, 0)), rhs_task=rhs[None])[0]
+        return actuator_efforts(model, kin, np.zeros((1, 0)), rhs_task=rhs[None])[0] / model.drive_ratio
 
     def forward_dynamics_one(self, model: MechanismModel, q: Array, qd: Array, u: Array,
                              load: float | None = None) -> Array:

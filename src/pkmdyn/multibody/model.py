@@ -185,6 +185,29 @@ class MechanismModel:
     solver_pcol: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     solver_blocks: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     topology: object = None
+    #: per actuator (order of ``act_joint``): its drive's name (``[[actuators]]``; None for a
+    #: joint that drives itself), ``drive_kind`` (``"rotary"``, ``"linear"``, ``""``), the
+    #: transmission ratio ``drive_ratio`` k (motor coordinate per joint coordinate, 1 without a
+    #: drive), the rotor inertia ``drive_rotor`` [kg m^2 or kg], the motor's friction
+    #: ``drive_coulomb``, ``drive_viscous``, its limits ``drive_max_effort``,
+    #: ``drive_max_speed``, ``drive_max_acceleration`` (motor side, inf when not given) and the
+    #: encoder's resolution ``drive_encoder`` (motor displacement per count; 0 when not given)
+    drive_name: tuple[str | None, ...] = ()
+    drive_kind: tuple[str, ...] = ()
+    drive_ratio: Array = field(default_factory=lambda: np.zeros(0))
+    drive_rotor: Array = field(default_factory=lambda: np.zeros(0))
+    drive_coulomb: Array = field(default_factory=lambda: np.zeros(0))
+    drive_viscous: Array = field(default_factory=lambda: np.zeros(0))
+    drive_max_effort: Array = field(default_factory=lambda: np.zeros(0))
+    drive_max_speed: Array = field(default_factory=lambda: np.zeros(0))
+    drive_max_acceleration: Array = field(default_factory=lambda: np.zeros(0))
+    drive_encoder: Array = field(default_factory=lambda: np.zeros(0))
+    drive_specs: tuple = ()
+    #: the effort split's body groups: names, and each body's group index (nb,)
+    group_names: tuple[str, ...] = ()
+    body_group: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    #: plausibility limits of motions (``[limits]``: ``description.LIMIT_KEYS``)
+    limits: dict = field(default_factory=dict)
 
     @property
     def nb(self) -> int:
@@ -209,6 +232,18 @@ class MechanismModel:
     @property
     def actuator_units(self) -> tuple[str, ...]:
         return tuple(JOINT_TYPES[self.joint_type[j]].units[0] for j in self.act_joint)
+
+    @property
+    def has_drives(self) -> bool:
+        """Whether any actuated joint has a drive (an ``[[actuators]]`` entry)."""
+        return any(d is not None for d in self.drive_name)
+
+    @property
+    def motor_units(self) -> tuple[str, ...]:
+        """Unit of each actuator's motor coordinate: ``rad`` (a rotary motor) or ``m`` (a linear
+        one; also a joint without a drive, in its own unit)."""
+        return tuple("rad" if k == "rotary" else ("m" if k == "linear" else u)
+                     for k, u in zip(self.drive_kind, self.actuator_units))
 
     def body_index(self, name: str) -> int:
         """Index of body ``name`` (-1 for the ground)."""
@@ -414,7 +449,34 @@ def compile_model(desc: Description) -> MechanismModel:
     rows, idle, rep = solver_selection(model)
     prow, pcol, blocks = block_structure(model, rows, idle)
     return replace(model, solver_rows=rows, solver_idle=idle, solver_prow=prow, solver_pcol=pcol,
-                   solver_blocks=blocks, topology=rep)
+                   solver_blocks=blocks, topology=rep, **_drives(desc, act), **_body_groups(desc, order),
+                   limits=dict(desc.limits))
+
+
+def _drives(desc: Description, act: list[int]) -> dict:
+    """The model's ``drive_*`` arrays (:class:`MechanismModel`) for the actuated joints ``act``."""
+    by_joint = {a.joint: a for a in desc.actuators}
+    specs = [by_joint.get(desc.joints[k].name) for k in act]
+    inf = float("inf")
+
+    def arr(attr: str, default: float) -> Array:
+        return np.array([default if a is None else float(getattr(a, attr)) for a in specs], dtype=float)
+
+    return {"drive_name": tuple(None if a is None else a.name for a in specs),
+            "drive_kind": tuple("" if a is None else a.kind for a in specs),
+            "drive_ratio": arr("ratio", 1.0), "drive_rotor": arr("rotor", 0.0), "drive_coulomb": arr("coulomb", 0.0),
+            "drive_viscous": arr("viscous", 0.0), "drive_max_effort": arr("max_effort", inf),
+            "drive_max_speed": arr("max_speed", inf), "drive_max_acceleration": arr("max_acceleration", inf),
+            "drive_encoder": arr("encoder_resolution", 0.0), "drive_specs": tuple(specs)}
+
+
+def _body_groups(desc: Description, order: list[str]) -> dict:
+    """``group_names`` and ``body_group`` (nb,) of the model's body order."""
+    names = tuple(g for g, _ in desc.groups)
+    of = {b: i for i, (_, bodies) in enumerate(desc.groups) for b in bodies}
+    if not names:  # a description made without groups: one group of every body
+        return {"group_names": ("bodies",), "body_group": np.zeros(len(order), dtype=np.int64)}
+    return {"group_names": names, "body_group": np.array([of[b] for b in order], dtype=np.int64)}
 
 
 def _ancestor_list(anc: NDArray[np.bool_]) -> IntArray:

@@ -21,12 +21,14 @@ from ..io import read_csv_columns
 from ..profiles._columns import column_group, derivatives, require_increasing
 from .model import MechanismModel
 
-__all__ = ["TaskMotion", "task_columns", "default_motion", "read_task_motion", "MAX_MOTION_ROWS"]
+__all__ = ["TaskMotion", "PeriodicMotion", "RepeatedMotion", "task_columns", "default_motion", "periodic_motion",
+           "repeated_motion", "read_task_motion", "MAX_MOTION_ROWS"]
 
 Array = NDArray[np.float64]
 
-#: rows of a motion file for a described mechanism: every sample keeps the motion of every body
-#: and joint (about 6 kB for a Stewart platform), so a run is held in memory whole
+#: rows of a motion file for a described mechanism: the file is read whole (its rows, not the
+#: bodies' motion, are held in memory; a run computes and writes them chunk by chunk); longer
+#: runs repeat the default motion (``pkmdyn run --cycles``)
 MAX_MOTION_ROWS = 200_000
 
 
@@ -45,6 +47,41 @@ class TaskMotion:
     def __len__(self) -> int:
         return int(self.t.shape[0])
 
+    def chunk(self, start: int, stop: int) -> "TaskMotion":
+        """Samples ``start .. stop - 1`` (views)."""
+        sl = slice(start, stop)
+        return TaskMotion(self.t[sl], self.x[sl], self.xd[sl], self.xdd[sl],
+                          {k: v[sl] for k, v in self.loads.items()})
+
+
+@dataclass(frozen=True)
+class PeriodicMotion:
+    """The default motion ``x(t) = x_ref + offset + amplitude sin(2 pi t / T)`` over ``cycles``
+    periods at ``samples_per_cycle`` samples per period (``n = round(cycles samples_per_cycle)
+    + 1`` samples, ``t_i = i T / samples_per_cycle``), made chunk by chunk (:meth:`chunk`), so
+    that a long run never holds the whole motion. Its rates are exact."""
+
+    x_ref: Array
+    offset: Array
+    amplitude: Array
+    period: float
+    samples_per_cycle: int
+    n: int
+
+    def __len__(self) -> int:
+        return self.n
+
+    def chunk(self, start: int, stop: int) -> TaskMotion:
+        """Samples ``start .. stop - 1`` of the motion."""
+        stop = min(stop, self.n)
+        t = np.arange(start, stop, dtype=float) * (self.period / self.samples_per_cycle)
+        w = 2.0 * np.pi / self.period
+        s = np.sin(w * t)[:, None]
+        c = np.cos(w * t)[:, None]
+        x = self.x_ref + self.offset + self.amplitude * s
+        return TaskMotion(t, np.ascontiguousarray(x), np.ascontiguousarray(self.amplitude * w * c),
+                          np.ascontiguousarray(-self.amplitude * w * w * s))
+
 
 def task_columns(model: MechanismModel) -> tuple[list[str], list[str], list[str]]:
     """Column names of the task coordinates, their rates and accelerations."""
@@ -54,21 +91,91 @@ def task_columns(model: MechanismModel) -> tuple[list[str], list[str], list[str]
     return pos, vel, acc
 
 
-def default_motion(model: MechanismModel) -> TaskMotion:
+@dataclass(frozen=True)
+class RepeatedMotion:
+    """A one-cycle motion ``cycle`` (a :class:`TaskMotion` whose last sample is its first one
+    period later) repeated ``cycles`` times: sample ``i`` is the cycle's sample ``i mod m``
+    (``m = len(cycle) - 1``) shifted by whole periods, ``n = round(cycles m) + 1`` samples, made
+    chunk by chunk (:meth:`chunk`)."""
+
+    cycle: TaskMotion
+    n: int
+
+    def __len__(self) -> int:
+        return self.n
+
+    def chunk(self, start: int, stop: int) -> TaskMotion:
+        stop = min(stop, self.n)
+        m = len(self.cycle) - 1
+        i = np.arange(start, stop)
+        c, r = np.divmod(i, m)
+        c = c.astype(float)
+        period = float(self.cycle.t[m] - self.cycle.t[0])
+        t = self.cycle.t[r] + c * period
+        return TaskMotion(t, self.cycle.x[r], self.cycle.xd[r], self.cycle.xdd[r],
+                          {k: v[r] for k, v in self.cycle.loads.items()})
+
+
+def repeated_motion(cycle: TaskMotion, cycles: float, what: str = "the default motion",
+                    max_samples: int | None = None) -> TaskMotion | RepeatedMotion:
+    """``cycle`` repeated ``cycles`` times (:class:`RepeatedMotion`; ``cycle`` itself for one
+    cycle). The cycle must be periodic: its last sample equal to its first (positions, rates,
+    accelerations, loads) to 1e-9 of their size, else a :class:`~pkmdyn.errors.MotionError`."""
+    if not (np.isfinite(cycles) and cycles > 0):
+        raise MotionError(f"--cycles: must be a finite number > 0, got {cycles!r}")
+    m = len(cycle) - 1
+    n = int(round(float(cycles) * m)) + 1
+    if n == len(cycle) and cycles == 1:
+        return cycle
+    if m < 1:
+        raise MotionError(f"--cycles: {what} has one sample; nothing to repeat")
+    for name, a in (("position", cycle.x), ("rate", cycle.xd), ("acceleration", cycle.xdd),
+                    *((f"load {k}", v[:, None]) for k, v in cycle.loads.items())):
+        scale = max(float(np.abs(a).max()), 1e-12)
+        if not np.abs(a[-1] - a[0]).max() <= 1e-9 * scale:
+            raise MotionError(f"--cycles: {what} is not periodic (its last sample's {name} differs from its first); "
+                              "only a periodic motion repeats")
+    if max_samples is not None and not n <= max_samples:
+        from ..params_util import check_limit
+
+        check_limit(n, max_samples, "motion: samples (cycles x samples per cycle + 1)", "max_samples")
+    return RepeatedMotion(cycle, n)
+
+
+def default_motion(model: MechanismModel, cycles: float = 1.0, samples_per_cycle: int | None = None
+                   ) -> TaskMotion:
     """The description's ``[default_motion]``: ``x(t) = x_ref + offset + amplitude sin(2 pi t/T)``
-    at ``samples`` times over one period ``T`` (x_ref: the task at the reference configuration)."""
+    at ``samples`` times over one period ``T`` (x_ref: the task at the reference configuration);
+    over ``cycles`` periods at ``samples_per_cycle`` samples each when given
+    (:func:`periodic_motion`), in memory."""
+    m = periodic_motion(model, cycles, samples_per_cycle)
+    return m.chunk(0, len(m))
+
+
+def periodic_motion(model: MechanismModel, cycles: float = 1.0, samples_per_cycle: int | None = None,
+                    max_samples: int | None = None) -> PeriodicMotion:
+    """The default motion as a :class:`PeriodicMotion`: ``cycles`` periods (default 1) at
+    ``samples_per_cycle`` samples per period (default the description's ``samples - 1``, so that
+    one cycle has ``samples`` samples, both ends included). More than ``max_samples`` samples is
+    a :class:`~pkmdyn.errors.LimitError` naming the limit."""
     from .kinematics import reference_task
 
     spec = model.motion
+    if not (np.isfinite(cycles) and cycles > 0):
+        raise MotionError(f"--cycles: must be a finite number > 0, got {cycles!r}")
+    spc = spec.samples - 1 if samples_per_cycle is None else int(samples_per_cycle)
+    if spc < 1:
+        raise MotionError(f"--samples-per-cycle: must be at least 1, got {samples_per_cycle!r}")
+    total = float(cycles) * spc
+    n = int(round(total)) + 1
+    if max_samples is not None and not n <= max_samples:
+        from ..params_util import check_limit
+
+        check_limit(n, max_samples, "default motion: samples (cycles x samples per cycle + 1)", "max_samples")
     pos, _, _ = task_columns(model)
     off = np.array([spec.offset.get(c, 0.0) for c in pos])
     amp = np.array([spec.amplitude.get(c, 0.0) for c in pos])
-    t = np.linspace(0.0, spec.period, spec.samples)
-    w = 2.0 * np.pi / spec.period
-    s = np.sin(w * t)[:, None]
-    c = np.cos(w * t)[:, None]
-    x = reference_task(model) + off + amp * s
-    return TaskMotion(t, x, amp * w * c, -amp * w * w * s)
+    return PeriodicMotion(reference_task(model), off, amp, float(spec.period), spc, n)
 
 
 def read_task_motion(model: MechanismModel, path: str | Path, max_rows: int | None = MAX_MOTION_ROWS) -> TaskMotion:

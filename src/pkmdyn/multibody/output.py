@@ -9,7 +9,6 @@ flags), the loops, the task coordinates and gravity.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -17,13 +16,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import PkmdynError
-from ..io import output_dir, write_csv, write_json
+from .actuators import motor_effort_column
+from .dynamics import effort_unit
 from .joint_types import JOINT_TYPES
-from .kinematics import MechanismKinematics, limit_message, singularity_measures, solve_kinematics
+from .kinematics import MechanismKinematics
 from .model import MechanismModel
-from .motion import TaskMotion, task_columns
+from .motion import task_columns
 
-__all__ = ["results_columns", "model_summary", "bodies_arrays", "run_mechanism"]
+__all__ = ["results_columns", "model_summary", "bodies_arrays", "write_run_report"]
 
 Array = NDArray[np.float64]
 _MOTION_NAMES = ("RX", "RY", "RZ", "TX", "TY", "TZ")
@@ -140,79 +140,46 @@ def bodies_arrays(model: MechanismModel, kin: MechanismKinematics) -> dict[str, 
     return out
 
 
-def _write_report(out: Path, model: MechanismModel, files: dict[str, Path], cols: dict[str, Array],
-                  summary: dict[str, Any], description_text: str) -> Path:
-    """``report.html`` of a run (:mod:`pkmdyn.report`): the mechanism drawn from the files just
-    written (``model.json``, ``bodies.npz``), the task and actuator coordinates against time."""
-    from ..report import Curve, TimePlot, scene_from_files, write_report
+def write_run_report(out: Path, model: MechanismModel, cols: dict[str, Array], frames: dict[str, Array],
+                     summary: dict[str, Any], description_text: str, samples: int | None = None) -> Path:
+    """``report.html`` of a run (:mod:`pkmdyn.report`): the mechanism drawn at the animation's
+    samples ``frames`` (``t``, ``joint_point``: each body through its joint centres, actuated
+    joints as chains coloured by effort), the task and actuator coordinates, rates and efforts
+    against time from the results columns ``cols`` (the plots' window of the run; ``samples``:
+    the run's length when the window is shorter)."""
+    from ..report import Curve, TimePlot, scene_from_joints, write_report
 
     t = cols["t_s"]
     pos, _, _ = task_columns(model)
     plots = [TimePlot("Task coordinates", "task coordinate [m or rad]", t, tuple(Curve(c, cols[c]) for c in pos))]
-    for kind, label in (("pos", "actuator coordinates"), ("vel", "actuator rates"), ("effort", "actuator efforts")):
-        names = [c for c in cols if f"_{kind}_" in c]
-        if names:
-            plots.append(TimePlot(label.capitalize(), f"{label} [SI]", t, tuple(Curve(c, cols[c]) for c in names)))
+    units = model.actuator_units
+    names = model.actuator_names
+    for label, group in (("actuator coordinates", [f"{a}_pos_{u}" for a, u in zip(names, units)]),
+                         ("actuator rates", [f"{a}_vel_{u}_s" for a, u in zip(names, units)]),
+                         ("actuator efforts", [f"{a}_effort_{effort_unit(model, i)}" for i, a in enumerate(names)])):
+        plots.append(TimePlot(label.capitalize(), f"{label} [SI]", t, tuple(Curve(c, cols[c]) for c in group)))
+    motors = [motor_effort_column(model, i) for i, d in enumerate(model.drive_name) if d is not None]
+    if motors:
+        plots.append(TimePlot("Motor efforts", "motor effort [N m or N]", t, tuple(Curve(c, cols[c]) for c in motors)))
+    idx = frame_indices_of(t, frames["t"])
     efforts = {}
-    for name in model.actuator_names:
-        col = next((c for c in cols if c.startswith(f"{name}_effort_")), None)
-        if col is not None:
-            efforts[name] = (cols[col], f"{name} effort", col.rsplit("_effort_", 1)[1])
-    scene = scene_from_files(files["model"], files["bodies"], actuated=efforts or None)
+    for i, name in enumerate(model.actuator_names):
+        col = f"{name}_effort_{effort_unit(model, i)}"
+        efforts[name] = (cols[col][idx], f"{name} effort", effort_unit(model, i))
+    joints = [(nm, JOINT_TYPES[model.joint_type[k]].name,
+               "ground" if model.joint_parent[k] < 0 else model.body_names[model.joint_parent[k]],
+               "ground" if model.joint_child[k] < 0 else model.body_names[model.joint_child[k]])
+              for k, nm in enumerate(model.joint_names)]
+    scene = scene_from_joints(frames["t"], frames["joint_point"], joints, efforts)
+    notes = [f"mechanism: {model.name}" + (f" ({model.source})" if model.source else "")]
+    if samples is not None and samples > t.shape[0]:
+        notes.append(f"plots and animation: the first {t.shape[0]} of {samples} samples (results hold every sample)")
     return write_report(out, title=f"{model.name}: pkmdyn run", scene=scene,
-                        plots=plots, summary=summary, parameters=description_text,
-                        notes=[f"mechanism: {model.name}" + (f" ({model.source})" if model.source else "")],
-                        scene_note="Joint centres as in bodies.npz (joint_point); actuated joints drawn as chains.")
+                        plots=plots, summary=summary, parameters=description_text, notes=notes,
+                        scene_note="Joint centres as in bodies.npz (joint_point); actuated joints drawn as chains.",
+                        samples=t.shape[0])
 
 
-def run_mechanism(model: MechanismModel, motion: TaskMotion, out_dir: str | Path, inputs: Any = (),
-                  report: Callable[[dict[str, Path]], None] | None = None, description_text: str = "",
-                  unique_reactions: bool = False) -> dict[str, Any]:
-    """Kinematics of ``model`` along ``motion``, written into ``out_dir`` (through
-    :func:`pkmdyn.io.output_dir` under the output rule, ``inputs`` the files the run read:
-    nothing is written when anything fails), with ``report.html`` (``description_text``: the
-    description file's text, shown on the page). ``report`` is called with the files' final
-    paths before they move into place. An over-constrained mechanism needs the section and
-    material that make its reactions unique: without them its run writes the minimum-norm
-    reactions flagged ``"unique": false`` (kinematics and efforts are unique all the same), or,
-    with ``unique_reactions``, is refused (:func:`pkmdyn.multibody.dynamics.dynamics_outputs`). Returns the summary with ``files`` as
-    ``{label: path}``."""
-    from .dynamics import dynamics_outputs
-
-    kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
-    sm = singularity_measures(model, kin.q)
-    beyond = limit_message(model, kin)
-    cols = results_columns(model, kin)
-    npz = bodies_arrays(model, kin)
-    dyn_cols, dyn_npz, dyn_summary = dynamics_outputs(model, kin, minimum_norm=not unique_reactions,
-                                                      named=motion.loads)
-    cols.update(dyn_cols)
-    npz.update(dyn_npz)
-    summary = {
-        "mechanism": model.name, "samples": len(kin), "max_residual": float(kin.residual.max()),
-        "min_inverse_singularity_measure": float(sm.inverse.min()),
-        "min_direct_singularity_measure": None if np.isnan(sm.direct).all() else float(np.nanmin(sm.direct)),
-        "min_constraint_singularity_measure": float(sm.constraint.min()),
-        # the motion against the joints' limits (stored in the description; the run goes on beyond them)
-        "joint_limits": {"kept": beyond is None, "first_beyond": beyond},
-        "topology": model.topology.as_dict() if model.topology is not None else None,
-        **dyn_summary,
-    }
-    final = Path(out_dir)
-    with output_dir(out_dir, inputs=inputs) as out:
-        files = {"results": out / "results.csv", "model": out / "model.json", "bodies": out / "bodies.npz",
-                 "summary": out / "summary.json"}
-        write_csv(files["results"], cols)
-        write_json(files["model"], model_summary(model))
-        try:
-            np.savez_compressed(files["bodies"], body_names=np.array(model.body_names),
-                                joint_names=np.array(model.joint_names),
-                                coordinate_joints=np.array([model.joint_names[j] for j in model.coord_joint]), **npz)
-        except OSError as exc:
-            raise PkmdynError(f"{files['bodies']}: cannot write file ({exc.strerror or type(exc).__name__})") from None
-        files["report"] = _write_report(out, model, files, cols, summary, description_text)
-        summary["files"] = sorted(p.name for p in files.values())
-        write_json(files["summary"], summary)
-        if report is not None:
-            report({k: final / v.name for k, v in files.items()})
-    return {**summary, "files": {k: final / v.name for k, v in files.items()}}
+def frame_indices_of(t: Array, frame_t: Array) -> Array:
+    """Indices into ``t`` (increasing) of the animation's sample times ``frame_t``."""
+    return np.clip(np.searchsorted(t, frame_t), 0, t.shape[0] - 1)

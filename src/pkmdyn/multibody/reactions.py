@@ -154,7 +154,9 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
     else:
         scale = np.ones((nj, 6))
         scale[:, :3] = model.length_scale
-        scale = scale.reshape(-1)
+        scale = np.concatenate([scale.reshape(-1), np.ones(A.shape[2] - k)])
+        if A.shape[2] > k:  # the idle freedoms' holding forces (dynamics.idle_holding) strain no body
+            G = np.concatenate([G, np.zeros(G.shape[:3] + (A.shape[2] - k,))], axis=3)
     try:
         res = unique_reactions(A * scale, b, G * scale, w0, C)
     except SingularityError:
@@ -166,4 +168,4 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
     t = int(A.shape[2] - res.rank.min())
     if affine is not None:
         return affine[0] + np.einsum("nkl,nl->nk", affine[1], lam), t
-    return lam, t
+    return lam[:, :k], t

@@ -66,7 +66,8 @@ class LoopSettings:
 
     ``cycle_s`` control cycle; ``step_s`` integration step (divides the cycle);
     ``effort_limit (nu,)`` [N m or N]; ``divergence_limit (nq,)`` [rad or m];
-    ``encoder_resolution`` actuator displacement per count [rad or m];
+    ``encoder_resolution`` actuator displacement per count [rad or m], one for every actuator
+    or one each (nu,);
     ``velocity_cutoff_Hz``, ``acceleration_cutoff_Hz`` encoder filters (0: none);
     ``pose_noise (nq,)`` standard deviation [rad or m]; ``pose_delay_cycles``; ``seed``;
     ``pose_from_sensor``: the controller's pose from the pose sensor (else from the encoders);
@@ -78,7 +79,7 @@ class LoopSettings:
     step_s: float
     effort_limit: Array
     divergence_limit: Array
-    encoder_resolution: float
+    encoder_resolution: float | Array
     velocity_cutoff_Hz: float
     acceleration_cutoff_Hz: float
     pose_noise: Array
@@ -134,7 +135,7 @@ def _alpha(fc: float, T: float) -> float:
 
 @numba.njit(cache=True)
 def _sense(kr: int, k: int, j: int, first: bool, q: Array, qd: Array, q_ref: Array, div: Array, s_ref_p: Array,
-           Bt_p: Array, s_ref_c: Array, rate_map: Array, res: float, T: float, a_v: float, a_a: float,
+           Bt_p: Array, s_ref_c: Array, rate_map: Array, res: Array, T: float, a_v: float, a_a: float,
            noise: Array, pose_from_sensor: bool,
            s_prev: Array, sd_prev: Array, yq: Array, yqd: Array, ys: Array, ysd: Array, ysdd: Array,
            out_q: Array, out_qd: Array, out_att: Array, out_s: Array, out_qs: Array, out_qds: Array,
@@ -157,7 +158,7 @@ def _sense(kr: int, k: int, j: int, first: bool, q: Array, qd: Array, q_ref: Arr
         for i in range(nq):
             s += Bt_p[kr, a, i] * (q[i] - q_ref[kr, i])
         out_s[k, a] = s
-        se = res * np.floor(s / res) if res > 0 else s
+        se = res[a] * np.floor(s / res[a]) if res[a] > 0 else s
         if not first:
             ysd[a] += a_v * ((se - s_prev[a]) / T - ysd[a])
             ysdd[a] += a_a * ((ysd[a] - sd_prev[a]) / T - ysdd[a])
@@ -281,7 +282,7 @@ def run_span(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_joi
     noise[pre:] = state.rng.standard_normal((n, nq)) * settings.pose_noise
     a_v = _alpha(settings.velocity_cutoff_Hz, T)
     a_a = _alpha(settings.acceleration_cutoff_Hz, T)
-    res = float(settings.encoder_resolution)
+    res = np.ascontiguousarray(np.broadcast_to(np.asarray(settings.encoder_resolution, dtype=float), (nu,)))
     lim = np.asarray(settings.effort_limit, dtype=float)
     div = np.asarray(settings.divergence_limit, dtype=float)
     from_sensor = bool(settings.pose_from_sensor)

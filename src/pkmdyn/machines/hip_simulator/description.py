@@ -15,9 +15,12 @@ generic engine's test oracle. Described at the zero pose (R = I):
 
 Masses and inertias from Table 2: lever mass and principal inertia (x along the U joint's
 second axis, z along the lever), the two sliders of a module as one body of twice the slider
-mass, the platform's principal inertia in its frame; the lead screw's rotor inertia belongs to
-the actuator, not to a body of the mechanism. The task is the upper platform's Euler angles
-in the parameter file's sequence.
+mass, the platform's principal inertia in its frame. Each module's motor drives its slider
+through a lead screw (``[[actuators]]`` ``motor_i``: lead p, rotor inertia I_L, the screw's
+Coulomb and viscous friction on the motor side), so that the motor torques are those of Eq.
+7-16; the effort split's groups are the platforms, the levers and the sliders (the parts of
+Eq. 14; the screws' rotors and all friction are parts of their own). The task is the upper
+platform's Euler angles in the parameter file's sequence.
 
 The hydraulic load is the named load ``hydraulic_N`` (one magnitude per sample for both
 platforms, along -Z through each centre o_j), and the hip-joint and thrust-bearing friction of
@@ -100,6 +103,17 @@ def hip_description(model: HipModel) -> dict[str, Any]:
             joints.append({"name": f"S_{pname}_{i + 1}", "type": "spherical", "parent": lever, "child": pname,
                            "point_m": _l(a), "axis": _l(e),
                            **friction(coulomb_torque_Nm=f.spherical_coulomb, viscous_Nm_s_rad=f.spherical_viscous)})
+    # the lead screws: each module's motor turns a screw of lead p (one body per module for its
+    # two carriages), its rotor inertia I_L and the screw friction on the motor side (Eq. 10, 16)
+    actuators = [{"name": f"motor_{i + 1}", "joint": f"P_{i + 1}", "screw_lead_m": float(g.p),
+                  "rotor_inertia_kgm2": float(m.I_L),
+                  **({"coulomb_torque_Nm": float(f.screw_coulomb)} if f.screw_coulomb else {}),
+                  **({"viscous_Nm_s_rad": float(f.screw_viscous)} if f.screw_viscous else {})} for i in range(3)]
+    # the parts of Eq. (14): platforms, levers, sliders (the screws' rotors and every friction
+    # are parts of the split of their own)
+    groups = [{"name": "platform", "bodies": ["upper", "lower"]},
+              {"name": "lever", "bodies": [f"lever_{p}_{i + 1}" for p in ("upper", "lower") for i in range(3)]},
+              {"name": "slider", "bodies": [f"slider_{i + 1}" for i in range(3)]}]
     return {
         "mechanism": {"name": "hip", "source": "2(3PUS+S) hip simulator, Chen, Cheng & Pang (2022), Tables 1-2"
                       + (f"; parameters {model.source}" if getattr(model, "source", "") else ""),
@@ -107,6 +121,8 @@ def hip_description(model: HipModel) -> dict[str, Any]:
         "bodies": bodies,
         "joints": joints,
         "loads": loads,
+        "actuators": actuators,
+        "groups": groups,
         "task": {"body": "upper", "point_m": _l(g.o[0]), "euler_sequence": g.euler_sequence, "orientation": [1, 2, 3]},
         "default_motion": {"period_s": 1.0, "samples": 201,
                            "amplitude": {"euler1_rad": 0.3, "euler2_rad": 0.12, "euler3_rad": 0.1}},
