@@ -212,12 +212,32 @@ def test_hip_description_reproduces_the_closed_form_efforts():
         ref = hip_inverse_dynamics(hip, inverse_kinematics(hip, motion), np.zeros(len(motion.t)))
         m = load_mechanism(hip_description(hip))
         kin = solve_kinematics(m, motion.angles, motion.rates, motion.accels, motion.t)
-        r = joint_reactions(m, kin)
+        r = joint_reactions(m, kin, split=True)
         gear = hip.geometry.p / (2 * np.pi)
         sl = [m.actuator_names.index(f"P_{i + 1}") for i in range(3)]
         tau = gear * r.u[:, sl] + hip.inertia.I_L * kin.act_qdd[:, sl] / gear
         assert _rel(tau, ref.tau) < 1e-9
+        # the description's drives (screw lead, rotor I_L) and groups give the motor torques and
+        # the parts of Eq. 14 themselves
+        _check_hip_parts(m, kin, r, ref, sl)
         assert r.residual.max() < 1e-9 * np.abs(r.joint_force).max()
+
+
+def _check_hip_parts(m, kin, r, ref, sl):
+    """The generic motor torques and every part of the split against the hand-built Eq. 7-16
+    torques ``ref`` (platform, lever, slider, screw = the rotor, friction = every joint's and
+    the screws' friction), 1e-9 of each part's largest value."""
+    from pkmdyn.multibody.actuators import motor_efforts
+
+    mot = motor_efforts(m, kin.act_q, kin.act_qd, kin.act_qdd, r.u)
+    assert _rel(mot.effort[:, sl], ref.tau) < 1e-9
+    k = m.drive_ratio[sl]
+    for part in ("platform", "lever", "slider"):
+        g = m.group_names.index(part)
+        assert _rel(r.shares.groups[:, sl, g] / k, getattr(ref, part)) < 1e-9, part
+    assert _rel(mot.rotor[:, sl], ref.screw) < 1e-9
+    fr = r.shares.friction[:, sl].sum(axis=2) / k + mot.friction[:, sl]
+    assert np.abs(fr - ref.friction).max() <= 1e-9 * max(np.abs(ref.friction).max(), 1e-12 * np.abs(ref.tau).max())
 
 
 @pytest.mark.parametrize("name", ["bennett", "rrr3", "sarrus", "slider_crank", "four_bar_cut_b"])
@@ -563,9 +583,10 @@ def test_hip_description_reproduces_the_closed_form_with_every_friction_family(s
         return (gear * r.u[:, sl] + hip.inertia.I_L * kin.act_qdd[:, sl] / gear
                 + coulomb_viscous(theta_dot, f.screw_coulomb, f.screw_viscous, f.eps_w, vector=False))
 
-    r = joint_reactions(m, kin, named={"hydraulic_N": motion.load})
+    r = joint_reactions(m, kin, named={"hydraulic_N": motion.load}, split=True)
     assert r.iterations >= 1
     assert _rel(motor(r), ref.tau) < 1e-9
+    _check_hip_parts(m, kin, r, ref, sl)
     assert _power_error(m, r) < 1e-9
     # the Eq. 16 part is some 1e-3 of the torques here: the load must reach it
     assert _rel(motor(joint_reactions(m, kin)), ref.tau) > 1e-5

@@ -655,6 +655,10 @@ def check_table_format(fmt: str) -> None:
             ) from None
 
 
+#: rows of a Parquet row group (TableWriter)
+PARQUET_ROW_GROUP = 32_768
+
+
 class TableWriter:
     """Writes a results table block by block (CSV or Parquet), so that memory stays bounded.
 
@@ -671,6 +675,8 @@ class TableWriter:
         self._pq: Any = None
         self._arrow_csv: Any = None
         self._arrow_options: Any = None
+        self._pending: list[list[Array]] = []
+        self._pending_rows = 0
         check_table_format(fmt)
         if fmt == "csv" and precision >= 17:
             # pyarrow, where installed, formats numbers some 3x faster, in the shortest form that
@@ -698,10 +704,22 @@ class TableWriter:
         elif self.fmt == "csv":
             self._fh.write(_csv_lines(arrays, self.precision))
         else:
-            import pyarrow as pa
-
-            self._pq.write_table(pa.table(dict(zip(names, arrays))))
+            # blocks gathered into row groups of about PARQUET_ROW_GROUP rows: each row group keeps
+            # its metadata in memory until the file closes, so small groups add up over a long run
+            self._pending.append([np.array(a, copy=True) for a in arrays])
+            self._pending_rows += arrays[0].shape[0] if arrays else 0
+            if self._pending_rows >= PARQUET_ROW_GROUP:
+                self._flush()
         self.rows += arrays[0].shape[0] if arrays else 0
+
+    def _flush(self) -> None:
+        if not self._pending:
+            return
+        import pyarrow as pa
+
+        cols = [np.concatenate([blk[k] for blk in self._pending]) for k in range(len(self._names or []))]
+        self._pq.write_table(pa.table(dict(zip(self._names or [], cols))))
+        self._pending, self._pending_rows = [], 0
 
     def _open(self, names: list[str]) -> None:
         if self.fmt == "csv":
@@ -719,6 +737,7 @@ class TableWriter:
         if self._fh is not None:
             self._fh.close()
         if self._pq is not None:
+            self._flush()
             self._pq.close()
 
     def __enter__(self) -> "TableWriter":

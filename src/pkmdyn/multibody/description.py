@@ -160,7 +160,7 @@ class _Actuator(Section):
     motor coordinate's unit: a rotary motor (a revolute joint, or a prismatic joint driven by a
     screw) in rad, N m; a linear motor (a prismatic joint without a screw) in m, N."""
 
-    name: str | None = NAME
+    name: str | None = Field(default=None, min_length=1, max_length=64, pattern=r"^[A-Za-z_][A-Za-z0-9_'.-]*$")
     joint: str = NAME
     gear_ratio: float | None = None
     screw_lead_m: float | None = None

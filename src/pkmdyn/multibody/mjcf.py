@@ -20,8 +20,12 @@ body's joints in order, each axis turned by the previous ones, which is the prod
 elementary motions of :mod:`.joint_types`. ``qpos`` is therefore the tree coordinate vector
 ``q`` less its reference offsets (``q - coord_offset``), ``qvel = qd``, ``qacc = qdd``, each in
 MuJoCo's joint order (:func:`mujoco_order`).
-Actuated joints get a ``motor`` (control = effort [N or N m]). Not exported: friction, loads,
-sections (MuJoCo has no load-dependent joint friction).
+Actuated joints get a ``motor`` (control = effort [N or N m]); a joint with a drive
+(``[[actuators]]``) a motor named after the drive with ``gear`` = its transmission ratio k
+(control = motor effort [N m]), its rotor as the joint's ``armature`` (``k^2 I_r``) and its
+motor friction as ``damping`` (``k^2 b``) and ``frictionloss`` (``k C``, MuJoCo's dry friction,
+not the regularised law). Not exported: joint friction, loads, sections (MuJoCo has no
+load-dependent joint friction).
 """
 
 from __future__ import annotations
@@ -88,6 +92,17 @@ def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3) -> str:
              f'  <option timestep="{timestep:g}" gravity="{_v(model.gravity)}" integrator="RK4"/>',
              '  <compiler angle="radian" autolimits="true"/>', "  <worldbody>"]
 
+    # a drive on the joint (multibody.actuators): its rotor reflected as armature k^2 I_r, its
+    # motor's viscous friction as damping k^2 b and Coulomb friction as frictionloss k C
+    drive_attrs: dict[int, str] = {}
+    for i, j in enumerate(model.act_joint):
+        if not model.drive_name or model.drive_name[i] is None:
+            continue
+        k = float(model.drive_ratio[i])
+        parts = [("armature", k * k * float(model.drive_rotor[i])), ("damping", k * k * float(model.drive_viscous[i])),
+                 ("frictionloss", k * float(model.drive_coulomb[i]))]
+        drive_attrs[int(model.joint_q0[j])] = "".join(f' {key}="{v:.17g}"' for key, v in parts if v)
+
     def body(b: int, depth: int) -> None:
         ind = "  " * depth
         par = int(model.body_parent[b])
@@ -108,7 +123,7 @@ def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3) -> str:
             axis = model.coord_sign[c] * Rc[:, mcode % 3]
             kind = "hinge" if mcode < 3 else "slide"
             lines.append(f'{ind}  <joint name="{names[c]}" type="{kind}" pos="{_v(pc)}" axis="{_v(axis)}" '
-                         'limited="false"/>')
+                         f'limited="false"{drive_attrs.get(c, "")}/>')
         for ch in children.get(b, []):
             body(ch, depth + 1)
         lines.append(f"{ind}</body>")
@@ -137,7 +152,10 @@ def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3) -> str:
                       f'anchor="{_v(pa + Ra[:, 2] * model.length_scale)}"/>')
     if eq:
         lines += ["  <equality>", *eq, "  </equality>"]
-    acts = [f'    <motor name="{model.joint_names[j]}" joint="{names[int(model.joint_q0[j])]}" gear="1"/>'
-            for j in model.act_joint]
+    acts = []
+    for i, j in enumerate(model.act_joint):
+        name = model.drive_name[i] if model.drive_name and model.drive_name[i] is not None else model.joint_names[j]
+        gear = float(model.drive_ratio[i]) if len(model.drive_ratio) else 1.0
+        acts.append(f'    <motor name="{name}" joint="{names[int(model.joint_q0[j])]}" gear="{gear:.17g}"/>')
     lines += ["  <actuator>", *acts, "  </actuator>", "</mujoco>"]
     return "\n".join(lines) + "\n"

@@ -23,7 +23,7 @@ from .kinematics import MechanismKinematics
 from .model import MechanismModel
 from .motion import task_columns
 
-__all__ = ["results_columns", "model_summary", "bodies_arrays", "write_run_report"]
+__all__ = ["results_columns", "model_summary", "bodies_arrays", "report_columns", "write_run_report"]
 
 Array = NDArray[np.float64]
 _MOTION_NAMES = ("RX", "RY", "RZ", "TX", "TY", "TZ")
@@ -138,6 +138,16 @@ def bodies_arrays(model: MechanismModel, kin: MechanismKinematics) -> dict[str, 
         if not np.all(np.isfinite(v)):
             raise PkmdynError(f"bodies.npz: {k} has a non-finite value; refusing to write it")
     return out
+
+
+def report_columns(model: MechanismModel) -> list[str]:
+    """The results columns a run's report plots (:func:`write_run_report`)."""
+    pos, _, _ = task_columns(model)
+    units, names = model.actuator_units, model.actuator_names
+    return ["t_s", *pos, *(f"{a}_pos_{u}" for a, u in zip(names, units)),
+            *(f"{a}_vel_{u}_s" for a, u in zip(names, units)),
+            *(f"{a}_effort_{effort_unit(model, i)}" for i, a in enumerate(names)),
+            *(motor_effort_column(model, i) for i, d in enumerate(model.drive_name) if d is not None)]
 
 
 def write_run_report(out: Path, model: MechanismModel, cols: dict[str, Array], frames: dict[str, Array],

@@ -32,14 +32,16 @@ from .kinematics import LIMIT_TOLERANCE, MechanismKinematics, joint_coordinates,
     solve_kinematics
 from .joint_types import JOINT_TYPES
 from .model import MechanismModel
-from .output import bodies_arrays, model_summary, results_columns, write_run_report
+from .output import bodies_arrays, model_summary, report_columns, results_columns, write_run_report
 
 __all__ = ["run_mechanism", "effort_columns", "results_column_names", "CHUNK", "MAX_BODY_SAMPLES"]
 
 Array = NDArray[np.float64]
 
-#: samples per chunk of a run (a few tens of MiB of working set for a Stewart platform)
-CHUNK = 4096
+#: samples per chunk of a run (some 40 MiB of working set for a Stewart platform)
+CHUNK = 1024
+#: beyond the bodies' window, the singularity measures of every this many samples
+SINGULARITY_STRIDE = 10
 #: default of ``[limits] max_body_samples``: bodies.npz, plots and animation keep this many first samples
 MAX_BODY_SAMPLES = 200_000
 
@@ -244,6 +246,7 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
 
     frames = FramePicker(window)
     plot_parts: list[dict[str, Array]] = []
+    plotted = report_columns(model)
     final = Path(out_dir)
     with output_dir(out_dir, inputs=inputs) as out:
         files = {"results": out / ("results.csv" if fmt == "csv" else "results.parquet"), "model": out / "model.json",
@@ -277,7 +280,11 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
                         summ.limit_first = _limit_note(model, kin, limited, c, start)
                     elif limited:
                         prev_coords = joint_coordinates(model, kin, limited, previous=prev_coords)[-1]
-                    sm = singularity_measures(model, kin.q)
+                    # every sample of the bodies' window, then every SINGULARITY_STRIDE-th (three SVDs
+                    # a sample cost more than the rest of the run)
+                    idx = np.arange(start, stop)
+                    pick = np.flatnonzero((idx < body_rows) | (idx % SINGULARITY_STRIDE == 0))
+                    sm = singularity_measures(model, kin.q[pick])
                     try:
                         reac = joint_reactions(model, kin, named=m.loads, split=True, sample_offset=start,
                                                overconstrained=overconstrained)
@@ -305,7 +312,7 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
                         npz.write({key: v[:k] for key, v in arrays.items()})
                     if start < window:
                         k = min(stop, window) - start
-                        plot_parts.append({key: v[:k] for key, v in cols.items()})
+                        plot_parts.append({key: cols[key][:k].copy() for key in plotted})
                         frames.add(start, t=kin.t[:k] if kin.t is not None else np.arange(start, start + k, dtype=float),
                                    joint_point=kin.joint_point[:k])
                     bar.update(stop - start)
