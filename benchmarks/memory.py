@@ -1,11 +1,16 @@
-"""Peak memory and throughput of ``pkmdyn hip run --no-plots`` as a function of the sample count.
+"""Peak memory and throughput of long runs as a function of the sample count: ``pkmdyn hip run
+--no-plots`` and ``pkmdyn run --machine NAME`` (the generic engine, streamed in chunks: every
+body's kinematics, efforts, motor torques, effort split and joint reactions).
 
 Each measurement runs the command in a fresh subprocess (so the peak resident set size is the
-run's own, read from ``resource.getrusage(RUSAGE_CHILDREN)``) on the built-in ISO 14242-1
-cycle at 1000 samples per cycle. The bound of issue 9: 10,000,000 samples within 500 MiB.
+run's own, read from ``resource.getrusage`` in the child): the hip job on the built-in ISO
+14242-1 cycle at 1000 samples per cycle; ``--machine stewart`` on its default motion at 1000
+samples per cycle, ``--machine hip`` (the hip's description) on its ISO cycle (1000 samples)
+repeated. The bound: 10,000,000 samples within 500 MiB.
 
-    python benchmarks/memory.py --json                      # 1e5, 1e6, 1e7 samples, parquet + csv
+    python benchmarks/memory.py --json                      # hip run: 1e5, 1e6, 1e7 samples, parquet + csv
     python benchmarks/memory.py --json --samples 1000000 --formats csv
+    python benchmarks/memory.py --json --machine stewart hip --formats csv   # run --machine
 """
 
 from __future__ import annotations
@@ -45,6 +50,31 @@ def measure(samples: int, fmt: str) -> dict:
     }
 
 
+def measure_described(machine: str, samples: int, fmt: str) -> dict:
+    """One ``run --machine MACHINE`` of ``samples`` samples in a subprocess: peak RSS and speed."""
+    cycles = (samples - 1) / SAMPLES_PER_CYCLE
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "out"
+        args = ["run", "--machine", machine, "--cycles", repr(cycles), "--format", fmt, "--out", str(out)]
+        if machine != "hip":  # the hip's description repeats its 1000-sample ISO cycle
+            args[5:5] = ["--samples-per-cycle", str(SAMPLES_PER_CYCLE)]
+        peak, run_s, wall = cli_peak_memory(args)
+        summary = json.loads((out / "summary.json").read_text())
+        size = sum(p.stat().st_size for p in out.iterdir())
+    return {
+        "machine": machine,
+        "samples": summary["samples"],
+        "bodies_samples": summary["bodies_samples"],
+        "format": fmt,
+        "peak_rss_mib": round(peak, 1),
+        "samples_per_s": round(summary["samples"] / float(run_s)),
+        "run_s": round(float(run_s), 2),
+        "process_wall_s": round(wall, 2),
+        "output_mib": round(size / 2**20, 1),
+        "within_bound": peak <= BOUND_MIB,
+    }
+
+
 def baseline() -> float:
     """Peak RSS [MiB] of a process that only imports the command line (the fixed cost)."""
     code = ("import resource; import pkmdyn.cli, pkmdyn.machines.hip_simulator.run; "
@@ -58,7 +88,22 @@ def main() -> None:
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     ap.add_argument("--samples", type=int, nargs="+", default=[100_001, 1_000_001, 10_000_001])
     ap.add_argument("--formats", nargs="+", default=["parquet", "csv"], choices=["csv", "parquet"])
+    ap.add_argument("--machine", nargs="+", default=None,
+                    help="measure pkmdyn run --machine NAME (e.g. stewart hip) instead of pkmdyn hip run")
     args = ap.parse_args()
+    if args.machine:
+        runs = [measure_described(mach, n, fmt) for mach in args.machine for fmt in args.formats for n in args.samples]
+        result = {"bound_mib": BOUND_MIB, "runs": runs,
+                  "largest": {mach: max((r for r in runs if r["machine"] == mach), key=lambda r: r["samples"])
+                              for mach in args.machine},
+                  "all_within_bound": all(r["within_bound"] for r in runs)}
+        if args.json:
+            print(json.dumps(result, indent=2))
+        else:
+            for r in runs:
+                print(f"{r['machine']:8s} {r['format']:8s} {r['samples']:>10d} samples: {r['peak_rss_mib']:7.1f} MiB, "
+                      f"{r['samples_per_s']:>9d} samples/s")
+        return
     runs = [measure(n, fmt) for fmt in args.formats for n in args.samples]
     base = baseline()
     largest = {fmt: max((r for r in runs if r["format"] == fmt), key=lambda r: r["samples"]) for fmt in args.formats}

@@ -85,3 +85,40 @@ def test_export_command_refuses_an_inexpressible_cut_joint(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "D: a cut universal joint" in err[0]
     assert not out.exists()
+
+
+def test_drives_export_as_gear_armature_and_damping_and_give_the_motor_torques():
+    """A Stewart platform on ball screws (rotor inertia, viscous motor friction) in MuJoCo: each
+    motor's gear is the transmission ratio k, each actuated joint's armature k^2 I_r and damping
+    k^2 b; MuJoCo's tree forces (M qacc + bias - passive, its armature and damping included)
+    projected through the loop closure give the motor torques pkmdyn computes (Eq. A1)."""
+    from pkmdyn.multibody.actuators import motor_efforts
+    from pkmdyn.multibody.dynamics import joint_reactions
+
+    d = ex.builtin_dict("stewart")
+    for leg in d["legs"]:
+        leg["actuators"] = [{"joint": "P", "name": "M", "screw_lead_m": 0.004, "gear_ratio": 3.0,
+                             "rotor_inertia_kgm2": 4e-5, "viscous_Nm_s_rad": 3e-4}]
+    m = load_mechanism(d)
+    mm = mujoco.MjModel.from_xml_string(mechanism_mjcf(m))
+    md = mujoco.MjData(mm)
+    k = 3.0 * 2 * np.pi / 0.004
+    assert np.allclose(mm.actuator_gear[:, 0], k)
+    assert [mm.actuator(i).name for i in range(mm.nu)] == list(m.drive_name)
+    o = mujoco_order(m, mm)
+    t = np.linspace(0.0, 0.5, 4)
+    x, xd, xdd = ex.smooth_motion(reference_task(m), np.where(m.task_kind == 1, 0.04, 0.02), t, 1)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    tau = motor_efforts(m, kin.act_q, kin.act_qd, kin.act_qdd, joint_reactions(m, kin).u).effort
+    for s in range(len(t)):
+        md.qpos[:] = mujoco_qpos(m, kin.q[s], mm)
+        md.qvel[o] = kin.qd[s]
+        mujoco.mj_forward(mm, md)
+        M = np.zeros((mm.nv, mm.nv))
+        mujoco.mj_fullM(mm, md, M)
+        qa = np.zeros(mm.nv)
+        qa[o] = kin.qdd[s]
+        Q = (M @ qa + md.qfrc_bias - md.qfrc_passive)[o]
+        # J_ax^T k tau = G^T Q (the virtual work of the motors through the loop closure)
+        tau_mj = np.linalg.solve(kin.J_ax[s].T * k, kin.G[s].T @ Q)
+        assert np.abs(tau_mj - tau[s]).max() <= 1e-9 * np.abs(tau[s]).max()

@@ -212,6 +212,20 @@ def _velocity_jacobians(par: FiveBar, P):
     return np.stack(cols_c, -1), np.stack(cols_w, -1)
 
 
+def effort_shares(par: FiveBar, P, Pd, Pdd):
+    """Each body's share of the joint efforts, ``(n, 4, 2)`` (bodies ``proximal_0, proximal_1, distal_0, distal_1``):
+    the efforts are linear in the bodies' required wrenches, so body b's share solves
+    ``H^T u_b = Jc_b^T m_b (a_b - g) + Jw_b^T I_b alpha_b``; the shares sum to ``u``."""
+    bm = body_motion(par, P, Pd, Pdd)
+    Jc, Jw = _velocity_jacobians(par, P)
+    f = bm["mass"][None, :, None] * (bm["a"] - par.gravity[None, None, :])
+    m = bm["inertia"][None] * bm["alpha"]
+    Qb = np.einsum("nbik,nbi->nbk", Jc, f) + np.einsum("nbk,nb->nbk", Jw, m)
+    H = par.joint_sign[None, :, None] * bm["ik"]["K"]
+    Ht = np.broadcast_to(np.swapaxes(H, 1, 2)[:, None], Qb.shape + (2,))
+    return np.linalg.solve(Ht, Qb[..., None])[..., 0]
+
+
 def joint_efforts(par: FiveBar, P, Pd, Pdd):
     """Joint efforts ``u (n, 2)`` [N m] along ``q_i`` (mechanism side, no drive terms).
 

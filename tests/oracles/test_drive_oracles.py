@@ -325,3 +325,30 @@ def test_static_efforts_are_the_gradient_of_the_potential(name):
                       - mod.energies(par, P - h * np.eye(2)[k], zero)["V"]) / (2 * h)
                      for k in range(2)], -1)
     assert_close(np.einsum("nik,ni->nk", _dq_dP(mod, par, P), u), grad, 1e-8, what="statics")
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_effort_shares_are_the_efforts_of_each_body_alone(name):
+    """A body's share is the effort with every other body massless (linearity), and the
+    shares sum to the efforts."""
+    mod, par, pose = make(name, seed=4, signs=(1.0, -1.0))
+    P, Pd, Pdd = motion_fn(pose)(TS)
+    shares = mod.effort_shares(par, P, Pd, Pdd)
+    u = mod.joint_efforts(par, P, Pd, Pdd)
+    assert_close(shares.sum(axis=1), u, 1e-13, what="sum of shares")
+    if name == "five_bar":
+        keys = ("mass_proximal", "inertia_proximal", "mass_distal", "inertia_distal")
+    else:
+        keys = ("mass_slider", None, "mass_link", "inertia_link")
+    for b in range(4):
+        leg, kind = b % 2, b // 2
+        kept = {}
+        for j, key in enumerate(keys):
+            if key is None:
+                continue
+            keep = np.zeros(2)
+            if j // 2 == kind:
+                keep[leg] = 1.0
+            kept[key] = getattr(par, key) * keep
+        alone = mod.joint_efforts(dataclasses.replace(par, **kept), P, Pd, Pdd)
+        assert_close(shares[:, b], alone, 1e-12, what=f"share of body {b}")

@@ -96,9 +96,35 @@ def model_summary(model: MechanismModel) -> dict[str, Any]:
                  "euler_sequence": model.euler_sequence,
                  "coordinates": _task_coordinates(model, pos)},
         "actuators": list(model.actuator_names),
+        "drives": [_drive_entry(model, i) for i, d in enumerate(model.drive_name) if d is not None],
+        "groups": {g: [model.body_names[b] for b in np.flatnonzero(model.body_group == k)]
+                   for k, g in enumerate(model.group_names)},
         "loads": [_load_entry(model, k) for k in range(len(model.load_body))],
         "topology": model.topology.as_dict() if model.topology is not None else None,
     }
+
+
+def _drive_entry(model: MechanismModel, i: int) -> dict[str, Any]:
+    """One drive of model.json (multibody.actuators, Eq. A1), its keys in the motor's units:
+    ``name``, ``joint``, ``kind`` (``rotary`` or ``linear``), ``ratio`` (motor coordinate per
+    joint coordinate, ``theta = ratio q``), ``screw_lead_m`` and ``gear_ratio`` as given, the
+    rotor, friction and limits (null when not given), ``encoder_resolution`` (motor travel per
+    count, null when not given)."""
+    rot = model.motor_units[i] == "rad"
+    spec = model.drive_specs[i]
+
+    def val(v: float) -> float | None:
+        return float(v) if np.isfinite(v) else None
+
+    return {"name": model.drive_name[i], "joint": model.actuator_names[i], "kind": model.drive_kind[i],
+            "ratio": float(model.drive_ratio[i]), "screw_lead_m": spec.lead, "gear_ratio": spec.gear_ratio,
+            ("rotor_inertia_kgm2" if rot else "moving_mass_kg"): float(model.drive_rotor[i]),
+            ("coulomb_torque_Nm" if rot else "coulomb_force_N"): float(model.drive_coulomb[i]),
+            ("viscous_Nm_s_rad" if rot else "viscous_N_s_m"): float(model.drive_viscous[i]),
+            ("max_torque_Nm" if rot else "max_force_N"): val(model.drive_max_effort[i]),
+            ("max_speed_rad_s" if rot else "max_speed_m_s"): val(model.drive_max_speed[i]),
+            ("max_acceleration_rad_s2" if rot else "max_acceleration_m_s2"): val(model.drive_max_acceleration[i]),
+            ("encoder_resolution_rad" if rot else "encoder_resolution_m"): float(model.drive_encoder[i]) or None}
 
 
 def _load_entry(model: MechanismModel, k: int) -> dict[str, Any]:
