@@ -28,18 +28,15 @@ BOUND_MIB = 500.0
 SAMPLES_PER_CYCLE = 1000
 
 
-def measure(samples: int, fmt: str) -> dict:
-    """One ``hip run --no-plots`` of ``samples`` samples in a subprocess: peak RSS and speed."""
-    cycles = (samples - 1) / SAMPLES_PER_CYCLE
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "out"
-        args = ["hip", "run", "--no-plots", "--cycles", repr(cycles), "--samples-per-cycle", str(SAMPLES_PER_CYCLE),
-                "--format", fmt, "--limit", f"max_samples={max(samples, 1)}", "--out", str(out)]
-        peak, run_s, wall = cli_peak_memory(args)
-        summary = json.loads((out / "summary.json").read_text())
-        size = sum(p.stat().st_size for p in out.iterdir())
+def _measure(args: list[str], fmt: str, out: Path, **extra) -> dict:
+    """Run ``pkmdyn ARGS`` (writing into ``out``) in a subprocess: peak RSS, speed, output size."""
+    peak, run_s, wall = cli_peak_memory(args)
+    summary = json.loads((out / "summary.json").read_text())
+    size = sum(p.stat().st_size for p in out.iterdir())
     return {
+        **extra,
         "samples": summary["samples"],
+        **({"bodies_samples": summary["bodies_samples"]} if "bodies_samples" in summary else {}),
         "format": fmt,
         "peak_rss_mib": round(peak, 1),
         "samples_per_s": round(summary["samples"] / float(run_s)),
@@ -48,6 +45,16 @@ def measure(samples: int, fmt: str) -> dict:
         "output_mib": round(size / 2**20, 1),
         "within_bound": peak <= BOUND_MIB,
     }
+
+
+def measure(samples: int, fmt: str) -> dict:
+    """One ``hip run --no-plots`` of ``samples`` samples in a subprocess: peak RSS and speed."""
+    cycles = (samples - 1) / SAMPLES_PER_CYCLE
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "out"
+        return _measure(["hip", "run", "--no-plots", "--cycles", repr(cycles), "--samples-per-cycle",
+                         str(SAMPLES_PER_CYCLE), "--format", fmt, "--limit", f"max_samples={max(samples, 1)}",
+                         "--out", str(out)], fmt, out)
 
 
 def measure_described(machine: str, samples: int, fmt: str) -> dict:
@@ -58,21 +65,7 @@ def measure_described(machine: str, samples: int, fmt: str) -> dict:
         args = ["run", "--machine", machine, "--cycles", repr(cycles), "--format", fmt, "--out", str(out)]
         if machine != "hip":  # the hip's description repeats its 1000-sample ISO cycle
             args[5:5] = ["--samples-per-cycle", str(SAMPLES_PER_CYCLE)]
-        peak, run_s, wall = cli_peak_memory(args)
-        summary = json.loads((out / "summary.json").read_text())
-        size = sum(p.stat().st_size for p in out.iterdir())
-    return {
-        "machine": machine,
-        "samples": summary["samples"],
-        "bodies_samples": summary["bodies_samples"],
-        "format": fmt,
-        "peak_rss_mib": round(peak, 1),
-        "samples_per_s": round(summary["samples"] / float(run_s)),
-        "run_s": round(float(run_s), 2),
-        "process_wall_s": round(wall, 2),
-        "output_mib": round(size / 2**20, 1),
-        "within_bound": peak <= BOUND_MIB,
-    }
+        return _measure(args, fmt, out, machine=machine)
 
 
 def baseline() -> float:

@@ -467,3 +467,19 @@ def test_groups_name_template_bodies_and_leave_the_rest_in_other():
     assert sorted(cyl) == [f"cylinder_{i}" for i in range(1, 7)]
     default = load_mechanism(ex.builtin_dict("stewart"))
     assert default.group_names == ("leg_1", "leg_3", "leg_5", "leg_2", "leg_4", "leg_6", "platform")
+
+
+def test_friction_that_locks_is_named_at_its_sample_of_the_whole_run():
+    """A chunk's friction iteration names the sample by its number in the whole run."""
+    import test_multibody_dynamics as tmd
+
+    m = load_mechanism(tmd._stewart_with_friction(200.0))
+    t, x, xd, xdd = _motion(m, n=5)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    with pytest.raises(ParameterError) as a:
+        joint_reactions(m, kin)
+    with pytest.raises(ParameterError) as b:
+        joint_reactions(m, kin, sample_offset=5000)
+    sa = int(str(a.value).split("sample ")[1].split()[0])
+    sb = int(str(b.value).split("sample ")[1].split()[0])
+    assert sb == sa + 5000

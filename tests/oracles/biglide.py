@@ -43,23 +43,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._batch import as_batch as _as_batch
-from .five_bar import G0, regularised_sign, sine_motion  # noqa: F401  (re-exported)
-
-
-def _e(a):
-    return np.stack([np.cos(a), np.sin(a)], -1)
-
-
-def _n(a):
-    return np.stack([-np.sin(a), np.cos(a)], -1)
-
-
-def _perp(v):
-    return np.stack([-v[..., 1], v[..., 0]], -1)
-
-
-def _dot(a, b):
-    return np.sum(a * b, axis=-1)
+from ._planar import G0, dot as _dot, e as _e, n as _n, perp as _perp  # noqa: F401
+from ._planar import regularised_sign, sine_motion  # noqa: F401  (re-exported)
+from . import _planar
 
 
 @dataclass
@@ -161,70 +147,26 @@ def body_motion(par: Biglide, P, Pd=None, Pdd=None):
     }
 
 
-def _velocity_jacobians(par: Biglide, P):
-    P = _as_batch(P, 2)
-    n = P.shape[0]
-    cols_c, cols_w = [], []
-    for k in range(2):
-        unit = np.zeros((n, 2))
-        unit[:, k] = 1.0
-        bm = body_motion(par, P, unit, None)
-        cols_c.append(bm["v"])
-        cols_w.append(bm["w"])
-    return np.stack(cols_c, -1), np.stack(cols_w, -1)
-
-
 def effort_shares(par: Biglide, P, Pd, Pdd):
-    """Each body's share of the joint efforts, ``(n, 4, 2)`` (bodies ``slider_0, slider_1, link_0, link_1``):
-    the efforts are linear in the bodies' required wrenches, so body b's share solves
-    ``H^T u_b = Jc_b^T m_b (a_b - g) + Jw_b^T I_b alpha_b``; the shares sum to ``u``."""
-    bm = body_motion(par, P, Pd, Pdd)
-    Jc, Jw = _velocity_jacobians(par, P)
-    f = bm["mass"][None, :, None] * (bm["a"] - par.gravity[None, None, :])
-    m = bm["inertia"][None] * bm["alpha"]
-    Qb = np.einsum("nbik,nbi->nbk", Jc, f) + np.einsum("nbk,nb->nbk", Jw, m)
-    H = par.joint_sign[None, :, None] * bm["ik"]["K"]
-    Ht = np.broadcast_to(np.swapaxes(H, 1, 2)[:, None], Qb.shape + (2,))
-    return np.linalg.solve(Ht, Qb[..., None])[..., 0]
+    """Each body's share of the joint efforts, ``(n, 4, 2)`` (:func:`._planar.effort_shares`)."""
+    return _planar.effort_shares(body_motion, par, P, Pd, Pdd)
 
 
 def joint_efforts(par: Biglide, P, Pd, Pdd):
-    """Joint forces ``u (n, 2)`` [N] along ``q_i`` (mechanism side, no drive terms)."""
-    bm = body_motion(par, P, Pd, Pdd)
-    Jc, Jw = _velocity_jacobians(par, P)
-    f = bm["mass"][None, :, None] * (bm["a"] - par.gravity[None, None, :])
-    m = bm["inertia"][None] * bm["alpha"]
-    Q = np.einsum("nbik,nbi->nk", Jc, f) + np.einsum("nbk,nb->nk", Jw, m)
-    H = par.joint_sign[None, :, None] * bm["ik"]["K"]
-    return np.linalg.solve(np.swapaxes(H, 1, 2), Q[..., None])[..., 0]
+    """Joint efforts ``u (n, 2)`` along ``q_i`` (mechanism side, no drive terms), by virtual
+    work (:func:`._planar.joint_efforts`)."""
+    return _planar.joint_efforts(body_motion, par, P, Pd, Pdd)
 
 
 def motor_torques(par: Biglide, P, Pd, Pdd):
-    """Motor torques (motor side): ``torque (n, 2)`` [N m] with parts ``load = u / k``,
-    ``rotor``, ``friction``; ``effort = u`` [N]; ``theta, theta_d, theta_dd``; ``q, qd, qdd``."""
-    ik = inverse_kinematics(par, P, Pd, Pdd)
-    u = joint_efforts(par, P, Pd, Pdd)
-    k = par.ratio[None]
-    th, thd, thdd = k * ik["q"], k * ik["qd"], k * ik["qdd"]
-    load = u / k
-    rotor = par.rotor_inertia[None] * thdd
-    fric = par.coulomb[None] * regularised_sign(thd) + par.viscous[None] * thd
-    return {
-        "torque": load + rotor + fric, "load": load, "rotor": rotor, "friction": fric,
-        "effort": u, "theta": th, "theta_d": thd, "theta_dd": thdd,
-        "q": ik["q"], "qd": ik["qd"], "qdd": ik["qdd"],
-    }
+    """Motor torques (motor side) for a prescribed end-point motion and their parts
+    (:func:`._planar.motor_torques`)."""
+    return _planar.motor_torques(inverse_kinematics(par, P, Pd, Pdd), joint_efforts(par, P, Pd, Pdd), par, par.ratio)
 
 
 def energies(par: Biglide, P, Pd):
-    """``T`` (links and sliders), ``V = -sum m g.c``, ``T_rotor``, motor friction ``loss``."""
-    bm = body_motion(par, P, Pd, None)
-    T = 0.5 * np.sum(bm["mass"][None] * _dot(bm["v"], bm["v"]) + bm["inertia"][None] * bm["w"] ** 2, -1)
-    V = -np.sum(bm["mass"][None] * _dot(bm["c"], par.gravity[None, None, :]), -1)
-    thd = par.ratio[None] * bm["ik"]["qd"]
-    Trot = 0.5 * np.sum(par.rotor_inertia[None] * thd**2, -1)
-    loss = np.sum((par.coulomb[None] * regularised_sign(thd) + par.viscous[None] * thd) * thd, -1)
-    return {"T": T, "V": V, "T_rotor": Trot, "loss": loss}
+    """``T``, ``V``, ``T_rotor`` and the motors' friction power ``loss`` (:func:`._planar.energies`)."""
+    return _planar.energies(body_motion, par, P, Pd, par.ratio)
 
 
 def default_biglide(**drives) -> Biglide:

@@ -47,49 +47,9 @@ import numpy as np
 
 from ._batch import as_batch as _as_batch
 
-G0 = 9.80665          # standard gravity [m/s^2]
-EPS_ROT = 1e-3        # regularisation of the Coulomb sign for rotations [rad/s]
-
-
-def regularised_sign(x, eps=EPS_ROT):
-    """``x / sqrt(x^2 + eps^2)``: a smooth sign for Coulomb friction."""
-    x = np.asarray(x, float)
-    return x / np.sqrt(x * x + eps * eps)
-
-
-def _e(a):
-    return np.stack([np.cos(a), np.sin(a)], -1)
-
-
-def _n(a):
-    return np.stack([-np.sin(a), np.cos(a)], -1)
-
-
-def _perp(v):
-    """Rotate a planar vector by +90 degrees: (x, z) -> (-z, x)."""
-    return np.stack([-v[..., 1], v[..., 0]], -1)
-
-
-def _cross(a, b):
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
-def _dot(a, b):
-    return np.sum(a * b, axis=-1)
-
-
-def sine_motion(t, p0, amp, omega, phase):
-    """Smooth motion starting exactly at ``p0``: ``p = p0 + amp (sin(w t + ph) - sin ph)``.
-
-    ``t (n,)``; ``p0, amp, omega, phase (k,)``. Returns ``p, pd, pdd (n, k)``.
-    """
-    t = np.asarray(t, float)[:, None]
-    p0, amp, omega, phase = (np.asarray(v, float)[None] for v in (p0, amp, omega, phase))
-    arg = omega * t + phase
-    p = p0 + amp * (np.sin(arg) - np.sin(phase))
-    pd = amp * omega * np.cos(arg)
-    pdd = -amp * omega**2 * np.sin(arg)
-    return p, pd, pdd
+from ._planar import G0, cross as _cross, dot as _dot, e as _e, n as _n, perp as _perp  # noqa: F401
+from ._planar import EPS_ROT, regularised_sign, sine_motion  # noqa: F401  (re-exported)
+from . import _planar
 
 
 @dataclass
@@ -198,82 +158,26 @@ def body_motion(par: FiveBar, P, Pd=None, Pdd=None):
     }
 
 
-def _velocity_jacobians(par: FiveBar, P):
-    """``Jc (n, 4, 2, 2)`` and ``Jw (n, 4, 2)``: body rates per unit end-point rate."""
-    P = _as_batch(P, 2)
-    n = P.shape[0]
-    cols_c, cols_w = [], []
-    for k in range(2):
-        unit = np.zeros((n, 2))
-        unit[:, k] = 1.0
-        bm = body_motion(par, P, unit, None)
-        cols_c.append(bm["v"])
-        cols_w.append(bm["w"])
-    return np.stack(cols_c, -1), np.stack(cols_w, -1)
-
-
 def effort_shares(par: FiveBar, P, Pd, Pdd):
-    """Each body's share of the joint efforts, ``(n, 4, 2)`` (bodies ``proximal_0, proximal_1, distal_0, distal_1``):
-    the efforts are linear in the bodies' required wrenches, so body b's share solves
-    ``H^T u_b = Jc_b^T m_b (a_b - g) + Jw_b^T I_b alpha_b``; the shares sum to ``u``."""
-    bm = body_motion(par, P, Pd, Pdd)
-    Jc, Jw = _velocity_jacobians(par, P)
-    f = bm["mass"][None, :, None] * (bm["a"] - par.gravity[None, None, :])
-    m = bm["inertia"][None] * bm["alpha"]
-    Qb = np.einsum("nbik,nbi->nbk", Jc, f) + np.einsum("nbk,nb->nbk", Jw, m)
-    H = par.joint_sign[None, :, None] * bm["ik"]["K"]
-    Ht = np.broadcast_to(np.swapaxes(H, 1, 2)[:, None], Qb.shape + (2,))
-    return np.linalg.solve(Ht, Qb[..., None])[..., 0]
+    """Each body's share of the joint efforts, ``(n, 4, 2)`` (:func:`._planar.effort_shares`)."""
+    return _planar.effort_shares(body_motion, par, P, Pd, Pdd)
 
 
 def joint_efforts(par: FiveBar, P, Pd, Pdd):
-    """Joint efforts ``u (n, 2)`` [N m] along ``q_i`` (mechanism side, no drive terms).
-
-    Virtual work: ``H^T u = sum_b Jc_b^T m_b (a_b - g) + Jw_b^T I_b alpha_b``,
-    ``H = diag(joint_sign) K``.
-    """
-    bm = body_motion(par, P, Pd, Pdd)
-    Jc, Jw = _velocity_jacobians(par, P)
-    f = bm["mass"][None, :, None] * (bm["a"] - par.gravity[None, None, :])
-    m = bm["inertia"][None] * bm["alpha"]
-    Q = np.einsum("nbik,nbi->nk", Jc, f) + np.einsum("nbk,nb->nk", Jw, m)
-    H = par.joint_sign[None, :, None] * bm["ik"]["K"]
-    return np.linalg.solve(np.swapaxes(H, 1, 2), Q[..., None])[..., 0]
+    """Joint efforts ``u (n, 2)`` along ``q_i`` (mechanism side, no drive terms), by virtual
+    work (:func:`._planar.joint_efforts`)."""
+    return _planar.joint_efforts(body_motion, par, P, Pd, Pdd)
 
 
 def motor_torques(par: FiveBar, P, Pd, Pdd):
-    """Motor torques (motor side) for a prescribed end-point motion.
-
-    Returns ``torque (n, 2)`` [N m] and its parts ``load = u / N``,
-    ``rotor = I_r theta_dd``, ``friction = C sgn_eps(theta_d) + b theta_d``; the joint
-    efforts ``effort = u``; the motor motion ``theta, theta_d, theta_dd`` and the joint
-    coordinates ``q, qd, qdd``.
-    """
-    ik = inverse_kinematics(par, P, Pd, Pdd)
-    u = joint_efforts(par, P, Pd, Pdd)
-    N = par.gear_ratio[None]
-    th, thd, thdd = N * ik["q"], N * ik["qd"], N * ik["qdd"]
-    load = u / N
-    rotor = par.rotor_inertia[None] * thdd
-    fric = par.coulomb[None] * regularised_sign(thd) + par.viscous[None] * thd
-    return {
-        "torque": load + rotor + fric, "load": load, "rotor": rotor, "friction": fric,
-        "effort": u, "theta": th, "theta_d": thd, "theta_dd": thdd,
-        "q": ik["q"], "qd": ik["qd"], "qdd": ik["qdd"],
-    }
+    """Motor torques (motor side) for a prescribed end-point motion and their parts
+    (:func:`._planar.motor_torques`)."""
+    return _planar.motor_torques(inverse_kinematics(par, P, Pd, Pdd), joint_efforts(par, P, Pd, Pdd), par, par.gear_ratio)
 
 
 def energies(par: FiveBar, P, Pd):
-    """Kinetic energy of the links ``T``, potential energy ``V = -sum m g.c``, rotor
-    kinetic energy ``T_rotor = sum I_r theta_d^2 / 2`` and the motors' friction power
-    ``loss = sum (C sgn_eps(theta_d) + b theta_d) theta_d`` (each (n,))."""
-    bm = body_motion(par, P, Pd, None)
-    T = 0.5 * np.sum(bm["mass"][None] * _dot(bm["v"], bm["v"]) + bm["inertia"][None] * bm["w"] ** 2, -1)
-    V = -np.sum(bm["mass"][None] * _dot(bm["c"], par.gravity[None, None, :]), -1)
-    thd = par.gear_ratio[None] * bm["ik"]["qd"]
-    Trot = 0.5 * np.sum(par.rotor_inertia[None] * thd**2, -1)
-    loss = np.sum((par.coulomb[None] * regularised_sign(thd) + par.viscous[None] * thd) * thd, -1)
-    return {"T": T, "V": V, "T_rotor": Trot, "loss": loss}
+    """``T``, ``V``, ``T_rotor`` and the motors' friction power ``loss`` (:func:`._planar.energies`)."""
+    return _planar.energies(body_motion, par, P, Pd, par.gear_ratio)
 
 
 def default_five_bar(**drives) -> FiveBar:

@@ -830,7 +830,7 @@ def _groups(label: str, data: _File, expanded: _Expanded, bodies: dict[str, Body
     out: list[tuple[str, tuple[str, ...]]] = []
     owner: dict[str, str] = {}
     if data.groups:
-        for gi, g in enumerate(data.groups):
+        for g in data.groups:
             where = f"{label}: [groups] {g.name}:"
             if g.name in RESERVED_PARTS:
                 raise ParameterError(f"{where} name: {g.name!r} is a part of the split of its own; name the group "

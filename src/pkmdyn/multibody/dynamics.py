@@ -244,7 +244,7 @@ class InverseDynamics:
     """``u`` (n, na) actuator efforts [N (prismatic) or N m (revolute)], order of
     ``model.actuator_names``; ``Q`` (n, nq) generalised tree forces of Eq. (2); ``W`` (n, nb,
     6) required body wrenches of Eq. (1); ``S`` (n, nq, 6) coordinate twists; ``kin``: the
-    kinematics they hold for (idle accelerations made dynamic, :func:`idle_dynamics`)."""
+    kinematics they hold for (idle freedoms held, :func:`idle_holding`)."""
 
     u: Array
     Q: Array
@@ -535,7 +535,7 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     pts = kin.joint_point
     force = Wj[..., 3:]
     moment = Wj[..., :3] - _cross(pts, force)
-    shares = effort_shares(model, kin, S, W, fr, F, u) if split else None
+    shares = effort_shares(model, kin, S, W, fr, F) if split else None
     return JointReactions(u=u, joint_point=pts, joint_force=force, joint_moment=moment, residual=res,
                           self_stress=t, method=method, kin=kin, friction=F or {}, iterations=it,
                           dissipation=fr.dissipation(F) if fr is not None else np.zeros(n), holding=hold,
@@ -554,8 +554,8 @@ class EffortShares:
     friction: Array
 
 
-def effort_shares(model: MechanismModel, kin: MechanismKinematics, S: Array, W: Array, fr, F: dict | None,
-                  u: Array | None = None) -> EffortShares:
+def effort_shares(model: MechanismModel, kin: MechanismKinematics, S: Array, W: Array, fr,
+                  F: dict | None) -> EffortShares:
     """:class:`EffortShares` from the required body wrenches ``W (n, nb, 6)`` and the joints'
     friction ``F`` (``fr``: the :class:`~.friction.JointFriction` that made it, or None):
     ``u_part = (J_ax^T)^-1 G^T Q_part`` for ``Q_part`` the generalised forces (Eq. 2) of one
