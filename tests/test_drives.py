@@ -483,3 +483,19 @@ def test_friction_that_locks_is_named_at_its_sample_of_the_whole_run():
     sa = int(str(a.value).split("sample ")[1].split()[0])
     sb = int(str(b.value).split("sample ")[1].split()[0])
     assert sb == sa + 5000
+
+
+def test_run_machine_hip_writes_the_hip_runs_motor_torques_and_parts(tmp_path):
+    """The two commands on the built-in ISO cycle: pkmdyn run --machine hip (the generic engine
+    through the hip's description) writes the motor torques of pkmdyn hip run (Eq. 7-16, its
+    own closed form) and every part of their split (platform, lever, slider, screw = rotor,
+    friction), each to 1e-9 of that part's largest value."""
+    assert main(["hip", "run", "--no-plots", "--out", str(tmp_path / "own")]) == 0
+    assert main(["run", "--machine", "hip", "--out", str(tmp_path / "gen")]) == 0
+    own, gen = _read_csv(tmp_path / "own" / "results.csv"), _read_csv(tmp_path / "gen" / "results.csv")
+    assert np.array_equal(own["t_s"], gen["t_s"])
+    for i in (1, 2, 3):
+        for part, word in (("", ""), ("_platform", "_platform"), ("_lever", "_lever"), ("_slider", "_slider"),
+                           ("_screw", "_rotor"), ("_friction", "_friction")):
+            ref, got = own[f"tau{i}{part}_Nm"], gen[f"motor_{i}_torque{word}_Nm"]
+            assert np.abs(got - ref).max() <= 1e-9 * np.abs(ref).max(), (i, part)
