@@ -415,6 +415,9 @@ BAD = [
     ({"joint": "P", "gear_ratio": 3.0}, "gear_ratio: joint 'P_1' is prismatic"),
     ({"joint": "P", "name": "U", "screw_lead_m": 0.01}, "is the name of a joint or body"),
     ({"joint": "P", "screw_lead_m": 0.01, "max_speed_rad_s": 0.0}, "max_speed_rad_s: must be > 0"),
+    ({"joint": "P", "screw_lead_m": 0.01, "gear_ratio": 1e-9}, "gear_ratio: 1e-09 is outside the plausible range"),
+    ({"joint": "P", "screw_lead_m": 100.0}, "screw_lead_m: 100 is outside the plausible range"),
+    ({"joint": "P", "screw_lead_m": 0.01, "coulomb_torque_Nm": 1e300}, "coulomb_torque_Nm: 1e+300 exceeds"),
 ]
 
 
@@ -499,3 +502,104 @@ def test_run_machine_hip_writes_the_hip_runs_motor_torques_and_parts(tmp_path):
                            ("_screw", "_rotor"), ("_friction", "_friction")):
             ref, got = own[f"tau{i}{part}_Nm"], gen[f"motor_{i}_torque{word}_Nm"]
             assert np.abs(got - ref).max() <= 1e-9 * np.abs(ref).max(), (i, part)
+
+
+def test_a_short_last_chunk_beyond_the_bodies_window_and_an_odd_body_limit(tmp_path, capsys):
+    """A run whose last chunk lies beyond the bodies' window and holds no sample of the
+    singularity stride completes; max_body_samples takes whole numbers only (one line)."""
+    out = tmp_path / "a"
+    assert main(["run", "--machine", "rrr3", "--samples-per-cycle", "1026", "--limit", "max_body_samples=10",
+                 "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["samples"] == 1027 and s["bodies_samples"] == 10 and s["min_inverse_singularity_measure"] > 0
+    assert np.load(out / "bodies.npz")["t"].shape == (10,)
+    capsys.readouterr()
+    assert main(["run", "--machine", "rrr3", "--limit", "max_body_samples=0.5", "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "max_body_samples" in err[0] and not (tmp_path / "b").exists()
+
+
+def test_a_chunked_run_beyond_the_bodies_window_keeps_its_extremes(tmp_path):
+    """Chunks of 50 against one chunk, the bodies' window 130 of 301 samples: the same results,
+    the same bodies.npz, and the smallest singularity measures of the stride within those of
+    every sample."""
+    from pkmdyn.multibody.motion import periodic_motion
+    from pkmdyn.multibody.run import run_mechanism
+
+    m = load_mechanism(ex.builtin_dict("delta"))
+    mo = periodic_motion(m, 1.0, 300)
+    a = run_mechanism(m, mo, tmp_path / "a", chunk=50, limits={"max_body_samples": 130})
+    b = run_mechanism(m, mo, tmp_path / "b", chunk=1000, limits={"max_body_samples": 130})
+    ca, cb = _read_csv(tmp_path / "a" / "results.csv"), _read_csv(tmp_path / "b" / "results.csv")
+    for k in ca:
+        assert np.abs(ca[k] - cb[k]).max() <= 1e-12 * max(np.abs(cb[k]).max(), 1.0), k
+    za, zb = np.load(tmp_path / "a" / "bodies.npz"), np.load(tmp_path / "b" / "bodies.npz")
+    assert za["t"].shape == (130,)
+    for k in ("q", "wd", "joint_force"):
+        assert np.abs(za[k] - zb[k]).max() <= 1e-9 * max(np.abs(zb[k]).max(), 1.0), k
+    from pkmdyn.multibody import singularity_measures
+
+    kin = solve_kinematics(m, mo.chunk(0, 301).x, mo.chunk(0, 301).xd, mo.chunk(0, 301).xdd)
+    every = singularity_measures(m, kin.q).inverse.min()
+    assert a["min_inverse_singularity_measure"] >= every - 1e-12
+    assert a["min_inverse_singularity_measure"] == pytest.approx(b["min_inverse_singularity_measure"], abs=1e-12)
+
+
+def test_an_actuator_singularity_names_its_sample_of_the_whole_run(monkeypatch):
+    """The actuator map's singularity message gives the sample's number in the whole run (here
+    every sample made singular by raising the threshold)."""
+    from pkmdyn.errors import SingularityError
+    from pkmdyn.multibody import dynamics
+
+    m = load_mechanism(ex.builtin_dict("rrr3"))
+    t, x, xd, xdd = _motion(m, n=5)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    monkeypatch.setattr(dynamics, "SINGULAR_ACTUATION", 2.0)
+    with pytest.raises(SingularityError, match=r"^sample 5000 \(t = 0 s\): the actuator map is singular"):
+        joint_reactions(m, kin, sample_offset=5000)
+
+
+def test_the_split_adds_up_under_friction_that_depends_on_the_reactions():
+    """Load-dependent friction (iterated): the split's parts add up to the efforts to rounding,
+    and the dissipation is that of the friction the efforts hold with."""
+    import test_multibody_dynamics as tmd
+
+    m = load_mechanism(tmd._stewart_with_friction(1.0))
+    t, x, xd, xdd = _motion(m, n=20)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    r = joint_reactions(m, kin, split=True)
+    assert r.iterations > 2
+    total = r.shares.groups.sum(axis=2) + r.shares.friction.sum(axis=2)
+    assert np.abs(total - r.u).max() <= 1e-12 * np.abs(r.u).max()
+    assert tmd._power_error(m, r) < 1e-12
+
+
+def test_a_drives_encoder_too_coarse_for_the_motion_is_refused(tmp_path, capsys):
+    """pkmdyn control checks a drive's own encoder: fewer than 10 counts over the motor's travel
+    is refused naming the drive and its key (a linear motor: encoder_counts_per_m)."""
+    d = ex.builtin_dict("stewart")
+    for leg in d["legs"]:
+        leg["actuators"] = [{"joint": "P", "name": "L", "moving_mass_kg": 0.5, "encoder_counts_per_m": 0.5}]
+    path = tmp_path / "lin.toml"
+    _write_toml(path, d)
+    out = tmp_path / "out"
+    assert main(["control", "--machine", str(path), "--duration", "0.2", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "[[actuators]] L_" in err[0] and "encoder_counts_per_m" in err[0] and not out.exists()
+
+
+def test_control_summary_names_every_actuator_whole(tmp_path):
+    """summary.json of a described mechanism's control run: one entry per actuator, under its
+    whole name (names hold underscores)."""
+    out = tmp_path / "ctl"
+    assert main(["control", "--machine", "stewart", "--duration", "0.1", "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    efforts = next(v for k, v in s.items() if isinstance(v, dict) and "P_1" in v)
+    assert sorted(efforts) == [f"P_{i}" for i in range(1, 7)]
+
+
+def test_a_part_of_a_cycle_needs_no_periodic_motion(tmp_path):
+    """--cycles 0.5 of the PDM's default motion (not periodic) takes its first half."""
+    out = tmp_path / "pdm"
+    assert main(["run", "--machine", "pdm", "--cycles", "0.5", "--out", str(out)]) == 0
+    assert json.loads((out / "summary.json").read_text())["samples"] == 201

@@ -117,16 +117,17 @@ def validate(cls: type[M], data: dict[str, Any], source: str) -> M:
         raise ParameterError(describe_errors(exc, source)) from None
 
 
-def check_limit(value: float, limit: float, what: str, key: str, unit: str = "", option: bool = True) -> None:
+def check_limit(value: float, limit: float, what: str, key: str, unit: str = "", option: bool = True,
+                file: str = "the parameter file") -> None:
     """Refuse ``value`` above ``limit`` (a plausibility limit named ``key`` in ``[limits]``).
 
     The message gives the value, the limit and how to raise it (``option``: the command also
-    takes ``--limit KEY=VALUE``).
+    takes ``--limit KEY=VALUE``; ``file``: the file whose ``[limits]`` holds it).
     """
     if not value <= limit:
         u = f" {unit}" if unit else ""
         shown = f"{value}" if isinstance(value, int) else f"{value:.4g}"
-        how = f"[limits] {key} in the parameter file" + (f" or --limit {key}=VALUE" if option else "")
+        how = f"[limits] {key} in {file}" + (f" or --limit {key}=VALUE" if option else "")
         raise LimitError(f"{what}: {shown}{u} exceeds the limit {key} = {limit:g}{u} (raise it with {how})")
 
 

@@ -61,7 +61,8 @@ class _Setup:
     fold_s: float = 0.0  #: the period a built-in motion repeats with [s] (plots fold the run by it); 0: none
     load_column: str = "load_N"  #: the column of the motion's load in control.csv (``has_load``)
     job: Any = None
-    #: per actuator: the name of the drive whose own encoder it reads ([[actuators]]), or None
+    #: per actuator: ``(drive name, encoder key, unit)`` of the drive whose own encoder it reads
+    #: ([[actuators]]), or None
     drive_encoders: tuple = ()
 
 
@@ -253,10 +254,11 @@ def _check_encoder(setup: _Setup, ls: Any, settings: dict[str, Any], gains_path:
         unit = _travel_unit(setup)
         drive = setup.drive_encoders[a] if setup.drive_encoders else None
         if drive is not None:
+            name, key, u = drive
             raise ParameterError(
-                f"[[actuators]] {drive}: encoder_counts_per_turn makes one count {res:.3g} rad of motor travel, while "
-                f"the motion turns the motor at most {travel:.3g} rad: fewer than {MIN_ENCODER_COUNTS} counts, too "
-                "coarse to measure it (raise its encoder_counts_per_turn)")
+                f"[[actuators]] {name}: {key} makes one count {res:.3g} {u} of motor travel, while the motion moves "
+                f"the motor at most {travel:.3g} {u}: fewer than {MIN_ENCODER_COUNTS} counts, too coarse to measure "
+                f"it (raise its {key})")
         where = f"{gains_path}: [sensors]" if gains_path is not None else "built-in settings: [sensors]"
         counts = settings["sensors"]["encoder_counts_per_turn"]
         raise ParameterError(
@@ -417,7 +419,7 @@ class _Summary:
                             f"max_abs_err_{unit}": float(self.mx[c]) * scale}
         efforts: dict[str, Any] = {}
         for a, name in enumerate(self.setup.verbs.ACTUATORS):
-            base, unit = name.split("_", 1)
+            base, unit = name.rsplit("_", 1)  # the actuator's name (it may hold "_"), then its unit
             efforts[base] = {f"peak_abs_{unit}": float(self.peak[a]), "saturated_cycles": int(self.sat[a])}
         b = {k: np.concatenate(v) for k, v in self.buf.items()}
         names = [c[0] for c in _joint_columns(self.setup)]

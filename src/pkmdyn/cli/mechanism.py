@@ -97,7 +97,7 @@ def run(machine: str, motion_path: Path | None, cycles: float | None, samples_pe
 
     The same files for every machine; the hip's and the PDM's own jobs (dynamics, plots) are
     pkmdyn hip run and pkmdyn pdm run."""
-    from ..io import check_output_dir, check_table_format
+    from ..io import check_output_dir
     from ..machines.registry import resolve
     from ..multibody import read_task_motion
     from ..multibody.actuators import effective_limits
@@ -109,7 +109,6 @@ def run(machine: str, motion_path: Path | None, cycles: float | None, samples_pe
     entry, path = resolve(machine)
     inputs = {"--machine": path, "--motion": motion_path}
     check_output_dir(out_dir, inputs)
-    check_table_format(fmt)
     limits = parse_limit_options(limit_items, LIMIT_KEYS)
     if minimum_norm_reactions and unique_reactions:
         raise click.UsageError("--minimum-norm-reactions and --unique-reactions contradict each other")
@@ -162,13 +161,13 @@ DESCRIBED_CONTROLLERS = ("computed-torque", "augmented-pd", "pd", "pid", "feedfo
 def described_control_settings(model) -> dict:
     """Control settings of a described mechanism, laid under ``--gains`` (no ``[mismatch]``: the
     plant is the controller's own model): 2 ms cycle, 1 ms plant step, exact pose feedback, effort
-    limits the drives' rated efforts (``[[actuators]]`` ``max_torque_Nm``; far away without
-    one), the efforts being the drives' motor efforts, divergence at 0.05 m or 0.2 rad of
+    limits the drives' rated efforts (``[[actuators]]`` ``max_torque_Nm`` or ``max_force_N``;
+    far away without one), the efforts being the drives' motor efforts, divergence at 0.05 m or 0.2 rad of
     tracking error; every controller tuned for 5 Hz at damping 0.7 on the mechanism's inertia
     at its reference pose: computed torque ``kp = wn^2``, ``kd = 2 zeta wn`` [1/s^2, 1/s]; the
     task-space PD (and augmented PD) ``kp = wn^2 M_ii``, ``kd = 2 zeta wn M_ii`` with ``M`` the
     task mass matrix [N/m or N m/rad, ...]; the actuators' PID ``kp = wn^2 Ma_ii``,
-    ``kd = 2 zeta wn Ma_ii``, ``ki = wn kp / 10`` with ``Ma = J_ax^-T M J_ax^-1`` the inertia
+    ``kd = 2 zeta wn Ma_ii``, ``ki = wn kp / 10`` with ``Ma = B^+ M B^+T`` (``B = J_ax^T K``) the inertia
     seen by each actuator. Keys ending ``_si`` are in SI units of their coordinate."""
     import numpy as np
 
@@ -180,7 +179,7 @@ def described_control_settings(model) -> dict:
     verbs = machine_verbs(model)
     x0 = reference_task(model)[None]
     M = verbs.mass_matrix(model, x0)[0]
-    B = verbs.actuator_map(model, x0)[0]  # J_ax^T (nt, na)
+    B = verbs.actuator_map(model, x0)[0]  # J_ax^T K (nt, na): the motors' map, K the drives' ratios
     Ma = np.linalg.pinv(B) @ M @ np.linalg.pinv(B.T) if na else np.zeros((0, 0))
     dm, da = np.abs(np.diag(M)), np.abs(np.diag(Ma))
 
@@ -244,7 +243,7 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     from ..multibody.kinematics import limit_message, limited_joints
     from ..multibody.machine import machine_verbs
     from ..simulate import check_timing
-    from .control import _command, _Setup, _stream
+    from .control import _check_encoder, _command, _Setup, _stream
 
     entry, path = resolve(machine)
     if entry is not None:
@@ -293,9 +292,11 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     verbs = machine_verbs(model)
     load, column = _control_load(model, motion, what, verbs.ACTUATORS)
     fn = hermite_motion(motion.t, motion.x, motion.xd, motion.xdd, load)
+    encoders = tuple((d, "encoder_counts_per_turn" if u == "rad" else "encoder_counts_per_m", u) if r > 0 else None
+                     for d, r, u in zip(model.drive_name, model.drive_encoder, model.motor_units))
     setup = _Setup(model.name, verbs, model, model, fn, duration_s, load is not None, str(path),
-                   "the controller's model", what, span_s=span, load_column=column,
-                   drive_encoders=tuple(d if r > 0 else None for d, r in zip(model.drive_name, model.drive_encoder)))
+                   "the controller's model", what, span_s=span, load_column=column, drive_encoders=encoders)
+    _check_encoder(setup, ls, settings, gains_path)
     n = model.na if controller == "pid" else model.nt
     _stream(setup, controller, gains(settings, controller, n), ls, settings, out_dir,
             False, gains_path, inputs, fmt, html_report=False)  # its plots and page are the hand-built machines' own

@@ -28,7 +28,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import MotionError
 from ..io import output_dir, read_csv_columns, write_csv, write_json
 from ..multibody.actuators import motor_effort_column
 from ..multibody.dynamics import effort_unit

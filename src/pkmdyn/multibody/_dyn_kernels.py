@@ -316,7 +316,7 @@ def friction_batch(w, ov, org, jpt, S, fsc, fidx, fcnt, fj, fch, fpa, frot, fsli
     the child and not the parent, -1 for the reverse (``fidx[k, :fcnt[k]]``, signs ``fsc``): the
     virtual power of the friction. For a tree joint these are its own coordinates and ``Q`` is
     the joint-by-joint route's exactly; for a cut joint the two differ by constraint forces only
-    (the same efforts and idle accelerations, ``G^T Q``)."""
+    (the same efforts, ``G^T Q``)."""
     for s in range(w.shape[0]):
         for c in range(Q_out.shape[1]):
             Q_out[s, c] = 0.0

@@ -104,6 +104,7 @@ def pack(model: MechanismModel) -> NDArray[np.int64]:
     kernel takes its views by pointer arithmetic (:func:`_fview`), with no allocation."""
     from .kinematics import CHECK_TOLERANCE, MAX_ITER, TOLERANCE, row_scale
 
+    from .actuators import motor_eps
     from .friction import friction_arrays
 
     arrays = {k: getattr(model, k) for k in _INT + _FLOAT if hasattr(model, k)}
@@ -113,7 +114,7 @@ def pack(model: MechanismModel) -> NDArray[np.int64]:
     task_unit_rhs(model.solver_rows, model.row_loop.shape[0], arrays["task_rhs"])
     arrays.update(friction_arrays(model))
     arrays["load_named"] = np.array([nm is not None for nm in model.load_name], dtype=np.int64)
-    arrays["drive_eps"] = np.array([EPS_R if u == "rad" else EPS_T for u in model.motor_units])
+    arrays["drive_eps"] = motor_eps(model)
     arrays["solver_rowpos"] = np.empty(model.row_loop.shape[0] + model.nt, dtype=np.int64)
     arrays["solver_colpos"] = np.empty(model.nq, dtype=np.int64)
     arrays["solver_idlepos"] = np.empty(model.solver_idle.shape[0], dtype=np.int64)

@@ -37,14 +37,15 @@ from ..friction import regularised_sign
 from .friction import EPS_ROTATION, EPS_TRANSLATION
 from .model import MechanismModel
 
-__all__ = ["MotorEfforts", "motor_coordinates", "motor_friction", "motor_efforts", "rotor_energy",
+__all__ = ["MotorEfforts", "motor_coordinates", "motor_friction", "motor_efforts", "rotor_energy", "motor_eps",
            "motor_effort_unit", "motor_effort_column", "check_task_rates", "check_actuator_rates", "effective_limits"]
 
 Array = NDArray[np.float64]
 
 
-def _eps(model: MechanismModel) -> Array:
-    """The regularisation velocity of each motor's friction (rotary [rad/s], linear [m/s])."""
+def motor_eps(model: MechanismModel) -> Array:
+    """The regularisation velocity of each motor's friction (rotary [rad/s], linear [m/s]): the
+    joints' (:data:`.friction.EPS_ROTATION`, :data:`.friction.EPS_TRANSLATION`)."""
     return np.array([EPS_ROTATION if u == "rad" else EPS_TRANSLATION for u in model.motor_units])
 
 
@@ -58,7 +59,7 @@ def motor_coordinates(model: MechanismModel, act_q: Array, act_qd: Array, act_qd
 
 def motor_friction(model: MechanismModel, theta_dot: Array) -> Array:
     """Motor friction ``tau_f = C u(theta_dot) + b theta_dot`` (n, na) [N m or N], resisting."""
-    return model.drive_coulomb * regularised_sign(theta_dot, _eps(model), False) + model.drive_viscous * theta_dot
+    return model.drive_coulomb * regularised_sign(theta_dot, motor_eps(model), False) + model.drive_viscous * theta_dot
 
 
 @dataclass(frozen=True)

@@ -204,7 +204,8 @@ class _Limits(Section):
 
 
 #: the plausibility limits of motions and their types (``[limits]``, ``--limit KEY=VALUE``)
-LIMIT_KEYS: dict[str, type] = {k: (int if k == "max_samples" else float) for k in _Limits.model_fields}
+LIMIT_KEYS: dict[str, type] = {k: (int if k in ("max_samples", "max_body_samples") else float)
+                               for k in _Limits.model_fields}
 
 
 class _Leg(Section):
@@ -731,9 +732,14 @@ _MOTOR_KEYS = {
                "max_effort": "max_force_N", "max_speed": "max_speed_m_s", "max_acceleration": "max_acceleration_m_s2",
                "encoder": "encoder_counts_per_m"},
 }
-#: the largest transmission ratio (motor coordinate per joint coordinate) and rotor inertia taken
-_MAX_RATIO = 1e6
+#: plausible ranges of a drive's transmission keys: a gear ratio (motor turns per joint or screw
+#: turn) and a screw's lead [m per turn]; the largest transmission ratio (motor coordinate per
+#: joint coordinate) and rotor inertia taken
+_TRANSMISSION_BOUNDS = {"gear_ratio": (1e-6, 1e6), "screw_lead_m": (1e-6, 10.0)}
+_MAX_RATIO = 1e7
 _MAX_ROTOR = 1e3
+#: the largest motor friction, limit or encoder count taken (an entry beyond is a typing error)
+_MAX_MOTOR_VALUE = 1e12
 
 
 def _actuators(label: str, entries: list[tuple[_Actuator, str]], joints: list[JointSpec],
@@ -761,10 +767,12 @@ def _actuators(label: str, entries: list[tuple[_Actuator, str]], joints: list[Jo
                                  "otherwise (its columns would read as the joint's)")
         seen_joint[a.joint] = name
         seen_name.add(name)
-        for key in ("gear_ratio", "screw_lead_m"):
+        for key, (lo, hi) in _TRANSMISSION_BOUNDS.items():
             v = getattr(a, key)
             if v is not None and not (math.isfinite(v) and v > 0):
                 raise ParameterError(f"{where} {key}: must be a finite number > 0, got {v!r}")
+            if v is not None and not lo <= v <= hi:
+                raise ParameterError(f"{where} {key}: {v:g} is outside the plausible range [{lo:g}, {hi:g}]")
         gear = 1.0 if a.gear_ratio is None else float(a.gear_ratio)
         if j.type == "revolute":
             if a.screw_lead_m is not None:
@@ -780,8 +788,8 @@ def _actuators(label: str, entries: list[tuple[_Actuator, str]], joints: list[Jo
                                      "neither for a linear motor")
             kind, ratio = "linear", 1.0
         if not ratio <= _MAX_RATIO:
-            raise ParameterError(f"{where}: the transmission ratio {ratio:.4g} (motor coordinate per joint "
-                                 f"coordinate) exceeds {_MAX_RATIO:g}")
+            raise ParameterError(f"{where} gear_ratio: with screw_lead_m the transmission ratio {ratio:.4g} (motor "
+                                 f"radians per joint metre) exceeds {_MAX_RATIO:g}")
         keys = _MOTOR_KEYS[kind]
         other = _MOTOR_KEYS["linear" if kind == "rotary" else "rotary"]
         for key in other.values():
@@ -802,8 +810,9 @@ def _actuators(label: str, entries: list[tuple[_Actuator, str]], joints: list[Jo
             if role.startswith("max_") or role == "encoder":
                 if not v > 0:
                     raise ParameterError(f"{where} {key}: must be > 0, got {v:g}")
-            if role == "rotor" and v > _MAX_ROTOR:
-                raise ParameterError(f"{where} {key}: {v:g} exceeds the plausibility bound {_MAX_ROTOR:g}")
+            bound = _MAX_ROTOR if role == "rotor" else _MAX_MOTOR_VALUE
+            if v > bound:
+                raise ParameterError(f"{where} {key}: {v:g} exceeds the plausibility bound {bound:g}")
             vals[role] = v
         res = 0.0
         if vals["encoder"]:

@@ -51,7 +51,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ParameterError, SingularityError
-from . import _kernels as K
 from .joint_types import JOINT_TYPES
 from .kinematics import MechanismKinematics, joint_frame
 from .model import MechanismModel
@@ -186,13 +185,14 @@ def generalised_forces(model: MechanismModel, S: Array, W: Array) -> Array:
     return Q
 
 
-def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, rhs_task: Array | None = None
-                     ) -> Array:
+def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, rhs_task: Array | None = None,
+                     sample_offset: int = 0) -> Array:
     """Efforts ``u (n, na)`` [N or N m] from the generalised tree forces ``Q (n, nq)``, Eq. (3)
     (or from the task-space forces ``rhs_task = G^T Q (n, nt)`` when given).
 
     Raises :class:`~pkmdyn.errors.SingularityError` naming the first sample where the
-    actuator map ``J_ax`` is singular (the actuators cannot move the mechanism there)."""
+    actuator map ``J_ax`` is singular (the actuators cannot move the mechanism there; its
+    number in a longer motion: ``sample_offset`` + its index here)."""
     JT = np.swapaxes(kin.J_ax, 1, 2)  # (n, nt, na)
     scale = np.maximum(np.abs(JT).max(axis=(0, 1)), 1e-300)
     u_fast = None
@@ -228,7 +228,7 @@ def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, 
     bad = np.flatnonzero(~(ratio > SINGULAR_ACTUATION))
     if bad.size:
         s = int(bad[0])
-        when = f"sample {s}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
+        when = f"sample {s + sample_offset}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
         raise SingularityError(f"{when}: the actuator map is singular (smallest/largest singular value "
                                f"{ratio[s]:.3g}): the actuators {', '.join(model.actuator_names)} cannot move "
                                f"mechanism {model.name!r} there")
@@ -486,10 +486,12 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     W = body_wrenches(model, kin, loads, named)
     Q = generalised_forces(model, S, W)
     while True:
-        u = actuator_efforts(model, kin, Q if Qf is None else Q + Qf)
+        F_u = F  # the friction these efforts and reactions hold with (the split's, below)
+        u = actuator_efforts(model, kin, Q if Qf is None else Q + Qf, sample_offset=sample_offset)
         eff = np.zeros((n, model.nq))
         eff[:, model.act_coord] = u
         b = equilibrium_rhs(model, blocks, W, eff, F)
+        mu = None  # the idle freedoms' holding forces where the solve gives them
         if over:
             from .reactions import compliant_reactions
 
@@ -499,10 +501,12 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
             method = "compliance"
         elif cuts is not None:
             z = cuts.solve(model, W, Q if Qf is None else Q + Qf, eff, F)
+            mu = cuts.holding
             method, t = "rigid", 0
         elif r < A.shape[2] and overconstrained == "minimum-norm":
             coef = np.einsum("nmr,nm->nr", U[:, :, :r], b) / sv[:, :r]
-            z = (np.einsum("nrk,nr->nk", Vt[:, :r], coef) * scale[None, :])[:, :k]
+            z = np.einsum("nrk,nr->nk", Vt[:, :r], coef) * scale[None, :]
+            z, mu = z[:, :k], z[:, k:]
             method, t = "minimum-norm", A.shape[2] - r
         elif r < A.shape[2]:
             from .reactions import compliant_reactions
@@ -511,7 +515,8 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
             method = "compliance"
         else:
             coef = np.einsum("nmr,nm->nr", U, b) / sv
-            z = (np.einsum("nrk,nr->nk", Vt, coef) * scale[None, :])[:, :k]
+            z = np.einsum("nrk,nr->nk", Vt, coef) * scale[None, :]
+            z, mu = z[:, :k], z[:, k:]
             method, t = "rigid", 0
         if fr is None:
             break
@@ -530,15 +535,17 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
             raise ParameterError(f"joint {model.joint_names[worst_joint]}: the load-dependent friction does not "
                                  f"converge at {when} (relative change {history[-1]:.3g} after {it} iterations): "
                                  "the friction coefficients lock the mechanism")
-    res, hold = _residual(model, blocks, z, b)
+    res, hold = _residual(model, blocks, z, b, mu)
     Wj = z.reshape(n, -1, 6)
     pts = kin.joint_point
     force = Wj[..., 3:]
     moment = Wj[..., :3] - _cross(pts, force)
-    shares = effort_shares(model, kin, S, W, fr, F) if split else None
+    shares = effort_shares(model, kin, S, W, fr, F_u) if split else None
+    # the friction the efforts and reactions hold with (within the iteration's tolerance of the
+    # law at these reactions), so that the efforts, dissipation and split agree to rounding
     return JointReactions(u=u, joint_point=pts, joint_force=force, joint_moment=moment, residual=res,
-                          self_stress=t, method=method, kin=kin, friction=F or {}, iterations=it,
-                          dissipation=fr.dissipation(F) if fr is not None else np.zeros(n), holding=hold,
+                          self_stress=t, method=method, kin=kin, friction=F_u or {}, iterations=it,
+                          dissipation=fr.dissipation(F_u) if fr is not None else np.zeros(n), holding=hold,
                           shares=shares)
 
 
@@ -562,28 +569,32 @@ def effort_shares(model: MechanismModel, kin: MechanismKinematics, S: Array, W: 
     group's wrenches or of one joint's friction."""
     n, nq = S.shape[0], model.nq
     ng, nj = len(model.group_names), len(model.joint_names)
-    rhs = np.zeros((n, nq, ng + nj))
+    rubbing = [jd for jd in fr.joints] if fr is not None and F else []  # the joints with friction
+    rhs = np.zeros((n, nq, ng + len(rubbing)))
     for g in range(ng):
         Wg = np.where((model.body_group == g)[None, :, None], W, 0.0)
         rhs[:, :, g] = generalised_forces(model, S, Wg)
-    if fr is not None and F:
-        for jd in fr.joints:
-            Qj = np.zeros((n, nq))
-            fr.add_generalised(Qj, jd, F[jd["j"]])
-            rhs[:, :, ng + jd["j"]] = Qj
+    for i, jd in enumerate(rubbing):
+        Qj = np.zeros((n, nq))
+        fr.add_generalised(Qj, jd, F[jd["j"]])
+        rhs[:, :, ng + i] = Qj
     task = np.einsum("nct,ncp->ntp", kin.G, rhs)
     JT = np.swapaxes(kin.J_ax, 1, 2)
     if model.na == model.nt:
         parts = np.linalg.solve(JT, task)
     else:
         parts = np.einsum("nat,ntp->nap", np.linalg.pinv(JT), task)
-    return EffortShares(groups=parts[:, :, :ng], friction=parts[:, :, ng:])
+    friction = np.zeros((n, model.na, nj))
+    friction[:, :, [jd["j"] for jd in rubbing]] = parts[:, :, ng:]
+    return EffortShares(groups=parts[:, :, :ng], friction=friction)
 
 
-def _residual(model: MechanismModel, blocks: list, z: Array, b: Array) -> tuple[Array, Array]:
-    """``max |A z - b|`` per sample (n,) without forming ``A`` (:func:`equilibrium_matrix`), the
-    idle freedoms' holding forces taken out of the free-twist rows (the least-squares ``mu`` of
-    :func:`idle_holding`), and that holding force ``H mu (n, nq)``."""
+def _residual(model: MechanismModel, blocks: list, z: Array, b: Array, mu: Array | None = None
+              ) -> tuple[Array, Array]:
+    """``max |A [z; mu] - b|`` per sample (n,) without forming ``A`` (:func:`equilibrium_matrix`)
+    and the idle freedoms' holding force ``H mu (n, nq)`` (:func:`idle_holding`): ``mu (n, k)``
+    as the solve gave it, or, where it gives none (the compliance route), the least-squares
+    ``mu`` of the free-twist rows."""
     n, nb = z.shape[0], model.nb
     nj = len(model.joint_names)
     Wj = z.reshape(n, nj, 6)
@@ -603,7 +614,8 @@ def _residual(model: MechanismModel, blocks: list, z: Array, b: Array) -> tuple[
         H = idle_holding(model)
         if H.shape[1]:
             Hr = np.where((coords >= 0)[:, None], H[np.maximum(coords, 0)], 0.0)  # (nf, k)
-            mu = rt @ np.linalg.pinv(Hr).T
+            if mu is None:
+                mu = rt @ np.linalg.pinv(Hr).T
             rt = rt - mu @ Hr.T
             hold = mu @ H.T
         r = np.maximum(r, np.abs(rt).max(axis=1))
@@ -711,6 +723,7 @@ class _CutRoute:
             for s in np.flatnonzero(~ok):  # columns dependent at this sample (a constraint singularity):
                 # the minimum-norm multipliers, which balance every body but are one choice of many
                 lam[s] = np.linalg.lstsq(self.A[s], rhs[s], rcond=None)[0]
+        self.holding = lam[:, self.n_cut:]  # the idle freedoms' mu (idle_holding)
         return self.assemble(model, W, lam, F)
 
     def assemble(self, model: MechanismModel, W: Array, lam: Array, F: dict | None) -> Array:

@@ -225,9 +225,8 @@ def known_friction(model: MechanismModel, kin, S: Array, named: Mapping[str, obj
     reactions (Coulomb, viscous and the named loads' part of laws F1-F2), compiled
     (:func:`._dyn_kernels.friction_batch`, the virtual power of each joint's resisting wrench
     in its relative twist). Equal to ``JointFriction(...).generalised(initial())`` for tree
-    joints; for cut joints up to constraint forces, so that the efforts and idle accelerations
-    (``G^T Q``, ``N^T Q``) are the same. A ``coefficient`` (reaction-dependent) is a
-    ``ValueError``."""
+    joints; for cut joints up to constraint forces, so that the efforts (``G^T Q``) are the
+    same. A ``coefficient`` (reaction-dependent) is a ``ValueError``."""
     from ._dyn_kernels import friction_batch
 
     n = S.shape[0]

@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ParameterError
-from .actuators import motor_coordinates
+from .actuators import motor_coordinates, motor_eps
 from .dynamics import actuator_efforts, coordinate_twists, free_blocks, generalised_forces, named_magnitudes
 from .kinematics import MechanismKinematics
 from .model import MechanismModel
@@ -174,8 +174,8 @@ def regressor(model: MechanismModel, kin: MechanismKinematics, named: dict | Non
     k = model.drive_ratio
     Y = Y / k[None, :, None]
     u0 = u0 / k[None, :]
-    th, thd, thdd = motor_coordinates(model, kin.act_q, kin.act_qd, kin.act_qdd)
-    eps = np.array([EPS_ROTATION if u == "rad" else EPS_TRANSLATION for u in model.motor_units])
+    _, thd, thdd = motor_coordinates(model, kin.act_q, kin.act_qd, kin.act_qdd)
+    eps = motor_eps(model)
     extra, extra_names, extra_theta = [], [], []
     for i, name in enumerate(model.drive_name):
         if name is None:

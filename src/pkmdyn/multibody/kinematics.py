@@ -44,7 +44,7 @@ from .topology import constraint_jacobian, row_labels, row_scale
 
 __all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals",
            "singularity_measures", "SingularityMeasures", "reachable", "TOLERANCE", "joint_coordinates",
-           "limited_joints", "limit_violation", "limit_message", "joint_frame"]
+           "limited_joints", "limit_violation", "limit_message", "limit_hit", "limit_line", "joint_frame"]
 
 Array = NDArray[np.float64]
 
@@ -356,13 +356,10 @@ def joint_coordinates(model: MechanismModel, kin: MechanismKinematics, joints: l
     return out
 
 
-def limit_violation(model: MechanismModel, kin: MechanismKinematics) -> tuple[int, int, float] | None:
-    """The first sample and joint whose coordinate lies beyond the joint's limits (by more than
-    :data:`LIMIT_TOLERANCE`), and the coordinate: ``(sample, joint, value)``, or None."""
-    joints = limited_joints(model)
-    if not joints:
-        return None
-    c = joint_coordinates(model, kin, joints)
+def limit_hit(model: MechanismModel, c: Array, joints: list[int]) -> tuple[int, int] | None:
+    """The first sample and the index into ``joints`` of a coordinate ``c (n, k)``
+    (:func:`joint_coordinates`) beyond its joint's limits by more than :data:`LIMIT_TOLERANCE`,
+    or None."""
     lo = np.array([model.joint_limits[j][0] for j in joints])
     hi = np.array([model.joint_limits[j][1] for j in joints])
     tol = np.array([LIMIT_TOLERANCE * (model.length_scale if JOINT_TYPES[model.joint_type[j]].units[0] == "m" else 1.0)
@@ -371,22 +368,39 @@ def limit_violation(model: MechanismModel, kin: MechanismKinematics) -> tuple[in
     if not bad.any():
         return None
     s = int(np.flatnonzero(bad.any(axis=1))[0])
-    k = int(np.flatnonzero(bad[s])[0])
+    return s, int(np.flatnonzero(bad[s])[0])
+
+
+def limit_line(model: MechanismModel, kin: MechanismKinematics, s: int, j: int, v: float,
+               sample_offset: int = 0) -> str:
+    """One line: sample ``s`` (its number ``s + sample_offset`` in a longer motion), joint ``j`` at
+    ``v`` beyond its limits, the task pose."""
+    unit = JOINT_TYPES[model.joint_type[j]].units[0]
+    lo, hi = model.joint_limits[j]
+    when = f"sample {s + sample_offset}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
+    pose = ", ".join(f"{nm} = {x:.6g} {u}" for nm, u, x in zip(model.task_names, model.task_units, kin.x[s]))
+    return (f"{when}: joint {model.joint_names[j]!r} is at {v:.6g} {unit}, beyond its limits [{lo:g}, {hi:g}] {unit} "
+            f"(task pose {pose})")
+
+
+def limit_violation(model: MechanismModel, kin: MechanismKinematics) -> tuple[int, int, float] | None:
+    """The first sample and joint whose coordinate lies beyond the joint's limits (by more than
+    :data:`LIMIT_TOLERANCE`), and the coordinate: ``(sample, joint, value)``, or None."""
+    joints = limited_joints(model)
+    if not joints:
+        return None
+    c = joint_coordinates(model, kin, joints)
+    hit = limit_hit(model, c, joints)
+    if hit is None:
+        return None
+    s, k = hit
     return s, joints[k], float(c[s, k])
 
 
 def limit_message(model: MechanismModel, kin: MechanismKinematics) -> str | None:
     """One line naming the first sample and joint beyond the joint's limits, or None."""
     hit = limit_violation(model, kin)
-    if hit is None:
-        return None
-    s, j, v = hit
-    unit = JOINT_TYPES[model.joint_type[j]].units[0]
-    lo, hi = model.joint_limits[j]
-    when = f"sample {s}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
-    pose = ", ".join(f"{nm} = {x:.6g} {u}" for nm, u, x in zip(model.task_names, model.task_units, kin.x[s]))
-    return (f"{when}: joint {model.joint_names[j]!r} is at {v:.6g} {unit}, beyond its limits [{lo:g}, {hi:g}] {unit} "
-            f"(task pose {pose})")
+    return None if hit is None else limit_line(model, kin, *hit)
 
 
 def _limit_error(model: MechanismModel, kin: MechanismKinematics) -> None:

@@ -194,7 +194,8 @@ class MechanismVerbs:
 
     def inverse_dynamics(self, model: MechanismModel, q: Array, qd: Array, qdd: Array,
                          load: Array | None = None) -> Array:
-        """Efforts ``u (n, na)`` with ``B u = M xdd + h`` (minimum norm when redundant)."""
+        """Efforts ``u (n, na)`` with ``B u = M xdd + h`` (more actuators than task coordinates:
+        the minimum-norm joint efforts, each divided by its drive's ratio)."""
         M, h, B, kin = self._all(model, q, qd, load)
         rhs = np.einsum("nij,nj->ni", M, self._x(qdd, "qdd")) + h
         # actuator_efforts checks the actuator map's rank and names the sample; J_ax^T (k tau) = rhs

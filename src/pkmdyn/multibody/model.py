@@ -315,7 +315,6 @@ def compile_model(desc: Description) -> MechanismModel:
     disconnect a body or an actuated joint would have to be cut.
     """
     tree, cuts = spanning_tree(desc)
-    jidx = {j.name: k for k, j in enumerate(desc.joints)}
     bspec = {b.name: b for b in desc.bodies}
     # body order: the order in which the tree reached them
     order = []

@@ -119,14 +119,15 @@ class RepeatedMotion:
 def repeated_motion(cycle: TaskMotion, cycles: float, what: str = "the default motion",
                     max_samples: int | None = None) -> TaskMotion | RepeatedMotion:
     """``cycle`` repeated ``cycles`` times (:class:`RepeatedMotion`; ``cycle`` itself for one
-    cycle). The cycle must be periodic: its last sample equal to its first (positions, rates,
-    accelerations, loads) to 1e-9 of their size, else a :class:`~pkmdyn.errors.MotionError`."""
+    cycle, its first samples for less). To repeat, the cycle must be periodic: its last sample
+    equal to its first (positions, rates, accelerations, loads) to 1e-9 of their size, else a
+    :class:`~pkmdyn.errors.MotionError`."""
     if not (np.isfinite(cycles) and cycles > 0):
         raise MotionError(f"--cycles: must be a finite number > 0, got {cycles!r}")
     m = len(cycle) - 1
     n = int(round(float(cycles) * m)) + 1
-    if n == len(cycle) and cycles == 1:
-        return cycle
+    if n <= len(cycle):  # a part of one cycle (or all of it): no repetition, no periodicity needed
+        return cycle if n == len(cycle) else cycle.chunk(0, n)
     if m < 1:
         raise MotionError(f"--cycles: {what} has one sample; nothing to repeat")
     for name, a in (("position", cycle.x), ("rate", cycle.xd), ("acceleration", cycle.xdd),
@@ -138,7 +139,8 @@ def repeated_motion(cycle: TaskMotion, cycles: float, what: str = "the default m
     if max_samples is not None and not n <= max_samples:
         from ..params_util import check_limit
 
-        check_limit(n, max_samples, "motion: samples (cycles x samples per cycle + 1)", "max_samples")
+        check_limit(n, max_samples, "motion: samples (cycles x samples per cycle + 1)", "max_samples",
+                    file="the description")
     return RepeatedMotion(cycle, n)
 
 
@@ -171,7 +173,8 @@ def periodic_motion(model: MechanismModel, cycles: float = 1.0, samples_per_cycl
     if max_samples is not None and not n <= max_samples:
         from ..params_util import check_limit
 
-        check_limit(n, max_samples, "default motion: samples (cycles x samples per cycle + 1)", "max_samples")
+        check_limit(n, max_samples, "default motion: samples (cycles x samples per cycle + 1)", "max_samples",
+                    file="the description")
     pos, _, _ = task_columns(model)
     off = np.array([spec.offset.get(c, 0.0) for c in pos])
     amp = np.array([spec.amplitude.get(c, 0.0) for c in pos])

@@ -9,8 +9,9 @@ solved whole), its rates checked against the plausibility limits
 (:mod:`.actuators`), its efforts and reactions computed (:func:`.dynamics.joint_reactions`,
 load-dependent friction iterated per chunk, messages naming the sample of the whole run), its
 rows appended to ``results.csv`` (or ``.parquet``), and the summary's extremes kept on the fly.
-``bodies.npz``, the report's plots and its animation hold the first ``max_body_samples``
-samples (every sample of a run up to that length). The files are written into a temporary
+``bodies.npz`` holds the first ``max_body_samples`` samples (every sample of a run up to that
+length), the report's plots and animation a window of them (the first cycle of a repeated
+default motion). The files are written into a temporary
 folder beside ``--out`` and moved into place only when the whole run succeeded
 (:func:`pkmdyn.io.output_dir`); formats: ``docs/mechanism_format.md``, "Outputs".
 """
@@ -28,13 +29,12 @@ from ..errors import PkmdynError
 from ..io import NpzWriter, check_table_format, open_table_writer, output_dir, write_json
 from .actuators import check_actuator_rates, check_task_rates, effective_limits, motor_effort_column, motor_efforts
 from .dynamics import effort_unit, joint_reactions, load_forces, named_magnitudes
-from .kinematics import LIMIT_TOLERANCE, MechanismKinematics, joint_coordinates, limited_joints, singularity_measures, \
-    solve_kinematics
-from .joint_types import JOINT_TYPES
+from .kinematics import MechanismKinematics, joint_coordinates, limit_hit, limit_line, limited_joints, \
+    singularity_measures, solve_kinematics
 from .model import MechanismModel
 from .output import bodies_arrays, model_summary, report_columns, results_columns, write_run_report
 
-__all__ = ["run_mechanism", "effort_columns", "results_column_names", "CHUNK", "MAX_BODY_SAMPLES"]
+__all__ = ["run_mechanism", "effort_columns", "results_column_names", "CHUNK"]
 
 Array = NDArray[np.float64]
 
@@ -42,8 +42,6 @@ Array = NDArray[np.float64]
 CHUNK = 1024
 #: beyond the bodies' window, the singularity measures of every this many samples
 SINGULARITY_STRIDE = 10
-#: default of ``[limits] max_body_samples``: bodies.npz, plots and animation keep this many first samples
-MAX_BODY_SAMPLES = 200_000
 
 
 def effort_columns(model: MechanismModel, kin: MechanismKinematics, reac: Any, named: Mapping | None) -> dict[str, Array]:
@@ -140,11 +138,12 @@ class _Summary:
     def add(self, start: int, kin: MechanismKinematics, sm: Any, reac: Any, cols: dict[str, Array]) -> None:
         model = self.model
         self.residual = max(self.residual, float(kin.residual.max()))
-        for key in ("inverse", "constraint"):
-            self.sing[key] = min(self.sing[key], float(getattr(sm, key).min()))
-        if not np.isnan(sm.direct).all():
-            self.direct_nan = False
-            self.sing["direct"] = min(self.sing["direct"], float(np.nanmin(sm.direct)))
+        if sm is not None:  # (None: a chunk beyond the bodies' window without a sample of the stride)
+            for key in ("inverse", "constraint"):
+                self.sing[key] = min(self.sing[key], float(getattr(sm, key).min()))
+            if not np.isnan(sm.direct).all():
+                self.direct_nan = False
+                self.sing["direct"] = min(self.sing["direct"], float(np.nanmin(sm.direct)))
         self.eq_residual = max(self.eq_residual, float(reac.residual.max()))
         self.iterations = max(self.iterations, int(reac.iterations))
         if reac.holding is not None and reac.holding.size:
@@ -181,29 +180,6 @@ class _Summary:
         return out
 
 
-def _limit_tolerances(model: MechanismModel, joints: list[int]) -> Array:
-    return np.array([LIMIT_TOLERANCE * (model.length_scale if JOINT_TYPES[model.joint_type[j]].units[0] == "m" else 1.0)
-                     for j in joints])
-
-
-def _limit_note(model: MechanismModel, kin: MechanismKinematics, joints: list[int], c: Array, start: int) -> str | None:
-    """One line naming the chunk's first sample and joint beyond the joint's limits, or None."""
-    lo = np.array([model.joint_limits[j][0] for j in joints])
-    hi = np.array([model.joint_limits[j][1] for j in joints])
-    tol = _limit_tolerances(model, joints)
-    bad = (c < lo - tol) | (c > hi + tol)
-    if not bad.any():
-        return None
-    s = int(np.flatnonzero(bad.any(axis=1))[0])
-    k = int(np.flatnonzero(bad[s])[0])
-    j = joints[k]
-    unit = JOINT_TYPES[model.joint_type[j]].units[0]
-    when = f"sample {start + s}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
-    pose = ", ".join(f"{nm} = {x:.6g} {u}" for nm, u, x in zip(model.task_names, model.task_units, kin.x[s]))
-    return (f"{when}: joint {model.joint_names[j]!r} is at {c[s, k]:.6g} {unit}, beyond its limits "
-            f"[{lo[k]:g}, {hi[k]:g}] {unit} (task pose {pose})")
-
-
 def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, inputs: Any = (),
                   report: Callable[[dict[str, Path]], None] | None = None, description_text: str = "",
                   unique_reactions: bool = False, fmt: str = "csv", limits: dict | None = None,
@@ -234,8 +210,8 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
         raise PkmdynError("the motion has no samples")
     from ..params_util import check_limit
 
-    check_limit(n, int(lim["max_samples"]), "motion: samples", "max_samples")
-    body_rows = min(n, int(lim.get("max_body_samples", MAX_BODY_SAMPLES)))
+    check_limit(n, int(lim["max_samples"]), "motion: samples", "max_samples", file="the description")
+    body_rows = min(n, int(lim["max_body_samples"]))
     window = min(body_rows, n if plot_window is None else int(plot_window))
     summ = _Summary(model)
     limited = limited_joints(model)
@@ -274,17 +250,18 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
                         kin = kin.rows(1)
                         m = m.chunk(1, len(m))
                     check_actuator_rates(model, kin.t, kin.act_qd, kin.act_qdd, lim, start)
-                    if limited and summ.limit_first is None:
+                    if limited:
                         c = joint_coordinates(model, kin, limited, previous=prev_coords)
                         prev_coords = c[-1]
-                        summ.limit_first = _limit_note(model, kin, limited, c, start)
-                    elif limited:
-                        prev_coords = joint_coordinates(model, kin, limited, previous=prev_coords)[-1]
+                        hit = limit_hit(model, c, limited) if summ.limit_first is None else None
+                        if hit is not None:
+                            s, k = hit
+                            summ.limit_first = limit_line(model, kin, s, limited[k], float(c[s, k]), start)
                     # every sample of the bodies' window, then every SINGULARITY_STRIDE-th (three SVDs
                     # a sample cost more than the rest of the run)
                     idx = np.arange(start, stop)
                     pick = np.flatnonzero((idx < body_rows) | (idx % SINGULARITY_STRIDE == 0))
-                    sm = singularity_measures(model, kin.q[pick])
+                    sm = singularity_measures(model, kin.q[pick]) if pick.size else None
                     try:
                         reac = joint_reactions(model, kin, named=m.loads, split=True, sample_offset=start,
                                                overconstrained=overconstrained)
