@@ -198,6 +198,11 @@ def test_split_parts_add_up_to_the_total_in_the_run_files(tmp_path, name):
             assert np.abs(sum(got) - total).max() <= 1e-12 * np.abs(total).max(), c
             checked += 1
     assert checked == len(summary["actuators"])  # every actuator's split: its motor's for a drive, else the joint's
+    # the columns identify --machine accepts from a run are the ones a run writes
+    from pkmdyn.cli.mechanism import _load
+    from pkmdyn.multibody.run import results_column_names
+
+    assert head == results_column_names(_load(name)[0])
 
 
 # --------------------------------------------------------------------------- idle freedoms
