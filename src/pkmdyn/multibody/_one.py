@@ -115,6 +115,9 @@ def pack(model: MechanismModel) -> NDArray[np.int64]:
     arrays.update(friction_arrays(model))
     arrays["load_named"] = np.array([nm is not None for nm in model.load_name], dtype=np.int64)
     arrays["drive_eps"] = motor_eps(model)
+    if not model.has_drives:  # no drive: empty arrays, and the kernel's drive terms do nothing
+        for k in ("drive_ratio", "drive_rotor", "drive_coulomb", "drive_viscous", "drive_eps"):
+            arrays[k] = np.zeros(0)
     arrays["solver_rowpos"] = np.empty(model.row_loop.shape[0] + model.nt, dtype=np.int64)
     arrays["solver_colpos"] = np.empty(model.nq, dtype=np.int64)
     arrays["solver_idlepos"] = np.empty(model.solver_idle.shape[0], dtype=np.int64)
@@ -452,7 +455,8 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     task_mass(S, Gp, body_parent, body_joint, joint_q0, joint_nq, R, pc, mass, inertia_factor, M, T, Z, tmp)
     # ---- 4b. the drives (multibody.actuators, Eq. A1): rotor inertia k^2 I_r along each actuator's
     # row of J_ax, its bias acceleration and the motor friction, in the motor's effort
-    for a in range(nt):
+    nd = ratio.shape[0]  # 0 without drives (pack), else one per actuator
+    for a in range(nd):
         ca = _nn(act_coord[a])
         ka = ratio[a]
         thd = ka * qd[ca]
@@ -469,7 +473,7 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
         for t in range(nt):
             acc = -h[t]
             for a in range(nt):
-                acc += Gp[_nn(act_coord[a]), t] * ratio[a] * v[a]
+                acc += Gp[_nn(act_coord[a]), t] * (ratio[a] if nd else 1.0) * v[a]
             out[t] = acc
         big = 0.0
         for t in range(nt):
@@ -483,7 +487,7 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
                 acc += M[t, j] * v[j]
             out[t] = acc
             for a in range(nt):
-                Bm[t, a] = Gp[_nn(act_coord[a]), t] * ratio[a]
+                Bm[t, a] = Gp[_nn(act_coord[a]), t] * (ratio[a] if nd else 1.0)
         # the checked verb's screen: Hadamard ratio |det A| / prod |a_i| of the column-scaled map
         for a in range(nt):
             big = 0.0
