@@ -675,10 +675,10 @@ def test_cut_route_solves_a_sample_with_dependent_columns_by_least_squares():
     W = np.zeros((5, m.nb, 6))
     rng = np.random.default_rng(0)
     lam = rng.normal(size=(5, cuts.A.shape[2]))
-    before = cuts.solve(m, W, np.einsum("nqk,nk->nq", cuts.A, lam), np.zeros((5, m.nq)), None)
+    before, _ = cuts.solve(m, W, np.einsum("nqk,nk->nq", cuts.A, lam), np.zeros((5, m.nq)), None)
     cuts.A[2, :, 7] = cuts.A[2, :, 2] - 0.5 * cuts.A[2, :, 4]
     rhs = np.einsum("nqk,nk->nq", cuts.A, lam)
-    z = cuts.solve(m, W, rhs, np.zeros((5, m.nq)), None)
+    z, _ = cuts.solve(m, W, rhs, np.zeros((5, m.nq)), None)
     assert np.all(np.isfinite(z))
     keep = [0, 1, 3, 4]
     assert np.abs(z[keep] - before[keep]).max() <= 1e-9 * np.abs(before).max()

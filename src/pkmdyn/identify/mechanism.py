@@ -29,8 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..io import output_dir, read_csv_columns, write_csv, write_json
-from ..multibody.actuators import motor_effort_column
-from ..multibody.dynamics import effort_unit
+from ..multibody.output import actuator_effort_column
 from ..multibody.identify import regressor
 from ..multibody.kinematics import solve_kinematics
 from ..multibody.model import MechanismModel
@@ -50,8 +49,7 @@ Array = NDArray[np.float64]
 def effort_columns(model: MechanismModel) -> list[str]:
     """The measured file's effort columns, in actuator order: a drive's motor effort
     (``<actuator>_torque_Nm``), else the joint's (``<joint>_effort_<N|Nm>``)."""
-    return [motor_effort_column(model, i) if model.drive_name[i] is not None else f"{a}_effort_{effort_unit(model, i)}"
-            for i, a in enumerate(model.actuator_names)]
+    return [actuator_effort_column(model, i) for i in range(model.na)]
 
 
 def read_measured(model: MechanismModel, path: Path) -> tuple[Array, Array, Array, Array, Array, dict[str, Array]]:

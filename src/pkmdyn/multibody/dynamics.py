@@ -500,8 +500,7 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
                                        affine=(z0, Z))
             method = "compliance"
         elif cuts is not None:
-            z = cuts.solve(model, W, Q if Qf is None else Q + Qf, eff, F)
-            mu = cuts.holding
+            z, mu = cuts.solve(model, W, Q if Qf is None else Q + Qf, eff, F)
             method, t = "rigid", 0
         elif r < A.shape[2] and overconstrained == "minimum-norm":
             coef = np.einsum("nmr,nm->nr", U[:, :, :r], b) / sv[:, :r]
@@ -569,7 +568,7 @@ def effort_shares(model: MechanismModel, kin: MechanismKinematics, S: Array, W: 
     group's wrenches or of one joint's friction."""
     n, nq = S.shape[0], model.nq
     ng, nj = len(model.group_names), len(model.joint_names)
-    rubbing = [jd for jd in fr.joints] if fr is not None and F else []  # the joints with friction
+    rubbing = list(fr.joints) if fr is not None and F else []  # the joints with friction
     rhs = np.zeros((n, nq, ng + len(rubbing)))
     for g in range(ng):
         Wg = np.where((model.body_group == g)[None, :, None], W, 0.0)
@@ -710,8 +709,10 @@ class _CutRoute:
             self._D[j] = Tc @ np.linalg.inv(T @ Tc)
         return self._D[j]
 
-    def solve(self, model: MechanismModel, W: Array, Qtot: Array, eff: Array, F: dict | None) -> Array:
-        """Every joint wrench ``z (n, 6 nj)`` (full column rank)."""
+    def solve(self, model: MechanismModel, W: Array, Qtot: Array, eff: Array, F: dict | None
+              ) -> tuple[Array, Array]:
+        """Every joint wrench ``z (n, 6 nj)`` (full column rank) and the idle freedoms' holding
+        forces ``mu (n, k)`` (:func:`idle_holding`)."""
         n, K = W.shape[0], self.A.shape[2]
         rhs = np.ascontiguousarray(Qtot - eff)
         lam = np.zeros((n, K))
@@ -723,8 +724,7 @@ class _CutRoute:
             for s in np.flatnonzero(~ok):  # columns dependent at this sample (a constraint singularity):
                 # the minimum-norm multipliers, which balance every body but are one choice of many
                 lam[s] = np.linalg.lstsq(self.A[s], rhs[s], rcond=None)[0]
-        self.holding = lam[:, self.n_cut:]  # the idle freedoms' mu (idle_holding)
-        return self.assemble(model, W, lam, F)
+        return self.assemble(model, W, lam, F), lam[:, self.n_cut:]
 
     def assemble(self, model: MechanismModel, W: Array, lam: Array, F: dict | None) -> Array:
         """Every joint wrench ``z (n, 6 nj)`` from the cut joints' ``lam (n, K)``: the cut wrenches,

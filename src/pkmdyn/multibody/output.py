@@ -23,10 +23,31 @@ from .kinematics import MechanismKinematics
 from .model import MechanismModel
 from .motion import task_columns
 
-__all__ = ["results_columns", "model_summary", "bodies_arrays", "report_columns", "write_run_report"]
+__all__ = ["results_columns", "motion_columns", "joint_effort_column", "actuator_effort_column", "model_summary", "bodies_arrays",
+           "report_columns", "write_run_report"]
 
 Array = NDArray[np.float64]
 _MOTION_NAMES = ("RX", "RY", "RZ", "TX", "TY", "TZ")
+
+
+def motion_columns(name: str, unit: str) -> tuple[str, str, str]:
+    """The columns of a coordinate ``name`` in ``unit`` (an actuated joint's or a motor's):
+    ``<name>_pos_<u>``, ``<name>_vel_<u>_s``, ``<name>_acc_<u>_s2``."""
+    return f"{name}_pos_{unit}", f"{name}_vel_{unit}_s", f"{name}_acc_{unit}_s2"
+
+
+def joint_effort_column(model: MechanismModel, i: int, part: str | None = None) -> str:
+    """Actuated joint i's effort column ``<joint>_effort_<N|Nm>``, or one part of it
+    (``<joint>_effort_<part>_<N|Nm>``)."""
+    name, unit = model.actuator_names[i], effort_unit(model, i)
+    return f"{name}_effort_{unit}" if part is None else f"{name}_effort_{part}_{unit}"
+
+
+def actuator_effort_column(model: MechanismModel, i: int, part: str | None = None) -> str:
+    """Actuator i's effort column as its machine is driven, or one part of its split: at the
+    motor for a drive (:func:`.actuators.motor_effort_column`), else at the joint."""
+    return motor_effort_column(model, i, part) if model.drive_name[i] is not None else \
+        joint_effort_column(model, i, part)
 
 
 def results_columns(model: MechanismModel, kin: MechanismKinematics) -> dict[str, Array]:
@@ -38,9 +59,8 @@ def results_columns(model: MechanismModel, kin: MechanismKinematics) -> dict[str
     for k, c in enumerate(pos):
         cols[c] = kin.x[:, k]
     for i, (name, unit) in enumerate(zip(model.actuator_names, model.actuator_units)):
-        cols[f"{name}_pos_{unit}"] = kin.act_q[:, i]
-        cols[f"{name}_vel_{unit}_s"] = kin.act_qd[:, i]
-        cols[f"{name}_acc_{unit}_s2"] = kin.act_qdd[:, i]
+        for c, v in zip(motion_columns(name, unit), (kin.act_q, kin.act_qd, kin.act_qdd)):
+            cols[c] = v[:, i]
     return cols
 
 
@@ -166,14 +186,22 @@ def bodies_arrays(model: MechanismModel, kin: MechanismKinematics) -> dict[str, 
     return out
 
 
+def _report_groups(model: MechanismModel) -> list[tuple[str, str, list[str]]]:
+    """The report's plots of the actuators: ``(title, y label, columns)``."""
+    joints = [motion_columns(a, u) for a, u in zip(model.actuator_names, model.actuator_units)]
+    groups = [("Actuator coordinates", "actuator coordinates [SI]", [c[0] for c in joints]),
+              ("Actuator rates", "actuator rates [SI]", [c[1] for c in joints]),
+              ("Actuator efforts", "actuator efforts [SI]", [joint_effort_column(model, i) for i in range(model.na)])]
+    motors = [motor_effort_column(model, i) for i, d in enumerate(model.drive_name) if d is not None]
+    if motors:
+        groups.append(("Motor efforts", "motor effort [N m or N]", motors))
+    return groups
+
+
 def report_columns(model: MechanismModel) -> list[str]:
     """The results columns a run's report plots (:func:`write_run_report`)."""
     pos, _, _ = task_columns(model)
-    units, names = model.actuator_units, model.actuator_names
-    return ["t_s", *pos, *(f"{a}_pos_{u}" for a, u in zip(names, units)),
-            *(f"{a}_vel_{u}_s" for a, u in zip(names, units)),
-            *(f"{a}_effort_{effort_unit(model, i)}" for i, a in enumerate(names)),
-            *(motor_effort_column(model, i) for i, d in enumerate(model.drive_name) if d is not None)]
+    return ["t_s", *pos, *(c for _, _, cols in _report_groups(model) for c in cols)]
 
 
 def write_run_report(out: Path, model: MechanismModel, cols: dict[str, Array], frames: dict[str, Array],
@@ -188,20 +216,12 @@ def write_run_report(out: Path, model: MechanismModel, cols: dict[str, Array], f
     t = cols["t_s"]
     pos, _, _ = task_columns(model)
     plots = [TimePlot("Task coordinates", "task coordinate [m or rad]", t, tuple(Curve(c, cols[c]) for c in pos))]
-    units = model.actuator_units
-    names = model.actuator_names
-    for label, group in (("actuator coordinates", [f"{a}_pos_{u}" for a, u in zip(names, units)]),
-                         ("actuator rates", [f"{a}_vel_{u}_s" for a, u in zip(names, units)]),
-                         ("actuator efforts", [f"{a}_effort_{effort_unit(model, i)}" for i, a in enumerate(names)])):
-        plots.append(TimePlot(label.capitalize(), f"{label} [SI]", t, tuple(Curve(c, cols[c]) for c in group)))
-    motors = [motor_effort_column(model, i) for i, d in enumerate(model.drive_name) if d is not None]
-    if motors:
-        plots.append(TimePlot("Motor efforts", "motor effort [N m or N]", t, tuple(Curve(c, cols[c]) for c in motors)))
+    for title, label, group in _report_groups(model):
+        plots.append(TimePlot(title, label, t, tuple(Curve(c, cols[c]) for c in group)))
     idx = frame_indices_of(t, frames["t"])
     efforts = {}
     for i, name in enumerate(model.actuator_names):
-        col = f"{name}_effort_{effort_unit(model, i)}"
-        efforts[name] = (cols[col][idx], f"{name} effort", effort_unit(model, i))
+        efforts[name] = (cols[joint_effort_column(model, i)][idx], f"{name} effort", effort_unit(model, i))
     joints = [(nm, JOINT_TYPES[model.joint_type[k]].name,
                "ground" if model.joint_parent[k] < 0 else model.body_names[model.joint_parent[k]],
                "ground" if model.joint_child[k] < 0 else model.body_names[model.joint_child[k]])

@@ -28,11 +28,12 @@ from numpy.typing import NDArray
 from ..errors import PkmdynError
 from ..io import NpzWriter, check_table_format, open_table_writer, output_dir, write_json
 from .actuators import check_actuator_rates, check_task_rates, effective_limits, motor_effort_column, motor_efforts
-from .dynamics import effort_unit, joint_reactions, load_forces, named_magnitudes
+from .dynamics import joint_reactions, load_forces, named_magnitudes
 from .kinematics import MechanismKinematics, joint_coordinates, limit_hit, limit_line, limited_joints, \
     singularity_measures, solve_kinematics
 from .model import MechanismModel
-from .output import bodies_arrays, model_summary, report_columns, results_columns, write_run_report
+from .output import bodies_arrays, joint_effort_column, model_summary, motion_columns, report_columns, results_columns, \
+    actuator_effort_column, write_run_report
 
 __all__ = ["run_mechanism", "effort_columns", "results_column_names", "CHUNK"]
 
@@ -54,33 +55,25 @@ def effort_columns(model: MechanismModel, kin: MechanismKinematics, reac: Any, n
     loads' magnitudes."""
     cols: dict[str, Array] = {}
     u = reac.u
-    for i, name in enumerate(model.actuator_names):
-        cols[f"{name}_effort_{effort_unit(model, i)}"] = u[:, i]
+    for i in range(model.na):
+        cols[joint_effort_column(model, i)] = u[:, i]
     mot = motor_efforts(model, kin.act_q, kin.act_qd, kin.act_qdd, u)
     for i, name in enumerate(model.drive_name):
         if name is None:
             continue
-        unit = model.motor_units[i]
-        cols[f"{name}_pos_{unit}"] = mot.theta[:, i]
-        cols[f"{name}_vel_{unit}_s"] = mot.theta_dot[:, i]
-        cols[f"{name}_acc_{unit}_s2"] = mot.theta_ddot[:, i]
+        for c, v in zip(motion_columns(name, model.motor_units[i]), (mot.theta, mot.theta_dot, mot.theta_ddot)):
+            cols[c] = v[:, i]
         cols[motor_effort_column(model, i)] = mot.effort[:, i]
     sh = reac.shares
     if sh is not None:
         k = model.drive_ratio
         fr_joint = sh.friction.sum(axis=2)
-        for i, joint in enumerate(model.actuator_names):
-            drive = model.drive_name[i] is not None
-
-            def col(part: str, i: int = i, joint: str = joint, drive: bool = drive) -> str:
-                return motor_effort_column(model, i, part) if drive else \
-                    f"{joint}_effort_{part}_{effort_unit(model, i)}"
-
+        for i in range(model.na):
             for g, gname in enumerate(model.group_names):
-                cols[col(gname)] = sh.groups[:, i, g] / k[i]
-            if drive:
-                cols[col("rotor")] = mot.rotor[:, i]
-            cols[col("friction")] = fr_joint[:, i] / k[i] + mot.friction[:, i]
+                cols[actuator_effort_column(model, i, gname)] = sh.groups[:, i, g] / k[i]
+            if model.drive_name[i] is not None:
+                cols[actuator_effort_column(model, i, "rotor")] = mot.rotor[:, i]
+            cols[actuator_effort_column(model, i, "friction")] = fr_joint[:, i] / k[i] + mot.friction[:, i]
     if model.named_loads:
         cols.update(named_magnitudes(model, len(kin), named))
     return cols
@@ -94,17 +87,14 @@ def results_column_names(model: MechanismModel) -> list[str]:
     pos, _, _ = task_columns(model)
     out = ["t_s", *pos]
     for name, unit in zip(model.actuator_names, model.actuator_units):
-        out += [f"{name}_pos_{unit}", f"{name}_vel_{unit}_s", f"{name}_acc_{unit}_s2"]
-    out += [f"{name}_effort_{effort_unit(model, i)}" for i, name in enumerate(model.actuator_names)]
+        out += motion_columns(name, unit)
+    out += [joint_effort_column(model, i) for i in range(model.na)]
     for i, name in enumerate(model.drive_name):
         if name is not None:
-            u = model.motor_units[i]
-            out += [f"{name}_pos_{u}", f"{name}_vel_{u}_s", f"{name}_acc_{u}_s2", motor_effort_column(model, i)]
-    for i, joint in enumerate(model.actuator_names):
-        drive = model.drive_name[i] is not None
-        parts = [*model.group_names, *(["rotor"] if drive else []), "friction"]
-        out += [motor_effort_column(model, i, p) if drive else f"{joint}_effort_{p}_{effort_unit(model, i)}"
-                for p in parts]
+            out += [*motion_columns(name, model.motor_units[i]), motor_effort_column(model, i)]
+    for i in range(model.na):
+        parts = [*model.group_names, *(["rotor"] if model.drive_name[i] is not None else []), "friction"]
+        out += [actuator_effort_column(model, i, p) for p in parts]
     return out + list(model.named_loads)
 
 
@@ -150,9 +140,7 @@ class _Summary:
             self.holding = max(self.holding, float(np.abs(reac.holding).max()))
         self.joint_effort = np.maximum(self.joint_effort, np.abs(reac.u).max(axis=0))
         for i, name in enumerate(model.drive_name):
-            col = motor_effort_column(model, i) if name is not None else \
-                f"{model.actuator_names[i]}_effort_{effort_unit(model, i)}"
-            tau = cols[col]
+            tau = cols[actuator_effort_column(model, i)]
             self.motor_effort[i] = max(self.motor_effort[i], float(np.abs(tau).max()))
             self.motor_speed[i] = max(self.motor_speed[i], float(np.abs(kin.act_qd[:, i] * model.drive_ratio[i]).max()))
             lim = model.drive_max_effort[i]
