@@ -15,6 +15,7 @@ import multibody_examples as ex
 from pkmdyn.cli import main
 from pkmdyn.errors import LimitError, ParameterError
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
+from pkmdyn.multibody.kinematics import TOLERANCE
 from pkmdyn.multibody.actuators import motor_efforts, rotor_energy
 from pkmdyn.multibody.dynamics import joint_reactions
 
@@ -133,7 +134,10 @@ def test_verbs_with_drives_are_the_motor_side_equations():
     T, _ = energies(m, kin)
     assert _rel(0.5 * np.einsum("ni,nij,nj->n", xd, M, xd), T + rotor_energy(m, kin.act_qd)) < 1e-12
     B = v.actuator_map(m, x)
-    assert _rel(B, np.swapaxes(kin.J_ax, 1, 2) * m.drive_ratio) < 1e-14
+    # the verbs solve each pose from their own start, the run along the motion: both close the loops
+    # to the solver's TOLERANCE (1e-13, dimensionless), which moves J_ax by up to the condition
+    # number of the Newton matrix times that
+    assert _rel(B, np.swapaxes(kin.J_ax, 1, 2) * m.drive_ratio) < 100 * TOLERANCE
     for i in range(len(t)):
         one = v.inverse_dynamics_one(m, x[i], xd[i], xdd[i])
         assert _rel(one, tau[i]) < 1e-9

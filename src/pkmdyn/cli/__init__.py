@@ -39,7 +39,16 @@ def main(argv: list[str] | None = None) -> int:
     Ctrl-C and SIGTERM end a run cleanly (its temporary output removed) with one line; a run
     that failed says nothing but its error line (notes held back are dropped).
     """
+    from ..compile_notice import install, summary
+
+    install()
     status = _main(argv)
+    done = summary()
+    if done is not None and status == 0:
+        try:
+            click.echo(done, err=True)
+        except OSError:
+            pass
     notes = list(HELD_NOTES) if status == 0 else []
     HELD_NOTES.clear()
     for note in notes:

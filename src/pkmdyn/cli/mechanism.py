@@ -40,6 +40,8 @@ def _load(machine: str):
 @click.option("--machine", required=True, help=_MACHINE_HELP)
 def describe(machine: str) -> None:
     """Print the topology, mobility and over-constraints of a machine."""
+    from ..multibody.legs import LEG_PATTERNS
+
     model, _ = _load(machine)
     rep = model.topology
     counts = ", ".join(f"{c} {k}" for k, c in rep.joint_counts.items())
@@ -58,6 +60,9 @@ def describe(machine: str) -> None:
         f"actuated joints: {', '.join(model.actuator_names)}",
         f"task coordinates: {', '.join(f'{n} [{u}]' for n, u in zip(model.task_names, model.task_units))} "
         f"of body {model.body_names[model.task_body]}",
+        f"explicit legs (closed form, {model.legs.count}): "
+        + (", ".join(f"{'-'.join(chain)} to {cut} ({LEG_PATTERNS[kind].split(' ')[0]})"
+                     for cut, chain, kind in model.legs.names) or "none; Newton solves every loop"),
     ]
     for line in lines:
         if line is not None:

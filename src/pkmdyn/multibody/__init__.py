@@ -21,6 +21,7 @@ from .kinematics import (
     singularity_measures,
     solve_kinematics,
 )
+from .legs import LegTable, newton_only
 from .model import LoopRecord, MechanismModel, compile_model
 from .motion import TaskMotion, default_motion, read_task_motion, task_columns
 from .topology import TopologyReport, analyse_topology, constraint_jacobian
@@ -31,7 +32,7 @@ __all__ = [
     "TopologyReport", "analyse_topology", "constraint_jacobian",
     "MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals", "reachable",
     "SingularityMeasures", "singularity_measures",
-    "TaskMotion", "default_motion", "read_task_motion", "task_columns",
+    "TaskMotion", "default_motion", "read_task_motion", "task_columns", "LegTable", "newton_only",
 ]
 
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._kernels import _advance, _frame, _matmul3, _nn, _unit_twist, forward_positions
+from ._kernels import _advance, _frame, _matmul3, _nn, _unit_twist, forward_positions, empty_legs
 
 
 @njit(cache=True)
@@ -20,9 +20,10 @@ def twists_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, c
     w33 = np.empty((5, 3, 3))
     w3 = np.empty((20, 3))
     trig = np.empty((q.shape[1], 3))
+    legs = empty_legs(nb)
     for s in range(q.shape[0]):
         forward_positions(q[s], body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
-                          RP, pP, RC, pC, R, p, S_out[s], w33, w3, trig, False)
+                          RP, pP, RC, pC, R, p, S_out[s], w33, w3, trig, False, legs, False)
 
 
 @njit(cache=True, _nrt=False, inline="always")
@@ -82,7 +83,7 @@ def body_wrench_batch(R, w, wd, p, a, mass, inertia, gravity, W_out):  # pragma:
     _body_wrench_loop(R, w, wd, p, a, mass, inertia, gravity, W_out, np.empty((3, 3)), np.empty((3, 3)))
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False)
 def generalised(S, W, anc_list, Q):  # pragma: no cover - compiled
     """One sample of Eq. (2): ``Q (nq,)``, ``Q_c = S_c . sum of W_b over the bodies c moves``
     (``S (nq, 6)``, ``W (nb, 6)``; ``anc_list`` the model's ``ancestor_list``: per body a count,
@@ -218,7 +219,7 @@ def _gram(Z, M):  # pragma: no cover - compiled
             M[j, i] = acc
 
 
-@njit(cache=True, _nrt=False, inline="always")
+@njit(cache=True, _nrt=False)
 def task_mass(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, factor, M, T, Z,
               RL):  # pragma: no cover - compiled
     """One sample's ``M (nt, nt) = sum_b T_b^T I_b T_b``: the bodies' kinetic energy in the task

@@ -149,37 +149,273 @@ def _cos_sin(trig, c, qc, reuse):
     return cq, sq
 
 
-@njit(cache=True, _nrt=False, inline='always')
+# ---- explicit leg closure (:mod:`.legs`): Paden-Kahan subproblems on a leg's product of exponentials
+#: leg patterns (:mod:`.legs`): a first joint then a ball of one or two turns about a point ``m0``;
+#: one or two turns about ``m0`` then a slide
+LEG_A1, LEG_A2, LEG_B1, LEG_B2 = 1, 2, 3, 4
+
+
+@njit(cache=True, inline="always")
+def _rotate_about(w, r, th, x, out):  # pragma: no cover - compiled
+    """``out``: the point ``x`` turned by ``th`` about the unit axis ``w`` through ``r``
+    (Rodrigues)."""
+    c, s = math.cos(th), math.sin(th)
+    d0, d1, d2 = x[0] - r[0], x[1] - r[1], x[2] - r[2]
+    wd = w[0] * d0 + w[1] * d1 + w[2] * d2
+    k0 = w[1] * d2 - w[2] * d1
+    k1 = w[2] * d0 - w[0] * d2
+    k2 = w[0] * d1 - w[1] * d0
+    out[0] = r[0] + c * d0 + s * k0 + (1.0 - c) * wd * w[0]
+    out[1] = r[1] + c * d1 + s * k1 + (1.0 - c) * wd * w[1]
+    out[2] = r[2] + c * d2 + s * k2 + (1.0 - c) * wd * w[2]
+
+
+@njit(cache=True, inline="always")
+def _sp1(w, u, v):  # pragma: no cover - compiled
+    """Paden-Kahan subproblem 1: the angle that turns the vector ``u`` into ``v`` about the
+    unit axis ``w`` (both taken normal to ``w``)."""
+    uw = _dot(w, u)
+    vw = _dot(w, v)
+    a0, a1, a2 = u[0] - uw * w[0], u[1] - uw * w[1], u[2] - uw * w[2]
+    b0, b1, b2 = v[0] - vw * w[0], v[1] - vw * w[1], v[2] - vw * w[2]
+    cr = w[0] * (a1 * b2 - a2 * b1) + w[1] * (a2 * b0 - a0 * b2) + w[2] * (a0 * b1 - a1 * b0)
+    return math.atan2(cr, a0 * b0 + a1 * b1 + a2 * b2)
+
+
+@njit(cache=True, inline="always")
+def _near(th, cur):  # pragma: no cover - compiled
+    """The angle ``th`` moved by whole turns to lie within half a turn of ``cur``."""
+    return cur + _wrap(th - cur)
+
+
+@njit(cache=True, inline="always")
+def _quadratic_nearest(b, c, cur, tol):  # pragma: no cover - compiled
+    """The root of ``t^2 + 2 b t + c = 0`` nearest ``cur``; ``nan`` when there is none (a
+    negative discriminant beyond ``tol``: out of reach)."""
+    disc = b * b - c
+    if disc < 0.0:
+        if disc < -tol:
+            return math.nan
+        disc = 0.0
+    sq = math.sqrt(disc)
+    t1, t2 = -b + sq, -b - sq
+    return t1 if abs(t1 - cur) <= abs(t2 - cur) else t2
+
+
+@njit(cache=True, inline="always")
+def _sp2(w1, w2, u, v, cur1, cur2, z, t3):  # pragma: no cover - compiled
+    """Paden-Kahan subproblem 2: angles ``(th1, th2)`` with ``Rot(w1, th1) Rot(w2, th2) u = v``
+    about two unit axes through one point (``|u| = |v|``): ``z = Rot(w2, th2) u`` lies on
+    both cones, ``z = al w1 + be w2 + ga (w1 x w2)``. Of the two solutions (the sign of
+    ``ga``) the one nearest ``(cur1, cur2)``; ``(nan, nan)`` when ``v`` is out of reach."""
+    c12 = _dot(w1, w2)
+    den = 1.0 - c12 * c12
+    w1v = _dot(w1, v)
+    w2u = _dot(w2, u)
+    al = (w1v - c12 * w2u) / den
+    be = (w2u - c12 * w1v) / den
+    _cross(w1, w2, t3)
+    g2 = (_dot(u, u) - al * al - be * be - 2.0 * al * be * c12) / _dot(t3, t3)
+    if g2 < 0.0:
+        if g2 < -1e-10 * _dot(u, u) / _dot(t3, t3):
+            return math.nan, math.nan
+        g2 = 0.0
+    ga = math.sqrt(g2)
+    best1, best2, bestd = math.nan, math.nan, math.inf
+    for sg in (1.0, -1.0):
+        for i in range(3):
+            z[i] = al * w1[i] + be * w2[i] + sg * ga * t3[i]
+        th2 = _near(_sp1(w2, u, z), cur2)
+        th1 = _near(_sp1(w1, z, v), cur1)
+        d = (th1 - cur1) ** 2 + (th2 - cur2) ** 2
+        if d < bestd:
+            best1, best2, bestd = th1, th2, d
+    return best1, best2
+
+
+@njit(cache=True, inline="always")
+def _explicit_leg(L, q, R, p, legs, w3):  # pragma: no cover - compiled
+    """Set leg ``L``'s coordinates in ``q`` in closed form from the pose of the body it meets
+    (:mod:`.legs`): the cut joint's point on that body, ``c``, taken into the leg's base frame,
+    is reached by the leg's end point ``e`` along its product of exponentials about the
+    reference configuration, ``e(th) = exp(xi_1 th_1) ... exp(xi_k th_k) e0`` (``th = q -
+    q_ref``; Paden & Kahan's subproblems, Murray, Li & Sastry 1994, section 3.3). Of two
+    assembly branches, the one nearest the present ``q``. Returns False (``q`` left as it is,
+    for Newton) where ``c`` is out of the leg's reach."""
+    (_, leg_kind, leg_coord, leg_base, leg_placed, leg_cpt, leg_axis, leg_point, leg_m0, leg_e0,
+     leg_q0, _) = legs
+    c, cb, u, v, z, t3 = w3[0], w3[1], w3[2], w3[3], w3[4], w3[5]
+    P = leg_placed[L]
+    for i in range(3):
+        c[i] = leg_cpt[L, i]
+    if P >= 0:
+        P = _nn(P)
+        for i in range(3):
+            c[i] = p[P, i] + R[P, i, 0] * leg_cpt[L, 0] + R[P, i, 1] * leg_cpt[L, 1] + R[P, i, 2] * leg_cpt[L, 2]
+    B = leg_base[L]
+    if B >= 0:  # into the base body's frame
+        B = _nn(B)
+        for i in range(3):
+            cb[i] = ((c[0] - p[B, 0]) * R[B, 0, i] + (c[1] - p[B, 1]) * R[B, 1, i]
+                     + (c[2] - p[B, 2]) * R[B, 2, i])
+        for i in range(3):
+            c[i] = cb[i]
+    kind = leg_kind[L]
+    c0, c1 = _nn(leg_coord[L, 0]), _nn(leg_coord[L, 1])
+    cur0, cur1 = q[c0] - leg_q0[L, 0], q[c1] - leg_q0[L, 1]
+    m0 = leg_m0[L]
+    e0 = leg_e0[L]
+    a0 = leg_axis[L, 0]
+    a1 = leg_axis[L, 1]
+    scale = _dot(e0, e0) + _dot(m0, m0) + _dot(c, c) + 1e-300
+    if kind == LEG_A1 or kind == LEG_A2:
+        # 1. the first joint brings m0 to the distance |e0 - m0| from c
+        d2 = 0.0
+        for i in range(3):
+            d2 += (e0[i] - m0[i]) ** 2
+        if leg_point[L, 0, 0] != leg_point[L, 0, 0]:  # a slide (no axis point): |m0 + t a - c|^2 = d2
+            bq = 0.0
+            cq = -d2
+            for i in range(3):
+                bq += a0[i] * (m0[i] - c[i])
+                cq += (m0[i] - c[i]) ** 2
+            th0 = _quadratic_nearest(bq, cq, cur0, 1e-12 * scale)
+            if th0 != th0:
+                return False
+            for i in range(3):
+                cb[i] = c[i] - th0 * a0[i]  # c taken back through the first joint
+        else:  # a turn about a0 through r: cos(th - th_c) = (|u'|^2 + |v'|^2 - d'^2) / (2 |u'| |v'|)
+            r = leg_point[L, 0]
+            for i in range(3):
+                u[i] = m0[i] - r[i]
+                v[i] = c[i] - r[i]
+            ua, va = _dot(a0, u), _dot(a0, v)
+            for i in range(3):
+                u[i] -= ua * a0[i]
+                v[i] -= va * a0[i]
+            nu, nv = math.sqrt(_dot(u, u)), math.sqrt(_dot(v, v))
+            dd = d2 - (ua - va) ** 2
+            if nu * nv == 0.0:
+                return False
+            cs = (nu * nu + nv * nv - dd) / (2.0 * nu * nv)
+            if abs(cs) > 1.0:
+                if abs(cs) > 1.0 + 1e-10:
+                    return False
+                cs = 1.0 if cs > 0 else -1.0
+            thc = _sp1(a0, u, v)
+            h = math.acos(cs)
+            t1, t2 = _near(thc + h, cur0), _near(thc - h, cur0)
+            th0 = t1 if abs(t1 - cur0) <= abs(t2 - cur0) else t2
+            _rotate_about(a0, r, -th0, c, cb)
+        q[c0] = leg_q0[L, 0] + th0
+        # 2. the ball about m0 turns e0 - m0 into cb - m0
+        for i in range(3):
+            u[i] = e0[i] - m0[i]
+            v[i] = cb[i] - m0[i]
+        if kind == LEG_A1:
+            q[c1] = leg_q0[L, 1] + _near(_sp1(a1, u, v), cur1)
+        else:
+            c2 = _nn(leg_coord[L, 2])
+            th1, th2 = _sp2(a1, leg_axis[L, 2], u, v, cur1, q[c2] - leg_q0[L, 2], z, t3)
+            if th1 != th1:
+                return False
+            q[c1] = leg_q0[L, 1] + th1
+            q[c2] = leg_q0[L, 2] + th2
+        return True
+    # LEG_B1, LEG_B2: the slide last, |e0 + t a - m0| = |c - m0| (normal to the turn's axis for B1)
+    ks = 1 if kind == LEG_B1 else 2
+    cs_ = _nn(leg_coord[L, ks])
+    a = leg_axis[L, ks]
+    for i in range(3):
+        u[i] = e0[i] - m0[i]
+        v[i] = c[i] - m0[i]
+    if kind == LEG_B1:
+        ua, va = _dot(a0, u), _dot(a0, v)
+        for i in range(3):
+            u[i] -= ua * a0[i]
+            v[i] -= va * a0[i]
+    bq = _dot(a, u)
+    cq = _dot(u, u) - _dot(v, v)
+    ts = _quadratic_nearest(bq, cq, q[cs_] - leg_q0[L, ks], 1e-12 * scale)
+    if ts != ts:
+        return False
+    for i in range(3):
+        u[i] = e0[i] - m0[i] + ts * a[i]
+        v[i] = c[i] - m0[i]
+    if kind == LEG_B1:
+        q[c0] = leg_q0[L, 0] + _near(_sp1(a0, u, v), cur0)
+    else:
+        th0, th1 = _sp2(a0, a1, u, v, cur0, cur1, z, t3)
+        if th0 != th0:
+            return False
+        q[c0] = leg_q0[L, 0] + th0
+        q[c1] = leg_q0[L, 1] + th1
+    q[cs_] = leg_q0[L, ks] + ts
+    return True
+
+
+@njit(cache=True)
+def empty_legs(nb):  # pragma: no cover - compiled
+    """An empty leg table (:class:`.legs.LegTable`) for ``nb`` bodies, for the passes that
+    take ``q`` as it is."""
+    return (np.full(nb, -1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 3), dtype=np.int64),
+            np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 3)), np.zeros((0, 3, 3)),
+            np.zeros((0, 3, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 1), dtype=np.int64))
+
+
+@njit(cache=True, _nrt=False)
 def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
-                      RP, pP, RC, pC, R, p, S, w33, w3, trig, reuse):
+                      RP, pP, RC, pC, R, p, S, w33, w3, trig, reuse, legs, explicit):
     """Body poses ``R (nb, 3, 3)``, ``p (nb, 3)`` and coordinate twists ``S (nq, 6)`` at ``q``
     (frames ``RP, pP, RC, pC`` in tree order; coordinate c moves by ``coord_sign[c] (q - offset)``;
     ``w33 (5, 3, 3)``, ``w3 (20, 3)``: work space). ``trig (nq, 3)`` keeps each turning
     coordinate's cosine and sine (:func:`_cos_sin`); with ``reuse`` they are taken from the last
-    pass where ``q`` moved little since (a Newton step)."""
+    pass where ``q`` moved little since (a Newton step). With ``explicit``, the bodies of the
+    legs of the table ``legs`` (:mod:`.legs`) wait until the rest is placed; then each leg in
+    turn has its coordinates in ``q`` set in closed form from the body it meets
+    (:func:`_explicit_leg`) and its bodies placed."""
     Rf = w33[0]
     o = w3[18]
+    late, redo = legs[0], legs[11]
     for b in range(body_parent.shape[0]):
-        k = _nn(body_joint[b])
-        _frame(body_parent[b], R, p, RP[k], pP[k], Rf, o)  # the joint frame on the parent, world
-        for c in range(_nn(joint_q0[k]), _nn(joint_q0[k] + joint_nq[k])):
-            m = _nn(coord_motion[c])
-            mm = m % 3
-            _unit_twist(S, c, coord_sign[c], m < 3, Rf[0, mm], Rf[1, mm], Rf[2, mm], o[0], o[1], o[2])
-            qc = coord_sign[c] * (q[c] - coord_offset[c])
-            if m < 3:
-                cq, sq = _cos_sin(trig, c, qc, reuse)
-                _turn(Rf, m, cq, sq)
-            else:
-                _slide(Rf, o, m, qc)
-        for i in range(3):
-            for j in range(3):
-                R[b, i, j] = Rf[i, 0] * RC[k, j, 0] + Rf[i, 1] * RC[k, j, 1] + Rf[i, 2] * RC[k, j, 2]
-        for i in range(3):
-            p[b, i] = o[i] - (R[b, i, 0] * pC[k, 0] + R[b, i, 1] * pC[k, 1] + R[b, i, 2] * pC[k, 2])
+        if explicit and late[b] >= 0:
+            continue
+        _forward_body(b, q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                      RP, pP, RC, pC, R, p, S, Rf, o, trig, reuse)
+    if explicit:
+        for L in range(redo.shape[0]):
+            _explicit_leg(L, q, R, p, legs, w3)
+            for i in range(1, _nn(redo[L, 0] + 1)):
+                _forward_body(redo[L, i], q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                              coord_sign, RP, pP, RC, pC, R, p, S, Rf, o, trig, reuse)
 
 
 @njit(cache=True, _nrt=False, inline='always')
+def _forward_body(b, q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                  RP, pP, RC, pC, R, p, S, Rf, o, trig, reuse):
+    """Body b's pose and its joint's coordinate twists (:func:`forward_positions`), its parent
+    placed."""
+    b = _nn(b)
+    k = _nn(body_joint[b])
+    _frame(body_parent[b], R, p, RP[k], pP[k], Rf, o)  # the joint frame on the parent, world
+    for c in range(_nn(joint_q0[k]), _nn(joint_q0[k] + joint_nq[k])):
+        m = _nn(coord_motion[c])
+        mm = m % 3
+        _unit_twist(S, c, coord_sign[c], m < 3, Rf[0, mm], Rf[1, mm], Rf[2, mm], o[0], o[1], o[2])
+        qc = coord_sign[c] * (q[c] - coord_offset[c])
+        if m < 3:
+            cq, sq = _cos_sin(trig, c, qc, reuse)
+            _turn(Rf, m, cq, sq)
+        else:
+            _slide(Rf, o, m, qc)
+    for i in range(3):
+        for j in range(3):
+            R[b, i, j] = Rf[i, 0] * RC[k, j, 0] + Rf[i, 1] * RC[k, j, 1] + Rf[i, 2] * RC[k, j, 2]
+    for i in range(3):
+        p[b, i] = o[i] - (R[b, i, 0] * pC[k, 0] + R[b, i, 1] * pC[k, 1] + R[b, i, 2] * pC[k, 2])
+
+
+@njit(cache=True, _nrt=False)
 def forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre):
     """Spatial velocities ``V (nb, 6)`` and the velocity ``Vpre (nq, 6)`` of the frame that
     carries each coordinate's twist."""
@@ -194,7 +430,7 @@ def forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vp
                 V[b, i] += S[c, i] * qd[c]
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False)
 def forward_accelerations(qd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A):
     """The bias accelerations ``A (nb, 6)`` (those at ``qdd = 0``; :func:`add_joint_accelerations`
     adds the rest)."""
@@ -217,7 +453,7 @@ def forward_accelerations(qd, body_parent, body_joint, joint_q0, joint_nq, S, Vp
             A[b, 5] += (w0 * t1 - w1 * t0 + v0 * s1 - v1 * s0) * d
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False)
 def add_joint_accelerations(qdd, body_parent, body_joint, joint_q0, joint_nq, S, A):
     """``A += `` the accelerations that ``qdd`` adds to the bias accelerations ``A (nb, 6)`` of
     :func:`forward_accelerations` (``sum S_c qdd_c`` over the coordinates of every joint from
@@ -384,7 +620,7 @@ def _jrow(J, i, colpos, wa, wb, S, anc, a, b, coef_a, coef_b):
                                              + wb[0] * S[c, 3] + wb[1] * S[c, 4] + wb[2] * S[c, 5])
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False)
 def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
          RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
          val, J, rowpos, colpos, mode, V, A, gamma, w33, w3):
@@ -517,7 +753,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
     return ok
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False)
 def _fill_idle(K, idle, idlepos, colpos):
     """The idle rows of the permuted Newton matrix: ``K[idlepos[i], colpos[c]] = idle[i, c]``."""
     for i in range(idle.shape[0]):
@@ -550,7 +786,7 @@ def _wrap(a):
     return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False)
 def block_lu_factor(M, piv, blocks):
     """LU with partial pivoting inside each diagonal block of a block lower-triangular ``M``
     (``blocks``: block start rows, then ``n``); rows are swapped up to the block's last column
@@ -598,7 +834,7 @@ def block_lu_factor(M, piv, blocks):
     return True
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False)
 def block_lu_solve(M, piv, blocks, prow, pcol, b, work):
     """Solve ``Kfull x = b`` in place (``b`` in the rows of ``Kfull``, ``x`` in coordinate
     order) with the factors of :func:`block_lu_factor` of the permuted ``K``: block by block,
@@ -630,7 +866,7 @@ def block_lu_solve(M, piv, blocks, prow, pcol, b, work):
         b[_nn(pcol[j])] = work[j]
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False)
 def block_lu_solve_columns(M, piv, blocks, prow, pcol, B, X, work):
     """:func:`block_lu_solve` for every column of ``B (n, k)`` at once into ``X (n, k)`` (rows of
     ``B`` in the rows of ``Kfull``, of ``X`` in coordinate order; ``work (n, k)``)."""
@@ -673,7 +909,7 @@ def block_lu_solve_columns(M, piv, blocks, prow, pcol, B, X, work):
             X[_nn(pcol[j]), t] = work[j, t]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _residuals(xs, val, nr, task_kind, res):
     """Residuals ``res`` of the rows: loop rows as they are, task rows less the task pose
     ``xs`` (angles wrapped)."""
@@ -686,7 +922,7 @@ def _residuals(xs, val, nr, task_kind, res):
             res[rr] = val[rr] - xs[rr - nr]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _idle_residuals(q, q_ref, idle, ires):
     """``ires = idle (q - q_ref)``: how far each idle freedom has moved from its reference."""
     for i in range(idle.shape[0]):
@@ -738,8 +974,8 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
        ``A`` (``K, piv`` are left holding the factors at the solution).
 
     The model's arrays and the work space come as five tuples (``tree``, ``loops``, ``task``,
-    ``solver``, ``work``, unpacked below in :func:`solve_batch`'s names), so that the call
-    stays short enough to be inlined. ``Gw (mk, nt)``: the constant right-hand sides
+    ``solver``, ``work``, unpacked below in :func:`solve_batch`'s names; ``tree`` ends with the
+    explicit legs' table, :mod:`.legs`), so that the call stays short. ``Gw (mk, nt)``: the constant right-hand sides
     ``(0; I; 0)`` (:func:`task_unit_rhs`); ``Gw2 (mk, nt)`` work space; ``trig (nq, 3)`` the
     turning coordinates' cosines and sines (:func:`_cos_sin`). Returns the status (OK,
     NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN); ``info[0]`` the worst row, ``info[1]``
@@ -747,10 +983,10 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
     On OK the poses ``R, p`` and twists ``S`` are those of the converged ``q``. The Jacobian's
     solved rows go straight into ``K`` at their permuted places (``rowpos``, ``colpos``,
     ``idlepos`` of :func:`solver_positions`, in ``solver``). The poses, the rows, the
-    factorisation and the solve are each called from one place, so that the compiled sample
-    carries one copy of each."""
+    factorisation and the solve are each compiled once, as functions of their own, and called
+    from one place each."""
     (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC,
-     tpC) = tree
+     tpC, legs) = tree
     RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child = loops
     task_body, task_point, task_kind, task_index, euler_axes = task
     sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter, rowpos, colpos, idlepos = solver
@@ -781,7 +1017,7 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
             mode = ROWS_DRIFT
         else:
             forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
-                              coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, again)
+                              coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, again, legs, True)
             # the pass after the simplified step (a step within rounding of the solution) starts from this
             # one's sines and cosines; a Newton step computes them afresh
             again = phase == _CHORD
@@ -857,15 +1093,15 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
         phase = _NEWTON
 
 
-#: :func:`solve_sample` inlined where it is called (the single-sample kernel, :mod:`._one`: its
-#: ~60 arrays then need no passing, which keeps the compiled sample smaller and faster); the
-#: batched loop (:func:`solve_batch`) calls it as a function, which keeps that loop faster
-solve_sample_inline = njit(cache=True, _nrt=False, inline="always")(solve_sample)
+#: :func:`solve_sample` compiled once, called as a function by the batched loop
+#: (:func:`solve_batch`) and by the single-sample kernel (:mod:`._one`) alike: inlining it
+#: there as well cost a second typing of the whole solver (some 90 s of cold compilation on
+#: two cores) for a few tenths of a microsecond per call
 solve_sample = njit(cache=True, _nrt=False)(solve_sample)
 
 
 @njit(cache=True)
-def solve_batch(tm, x, xd, xdd, q_start,
+def solve_batch(tm, x, xd, xdd, q_start, legs,
                 body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
                 tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
                 row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
@@ -884,7 +1120,8 @@ def solve_batch(tm, x, xd, xdd, q_start,
     ``K = [J[sel_rows]; idle]`` (nq, nq), permuted (``prow``, ``pcol``) to block lower-triangular
     form with diagonal blocks starting at ``blocks`` (legs that are independent once the
     platform is placed are solved one by one), starting from
-    ``q_{s-1} + qd_{s-1} dt + qdd_{s-1} dt^2 / 2`` (``dt = tm_s - tm_{s-1}``; the first-order
+    ``q_{s-1} + qd_{s-1} dt + qdd_{s-1} dt^2 / 2`` (the explicit legs' coordinates then set in
+    closed form at every evaluation, ``legs``: :mod:`.legs`) (``dt = tm_s - tm_{s-1}``; the first-order
     ``q_{s-1} + G_{s-1} (x_s - x_{s-1})`` when ``tm`` is empty; ``q_start`` for the first
     sample), until the scaled residual of the solved rows is at most ``tol`` (or stalls within
     a factor 1000 of it: the rounding floor of an ill-conditioned pose) and that of every row,
@@ -929,7 +1166,8 @@ def solve_batch(tm, x, xd, xdd, q_start,
     Gw = np.empty((mk, nt))
     task_unit_rhs(sel_rows, nr, Gw)
     Gw2 = np.empty((mk, nt))
-    tree = (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC)
+    tree = (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC,
+            legs)
     loops = (RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child)
     task = (task_body, task_point, task_kind, task_index, euler_axes)
     rowpos = np.empty(nrow, dtype=np.int64)
@@ -1018,9 +1256,10 @@ def jacobians_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion
     rowpos = np.arange(val_out.shape[1])
     colpos = np.arange(nq)
     trig = np.empty((nq, 3))
+    legs = empty_legs(nb)
     for s in range(q.shape[0]):
         forward_positions(q[s], body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
-                          coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, False)
+                          coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, False, legs, False)
         rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
              RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
              val_out[s], J_out[s], rowpos, colpos, ROWS_JACOBIAN, V, A, gamma, w33, w3)

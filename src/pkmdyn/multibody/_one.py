@@ -45,7 +45,7 @@ from numpy.typing import NDArray
 
 from .._dense import solve_in_place
 from ._dyn_kernels import body_wrench, generalised, joint_friction, load_wrench, task_mass
-from ._kernels import OK, _nn, _point_motion, _wrap, chord_pause, solve_sample_inline, solver_positions, task_unit_rhs
+from ._kernels import OK, _nn, _point_motion, _wrap, chord_pause, solve_sample, solver_positions, task_unit_rhs
 from .dynamics import SINGULAR_ACTUATION, inertia_factors
 from .friction import EPS_ROTATION as EPS_R
 from .friction import EPS_TRANSLATION as EPS_T
@@ -68,12 +68,12 @@ _INT = ("body_parent", "body_joint", "joint_q0", "joint_nq", "coord_motion", "an
         "row_i", "row_j", "loop_joint", "joint_parent", "joint_child", "task_kind", "task_index", "euler_axes",
         "solver_rows", "solver_prow", "solver_pcol", "solver_blocks", "act_coord", "load_body",
         "fj", "fch", "fpa", "frot", "fslide", "fidx", "fcnt", "eload", "load_named", "solver_rowpos",
-        "solver_colpos", "solver_idlepos")
+        "solver_colpos", "solver_idlepos", "leg_late", "leg_kind", "leg_coord", "leg_base", "leg_placed", "leg_redo")
 _FLOAT = ("coord_offset", "coord_sign", "tree_R_parent", "tree_p_parent", "tree_R_child", "tree_p_child",
           "joint_R_parent", "joint_p_parent", "joint_R_child", "joint_p_child", "task_point", "solver_idle",
           "row_scale", "mass", "inertia", "com", "gravity", "load_point", "load_force", "load_moment",
           "coef", "fsc", "ecoef", "eoff", "load_direction", "inertia_factor", "task_rhs", "drive_ratio", "drive_rotor",
-          "drive_coulomb", "drive_viscous", "drive_eps")
+          "drive_coulomb", "drive_viscous", "drive_eps", "leg_cpt", "leg_axis", "leg_point", "leg_m0", "leg_e0", "leg_q0")
 #: header of the packed buffer: n_int, n_float, task_body, max_iter, nq, nt, and the offsets
 #: of the two tolerances, the state, the work space and the integer work space
 _HEAD = 10
@@ -118,6 +118,10 @@ def pack(model: MechanismModel) -> NDArray[np.int64]:
     if not model.has_drives:  # no drive: empty arrays, and the kernel's drive terms do nothing
         for k in ("drive_ratio", "drive_rotor", "drive_coulomb", "drive_viscous", "drive_eps"):
             arrays[k] = np.zeros(0)
+    lg = model.legs
+    arrays.update({"leg_late": lg.late, "leg_kind": lg.kind, "leg_coord": lg.coord, "leg_base": lg.base,
+                   "leg_placed": lg.placed, "leg_redo": lg.redo, "leg_cpt": lg.cpt, "leg_axis": lg.axis,
+                   "leg_point": lg.point, "leg_m0": lg.m0, "leg_e0": lg.e0, "leg_q0": lg.q0})
     arrays["solver_rowpos"] = np.empty(model.row_loop.shape[0] + model.nt, dtype=np.int64)
     arrays["solver_colpos"] = np.empty(model.nq, dtype=np.int64)
     arrays["solver_idlepos"] = np.empty(model.solver_idle.shape[0], dtype=np.int64)
@@ -300,6 +304,8 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     eload = _i2(pk, 29)
     load_named = _i(pk, 30)
     rowpos, colpos, idlepos = _i(pk, 31), _i(pk, 32), _i(pk, 33)
+    legs = (_i(pk, 34), _i(pk, 35), _i2(pk, 36), _i(pk, 37), _i(pk, 38), _fn3(pk, 32), _f33(pk, 33), _f33(pk, 34),
+            _fn3(pk, 35), _fn3(pk, 36), _fn3(pk, 37), _i2(pk, 39))
     nb = body_parent.shape[0]
     nl = load_body.shape[0]
     coord_offset, coord_sign = _f(pk, 0), _f(pk, 1)
@@ -390,12 +396,13 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
         q[c] += acc
     for t in range(nt):
         r[t] = 0.0  # the rates at xdd = 0
-    tree = (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC)
+    tree = (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC,
+            legs)
     loops = (RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child)
     task = (task_body, task_point, task_kind, task_index, euler_axes)
     solver = (sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter, rowpos, colpos, idlepos)
     work = (R, p, S, val, res, K, wi, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, Gp, w33, w3, Gw, Gw2, trig)
-    status = solve_sample_inline(x, xd, r, q, coord_offset, chord, tree, loops, task, solver, work, info)
+    status = solve_sample(x, xd, r, q, coord_offset, chord, tree, loops, task, solver, work, info)
     if status != OK:
         st[0] = COLD_STATE
         return status

@@ -39,6 +39,7 @@ from numpy.typing import NDArray
 from ..errors import MotionError, SingularityError, UnreachablePoseError, as_array
 from . import _kernels as K
 from .joint_types import JOINT_TYPES
+from .legs import no_legs
 from .model import MechanismModel
 from .topology import constraint_jacobian, row_labels, row_scale
 
@@ -122,7 +123,8 @@ def _poses(model: MechanismModel, q: Array) -> tuple[Array, Array, Array]:
     K.forward_positions(np.ascontiguousarray(q, dtype=float), model.body_parent, model.body_joint, model.joint_q0,
                         model.joint_nq, model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent,
                         model.tree_p_parent, model.tree_R_child, model.tree_p_child, R, p, S,
-                        np.empty((5, 3, 3)), np.empty((20, 3)), np.empty((model.nq, 3)), False)
+                        np.empty((5, 3, 3)), np.empty((20, 3)), np.empty((model.nq, 3)), False,
+                        no_legs(model.nb).arrays(), False)
     return R, p, S
 
 
@@ -157,7 +159,7 @@ def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array,
     out["status"] = np.full(n, -1, dtype=np.int64)
     out["worst"] = np.zeros(n, dtype=np.int64)
     tt = np.zeros(0) if t is None else np.ascontiguousarray(t, dtype=float)
-    K.solve_batch(tt, x, xd, xdd, q_start, model.body_parent, model.body_joint, model.joint_q0, model.joint_nq,
+    K.solve_batch(tt, x, xd, xdd, q_start, model.legs.arrays(), model.body_parent, model.body_joint, model.joint_q0, model.joint_nq,
                   model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent,
                   model.tree_R_child, model.tree_p_child, model.joint_R_parent, model.joint_p_parent,
                   model.joint_R_child, model.joint_p_child, model.ancestor_list, model.row_loop, model.row_kind,

@@ -108,7 +108,8 @@ class MechanismModel:
     matrix block lower-triangular, ``solver_blocks`` the first row of each diagonal block
     (then nq) (:func:`~.topology.block_structure`)
     (:func:`~.topology.solver_selection`); ``topology``: the
-    :class:`~.topology.TopologyReport` there.
+    :class:`~.topology.TopologyReport` there; ``legs``: the blocks solved in closed form
+    (:mod:`.legs`).
     """
 
     name: str
@@ -185,6 +186,9 @@ class MechanismModel:
     solver_pcol: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     solver_blocks: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     topology: object = None
+    #: the explicit legs (:class:`~.legs.LegTable`): blocks of the Newton system solved in closed
+    #: form; None only while the model is being compiled
+    legs: object = None
     #: per actuator (order of ``act_joint``): its drive's name (``[[actuators]]``; None for a
     #: joint that drives itself), ``drive_kind`` (``"rotary"``, ``"linear"``, ``""``), the
     #: transmission ratio ``drive_ratio`` k (motor coordinate per joint coordinate, 1 without a
@@ -447,9 +451,12 @@ def compile_model(desc: Description) -> MechanismModel:
 
     rows, idle, rep = solver_selection(model)
     prow, pcol, blocks = block_structure(model, rows, idle)
-    return replace(model, solver_rows=rows, solver_idle=idle, solver_prow=prow, solver_pcol=pcol,
-                   solver_blocks=blocks, topology=rep, **_drives(desc, act), **_body_groups(desc, order),
-                   limits=dict(desc.limits))
+    from .legs import explicit_legs
+
+    model = replace(model, solver_rows=rows, solver_idle=idle, solver_prow=prow, solver_pcol=pcol,
+                    solver_blocks=blocks, topology=rep, **_drives(desc, act), **_body_groups(desc, order),
+                    limits=dict(desc.limits))
+    return replace(model, legs=explicit_legs(model))
 
 
 def _drives(desc: Description, act: list[int]) -> dict:

@@ -1,0 +1,318 @@
+"""Explicit leg closure: the legs of a parallel mechanism whose joint coordinates follow in
+closed form from the pose of the body they meet.
+
+A parallel robot's leg is solved by its own inverse kinematics once the platform is placed
+(ParRob's leg-wise inverse kinematics; Merlet, *Parallel Robots*, 2006, ch. 4). The
+kinematics solver (:mod:`.kinematics`) orders the Newton system block lower-triangular
+(:func:`~.topology.block_structure`): for a Stewart platform, the task rows with the leg that
+carries the platform, then each other leg's closure rows with that leg's coordinates. This
+module recognises, from the compiled model's topology and geometry alone, the diagonal blocks
+that are such a leg and can be solved in closed form, and records each as a row of a table
+(:class:`LegTable`) that the kernels read (:func:`._kernels._explicit_leg`).
+
+A block is an **explicit leg** when
+
+* its rows are the translation rows of one cut joint (a spherical joint, or a revolute joint
+  whose rotation rows are not among the solved rows: a planar mechanism) and it has no task
+  or idle row;
+* its coordinates are those of a serial chain of whole tree joints, from a base body (the
+  ground or a body placed by earlier blocks) to the body that carries the cut joint's point
+  ``e`` on the leg's side; the cut joint's other body (the one the leg meets, holding the
+  point ``c``) is placed by earlier blocks and comes before the chain in the tree order;
+* the chain, written as the product of exponentials about the reference configuration
+  (``e(th) = exp(xi_1 th_1) ... exp(xi_k th_k) e0``, ``th = q - q_ref``; Murray, Li &
+  Sastry 1994, Eq. 3.3) has one of four patterns, each solved by the subproblems of Paden and
+  Kahan (ibid., section 3.3):
+
+  ====  ===================================  ====================================  ==============
+  code  chain (base to end)                  closed form                           leg types
+  ====  ===================================  ====================================  ==============
+  A1    turn or slide, then a turn           distance to the turn's axis point     R-R-R, P-R-R
+        (planar: a turn parallel, a slide    (subproblem 3 or a quadratic), then   planar, P-R-S
+        normal to the second turn)           subproblem 1                          planar
+  A2    turn or slide, then two turns about  subproblem 3 or a quadratic for the   R-U-S, P-U-S
+        one point ``m0`` (a universal        first joint, subproblem 2 for the     (the hip's
+        joint)                               two turns                             PUS legs)
+  B1    a turn, then a slide normal to it    quadratic in the plane, then          R-P-R planar
+                                             subproblem 1
+  B2    two turns about one point ``m0``,    quadratic ``|e0 + s a - m0| = |c -    U-P-S
+        then a slide                         m0|``, then subproblem 2
+  ====  ===================================  ====================================  ==============
+
+Each has two assembly branches (the sign of a square root); the kernels take the one nearest
+the coordinates they start from (the previous sample's solution, or the reference
+configuration for the first), so a leg stays on the branch it starts on (an elbow-up leg
+stays elbow-up), as Newton from the same start does. Where the point is out of the leg's
+reach, the leg's coordinates are left to Newton, which reports the sample.
+
+The explicit legs set their coordinates at each evaluation of the positions; Newton then
+solves the remaining blocks (the leg that carries the platform, coupled sub-chains such as
+a Delta robot's parallelograms, the PDM's planar loops, a Bennett linkage) and checks every
+row, the explicit legs' included, so the two routes give the same solution to the solver's
+tolerance (:func:`newton_only` builds a model without explicit legs; the tests compare the
+two). Recognition is documented in ``docs/mechanism_format.md`` and printed by ``pkmdyn
+describe``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._kernels import forward_positions
+
+__all__ = ["LegTable", "explicit_legs", "newton_only", "LEG_PATTERNS"]
+
+Array = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: pattern code -> name (:mod:`._kernels`: LEG_A1, LEG_A2, LEG_B1, LEG_B2)
+LEG_PATTERNS = {1: "A1 (first joint, then one turn; planar)", 2: "A2 (first joint, then a universal joint)",
+                3: "B1 (turn, then a slide; planar)", 4: "B2 (universal joint, then a slide)"}
+
+
+def _empty_int(*shape: int) -> IntArray:
+    return np.zeros(shape, dtype=np.int64)
+
+
+@dataclass(frozen=True)
+class LegTable:
+    """The explicit legs of a model (module docstring), as the kernels read them.
+
+    ``late (nb,)``: the leg whose chain moves body b (its chain's bodies and their
+    descendants, placed after the leg is solved), else -1; per leg L (nL of them):
+    ``kind`` the pattern code; ``coord (nL, 3)`` its tree coordinates from the base (unused
+    entries 0); ``base`` the body the chain starts from and ``placed`` the body it meets (-1:
+    the ground); ``cpt (nL, 3)`` the cut joint's point on ``placed``, in that body's frame
+    [m]; in the base body's frame at the reference configuration: ``axis (nL, 3, 3)`` each
+    coordinate's unit direction (sign included), ``point (nL, 3, 3)`` a point on each turning
+    axis [m] (NaN for a slide), ``m0`` the point the ball turns about [m], ``e0`` the cut
+    joint's point on the leg [m]; ``q0 (nL, 3)`` the coordinates' reference values;
+    ``redo (nL, 1 + max)`` the count and the bodies the leg moves, in tree order.
+    ``names``: per leg, its cut joint's name, the chain's joint names and the pattern."""
+
+    late: IntArray
+    kind: IntArray = field(default_factory=lambda: _empty_int(0))
+    coord: IntArray = field(default_factory=lambda: _empty_int(0, 3))
+    base: IntArray = field(default_factory=lambda: _empty_int(0))
+    placed: IntArray = field(default_factory=lambda: _empty_int(0))
+    cpt: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    axis: Array = field(default_factory=lambda: np.zeros((0, 3, 3)))
+    point: Array = field(default_factory=lambda: np.zeros((0, 3, 3)))
+    m0: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    e0: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    q0: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    redo: IntArray = field(default_factory=lambda: _empty_int(0, 1))
+    names: tuple[tuple[str, tuple[str, ...], int], ...] = ()
+
+    @property
+    def count(self) -> int:
+        return int(self.kind.shape[0])
+
+    def arrays(self) -> tuple:
+        """The tuple the kernels take (:func:`._kernels.forward_positions`)."""
+        return (self.late, self.kind, self.coord, self.base, self.placed, self.cpt, self.axis, self.point,
+                self.m0, self.e0, self.q0, self.redo)
+
+
+def no_legs(nb: int) -> LegTable:
+    """A table without explicit legs (every block by Newton)."""
+    return LegTable(late=np.full(nb, -1, dtype=np.int64))
+
+
+def newton_only(model):
+    """``model`` with every block solved by Newton (no explicit legs): the second route the
+    tests compare the explicit legs with."""
+    from dataclasses import replace
+
+    return replace(model, legs=no_legs(model.nb))
+
+
+def _poses(model) -> tuple[Array, Array, Array]:
+    """Body rotations, origins and coordinate twists at the reference configuration."""
+    R, p, S = np.empty((model.nb, 3, 3)), np.empty((model.nb, 3)), np.empty((model.nq, 6))
+    forward_positions(np.ascontiguousarray(model.coord_offset, dtype=float), model.body_parent, model.body_joint,
+                      model.joint_q0, model.joint_nq, model.coord_motion, model.coord_offset, model.coord_sign,
+                      model.tree_R_parent, model.tree_p_parent, model.tree_R_child, model.tree_p_child, R, p, S,
+                      np.empty((5, 3, 3)), np.empty((20, 3)), np.empty((model.nq, 3)), False,
+                      no_legs(model.nb).arrays(), False)
+    return R, p, S
+
+
+def _unit(v: Array) -> Array:
+    return v / np.linalg.norm(v)
+
+
+def _intersection(p1: Array, w1: Array, p2: Array, w2: Array, tol: float) -> Array | None:
+    """The common point of two non-parallel lines ``p_i + t w_i`` (unit ``w_i``), or None when
+    they are parallel or pass more than ``tol`` apart."""
+    n = np.cross(w1, w2)
+    nn = float(n @ n)
+    if nn < 1e-12:
+        return None
+    d = p2 - p1
+    if abs(float(d @ n)) / np.sqrt(nn) > tol:
+        return None
+    t1 = float(np.cross(d, w2) @ n) / nn
+    t2 = float(np.cross(d, w1) @ n) / nn
+    return 0.5 * (p1 + t1 * w1 + p2 + t2 * w2)
+
+
+def _foot(p: Array, w: Array, x: Array) -> Array:
+    """The foot of ``x`` on the line ``p + t w`` (unit ``w``)."""
+    return p + float((x - p) @ w) * w
+
+
+def explicit_legs(model) -> LegTable:
+    """Recognise the explicit legs of ``model`` (module docstring) at its reference
+    configuration; a table without legs where none is found."""
+    nb, nr = model.nb, model.row_loop.shape[0]
+    blocks, prow, pcol, rows = model.solver_blocks, model.solver_prow, model.solver_pcol, model.solver_rows
+    m = rows.shape[0]
+    if blocks.shape[0] < 2 or model.nq == 0:
+        return no_legs(nb)
+    R, p, S = _poses(model)
+    tol = 1e-9 * max(model.length_scale, 1e-300)
+    coord_body = np.full(model.nq, -1, dtype=np.int64)  # the body each coordinate's joint carries
+    for b in range(nb):
+        k = model.body_joint[b]
+        coord_body[model.joint_q0[k]:model.joint_q0[k] + model.joint_nq[k]] = b
+    found: list[dict] = []
+    for bk in range(blocks.shape[0] - 1):
+        r_idx = prow[blocks[bk]:blocks[bk + 1]]
+        cols = np.sort(pcol[blocks[bk]:blocks[bk + 1]])
+        if np.any(r_idx >= m) or np.any(rows[r_idx] >= nr) or cols.size not in (2, 3):
+            continue
+        rr = rows[r_idx]
+        loops = set(int(model.row_loop[i]) for i in rr)
+        if len(loops) != 1 or np.any(model.row_kind[rr] != 0):
+            continue
+        k = int(model.loop_joint[loops.pop()])
+        leg = _chain(model, cols, coord_body, k, R, p, S, tol)
+        if leg is not None:
+            found.append(leg)
+    # each leg's bodies: its chain's and their descendants', placed once the leg is solved; a
+    # leg whose bodies meet another leg's, or carry a body that a leg starts from or meets, is
+    # left to Newton
+    moved = [[b for b in range(nb) if _descends(model.body_parent, b, leg["first"])] for leg in found]
+    keep = []
+    for i, leg in enumerate(found):
+        others = set().union(*(moved[j] for j in range(len(found)) if j != i), ())
+        ends = {g[key] for g in found for key in ("base", "placed")}
+        if not (set(moved[i]) & others) and not (set(moved[i]) & ends):
+            keep.append(i)
+    found, moved = [found[i] for i in keep], [moved[i] for i in keep]
+    if not found:
+        return no_legs(nb)
+    late = np.full(nb, -1, dtype=np.int64)
+    redo = np.zeros((len(found), 1 + max(len(mv) for mv in moved)), dtype=np.int64)
+    for i, mv in enumerate(moved):
+        late[mv] = i
+        redo[i, 0] = len(mv)
+        redo[i, 1:1 + len(mv)] = mv
+    pad = lambda c: list(c) + [0] * (3 - len(c))  # noqa: E731
+    return LegTable(
+        late=late, redo=redo,
+        kind=np.array([g["kind"] for g in found], dtype=np.int64),
+        coord=np.array([pad(g["coords"]) for g in found], dtype=np.int64),
+        base=np.array([g["base"] for g in found], dtype=np.int64),
+        placed=np.array([g["placed"] for g in found], dtype=np.int64),
+        cpt=np.array([g["cpt"] for g in found]),
+        axis=np.array([g["axis"] for g in found]),
+        point=np.array([g["point"] for g in found]),
+        m0=np.array([g["m0"] for g in found]),
+        e0=np.array([g["e0"] for g in found]),
+        q0=np.array([pad(model.coord_offset[g["coords"]]) for g in found], dtype=float),
+        names=tuple((model.joint_names[g["cut"]], g["joints"], g["kind"]) for g in found),
+    )
+
+
+def _chain(model, cols: IntArray, coord_body: IntArray, k: int, R: Array, p: Array, S: Array,
+           tol: float) -> dict | None:
+    """The explicit leg of the block with coordinates ``cols`` closed by cut joint ``k``, or
+    None (module docstring)."""
+    bodies: list[int] = []
+    for c in cols:
+        b = int(coord_body[c])
+        if not bodies or bodies[-1] != b:
+            bodies.append(b)
+    # whole joints, a chain: each body the child of the one before
+    for b in bodies:
+        j = model.body_joint[b]
+        own = set(range(model.joint_q0[j], model.joint_q0[j] + model.joint_nq[j]))
+        if not own <= set(int(c) for c in cols):
+            return None
+    for a, b in zip(bodies, bodies[1:]):
+        if model.body_parent[b] != a:
+            return None
+    end, first = bodies[-1], bodies[0]
+    base = int(model.body_parent[first])
+    pa, ch = int(model.joint_parent[k]), int(model.joint_child[k])
+    if end == ch:
+        placed, e_loc, c_loc = pa, model.joint_p_child[k], model.joint_p_parent[k]
+    elif end == pa:
+        placed, e_loc, c_loc = ch, model.joint_p_parent[k], model.joint_p_child[k]
+    else:
+        return None
+    if placed >= 0 and np.any(model.ancestors[placed][cols]):
+        return None
+    if base >= 0 and np.any(model.ancestors[base][cols]):  # pragma: no cover - the chain starts at its base
+        return None
+    # the reference geometry in the base body's frame
+    Rb = np.eye(3) if base < 0 else R[base]
+    pb = np.zeros(3) if base < 0 else p[base]
+    e_world = p[end] + R[end] @ e_loc
+    e0 = Rb.T @ (e_world - pb)
+    turns = [bool(model.coord_motion[c] < 3) for c in cols]
+    axis, point = np.zeros((3, 3)), np.full((3, 3), np.nan)
+    for i, c in enumerate(cols):
+        w, v = S[c, :3], S[c, 3:]
+        if turns[i]:
+            axis[i] = _unit(Rb.T @ w)
+            r_world = np.cross(w, v) / float(w @ w)  # the point of the axis nearest the origin
+            point[i] = Rb.T @ (r_world - pb)
+        else:
+            axis[i] = _unit(Rb.T @ v)
+    n = cols.size
+    kind, m0 = 0, None
+    if n == 2 and turns[1]:  # A1: planar, the first joint in the plane of the turn
+        if (turns[0] and np.linalg.norm(np.cross(axis[0], axis[1])) < 1e-9) or \
+                (not turns[0] and abs(float(axis[0] @ axis[1])) < 1e-9):
+            kind, m0 = 1, _foot(point[1], axis[1], e0)
+    elif n == 2 and turns[0] and not turns[1]:  # B1: a turn, then a slide normal to it
+        if abs(float(axis[0] @ axis[1])) < 1e-9:
+            kind, m0 = 3, _foot(point[0], axis[0], e0)
+    elif n == 3 and turns[1] and turns[2]:  # A2: a first joint, then two turns about one point
+        m0 = _intersection(point[1], axis[1], point[2], axis[2], tol)
+        if m0 is not None and _ball_ok(e0 - m0, axis[1], axis[2]):
+            kind = 2
+            if turns[0] and np.linalg.norm(np.cross(axis[0], m0 - point[0])) < tol:
+                kind = 0  # the ball's centre on the first axis: its distance to c does not change
+    elif n == 3 and turns[0] and turns[1] and not turns[2]:  # B2: two turns about one point, a slide
+        m0 = _intersection(point[0], axis[0], point[1], axis[1], tol)
+        if m0 is not None and _ball_ok(e0 - m0, axis[0], axis[1]):
+            kind = 4
+    if kind == 0:
+        return None
+    joints = tuple(model.joint_names[model.body_joint[b]] for b in bodies)
+    return {"kind": kind, "coords": [int(c) for c in cols], "base": base, "placed": placed, "first": first,
+            "cpt": np.asarray(c_loc, dtype=float), "axis": axis, "point": point, "m0": m0, "e0": e0, "cut": k,
+            "joints": joints}
+
+
+def _descends(parent: IntArray, b: int, a: int) -> bool:
+    """Whether body ``b`` is ``a`` or one of its descendants."""
+    while b >= 0:
+        if b == a:
+            return True
+        b = int(parent[b])
+    return False
+
+
+def _ball_ok(u: Array, w1: Array, w2: Array) -> bool:
+    """Whether the point ``m0 + u`` is off both axes of a ball (subproblem 2 then has a unique
+    angle for each axis)."""
+    nu = float(np.linalg.norm(u))
+    return nu > 0 and np.linalg.norm(np.cross(u, w1)) > 1e-6 * nu and np.linalg.norm(np.cross(u, w2)) > 1e-6 * nu

@@ -1,0 +1,259 @@
+"""Explicit leg closure (multibody/legs.py): recognition from the description, and the
+explicit and the Newton routes giving the same kinematics, branches included.
+
+The mechanisms beside the built-ins are made here: six-legged platforms whose legs are
+U-P-S, R-U-S or P-U-S, turned as a whole by an arbitrary rotation (legs in unusual
+orientations), and a planar 3-RPR; each is solved by both routes on random smooth motions.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
+from pkmdyn.multibody import _kernels as K
+from pkmdyn.multibody.kinematics import TOLERANCE, loop_residuals
+from pkmdyn.multibody.legs import newton_only
+
+from multibody_examples import MACHINES
+
+
+def _rot(axis, ang):
+    a = np.asarray(axis, float) / np.linalg.norm(axis)
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return np.eye(3) + np.sin(ang) * k + (1 - np.cos(ang)) * k @ k
+
+
+def _unit(v):
+    return v / np.linalg.norm(v)
+
+
+def platform(leg: str, Q: np.ndarray = np.eye(3)) -> dict:
+    """A six-legged platform with legs of type ``leg`` (``UPS``, ``RUS``, ``PUS``), base joints
+    in pairs on a 1 m circle, platform joints on a 0.5 m circle 1 m above, every point and
+    axis turned by ``Q``."""
+    T = lambda v: [float(x) for x in Q @ np.asarray(v, float)]  # noqa: E731
+    bodies = [{"name": "platform", "mass_kg": 10.0, "com_m": T([0, 0, 1.0]),
+               "inertia_kgm2": [0.6, 0.6, 1.2, 0, 0, 0]}]
+    joints = []
+    for i in range(6):
+        pair, side = divmod(i, 2)
+        sg = -1.0 if side == 0 else 1.0
+        ab = np.radians(120 * pair + 10 * sg)
+        ap = np.radians(120 * pair + 50 * sg)
+        b = np.array([np.cos(ab), np.sin(ab), 0.0])
+        s = np.array([0.5 * np.cos(ap), 0.5 * np.sin(ap), 1.0])
+        radial = np.array([np.cos(ab), np.sin(ab), 0.0])
+        tangent = np.array([-np.sin(ab), np.cos(ab), 0.0])
+        n1, n2 = f"first_{i + 1}", f"second_{i + 1}"
+        if leg == "UPS":
+            u = b
+            d = _unit(s - u)
+            a1 = _unit(np.cross(d, [0, 0, 1.0]))
+            joints += [{"name": f"U_{i + 1}", "type": "universal", "parent": "ground", "child": n1, "point_m": T(u),
+                        "axes": [T(a1), T(np.cross(d, a1))]},
+                       {"name": f"P_{i + 1}", "type": "prismatic", "parent": n1, "child": n2, "point_m": T(u),
+                        "axis": T(d), "actuated": True,
+                        "position_at_reference_m": float(np.linalg.norm(s - u))}]
+        elif leg == "RUS":
+            u = b + 0.3 * radial + np.array([0, 0, 0.1])
+            d = _unit(s - u)
+            a2 = _unit(np.cross(d, tangent))
+            joints += [{"name": f"R_{i + 1}", "type": "revolute", "parent": "ground", "child": n1, "point_m": T(b),
+                        "axis": T(tangent), "actuated": True, "angle_at_reference_rad": 0.0},
+                       {"name": f"U_{i + 1}", "type": "universal", "parent": n1, "child": n2, "point_m": T(u),
+                        "axes": [T(tangent), T(a2)]}]
+        else:  # PUS: a vertical slider, a universal joint on it
+            u = b + np.array([0, 0, 0.2])
+            d = _unit(s - u)
+            a2 = _unit(np.cross(d, tangent))
+            joints += [{"name": f"P_{i + 1}", "type": "prismatic", "parent": "ground", "child": n1, "point_m": T(b),
+                        "axis": T([0, 0, 1.0]), "actuated": True, "position_at_reference_m": 0.2},
+                       {"name": f"U_{i + 1}", "type": "universal", "parent": n1, "child": n2, "point_m": T(u),
+                        "axes": [T(tangent), T(a2)]}]
+        joints.append({"name": f"S_{i + 1}", "type": "spherical", "parent": n2, "child": "platform",
+                       "point_m": T(s), "axis": T(d)})
+        bodies += [{"name": n1, "mass_kg": 1.0, "com_m": T(u), "inertia_kgm2": [0.01, 0.01, 0.01, 0, 0, 0]},
+                   {"name": n2, "mass_kg": 1.0, "com_m": T(0.5 * (u + s)), "inertia_kgm2": [0.02, 0.02, 0.02, 0, 0, 0]}]
+    return {"mechanism": {"name": f"hexa_{leg.lower()}", "gravity_m_s2": T([0, 0, -9.80665])},
+            "bodies": bodies, "joints": joints,
+            "task": {"body": "platform", "point_m": T([0, 0, 1.0]), "position": ["x", "y", "z"],
+                     "euler_sequence": "XYZ", "orientation": [1, 2, 3]}}
+
+
+def rpr3() -> dict:
+    """A planar 3-RPR: base revolutes at 120 deg on a 1 m circle, sliding legs, platform
+    revolutes on a 0.3 m circle."""
+    bodies = [{"name": "platform", "mass_kg": 2.0, "com_m": [0, 0, 0], "inertia_kgm2": [0.1, 0.1, 0.1, 0, 0, 0]}]
+    joints = []
+    for i in range(3):
+        a = np.radians(120 * i + 90)
+        b = np.array([np.cos(a), np.sin(a), 0.0])
+        s = 0.3 * np.array([np.cos(a + 0.5), np.sin(a + 0.5), 0.0])
+        d = _unit(s - b)
+        joints += [{"name": f"RA_{i + 1}", "type": "revolute", "parent": "ground", "child": f"cyl_{i + 1}",
+                    "point_m": b.tolist(), "axis": [0, 0, 1.0], "angle_at_reference_rad": 0.0},
+                   {"name": f"P_{i + 1}", "type": "prismatic", "parent": f"cyl_{i + 1}", "child": f"rod_{i + 1}",
+                    "point_m": b.tolist(), "axis": d.tolist(), "actuated": True,
+                    "position_at_reference_m": float(np.linalg.norm(s - b))},
+                   {"name": f"RC_{i + 1}", "type": "revolute", "parent": f"rod_{i + 1}", "child": "platform",
+                    "point_m": s.tolist(), "axis": [0, 0, 1.0], "angle_at_reference_rad": 0.0}]
+        bodies += [{"name": f"cyl_{i + 1}", "mass_kg": 1.0, "com_m": b.tolist(), "inertia_kgm2": [0.01] * 3 + [0] * 3},
+                   {"name": f"rod_{i + 1}", "mass_kg": 1.0, "com_m": s.tolist(), "inertia_kgm2": [0.01] * 3 + [0] * 3}]
+    return {"mechanism": {"name": "rpr3", "gravity_m_s2": [0, 0, -9.80665]}, "bodies": bodies, "joints": joints,
+            "task": {"body": "platform", "point_m": [0, 0, 0], "position": ["x", "y"], "euler_sequence": "ZYX",
+                     "orientation": [1]}}
+
+
+def _motion(model, amp, n=120, seed=0):
+    rng = np.random.default_rng(seed)
+    x0 = reference_task(model)
+    t = np.linspace(0.0, 2.0, n)
+    w = rng.uniform(1.0, 3.0, x0.size)
+    ph = rng.uniform(0, 2 * np.pi, x0.size)
+    a = np.broadcast_to(amp, x0.shape)
+    s, c = np.sin(w * t[:, None] + ph), np.cos(w * t[:, None] + ph)
+    return t, x0 + a * (s - np.sin(ph)), a * w * c, -a * w**2 * s
+
+
+#: the two routes agree to what Newton leaves: both solve the blocks that are not explicit
+#: legs (the leg carrying the platform, coupled sub-chains) by Newton to a dimensionless
+#: residual of TOLERANCE = 1e-13, which moves the coordinates by up to the condition number
+#: of the scaled Newton matrix times that (taken as at most 100 here); the explicit legs
+#: themselves close to rounding (test_closed_form_closes_each_leg_alone)
+AGREE = 100 * TOLERANCE
+
+
+def _compare(model, amp, seeds=(0, 1)):
+    """Largest difference of q, qd, qdd and G between the two routes, each relative to the
+    largest entry (at least 1)."""
+    worst = 0.0
+    for seed in seeds:
+        t, x, xd, xdd = _motion(model, amp, seed=seed)
+        a = solve_kinematics(model, x, xd, xdd, t)
+        b = solve_kinematics(newton_only(model), x, xd, xdd, t)
+        for k in ("q", "qd", "qdd", "G"):
+            va, vb = getattr(a, k), getattr(b, k)
+            worst = max(worst, float(np.abs(va - vb).max() / max(np.abs(vb).max(), 1.0)))
+    return worst
+
+
+BUILT_IN = {"stewart": (5, 0.04), "rrr3": (2, 0.03), "delta": (0, 0.05), "bennett": (0, 0.3)}
+
+
+@pytest.mark.parametrize("name", sorted(BUILT_IN))
+def test_built_in_routes_agree(name):
+    model = load_mechanism(MACHINES / name / f"{name}.toml")
+    count, amp = BUILT_IN[name]
+    assert model.legs.count == count
+    assert _compare(model, amp) <= AGREE
+
+
+def test_hip_and_pdm_descriptions_routes_agree():
+    from pkmdyn.machines.hip_simulator.description import hip_description
+    from pkmdyn.machines.hip_simulator.params import load_params
+    from pkmdyn.machines.pdm4.description import pdm_description
+    from pkmdyn.machines.pdm4.params import load_params as pdm_params
+
+    hip = load_mechanism(hip_description(load_params()))
+    # the three upper P-U-S legs are explicit (slide, then a universal joint); the lower
+    # platform's legs are coupled through it and stay with Newton
+    assert [nm[2] for nm in hip.legs.names] == [2, 2, 2]
+    assert _compare(hip, 0.1) <= AGREE
+    pdm = load_mechanism(pdm_description(pdm_params()))
+    assert _compare(pdm, np.array([0.01, 0.01, 0.02, 0.02])) <= AGREE
+
+
+@pytest.mark.parametrize("leg,pattern", [("UPS", 4), ("RUS", 2), ("PUS", 2)])
+@pytest.mark.parametrize("turned", [False, True])
+def test_leg_types_in_any_orientation(leg, pattern, turned):
+    Q = _rot([0.3, -0.8, 0.5], 2.1) if turned else np.eye(3)
+    model = load_mechanism(platform(leg, Q))
+    # the platform hangs on the first leg in the spanning tree (Newton); the other five are explicit
+    assert model.legs.count == 5
+    assert {nm[2] for nm in model.legs.names} == {pattern}
+    assert _compare(model, np.array([0.03, 0.03, 0.03, 0.05, 0.05, 0.05])) <= AGREE
+
+
+def test_planar_rpr():
+    model = load_mechanism(rpr3())
+    assert [nm[2] for nm in model.legs.names] == [3, 3]
+    assert _compare(model, np.array([0.05, 0.05, 0.1])) <= AGREE
+
+
+def _place(model, q):
+    """``q`` with the explicit legs set in closed form (one pass of the positions), and the
+    loop residuals there."""
+    q = np.array(q, dtype=float)
+    R, p, S = np.empty((model.nb, 3, 3)), np.empty((model.nb, 3)), np.empty((model.nq, 6))
+    K.forward_positions(q, model.body_parent, model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion,
+                        model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent,
+                        model.tree_R_child, model.tree_p_child, R, p, S, np.empty((5, 3, 3)), np.empty((20, 3)),
+                        np.empty((model.nq, 3)), False, model.legs.arrays(), True)
+    return q, loop_residuals(model, q[None])[0]
+
+
+def _leg_rows(model):
+    cuts = [model.joint_index(nm[0]) for nm in model.legs.names]
+    return np.isin(model.loop_joint[model.row_loop], cuts) & (model.row_kind == 0)
+
+
+@pytest.mark.parametrize("leg", ["UPS", "RUS", "PUS"])
+def test_closed_form_closes_each_leg_alone(leg):
+    """From leg coordinates far from the solution, one pass of the positions closes every
+    explicit leg's cut joint to rounding (no Newton step)."""
+    model = load_mechanism(platform(leg, _rot([1.0, 2.0, -0.5], 0.7)))
+    rng = np.random.default_rng(3)
+    legs = np.zeros(model.nq, dtype=bool)
+    legs[model.legs.coord[model.legs.kind > 0].ravel()] = True
+    q0 = model.coord_offset + np.where(legs, rng.uniform(-0.1, 0.1, model.nq), 0.0)
+    before = np.abs(loop_residuals(model, q0[None])[0][_leg_rows(model)]).max()
+    q, res = _place(model, q0)
+    assert before > 1e-3
+    assert np.abs(res[_leg_rows(model)]).max() <= 1e-13 * model.length_scale
+    # and at the reference configuration, the reference coordinates themselves
+    assert np.abs(q - model.coord_offset).max() <= 1e-6
+
+
+def test_branch_is_kept():
+    """Each explicit 3-RRR leg has two closed solutions (its elbow on either side); the closed
+    form takes the one nearest the coordinates it starts from, so a leg placed again stays
+    where it is, on either branch."""
+    model = load_mechanism(MACHINES / "rrr3" / "rrr3.toml")
+    q_ref, _ = _place(model, model.coord_offset)
+    assert np.abs(q_ref - model.coord_offset).max() <= 1e-9
+    for L in range(model.legs.count):
+        c0, c1 = model.legs.coord[L, :2]
+        found = []
+        for d in np.linspace(-3.0, 3.0, 13):
+            start = q_ref.copy()
+            start[c0] += d
+            q, res = _place(model, start)
+            assert np.abs(res[_leg_rows(model)]).max() <= 1e-12
+            key = (round(float(np.sin(q[c1])), 6), round(float(np.cos(q[c1])), 6))
+            if key not in [k for k, _ in found]:
+                found.append((key, q))
+        assert len(found) == 2
+        for _, q in found:
+            q_again, _ = _place(model, q)
+            assert np.abs(q_again - q).max() <= 1e-12
+
+
+def _elbow_sign(kin, model, L):
+    """Sign of the turn from a 3-RRR leg's first link to its second (about z)."""
+    cut = model.joint_index(model.legs.names[L][0])
+    ja, jb = (model.joint_index(nm) for nm in model.legs.names[L][1])
+    a, b, c = kin.joint_point[:, ja], kin.joint_point[:, jb], kin.joint_point[:, cut]
+    return np.sign(np.cross(b - a, c - b)[:, 2])
+
+
+def test_elbow_kept_along_a_motion():
+    """Along a motion, each explicit 3-RRR elbow keeps the side it has at the reference."""
+    model = load_mechanism(MACHINES / "rrr3" / "rrr3.toml")
+    t, x, xd, xdd = _motion(model, np.array([0.03, 0.03, 0.1]), n=200, seed=5)
+    kin = solve_kinematics(model, x, xd, xdd, t)
+    ref = solve_kinematics(model, reference_task(model)[None], np.zeros((1, 3)), np.zeros((1, 3)))
+    for L in range(model.legs.count):
+        s = _elbow_sign(kin, model, L)
+        assert np.all(s == _elbow_sign(ref, model, L)[0]) and s[0] != 0
