@@ -187,10 +187,11 @@ def _place(model, q):
     loop residuals there."""
     q = np.array(q, dtype=float)
     R, p, S = np.empty((model.nb, 3, 3)), np.empty((model.nb, 3)), np.empty((model.nq, 6))
-    K.forward_positions(q, model.body_parent, model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion,
-                        model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent,
-                        model.tree_R_child, model.tree_p_child, R, p, S, np.empty((5, 3, 3)), np.empty((20, 3)),
-                        np.empty((model.nq, 3)), False, model.legs.arrays(), True)
+    args = (model.body_parent, model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion,
+            model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,
+            model.tree_p_child, R, p, S, np.empty((5, 3, 3)), np.empty((20, 3)), np.empty((model.nq, 3)), False)
+    K.forward_positions(q, *args, model.legs.late, True)
+    K.place_legs(q, *args, model.legs.arrays())
     return q, loop_residuals(model, q[None])[0]
 
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._kernels import _advance, _frame, _matmul3, _nn, _unit_twist, forward_positions, empty_legs
+from ._kernels import _advance, _frame, _matmul3, _nn, _unit_twist, forward_positions
 
 
 @njit(cache=True)
@@ -20,10 +20,11 @@ def twists_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, c
     w33 = np.empty((5, 3, 3))
     w3 = np.empty((20, 3))
     trig = np.empty((q.shape[1], 3))
-    legs = empty_legs(nb)
+    late = np.full(nb, -1, dtype=np.int64)
+    off = nb < 0  # False as a run-time value: forward_positions compiles once (_kernels.jacobians_batch)
     for s in range(q.shape[0]):
         forward_positions(q[s], body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
-                          RP, pP, RC, pC, R, p, S_out[s], w33, w3, trig, False, legs, False)
+                          RP, pP, RC, pC, R, p, S_out[s], w33, w3, trig, off, late, off)
 
 
 @njit(cache=True, _nrt=False, inline="always")

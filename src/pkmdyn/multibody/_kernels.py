@@ -155,7 +155,7 @@ def _cos_sin(trig, c, qc, reuse):
 LEG_A1, LEG_A2, LEG_B1, LEG_B2 = 1, 2, 3, 4
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)
 def _rotate_about(w, r, th, x, out):  # pragma: no cover - compiled
     """``out``: the point ``x`` turned by ``th`` about the unit axis ``w`` through ``r``
     (Rodrigues)."""
@@ -170,7 +170,7 @@ def _rotate_about(w, r, th, x, out):  # pragma: no cover - compiled
     out[2] = r[2] + c * d2 + s * k2 + (1.0 - c) * wd * w[2]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)
 def _sp1(w, u, v):  # pragma: no cover - compiled
     """Paden-Kahan subproblem 1: the angle that turns the vector ``u`` into ``v`` about the
     unit axis ``w`` (both taken normal to ``w``)."""
@@ -182,13 +182,13 @@ def _sp1(w, u, v):  # pragma: no cover - compiled
     return math.atan2(cr, a0 * b0 + a1 * b1 + a2 * b2)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)
 def _near(th, cur):  # pragma: no cover - compiled
     """The angle ``th`` moved by whole turns to lie within half a turn of ``cur``."""
     return cur + _wrap(th - cur)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)
 def _quadratic_nearest(b, c, cur, tol):  # pragma: no cover - compiled
     """The root of ``t^2 + 2 b t + c = 0`` nearest ``cur``; ``nan`` when there is none (a
     negative discriminant beyond ``tol``: out of reach)."""
@@ -202,7 +202,7 @@ def _quadratic_nearest(b, c, cur, tol):  # pragma: no cover - compiled
     return t1 if abs(t1 - cur) <= abs(t2 - cur) else t2
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)
 def _sp2(w1, w2, u, v, cur1, cur2, z, t3):  # pragma: no cover - compiled
     """Paden-Kahan subproblem 2: angles ``(th1, th2)`` with ``Rot(w1, th1) Rot(w2, th2) u = v``
     about two unit axes through one point (``|u| = |v|``): ``z = Rot(w2, th2) u`` lies on
@@ -233,7 +233,7 @@ def _sp2(w1, w2, u, v, cur1, cur2, z, t3):  # pragma: no cover - compiled
     return best1, best2
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)
 def _explicit_leg(L, q, R, p, legs, w3):  # pragma: no cover - compiled
     """Set leg ``L``'s coordinates in ``q`` in closed form from the pose of the body it meets
     (:mod:`.legs`): the cut joint's point on that body, ``c``, taken into the leg's base frame,
@@ -354,40 +354,38 @@ def _explicit_leg(L, q, R, p, legs, w3):  # pragma: no cover - compiled
     return True
 
 
-@njit(cache=True)
-def empty_legs(nb):  # pragma: no cover - compiled
-    """An empty leg table (:class:`.legs.LegTable`) for ``nb`` bodies, for the passes that
-    take ``q`` as it is."""
-    return (np.full(nb, -1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 3), dtype=np.int64),
-            np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 3)), np.zeros((0, 3, 3)),
-            np.zeros((0, 3, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 1), dtype=np.int64))
-
-
 @njit(cache=True, _nrt=False)
 def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
-                      RP, pP, RC, pC, R, p, S, w33, w3, trig, reuse, legs, explicit):
+                      RP, pP, RC, pC, R, p, S, w33, w3, trig, reuse, late, explicit):
     """Body poses ``R (nb, 3, 3)``, ``p (nb, 3)`` and coordinate twists ``S (nq, 6)`` at ``q``
     (frames ``RP, pP, RC, pC`` in tree order; coordinate c moves by ``coord_sign[c] (q - offset)``;
     ``w33 (5, 3, 3)``, ``w3 (20, 3)``: work space). ``trig (nq, 3)`` keeps each turning
     coordinate's cosine and sine (:func:`_cos_sin`); with ``reuse`` they are taken from the last
-    pass where ``q`` moved little since (a Newton step). With ``explicit``, the bodies of the
-    legs of the table ``legs`` (:mod:`.legs`) wait until the rest is placed; then each leg in
-    turn has its coordinates in ``q`` set in closed form from the body it meets
-    (:func:`_explicit_leg`) and its bodies placed."""
+    pass where ``q`` moved little since (a Newton step). With ``explicit``, the bodies that an
+    explicit leg moves (``late[b] >= 0``, :mod:`.legs`) are left for :func:`place_legs`."""
     Rf = w33[0]
     o = w3[18]
-    late, redo = legs[0], legs[11]
     for b in range(body_parent.shape[0]):
         if explicit and late[b] >= 0:
             continue
         _forward_body(b, q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
                       RP, pP, RC, pC, R, p, S, Rf, o, trig, reuse)
-    if explicit:
-        for L in range(redo.shape[0]):
-            _explicit_leg(L, q, R, p, legs, w3)
-            for i in range(1, _nn(redo[L, 0] + 1)):
-                _forward_body(redo[L, i], q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
-                              coord_sign, RP, pP, RC, pC, R, p, S, Rf, o, trig, reuse)
+
+
+@njit(cache=True, _nrt=False)
+def place_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+               RP, pP, RC, pC, R, p, S, w33, w3, trig, reuse, legs):  # pragma: no cover - compiled
+    """After :func:`forward_positions` with ``explicit``: each leg of ``legs`` (:mod:`.legs`) in
+    turn has its coordinates in ``q`` set in closed form from the body it meets
+    (:func:`_explicit_leg`), and the bodies it moves placed."""
+    Rf = w33[0]
+    o = w3[18]
+    redo = legs[11]
+    for L in range(redo.shape[0]):
+        _explicit_leg(L, q, R, p, legs, w3)
+        for i in range(1, _nn(redo[L, 0] + 1)):
+            _forward_body(redo[L, i], q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                          coord_sign, RP, pP, RC, pC, R, p, S, Rf, o, trig, reuse)
 
 
 @njit(cache=True, _nrt=False, inline='always')
@@ -1001,7 +999,8 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
     prev = 1e300
     phase = _CHORD if chord else _NEWTON
     it = 0
-    again = False
+    again = nq < 0  # False, typed as a run-time value (jacobians_batch)
+    explicit = legs[1].shape[0] > 0
     while True:
         # ---- evaluate the rows at q (their values with the Jacobian, or the drift)
         if phase == _RATES:
@@ -1017,7 +1016,10 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
             mode = ROWS_DRIFT
         else:
             forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
-                              coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, again, legs, True)
+                              coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, again, legs[0], explicit)
+            if explicit:
+                place_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                           tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, again, legs)
             # the pass after the simplified step (a step within rounding of the solution) starts from this
             # one's sines and cosines; a Newton step computes them afresh
             again = phase == _CHORD
@@ -1256,10 +1258,14 @@ def jacobians_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion
     rowpos = np.arange(val_out.shape[1])
     colpos = np.arange(nq)
     trig = np.empty((nq, 3))
-    legs = empty_legs(nb)
+    late = np.full(nb, -1, dtype=np.int64)
+    # flags and modes as run-time values, not constants: a constant argument is typed as a
+    # literal, and each literal would compile another copy of the callee
+    off = nq < 0
+    jac = ROWS_JACOBIAN + 0 * nq
     for s in range(q.shape[0]):
         forward_positions(q[s], body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
-                          coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, False, legs, False)
+                          coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, off, late, off)
         rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
              RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-             val_out[s], J_out[s], rowpos, colpos, ROWS_JACOBIAN, V, A, gamma, w33, w3)
+             val_out[s], J_out[s], rowpos, colpos, jac, V, A, gamma, w33, w3)

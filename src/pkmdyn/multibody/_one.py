@@ -523,13 +523,15 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
 def forward_one(pk, x, xd, u, load, out):  # pragma: no cover - compiled
     """``out = xdd (nt,)`` of one sample (``pk`` from :func:`pack`;
     ``load`` the named load's magnitude [N], if the mechanism has one); returns the status (0 OK)."""
-    return _dynamics(pk, x, xd, u, load, True, out)
+    # the direction as a run-time value: a constant would be typed as a literal and compile a
+    # second copy of the kernel for inverse_one
+    return _dynamics(pk, x, xd, u, load, x.shape[0] >= 0, out)
 
 
 @njit(cache=True)
 def inverse_one(pk, x, xd, xdd, load, out):  # pragma: no cover - compiled
     """``out = u (na,)`` of one sample; returns the status (0 OK)."""
-    return _dynamics(pk, x, xd, xdd, load, False, out)
+    return _dynamics(pk, x, xd, xdd, load, x.shape[0] < 0, out)
 
 
 def _refresh_cache() -> None:

@@ -39,7 +39,6 @@ from numpy.typing import NDArray
 from ..errors import MotionError, SingularityError, UnreachablePoseError, as_array
 from . import _kernels as K
 from .joint_types import JOINT_TYPES
-from .legs import no_legs
 from .model import MechanismModel
 from .topology import constraint_jacobian, row_labels, row_scale
 
@@ -124,7 +123,7 @@ def _poses(model: MechanismModel, q: Array) -> tuple[Array, Array, Array]:
                         model.joint_nq, model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent,
                         model.tree_p_parent, model.tree_R_child, model.tree_p_child, R, p, S,
                         np.empty((5, 3, 3)), np.empty((20, 3)), np.empty((model.nq, 3)), False,
-                        no_legs(model.nb).arrays(), False)
+                        np.full(model.nb, -1, dtype=np.int64), False)
     return R, p, S
 
 

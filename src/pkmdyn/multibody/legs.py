@@ -137,7 +137,7 @@ def _poses(model) -> tuple[Array, Array, Array]:
                       model.joint_q0, model.joint_nq, model.coord_motion, model.coord_offset, model.coord_sign,
                       model.tree_R_parent, model.tree_p_parent, model.tree_R_child, model.tree_p_child, R, p, S,
                       np.empty((5, 3, 3)), np.empty((20, 3)), np.empty((model.nq, 3)), False,
-                      no_legs(model.nb).arrays(), False)
+                      np.full(model.nb, -1, dtype=np.int64), False)
     return R, p, S
 
 
