@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody import _kernels as K
 from pkmdyn.multibody.kinematics import TOLERANCE, loop_residuals
-from pkmdyn.multibody.legs import newton_only
+from pkmdyn.multibody.legs import newton_only, place
+from pkmdyn.multibody.topology import constraint_jacobian
 
 from multibody_examples import MACHINES
 
@@ -139,7 +139,10 @@ def _compare(model, amp, seeds=(0, 1)):
     return worst
 
 
-BUILT_IN = {"stewart": (5, 0.04), "rrr3": (2, 0.03), "delta": (0, 0.05), "bennett": (0, 0.3)}
+#: explicit legs of each built-in (the Stewart platform: every block, the leg carrying the platform
+#: from the task; the 3-RRR: the two legs off the spanning tree; the Delta's parallelograms and the
+#: Bennett linkage: none)
+BUILT_IN = {"stewart": (6, 0.04), "rrr3": (2, 0.03), "delta": (0, 0.05), "bennett": (0, 0.3)}
 
 
 @pytest.mark.parametrize("name", sorted(BUILT_IN))
@@ -157,9 +160,9 @@ def test_hip_and_pdm_descriptions_routes_agree():
     from pkmdyn.machines.pdm4.params import load_params as pdm_params
 
     hip = load_mechanism(hip_description(load_params()))
-    # the three upper P-U-S legs are explicit (slide, then a universal joint); the lower
-    # platform's legs are coupled through it and stay with Newton
-    assert [nm[2] for nm in hip.legs.names] == [2, 2, 2]
+    # the upper platform on its ball from the task, the three upper P-U-S legs (slide, then a
+    # universal joint); the lower platform's legs are coupled through it and stay with Newton
+    assert [nm[2] for nm in hip.legs.names] == [10, 2, 2, 2]
     assert _compare(hip, 0.1) <= AGREE
     pdm = load_mechanism(pdm_description(pdm_params()))
     assert _compare(pdm, np.array([0.01, 0.01, 0.02, 0.02])) <= AGREE
@@ -170,9 +173,10 @@ def test_hip_and_pdm_descriptions_routes_agree():
 def test_leg_types_in_any_orientation(leg, pattern, turned):
     Q = _rot([0.3, -0.8, 0.5], 2.1) if turned else np.eye(3)
     model = load_mechanism(platform(leg, Q))
-    # the platform hangs on the first leg in the spanning tree (Newton); the other five are explicit
-    assert model.legs.count == 5
-    assert {nm[2] for nm in model.legs.names} == {pattern}
+    # the leg that carries the platform from the task (its ball placed by the same pattern), the
+    # other five from the platform: every block explicit
+    assert model.legs.count == 6 == model.solver_blocks.shape[0] - 1
+    assert [nm[2] for nm in model.legs.names] == [10 + pattern] + [pattern] * 5
     assert _compare(model, np.array([0.03, 0.03, 0.03, 0.05, 0.05, 0.05])) <= AGREE
 
 
@@ -182,16 +186,10 @@ def test_planar_rpr():
     assert _compare(model, np.array([0.05, 0.05, 0.1])) <= AGREE
 
 
-def _place(model, q):
-    """``q`` with the explicit legs set in closed form (one pass of the positions), and the
-    loop residuals there."""
-    q = np.array(q, dtype=float)
-    R, p, S = np.empty((model.nb, 3, 3)), np.empty((model.nb, 3)), np.empty((model.nq, 6))
-    args = (model.body_parent, model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion,
-            model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,
-            model.tree_p_child, R, p, S, np.empty((5, 3, 3)), np.empty((20, 3)), np.empty((model.nq, 3)), False)
-    K.forward_positions(q, *args, model.legs.late, True)
-    K.place_legs(q, *args, model.legs.arrays())
+def _place(model, q, x=None):
+    """``q`` with the explicit legs set in closed form (one pass of the positions) for the task
+    ``x`` (default: the reference task), and the loop residuals there."""
+    q = place(model, q, reference_task(model) if x is None else x)
     return q, loop_residuals(model, q[None])[0]
 
 
@@ -202,19 +200,22 @@ def _leg_rows(model):
 
 @pytest.mark.parametrize("leg", ["UPS", "RUS", "PUS"])
 def test_closed_form_closes_each_leg_alone(leg):
-    """From leg coordinates far from the solution, one pass of the positions closes every
-    explicit leg's cut joint to rounding (no Newton step)."""
+    """From coordinates far from the solution, one pass of the positions closes every loop and
+    reaches the task pose to rounding (no Newton step: every block is an explicit leg)."""
     model = load_mechanism(platform(leg, _rot([1.0, 2.0, -0.5], 0.7)))
     rng = np.random.default_rng(3)
-    legs = np.zeros(model.nq, dtype=bool)
-    legs[model.legs.coord[model.legs.kind > 0].ravel()] = True
-    q0 = model.coord_offset + np.where(legs, rng.uniform(-0.1, 0.1, model.nq), 0.0)
-    before = np.abs(loop_residuals(model, q0[None])[0][_leg_rows(model)]).max()
-    q, res = _place(model, q0)
+    x = reference_task(model) + np.array([0.02, -0.03, 0.01, 0.04, -0.02, 0.05])
+    q0 = model.coord_offset + rng.uniform(-0.1, 0.1, model.nq)
+    nr = model.row_loop.shape[0]
+    before = np.abs(loop_residuals(model, q0[None])[0]).max()
+    q = place(model, q0, x)
+    val, _ = constraint_jacobian(model, q)
     assert before > 1e-3
-    assert np.abs(res[_leg_rows(model)]).max() <= 1e-13 * model.length_scale
-    # and at the reference configuration, the reference coordinates themselves
-    assert np.abs(q - model.coord_offset).max() <= 1e-6
+    assert np.abs(val[0, :nr]).max() <= 1e-13 * model.length_scale
+    assert np.abs(val[0, nr:] - x).max() <= 1e-13
+    # the same coordinates as the Newton route's at that pose
+    kin = solve_kinematics(newton_only(model), x[None], np.zeros((1, 6)), np.zeros((1, 6)))
+    assert np.abs(q - kin.q[0]).max() <= AGREE
 
 
 def test_branch_is_kept():

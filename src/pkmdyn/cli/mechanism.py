@@ -62,7 +62,8 @@ def describe(machine: str) -> None:
         f"of body {model.body_names[model.task_body]}",
         f"explicit legs (closed form, {model.legs.count}): "
         + (", ".join(f"{'-'.join(chain)} to {cut} ({LEG_PATTERNS[kind].split(' ')[0]})"
-                     for cut, chain, kind in model.legs.names) or "none; Newton solves every loop"),
+                     for cut, chain, kind in model.legs.names) or "none; Newton solves every loop")
+        + (" (every block: no Newton step)" if model.legs.count == model.solver_blocks.shape[0] - 1 else ""),
     ]
     for line in lines:
         if line is not None:

@@ -153,6 +153,9 @@ def _cos_sin(trig, c, qc, reuse):
 #: leg patterns (:mod:`.legs`): a first joint then a ball of one or two turns about a point ``m0``;
 #: one or two turns about ``m0`` then a slide
 LEG_A1, LEG_A2, LEG_B1, LEG_B2 = 1, 2, 3, 4
+#: a leg that carries the task body (:mod:`.legs`): ``LEG_TASK + pattern`` of the chain that places
+#: its ball joint's centre (0: the ball sits on the ground)
+LEG_TASK = 10
 
 
 @njit(cache=True, _nrt=False)
@@ -237,14 +240,10 @@ def _sp2(w1, w2, u, v, cur1, cur2, z, t3):  # pragma: no cover - compiled
 def _explicit_leg(L, q, R, p, legs, w3):  # pragma: no cover - compiled
     """Set leg ``L``'s coordinates in ``q`` in closed form from the pose of the body it meets
     (:mod:`.legs`): the cut joint's point on that body, ``c``, taken into the leg's base frame,
-    is reached by the leg's end point ``e`` along its product of exponentials about the
-    reference configuration, ``e(th) = exp(xi_1 th_1) ... exp(xi_k th_k) e0`` (``th = q -
-    q_ref``; Paden & Kahan's subproblems, Murray, Li & Sastry 1994, section 3.3). Of two
-    assembly branches, the one nearest the present ``q``. Returns False (``q`` left as it is,
-    for Newton) where ``c`` is out of the leg's reach."""
-    (_, leg_kind, leg_coord, leg_base, leg_placed, leg_cpt, leg_axis, leg_point, leg_m0, leg_e0,
-     leg_q0, _) = legs
-    c, cb, u, v, z, t3 = w3[0], w3[1], w3[2], w3[3], w3[4], w3[5]
+    is reached by the leg's end point (:func:`_reach`). Returns False (``q`` left as it is, for
+    Newton) where ``c`` is out of the leg's reach."""
+    leg_base, leg_placed, leg_cpt = legs[3], legs[4], legs[5]
+    c, cb = w3[0], w3[1]
     P = leg_placed[L]
     for i in range(3):
         c[i] = leg_cpt[L, i]
@@ -260,7 +259,18 @@ def _explicit_leg(L, q, R, p, legs, w3):  # pragma: no cover - compiled
                      + (c[2] - p[B, 2]) * R[B, 2, i])
         for i in range(3):
             c[i] = cb[i]
-    kind = leg_kind[L]
+    return _reach(L, legs[1][L], q, legs, w3)
+
+
+@njit(cache=True, _nrt=False)
+def _reach(L, kind, q, legs, w3):  # pragma: no cover - compiled
+    """Leg ``L``'s coordinates in ``q`` such that its end point reaches ``c = w3[0]`` (base
+    frame), by pattern ``kind`` (:mod:`.legs`): along the product of exponentials about the
+    reference configuration, ``e(th) = exp(xi_1 th_1) ... exp(xi_k th_k) e0`` (``th = q -
+    q_ref``; Paden & Kahan's subproblems, Murray, Li & Sastry 1994, section 3.3). Of two
+    assembly branches, the one nearest the present ``q``. False where ``c`` is out of reach."""
+    (_, _, leg_coord, _, _, _, leg_axis, leg_point, leg_m0, leg_e0, leg_q0, _) = legs[:12]
+    c, cb, u, v, z, t3 = w3[0], w3[1], w3[2], w3[3], w3[4], w3[5]
     c0, c1 = _nn(leg_coord[L, 0]), _nn(leg_coord[L, 1])
     cur0, cur1 = q[c0] - leg_q0[L, 0], q[c1] - leg_q0[L, 1]
     m0 = leg_m0[L]
@@ -374,18 +384,117 @@ def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_moti
 
 @njit(cache=True, _nrt=False)
 def place_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
-               RP, pP, RC, pC, R, p, S, w33, w3, trig, reuse, legs):  # pragma: no cover - compiled
+               RP, pP, RC, pC, R, p, S, w33, w3, trig, reuse, legs, xs, task):  # pragma: no cover - compiled
     """After :func:`forward_positions` with ``explicit``: each leg of ``legs`` (:mod:`.legs`) in
-    turn has its coordinates in ``q`` set in closed form from the body it meets
-    (:func:`_explicit_leg`), and the bodies it moves placed."""
-    Rf = w33[0]
-    o = w3[18]
-    redo = legs[11]
+    turn has its coordinates in ``q`` set in closed form, the leg that carries the task body
+    from the task coordinates ``xs`` (:func:`_task_leg`; ``task`` the model's task arrays), the
+    others from the body they meet (:func:`_explicit_leg`), and the bodies it moves placed."""
+    redo, kind = legs[11], legs[1]
     for L in range(redo.shape[0]):
-        _explicit_leg(L, q, R, p, legs, w3)
+        if kind[L] >= LEG_TASK:
+            _task_leg(L, xs, q, legs, task, RP, RC, pC, w3, w33)
+        else:
+            _explicit_leg(L, q, R, p, legs, w3)
+        Rf = w33[0]
+        o = w3[18]
         for i in range(1, _nn(redo[L, 0] + 1)):
             _forward_body(redo[L, i], q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
                           coord_sign, RP, pP, RC, pC, R, p, S, Rf, o, trig, reuse)
+
+
+@njit(cache=True, _nrt=False)
+def _task_leg(L, xs, q, legs, task, RP, RC, pC, w3, w33):  # pragma: no cover - compiled
+    """The leg ``L`` that carries the task body, in closed form from the task coordinates ``xs``
+    (:mod:`.legs`): the task body's rotation ``R_T = Rot_a1(phi_1) Rot_a2(phi_2) Rot_a3(phi_3)``
+    from its Euler angles; where the task gives the position too, the centre of the ball (the
+    spherical joint that carries the task body) ``x - R_T t + R_T c`` (``t`` the task point,
+    ``c`` the centre, task body frame) reached by the chain before the ball (:func:`_reach`),
+    whose end body then has the rotation ``R_e`` (the product of its turns' exponentials times
+    its reference rotation); the ball's three angles are the Euler angles, about its own axes,
+    of ``R_b = (R_e R_P)^T R_T R_C`` (``R_P, R_C`` its frames on the two bodies, since the task
+    body's rotation is ``R_e R_P R_b R_C^T``): of the two solutions, the one nearest the present
+    ``q``. False where the ball's centre is out of reach (``q`` left to Newton)."""
+    task_point, task_kind, task_index, euler_axes = task[1], task[2], task[3], task[4]
+    kind, coord, axis, point, q0 = legs[1], legs[2], legs[6], legs[7], legs[10]
+    ball, bax, boff, bsg, Rend0 = legs[12], legs[13], legs[14], legs[15], legs[16]
+    RT, Re, Rt, Rb = w33[1], w33[2], w33[3], w33[4]
+    ang, pos = w3[10], w3[11]
+    for i in range(3):
+        ang[i] = 0.0
+        pos[i] = 0.0
+    for t in range(task_kind.shape[0]):
+        if task_kind[t] == 1:
+            ang[_nn(task_index[t])] = xs[t]
+        else:
+            pos[_nn(task_index[t])] = xs[t]
+    _rot(euler_axes[0], ang[0], RT)
+    _rot(euler_axes[1], ang[1], Rt)
+    _matmul3(RT, Rt, Rb)
+    _rot(euler_axes[2], ang[2], Rt)
+    _matmul3(Rb, Rt, RT)
+    k = _nn(ball[L, 0])
+    for i in range(3):
+        for j in range(3):
+            Re[i, j] = Rend0[L, i, j]
+    pk = kind[L] - LEG_TASK
+    if pk > 0:
+        c = w3[0]
+        for i in range(3):
+            c[i] = pos[i] + (RT[i, 0] * (pC[k, 0] - task_point[0]) + RT[i, 1] * (pC[k, 1] - task_point[1])
+                             + RT[i, 2] * (pC[k, 2] - task_point[2]))
+        if not _reach(L, pk, q, legs, w3):
+            return False
+        # R_e = exp(w_1 th_1) ... exp(w_n th_n) R_e0: the turns applied from the last
+        n = 2 if pk == LEG_A1 or pk == LEG_B1 else 3
+        for jj in range(n):
+            j = n - 1 - jj
+            if point[L, j, 0] == point[L, j, 0]:  # a turn (a slide has no axis point)
+                _rot_axis(axis[L, j], q[_nn(coord[L, j])] - q0[L, j], Rt)
+                _matmul3(Rt, Re, Rb)
+                for i1 in range(3):
+                    for i2 in range(3):
+                        Re[i1, i2] = Rb[i1, i2]
+    _matmul3(Re, RP[k], Rt)  # R_e R_P
+    _matmul3(RT, RC[k], Re)  # R_T R_C
+    for i in range(3):
+        for j in range(3):
+            Rb[i, j] = Rt[0, i] * Re[0, j] + Rt[1, i] * Re[1, j] + Rt[2, i] * Re[2, j]
+    out = w3[12]
+    euler_angles(Rb, bax[L], out)
+    i0, i2 = bax[L, 0], bax[L, 2]
+    # the second solution: (a1 + pi, pi - a2, a3 + pi) for three distinct axes, (a1 + pi, -a2, a3 + pi)
+    # for a repeated one; the nearest to the present angles
+    alt1 = (math.pi - out[1]) if i0 != i2 else -out[1]
+    d1 = 0.0
+    d2 = 0.0
+    for i in range(3):
+        cur = bsg[L, i] * (q[_nn(ball[L, 1 + i])] - boff[L, i])
+        s1 = out[i]
+        s2 = alt1 if i == 1 else out[i] + math.pi
+        d1 += _wrap(s1 - cur) ** 2
+        d2 += _wrap(s2 - cur) ** 2
+    for i in range(3):
+        cb = _nn(ball[L, 1 + i])
+        cur = bsg[L, i] * (q[cb] - boff[L, i])
+        th = out[i] if d1 <= d2 else (alt1 if i == 1 else out[i] + math.pi)
+        q[cb] = boff[L, i] + bsg[L, i] * _near(th, cur)
+    return True
+
+
+@njit(cache=True, inline="always")
+def _rot_axis(w, th, out):  # pragma: no cover - compiled
+    """``out (3, 3)``: the rotation by ``th`` about the unit axis ``w`` (Rodrigues)."""
+    c, s = math.cos(th), math.sin(th)
+    v = 1.0 - c
+    out[0, 0] = c + v * w[0] * w[0]
+    out[1, 1] = c + v * w[1] * w[1]
+    out[2, 2] = c + v * w[2] * w[2]
+    out[0, 1] = v * w[0] * w[1] - s * w[2]
+    out[1, 0] = v * w[0] * w[1] + s * w[2]
+    out[0, 2] = v * w[0] * w[2] + s * w[1]
+    out[2, 0] = v * w[0] * w[2] - s * w[1]
+    out[1, 2] = v * w[1] * w[2] - s * w[0]
+    out[2, 1] = v * w[1] * w[2] + s * w[0]
 
 
 @njit(cache=True, _nrt=False, inline='always')
@@ -997,10 +1106,12 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
     ni = idle.shape[0]
     mk = m + ni
     prev = 1e300
-    phase = _CHORD if chord else _NEWTON
+    explicit = legs[1].shape[0] > 0
+    # every block an explicit leg: the positions are exact at the first evaluation, which is
+    # Newton's check; no simplified step before it
+    phase = _CHORD if chord and legs[1].shape[0] < blocks.shape[0] - 1 else _NEWTON
     it = 0
     again = nq < 0  # False, typed as a run-time value (jacobians_batch)
-    explicit = legs[1].shape[0] > 0
     while True:
         # ---- evaluate the rows at q (their values with the Jacobian, or the drift)
         if phase == _RATES:
@@ -1019,7 +1130,7 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
                               coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, again, legs[0], explicit)
             if explicit:
                 place_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
-                           tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, again, legs)
+                           tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, again, legs, xs, task)
             # the pass after the simplified step (a step within rounding of the solution) starts from this
             # one's sines and cosines; a Newton step computes them afresh
             again = phase == _CHORD

@@ -45,13 +45,19 @@ configuration for the first), so a leg stays on the branch it starts on (an elbo
 stays elbow-up), as Newton from the same start does. Where the point is out of the leg's
 reach, the leg's coordinates are left to Newton, which reports the sample.
 
+The leg that carries the task body (the block of the task rows) is explicit where the task
+fixes that body's pose (three Euler angles, and three positions unless the body sits on a
+spherical joint on the ground): its chain ends with a spherical joint into the task body
+(pattern T), placed by one of the four patterns above (T+A1 ... T+B2) or fixed to the ground;
+the ball's angles are Euler angles of the relative rotation (:func:`._kernels._task_leg`).
+
 The explicit legs set their coordinates at each evaluation of the positions; Newton then
-solves the remaining blocks (the leg that carries the platform, coupled sub-chains such as
-a Delta robot's parallelograms, the PDM's planar loops, a Bennett linkage) and checks every
-row, the explicit legs' included, so the two routes give the same solution to the solver's
-tolerance (:func:`newton_only` builds a model without explicit legs; the tests compare the
-two). Recognition is documented in ``docs/mechanism_format.md`` and printed by ``pkmdyn
-describe``.
+solves the remaining blocks (coupled sub-chains such as a Delta robot's parallelograms or the
+hip's lower platform, a Bennett linkage) and checks every row, the explicit legs' included,
+so the two routes give the same solution to the solver's tolerance (:func:`newton_only`
+builds a model without explicit legs; the tests compare the two). Where every block is an
+explicit leg, the first evaluation is exact and Newton's simplified step is left out.
+Recognition is documented in ``docs/mechanism_format.md`` and printed by ``pkmdyn describe``.
 """
 
 from __future__ import annotations
@@ -61,16 +67,19 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from ._kernels import forward_positions
+from ._kernels import forward_positions, place_legs
 
-__all__ = ["LegTable", "explicit_legs", "newton_only", "LEG_PATTERNS"]
+__all__ = ["LegTable", "explicit_legs", "newton_only", "place", "LEG_PATTERNS"]
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 #: pattern code -> name (:mod:`._kernels`: LEG_A1, LEG_A2, LEG_B1, LEG_B2)
 LEG_PATTERNS = {1: "A1 (first joint, then one turn; planar)", 2: "A2 (first joint, then a universal joint)",
-                3: "B1 (turn, then a slide; planar)", 4: "B2 (universal joint, then a slide)"}
+                3: "B1 (turn, then a slide; planar)", 4: "B2 (universal joint, then a slide)",
+                10: "T (the task body on a ball joint)"}
+LEG_PATTERNS.update({10 + k: f"T+{v.split(' ')[0]} (the task body on a ball joint placed by {v.split(' ', 1)[1][1:-1]})"
+                     for k, v in list(LEG_PATTERNS.items()) if k < 10})
 
 
 def _empty_int(*shape: int) -> IntArray:
@@ -90,7 +99,11 @@ class LegTable:
     coordinate's unit direction (sign included), ``point (nL, 3, 3)`` a point on each turning
     axis [m] (NaN for a slide), ``m0`` the point the ball turns about [m], ``e0`` the cut
     joint's point on the leg [m]; ``q0 (nL, 3)`` the coordinates' reference values;
-    ``redo (nL, 1 + max)`` the count and the bodies the leg moves, in tree order.
+    ``redo (nL, 1 + max)`` the count and the bodies the leg moves, in tree order. The leg that
+    carries the task body (``kind >= 10``): ``ball (nL, 4)`` its spherical joint and that
+    joint's three coordinates (-1 for another leg), ``ball_axes`` their turning axes (0-2 of
+    the joint frame), ``ball_offset``, ``ball_sign`` their reference values and signs,
+    ``R_end0 (nL, 3, 3)`` the reference rotation of the body before the ball.
     ``names``: per leg, its cut joint's name, the chain's joint names and the pattern."""
 
     late: IntArray
@@ -105,6 +118,11 @@ class LegTable:
     e0: Array = field(default_factory=lambda: np.zeros((0, 3)))
     q0: Array = field(default_factory=lambda: np.zeros((0, 3)))
     redo: IntArray = field(default_factory=lambda: _empty_int(0, 1))
+    ball: IntArray = field(default_factory=lambda: _empty_int(0, 4))
+    ball_axes: IntArray = field(default_factory=lambda: _empty_int(0, 3))
+    ball_offset: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    ball_sign: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    R_end0: Array = field(default_factory=lambda: np.zeros((0, 3, 3)))
     names: tuple[tuple[str, tuple[str, ...], int], ...] = ()
 
     @property
@@ -114,7 +132,8 @@ class LegTable:
     def arrays(self) -> tuple:
         """The tuple the kernels take (:func:`._kernels.forward_positions`)."""
         return (self.late, self.kind, self.coord, self.base, self.placed, self.cpt, self.axis, self.point,
-                self.m0, self.e0, self.q0, self.redo)
+                self.m0, self.e0, self.q0, self.redo, self.ball, self.ball_axes, self.ball_offset, self.ball_sign,
+                self.R_end0)
 
 
 def no_legs(nb: int) -> LegTable:
@@ -139,6 +158,21 @@ def _poses(model) -> tuple[Array, Array, Array]:
                       np.empty((5, 3, 3)), np.empty((20, 3)), np.empty((model.nq, 3)), False,
                       np.full(model.nb, -1, dtype=np.int64), False)
     return R, p, S
+
+
+def place(model, q: Array, x: Array) -> Array:
+    """Tree coordinates ``q (nq,)`` with every explicit leg's set in closed form for the task
+    coordinates ``x (nt,)`` (one pass of the positions, as the solver makes it before each of its
+    evaluations; the other coordinates as given). A leg out of reach keeps its coordinates."""
+    q = np.array(q, dtype=float)
+    R, p, S = np.empty((model.nb, 3, 3)), np.empty((model.nb, 3)), np.empty((model.nq, 6))
+    args = (model.body_parent, model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion,
+            model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,
+            model.tree_p_child, R, p, S, np.empty((5, 3, 3)), np.empty((20, 3)), np.empty((model.nq, 3)), False)
+    forward_positions(q, *args, model.legs.late, True)
+    task = (int(model.task_body), model.task_point, model.task_kind, model.task_index, model.euler_axes)
+    place_legs(q, *args, model.legs.arrays(), np.ascontiguousarray(x, dtype=float), task)
+    return q
 
 
 def _unit(v: Array) -> Array:
@@ -183,25 +217,33 @@ def explicit_legs(model) -> LegTable:
     for bk in range(blocks.shape[0] - 1):
         r_idx = prow[blocks[bk]:blocks[bk + 1]]
         cols = np.sort(pcol[blocks[bk]:blocks[bk + 1]])
-        if np.any(r_idx >= m) or np.any(rows[r_idx] >= nr) or cols.size not in (2, 3):
+        if np.any(r_idx >= m):
             continue
         rr = rows[r_idx]
-        loops = set(int(model.row_loop[i]) for i in rr)
-        if len(loops) != 1 or np.any(model.row_kind[rr] != 0):
+        if np.all(rr >= nr):  # the task rows: the leg that carries the task body
+            leg = _task_chain(model, cols, coord_body, R, p, S, tol)
+        elif np.any(rr >= nr) or cols.size not in (2, 3):
             continue
-        k = int(model.loop_joint[loops.pop()])
-        leg = _chain(model, cols, coord_body, k, R, p, S, tol)
+        else:
+            loops = set(int(model.row_loop[i]) for i in rr)
+            if len(loops) != 1 or np.any(model.row_kind[rr] != 0):
+                continue
+            leg = _chain(model, cols, coord_body, int(model.loop_joint[loops.pop()]), R, p, S, tol)
         if leg is not None:
             found.append(leg)
-    # each leg's bodies: its chain's and their descendants', placed once the leg is solved; a
-    # leg whose bodies meet another leg's, or carry a body that a leg starts from or meets, is
-    # left to Newton
+    # each leg's bodies: its chain's and their descendants', placed once the leg is solved (in
+    # block order); a leg whose bodies meet another leg's, or carry a body that an earlier leg
+    # starts from or meets, or that starts from or meets a body a later leg moves, is left to
+    # Newton
     moved = [[b for b in range(nb) if _descends(model.body_parent, b, leg["first"])] for leg in found]
-    keep = []
-    for i, leg in enumerate(found):
+    keep: list[int] = []
+    for i in range(len(found)):
         others = set().union(*(moved[j] for j in range(len(found)) if j != i), ())
-        ends = {g[key] for g in found for key in ("base", "placed")}
-        if not (set(moved[i]) & others) and not (set(moved[i]) & ends):
+        ends = {found[j][key] for j in range(i + 1) for key in ("base", "placed")}
+        earlier = set().union(*(moved[j] for j in keep), ())
+        needs = {found[i][key] for key in ("base", "placed")} - {-1}
+        if not (set(moved[i]) & others) and not (set(moved[i]) & ends) and \
+                all(b in earlier or not _moved_by_any(b, moved) for b in needs):
             keep.append(i)
     found, moved = [found[i] for i in keep], [moved[i] for i in keep]
     if not found:
@@ -213,57 +255,39 @@ def explicit_legs(model) -> LegTable:
         redo[i, 0] = len(mv)
         redo[i, 1:1 + len(mv)] = mv
     pad = lambda c: list(c) + [0] * (3 - len(c))  # noqa: E731
+    nan3 = np.full((3, 3), np.nan)
     return LegTable(
         late=late, redo=redo,
         kind=np.array([g["kind"] for g in found], dtype=np.int64),
         coord=np.array([pad(g["coords"]) for g in found], dtype=np.int64),
         base=np.array([g["base"] for g in found], dtype=np.int64),
         placed=np.array([g["placed"] for g in found], dtype=np.int64),
-        cpt=np.array([g["cpt"] for g in found]),
-        axis=np.array([g["axis"] for g in found]),
-        point=np.array([g["point"] for g in found]),
-        m0=np.array([g["m0"] for g in found]),
-        e0=np.array([g["e0"] for g in found]),
+        cpt=np.array([g.get("cpt", np.zeros(3)) for g in found]),
+        axis=np.array([g.get("axis", np.zeros((3, 3))) for g in found]),
+        point=np.array([g.get("point", nan3) for g in found]),
+        m0=np.array([g["m0"] if g.get("m0") is not None else np.zeros(3) for g in found]),
+        e0=np.array([g.get("e0", np.zeros(3)) for g in found]),
         q0=np.array([pad(model.coord_offset[g["coords"]]) for g in found], dtype=float),
-        names=tuple((model.joint_names[g["cut"]], g["joints"], g["kind"]) for g in found),
+        ball=np.array([g.get("ball", [-1, 0, 0, 0]) for g in found], dtype=np.int64),
+        ball_axes=np.array([g.get("ball_axes", [0, 1, 2]) for g in found], dtype=np.int64),
+        ball_offset=np.array([g.get("ball_offset", np.zeros(3)) for g in found], dtype=float),
+        ball_sign=np.array([g.get("ball_sign", np.ones(3)) for g in found], dtype=float),
+        R_end0=np.array([g.get("R_end0", np.eye(3)) for g in found], dtype=float),
+        names=tuple((g["cut"], g["joints"], g["kind"]) for g in found),
     )
 
 
-def _chain(model, cols: IntArray, coord_body: IntArray, k: int, R: Array, p: Array, S: Array,
-           tol: float) -> dict | None:
-    """The explicit leg of the block with coordinates ``cols`` closed by cut joint ``k``, or
-    None (module docstring)."""
-    bodies: list[int] = []
-    for c in cols:
-        b = int(coord_body[c])
-        if not bodies or bodies[-1] != b:
-            bodies.append(b)
-    # whole joints, a chain: each body the child of the one before
-    for b in bodies:
-        j = model.body_joint[b]
-        own = set(range(model.joint_q0[j], model.joint_q0[j] + model.joint_nq[j]))
-        if not own <= set(int(c) for c in cols):
-            return None
-    for a, b in zip(bodies, bodies[1:]):
-        if model.body_parent[b] != a:
-            return None
-    end, first = bodies[-1], bodies[0]
-    base = int(model.body_parent[first])
-    pa, ch = int(model.joint_parent[k]), int(model.joint_child[k])
-    if end == ch:
-        placed, e_loc, c_loc = pa, model.joint_p_child[k], model.joint_p_parent[k]
-    elif end == pa:
-        placed, e_loc, c_loc = ch, model.joint_p_parent[k], model.joint_p_child[k]
-    else:
-        return None
-    if placed >= 0 and np.any(model.ancestors[placed][cols]):
-        return None
-    if base >= 0 and np.any(model.ancestors[base][cols]):  # pragma: no cover - the chain starts at its base
-        return None
-    # the reference geometry in the base body's frame
+def _moved_by_any(b: int, moved: list[list[int]]) -> bool:
+    return any(b in mv for mv in moved)
+
+
+def _geometry(model, cols: IntArray, R: Array, p: Array, S: Array, base: int, e_world: Array,
+              tol: float) -> dict | None:
+    """The reference geometry of the chain with coordinates ``cols`` from body ``base`` whose end
+    point is ``e_world`` (the base body's frame): its unit axes, a point on each turning axis, and
+    its pattern (module docstring) with the ball's point ``m0``; None where no pattern fits."""
     Rb = np.eye(3) if base < 0 else R[base]
     pb = np.zeros(3) if base < 0 else p[base]
-    e_world = p[end] + R[end] @ e_loc
     e0 = Rb.T @ (e_world - pb)
     turns = [bool(model.coord_motion[c] < 3) for c in cols]
     axis, point = np.zeros((3, 3)), np.full((3, 3), np.nan)
@@ -275,7 +299,7 @@ def _chain(model, cols: IntArray, coord_body: IntArray, k: int, R: Array, p: Arr
             point[i] = Rb.T @ (r_world - pb)
         else:
             axis[i] = _unit(Rb.T @ v)
-    n = cols.size
+    n = len(cols)
     kind, m0 = 0, None
     if n == 2 and turns[1]:  # A1: planar, the first joint in the plane of the turn
         if (turns[0] and np.linalg.norm(np.cross(axis[0], axis[1])) < 1e-9) or \
@@ -296,10 +320,87 @@ def _chain(model, cols: IntArray, coord_body: IntArray, k: int, R: Array, p: Arr
             kind = 4
     if kind == 0:
         return None
+    return {"kind": kind, "axis": axis, "point": point, "m0": m0, "e0": e0}
+
+
+def _path(model, cols: IntArray, coord_body: IntArray) -> list[int] | None:
+    """The bodies of a chain of whole tree joints with coordinates ``cols``, base first, or None."""
+    bodies: list[int] = []
+    for c in cols:
+        b = int(coord_body[c])
+        if not bodies or bodies[-1] != b:
+            bodies.append(b)
+    have = set(int(c) for c in cols)
+    for b in bodies:
+        j = model.body_joint[b]
+        if not set(range(model.joint_q0[j], model.joint_q0[j] + model.joint_nq[j])) <= have:
+            return None
+    for a, b in zip(bodies, bodies[1:]):
+        if model.body_parent[b] != a:
+            return None
+    return bodies
+
+
+def _chain(model, cols: IntArray, coord_body: IntArray, k: int, R: Array, p: Array, S: Array,
+           tol: float) -> dict | None:
+    """The explicit leg of the block with coordinates ``cols`` closed by cut joint ``k``, or
+    None (module docstring)."""
+    bodies = _path(model, cols, coord_body)
+    if bodies is None:
+        return None
+    end, first = bodies[-1], bodies[0]
+    base = int(model.body_parent[first])
+    pa, ch = int(model.joint_parent[k]), int(model.joint_child[k])
+    if end == ch:
+        placed, e_loc, c_loc = pa, model.joint_p_child[k], model.joint_p_parent[k]
+    elif end == pa:
+        placed, e_loc, c_loc = ch, model.joint_p_parent[k], model.joint_p_child[k]
+    else:
+        return None
+    if placed >= 0 and np.any(model.ancestors[placed][cols]):
+        return None
+    geo = _geometry(model, cols, R, p, S, base, p[end] + R[end] @ e_loc, tol)
+    if geo is None:
+        return None
     joints = tuple(model.joint_names[model.body_joint[b]] for b in bodies)
-    return {"kind": kind, "coords": [int(c) for c in cols], "base": base, "placed": placed, "first": first,
-            "cpt": np.asarray(c_loc, dtype=float), "axis": axis, "point": point, "m0": m0, "e0": e0, "cut": k,
-            "joints": joints}
+    return {**geo, "coords": [int(c) for c in cols], "base": base, "placed": placed, "first": first,
+            "cpt": np.asarray(c_loc, dtype=float), "cut": model.joint_names[k], "joints": joints}
+
+
+def _task_chain(model, cols: IntArray, coord_body: IntArray, R: Array, p: Array, S: Array,
+                tol: float) -> dict | None:
+    """The leg that carries the task body (the block of the task rows), or None: the task gives
+    the body's three Euler angles and, where the chain places its ball, its position too; the
+    chain ends with a spherical joint (three turns about its centre) into the task body, from
+    the ground or from a chain of one of the patterns that reaches the ball's centre."""
+    tb = int(model.task_body)
+    n_ang = int(np.sum(model.task_kind == 1))
+    n_pos = int(np.sum(model.task_kind == 0))
+    bodies = _path(model, cols, coord_body)
+    if bodies is None or bodies[-1] != tb or n_ang != 3 or n_pos not in (0, 3) or cols.size != model.nt:
+        return None
+    if int(model.body_parent[bodies[0]]) >= 0:
+        return None  # block 0 starts from the ground
+    k = int(model.body_joint[tb])
+    bc = list(range(model.joint_q0[k], model.joint_q0[k] + model.joint_nq[k]))
+    motions = [int(model.coord_motion[c]) for c in bc]
+    if len(bc) != 3 or any(mo >= 3 for mo in motions) or motions[0] == motions[1] or motions[1] == motions[2]:
+        return None
+    front = [int(c) for c in cols if c not in bc]
+    ball = {"ball": [k, *bc], "ball_axes": motions, "ball_offset": model.coord_offset[bc],
+            "ball_sign": model.coord_sign[bc], "coords": front or [0], "base": -1, "placed": -1,
+            "cut": "task", "joints": tuple(model.joint_names[model.body_joint[b]] for b in bodies)}
+    if n_pos == 0:
+        if front:
+            return None
+        return {**ball, "kind": 10, "first": tb, "coords": []}
+    if len(front) not in (2, 3) or len(bodies) < 2:
+        return None
+    end = bodies[-2]
+    geo = _geometry(model, np.array(front), R, p, S, -1, p[end] + R[end] @ model.tree_p_parent[k], tol)
+    if geo is None:
+        return None
+    return {**ball, **geo, "kind": 10 + geo["kind"], "first": bodies[0], "coords": front, "R_end0": R[end]}
 
 
 def _descends(parent: IntArray, b: int, a: int) -> bool:
