@@ -259,31 +259,29 @@ def _explicit_leg(L, q, R, p, legs, w3):  # pragma: no cover - compiled
                      + (c[2] - p[B, 2]) * R[B, 2, i])
         for i in range(3):
             c[i] = cb[i]
-    return _reach(L, legs[1][L], q, legs, w3)
+    return _reach(legs[1][L], q, legs[2][L], legs[6][L], legs[7][L], legs[8][L], legs[9][L], legs[10][L], w3)
 
 
 @njit(cache=True, _nrt=False)
-def _reach(L, kind, q, legs, w3):  # pragma: no cover - compiled
-    """Leg ``L``'s coordinates in ``q`` such that its end point reaches ``c = w3[0]`` (base
-    frame), by pattern ``kind`` (:mod:`.legs`): along the product of exponentials about the
+def _reach(kind, q, coord, axis, point, m0, e0, q0, w3):  # pragma: no cover - compiled
+    """A leg's coordinates in ``q`` such that its end point reaches ``c = w3[0]`` (base frame),
+    by pattern ``kind`` (:mod:`.legs`; the leg's rows of the table: ``coord (3,)``, ``axis,
+    point (3, 3)``, ``m0, e0, q0 (3,)``): along the product of exponentials about the
     reference configuration, ``e(th) = exp(xi_1 th_1) ... exp(xi_k th_k) e0`` (``th = q -
     q_ref``; Paden & Kahan's subproblems, Murray, Li & Sastry 1994, section 3.3). Of two
     assembly branches, the one nearest the present ``q``. False where ``c`` is out of reach."""
-    (_, _, leg_coord, _, _, _, leg_axis, leg_point, leg_m0, leg_e0, leg_q0, _) = legs[:12]
     c, cb, u, v, z, t3 = w3[0], w3[1], w3[2], w3[3], w3[4], w3[5]
-    c0, c1 = _nn(leg_coord[L, 0]), _nn(leg_coord[L, 1])
-    cur0, cur1 = q[c0] - leg_q0[L, 0], q[c1] - leg_q0[L, 1]
-    m0 = leg_m0[L]
-    e0 = leg_e0[L]
-    a0 = leg_axis[L, 0]
-    a1 = leg_axis[L, 1]
+    c0, c1 = _nn(coord[0]), _nn(coord[1])
+    cur0, cur1 = q[c0] - q0[0], q[c1] - q0[1]
+    a0 = axis[0]
+    a1 = axis[1]
     scale = _dot(e0, e0) + _dot(m0, m0) + _dot(c, c) + 1e-300
     if kind == LEG_A1 or kind == LEG_A2:
         # 1. the first joint brings m0 to the distance |e0 - m0| from c
         d2 = 0.0
         for i in range(3):
             d2 += (e0[i] - m0[i]) ** 2
-        if leg_point[L, 0, 0] != leg_point[L, 0, 0]:  # a slide (no axis point): |m0 + t a - c|^2 = d2
+        if point[0, 0] != point[0, 0]:  # a slide (no axis point): |m0 + t a - c|^2 = d2
             bq = 0.0
             cq = -d2
             for i in range(3):
@@ -295,7 +293,7 @@ def _reach(L, kind, q, legs, w3):  # pragma: no cover - compiled
             for i in range(3):
                 cb[i] = c[i] - th0 * a0[i]  # c taken back through the first joint
         else:  # a turn about a0 through r: cos(th - th_c) = (|u'|^2 + |v'|^2 - d'^2) / (2 |u'| |v'|)
-            r = leg_point[L, 0]
+            r = point[0]
             for i in range(3):
                 u[i] = m0[i] - r[i]
                 v[i] = c[i] - r[i]
@@ -317,25 +315,25 @@ def _reach(L, kind, q, legs, w3):  # pragma: no cover - compiled
             t1, t2 = _near(thc + h, cur0), _near(thc - h, cur0)
             th0 = t1 if abs(t1 - cur0) <= abs(t2 - cur0) else t2
             _rotate_about(a0, r, -th0, c, cb)
-        q[c0] = leg_q0[L, 0] + th0
+        q[c0] = q0[0] + th0
         # 2. the ball about m0 turns e0 - m0 into cb - m0
         for i in range(3):
             u[i] = e0[i] - m0[i]
             v[i] = cb[i] - m0[i]
         if kind == LEG_A1:
-            q[c1] = leg_q0[L, 1] + _near(_sp1(a1, u, v), cur1)
+            q[c1] = q0[1] + _near(_sp1(a1, u, v), cur1)
         else:
-            c2 = _nn(leg_coord[L, 2])
-            th1, th2 = _sp2(a1, leg_axis[L, 2], u, v, cur1, q[c2] - leg_q0[L, 2], z, t3)
+            c2 = _nn(coord[2])
+            th1, th2 = _sp2(a1, axis[2], u, v, cur1, q[c2] - q0[2], z, t3)
             if th1 != th1:
                 return False
-            q[c1] = leg_q0[L, 1] + th1
-            q[c2] = leg_q0[L, 2] + th2
+            q[c1] = q0[1] + th1
+            q[c2] = q0[2] + th2
         return True
     # LEG_B1, LEG_B2: the slide last, |e0 + t a - m0| = |c - m0| (normal to the turn's axis for B1)
     ks = 1 if kind == LEG_B1 else 2
-    cs_ = _nn(leg_coord[L, ks])
-    a = leg_axis[L, ks]
+    cs_ = _nn(coord[ks])
+    a = axis[ks]
     for i in range(3):
         u[i] = e0[i] - m0[i]
         v[i] = c[i] - m0[i]
@@ -346,21 +344,21 @@ def _reach(L, kind, q, legs, w3):  # pragma: no cover - compiled
             v[i] -= va * a0[i]
     bq = _dot(a, u)
     cq = _dot(u, u) - _dot(v, v)
-    ts = _quadratic_nearest(bq, cq, q[cs_] - leg_q0[L, ks], 1e-12 * scale)
+    ts = _quadratic_nearest(bq, cq, q[cs_] - q0[ks], 1e-12 * scale)
     if ts != ts:
         return False
     for i in range(3):
         u[i] = e0[i] - m0[i] + ts * a[i]
         v[i] = c[i] - m0[i]
     if kind == LEG_B1:
-        q[c0] = leg_q0[L, 0] + _near(_sp1(a0, u, v), cur0)
+        q[c0] = q0[0] + _near(_sp1(a0, u, v), cur0)
     else:
         th0, th1 = _sp2(a0, a1, u, v, cur0, cur1, z, t3)
         if th0 != th0:
             return False
-        q[c0] = leg_q0[L, 0] + th0
-        q[c1] = leg_q0[L, 1] + th1
-    q[cs_] = leg_q0[L, ks] + ts
+        q[c0] = q0[0] + th0
+        q[c1] = q0[1] + th1
+    q[cs_] = q0[ks] + ts
     return True
 
 
@@ -442,7 +440,7 @@ def _task_leg(L, xs, q, legs, task, RP, RC, pC, w3, w33):  # pragma: no cover - 
         for i in range(3):
             c[i] = pos[i] + (RT[i, 0] * (pC[k, 0] - task_point[0]) + RT[i, 1] * (pC[k, 1] - task_point[1])
                              + RT[i, 2] * (pC[k, 2] - task_point[2]))
-        if not _reach(L, pk, q, legs, w3):
+        if not _reach(pk, q, coord[L], axis[L], point[L], legs[8][L], legs[9][L], q0[L], w3):
             return False
         # R_e = exp(w_1 th_1) ... exp(w_n th_n) R_e0: the turns applied from the last
         n = 2 if pk == LEG_A1 or pk == LEG_B1 else 3
@@ -481,7 +479,7 @@ def _task_leg(L, xs, q, legs, task, RP, RC, pC, w3, w33):  # pragma: no cover - 
     return True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)
 def _rot_axis(w, th, out):  # pragma: no cover - compiled
     """``out (3, 3)``: the rotation by ``th`` about the unit axis ``w`` (Rodrigues)."""
     c, s = math.cos(th), math.sin(th)
