@@ -40,7 +40,7 @@ def main() -> None:
     ap.add_argument("--machines", nargs="+", default=["stewart", "delta", "hip"])
     args = ap.parse_args()
     out: dict = {"cpus": os.cpu_count()}
-    commands = {"run": ["run"], "control": ["control"]}
+    commands = {"run": ["run"], "control": ["control", "--controller", "computed-torque"]}
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         for m in args.machines:

@@ -59,6 +59,7 @@ def _peak_bytes(args):
         tracemalloc.stop()
 
 
+@pytest.mark.slow
 def test_memory_does_not_grow_with_the_run(tmp_path, monkeypatch):
     monkeypatch.setattr(_run, "SPAN_CYCLES", 500)
     base = ["hip", "control", "--controller", "augmented-pd", "--no-plots", "--format", "parquet"]

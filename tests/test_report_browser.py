@@ -20,6 +20,9 @@ import pytest
 
 from pkmdyn.cli import main
 
+#: the pages' drawing does not depend on the BLAS kernel: CI runs these once (pyproject.toml, slow)
+pytestmark = pytest.mark.slow
+
 sync_api = pytest.importorskip("playwright.sync_api")
 Image = pytest.importorskip("PIL.Image")
 

@@ -98,6 +98,7 @@ def test_pdm_serial_and_dask_rows_bit_identical(tmp_path):
     assert _table(tmp_path / "serial").equals(_table(tmp_path / "dask"))
 
 
+@pytest.mark.slow
 def test_worker_killed_mid_run_every_design_exactly_once(tmp_path):
     from distributed import LocalCluster
 
@@ -147,6 +148,7 @@ def test_a_failing_batch_is_retried(tmp_path):
     assert _table(tmp_path / "out").equals(_table(tmp_path / "plain"))
 
 
+@pytest.mark.slow
 def test_ctrl_c_then_rerun_loses_and_duplicates_nothing(tmp_path):
     space = _space(tmp_path, 300, 5, 1500)
     out = tmp_path / "out"
