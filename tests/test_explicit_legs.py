@@ -259,3 +259,13 @@ def test_elbow_kept_along_a_motion():
     for L in range(model.legs.count):
         s = _elbow_sign(kin, model, L)
         assert np.all(s == _elbow_sign(ref, model, L)[0]) and s[0] != 0
+
+
+def test_describe_lists_the_explicit_legs(capsys):
+    from pkmdyn.cli import main
+
+    assert main(["describe", "--machine", "stewart"]) == 0
+    line = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("explicit legs")][0]
+    assert "(closed form, 6)" in line and "U_1-P_1-S_1 to the task body (T+B2)" in line and "S_6 (B2)" in line
+    assert main(["describe", "--machine", "delta"]) == 0
+    assert "explicit legs (closed form, 0): none" in capsys.readouterr().out

@@ -63,7 +63,7 @@ def describe(machine: str) -> None:
         f"explicit legs (closed form, {model.legs.count}): "
         + (", ".join(f"{'-'.join(chain)} to {cut} ({LEG_PATTERNS[kind].split(' ')[0]})"
                      for cut, chain, kind in model.legs.names) or "none; Newton solves every loop")
-        + (" (every block: no Newton step)" if model.legs.count == model.solver_blocks.shape[0] - 1 else ""),
+        + (" (every block: Newton only checks)" if model.legs.count == model.solver_blocks.shape[0] - 1 else ""),
     ]
     for line in lines:
         if line is not None:

@@ -389,7 +389,7 @@ def _task_chain(model, cols: IntArray, coord_body: IntArray, R: Array, p: Array,
     front = [int(c) for c in cols if c not in bc]
     ball = {"ball": [k, *bc], "ball_axes": motions, "ball_offset": model.coord_offset[bc],
             "ball_sign": model.coord_sign[bc], "coords": front or [0], "base": -1, "placed": -1,
-            "cut": "task", "joints": tuple(model.joint_names[model.body_joint[b]] for b in bodies)}
+            "cut": "the task body", "joints": tuple(model.joint_names[model.body_joint[b]] for b in bodies)}
     if n_pos == 0:
         if front:
             return None
