@@ -4,8 +4,8 @@ The kinematics and dynamics kernels (numba) are compiled on their first use afte
 install and cached on disk (beside the package, or in the user's cache folder where that is
 not writable); a later run loads them in a fraction of a second. The first run of a command
 compiles what that command needs: measured on a 2-core machine with an empty cache, about
-40 s for ``pkmdyn run --machine stewart`` and 30 s more for the single-sample kernels of a
-first ``pkmdyn control`` (75 s for ``control`` alone from an empty cache). :func:`install` (called by the command line, never on import) registers
+40-45 s for ``pkmdyn run --machine stewart`` and 20 s more for the single-sample kernels of a
+first ``pkmdyn control`` (about 60 s for ``control`` alone from an empty cache). :func:`install` (called by the command line, never on import) registers
 a listener on numba's compile events that says so once, when the first kernel of pkmdyn starts
 compiling, and :func:`summary` gives the time it took, for the command line to print at the
 end of a run that succeeded. Like the progress bars, both are written where stderr is a

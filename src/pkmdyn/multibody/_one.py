@@ -524,19 +524,17 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     return OK
 
 
-@njit(cache=True)
-def forward_one(pk, x, xd, u, load, out):  # pragma: no cover - compiled
-    """``out = xdd (nt,)`` of one sample (``pk`` from :func:`pack`;
-    ``load`` the named load's magnitude [N], if the mechanism has one); returns the status (0 OK)."""
-    # the direction as a run-time value: a constant would be typed as a literal and compile a
-    # second copy of the kernel for inverse_one
-    return _dynamics(pk, x, xd, u, load, x.shape[0] >= 0, out)
+def forward_one(pk: NDArray[np.int64], x: Array, xd: Array, u: Array, load: float, out: Array) -> int:
+    """``out = xdd (nt,)`` of one sample (``pk`` from :func:`pack`; ``load`` the named load's
+    magnitude [N], if the mechanism has one); returns the status (0 OK). The compiled kernel is
+    :func:`_dynamics`, one for both directions (a compiled entry point per direction cost a
+    second linking of the whole kernel, some 3 s of cold compilation each)."""
+    return _dynamics(pk, x, xd, u, load, True, out)
 
 
-@njit(cache=True)
-def inverse_one(pk, x, xd, xdd, load, out):  # pragma: no cover - compiled
-    """``out = u (na,)`` of one sample; returns the status (0 OK)."""
-    return _dynamics(pk, x, xd, xdd, load, x.shape[0] < 0, out)
+def inverse_one(pk: NDArray[np.int64], x: Array, xd: Array, xdd: Array, load: float, out: Array) -> int:
+    """``out = u (na,)`` of one sample; returns the status (0 OK) (:func:`forward_one`)."""
+    return _dynamics(pk, x, xd, xdd, load, False, out)
 
 
 def _refresh_cache() -> None:
@@ -544,7 +542,7 @@ def _refresh_cache() -> None:
     from .. import _dense
     from . import _cache, _dyn_kernels, _kernels, dynamics, friction
 
-    _cache.refresh((_dynamics, forward_one, inverse_one), (_kernels, _dyn_kernels, _dense, friction, dynamics))
+    _cache.refresh((_dynamics,), (_kernels, _dyn_kernels, _dense, friction, dynamics))
 
 
 _refresh_cache()

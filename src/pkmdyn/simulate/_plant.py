@@ -163,6 +163,15 @@ def _solve_small(W: Array, b: Array, out: Array) -> None:  # pragma: no cover - 
 
 
 @numba.njit(cache=True)
+def _copy_matrix(W: Array) -> None:  # pragma: no cover - compiled
+    """``W[1] = W[0]`` element by element: the array assignment would compile numba's shape
+    mismatch message (string formatting, some 4 s of a cold start) for a case that cannot occur."""
+    for i in range(W.shape[1]):
+        for j in range(W.shape[2]):
+            W[1, i, j] = W[0, i, j]
+
+
+@numba.njit(cache=True)
 def _stage1(q: Array, v: Array, f0: Array, A: Array, dt: float, W: Array, buf: Array) -> None:  # pragma: no cover
     """Form ``W[0] = I - gamma dt A`` and solve stage 1 into ``buf`` (rows: k1q, k1v, q2, v2,
     rhs, k2v, q_n, v_n); ``q2, v2 = y_n + dt k1``."""
@@ -175,7 +184,7 @@ def _stage1(q: Array, v: Array, f0: Array, A: Array, dt: float, W: Array, buf: A
         for j in range(n):
             W[0, i, j] = -g * A[i, j]
         W[0, i, i] += 1.0
-    W[1] = W[0]
+    _copy_matrix(W)
     _solve_small(W[1], f0, buf[1])
     for i in range(n):
         buf[0, i] = v[i] + g * buf[1, i]
@@ -190,7 +199,7 @@ def _stage2(q: Array, v: Array, f2: Array, dt: float, W: Array, buf: Array) -> b
     g = ROS2_GAMMA * dt
     for i in range(n):
         buf[4, i] = f2[i] - 2.0 * buf[1, i]
-    W[1] = W[0]
+    _copy_matrix(W)
     _solve_small(W[1], buf[4], buf[5])
     for i in range(n):
         k2q = buf[3, i] - 2.0 * buf[0, i] + g * buf[5, i]
