@@ -268,7 +268,7 @@ def _reach(kind, q, coord, axis, point, m0, e0, q0, w3):  # pragma: no cover - c
     by pattern ``kind`` (:mod:`.legs`; the leg's rows of the table: ``coord (3,)``, ``axis,
     point (3, 3)``, ``m0, e0, q0 (3,)``): along the product of exponentials about the
     reference configuration, ``e(th) = exp(xi_1 th_1) ... exp(xi_k th_k) e0`` (``th = q -
-    q_ref``; Paden & Kahan's subproblems, Murray, Li & Sastry 1994, section 3.3). Of two
+    q_ref``; Paden & Kahan's subproblems, Murray, Li & Sastry 1994, ch. 3). Of two
     assembly branches, the one nearest the present ``q``. False where ``c`` is out of reach."""
     c, cb, u, v, z, t3 = w3[0], w3[1], w3[2], w3[3], w3[4], w3[5]
     c0, c1 = _nn(coord[0]), _nn(coord[1])

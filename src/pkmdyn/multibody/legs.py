@@ -18,11 +18,11 @@ A block is an **explicit leg** when
 * its coordinates are those of a serial chain of whole tree joints, from a base body (the
   ground or a body placed by earlier blocks) to the body that carries the cut joint's point
   ``e`` on the leg's side; the cut joint's other body (the one the leg meets, holding the
-  point ``c``) is placed by earlier blocks and comes before the chain in the tree order;
+  point ``c``) is placed by earlier blocks (or by an explicit leg solved before this one);
 * the chain, written as the product of exponentials about the reference configuration
   (``e(th) = exp(xi_1 th_1) ... exp(xi_k th_k) e0``, ``th = q - q_ref``; Murray, Li &
-  Sastry 1994, Eq. 3.3) has one of four patterns, each solved by the subproblems of Paden and
-  Kahan (ibid., section 3.3):
+  Sastry 1994, ch. 3) has one of four patterns, each solved by the subproblems of Paden and
+  Kahan (ibid., ch. 3):
 
   ====  ===================================  ====================================  ==============
   code  chain (base to end)                  closed form                           leg types
