@@ -528,7 +528,7 @@ def forward_one(pk: NDArray[np.int64], x: Array, xd: Array, u: Array, load: floa
     """``out = xdd (nt,)`` of one sample (``pk`` from :func:`pack`; ``load`` the named load's
     magnitude [N], if the mechanism has one); returns the status (0 OK). The compiled kernel is
     :func:`_dynamics`, one for both directions (a compiled entry point per direction cost a
-    second linking of the whole kernel, some 3 s of cold compilation each)."""
+    second linking of the whole kernel, some seconds of cold compilation each)."""
     return _dynamics(pk, x, xd, u, load, True, out)
 
 
