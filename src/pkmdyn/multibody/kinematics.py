@@ -114,19 +114,6 @@ class MechanismKinematics:
                                 if getattr(self, f.name) is not None})
 
 
-def _poses(model: MechanismModel, q: Array) -> tuple[Array, Array, Array]:
-    """Body rotations (nb, 3, 3), origins (nb, 3) and coordinate twists (nq, 6) at ``q (nq,)``."""
-    R = np.empty((model.nb, 3, 3))
-    p = np.empty((model.nb, 3))
-    S = np.empty((model.nq, 6))
-    K.forward_positions(np.ascontiguousarray(q, dtype=float), model.body_parent, model.body_joint, model.joint_q0,
-                        model.joint_nq, model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent,
-                        model.tree_p_parent, model.tree_R_child, model.tree_p_child, R, p, S,
-                        np.empty((5, 3, 3)), np.empty((20, 3)), np.empty((model.nq, 3)), False,
-                        np.full(model.nb, -1, dtype=np.int64), False)
-    return R, p, S
-
-
 def reference_task(model: MechanismModel) -> Array:
     """Task coordinates (nt,) at the reference configuration."""
     val, _ = constraint_jacobian(model, model.coord_offset)

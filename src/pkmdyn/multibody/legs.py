@@ -68,6 +68,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._kernels import forward_positions, place_legs
+from .poses import body_poses
 
 __all__ = ["LegTable", "explicit_legs", "newton_only", "place", "LEG_PATTERNS"]
 
@@ -149,17 +150,6 @@ def newton_only(model):
     return replace(model, legs=no_legs(model.nb))
 
 
-def _poses(model) -> tuple[Array, Array, Array]:
-    """Body rotations, origins and coordinate twists at the reference configuration."""
-    R, p, S = np.empty((model.nb, 3, 3)), np.empty((model.nb, 3)), np.empty((model.nq, 6))
-    forward_positions(np.ascontiguousarray(model.coord_offset, dtype=float), model.body_parent, model.body_joint,
-                      model.joint_q0, model.joint_nq, model.coord_motion, model.coord_offset, model.coord_sign,
-                      model.tree_R_parent, model.tree_p_parent, model.tree_R_child, model.tree_p_child, R, p, S,
-                      np.empty((5, 3, 3)), np.empty((20, 3)), np.empty((model.nq, 3)), False,
-                      np.full(model.nb, -1, dtype=np.int64), False)
-    return R, p, S
-
-
 def place(model, q: Array, x: Array) -> Array:
     """Tree coordinates ``q (nq,)`` with every explicit leg's set in closed form for the task
     coordinates ``x (nt,)`` (one pass of the positions, as the solver makes it before each of its
@@ -207,7 +197,7 @@ def explicit_legs(model) -> LegTable:
     m = rows.shape[0]
     if blocks.shape[0] < 2 or model.nq == 0:
         return no_legs(nb)
-    R, p, S = _poses(model)
+    R, p, S = body_poses(model, model.coord_offset)
     tol = 1e-9 * max(model.length_scale, 1e-300)
     coord_body = np.full(model.nq, -1, dtype=np.int64)  # the body each coordinate's joint carries
     for b in range(nb):

@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 from . import _kernels as K
 from .joint_types import JOINT_TYPES
 from .model import MechanismModel
+from .poses import body_poses
 
 __all__ = ["TopologyReport", "analyse_topology", "kutzbach_count", "constraint_jacobian", "solver_selection",
            "row_scale", "column_scale", "row_labels"]
@@ -145,9 +146,7 @@ def _null(a: Array, ncols: int) -> Array:
 
 def _point_jacobian(model: MechanismModel, q: Array) -> Array:
     """(3 nj, nq): velocity of every joint centre (the child frame's origin) per tree rate."""
-    from .kinematics import _poses  # local: kinematics imports this module
-
-    R, p, S = _poses(model, q)
+    R, p, S = body_poses(model, q)
     rows = []
     for k in range(len(model.joint_names)):
         b = int(model.joint_child[k])
