@@ -22,7 +22,7 @@ reference configuration (all tree coordinates zero) each joint's two frames coin
 from __future__ import annotations
 
 import heapq
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,6 +30,8 @@ from numpy.typing import NDArray
 from ..errors import ParameterError
 from .description import GROUND, Description
 from .joint_types import JOINT_TYPES, MOTION_CODES, joint_type, type_code
+from .legs import explicit_legs
+from .topology import block_structure, solver_selection
 
 __all__ = ["MechanismModel", "LoopRecord", "compile_model", "spanning_tree"]
 
@@ -445,14 +447,8 @@ def compile_model(desc: Description) -> MechanismModel:
         load_magnitude=np.array([ld.magnitude for ld in desc.loads], dtype=float),
         named_loads=tuple(dict.fromkeys(ld.name for ld in desc.loads if ld.name is not None)),
     )
-    from dataclasses import replace
-
-    from .topology import block_structure, solver_selection
-
     rows, idle, rep = solver_selection(model)
     prow, pcol, blocks = block_structure(model, rows, idle)
-    from .legs import explicit_legs
-
     model = replace(model, solver_rows=rows, solver_idle=idle, solver_prow=prow, solver_pcol=pcol,
                     solver_blocks=blocks, topology=rep, **_drives(desc, act), **_body_groups(desc, order),
                     limits=dict(desc.limits))
