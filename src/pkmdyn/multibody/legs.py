@@ -68,7 +68,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._kernels import forward_positions, place_legs
-from .poses import body_poses
+from .poses import body_poses, positions_args
 
 __all__ = ["LegTable", "explicit_legs", "newton_only", "place", "LEG_PATTERNS"]
 
@@ -155,10 +155,7 @@ def place(model, q: Array, x: Array) -> Array:
     coordinates ``x (nt,)`` (one pass of the positions, as the solver makes it before each of its
     evaluations; the other coordinates as given). A leg out of reach keeps its coordinates."""
     q = np.array(q, dtype=float)
-    R, p, S = np.empty((model.nb, 3, 3)), np.empty((model.nb, 3)), np.empty((model.nq, 6))
-    args = (model.body_parent, model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion,
-            model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,
-            model.tree_p_child, R, p, S, np.empty((5, 3, 3)), np.empty((20, 3)), np.empty((model.nq, 3)), False)
+    args = positions_args(model, np.empty((model.nb, 3, 3)), np.empty((model.nb, 3)), np.empty((model.nq, 6)))
     forward_positions(q, *args, model.legs.late, True)
     task = (int(model.task_body), model.task_point, model.task_kind, model.task_index, model.euler_axes)
     place_legs(q, *args, model.legs.arrays(), np.ascontiguousarray(x, dtype=float), task)
