@@ -193,3 +193,29 @@ def test_a_described_mechanism_named_like_a_hand_built_machine_controls_as_itsel
         assert main(["control", "--machine", machine, "--duration", "0.04", "--out", str(out)]) == 0
     assert (tmp_path / "a" / "control.csv").read_bytes() == (tmp_path / "b" / "control.csv").read_bytes()
     assert json.loads((tmp_path / "b" / "summary.json").read_text())["machine"] == name
+
+
+def test_one_set_of_verbs_serves_a_plant_beside_the_controllers_model():
+    """The controller's model and a plant with other masses (a mismatch study) through one set
+    of verbs, as the closed loop calls them: each model keeps its own warm start and compiled
+    state, so interleaved calls answer as separate verbs would; a model of another mechanism
+    is refused."""
+    d = ex.builtin_dict("stewart")
+    m = load_mechanism(d)
+    for body in d["bodies"]:
+        if "mass_kg" in body:
+            body["mass_kg"] *= 1.3
+    plant = load_mechanism(d)
+    _, x, xd, xdd = _state(m, 8)
+    shared = machine_verbs(m)
+    alone_m, alone_p = machine_verbs(m), machine_verbs(plant)
+    u = alone_m.inverse_dynamics(m, x, xd, xdd)
+    for i in range(len(x)):
+        a_m = shared.forward_dynamics_one(m, x[i], xd[i], u[i])
+        a_p = shared.forward_dynamics_one(plant, x[i], xd[i], u[i])
+        assert np.allclose(a_m, alone_m.forward_dynamics_one(m, x[i], xd[i], u[i]), rtol=1e-10, atol=1e-12)
+        assert np.allclose(a_p, alone_p.forward_dynamics_one(plant, x[i], xd[i], u[i]), rtol=1e-10, atol=1e-12)
+        assert np.allclose(a_m, xdd[i], rtol=1e-7, atol=1e-9 * np.abs(xdd).max())
+        assert not np.allclose(a_p, a_m, rtol=1e-3)  # heavier bodies: another answer
+    with pytest.raises(ParameterError, match="belong to mechanism"):
+        shared.mass_matrix(load_mechanism(ex.builtin_dict("delta")), reference_task(m)[None])

@@ -132,7 +132,7 @@ def test_the_compiled_sample_with_friction_and_a_named_load():
         u = ref.inverse_dynamics(mech, x, xd, xdd, F)
         a_ref = ref.forward_dynamics(mech, x, xd, u, F)
         V = machine_verbs(mech)
-        p, inverse, forward = V._pk, _one.inverse_one, _one.forward_one
+        p, inverse, forward = V._state(mech).pk, _one.inverse_one, _one.forward_one
         out = np.empty(mech.nt)
         V.forward_dynamics_one(mech, x[0], xd[0], u[0], float(F[0]))  # primes the kernel
         for i in range(1, len(x)):
@@ -200,12 +200,12 @@ def test_the_general_route_starts_where_the_kernel_left_off():
         V.forward_dynamics_one(m, xi, zero, zero)
     from pkmdyn.multibody import _one
 
-    assert _one.solution(V._pk) is not None
+    assert _one.solution(V._state(m).pk) is not None
     ref = machine_verbs(m)
     from pkmdyn.multibody import solve_kinematics
 
     q_ref = solve_kinematics(m, x).q[-1]
-    assert np.abs(V._last_q() - q_ref).max() <= 1e-8
+    assert np.abs(V._state(m).last_q() - q_ref).max() <= 1e-8
     assert np.allclose(V.mass_matrix(m, x[-1:]), ref.mass_matrix(m, solve_kinematics(m, x).x[-1:]), rtol=1e-9)
 
 

@@ -48,22 +48,67 @@ def _load_dependent(model: MechanismModel) -> bool:
     return any(f is not None and f.get("coefficient", 0.0) for f in model.joint_friction)
 
 
+class _State:
+    """What the verbs keep of one model between calls: its last solved tree coordinates (the
+    next solve's start), the mass matrix's constant factors and the compiled single-sample
+    path's buffer (:mod:`._one`; None where that path does not answer for the model)."""
+
+    def __init__(self, model: MechanismModel) -> None:
+        from . import _one
+
+        self.q_last: Array | None = None
+        self.inertia_factors = inertia_factors(model)
+        self.pk = _one.pack(model) if _one.supported(model) else None
+
+    def last_q(self) -> Array | None:
+        """The last solved tree coordinates: the compiled path's when it holds a solution (it
+        advances without this object), else the general route's."""
+        from . import _one
+
+        q = _one.solution(self.pk) if self.pk is not None else None
+        return q if q is not None else self.q_last
+
+    def remember(self, kin: MechanismKinematics) -> None:
+        """The last solved sample: the next solve's start, and the compiled path's state."""
+        self.q_last = kin.q[-1].copy()
+        if self.pk is not None:
+            from . import _one
+
+            _one.prime(self.pk, kin.q[-1], kin.x[-1], kin.G[-1])
+
+
 class MechanismVerbs:
     """The machine verbs of one described mechanism (module docstring). Solves are warm-started
     from the previous call's last configuration, as a control loop calls them."""
 
     def __init__(self, model: MechanismModel) -> None:
-        from . import _one
-
         self.model = model
         self.COORDINATES = tuple(f"{n}_{u}" for n, u in zip(model.task_names, model.task_units))
         # a drive's efforts are its motor's ([[actuators]]): <actuator>_Nm; a joint's own, <joint>_N or _Nm
         self.ACTUATORS = tuple(f"{model.drive_name[i]}_{motor_effort_unit(model, i)}" if model.drive_name[i] is not None
                                else f"{a}_{effort_unit(model, i)}" for i, a in enumerate(model.actuator_names))
-        self._q_last: Array | None = None
-        self._inertia_factors = inertia_factors(model)  # the mass matrix's constant factors
-        # the compiled single-sample path (:mod:`._one`), where it answers for this mechanism
-        self._pk = _one.pack(model) if _one.supported(model) else None
+        #: per model these verbs have served (the controller's and the plant's may differ): its
+        #: warm-start state (:class:`_State`), by ``id``, with the model held so the id stays its own
+        self._states: dict[int, tuple[MechanismModel, _State]] = {}
+        self._state(model)
+
+    def _state(self, model: MechanismModel) -> _State:
+        """The state of ``model``: made on its first call, for a model with the first one's task
+        coordinates and actuators (the same machine with other numbers: a plant beside its
+        controller's model)."""
+        held = self._states.get(id(model))
+        if held is not None and held[0] is model:
+            return held[1]
+        if not isinstance(model, MechanismModel):
+            raise ParameterError(f"model: expected a MechanismModel, got {type(model).__name__}")
+        first = self.model
+        if (model.task_names, model.task_units, model.actuator_names, model.drive_name) != \
+                (first.task_names, first.task_units, first.actuator_names, first.drive_name):
+            raise ParameterError(f"these verbs belong to mechanism {first.name!r}: model {model.name!r} has other "
+                                 "task coordinates or actuators")
+        st = _State(model)
+        self._states[id(model)] = (model, st)
+        return st
 
     # ------------------------------------------------------------------ helpers
     def _x(self, q: object, name: str = "q") -> Array:
@@ -71,27 +116,10 @@ class MechanismVerbs:
                                       MotionError))
 
     def _kin(self, model: MechanismModel, x: Array, xd: Array | None = None) -> MechanismKinematics:
-        if model is not self.model:
-            raise ParameterError("these verbs belong to mechanism " + repr(self.model.name))
-        kin = solve_kinematics(model, x, xd, None, q_start=self._last_q())
-        self._remember(kin)
+        st = self._state(model)
+        kin = solve_kinematics(model, x, xd, None, q_start=st.last_q())
+        st.remember(kin)
         return kin
-
-    def _last_q(self) -> Array | None:
-        """The last solved tree coordinates: the compiled path's when it holds a solution (it
-        advances without this object), else the general route's."""
-        from . import _one
-
-        q = _one.solution(self._pk) if self._pk is not None else None
-        return q if q is not None else self._q_last
-
-    def _remember(self, kin: MechanismKinematics) -> None:
-        """The last solved sample: the next solve's start, and the compiled path's state."""
-        self._q_last = kin.q[-1].copy()
-        if self._pk is not None:
-            from . import _one
-
-            _one.prime(self._pk, kin.q[-1], kin.x[-1], kin.G[-1])
 
     def _named(self, load: object, n: int) -> dict | None:
         """The named loads' magnitudes ``{name: (n,)}`` from the verbs' ``load`` (module docstring)."""
@@ -122,8 +150,9 @@ class MechanismVerbs:
         from . import _kernels as K
         from .kinematics import _assemble, _run
 
-        q_last = self._last_q()
-        if q_last is None or model is not self.model:
+        st = self._state(model)
+        q_last = st.last_q()
+        if q_last is None:
             return self._kin(model, x[None], xd[None])
         x1 = np.ascontiguousarray(x, dtype=float).reshape(1, -1)
         xd1 = np.ascontiguousarray(xd, dtype=float).reshape(1, -1)
@@ -132,7 +161,7 @@ class MechanismVerbs:
         if out["status"][0] != K.OK or not (np.all(np.isfinite(x1)) and np.all(np.isfinite(xd1))):
             return self._kin(model, x1, xd1)
         kin = _assemble(model, None, x1, xd1, zero, out)
-        self._remember(kin)
+        st.remember(kin)
         return kin
 
     def _mass(self, model: MechanismModel, kin: MechanismKinematics, S: Array) -> Array:
@@ -141,7 +170,7 @@ class MechanismVerbs:
         M = np.empty((len(kin), model.nt, model.nt))
         task_mass_batch(np.ascontiguousarray(S), np.ascontiguousarray(kin.G), model.body_parent, model.body_joint,
                         model.joint_q0, model.joint_nq, np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.p),
-                        model.mass, self._inertia_factors, M)
+                        model.mass, self._state(model).inertia_factors, M)
         if np.any(model.drive_rotor):  # the rotors' inertia k^2 I_r along each actuator's row of J_ax
             M += np.einsum("nat,a,nas->nts", kin.J_ax, model.drive_rotor * model.drive_ratio ** 2, kin.J_ax)
         return M
@@ -216,19 +245,21 @@ class MechanismVerbs:
         magnitude): the ``*_one`` verbs then take the general route."""
         from . import _one
 
-        if self._pk is None or model is not self.model or np.any(self.model.load_magnitude != 0.0):
+        pk = self._state(model).pk
+        if pk is None or np.any(model.load_magnitude != 0.0):
             return None  # (a caller without a load passes 0.0: right only for a zero default magnitude)
-        return self._pk, _one.inverse_one, _one.forward_one
+        return pk, _one.inverse_one, _one.forward_one
 
     def _kernel(self, model: MechanismModel, forward: bool, q: object, qd: object, v: object,
                 load: object) -> Array | None:
         """The compiled path's answer, or None (then the general route answers and primes it)."""
-        if self._pk is None or model is not self.model:
+        pk = self._state(model).pk
+        if pk is None:
             return None
         from . import _one
 
-        if self.model.named_loads:
-            mag = float(self.model.load_magnitude[list(self.model.load_name).index(self.model.named_loads[0])])
+        if model.named_loads:
+            mag = float(model.load_magnitude[list(model.load_name).index(model.named_loads[0])])
             lv = np.asarray(mag if load is None else load, dtype=float)
             if lv.size != 1 or not np.isfinite(lv).all():
                 return None  # the general route names what is wrong
@@ -241,11 +272,11 @@ class MechanismVerbs:
         x = np.ascontiguousarray(q, dtype=float)
         xd = np.ascontiguousarray(qd, dtype=float)
         vv = np.ascontiguousarray(v, dtype=float)
-        nt = self.model.nt
+        nt = model.nt
         if x.shape != (nt,) or xd.shape != (nt,) or vv.shape != (nt,):
             return None  # the general route names what is wrong (the kernel refuses non-finite input)
         out = np.empty(nt)
-        status = (_one.forward_one if forward else _one.inverse_one)(self._pk, x, xd, vv, magnitude, out)
+        status = (_one.forward_one if forward else _one.inverse_one)(pk, x, xd, vv, magnitude, out)
         return out if status == 0 else None
 
     def inverse_dynamics_one(self, model: MechanismModel, q: Array, qd: Array, qdd: Array,
