@@ -121,6 +121,45 @@ def inverse_kinematics(par: FiveBar, P, Pd=None, Pdd=None):
     }
 
 
+def forward_kinematics(par: FiveBar, phi):
+    """Direct kinematics: both end-point solutions for given proximal link angles.
+
+    ``phi (n, 2)``: absolute proximal link angles ``phi_i`` (the convention of
+    :func:`inverse_kinematics`; the driven joint's coordinate is ``q_i = joint_sign_i phi_i``,
+    so pass ``phi = joint_sign * q``).
+
+    The elbows ``B_i = A_i + l1_i e(phi_i)`` are fixed by ``phi``; the end point is an
+    intersection of the circles of radius ``l2_0`` about ``B_0`` and ``l2_1`` about ``B_1``
+    (Tsai 1999, sec. 2 (planar five-bar); Merlet 2006, ch. 4 (direct kinematics of planar
+    2-DOF mechanisms)). With ``d = B_1 - B_0``, ``D = |d|``, ``u = d / D``:
+
+    * ``a = (D^2 + l2_0^2 - l2_1^2) / (2 D)``: distance from ``B_0`` to the foot of the
+      common chord along ``u`` (law of cosines),
+    * ``h = sqrt(l2_0^2 - a^2)``: half the chord,
+    * ``P = B_0 + a u +/- h perp(u)``, ``perp(u) = (-u_z, u_x)`` (``u`` turned +90 degrees).
+
+    Solution 0 takes ``+h``: the end point lies to the LEFT of the directed line
+    ``B_0 -> B_1`` (``cross(B_1 - B_0, P - B_0) = D h > 0``); solution 1 takes ``-h`` (right).
+
+    Returns a dict: ``P (n, 2, 2)`` indexed ``[sample, solution, (x, z)]`` and ``B (n, 2, 2)``
+    the elbows ``[sample, leg, (x, z)]``. Where the circles do not meet (``h^2 < 0``, or
+    ``D = 0``) ``P`` is NaN; where they touch (``h = 0``, a singularity) both solutions coincide.
+    """
+    phi = _as_batch(phi, 2)
+    A, l1, l2 = par.base[None], par.l1[None], par.l2[None]
+    B = A + l1[..., None] * _e(phi)
+    d = B[:, 1] - B[:, 0]
+    D = np.linalg.norm(d, axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        u = d / D[:, None]
+        a = (D**2 + l2[:, 0] ** 2 - l2[:, 1] ** 2) / (2.0 * D)
+        h = np.sqrt(l2[:, 0] ** 2 - a**2)
+    foot = B[:, 0] + a[:, None] * u
+    off = h[:, None] * _perp(u)
+    P = np.stack([foot + off, foot - off], axis=1)
+    return {"P": P, "B": B}
+
+
 def _link_com(origin, v_origin, a_origin, ang, w, al, com):
     """Centre of mass of a link at angle ``ang`` about its proximal end ``origin``."""
     r = com[None, :, 0, None] * _e(ang) + com[None, :, 1, None] * _n(ang)

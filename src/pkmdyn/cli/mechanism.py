@@ -76,6 +76,15 @@ def describe(machine: str) -> None:
               help="Motion CSV: t_s and one column per task coordinate (<name>_<unit>), optional rates "
                    "<name>d_<unit>_s and accelerations <name>dd_<unit>_s2 (default: the machine's default motion; "
                    "hip: the ISO 14242-1 cycle, pdm: the Eq. 84 motion).")
+@click.option("--actuator-motion", "actuator_path", type=PATH_IN, default=None,
+              help="Motion in actuator coordinates (CSV): t_s and one column per actuated joint, <joint>_pos_<m|rad>, "
+                   "optional rates <joint>_vel_<u>_s and accelerations <joint>_acc_<u>_s2 and named loads; the pose "
+                   "by the direct kinematics (docs/mechanism_format.md, \"Direct kinematics\").")
+@click.option("--sg-window", type=click.IntRange(0, 100_001), default=15, show_default=True,
+              help="--actuator-motion without rate columns: samples of the Savitzky-Golay smoothing differentiator "
+                   "(odd, >= 3; uniform sampling), or 0 for the interpolating quintic spline (exact positions).")
+@click.option("--sg-order", type=click.IntRange(2, 20), default=5, show_default=True,
+              help="Degree of the Savitzky-Golay polynomial (less than --sg-window).")
 @click.option("--cycles", type=FiniteFloat(0.0, 1e9, lo_open=True), default=None,
               help="Cycles of the default motion (default 1; a periodic default motion repeats).")
 @click.option("--samples-per-cycle", type=click.IntRange(1, 100_000_000), default=None,
@@ -95,8 +104,9 @@ def describe(machine: str) -> None:
               help="The default: refuse reactions that are not unique.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
-def run(machine: str, motion_path: Path | None, cycles: float | None, samples_per_cycle: int | None, fmt: str,
-        limit_items: tuple[str, ...], minimum_norm_reactions: bool, unique_reactions: bool, out_dir: Path) -> None:
+def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_window: int, sg_order: int,
+        cycles: float | None, samples_per_cycle: int | None, fmt: str, limit_items: tuple[str, ...],
+        minimum_norm_reactions: bool, unique_reactions: bool, out_dir: Path) -> None:
     """Kinematics, actuator and motor efforts, the effort split and every joint reaction along a
     motion, streamed in chunks: results.csv (or .parquet), model.json, bodies.npz, summary.json,
     report.html.
@@ -113,7 +123,9 @@ def run(machine: str, motion_path: Path | None, cycles: float | None, samples_pe
     from ..params_util import parse_limit_options
 
     entry, path = resolve(machine)
-    inputs = {"--machine": path, "--motion": motion_path}
+    inputs = {"--machine": path, "--motion": motion_path, "--actuator-motion": actuator_path}
+    if motion_path is not None and actuator_path is not None:
+        raise click.UsageError("--motion and --actuator-motion exclude each other: give the motion one way")
     check_output_dir(out_dir, inputs)
     limits = parse_limit_options(limit_items, LIMIT_KEYS)
     if minimum_norm_reactions and unique_reactions:
@@ -121,11 +133,21 @@ def run(machine: str, motion_path: Path | None, cycles: float | None, samples_pe
     model, entry = _load(machine)
     lim = effective_limits(model, limits)
     window = None
-    if motion_path is not None:
+    if motion_path is not None or actuator_path is not None:
+        given = "--motion" if motion_path is not None else "--actuator-motion"
         for opt, v in (("--cycles", cycles), ("--samples-per-cycle", samples_per_cycle)):
             if v is not None:
-                raise click.UsageError(f"{opt} applies to the default motion, not to --motion")
-        motion = read_task_motion(model, Path(motion_path).absolute())
+                raise click.UsageError(f"{opt} applies to the default motion, not to {given}")
+        if motion_path is not None:
+            motion = read_task_motion(model, Path(motion_path).absolute())
+        else:
+            from ..multibody.direct import task_motion
+            from ..multibody.motion import read_actuator_motion
+
+            if sg_window != 0 and (sg_window < 3 or sg_window % 2 == 0 or sg_order >= sg_window):
+                raise click.UsageError("--sg-window: an odd number >= 3 and above --sg-order, or 0")
+            am = read_actuator_motion(model, Path(actuator_path).absolute(), sg_window, sg_order)
+            motion, _ = task_motion(model, am)
     elif entry is None:
         motion = periodic_motion(model, 1.0 if cycles is None else cycles, samples_per_cycle,
                                  max_samples=int(lim["max_samples"]))

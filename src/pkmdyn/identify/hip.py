@@ -41,12 +41,12 @@ from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.signal import savgol_filter
 
 from ..errors import MotionError, ParameterError
 from ..io import read_csv_columns
 from ..machines.hip_simulator import HipModel, model_from_dict
 from ..machines.hip_simulator import minimal as hip_machine
+from ..profiles._columns import savgol_derivatives
 from ..profiles.orientation import MOTION_COLUMNS, OrientationMotion, make_motion
 from ._base import DEFAULT_RANK_TOL, BaseParameters
 from ._identify import identify_efforts
@@ -335,39 +335,6 @@ def identified_description(description: dict[str, Any], result: HipIdentificatio
 MAX_ANGLE_DEG = 360.0
 MAX_TORQUE_NM = 1e4
 MAX_LOAD_N = 1e5
-
-
-def savgol_derivatives(t: Array, x: Array, window: int, order: int, source: str) -> tuple[Array, Array]:
-    """First and second time derivatives of ``x (n, k)`` by a Savitzky-Golay filter.
-
-    A polynomial of degree ``order`` is fitted by least squares to each ``window`` samples
-    (``scipy.signal.savgol_filter``, ends by a fit to the first/last window) and
-    differentiated; sampling must be uniform. Errors name ``source``.
-    """
-    n = t.shape[0]
-    if window % 2 == 0 or window < 3:
-        raise MotionError(f"--sg-window: must be an odd number >= 3, got {window}")
-    if not 2 <= order < window:
-        raise MotionError(f"--sg-order: must be >= 2 and less than the window ({window}), got {order}")
-    if n < window:
-        raise MotionError(f"{source}: {n} rows are fewer than the smoothing window of {window} samples")
-    dt = np.diff(t)
-    h = (t[-1] - t[0]) / (n - 1)
-    if np.max(np.abs(dt - h)) > 1e-6 * h:
-        r = int(np.argmax(np.abs(dt - h))) + 2
-        raise MotionError(
-            f"{source}: row {r}, column 't_s': sampling is not uniform (step {dt[r - 2]:g} s, mean {h:g} s); "
-            "the smoothing differentiator needs a uniform time step, or give the derivative columns"
-        )
-    try:
-        with np.errstate(all="ignore"):
-            d1 = savgol_filter(x, window, order, deriv=1, delta=h, axis=0, mode="interp")
-            d2 = savgol_filter(x, window, order, deriv=2, delta=h, axis=0, mode="interp")
-    except (ValueError, np.linalg.LinAlgError):
-        d1 = d2 = np.full_like(x, np.nan)
-    if not (np.all(np.isfinite(d1)) and np.all(np.isfinite(d2))):
-        raise MotionError(f"{source}: the derivatives overflow (time step {h:g} s); check the column 't_s'")
-    return d1, d2
 
 
 def read_measured_csv(path: str | Path, sg_window: int = 15, sg_order: int = 5) -> tuple[OrientationMotion, Array, dict[str, Any]]:

@@ -6,6 +6,15 @@ Motion CSV: ``t_s`` and one column per task coordinate, ``<name>_<unit>`` (``x_m
 optional: one column per named load of the description (``[[loads]]`` with a ``name`` such as
 ``push_N``), its magnitude [N] at each sample (the description's ``magnitude_N`` where the
 column is absent).
+
+Actuator motion CSV (:func:`read_actuator_motion`; the pose then follows by the direct
+kinematics, :mod:`.direct`): ``t_s`` and one column per actuated joint,
+``<joint>_pos_<unit>`` (``m`` or ``rad``, the columns of a run's ``results.csv``); optional rates
+``<joint>_vel_<unit>_s`` and accelerations ``<joint>_acc_<unit>_s2`` (each group all or
+none) and the named loads' columns. Missing derivatives come from a Savitzky-Golay smoothing
+differentiator (a polynomial of degree ``sg_order`` fitted to each ``sg_window`` samples,
+uniform sampling; for measured positions) or, with ``sg_window = 0``, from the interpolating
+quintic spline of a task motion file (for exact, planned positions).
 """
 
 from __future__ import annotations
@@ -18,11 +27,12 @@ from numpy.typing import NDArray
 
 from ..errors import MotionError
 from ..io import read_csv_columns
-from ..profiles._columns import column_group, derivatives, require_increasing
+from ..profiles._columns import column_group, derivatives, require_increasing, require_rows, savgol_derivatives
 from .model import MechanismModel
 
-__all__ = ["TaskMotion", "PeriodicMotion", "RepeatedMotion", "task_columns", "default_motion", "periodic_motion",
-           "repeated_motion", "read_task_motion", "MAX_MOTION_ROWS"]
+__all__ = ["TaskMotion", "PeriodicMotion", "RepeatedMotion", "ActuatorMotion", "task_columns", "motion_columns",
+           "actuator_columns", "default_motion", "periodic_motion", "repeated_motion", "read_task_motion",
+           "read_actuator_motion", "MAX_MOTION_ROWS"]
 
 Array = NDArray[np.float64]
 
@@ -81,6 +91,34 @@ class PeriodicMotion:
         x = self.x_ref + self.offset + self.amplitude * s
         return TaskMotion(t, np.ascontiguousarray(x), np.ascontiguousarray(self.amplitude * w * c),
                           np.ascontiguousarray(-self.amplitude * w * w * s))
+
+
+def motion_columns(name: str, unit: str) -> tuple[str, str, str]:
+    """The columns of a coordinate ``name`` in ``unit`` (an actuated joint's or a motor's):
+    ``<name>_pos_<u>``, ``<name>_vel_<u>_s``, ``<name>_acc_<u>_s2``."""
+    return f"{name}_pos_{unit}", f"{name}_vel_{unit}_s", f"{name}_acc_{unit}_s2"
+
+
+def actuator_columns(model: MechanismModel) -> tuple[list[str], list[str], list[str]]:
+    """Column names of the actuated joints' coordinates, rates and accelerations."""
+    cols = [motion_columns(a, u) for a, u in zip(model.actuator_names, model.actuator_units)]
+    return [c[0] for c in cols], [c[1] for c in cols], [c[2] for c in cols]
+
+
+@dataclass(frozen=True)
+class ActuatorMotion:
+    """``t`` (n,) [s]; ``s, sd, sdd`` (n, na): the actuated joints' coordinates ([m], [rad]) in
+    the model's ``actuator_names`` order and their first and second time derivatives;
+    ``loads``: magnitudes (n,) [N] of named loads given by the motion."""
+
+    t: Array
+    s: Array
+    sd: Array
+    sdd: Array
+    loads: dict[str, Array] = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return int(self.t.shape[0])
 
 
 def task_columns(model: MechanismModel) -> tuple[list[str], list[str], list[str]]:
@@ -194,3 +232,31 @@ def read_task_motion(model: MechanismModel, path: str | Path, max_rows: int | No
     xd, xdd = derivatives(path, t, x, column_group(path, cols, vel), column_group(path, cols, acc), vel)
     loads = {nm: np.asarray(cols[nm], dtype=float) for nm in model.named_loads if cols.get(nm) is not None}
     return TaskMotion(t, np.ascontiguousarray(x), np.ascontiguousarray(xd), np.ascontiguousarray(xdd), loads)
+
+
+def read_actuator_motion(model: MechanismModel, path: str | Path, sg_window: int = 15, sg_order: int = 5,
+                         max_rows: int | None = MAX_MOTION_ROWS) -> ActuatorMotion:
+    """Read an actuator motion CSV for ``model`` (module docstring): missing rates and
+    accelerations by the Savitzky-Golay differentiator (``sg_window`` odd >= 3 samples, degree
+    ``sg_order``), or by the quintic spline with ``sg_window = 0``. Errors name the file, row and
+    column."""
+    path = Path(path)
+    pos, vel, acc = actuator_columns(model)
+    cols = read_csv_columns(path, ("t_s", *pos), (*vel, *acc, *model.named_loads), max_rows=max_rows)
+    t = cols["t_s"]
+    require_rows(path, t)
+    require_increasing(path, t)
+    s = column_group(path, cols, pos)
+    if s is None:  # pragma: no cover - required columns
+        raise MotionError(f"{path}: no actuator columns")
+    sd, sdd = column_group(path, cols, vel), column_group(path, cols, acc)
+    if sd is None and sdd is not None:
+        raise MotionError(f"{path}: acceleration columns need the rate columns ({', '.join(vel)})")
+    if sg_window == 0:
+        sd, sdd = derivatives(path, t, s, sd, sdd, vel)
+    elif sd is None:
+        sd, sdd = savgol_derivatives(t, s, sg_window, sg_order, str(path))
+    elif sdd is None:
+        sdd = savgol_derivatives(t, sd, sg_window, sg_order, str(path))[0]
+    loads = {nm: np.asarray(cols[nm], dtype=float) for nm in model.named_loads if cols.get(nm) is not None}
+    return ActuatorMotion(t, np.ascontiguousarray(s), np.ascontiguousarray(sd), np.ascontiguousarray(sdd), loads)

@@ -21,19 +21,13 @@ from .dynamics import effort_unit
 from .joint_types import JOINT_TYPES
 from .kinematics import MechanismKinematics
 from .model import MechanismModel
-from .motion import task_columns
+from .motion import motion_columns, task_columns
 
 __all__ = ["results_columns", "motion_columns", "joint_effort_column", "actuator_effort_column", "model_summary", "bodies_arrays",
            "report_columns", "write_run_report"]
 
 Array = NDArray[np.float64]
 _MOTION_NAMES = ("RX", "RY", "RZ", "TX", "TY", "TZ")
-
-
-def motion_columns(name: str, unit: str) -> tuple[str, str, str]:
-    """The columns of a coordinate ``name`` in ``unit`` (an actuated joint's or a motor's):
-    ``<name>_pos_<u>``, ``<name>_vel_<u>_s``, ``<name>_acc_<u>_s2``."""
-    return f"{name}_pos_{unit}", f"{name}_vel_{unit}_s", f"{name}_acc_{unit}_s2"
 
 
 def joint_effort_column(model: MechanismModel, i: int, part: str | None = None) -> str:

@@ -1,0 +1,365 @@
+"""Compiled kernels of the direct kinematics (:mod:`.direct`), driven by the model's arrays only.
+
+For actuator coordinates ``s (na,)`` the tree coordinates ``q (nq,)`` solve the square system
+
+    Phi_sel(q) = 0            (the independent loop rows the inverse kinematics solves),
+    N (q - q_ref) = 0         (the idle freedoms held as the inverse kinematics holds them),
+    q_a = s                   (the actuated coordinates),
+
+for the ``nu = nq - na`` coordinates that are not actuated, by Newton on
+``K = [Phi_sel,u; N_u]`` (``u``: those columns; ``K`` is square when the mechanism has as
+many actuators as degrees of freedom). Then, at the solution, the rates follow from the
+derivatives of the same rows:
+
+    K G_u = -[Phi_sel,a; N_a]           (G = dq/ds; G_a = I),      qd = G sd,
+    K qdd_u = -[Phi_sel,a; N_a] sdd - [gamma_sel; 0],              qdd_a = sdd,
+
+with ``gamma`` the rows' drift at ``qdd = 0`` (:func:`._kernels.rows`), and the task
+coordinates are the task rows' values, ``xd = J_x qd``, ``xdd = J_x qdd + gamma_x``. The
+determinant of ``K`` changes sign where the direct kinematics is singular (a type II or
+parallel singularity of Gosselin and Angeles 1990): its sign tells the assembly branch along a
+motion. Nothing here knows a mechanism; the row and pose kernels are those of the inverse
+kinematics (:mod:`._kernels`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ._kernels import (LOOP_OPEN, NOT_CONVERGED, OK, ROWS_DRIFT, ROWS_JACOBIAN, ROWS_VALUES, SINGULAR, _wrap,
+                       forward_accelerations,
+                       forward_positions, forward_velocities, rows)
+
+__all__ = ["CROSSED", "EULER_SINGULAR_RATES", "direct_batch", "direct_starts"]
+
+#: status of a sample where the determinant of ``K`` changed sign since the previous one
+CROSSED = 5
+#: status of a solved sample whose task Euler angles are at their singularity (no task rates)
+EULER_SINGULAR_RATES = 6
+
+
+@njit(cache=True, _nrt=False)
+def _lu(M, piv):  # pragma: no cover - compiled
+    """``M = P L U`` in place (partial pivoting, ``piv`` the row swaps); returns the determinant
+    and the ratio of the smallest to the largest pivot magnitude (0 for a zero pivot)."""
+    n = M.shape[0]
+    det = 1.0
+    big = 0.0
+    small = math.inf
+    for k in range(n):
+        p = k
+        for i in range(k + 1, n):
+            if abs(M[i, k]) > abs(M[p, k]):
+                p = i
+        piv[k] = p
+        if p != k:
+            for j in range(n):
+                tmp = M[k, j]
+                M[k, j] = M[p, j]
+                M[p, j] = tmp
+            det = -det
+        d = M[k, k]
+        det *= d
+        a = abs(d)
+        big = max(big, a)
+        small = min(small, a)
+        if d == 0.0:
+            return 0.0, 0.0
+        for i in range(k + 1, n):
+            f = M[i, k] / d
+            M[i, k] = f
+            for j in range(k + 1, n):
+                M[i, j] -= f * M[k, j]
+    if n == 0:
+        return 1.0, 1.0
+    return det, small / big
+
+
+@njit(cache=True, _nrt=False)
+def _lu_solve(M, piv, b):  # pragma: no cover - compiled
+    """``b = M^-1 b`` with the factors of :func:`_lu`."""
+    n = b.shape[0]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            tmp = b[k]
+            b[k] = b[p]
+            b[p] = tmp
+    for i in range(n):
+        acc = b[i]
+        for j in range(i):
+            acc -= M[i, j] * b[j]
+        b[i] = acc
+    for i in range(n - 1, -1, -1):
+        acc = b[i]
+        for j in range(i + 1, n):
+            acc -= M[i, j] * b[j]
+        b[i] = acc / M[i, i]
+
+
+def direct_sample(s, sd, sdd, q, chord, tree, loops, task, sol, work, info):  # pragma: no cover - compiled
+    """One sample (module docstring) from ``q`` (updated in place; its actuated coordinates are
+    set to ``s``). With ``chord``, a first simplified Newton step with the factors of ``K`` left
+    in ``work`` by the previous sample (the rows' values only: no Jacobian, no factorisation);
+    from a close predictor it lands within rounding of the solution, which the next (full)
+    evaluation then confirms. ``sol``: ``(act, unk, cut, idle, q_ref, row_scale, tol, check_tol, max_iter,
+    damped)``; with ``damped`` a step that does not lower the residual is halved (a search from
+    far away, :func:`direct_starts`). Converged when the scaled residual of the solved rows is
+    at most ``tol`` (or stalls within a factor 1000 of it) and that of every loop row at most
+    ``check_tol``. ``info``: worst row, scaled residual, Newton steps, ``det K``, smallest over
+    largest pivot. Returns the status; on OK (or :data:`EULER_SINGULAR_RATES`) ``work`` holds
+    the rows' values ``val`` and Jacobian ``J`` at the solution, ``G``, ``qd``, ``qdd`` and the
+    drift ``gamma``."""
+    (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC) = tree
+    RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child = loops
+    task_body, task_point, task_kind, task_index, euler_axes = task
+    act, unk, cut, idle, q_ref, row_scale, tol, check_tol, max_iter, damped = sol
+    R, p, S, val, J, gamma, V, Vpre, A, K, piv, r, G, qd, qdd, w33, w3, trig, late, rowpos, colpos, q0, step = work
+    nq = q.shape[0]
+    na = act.shape[0]
+    nu = unk.shape[0]
+    nc = cut.shape[0]
+    ni = idle.shape[0]
+    nr = row_loop.shape[0]
+    for a in range(na):
+        q[act[a]] = s[a]
+    off = nq < 0  # False, typed as a run-time value (a literal would compile another copy of the callees)
+    jac = ROWS_JACOBIAN + 0 * nq
+    drift = ROWS_DRIFT + 0 * nq
+    values = ROWS_VALUES + 0 * nq
+    prev = math.inf
+    lam = 1.0
+    it = 0
+    evals = 0
+    info[2] = 0.0
+    while True:
+        forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                          tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, off, late, off)
+        ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                  RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+                  val, J, rowpos, colpos, values if chord else jac, V, A, gamma, w33, w3)
+        evals += 1
+        big = 0.0
+        worst = cut[0] if nc > 0 else 0
+        for i in range(nc):
+            rr = cut[i]
+            r[i] = -val[rr]
+            sc = abs(val[rr]) * row_scale[rr]
+            if sc > big:
+                big = sc
+                worst = rr
+        for k in range(ni):
+            acc = 0.0
+            for c in range(nq):
+                acc += idle[k, c] * (q[c] - q_ref[c])
+            r[nc + k] = -acc
+            big = max(big, abs(acc))
+        if chord:  # the simplified step; the next evaluation (with the Jacobian) checks it
+            chord = False
+            _lu_solve(K, piv, r)
+            for j in range(nu):
+                q[unk[j]] += r[j]
+            continue
+        if damped and it > 0 and not big < prev and lam > 1e-3 and evals < 4 * max_iter:
+            # a step that did not lower the residual: half of it
+            lam *= 0.5
+            for j in range(nu):
+                q[unk[j]] = q0[unk[j]] + lam * step[j]
+            continue
+        info[0] = worst
+        info[1] = big
+        done = big <= tol or (big <= 1e3 * tol and big > 0.5 * prev)
+        if done:
+            big_all = 0.0
+            wa = 0
+            for rr in range(nr):
+                sc = abs(val[rr]) * row_scale[rr]
+                if sc > big_all:
+                    big_all = sc
+                    wa = rr
+            if big_all > check_tol:
+                info[0] = wa
+                info[1] = big_all
+                return LOOP_OPEN
+        elif it >= max_iter or not big < math.inf:
+            return NOT_CONVERGED
+        for i in range(nc):
+            rr = cut[i]
+            for j in range(nu):
+                K[i, j] = J[rr, unk[j]]
+        for k in range(ni):
+            for j in range(nu):
+                K[nc + k, j] = idle[k, unk[j]]
+        det, ratio = _lu(K, piv)
+        info[3] = det
+        info[4] = ratio
+        if not ratio > 1e-13:
+            return SINGULAR
+        if done:
+            break
+        _lu_solve(K, piv, r)
+        for j in range(nu):
+            c = unk[j]
+            q0[c] = q[c]
+            step[j] = r[j]
+            q[c] += r[j]
+        lam = 1.0
+        prev = big
+        it += 1
+        info[2] = it
+    # ---- rates at the solution: G = dq/ds, qd, the drift, qdd
+    for a in range(na):
+        ca = act[a]
+        for i in range(nc):
+            r[i] = -J[cut[i], ca]
+        for k in range(ni):
+            r[nc + k] = -idle[k, ca]
+        _lu_solve(K, piv, r)
+        for c in range(nq):
+            G[c, a] = 0.0
+        for j in range(nu):
+            G[unk[j], a] = r[j]
+        G[ca, a] = 1.0
+    for c in range(nq):
+        acc = 0.0
+        for a in range(na):
+            acc += G[c, a] * sd[a]
+        qd[c] = acc
+    forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre)
+    forward_accelerations(qd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
+    rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+         RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+         val, J, rowpos, colpos, drift, V, A, gamma, w33, w3)
+    for i in range(nc):
+        rr = cut[i]
+        acc = -gamma[rr]
+        for a in range(na):
+            acc -= J[rr, act[a]] * sdd[a]
+        r[i] = acc
+    for k in range(ni):
+        acc = 0.0
+        for a in range(na):
+            acc -= idle[k, act[a]] * sdd[a]
+        r[nc + k] = acc
+    _lu_solve(K, piv, r)
+    for c in range(nq):
+        qdd[c] = 0.0
+    for j in range(nu):
+        qdd[unk[j]] = r[j]
+    for a in range(na):
+        qdd[act[a]] = sdd[a]
+    return OK if ok else EULER_SINGULAR_RATES
+
+
+#: compiled once and called as a function by both drivers below (inlining it twice would type
+#: the whole solver twice)
+direct_sample = njit(cache=True, _nrt=False)(direct_sample)
+
+
+@njit(cache=True)
+def _work(nq, nb, nrow, nu, na):  # pragma: no cover - compiled
+    rowpos = np.arange(nrow)
+    colpos = np.arange(nq)
+    return (np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nq, 6)), np.empty(nrow), np.zeros((nrow, nq)),
+            np.zeros(nrow), np.zeros((nb, 6)), np.zeros((nq, 6)), np.zeros((nb, 6)), np.empty((nu, nu)),
+            np.empty(nu, dtype=np.int64), np.empty(nu), np.zeros((nq, na)), np.zeros(nq), np.zeros(nq),
+            np.empty((5, 3, 3)), np.empty((20, 3)), np.empty((nq, 3)), np.full(nb, -1, dtype=np.int64), rowpos,
+            colpos, np.zeros(nq), np.zeros(nu))
+
+
+@njit(cache=True)
+def direct_batch(tm, s, sd, sdd, q_start, x_start, tree, loops, task, sol, q_out, qd_out, qdd_out, x_out, xd_out,
+                 xdd_out, res_out, it_out, det_out, ratio_out, status, worst):  # pragma: no cover - compiled
+    """Every sample of the actuator motion ``s, sd, sdd (n, na)`` in order, each from the
+    previous one's solution: ``q_{k-1} + qd dt + qdd dt^2 / 2`` (times ``tm``; without times
+    ``q_{k-1} + G (s_k - s_{k-1})``), ``q_start`` for the first. Task angles are taken
+    continuous, the first sample's nearest ``x_start``. Stops at the first sample that fails
+    (``status``: NOT_CONVERGED, SINGULAR, LOOP_OPEN, :data:`CROSSED` where ``det K`` changed sign
+    since the previous sample, :data:`EULER_SINGULAR_RATES`), with ``worst`` its worst row."""
+    n = s.shape[0]
+    nq = q_start.shape[0]
+    nb = tree[0].shape[0]
+    nr = loops[5].shape[0]
+    nt = task[2].shape[0]
+    na = sol[0].shape[0]
+    nu = sol[1].shape[0]
+    work = _work(nq, nb, nr + nt, nu, na)
+    val, J, gamma, G, qd, qdd = work[3], work[4], work[5], work[12], work[13], work[14]
+    info = np.zeros(5)
+    q = q_start.copy()
+    task_kind = task[2]
+    det_prev = 0.0
+    for k in range(n):
+        if k > 0:
+            if tm.shape[0] == n:
+                dt = tm[k] - tm[k - 1]
+                for c in range(nq):
+                    q[c] += qd[c] * dt + 0.5 * qdd[c] * dt * dt
+            else:
+                for c in range(nq):
+                    acc = 0.0
+                    for a in range(na):
+                        acc += G[c, a] * (s[k, a] - s[k - 1, a])
+                    q[c] += acc
+        st = direct_sample(s[k], sd[k], sdd[k], q, k > 0, tree, loops, task, sol, work, info)
+        worst[k] = int(info[0])
+        res_out[k] = info[1]
+        it_out[k] = int(info[2])
+        det_out[k] = info[3]
+        ratio_out[k] = info[4]
+        for c in range(nq):
+            q_out[k, c] = q[c]
+        if st == OK and k > 0 and info[3] * det_prev < 0.0:
+            st = CROSSED
+        if st != OK:
+            status[k] = st
+            return
+        det_prev = info[3]
+        for c in range(nq):
+            qd_out[k, c] = qd[c]
+            qdd_out[k, c] = qdd[c]
+        for t in range(nt):
+            rr = nr + t
+            v = val[rr]
+            if task_kind[t] == 1:  # continuous along the motion
+                ref = x_start[t] if k == 0 else x_out[k - 1, t]
+                v = ref + _wrap(v - ref)
+            x_out[k, t] = v
+            a1 = 0.0
+            a2 = gamma[rr]
+            for c in range(nq):
+                a1 += J[rr, c] * qd[c]
+                a2 += J[rr, c] * qdd[c]
+            xd_out[k, t] = a1
+            xdd_out[k, t] = a2
+        status[k] = OK
+
+
+@njit(cache=True)
+def direct_starts(s, starts, tree, loops, task, sol, q_out, res_out, det_out, ratio_out, status):  # pragma: no cover
+    """The actuator coordinates ``s (na,)`` solved from each row of ``starts (m, nq)`` alone
+    (a damped Newton search when ``sol`` says so): the solutions ``q_out``, their residual,
+    ``det K``, pivot ratio and status."""
+    m = starts.shape[0]
+    nq = starts.shape[1]
+    nb = tree[0].shape[0]
+    nrow = loops[5].shape[0] + task[2].shape[0]
+    na = sol[0].shape[0]
+    nu = sol[1].shape[0]
+    work = _work(nq, nb, nrow, nu, na)
+    info = np.zeros(5)
+    zero = np.zeros(na)
+    q = np.empty(nq)
+    for i in range(m):
+        for c in range(nq):
+            q[c] = starts[i, c]
+        st = direct_sample(s, zero, zero, q, False, tree, loops, task, sol, work, info)
+        status[i] = st
+        res_out[i] = info[1]
+        det_out[i] = info[3]
+        ratio_out[i] = info[4]
+        for c in range(nq):
+            q_out[i, c] = q[c]

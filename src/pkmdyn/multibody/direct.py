@@ -1,0 +1,445 @@
+"""Direct kinematics of any described mechanism: the pose from the actuator coordinates.
+
+A parallel robot is driven and measured at its actuators. For actuator coordinates ``s``
+(``model.actuator_names`` order; [m] for a prismatic joint, [rad] for a revolute one) the tree
+coordinates ``q`` solve the loop closure with the actuated coordinates held at ``s`` and the
+idle freedoms held as the inverse kinematics holds them (:mod:`._direct`, the equations); the
+task coordinates are then the task body's pose. Two routes:
+
+- :func:`direct_kinematics`: along an actuator motion, each sample by Newton from the
+  previous one (continuation), the first from the reference configuration by continuation
+  along the straight actuator path (or from ``q_start``): the assembly mode connected to the
+  description's reference pose. Each sample reports its residual, Newton steps, the
+  determinant of the direct kinematics Jacobian (its sign is the assembly branch; a change of
+  sign between two samples is a crossed singularity, refused) and its smallest-to-largest
+  pivot ratio (near zero next to a singularity).
+- :func:`assembly_modes`: every assembly mode found at one actuator configuration, by damped
+  Newton from many random configurations (multi-start), each solution verified by the inverse
+  kinematics (its actuator coordinates back to ``s`` within ``1e-10``) and duplicates merged by
+  the task body's pose. What it guarantees: every mode listed is a real, verified solution, and
+  modes are distinct poses of the task body. What it does not: that none is missing (a mode
+  whose basin of attraction no start falls into stays unfound; ``hits`` counts the starts
+  that reached each mode, and a mode found once suggests more starts). A general
+  Gough-Stewart platform has up to 40 assembly modes (Husty 1996; Dietmaier 1998).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import MotionError, ParameterError, SingularityError, UnreachablePoseError, as_array
+from . import _direct as D
+from . import _kernels as K
+from .kinematics import CHECK_TOLERANCE, MAX_ITER, TOLERANCE, reference_task, solve_kinematics
+from .model import MechanismModel
+from .motion import ActuatorMotion, TaskMotion
+from .poses import body_poses
+from .topology import column_scale, constraint_jacobian, row_labels, row_scale
+
+__all__ = ["DirectKinematics", "Assembly", "AssemblyModes", "direct_kinematics", "assembly_modes", "task_motion",
+           "actuator_reference", "parse_actuators", "ROUND_TRIP_TOLERANCE"]
+
+Array = NDArray[np.float64]
+
+#: largest scaled difference (lengths over the mechanism's size) between the actuator
+#: coordinates and those the inverse kinematics gives back at a verified assembly mode
+ROUND_TRIP_TOLERANCE = 1e-10
+#: Newton steps of a search from a random configuration (each may be halved; :mod:`._direct`)
+SEARCH_ITER = 60
+#: two solutions whose task body poses differ by less than this (rotation matrix entries, and
+#: positions over the mechanism's size) are one assembly mode
+SAME_POSE = 1e-6
+
+
+@dataclass(frozen=True)
+class DirectKinematics:
+    """The direct kinematics along an actuator motion, per sample.
+
+    ``t (n,)`` [s] or None; ``s, sd, sdd (n, na)``: actuator coordinates and their rates (SI);
+    ``x, xd, xdd (n, nt)``: task coordinates ([m], Euler angles [rad], continuous along the
+    motion) and their rates; ``q, qd, qdd (n, nq)``: tree coordinates; ``residual (n,)``: the
+    largest scaled loop residual; ``iterations (n,)``: Newton steps; ``det (n,)``: determinant
+    of the direct kinematics Jacobian ``K`` (its sign: the assembly branch); ``pivot_ratio
+    (n,)``: the smallest over the largest pivot of ``K``'s factorisation (near 0 close to a
+    singularity)."""
+
+    t: Array | None
+    s: Array
+    sd: Array
+    sdd: Array
+    x: Array
+    xd: Array
+    xdd: Array
+    q: Array
+    qd: Array
+    qdd: Array
+    residual: Array
+    iterations: NDArray[np.int64]
+    det: Array
+    pivot_ratio: Array
+
+    def __len__(self) -> int:
+        return int(self.s.shape[0])
+
+
+@dataclass(frozen=True)
+class Assembly:
+    """One assembly mode: task coordinates ``x (nt,)`` (angles the branch nearest the reference
+    pose's), tree coordinates ``q (nq,)``, the scaled loop ``residual``, the scaled actuator
+    difference of the inverse kinematics round trip, the sign of the direct kinematics
+    Jacobian's determinant, the singularity measures (:func:`.kinematics.singularity_measures`:
+    ``inverse``, ``direct``, ``constraint``) and the starts that reached it (``hits``)."""
+
+    x: Array
+    q: Array
+    residual: float
+    round_trip: float
+    det_sign: int
+    inverse: float
+    direct: float
+    constraint: float
+    hits: int
+
+
+@dataclass(frozen=True)
+class AssemblyModes:
+    """The assembly modes found at actuator coordinates ``s``: ``modes`` nearest the reference
+    pose first; ``starts`` the random starts tried, ``converged`` those whose Newton search
+    converged to a verified solution."""
+
+    s: Array
+    modes: tuple[Assembly, ...]
+    starts: int
+    converged: int
+    method: str = ("damped Newton from random configurations (multi-start), each solution verified by the inverse "
+                   "kinematics and duplicates merged by the task body's pose; every mode listed is real, none is "
+                   "guaranteed to be the last")
+
+
+def _check(model: MechanismModel) -> None:
+    if not isinstance(model, MechanismModel):
+        raise ParameterError(f"model: expected a MechanismModel, got {type(model).__name__}")
+    if model.na != model.nt:
+        raise ParameterError(f"{model.name}: direct kinematics needs as many actuated joints as degrees of freedom "
+                             f"({model.na} actuated, {model.nt} degrees of freedom)")
+
+
+def _arrays(model: MechanismModel, damped: bool = False, max_iter: int = MAX_ITER) -> tuple:
+    """The kernels' model tuples (:mod:`._direct`)."""
+    nr = model.row_loop.shape[0]
+    act = np.ascontiguousarray(model.act_coord, dtype=np.int64)
+    unk = np.ascontiguousarray(np.setdiff1d(np.arange(model.nq), act), dtype=np.int64)
+    rows = model.solver_rows
+    cut = np.ascontiguousarray(rows[rows < nr], dtype=np.int64)
+    tree = (model.body_parent, model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion,
+            model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,
+            model.tree_p_child)
+    loops = (model.joint_R_parent, model.joint_p_parent, model.joint_R_child, model.joint_p_child,
+             model.ancestor_list, model.row_loop, model.row_kind, model.row_i, model.row_j, model.loop_joint,
+             model.joint_parent, model.joint_child)
+    task = (model.task_body, model.task_point, model.task_kind, model.task_index, model.euler_axes)
+    sol = (act, unk, cut, np.ascontiguousarray(model.solver_idle), model.coord_offset, row_scale(model),
+           float(TOLERANCE), float(CHECK_TOLERANCE), int(max_iter), bool(damped))
+    return tree, loops, task, sol
+
+
+def actuator_reference(model: MechanismModel) -> Array:
+    """The actuator coordinates (na,) at the reference configuration."""
+    return model.coord_offset[model.act_coord].copy()
+
+
+def _batch(model: MechanismModel, s: Array, sd: Array, sdd: Array, q_start: Array, x_start: Array,
+           t: Array | None) -> dict:
+    n, nq, nt = s.shape[0], model.nq, model.nt
+    out = {"q": np.zeros((n, nq)), "qd": np.zeros((n, nq)), "qdd": np.zeros((n, nq)), "x": np.zeros((n, nt)),
+           "xd": np.zeros((n, nt)), "xdd": np.zeros((n, nt)), "res": np.zeros(n), "it": np.zeros(n, dtype=np.int64),
+           "det": np.zeros(n), "ratio": np.zeros(n), "status": np.full(n, -1, dtype=np.int64),
+           "worst": np.zeros(n, dtype=np.int64)}
+    tm = np.zeros(0) if t is None else np.ascontiguousarray(t, dtype=float)
+    D.direct_batch(tm, s, sd, sdd, np.ascontiguousarray(q_start, dtype=float), np.ascontiguousarray(x_start),
+                   *_arrays(model), out["q"], out["qd"], out["qdd"], out["x"], out["xd"], out["xdd"], out["res"],
+                   out["it"], out["det"], out["ratio"], out["status"], out["worst"])
+    return out
+
+
+def _values(model: MechanismModel, s: Array) -> str:
+    return ", ".join(f"{a} = {v:.6g} {'m' if model.coord_motion[c] >= 3 else 'rad'}"
+                     for a, c, v in zip(model.actuator_names, model.act_coord, s))
+
+
+def _acting(model: MechanismModel, q: Array, row: int) -> str:
+    """The actuator whose coordinate moves row ``row`` the most at ``q`` (scaled)."""
+    _, J = constraint_jacobian(model, q[None])
+    if not np.all(np.isfinite(J)):
+        return model.actuator_names[0]
+    w = np.abs(J[0, row, model.act_coord]) * column_scale(model)[model.act_coord]
+    return model.actuator_names[int(np.argmax(w))]
+
+
+def _fail(model: MechanismModel, out: dict, k: int, s: Array, t: Array | None, offset: int) -> None:
+    """Raise the error of sample ``k`` of ``out`` (a :func:`_batch` result)."""
+    when = f"sample {k + offset}" + (f" (t = {t[k]:.6g} s)" if t is not None else "")
+    _raise(model, int(out["status"][k]), int(out["worst"][k]), float(out["res"][k]), out["q"][k], s[k], when)
+
+
+def _raise(model: MechanismModel, st: int, worst: int, res: float, q: Array, s: Array, when: str) -> None:
+    if st == D.CROSSED:
+        raise SingularityError(f"{when}: the actuator motion crosses a singularity of the direct kinematics (the "
+                               f"determinant of its Jacobian changes sign since the sample before; actuators "
+                               f"{_values(model, s)}): the pose would jump between assembly modes")
+    if st == K.SINGULAR:
+        raise SingularityError(f"{when}: singular direct kinematics at actuators {_values(model, s)} (the "
+                               f"actuators do not determine the pose: a type II singularity)")
+    if st == D.EULER_SINGULAR_RATES:
+        raise SingularityError(f"{when}: the Euler angles ({model.euler_sequence}) of task body "
+                               f"{model.body_names[model.task_body]!r} are at their singularity (actuators "
+                               f"{_values(model, s)})")
+    actuator = _acting(model, q, worst)
+    raise UnreachablePoseError(f"{when}: actuator {actuator!r}: the actuator coordinates {_values(model, s)} reach "
+                               f"no pose: {row_labels(model)[worst]} does not close (residual {res:.3g} of the "
+                               "length scale)")
+
+
+def _start(model: MechanismModel, s0: Array, t: Array | None, offset: int) -> Array:
+    """Tree coordinates at actuator coordinates ``s0`` connected to the reference configuration:
+    continuation from the reference actuator coordinates in 1, then 8, then 64 steps."""
+    s_ref = actuator_reference(model)
+    x_ref = reference_task(model)
+    last = None
+    for steps in (1, 8, 64):
+        path = np.ascontiguousarray(s_ref + np.linspace(0.0, 1.0, steps + 1)[1:, None] * (s0 - s_ref))
+        zero = np.zeros_like(path)
+        out = _batch(model, path, zero, zero, model.coord_offset, x_ref, None)
+        if out["status"][-1] == K.OK:
+            return out["q"][-1].copy()
+        last = out
+    assert last is not None
+    k = int(np.flatnonzero(last["status"] != K.OK)[0])
+    when = f"sample {offset}" + (f" (t = {t[0]:.6g} s)" if t is not None else "")
+    _raise(model, int(last["status"][k]), int(last["worst"][k]), float(last["res"][k]), last["q"][k], s0, when)
+    raise AssertionError  # pragma: no cover - _raise raises
+
+
+def _bridge(model: MechanismModel, s: Array, out: dict, k: int) -> Array | None:
+    """Tree coordinates at sample ``k`` followed from the solved sample ``k - 1`` in 8, then 64
+    small actuator steps, on the same branch (a coarsely sampled motion, or a sample whose
+    Newton solve took many steps and may have jumped to another assembly mode); None where
+    that fails too. A step in which the Jacobian's determinant changes sign is a singularity
+    crossed: status :data:`._direct.CROSSED` at ``k``."""
+    if k == 0:
+        return None
+    for steps in (8, 64):
+        path = np.ascontiguousarray(s[k - 1] + np.linspace(0.0, 1.0, steps + 1)[1:, None] * (s[k] - s[k - 1]))
+        zero = np.zeros_like(path)
+        b = _batch(model, path, zero, zero, out["q"][k - 1], out["x"][k - 1], None)
+        if np.all(b["status"] == K.OK):
+            if np.any(b["det"] * out["det"][k - 1] < 0):
+                out["status"][k] = D.CROSSED
+                return None
+            return b["q"][-1].copy()
+    return None
+
+
+#: Newton steps beyond the simplified one after which a sample is followed again in small
+#: steps (:func:`_bridge`): from a close predictor one step suffices, many suggest a jump
+JUMP_STEPS = 3
+#: a sample whose Jacobian's smallest-to-largest pivot ratio is below this sits on a
+#: singularity; where the next sample then needs many Newton steps, the branch that follows
+#: cannot be told from the actuators, and the motion is refused there as a crossing
+NEAR_SINGULAR = 1e-4
+
+
+def direct_kinematics(model: MechanismModel, s: Array, sd: Array | None = None, sdd: Array | None = None,
+                      t: Array | None = None, q_start: Array | None = None,
+                      sample_offset: int = 0) -> DirectKinematics:
+    """The direct kinematics along the actuator motion ``s, sd, sdd (n, na)`` (SI; module
+    docstring): each sample warm-started from the one before (``t`` (n,) [s] gives the
+    second-order predictor and the messages' times), the first from ``q_start`` (nq,) or else
+    by continuation from the reference configuration. Refused, naming the sample (counted from
+    ``sample_offset``) and an actuator, where the actuator coordinates reach no pose
+    (:class:`~pkmdyn.errors.UnreachablePoseError`) or the motion crosses a singularity or meets
+    one (:class:`~pkmdyn.errors.SingularityError`)."""
+    _check(model)
+    na = model.na
+    s = np.ascontiguousarray(as_array(s, (None, na), "s", MotionError))
+    n = s.shape[0]
+    sd = np.zeros_like(s) if sd is None else np.ascontiguousarray(as_array(sd, (n, na), "sd", MotionError))
+    sdd = np.zeros_like(s) if sdd is None else np.ascontiguousarray(as_array(sdd, (n, na), "sdd", MotionError))
+    if t is not None:
+        t = np.ascontiguousarray(as_array(t, (n,), "t", MotionError))
+    for name, arr in (("s", s), ("sd", sd), ("sdd", sdd)):
+        bad = np.flatnonzero(~np.all(np.isfinite(arr), axis=1))
+        if bad.size:
+            raise MotionError(f"{name}: sample {int(bad[0]) + sample_offset} is not finite")
+    if n == 0:
+        raise MotionError("s: the actuator motion has no samples")
+    q0 = _start(model, s[0], t, sample_offset) if q_start is None else \
+        np.ascontiguousarray(as_array(q_start, (model.nq,), "q_start"))
+    out = _batch(model, s, sd, sdd, q0, reference_task(model), t)
+    if out["status"][0] != K.OK:
+        _fail(model, out, 0, s, t, sample_offset)
+    settled = 1  # samples before this one are final
+    while True:
+        failed = out["status"][settled:] != K.OK
+        slow = (out["it"][settled:] > JUMP_STEPS) & ~failed
+        pending = np.flatnonzero(failed | slow)
+        if pending.size == 0:
+            break
+        k = settled + int(pending[0])
+        if out["status"][k] == K.OK and out["ratio"][k - 1] < NEAR_SINGULAR:
+            out["status"][k] = D.CROSSED  # the sample before sat on a singularity: which branch follows is unknown
+        if out["status"][k] == D.CROSSED:  # the predictor carried the solution through a singularity
+            _fail(model, out, k, s, t, sample_offset)
+        q_k = _bridge(model, s, out, k)
+        if q_k is None:
+            if out["status"][k] == K.OK:  # solved in many steps, but not reached by following the branch
+                out["status"][k] = K.NOT_CONVERGED
+            _fail(model, out, k, s, t, sample_offset)
+        if not failed[k - settled] and np.abs(q_k - out["q"][k]).max() <= 1e-8:
+            settled = k + 1  # the many steps did land on the same branch
+            continue
+        rest = _batch(model, s[k:], sd[k:], sdd[k:], q_k, out["x"][k - 1], None if t is None else t[k:])
+        for key, arr in rest.items():
+            out[key][k:] = arr
+        if out["status"][k] != K.OK:
+            _fail(model, out, k, s, t, sample_offset)
+        settled = k + 1
+    if n > 1:
+        flip = np.flatnonzero(out["det"][1:] * out["det"][:-1] < 0)
+        if flip.size:
+            out["status"][flip[0] + 1] = D.CROSSED
+            _fail(model, out, int(flip[0]) + 1, s, t, sample_offset)
+    return DirectKinematics(t=t, s=s, sd=sd, sdd=sdd, x=out["x"], xd=out["xd"], xdd=out["xdd"], q=out["q"],
+                            qd=out["qd"], qdd=out["qdd"], residual=out["res"], iterations=out["it"], det=out["det"],
+                            pivot_ratio=out["ratio"])
+
+
+def task_motion(model: MechanismModel, motion: ActuatorMotion,
+                q_start: Array | None = None) -> tuple[TaskMotion, DirectKinematics]:
+    """The task motion of an actuator motion (:func:`.motion.read_actuator_motion`) by the
+    direct kinematics along it (:func:`direct_kinematics`), with its named loads; and the
+    direct kinematics itself (residuals, iterations, branch)."""
+    dk = direct_kinematics(model, motion.s, motion.sd, motion.sdd, motion.t, q_start=q_start)
+    return TaskMotion(motion.t, dk.x, dk.xd, dk.xdd, dict(motion.loads)), dk
+
+
+def _random_starts(model: MechanismModel, m: int, rng: np.random.Generator) -> Array:
+    """``m`` tree configurations: turning coordinates uniform over a turn, sliding ones within
+    two length scales of their reference (the actuated ones are set by the solve)."""
+    turn = model.coord_motion < 3
+    q = np.empty((m, model.nq))
+    q[:, turn] = rng.uniform(-np.pi, np.pi, (m, int(turn.sum())))
+    q[:, ~turn] = model.coord_offset[~turn] + rng.uniform(-2.0, 2.0, (m, int((~turn).sum()))) * model.length_scale
+    return q
+
+
+def assembly_modes(model: MechanismModel, s: Array, starts: int = 2000, seed: int = 0) -> AssemblyModes:
+    """The assembly modes found at actuator coordinates ``s (na,)`` (module docstring): the
+    reference configuration, the continuation from it and ``starts`` random configurations
+    (``seed``) are each taken to a solution by damped Newton; the converged ones verified by the
+    inverse kinematics round trip to :data:`ROUND_TRIP_TOLERANCE` and merged by the task body's
+    pose. Refused where no start reaches a solution (the actuators reach no pose)."""
+    from .kinematics import singularity_measures
+
+    _check(model)
+    s = np.ascontiguousarray(as_array(s, (model.na,), "s", MotionError))
+    if not np.all(np.isfinite(s)):
+        raise MotionError("s: not finite")
+    if isinstance(starts, bool) or not isinstance(starts, (int, np.integer)) or not 0 <= starts <= 1_000_000:
+        raise ParameterError(f"starts: expected an integer from 0 to 1,000,000, got {starts!r}")
+    rng = np.random.default_rng(seed)
+    cand = [model.coord_offset[None]]
+    try:
+        cand.append(_start(model, s, None, 0)[None])
+    except (UnreachablePoseError, SingularityError):
+        pass
+    cand.append(_random_starts(model, int(starts), rng))
+    Q0 = np.ascontiguousarray(np.concatenate(cand))
+    m = Q0.shape[0]
+    q_out = np.zeros_like(Q0)
+    res, det, ratio = np.zeros(m), np.zeros(m), np.zeros(m)
+    status = np.full(m, -1, dtype=np.int64)
+    D.direct_starts(s, Q0, *_arrays(model, damped=True, max_iter=SEARCH_ITER), q_out, res, det, ratio, status)
+    good = np.flatnonzero((status == K.OK) | (status == D.EULER_SINGULAR_RATES))
+    if good.size == 0:
+        raise UnreachablePoseError(f"actuator {model.actuator_names[0]!r}: the actuator coordinates {_values(model, s)} "
+                                   f"reach no pose ({m} starts, none converged)")
+    L = model.length_scale
+    tb = model.task_body
+    x_ref = reference_task(model)
+    nr = model.row_loop.shape[0]
+    groups: list[dict] = []
+    for i in good:
+        R, p, _ = body_poses(model, q_out[i])
+        key = np.concatenate([R[tb].ravel(), p[tb] / L])
+        if not np.all(np.isfinite(key)):
+            continue
+        for g in groups:
+            if np.abs(g["key"] - key).max() < SAME_POSE:
+                g["hits"] += 1
+                if res[i] < res[g["i"]]:
+                    g["i"] = i
+                break
+        else:
+            groups.append({"key": key, "i": i, "hits": 1})
+    modes = []
+    for g in groups:
+        i = g["i"]
+        q = q_out[i]
+        val, _ = constraint_jacobian(model, q[None])
+        x = val[0, nr:].copy()
+        ang = model.task_kind == 1
+        x[ang] = x_ref[ang] + (x[ang] - x_ref[ang] + np.pi) % (2 * np.pi) - np.pi
+        try:
+            kin = solve_kinematics(model, x[None], q_start=q)
+            back = kin.act_q[0]
+        except (UnreachablePoseError, SingularityError):
+            continue
+        scale = np.where(model.coord_motion[model.act_coord] >= 3, 1.0 / L, 1.0)
+        trip = float(np.abs((back - s) * scale).max())
+        if not trip <= ROUND_TRIP_TOLERANCE:
+            continue
+        sm = singularity_measures(model, q[None])
+        modes.append(Assembly(x=x, q=q.copy(), residual=float(res[i]), round_trip=trip, det_sign=int(np.sign(det[i])),
+                              inverse=float(sm.inverse[0]), direct=float(sm.direct[0]),
+                              constraint=float(sm.constraint[0]), hits=int(g["hits"])))
+    if not modes:
+        raise UnreachablePoseError(f"actuator {model.actuator_names[0]!r}: no solution at {_values(model, s)} passed "
+                                   "the inverse kinematics check")
+    scale_x = np.where(model.task_kind == 0, 1.0 / L, 1.0)
+    modes.sort(key=lambda a: float(np.abs((a.x - x_ref) * scale_x).max()))
+    return AssemblyModes(s=s, modes=tuple(modes), starts=m, converged=int(good.size))
+
+
+def parse_actuators(model: MechanismModel, text: str) -> Array:
+    """Actuator coordinates from ``"P_1=0.41,P_2=0.40,..."`` (every actuated joint once, SI
+    units of its coordinate: m or rad); errors name the key."""
+    vals: dict[str, float] = {}
+    for item in str(text).split(","):
+        item = item.strip()
+        if not item:
+            continue
+        name, eq, v = item.partition("=")
+        name = name.strip()
+        if not eq:
+            raise ParameterError(f"--actuators: {item!r}: expected NAME=VALUE")
+        if name not in model.actuator_names:
+            raise ParameterError(f"--actuators: {name!r}: not an actuated joint of {model.name!r} (those are: "
+                                 f"{', '.join(model.actuator_names)})")
+        if name in vals:
+            raise ParameterError(f"--actuators: {name!r}: given twice")
+        try:
+            f = float(v)
+        except ValueError:
+            raise ParameterError(f"--actuators: {name}: {v.strip()!r} is not a number") from None
+        if not np.isfinite(f) or abs(f) > 1e6 * max(model.length_scale, 1.0):
+            raise ParameterError(f"--actuators: {name}: {v.strip()!r} is not a finite value of a plausible size")
+        vals[name] = f
+    missing = [a for a in model.actuator_names if a not in vals]
+    if missing:
+        raise ParameterError(f"--actuators: {missing[0]!r}: missing (give every actuated joint: "
+                             f"{', '.join(model.actuator_names)})")
+    return np.array([vals[a] for a in model.actuator_names])

@@ -1,0 +1,418 @@
+"""Direct kinematics of described mechanisms (pkmdyn.multibody.direct): the pose from the
+actuator coordinates against independent closed forms (tests/oracles: the Delta's three-sphere
+intersection, the Gough-Stewart leg lengths), round trips with the inverse kinematics on every
+built-in machine, the assembly-mode search, and the commands (``pkmdyn assemble``, ``pkmdyn run
+--actuator-motion``) with their refusals."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import multibody_examples as ex
+from oracles import delta, stewart
+from pkmdyn.cli import main
+from pkmdyn.errors import MotionError, ParameterError, SingularityError, UnreachablePoseError
+from pkmdyn.machines.registry import described_machines, hand_built_machines
+from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
+from pkmdyn.multibody.direct import actuator_reference, assembly_modes, direct_kinematics, parse_actuators
+from pkmdyn.multibody.poses import body_poses
+
+MACHINES = Path(__file__).resolve().parents[1] / "src" / "pkmdyn" / "machines"
+
+
+def _model(name):
+    if name in hand_built_machines():
+        return load_mechanism(hand_built_machines()[name].description())
+    return load_mechanism(described_machines()[name])
+
+
+def _scaled(model):
+    """Task coordinates scaled to dimensionless (lengths over the mechanism's size)."""
+    return np.where(model.task_kind == 0, 1.0 / model.length_scale, 1.0)
+
+
+def _smooth(model, n=240, seed=0, size=1.0):
+    t = np.linspace(0.0, 1.2, n)
+    amp = size * np.where(model.task_kind == 1, 0.06, 0.04 * model.length_scale)
+    x, xd, xdd = ex.smooth_motion(reference_task(model), amp, t, seed)
+    return t, x, xd, xdd
+
+
+def _run(capsys, *args):
+    code = main([str(a) for a in args])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+# ----------------------------------------------------------------------------- independent closed forms
+@pytest.mark.parametrize("seed", [3, 4])
+def test_delta_pose_from_the_arm_angles_is_the_three_sphere_intersection(seed):
+    """Arm angles from the oracle's inverse kinematics of a random motion below the base; the
+    direct kinematics (continuation from the reference pose) gives back the oracle's
+    three-sphere intersection and the motion's rates."""
+    m = _model("delta")
+    g = delta.williams_irb360_geometry()
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, 1.0, 200)
+    x0 = np.array([0.0, 0.0, -1.0])
+    a, w, ph = rng.uniform(-1, 1, 3) * [0.15, 0.15, 0.1], rng.uniform(2, 6, 3), rng.uniform(0, 6, 3)
+    x = x0 + a * (np.sin(w * t[:, None] + ph) - np.sin(ph))
+    xd = a * w * np.cos(w * t[:, None] + ph)
+    xdd = -a * w * w * np.sin(w * t[:, None] + ph)
+    ref = delta.kinematics(x, g["R_b"], g["R_p"], g["L_A"], g["L_B"], xd, xdd)
+    legs = [m.actuator_names.index(f"R_{i + 1}") for i in range(3)]
+    s = np.empty((len(t), 3))
+    sd, sdd = np.empty_like(s), np.empty_like(s)
+    s[:, legs], sd[:, legs], sdd[:, legs] = ref["theta"], ref["thetad"], ref["thetadd"]
+    dk = direct_kinematics(m, s, sd, sdd, t)
+    fk = delta.forward_kinematics(ref["theta"], g["R_b"], g["R_p"], g["L_A"], g["L_B"])
+    assert np.abs(dk.x - fk).max() <= 1e-10 * m.length_scale
+    assert np.abs(dk.x - x).max() <= 1e-10 * m.length_scale
+    assert np.abs(dk.xd - xd).max() <= 1e-8 * np.abs(xd).max()
+    assert np.abs(dk.xdd - xdd).max() <= 1e-8 * np.abs(xdd).max()
+    assert np.all(dk.residual <= 1e-12) and np.all(np.sign(dk.det) == np.sign(dk.det[0]))
+
+
+def test_delta_assembly_modes_include_both_sphere_intersections():
+    """At one set of arm angles, the modes with the platform parallel to the base are exactly
+    the two intersections of the three spheres (the oracle's lower one and its mirror image in
+    the plane of the sphere centres); the others turn the platform (the rod pairs crossed)."""
+    m = _model("delta")
+    g = delta.williams_irb360_geometry()
+    p = np.array([[0.06, -0.04, -0.95]])
+    theta = delta.inverse_kinematics(p, g["R_b"], g["R_p"], g["L_A"], g["L_B"])
+    legs = [m.actuator_names.index(f"R_{i + 1}") for i in range(3)]
+    s = np.empty(3)
+    s[legs] = theta[0]
+    modes = assembly_modes(m, s, starts=600, seed=1)
+    centres = delta.elbow_points(theta, g["R_b"], g["L_A"])[0] - g["R_p"] * delta.leg_directions()
+    normal = np.cross(centres[1] - centres[0], centres[2] - centres[0])
+    normal /= np.linalg.norm(normal)
+    low = delta.forward_kinematics(theta, g["R_b"], g["R_p"], g["L_A"], g["L_B"])[0]
+    high = low - 2.0 * np.dot(low - centres[0], normal) * normal
+    pl = m.body_names.index("platform")
+    parallel = [a.x for a in modes.modes if np.abs(body_poses(m, a.q)[0][pl] - np.eye(3)).max() < 1e-9]
+    assert len(parallel) == 2
+    found = sorted(parallel, key=lambda v: v[2])
+    assert np.abs(found[0] - low).max() <= 1e-9 and np.abs(found[1] - high).max() <= 1e-9
+    assert np.abs(modes.modes[0].x - low).max() <= 1e-9  # nearest the reference pose first
+    for a in modes.modes:
+        assert a.round_trip <= 1e-10 and a.residual <= 1e-12 and a.hits >= 1
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_stewart_pose_from_the_leg_lengths(seed):
+    """Leg lengths (and their rates) of a random motion by the oracle's inverse kinematics
+    (Merlet ch. 3); the direct kinematics gives the motion back."""
+    m = _model("stewart")
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, 1.5, 300)
+    amp = np.array([0.06, 0.06, 0.05, 0.08, 0.08, 0.1])
+    a, w, ph = rng.uniform(-1, 1, 6) * amp, rng.uniform(2, 6, 6), rng.uniform(0, 6, 6)
+    x = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0]) + a * (np.sin(w * t[:, None] + ph) - np.sin(ph))
+    xd = a * w * np.cos(w * t[:, None] + ph)
+    xdd = -a * w * w * np.sin(w * t[:, None] + ph)
+    A, B, _ = stewart.default_geometry()
+    ref = stewart.inverse_kinematics(A, B, x[:, :3], x[:, 3:], "XYZ", xd[:, :3], xd[:, 3:], xdd[:, :3], xdd[:, 3:])
+    legs = [m.actuator_names.index(f"P_{i + 1}") for i in range(6)]
+    s, sd, sdd = (np.empty((len(t), 6)) for _ in range(3))
+    s[:, legs], sd[:, legs], sdd[:, legs] = ref["L"], ref["Ld"], ref["Ldd"]
+    dk = direct_kinematics(m, s, sd, sdd, t)
+    sc = _scaled(m)
+    assert np.abs((dk.x - x) * sc).max() <= 1e-10
+    assert np.abs((dk.xd - xd) * sc).max() <= 1e-8 * np.abs(xd * sc).max()
+    assert np.abs((dk.xdd - xdd) * sc).max() <= 1e-8 * np.abs(xdd * sc).max()
+    pl = m.body_names.index("platform")
+    R = np.stack([body_poses(m, q)[0][pl] for q in dk.q[::50]])
+    assert np.abs(R - ref["R"][::50]).max() <= 1e-10
+
+
+# ----------------------------------------------------------------------------- every built-in machine
+BUILTINS = ["stewart", "delta", "rrr3", "bennett", "hip", "pdm"]
+
+
+@pytest.mark.parametrize("name", BUILTINS)
+def test_round_trips_with_the_inverse_kinematics(name):
+    """direct(inverse(x)) = x to 1e-10 and inverse(direct(s)) = s to 1e-12 (scaled), rates and
+    accelerations included, along a random motion away from singularities; the batched
+    route's tree coordinates are the inverse kinematics' own."""
+    m = _model(name)
+    t, x, xd, xdd = _smooth(m, seed=7)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    dk = direct_kinematics(m, kin.act_q, kin.act_qd, kin.act_qdd, t)
+    sc = _scaled(m)
+    assert np.abs((dk.x - x) * sc).max() <= 1e-10
+    assert np.abs((dk.xd - xd) * sc).max() <= 1e-8 * max(np.abs(xd * sc).max(), 1e-12)
+    assert np.abs((dk.xdd - xdd) * sc).max() <= 1e-8 * max(np.abs(xdd * sc).max(), 1e-12)
+    back = solve_kinematics(m, dk.x, dk.xd, dk.xdd, t)
+    act_sc = np.where(m.coord_motion[m.act_coord] >= 3, 1.0 / m.length_scale, 1.0)
+    assert np.abs((back.act_q - kin.act_q) * act_sc).max() <= 1e-12
+    assert np.abs(dk.q - kin.q).max() <= 1e-9
+    # dq/ds by finite differences of the direct kinematics itself
+    k = 60
+    h = 1e-6
+    for a in range(m.na):
+        e = np.zeros(m.na)
+        e[a] = h * (m.length_scale if m.coord_motion[m.act_coord[a]] >= 3 else 1.0)
+        xp = direct_kinematics(m, (kin.act_q[k] + e)[None], q_start=dk.q[k]).x[0]
+        xm = direct_kinematics(m, (kin.act_q[k] - e)[None], q_start=dk.q[k]).x[0]
+        one = np.zeros((1, m.na))
+        one[0, a] = 1.0
+        rate = direct_kinematics(m, kin.act_q[k][None], one, q_start=dk.q[k]).xd[0]
+        assert np.abs((xp - xm) / (2 * e[a]) - rate).max() <= 1e-6 * max(np.abs(rate).max(), 1.0)
+
+
+def test_the_first_sample_is_reached_from_the_reference_pose():
+    """Without a start, the first sample comes by continuation from the reference actuator
+    coordinates: the assembly mode of the description's reference pose."""
+    m = _model("stewart")
+    s0 = actuator_reference(m)
+    dk = direct_kinematics(m, s0[None])
+    assert np.abs((dk.x[0] - reference_task(m)) * _scaled(m)).max() <= 1e-12
+
+
+# ----------------------------------------------------------------------------- refusals
+def test_unreachable_actuator_coordinates_name_the_sample_and_an_actuator():
+    m = _model("stewart")
+    t, x, xd, xdd = _smooth(m)
+    s = solve_kinematics(m, x, xd, xdd, t).act_q.copy()
+    k = m.actuator_names.index("P_4")
+    s[150:, k] += np.linspace(0.0, 3.0, len(t) - 150) ** 2  # leg 4 far longer than the others allow
+    with pytest.raises(UnreachablePoseError, match=r"sample 1[5-9]\d .*actuator 'P_\d'.*reach no pose"):
+        direct_kinematics(m, s, t=t)
+
+
+def _five_bar():
+    """The planar five-bar of the drives' oracle test (tests/test_drives_oracle.py), its
+    description and oracle parameters."""
+    import tomllib
+
+    import test_drives_oracle as tdo
+
+    par, _, text, _, _, _ = tdo.five_bar_case(11, Path("."))
+    return par, load_mechanism(tomllib.loads(text))
+
+
+def test_a_motion_through_a_singularity_is_refused():
+    """The five-bar's end point driven through a type II singularity (the distal links in line,
+    the end point between the elbows; constructed from the oracle's geometry), its actuator
+    motion with rates from the oracle's inverse kinematics: the direct kinematics refuses at
+    the crossing, naming the sample, instead of reflecting onto the other assembly mode."""
+    import dataclasses
+
+    from oracles import five_bar
+
+    par, m = _five_bar()
+    A, l1, l2 = par.base, par.l1, par.l2
+    ref = five_bar.inverse_kinematics(par, five_bar.DEFAULT_POSE)
+    B1 = ref["B"][0, 0]
+    span = l2[0] + l2[1]
+    al = np.linspace(-np.pi, np.pi, 400001)  # directions d with |B1 + span d - A2| = l1_2
+    f = np.linalg.norm(B1 + span * np.stack([np.cos(al), np.sin(al)], 1) - A[1], axis=1) - l1[1]
+    found = False
+    for k in np.flatnonzero(np.sign(f[:-1]) != np.sign(f[1:])):
+        d = np.array([np.cos(al[k]), np.sin(al[k])])
+        P_sing = B1 + l2[0] * d
+        B2 = B1 + span * d
+        cross = [np.cross(np.append(P_sing - A[i], 0), np.append(B - A[i], 0))[2] for i, B in enumerate((B1, B2))]
+        par_k = dataclasses.replace(par, sigma=np.sign(cross))
+        if not np.all(par_k.sigma == par.sigma):
+            continue  # the description's elbows are on these branches
+        found = True
+        t = np.linspace(0.0, 1.0, 101)
+        v = 0.04 * np.array([-d[1], d[0]])
+        P = P_sing + (t[:, None] - 0.5) * v
+        ik = five_bar.inverse_kinematics(par_k, P, np.tile(v, (len(t), 1)), np.zeros_like(P))
+        assert np.all(np.isfinite(ik["q"])) and np.abs(ik["distal_sine"]).min() < 1e-3
+        order = [m.actuator_names.index(f"A{i + 1}") for i in range(2)]
+        s, sd, sdd = (np.empty((len(t), 2)) for _ in range(3))
+        s[:, order], sd[:, order], sdd[:, order] = ik["q"], ik["qd"], ik["qdd"]
+        start = solve_kinematics(m, P[:1]).q[0]  # the configuration of the motion's first pose
+        with pytest.raises(SingularityError, match=r"sample (49|50|51) .*crosses a singularity"):
+            direct_kinematics(m, s, sd, sdd, t, q_start=start)
+        # up to the crossing the motion is followed exactly
+        dk = direct_kinematics(m, s[:45], sd[:45], sdd[:45], t[:45], q_start=start)
+        assert np.abs(dk.x - P[:45]).max() <= 1e-10
+    assert found
+
+
+def test_five_bar_assembly_modes_are_the_two_circle_intersections():
+    """At random reachable actuator angles the five-bar has exactly two assembly modes, the
+    intersections of the circles of the distal links about the elbows (computed here from the
+    oracle's elbows)."""
+    from oracles import five_bar
+
+    par, m = _five_bar()
+    rng = np.random.default_rng(5)
+    order = [m.actuator_names.index(f"A{i + 1}") for i in range(2)]
+    for _ in range(3):
+        P = five_bar.DEFAULT_POSE + rng.uniform(-0.03, 0.03, 2)
+        ik = five_bar.inverse_kinematics(par, P)
+        B = ik["B"][0]
+        d = np.linalg.norm(B[1] - B[0])
+        a = (l2_0 := par.l2[0]) ** 2 - par.l2[1] ** 2 + d * d
+        a /= 2.0 * d
+        h = np.sqrt(l2_0 ** 2 - a * a)
+        e = (B[1] - B[0]) / d
+        mid = B[0] + a * e
+        both = [mid + h * np.array([-e[1], e[0]]), mid - h * np.array([-e[1], e[0]])]
+        s = np.empty(2)
+        s[order] = ik["q"][0]
+        modes = assembly_modes(m, s, starts=200, seed=2)
+        assert len(modes.modes) == 2
+        got = sorted((a_.x for a_ in modes.modes), key=lambda v: v[0])
+        want = sorted(both, key=lambda v: v[0])
+        for g_, w_ in zip(got, want):
+            assert np.abs(g_ - w_).max() <= 1e-9
+        assert np.abs(modes.modes[0].x - P).max() <= 1e-9 or np.abs(modes.modes[1].x - P).max() <= 1e-9
+        assert {a_.det_sign for a_ in modes.modes} == {-1, 1}  # the two modes lie on either side of a singularity
+
+
+def test_bad_calls_are_refused_by_name():
+    m = _model("stewart")
+    with pytest.raises(MotionError, match="sample 3"):
+        s = np.tile(actuator_reference(m), (5, 1))
+        s[3, 2] = np.nan
+        direct_kinematics(m, s)
+    with pytest.raises(ParameterError, match="'P_9'"):
+        parse_actuators(m, "P_1=1,P_2=1,P_3=1,P_4=1,P_5=1,P_9=1")
+    with pytest.raises(ParameterError, match="'P_6': missing"):
+        parse_actuators(m, "P_1=1,P_2=1,P_3=1,P_4=1,P_5=1")
+    with pytest.raises(ParameterError, match="P_2: 'x' is not a number"):
+        parse_actuators(m, "P_1=1,P_2=x")
+    serial = load_mechanism(ex.serial_arm())
+    if serial.na != serial.nt:
+        with pytest.raises(ParameterError, match="as many actuated joints as degrees of freedom"):
+            direct_kinematics(serial, np.zeros((1, serial.na)))
+
+
+# ----------------------------------------------------------------------------- commands
+def _stewart_lengths():
+    m = _model("stewart")
+    return m, ",".join(f"{a}={v:.12g}" for a, v in zip(m.actuator_names, actuator_reference(m) + 0.05))
+
+
+def test_assemble_lists_verified_modes_and_writes_them(capsys, tmp_path):
+    m, text = _stewart_lengths()
+    out = tmp_path / "modes"
+    code, stdout, err = _run(capsys, "assemble", "--machine", "stewart", "--actuators", text, "--starts", 300,
+                             "--out", out)
+    assert code == 0, err
+    doc = json.loads((out / "assemblies.json").read_text())
+    assert (out / "report.html").is_file()
+    assert doc["mechanism"] == "stewart" and len(doc["modes"]) >= 2
+    assert f"assembly modes found: {len(doc['modes'])}" in stdout
+    for mode in doc["modes"]:
+        assert mode["round_trip"] <= 1e-10
+        x = np.array([mode["task"][f"{n}_{u}"] for n, u in zip(m.task_names, m.task_units)])
+        s = solve_kinematics(m, x[None], q_start=np.array(list(mode["tree_coordinates"].values()))).act_q[0]
+        assert np.abs(s - [doc["actuators"][a]["value"] for a in m.actuator_names]).max() <= 1e-10
+    poses = np.array([[v for v in mode["task"].values()] for mode in doc["modes"]])
+    assert len({tuple(np.round(p, 6)) for p in poses}) == len(poses)  # distinct
+
+
+@pytest.mark.parametrize("actuators, pattern", [
+    ("P_1=1.0", "'P_3': missing"),
+    ("P_1=1,P_2=1,P_3=1,P_4=1,P_5=1,P_6=1,Q=2", "'Q': not an actuated joint"),
+    ("P_1=0.2,P_2=3,P_3=0.2,P_4=3,P_5=0.2,P_6=3", "reach no pose"),
+])
+def test_assemble_refusals_are_one_line(capsys, tmp_path, actuators, pattern):
+    out = tmp_path / "o"
+    code, _, err = _run(capsys, "assemble", "--machine", "stewart", "--actuators", actuators, "--starts", 50,
+                        "--out", out)
+    assert code == 2 and pattern in err and err.count("\n") == 1
+    assert not out.exists()
+
+
+def _write_actuator_motion(path, model, kin, rates=True):
+    cols = {"t_s": kin.t}
+    for i, (a, u) in enumerate(zip(model.actuator_names, model.actuator_units)):
+        cols[f"{a}_pos_{u}"] = kin.act_q[:, i]
+        if rates:
+            cols[f"{a}_vel_{u}_s"] = kin.act_qd[:, i]
+            cols[f"{a}_acc_{u}_s2"] = kin.act_qdd[:, i]
+    data = np.stack(list(cols.values()), axis=1)
+    np.savetxt(path, data, delimiter=",", header=",".join(cols), comments="", fmt="%.17g")
+
+
+def _table(path):
+    a = np.genfromtxt(path, delimiter=",", names=True)
+    return {n: a[n] for n in a.dtype.names}
+
+
+def test_run_from_an_actuator_motion_gives_the_task_motions_files(capsys, tmp_path):
+    """The same motion given in task coordinates and in actuator coordinates (with rates): every
+    column of results.csv agrees."""
+    m = _model("stewart")
+    t, x, xd, xdd = _smooth(m, n=120)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    task = tmp_path / "task.csv"
+    cols = ["t_s"] + [f"{n}_{u}" for n, u in zip(m.task_names, m.task_units)] \
+        + [f"{n}d_{u}_s" for n, u in zip(m.task_names, m.task_units)] \
+        + [f"{n}dd_{u}_s2" for n, u in zip(m.task_names, m.task_units)]
+    np.savetxt(task, np.column_stack([t, x, xd, xdd]), delimiter=",", header=",".join(cols), comments="", fmt="%.17g")
+    act = tmp_path / "act.csv"
+    _write_actuator_motion(act, m, kin)
+    assert _run(capsys, "run", "--machine", "stewart", "--motion", task, "--out", tmp_path / "a")[0] == 0
+    code, _, err = _run(capsys, "run", "--machine", "stewart", "--actuator-motion", act, "--out", tmp_path / "b")
+    assert code == 0, err
+    a, b = _table(tmp_path / "a" / "results.csv"), _table(tmp_path / "b" / "results.csv")
+    assert a.keys() == b.keys()
+    for k in a:
+        assert np.abs(a[k] - b[k]).max() <= 1e-8 * max(np.abs(a[k]).max(), 1e-9), k
+
+
+def test_run_from_actuator_positions_alone_differentiates_them(capsys, tmp_path):
+    """Positions only: the rates by the smoothing differentiator (default) or the spline
+    (--sg-window 0); the poses are exact either way and the rates close to the motion's."""
+    m = _model("rrr3")
+    t, x, xd, xdd = _smooth(m, n=400)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    act = tmp_path / "act.csv"
+    _write_actuator_motion(act, m, kin, rates=False)
+    for window, out in (("15", "sg"), ("0", "spline")):
+        code, _, err = _run(capsys, "run", "--machine", "rrr3", "--actuator-motion", act, "--sg-window", window,
+                            "--out", tmp_path / out)
+        assert code == 0, err
+        r = _table(tmp_path / out / "results.csv")
+        for i, (n, u) in enumerate(zip(m.task_names, m.task_units)):
+            assert np.abs(r[f"{n}_{u}"] - x[:, i]).max() <= 1e-10 * m.length_scale
+        for i, (a, u) in enumerate(zip(m.actuator_names, m.actuator_units)):
+            assert np.abs(r[f"{a}_vel_{u}_s"] - kin.act_qd[:, i]).max() <= 1e-3 * np.abs(kin.act_qd).max()
+
+
+@pytest.mark.parametrize("edit, pattern", [
+    (lambda rows: rows[:3] + [rows[4], rows[3]] + rows[5:], "row 4, column 't_s'"),
+    (lambda rows: [rows[0].replace("P_1_pos_m", "P_7_pos_m")] + rows[1:], "P_7_pos_m"),
+    (lambda rows: [",".join(rows[0].split(",")[:-3])] + [",".join(r.split(",")[:-3]) for r in rows[1:]],
+     "P_6_pos_m"),
+])
+def test_bad_actuator_motion_files_are_one_line(capsys, tmp_path, edit, pattern):
+    m = _model("stewart")
+    t, x, xd, xdd = _smooth(m, n=40)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    act = tmp_path / "act.csv"
+    _write_actuator_motion(act, m, kin)
+    lines = act.read_text().splitlines()
+    act.write_text("\n".join(edit(lines)) + "\n")
+    code, _, err = _run(capsys, "run", "--machine", "stewart", "--actuator-motion", act, "--out", tmp_path / "o")
+    assert code == 2 and pattern in err and err.count("\n") == 1, err
+    assert not (tmp_path / "o").exists()
+
+
+def test_an_unreachable_actuator_motion_writes_nothing(capsys, tmp_path):
+    m = _model("stewart")
+    t, x, xd, xdd = _smooth(m, n=60)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    s = kin.act_q.copy()
+    s[40:, 0] += 2.0
+    k2 = type(kin)(**{**kin.__dict__, "act_q": s})
+    act = tmp_path / "act.csv"
+    _write_actuator_motion(act, m, k2)
+    code, _, err = _run(capsys, "run", "--machine", "stewart", "--actuator-motion", act, "--out", tmp_path / "o")
+    assert code == 2 and "sample 40" in err and "actuator '" in err and err.count("\n") == 1, err
+    assert not (tmp_path / "o").exists()
