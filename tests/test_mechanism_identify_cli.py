@@ -139,3 +139,46 @@ def test_identify_refuses_a_misspelt_column_and_too_few_samples(tmp_path, capsys
         err = capsys.readouterr().err.strip()
         assert code == 2 and word in err and len(err.splitlines()) == 1, err
         assert not (tmp_path / "o").exists()
+
+
+def test_identification_from_a_log_in_actuator_coordinates(tmp_path):
+    """A real machine's log: time, the actuated joints' positions and the efforts, no task
+    column. The pose by the direct kinematics; the identification is the one of the full
+    results file (the same friction coefficients), with the rates given or derived from the
+    positions (Savitzky-Golay, or the spline for exact positions)."""
+    true, prior = _files(tmp_path)
+    mt = load_mechanism(true)
+    _motion_file(mt, tmp_path / "excite.csv", seed=11)
+    assert main(["run", "--machine", str(true), "--motion", str(tmp_path / "excite.csv"),
+                 "--out", str(tmp_path / "run")]) == 0
+    with (tmp_path / "run" / "results.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    effort = [f"P_{k}_effort_N" for k in range(1, 7)]
+    pos = [f"P_{k}_pos_m" for k in range(1, 7)]
+    rates = [f"P_{k}_vel_m_s" for k in range(1, 7)] + [f"P_{k}_acc_m_s2" for k in range(1, 7)]
+    for name, cols, extra in (("rates", pos + rates, []), ("spline", pos, ["--sg-window", "0"]),
+                              ("smoothed", pos, ["--sg-window", "9", "--sg-order", "4"])):
+        log = tmp_path / f"log_{name}.csv"
+        with log.open("w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["t_s", *cols, *effort])
+            for r in rows:
+                w.writerow([r[c] for c in ("t_s", *cols, *effort)])
+        assert main(["identify", "--machine", str(prior), "--measured", str(log), *extra,
+                     "--out", str(tmp_path / f"id_{name}")]) == 0
+        rep = json.loads((tmp_path / f"id_{name}" / "identification.json").read_text())
+        rel = {"rates": 1e-9, "spline": 1e-4, "smoothed": 5e-3}[name]
+        for k in (1, 2, 3, 4, 5, 6):
+            for law, want in (("coulomb", 3.0), ("viscous", 15.0)):
+                assert rep["separable"][f"P_{k}_{law}"]["estimate"] == pytest.approx(want, rel=rel), (name, k, law)
+
+
+def test_an_actuator_log_without_positions_is_refused(tmp_path, capsys):
+    true, prior = _files(tmp_path)
+    log = tmp_path / "log.csv"
+    log.write_text("t_s," + ",".join(f"P_{k}_effort_N" for k in range(1, 7)) + "\n"
+                   + "".join(f"{0.01 * i}," + ",".join("1.0" for _ in range(6)) + "\n" for i in range(20)))
+    assert main(["identify", "--machine", str(prior), "--measured", str(log), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "P_1_pos_m" in err and err.count("\n") == 1
+    assert not (tmp_path / "o").exists()

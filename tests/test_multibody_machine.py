@@ -219,3 +219,52 @@ def test_one_set_of_verbs_serves_a_plant_beside_the_controllers_model():
         assert not np.allclose(a_p, a_m, rtol=1e-3)  # heavier bodies: another answer
     with pytest.raises(ParameterError, match="belong to mechanism"):
         shared.mass_matrix(load_mechanism(ex.builtin_dict("delta")), reference_task(m)[None])
+
+
+def test_exact_encoders_read_the_plants_kinematics_and_the_pose_comes_from_the_direct_kinematics():
+    """Exact encoders (the described default): each cycle's true actuator displacement is the
+    plant's own inverse kinematics at its pose (against a batched solve of the recorded poses),
+    and the controller's pose from the encoders (pose feedback off) is the direct kinematics of
+    the quantised reading: within a few counts of the true pose. The first-order encoders of
+    the hand-built machines differ from the exact ones by the second order of the tracking
+    error, here made large by a heavier plant and a soft PD."""
+    from dataclasses import replace
+
+    from pkmdyn.cli.mechanism import described_control_settings
+    from pkmdyn.control import gains, hermite_motion, loop_settings
+    from pkmdyn.multibody import default_motion
+    from pkmdyn.simulate import track
+
+    d = ex.builtin_dict("stewart")
+    m = load_mechanism(d)
+    for body in d["bodies"]:
+        body["mass_kg"] *= 3.0
+    plant = load_mechanism(d)
+    settings = described_control_settings(m)
+    settings["sensors"]["pose_feedback_from_sensor"] = 0
+    ls = loop_settings(settings)
+    assert ls.exact_encoders
+    mo = default_motion(m)
+    fn = hermite_motion(mo.t, mo.x, mo.xd, mo.xdd, None)
+    V = machine_verbs(m)
+    g = gains(settings, "pd", m.nt)
+    res = {}
+    for exact in (True, False):
+        res[exact] = track(V, m, plant, fn, 0.3, "pd", g, replace(ls, exact_encoders=exact), False).result
+    r = res[True]
+    kin = solve_kinematics(plant, r.q)
+    a0 = solve_kinematics(plant, r.q[:1]).act_q[0]
+    assert np.abs(r.s - m.drive_ratio * (kin.act_q - a0)).max() <= 1e-12
+    count = float(np.max(ls.encoder_resolution))
+    Jmax = np.abs(kin.J_ax).max()
+    # the pose from the quantised reading: within a few counts of the truth (through dx/ds)
+    lin = np.abs(r.q_s - r.q)[:, :3].max()
+    assert lin <= 10 * count * max(1.0, 1.0 / Jmax)
+    # first-order encoders: their reading is off the true displacement by the second order of the
+    # tracking error (and the first-order pose inverts that same map, so it cannot see it)
+    rl = res[False]
+    a_true = solve_kinematics(plant, rl.q).act_q
+    off = np.abs(rl.s - m.drive_ratio * (a_true - a0)).max()
+    track_err = np.abs(rl.q - fn(rl.t)[0])[:, :3].max()
+    assert track_err > 1e-3  # a soft PD on a heavier plant: millimetres
+    assert 1e3 * 1e-12 < off <= 10.0 * track_err ** 2 / m.length_scale

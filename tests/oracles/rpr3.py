@@ -55,8 +55,9 @@ harmonics whose coefficients are negligible (``<= 1e-12`` of the largest) are dr
 ``numpy.roots``.
 
 For each root close to the unit circle, ``p = N / D``; where ``D`` nearly vanishes (the
-points ``A_i - R b_i`` collinear) ``M p = r`` reduces to one line, intersected with the circle
-``E_0`` instead. Each candidate is refined by Newton steps on the original ``E_0, E_1, E_2``
+points ``A_i - R b_i`` collinear) ``M p = r`` reduces to one line, which is intersected with
+the circle ``E_0`` as well (there ``F`` has a double root: the pose and its mirror image in
+that line share ``phi``). Each candidate is refined by Newton steps on the original ``E_0, E_1, E_2``
 in ``(x, y, phi)`` and kept if every leg-length residual ``| |w_i| - rho_i |`` is below
 ``1e-9`` times the size of the manipulator (largest of ``rho``, ``|A_i|``, ``|b_i|``).
 Duplicates (a double root near a singularity) are merged.
@@ -205,18 +206,24 @@ def _newton(par, rho, pose, steps=8):
 
 
 def _positions(el, phi, rho0, size):
-    """Candidate ``p`` for a root ``phi``: ``N / D``, or the line-circle fallback where the
-    linear system is (nearly) singular."""
+    """Candidates ``p`` for a root ``phi``: ``N / D``, and where the linear system is nearly
+    singular (``|D|`` below ``1e-3`` of the product of the row norms) also the line-circle
+    fallback. Near such a root ``N`` and ``D`` both nearly vanish, ``F`` has a double root
+    (the pose and its mirror image in the line share ``phi``), and ``N / D`` is inaccurate."""
     val = lambda c: _eval(c, phi)[0]
     M = np.array([[val(el["M"][i][j]) for j in range(2)] for i in range(2)])
     r = np.array([val(el["r"][0]), val(el["r"][1])])
     D = val(el["D"])
     rownorm = np.linalg.norm(M, axis=1)
-    if abs(D) > 1e-8 * max(rownorm[0] * rownorm[1], 1e-300):
-        return [np.array([val(el["N"][0]), val(el["N"][1])]) / D]
+    rel = abs(D) / max(rownorm[0] * rownorm[1], 1e-300)
+    out = []
+    if rel > 1e-8:
+        out.append(np.array([val(el["N"][0]), val(el["N"][1])]) / D)
+    if rel > 1e-3:
+        return out
     k = int(np.argmax(rownorm))
     if rownorm[k] < 1e-14 * size:
-        return []
+        return out
     m = M[k] / rownorm[k]
     p0 = m * r[k] / rownorm[k]
     t_dir = np.array([-m[1], m[0]])
@@ -226,7 +233,7 @@ def _positions(el, phi, rho0, size):
     if disc < 0.0:
         disc = 0.0  # tangent up to rounding; Newton and the residual test decide
     s = np.sqrt(disc)
-    return [p0 + (-bq + s) * t_dir, p0 + (-bq - s) * t_dir]
+    return out + [p0 + (-bq + s) * t_dir, p0 + (-bq - s) * t_dir]
 
 
 def forward_kinematics(par: RPR3, rho):
@@ -273,11 +280,15 @@ def forward_kinematics(par: RPR3, rho):
 
 def default_rpr3() -> RPR3:
     """A documented default (not a published design), deliberately without symmetry:
-    base ``A = (0, 0), (0.9, 0.05), (0.35, 0.7)`` m; platform (platform frame)
-    ``b = (-0.10, -0.06), (0.13, -0.04), (0.02, 0.12)`` m."""
-    return RPR3(A=[[0.0, 0.0], [0.9, 0.05], [0.35, 0.7]],
-                b=[[-0.10, -0.06], [0.13, -0.04], [0.02, 0.12]])
+    base ``A = (0, 0), (0.8, 0.05), (0.3, 0.7)`` m (sides 0.80, 0.82, 0.76 m); platform, in
+    the platform frame, ``b = (-0.22, 0.03), (0.14, -0.19), (0.14, 0.15)`` m (sides 0.42, 0.34,
+    0.38 m). At :data:`DEFAULT_POSE` the legs are ``rho = (0.3087, 0.3102, 0.3551)`` m and
+    these leg lengths have two real assembly modes: the home pose and
+    ``(0.3795, 0.1807, 1.3751)``."""
+    return RPR3(A=[[0.0, 0.0], [0.8, 0.05], [0.3, 0.7]],
+                b=[[-0.22, 0.03], [0.14, -0.19], [0.14, 0.15]])
 
 
-DEFAULT_POSE = np.array([0.42, 0.28, 0.15])
-"""A regular home pose of :func:`default_rpr3` ``(x, y, phi)`` [m, m, rad]."""
+DEFAULT_POSE = np.array([0.35, 0.25, 0.0])
+"""A regular home pose of :func:`default_rpr3` ``(x, y, phi)`` [m, m, rad], near the base
+triangle's centroid; the inverse Jacobian's smallest singular value there is 0.344."""

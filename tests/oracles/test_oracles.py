@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
-from oracles import bennett, delta, mobility, rrr3, stewart
+from oracles import bennett, delta, five_bar, mobility, rpr3, rrr3, stewart
 
 RNG_SEED = 20261130
 
@@ -527,3 +529,271 @@ def test_kutzbach_basic_counts():
     assert mobility.kutzbach(2, "H") == 1 and mobility.kutzbach(2, "E") == 3
     assert mobility.loops(14, 18) == 5                    # Stewart: 5 independent loops
     assert mobility.loops(8, 9) == 2
+
+
+# --------------------------------------------------------------------------
+# Five-bar direct kinematics
+# --------------------------------------------------------------------------
+
+def _cross2(a, b):
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+@pytest.mark.parametrize("sigma", [(1, -1), (1, 1), (-1, -1), (-1, 1)])
+def test_five_bar_fk_of_ik_both_solutions(sigma):
+    par = dataclasses.replace(five_bar.default_five_bar(), sigma=np.asarray(sigma, float),
+                              joint_sign=np.array([-1.0, 1.0]))
+    P = five_bar.DEFAULT_POSE + rng().uniform(-0.05, 0.05, (8, 2))
+    ik = five_bar.inverse_kinematics(par, P)
+    assert np.all(np.isfinite(ik["phi"]))
+    phi = par.joint_sign * ik["q"]          # the joint coordinates back to absolute angles
+    fk = five_bar.forward_kinematics(par, phi)
+    assert fk["P"].shape == (8, 2, 2) and fk["B"].shape == (8, 2, 2)
+    assert_close(fk["B"], ik["B"], 1e-13, what="elbows")
+    # P is the solution on its own side of B_0 -> B_1: 0 left, 1 right
+    B0, B1 = ik["B"][:, 0], ik["B"][:, 1]
+    side = _cross2(B1 - B0, P - B0)
+    assert np.all(np.abs(side) > 1e-4)     # regular: the two solutions are distinct
+    k = np.where(side > 0, 0, 1)
+    idx = np.arange(len(P))
+    assert_close(fk["P"][idx, k], P, 1e-12, what="fk(ik(P))")
+    # the other solution closes both distal links too, and lies on the other side
+    other = fk["P"][idx, 1 - k]
+    assert np.all(np.linalg.norm(other - P, axis=-1) > 1e-3)
+    for i in range(2):
+        assert_close(np.linalg.norm(other - ik["B"][:, i], axis=-1), np.full(len(P), par.l2[i]), 1e-12,
+                     what=f"other solution, distal {i}")
+    assert np.all(_cross2(B1 - B0, fk["P"][:, 0] - B0) > 0) and np.all(_cross2(B1 - B0, fk["P"][:, 1] - B0) < 0)
+
+
+def test_five_bar_fk_unreachable_is_nan_and_wrong_formula_fails():
+    par = five_bar.default_five_bar()
+    # elbows pointing away from each other: |B_1 - B_0| = 0.67 m > l2_0 + l2_1 = 0.54 m
+    out = five_bar.forward_kinematics(par, [[np.pi, 0.0], [0.3, 2.0]])
+    assert np.all(np.isnan(out["P"][0])) and np.all(np.isfinite(out["P"][1]))
+    # one sample of shape (2,) is promoted to (1, 2)
+    assert five_bar.forward_kinematics(par, [1.2, 1.9])["P"].shape == (1, 2, 2)
+    # swapped distal lengths must not reproduce the pose
+    P = five_bar.DEFAULT_POSE + rng().uniform(-0.03, 0.03, (4, 2))
+    phi = five_bar.inverse_kinematics(par, P)["phi"]
+    bad = dataclasses.replace(par, l2=par.l2[::-1].copy())
+    fk = five_bar.forward_kinematics(bad, phi)["P"]
+    err = np.min(np.linalg.norm(fk - P[:, None, :], axis=-1), axis=1)
+    assert np.all(err > 1e-4)
+
+
+# --------------------------------------------------------------------------
+# 3-RPR
+# --------------------------------------------------------------------------
+
+# a constructed geometry with six real assembly modes (found by a search with this oracle and
+# confirmed by the independent coupler-curve scan below)
+RPR_SIX = rpr3.RPR3(A=[[0.0, 0.0], [0.7, 0.05], [0.2, 0.55]], b=[[-0.25, -0.12], [0.2, -0.1], [0.05, 0.25]])
+RPR_SIX_RHO = np.array([0.55, 0.288, 0.611])
+# four real modes of the default geometry
+RPR_DEFAULT_FOUR_RHO = np.array([0.758, 0.214, 0.775])
+
+
+def _triangle(d01, d12, d20):
+    """Platform points b_0 = 0, b_1 on +x, b_2 above, from the side lengths."""
+    x = (d01**2 + d20**2 - d12**2) / (2 * d01)
+    return np.array([[0.0, 0.0], [d01, 0.0], [x, np.sqrt(d20**2 - x**2)]])
+
+
+# Recalled from the 3-RPR of Innocenti & Parenti-Castelli (1992), as used by Zein, Wenger &
+# Chablat, Mech. Mach. Theory 43(4) (2008) 480-490: A_1 = (0, 0), A_2 = (15.91, 0),
+# A_3 = (0, 10), platform sides d_1 = B_1B_2 = 17.04, d_2 = B_2B_3 = 16.54,
+# d_3 = B_3B_1 = 20.84, and rho = (14.98, 15.38, 12.0) with six assembly modes.
+# Quoted from memory, NOT confirmed against the papers here; the six modes are confirmed by
+# the coupler-curve scan.
+RPR_RECALLED = rpr3.RPR3(A=[[0.0, 0.0], [15.91, 0.0], [0.0, 10.0]], b=_triangle(17.04, 16.54, 20.84))
+RPR_RECALLED_RHO = np.array([14.98, 15.38, 12.0])
+
+# the points A_i - b_i are collinear (on y = 0) at phi = 0: the linear system M p = r of the
+# elimination is singular at that root (the fallback path)
+RPR_COLLINEAR = rpr3.RPR3(A=[[0.0, 0.0], [0.8, 0.05], [0.3, 0.7]], b=[[0.0, 0.0], [0.3, 0.05], [0.1, 0.7]])
+
+
+def _rpr_cases():
+    par = rpr3.default_rpr3()
+    home_rho = rpr3.inverse_kinematics(par, rpr3.DEFAULT_POSE)["rho"][0]
+    return {
+        "default_home": (par, home_rho, 2),
+        "default_four": (par, RPR_DEFAULT_FOUR_RHO, 4),
+        "six": (RPR_SIX, RPR_SIX_RHO, 6),
+        "recalled": (RPR_RECALLED, RPR_RECALLED_RHO, 6),
+    }
+
+
+def _wrap(a):
+    return np.angle(np.exp(1j * np.asarray(a)))
+
+
+def _pose_distance(a, b, size):
+    """Largest of the position difference (relative to size) and the wrapped angle difference."""
+    return max(np.max(np.abs(a[:2] - b[:2])) / size, abs(_wrap(a[2] - b[2])))
+
+
+def _coupler_scan(par, rho, n=40000):
+    """Every assembly mode by a second, geometric route (Merlet 2006, sec. 4.3): cut leg k;
+    legs i, j and the platform side b_i b_j form a four-bar. For the angle t of leg i
+    (the crank), C_i = A_i + rho_i e(t) and C_j is one of the two intersections (branch s) of
+    the circles |C_j - A_j| = rho_j and |C_j - C_i| = |b_j - b_i|; that fixes phi and C_k.
+    The modes are the roots of g(t) = |C_k - A_k| - rho_k on each branch, bracketed on a dense
+    grid and refined by brentq. A root where the crank turns back (the coupler in line with
+    leg j, where the two branches meet) can be missed, so the scan is repeated with legs i and
+    j swapped and the union is returned."""
+    A, b = np.asarray(par.A), np.asarray(par.b)
+    size = max(np.max(rho), np.max(np.abs(A)), np.max(np.abs(b)))
+    found = []
+    for i, j, k in ((0, 1, 2), (1, 0, 2)):
+        L = np.linalg.norm(b[j] - b[i])
+        beta = np.arctan2(b[j, 1] - b[i, 1], b[j, 0] - b[i, 0])
+
+        def pose_of(t, s):
+            t = np.atleast_1d(t)
+            Ci = A[i] + rho[i] * np.stack([np.cos(t), np.sin(t)], -1)
+            g = A[j] - Ci
+            G = np.linalg.norm(g, axis=-1)
+            a = (G**2 + L**2 - rho[j] ** 2) / (2 * G)
+            with np.errstate(invalid="ignore"):
+                h = np.sqrt(L**2 - a**2)
+            u = g / G[:, None]
+            Cj = Ci + a[:, None] * u + s * h[:, None] * np.stack([-u[:, 1], u[:, 0]], -1)
+            phi = np.arctan2(Cj[:, 1] - Ci[:, 1], Cj[:, 0] - Ci[:, 0]) - beta
+            c, sn = np.cos(phi), np.sin(phi)
+            rot = lambda v: np.stack([c * v[0] - sn * v[1], sn * v[0] + c * v[1]], -1)
+            p = Ci - rot(b[i])
+            Ck = p + rot(b[k])
+            return np.column_stack([p, _wrap(phi)]), np.linalg.norm(Ck - A[k], axis=-1) - rho[k]
+
+        t = np.linspace(-np.pi, np.pi, n + 1)
+        for s in (1.0, -1.0):
+            _, g = pose_of(t, s)
+            ok = np.isfinite(g[:-1]) & np.isfinite(g[1:]) & (np.sign(g[:-1]) != np.sign(g[1:]))
+            for m in np.nonzero(ok)[0]:
+                root = brentq(lambda x: pose_of(x, s)[1][0], t[m], t[m + 1], xtol=1e-15, rtol=1e-15)
+                found.append(pose_of(root, s)[0][0])
+    out = []
+    for p in found:   # t = +-pi is one point; both scans find most modes
+        if not any(_pose_distance(p, q, size) < 1e-7 for q in out):
+            out.append(p)
+    return np.array(out).reshape(-1, 3)
+
+
+def test_rpr3_inverse_kinematics_and_jacobian():
+    par = rpr3.default_rpr3()
+    r = rng()
+    pose = rpr3.DEFAULT_POSE + np.column_stack([r.uniform(-0.05, 0.05, (4, 2)), r.uniform(-0.3, 0.3, 4)])
+    out = rpr3.inverse_kinematics(par, pose)
+    ph = pose[:, 2]
+    for i in range(3):   # rebuild C_i by hand
+        C = pose[:, :2] + np.column_stack([np.cos(ph) * par.b[i, 0] - np.sin(ph) * par.b[i, 1],
+                                           np.sin(ph) * par.b[i, 0] + np.cos(ph) * par.b[i, 1]])
+        assert_close(out["C"][:, i], C, 1e-14)
+        assert_close(out["rho"][:, i], np.linalg.norm(C - par.A[i], axis=-1), 1e-14)
+    eps = 1e-6
+    for k in range(3):
+        d = np.zeros(3)
+        d[k] = eps
+        col = (rpr3.inverse_kinematics(par, pose + d)["rho"] - rpr3.inverse_kinematics(par, pose - d)["rho"]) / (2 * eps)
+        assert_close(out["J"][:, :, k], col, 1e-8, what=f"J col {k}")
+
+
+@pytest.mark.parametrize("case", ["default_home", "default_four", "six", "recalled"])
+def test_rpr3_every_mode_reproduces_rho_and_matches_coupler_scan(case):
+    par, rho, count = _rpr_cases()[case]
+    sols = rpr3.forward_kinematics(par, rho)
+    assert sols.shape == (count, 3), sols
+    assert np.all(sols[:, 2] > -np.pi) and np.all(sols[:, 2] <= np.pi)
+    assert_close(rpr3.inverse_kinematics(par, sols)["rho"], np.broadcast_to(rho, (count, 3)), 1e-10, what=case)
+    # all of them, and no others: the independent geometric route finds the same set
+    scan = _coupler_scan(par, rho)
+    size = max(np.max(rho), np.max(np.abs(par.A)), np.max(np.abs(par.b)))
+    assert len(scan) == count, scan
+    for p in scan:
+        assert min(_pose_distance(p, q, size) for q in sols) < 1e-9, (p, sols)
+
+
+def test_rpr3_mode_count_stable_under_tiny_perturbation():
+    r = rng()
+    for par, rho, count in [(RPR_SIX, RPR_SIX_RHO, 6), (RPR_RECALLED, RPR_RECALLED_RHO, 6),
+                            (rpr3.default_rpr3(), RPR_DEFAULT_FOUR_RHO, 4)]:
+        base = rpr3.forward_kinematics(par, rho)
+        size = np.max(rho)
+        for _ in range(4):
+            rho2 = rho * (1 + r.uniform(-1e-7, 1e-7, 3))
+            sols = rpr3.forward_kinematics(par, rho2)
+            assert len(sols) == count
+            # each mode moves continuously (well away from a singularity)
+            for p in sols:
+                assert min(_pose_distance(p, q, size) for q in base) < 1e-5
+
+
+def test_rpr3_fk_of_ik_contains_the_pose():
+    par = rpr3.default_rpr3()
+    r = rng()
+    n = 30
+    pose = np.column_stack([r.uniform(0.15, 0.55, n), r.uniform(0.1, 0.45, n), r.uniform(-np.pi, np.pi, n)])
+    pose[:3, 2] = [np.pi, -np.pi + 1e-9, 3.1]   # near and at phi = pi (t = tan(phi/2) = infinity)
+    rho = rpr3.inverse_kinematics(par, pose)["rho"]
+    counts = []
+    for p, rh in zip(pose, rho):
+        sols = rpr3.forward_kinematics(par, rh)
+        counts.append(len(sols))
+        assert len(sols) % 2 == 0 and 2 <= len(sols) <= 6
+        assert min(_pose_distance(p, q, 1.0) for q in sols) < 1e-9, (p, sols)
+        assert_close(rpr3.inverse_kinematics(par, sols)["rho"], np.broadcast_to(rh, sols.shape), 1e-10)
+    assert max(counts) >= 4   # more than the two obvious modes occur in this box
+
+
+def test_rpr3_singular_linear_system_fallback():
+    """At phi = 0 the points A_i - R b_i are collinear: p comes from the line-circle fallback."""
+    par = RPR_COLLINEAR
+    for p in ([0.35, 0.3, 0.0], [0.5, 0.1, 0.0]):
+        rho = rpr3.inverse_kinematics(par, p)["rho"][0]
+        sols = rpr3.forward_kinematics(par, rho)
+        assert min(_pose_distance(np.asarray(p), q, 1.0) for q in sols) < 1e-9
+        scan = _coupler_scan(par, rho)
+        assert len(scan) == len(sols)
+
+
+def test_rpr3_eliminant_is_a_sextic():
+    """The 4th harmonic of F(phi) cancels (at most 6 real modes), and F vanishes at every mode."""
+    r = rng()
+    for _ in range(5):
+        par = rpr3.RPR3(A=r.uniform(-1, 1, (3, 2)), b=r.uniform(-0.4, 0.4, (3, 2)))
+        rho = r.uniform(0.2, 1.5, 3)
+        f = rpr3.eliminant_harmonics(par, rho)
+        k = (len(f) - 1) // 2
+        big = np.max(np.abs(f))
+        assert np.all(np.abs(f[: k - 3]) <= 1e-13 * big) and np.all(np.abs(f[k + 4:]) <= 1e-13 * big)
+        assert np.max(np.abs(f[[k - 3, k + 3]])) > 1e-6 * big   # degree 3 in general
+        assert_close(f[::-1], np.conj(f), 1e-14, what="real F")
+
+
+def test_rpr3_unreachable_gives_no_mode():
+    par = rpr3.default_rpr3()
+    assert rpr3.forward_kinematics(par, [0.01, 0.01, 2.0]).shape == (0, 3)   # leg 2 far too long
+    assert rpr3.forward_kinematics(par, [0.01, 0.01, 0.01]).shape == (0, 3)  # platform larger than legs allow
+    with pytest.raises(ValueError):
+        rpr3.forward_kinematics(par, [-0.3, 0.3, 0.3])
+
+
+def test_rpr3_wrong_formulas_fail():
+    par = rpr3.default_rpr3()
+    p = rpr3.DEFAULT_POSE
+    rho = rpr3.inverse_kinematics(par, p)["rho"][0]
+    sols = rpr3.forward_kinematics(par, rho)
+
+    def wrong_ik(pose):   # platform rotated the wrong way: R(-phi)
+        return rpr3.inverse_kinematics(par, pose * np.array([1.0, 1.0, -1.0]))["rho"]
+
+    with pytest.raises(AssertionError):
+        assert_close(wrong_ik(sols), np.broadcast_to(rho, sols.shape), 1e-10)
+    # a leg length 1e-6 m off does not reproduce the pose to 1e-9
+    moved = rpr3.forward_kinematics(par, rho + np.array([1e-6, 0.0, 0.0]))
+    assert min(_pose_distance(p, q, 1.0) for q in moved) > 1e-9
+    # a wrong platform point misses the pose altogether
+    bad = rpr3.RPR3(A=par.A, b=par.b * np.array([1.0, -1.0]))
+    assert all(_pose_distance(p, q, 1.0) > 1e-3 for q in rpr3.forward_kinematics(bad, rho))

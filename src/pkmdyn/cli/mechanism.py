@@ -36,6 +36,12 @@ def _load(machine: str):
     return load_mechanism(path if entry is None else entry.description()), entry
 
 
+def _check_differentiator(sg_window: int, sg_order: int) -> None:
+    """``--sg-window`` odd, at least 3 and above ``--sg-order``, or 0 (the spline)."""
+    if sg_window != 0 and (sg_window < 3 or sg_window % 2 == 0 or sg_order >= sg_window):
+        raise click.UsageError(f"--sg-window: {sg_window}: an odd number >= 3 and above --sg-order ({sg_order}), or 0")
+
+
 @cli.command("describe")
 @click.option("--machine", required=True, help=_MACHINE_HELP)
 def describe(machine: str) -> None:
@@ -144,8 +150,7 @@ def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_w
             from ..multibody.direct import task_motion
             from ..multibody.motion import read_actuator_motion
 
-            if sg_window != 0 and (sg_window < 3 or sg_window % 2 == 0 or sg_order >= sg_window):
-                raise click.UsageError("--sg-window: an odd number >= 3 and above --sg-order, or 0")
+            _check_differentiator(sg_window, sg_order)
             am = read_actuator_motion(model, Path(actuator_path).absolute(), sg_window, sg_order)
             motion, _ = task_motion(model, am)
     elif entry is None:
@@ -221,7 +226,7 @@ def described_control_settings(model) -> dict:
         "actuators": {"effort_limit_si": limits},
         "sensors": {"encoder_counts_per_turn": 1000000, "encoder_travel_per_turn_m": 0.001,
                     "velocity_cutoff_Hz": 200.0, "acceleration_cutoff_Hz": 50.0, "pose_noise_si": [0.0] * nt,
-                    "pose_delay_cycles": 0, "pose_feedback_from_sensor": 1, "seed": 1},
+                    "pose_delay_cycles": 0, "pose_feedback_from_sensor": 1, "seed": 1, "exact_encoders": 1},
         "run": {"divergence_limit_si": [0.2 if k == 1 else 0.05 for k in model.task_kind]},
         "computed-torque": {"kp_1_s2": [wn * wn] * nt, "kd_1_s": [2 * zeta * wn] * nt},
         "pd": dict(pd),
@@ -355,13 +360,21 @@ def _control_load(model, motion, what: str, efforts: tuple[str, ...]):
 @cli.command("identify")
 @click.option("--machine", required=True, help=_MACHINE_HELP)
 @click.option("--measured", "measured_path", type=PATH_IN, required=True,
-              help="Measured run (CSV): t_s, the task columns and one <joint>_effort_<N|Nm> column per actuator "
-                   "(a pkmdyn run results.csv works as it is); optional: rates, accelerations, named loads.")
+              help="Measured run (CSV): t_s, the task columns (or the actuated joints' <joint>_pos_<m|rad>: the pose "
+                   "by the direct kinematics) and one effort column per actuator, a drive's <actuator>_torque_Nm or a "
+                   "joint's <joint>_effort_<N|Nm> (a pkmdyn run results.csv works as it is); optional: rates, "
+                   "accelerations, named loads.")
 @click.option("--rank-tol", type=FiniteFloat(0.0, 1.0, lo_open=True), default=1e-6, show_default=True,
               help="Singular values of the column-scaled regressor below this fraction of the largest count as zero.")
+@click.option("--sg-window", type=click.IntRange(0, 100_001), default=15, show_default=True,
+              help="A log in actuator coordinates without rate columns: samples of the Savitzky-Golay smoothing "
+                   "differentiator (odd, >= 3; uniform sampling), or 0 for the interpolating quintic spline.")
+@click.option("--sg-order", type=click.IntRange(2, 20), default=5, show_default=True,
+              help="Degree of the Savitzky-Golay polynomial (less than --sg-window).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
-def identify(machine: str, measured_path: Path, rank_tol: float, out_dir: Path) -> None:
+def identify(machine: str, measured_path: Path, rank_tol: float, sg_window: int, sg_order: int,
+             out_dir: Path) -> None:
     """Identify a mechanism's inertial parameters and joint friction coefficients from measured
     actuator efforts: identification.json, efforts.csv (docs/identification.md)."""
     from ..identify.mechanism import identify_mechanism
@@ -372,7 +385,9 @@ def identify(machine: str, measured_path: Path, rank_tol: float, out_dir: Path) 
     inputs = {"--machine": path, "--measured": measured_path}
     check_output_dir(out_dir, inputs)
     model, _ = _load(machine)
-    rep = identify_mechanism(model, Path(measured_path).absolute(), out_dir, rank_tol, inputs=inputs)
+    _check_differentiator(sg_window, sg_order)
+    rep = identify_mechanism(model, Path(measured_path).absolute(), out_dir, rank_tol, inputs=inputs,
+                             sg_window=sg_window, sg_order=sg_order)
     list_files(rep["files"])
     worst = min((v for v in rep["explained_percent"].values() if v is not None), default=None)
     click.echo(f"rank {rep['rank']} of {len(rep['parameters_asked'])} parameters; "

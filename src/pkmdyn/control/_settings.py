@@ -29,9 +29,9 @@ __all__ = ["default_settings_text", "load_settings", "loop_settings", "gains", "
 POSITIVE = ("control_cycle_s", "integration_step_s", "effort_limit", "encoder_counts_per_turn",
             "encoder_travel_per_turn", "divergence_limit", "mass_factor", "friction_factor")
 #: keys whose values must be whole numbers
-INTEGER = ("encoder_counts_per_turn", "pose_delay_cycles", "seed", "pose_feedback_from_sensor")
+INTEGER = ("encoder_counts_per_turn", "pose_delay_cycles", "seed", "pose_feedback_from_sensor", "exact_encoders")
 #: upper bounds of keys (the loop allocates ``pose_delay_cycles`` samples; seeds are 64-bit; a flag is 0 or 1)
-MAXIMUM = {"pose_delay_cycles": 10_000, "seed": 2**63 - 1, "pose_feedback_from_sensor": 1}
+MAXIMUM = {"pose_delay_cycles": 10_000, "seed": 2**63 - 1, "pose_feedback_from_sensor": 1, "exact_encoders": 1}
 
 
 def default_settings_text(machine: str) -> str:
@@ -153,6 +153,7 @@ def loop_settings(settings: dict[str, dict[str, Any]]) -> "LoopSettings":
         pose_delay_cycles=int(sen["pose_delay_cycles"]),
         seed=int(sen["seed"]),
         pose_from_sensor=bool(sen["pose_feedback_from_sensor"]),
+        exact_encoders=bool(sen.get("exact_encoders", 0)),
     )
 
 

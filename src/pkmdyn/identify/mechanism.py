@@ -9,8 +9,11 @@ decomposition, then least squares with the description's values as a vanishing p
 fix only what the motion cannot show), masses and friction coefficients kept >= 0.
 
 Measured file (CSV): ``t_s``, the task columns of the description (``x_m`` ... as ``pkmdyn
-run`` writes them; rates and accelerations optional, else from a quintic spline), one effort
-column per actuator, its motor effort ``<actuator>_torque_Nm`` for a drive (``[[actuators]]``:
+run`` writes them; rates and accelerations optional, else from a quintic spline) or, for a log
+of a real machine, its actuated joints' positions instead (``<joint>_pos_<m|rad>``; rates
+``<joint>_vel_<u>_s`` and accelerations ``<joint>_acc_<u>_s2`` optional, else by the
+Savitzky-Golay differentiator of ``sg_window`` samples and degree ``sg_order``), the pose then
+by the direct kinematics (:mod:`pkmdyn.multibody.direct`); one effort column per actuator, its motor effort ``<actuator>_torque_Nm`` for a drive (``[[actuators]]``:
 what a real machine's motor currents give) or the joint's ``<joint>_effort_<N|Nm>`` for an
 actuated joint without one, and, optional, a column per named load and every other column a
 ``pkmdyn run`` results file carries (not used); any other column is refused by name, as a
@@ -33,7 +36,7 @@ from ..multibody.output import actuator_effort_column
 from ..multibody.identify import regressor
 from ..multibody.kinematics import solve_kinematics
 from ..multibody.model import MechanismModel
-from ..multibody.motion import MAX_MOTION_ROWS, task_columns
+from ..multibody.motion import MAX_MOTION_ROWS, actuator_columns, actuator_rates, task_columns
 from ..multibody.run import results_column_names
 from ..profiles._columns import column_group, derivatives, require_increasing
 from ._base import DEFAULT_RANK_TOL
@@ -52,19 +55,35 @@ def effort_columns(model: MechanismModel) -> list[str]:
     return [actuator_effort_column(model, i) for i in range(model.na)]
 
 
-def read_measured(model: MechanismModel, path: Path) -> tuple[Array, Array, Array, Array, Array, dict[str, Array]]:
+def read_measured(model: MechanismModel, path: Path, sg_window: int = 15, sg_order: int = 5
+                  ) -> tuple[Array, Array, Array, Array, Array, dict[str, Array]]:
     """``t, x, xd, xdd, u, named loads`` from a measured file (module docstring)."""
     pos, vel, acc = task_columns(model)
+    apos, avel, aacc = actuator_columns(model)
     eff = effort_columns(model)
     # what a pkmdyn run results file carries besides (joint and motor coordinates, the other
     # efforts, the effort split): accepted, not used
-    run_cols = [c for c in results_column_names(model) if c not in ("t_s", *pos, *eff, *model.named_loads)]
-    optional = (*vel, *acc, *model.named_loads, *run_cols)
-    cols = read_csv_columns(path, ("t_s", *pos, *eff), optional, max_rows=MAX_MOTION_ROWS)
+    own = ("t_s", *pos, *vel, *acc, *apos, *avel, *aacc, *eff, *model.named_loads)
+    run_cols = [c for c in results_column_names(model) if c not in own]
+    optional = (*pos, *vel, *acc, *apos, *avel, *aacc, *model.named_loads, *run_cols)
+    cols = read_csv_columns(path, ("t_s", *eff), optional, max_rows=MAX_MOTION_ROWS)
     t = cols["t_s"]
     require_increasing(path, t)
     x = column_group(path, cols, pos)
-    xd, xdd = derivatives(path, t, x, column_group(path, cols, vel), column_group(path, cols, acc), vel)
+    if x is not None:
+        xd, xdd = derivatives(path, t, x, column_group(path, cols, vel), column_group(path, cols, acc), vel)
+    else:  # a log in actuator coordinates: the pose by the direct kinematics
+        from ..errors import MotionError
+        from ..multibody.direct import direct_kinematics
+
+        s = column_group(path, cols, apos)
+        if s is None:
+            raise MotionError(f"{path}: give the task columns ({', '.join(pos)}) or the actuated joints' positions "
+                              f"({', '.join(apos)})")
+        sd, sdd = actuator_rates(path, t, s, column_group(path, cols, avel), column_group(path, cols, aacc), avel,
+                                 sg_window, sg_order)
+        dk = direct_kinematics(model, np.ascontiguousarray(s), np.ascontiguousarray(sd), np.ascontiguousarray(sdd), t)
+        x, xd, xdd = dk.x, dk.xd, dk.xdd
     u = np.column_stack([cols[c] for c in eff])
     named = {nm: cols[nm] for nm in model.named_loads if nm in cols}
     return t, np.ascontiguousarray(x), np.ascontiguousarray(xd), np.ascontiguousarray(xdd), u, named
@@ -81,11 +100,13 @@ def _consistency(reg: Regressor) -> tuple[Array, Array, Array]:
 
 
 def identify_mechanism(model: MechanismModel, measured: str | Path, out_dir: str | Path,
-                       rank_tol: float = DEFAULT_RANK_TOL, inputs: Any = ()) -> dict[str, Any]:
+                       rank_tol: float = DEFAULT_RANK_TOL, inputs: Any = (), sg_window: int = 15,
+                       sg_order: int = 5) -> dict[str, Any]:
     """Identify ``model``'s parameters from the measured file; write ``out_dir`` (module
-    docstring). Returns the report with ``files``."""
+    docstring; ``sg_window``, ``sg_order`` the differentiator of a log in actuator coordinates
+    without rate columns). Returns the report with ``files``."""
     path = Path(measured)
-    t, x, xd, xdd, u, named = read_measured(model, path)
+    t, x, xd, xdd, u, named = read_measured(model, path, sg_window, sg_order)
     kin = solve_kinematics(model, x, xd, xdd, t)
     reg0 = regressor(model, kin, named or None)
     reg = Regressor(reg0.Y, reg0.u0, reg0.names)

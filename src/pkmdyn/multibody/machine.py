@@ -32,6 +32,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from typing import Any
+
 from ..errors import MotionError, ParameterError, as_array
 from .dynamics import actuator_efforts, body_wrenches, inertia_factors, coordinate_twists, effort_unit, fr_any, \
     generalised_forces, joint_reactions
@@ -59,6 +61,7 @@ class _State:
         self.q_last: Array | None = None
         self.inertia_factors = inertia_factors(model)
         self.pk = _one.pack(model) if _one.supported(model) else None
+        self.direct: Any = None  # the direct kinematics' warm start (:meth:`MechanismVerbs.direct_one`)
 
     def last_q(self) -> Array | None:
         """The last solved tree coordinates: the compiled path's when it holds a solution (it
@@ -299,6 +302,56 @@ class MechanismVerbs:
             return a
         M, h, B, _ = self._all(model, q, qd, load, one=True)
         return np.linalg.solve(M[0], B[0] @ np.asarray(u, dtype=float) - h[0])
+
+
+    # ------------------------------------------------------------------ kinematics (exact encoders)
+    def drive_ratios(self, model: MechanismModel) -> Array:
+        """``(na,)`` the drives' transmission ratios (1 for an actuated joint without a drive):
+        motor displacement per actuated joint displacement."""
+        self._state(model)
+        return np.asarray(model.drive_ratio, dtype=float).copy()
+
+    def actuator_coordinates_one(self, model: MechanismModel, q: Array, qd: Array) -> Array:
+        """The actuated joints' coordinates ``(na,)`` at task pose ``q`` (one sample of the
+        inverse kinematics, warm-started: the plant's encoders)."""
+        kin = self._state_one(model, np.asarray(q, dtype=float), np.asarray(qd, dtype=float))
+        return kin.act_q[0].copy()
+
+    def direct_one(self, model: MechanismModel, a: Array, ad: Array) -> tuple[Array, Array]:
+        """The task pose and rate ``(nt,), (nt,)`` at actuated joint coordinates ``a`` and rates
+        ``ad`` by the direct kinematics (:mod:`.direct`), warm-started from the previous call
+        (the first from the reference configuration): the controller's pose from its encoders.
+        Raises where the actuators reach no pose or sit on a singularity."""
+        from . import _direct as D
+        from . import _kernels as K
+        from .direct import _arrays, direct_kinematics
+        from .kinematics import reference_task
+
+        st = self._state(model)
+        a1 = np.ascontiguousarray(a, dtype=float).reshape(1, -1)
+        ad1 = np.ascontiguousarray(ad, dtype=float).reshape(1, -1)
+        if st.direct is None:
+            dk = direct_kinematics(model, a1, ad1)
+            st.direct = {"args": _arrays(model), "q": dk.q[0].copy(), "x": dk.x[0].copy(), "det": float(dk.det[0]),
+                         "buf": [np.zeros((1, model.nq)) for _ in range(3)] + [np.zeros((1, model.nt)) for _ in range(3)]
+                         + [np.zeros(1), np.zeros(1, dtype=np.int64), np.zeros(1), np.zeros(1),
+                            np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64)]}
+            return dk.x[0].copy(), dk.xd[0].copy()
+        d = st.direct
+        b = d["buf"]
+        D.direct_batch(np.zeros(0), a1, ad1, np.zeros_like(a1), d["q"], d["x"], *d["args"], *b)
+        if b[-2][0] != K.OK or b[8][0] * d["det"] < 0:  # the checked route names what is wrong
+            dk = direct_kinematics(model, a1, ad1, q_start=d["q"])
+            if dk.det[0] * d["det"] < 0:
+                from ..errors import SingularityError
+
+                raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
+            d.update(q=dk.q[0].copy(), x=dk.x[0].copy(), det=float(dk.det[0]))
+            return dk.x[0].copy(), dk.xd[0].copy()
+        d["q"] = b[0][0].copy()
+        d["x"] = b[3][0].copy()
+        d["det"] = float(b[8][0])
+        return b[3][0].copy(), b[4][0].copy()
 
 
 def machine_verbs(model: MechanismModel) -> MechanismVerbs:

@@ -32,7 +32,7 @@ from .model import MechanismModel
 
 __all__ = ["TaskMotion", "PeriodicMotion", "RepeatedMotion", "ActuatorMotion", "task_columns", "motion_columns",
            "actuator_columns", "default_motion", "periodic_motion", "repeated_motion", "read_task_motion",
-           "read_actuator_motion", "MAX_MOTION_ROWS"]
+           "read_actuator_motion", "actuator_rates", "MAX_MOTION_ROWS"]
 
 Array = NDArray[np.float64]
 
@@ -234,6 +234,22 @@ def read_task_motion(model: MechanismModel, path: str | Path, max_rows: int | No
     return TaskMotion(t, np.ascontiguousarray(x), np.ascontiguousarray(xd), np.ascontiguousarray(xdd), loads)
 
 
+def actuator_rates(path: str | Path, t: Array, s: Array, sd: Array | None, sdd: Array | None, rate_names: list[str],
+                   sg_window: int = 15, sg_order: int = 5) -> tuple[Array, Array]:
+    """Rates and accelerations of actuator positions ``s (n, na)`` (module docstring): given
+    columns as they are, missing ones by the Savitzky-Golay differentiator (``sg_window`` > 0)
+    or the quintic spline (``sg_window = 0``)."""
+    if sd is None and sdd is not None:
+        raise MotionError(f"{path}: acceleration columns need the rate columns ({', '.join(rate_names)})")
+    if sg_window == 0:
+        return derivatives(path, t, s, sd, sdd, rate_names)
+    if sd is None:
+        return savgol_derivatives(t, s, sg_window, sg_order, str(path))
+    if sdd is None:
+        return sd, savgol_derivatives(t, sd, sg_window, sg_order, str(path))[0]
+    return sd, sdd
+
+
 def read_actuator_motion(model: MechanismModel, path: str | Path, sg_window: int = 15, sg_order: int = 5,
                          max_rows: int | None = MAX_MOTION_ROWS) -> ActuatorMotion:
     """Read an actuator motion CSV for ``model`` (module docstring): missing rates and
@@ -249,14 +265,7 @@ def read_actuator_motion(model: MechanismModel, path: str | Path, sg_window: int
     s = column_group(path, cols, pos)
     if s is None:  # pragma: no cover - required columns
         raise MotionError(f"{path}: no actuator columns")
-    sd, sdd = column_group(path, cols, vel), column_group(path, cols, acc)
-    if sd is None and sdd is not None:
-        raise MotionError(f"{path}: acceleration columns need the rate columns ({', '.join(vel)})")
-    if sg_window == 0:
-        sd, sdd = derivatives(path, t, s, sd, sdd, vel)
-    elif sd is None:
-        sd, sdd = savgol_derivatives(t, s, sg_window, sg_order, str(path))
-    elif sdd is None:
-        sdd = savgol_derivatives(t, sd, sg_window, sg_order, str(path))[0]
+    sd, sdd = actuator_rates(path, t, s, column_group(path, cols, vel), column_group(path, cols, acc), vel, sg_window,
+                             sg_order)
     loads = {nm: np.asarray(cols[nm], dtype=float) for nm in model.named_loads if cols.get(nm) is not None}
     return ActuatorMotion(t, np.ascontiguousarray(s), np.ascontiguousarray(sd), np.ascontiguousarray(sdd), loads)

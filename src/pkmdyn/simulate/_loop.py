@@ -4,11 +4,14 @@ Per cycle ``k`` (instant ``t_k = k T``):
 
 1. **Encoders.** The actuator displacement ``s`` (hip: motor angle [rad]; PDM: limb extension
    [m]) from the start, read as a whole number of counts: ``s_enc = res floor(s / res)``,
-   ``res`` = travel per turn / counts per turn. The true ``s`` is taken to first order in the
-   tracking error about the plant's own reference displacement,
+   ``res`` = travel per turn / counts per turn. With ``exact_encoders`` the true ``s`` is the
+   plant's own: its actuated joints' coordinates at the present pose by its inverse kinematics,
+   ``s = k (a(q) - a(q_0))`` (``k`` the drives' ratios, ``q_0`` the run's first pose); else it
+   is taken to first order in the tracking error about the plant's own reference displacement,
    ``s = s_ref + B_p(q_ref)^T (q - q_ref)`` (``B_p`` the plant's actuator map; the neglected
    second-order term is ``O(|q - q_ref|^2)``, below one count for the errors these loops
-   produce). Rate: backward difference ``(s_enc,k - s_enc,k-1) / T`` through a first-order
+   produce; the machines without single-sample kinematics verbs, the hip and the PDM, take
+   this one). Rate: backward difference ``(s_enc,k - s_enc,k-1) / T`` through a first-order
    low-pass filter (cutoff ``velocity_cutoff_Hz``); acceleration: backward difference of the
    filtered rate through a second low-pass filter (``acceleration_cutoff_Hz``) - the chain of
    the PDM paper's section 7 (position differentiated twice, filtered). A cutoff of 0 means no
@@ -17,9 +20,11 @@ Per cycle ``k`` (instant ``t_k = k T``):
 2. **Pose.** The pose sensor (the hip's attitude heading reference system) reads the pose
    ``delay`` cycles ago plus Gaussian noise of the given standard deviation per coordinate
    (seeded generator); it is recorded, and fed back only with ``pose_from_sensor``. By
-   default the controller's pose comes from the encoders through the controller's model,
-   ``q_s = q_ref + (B(q_ref)^T)^-1 (s_enc - s_ref)`` (forward kinematics to first order about
-   the reference), and its rate is always ``qd_s = (B(q_ref)^T)^-1 sd_enc``.
+   default the controller's pose comes from the encoders through the controller's model: with
+   ``exact_encoders`` by its direct kinematics (:mod:`pkmdyn.multibody.direct`, warm-started
+   from the previous cycle), ``q_s = DK(a_0 + s_enc / k)`` with the rate ``qd_s = (dq/da)
+   sd_enc / k``; else to first order about the reference,
+   ``q_s = q_ref + (B(q_ref)^T)^-1 (s_enc - s_ref)``, ``qd_s = (B(q_ref)^T)^-1 sd_enc``.
 3. **Controller** (:func:`pkmdyn.control.effort`) -> efforts, clipped to the effort limits.
 4. **Plant**: the efforts held over the cycle, ``T / dt`` steps of the integrator
    (:mod:`pkmdyn.simulate._plant`), the load evaluated at every step boundary and middle.
@@ -41,8 +46,8 @@ from numpy.typing import NDArray
 from ..errors import PkmdynError
 from ._plant import Plant, hold_interval, make_work
 
-__all__ = ["LoopSettings", "LoopResult", "LoopState", "DivergenceError", "closed_loop", "run_span", "new_loop_state",
-           "check_timing"]
+__all__ = ["LoopSettings", "LoopResult", "LoopState", "DivergenceError", "ExactEncoders", "closed_loop", "run_span",
+           "new_loop_state", "check_timing"]
 
 Array = NDArray[np.float64]
 
@@ -71,7 +76,9 @@ class LoopSettings:
     ``velocity_cutoff_Hz``, ``acceleration_cutoff_Hz`` encoder filters (0: none);
     ``pose_noise (nq,)`` standard deviation [rad or m]; ``pose_delay_cycles``; ``seed``;
     ``pose_from_sensor``: the controller's pose from the pose sensor (else from the encoders);
-    ``method``: the plant's step (:data:`pkmdyn.simulate.METHODS`; by default a third-order
+    ``exact_encoders``: the encoders read the plant's true actuator coordinates and the
+    controller's pose comes from its direct kinematics (module docstring; else both to first
+    order about the reference); ``method``: the plant's step (:data:`pkmdyn.simulate.METHODS`; by default a third-order
     explicit step away from the friction band and ROS2 in it).
     """
 
@@ -87,6 +94,7 @@ class LoopSettings:
     seed: int
     pose_from_sensor: bool = False
     method: str = "rk3-ros2"
+    exact_encoders: bool = False
 
 
 @dataclass(frozen=True)
@@ -134,8 +142,8 @@ def _alpha(fc: float, T: float) -> float:
 
 
 @numba.njit(cache=True)
-def _sense(kr: int, k: int, j: int, first: bool, q: Array, qd: Array, q_ref: Array, div: Array, s_ref_p: Array,
-           Bt_p: Array, s_ref_c: Array, rate_map: Array, res: Array, T: float, a_v: float, a_a: float,
+def _sense(kr: int, k: int, j: int, first: bool, exact: bool, s_exact: Array, q: Array, qd: Array, q_ref: Array,
+           div: Array, s_ref_p: Array, Bt_p: Array, s_ref_c: Array, rate_map: Array, res: Array, T: float, a_v: float, a_a: float,
            noise: Array, pose_from_sensor: bool,
            s_prev: Array, sd_prev: Array, yq: Array, yqd: Array, ys: Array, ysd: Array, ysdd: Array,
            out_q: Array, out_qd: Array, out_att: Array, out_s: Array, out_qs: Array, out_qds: Array,
@@ -143,7 +151,8 @@ def _sense(kr: int, k: int, j: int, first: bool, q: Array, qd: Array, q_ref: Arr
     """Sensors of a cycle (module docstring, items 1-2); records the true and sensed state.
     ``kr`` is the cycle's row in the reference arrays, ``k`` in the records (and ``noise``),
     ``j`` the record row the delayed pose sensor reads; ``first``: the run's first cycle (the
-    filters start there). Returns the index of a coordinate beyond its divergence limit (or
+    filters start there); with ``exact`` the encoders read ``s_exact`` (the plant's true
+    displacement). Returns the index of a coordinate beyond its divergence limit (or
     not finite), else -1."""
     nq = q.shape[0]
     nu = ys.shape[0]
@@ -154,9 +163,12 @@ def _sense(kr: int, k: int, j: int, first: bool, q: Array, qd: Array, q_ref: Arr
         out_q[k, i] = q[i]
         out_qd[k, i] = qd[i]
     for a in range(nu):
-        s = s_ref_p[kr, a]
-        for i in range(nq):
-            s += Bt_p[kr, a, i] * (q[i] - q_ref[kr, i])
+        if exact:
+            s = s_exact[a]
+        else:
+            s = s_ref_p[kr, a]
+            for i in range(nq):
+                s += Bt_p[kr, a, i] * (q[i] - q_ref[kr, i])
         out_s[k, a] = s
         se = res[a] * np.floor(s / res[a]) if res[a] > 0 else s
         if not first:
@@ -197,8 +209,8 @@ class LoopState:
     """What a closed loop carries from one cycle to the next (mutable; :func:`new_loop_state`):
     the plant's ``q, qd``, the sensed buffers ``y``, the controller's ``memory``, the integrator's
     ``work``, the encoder's previous reading and filtered rate, the noise generator, the pose
-    records the delayed pose sensor still needs (``history``, at most ``delay`` rows) and the
-    cycles done. With it a run can be computed span by span in bounded memory
+    records the delayed pose sensor still needs (``history``, at most ``delay`` rows), the
+    cycles done and, with exact encoders, their :class:`ExactEncoders`. With it a run can be computed span by span in bounded memory
     (:func:`pkmdyn.simulate.track_spans`); the spans join exactly."""
 
     q: Array
@@ -211,23 +223,60 @@ class LoopState:
     rng: Any
     history: Array
     done: int = 0
+    exact: Any = None
 
 
-def new_loop_state(plant: Plant, controller: Any, ref: Any, ctrl_joint: Any, settings: LoopSettings) -> LoopState:
+class ExactEncoders:
+    """The encoders of a plant read through its kinematics (module docstring, items 1-2): the
+    plant's actuated joint coordinates at its pose (``verbs.actuator_coordinates_one``) as the
+    motors' displacement from the run's first pose, and the controller's pose from the reading
+    by its model's direct kinematics (``verbs.direct_one``). ``ratio (nu,)`` the drives' ratios
+    (1 for a joint without one)."""
+
+    def __init__(self, plant: Plant, ctrl_model: Any, q0: Array) -> None:
+        from ..errors import ParameterError
+
+        verbs = plant.verbs
+        if not (hasattr(verbs, "actuator_coordinates_one") and hasattr(verbs, "direct_one")):
+            raise ParameterError("[sensors] exact_encoders: this machine's verbs have no single-sample inverse and "
+                                 "direct kinematics; set exact_encoders = 0")
+        self.verbs, self.plant_model, self.ctrl_model = verbs, plant.model, ctrl_model
+        self.ratio = np.asarray(verbs.drive_ratios(plant.model), dtype=float)
+        zero = np.zeros_like(q0)
+        self.a0_plant = verbs.actuator_coordinates_one(plant.model, q0, zero)
+        self.a0_ctrl = verbs.actuator_coordinates_one(ctrl_model, q0, zero)
+
+    def read(self, q: Array, qd: Array, out: Array) -> None:
+        """The plant's motor displacement at its pose ``q`` into ``out (nu,)``."""
+        out[:] = self.ratio * (self.verbs.actuator_coordinates_one(self.plant_model, q, qd) - self.a0_plant)
+
+    def pose(self, s: Array, sd: Array) -> tuple[Array, Array]:
+        """The controller's pose and rate from the motors' reading ``s, sd``."""
+        return self.verbs.direct_one(self.ctrl_model, self.a0_ctrl + s / self.ratio, sd / self.ratio)
+
+
+def new_loop_state(plant: Plant, controller: Any, ref: Any, ctrl_joint: Any, settings: LoopSettings,
+                   ctrl_model: Any = None) -> LoopState:
     """The state at the start of a run: the plant on the reference's initial state, the filters
-    on the reference's rate and acceleration (the loop starts in steady state on it)."""
+    on the reference's rate and acceleration (the loop starts in steady state on it); with
+    ``settings.exact_encoders`` the encoders through the kinematics of the plant and of the
+    controller's model ``ctrl_model`` (:class:`ExactEncoders`)."""
     from ..control._laws import Sensed, new_memory
 
     nq, nu = plant.nq, plant.nu
     y = Sensed(np.empty(nq), np.empty(nq), np.empty(nu), ctrl_joint.sd[0].astype(float).copy(),
                ctrl_joint.sdd[0].astype(float).copy())
-    return LoopState(ref.q[0].astype(float).copy(), ref.qd[0].astype(float).copy(), y, new_memory(controller, nu),
+    q0 = ref.q[0].astype(float).copy()
+    exact = ExactEncoders(plant, plant.model if ctrl_model is None else ctrl_model, q0) \
+        if settings.exact_encoders else None
+    return LoopState(q0, ref.qd[0].astype(float).copy(), y, new_memory(controller, nu),
                      make_work(plant, settings.method), np.zeros(nu), y.sd.copy(),
-                     np.random.default_rng(settings.seed), np.empty((0, nq)))
+                     np.random.default_rng(settings.seed), np.empty((0, nq)), exact=exact)
 
 
 def closed_loop(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_joint: Any, rate_map: Array,
-                settings: LoopSettings, loads: Array | None = None, progress: bool = False) -> LoopResult:
+                settings: LoopSettings, loads: Array | None = None, progress: bool = False,
+                ctrl_model: Any = None) -> LoopResult:
     """Run the loop over the reference's ``K`` cycles from the reference's initial state.
 
     ``controller`` from :func:`pkmdyn.control.make_controller`; ``ref`` its
@@ -236,9 +285,10 @@ def closed_loop(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_
     encoders); ``rate_map (K + 1, nq, nu)`` the controller's ``(B^T)^-1`` along the reference;
     ``loads (2 K steps + 1,)`` the load [N] at every integration step boundary and middle,
     ``j dt / 2`` (None: the reference load, linear within a cycle; zeros for a machine without
-    load; :func:`pkmdyn.simulate.track` passes the motion's own load).
+    load; :func:`pkmdyn.simulate.track` passes the motion's own load); ``ctrl_model`` the
+    controller's model (exact encoders; default the plant's).
     """
-    state = new_loop_state(plant, controller, ref, ctrl_joint, settings)
+    state = new_loop_state(plant, controller, ref, ctrl_joint, settings, ctrl_model)
     bar = None
     if progress and ref.cycles >= 2000:
         from tqdm import tqdm
@@ -296,6 +346,8 @@ def run_span(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_joi
     from ..control._laws import effort
 
     q, qd, y, memory, work = state.q, state.qd, state.y, state.memory, state.work
+    exact = state.exact
+    s_exact = np.zeros(nu)
     u = np.empty(nu)
     q_ref = np.ascontiguousarray(ref.q)
     args = (q, qd, q_ref, div, np.ascontiguousarray(plant_joint.s), np.ascontiguousarray(plant_joint.Bt),
@@ -305,13 +357,28 @@ def run_span(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_joi
     done = state.done
     for i in range(n):
         kr, k, g = first + i, pre + i, done + i
-        bad = _sense(kr, k, k - delay if g >= delay else 0, g == 0, *args)
+        if exact is not None:
+            try:
+                exact.read(q, qd, s_exact)
+            except PkmdynError as exc:
+                raise DivergenceError(f"run diverged at t = {ref.t[kr]:.4f} s: {exc}") from None
+        bad = _sense(kr, k, k - delay if g >= delay else 0, g == 0, exact is not None, s_exact, *args)
         if bad >= 0:
             e = q[bad] - q_ref[kr, bad]
             raise DivergenceError(
                 f"run diverged at t = {ref.t[kr]:.4f} s: tracking error of coordinate {bad + 1} is "
                 f"{e:.3g}, beyond its divergence limit {div[bad]:g}", bad, float(e), float(div[bad]),
                 float(ref.t[kr]))
+        if exact is not None:  # the controller's pose by the direct kinematics of the reading
+            try:
+                xs, xds = exact.pose(y.s, y.sd)
+            except PkmdynError as exc:
+                raise DivergenceError(f"run diverged at t = {ref.t[kr]:.4f} s: {exc}") from None
+            if not from_sensor:
+                y.q[:] = xs
+                out_qs[k] = xs
+            y.qd[:] = xds
+            out_qds[k] = xds
         _actuate(k, effort(controller, ref, kr, y, memory), lim, u, out_u, sat)
         try:
             hold_interval(plant, q, qd, u, loads[2 * kr * steps:2 * (kr + 1) * steps + 1], dt, work)

@@ -67,7 +67,8 @@ def track(verbs: Any, model: Any, plant_model: Any, motion: Any, duration: float
         else:
             tt = np.arange(2 * ref.cycles * steps + 1) * (0.5 * settings.cycle_s / steps)
             loads = np.asarray(motion(tt)[3], dtype=float)
-    res = closed_loop(plant, ctrl, ref, plant_joint, joint, rate_map, settings, loads=loads, progress=progress)
+    res = closed_loop(plant, ctrl, ref, plant_joint, joint, rate_map, settings, loads=loads, progress=progress,
+                      ctrl_model=model)
     return Tracking(ref, joint, res, ctrl, plant.fast)
 
 
@@ -136,7 +137,7 @@ def track_spans(verbs: Any, model: Any, plant_model: Any, motion: Any, duration:
                     tt = (2 * w0 * steps + np.arange(2 * ref.cycles * steps + 1)) * (0.5 * T / steps)
                     loads = np.asarray(motion(tt)[3], dtype=float)
             if state is None:
-                state = new_loop_state(plant, ctrl, ref, joint, settings)
+                state = new_loop_state(plant, ctrl, ref, joint, settings, model)
             res = run_span(plant, ctrl, ref, plant_joint, joint, rate_map, settings, state, o, n, loads=loads, bar=bar,
                            last=k1 == K)
             s_ctrl, s_plant = joint.s[o + n].copy(), plant_joint.s[o + n].copy()
