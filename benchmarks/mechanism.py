@@ -13,6 +13,13 @@ with ``--json`` nothing else is printed.
 
 The PDM likewise (``pdm4/description.py``; every one of its 14 bodies' pose, velocity and
 acceleration on the Eq. 84 motion).
+
+Direct kinematics (``pkmdyn.multibody.direct``) of the Stewart platform, the hip, the Delta and
+the PDM: batched along a motion and one sample at a time as a controller calls it
+(``direct_one``, warm-started), with the round trips through the inverse kinematics; and the
+Stewart platform's closed loop with exact encoders (``pkmdyn.simulate.track``, computed torque,
+the pose from the encoders by the direct kinematics) beside MuJoCo simulating the exported
+platform (``mj_step`` at 1 ms, actuator PD plus pkmdyn's feedforward) for the same seconds.
 """
 
 from __future__ import annotations
@@ -210,6 +217,91 @@ def _dynamics(out: dict, n: int, repeat: int, m, hip, mh, pm) -> None:
     out["stewart_fd_over_mj_forward"] = out["stewart_fd_over_mujoco"]
 
 
+def _direct(out: dict, n: int, repeat: int, machines: dict) -> None:
+    """Direct kinematics: batched and single-sample timings, round trips (module docstring)."""
+    from pkmdyn.multibody.direct import direct_kinematics
+    from pkmdyn.multibody.machine import machine_verbs
+
+    for name, mech in machines.items():
+        amp = np.where(mech.task_kind == 1, 0.05, 0.03 * mech.length_scale)
+        t, x, xd, xdd = _motion(reference_task(mech), amp, n, seed=4)
+        kin = solve_kinematics(mech, x, xd, xdd, t)
+        q0 = kin.q[0]
+        sec = best_time(lambda: direct_kinematics(mech, kin.act_q, kin.act_qd, kin.act_qdd, t, q_start=q0), repeat)
+        out[f"{name}_dk_batched_us_per_sample"] = sec / n * 1e6
+        dk = direct_kinematics(mech, kin.act_q, kin.act_qd, kin.act_qdd, t, q_start=q0)
+        sc = np.where(mech.task_kind == 0, 1.0 / mech.length_scale, 1.0)
+        back = solve_kinematics(mech, dk.x, dk.xd, dk.xdd, t, q_start=q0)
+        act_sc = np.where(mech.coord_motion[mech.act_coord] >= 3, 1.0 / mech.length_scale, 1.0)
+        out[f"{name}_dk_direct_of_inverse_max_err"] = float(np.abs((dk.x - x) * sc).max())
+        out[f"{name}_dk_inverse_of_direct_max_err"] = float(np.abs((back.act_q - kin.act_q) * act_sc).max())
+        V = machine_verbs(mech)
+        m1 = min(n, 2000)
+        V.direct_one(mech, kin.act_q[0], kin.act_qd[0])
+
+        def single() -> None:
+            for i in range(m1):
+                V.direct_one(mech, kin.act_q[i], kin.act_qd[i])
+
+        sec = best_time(single, repeat)
+        out[f"{name}_dk_single_us"] = sec / m1 * 1e6
+
+
+def _stewart_loops(out: dict, m, seconds: float = 2.0) -> None:
+    """The Stewart platform's closed loop with exact encoders beside MuJoCo's simulation of it."""
+    import time
+
+    from pkmdyn.cli.mechanism import described_control_settings
+    from pkmdyn.control import gains, hermite_motion, loop_settings
+    from pkmdyn.multibody import default_motion
+    from pkmdyn.multibody.machine import machine_verbs
+    from pkmdyn.simulate import track
+
+    settings = described_control_settings(m)
+    settings["sensors"]["pose_feedback_from_sensor"] = 0  # the pose from the encoders, by the direct kinematics
+    ls = loop_settings(settings)
+    mo = default_motion(m, cycles=max(1.0, seconds / float(m.motion.period)))
+    fn = hermite_motion(mo.t, mo.x, mo.xd, mo.xdd, None)
+    V = machine_verbs(m)
+    g = gains(settings, "computed-torque", m.nt)
+    track(V, m, m, fn, 0.1, "computed-torque", g, ls, False)
+    t0 = time.perf_counter()
+    tr = track(V, m, m, fn, seconds, "computed-torque", g, ls, False)
+    wall = time.perf_counter() - t0
+    out["stewart_exact_encoder_loop_realtime_factor"] = seconds / wall
+    ref = fn(tr.result.t)[0]
+    out["stewart_exact_encoder_loop_max_error_mm"] = float(np.abs(tr.result.q - ref)[:, :3].max() * 1e3)
+    try:
+        import mujoco
+
+        from pkmdyn.multibody.mjcf import mechanism_mjcf, mujoco_order, mujoco_qpos
+    except ImportError:  # pragma: no cover - MuJoCo is optional
+        out["mujoco_stewart_loop_realtime_factor"] = None
+        return
+    mm = mujoco.MjModel.from_xml_string(mechanism_mjcf(m))
+    md = mujoco.MjData(mm)
+    T = mm.opt.timestep
+    K = int(round(seconds / T))
+    tt = np.arange(K) * T
+    x, xd, xdd, _ = fn(tt)
+    kin = solve_kinematics(m, x, xd, xdd, tt)
+    ff = V.inverse_dynamics(m, x, xd, xdd)
+    o = mujoco_order(m, mm)
+    md.qpos[:] = mujoco_qpos(m, kin.q[0], mm)
+    md.qvel[o] = kin.qd[0]
+    act = o[m.act_coord]
+    s_ref = kin.act_q - m.coord_offset[m.act_coord]
+    kp, kd = 2e4, 4e2  # [N/m, N s/m] on the legs
+    t0 = time.perf_counter()
+    for k in range(K):
+        md.ctrl[:] = ff[k] + kp * (s_ref[k] - md.qpos[act]) + kd * (kin.act_qd[k] - md.qvel[act])
+        mujoco.mj_step(mm, md)
+    wall = time.perf_counter() - t0
+    out["mujoco_stewart_loop_realtime_factor"] = seconds / wall
+    out["stewart_exact_encoder_loop_over_mujoco"] = out["stewart_exact_encoder_loop_realtime_factor"] / out[
+        "mujoco_stewart_loop_realtime_factor"]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", action="store_true", help="print only the JSON object")
@@ -307,6 +399,8 @@ def main() -> None:
         diffs += [_rel(getattr(kin, f)[:, k], getattr(ref.bodies[b], f)) for f in ("R", "p", "v", "a", "w", "wd")]
     out["pdm_max_rel_diff"] = max(diffs)
     _dynamics(out, n, args.repeat, m, hip, mh, pm)
+    _direct(out, n, args.repeat, {"stewart": m, "hip": mh, "delta": md, "pdm": mp})
+    _stewart_loops(out, m)
     out["targets"] = {"stewart_kinematics_us_per_sample<=20": out["stewart_kinematics_us_per_sample"] <= 20.0,
                       "hip_max_rel_diff<=1e-9": out["hip_max_rel_diff"] <= 1e-9,
                       "hip_generic_within_10x_of_closed_form": out["hip_generic_over_closed_form"] <= 10.0,
@@ -319,7 +413,14 @@ def main() -> None:
                       "hip_fd_generic_within_2x_of_hand_built": out["hip_fd_generic_over_hand_built"] <= 2.0,
                       "stewart_fd_over_mj_forward<=0.5": out["stewart_fd_over_mj_forward"] <= 0.5,
                       "stewart_id_reactions_us_per_sample<=10": out["stewart_id_reactions_us_per_sample"] <= 10.0,
-                      "explicit_vs_newton_max_rel_diff<=1e-11": out["explicit_vs_newton_max_rel_diff"] <= 1e-11}
+                      "explicit_vs_newton_max_rel_diff<=1e-11": out["explicit_vs_newton_max_rel_diff"] <= 1e-11,
+                      "stewart_dk_single_us<=5": out["stewart_dk_single_us"] <= 5.0,
+                      "stewart_dk_batched_us_per_sample<=3": out["stewart_dk_batched_us_per_sample"] <= 3.0,
+                      "dk_round_trips": all(out[f"{k}_dk_direct_of_inverse_max_err"] <= 1e-10
+                                            and out[f"{k}_dk_inverse_of_direct_max_err"] <= 1e-12
+                                            for k in ("stewart", "hip", "delta", "pdm")),
+                      "stewart_exact_encoder_loop_at_least_mujoco":
+                          out.get("stewart_exact_encoder_loop_over_mujoco", 0.0) >= 1.0}
     print(json.dumps(out, indent=None if args.json else 2))
 
 
