@@ -416,3 +416,110 @@ def test_an_unreachable_actuator_motion_writes_nothing(capsys, tmp_path):
     code, _, err = _run(capsys, "run", "--machine", "stewart", "--actuator-motion", act, "--out", tmp_path / "o")
     assert code == 2 and "sample 40" in err and "actuator '" in err and err.count("\n") == 1, err
     assert not (tmp_path / "o").exists()
+
+
+# ----------------------------------------------------------------------------- planar 3-RPR against its polynomial
+def _rpr3_description(par, pose):
+    """A planar 3-RPR (tests/oracles/rpr3.py) as a description in the x-y plane: per leg a
+    cylinder turning about the base point A_i, a rod sliding in it (the actuated prismatic
+    joint, its coordinate the leg length) and a revolute joint at the platform point C_i; the
+    task the platform's position and its turn about z, the oracle's pose."""
+    x0, y0, phi0 = pose
+    c, s = np.cos(phi0), np.sin(phi0)
+    C = np.array([[x0 + c * b[0] - s * b[1], y0 + s * b[0] + c * b[1]] for b in par.b])
+    bodies = [{"name": "platform", "mass_kg": 1.0, "com_m": [x0, y0, 0.0],
+               "inertia_kgm2": [0.01, 0.01, 0.02, 0.0, 0.0, 0.0]}]
+    joints = []
+    for i in range(3):
+        A = par.A[i]
+        d = C[i] - A
+        rho = float(np.hypot(*d))
+        u = d / rho
+        bodies += [{"name": f"cylinder_{i + 1}", "mass_kg": 0.5, "com_m": [*(A + 0.25 * d), 0.0],
+                    "inertia_kgm2": [0.001, 0.001, 0.001, 0.0, 0.0, 0.0]},
+                   {"name": f"rod_{i + 1}", "mass_kg": 0.3, "com_m": [*(A + 0.75 * d), 0.0],
+                    "inertia_kgm2": [0.001, 0.001, 0.001, 0.0, 0.0, 0.0]}]
+        joints += [{"name": f"RA_{i + 1}", "type": "revolute", "parent": "ground", "child": f"cylinder_{i + 1}",
+                    "point_m": [*A, 0.0], "axis": [0.0, 0.0, 1.0]},
+                   {"name": f"P_{i + 1}", "type": "prismatic", "parent": f"cylinder_{i + 1}", "child": f"rod_{i + 1}",
+                    "point_m": [*A, 0.0], "axis": [*u, 0.0], "actuated": True, "position_at_reference_m": rho},
+                   {"name": f"RC_{i + 1}", "type": "revolute", "parent": f"rod_{i + 1}", "child": "platform",
+                    "point_m": [*C[i], 0.0], "axis": [0.0, 0.0, 1.0]}]
+    return {"mechanism": {"name": "rpr3", "gravity_m_s2": [0.0, 0.0, -9.80665]}, "bodies": bodies, "joints": joints,
+            "task": {"body": "platform", "point_m": [x0, y0, 0.0], "position": ["x", "y"], "euler_sequence": "ZYX",
+                     "orientation": [1]}}
+
+
+def _rpr3_case(geometry=None):
+    from oracles import rpr3
+
+    par = rpr3.default_rpr3() if geometry is None else geometry
+    m = load_mechanism(_rpr3_description(par, rpr3.DEFAULT_POSE))
+    order = [m.actuator_names.index(f"P_{i + 1}") for i in range(3)]
+    return rpr3, par, m, order
+
+
+def test_rpr3_pose_and_rates_from_the_leg_lengths():
+    rpr3, par, m, order = _rpr3_case()
+    t = np.linspace(0.0, 1.0, 150)
+    amp = np.array([0.03, 0.02, 0.2])
+    w = np.array([3.0, 4.0, 2.5])
+    pose = rpr3.DEFAULT_POSE + amp * np.sin(w * t[:, None])
+    pose_d = amp * w * np.cos(w * t[:, None])
+    ik = rpr3.inverse_kinematics(par, pose)
+    s, sd = np.empty((len(t), 3)), np.empty((len(t), 3))
+    s[:, order] = ik["rho"]
+    sd[:, order] = np.einsum("nij,nj->ni", ik["J"], pose_d)
+    dk = direct_kinematics(m, s, sd, None, t)
+    assert np.abs(dk.x - pose).max() <= 1e-10
+    assert np.abs(dk.xd - pose_d).max() <= 1e-8 * np.abs(pose_d).max()
+
+
+@pytest.mark.parametrize("rho", [None, (0.758, 0.214, 0.775), "random"])
+def test_rpr3_assembly_modes_are_the_real_roots_of_its_polynomial(rho):
+    """Every real assembly mode of the planar 3-RPR (the oracle's sextic of Gosselin, Sefrioui
+    and Richard, every real root refined) is found, each once, and nothing else."""
+    rpr3, par, m, order = _rpr3_case()
+    cases = []
+    if rho is None:
+        cases.append(rpr3.inverse_kinematics(par, rpr3.DEFAULT_POSE[None])["rho"][0])
+    elif rho == "random":
+        rng = np.random.default_rng(8)
+        for _ in range(2):
+            p = rpr3.DEFAULT_POSE + rng.uniform([-0.1, -0.1, -1.0], [0.1, 0.1, 1.0])
+            cases.append(rpr3.inverse_kinematics(par, p[None])["rho"][0])
+    else:
+        cases.append(np.array(rho))
+    for r in cases:
+        want = rpr3.forward_kinematics(par, r)
+        assert len(want) >= 2
+        s = np.empty(3)
+        s[order] = r
+        got = assembly_modes(m, s, starts=1500, seed=3)
+        assert len(got.modes) == len(want), (r, [a.x for a in got.modes], want)
+        for w_ in want:
+            d = [max(np.abs(a.x[:2] - w_[:2]).max(), abs((a.x[2] - w_[2] + np.pi) % (2 * np.pi) - np.pi))
+                 for a in got.modes]
+            assert min(d) <= 1e-9, (w_, d)
+
+
+def test_rpr3_with_six_real_assembly_modes():
+    """A geometry with six real modes (the constructed case of tests/oracles/test_oracles.py,
+    confirmed there by an independent scan): all six found, described at one of them."""
+    from oracles import rpr3
+
+    par = rpr3.RPR3(A=[[0.0, 0.0], [0.7, 0.05], [0.2, 0.55]], b=[[-0.25, -0.12], [0.2, -0.1], [0.05, 0.25]])
+    rho = np.array([0.55, 0.288, 0.611])
+    want = rpr3.forward_kinematics(par, rho)
+    assert len(want) == 6
+    m = load_mechanism(_rpr3_description(par, want[0]))
+    order = [m.actuator_names.index(f"P_{i + 1}") for i in range(3)]
+    s = np.empty(3)
+    s[order] = rho
+    got = assembly_modes(m, s, starts=3000, seed=4)
+    assert len(got.modes) == 6
+    # the description's reference pose is want[0]: its task angle is measured from there
+    for w_ in want:
+        d = [max(np.abs(a.x[:2] - w_[:2]).max(), abs((a.x[2] + want[0][2] - w_[2] + np.pi) % (2 * np.pi) - np.pi))
+             for a in got.modes]
+        assert min(d) <= 1e-9, (w_, d)

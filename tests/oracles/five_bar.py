@@ -1,5 +1,6 @@
 """Planar five-bar linkage (2 DOF, base revolutes driven by geared motors): closed-form
-kinematics, joint efforts and motor torques for a prescribed motion of the end point.
+kinematics (inverse, and direct with both end-point solutions), joint efforts and motor
+torques for a prescribed motion of the end point.
 
 References: L.-W. Tsai, *Robot Analysis*, Wiley 1999 (planar five-bar, ch. 2 and 8);
 J.-P. Merlet, *Parallel Robots*, 2nd ed., Springer 2006 (ch. 3 and 9); H. Goldstein,

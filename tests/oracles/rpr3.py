@@ -3,14 +3,14 @@ the direct kinematics.
 
 References: C. M. Gosselin, J. Sefrioui & M. J. Richard, "Solutions polynomiales au
 problème de la cinématique directe des manipulateurs parallèles plans à trois degrés de
-liberté", Mech. Mach. Theory 27(2) (1992) 107-119; C. M. Gosselin, J. Sefrioui &
-M. J. Richard, "On the direct kinematics of general spherical three-degree-of-freedom
-parallel manipulators with coplanar platform" and the planar case in J. Mech. Des. (1994);
-J.-P. Merlet, *Parallel Robots*, 2nd ed., Springer 2006, ch. 4.3 (planar 3-RPR: a
-univariate polynomial of degree 6, hence at most 6 real assembly modes; the third platform
-joint traces a tricircular sextic when the third leg is cut); K. H. Hunt, "Structural
-kinematics of in-parallel-actuated robot-arms", J. Mech. Trans. Autom. Des. 105 (1983)
-705-712 (at most 6 assembly modes).
+liberté", Mech. Mach. Theory 27(2) (1992) 107-119 (elimination of the position, a polynomial
+of degree 6 in ``tan(phi/2)``); C. M. Gosselin & J.-P. Merlet, "The direct kinematics of
+planar parallel manipulators: special architectures and number of solutions", Mech. Mach.
+Theory 29(8) (1994) 1083-1097; J.-P. Merlet, *Parallel Robots*, 2nd ed., Springer 2006,
+ch. 4 (direct kinematics of the planar 3-RPR: at most 6 real assembly modes; with one leg cut
+the third platform joint traces a tricircular sextic); K. H. Hunt, "Structural kinematics of
+in-parallel-actuated robot-arms", J. Mech. Trans. Autom. Des. 105 (1983) 705-712.
+(The spherical counterpart is Gosselin, Sefrioui & Richard, J. Mech. Des. 116 (1994).)
 
 Conventions
 -----------
@@ -26,7 +26,7 @@ Conventions
   ``cross(a, b) = a_x b_y - a_y b_x``.
 
 Direct kinematics (elimination of ``x``, ``y``; Gosselin et al. 1992, Merlet 2006)
------------------------------------------------------------------------------------
+----------------------------------------------------------------------------------
 With ``v_i(phi) = R(phi) b_i - A_i`` the loop equations are
 
     E_i:  |p|^2 + 2 p . v_i + |v_i|^2 - rho_i^2 = 0,        i = 0, 1, 2.

@@ -635,7 +635,7 @@ def _pose_distance(a, b, size):
 
 
 def _coupler_scan(par, rho, n=40000):
-    """Every assembly mode by a second, geometric route (Merlet 2006, sec. 4.3): cut leg k;
+    """Every assembly mode by a second, geometric route (Merlet 2006, ch. 4): cut leg k;
     legs i, j and the platform side b_i b_j form a four-bar. For the angle t of leg i
     (the crank), C_i = A_i + rho_i e(t) and C_j is one of the two intersections (branch s) of
     the circles |C_j - A_j| = rho_j and |C_j - C_i| = |b_j - b_i|; that fixes phi and C_k.
@@ -696,7 +696,8 @@ def test_rpr3_inverse_kinematics_and_jacobian():
     for k in range(3):
         d = np.zeros(3)
         d[k] = eps
-        col = (rpr3.inverse_kinematics(par, pose + d)["rho"] - rpr3.inverse_kinematics(par, pose - d)["rho"]) / (2 * eps)
+        rho_of = lambda q: rpr3.inverse_kinematics(par, q)["rho"]
+        col = (rho_of(pose + d) - rho_of(pose - d)) / (2 * eps)
         assert_close(out["J"][:, :, k], col, 1e-8, what=f"J col {k}")
 
 
@@ -742,6 +743,7 @@ def test_rpr3_fk_of_ik_contains_the_pose():
         sols = rpr3.forward_kinematics(par, rh)
         counts.append(len(sols))
         assert len(sols) % 2 == 0 and 2 <= len(sols) <= 6
+        assert np.all(sols[:, 2] > -np.pi) and np.all(sols[:, 2] <= np.pi)
         assert min(_pose_distance(p, q, 1.0) for q in sols) < 1e-9, (p, sols)
         assert_close(rpr3.inverse_kinematics(par, sols)["rho"], np.broadcast_to(rh, sols.shape), 1e-10)
     assert max(counts) >= 4   # more than the two obvious modes occur in this box
@@ -753,7 +755,10 @@ def test_rpr3_singular_linear_system_fallback():
     for p in ([0.35, 0.3, 0.0], [0.5, 0.1, 0.0]):
         rho = rpr3.inverse_kinematics(par, p)["rho"][0]
         sols = rpr3.forward_kinematics(par, rho)
-        assert min(_pose_distance(np.asarray(p), q, 1.0) for q in sols) < 1e-9
+        # the pose and its mirror image in y = 0 share phi = 0 (a double root of F)
+        for q in (np.asarray(p), np.asarray(p) * [1.0, -1.0, 1.0]):
+            assert min(_pose_distance(q, s, 1.0) for s in sols) < 1e-9, (q, sols)
+        assert_close(rpr3.inverse_kinematics(par, sols)["rho"], np.broadcast_to(rho, sols.shape), 1e-10)
         scan = _coupler_scan(par, rho)
         assert len(scan) == len(sols)
 
