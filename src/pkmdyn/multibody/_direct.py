@@ -30,8 +30,7 @@ import numpy as np
 from numba import njit
 
 from ._kernels import (LOOP_OPEN, NOT_CONVERGED, OK, ROWS_DRIFT, ROWS_JACOBIAN, ROWS_VALUES, SINGULAR, _wrap,
-                       forward_accelerations,
-                       forward_positions, forward_velocities, rows)
+                       forward_accelerations, forward_positions, forward_velocities, largest_scaled, rows)
 
 __all__ = ["CROSSED", "EULER_SINGULAR_RATES", "direct_batch", "direct_starts"]
 
@@ -173,13 +172,7 @@ def direct_sample(s, sd, sdd, q, chord, tree, loops, task, sol, work, info):  # 
         info[1] = big
         done = big <= tol or (big <= 1e3 * tol and big > 0.5 * prev)
         if done:
-            big_all = 0.0
-            wa = 0
-            for rr in range(nr):
-                sc = abs(val[rr]) * row_scale[rr]
-                if sc > big_all:
-                    big_all = sc
-                    wa = rr
+            big_all, wa = largest_scaled(val, row_scale, nr)
             if big_all > check_tol:
                 info[0] = wa
                 info[1] = big_all
@@ -363,3 +356,13 @@ def direct_starts(s, starts, tree, loops, task, sol, q_out, res_out, det_out, ra
         ratio_out[i] = info[4]
         for c in range(nq):
             q_out[i, c] = q[c]
+
+
+def _refresh_cache() -> None:
+    """The kernels above link and inline functions of :mod:`._kernels` (:mod:`._cache`)."""
+    from . import _cache, _kernels
+
+    _cache.refresh((direct_sample, direct_batch, direct_starts), (_kernels,))
+
+
+_refresh_cache()

@@ -1014,6 +1014,19 @@ def block_lu_solve_columns(M, piv, blocks, prow, pcol, B, X, work):
             X[_nn(pcol[j]), t] = work[j, t]
 
 
+@njit(cache=True, inline="always")
+def largest_scaled(res, row_scale, n):
+    """The largest scaled residual ``|res[r]| row_scale[r]`` of the first ``n`` rows and its row."""
+    big = 0.0
+    at = 0
+    for rr in range(n):
+        sc = abs(res[rr]) * row_scale[rr]
+        if sc > big:
+            big = sc
+            at = rr
+    return big, at
+
+
 @njit(cache=True)
 def _residuals(xs, val, nr, task_kind, res):
     """Residuals ``res`` of the rows: loop rows as they are, task rows less the task pose
@@ -1166,13 +1179,7 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
                 for i in range(ni):
                     if abs(ires[i]) > big_sel:
                         big_sel = abs(ires[i])
-                big_all = 0.0
-                wa = 0
-                for rr in range(nrow):
-                    sc = abs(res[rr]) * row_scale[rr]
-                    if sc > big_all:
-                        big_all = sc
-                        wa = rr
+                big_all, wa = largest_scaled(res, row_scale, nrow)
                 info[0] = wr
                 info[1] = big_sel if big_sel > big_all else big_all
                 # converged: at the tolerance, or stalled at the rounding floor (no halving) near it
