@@ -3,6 +3,8 @@ the body, joint or key; and the leg generator, units and frames of good ones."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -214,3 +216,31 @@ def test_adding_a_joint_type_is_adding_a_table_entry(monkeypatch):
     pin = m.joint_index("D")
     assert np.abs(kin.joint_point[:, pin, 1:]).max() < 1e-12  # the slot's point moves along x only
     assert np.ptp(kin.joint_point[:, pin, 0]) > 0.01
+
+
+@pytest.mark.parametrize("edit, where", [
+    (lambda d: d["bodies"][0].__setitem__("mass_kg", 1e300), "[bodies] platform mass_kg: 1e+300"),
+    (lambda d: d["legs"][0]["joints"][0].__setitem__("point_m", [1e300, 0.0, 0.0]),
+     "[legs] #1 joints U point_m[0]: 1e+300"),
+    (lambda d: d["mechanism"].__setitem__("gravity_m_s2", [0.0, 0.0, -1e9]), "[mechanism] gravity_m_s2[2]"),
+    (lambda d: d["default_motion"]["amplitude"].__setitem__("x_m", 1e9), "[default_motion] amplitude x_m"),
+    (lambda d: d["default_motion"].__setitem__("period_s", 1e30), "[default_motion] period_s"),
+    (lambda d: d["legs"][0]["joints"][0].__setitem__("axis", [1e300, 0.0, 0.0]), "axis[0]"),
+])
+def test_numbers_beyond_their_plausibility_limit_are_refused_by_key(edit, where):
+    """A mass, a point, a gravity, a motion amplitude or period near 1e300 (or merely absurd) is
+    refused before any work, naming the table, the entry and the key, and the limit to raise."""
+    d = ex.builtin_dict("stewart")
+    edit(d)
+    with pytest.raises(ParameterError, match=re.escape(where) + ".*plausibility limit max_"):
+        load_mechanism(d)
+
+
+def test_a_plausibility_limit_is_raised_in_the_description_or_by_the_caller():
+    d = ex.builtin_dict("stewart")
+    d["bodies"][0]["mass_kg"] = 2e6
+    with pytest.raises(ParameterError, match="max_mass_kg"):
+        load_mechanism(d)
+    assert load_mechanism(d, limits={"max_mass_kg": 1e7}).mass.max() == 2e6
+    d["limits"] = {"max_mass_kg": 1e7}
+    assert load_mechanism(d).mass.max() == 2e6

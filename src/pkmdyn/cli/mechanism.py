@@ -26,14 +26,15 @@ def machines() -> None:
         click.echo(name)
 
 
-def _load(machine: str):
+def _load(machine: str, limits: dict | None = None):
     """The compiled mechanism of ``--machine`` (a hand-built machine through the description its
-    folder makes) and its registry entry (``None`` for a described one)."""
+    folder makes) and its registry entry (``None`` for a described one); ``limits`` (``--limit``)
+    over the description's own for the plausibility of its numbers."""
     from ..machines.registry import resolve
     from ..multibody import load_mechanism
 
     entry, path = resolve(machine)
-    return load_mechanism(path if entry is None else entry.description()), entry
+    return load_mechanism(path if entry is None else entry.description(), limits), entry
 
 
 def _check_differentiator(sg_window: int, sg_order: int) -> None:
@@ -136,7 +137,7 @@ def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_w
     limits = parse_limit_options(limit_items, LIMIT_KEYS)
     if minimum_norm_reactions and unique_reactions:
         raise click.UsageError("--minimum-norm-reactions and --unique-reactions contradict each other")
-    model, entry = _load(machine)
+    model, entry = _load(machine, limits)
     lim = effective_limits(model, limits)
     window = None
     if motion_path is not None or actuator_path is not None:

@@ -36,6 +36,7 @@ __all__ = [
 ]
 
 
-def load_mechanism(source: str | Path | dict[str, Any]) -> MechanismModel:
-    """Read, validate and compile a description (a TOML path or a dict)."""
-    return compile_model(load_description(source))
+def load_mechanism(source: str | Path | dict[str, Any], limits: dict[str, Any] | None = None) -> MechanismModel:
+    """Read, validate and compile a description (a TOML path or a dict); ``limits`` lay over its
+    ``[limits]`` for the plausibility of its numbers (:func:`load_description`)."""
+    return compile_model(load_description(source, limits))

@@ -28,7 +28,7 @@ from ..errors import ParameterError
 from ..params_util import Section, _rule, read_toml
 from .joint_types import JOINT_TYPES, joint_type
 
-__all__ = ["Description", "BodySpec", "JointSpec", "TaskSpec", "LoadSpec", "MotionSpec", "ActuatorSpec",
+__all__ = ["MAGNITUDES", "Description", "BodySpec", "JointSpec", "TaskSpec", "LoadSpec", "MotionSpec", "ActuatorSpec",
            "load_description", "GROUND", "inertia_matrix", "LIMIT_KEYS", "RESERVED_PARTS"]
 
 Array = NDArray[np.float64]
@@ -201,6 +201,39 @@ class _Limits(Section):
     max_joint_acceleration_m_s2: float = Field(default=1000.0, gt=0)
     max_joint_speed_rad_s: float = Field(default=100.0, gt=0)
     max_joint_acceleration_rad_s2: float = Field(default=1e4, gt=0)
+    # magnitudes of the description's own numbers (:data:`MAGNITUDES`)
+    max_length_m: float = Field(default=1e3, gt=0)
+    max_mass_kg: float = Field(default=1e6, gt=0)
+    max_inertia_kgm2: float = Field(default=1e9, gt=0)
+    max_gravity_m_s2: float = Field(default=1e3, gt=0)
+    max_force_N: float = Field(default=1e9, gt=0)
+    max_torque_Nm: float = Field(default=1e9, gt=0)
+    max_viscous_SI: float = Field(default=1e9, gt=0)
+    max_modulus_Pa: float = Field(default=1e13, gt=0)
+    max_angle_rad: float = Field(default=1e4, gt=0)
+    max_time_s: float = Field(default=1e6, gt=0)
+    max_friction_coefficient: float = Field(default=10.0, gt=0)
+    max_factor: float = Field(default=1e6, gt=0)
+
+
+#: the plausibility limits of a description's numbers by the unit of their key: a number whose
+#: key ends with one of the suffixes may not exceed the limit in magnitude (``[limits]``; checked
+#: in this order, so that ``viscous_N_s_m`` is a viscous coefficient and not a length). Every
+#: other number (an axis component, a gear ratio, a count) is bounded by ``max_factor``.
+MAGNITUDES: tuple[tuple[str, tuple[str, ...], float], ...] = (
+    ("max_viscous_SI", ("_N_s_m", "_Nm_s_rad"), 1.0),
+    ("max_gravity_m_s2", ("_m_s2",), 1.0),
+    ("max_inertia_kgm2", ("_kgm2",), 1.0),
+    ("max_torque_Nm", ("_Nm",), 1.0),
+    ("max_force_N", ("_N",), 1.0),
+    ("max_modulus_Pa", ("_Pa",), 1.0),
+    ("max_mass_kg", ("_kg",), 1.0),
+    ("max_angle_rad", ("_rad",), 1.0),
+    ("max_angle_rad", ("_deg",), 180.0 / np.pi),
+    ("max_time_s", ("_s",), 1.0),
+    ("max_length_m", ("_m",), 1.0),
+    ("max_friction_coefficient", ("coefficient",), 1.0),
+)
 
 
 #: the plausibility limits of motions and their types (``[limits]``, ``--limit KEY=VALUE``)
@@ -645,8 +678,49 @@ def _task(t: _Task, where: str, bodies: dict[str, BodySpec]) -> TaskSpec:
                     orientation=tuple(int(k) - 1 for k in t.orientation), names=names, units=units)
 
 
-def load_description(source: str | Path | dict[str, Any]) -> Description:
-    """Read (a path) or take (a dict) a description, validate it and expand its legs.
+def _bound(key: str, limits: dict[str, Any]) -> tuple[str, float, str]:
+    """The limit key, the bound and its unit of a description number under ``key``."""
+    for name, suffixes, scale in MAGNITUDES:
+        for suf in suffixes:
+            if key.endswith(suf):
+                return name, float(limits[name]) * scale, suf
+    return "max_factor", float(limits["max_factor"]), ""
+
+
+def _check_magnitudes(raw: dict[str, Any], label: str, limits: dict[str, Any]) -> None:
+    """Every number of the description ``raw`` within the plausibility limit of its key's unit
+    (:data:`MAGNITUDES`); the error names the table, the entry (by its name, else its number)
+    and the key: ``[legs] #1 joints U point_m[0]: 1e+300 is beyond ...``."""
+
+    def walk(v: Any, where: str, key: str) -> None:
+        if isinstance(v, dict):
+            for k, x in v.items():
+                if not where and k == "limits":
+                    continue  # the limits themselves
+                w = f"{where} {k}" if where else f"[{k}]"
+                if isinstance(x, dict):
+                    walk(x, w, "")
+                elif isinstance(x, list) and any(isinstance(e, dict) for e in x):
+                    for i, e in enumerate(x):
+                        nm = e.get("name") if isinstance(e, dict) else None
+                        walk(e, f"{w} {nm}" if isinstance(nm, str) else f"{w} #{i + 1}", "")
+                else:
+                    walk(x, where, k)
+        elif isinstance(v, list):
+            for i, e in enumerate(v):
+                walk(e, where, f"{key}[{i}]")
+        elif isinstance(v, (int, float)) and not isinstance(v, bool):
+            name, bound, _ = _bound(key.split("[")[0], limits)
+            if not abs(v) <= bound:
+                raise ParameterError(f"{label}: {where} {key}: {v:g} is beyond the plausibility limit {name} = "
+                                     f"{limits[name]:g} (raise it in the description's [limits])")
+
+    walk(raw, "", "")
+
+
+def load_description(source: str | Path | dict[str, Any], limits: dict[str, Any] | None = None) -> Description:
+    """Read (a path) or take (a dict) a description, validate it and expand its legs;
+    ``limits`` (``--limit``) lay over its ``[limits]`` for the plausibility of its numbers.
 
     Raises :class:`~pkmdyn.errors.ParameterError` (one line naming the file, table, body,
     joint or key) on: unknown or missing keys, wrong types, duplicate names, a joint naming a
@@ -660,6 +734,7 @@ def load_description(source: str | Path | dict[str, Any]) -> Description:
         path = str(Path(source).absolute())
         raw, label = read_toml(source), str(source)
     data = _validate(raw, label)
+    _check_magnitudes(raw, label, {**data.limits.model_dump(), **(limits or {})})
     body_specs: dict[str, BodySpec] = {}
     expanded = _expand_legs(data, label)
     expanded_bodies, expanded_joints = expanded.bodies, expanded.joints
