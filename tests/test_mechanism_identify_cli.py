@@ -182,3 +182,24 @@ def test_an_actuator_log_without_positions_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "P_1_pos_m" in err and err.count("\n") == 1
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("value, pattern", [("0.0", "is zero: nothing to identify"),
+                                            ("1e15", "column 'P_1_effort_N': 1e+15 is beyond the plausibility limit")])
+def test_identify_refuses_implausible_or_empty_efforts(tmp_path, capsys, value, pattern):
+    """As the hip's identification does: all-zero efforts, or one beyond its plausibility limit."""
+    true, prior = _files(tmp_path)
+    m = load_mechanism(true)
+    t, x, _, _ = _motion_file(m, tmp_path / "m.csv", seed=3, n=40)
+    log = tmp_path / "log.csv"
+    names = [f"{a}_{u}" for a, u in zip(m.task_names, m.task_units)]
+    with log.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["t_s", *names, *(f"P_{k}_effort_N" for k in range(1, 7))])
+        for i in range(len(t)):
+            w.writerow([repr(float(v)) for v in (t[i], *x[i])] + [value if k == 0 or value == "0.0" else "1.0"
+                                                                  for k in range(6)])
+    assert main(["identify", "--machine", str(prior), "--measured", str(log), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert pattern in err and err.count("\n") == 1, err
+    assert not (tmp_path / "o").exists()

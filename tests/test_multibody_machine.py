@@ -169,7 +169,12 @@ def test_described_control_refuses_bad_settings_by_key(tmp_path, capsys):
     from pkmdyn.cli import main
 
     for text, word in (("[pd]\nkp_N_m = [1.0]\n", "kp_N_m"), ("[pd]\nkp_si = [1.0]\n", "kp_si"),
-                       ("[mismatch]\nmass_factor = 2.0\n", "mismatch")):  # the plant is the model itself
+                       ("[mismatch]\nmass_factor = 2.0\n", "mismatch"),  # the plant is the model itself
+                       # the limits of the papers' machines' loops hold here too: cycles, steps, filters
+                       ("[timing]\ncontrol_cycle_s = 1e-8\nintegration_step_s = 1e-8\n", "control cycles"),
+                       ("[timing]\ncontrol_cycle_s = 0.002\nintegration_step_s = 1e-6\n", "steps per control cycle"),
+                       ("[sensors]\nvelocity_cutoff_Hz = 400.0\n", "Nyquist"),
+                       ("[sensors]\nexact_encoders = 2\n", "exact_encoders")):
         bad = tmp_path / "bad.toml"
         bad.write_text(text)
         code = main(["control", "--machine", "stewart", "--controller", "pd", "--gains", str(bad),

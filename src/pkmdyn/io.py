@@ -513,12 +513,14 @@ _BLOCK = 65_536
 
 
 def read_csv_columns(
-    path: str | Path, required: Sequence[str], optional: Sequence[str] = (), max_rows: int | None = DEFAULT_MAX_SAMPLES
+    path: str | Path, required: Sequence[str], optional: Sequence[str] = (), max_rows: int | None = DEFAULT_MAX_SAMPLES,
+    beyond: str = "the sample limit (raise it with [limits] max_samples in the parameter file or --limit max_samples=N)"
 ) -> dict[str, Array]:
     """Read a numeric CSV with a header row into ``{column: (n,) array}``.
 
     Every required column must be present, unknown columns are errors (they are most often
-    a misspelt unit suffix), and every cell must parse as a finite number. Errors name the
+    a misspelt unit suffix), and every cell must parse as a finite number; ``beyond`` says what
+    the row limit is and how to live with it. Errors name the
     file, the column and the 1-based data row. The text must be UTF-8 (a UTF-8 byte-order
     mark is allowed); more than ``max_rows`` data rows is a :class:`LimitError` raised before
     they are stored. The file is read as a stream, 8 bytes per stored value.
@@ -541,7 +543,7 @@ def read_csv_columns(
         check_text_encoding(path, head, MotionError)
         reader = csv.reader(fh)
         try:
-            return _parse_csv(path, reader, required, optional, max_rows)
+            return _parse_csv(path, reader, required, optional, max_rows, beyond)
         except UnicodeDecodeError as exc:
             raise MotionError(_decode_message(path, exc, reader.line_num + 1)) from None
         except csv.Error as exc:
@@ -551,7 +553,8 @@ def read_csv_columns(
 
 
 def _parse_csv(
-    path: Path, reader: Iterator[list[str]], required: Sequence[str], optional: Sequence[str], max_rows: int | None
+    path: Path, reader: Iterator[list[str]], required: Sequence[str], optional: Sequence[str], max_rows: int | None,
+    beyond: str
 ) -> dict[str, Array]:
     rows = (row for row in reader if any(cell.strip() for cell in row))
     first = next(rows, None)
@@ -579,10 +582,7 @@ def _parse_csv(
     r = 0
     for r, row in enumerate(rows, start=1):
         if max_rows is not None and r > max_rows:
-            raise LimitError(
-                f"{path}: more than {max_rows} data rows, the sample limit (raise it with [limits] "
-                "max_samples in the parameter file or --limit max_samples=N)"
-            )
+            raise LimitError(f"{path}: more than {max_rows} data rows, {beyond}")
         if len(row) != ncol:
             raise MotionError(f"{path}: row {r} has {len(row)} fields, the header has {ncol}")
         for c, cell in enumerate(row):

@@ -29,8 +29,8 @@ from ._groups import PATH_IN, announce_compiles, hip, list_files, pdm
 from ._groups import FiniteFloat
 from ._hip_options import paper_option
 
-__all__ = ["hip_closed_loop", "run_control", "machine_setup", "effort_label", "hand_built_controllers", "MAX_CYCLES",
-           "MAX_CONTROL_CYCLES"]
+__all__ = ["hip_closed_loop", "run_control", "machine_setup", "effort_label", "hand_built_controllers", "check_loop",
+           "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
 
 #: most cycles of the built-in motion (``--cycles``)
 MAX_CYCLES = 1000.0
@@ -127,8 +127,6 @@ def _prepare(machine: str, controller: str, params: Path | None, plant_params: P
              cycles: float, gains_path: Path | None) -> tuple[_Setup, dict[str, Any], Any, Any]:
     """Every check of a run, then its setup, settings, loop settings and gains."""
     from ..control import gains, load_settings, loop_settings
-    from ..simulate import check_timing
-
     from ..machines.registry import control_adapter
 
     allowed = control_adapter(machine).CONTROLLERS
@@ -138,20 +136,33 @@ def _prepare(machine: str, controller: str, params: Path | None, plant_params: P
         raise MotionError(f"--cycles: {cycles:g} must be > 0 and at most {MAX_CYCLES:g}")
     settings = load_settings(machine, gains_path)
     ls = loop_settings(settings)
+    check_loop(ls, None, gains_path)
+    setup = machine_setup(machine, params, plant_params, motion, cycles, settings)
+    check_loop(ls, setup.duration, gains_path)
+    _check_encoder(setup, ls, settings, gains_path)
+    n = len(setup.verbs.ACTUATORS) if controller == "pid" else len(setup.verbs.COORDINATES)
+    return setup, settings, ls, gains(settings, controller, n)
+
+
+def check_loop(ls: Any, duration: float | None, gains_path: Path | None) -> None:
+    """The limits every closed loop keeps, whatever the machine: the cycle a whole multiple of
+    the step, at most :data:`MAX_STEPS_PER_CYCLE` steps per cycle, the encoder filters below
+    the cycle's Nyquist frequency and (with ``duration`` [s]) at most
+    :data:`MAX_CONTROL_CYCLES` cycles and 50 times as many steps."""
+    from ..simulate import check_timing
+
     steps = check_timing(ls.cycle_s, ls.step_s)
     _check_filters(ls, gains_path)
     if steps > MAX_STEPS_PER_CYCLE:
         raise ParameterError(f"[timing] integration_step_s = {ls.step_s:g} s: {steps:g} steps per control cycle, above "
                              f"the limit {MAX_STEPS_PER_CYCLE}")
-    setup = machine_setup(machine, params, plant_params, motion, cycles, settings)
-    n_cycles = setup.duration / ls.cycle_s
+    if duration is None:
+        return
+    n_cycles = duration / ls.cycle_s
     if not np.isfinite(n_cycles) or n_cycles > MAX_CONTROL_CYCLES or n_cycles * steps > 50 * MAX_CONTROL_CYCLES:
-        raise MotionError(f"motion: {setup.duration:g} s is {n_cycles:g} control cycles of {ls.cycle_s:g} s "
+        raise MotionError(f"motion: {duration:g} s is {n_cycles:g} control cycles of {ls.cycle_s:g} s "
                           f"({n_cycles * steps:g} integration steps), above the limit {MAX_CONTROL_CYCLES:,} cycles "
                           f"({50 * MAX_CONTROL_CYCLES:,} steps)")
-    _check_encoder(setup, ls, settings, gains_path)
-    n = len(setup.verbs.ACTUATORS) if controller == "pid" else len(setup.verbs.COORDINATES)
-    return setup, settings, ls, gains(settings, controller, n)
 
 
 def _warn_unstable(setup: _Setup, controller: str) -> None:

@@ -276,8 +276,7 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     from ..multibody import default_motion, read_task_motion, solve_kinematics
     from ..multibody.kinematics import limit_message, limited_joints
     from ..multibody.machine import machine_verbs
-    from ..simulate import check_timing
-    from .control import _check_encoder, _command, _Setup, _stream
+    from .control import _check_encoder, _command, _Setup, _stream, check_loop
 
     entry, path = resolve(machine)
     if entry is not None:
@@ -322,7 +321,7 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
 
         ls = replace(ls, encoder_resolution=np.where(model.drive_encoder > 0, model.drive_encoder,
                                                      float(ls.encoder_resolution)))
-    check_timing(ls.cycle_s, ls.step_s)
+    check_loop(ls, duration_s, gains_path)
     verbs = machine_verbs(model)
     load, column = _control_load(model, motion, what, verbs.ACTUATORS)
     fn = hermite_motion(motion.t, motion.x, motion.xd, motion.xdd, load)

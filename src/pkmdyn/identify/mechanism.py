@@ -66,7 +66,8 @@ def read_measured(model: MechanismModel, path: Path, sg_window: int = 15, sg_ord
     own = ("t_s", *pos, *vel, *acc, *apos, *avel, *aacc, *eff, *model.named_loads)
     run_cols = [c for c in results_column_names(model) if c not in own]
     optional = (*pos, *vel, *acc, *apos, *avel, *aacc, *model.named_loads, *run_cols)
-    cols = read_csv_columns(path, ("t_s", *eff), optional, max_rows=MAX_MOTION_ROWS)
+    cols = read_csv_columns(path, ("t_s", *eff), optional, max_rows=MAX_MOTION_ROWS,
+                            beyond="the most a measured file holds (it is read whole); identify from a part of it")
     t = cols["t_s"]
     require_increasing(path, t)
     x = column_group(path, cols, pos)
@@ -85,8 +86,26 @@ def read_measured(model: MechanismModel, path: Path, sg_window: int = 15, sg_ord
         dk = direct_kinematics(model, np.ascontiguousarray(s), np.ascontiguousarray(sd), np.ascontiguousarray(sdd), t)
         x, xd, xdd = dk.x, dk.xd, dk.xdd
     u = np.column_stack([cols[c] for c in eff])
+    _check_efforts(model, path, eff, u)
     named = {nm: cols[nm] for nm in model.named_loads if nm in cols}
     return t, np.ascontiguousarray(x), np.ascontiguousarray(xd), np.ascontiguousarray(xdd), u, named
+
+
+def _check_efforts(model: MechanismModel, path: Path, names: list[str], u: Array) -> None:
+    """The measured efforts within the description's plausibility limits (``max_force_N``,
+    ``max_torque_Nm``) and not all zero (nothing to identify from); errors name the row and
+    column."""
+    from ..errors import MotionError
+
+    for k, c in enumerate(names):
+        key = "max_torque_Nm" if c.endswith("_Nm") else "max_force_N"
+        lim = float(model.limits.get(key, np.inf))
+        big = np.flatnonzero(~(np.abs(u[:, k]) <= lim))
+        if big.size:
+            raise MotionError(f"{path}: row {big[0] + 1}, column {c!r}: {u[big[0], k]:g} is beyond the plausibility "
+                              f"limit {key} = {lim:g} (the description's [limits])")
+    if not np.any(u != 0.0):
+        raise MotionError(f"{path}: every effort column ({', '.join(names)}) is zero: nothing to identify from")
 
 
 def _consistency(reg: Regressor) -> tuple[Array, Array, Array]:

@@ -40,6 +40,9 @@ Array = NDArray[np.float64]
 #: bodies' motion, are held in memory; a run computes and writes them chunk by chunk); longer
 #: runs repeat the default motion (``pkmdyn run --cycles``)
 MAX_MOTION_ROWS = 200_000
+#: what the row limit of a motion file is (:func:`pkmdyn.io.read_csv_columns`)
+_BEYOND = ("the most a motion file of a described mechanism holds (it is read whole); a longer run repeats the "
+           "default motion (pkmdyn run --cycles)")
 
 
 @dataclass(frozen=True)
@@ -223,7 +226,7 @@ def read_task_motion(model: MechanismModel, path: str | Path, max_rows: int | No
     """Read a motion CSV for ``model`` (see the module docstring); errors name the file, row and column."""
     path = Path(path)
     pos, vel, acc = task_columns(model)
-    cols = read_csv_columns(path, ("t_s", *pos), (*vel, *acc, *model.named_loads), max_rows=max_rows)
+    cols = read_csv_columns(path, ("t_s", *pos), (*vel, *acc, *model.named_loads), max_rows=max_rows, beyond=_BEYOND)
     t = cols["t_s"]
     require_increasing(path, t)
     x = column_group(path, cols, pos)
@@ -258,7 +261,7 @@ def read_actuator_motion(model: MechanismModel, path: str | Path, sg_window: int
     column."""
     path = Path(path)
     pos, vel, acc = actuator_columns(model)
-    cols = read_csv_columns(path, ("t_s", *pos), (*vel, *acc, *model.named_loads), max_rows=max_rows)
+    cols = read_csv_columns(path, ("t_s", *pos), (*vel, *acc, *model.named_loads), max_rows=max_rows, beyond=_BEYOND)
     t = cols["t_s"]
     require_rows(path, t)
     require_increasing(path, t)
