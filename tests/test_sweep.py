@@ -561,3 +561,92 @@ def test_base_parameters_from_the_space_file_and_from_params(tmp_path):
     assert tomllib.loads((tmp_path / "b" / "best_params.toml").read_text(encoding="utf-8"))["geometry"]["screw_lead_m"] == 0.02
     with pytest.raises(Exception, match="different base description"):
         run_sweep(sweep_adapter("hip"), plain, tmp_path / "b", workers=0, plots=False)
+
+
+# ----------------------------------------------------------------------------- the output rule
+def test_a_symlinked_out_is_refused_and_nothing_written_through_it(hip_sweep, tmp_path, capsys):
+    tmp, _ = hip_sweep
+    target = tmp_path / "elsewhere"
+    target.mkdir()
+    link = tmp_path / "link"
+    link.symlink_to(target, target_is_directory=True)
+    code = main(["sweep", "--machine", "hip", "--space", str(tmp / "space.toml"), "--workers", "0",
+                 "--out", str(link)])
+    err = capsys.readouterr().err
+    assert code == 2 and "symbolic link" in err and err.count("\n") == 1
+    assert list(target.iterdir()) == []
+
+
+def test_the_space_file_inside_out_is_refused(tmp_path, capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    space = _write(out, HIP_SPACE)
+    code = main(["sweep", "--machine", "hip", "--space", str(space), "--workers", "0", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and "an input of this run" in err
+    assert sorted(p.name for p in out.iterdir()) == ["space.toml"]
+
+
+def _copy_sweep(src: Path, dst: Path) -> None:
+    import shutil
+
+    shutil.copytree(src, dst, copy_function=shutil.copy2)  # keeps the modification times
+
+
+def test_a_foreign_file_where_the_sweep_writes_is_never_replaced(hip_sweep, tmp_path, capsys):
+    """A best_params.toml (or a plot) that this sweep did not write, or that changed since: a
+    rerun refuses with one line and leaves it as it is."""
+    tmp, _ = hip_sweep
+    out = tmp_path / "out"
+    _copy_sweep(tmp / "out", out)
+    mine = out / "best_params.toml"
+    mine.write_text("# my own notes\n")
+    code = main(["sweep", "--machine", "hip", "--space", str(tmp / "space.toml"), "--workers", "0",
+                 "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and "best_params.toml was not written by this sweep" in err and err.count("\n") == 1
+    assert mine.read_text() == "# my own notes\n"
+
+
+def test_a_sweep_without_feasible_design_never_deletes_a_best_design_it_did_not_write(tmp_path, capsys):
+    """No design feasible: no best_params.toml. One the user put there afterwards is not this
+    sweep's, and a rerun refuses to replace (or delete) it."""
+    space = _write(tmp_path, HIP_SPACE.replace("designs = 32", "designs = 8").replace(
+        "max_spherical_angle_deg = { max = 29.0 }", "max_spherical_angle_deg = { max = 0.001 }"))
+    out = tmp_path / "out"
+    report = run_sweep(sweep_adapter("hip"), space, out, workers=0, plots=False, progress=False)
+    assert report.best_design_id is None and not (out / "best_params.toml").exists()
+    mine = out / "best_params.toml"
+    mine.write_text("# the design I chose by hand\n")
+    code = main(["sweep", "--machine", "hip", "--space", str(space), "--workers", "0", "--no-plots", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and "best_params.toml was not written by this sweep" in err
+    assert mine.read_text() == "# the design I chose by hand\n"
+
+
+def test_two_runs_into_one_folder_with_other_batch_sizes_resume_to_one_row_per_design(hip_sweep, tmp_path):
+    """Two runs at once with other batch sizes may both evaluate a design (other part files);
+    the rows agree, and the folder resumes to the same results with each design once."""
+    tmp, _ = hip_sweep
+    out = tmp_path / "out"
+    _copy_sweep(tmp / "out", out)
+    parts = sorted((out / "parts").glob("part-*.parquet"))
+    both = pa.concat_tables([pq.read_table(p) for p in parts[:2]])
+    pq.write_table(both.slice(3, 8), out / "parts" / "part-000000003.parquet")  # designs 3..10 again
+    run_sweep(sweep_adapter("hip"), tmp / "space.toml", out, workers=0, plots=False, progress=False)
+    ids = pq.read_table(out / "designs.parquet").column("design_id").to_numpy()
+    assert ids.tolist() == list(range(32))
+    assert pq.read_table(out / "designs.parquet").equals(pq.read_table(tmp / "out" / "designs.parquet"))
+
+
+@pytest.mark.parametrize("address, pattern", [("http://head:8786", "unknown scheme 'http'"),
+                                              ("head", "expected [scheme://]host:port"),
+                                              ("tcp://head", "expected [scheme://]host:port"),
+                                              ("tcp://head:99999", "port 99999")])
+def test_a_malformed_scheduler_address_is_one_line(hip_sweep, tmp_path, capsys, address, pattern):
+    tmp, _ = hip_sweep
+    code = main(["sweep", "--machine", "hip", "--space", str(tmp / "space.toml"), "--scheduler", address,
+                 "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert code == 2 and pattern in err and err.count("\n") == 1
+    assert not (tmp_path / "o").exists()

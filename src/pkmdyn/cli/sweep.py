@@ -7,11 +7,29 @@ and exit status 2. The output folder fills batch by batch; a rerun resumes it.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import click
 
 from ._groups import PATH_IN, cli
+
+#: a Dask scheduler address: an optional scheme of Dask's comms, a host, a port
+_ADDRESS = re.compile(r"^(?:(?P<scheme>[A-Za-z][A-Za-z0-9+.-]*)://)?(?P<host>\[[0-9A-Fa-f:.]+\]|[^\s:/\[\]]+):(?P<port>\d{1,5})/?$")
+_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx")
+
+
+def check_scheduler(address: str) -> None:
+    """A scheduler address of the form ``[scheme://]host:port`` (``scheme`` one of Dask's comms:
+    tcp, tls, ws, wss, ucx; ``port`` 1 to 65535), else one line naming what is wrong."""
+    m = _ADDRESS.match(address)
+    if m is None:
+        raise click.UsageError(f"--scheduler {address!r}: expected [scheme://]host:port, e.g. tcp://head:8786")
+    if m["scheme"] is not None and m["scheme"].lower() not in _SCHEMES:
+        raise click.UsageError(f"--scheduler {address!r}: unknown scheme {m['scheme']!r} (one of {', '.join(_SCHEMES)})")
+    if not 1 <= int(m["port"]) <= 65535:
+        raise click.UsageError(f"--scheduler {address!r}: port {m['port']} is not from 1 to 65535")
+
 
 _MACHINE_HELP = ("Machine to sweep: hip, pdm, a described built-in machine (see pkmdyn machines) or a mechanism "
                  "description FILE.toml.")
@@ -43,6 +61,8 @@ def sweep(machine: str, space_path: Path, params_path: Path | None, workers: int
 
     if workers is not None and scheduler is not None:
         raise click.UsageError("--workers and --scheduler: give one of them (a scheduler has its own workers)")
+    if scheduler is not None:
+        check_scheduler(scheduler)
     max_designs = parse_limit_options(limits, {"max_designs": int}).get("max_designs")
     adapter = sweep_adapter(machine)
     try:

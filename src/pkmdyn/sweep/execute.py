@@ -223,8 +223,9 @@ def _client(workers: int, scheduler: str | None) -> tuple[Any, Any]:
     if scheduler is not None:
         try:
             return Client(scheduler, timeout="30s"), None
-        except (OSError, TimeoutError) as exc:
-            raise PkmdynError(f"--scheduler {scheduler}: cannot connect ({exc})") from None
+        except (OSError, TimeoutError, ValueError, TypeError) as exc:
+            reason = " ".join(str(exc).split()) or type(exc).__name__
+            raise PkmdynError(f"--scheduler {scheduler}: cannot connect ({reason})") from None
     # Dask's own log lines stay quiet (a worker that dies and is replaced is expected; the
     # sweep reports what it cannot recover from itself, in one line)
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,

@@ -104,13 +104,49 @@ def prepare_sweep(adapter: Any, space_path: str | Path, params: str | Path | Non
     return PreparedSweep(adapter.NAME, space, X, job, json.loads(json.dumps(record)))
 
 
-def _open_out(out: Path, record: dict[str, Any]) -> None:
-    """Create ``out`` or check that it holds a sweep of the same space (to resume)."""
+#: the result files a sweep writes beside its parts (replaced by a rerun)
+OUTPUTS = ("designs.parquet", "pareto.parquet", "best_params.toml", "summary.json", "pareto_front.png",
+           "metric_vs_parameter.png", "scatter_matrix.png")
+
+
+def _stamp(path: Path) -> list[int]:
+    st = path.stat()
+    return [int(st.st_size), int(st.st_mtime_ns)]
+
+
+def _written(out: Path) -> dict[str, list[int]]:
+    """The result files the last run wrote into ``out``, with their size and modification time
+    (``summary.json`` ``written``); empty where none is recorded."""
+    try:
+        doc = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+        written = doc.get("written", {})
+        return {str(k): list(v) for k, v in written.items()} if isinstance(written, dict) else {}
+    except (OSError, ValueError, UnicodeDecodeError, AttributeError, TypeError):
+        return {}
+
+
+def _open_out(out: Path, record: dict[str, Any], inputs: Mapping[str, Any] = ()) -> None:
+    """Create ``out`` or check that it holds a sweep of the same space (to resume), under the
+    output rule (``docs/file_formats.md``): not a link or anything but a folder, no input of
+    the run inside it, and no file where the sweep writes its results that an earlier run did
+    not write or that was changed since (it would be replaced)."""
+    import os
+    import stat as st_
+
+    if out.is_symlink():
+        raise PkmdynError(f"--out {out}: is a symbolic link, not a folder pkmdyn wrote; refusing to write through it")
     if out.exists() and not out.is_dir():
         raise PkmdynError(f"--out {out}: exists and is a file, not a folder")
+    real = Path(os.path.realpath(out))
+    for label, given in dict(inputs).items():
+        if given is None:
+            continue
+        ip = Path(os.path.realpath(given))
+        if ip == real or real in ip.parents:
+            raise PkmdynError(f"--out {out}: holds {label} ({given}), an input of this run; write to another --out")
     rec = out / RECORD
     if out.is_dir() and any(out.iterdir()):
-        if not rec.is_file():
+        if not rec.is_file() or rec.is_symlink():
             raise PkmdynError(f"--out {out}: folder is not empty and holds no pkmdyn sweep; refusing to write into it")
         try:
             earlier = json.loads(rec.read_text(encoding="utf-8"))
@@ -120,6 +156,17 @@ def _open_out(out: Path, record: dict[str, Any]) -> None:
             diff = next((k for k in record if earlier.get(k) != record[k]), "?")
             raise PkmdynError(f"--out {out}: holds a sweep of a different {diff.replace('_', ' ')}; use a new --out "
                               "(a rerun resumes only the same machine, space and parameters)")
+        written = _written(out)
+        for name in OUTPUTS:
+            f = out / name
+            if not os.path.lexists(f):
+                continue
+            lst = f.lstat()
+            if not st_.S_ISREG(lst.st_mode):
+                raise PkmdynError(f"--out {out}: {name} is not a file pkmdyn wrote; refusing to replace it")
+            if name != "summary.json" and written.get(name) != _stamp(f):
+                raise PkmdynError(f"--out {out}: {name} was not written by this sweep or was changed since; refusing "
+                                  "to replace it (move it away, or use a new --out)")
         return
     out.mkdir(parents=True, exist_ok=True)
     with atomic_file(rec, notify=None) as tmp:
@@ -156,12 +203,37 @@ def _collect(parts: Path, schema: Any, n: int, later: bool = False) -> Any:
     table = table.take(pc.sort_indices(table, sort_keys=[("design_id", "ascending")]))
     if later:
         table = table.filter(pc.less(table.column("design_id"), n))
+    table = _unique_rows(table, parts)
     ids = table.column("design_id").to_numpy()
     if ids.shape[0] != n or not np.array_equal(ids, np.arange(n)):
         dup = ids[1:][ids[1:] == ids[:-1]]
         raise PkmdynError(f"{parts}: the part files hold {ids.shape[0]} rows for {n} designs"
                           + (f" (design {int(dup[0])} twice)" if dup.size else "") + "; use a new --out")
     return table
+
+
+def _unique_rows(table: Any, parts: Path) -> Any:
+    """``table`` (sorted by design id) with each design once: two runs into one folder at the
+    same time (other batch sizes, so other part files) may both evaluate a design, and a
+    design's row depends on the design alone, so the copies agree and one is kept; copies that
+    differ are an error naming the design."""
+    import pyarrow as pa
+
+    ids = table.column("design_id").to_numpy()
+    if ids.shape[0] < 2:
+        return table
+    dup = np.flatnonzero(ids[1:] == ids[:-1]) + 1
+    if not dup.size:
+        return table
+    for k in dup:
+        a, b = table.slice(int(k) - 1, 1).to_pylist()[0], table.slice(int(k), 1).to_pylist()[0]
+        same = all(a[c] == b[c] or (isinstance(a[c], float) and isinstance(b[c], float) and a[c] != a[c] and
+                                    b[c] != b[c]) for c in a)
+        if not same:
+            raise PkmdynError(f"{parts}: design {int(ids[k])} has two different rows; use a new --out")
+    keep = np.ones(ids.shape[0], dtype=bool)
+    keep[dup] = False
+    return table.filter(pa.array(keep))
 
 
 def _write_table(path: Path, table: Any) -> Path:
@@ -195,7 +267,7 @@ def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: in
     prep = prepare_sweep(adapter, space_path, params, max_designs)
     out = Path(out)
     fresh = not out.exists()
-    _open_out(out, prep.record)
+    _open_out(out, prep.record, {"--space": space_path, "--params": params})
     parts = out / PARTS_DIR
     done = finished_ids(parts)
     n = prep.X.shape[0]
@@ -283,7 +355,9 @@ def _results(prep: PreparedSweep, X: Any, rounds: int, out: Path, plots: bool, s
                                   "objectives": values}
     else:
         summary["best_design"] = None
-        (out / "best_params.toml").unlink(missing_ok=True)
+        earlier = out / "best_params.toml"  # the best design of an earlier run of this sweep (checked by _open_out)
+        if earlier.is_file() and not earlier.is_symlink() and _written(out).get(earlier.name) == _stamp(earlier):
+            earlier.unlink()
     summary["execution"] = {"mode": stats.mode, "workers": stats.workers, "batches": stats.batches,
                             "cluster_start_s": stats.cluster_start_s, "evaluate_s": stats.evaluate_s,
                             "driver_cpu_s": stats.driver_cpu_s, "worker_cpu_s": stats.worker_cpu_s}
@@ -293,6 +367,7 @@ def _results(prep: PreparedSweep, X: Any, rounds: int, out: Path, plots: bool, s
         files.update(_plots.sweep_plots(out, table, prep.space, on_front))
     files["summary"] = out / "summary.json"
     summary["files"] = sorted(p.name for p in files.values())
+    summary["written"] = {p.name: _stamp(p) for p in files.values() if p.name != "summary.json"}
     with atomic_file(files["summary"], notify=None) as tmp:
         write_json(tmp, summary)
     return files, counts, int(on_front.size), best
