@@ -228,8 +228,20 @@ def _client(workers: int, scheduler: str | None) -> tuple[Any, Any]:
             raise PkmdynError(f"--scheduler {scheduler}: cannot connect ({reason})") from None
     # Dask's own log lines stay quiet (a worker that dies and is replaced is expected; the
     # sweep reports what it cannot recover from itself, in one line)
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                           silence_logs=logging.CRITICAL)
+    # the worker processes start with SIGINT ignored (inherited; Python then installs no
+    # KeyboardInterrupt handler in them): a Ctrl-C at the terminal reaches the whole process
+    # group, and this process alone stops the sweep, with one line, and closes the cluster
+    import signal
+    import threading
+
+    main = threading.current_thread() is threading.main_thread()
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+    try:
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=logging.CRITICAL)
+    finally:
+        if main:
+            signal.signal(signal.SIGINT, old)
     return Client(cluster), cluster
 
 
