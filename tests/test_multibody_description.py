@@ -221,11 +221,13 @@ def test_adding_a_joint_type_is_adding_a_table_entry(monkeypatch):
 @pytest.mark.parametrize("edit, where", [
     (lambda d: d["bodies"][0].__setitem__("mass_kg", 1e300), "[bodies] platform mass_kg: 1e+300"),
     (lambda d: d["legs"][0]["joints"][0].__setitem__("point_m", [1e300, 0.0, 0.0]),
-     "[legs] #1 joints U point_m[0]: 1e+300"),
+     "[legs][0] joints U point_m[0]: 1e+300"),
     (lambda d: d["mechanism"].__setitem__("gravity_m_s2", [0.0, 0.0, -1e9]), "[mechanism] gravity_m_s2[2]"),
     (lambda d: d["default_motion"]["amplitude"].__setitem__("x_m", 1e9), "[default_motion] amplitude x_m"),
     (lambda d: d["default_motion"].__setitem__("period_s", 1e30), "[default_motion] period_s"),
-    (lambda d: d["legs"][0]["joints"][0].__setitem__("axis", [1e300, 0.0, 0.0]), "axis[0]"),
+    (lambda d: d["legs"][0]["actuators"].__setitem__(0, {"joint": "P", "gear_ratio": 1e9}) if d["legs"][0].get(
+        "actuators") else d["legs"][0].__setitem__("actuators", [{"joint": "P", "screw_lead_m": 0.01,
+                                                                  "gear_ratio": 1e9}]), "gear_ratio: 1e+09"),
 ])
 def test_numbers_beyond_their_plausibility_limit_are_refused_by_key(edit, where):
     """A mass, a point, a gravity, a motion amplitude or period near 1e300 (or merely absurd) is

@@ -447,6 +447,8 @@ def _stewart_with_friction(mu=0.1):
                                  "coulomb_torque_Nm": 0.05}
             if j["type"] == "prismatic":
                 j["friction"] = {"coefficient": mu, "coulomb_force_N": 5.0, "viscous_N_s_m": 20.0}
+    if mu > 10.0:  # beyond the plausibility limit of a friction coefficient: raised, to make friction lock
+        d["limits"] = {"max_friction_coefficient": 10.0 * mu}
     return d
 
 

@@ -8,6 +8,7 @@ exit status 2, with no traceback. Each concern registers its commands on the gro
 from __future__ import annotations
 
 import sys
+import warnings
 
 import click
 
@@ -60,6 +61,10 @@ def main(argv: list[str] | None = None) -> int:
     return status
 
 
+#: the messages of numpy's and scipy's floating-point warnings
+_NUMERIC = r"(?i).*(overflow|invalid value|divide by zero|underflow)"
+
+
 def _main(argv: list[str] | None) -> int:
     import signal
     import threading
@@ -69,8 +74,17 @@ def _main(argv: list[str] | None) -> int:
         old = signal.signal(signal.SIGTERM, _sigterm)
     args = sys.argv[1:] if argv is None else list(argv)
     try:
-        with cli.make_context("pkmdyn", args) as ctx:
-            cli.invoke(ctx)
+        with warnings.catch_warnings():
+            # a floating-point warning of numpy or scipy (overflow, an invalid value, a division by
+            # zero) means an input beyond what the computation can hold: one line, not a run
+            # written with its consequences (and never the warnings' own lines on stderr)
+            warnings.filterwarnings("error", message=_NUMERIC, category=RuntimeWarning)
+            with cli.make_context("pkmdyn", args) as ctx:
+                cli.invoke(ctx)
+    except RuntimeWarning as exc:
+        click.echo(f"pkmdyn: error: the computation overflowed ({' '.join(str(exc).split())}); an input is beyond "
+                   "what it can hold: check the magnitudes of the description, parameters and motion", err=True)
+        return 2
     except click.exceptions.Exit as exc:
         return int(exc.exit_code)
     except _NO_ARGS_IS_HELP as exc:  # `pkmdyn`, `pkmdyn hip`: the group's help, as --help prints it

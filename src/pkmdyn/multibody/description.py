@@ -219,7 +219,7 @@ class _Limits(Section):
 #: the plausibility limits of a description's numbers by the unit of their key: a number whose
 #: key ends with one of the suffixes may not exceed the limit in magnitude (``[limits]``; checked
 #: in this order, so that ``viscous_N_s_m`` is a viscous coefficient and not a length). Every
-#: other number (an axis component, a gear ratio, a count) is bounded by ``max_factor``.
+#: other number (a gear ratio, a count) is bounded by ``max_factor``; directions (axes, load directions) by nothing.
 MAGNITUDES: tuple[tuple[str, tuple[str, ...], float], ...] = (
     ("max_viscous_SI", ("_N_s_m", "_Nm_s_rad"), 1.0),
     ("max_gravity_m_s2", ("_m_s2",), 1.0),
@@ -678,8 +678,14 @@ def _task(t: _Task, where: str, bodies: dict[str, BodySpec]) -> TaskSpec:
                     orientation=tuple(int(k) - 1 for k in t.orientation), names=names, units=units)
 
 
+#: keys of directions (normalised where read: only their direction counts), bounded by nothing
+_DIRECTIONS = ("axis", "axes", "direction")
+
+
 def _bound(key: str, limits: dict[str, Any]) -> tuple[str, float, str]:
     """The limit key, the bound and its unit of a description number under ``key``."""
+    if key in _DIRECTIONS:
+        return "", np.inf, ""
     for name, suffixes, scale in MAGNITUDES:
         for suf in suffixes:
             if key.endswith(suf):
@@ -690,7 +696,8 @@ def _bound(key: str, limits: dict[str, Any]) -> tuple[str, float, str]:
 def _check_magnitudes(raw: dict[str, Any], label: str, limits: dict[str, Any]) -> None:
     """Every number of the description ``raw`` within the plausibility limit of its key's unit
     (:data:`MAGNITUDES`); the error names the table, the entry (by its name, else its number)
-    and the key: ``[legs] #1 joints U point_m[0]: 1e+300 is beyond ...``."""
+    and the key: ``[legs][0] joints U point_m[0]: 1e+300 is beyond ...``. Directions (axes,
+    load directions) are left alone: they are normalised where read."""
 
     def walk(v: Any, where: str, key: str) -> None:
         if isinstance(v, dict):
@@ -703,7 +710,7 @@ def _check_magnitudes(raw: dict[str, Any], label: str, limits: dict[str, Any]) -
                 elif isinstance(x, list) and any(isinstance(e, dict) for e in x):
                     for i, e in enumerate(x):
                         nm = e.get("name") if isinstance(e, dict) else None
-                        walk(e, f"{w} {nm}" if isinstance(nm, str) else f"{w} #{i + 1}", "")
+                        walk(e, f"{w} {nm}" if isinstance(nm, str) else f"{w}[{i}]", "")
                 else:
                     walk(x, where, k)
         elif isinstance(v, list):

@@ -62,6 +62,7 @@ class _State:
         self.inertia_factors = inertia_factors(model)
         self.pk = _one.pack(model) if _one.supported(model) else None
         self.direct: Any = None  # the direct kinematics' warm start (:meth:`MechanismVerbs.direct_one`)
+        self.encoder_q: Array | None = None  # the last reading's tree coordinates (``actuator_coordinates_one``)
 
     def last_q(self) -> Array | None:
         """The last solved tree coordinates: the compiled path's when it holds a solution (it
@@ -311,10 +312,25 @@ class MechanismVerbs:
         self._state(model)
         return np.asarray(model.drive_ratio, dtype=float).copy()
 
-    def actuator_coordinates_one(self, model: MechanismModel, q: Array, qd: Array) -> Array:
+    def actuator_coordinates_one(self, model: MechanismModel, q: Array, qd: Array, fresh: bool = False) -> Array:
         """The actuated joints' coordinates ``(na,)`` at task pose ``q`` (one sample of the
-        inverse kinematics, warm-started: the plant's encoders)."""
-        kin = self._state_one(model, np.asarray(q, dtype=float), np.asarray(qd, dtype=float))
+        inverse kinematics, warm-started from the last solved sample: the plant's encoders; with
+        ``fresh``, reached from the reference configuration instead, the assembly of a run's
+        first pose)."""
+        from . import _kernels as K
+        from .kinematics import _run
+
+        st = self._state(model)
+        x1 = np.ascontiguousarray(self._x(q))
+        if not fresh and st.encoder_q is not None and np.all(np.isfinite(x1)):
+            # from the previous reading (near: one control cycle ago), not from whatever the
+            # other verbs solved last, which may lie on another branch of a leg
+            out = _run(model, x1, np.zeros_like(x1), np.zeros_like(x1), st.encoder_q)
+            if out["status"][0] == K.OK:
+                st.encoder_q = out["q"][0].copy()
+                return out["q"][0][model.act_coord].copy()
+        kin = solve_kinematics(model, x1, q_start=None if fresh or st.encoder_q is None else st.encoder_q)
+        st.encoder_q = kin.q[0].copy()
         return kin.act_q[0].copy()
 
     def direct_one(self, model: MechanismModel, a: Array, ad: Array) -> tuple[Array, Array]:

@@ -243,8 +243,8 @@ class ExactEncoders:
         self.verbs, self.plant_model, self.ctrl_model = verbs, plant.model, ctrl_model
         self.ratio = np.asarray(verbs.drive_ratios(plant.model), dtype=float)
         zero = np.zeros_like(q0)
-        self.a0_plant = verbs.actuator_coordinates_one(plant.model, q0, zero)
-        self.a0_ctrl = verbs.actuator_coordinates_one(ctrl_model, q0, zero)
+        self.a0_plant = verbs.actuator_coordinates_one(plant.model, q0, zero, fresh=True)
+        self.a0_ctrl = verbs.actuator_coordinates_one(ctrl_model, q0, zero, fresh=True)
 
     def read(self, q: Array, qd: Array, out: Array) -> None:
         """The plant's motor displacement at its pose ``q`` into ``out (nu,)``."""
