@@ -168,3 +168,17 @@ peak_effort_N = "min"
     a = pq.read_table(tmp_path / "serial" / "designs.parquet")
     b = pq.read_table(tmp_path / "dask" / "designs.parquet")
     assert a.num_rows == 8 and a.equals(b)
+
+
+def test_params_of_another_mechanism_are_refused(tmp_path, capsys):
+    """--params gives the swept machine other numbers; a description of another mechanism would
+    be swept under this machine's name, so it is refused with one line."""
+    space = tmp_path / "space.toml"
+    space.write_text(SPACE, encoding="utf-8")
+    other = tmp_path / "delta.toml"
+    other.write_text(dumps_toml(ex.builtin_dict("delta"), "another mechanism"), encoding="utf-8")
+    code = main(["sweep", "--machine", "stewart", "--space", str(space), "--params", str(other), "--workers", "0",
+                 "--no-plots", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and "'delta' is not 'stewart'" in err and err.count("\n") == 1
+    assert not (tmp_path / "out").exists()

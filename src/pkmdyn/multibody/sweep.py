@@ -92,8 +92,18 @@ class DescribedSweep:
         return cls(Path(path), raw, name)
 
     def base_description(self, params_path: Path | None) -> dict[str, Any]:
-        """The description to vary: ``params_path`` (a description file) or the machine's own."""
-        return copy.deepcopy(self.raw) if params_path is None else read_toml(params_path)
+        """The description to vary: ``params_path`` (a description file of the same mechanism,
+        ``[mechanism] name``: other numbers, the same machine) or the machine's own. A file of
+        another mechanism is refused: its sweep would carry this machine's name."""
+        if params_path is None:
+            return copy.deepcopy(self.raw)
+        raw = read_toml(params_path)
+        mech = raw.get("mechanism") if isinstance(raw, dict) else None
+        name = mech.get("name") if isinstance(mech, dict) else None
+        if name != self.NAME:
+            raise ParameterError(f"--params {params_path}: [mechanism] name: {name!r} is not {self.NAME!r}, the machine "
+                                 "swept; give another mechanism as --machine FILE.toml")
+        return raw
 
     def check_description(self, description: Mapping[str, Any], source: str) -> None:
         """The validation of :func:`pkmdyn.multibody.load_mechanism` (and the model's compilation)."""
