@@ -30,7 +30,7 @@ import numpy as np
 from numba import njit
 
 from ._kernels import (LOOP_OPEN, NOT_CONVERGED, OK, ROWS_DRIFT, ROWS_JACOBIAN, ROWS_VALUES, SINGULAR, _wrap,
-                       forward_accelerations, forward_positions, forward_velocities, largest_scaled, rows)
+                       bias_motion, forward_positions, largest_scaled, rows)
 
 __all__ = ["CROSSED", "EULER_SINGULAR_RATES", "direct_batch", "direct_starts"]
 
@@ -216,13 +216,7 @@ def direct_sample(s, sd, sdd, q, chord, tree, loops, task, sol, work, info):  # 
         for j in range(nu):
             G[unk[j], a] = r[j]
         G[ca, a] = 1.0
-    for c in range(nq):
-        acc = 0.0
-        for a in range(na):
-            acc += G[c, a] * sd[a]
-        qd[c] = acc
-    forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre)
-    forward_accelerations(qd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
+    bias_motion(G, sd, qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre, A)
     rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
          RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
          val, J, rowpos, colpos, drift, V, A, gamma, w33, w3)

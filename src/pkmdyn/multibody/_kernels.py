@@ -1015,6 +1015,19 @@ def block_lu_solve_columns(M, piv, blocks, prow, pcol, B, X, work):
 
 
 @njit(cache=True, inline="always")
+def bias_motion(G, rate, qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre, A):
+    """``qd = G rate`` (tree rates from the rates ``rate`` of the solved coordinates), then the
+    bodies' velocities ``V`` and bias accelerations ``A`` (at ``qdd = 0``)."""
+    for j in range(qd.shape[0]):
+        acc = 0.0
+        for t in range(rate.shape[0]):
+            acc += G[j, t] * rate[t]
+        qd[j] = acc
+    forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre)
+    forward_accelerations(qd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
+
+
+@njit(cache=True, inline="always")
 def largest_scaled(res, row_scale, n):
     """The largest scaled residual ``|res[r]| row_scale[r]`` of the first ``n`` rows and its row."""
     big = 0.0
@@ -1128,13 +1141,7 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
         if phase == _RATES:
             # G = K^-1 (0; I) (all task columns in one pass), qd = G xd, bias motion
             block_lu_solve_columns(K, piv, blocks, prow, pcol, Gw, G, Gw2)
-            for j in range(nq):
-                acc = 0.0
-                for t in range(nt):
-                    acc += G[j, t] * xds[t]
-                qd[j] = acc
-            forward_velocities(qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre)
-            forward_accelerations(qd, body_parent, body_joint, joint_q0, joint_nq, S, Vpre, A)
+            bias_motion(G, xds, qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre, A)
             mode = ROWS_DRIFT
         else:
             forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
