@@ -246,3 +246,10 @@ def test_a_plausibility_limit_is_raised_in_the_description_or_by_the_caller():
     assert load_mechanism(d, limits={"max_mass_kg": 1e7}).mass.max() == 2e6
     d["limits"] = {"max_mass_kg": 1e7}
     assert load_mechanism(d).mass.max() == 2e6
+
+
+def test_default_motion_samples_keep_the_motion_file_cap():
+    d = ex.builtin_dict("stewart")
+    d["default_motion"]["samples"] = 200_001
+    with pytest.raises(ParameterError, match=r"\[default_motion\] samples"):
+        load_mechanism(d)

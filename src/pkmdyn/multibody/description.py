@@ -149,7 +149,7 @@ class _Task(Section):
 
 class _Motion(Section):
     period_s: float = Field(default=2.0, gt=0)
-    samples: int = Field(default=201, ge=2, le=1_000_000)
+    samples: int = Field(default=201, ge=2, le=200_000)  # one cycle, held whole as a motion file is
     offset: dict[str, float] = Field(default_factory=dict)
     amplitude: dict[str, float] = Field(default_factory=dict)
 
