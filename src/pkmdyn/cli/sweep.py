@@ -15,7 +15,8 @@ import click
 from ._groups import PATH_IN, cli
 
 #: a Dask scheduler address: an optional scheme of Dask's comms, a host, a port
-_ADDRESS = re.compile(r"^(?:(?P<scheme>[A-Za-z][A-Za-z0-9+.-]*)://)?(?P<host>\[[0-9A-Fa-f:.]+\]|[^\s:/\[\]]+):(?P<port>\d{1,5})/?$")
+_ADDRESS = re.compile(r"^(?:(?P<scheme>[A-Za-z][A-Za-z0-9+.-]*)://)?"
+                      r"(?P<host>\[[0-9A-Fa-f:.]+\]|[^\s:/\[\]]+):(?P<port>\d{1,5})/?$")
 _SCHEMES = ("tcp", "tls", "ws", "wss", "ucx")
 
 
@@ -26,7 +27,8 @@ def check_scheduler(address: str) -> None:
     if m is None:
         raise click.UsageError(f"--scheduler {address!r}: expected [scheme://]host:port, e.g. tcp://head:8786")
     if m["scheme"] is not None and m["scheme"].lower() not in _SCHEMES:
-        raise click.UsageError(f"--scheduler {address!r}: unknown scheme {m['scheme']!r} (one of {', '.join(_SCHEMES)})")
+        raise click.UsageError(f"--scheduler {address!r}: unknown scheme {m['scheme']!r} "
+                               f"(one of {', '.join(_SCHEMES)})")
     if not 1 <= int(m["port"]) <= 65535:
         raise click.UsageError(f"--scheduler {address!r}: port {m['port']} is not from 1 to 65535")
 

@@ -13,8 +13,9 @@ run`` writes them; rates and accelerations optional, else from a quintic spline)
 of a real machine, its actuated joints' positions instead (``<joint>_pos_<m|rad>``; rates
 ``<joint>_vel_<u>_s`` and accelerations ``<joint>_acc_<u>_s2`` optional, else by the
 Savitzky-Golay differentiator of ``sg_window`` samples and degree ``sg_order``), the pose then
-by the direct kinematics (:mod:`pkmdyn.multibody.direct`); one effort column per actuator, its motor effort ``<actuator>_torque_Nm`` for a drive (``[[actuators]]``:
-what a real machine's motor currents give) or the joint's ``<joint>_effort_<N|Nm>`` for an
+by the direct kinematics (:mod:`pkmdyn.multibody.direct`); one effort column per actuator,
+its motor effort ``<actuator>_torque_Nm`` for a drive (``[[actuators]]``: what a real
+machine's motor currents give) or the joint's ``<joint>_effort_<N|Nm>`` for an
 actuated joint without one, and, optional, a column per named load and every other column a
 ``pkmdyn run`` results file carries (not used); any other column is refused by name, as a
 misspelt one would be. With drives, the rotor inertias and motor friction coefficients are

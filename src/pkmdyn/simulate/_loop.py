@@ -78,8 +78,8 @@ class LoopSettings:
     ``pose_from_sensor``: the controller's pose from the pose sensor (else from the encoders);
     ``exact_encoders``: the encoders read the plant's true actuator coordinates and the
     controller's pose comes from its direct kinematics (module docstring; else both to first
-    order about the reference); ``method``: the plant's step (:data:`pkmdyn.simulate.METHODS`; by default a third-order
-    explicit step away from the friction band and ROS2 in it).
+    order about the reference); ``method``: the plant's step (:data:`pkmdyn.simulate.METHODS`;
+    by default a third-order explicit step away from the friction band and ROS2 in it).
     """
 
     cycle_s: float
@@ -143,8 +143,8 @@ def _alpha(fc: float, T: float) -> float:
 
 @numba.njit(cache=True)
 def _sense(kr: int, k: int, j: int, first: bool, exact: bool, s_exact: Array, q: Array, qd: Array, q_ref: Array,
-           div: Array, s_ref_p: Array, Bt_p: Array, s_ref_c: Array, rate_map: Array, res: Array, T: float, a_v: float, a_a: float,
-           noise: Array, pose_from_sensor: bool,
+           div: Array, s_ref_p: Array, Bt_p: Array, s_ref_c: Array, rate_map: Array, res: Array, T: float, a_v: float,
+           a_a: float, noise: Array, pose_from_sensor: bool,
            s_prev: Array, sd_prev: Array, yq: Array, yqd: Array, ys: Array, ysd: Array, ysdd: Array,
            out_q: Array, out_qd: Array, out_att: Array, out_s: Array, out_qs: Array, out_qds: Array,
            out_se: Array, out_sde: Array, out_sdde: Array) -> int:  # pragma: no cover - compiled
@@ -210,8 +210,9 @@ class LoopState:
     the plant's ``q, qd``, the sensed buffers ``y``, the controller's ``memory``, the integrator's
     ``work``, the encoder's previous reading and filtered rate, the noise generator, the pose
     records the delayed pose sensor still needs (``history``, at most ``delay`` rows), the
-    cycles done and, with exact encoders, their :class:`ExactEncoders`. With it a run can be computed span by span in bounded memory
-    (:func:`pkmdyn.simulate.track_spans`); the spans join exactly."""
+    cycles done and, with exact encoders, their :class:`ExactEncoders`. With it a run can be
+    computed span by span in bounded memory (:func:`pkmdyn.simulate.track_spans`); the spans
+    join exactly."""
 
     q: Array
     qd: Array
