@@ -29,10 +29,10 @@ minimum-norm efforts ``u = B^+ (M xdd + h)``.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
-
-from typing import Any
 
 from ..errors import MotionError, ParameterError, as_array
 from .dynamics import actuator_efforts, body_wrenches, inertia_factors, coordinate_twists, effort_unit, fr_any, \
@@ -341,12 +341,13 @@ class MechanismVerbs:
         from . import _direct as D
         from . import _kernels as K
         from .direct import _arrays, direct_kinematics
-        from .kinematics import reference_task
 
         st = self._state(model)
         a1 = np.ascontiguousarray(a, dtype=float).reshape(1, -1)
         ad1 = np.ascontiguousarray(ad, dtype=float).reshape(1, -1)
         if st.direct is None:
+            # the kernel's outputs for one sample (:func:`._direct.direct_batch`): q, qd, qdd, x, xd,
+            # xdd, residual, steps, det K, pivot ratio, status, worst row
             dk = direct_kinematics(model, a1, ad1)
             st.direct = {"args": _arrays(model), "q": dk.q[0].copy(), "x": dk.x[0].copy(), "det": float(dk.det[0]),
                          "buf": [np.zeros((1, model.nq)) for _ in range(3)] + [np.zeros((1, model.nt)) for _ in range(3)]
@@ -356,7 +357,7 @@ class MechanismVerbs:
         d = st.direct
         b = d["buf"]
         D.direct_batch(np.zeros(0), a1, ad1, np.zeros_like(a1), d["q"], d["x"], *d["args"], *b)
-        if b[-2][0] != K.OK or b[8][0] * d["det"] < 0:  # the checked route names what is wrong
+        if b[10][0] != K.OK or b[8][0] * d["det"] < 0:  # the checked route names what is wrong
             dk = direct_kinematics(model, a1, ad1, q_start=d["q"])
             if dk.det[0] * d["det"] < 0:
                 from ..errors import SingularityError
