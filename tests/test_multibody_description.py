@@ -225,9 +225,7 @@ def test_adding_a_joint_type_is_adding_a_table_entry(monkeypatch):
     (lambda d: d["mechanism"].__setitem__("gravity_m_s2", [0.0, 0.0, -1e9]), "[mechanism] gravity_m_s2[2]"),
     (lambda d: d["default_motion"]["amplitude"].__setitem__("x_m", 1e9), "[default_motion] amplitude x_m"),
     (lambda d: d["default_motion"].__setitem__("period_s", 1e30), "[default_motion] period_s"),
-    (lambda d: d["legs"][0]["actuators"].__setitem__(0, {"joint": "P", "gear_ratio": 1e9}) if d["legs"][0].get(
-        "actuators") else d["legs"][0].__setitem__("actuators", [{"joint": "P", "screw_lead_m": 0.01,
-                                                                  "gear_ratio": 1e9}]), "gear_ratio: 1e+09"),
+    (lambda d: d["legs"][0]["joints"][1].__setitem__("limits_m", [-1e9, 1e9]), "joints P limits_m[0]"),
 ])
 def test_numbers_beyond_their_plausibility_limit_are_refused_by_key(edit, where):
     """A mass, a point, a gravity, a motion amplitude or period near 1e300 (or merely absurd) is
@@ -236,6 +234,15 @@ def test_numbers_beyond_their_plausibility_limit_are_refused_by_key(edit, where)
     edit(d)
     with pytest.raises(ParameterError, match=re.escape(where) + ".*plausibility limit max_"):
         load_mechanism(d)
+
+
+def test_drives_keep_their_own_bounds_and_fine_encoders_pass():
+    """[[actuators]] entries have bounds of their own (a linear encoder of a million counts per
+    metre is no length, a motor's acceleration no gravity)."""
+    d = ex.builtin_dict("stewart")
+    d["legs"][0]["actuators"] = [{"joint": "P", "screw_lead_m": 0.01, "encoder_counts_per_turn": 2 ** 24,
+                                  "max_acceleration_rad_s2": 5e4}]
+    load_mechanism(d)
 
 
 def test_a_plausibility_limit_is_raised_in_the_description_or_by_the_caller():

@@ -702,8 +702,8 @@ def _check_magnitudes(raw: dict[str, Any], label: str, limits: dict[str, Any]) -
     def walk(v: Any, where: str, key: str) -> None:
         if isinstance(v, dict):
             for k, x in v.items():
-                if not where and k == "limits":
-                    continue  # the limits themselves
+                if (not where and k == "limits") or k == "actuators":
+                    continue  # the limits themselves; the drives' entries have bounds of their own (_actuators)
                 w = f"{where} {k}" if where else f"[{k}]"
                 if isinstance(x, dict):
                     walk(x, w, "")
