@@ -72,9 +72,18 @@ def describe(machine: str) -> None:
                      for cut, chain, kind in model.legs.names) or "none; Newton solves every loop")
         + (" (every block: Newton only checks)" if model.legs.count == model.solver_blocks.shape[0] - 1 else ""),
     ]
+    if model.parameters:
+        lines.append("parameters: " + "; ".join(f"{k} = {_shown(v)}" for k, v in model.parameters.items()))
     for line in lines:
         if line is not None:
             click.echo(line)
+
+
+def _shown(v) -> str:
+    """A parameter's value as ``describe`` prints it: a number, or a vector of numbers."""
+    if isinstance(v, list):
+        return "[" + ", ".join(_shown(x) for x in v) + "]"
+    return f"{v:.9g}"
 
 
 @cli.command("run")

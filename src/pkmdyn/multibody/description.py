@@ -26,6 +26,7 @@ from pydantic import Field, ValidationError, field_validator
 
 from ..errors import ParameterError
 from ..params_util import Section, _rule, read_toml
+from .expressions import resolve_parameters
 from .joint_types import JOINT_TYPES, joint_type
 
 __all__ = ["MAGNITUDES", "Description", "BodySpec", "JointSpec", "TaskSpec", "LoadSpec", "MotionSpec", "ActuatorSpec",
@@ -397,6 +398,8 @@ class Description:
     groups: tuple[tuple[str, tuple[str, ...]], ...] = ()
     #: the plausibility limits of motions (``[limits]``, keys of :data:`LIMIT_KEYS`)
     limits: dict[str, float] = field(default_factory=dict)
+    #: the named design parameters and their values (``[parameters]``, :mod:`.expressions`)
+    parameters: dict[str, Any] = field(default_factory=dict)
 
 
 def _rot(axis: Array, angle: float) -> Array:
@@ -740,6 +743,7 @@ def load_description(source: str | Path | dict[str, Any], limits: dict[str, Any]
     else:
         path = str(Path(source).absolute())
         raw, label = read_toml(source), str(source)
+    raw, parameters = resolve_parameters(raw, label)
     data = _validate(raw, label)
     _check_magnitudes(raw, label, {**data.limits.model_dump(), **(limits or {})})
     body_specs: dict[str, BodySpec] = {}
@@ -802,7 +806,7 @@ def load_description(source: str | Path | dict[str, Any], limits: dict[str, Any]
                        gravity=np.array(data.mechanism.gravity_m_s2, dtype=float),
                        bodies=tuple(body_specs.values()), joints=tuple(joints), task=task, loads=tuple(loads),
                        cut_joints=cuts, motion=motion, path=path, actuators=actuators, groups=groups,
-                       limits=data.limits.model_dump())
+                       limits=data.limits.model_dump(), parameters=parameters)
 
 
 #: the keys of an actuator entry for each kind of motor (rotary, linear), by role

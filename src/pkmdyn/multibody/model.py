@@ -214,6 +214,8 @@ class MechanismModel:
     body_group: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     #: plausibility limits of motions (``[limits]``: ``description.LIMIT_KEYS``)
     limits: dict = field(default_factory=dict)
+    #: the description's named design parameters and their values (``[parameters]``)
+    parameters: dict = field(default_factory=dict)
 
     @property
     def nb(self) -> int:
@@ -451,7 +453,7 @@ def compile_model(desc: Description) -> MechanismModel:
     prow, pcol, blocks = block_structure(model, rows, idle)
     model = replace(model, solver_rows=rows, solver_idle=idle, solver_prow=prow, solver_pcol=pcol,
                     solver_blocks=blocks, topology=rep, **_drives(desc, act), **_body_groups(desc, order),
-                    limits=dict(desc.limits))
+                    limits=dict(desc.limits), parameters=dict(desc.parameters))
     return replace(model, legs=explicit_legs(model))
 
 

@@ -98,6 +98,7 @@ def model_summary(model: MechanismModel) -> dict[str, Any]:
     return {
         "format": "pkmdyn mechanism model 1",
         "name": model.name, "source": model.source, "gravity_m_s2": model.gravity,
+        "parameters": dict(model.parameters),
         "frames": ("every point and frame of a body is in that body's frame; reference_frame is the body frame in "
                    "the base frame at the reference configuration, where every joint coordinate equals "
                    "position_at_reference and each joint's parent_frame and child_frame coincide; a joint's "
