@@ -63,11 +63,16 @@ def rssr():
     }
 
 
-def builtin_dict(name):
+def builtin_dict(name, parametric=False):
+    """A built-in description as a dict: its numbers (the expressions of a parametric file
+    evaluated, its [parameters] left out), or with ``parametric`` the file as written."""
     import tomllib
 
+    from pkmdyn.multibody.expressions import resolve_parameters
+
     with open(MACHINES / name / f"{name}.toml", "rb") as fh:
-        return tomllib.load(fh)
+        raw = tomllib.load(fh)
+    return raw if parametric else resolve_parameters(raw, name)[0]
 
 
 def stewart_sps():

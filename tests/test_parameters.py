@@ -102,7 +102,7 @@ def test_the_parametric_stewart_platform_is_the_numeric_one():
 def test_one_parameter_moves_every_number_that_depends_on_it():
     """A larger base radius moves the base joints to that radius, the legs' axes and reference
     lengths with them: the leg length stays the distance between its joint centres."""
-    d = ex.builtin_dict("stewart")
+    d = ex.builtin_dict("stewart", parametric=True)
     d["parameters"]["base_radius_m"] = 1.3
     m = load_mechanism(d)
     base = [m.joint_index(f"U_{i}") for i in range(1, 7)]
