@@ -33,6 +33,7 @@ DATA = Path(__file__).parent / "data"
     ("dot(unit([3, 4, 0]), [3, 4, 0])", 5.0),
     ("-(r_m ** 2) + atan2(1, 1) * 4 / pi", 0.0),
     ("hypot(3, 4) - max(1, 2) + min(1, 2) + abs(-1)", 5.0),
+    ("(rotzd(90) @ [2, 0, 0])[1] + [1, 2, 3][2]", 5.0),
 ])
 def test_the_grammar_computes_what_it_says(text, want):
     got = evaluate(text, {"r_m": 1.0})
@@ -43,7 +44,8 @@ def test_the_grammar_computes_what_it_says(text, want):
     ("__import__('os').system('true')", "is not part of"),
     ("__import__('os')", "unknown function '__import__'"),
     ("r_m.real", "'Attribute' is not part of the expression grammar"),
-    ("[1, 2, 3][0]", "'Subscript' is not part of"),
+    ("[1, 2, 3][r_m]", "'Subscript' is not part of"),
+    ("[1, 2, 3][3]", "takes an entry of a vector"),
     ("(lambda: 1)()", "is not part of"),
     ("[x for x in [1]]", "is not part of"),
     ("r_m if 1 else 2", "is not part of"),
@@ -87,16 +89,20 @@ def test_parameters_in_order_with_bounds_and_derived_values():
             parameter_values({"parameters": {name: 1.0}}, "d")
 
 
-def test_the_parametric_stewart_platform_is_the_numeric_one():
-    """The built-in file, written in its designer's parameters, compiles to the model of the
-    earlier file that spelt every number (kept as tests/data/stewart_numeric.toml)."""
-    a = load_mechanism(ex.MACHINES / "stewart" / "stewart.toml")
-    b = load_mechanism(DATA / "stewart_numeric.toml")
+@pytest.mark.parametrize("name", ["stewart", "delta", "rrr3", "bennett"])
+def test_the_parametric_built_ins_are_the_numeric_ones(name):
+    """Each built-in file, written in its designer's parameters, compiles to the model of the
+    earlier file that spelt every number (kept as tests/data/<name>_numeric.toml)."""
+    a = load_mechanism(ex.MACHINES / name / f"{name}.toml")
+    b = load_mechanism(DATA / f"{name}_numeric.toml")
+    assert a.parameters and not b.parameters
     for field in ("joint_p_parent", "joint_p_child", "joint_R_parent", "joint_R_child", "com", "inertia", "mass",
                   "tree_p_parent", "tree_R_parent", "coord_offset", "task_point", "p0", "R0"):
         x, y = getattr(a, field), getattr(b, field)
         assert x.shape == y.shape and np.abs(x - y).max() <= 1e-12, field
-    assert a.parameters["base_radius_m"] == 1.0 and a.parameters["leg_length_m"] == pytest.approx(1.218177145115201)
+    assert [e.get("section") for e in a.body_extra] == [e.get("section") for e in b.body_extra]
+    if name == "stewart":
+        assert a.parameters["base_radius_m"] == 1.0 and a.parameters["leg_length_m"] == pytest.approx(1.218177145115201)
 
 
 def test_one_parameter_moves_every_number_that_depends_on_it():

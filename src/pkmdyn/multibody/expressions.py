@@ -6,12 +6,14 @@ base_m)"``; a table ``{ value = 1.0, min = 0.5, max = 2.0 }`` gives bounds), and
 may then be an expression string (``point_m = "rotz(-half_angle_deg * deg) @ [base_radius_m, 0,
 0]"``). Expressions are evaluated here, before validation, by walking Python's own parse tree
 of the text (:func:`ast.parse`) with a closed set of nodes: numbers, the parameters' names,
-``+ - * / ** @``, unary signs, parentheses, ``[a, b, c]`` vectors and the calls below; no
-attribute, subscript, keyword, comprehension or other name is accepted (no Python ``eval``).
+``+ - * / ** @``, unary signs, parentheses, ``[a, b, c]`` vectors, ``v[0]`` (an entry, by a whole
+number) and the calls below; no attribute, other subscript, keyword, comprehension or other
+name is accepted (no Python ``eval``).
 
 Grammar (``docs/mechanism_format.md``, "Parameters")::
 
     expr   := number | name | expr op expr | -expr | +expr | (expr) | [expr, ...] | f(expr, ...)
+              | expr[k] (an entry of a vector, k a whole number)
     op     := + - * / ** @
     name   := a parameter | pi | deg (pi / 180)
     f      := sqrt abs exp log sin cos tan asin acos atan atan2 sind cosd tand hypot min max
@@ -130,6 +132,13 @@ def _eval(node: ast.AST, names: Mapping[str, Any]) -> Any:
                 return _BINARY[type(node.op)](a, b)
             except (FloatingPointError, OverflowError, ZeroDivisionError):
                 raise ValueError("the value overflows") from None
+    if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant) \
+            and isinstance(node.slice.value, int) and not isinstance(node.slice.value, bool):
+        v = _eval(node.value, names)
+        k = node.slice.value
+        if np.ndim(v) != 1 or not 0 <= k < len(v):
+            raise ValueError(f"[{k}]: takes an entry of a vector (0 to its length - 1)")
+        return float(v[k])
     if isinstance(node, ast.List):
         items = [_eval(e, names) for e in node.elts]
         if any(np.ndim(v) for v in items):
