@@ -171,7 +171,7 @@ def test_unreachable_pose_names_the_sample_and_loop():
     x = np.tile(reference_task(m), (30, 1))
     x[:, 2] -= np.linspace(0.0, 1.5, 30)  # below the reach of arm and forearm (1.768 m)
     t = np.linspace(0.0, 1.0, 30)
-    with pytest.raises(UnreachablePoseError, match=r"sample 15 \(t = 0.517241 s\).*(loop \d+ \(cut \w+\)|task "
+    with pytest.raises(UnreachablePoseError, match=r"sample 15 \(t = 0.517241 s\).*(loop \d+ \(cut \w+\): \w+|task "
                                                    r"coordinate [xyz]) does not close"):
         solve_kinematics(m, x, t=t)
 
