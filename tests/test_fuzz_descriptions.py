@@ -39,6 +39,16 @@ def _set(d, path, value):
     d[path[-1]] = value
 
 
+def _hostile(tmp_path_factory, d, pick, value, name):
+    """``d`` with its number number ``pick`` (modulo their count) set to ``value``, written as
+    TOML file ``name`` in a fresh folder."""
+    paths = list(_leaves(d))
+    _set(d, paths[pick % len(paths)], value)
+    f = tmp_path_factory.mktemp("fuzz") / name
+    f.write_text(tomlkit.dumps(d))
+    return f
+
+
 def _finite_files(folder):
     """Every number in the folder's CSV and JSON files is finite."""
     for f in folder.iterdir():
@@ -68,12 +78,7 @@ NAMES = ["stewart", "delta", "rrr3", "bennett"]
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(name=st.sampled_from(NAMES), pick=st.integers(0, 10_000), value=st.sampled_from(EXTREMES))
 def test_describe_a_hostile_description(tmp_path_factory, capsys, name, pick, value):
-    d = ex.builtin_dict(name)
-    paths = list(_leaves(d))
-    _set(d, paths[pick % len(paths)], value)
-    folder = tmp_path_factory.mktemp("fuzz")
-    f = folder / "m.toml"
-    f.write_text(tomlkit.dumps(d))
+    f = _hostile(tmp_path_factory, ex.builtin_dict(name), pick, value, "m.toml")
     _promise(capsys, main(["describe", "--machine", str(f)]), None)
 
 
@@ -83,12 +88,8 @@ def test_describe_a_hostile_description(tmp_path_factory, capsys, name, pick, va
 def test_run_a_hostile_description(tmp_path_factory, capsys, name, pick, value):
     d = ex.builtin_dict(name)
     d.setdefault("default_motion", {})["samples"] = 21
-    paths = list(_leaves(d))
-    _set(d, paths[pick % len(paths)], value)
-    folder = tmp_path_factory.mktemp("fuzz")
-    f = folder / "m.toml"
-    f.write_text(tomlkit.dumps(d))
-    out = folder / "out"
+    f = _hostile(tmp_path_factory, d, pick, value, "m.toml")
+    out = f.parent / "out"
     _promise(capsys, main(["run", "--machine", str(f), "--minimum-norm-reactions", "--out", str(out)]), out)
 
 
@@ -105,13 +106,8 @@ SPACE = {
 @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(pick=st.integers(0, 10_000), value=st.sampled_from(EXTREMES))
 def test_sweep_a_hostile_space_file(tmp_path_factory, capsys, pick, value):
-    space = copy.deepcopy(SPACE)
-    paths = list(_leaves(space))
-    _set(space, paths[pick % len(paths)], value)
-    folder = tmp_path_factory.mktemp("fuzz")
-    f = folder / "space.toml"
-    f.write_text(tomlkit.dumps(space))
-    out = folder / "out"
+    f = _hostile(tmp_path_factory, copy.deepcopy(SPACE), pick, value, "space.toml")
+    out = f.parent / "out"
     code = main(["sweep", "--machine", "rrr3", "--space", str(f), "--workers", "0", "--no-plots", "--out", str(out)])
     err = capsys.readouterr().err
     if code == 0:

@@ -40,6 +40,7 @@ __all__ = [
     "output_dir",
     "atomic_file",
     "check_output_dir",
+    "check_inputs_outside",
     "check_output_file",
     "RUN_MARKER",
     "DEFAULT_MAX_SAMPLES",
@@ -183,6 +184,19 @@ def _inputs(inputs: Inputs) -> list[_Input]:
     return found
 
 
+def check_inputs_outside(out: str | Path, inputs: Inputs) -> list[_Input]:
+    """No input of the run (``{label: path}``) inside the folder ``out`` or equal to it (by
+    resolved path): one :class:`~pkmdyn.errors.PkmdynError` line naming it. Returns the inputs
+    that exist."""
+    real = Path(os.path.realpath(out))
+    given = _inputs(inputs)
+    for inp in given:
+        if inp.real == real or real in inp.real.parents:
+            raise PkmdynError(f"--out {out}: holds {inp.label} ({inp.real.relative_to(real)}), an input of this "
+                              "run; refusing to replace it (write to another --out)")
+    return given
+
+
 def _check_parent(target: Path) -> None:
     """The folder that will receive ``target`` (or, when it is missing, its nearest existing
     ancestor) is a folder and is not write-protected."""
@@ -247,12 +261,7 @@ def check_output_dir(path: str | Path, inputs: Inputs = ()) -> _Earlier:
     if _write_protected(st):
         raise PkmdynError(f"--out {out}: folder is write-protected; refusing to replace it")
     _check_parent(out)
-    real = Path(os.path.realpath(out))
-    given = _inputs(inputs)
-    for inp in given:
-        if inp.real == real or real in inp.real.parents:
-            raise PkmdynError(f"--out {out}: holds {inp.label} ({inp.real.relative_to(real)}), an input of this "
-                              "run; refusing to replace it (write to another --out)")
+    given = check_inputs_outside(out, inputs)
     entries = _walk(out)
     if not entries:
         return _Earlier(True, 0)

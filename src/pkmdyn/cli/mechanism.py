@@ -38,9 +38,12 @@ def _load(machine: str, limits: dict | None = None):
 
 
 def _check_differentiator(sg_window: int, sg_order: int) -> None:
-    """``--sg-window`` odd, at least 3 and above ``--sg-order``, or 0 (the spline)."""
-    if sg_window != 0 and (sg_window < 3 or sg_window % 2 == 0 or sg_order >= sg_window):
-        raise click.UsageError(f"--sg-window: {sg_window}: an odd number >= 3 and above --sg-order ({sg_order}), or 0")
+    """``--sg-window`` and ``--sg-order`` of the Savitzky-Golay differentiator, before any file
+    is read (0: the spline, no differentiator)."""
+    from ..profiles._columns import check_smoothing
+
+    if sg_window != 0:
+        check_smoothing(sg_window, sg_order)
 
 
 @cli.command("describe")

@@ -685,15 +685,14 @@ def _task(t: _Task, where: str, bodies: dict[str, BodySpec]) -> TaskSpec:
 _DIRECTIONS = ("axis", "axes", "direction")
 
 
-def _bound(key: str, limits: dict[str, Any]) -> tuple[str, float, str]:
-    """The limit key, the bound and its unit of a description number under ``key``."""
+def _bound(key: str, limits: dict[str, Any]) -> tuple[str, float]:
+    """The limit key and the bound of a description number under ``key``."""
     if key in _DIRECTIONS:
-        return "", np.inf, ""
+        return "", np.inf
     for name, suffixes, scale in MAGNITUDES:
-        for suf in suffixes:
-            if key.endswith(suf):
-                return name, float(limits[name]) * scale, suf
-    return "max_factor", float(limits["max_factor"]), ""
+        if key.endswith(suffixes):
+            return name, float(limits[name]) * scale
+    return "max_factor", float(limits["max_factor"])
 
 
 def _check_magnitudes(raw: dict[str, Any], label: str, limits: dict[str, Any]) -> None:
@@ -720,7 +719,7 @@ def _check_magnitudes(raw: dict[str, Any], label: str, limits: dict[str, Any]) -
             for i, e in enumerate(v):
                 walk(e, where, f"{key}[{i}]")
         elif isinstance(v, (int, float)) and not isinstance(v, bool):
-            name, bound, _ = _bound(key.split("[")[0], limits)
+            name, bound = _bound(key.split("[")[0], limits)
             if not abs(v) <= bound:
                 raise ParameterError(f"{label}: {where} {key}: {v:g} is beyond the plausibility limit {name} = "
                                      f"{limits[name]:g} (raise it in the description's [limits])")

@@ -151,18 +151,29 @@ def actuator_reference(model: MechanismModel) -> Array:
     return model.coord_offset[model.act_coord].copy()
 
 
+def _outputs(model: MechanismModel, n: int) -> dict:
+    """The kernel's output arrays for ``n`` samples (:func:`._direct.direct_batch`, in its order)."""
+    nq, nt = model.nq, model.nt
+    return {"q": np.zeros((n, nq)), "qd": np.zeros((n, nq)), "qdd": np.zeros((n, nq)), "x": np.zeros((n, nt)),
+            "xd": np.zeros((n, nt)), "xdd": np.zeros((n, nt)), "res": np.zeros(n), "it": np.zeros(n, dtype=np.int64),
+            "det": np.zeros(n), "ratio": np.zeros(n), "status": np.full(n, -1, dtype=np.int64),
+            "worst": np.zeros(n, dtype=np.int64)}
+
+
 def _batch(model: MechanismModel, s: Array, sd: Array, sdd: Array, q_start: Array, x_start: Array,
-           t: Array | None) -> dict:
-    n, nq, nt = s.shape[0], model.nq, model.nt
-    out = {"q": np.zeros((n, nq)), "qd": np.zeros((n, nq)), "qdd": np.zeros((n, nq)), "x": np.zeros((n, nt)),
-           "xd": np.zeros((n, nt)), "xdd": np.zeros((n, nt)), "res": np.zeros(n), "it": np.zeros(n, dtype=np.int64),
-           "det": np.zeros(n), "ratio": np.zeros(n), "status": np.full(n, -1, dtype=np.int64),
-           "worst": np.zeros(n, dtype=np.int64)}
+           t: Array | None, out: dict | None = None, args: tuple | None = None) -> dict:
+    """The kernel along ``s, sd, sdd`` into ``out`` (new arrays unless given, as a caller that
+    solves one sample at a time keeps them) with the model's tuples ``args`` (:func:`_arrays`)."""
+    out = _outputs(model, s.shape[0]) if out is None else out
     tm = np.zeros(0) if t is None else np.ascontiguousarray(t, dtype=float)
     D.direct_batch(tm, s, sd, sdd, np.ascontiguousarray(q_start, dtype=float), np.ascontiguousarray(x_start),
-                   *_arrays(model), out["q"], out["qd"], out["qdd"], out["x"], out["xd"], out["xdd"], out["res"],
-                   out["it"], out["det"], out["ratio"], out["status"], out["worst"])
+                   *(_arrays(model) if args is None else args), *out.values())
     return out
+
+
+def _straight(a: Array, b: Array, steps: int) -> Array:
+    """``steps`` points from ``a`` (left out) to ``b`` along the straight line."""
+    return np.ascontiguousarray(a + np.linspace(0.0, 1.0, steps + 1)[1:, None] * (b - a))
 
 
 def _values(model: MechanismModel, s: Array) -> str:
@@ -210,7 +221,7 @@ def _start(model: MechanismModel, s0: Array, t: Array | None, offset: int) -> Ar
     x_ref = reference_task(model)
     last = None
     for steps in (1, 8, 64):
-        path = np.ascontiguousarray(s_ref + np.linspace(0.0, 1.0, steps + 1)[1:, None] * (s0 - s_ref))
+        path = _straight(s_ref, s0, steps)
         zero = np.zeros_like(path)
         out = _batch(model, path, zero, zero, model.coord_offset, x_ref, None)
         if out["status"][-1] == K.OK:
@@ -232,7 +243,7 @@ def _bridge(model: MechanismModel, s: Array, out: dict, k: int) -> Array | None:
     if k == 0:
         return None
     for steps in (8, 64):
-        path = np.ascontiguousarray(s[k - 1] + np.linspace(0.0, 1.0, steps + 1)[1:, None] * (s[k] - s[k - 1]))
+        path = _straight(s[k - 1], s[k], steps)
         zero = np.zeros_like(path)
         b = _batch(model, path, zero, zero, out["q"][k - 1], out["x"][k - 1], None)
         if np.all(b["status"] == K.OK):

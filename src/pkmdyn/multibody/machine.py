@@ -338,26 +338,20 @@ class MechanismVerbs:
         ``ad`` by the direct kinematics (:mod:`.direct`), warm-started from the previous call
         (the first from the reference configuration): the controller's pose from its encoders.
         Raises where the actuators reach no pose or sit on a singularity."""
-        from . import _direct as D
         from . import _kernels as K
-        from .direct import _arrays, direct_kinematics
+        from .direct import _arrays, _batch, _outputs, direct_kinematics
 
         st = self._state(model)
         a1 = np.ascontiguousarray(a, dtype=float).reshape(1, -1)
         ad1 = np.ascontiguousarray(ad, dtype=float).reshape(1, -1)
         if st.direct is None:
-            # the kernel's outputs for one sample (:func:`._direct.direct_batch`): q, qd, qdd, x, xd,
-            # xdd, residual, steps, det K, pivot ratio, status, worst row
             dk = direct_kinematics(model, a1, ad1)
-            st.direct = {"args": _arrays(model), "q": dk.q[0].copy(), "x": dk.x[0].copy(), "det": float(dk.det[0]),
-                         "buf": [np.zeros((1, model.nq)) for _ in range(3)] + [np.zeros((1, model.nt)) for _ in range(3)]
-                         + [np.zeros(1), np.zeros(1, dtype=np.int64), np.zeros(1), np.zeros(1),
-                            np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64)]}
+            st.direct = {"args": _arrays(model), "out": _outputs(model, 1), "q": dk.q[0].copy(), "x": dk.x[0].copy(),
+                         "det": float(dk.det[0])}
             return dk.x[0].copy(), dk.xd[0].copy()
         d = st.direct
-        b = d["buf"]
-        D.direct_batch(np.zeros(0), a1, ad1, np.zeros_like(a1), d["q"], d["x"], *d["args"], *b)
-        if b[10][0] != K.OK or b[8][0] * d["det"] < 0:  # the checked route names what is wrong
+        out = _batch(model, a1, ad1, np.zeros_like(a1), d["q"], d["x"], None, out=d["out"], args=d["args"])
+        if out["status"][0] != K.OK or out["det"][0] * d["det"] < 0:  # the checked route names what is wrong
             dk = direct_kinematics(model, a1, ad1, q_start=d["q"])
             if dk.det[0] * d["det"] < 0:
                 from ..errors import SingularityError
@@ -365,10 +359,8 @@ class MechanismVerbs:
                 raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
             d.update(q=dk.q[0].copy(), x=dk.x[0].copy(), det=float(dk.det[0]))
             return dk.x[0].copy(), dk.xd[0].copy()
-        d["q"] = b[0][0].copy()
-        d["x"] = b[3][0].copy()
-        d["det"] = float(b[8][0])
-        return b[3][0].copy(), b[4][0].copy()
+        d.update(q=out["q"][0].copy(), x=out["x"][0].copy(), det=float(out["det"][0]))
+        return out["x"][0].copy(), out["xd"][0].copy()
 
 
 def machine_verbs(model: MechanismModel) -> MechanismVerbs:

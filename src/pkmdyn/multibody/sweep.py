@@ -73,6 +73,12 @@ def _mean(x: Array, t: Array) -> float:
     return float(time_mean(x, t)) if t[-1] > t[0] else float(x.mean())
 
 
+def _mechanism_name(raw: Any) -> Any:
+    """A description's ``[mechanism] name`` as written, or None."""
+    mech = raw.get("mechanism") if isinstance(raw, dict) else None
+    return mech.get("name") if isinstance(mech, dict) else None
+
+
 @dataclass(frozen=True, eq=False)
 class DescribedSweep:
     """The sweep adapter of the mechanism described by ``path`` (``NAME``: its
@@ -85,8 +91,7 @@ class DescribedSweep:
     @classmethod
     def from_file(cls, path: str | Path) -> DescribedSweep:
         raw = read_toml(path)
-        mech = raw.get("mechanism")
-        name = mech.get("name") if isinstance(mech, dict) else None
+        name = _mechanism_name(raw)
         if not isinstance(name, str):
             raise ParameterError(f"{path}: [mechanism] name: missing (a described mechanism names itself)")
         return cls(Path(path), raw, name)
@@ -98,8 +103,7 @@ class DescribedSweep:
         if params_path is None:
             return copy.deepcopy(self.raw)
         raw = read_toml(params_path)
-        mech = raw.get("mechanism") if isinstance(raw, dict) else None
-        name = mech.get("name") if isinstance(mech, dict) else None
+        name = _mechanism_name(raw)
         if name != self.NAME:
             raise ParameterError(f"--params {params_path}: [mechanism] name: {name!r} is not {self.NAME!r}, the machine "
                                  "swept; give another mechanism as --machine FILE.toml")

@@ -15,7 +15,8 @@ from scipy.signal import savgol_filter
 
 from ..errors import MotionError
 
-__all__ = ["require_increasing", "require_rows", "column_group", "derivatives", "savgol_derivatives"]
+__all__ = ["require_increasing", "require_rows", "column_group", "derivatives", "savgol_derivatives",
+           "check_smoothing"]
 
 Array = NDArray[np.float64]
 
@@ -82,6 +83,15 @@ def derivatives(
     return qd, qdd
 
 
+def check_smoothing(window: int, order: int) -> None:
+    """The Savitzky-Golay differentiator's window (odd, >= 3) and degree (>= 2, below the
+    window); errors name the option."""
+    if window % 2 == 0 or window < 3:
+        raise MotionError(f"--sg-window: must be an odd number >= 3, got {window}")
+    if not 2 <= order < window:
+        raise MotionError(f"--sg-order: must be >= 2 and less than the window ({window}), got {order}")
+
+
 def savgol_derivatives(t: Array, x: Array, window: int, order: int, source: str) -> tuple[Array, Array]:
     """First and second time derivatives of ``x (n, k)`` by a Savitzky-Golay filter.
 
@@ -90,10 +100,7 @@ def savgol_derivatives(t: Array, x: Array, window: int, order: int, source: str)
     differentiated; sampling must be uniform. Errors name ``source``.
     """
     n = t.shape[0]
-    if window % 2 == 0 or window < 3:
-        raise MotionError(f"--sg-window: must be an odd number >= 3, got {window}")
-    if not 2 <= order < window:
-        raise MotionError(f"--sg-order: must be >= 2 and less than the window ({window}), got {order}")
+    check_smoothing(window, order)
     if n < window:
         raise MotionError(f"{source}: {n} rows are fewer than the smoothing window of {window} samples")
     dt = np.diff(t)

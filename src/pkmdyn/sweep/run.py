@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError, PkmdynError
-from ..io import atomic_file, dumps_toml, write_json
+from ..io import atomic_file, check_inputs_outside, dumps_toml, write_json
 from ..sweep_protocol import STATUSES, SweepAdapter
 from .execute import PARTS_DIR, BatchJob, ExecutionStats, execute, finished_ids, part_schema
 from .pareto import minimised, pareto_mask
@@ -137,13 +137,7 @@ def _open_out(out: Path, record: dict[str, Any], inputs: Mapping[str, Any] = ())
         raise PkmdynError(f"--out {out}: is a symbolic link, not a folder pkmdyn wrote; refusing to write through it")
     if out.exists() and not out.is_dir():
         raise PkmdynError(f"--out {out}: exists and is a file, not a folder")
-    real = Path(os.path.realpath(out))
-    for label, given in dict(inputs).items():
-        if given is None:
-            continue
-        ip = Path(os.path.realpath(given))
-        if ip == real or real in ip.parents:
-            raise PkmdynError(f"--out {out}: holds {label} ({given}), an input of this run; write to another --out")
+    check_inputs_outside(out, inputs)
     rec = out / RECORD
     if out.is_dir() and any(out.iterdir()):
         if not rec.is_file() or rec.is_symlink():
