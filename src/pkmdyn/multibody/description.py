@@ -106,6 +106,27 @@ class _Friction(Section):
     external: list[_ExternalFriction] = Field(default_factory=list, max_length=16)
 
 
+class _Stiffness(Section):
+    """Joint and drive stiffness (``docs/mechanism_format.md``, "Stiffness"): ``drive_N_m`` /
+    ``drive_Nm_rad`` the drive's stiffness along an actuated joint's coordinate (joint side: a
+    ball screw, its nut and bearings, a belt, a gearbox's torsion); ``force_N_m`` and
+    ``moment_Nm_rad`` the joint's stiffness against its reaction force and moment (one number,
+    or three along the axes of the joint's frame on its parent), e.g. a bearing's radial
+    stiffness. Not given: rigid."""
+
+    drive_N_m: float | None = Field(default=None, gt=0)
+    drive_Nm_rad: float | None = Field(default=None, gt=0)
+    force_N_m: float | Vec3 | None = None
+    moment_Nm_rad: float | Vec3 | None = None
+
+    @field_validator("force_N_m", "moment_Nm_rad")
+    @classmethod
+    def _positive(cls, v: float | list[float] | None) -> float | list[float] | None:
+        if v is not None and not all(x > 0 for x in (v if isinstance(v, list) else [v])):
+            raise ValueError("must be positive (leave the key out for a rigid direction)")
+        return v
+
+
 class _Joint(Section):
     name: str = NAME
     type: str
@@ -121,6 +142,7 @@ class _Joint(Section):
     limits_m: Pair | None = None
     limits_rad: Pair | None = None
     friction: _Friction | None = None
+    stiffness: _Stiffness | None = None
 
     @field_validator("type")
     @classmethod
@@ -215,6 +237,7 @@ class _Limits(Section):
     max_time_s: float = Field(default=1e6, gt=0)
     max_friction_coefficient: float = Field(default=10.0, gt=0)
     max_factor: float = Field(default=1e6, gt=0)
+    max_stiffness_SI: float = Field(default=1e13, gt=0)
 
 
 #: the plausibility limits of a description's numbers by the unit of their key: a number whose
@@ -222,6 +245,7 @@ class _Limits(Section):
 #: in this order, so that ``viscous_N_s_m`` is a viscous coefficient and not a length). Every
 #: other number (a gear ratio, a count) is bounded by ``max_factor``; directions (axes, load directions) by nothing.
 MAGNITUDES: tuple[tuple[str, tuple[str, ...], float], ...] = (
+    ("max_stiffness_SI", ("_N_m", "_Nm_rad"), 1.0),
     ("max_viscous_SI", ("_N_s_m", "_Nm_s_rad"), 1.0),
     ("max_gravity_m_s2", ("_m_s2",), 1.0),
     ("max_inertia_kgm2", ("_kgm2",), 1.0),
@@ -306,6 +330,9 @@ class JointSpec:
     offset: float
     limits: tuple[float, float] | None
     friction: dict[str, float] | None
+    #: joint and drive stiffness (:class:`_Stiffness`; ``force_N_m``/``moment_Nm_rad`` as three
+    #: numbers), None when rigid
+    stiffness: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -521,7 +548,32 @@ def _joint(j: _Joint, where: str) -> JointSpec:
                              f"actuated, not a {j.type} joint")
     return JointSpec(name=j.name, type=j.type, parent=j.parent, child=j.child,
                      point=np.array(j.point_m, dtype=float), frame=frame, actuated=bool(j.actuated),
-                     offset=offset, limits=limits, friction=j.friction.model_dump() if j.friction else None)
+                     offset=offset, limits=limits, friction=j.friction.model_dump() if j.friction else None,
+                     stiffness=_stiffness(j, jt, where))
+
+
+def _stiffness(j: _Joint, jt: Any, where: str) -> dict[str, Any] | None:
+    """Joint j's stiffness as plain numbers (three per direction), or None; a drive stiffness
+    only on an actuated joint and in its coordinate's unit."""
+    st = j.stiffness
+    if st is None:
+        return None
+    out: dict[str, Any] = {}
+    for key, unit in (("drive_N_m", "m"), ("drive_Nm_rad", "rad")):
+        v = getattr(st, key)
+        if v is None:
+            continue
+        if not j.actuated:
+            raise ParameterError(f"{where} stiffness.{key}: only an actuated joint has a drive")
+        if jt.units[0] != unit:
+            other = "drive_Nm_rad" if unit == "m" else "drive_N_m"
+            raise ParameterError(f"{where} stiffness.{key}: a {j.type} joint's drive stiffness is {other}")
+        out["drive"] = float(v)
+    for key in ("force_N_m", "moment_Nm_rad"):
+        v = getattr(st, key)
+        if v is not None:
+            out[key] = [float(x) for x in (v if isinstance(v, list) else [v] * 3)]
+    return out or None
 
 
 def _load(ld: _Load, where: str, body_specs: dict[str, BodySpec], task: TaskSpec) -> LoadSpec:

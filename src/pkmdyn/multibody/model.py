@@ -142,6 +142,8 @@ class MechanismModel:
     joint_offset: Array
     joint_limits: tuple[tuple[float, float] | None, ...]
     joint_friction: tuple[dict | None, ...]
+    #: joint and drive stiffness (``JointSpec.stiffness``), None for a rigid joint
+    joint_stiffness: tuple[dict | None, ...]
     coord_joint: IntArray
     coord_motion: IntArray
     coord_offset: Array
@@ -427,6 +429,7 @@ def compile_model(desc: Description) -> MechanismModel:
         joint_cut=np.isin(np.arange(nj), cuts), joint_actuated=np.array([j.actuated for j in desc.joints]),
         joint_q0=q0, joint_nq=nqj, joint_offset=np.array([j.offset for j in desc.joints]),
         joint_limits=tuple(j.limits for j in desc.joints), joint_friction=tuple(j.friction for j in desc.joints),
+        joint_stiffness=tuple(j.stiffness for j in desc.joints),
         coord_joint=np.array(coord_joint, dtype=np.int64), coord_motion=np.array(coord_motion, dtype=np.int64),
         coord_offset=np.array(coord_offset, dtype=float), coord_sign=np.array(coord_sign, dtype=float),
         joint_flipped=np.isin(np.arange(nj), sorted(flipped)), tree_R_parent=tRP, tree_p_parent=tpP,

@@ -31,7 +31,8 @@ from ..errors import ParameterError, SingularityError
 from .kinematics import MechanismKinematics
 from .model import MechanismModel
 
-__all__ = ["elastic_bodies", "compliant_reactions", "ComplianceDataMissing"]
+__all__ = ["elastic_bodies", "compliant_reactions", "ComplianceDataMissing", "beam_terms", "joint_spring_terms",
+           "compliance_terms"]
 
 Array = NDArray[np.float64]
 
@@ -90,11 +91,54 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
         W = b[:, : 6 * nb].reshape(n, nb, 6)
     elastic = elastic_bodies(model)
     t = (A.shape[2] - rank) if rank >= 0 else int(model.topology.overconstraints)
-    if not elastic:
+    if not elastic and not any(st and ("force_N_m" in st or "moment_Nm_rad" in st) for st in model.joint_stiffness):
         names = ", ".join(model.body_names[:4]) + (", ..." if len(model.body_names) > 4 else "")
         raise ComplianceDataMissing(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no "
                                     f"body carries a section and a material ({names}): the joint reactions cannot be "
                                     "made unique (give [[bodies]] section and material)")
+    G, w0, C = compliance_terms(model, kin, W, elastic)
+    if G.shape[1] == 0:
+        raise ComplianceDataMissing(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no "
+                                    "elastic body joins two joints: the joint reactions cannot be made unique")
+    # the compatibility equations are homogeneous in the flexibilities: normalise them (no change
+    # in the result, O(1) numbers for any modulus)
+    C = C / np.abs(C).max()
+    if affine is not None:
+        z0, Z = affine
+        w0 = w0 + np.einsum("nsak,nk->nsa", G, z0)
+        G = np.einsum("nsak,nkl->nsal", G, Z)
+        scale = np.ones(A.shape[2])
+    else:
+        scale = np.ones((nj, 6))
+        scale[:, :3] = model.length_scale
+        scale = np.concatenate([scale.reshape(-1), np.ones(A.shape[2] - k)])
+        if A.shape[2] > k:  # the idle freedoms' holding forces (dynamics.idle_holding) strain no body
+            G = np.concatenate([G, np.zeros(G.shape[:3] + (A.shape[2] - k,))], axis=3)
+    try:
+        res = unique_reactions(A * scale, b, G * scale, w0, C)
+    except SingularityError:
+        missing = [model.body_names[i] for i in range(nb) if i not in elastic]
+        raise ComplianceDataMissing(f"mechanism {model.name!r}: a self-stress state strains no elastic body; give a section "
+                             f"and a material to the bodies of the over-constrained loops (without: "
+                             f"{', '.join(missing[:8])}{' ...' if len(missing) > 8 else ''})") from None
+    lam = res.lam * scale
+    t = int(A.shape[2] - res.rank.min())
+    if affine is not None:
+        return affine[0] + np.einsum("nkl,nl->nk", affine[1], lam), t
+    return lam[:, :k], t
+
+
+def beam_terms(model: MechanismModel, kin: MechanismKinematics, W: Array, elastic: list[int] | None = None
+               ) -> tuple[Array, Array, Array]:
+    """The elastic bodies' beam segments (module docstring): ``G (n, S, 6, 6 nj)`` and
+    ``w0 (n, S, 6)`` with the internal wrench of segment s at its far end ``G_s z + w0_s``
+    (beam frame) for the joint wrenches ``z`` and the required body wrenches ``W (n, nb, 6)``,
+    and its flexibility ``C (n, S, 6, 6)`` (Eq. 64)."""
+    n = len(kin)
+    nj = len(model.joint_names)
+    k = 6 * nj
+    if elastic is None:
+        elastic = elastic_bodies(model)
     G_list, w0_list, C_list = [], [], []
     for bi in elastic:
         joints = [(j, 1.0) for j in range(nj) if model.joint_child[j] == bi]
@@ -138,34 +182,57 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
         w0_list.append(w0)
         C_list.append(C)
     if not G_list:
-        raise ComplianceDataMissing(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no "
-                                    "elastic body joins two joints: the joint reactions cannot be made unique")
-    G = np.concatenate(G_list, axis=1)
-    w0 = np.concatenate(w0_list, axis=1)
-    C = np.concatenate(C_list, axis=1)
-    # the compatibility equations are homogeneous in the flexibilities: normalise them (no change
-    # in the result, O(1) numbers for any modulus)
-    C = C / np.abs(C).max()
-    if affine is not None:
-        z0, Z = affine
-        w0 = w0 + np.einsum("nsak,nk->nsa", G, z0)
-        G = np.einsum("nsak,nkl->nsal", G, Z)
-        scale = np.ones(A.shape[2])
-    else:
-        scale = np.ones((nj, 6))
-        scale[:, :3] = model.length_scale
-        scale = np.concatenate([scale.reshape(-1), np.ones(A.shape[2] - k)])
-        if A.shape[2] > k:  # the idle freedoms' holding forces (dynamics.idle_holding) strain no body
-            G = np.concatenate([G, np.zeros(G.shape[:3] + (A.shape[2] - k,))], axis=3)
-    try:
-        res = unique_reactions(A * scale, b, G * scale, w0, C)
-    except SingularityError:
-        missing = [model.body_names[i] for i in range(nb) if i not in elastic]
-        raise ComplianceDataMissing(f"mechanism {model.name!r}: a self-stress state strains no elastic body; give a section "
-                             f"and a material to the bodies of the over-constrained loops (without: "
-                             f"{', '.join(missing[:8])}{' ...' if len(missing) > 8 else ''})") from None
-    lam = res.lam * scale
-    t = int(A.shape[2] - res.rank.min())
-    if affine is not None:
-        return affine[0] + np.einsum("nkl,nl->nk", affine[1], lam), t
-    return lam[:, :k], t
+        return np.zeros((n, 0, 6, k)), np.zeros((n, 0, 6)), np.zeros((n, 0, 6, 6))
+    return np.concatenate(G_list, axis=1), np.concatenate(w0_list, axis=1), np.concatenate(C_list, axis=1)
+
+
+def joint_spring_terms(model: MechanismModel, kin: MechanismKinematics) -> tuple[Array, Array]:
+    """The joints' springs (``[joints.stiffness]`` ``force_N_m``, ``moment_Nm_rad``): ``P (n, s, 6,
+    6 nj)`` giving each sprung joint's reaction ``[f; m]`` (force, moment about the joint
+    point, along the axes of its frame on the parent) from the joint wrenches ``z``, and the
+    flexibility ``C (n, s, 6, 6)`` (diagonal, ``1/k``; zero along a rigid direction)."""
+    from .kinematics import joint_frame
+
+    n, nj = len(kin), len(model.joint_names)
+    P_list, C_list = [], []
+    for j, st in enumerate(model.joint_stiffness):
+        if not st or not ("force_N_m" in st or "moment_Nm_rad" in st):
+            continue
+        RP, _ = joint_frame(model, kin, j, child=False)
+        pt = kin.joint_point[:, j]
+        P = np.zeros((n, 1, 6, 6 * nj))
+        # W_j = [n_O; f]: f' = R^T f, m' = R^T (n_O - p x f)
+        RT = np.swapaxes(RP, 1, 2)
+        P[:, 0, :3, 6 * j + 3:6 * j + 6] = RT
+        P[:, 0, 3:, 6 * j:6 * j + 3] = RT
+        P[:, 0, 3:, 6 * j + 3:6 * j + 6] = -RT @ _skew(pt)
+        c = np.zeros(6)
+        if "force_N_m" in st:
+            c[:3] = 1.0 / np.asarray(st["force_N_m"], dtype=float)
+        if "moment_Nm_rad" in st:
+            c[3:] = 1.0 / np.asarray(st["moment_Nm_rad"], dtype=float)
+        P_list.append(P)
+        C_list.append(np.broadcast_to(np.diag(c), (n, 1, 6, 6)))
+    if not P_list:
+        return np.zeros((n, 0, 6, 6 * nj)), np.zeros((n, 0, 6, 6))
+    return np.concatenate(P_list, axis=1), np.concatenate(C_list, axis=1)
+
+
+def compliance_terms(model: MechanismModel, kin: MechanismKinematics, W: Array, elastic: list[int] | None = None
+                     ) -> tuple[Array, Array, Array]:
+    """Every compliant member's internal wrench ``G_s z + w0_s`` and flexibility ``C_s``: the
+    elastic bodies' beam segments (:func:`beam_terms`), then the joints' springs
+    (:func:`joint_spring_terms`, ``w0 = 0``)."""
+    Gb, w0b, Cb = beam_terms(model, kin, W, elastic)
+    Pj, Cj = joint_spring_terms(model, kin)
+    return (np.concatenate([Gb, Pj], axis=1), np.concatenate([w0b, np.zeros(Pj.shape[:3])], axis=1),
+            np.concatenate([Cb, Cj], axis=1))
+
+
+def _skew(p: Array) -> Array:
+    """``[p]x (n, 3, 3)``."""
+    S = np.zeros(p.shape[:-1] + (3, 3))
+    S[..., 0, 1], S[..., 0, 2] = -p[..., 2], p[..., 1]
+    S[..., 1, 0], S[..., 1, 2] = p[..., 2], -p[..., 0]
+    S[..., 2, 0], S[..., 2, 1] = -p[..., 1], p[..., 0]
+    return S

@@ -1,0 +1,393 @@
+"""Stiffness, deflection and natural frequencies with the actuators locked
+(pkmdyn.multibody.stiffness), against closed forms (Gosselin's J^T diag(k) J with the Stewart
+oracle's Jacobian, cantilever and bar formulas), an independent frame finite-element model
+(tests/oracles/frame_fe.py) and the eigenvalues of M^-1 K; and the command."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import multibody_examples as ex
+from oracles import stewart
+from oracles.frame_fe import Frame
+from pkmdyn.multibody import load_mechanism, solve_kinematics
+from pkmdyn.multibody.machine import machine_verbs
+from pkmdyn.multibody.dynamics import joint_reactions
+from pkmdyn.multibody.description import load_description
+from pkmdyn.multibody.kinematics import reference_task
+from pkmdyn.multibody.model import compile_model
+from pkmdyn.multibody.stiffness import StiffnessDataMissing, deflection, stiffness
+
+E_STEEL, NU = 2.1e11, 0.3
+G_STEEL = E_STEEL / (2 * (1 + NU))
+
+
+def _rel(a, b):
+    return float(np.abs(np.asarray(a) - np.asarray(b)).max() / max(np.abs(np.asarray(b)).max(), 1e-300))
+
+
+def _with_drives(d, k):
+    """The description's model with leg P_i's drive stiffness ``k[i]`` [N/m] (the legs come from
+    two templates, so the values are set on the expanded joints)."""
+    desc = load_description(d)
+    joints = [dataclasses.replace(js, stiffness={"drive": float(k[int(js.name.split("_")[1]) - 1])})
+              if js.actuated else js for js in desc.joints]
+    return compile_model(dataclasses.replace(desc, joints=type(desc.joints)(joints)))
+
+
+def _poses(m, n, seed):
+    rng = np.random.default_rng(seed)
+    amp = np.array([0.08, 0.08, 0.08, 0.1, 0.1, 0.15])
+    return reference_task(m) + rng.uniform(-1, 1, (n, 6)) * amp
+
+
+def _oracle_J(x):
+    """dL/dx of the six legs (oracle order) at task poses x (n, 6), Euler XYZ."""
+    a, b, _ = stewart.default_geometry()
+    ref = stewart.inverse_kinematics(a, b, x[:, :3], x[:, 3:], "XYZ")
+    E = np.stack([stewart.euler_kinematics(x[:, 3:], "XYZ", np.eye(3)[k][None].repeat(len(x), 0))["omega"]
+                  for k in range(3)], axis=-1)
+    return np.concatenate([ref["J"][:, :, :3], np.einsum("nij,njk->nik", ref["J"][:, :, 3:], E)], axis=-1), ref["L"]
+
+
+def test_stewart_with_drive_springs_is_gosselin():
+    k = np.array([1.0e7, 2.0e7, 3.5e7, 1.5e7, 2.5e7, 0.8e7])
+    m = _with_drives(ex.builtin_dict("stewart"), k)
+    x = _poses(m, 12, seed=5)
+    st = stiffness(m, solve_kinematics(m, x))
+    J, _ = _oracle_J(x)
+    K_ref = np.einsum("nat,a,nas->nts", J, k, J)
+    assert _rel(st.K_task, K_ref) < 1e-10
+    # the inverse is the compliance, and the eigen-stiffnesses are K's
+    assert _rel(np.einsum("nij,njk->nik", st.K_task, st.C_task), np.broadcast_to(np.eye(6), (12, 6, 6))) < 1e-10
+    assert _rel(st.eigenvalues, np.linalg.eigvalsh(K_ref)) < 1e-10
+
+
+def test_stewart_beam_pistons_add_EA_over_L_in_series():
+    k = np.full(6, 2.0e7)
+    outer, inner = 0.03, 0.02
+    d = ex.builtin_dict("stewart")
+    for leg in d["legs"]:
+        for b in leg["bodies"]:
+            if b["name"] == "piston":
+                b["section"] = {"outer_diameter_m": outer, "inner_diameter_m": inner}
+                b["material"] = {"youngs_modulus_Pa": E_STEEL, "poisson_ratio": NU}
+    m = _with_drives(d, k)
+    x = _poses(m, 6, seed=8)
+    st = stiffness(m, solve_kinematics(m, x))
+    J, L = _oracle_J(x)
+    EA = E_STEEL * np.pi * (outer**2 - inner**2) / 4
+    k_leg = 1.0 / (1.0 / k + L / EA)  # the piston's beam spans the leg, U centre to S centre
+    K_ref = np.einsum("nat,na,nas->nts", J, k_leg, J)
+    assert _rel(st.K_task, K_ref) < 1e-10
+    # and it is softer than the drives alone by a visible amount
+    assert _rel(st.K_task, np.einsum("nat,a,nas->nts", J, k, J)) > 1e-3
+
+
+def _four_bar(a=0.5, b=0.8, c=0.6, D=0.02, kd=2.0e4, elastic=("crank", "rocker"), crank_x=0.0):
+    """A planar four-bar in z = 0: crank A(0,0)-B(crank_x, a), coupler B-C(b, ...), rocker C-D;
+    the crank's drive a torsional spring; the listed links beams of diameter D."""
+    A, B = (0.0, 0.0, 0.0), (crank_x, a, 0.0)
+    C, Dp = (crank_x + b, a + 0.1, 0.0), (b + 0.2, a + 0.1 - c, 0.0)
+    sec = {"outer_diameter_m": D}
+    mat = {"youngs_modulus_Pa": E_STEEL, "poisson_ratio": NU}
+    bodies = []
+    for name, p, q in (("crank", A, B), ("coupler", B, C), ("rocker", C, Dp)):
+        bd = ex.body(name, tuple((np.add(p, q) / 2).tolist()), mass=2.0)
+        if name in elastic:
+            bd.update(section=sec, material=mat)
+        bodies.append(bd)
+    Z = [0.0, 0.0, 1.0]
+    joints = [ex.joint("A", "revolute", "ground", "crank", A, axis=Z, actuated=True, stiffness={"drive_Nm_rad": kd}),
+              ex.joint("B", "revolute", "crank", "coupler", B, axis=Z),
+              ex.joint("C", "revolute", "coupler", "rocker", C, axis=Z),
+              ex.joint("D", "revolute", "rocker", "ground", Dp, axis=Z)]
+    return {"mechanism": {"name": "beam_four_bar", "gravity_m_s2": [0.0, -9.81, 0.0]}, "bodies": bodies,
+            "joints": joints, "task": {"body": "coupler", "position": ["x"]}}, (A, B, C, Dp)
+
+
+def test_square_four_bar_against_textbook_beams():
+    """Crank A(0,0)-B(0,a) and rocker C(b,a)-D(b,0) of one section, a rigid coupler B-C: a
+    horizontal force at the coupler bends the crank as a cantilever on its drive spring
+    (the rocker, pinned at both ends, carries nothing); a vertical force at the coupler's middle
+    is shared by the two links in tension; a moment turns the coupler by their opposite
+    stretches."""
+    a, b, D, kd = 0.5, 0.8, 0.02, 2.0e4
+    d = {"mechanism": {"name": "square"},
+         "bodies": [dict(ex.body("crank", (0, a / 2, 0)), section={"outer_diameter_m": D},
+                         material={"youngs_modulus_Pa": E_STEEL, "poisson_ratio": NU}),
+                    ex.body("coupler", (b / 2, a, 0)),
+                    dict(ex.body("rocker", (b, a / 2, 0)), section={"outer_diameter_m": D},
+                         material={"youngs_modulus_Pa": E_STEEL, "poisson_ratio": NU})],
+         "joints": [ex.joint("A", "revolute", "ground", "crank", (0, 0, 0), axis=ex.Z, actuated=True,
+                             stiffness={"drive_Nm_rad": kd}),
+                    ex.joint("B", "revolute", "crank", "coupler", (0, a, 0), axis=ex.Z),
+                    ex.joint("C", "revolute", "coupler", "rocker", (b, a, 0), axis=ex.Z),
+                    ex.joint("D", "revolute", "rocker", "ground", (b, 0, 0), axis=ex.Z)],
+         "task": {"body": "coupler", "position": ["x"]}}
+    m = load_mechanism(d)
+    st = stiffness(m, solve_kinematics(m, reference_task(m)[None]))
+    I, A = np.pi * D**4 / 64, np.pi * D**2 / 4
+    C = st.C_point[0]
+    assert C[3, 3] == pytest.approx(a**3 / (3 * E_STEEL * I) + a**2 / kd, rel=1e-10)
+    assert C[4, 4] == pytest.approx(a / (2 * E_STEEL * A), rel=1e-10)
+    assert C[2, 2] == pytest.approx(2 * a / (E_STEEL * A * b**2), rel=1e-10)
+    assert st.K_task[0, 0, 0] == pytest.approx(1.0 / (a**3 / (3 * E_STEEL * I) + a**2 / kd), rel=1e-10)
+
+
+def _fe_four_bar(pts, D, kd, elastic, loads=None):
+    """The same four-bar as a frame: beams for the elastic links, rigid links otherwise, revolute
+    hinges about z (translations and the two other rotations coupled), the drive a spring."""
+    A, B, C, Dp = (np.array(p) for p in pts)
+    f = Frame()
+    I, Ar = np.pi * D**4 / 64, np.pi * D**2 / 4
+    ends = {}
+    for name, p, q in (("crank", A, B), ("coupler", B, C), ("rocker", C, Dp)):
+        n1, n2 = f.add_node(p), f.add_node(q)
+        mid = f.add_node((p + q) / 2)
+        if name in elastic:
+            nodes = f.add_beam(n1, n2, E_STEEL, G_STEEL, Ar, I, I, 2 * I, segments=2)
+            assert len(nodes) == 3
+            f.couple(nodes[1], mid, (0, 1, 2, 3, 4, 5))
+        else:
+            f.add_rigid(mid, n1)
+            f.add_rigid(mid, n2)
+        ends[name] = (n1, n2, mid)
+    hinge = (0, 1, 2, 3, 4)
+    f.support(ends["crank"][0], hinge)
+    f.spring(ends["crank"][0], 5, kd)
+    f.couple(ends["crank"][1], ends["coupler"][0], hinge)
+    f.couple(ends["coupler"][1], ends["rocker"][0], hinge)
+    f.support(ends["rocker"][1], hinge)
+    return f, ends
+
+
+@pytest.mark.parametrize("elastic", [("crank", "coupler", "rocker"), ("crank", "rocker"), ("coupler",)])
+def test_over_constrained_four_bar_of_beams_against_frame_elements(elastic):
+    """A spatially over-constrained four-bar (three parallel-axis hinges too many): the 6 x 6
+    compliance of the coupler's middle, every direction including the out-of-plane ones that
+    the self-stress decides, against the independent frame model."""
+    kd, D = 3.0e4, 0.02
+    d, pts = _four_bar(elastic=elastic, crank_x=0.15, kd=kd, D=D)
+    m = load_mechanism(d)
+    assert m.topology.overconstraints == 3
+    st = stiffness(m, solve_kinematics(m, reference_task(m)[None]))
+    f, ends = _fe_four_bar(pts, D, kd, elastic)
+    C_fe = f.compliance(ends["coupler"][2])
+    perm = [3, 4, 5, 0, 1, 2]  # [rotations; translations] -> the frame's [translations; rotations]
+    C = st.C_point[0][np.ix_(perm, perm)]
+    assert _rel(C, C_fe) < 1e-9
+
+
+def test_deflection_under_gravity_against_frame_elements():
+    """The four-bar under its own weight (static): the coupler's deflection along the task
+    coordinate from the motion's reactions (unit-load method) against the frame model loaded
+    by the same weights at the links' middles."""
+    kd, D = 3.0e4, 0.02
+    elastic = ("crank", "coupler", "rocker")
+    d, pts = _four_bar(elastic=elastic, crank_x=0.15, kd=kd, D=D)
+    m = load_mechanism(d)
+    x = reference_task(m)[None]
+    kin = solve_kinematics(m, x)
+    reac = joint_reactions(m, kin)
+    dx = deflection(m, kin, reac)
+    f, ends = _fe_four_bar(pts, D, kd, elastic)
+    g = np.array([0.0, -9.81, 0.0])
+    loads = {ends[name][2]: np.concatenate([2.0 * g, np.zeros(3)]) for name in ("crank", "coupler", "rocker")}
+    u = f.solve(loads)
+    # the task point is the coupler's centre of mass, its x the task coordinate
+    assert dx[0, 0] == pytest.approx(u[ends["coupler"][2]][0], rel=1e-9)
+    assert abs(dx[0, 0]) > 1e-7  # a real deflection, not zero against zero
+
+
+def test_deflection_is_compliance_times_load():
+    """A constant wrench on the Stewart platform, no gravity, at rest: the deflection from the
+    reactions equals the task compliance times the generalised force (two routes)."""
+    k = np.array([1.0e7, 2.0e7, 3.5e7, 1.5e7, 2.5e7, 0.8e7])
+    d = ex.builtin_dict("stewart")
+    d["mechanism"]["gravity_m_s2"] = [0.0, 0.0, 0.0]
+    F, M = np.array([120.0, -80.0, 300.0]), np.array([15.0, -25.0, 40.0])
+    d["loads"] = [{"body": "platform", "force_N": F.tolist(), "moment_Nm": M.tolist(), "point_m": [0.1, 0.05, 1.0]}]
+    m = _with_drives(d, k)
+    x = _poses(m, 4, seed=3)
+    kin = solve_kinematics(m, x)
+    dx = deflection(m, kin, joint_reactions(m, kin))
+    st = stiffness(m, kin)
+    # the load as a wrench at the task point [moment; force], then the task body's displacement
+    pl = m.task_body
+    p_task = kin.origin[:, pl] + np.einsum("nij,j->ni", kin.R[:, pl], m.task_point)
+    p_load = kin.origin[:, pl] + np.einsum("nij,j->ni", kin.R[:, pl], m.load_point[0])
+    w = np.concatenate([M + np.cross(p_load - p_task, F), np.broadcast_to(F, (4, 3))], axis=1)
+    t = np.einsum("nij,nj->ni", st.C_point, w)  # [dtheta; dp_task]
+    J, _ = _oracle_J(x)
+    # the same displacement in task coordinates: dp directly, the angles through omega = E phi_dot
+    E = np.stack([stewart.euler_kinematics(x[:, 3:], "XYZ", np.eye(3)[k_][None].repeat(4, 0))["omega"]
+                  for k_ in range(3)], axis=-1)
+    dphi = np.linalg.solve(E, t[:, :3, None])[..., 0]
+    assert _rel(dx[:, :3], t[:, 3:]) < 1e-9
+    assert _rel(dx[:, 3:], dphi) < 1e-9
+    # and by Gosselin: the legs' stretch u / k, dx = J^-1 (u / k)
+    u_legs = np.linalg.solve(np.swapaxes(J, 1, 2), np.einsum("nij,nj->ni", st.K_task, dx)[..., None])[..., 0]
+    assert _rel(np.linalg.solve(J, (u_legs / k)[..., None])[..., 0], dx) < 1e-9
+
+
+def test_stewart_frequencies_are_the_eigenvalues_of_M_inv_K():
+    m = load_mechanism(ex.MACHINES / "stewart" / "stewart.toml")
+    x = _poses(m, 5, seed=11)
+    st = stiffness(m, solve_kinematics(m, x))
+    M = machine_verbs(m).mass_matrix(m, x)  # the dynamics' own mass matrix (no drives here)
+    lam = np.sort(np.linalg.eigvals(np.linalg.solve(M, st.K_task)).real, axis=1)
+    assert _rel((2 * np.pi * st.frequencies) ** 2, lam) < 1e-8
+    # energy of a mode: phi^T K phi = omega^2 phi^T M phi, the modes M-orthogonal
+    w2 = (2 * np.pi * st.frequencies) ** 2
+    for s in range(5):
+        phi = st.modes[s]
+        Km, Mm = phi.T @ st.K_task[s] @ phi, phi.T @ M[s] @ phi
+        assert _rel(np.diag(Km), w2[s] * np.diag(Mm)) < 1e-8
+        assert _rel(np.diag(Mm), st.modal_mass[s]) < 1e-10
+        off = Mm - np.diag(np.diag(Mm))
+        assert np.abs(off).max() < 1e-8 * np.abs(Mm).max()
+        assert np.abs(phi).max(axis=0) == pytest.approx(np.ones(6), rel=1e-12)
+
+
+def test_worst_directions_of_a_stewart():
+    m = load_mechanism(ex.MACHINES / "stewart" / "stewart.toml")
+    x = _poses(m, 3, seed=2)
+    st = stiffness(m, solve_kinematics(m, x))
+    for s in range(3):
+        Cf = st.C_point[s, 3:, 3:]
+        d = st.min_stiffness_direction[s]
+        # the worst direction's compliance is the largest over random directions
+        rng = np.random.default_rng(s)
+        v = rng.normal(size=(500, 3))
+        v /= np.linalg.norm(v, axis=1, keepdims=True)
+        assert np.einsum("ki,ij,kj->k", v, Cf, v).max() <= d @ Cf @ d * (1 + 1e-12)
+        assert st.min_stiffness[s] == pytest.approx(1.0 / (d @ Cf @ d), rel=1e-10)
+
+
+def test_delta_turns_nowhere_with_rigid_rods():
+    m = load_mechanism(ex.MACHINES / "delta" / "delta.toml")
+    st = stiffness(m, solve_kinematics(m, reference_task(m)[None]))
+    assert np.isinf(st.min_rot_stiffness[0])
+    assert np.isfinite(st.min_stiffness[0]) and st.min_stiffness[0] > 0
+
+
+def test_no_compliance_source_is_refused():
+    d = ex.builtin_dict("stewart")
+    for leg in d["legs"]:
+        for j in leg["joints"]:
+            j.pop("stiffness", None)
+    m = load_mechanism(d)
+    with pytest.raises(StiffnessDataMissing, match="no compliance source"):
+        stiffness(m, solve_kinematics(m, reference_task(m)[None]))
+
+
+def test_section_without_material_is_named():
+    d, _ = _four_bar()
+    d["bodies"][0].pop("material")
+    m = load_mechanism(d)
+    with pytest.raises(StiffnessDataMissing, match="'crank'.*no material"):
+        stiffness(m, solve_kinematics(m, reference_task(m)[None]))
+
+
+def _cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "pkmdyn.cli", *args], capture_output=True, text=True, cwd=cwd)
+
+
+def _write(tmp_path, d, name="m.toml"):
+    import tomlkit
+
+    p = tmp_path / name
+    p.write_text(tomlkit.dumps(d))
+    return p
+
+
+@pytest.mark.parametrize("change, words", [
+    (lambda d: d["joints"][0].update(stiffness={"drive_Nm_rad": -5.0}), "drive_Nm_rad"),
+    (lambda d: d["joints"][1].update(stiffness={"drive_Nm_rad": 5.0}), "only an actuated joint"),
+    (lambda d: d["joints"][0].update(stiffness={"drive_N_m": 5.0}), "drive_Nm_rad"),
+    (lambda d: d["joints"][1].update(stiffness={"force_N_m": [1e8, 0.0, 1e8]}), "force_N_m"),
+    (lambda d: d["bodies"][0]["material"].update(youngs_modulus_Pa=0.0), "youngs_modulus_Pa"),
+    (lambda d: d["bodies"][2].pop("material"), "no material"),
+    (lambda d: [j.pop("stiffness", None) for j in d["joints"]] and [b.pop(k, None) for b in d["bodies"]
+                                                                     for k in ("section", "material")],
+     "no compliance source"),
+])
+def test_bad_compliance_data_exit_2_nothing_written(tmp_path, change, words):
+    d, _ = _four_bar()
+    change(d)
+    path = _write(tmp_path, d)
+    out = tmp_path / "out"
+    r = _cli("stiffness", "--machine", str(path), "--out", str(out))
+    assert r.returncode == 2, r.stderr
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and words in lines[0], r.stderr
+    assert not out.exists()
+
+
+def test_singular_pose_is_refused(tmp_path):
+    """Coupler and rocker in line: with the crank locked, the coupler's far end moves across the
+    line freely (infinite compliance)."""
+    d, _ = _four_bar()
+    B = (0.0, 0.5, 0.0)
+    d["joints"][1]["point_m"] = list(B)
+    d["joints"][2]["point_m"] = [0.8, 0.5, 0.0]
+    d["joints"][3]["point_m"] = [1.4, 0.5, 0.0]
+    d["bodies"][1]["com_m"] = [0.4, 0.5, 0.0]
+    d["bodies"][2]["com_m"] = [1.1, 0.5, 0.0]
+    path = _write(tmp_path, d)
+    out = tmp_path / "out"
+    r = _cli("stiffness", "--machine", str(path), "--out", str(out))
+    assert r.returncode == 2, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and "singular" in r.stderr, r.stderr
+    assert not out.exists()
+
+
+def test_command_pose_motion_and_grid(tmp_path):
+    out = tmp_path / "pose"
+    r = _cli("stiffness", "--machine", "stewart", "--pose", "x=0.02,euler3_rad=0.05", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((out / "stiffness.json").read_text())
+    p = doc["poses"][0]
+    assert p["task"]["x_m"] == 0.02 and p["task"]["euler3_rad"] == 0.05
+    K = np.array(p["K_task"])
+    assert K.shape == (6, 6) and np.allclose(K, K.T, rtol=1e-12, atol=0)
+    assert p["K_task_units"][0][3] == "N/rad" and p["K_task_units"][3][0] == "N m/m"
+    assert len(p["frequencies_Hz"]) == 6 and p["frequencies_Hz"] == sorted(p["frequencies_Hz"])
+    assert doc["sources"]["drives"] and (out / "report.html").exists()
+
+    # a motion: the deflection columns, the same stiffness at its samples as the API's
+    from pkmdyn.multibody import default_motion
+
+    m = load_mechanism(ex.MACHINES / "stewart" / "stewart.toml")
+    mo = default_motion(m)
+    cols = {"t_s": mo.t}
+    for i, (n, u) in enumerate(zip(m.task_names, m.task_units)):
+        cols[f"{n}_{u}"] = mo.x[:, i]
+    mfile = tmp_path / "motion.csv"
+    names = list(cols)
+    mfile.write_text(",".join(names) + "\n" + "\n".join(",".join(repr(float(cols[k][s])) for k in names)
+                                                        for s in range(len(mo.t))) + "\n")
+    out = tmp_path / "motion"
+    r = _cli("stiffness", "--machine", "stewart", "--motion", str(mfile), "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    head = (out / "results.csv").read_text().splitlines()[0].split(",")
+    for n, u in zip(m.task_names, m.task_units):
+        assert f"{n}_deflection_{u}" in head
+    assert "lowest_frequency_Hz" in head and "min_stiffness_N_m" in head
+
+    out = tmp_path / "grid"
+    r = _cli("stiffness", "--machine", "stewart", "--grid", "x=-0.1:0.1:3,z=0.95:1.05:3", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    assert (out / "stiffness_map.png").stat().st_size > 0
+    rows = (out / "grid.csv").read_text().splitlines()
+    assert len(rows) == 1 + 9
+    doc = json.loads((out / "stiffness.json").read_text())
+    worst = doc["worst"]
+    assert worst["min_stiffness_N_m"] == min(p["min_stiffness_N_m"] for p in doc["poses"])
