@@ -302,6 +302,30 @@ def _stewart_loops(out: dict, m, seconds: float = 2.0) -> None:
         "mujoco_stewart_loop_realtime_factor"]
 
 
+def _stiffness(out: dict, m, repeat: int, oracle) -> None:
+    """The stiffness of the Stewart platform with its drives locked at 1,000 poses, batched
+    (kinematics solved first, not timed), and its agreement with Gosselin's J^T diag(k) J from
+    the closed-form oracle's Jacobian."""
+    from pkmdyn.multibody.stiffness import stiffness
+
+    rng = np.random.default_rng(7)
+    x = reference_task(m) + rng.uniform(-1, 1, (1000, 6)) * np.array([0.08, 0.08, 0.08, 0.1, 0.1, 0.15])
+    kin = solve_kinematics(m, x)
+    stiffness(m, kin.rows(0, 2))  # the kernels compiled
+    out["stiffness_1000_poses_s"] = best_time(lambda: stiffness(m, kin), repeat)
+    if oracle is None:
+        return
+    st = stiffness(m, kin)
+    a, b, _ = oracle.default_geometry()
+    ref = oracle.inverse_kinematics(a, b, x[:, :3], x[:, 3:], "XYZ")
+    E = np.stack([oracle.euler_kinematics(x[:, 3:], "XYZ", np.eye(3)[k][None].repeat(len(x), 0))["omega"]
+                  for k in range(3)], axis=-1)
+    J = np.concatenate([ref["J"][:, :, :3], np.einsum("nij,njk->nik", ref["J"][:, :, 3:], E)], axis=-1)
+    legs = [m.actuator_names.index(f"P_{i + 1}") for i in range(6)]
+    k = np.array([m.joint_stiffness[m.act_joint[a_]]["drive"] for a_ in legs])
+    out["stiffness_gosselin_max_rel_diff"] = _rel(st.K_task, np.einsum("nat,a,nas->nts", J, k, J))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", action="store_true", help="print only the JSON object")
@@ -401,6 +425,7 @@ def main() -> None:
     _dynamics(out, n, args.repeat, m, hip, mh, pm)
     _direct(out, n, args.repeat, {"stewart": m, "hip": mh, "delta": md, "pdm": mp})
     _stewart_loops(out, m)
+    _stiffness(out, m, args.repeat, stewart_oracle)
     out["targets"] = {"stewart_kinematics_us_per_sample<=20": out["stewart_kinematics_us_per_sample"] <= 20.0,
                       "hip_max_rel_diff<=1e-9": out["hip_max_rel_diff"] <= 1e-9,
                       "hip_generic_within_10x_of_closed_form": out["hip_generic_over_closed_form"] <= 10.0,
@@ -419,6 +444,8 @@ def main() -> None:
                       "dk_round_trips": all(out[f"{k}_dk_direct_of_inverse_max_err"] <= 1e-10
                                             and out[f"{k}_dk_inverse_of_direct_max_err"] <= 1e-12
                                             for k in ("stewart", "hip", "delta", "pdm")),
+                      "stiffness_1000_poses_s<=1": out["stiffness_1000_poses_s"] <= 1.0,
+                      "stiffness_gosselin_max_rel_diff<=1e-10": out.get("stiffness_gosselin_max_rel_diff", 0.0) <= 1e-10,
                       "stewart_exact_encoder_loop_at_least_mujoco":
                           out.get("stewart_exact_encoder_loop_over_mujoco", 0.0) >= 1.0}
     print(json.dumps(out, indent=None if args.json else 2))

@@ -391,3 +391,23 @@ def test_command_pose_motion_and_grid(tmp_path):
     doc = json.loads((out / "stiffness.json").read_text())
     worst = doc["worst"]
     assert worst["min_stiffness_N_m"] == min(p["min_stiffness_N_m"] for p in doc["poses"])
+
+
+def test_sweep_reports_stiffness_metrics_that_scale_with_the_drives(tmp_path):
+    """Doubling every drive's stiffness (the only source) doubles the stiffness and multiplies
+    the frequencies by sqrt(2), design by design."""
+    pq = pytest.importorskip("pyarrow.parquet")
+    from pkmdyn.cli import main
+
+    space = tmp_path / "space.toml"
+    space.write_text('[sampling]\nmethod = "grid"\n[motion]\nreactions = false\n[parameters]\n'
+                     '"parameters.drive_stiffness_N_m" = { values = [1.0e7, 2.0e7] }\n'
+                     '[objectives]\nmin_stiffness_N_m = "max"\n')
+    out = tmp_path / "out"
+    assert main(["sweep", "--machine", "stewart", "--space", str(space), "--workers", "0", "--no-plots",
+                 "--out", str(out)]) == 0
+    rows = sorted(pq.read_table(out / "designs.parquet").to_pylist(), key=lambda r: r["design_id"])
+    assert [r["status"] for r in rows] == ["ok", "ok"]
+    assert rows[1]["min_stiffness_N_m"] == pytest.approx(2 * rows[0]["min_stiffness_N_m"], rel=1e-9)
+    assert rows[1]["min_rot_stiffness_Nm_rad"] == pytest.approx(2 * rows[0]["min_rot_stiffness_Nm_rad"], rel=1e-9)
+    assert rows[1]["lowest_frequency_Hz"] == pytest.approx(np.sqrt(2) * rows[0]["lowest_frequency_Hz"], rel=1e-9)

@@ -75,6 +75,11 @@ def describe(machine: str) -> None:
                      for cut, chain, kind in model.legs.names) or "none; Newton solves every loop")
         + (" (every block: Newton only checks)" if model.legs.count == model.solver_blocks.shape[0] - 1 else ""),
     ]
+    from ..multibody.stiffness import compliance_sources
+
+    src = compliance_sources(model)
+    lines.append("compliance (pkmdyn stiffness): " + ("; ".join(f"{k} {', '.join(v)}" for k, v in src.items() if v)
+                                                      or "none (every body, joint and drive rigid)"))
     if model.parameters:
         lines.append("parameters: " + "; ".join(f"{k} = {_shown(v)}" for k, v in model.parameters.items()))
     for line in lines:

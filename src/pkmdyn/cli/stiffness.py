@@ -20,13 +20,16 @@ _MACHINE_HELP = "A built-in machine (see pkmdyn machines) or a mechanism descrip
 @click.option("--motion", "motion_path", type=PATH_IN, default=None,
               help="A task motion file (as for pkmdyn run): the stiffness at every sample and the deflection under "
                    "the motion's own loads, in results.csv.")
+@click.option("--default-motion", is_flag=True,
+              help="The description's default motion (one cycle) as the motion.")
 @click.option("--grid", default=None, metavar="NAME=LOW:HIGH:COUNT[,NAME=...]",
               help="One or two task coordinates swept about the reference pose: grid.csv and stiffness_map.png.")
 @click.option("--limit", "limit_items", multiple=True, metavar="KEY=VALUE",
               help="Raise a plausibility limit of the description's numbers ([limits]).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder (an earlier run there is replaced whole).")
-def stiffness_command(machine: str, poses: tuple[str, ...], motion_path: Path | None, grid: str | None,
+def stiffness_command(machine: str, poses: tuple[str, ...], motion_path: Path | None, default_motion: bool,
+                      grid: str | None,
                       limit_items: tuple[str, ...], out_dir: Path) -> None:
     """Cartesian stiffness of the task body with the actuators locked (from the drives', links' and
     joints' compliance), its eigen-stiffnesses and worst directions, natural frequencies and modes;
@@ -39,7 +42,8 @@ def stiffness_command(machine: str, poses: tuple[str, ...], motion_path: Path | 
     from ..params_util import parse_limit_options
     from .mechanism import _load
 
-    given = [o for o, v in (("--pose", poses), ("--motion", motion_path), ("--grid", grid)) if v]
+    given = [o for o, v in (("--pose", poses), ("--motion", motion_path), ("--default-motion", default_motion),
+                            ("--grid", grid)) if v]
     if len(given) > 1:
         raise click.UsageError(f"{' and '.join(given)} exclude each other: give poses, a motion or a grid")
     entry, path = resolve(machine)
@@ -54,6 +58,10 @@ def stiffness_command(machine: str, poses: tuple[str, ...], motion_path: Path | 
         kw["poses"] = np.stack([parse_pose(model, p) for p in poses])
     elif motion_path is not None:
         kw["motion"] = read_task_motion(model, Path(motion_path).absolute())
+    elif default_motion:
+        from ..multibody.motion import default_motion as one_cycle
+
+        kw["motion"] = one_cycle(model)
     elif grid is not None:
         kw["grid"] = parse_grid(model, grid)
     text = path.read_text(encoding="utf-8", errors="replace") if path is not None else ""

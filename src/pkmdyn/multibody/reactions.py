@@ -16,8 +16,9 @@ child, ``-W_j`` as the parent) and, at the centre of mass, the gravity and d'Ale
 ``-W_b`` (Eq. 1 of :mod:`.dynamics`), each reduced to its node (moment transported along the
 offset from the axis). Each segment between consecutive nodes is a cantilever of uniform
 circular section (tension, torsion, bending; shear neglected, Eq. 64) carrying the resultant
-of the loads beyond it. Only bending, torsion and tension of the links strain: the joints are
-rigid. The compatibility equations are homogeneous in the compliances, so the reactions do
+of the loads beyond it. Bending, torsion and tension of the links strain, and the joints that
+the description gives springs (``[joints.stiffness]`` ``force_N_m``, ``moment_Nm_rad``: their
+reaction force and moment, :func:`joint_spring_terms`); the other joints are rigid. The compatibility equations are homogeneous in the compliances, so the reactions do
 not change when every Young's modulus is scaled by one factor (tested).
 """
 

@@ -276,7 +276,11 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
 
         kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
         st = stiffness(model, kin)
-        reac = joint_reactions(model, kin, named=motion.loads)
+        src = compliance_sources(model)
+        # rigid links and joints: a self-stress of an over-constrained mechanism strains no member
+        # (the drives' efforts are fixed), so the minimum-norm reactions give the same deflection
+        over = "compliance" if src["bodies"] or src["joints"] else "minimum-norm"
+        reac = joint_reactions(model, kin, named=motion.loads, overconstrained=over)
         dx = deflection(model, kin, reac, named=motion.loads)
         cols = {"t_s": np.asarray(motion.t, dtype=float)}
         for i, (n, u) in enumerate(zip(model.task_names, model.task_units)):

@@ -50,6 +50,8 @@ class DescribedSweepContext:
     motion: Any
     threshold: float
     reactions: bool
+    #: the stiffness metrics the base description has (:func:`_stiffness_metrics`)
+    stiffness: tuple[str, ...] = ()
 
 
 def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[str]]:
@@ -151,6 +153,8 @@ class DescribedSweep:
             MetricInfo("peak_power_W", "W", "max over samples of sum_k u_k s_dot_k"),
             MetricInfo("motor_energy_per_cycle_J", "J", "int sum_k |u_k s_dot_k| dt over the motion"),
         ]
+        out += [MetricInfo(name, unit, text) for name, unit, text in _STIFFNESS_METRICS
+                if name in _stiffness_metrics(self.raw if description is None else description)]
         if options.get("reactions", True) is True:
             out.append(MetricInfo("friction_energy_per_cycle_J", "J",
                                   "int (power dissipated by the joints' friction) dt over the motion"))
@@ -191,13 +195,46 @@ class DescribedSweep:
                 raise ComplianceDataMissing(f"[motion] reactions: {exc}; or set reactions = false") from None
             except PkmdynError:
                 pass  # the base design's own trouble is its row's, not the sweep's
-        return DescribedSweepContext(motion=motion, threshold=opt.singularity_threshold, reactions=opt.reactions)
+        return DescribedSweepContext(motion=motion, threshold=opt.singularity_threshold, reactions=opt.reactions,
+                                     stiffness=tuple(_stiffness_metrics(description)))
 
     def evaluate(self, descriptions: Sequence[Mapping[str, Any]], context: DescribedSweepContext
                  ) -> list[DesignOutcome]:
         """Each design of a batch by itself (:func:`evaluate_one`): rows never depend on the batch."""
         with np.errstate(all="ignore"):  # a non-finite metric becomes the status "nonfinite", not a warning
             return [evaluate_one(d, context) for d in descriptions]
+
+
+#: the stiffness metrics (docs/stiffness.md) of a description with a compliance source
+_STIFFNESS_METRICS = (
+    ("min_stiffness_N_m", "N/m", "min over samples of the task point's translational stiffness in its worst "
+                                 "direction with the actuators locked, 1/lambda_max(C_ff)"),
+    ("min_rot_stiffness_Nm_rad", "N m/rad", "min over samples of the task body's rotational stiffness in its "
+                                            "worst direction, 1/lambda_max(C_mm)"),
+    ("lowest_frequency_Hz", "Hz", "min over samples of the lowest natural frequency with the actuators locked"),
+)
+
+
+def _stiffness_metrics(description: Mapping[str, Any]) -> list[str]:
+    """The stiffness metrics of a description: none without a compliance source; those finite
+    at its reference pose (a Delta's platform with rigid rods does not turn: no rotational one)."""
+    from . import load_mechanism, solve_kinematics
+    from .kinematics import reference_task
+    from .stiffness import compliance_sources, stiffness
+
+    try:
+        model = load_mechanism(copy.deepcopy(dict(description)))
+        if not any(compliance_sources(model).values()):
+            return []
+        st = stiffness(model, solve_kinematics(model, reference_task(model)[None]))
+    except PkmdynError:
+        return []
+    names = ["lowest_frequency_Hz"]
+    if np.isfinite(st.min_stiffness[0]):
+        names.append("min_stiffness_N_m")
+    if np.isfinite(st.min_rot_stiffness[0]):
+        names.append("min_rot_stiffness_Nm_rad")
+    return names
 
 
 def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> DesignOutcome:
@@ -258,6 +295,19 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
         m[f"rms_effort_{name}_{unit}"] = math.sqrt(_mean(u[:, i] ** 2, t))
         m[f"peak_speed_{name}_{sp}"] = float(np.abs(sd[:, i]).max())
         m[f"rms_speed_{name}_{sp}"] = math.sqrt(_mean(sd[:, i] ** 2, t))
+    wanted = ctx.stiffness
+    if wanted:
+        from .stiffness import stiffness
+
+        try:
+            st = stiffness(model, kin)
+        except SingularityError as exc:
+            return DesignOutcome("singular", str(exc), m)
+        except PkmdynError as exc:
+            return DesignOutcome("invalid", str(exc), m)
+        values = {"min_stiffness_N_m": st.min_stiffness.min(), "min_rot_stiffness_Nm_rad": st.min_rot_stiffness.min(),
+                  "lowest_frequency_Hz": st.frequencies[:, 0].min()}
+        m.update({k: float(values[k]) for k in wanted})
     m["peak_power_W"] = float(power.sum(axis=1).max())
     m["motor_energy_per_cycle_J"] = float(time_integral(np.abs(power).sum(axis=1), t))
     if ctx.reactions:
