@@ -411,3 +411,26 @@ def test_sweep_reports_stiffness_metrics_that_scale_with_the_drives(tmp_path):
     assert rows[1]["min_stiffness_N_m"] == pytest.approx(2 * rows[0]["min_stiffness_N_m"], rel=1e-9)
     assert rows[1]["min_rot_stiffness_Nm_rad"] == pytest.approx(2 * rows[0]["min_rot_stiffness_Nm_rad"], rel=1e-9)
     assert rows[1]["lowest_frequency_Hz"] == pytest.approx(np.sqrt(2) * rows[0]["lowest_frequency_Hz"], rel=1e-9)
+
+
+def test_run_writes_the_deflection_columns(tmp_path):
+    """pkmdyn run --deflection: the Stewart platform's deflection under gravity and inertia is,
+    at every sample, the legs' change of length mapped to the task: a drive that pushes with the
+    effort u is compressed by u/k, so dx = J^-1 (-u / k) (the platform sinks under its weight)."""
+    import csv
+
+    from pkmdyn.cli import main
+
+    out = tmp_path / "run"
+    assert main(["run", "--machine", "stewart", "--deflection", "--out", str(out)]) == 0
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    m = load_mechanism(ex.MACHINES / "stewart" / "stewart.toml")
+    names = [f"{n}_{u}" for n, u in zip(m.task_names, m.task_units)]
+    x = np.array([[float(r[c]) for c in names] for r in rows])
+    dx = np.array([[float(r[f"{n}_deflection_{u}"]) for n, u in zip(m.task_names, m.task_units)] for r in rows])
+    u = np.array([[float(r[f"P_{i + 1}_effort_N"]) for i in range(6)] for r in rows])
+    k = m.joint_stiffness[m.act_joint[0]]["drive"]
+    J, _ = _oracle_J(x)
+    ref = np.linalg.solve(J, (-u / k)[..., None])[..., 0]
+    assert _rel(dx, ref) < 1e-8
+    assert np.all(dx[:, 2] < -1e-7)

@@ -124,13 +124,17 @@ def _shown(v) -> str:
                    "its joint reactions unique (refused without this flag): write its kinematics and efforts "
                    "(unique all the same) with the minimum-norm reactions, which balance every body but are one "
                    "choice among its self-stress states; said on stderr and in summary.json.")
+@click.option("--deflection", is_flag=True,
+              help="Also the task body's elastic deflection under the run's loads with the actuators locked "
+                   "(<coordinate>_deflection_<unit> columns; the description needs drive, link or joint "
+                   "stiffness, docs/stiffness.md).")
 @click.option("--unique-reactions", is_flag=True, hidden=True,
               help="The default: refuse reactions that are not unique.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
 def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_window: int, sg_order: int,
         cycles: float | None, samples_per_cycle: int | None, fmt: str, limit_items: tuple[str, ...],
-        minimum_norm_reactions: bool, unique_reactions: bool, out_dir: Path) -> None:
+        minimum_norm_reactions: bool, deflection: bool, unique_reactions: bool, out_dir: Path) -> None:
     """Kinematics, actuator and motor efforts, the effort split and every joint reaction along a
     motion, streamed in chunks: results.csv (or .parquet), model.json, bodies.npz, summary.json,
     report.html.
@@ -189,6 +193,7 @@ def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_w
     try:
         summary = run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files, description_text=text,
                                 unique_reactions=not minimum_norm_reactions, fmt=fmt, limits=limits, progress=True,
+                                deflection=deflection,
                                 plot_window=window)
     except ComplianceDataMissing as exc:
         raise ComplianceDataMissing(f"{exc}; or --minimum-norm-reactions for reactions that balance every body "

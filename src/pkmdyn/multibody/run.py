@@ -79,9 +79,10 @@ def effort_columns(model: MechanismModel, kin: MechanismKinematics, reac: Any, n
     return cols
 
 
-def results_column_names(model: MechanismModel) -> list[str]:
+def results_column_names(model: MechanismModel, deflection: bool = False) -> list[str]:
     """Every column of a run's results table, in order (:func:`.output.results_columns`, then
-    :func:`effort_columns`)."""
+    :func:`effort_columns`; with ``deflection`` the task coordinates' elastic deflection last,
+    :func:`deflection_columns`)."""
     from .motion import task_columns
 
     pos, _, _ = task_columns(model)
@@ -95,7 +96,20 @@ def results_column_names(model: MechanismModel) -> list[str]:
     for i in range(model.na):
         parts = [*model.group_names, *(["rotor"] if model.drive_name[i] is not None else []), "friction"]
         out += [actuator_effort_column(model, i, p) for p in parts]
-    return out + list(model.named_loads)
+    out += list(model.named_loads)
+    if deflection:
+        out += [f"{n}_deflection_{u}" for n, u in zip(model.task_names, model.task_units)]
+    return out
+
+
+def deflection_columns(model: MechanismModel, kin: MechanismKinematics, reac: Any, named: Mapping | None,
+                       sample_offset: int = 0) -> dict[str, Array]:
+    """``<coordinate>_deflection_<unit>``: the task coordinates' elastic deflection with the
+    actuators locked under the motion's own loads (:func:`.stiffness.deflection`)."""
+    from .stiffness import deflection
+
+    dx = deflection(model, kin, reac, named=named, sample_offset=sample_offset)
+    return {f"{n}_deflection_{u}": dx[:, i] for i, (n, u) in enumerate(zip(model.task_names, model.task_units))}
 
 
 def _motor_arrays(model: MechanismModel, reac: Any) -> dict[str, Array]:
@@ -171,7 +185,8 @@ class _Summary:
 def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, inputs: Any = (),
                   report: Callable[[dict[str, Path]], None] | None = None, description_text: str = "",
                   unique_reactions: bool = False, fmt: str = "csv", limits: dict | None = None,
-                  progress: bool = False, chunk: int = CHUNK, plot_window: int | None = None) -> dict[str, Any]:
+                  progress: bool = False, chunk: int = CHUNK, plot_window: int | None = None,
+                  deflection: bool = False) -> dict[str, Any]:
     """Kinematics, efforts and every joint reaction of ``model`` along ``motion`` (a
     :class:`~.motion.TaskMotion` or :class:`~.motion.PeriodicMotion`), written into ``out_dir``
     under the output rule (``inputs`` the files the run read: nothing is written when anything
@@ -183,7 +198,9 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
     ``max_body_samples``). An over-constrained mechanism needs the section and material that
     make its reactions unique: without them its run writes the minimum-norm reactions flagged
     ``"unique": false`` (kinematics and efforts are unique all the same), or, with
-    ``unique_reactions``, is refused. ``report`` is called with the files' final paths before
+    ``unique_reactions``, is refused. ``deflection``: the task coordinates' elastic deflection
+    under the run's loads in the results table (:func:`deflection_columns`; the description
+    needs a compliance source, docs/stiffness.md). ``report`` is called with the files' final paths before
     they move into place. Returns the summary with ``files`` as ``{label: path}``."""
     from tqdm import tqdm
 
@@ -261,6 +278,8 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
                                                overconstrained=overconstrained)
                     cols = results_columns(model, kin)
                     cols.update(effort_columns(model, kin, reac, m.loads))
+                    if deflection:
+                        cols.update(deflection_columns(model, kin, reac, m.loads, start))
                     writer.write(cols)
                     summ.add(start, kin, sm, reac, cols)
                     summ.reactions = {"method": reac.method, "self_stress_states": reac.self_stress}
