@@ -266,7 +266,9 @@ def test_rerun_into_an_earlier_run_leaves_none_of_its_files(tmp_path):
     assert (out / "torques.png").exists()
     rc, err = _run(["hip", "run", "--no-plots", "--samples-per-cycle", "20", "--format", "parquet", "--out", str(out)])
     assert rc == 0 and "replaced an earlier run" in err
-    assert sorted(p.name for p in out.iterdir()) == sorted([RUN_MARKER, "report.html", "results.parquet", "summary.json"])
+    wear = ["wear.json", "tracks.npz"] + [f"markers_S0_{p}_on_{s}.csv" for p in ("upper", "lower") for s in ("cup", "head")]
+    assert sorted(p.name for p in out.iterdir()) == sorted([RUN_MARKER, "report.html", "results.parquet", "summary.json",
+                                                            *wear])
 
 
 def test_foreign_folder_is_refused_and_untouched(tmp_path):

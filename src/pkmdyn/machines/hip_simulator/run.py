@@ -313,6 +313,29 @@ def _finite_option(name: str, value: Any, lo: float, hi: float) -> float:
     return float(value)
 
 
+def _wear(out: Path, model: HipModel, motion: OrientationMotion | None, cycle: Any, samples_per_cycle: int,
+          params_path: str | Path | None, plots: bool) -> dict[str, Path]:
+    """``wear.json`` (and the wear files, docs/wear.md) of both stations' prosthesis pairs over one
+    cycle of the built-in motion (or the whole motion file, taken as one cycle), through the
+    generic engine's kinematics of the hip's description: the head on the platform, the cup on
+    the frame, the head's radius the parameter file's ``hip_radius_m``, the load the test load."""
+    from ...multibody import load_mechanism, solve_kinematics
+    from ...multibody.wear_run import WearOptions, joint_wear, write_wear_files
+    from ...profiles.iso14242 import iso14242_motion
+    from .description import hip_description
+
+    m = motion if motion is not None else iso14242_motion(cycles=1, samples_per_cycle=samples_per_cycle, cycle=cycle)
+    mech = load_mechanism(hip_description(model))
+    kin = solve_kinematics(mech, m.angles, m.rates, m.accels, m.t)
+    opts = WearOptions(radius_m=float(model.friction.r_h), load="hydraulic_N")
+    loads = {"hydraulic_N": m.load}
+    results = [(j, *joint_wear(mech, kin, j, opts, loads)) for j in ("S0_upper", "S0_lower")]
+    return write_wear_files(out, mech, results, opts, {
+        "motion": "one cycle of the built-in ISO 14242-1 motion" if motion is None else "the motion file, as one cycle",
+        "euler_sequence": model.geometry.euler_sequence,
+        "parameters": str(params_path) if params_path else "built-in"}, plots=plots)
+
+
 def run_hip(
     out_dir: str | Path,
     params_path: str | Path | None = None,
@@ -437,6 +460,7 @@ def run_hip(
         if html_report:
             files["report"] = tmp / "report.html"
         write_json(files["summary"], doc)
+        files.update(_wear(tmp, model, motion, cycle, samples_per_cycle, params_path, make_plots))
         if collect is not None:
             from . import plots
 

@@ -1,0 +1,194 @@
+"""The wear job: a described mechanism, a motion and spherical joints in; ``wear.json``,
+``markers_<joint>_on_cup.csv``, ``markers_<joint>_on_head.csv``, ``tracks.npz`` and one
+``wear_<joint>.png`` per joint out (``docs/wear.md``).
+The numbers come from :mod:`.wear`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import ParameterError
+from .wear import ASPECT_LIMIT, WEAR_FACTOR_MM3_N_M, SlideTracks, joint_slide_tracks, marker_grid
+
+__all__ = ["WearOptions", "joint_wear", "wear_document", "write_wear_files", "head_radius"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class WearOptions:
+    """The wear analysis's settings (``docs/wear.md``): ``radius_m`` (None: the joint's
+    friction ``ball_radius_m``), ``head`` the body carrying the head (``child`` or ``parent``),
+    ``load`` a named load's name (None: the joint's own reaction force), the marker grid's
+    ``spacing_deg`` and ``cap_deg``, ``pole`` (None: the joint frame's z axis), the wear factor
+    [mm^3/(N m)], an optional cross-shear law of ``cs`` and the ``cycles`` the motion spans."""
+
+    radius_m: float | None = None
+    head: str = "child"
+    load: str | None = None
+    spacing_deg: float = 10.0
+    cap_deg: float = 60.0
+    pole: tuple[float, float, float] | None = None
+    wear_factor_mm3_N_m: float = WEAR_FACTOR_MM3_N_M
+    cross_shear_law: str | None = None
+    cycles: float = 1.0
+
+
+def head_radius(model: Any, joint: str, given: float | None) -> float:
+    """The sphere's radius: ``given``, else the joint's friction ``ball_radius_m``; refused by
+    name when neither is there."""
+    names = list(model.joint_names)
+    if joint not in names:
+        raise ParameterError(f"--joint {joint!r}: not a joint of {model.name} ({', '.join(names[:12])}"
+                             f"{' ...' if len(names) > 12 else ''})")
+    if given is not None:
+        return float(given)
+    j = names.index(joint)
+    fr = model.joint_friction[j] or {}
+    r = float(fr.get("ball_radius_m", 0.0) or 0.0)
+    if r <= 0:
+        raise ParameterError(f"joint {joint!r}: no head radius (give --radius-m, or the joint's friction "
+                             "ball_radius_m)")
+    return r
+
+
+def _load(model: Any, kin: Any, joint: str, opts: WearOptions, named: dict) -> tuple[Array, str]:
+    """The load through the joint (n,) [N] and its description."""
+    if opts.load is not None:
+        if opts.load not in named:
+            have = ", ".join(sorted(named)) or "none"
+            raise ParameterError(f"--load {opts.load!r}: not a named load of the motion ({have})")
+        return np.abs(np.asarray(named[opts.load], dtype=float)), f"named load {opts.load}"
+    from .dynamics import joint_reactions
+    from .stiffness import compliance_sources
+
+    src = compliance_sources(model)
+    over = "compliance" if (src["bodies"] or src["joints"]) else "minimum-norm"
+    reac = joint_reactions(model, kin, named=named or None,
+                           overconstrained=over if model.topology.overconstraints else "compliance")
+    j = list(model.joint_names).index(joint)
+    return np.linalg.norm(reac.joint_force[:, j], axis=1), f"the reaction force of joint {joint}"
+
+
+def joint_wear(model: Any, kin: Any, joint: str, opts: WearOptions, named: dict | None = None
+               ) -> tuple[SlideTracks, SlideTracks, str]:
+    """The head's markers' tracks on the cup and the cup's markers' tracks on the head of the
+    spherical joint ``joint`` along ``kin`` (its loads ``named``), and the load's description."""
+    named = dict(named or {})
+    r = head_radius(model, joint, opts.radius_m)
+    grid = marker_grid(opts.spacing_deg, opts.cap_deg)
+    load, what = _load(model, kin, joint, opts, named)
+    kw = dict(grid=grid, pole=opts.pole, cycles=opts.cycles, wear_factor_mm3_N_m=opts.wear_factor_mm3_N_m,
+              cross_shear_law=opts.cross_shear_law)
+    on_cup = joint_slide_tracks(model, kin, joint, load, r, head=opts.head, on="cup", **kw)
+    on_head = joint_slide_tracks(model, kin, joint, load, r, head=opts.head, on="head", **kw)
+    return on_cup, on_head, what
+
+
+def wear_document(model: Any, joint: str, on_cup: SlideTracks, on_head: SlideTracks, what: str,
+                  opts: WearOptions) -> dict[str, Any]:
+    """One joint's entry of ``wear.json`` (``docs/wear.md``)."""
+    j = list(model.joint_names).index(joint)
+    bodies = ("ground" if model.joint_child[j] < 0 else model.body_names[model.joint_child[j]],
+              "ground" if model.joint_parent[j] < 0 else model.body_names[model.joint_parent[j]])
+    head, cup = bodies if opts.head == "child" else bodies[::-1]
+    return {
+        "joint": joint, "head_body": head, "cup_body": cup,
+        "head_radius_m": float(np.linalg.norm(on_cup.points[0, 0])),
+        "load": what, "cycles": opts.cycles,
+        "marker_grid": {"spacing_deg": opts.spacing_deg, "cap_deg": opts.cap_deg,
+                        "pole": None if opts.pole is None else [float(v) for v in opts.pole],
+                        "markers": int(len(on_cup.weights))},
+        "wear_factor_mm3_N_m": opts.wear_factor_mm3_N_m,
+        "cross_shear_law": opts.cross_shear_law,
+        "aspect_ratio_limit": ASPECT_LIMIT,
+        "tracks_on_cup": on_cup.summary(),
+        "tracks_on_head": on_head.summary(),
+        # the cup wears: each cup point's wear from what slides over it (the cup's markers)
+        "wear_volume_mm3_per_million_cycles": float(on_head.wear_per_million_cycles),
+    }
+
+
+def _projection(points: Array, pole: Array) -> tuple[Array, Array]:
+    """Orthographic coordinates (.., 2) of unit points viewed along ``pole``."""
+    z = pole / np.linalg.norm(pole)
+    h = np.zeros(3)
+    h[int(np.argmin(np.abs(z)))] = 1.0
+    x = np.cross(h, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    return points @ x, points @ y
+
+
+def _png(path: Path, joint: str, on_cup: SlideTracks, on_head: SlideTracks) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    fig, axes = plt.subplots(1, 3, figsize=(15, 5))
+    pole = on_cup.pole
+    r = float(np.linalg.norm(on_cup.points[0, 0]))
+    for ax, tr, title in ((axes[0], on_cup, "head markers' tracks on the cup"),
+                          (axes[1], on_head, "cup markers' tracks on the head")):
+        x, y = _projection(tr.points / r, pole)
+        segs = [np.stack([x[:, k], y[:, k]], axis=1) for k in range(x.shape[1])]
+        lc = LineCollection(segs, array=tr.cross_shear, cmap="viridis", linewidths=1.2)
+        lc.set_clim(0.0, 0.5)
+        ax.add_collection(lc)
+        ax.add_patch(plt.Circle((0, 0), 1.0, fill=False, color="0.6", lw=0.8))
+        ax.set_xlim(-1.05, 1.05)
+        ax.set_ylim(-1.05, 1.05)
+        ax.set_aspect("equal")
+        ax.set_title(title)
+        ax.set_xlabel("viewed along the pole (unit sphere)")
+        fig.colorbar(lc, ax=ax, label="cross-shear")
+    x, y = _projection(on_head.markers, pole)
+    sc = axes[2].scatter(x, y, c=on_head.wear * 1e6 / on_head.cycles, cmap="magma", s=40)
+    axes[2].add_patch(plt.Circle((0, 0), 1.0, fill=False, color="0.6", lw=0.8))
+    axes[2].set_xlim(-1.05, 1.05)
+    axes[2].set_ylim(-1.05, 1.05)
+    axes[2].set_aspect("equal")
+    axes[2].set_title("wear over the cup (per point, Archard)")
+    fig.colorbar(sc, ax=axes[2], label="mm^3 per million cycles (whole load on that track)")
+    fig.suptitle(f"joint {joint}: slide tracks and wear (aspect ratio > {ASPECT_LIMIT:g}: "
+                 f"{100 * np.mean(on_cup.aspect_ratio > ASPECT_LIMIT):.0f} % of the tracks on the cup)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def write_wear_files(out: Path, model: Any, results: list[tuple[str, SlideTracks, SlideTracks, str]],
+                     opts: WearOptions, extra: dict[str, Any] | None = None, plots: bool = True) -> dict[str, Path]:
+    """``wear.json``, the markers' tables, ``tracks.npz`` and (``plots``) the PNGs into the folder ``out``."""
+    from ..io import write_csv, write_json
+
+    files: dict[str, Path] = {}
+    doc: dict[str, Any] = {"mechanism": model.name, "definitions": "docs/wear.md", **(extra or {}),
+                           "joints": [wear_document(model, j, c, h, w, opts) for j, c, h, w in results]}
+    files["wear"] = out / "wear.json"
+    write_json(files["wear"], doc)
+    arrays: dict[str, Array] = {}
+    for j, on_cup, on_head, _ in results:
+        for surface, tr in (("cup", on_cup), ("head", on_head)):
+            files[f"markers_{j}_on_{surface}"] = out / f"markers_{j}_on_{surface}.csv"
+            write_csv(files[f"markers_{j}_on_{surface}"], {
+                "marker": np.arange(len(tr.weights), dtype=float),
+                **{f"direction_{c}": tr.markers[:, k] for k, c in enumerate("xyz")},
+                "weight": tr.weights, "sliding_distance_per_cycle_m": tr.sliding_distance / tr.cycles,
+                "aspect_ratio": tr.aspect_ratio, "cross_shear": tr.cross_shear,
+                "track_load_integral_per_cycle_N_m": tr.load_integral / tr.cycles,
+                "wear_mm3_per_million_cycles": tr.wear * 1e6 / tr.cycles})
+            arrays[f"{j}__on_{surface}_points_m"] = tr.points
+        if plots:
+            files[f"png_{j}"] = _png(out / f"wear_{j}.png", j, on_cup, on_head)
+    files["tracks"] = out / "tracks.npz"
+    np.savez_compressed(files["tracks"], **arrays)
+    return files
