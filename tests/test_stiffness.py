@@ -271,11 +271,25 @@ def test_worst_directions_of_a_stewart():
         assert st.min_stiffness[s] == pytest.approx(1.0 / (d @ Cf @ d), rel=1e-10)
 
 
-def test_delta_turns_nowhere_with_rigid_rods():
+def test_delta_with_drive_springs_against_the_closed_form_jacobian():
+    """The Delta robot (rigid arms and rods, torsional drives of stiffness k): K = J^T k J with
+    J = d theta/d p = B^-1 A of the independent closed form (tests/oracles/delta.py); its platform
+    cannot turn."""
+    from oracles import delta
+
     m = load_mechanism(ex.MACHINES / "delta" / "delta.toml")
-    st = stiffness(m, solve_kinematics(m, reference_task(m)[None]))
-    assert np.isinf(st.min_rot_stiffness[0])
-    assert np.isfinite(st.min_stiffness[0]) and st.min_stiffness[0] > 0
+    rng = np.random.default_rng(4)
+    x = reference_task(m) + rng.uniform(-1, 1, (8, 3)) * np.array([0.15, 0.15, 0.1])
+    kin = solve_kinematics(m, x)
+    st = stiffness(m, kin)
+    g = delta.williams_irb360_geometry()
+    theta = delta.inverse_kinematics(x, g["R_b"], g["R_p"], g["L_A"], g["L_B"])
+    A, B, _ = delta.jacobian(x, theta, g["R_b"], g["R_p"], g["L_A"])
+    J = np.linalg.solve(B, A)
+    k = m.joint_stiffness[m.act_joint[0]]["drive"]
+    assert _rel(st.K_task, k * np.einsum("nat,nas->nts", J, J)) < 1e-9
+    assert np.all(np.isinf(st.min_rot_stiffness))
+    assert np.all(np.isfinite(st.min_stiffness)) and np.all(st.min_stiffness > 0)
 
 
 def test_no_compliance_source_is_refused():

@@ -3,6 +3,7 @@ along a motion (``docs/wear.md``)."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import click
@@ -88,6 +89,14 @@ def wear(machine: str, joints: tuple[str, ...], motion_path: Path | None, cycles
     with output_dir(out_dir, inputs=inputs) as out:
         files = write_wear_files(out, model, results, opts, {"motion": str(motion_path) if motion_path
                                                              else "the machine's default motion"})
+        from ..report import write_report
+
+        doc = json.loads(files["wear"].read_text(encoding="utf-8"))
+        files["report"] = write_report(out, title=f"{model.name}: slide tracks and wear", scene=None,
+                                       summary={j["joint"]: j for j in doc["joints"]},
+                                       parameters=path.read_text(encoding="utf-8", errors="replace") if path else "",
+                                       images=[p for p in files.values() if p.suffix == ".png"],
+                                       notes=["definitions: docs/wear.md"])
         list_files({k: final / v.name for k, v in files.items()})
     for j, on_cup, on_head, what in results:
         s = on_cup.summary()
