@@ -38,7 +38,8 @@ def stiffness_command(machine: str, poses: tuple[str, ...], motion_path: Path | 
     from ..machines.registry import resolve
     from ..multibody import read_task_motion
     from ..multibody.description import LIMIT_KEYS
-    from ..multibody.stiffness_run import parse_grid, parse_pose, run_stiffness
+    from ..multibody.stiffness_run import MAX_GRID_POINTS, run_stiffness
+    from ..multibody.task_grid import parse_grid, parse_pose
     from ..params_util import parse_limit_options
     from .mechanism import _load
 
@@ -63,7 +64,7 @@ def stiffness_command(machine: str, poses: tuple[str, ...], motion_path: Path | 
 
         kw["motion"] = one_cycle(model)
     elif grid is not None:
-        kw["grid"] = parse_grid(model, grid)
+        kw["grid"] = parse_grid(model, grid, max_axes=2, max_points=MAX_GRID_POINTS)
     text = path.read_text(encoding="utf-8", errors="replace") if path is not None else ""
     final = Path(out_dir)
     with output_dir(out_dir, inputs=inputs) as out:

@@ -17,88 +17,16 @@ from ..errors import ParameterError, PkmdynError
 from .kinematics import MechanismKinematics, reference_task, solve_kinematics
 from .model import MechanismModel
 from .stiffness import Stiffness, StiffnessDataMissing, compliance_sources, deflection, stiffness
+from .task_grid import grid_poses
 
-__all__ = ["parse_pose", "parse_grid", "pose_document", "run_stiffness", "MAX_GRID_POINTS", "grid_poses"]
+__all__ = ["pose_document", "run_stiffness", "MAX_GRID_POINTS"]
 
 Array = NDArray[np.float64]
 
-#: the most poses a grid may hold
+#: the most poses a stiffness grid may hold
 MAX_GRID_POINTS = 10_000
 #: the lowest modes drawn in the report
 DRAWN_MODES = 3
-
-
-def _coordinate(model: MechanismModel, key: str, what: str) -> int:
-    """The task coordinate named ``key`` (``x`` or ``x_m``)."""
-    for i, (n, u) in enumerate(zip(model.task_names, model.task_units)):
-        if key in (n, f"{n}_{u}"):
-            return i
-    names = ", ".join(f"{n}_{u}" for n, u in zip(model.task_names, model.task_units))
-    raise ParameterError(f"{what}: {key!r} is not a task coordinate of {model.name} ({names})")
-
-
-def _number(text: str, what: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise ParameterError(f"{what}: {text!r} is not a number") from None
-    if not math.isfinite(v):
-        raise ParameterError(f"{what}: {text!r} is not finite")
-    return v
-
-
-def parse_pose(model: MechanismModel, text: str) -> Array:
-    """``"x=0.01,euler1_rad=0.02"`` -> the task pose (nt,), the reference pose's value for every
-    coordinate not named."""
-    x = reference_task(model).copy()
-    seen: set[int] = set()
-    for item in filter(None, (s.strip() for s in text.split(","))):
-        key, sep, val = item.partition("=")
-        if not sep:
-            raise ParameterError(f"--pose: {item!r} is not NAME=VALUE")
-        i = _coordinate(model, key.strip(), "--pose")
-        if i in seen:
-            raise ParameterError(f"--pose: {key.strip()!r} given twice")
-        seen.add(i)
-        x[i] = _number(val.strip(), f"--pose {key.strip()}")
-    return x
-
-
-def parse_grid(model: MechanismModel, text: str) -> list[tuple[int, Array]]:
-    """``"x=-0.1:0.1:21,y=-0.1:0.1:21"`` -> one or two (task coordinate, values) axes, each
-    ``lo:hi:count`` (count 2 to 1,000), about the reference pose."""
-    axes: list[tuple[int, Array]] = []
-    for item in filter(None, (s.strip() for s in text.split(","))):
-        key, sep, val = item.partition("=")
-        parts = val.split(":")
-        if not sep or len(parts) != 3:
-            raise ParameterError(f"--grid: {item!r} is not NAME=LOW:HIGH:COUNT")
-        i = _coordinate(model, key.strip(), "--grid")
-        if any(i == a for a, _ in axes):
-            raise ParameterError(f"--grid: {key.strip()!r} given twice")
-        lo, hi = (_number(p.strip(), f"--grid {key.strip()}") for p in parts[:2])
-        try:
-            count = int(parts[2])
-        except ValueError:
-            raise ParameterError(f"--grid {key.strip()}: count {parts[2]!r} is not an integer") from None
-        if not 2 <= count <= 1000 or not lo < hi:
-            raise ParameterError(f"--grid {key.strip()}: expected LOW < HIGH and a count from 2 to 1,000")
-        axes.append((i, np.linspace(lo, hi, count)))
-    if not 1 <= len(axes) <= 2:
-        raise ParameterError("--grid: give one or two task coordinates")
-    if math.prod(len(v) for _, v in axes) > MAX_GRID_POINTS:
-        raise ParameterError(f"--grid: more than {MAX_GRID_POINTS:,} poses")
-    return axes
-
-
-def grid_poses(model: MechanismModel, axes: list[tuple[int, Array]], base: Array | None = None) -> Array:
-    """Every pose of the grid (n, nt), the first axis slowest."""
-    base = reference_task(model) if base is None else base
-    mesh = np.meshgrid(*[v for _, v in axes], indexing="ij")
-    x = np.tile(base, (mesh[0].size, 1))
-    for (i, _), m in zip(axes, mesh):
-        x[:, i] = m.reshape(-1)
-    return x
 
 
 def _unit_of(model: MechanismModel, i: int, j: int) -> str:

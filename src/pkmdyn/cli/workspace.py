@@ -1,0 +1,71 @@
+"""``pkmdyn workspace``: the workspace of any described mechanism on a grid of task poses
+(``docs/workspace.md``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ._groups import FiniteFloat, cli, list_files
+
+_MACHINE_HELP = "A built-in machine (see pkmdyn machines) or a mechanism description FILE.toml."
+
+
+@cli.command("workspace")
+@click.option("--machine", required=True, help=_MACHINE_HELP)
+@click.option("--grid", required=True, metavar="NAME=LOW:HIGH:COUNT[,...]",
+              help="One to three task coordinates on a grid, e.g. \"x=-0.3:0.3:17,y=-0.3:0.3:17,z=0.8:1.2:9\".")
+@click.option("--pose", default="", metavar="NAME=VALUE,...",
+              help="The task coordinates held while the grid varies the others (default: the reference pose's), "
+                   "e.g. a constant orientation \"euler3_rad=0.2\".")
+@click.option("--threshold", type=FiniteFloat(0.0, 1.0), default=1e-3, show_default=True,
+              help="A pose is inside only where every singularity measure is at least this.")
+@click.option("--centre", default=None, metavar="V1,V2,...",
+              help="Centre of the inscribed cube and cylinder, one value per grid coordinate (default: the pose's).")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
+              help="Output folder (an earlier run there is replaced whole).")
+def workspace_command(machine: str, grid: str, pose: str, threshold: float, centre: str | None,
+                      out_dir: Path) -> None:
+    """The reachable workspace within the joint limits and away from every singularity, on a grid
+    of task poses: its size with an error estimate, the largest inscribed cube and cylinder about a
+    centre, dexterity statistics, a map."""
+    import numpy as np
+
+    from ..errors import ParameterError
+    from ..io import check_output_dir, output_dir, write_csv, write_json
+    from ..machines.registry import resolve
+    from ..multibody.task_grid import parse_grid, parse_pose
+    from ..multibody.workspace import workspace, workspace_document, workspace_png
+    from ..report import write_report
+    from .mechanism import _load
+
+    entry, path = resolve(machine)
+    inputs = {"--machine": path}
+    check_output_dir(out_dir, inputs)
+    model, _ = _load(machine)
+    axes = parse_grid(model, grid, max_axes=3)
+    base = parse_pose(model, pose)
+    c = None
+    if centre is not None:
+        try:
+            c = np.array([float(v) for v in centre.split(",")])
+        except ValueError:
+            raise ParameterError(f"--centre {centre!r}: expected numbers separated by commas") from None
+    ws = workspace(model, axes, base, threshold, c)
+    doc = workspace_document(model, ws)
+    final = Path(out_dir)
+    with output_dir(out_dir, inputs=inputs) as out:
+        files = {"workspace": out / "workspace.json", "poses": out / "workspace.csv", "map": out / "workspace.png"}
+        write_json(files["workspace"], doc)
+        cols = {f"{n}_{u}": ws.x[:, i] for i, (n, u) in enumerate(zip(model.task_names, model.task_units))}
+        cols.update(reached=ws.reached.astype(float), inside=ws.inside.astype(float), singularity_measure=ws.measure)
+        write_csv(files["poses"], cols)
+        workspace_png(files["map"], model, ws)
+        files["report"] = write_report(out, title=f"{model.name}: workspace", scene=None, summary=doc,
+                                       parameters=path.read_text(encoding="utf-8", errors="replace") if path else "",
+                                       images=[files["map"]], notes=["definitions: docs/workspace.md"])
+        list_files({k: final / v.name for k, v in files.items()})
+    click.echo(f"{doc['inside']} of {doc['poses']} poses inside (reached: {doc['reached']}); size "
+               f"{ws.size:.6g} +- {ws.size_error:.2g} {ws.unit}; inscribed cube half-width {ws.cube_half_width:.4g}, "
+               f"cylinder radius {ws.cylinder_radius:.4g}")

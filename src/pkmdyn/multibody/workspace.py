@@ -1,0 +1,210 @@
+"""The workspace of any described mechanism on a grid of task poses (``docs/workspace.md``).
+
+**Method.** A regular grid over one to three task coordinates (the others held at a given
+pose, e.g. a constant orientation); each grid pose is *in the workspace* when
+
+1. the inverse kinematics reaches it from the reference configuration along the straight task
+   path (in 1, then 8, then 64 steps, the description's assembly branch kept; a pose reached
+   only along another path or on another branch reads outside: conservative), every joint
+   within its limits (``limits_rad``/``limits_m``, actuated joints included);
+2. every singularity measure (:func:`.kinematics.singularity_measures`: inverse, direct,
+   constraint) at it is at least ``threshold``.
+
+**Size.** Each grid pose stands for its cell (the product of the grid steps); the workspace's
+size (volume [m^3] for three position coordinates, area for two, length for one; angles count
+in rad) is the number of inside poses times the cell. Its error estimate is half the cells on
+the boundary (inside poses with an outside neighbour along a grid axis, and the reverse),
+times the cell: the boundary's cells are the ones the grid cannot tell in or out.
+
+**Inscribed shapes about a centre** ``c`` (default: the reference pose): the largest cube
+(the same half-width ``a`` along every grid axis) and the largest cylinder (axis along the last
+grid axis, height equal to its diameter; a disc for two axes) centred at ``c`` holding no
+outside grid pose: ``a`` = the least Chebyshev distance from ``c`` to an outside pose, less one
+grid step (so that the shape is inside to within the grid's resolution); 0 where ``c`` itself
+is outside.
+
+**Dexterity** over the inside poses: the statistics of the smallest of the singularity
+measures (1 isotropic, 0 singular; the inverse of a condition number of the scaled Jacobians).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import ParameterError, PkmdynError
+from .kinematics import limit_violation, reference_task, singularity_measures, solve_kinematics
+from .model import MechanismModel
+from .task_grid import grid_poses
+
+__all__ = ["Workspace", "workspace"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Workspace:
+    """A workspace on a grid (module docstring): ``axes`` the grid's (task coordinate, values);
+    ``x (N, nt)`` every grid pose (first axis slowest); ``reached (N,)`` reached within the
+    joint limits; ``inside (N,)`` reached and away from every singularity; ``measure (N,)`` the
+    smallest singularity measure (0 where not reached); ``size``, ``size_error`` in the unit of
+    the grid's cells (``unit``); ``cube_half_width``, ``cylinder_radius`` about ``centre``."""
+
+    axes: list
+    x: Array
+    reached: NDArray[np.bool_]
+    inside: NDArray[np.bool_]
+    measure: Array
+    cell: float
+    size: float
+    size_error: float
+    unit: str
+    centre: Array
+    cube_half_width: float
+    cylinder_radius: float
+    threshold: float
+
+
+def _reach(model: MechanismModel, x: Array) -> tuple[NDArray[np.bool_], Array]:
+    """Whether each pose is reached within the limits, and its tree coordinates (zeros where not)."""
+    n = x.shape[0]
+    ok = np.zeros(n, dtype=bool)
+    q = np.zeros((n, model.nq))
+    for k in range(n):
+        try:
+            kin = solve_kinematics(model, x[k:k + 1])
+        except PkmdynError:
+            continue
+        if limit_violation(model, kin) is None:
+            ok[k] = True
+            q[k] = kin.q[0]
+    return ok, q
+
+
+def _boundary(inside: NDArray[np.bool_], shape: tuple[int, ...]) -> int:
+    """Cells whose state differs from a neighbour's along a grid axis."""
+    g = inside.reshape(shape)
+    edge = np.zeros(shape, dtype=bool)
+    for ax in range(len(shape)):
+        diff = np.diff(g.astype(np.int8), axis=ax) != 0
+        lo = [slice(None)] * len(shape)
+        hi = [slice(None)] * len(shape)
+        lo[ax], hi[ax] = slice(0, -1), slice(1, None)
+        edge[tuple(lo)] |= diff
+        edge[tuple(hi)] |= diff
+    return int(edge.sum())
+
+
+def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array | None = None,
+              threshold: float = 1e-3, centre: Array | None = None) -> Workspace:
+    """The workspace on the grid ``axes`` (:func:`.task_grid.parse_grid`) about the pose
+    ``base`` (default: the reference pose), with the singularity ``threshold`` and the inscribed
+    shapes about ``centre`` (the grid coordinates' values; default: ``base``'s)."""
+    if not (math.isfinite(threshold) and 0.0 <= threshold < 1.0):
+        raise ParameterError(f"--threshold: {threshold!r} is not in [0, 1)")
+    base = reference_task(model) if base is None else np.asarray(base, dtype=float)
+    x = grid_poses(model, axes, base)
+    reached, q = _reach(model, x)
+    measure = np.zeros(len(x))
+    if reached.any():
+        sm = singularity_measures(model, q[reached])
+        m = np.minimum(sm.inverse, sm.constraint)
+        if model.na == model.nt:
+            m = np.minimum(m, sm.direct)
+        measure[reached] = m
+    inside = reached & (measure >= threshold)
+    steps = np.array([float(v[1] - v[0]) for _, v in axes])
+    cell = float(np.prod(steps))
+    units = [model.task_units[i] for i, _ in axes]
+    unit = "*".join(units) if len(set(units)) > 1 else (units[0] if len(units) == 1 else f"{units[0]}^{len(units)}")
+    shape = tuple(len(v) for _, v in axes)
+    c = np.array([base[i] for i, _ in axes]) if centre is None else np.asarray(centre, dtype=float)
+    if c.shape != (len(axes),):
+        raise ParameterError(f"--centre: expected {len(axes)} values (one per grid coordinate)")
+    pts = x[:, [i for i, _ in axes]]
+    out = ~inside
+    step = float(steps.max())
+    if out.any():
+        d = np.abs(pts[out] - c)
+        cube = float(d.max(axis=1).min()) - step
+        if len(axes) >= 2:
+            rho = np.linalg.norm(d[:, :2], axis=1) if len(axes) == 3 else np.linalg.norm(d, axis=1)
+            cyl = rho if len(axes) == 2 else np.maximum(rho, d[:, 2])
+            cylinder = float(cyl.min()) - step
+        else:
+            cylinder = cube
+    else:  # the whole grid is inside: bounded by the grid itself
+        cube = float(np.minimum(pts.max(axis=0) - c, c - pts.min(axis=0)).min())
+        cylinder = cube
+    return Workspace(axes=axes, x=x, reached=reached, inside=inside, measure=measure, cell=cell,
+                     size=float(inside.sum()) * cell, size_error=0.5 * _boundary(inside, shape) * cell, unit=unit,
+                     centre=c, cube_half_width=max(cube, 0.0), cylinder_radius=max(cylinder, 0.0),
+                     threshold=float(threshold))
+
+
+def workspace_document(model: MechanismModel, ws: Workspace) -> dict:
+    """``workspace.json`` (``docs/workspace.md``)."""
+    names = [f"{model.task_names[i]}_{model.task_units[i]}" for i, _ in ws.axes]
+    ins = ws.measure[ws.inside]
+    return {
+        "mechanism": model.name,
+        "method": "grid of task poses; inside: reached from the reference configuration within the joint limits "
+                  "and every singularity measure at least the threshold (docs/workspace.md)",
+        "grid": {n: {"low": float(v[0]), "high": float(v[-1]), "count": int(len(v))} for n, (_, v) in zip(names, ws.axes)},
+        "fixed": {f"{n}_{u}": float(ws.x[0, i]) for i, (n, u) in enumerate(zip(model.task_names, model.task_units))
+                  if i not in [a for a, _ in ws.axes]},
+        "singularity_threshold": ws.threshold,
+        "poses": int(len(ws.x)), "reached": int(ws.reached.sum()), "inside": int(ws.inside.sum()),
+        f"size_{ws.unit}": ws.size, f"size_error_{ws.unit}": ws.size_error, f"cell_{ws.unit}": ws.cell,
+        "centre": dict(zip(names, (float(v) for v in ws.centre))),
+        "inscribed_cube_half_width": ws.cube_half_width,
+        "inscribed_cylinder_radius": ws.cylinder_radius,
+        "dexterity": ({"min": float(ins.min()), "mean": float(ins.mean()), "median": float(np.median(ins)),
+                       "max": float(ins.max())} if ins.size else None),
+    }
+
+
+def workspace_png(path, model: MechanismModel, ws: Workspace) -> None:
+    """The workspace's map: the smallest singularity measure over the inside poses (blank
+    outside); a three-axis grid as up to six slices along its last axis."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = [f"{model.task_names[i]} [{model.task_units[i]}]" for i, _ in ws.axes]
+    vals = np.where(ws.inside, ws.measure, np.nan)
+    shape = tuple(len(v) for _, v in ws.axes)
+    if len(ws.axes) == 1:
+        fig, ax = plt.subplots(figsize=(7, 4))
+        ax.plot(ws.axes[0][1], vals, "o-", ms=3)
+        ax.set_xlabel(names[0])
+        ax.set_ylabel("smallest singularity measure")
+    else:
+        grid = vals.reshape(shape)
+        if len(ws.axes) == 2:
+            slices, titles = [grid], [""]
+        else:
+            ks = np.unique(np.linspace(0, shape[2] - 1, min(6, shape[2])).round().astype(int))
+            slices = [grid[:, :, k] for k in ks]
+            titles = [f"{names[2]} = {ws.axes[2][1][k]:.4g}" for k in ks]
+        cols = min(3, len(slices))
+        rows = -(-len(slices) // cols)
+        fig, axs = plt.subplots(rows, cols, figsize=(4.6 * cols, 4.0 * rows), squeeze=False)
+        for a, g, title in zip(axs.flat, slices, titles):
+            mesh = a.pcolormesh(ws.axes[0][1], ws.axes[1][1], np.ma.masked_invalid(g).T, shading="auto",
+                                vmin=0.0, vmax=float(np.nanmax(vals)) if np.isfinite(vals).any() else 1.0)
+            a.set_xlabel(names[0])
+            a.set_ylabel(names[1])
+            a.set_title(title)
+            a.set_aspect("equal" if model.task_units[ws.axes[0][0]] == model.task_units[ws.axes[1][0]] else "auto")
+        for a in list(axs.flat)[len(slices):]:
+            a.axis("off")
+        fig.colorbar(mesh, ax=axs, label="smallest singularity measure")
+    fig.suptitle(f"{model.name}: workspace ({int(ws.inside.sum())} of {len(ws.x)} poses inside; "
+                 f"size {ws.size:.4g} +- {ws.size_error:.2g} {ws.unit})")
+    fig.savefig(path, dpi=100)
+    plt.close(fig)

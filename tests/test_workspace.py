@@ -1,0 +1,115 @@
+"""The workspace of any described mechanism on a grid (pkmdyn.multibody.workspace), against the
+closed-form inverse kinematics of the Stewart platform and the Delta robot (tests/oracles) with
+the descriptions' joint limits; the size's error estimate against a finer grid; the command."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from oracles import delta, stewart
+from pkmdyn.cli import main
+from pkmdyn.multibody import load_mechanism
+from pkmdyn.multibody.kinematics import reference_task
+from pkmdyn.multibody.workspace import workspace
+
+from multibody_examples import MACHINES
+
+
+def _stewart_inside(x, margin):
+    """Every leg within [0.9, 1.6] m (the description's limits_m), and which poses lie within
+    ``margin`` of a limit (undecidable by rounding: left out of the comparison)."""
+    a, b, _ = stewart.default_geometry()
+    L = stewart.inverse_kinematics(a, b, x[:, :3], x[:, 3:], "XYZ")["L"]
+    inside = np.all((L >= 0.9) & (L <= 1.6), axis=1)
+    near = np.any((np.abs(L - 0.9) < margin) | (np.abs(L - 1.6) < margin), axis=1)
+    return inside, near
+
+
+def test_stewart_constant_orientation_workspace_against_the_closed_form():
+    m = load_mechanism(MACHINES / "stewart" / "stewart.toml")
+    axes = [(0, np.linspace(-0.5, 0.5, 11)), (1, np.linspace(-0.5, 0.5, 11)), (2, np.linspace(0.7, 1.5, 9))]
+    base = reference_task(m)
+    base[5] = 0.15  # a constant orientation away from the reference
+    ws = workspace(m, axes, base, threshold=0.0)
+    ref, near = _stewart_inside(ws.x, 1e-9)
+    assert ref.sum() > 50 and (~ref).sum() > 50  # the grid crosses the boundary
+    assert np.array_equal(ws.reached[~near], ref[~near])
+    cell = 0.1 * 0.1 * 0.1
+    assert ws.size == pytest.approx(ws.inside.sum() * cell)
+    assert ws.size_error > 0
+
+
+def test_delta_workspace_against_the_closed_form():
+    m = load_mechanism(MACHINES / "delta" / "delta.toml")
+    axes = [(0, np.linspace(-0.85, 0.85, 18)), (1, np.linspace(-0.85, 0.85, 18))]
+    base = np.array([0.0, 0.0, -1.25])
+    ws = workspace(m, axes, base, threshold=0.0)
+    g = delta.williams_irb360_geometry()
+    with np.errstate(invalid="ignore"):
+        th = delta.inverse_kinematics(ws.x, g["R_b"], g["R_p"], g["L_A"], g["L_B"])
+    ok = np.all(np.isfinite(th), axis=1)
+    ref = ok & np.all((np.nan_to_num(th) >= -1.2) & (np.nan_to_num(th) <= 1.5), axis=1)
+    near = np.any((np.abs(np.nan_to_num(th) + 1.2) < 1e-9) | (np.abs(np.nan_to_num(th) - 1.5) < 1e-9), axis=1)
+    assert ref.sum() > 20 and (~ref).sum() > 20
+    assert np.array_equal(ws.reached[~near], ref[~near])
+
+
+def test_the_size_error_estimate_covers_a_finer_grid():
+    """The Stewart platform's constant-orientation area at one height on a coarse and a 4x finer
+    grid: the two sizes differ by less than the sum of their error estimates, and the finer
+    estimate is smaller."""
+    m = load_mechanism(MACHINES / "stewart" / "stewart.toml")
+    base = reference_task(m)
+    base[2] = 1.3
+    sizes = []
+    for count in (13, 49):
+        axes = [(0, np.linspace(-0.6, 0.6, count)), (1, np.linspace(-0.6, 0.6, count))]
+        ws = workspace(m, axes, base, threshold=0.0)
+        assert ws.unit == "m^2"
+        sizes.append((ws.size, ws.size_error))
+    (a, ea), (b, eb) = sizes
+    assert abs(a - b) <= ea + eb
+    assert eb < ea
+
+
+def test_inscribed_shapes_and_the_singularity_threshold():
+    m = load_mechanism(MACHINES / "delta" / "delta.toml")
+    axes = [(0, np.linspace(-0.8, 0.8, 17)), (1, np.linspace(-0.8, 0.8, 17))]
+    base = np.array([0.0, 0.0, -1.25])
+    loose = workspace(m, axes, base, threshold=0.0)
+    strict = workspace(m, axes, base, threshold=float(np.quantile(loose.measure[loose.inside], 0.5)))
+    assert strict.inside.sum() < loose.inside.sum()
+    assert np.all(strict.measure[strict.inside] >= strict.threshold)
+    # every pose within the inscribed disc about the centre is inside
+    r = loose.cylinder_radius
+    d = np.linalg.norm(loose.x[:, :2], axis=1)
+    assert r > 0.1 and np.all(loose.inside[d <= r])
+    a = loose.cube_half_width
+    assert np.all(loose.inside[np.max(np.abs(loose.x[:, :2]), axis=1) <= a])
+
+
+def test_workspace_command(tmp_path):
+    out = tmp_path / "ws"
+    assert main(["workspace", "--machine", "delta", "--grid", "x=-0.6:0.6:7,y=-0.6:0.6:7", "--pose", "z=-1.2",
+                 "--out", str(out)]) == 0
+    doc = json.loads((out / "workspace.json").read_text())
+    assert doc["poses"] == 49 and 0 < doc["inside"] <= 49
+    assert doc["fixed"]["z_m"] == -1.2 and doc["size_m^2"] == pytest.approx(doc["inside"] * 0.04)
+    rows = (out / "workspace.csv").read_text().splitlines()
+    assert len(rows) == 50 and (out / "workspace.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--grid", "q=0:1:3"], "'q'"),
+    (["--grid", "x=1:0:3"], "LOW < HIGH"),
+    (["--grid", "x=0:1:3", "--threshold", "2"], "--threshold"),
+    (["--grid", "x=0:1:3,y=0:1:3", "--centre", "0.1"], "--centre"),
+])
+def test_bad_workspace_input(tmp_path, capsys, args, words):
+    out = tmp_path / "ws"
+    assert main(["workspace", "--machine", "delta", *args, "--out", str(out)]) == 2
+    assert words in capsys.readouterr().err
+    assert not out.exists()
