@@ -113,3 +113,31 @@ def test_bad_workspace_input(tmp_path, capsys, args, words):
     assert main(["workspace", "--machine", "delta", *args, "--out", str(out)]) == 2
     assert words in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_sweep_reports_the_workspace_of_every_design(tmp_path):
+    """The Stewart platform's constant-orientation workspace on a grid, per design of a sweep over
+    its base radius: each row's size is the workspace computed for that design alone."""
+    pq = pytest.importorskip("pyarrow.parquet")
+    space = tmp_path / "space.toml"
+    space.write_text('[sampling]\nmethod = "grid"\n[motion]\nreactions = false\n'
+                     'workspace_grid = "x=-0.4:0.4:5,y=-0.4:0.4:5,z=0.9:1.3:3"\n'
+                     '[parameters]\n"parameters.base_radius_m" = { values = [0.8, 1.1] }\n'
+                     '[objectives]\nworkspace_size_m3 = "max"\n')
+    out = tmp_path / "out"
+    assert main(["sweep", "--machine", "stewart", "--space", str(space), "--workers", "0", "--no-plots",
+                 "--out", str(out)]) == 0
+    rows = sorted(pq.read_table(out / "designs.parquet").to_pylist(), key=lambda r: r["design_id"])
+    assert [r["status"] for r in rows] == ["ok", "ok"]
+    from pkmdyn.multibody.task_grid import parse_grid
+
+    for r, radius in zip(rows, (0.8, 1.1)):
+        import multibody_examples as ex
+
+        d = ex.builtin_dict("stewart", parametric=True)
+        d["parameters"]["base_radius_m"] = radius
+        m = load_mechanism(d)
+        ws = workspace(m, parse_grid(m, "x=-0.4:0.4:5,y=-0.4:0.4:5,z=0.9:1.3:3", max_axes=3), threshold=1e-3)
+        assert r["workspace_size_m3"] == pytest.approx(ws.size, rel=1e-12)
+        assert r["workspace_inside_share"] == pytest.approx(ws.inside.mean())
+    assert rows[0]["workspace_size_m3"] != rows[1]["workspace_size_m3"]

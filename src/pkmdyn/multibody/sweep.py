@@ -39,6 +39,10 @@ class _Motion(Section):
     file: str | None = None
     singularity_threshold: Annotated[float, Field(ge=0.0, le=1.0)] = 1e-3
     reactions: bool = True
+    #: a grid of task poses (``pkmdyn workspace --grid``): each design's workspace size on it
+    workspace_grid: str | None = Field(default=None, max_length=400)
+    #: the poses the grid holds fixed (``--pose``)
+    workspace_pose: str = Field(default="", max_length=400)
 
 
 @dataclass(frozen=True)
@@ -52,6 +56,8 @@ class DescribedSweepContext:
     reactions: bool
     #: the stiffness metrics the base description has (:func:`_stiffness_metrics`)
     stiffness: tuple[str, ...] = ()
+    #: ``[motion] workspace_grid`` and ``workspace_pose`` (None: no workspace metrics)
+    workspace: tuple[str, str] | None = None
 
 
 def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[str]]:
@@ -155,6 +161,13 @@ class DescribedSweep:
         ]
         out += [MetricInfo(name, unit, text) for name, unit, text in _STIFFNESS_METRICS
                 if name in _stiffness_metrics(self.raw if description is None else description)]
+        if options.get("workspace_grid"):
+            name, unit = _workspace_size_name(self.raw if description is None else description,
+                                              str(options["workspace_grid"]))
+            out += [MetricInfo(name, unit, "the size of the workspace on [motion] workspace_grid (inside poses times "
+                                           "the grid cell, docs/workspace.md)"),
+                    MetricInfo("workspace_inside_share", "-", "the share of the grid's poses inside the workspace"),
+                    MetricInfo("workspace_min_measure", "-", "the least singularity measure over the inside poses")]
         if options.get("reactions", True) is True:
             out.append(MetricInfo("friction_energy_per_cycle_J", "J",
                                   "int (power dissipated by the joints' friction) dt over the motion"))
@@ -195,8 +208,15 @@ class DescribedSweep:
                 raise ComplianceDataMissing(f"[motion] reactions: {exc}; or set reactions = false") from None
             except PkmdynError:
                 pass  # the base design's own trouble is its row's, not the sweep's
+        ws = None
+        if opt.workspace_grid is not None:
+            from .task_grid import parse_grid, parse_pose
+
+            parse_grid(model, opt.workspace_grid, max_axes=3)  # refused here, once, when it names no task coordinate
+            parse_pose(model, opt.workspace_pose)
+            ws = (opt.workspace_grid, opt.workspace_pose)
         return DescribedSweepContext(motion=motion, threshold=opt.singularity_threshold, reactions=opt.reactions,
-                                     stiffness=tuple(_stiffness_metrics(description)))
+                                     stiffness=tuple(_stiffness_metrics(description)), workspace=ws)
 
     def evaluate(self, descriptions: Sequence[Mapping[str, Any]], context: DescribedSweepContext
                  ) -> list[DesignOutcome]:
@@ -235,6 +255,26 @@ def _stiffness_metrics(description: Mapping[str, Any]) -> list[str]:
     if np.isfinite(st.min_rot_stiffness[0]):
         names.append("min_rot_stiffness_Nm_rad")
     return names
+
+
+def _workspace_size_name(source: Any, grid: str) -> tuple[str, str]:
+    """The workspace-size metric's name and unit for a grid of task coordinates (``m3`` for three
+    position coordinates, ``m2_rad`` for two and an angle, ...); ``source`` a model or a
+    description."""
+    from collections import Counter
+
+    from . import load_mechanism
+    from .task_grid import parse_grid
+
+    model = source if hasattr(source, "task_units") else None
+    if model is None:
+        try:
+            model = load_mechanism(copy.deepcopy(dict(source)))
+        except PkmdynError as exc:
+            raise ParameterError(f"[motion] workspace_grid: the base description: {exc}") from None
+    counts = Counter(model.task_units[i] for i, _ in parse_grid(model, grid, max_axes=3))
+    unit = "_".join(u + (str(k) if k > 1 else "") for u, k in sorted(counts.items()))
+    return f"workspace_size_{unit}", unit.replace("_", " ")
 
 
 def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> DesignOutcome:
@@ -308,6 +348,21 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
         values = {"min_stiffness_N_m": st.min_stiffness.min(), "min_rot_stiffness_Nm_rad": st.min_rot_stiffness.min(),
                   "lowest_frequency_Hz": st.frequencies[:, 0].min()}
         m.update({k: float(values[k]) for k in wanted})
+    if ctx.workspace is not None:
+        from .task_grid import parse_grid, parse_pose
+        from .workspace import workspace
+
+        try:
+            ws = workspace(model, parse_grid(model, ctx.workspace[0], max_axes=3), parse_pose(model, ctx.workspace[1]),
+                           ctx.threshold)
+        except PkmdynError as exc:
+            return DesignOutcome("invalid", str(exc), m)
+        m[_workspace_size_name(model, ctx.workspace[0])[0]] = ws.size
+        m["workspace_inside_share"] = float(ws.inside.mean())
+        if ws.inside.any():
+            m["workspace_min_measure"] = float(ws.measure[ws.inside].min())
+        else:
+            return DesignOutcome("unreachable", "no pose of [motion] workspace_grid is inside the workspace", m)
     m["peak_power_W"] = float(power.sum(axis=1).max())
     m["motor_energy_per_cycle_J"] = float(time_integral(np.abs(power).sum(axis=1), t))
     if ctx.reactions:
