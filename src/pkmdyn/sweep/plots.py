@@ -112,3 +112,24 @@ def sweep_plots(out: Path, table: Any, space: SweepSpace, front: NDArray[np.int6
     fig.tight_layout()
     files["scatter_matrix_plot"] = _save(fig, out / "scatter_matrix.png")
     return files
+
+
+def convergence_plot(path: Path, generations: list[dict]) -> Path:
+    """An NSGA-II run's convergence: the hypervolume of the feasible Pareto set after each
+    generation (``summary.json`` ``generations``)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    g = [r["generation"] for r in generations]
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.plot(g, [r["hypervolume"] for r in generations], "o-", ms=3)
+    ax.set_xlabel("generation")
+    ax.set_ylabel("hypervolume (objectives scaled to [0, 1], reference 1.1)")
+    ax.set_title("NSGA-II convergence")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -106,7 +106,9 @@ def prepare_sweep(adapter: Any, space_path: str | Path, params: str | Path | Non
 
 #: the result files a sweep writes beside its parts (replaced by a rerun)
 OUTPUTS = ("designs.parquet", "pareto.parquet", "best_params.toml", "summary.json", "pareto_front.png",
-           "metric_vs_parameter.png", "scatter_matrix.png")
+           "metric_vs_parameter.png", "scatter_matrix.png", "convergence.png")
+#: the folder of an NSGA-II run's Pareto designs as description files (replaced by a rerun)
+PARETO_DESIGNS = "pareto_designs"
 
 
 def _stamp(path: Path) -> list[int]:
@@ -161,6 +163,14 @@ def _open_out(out: Path, record: dict[str, Any], inputs: Mapping[str, Any] = ())
             if name != "summary.json" and written.get(name) != _stamp(f):
                 raise PkmdynError(f"--out {out}: {name} was not written by this sweep or was changed since; refusing "
                                   "to replace it (move it away, or use a new --out)")
+        folder = out / PARETO_DESIGNS
+        if os.path.lexists(folder):
+            if folder.is_symlink() or not folder.is_dir():
+                raise PkmdynError(f"--out {out}: {PARETO_DESIGNS} is not a folder pkmdyn wrote; refusing to replace it")
+            for f in folder.iterdir():
+                if f.is_symlink() or not f.is_file() or written.get(f"{PARETO_DESIGNS}/{f.name}") != _stamp(f):
+                    raise PkmdynError(f"--out {out}: {PARETO_DESIGNS}/{f.name} was not written by this sweep or was "
+                                      "changed since; refusing to replace it (move it away, or use a new --out)")
         return
     out.mkdir(parents=True, exist_ok=True)
     with atomic_file(rec, notify=None) as tmp:
@@ -277,11 +287,24 @@ def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: in
     evaluated = int(todo.shape[0])
     X, rounds = prep.X, 0
     schema = part_schema(prep.job)
+    search = None
     for r in range(1, prep.space.refine_rounds + 1):
-        _, front = _front(_collect(parts, schema, X.shape[0], later=True), prep.space.objectives)
-        if not front.size:
-            break  # nothing feasible to refine around
-        X = np.vstack([X, refine_designs(prep.space, X, np.sort(front), r)])
+        table = _collect(parts, schema, X.shape[0], later=True)
+        if prep.space.method == "nsga2":  # the next generation from the last one's rows (search.py)
+            from .search import Nsga2Search, generation_values
+
+            if search is None:
+                search = Nsga2Search(prep.space)
+                if not np.array_equal(search.ask(), prep.X):
+                    raise PkmdynError("internal error: the NSGA-II search does not replay its first generation")
+            N = prep.space.designs
+            search.tell(*generation_values(table, (r - 1) * N, r * N, prep.space))
+            X = np.vstack([X, search.ask()])
+        else:
+            _, front = _front(table, prep.space.objectives)
+            if not front.size:
+                break  # nothing feasible to refine around
+            X = np.vstack([X, refine_designs(prep.space, X, np.sort(front), r)])
         todo = np.setdiff1d(np.arange(X.shape[0] - prep.space.refine_designs, X.shape[0]), done)
         _add(stats, execute(prep.job, X, todo, parts, n_workers, scheduler, size, progress, retries))
         evaluated += int(todo.shape[0])
@@ -352,6 +375,10 @@ def _results(prep: PreparedSweep, X: Any, rounds: int, out: Path, plots: bool, s
         earlier = out / "best_params.toml"  # the best design of an earlier run of this sweep (checked by _open_out)
         if earlier.is_file() and not earlier.is_symlink() and _written(out).get(earlier.name) == _stamp(earlier):
             earlier.unlink()
+    pareto_files: dict[str, Path] = {}
+    if prep.space.method == "nsga2":
+        summary["generations"] = _convergence(table, prep.space, X.shape[0])
+        pareto_files = _pareto_designs(out, prep, X, table, on_front)
     summary["execution"] = {"mode": stats.mode, "workers": stats.workers, "batches": stats.batches,
                             "cluster_start_s": stats.cluster_start_s, "evaluate_s": stats.evaluate_s,
                             "driver_cpu_s": stats.driver_cpu_s, "worker_cpu_s": stats.worker_cpu_s}
@@ -359,12 +386,64 @@ def _results(prep: PreparedSweep, X: Any, rounds: int, out: Path, plots: bool, s
         from . import plots as _plots
 
         files.update(_plots.sweep_plots(out, table, prep.space, on_front))
+        if "generations" in summary:
+            files["convergence"] = _plots.convergence_plot(out / "convergence.png", summary["generations"])
     files["summary"] = out / "summary.json"
     summary["files"] = sorted(p.name for p in files.values())
     summary["written"] = {p.name: _stamp(p) for p in files.values() if p.name != "summary.json"}
+    summary["written"].update({f"{PARETO_DESIGNS}/{p.name}": _stamp(p) for p in pareto_files.values()})
+    files.update(pareto_files)
     with atomic_file(files["summary"], notify=None) as tmp:
         write_json(tmp, summary)
     return files, counts, int(on_front.size), best
+
+
+def _convergence(table: Any, space: Any, n: int) -> list[dict[str, Any]]:
+    """Per NSGA-II generation: the designs so far, the feasible ones, the size of their Pareto
+    set and its hypervolume (objectives minimised and scaled to [0, 1] over every feasible design
+    of the run, reference point 1.1 in each: the same scale for every generation)."""
+    from .search import hypervolumes, normalise
+
+    feasible, _ = _front(table, space.objectives)
+    ids = np.asarray(table.column("design_id").to_numpy(zero_copy_only=False))[feasible]
+    F = minimised(np.column_stack([table.column(m).to_numpy(zero_copy_only=False)[feasible].astype(float)
+                                   for m, _ in space.objectives]), [s for _, s in space.objectives]) \
+        if feasible.size else np.zeros((0, len(space.objectives)))
+    N = space.designs
+    gens = n // N
+    Fn, ref, _ = normalise(F) if len(F) else (F, np.ones(F.shape[1]), None)
+    per = []
+    fronts = []
+    for g in range(gens):
+        sel = ids < (g + 1) * N
+        Fg = Fn[sel]
+        mask = pareto_mask(Fg) if len(Fg) else np.zeros(0, dtype=bool)
+        fronts.append(Fg[mask])
+        per.append({"generation": g, "designs": int((g + 1) * N), "feasible": int(sel.sum()),
+                    "pareto_designs": int(mask.sum())})
+    for row, hv in zip(per, hypervolumes(fronts, ref)):
+        row["hypervolume"] = hv
+    return per
+
+
+def _pareto_designs(out: Path, prep: PreparedSweep, X: Any, table: Any, on_front: Any) -> dict[str, Path]:
+    """Every Pareto design of an NSGA-II run as a description file ``pareto_designs/design_<id>.toml``
+    (the earlier run's files replaced: :func:`_open_out` checked they are this sweep's)."""
+    folder = out / PARETO_DESIGNS
+    if folder.is_dir():
+        for f in folder.iterdir():
+            f.unlink()
+    folder.mkdir(exist_ok=True)
+    files = {}
+    ids = np.asarray(table.column("design_id").to_numpy(zero_copy_only=False))
+    for row in on_front:
+        i = int(ids[row])
+        desc = design_description(prep.job.base, prep.space.parameters, X[i])
+        values = {m: float(table.column(m)[int(row)].as_py()) for m, _ in prep.space.objectives}
+        header = (f"Pareto design {i} of the NSGA-II sweep {prep.space.source} ({prep.machine}); objectives:\n"
+                  + "\n".join(f"  {m} = {v:.9g} ({s})" for (m, s), v in zip(prep.space.objectives, values.values())))
+        files[f"pareto_design_{i}"] = _write_best(folder / f"design_{i}.toml", desc, header)
+    return files
 
 
 def _write_best(path: Path, description: dict[str, Any], header: str) -> Path:

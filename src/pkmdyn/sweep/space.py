@@ -73,7 +73,7 @@ Array = NDArray[np.float64]
 
 #: designs of one sweep unless raised (``[sampling] max_designs`` or ``--limit max_designs=N``)
 DEFAULT_MAX_DESIGNS = 100_000
-METHODS = ("grid", "random", "lhs", "sobol")
+METHODS = ("grid", "random", "lhs", "sobol", "nsga2")
 _FINITE = Annotated[float, Field(allow_inf_nan=False)]
 
 
@@ -103,8 +103,10 @@ class _Param(Section):
 
 
 class _Sampling(Section):
-    method: Literal["grid", "random", "lhs", "sobol"] = "sobol"
+    method: Literal["grid", "random", "lhs", "sobol", "nsga2"] = "sobol"
     designs: Annotated[int, Field(ge=1)] | None = None
+    #: nsga2: the generations after the first population (each of ``designs`` offspring)
+    generations: Annotated[int, Field(ge=1, le=10_000)] | None = None
     seed: Annotated[int, Field(ge=0, le=2**63 - 1)] = 0
     max_designs: Annotated[int, Field(ge=1)] = DEFAULT_MAX_DESIGNS
     batch_size: Annotated[int, Field(ge=1, le=1_000_000)] | None = None
@@ -356,6 +358,16 @@ def space_from_dict(raw: Mapping[str, Any], description: Mapping[str, Any], metr
         raise ParameterError(f"{source}: [sampling] designs: a grid's size is set by the parameters' points")
     if s.method != "grid" and s.designs is None:
         raise ParameterError(f"{source}: [sampling] designs: missing required key for method = \"{s.method}\"")
+    if s.method == "nsga2":
+        if s.generations is None:
+            raise ParameterError(f"{source}: [sampling] generations: missing required key for method = \"nsga2\"")
+        if d.refine.rounds:
+            raise ParameterError(f"{source}: [refine]: method = \"nsga2\" evolves its own generations; "
+                                 "leave [refine] out")
+    elif s.generations is not None:
+        raise ParameterError(f"{source}: [sampling] generations: applies to method = \"nsga2\" only")
+    if s.method == "nsga2" and s.designs < 4:  # type: ignore[operator]
+        raise ParameterError(f"{source}: [sampling] designs: an NSGA-II population needs at least 4 designs")
     params_path = None
     base_dir = base_dir if base_dir is not None else Path(".")
     if d.params is not None:
@@ -366,7 +378,9 @@ def space_from_dict(raw: Mapping[str, Any], description: Mapping[str, Any], metr
         batch_size=s.batch_size, motion=dict(d.motion), parameters=tuple(params),
         constraints=tuple(Bound(k, b.min, b.max) for k, b in d.constraints.items()),
         objectives=tuple(d.objectives.items()),
-        refine_rounds=d.refine.rounds, refine_designs=d.refine.designs if d.refine.rounds else 0,
+        # an NSGA-II run's generations are its rounds, each of one population of designs
+        refine_rounds=s.generations if s.method == "nsga2" else d.refine.rounds,
+        refine_designs=(s.designs if s.method == "nsga2" else d.refine.designs if d.refine.rounds else 0),
         refine_shrink=d.refine.shrink,
     )
     n = design_count(space) + space.refine_rounds * space.refine_designs
@@ -421,6 +435,12 @@ def _unit_sample(space: SweepSpace) -> Array:
         return engine.random(n)
 
 
+def from_unit(space: SweepSpace, U: Array) -> Array:
+    """Designs ``(n, d)`` from points ``U (n, d)`` of the unit cube (each parameter's range, log
+    range, integers or list of values)."""
+    return np.stack([_from_unit(p, U[:, j]) for j, p in enumerate(space.parameters)], axis=-1)
+
+
 def _from_unit(p: Parameter, u: Array) -> Array:
     if p.values is not None:
         vals = np.asarray(p.values, dtype=float)
@@ -457,6 +477,10 @@ def sample_designs(space: SweepSpace) -> Array:
         axes = [_grid_axis(p) for p in space.parameters]
         mesh = np.meshgrid(*axes, indexing="ij")
         return np.stack([m.reshape(-1) for m in mesh], axis=-1)
+    if space.method == "nsga2":
+        from .search import Nsga2Search
+
+        return Nsga2Search(space).ask()
     u = _unit_sample(space)
     return np.stack([_from_unit(p, u[:, j]) for j, p in enumerate(space.parameters)], axis=-1)
 
