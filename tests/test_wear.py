@@ -144,6 +144,8 @@ def test_wear_command_on_a_described_mechanism_uses_the_joint_reaction(tmp_path)
     a = json.loads((out1 / "wear.json").read_text())["joints"][0]
     b = json.loads((out2 / "wear.json").read_text())["joints"][0]
     assert a["load"] == "the reaction force of joint S0_upper"
+    page = (out1 / "report.html").read_text()
+    assert 'id="views"' in page and "scatter3d" in page  # the tracks in 3D
     assert a["tracks_on_cup"]["aspect_ratio"] == b["tracks_on_cup"]["aspect_ratio"]  # the same kinematics
     assert a["tracks_on_cup"]["track_load_integral_per_cycle_N_m"]["mean"] != \
         b["tracks_on_cup"]["track_load_integral_per_cycle_N_m"]["mean"]

@@ -64,7 +64,7 @@ def wear(machine: str, joints: tuple[str, ...], motion_path: Path | None, cycles
     from ..multibody import read_task_motion, solve_kinematics
     from ..multibody.motion import default_motion
     from ..multibody.wear import WEAR_FACTOR_MM3_N_M, marker_grid
-    from ..multibody.wear_run import WearOptions, head_radius, joint_wear, write_wear_files
+    from ..multibody.wear_run import WearOptions, head_radius, joint_wear, tracks_figure, write_wear_files
     from .mechanism import _load
 
     entry, path = resolve(machine)
@@ -96,7 +96,8 @@ def wear(machine: str, joints: tuple[str, ...], motion_path: Path | None, cycles
                                        summary={j["joint"]: j for j in doc["joints"]},
                                        parameters=path.read_text(encoding="utf-8", errors="replace") if path else "",
                                        images=[p for p in files.values() if p.suffix == ".png"],
-                                       notes=["definitions: docs/wear.md"])
+                                       notes=["definitions: docs/wear.md"],
+                                       figures=[(f"{j}: tracks on the cup", tracks_figure(j, c)) for j, c, _, _ in results])
         list_files({k: final / v.name for k, v in files.items()})
     for j, on_cup, on_head, what in results:
         s = on_cup.summary()

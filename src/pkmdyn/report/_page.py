@@ -137,7 +137,8 @@ def _decimated_plot(plot: TimePlot) -> TimePlot:
 def write_report(out_folder: str | Path, *, title: str, scene: Scene | None, plots: Sequence[TimePlot] = (),
                  summary: Mapping[str, Any] | None = None, parameters: str = "", warnings: Sequence[str] = (),
                  images: Sequence[Path] = (), notes: Sequence[str] = (), max_frames: int = MAX_FRAMES,
-                 scene_note: str = "", samples: int | None = None) -> Path:
+                 scene_note: str = "", samples: int | None = None,
+                 figures: Sequence[tuple[str, Any]] = ()) -> Path:
     """Write ``report.html`` into ``out_folder`` (a run's temporary output folder) and return it.
 
     ``scene``: the mechanism along the motion (animated at most ``max_frames`` frames, evenly
@@ -145,7 +146,8 @@ def write_report(out_folder: str | Path, *, title: str, scene: Scene | None, plo
     marked at the slider's time; ``summary``: the run's summary (shown as tables);
     ``parameters``: the parameter file's text; ``warnings``: every warning of the run;
     ``images``: PNG summary figures embedded in the page; ``notes``: lines under the title;
-    ``samples``: the samples of the motion when ``scene`` holds only some of them (already decimated).
+    ``samples``: the samples of the motion when ``scene`` holds only some of them (already decimated);
+    ``figures``: further interactive plotly figures ``(caption, figure)`` (e.g. 3D views).
     """
     folder = Path(out_folder)
     body: list[str] = []
@@ -179,6 +181,11 @@ def write_report(out_folder: str | Path, *, title: str, scene: Scene | None, plo
             divs.append(f"<div class=\"timeplot\">{_div(time_figure(_decimated_plot(p), t0), div_id)}</div>")
         body.append("<section id=\"plots\"><h2>Plots</h2><p class=\"note\">The dotted red line marks the 3D "
                     "view's time.</p><div class=\"grid\">" + "".join(divs) + "</div></section>")
+    if figures:
+        divs = [f"<figure>{_div(fig, f'pkmdyn-figure-{k}')}<figcaption>{html.escape(cap)}</figcaption></figure>"
+                for k, (cap, fig) in enumerate(figures)]
+        body.append("<section id=\"views\"><h2>3D views</h2><p class=\"note\">Drag to orbit, scroll to zoom."
+                    "</p>" + "".join(divs) + "</section>")
     if images:
         figs = []
         for p in images:

@@ -60,8 +60,10 @@ def run_plots(data: Any) -> list[TimePlot]:
 
 def write_run_report(out: Path, *, title: str, scene: Scene | None, plots: list[TimePlot], summary: dict[str, Any],
                      params_path: str | Path | None, warnings: Sequence[str], images: Sequence[Path],
-                     notes: Sequence[str], scene_note: str = "", samples: int | None = None) -> Path:
-    """Write ``report.html`` into a run's (temporary) output folder ``out``."""
+                     notes: Sequence[str], scene_note: str = "", samples: int | None = None,
+                     figures: Sequence[tuple[str, Any]] = ()) -> Path:
+    """Write ``report.html`` into a run's (temporary) output folder ``out``; ``figures``: further
+    interactive figures (the slide tracks in 3D)."""
     return write_report(out, title=title, scene=scene, plots=plots, summary=summary,
                         parameters=parameters_text(params_path), warnings=warnings, images=images, notes=notes,
-                        scene_note=scene_note, samples=samples)
+                        scene_note=scene_note, samples=samples, figures=figures)

@@ -314,13 +314,14 @@ def _finite_option(name: str, value: Any, lo: float, hi: float) -> float:
 
 
 def _wear(out: Path, model: HipModel, motion: OrientationMotion | None, cycle: Any, samples_per_cycle: int,
-          params_path: str | Path | None, plots: bool) -> dict[str, Path]:
+          params_path: str | Path | None, plots: bool) -> tuple[dict[str, Path], list]:
     """``wear.json`` (and the wear files, docs/wear.md) of both stations' prosthesis pairs over one
     cycle of the built-in motion (or the whole motion file, taken as one cycle), through the
     generic engine's kinematics of the hip's description: the head on the platform, the cup on
-    the frame, the head's radius the parameter file's ``hip_radius_m``, the load the test load."""
+    the frame, the head's radius the parameter file's ``hip_radius_m``, the load the test load.
+    Returns the files and the report's 3D views of the tracks."""
     from ...multibody import load_mechanism, solve_kinematics
-    from ...multibody.wear_run import WearOptions, joint_wear, write_wear_files
+    from ...multibody.wear_run import WearOptions, joint_wear, tracks_figure, write_wear_files
     from ...profiles.iso14242 import iso14242_motion
     from .description import hip_description
 
@@ -330,10 +331,11 @@ def _wear(out: Path, model: HipModel, motion: OrientationMotion | None, cycle: A
     opts = WearOptions(radius_m=float(model.friction.r_h), load="hydraulic_N")
     loads = {"hydraulic_N": m.load}
     results = [(j, *joint_wear(mech, kin, j, opts, loads)) for j in ("S0_upper", "S0_lower")]
-    return write_wear_files(out, mech, results, opts, {
+    files = write_wear_files(out, mech, results, opts, {
         "motion": "one cycle of the built-in ISO 14242-1 motion" if motion is None else "the motion file, as one cycle",
         "euler_sequence": model.geometry.euler_sequence,
         "parameters": str(params_path) if params_path else "built-in"}, plots=plots)
+    return files, [(f"{j}: the head's tracks on the cup", tracks_figure(j, c)) for j, c, _, _ in results]
 
 
 def run_hip(
@@ -460,7 +462,8 @@ def run_hip(
         if html_report:
             files["report"] = tmp / "report.html"
         write_json(files["summary"], doc)
-        files.update(_wear(tmp, model, motion, cycle, samples_per_cycle, params_path, make_plots))
+        wear_files, wear_views = _wear(tmp, model, motion, cycle, samples_per_cycle, params_path, make_plots)
+        files.update(wear_files)
         if collect is not None:
             from . import plots
 
@@ -482,7 +485,7 @@ def run_hip(
                              images=[p for p in files.values() if p.suffix == ".png"],
                              notes=[f"parameters: {doc['parameters']}", f"motion: {source}"],
                              scene_note=(f"The animation covers the plots' window: {note}." if note else ""),
-                             samples=window)
+                             samples=window, figures=wear_views)
         final = {k: Path(out_dir) / p.name for k, p in files.items()}
         if report is not None:
             report(final)
