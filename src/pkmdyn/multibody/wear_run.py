@@ -194,14 +194,14 @@ def write_wear_files(out: Path, model: Any, results: list[tuple[str, SlideTracks
     return files
 
 
-def tracks_figure(joint: str, tracks: SlideTracks, max_points: int = 120) -> Any:
+def tracks_figure(joint: str, tracks: SlideTracks, max_points: int = 60) -> Any:
     """A plotly 3D view of the head's markers' tracks on the cup (each track at most
     ``max_points`` points, evenly spaced), coloured by cross-shear, on the sphere [mm]."""
     import plotly.graph_objects as go
 
     n = tracks.points.shape[0]
     idx = np.unique(np.linspace(0, n - 1, min(n, max_points)).round().astype(int))
-    P = tracks.points[idx] * 1e3
+    P = np.round(tracks.points[idx] * 1e3, 3)  # [mm], to a micrometre: a light page
     xs, ys, zs, cs = [], [], [], []
     for k in range(P.shape[1]):
         xs += list(P[:, k, 0]) + [None]

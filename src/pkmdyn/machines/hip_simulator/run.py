@@ -313,10 +313,15 @@ def _finite_option(name: str, value: Any, lo: float, hi: float) -> float:
     return float(value)
 
 
+#: the samples of the cycle the hip run's slide tracks are computed on (docs/wear.md)
+WEAR_SAMPLES = 1000
+
+
 def _wear(out: Path, model: HipModel, motion: OrientationMotion | None, cycle: Any, samples_per_cycle: int,
           params_path: str | Path | None, plots: bool) -> tuple[dict[str, Path], list]:
     """``wear.json`` (and the wear files, docs/wear.md) of both stations' prosthesis pairs over one
-    cycle of the built-in motion (or the whole motion file, taken as one cycle), through the
+    cycle of the built-in motion (or the whole motion file, taken as one cycle), at most
+    :data:`WEAR_SAMPLES` samples (evenly spaced), through the
     generic engine's kinematics of the hip's description: the head on the platform, the cup on
     the frame, the head's radius the parameter file's ``hip_radius_m``, the load the test load.
     Returns the files and the report's 3D views of the tracks."""
@@ -325,7 +330,12 @@ def _wear(out: Path, model: HipModel, motion: OrientationMotion | None, cycle: A
     from ...profiles.iso14242 import iso14242_motion
     from .description import hip_description
 
-    m = motion if motion is not None else iso14242_motion(cycles=1, samples_per_cycle=samples_per_cycle, cycle=cycle)
+    if motion is None:
+        m = iso14242_motion(cycles=1, samples_per_cycle=min(samples_per_cycle, WEAR_SAMPLES), cycle=cycle)
+    else:  # a long motion file: evenly spaced rows, the first and the last kept
+        keep = np.unique(np.linspace(0, len(motion) - 1, min(len(motion), WEAR_SAMPLES + 1)).round().astype(int))
+        m = OrientationMotion(motion.t[keep], motion.angles[keep], motion.rates[keep], motion.accels[keep],
+                              motion.load[keep])
     mech = load_mechanism(hip_description(model))
     kin = solve_kinematics(mech, m.angles, m.rates, m.accels, m.t)
     opts = WearOptions(radius_m=float(model.friction.r_h), load="hydraulic_N")
