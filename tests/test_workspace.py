@@ -141,3 +141,29 @@ def test_sweep_reports_the_workspace_of_every_design(tmp_path):
         assert r["workspace_size_m3"] == pytest.approx(ws.size, rel=1e-12)
         assert r["workspace_inside_share"] == pytest.approx(ws.inside.mean())
     assert rows[0]["workspace_size_m3"] != rows[1]["workspace_size_m3"]
+
+
+def test_a_required_region_constrains_a_sweep(tmp_path):
+    """[requirements]: the share of a required task region inside each design's workspace, a
+    constraint like any metric: a Stewart platform with a wider base needs longer legs than its
+    strokes allow for the region's lowest poses, covers less of it and breaks the constraint."""
+    grid = "x=-0.1:0.1:3,y=-0.1:0.1:3,z=0.9:1.3:3"
+    space = tmp_path / "space.toml"
+    space.write_text('[sampling]\nmethod = "grid"\n[motion]\nreactions = false\n'
+                     f'[requirements]\ngrid = "{grid}"\n'
+                     '[parameters]\n"parameters.base_radius_m" = { values = [1.0, 1.3] }\n'
+                     '[constraints]\nrequired_region_coverage = { min = 1.0 }\n'
+                     '[objectives]\npeak_effort_N = "min"\n')
+    out = tmp_path / "out"
+    assert main(["sweep", "--machine", "stewart", "--space", str(space), "--workers", "0", "--no-plots",
+                 "--out", str(out)]) == 0
+    pq = pytest.importorskip("pyarrow.parquet")
+    rows = sorted(pq.read_table(out / "designs.parquet").to_pylist(), key=lambda r: r["design_id"])
+    from pkmdyn.multibody.task_grid import parse_grid
+
+    m = load_mechanism(MACHINES / "stewart" / "stewart.toml")  # base radius 1.0: the oracle's geometry
+    ws = workspace(m, parse_grid(m, grid, max_axes=3), threshold=1e-3)
+    ref, _ = _stewart_inside(ws.x, 0.0)
+    assert rows[0]["required_region_coverage"] == pytest.approx(ref.mean()) == 1.0
+    assert rows[1]["required_region_coverage"] < 1.0
+    assert [r["status"] for r in rows] == ["ok", "infeasible"]

@@ -35,8 +35,17 @@ __all__ = ["DescribedSweep", "DescribedSweepContext"]
 Array = NDArray[np.float64]
 
 
+class _Requirements(Section):
+    """``[requirements]`` of a space file: a task region every design must reach (``grid``, the
+    ``pkmdyn workspace --grid`` syntax, at the poses ``pose``)."""
+
+    grid: str = Field(max_length=400)
+    pose: str = Field(default="", max_length=400)
+
+
 class _Motion(Section):
     file: str | None = None
+    requirements: _Requirements | None = None
     singularity_threshold: Annotated[float, Field(ge=0.0, le=1.0)] = 1e-3
     reactions: bool = True
     #: a grid of task poses (``pkmdyn workspace --grid``): each design's workspace size on it
@@ -58,6 +67,8 @@ class DescribedSweepContext:
     stiffness: tuple[str, ...] = ()
     #: ``[motion] workspace_grid`` and ``workspace_pose`` (None: no workspace metrics)
     workspace: tuple[str, str] | None = None
+    #: ``[requirements]`` ``grid`` and ``pose`` (None: no coverage metric)
+    required: tuple[str, str] | None = None
 
 
 def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[str]]:
@@ -168,6 +179,10 @@ class DescribedSweep:
                                            "the grid cell, docs/workspace.md)"),
                     MetricInfo("workspace_inside_share", "-", "the share of the grid's poses inside the workspace"),
                     MetricInfo("workspace_min_measure", "-", "the least singularity measure over the inside poses")]
+        if isinstance(options.get("requirements"), dict):
+            out.append(MetricInfo("required_region_coverage", "-",
+                                  "the share of the [requirements] grid's poses inside the workspace (reached within "
+                                  "the joint limits, every singularity measure at least singularity_threshold)"))
         if options.get("reactions", True) is True:
             out.append(MetricInfo("friction_energy_per_cycle_J", "J",
                                   "int (power dissipated by the joints' friction) dt over the motion"))
@@ -215,8 +230,18 @@ class DescribedSweep:
             parse_grid(model, opt.workspace_grid, max_axes=3)  # refused here, once, when it names no task coordinate
             parse_pose(model, opt.workspace_pose)
             ws = (opt.workspace_grid, opt.workspace_pose)
+        req = None
+        if opt.requirements is not None:
+            from .task_grid import parse_grid, parse_pose
+
+            try:
+                parse_grid(model, opt.requirements.grid, max_axes=3)
+                parse_pose(model, opt.requirements.pose)
+            except ParameterError as exc:
+                raise ParameterError(f"[requirements] {exc}") from None
+            req = (opt.requirements.grid, opt.requirements.pose)
         return DescribedSweepContext(motion=motion, threshold=opt.singularity_threshold, reactions=opt.reactions,
-                                     stiffness=tuple(_stiffness_metrics(description)), workspace=ws)
+                                     stiffness=tuple(_stiffness_metrics(description)), workspace=ws, required=req)
 
     def evaluate(self, descriptions: Sequence[Mapping[str, Any]], context: DescribedSweepContext
                  ) -> list[DesignOutcome]:
@@ -363,6 +388,16 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
             m["workspace_min_measure"] = float(ws.measure[ws.inside].min())
         else:
             return DesignOutcome("unreachable", "no pose of [motion] workspace_grid is inside the workspace", m)
+    if ctx.required is not None:
+        from .task_grid import parse_grid, parse_pose
+        from .workspace import workspace
+
+        try:
+            req = workspace(model, parse_grid(model, ctx.required[0], max_axes=3), parse_pose(model, ctx.required[1]),
+                            ctx.threshold)
+        except PkmdynError as exc:
+            return DesignOutcome("invalid", str(exc), m)
+        m["required_region_coverage"] = float(req.inside.mean())
     m["peak_power_W"] = float(power.sum(axis=1).max())
     m["motor_energy_per_cycle_J"] = float(time_integral(np.abs(power).sum(axis=1), t))
     if ctx.reactions:

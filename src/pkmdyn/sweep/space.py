@@ -139,6 +139,9 @@ class _SpaceFile(Section):
     constraints: dict[str, _Bound] = Field(default_factory=dict)
     objectives: dict[str, Literal["min", "max"]]
     refine: _Refine = _Refine()
+    #: a required task region (described mechanisms: ``grid``, ``pose``), handed to the machine
+    #: with the ``[motion]`` options as ``requirements``
+    requirements: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -375,7 +378,9 @@ def space_from_dict(raw: Mapping[str, Any], description: Mapping[str, Any], metr
     space = SweepSpace(
         source=source, base_dir=base_dir, params_path=params_path, method=s.method, designs=s.designs or 0,
         seed=s.seed, max_designs=max_designs if max_designs is not None else s.max_designs,
-        batch_size=s.batch_size, motion=dict(d.motion), parameters=tuple(params),
+        batch_size=s.batch_size,
+        motion={**dict(d.motion), **({"requirements": dict(d.requirements)} if d.requirements is not None else {})},
+        parameters=tuple(params),
         constraints=tuple(Bound(k, b.min, b.max) for k, b in d.constraints.items()),
         objectives=tuple(d.objectives.items()),
         # an NSGA-II run's generations are its rounds, each of one population of designs
@@ -411,7 +416,9 @@ def load_space(path: str | Path, description_for: Any, metrics_for: Any,
     if isinstance(params, str):
         params_path = Path(params) if Path(params).is_absolute() else base_dir / params
     description = description_for(params_path)
-    motion = raw.get("motion", {}) if isinstance(raw.get("motion", {}), dict) else {}
+    motion = dict(raw.get("motion", {})) if isinstance(raw.get("motion", {}), dict) else {}
+    if isinstance(raw.get("requirements"), dict):
+        motion["requirements"] = dict(raw["requirements"])
     space = space_from_dict(raw, description, metrics_for(motion, description), str(p), base_dir,
                             max_designs)
     return space, description
