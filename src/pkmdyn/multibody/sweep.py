@@ -302,6 +302,14 @@ def _workspace_size_name(source: Any, grid: str) -> tuple[str, str]:
     return f"workspace_size_{unit}", unit.replace("_", " ")
 
 
+def _on_grid(model: Any, spec: tuple[str, str], threshold: float) -> Any:
+    """The workspace of ``model`` on the grid and held pose ``spec`` (``--grid``, ``--pose`` syntax)."""
+    from .task_grid import parse_grid, parse_pose
+    from .workspace import workspace
+
+    return workspace(model, parse_grid(model, spec[0], max_axes=3), parse_pose(model, spec[1]), threshold)
+
+
 def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> DesignOutcome:
     """One design: model -> motion -> kinematics and singularity measures -> efforts (and every
     joint reaction with the friction) -> metrics."""
@@ -373,31 +381,22 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
         values = {"min_stiffness_N_m": st.min_stiffness.min(), "min_rot_stiffness_Nm_rad": st.min_rot_stiffness.min(),
                   "lowest_frequency_Hz": st.frequencies[:, 0].min()}
         m.update({k: float(values[k]) for k in wanted})
-    if ctx.workspace is not None:
-        from .task_grid import parse_grid, parse_pose
-        from .workspace import workspace
-
-        try:
-            ws = workspace(model, parse_grid(model, ctx.workspace[0], max_axes=3), parse_pose(model, ctx.workspace[1]),
-                           ctx.threshold)
-        except PkmdynError as exc:
-            return DesignOutcome("invalid", str(exc), m)
-        m[_workspace_size_name(model, ctx.workspace[0])[0]] = ws.size
+    grids = {}
+    for key, spec in (("workspace", ctx.workspace), ("required", ctx.required)):
+        if spec is not None:
+            try:
+                grids[key] = _on_grid(model, spec, ctx.threshold)
+            except PkmdynError as exc:
+                return DesignOutcome("invalid", str(exc), m)
+    if "workspace" in grids:
+        ws = grids["workspace"]
+        m[_workspace_size_name(model, ctx.workspace[0])[0]] = ws.size  # type: ignore[index]
         m["workspace_inside_share"] = float(ws.inside.mean())
-        if ws.inside.any():
-            m["workspace_min_measure"] = float(ws.measure[ws.inside].min())
-        else:
+        if not ws.inside.any():
             return DesignOutcome("unreachable", "no pose of [motion] workspace_grid is inside the workspace", m)
-    if ctx.required is not None:
-        from .task_grid import parse_grid, parse_pose
-        from .workspace import workspace
-
-        try:
-            req = workspace(model, parse_grid(model, ctx.required[0], max_axes=3), parse_pose(model, ctx.required[1]),
-                            ctx.threshold)
-        except PkmdynError as exc:
-            return DesignOutcome("invalid", str(exc), m)
-        m["required_region_coverage"] = float(req.inside.mean())
+        m["workspace_min_measure"] = float(ws.measure[ws.inside].min())
+    if "required" in grids:
+        m["required_region_coverage"] = float(grids["required"].inside.mean())
     m["peak_power_W"] = float(power.sum(axis=1).max())
     m["motor_energy_per_cycle_J"] = float(time_integral(np.abs(power).sum(axis=1), t))
     if ctx.reactions:
