@@ -232,9 +232,10 @@ def test_deflection_is_compliance_times_load():
     dphi = np.linalg.solve(E, t[:, :3, None])[..., 0]
     assert _rel(dx[:, :3], t[:, 3:]) < 1e-9
     assert _rel(dx[:, 3:], dphi) < 1e-9
-    # and by Gosselin: the legs' stretch u / k, dx = J^-1 (u / k)
-    u_legs = np.linalg.solve(np.swapaxes(J, 1, 2), np.einsum("nij,nj->ni", st.K_task, dx)[..., None])[..., 0]
-    assert _rel(np.linalg.solve(J, (u_legs / k)[..., None])[..., 0], dx) < 1e-9
+    # and from the drives' efforts: a drive pushing with u is compressed by u / k, dx = J^-1 (-u / k)
+    u = joint_reactions(m, kin).u
+    legs = [m.actuator_names.index(f"P_{i + 1}") for i in range(6)]
+    assert _rel(np.linalg.solve(J, (-u[:, legs] / k)[..., None])[..., 0], dx) < 1e-9
 
 
 def test_stewart_frequencies_are_the_eigenvalues_of_M_inv_K():
@@ -427,6 +428,30 @@ def test_sweep_reports_stiffness_metrics_that_scale_with_the_drives(tmp_path):
     assert rows[1]["lowest_frequency_Hz"] == pytest.approx(np.sqrt(2) * rows[0]["lowest_frequency_Hz"], rel=1e-9)
 
 
+def test_a_long_motion_in_chunks_equals_one_chunk(tmp_path, monkeypatch):
+    """pkmdyn stiffness --motion computes the structure chunk by chunk: the same rows and the
+    same worst sample with a chunk of 37 samples as with one chunk."""
+    import csv
+
+    import pkmdyn.multibody.stiffness_run as job
+    from pkmdyn.multibody import default_motion
+
+    m = load_mechanism(ex.MACHINES / "stewart" / "stewart.toml")
+    mo = default_motion(m)
+    out = []
+    for size in (10_000, 37):
+        monkeypatch.setattr(job, "MOTION_CHUNK", size)
+        folder = tmp_path / f"c{size}"
+        folder.mkdir()
+        doc = job.run_stiffness(m, folder, motion=mo)
+        rows = list(csv.DictReader((folder / "results.csv").open()))
+        out.append((doc["worst"]["index"], np.array([[float(v) for v in r.values()] for r in rows])))
+    assert out[0][0] == out[1][0]
+    # per sample the same computation; only the batched linear algebra's rounding may differ
+    scale = np.abs(out[0][1]).max(axis=0)
+    assert np.all(np.abs(out[0][1] - out[1][1]) <= 1e-10 * scale + 1e-300)
+
+
 def test_run_writes_the_deflection_columns(tmp_path):
     """pkmdyn run --deflection: the Stewart platform's deflection under gravity and inertia is,
     at every sample, the legs' change of length mapped to the task: a drive that pushes with the
@@ -448,3 +473,34 @@ def test_run_writes_the_deflection_columns(tmp_path):
     ref = np.linalg.solve(J, (-u / k)[..., None])[..., 0]
     assert _rel(dx, ref) < 1e-8
     assert np.all(dx[:, 2] < -1e-7)
+
+
+def test_a_joint_spring_on_a_driven_joint_leaves_the_drive_alone():
+    """A bearing's tilt stiffness given as one number on the crank's driven revolute joint: along
+    the driven axis the drive carries the load, so the task stiffness in the plane is the same as
+    without the joint's spring, while the joint's spring softens the out-of-plane tilt."""
+    d, _ = _four_bar(kd=2.0e4)
+    m0 = load_mechanism(d)
+    d["joints"][0]["stiffness"] = {"drive_Nm_rad": 2.0e4, "moment_Nm_rad": 2.0e4}
+    m1 = load_mechanism(d)
+    a, b = (stiffness(m, solve_kinematics(m, reference_task(m)[None])) for m in (m0, m1))
+    assert _rel(b.K_task, a.K_task) < 1e-10
+    assert b.C_point[0, 0, 0] > a.C_point[0, 0, 0] * (1 + 1e-6)
+
+
+def test_a_fixed_joint_with_a_spring_runs(tmp_path):
+    """A tool bolted to the coupler through a compliant interface (a fixed joint with springs):
+    the run writes its model.json with the spring listed."""
+    from pkmdyn.cli import main
+
+    d, _ = _four_bar()
+    d["bodies"].append(ex.body("tool", (0.6, 0.6, 0.0), mass=0.5))
+    d["joints"].append(ex.joint("bolt", "fixed", "coupler", "tool", (0.6, 0.6, 0.0),
+                                stiffness={"force_N_m": 1.0e6, "moment_Nm_rad": 1.0e4}))
+    d["task"] = {"body": "tool", "position": ["x"]}
+    path = _write(tmp_path, d)
+    out = tmp_path / "run"
+    assert main(["run", "--machine", str(path), "--deflection", "--out", str(out)]) == 0
+    doc = json.loads((out / "model.json").read_text())
+    bolt = next(j for j in doc["joints"] if j["name"] == "bolt")
+    assert bolt["stiffness"] == {"force_N_m": [1.0e6] * 3, "moment_Nm_rad": [1.0e4] * 3}

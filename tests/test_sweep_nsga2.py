@@ -77,7 +77,7 @@ def test_nsga2_is_reproducible_resumable_and_its_front_is_non_dominated(tmp_path
 
     summary = json.loads((a / "summary.json").read_text())
     hv = [g["hypervolume"] for g in summary["generations"]]
-    assert len(hv) == 3 and all(y >= x - 1e-12 for x, y in zip(hv, hv[1:]))
+    assert len(hv) == 3 and hv[-1] > hv[0]  # the generations improved on the first population
     files = sorted(p.name for p in (a / "pareto_designs").iterdir())
     assert files == sorted(f"design_{i}.toml" for i in front)
 

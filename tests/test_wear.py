@@ -114,9 +114,6 @@ def test_the_hip_head_in_its_cup_and_the_inverse_motion():
     inv = joint_slide_tracks(m, kin, "S0_upper", load, 0.014, head="parent")
     ref_inv = slide_tracks(np.swapaxes(R, 1, 2), mo_t, load, 0.014)
     assert np.abs(inv.points - ref_inv.points).max() < 1e-12
-    # and the cup's markers traced on the moving head are those tracks too
-    on_head = joint_slide_tracks(m, kin, "S0_upper", load, 0.014, on="head")
-    assert np.abs(on_head.points - inv.points).max() < 1e-12
 
 
 def test_hip_run_writes_wear_json(tmp_path):
@@ -170,9 +167,11 @@ def test_bad_wear_input_exit_2_nothing_written(tmp_path, capsys, args, words):
     assert not out.exists()
 
 
-def test_marker_grid_areas():
-    g = marker_grid(10.0, 60.0)
-    assert g.w.sum() == pytest.approx(2 * np.pi * (1 - np.cos(np.radians(60.0))), rel=1e-12)
+@pytest.mark.parametrize("spacing, cap", [(10.0, 60.0), (10.0, 58.0), (7.0, 45.0), (15.0, 10.0), (10.0, 0.0)])
+def test_marker_grid_areas(spacing, cap):
+    g = marker_grid(spacing, cap)
+    if cap > 0:
+        assert g.w.sum() == pytest.approx(2 * np.pi * (1 - np.cos(np.radians(cap))), rel=1e-12)
     assert np.allclose(np.linalg.norm(g.u, axis=1), 1.0)
     assert g.u[0] == pytest.approx([0.0, 0.0, 1.0])
     assert ASPECT_CAP >= 1e9

@@ -68,7 +68,7 @@ def test_the_size_error_estimate_covers_a_finer_grid():
     for count in (13, 49):
         axes = [(0, np.linspace(-0.6, 0.6, count)), (1, np.linspace(-0.6, 0.6, count))]
         ws = workspace(m, axes, base, threshold=0.0)
-        assert ws.unit == "m^2"
+        assert ws.unit == "m2"
         sizes.append((ws.size, ws.size_error))
     (a, ea), (b, eb) = sizes
     assert abs(a - b) <= ea + eb
@@ -97,7 +97,7 @@ def test_workspace_command(tmp_path):
                  "--out", str(out)]) == 0
     doc = json.loads((out / "workspace.json").read_text())
     assert doc["poses"] == 49 and 0 < doc["inside"] <= 49
-    assert doc["fixed"]["z_m"] == -1.2 and doc["size_m^2"] == pytest.approx(doc["inside"] * 0.04)
+    assert doc["fixed"]["z_m"] == -1.2 and doc["size_m2"] == pytest.approx(doc["inside"] * 0.04)
     rows = (out / "workspace.csv").read_text().splitlines()
     assert len(rows) == 50 and (out / "workspace.png").stat().st_size > 0
 

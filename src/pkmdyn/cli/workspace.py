@@ -36,7 +36,7 @@ def workspace_command(machine: str, grid: str, pose: str, threshold: float, cent
     from ..io import check_output_dir, output_dir, write_csv, write_json
     from ..machines.registry import resolve
     from ..multibody.task_grid import parse_grid, parse_pose
-    from ..multibody.workspace import workspace, workspace_document, workspace_png
+    from ..multibody.workspace import check_centre, workspace, workspace_document, workspace_png
     from ..report import write_report
     from .mechanism import _load
 
@@ -52,6 +52,7 @@ def workspace_command(machine: str, grid: str, pose: str, threshold: float, cent
             c = np.array([float(v) for v in centre.split(",")])
         except ValueError:
             raise ParameterError(f"--centre {centre!r}: expected numbers separated by commas") from None
+        c = check_centre(c, len(axes))
     ws = workspace(model, axes, base, threshold, c)
     doc = workspace_document(model, ws)
     final = Path(out_dir)
@@ -66,6 +67,7 @@ def workspace_command(machine: str, grid: str, pose: str, threshold: float, cent
                                        parameters=path.read_text(encoding="utf-8", errors="replace") if path else "",
                                        images=[files["map"]], notes=["definitions: docs/workspace.md"])
         list_files({k: final / v.name for k, v in files.items()})
+    shapes = ("" if ws.cube_half_width is None else
+              f"; inscribed cube half-width {ws.cube_half_width:.4g}, cylinder radius {ws.cylinder_radius:.4g}")
     click.echo(f"{doc['inside']} of {doc['poses']} poses inside (reached: {doc['reached']}); size "
-               f"{ws.size:.6g} +- {ws.size_error:.2g} {ws.unit}; inscribed cube half-width {ws.cube_half_width:.4g}, "
-               f"cylinder radius {ws.cylinder_radius:.4g}")
+               f"{ws.size:.6g} +- {ws.size_error:.2g} {ws.unit}{shapes}")

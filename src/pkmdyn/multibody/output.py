@@ -95,7 +95,7 @@ def model_summary(model: MechanismModel) -> dict[str, Any]:
             entry["friction"] = model.joint_friction[k]
         if model.joint_stiffness[k] is not None:  # drive_N_m|drive_Nm_rad, force_N_m, moment_Nm_rad
             st = model.joint_stiffness[k]
-            unit = "drive_N_m" if jt.units[0] == "m" else "drive_Nm_rad"
+            unit = ("drive_N_m" if jt.units[0] == "m" else "drive_Nm_rad") if "drive" in st else ""
             entry["stiffness"] = {(unit if key == "drive" else key): v for key, v in st.items()}
         joints.append(entry)
     pos, _, _ = task_columns(model)

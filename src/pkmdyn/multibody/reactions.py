@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 
 from ..analysis.compliance import beam_flexibility, circular_section, segment_wrenches, unique_reactions
 from ..errors import ParameterError, SingularityError
+from .joint_types import JOINT_TYPES
 from .kinematics import MechanismKinematics
 from .model import MechanismModel
 
@@ -191,7 +192,8 @@ def joint_spring_terms(model: MechanismModel, kin: MechanismKinematics) -> tuple
     """The joints' springs (``[joints.stiffness]`` ``force_N_m``, ``moment_Nm_rad``): ``P (n, s, 6,
     6 nj)`` giving each sprung joint's reaction ``[f; m]`` (force, moment about the joint
     point, along the axes of its frame on the parent) from the joint wrenches ``z``, and the
-    flexibility ``C (n, s, 6, 6)`` (diagonal, ``1/k``; zero along a rigid direction)."""
+    flexibility ``C (n, s, 6, 6)`` (diagonal, ``1/k``; zero along a rigid direction and along an
+    actuated joint's driven axis, whose load its drive carries: ``drive_N_m``/``drive_Nm_rad``)."""
     from .kinematics import joint_frame
 
     n, nj = len(kin), len(model.joint_names)
@@ -212,6 +214,8 @@ def joint_spring_terms(model: MechanismModel, kin: MechanismKinematics) -> tuple
             c[:3] = 1.0 / np.asarray(st["force_N_m"], dtype=float)
         if "moment_Nm_rad" in st:
             c[3:] = 1.0 / np.asarray(st["moment_Nm_rad"], dtype=float)
+        if model.joint_actuated[j]:  # along the driven axis (the joint frame's z) the drive carries the load
+            c[2 if JOINT_TYPES[model.joint_type[j]].units[0] == "m" else 5] = 0.0
         P_list.append(P)
         C_list.append(np.broadcast_to(np.diag(c), (n, 1, 6, 6)))
     if not P_list:

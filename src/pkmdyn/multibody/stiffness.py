@@ -243,14 +243,22 @@ class _Structure:
         npas = passive.size
         H = np.swapaxes(B, 1, 2) @ Fs @ B
         g = np.swapaxes(B, 1, 2) @ Fs @ e0
+        # symmetric equilibration: lambda = Dc mu (each unknown scaled by the larger of its energy's
+        # and its equations' size), each equation row by its size, so that members of very
+        # different stiffness and wrenches of N and N m meet at O(1) before the least squares
+        tiny = 1e-300
+        dc = 1.0 / np.maximum(np.maximum(np.sqrt(np.abs(np.einsum("nkk->nk", H))),
+                                         np.linalg.norm(Ap, axis=1) if npas else 0.0), tiny)
+        Aps = Ap * dc[:, None, :]
+        dr = 1.0 / np.maximum(np.linalg.norm(Aps, axis=2), tiny) if npas else np.ones((n, 0))
+        Aps = Aps * dr[:, :, None]
         kkt = np.zeros((n, K + npas, K + npas))
-        kkt[:, :K, :K] = H
-        kkt[:, :K, K:] = np.swapaxes(Ap, 1, 2)
-        kkt[:, K:, :K] = Ap
-        r = np.concatenate([-g, rhs], axis=1)
-        # scale the rows and columns of the multipliers to the equations' size
+        kkt[:, :K, :K] = H * dc[:, :, None] * dc[:, None, :]
+        kkt[:, :K, K:] = np.swapaxes(Aps, 1, 2)
+        kkt[:, K:, :K] = Aps
+        r = np.concatenate([-g * dc[:, :, None], rhs * dr[:, :, None]], axis=1)
         sol = np.linalg.pinv(kkt, rcond=1e-12, hermitian=True) @ r if K + npas else np.zeros((n, 0, 6))
-        lam = sol[:, :K]
+        lam = sol[:, :K] * dc[:, :, None]
         res = np.abs(Ap @ lam - rhs).max(axis=(1, 2)) if npas else np.zeros(n)
         size = np.maximum(np.abs(rhs).max(axis=(1, 2)) if npas else 0.0, 1.0)
         bad = np.flatnonzero(res > UNBALANCED * size * max(1.0, model.length_scale))
@@ -306,14 +314,18 @@ def stiffness(model: MechanismModel, kin: MechanismKinematics, sample_offset: in
     n, nt = len(kin), model.nt
     C_task = st.D @ st.C_O @ np.swapaxes(st.D, 1, 2)
     C_task = 0.5 * (C_task + np.swapaxes(C_task, 1, 2))
-    # a task direction no member strains: its stiffness is infinite
-    cs = np.sqrt(np.maximum(np.einsum("nii->ni", C_task), 0.0))
-    sv = np.linalg.svd(C_task / np.maximum(cs[:, :, None] * cs[:, None, :], 1e-300) if nt else C_task,
-                       compute_uv=False)
-    lo = (cs.min(axis=1) <= RIGID * max(float(cs.max()), 1e-300)) | (sv[:, -1] <= RIGID)
+    # a task direction no member strains: its stiffness is infinite (the diagonal compared per
+    # sample in one unit, an angle's compliance times the length scale squared; then the
+    # correlation matrix's smallest singular value, whose vector names the coordinate)
+    unit = np.array([1.0 if u == "m" else model.length_scale for u in model.task_units])
+    cs = np.sqrt(np.maximum(np.einsum("nii->ni", C_task), 0.0)) * unit
+    _, sv, vt = np.linalg.svd(C_task / np.maximum(cs[:, :, None] * cs[:, None, :], 1e-300) * unit[:, None] * unit
+                              if nt else C_task)
+    zero = cs.min(axis=1) <= RIGID * np.maximum(cs.max(axis=1), 1e-300)
+    lo = zero | (sv[:, -1] <= RIGID)
     if np.any(lo):
         s = int(np.flatnonzero(lo)[0])
-        r = int(np.argmin(cs[s]))
+        r = int(np.argmin(cs[s])) if zero[s] else int(np.argmax(np.abs(vt[s, -1])))
         raise StiffnessDataMissing(f"sample {s + sample_offset}: no compliance source strains task coordinate "
                                    f"{model.task_names[r]!r} (its stiffness would be infinite): give the drives a "
                                    "stiffness, the links a section and a material, or the joints springs")

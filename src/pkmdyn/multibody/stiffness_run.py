@@ -25,6 +25,8 @@ Array = NDArray[np.float64]
 
 #: the most poses a stiffness grid may hold
 MAX_GRID_POINTS = 10_000
+#: the samples of a motion whose stiffness and deflection are computed at once
+MOTION_CHUNK = 2048
 #: the lowest modes drawn in the report
 DRAWN_MODES = 3
 
@@ -202,33 +204,46 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
     elif motion is not None:
         from .dynamics import joint_reactions
 
-        kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
-        st = stiffness(model, kin)
+        kin_all = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
         src = compliance_sources(model)
         # rigid links and joints: a self-stress of an over-constrained mechanism strains no member
         # (the drives' efforts are fixed), so the minimum-norm reactions give the same deflection
         over = "compliance" if src["bodies"] or src["joints"] else "minimum-norm"
-        reac = joint_reactions(model, kin, named=motion.loads, overconstrained=over)
-        dx = deflection(model, kin, reac, named=motion.loads)
+        n_all = len(kin_all)
+        kt, kr, f1 = np.empty(n_all), np.empty(n_all), np.empty(n_all)
+        dx = np.empty((n_all, model.nt))
+        worst: tuple[float, int, int, Any, Any] | None = None
+        for a in range(0, n_all, MOTION_CHUNK):  # the structure's matrices grow with the samples: in chunks
+            b = min(a + MOTION_CHUNK, n_all)
+            kin_c = kin_all.rows(a, b)
+            named = {k: np.asarray(v)[a:b] for k, v in motion.loads.items()}
+            st_c = stiffness(model, kin_c, sample_offset=a)
+            reac = joint_reactions(model, kin_c, named=named, overconstrained=over, sample_offset=a)
+            dx[a:b] = deflection(model, kin_c, reac, named=named, sample_offset=a)
+            kt[a:b], kr[a:b], f1[a:b] = st_c.min_stiffness, st_c.min_rot_stiffness, st_c.frequencies[:, 0]
+            k = int(np.argmin(np.where(np.isfinite(st_c.min_stiffness), st_c.min_stiffness, np.inf)))
+            if worst is None or st_c.min_stiffness[k] < worst[0]:
+                worst = (float(st_c.min_stiffness[k]), a + k, k, kin_c, st_c)
         cols = {"t_s": np.asarray(motion.t, dtype=float)}
         for i, (n, u) in enumerate(zip(model.task_names, model.task_units)):
-            cols[f"{n}_{u}"] = kin.x[:, i]
+            cols[f"{n}_{u}"] = kin_all.x[:, i]
         for i, (n, u) in enumerate(zip(model.task_names, model.task_units)):
             cols[f"{n}_deflection_{u}"] = dx[:, i]
-        if np.all(np.isfinite(st.min_stiffness)):
-            cols["min_stiffness_N_m"] = st.min_stiffness
-        if np.all(np.isfinite(st.min_rot_stiffness)):
-            cols["min_rot_stiffness_Nm_rad"] = st.min_rot_stiffness
-        cols["lowest_frequency_Hz"] = st.frequencies[:, 0]
+        if np.all(np.isfinite(kt)):
+            cols["min_stiffness_N_m"] = kt
+        if np.all(np.isfinite(kr)):
+            cols["min_rot_stiffness_Nm_rad"] = kr
+        cols["lowest_frequency_Hz"] = f1
         files["results"] = out / "results.csv"
         write_csv(files["results"], cols)
-        s0 = int(np.argmin(np.where(np.isfinite(st.min_stiffness), st.min_stiffness, np.inf)))
+        assert worst is not None
+        _, i0, s0, kin, st = worst
         doc = _head(model, "motion")
-        doc["samples"] = int(len(kin))
+        doc["samples"] = int(n_all)
         doc["max_deflection"] = {f"{n}_{u}": float(np.abs(dx[:, i]).max())
                                  for i, (n, u) in enumerate(zip(model.task_names, model.task_units))}
-        doc["lowest_frequency_Hz"] = float(st.frequencies[:, 0].min())
-        doc["worst"] = dict(pose_document(model, st, s0), index=s0, t_s=float(motion.t[s0]))
+        doc["lowest_frequency_Hz"] = float(f1.min())
+        doc["worst"] = dict(pose_document(model, st, s0), index=i0, t_s=float(motion.t[i0]))
     else:
         x = np.atleast_2d(reference_task(model) if poses is None else poses)
         kin = solve_kinematics(model, x)

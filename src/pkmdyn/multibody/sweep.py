@@ -227,8 +227,11 @@ class DescribedSweep:
         if opt.workspace_grid is not None:
             from .task_grid import parse_grid, parse_pose
 
-            parse_grid(model, opt.workspace_grid, max_axes=3)  # refused here, once, when it names no task coordinate
-            parse_pose(model, opt.workspace_pose)
+            try:  # refused here, once, when it names no task coordinate
+                parse_grid(model, opt.workspace_grid, max_axes=3)
+                parse_pose(model, opt.workspace_pose)
+            except ParameterError as exc:
+                raise ParameterError(f"[motion] workspace_grid/workspace_pose: {exc}") from None
             ws = (opt.workspace_grid, opt.workspace_pose)
         req = None
         if opt.requirements is not None:
@@ -283,13 +286,11 @@ def _stiffness_metrics(description: Mapping[str, Any]) -> list[str]:
 
 
 def _workspace_size_name(source: Any, grid: str) -> tuple[str, str]:
-    """The workspace-size metric's name and unit for a grid of task coordinates (``m3`` for three
-    position coordinates, ``m2_rad`` for two and an angle, ...); ``source`` a model or a
-    description."""
-    from collections import Counter
-
+    """The workspace-size metric's name and unit for a grid of task coordinates
+    (:func:`.workspace.size_unit`: ``workspace_size_m3`` ...); ``source`` a model or a description."""
     from . import load_mechanism
     from .task_grid import parse_grid
+    from .workspace import size_unit
 
     model = source if hasattr(source, "task_units") else None
     if model is None:
@@ -297,8 +298,11 @@ def _workspace_size_name(source: Any, grid: str) -> tuple[str, str]:
             model = load_mechanism(copy.deepcopy(dict(source)))
         except PkmdynError as exc:
             raise ParameterError(f"[motion] workspace_grid: the base description: {exc}") from None
-    counts = Counter(model.task_units[i] for i, _ in parse_grid(model, grid, max_axes=3))
-    unit = "_".join(u + (str(k) if k > 1 else "") for u, k in sorted(counts.items()))
+    try:
+        axes = parse_grid(model, grid, max_axes=3)
+    except ParameterError as exc:
+        raise ParameterError(f"[motion] workspace_grid: {exc}") from None
+    unit = size_unit([model.task_units[i] for i, _ in axes])
     return f"workspace_size_{unit}", unit.replace("_", " ")
 
 

@@ -85,7 +85,8 @@ def marker_grid(spacing_deg: float = 10.0, cap_deg: float = 60.0) -> MarkerGrid:
     k = 0
     while k * s <= cap + 1e-12:
         t = k * s
-        lo, hi = max(0.0, t - s / 2), min(cap, t + s / 2) if k else min(cap, s / 2)
+        last = (k + 1) * s > cap + 1e-12  # the last ring's band runs to the cap
+        lo, hi = max(0.0, t - s / 2), cap if last else min(cap, t + s / 2)
         band = 2 * math.pi * (math.cos(lo) - math.cos(hi)) if hi > lo else 0.0
         count = 1 if k == 0 else max(1, round(2 * math.pi * math.sin(t) / s))
         for j in range(count):

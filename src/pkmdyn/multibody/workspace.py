@@ -12,7 +12,7 @@ pose, e.g. a constant orientation); each grid pose is *in the workspace* when
 
 **Size.** Each grid pose stands for its cell (the product of the grid steps); the workspace's
 size (volume [m^3] for three position coordinates, area for two, length for one; angles count
-in rad) is the number of inside poses times the cell. Its error estimate is half the cells on
+in rad; the unit written ``m3``, ``m2``, ``m2_rad``, ...) is the number of inside poses times the cell. Its error estimate is half the cells on
 the boundary (inside poses with an outside neighbour along a grid axis, and the reverse),
 times the cell: the boundary's cells are the ones the grid cannot tell in or out.
 
@@ -21,7 +21,7 @@ times the cell: the boundary's cells are the ones the grid cannot tell in or out
 grid axis, height equal to its diameter; a disc for two axes) centred at ``c`` holding no
 outside grid pose: ``a`` = the least Chebyshev distance from ``c`` to an outside pose, less one
 grid step (so that the shape is inside to within the grid's resolution); 0 where ``c`` itself
-is outside.
+is outside; not given (None) for a grid of lengths and angles together.
 
 **Dexterity** over the inside poses: the statistics of the smallest of the singularity
 measures (1 isotropic, 0 singular; the inverse of a condition number of the scaled Jacobians).
@@ -51,7 +51,8 @@ class Workspace:
     ``x (N, nt)`` every grid pose (first axis slowest); ``reached (N,)`` reached within the
     joint limits; ``inside (N,)`` reached and away from every singularity; ``measure (N,)`` the
     smallest singularity measure (0 where not reached); ``size``, ``size_error`` in the unit of
-    the grid's cells (``unit``); ``cube_half_width``, ``cylinder_radius`` about ``centre``."""
+    the grid's cells (``unit``, :func:`size_unit`); ``cube_half_width``, ``cylinder_radius``
+    about ``centre`` (None for a grid of lengths and angles together)."""
 
     axes: list
     x: Array
@@ -63,9 +64,17 @@ class Workspace:
     size_error: float
     unit: str
     centre: Array
-    cube_half_width: float
-    cylinder_radius: float
+    cube_half_width: float | None
+    cylinder_radius: float | None
     threshold: float
+
+
+def check_centre(centre: object, n: int) -> Array:
+    """``--centre``: one finite value per grid coordinate."""
+    c = np.asarray(centre, dtype=float)
+    if c.shape != (n,) or not np.all(np.isfinite(c)):
+        raise ParameterError(f"--centre: expected {n} finite values (one per grid coordinate)")
+    return c
 
 
 def _reach(model: MechanismModel, x: Array) -> tuple[NDArray[np.bool_], Array]:
@@ -119,15 +128,15 @@ def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array 
     steps = np.array([float(v[1] - v[0]) for _, v in axes])
     cell = float(np.prod(steps))
     units = [model.task_units[i] for i, _ in axes]
-    unit = "*".join(units) if len(set(units)) > 1 else (units[0] if len(units) == 1 else f"{units[0]}^{len(units)}")
+    unit = size_unit(units)
     shape = tuple(len(v) for _, v in axes)
-    c = np.array([base[i] for i, _ in axes]) if centre is None else np.asarray(centre, dtype=float)
-    if c.shape != (len(axes),):
-        raise ParameterError(f"--centre: expected {len(axes)} values (one per grid coordinate)")
+    c = np.array([base[i] for i, _ in axes]) if centre is None else check_centre(centre, len(axes))
     pts = x[:, [i for i, _ in axes]]
     out = ~inside
     step = float(steps.max())
-    if out.any():
+    if len(set(units)) > 1:  # lengths and angles together: no distance to measure the shapes by
+        cube = cylinder = None
+    elif out.any():
         d = np.abs(pts[out] - c)
         cube = float(d.max(axis=1).min()) - step
         if len(axes) >= 2:
@@ -141,8 +150,16 @@ def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array 
         cylinder = cube
     return Workspace(axes=axes, x=x, reached=reached, inside=inside, measure=measure, cell=cell,
                      size=float(inside.sum()) * cell, size_error=0.5 * _boundary(inside, shape) * cell, unit=unit,
-                     centre=c, cube_half_width=max(cube, 0.0), cylinder_radius=max(cylinder, 0.0),
-                     threshold=float(threshold))
+                     centre=c, cube_half_width=None if cube is None else max(cube, 0.0),
+                     cylinder_radius=None if cylinder is None else max(cylinder, 0.0), threshold=float(threshold))
+
+
+def size_unit(units: list[str]) -> str:
+    """The unit of a grid cell's size from its coordinates' units: ``m3``, ``m2``, ``m2_rad``, ``rad``."""
+    from collections import Counter
+
+    counts = Counter(units)
+    return "_".join(u + (str(k) if k > 1 else "") for u, k in sorted(counts.items()))
 
 
 def workspace_document(model: MechanismModel, ws: Workspace) -> dict:

@@ -299,7 +299,9 @@ def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: in
                     raise PkmdynError("internal error: the NSGA-II search does not replay its first generation")
             N = prep.space.designs
             search.tell(*generation_values(table, (r - 1) * N, r * N, prep.space))
-            X = np.vstack([X, search.ask()])
+            Xg = search.ask()
+            _check_replay(table, prep.space, r * N, Xg)
+            X = np.vstack([X, Xg])
         else:
             _, front = _front(table, prep.space.objectives)
             if not front.size:
@@ -313,6 +315,19 @@ def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: in
     files, counts, n_pareto, best = _results(prep, X, rounds, out, plots, stats)
     return SweepReport(out=out, designs=int(X.shape[0]), evaluated=evaluated, counts=counts, pareto=n_pareto,
                        best_design_id=best, files=files, stats=stats, results_s=time.perf_counter() - t0)
+
+
+def _check_replay(table: Any, space: Any, first: int, Xg: Any) -> None:
+    """The stored rows of a generation that an earlier run evaluated hold the designs the replay
+    asks for now (the same seed and pymoo give the same designs; anything else would pair a
+    design with another's metrics)."""
+    ids = np.asarray(table.column("design_id").to_numpy(zero_copy_only=False))
+    rows = np.flatnonzero((ids >= first) & (ids < first + Xg.shape[0]))
+    for row in rows:
+        stored = [table.column(p.key)[int(row)].as_py() for p in space.parameters]
+        if not np.allclose(stored, Xg[int(ids[row]) - first], rtol=1e-12, atol=0.0):
+            raise PkmdynError(f"design {int(ids[row])}: the stored design differs from the NSGA-II replay of its "
+                              "generation (another pymoo version?); use a new --out")
 
 
 def _add(total: ExecutionStats, more: ExecutionStats) -> None:

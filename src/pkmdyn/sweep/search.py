@@ -7,9 +7,10 @@ crowding distance, simulated binary crossover, polynomial mutation: pymoo's NSGA
 and tells it their objectives (every ``"max"`` objective negated) and constraint violation.
 The violation of a design is 0 when it is feasible, the sum of its metrics' relative
 distances beyond their ``[constraints]`` bounds when it is ``infeasible``, and 1e9 when its
-evaluation failed (invalid, unreachable, singular, ...). A generation always holds
-``designs`` rows: where pymoo returns fewer offspring (duplicates removed), the last ones are
-repeated and only pymoo's own are told. The same space file and seed give the same designs,
+evaluation failed (invalid, unreachable, singular, ...); an infeasible design's violation is
+capped below that. A generation always holds ``designs`` rows: where pymoo returns fewer
+offspring (duplicates removed), its offspring are repeated from the first and only pymoo's own
+are told. The same space file and seed give the same designs,
 generation after generation, so an interrupted run replays its finished generations from
 their stored rows and resumes (``docs/sweep.md``)."""
 
@@ -52,6 +53,11 @@ class Nsga2Search:
         U = np.clip(np.asarray(pop.get("X"), dtype=float), 0.0, 1.0 - 1e-12)
         self._pending = pop
         n = int(self.space.designs)
+        if U.shape[0] == 0:
+            from ..errors import PkmdynError
+
+            raise PkmdynError("NSGA-II: no new design in this generation (the population has collapsed onto "
+                              "duplicates); fewer generations or a larger population")
         if U.shape[0] < n:
             U = np.vstack([U, U[np.arange(n - U.shape[0]) % U.shape[0]]])
         return from_unit(self.space, U[:n])
@@ -84,7 +90,8 @@ def violation(status: Array, values: dict[str, Array], constraints: Any) -> Arra
                 scale = max(abs(float(bound)), 1e-12)
                 over = np.maximum(sign * (v - float(bound)), 0.0) / scale
                 total += np.where(np.isfinite(over), over, 1.0)
-        cv = np.where(inf, np.maximum(total, 1e-12), cv)
+        # below a failed design's violation whatever the bounds' scale: infeasible beats failed
+        cv = np.where(inf, np.clip(total, 1e-12, 0.5 * FAILED_VIOLATION), cv)
     return cv
 
 
