@@ -115,19 +115,24 @@ def test_bad_workspace_input(tmp_path, capsys, args, words):
     assert not out.exists()
 
 
-def test_sweep_reports_the_workspace_of_every_design(tmp_path):
-    """The Stewart platform's constant-orientation workspace on a grid, per design of a sweep over
-    its base radius: each row's size is the workspace computed for that design alone."""
+def _stewart_sweep(tmp_path, rest):
+    """The rows (by design id) of a serial grid sweep of the Stewart platform without reactions,
+    its space file's ``[motion]`` table continued by ``rest``."""
     pq = pytest.importorskip("pyarrow.parquet")
     space = tmp_path / "space.toml"
-    space.write_text('[sampling]\nmethod = "grid"\n[motion]\nreactions = false\n'
-                     'workspace_grid = "x=-0.4:0.4:5,y=-0.4:0.4:5,z=0.9:1.3:3"\n'
-                     '[parameters]\n"parameters.base_radius_m" = { values = [0.8, 1.1] }\n'
-                     '[objectives]\nworkspace_size_m3 = "max"\n')
+    space.write_text('[sampling]\nmethod = "grid"\n[motion]\nreactions = false\n' + rest)
     out = tmp_path / "out"
     assert main(["sweep", "--machine", "stewart", "--space", str(space), "--workers", "0", "--no-plots",
                  "--out", str(out)]) == 0
-    rows = sorted(pq.read_table(out / "designs.parquet").to_pylist(), key=lambda r: r["design_id"])
+    return sorted(pq.read_table(out / "designs.parquet").to_pylist(), key=lambda r: r["design_id"])
+
+
+def test_sweep_reports_the_workspace_of_every_design(tmp_path):
+    """The Stewart platform's constant-orientation workspace on a grid, per design of a sweep over
+    its base radius: each row's size is the workspace computed for that design alone."""
+    rows = _stewart_sweep(tmp_path, 'workspace_grid = "x=-0.4:0.4:5,y=-0.4:0.4:5,z=0.9:1.3:3"\n'
+                                    '[parameters]\n"parameters.base_radius_m" = { values = [0.8, 1.1] }\n'
+                                    '[objectives]\nworkspace_size_m3 = "max"\n')
     assert [r["status"] for r in rows] == ["ok", "ok"]
     from pkmdyn.multibody.task_grid import parse_grid
 
@@ -148,17 +153,10 @@ def test_a_required_region_constrains_a_sweep(tmp_path):
     constraint like any metric: a Stewart platform with a wider base needs longer legs than its
     strokes allow for the region's lowest poses, covers less of it and breaks the constraint."""
     grid = "x=-0.1:0.1:3,y=-0.1:0.1:3,z=0.9:1.3:3"
-    space = tmp_path / "space.toml"
-    space.write_text('[sampling]\nmethod = "grid"\n[motion]\nreactions = false\n'
-                     f'[requirements]\ngrid = "{grid}"\n'
-                     '[parameters]\n"parameters.base_radius_m" = { values = [1.0, 1.3] }\n'
-                     '[constraints]\nrequired_region_coverage = { min = 1.0 }\n'
-                     '[objectives]\npeak_effort_N = "min"\n')
-    out = tmp_path / "out"
-    assert main(["sweep", "--machine", "stewart", "--space", str(space), "--workers", "0", "--no-plots",
-                 "--out", str(out)]) == 0
-    pq = pytest.importorskip("pyarrow.parquet")
-    rows = sorted(pq.read_table(out / "designs.parquet").to_pylist(), key=lambda r: r["design_id"])
+    rows = _stewart_sweep(tmp_path, f'[requirements]\ngrid = "{grid}"\n'
+                                    '[parameters]\n"parameters.base_radius_m" = { values = [1.0, 1.3] }\n'
+                                    '[constraints]\nrequired_region_coverage = { min = 1.0 }\n'
+                                    '[objectives]\npeak_effort_N = "min"\n')
     from pkmdyn.multibody.task_grid import parse_grid
 
     m = load_mechanism(MACHINES / "stewart" / "stewart.toml")  # base radius 1.0: the oracle's geometry

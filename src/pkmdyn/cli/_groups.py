@@ -12,10 +12,12 @@ import click
 
 from ..errors import PkmdynError
 
-__all__ = ["cli", "hip", "pdm", "PATH_IN", "FiniteFloat", "list_files", "echo_lines", "echo"]
+__all__ = ["cli", "hip", "pdm", "PATH_IN", "MACHINE_HELP", "FiniteFloat", "list_files", "echo_lines", "echo"]
 
 #: an input file option (existence is checked by the readers, which name the file)
 PATH_IN = click.Path(dir_okay=False, path_type=Path)
+#: the help of every command's --machine that takes any machine
+MACHINE_HELP = "A built-in machine (see pkmdyn machines) or a mechanism description FILE.toml."
 
 
 @click.group()

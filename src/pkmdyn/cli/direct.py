@@ -7,9 +7,7 @@ from typing import Any
 
 import click
 
-from ._groups import cli, list_files
-
-_MACHINE_HELP = "A built-in machine (see pkmdyn machines) or a mechanism description FILE.toml."
+from ._groups import MACHINE_HELP, cli, list_files
 
 
 def _document(model: Any, modes: Any) -> dict[str, Any]:
@@ -70,7 +68,7 @@ def _report(out: Path, model: Any, modes: Any, doc: dict[str, Any], text: str) -
 
 
 @cli.command("assemble")
-@click.option("--machine", required=True, help=_MACHINE_HELP)
+@click.option("--machine", required=True, help=MACHINE_HELP)
 @click.option("--actuators", required=True, metavar="NAME=VALUE,...",
               help="Every actuated joint's coordinate, SI (m for a prismatic joint, rad for a revolute one), e.g. "
                    "\"P_1=1.02,P_2=1.05,...\".")

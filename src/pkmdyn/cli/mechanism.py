@@ -11,10 +11,8 @@ from pathlib import Path
 
 import click
 
-from ._groups import PATH_IN, FiniteFloat, cli, list_files
+from ._groups import MACHINE_HELP, PATH_IN, FiniteFloat, cli, list_files
 from .control import MAX_CYCLES, hand_built_controllers
-
-_MACHINE_HELP = "A built-in machine (see pkmdyn machines) or a mechanism description FILE.toml."
 
 
 @cli.command("machines")
@@ -47,7 +45,7 @@ def _check_differentiator(sg_window: int, sg_order: int) -> None:
 
 
 @cli.command("describe")
-@click.option("--machine", required=True, help=_MACHINE_HELP)
+@click.option("--machine", required=True, help=MACHINE_HELP)
 def describe(machine: str) -> None:
     """Print the topology, mobility and over-constraints of a machine."""
     from ..multibody.legs import LEG_PATTERNS
@@ -95,7 +93,7 @@ def _shown(v) -> str:
 
 
 @cli.command("run")
-@click.option("--machine", required=True, help=_MACHINE_HELP)
+@click.option("--machine", required=True, help=MACHINE_HELP)
 @click.option("--motion", "motion_path", type=PATH_IN, default=None,
               help="Motion CSV: t_s and one column per task coordinate (<name>_<unit>), optional rates "
                    "<name>d_<unit>_s and accelerations <name>dd_<unit>_s2 (default: the machine's default motion; "
@@ -259,7 +257,7 @@ def described_control_settings(model) -> dict:
 
 
 @cli.command("control")
-@click.option("--machine", required=True, help=_MACHINE_HELP)
+@click.option("--machine", required=True, help=MACHINE_HELP)
 @click.option("--controller", default=None,
               help="; ".join(f"{n}: {', '.join(c)}" for n, c in hand_built_controllers().items()) + "; a described "
                    "mechanism: " + ", ".join(DESCRIBED_CONTROLLERS) + " (default computed-torque).")
@@ -380,7 +378,7 @@ def _control_load(model, motion, what: str, efforts: tuple[str, ...]):
 
 
 @cli.command("identify")
-@click.option("--machine", required=True, help=_MACHINE_HELP)
+@click.option("--machine", required=True, help=MACHINE_HELP)
 @click.option("--measured", "measured_path", type=PATH_IN, required=True,
               help="Measured run (CSV): t_s, the task columns (or the actuated joints' <joint>_pos_<m|rad>: the pose "
                    "by the direct kinematics) and one effort column per actuator, a drive's <actuator>_torque_Nm or a "
@@ -417,7 +415,7 @@ def identify(machine: str, measured_path: Path, rank_tol: float, sg_window: int,
 
 
 @cli.command("export")
-@click.option("--machine", required=True, help=_MACHINE_HELP)
+@click.option("--machine", required=True, help=MACHINE_HELP)
 @click.option("--format", "fmt", type=click.Choice(["mjcf"]), required=True,
               help="mjcf: a MuJoCo model (the spanning tree; spherical, revolute and fixed cut joints as "
                    "equality constraints; motors on the actuated joints; no friction, no loads).")

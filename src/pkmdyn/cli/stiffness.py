@@ -7,13 +7,11 @@ from pathlib import Path
 
 import click
 
-from ._groups import PATH_IN, cli, list_files
-
-_MACHINE_HELP = "A built-in machine (see pkmdyn machines) or a mechanism description FILE.toml."
+from ._groups import MACHINE_HELP, PATH_IN, cli, list_files
 
 
 @cli.command("stiffness")
-@click.option("--machine", required=True, help=_MACHINE_HELP)
+@click.option("--machine", required=True, help=MACHINE_HELP)
 @click.option("--pose", "poses", multiple=True, metavar="NAME=VALUE,...",
               help="A task pose (task coordinates by name, e.g. \"x=0.02,euler3_rad=0.1\"; the reference pose's "
                    "value for the others); repeat for several. Default: the reference pose.")

@@ -8,9 +8,7 @@ from pathlib import Path
 
 import click
 
-from ._groups import PATH_IN, FiniteFloat, cli, list_files
-
-_MACHINE_HELP = "A built-in machine (see pkmdyn machines) or a mechanism description FILE.toml."
+from ._groups import MACHINE_HELP, PATH_IN, FiniteFloat, cli, list_files
 
 
 def _pole(text: str | None) -> tuple[float, float, float] | None:
@@ -28,7 +26,7 @@ def _pole(text: str | None) -> tuple[float, float, float] | None:
 
 
 @cli.command("wear")
-@click.option("--machine", required=True, help=_MACHINE_HELP)
+@click.option("--machine", required=True, help=MACHINE_HELP)
 @click.option("--joint", "joints", multiple=True, required=True,
               help="A spherical joint (repeat for several): the head on one of its bodies, the cup on the other.")
 @click.option("--motion", "motion_path", type=PATH_IN, default=None,

@@ -7,13 +7,11 @@ from pathlib import Path
 
 import click
 
-from ._groups import FiniteFloat, cli, list_files
-
-_MACHINE_HELP = "A built-in machine (see pkmdyn machines) or a mechanism description FILE.toml."
+from ._groups import MACHINE_HELP, FiniteFloat, cli, list_files
 
 
 @cli.command("workspace")
-@click.option("--machine", required=True, help=_MACHINE_HELP)
+@click.option("--machine", required=True, help=MACHINE_HELP)
 @click.option("--grid", required=True, metavar="NAME=LOW:HIGH:COUNT[,...]",
               help="One to three task coordinates on a grid, e.g. \"x=-0.3:0.3:17,y=-0.3:0.3:17,z=0.8:1.2:9\".")
 @click.option("--pose", default="", metavar="NAME=VALUE,...",

@@ -57,7 +57,8 @@ from .model import MechanismModel
 
 __all__ = ["body_wrenches", "named_magnitudes", "load_forces", "coordinate_twists", "generalised_forces", "actuator_efforts",
            "InverseDynamics", "inverse_dynamics", "idle_holding", "EffortShares", "effort_shares", "effort_unit", "free_twists", "equilibrium_system",
-           "JointReactions", "joint_reactions", "energies", "SINGULAR_ACTUATION", "inertia_factors"]
+           "JointReactions", "joint_reactions", "energies", "SINGULAR_ACTUATION", "inertia_factors",
+           "task_mass_matrix"]
 
 Array = NDArray[np.float64]
 
@@ -84,6 +85,22 @@ def _cross(a: Array, b: Array) -> Array:
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+def task_mass_matrix(model: MechanismModel, kin: MechanismKinematics, S: Array, factors: Array | None = None,
+                     rotors: bool = True) -> Array:
+    """``M(x) (n, nt, nt)``: every body's inertia in task coordinates (``S`` the coordinate
+    twists, ``factors`` :func:`inertia_factors`, computed when not given) and, with ``rotors``,
+    the drives' rotor inertia ``k^2 I_r`` along each actuator's row of ``J_ax``."""
+    from ._dyn_kernels import task_mass_batch
+
+    M = np.empty((len(kin), model.nt, model.nt))
+    task_mass_batch(np.ascontiguousarray(S), np.ascontiguousarray(kin.G), model.body_parent, model.body_joint,
+                    model.joint_q0, model.joint_nq, np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.p),
+                    model.mass, inertia_factors(model) if factors is None else factors, M)
+    if rotors and np.any(model.drive_rotor):
+        M += np.einsum("nat,a,nas->nts", kin.J_ax, model.drive_rotor * model.drive_ratio ** 2, kin.J_ax)
+    return M
 
 
 def coordinate_twists(model: MechanismModel, q: Array, kin: MechanismKinematics | None = None) -> Array:

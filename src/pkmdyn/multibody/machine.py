@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 
 from ..errors import MotionError, ParameterError, as_array
 from .dynamics import actuator_efforts, body_wrenches, inertia_factors, coordinate_twists, effort_unit, fr_any, \
-    generalised_forces, joint_reactions
+    generalised_forces, joint_reactions, task_mass_matrix
 from .actuators import motor_effort_unit, motor_efforts
 from .kinematics import MechanismKinematics, solve_kinematics
 from .model import MechanismModel
@@ -169,15 +169,7 @@ class MechanismVerbs:
         return kin
 
     def _mass(self, model: MechanismModel, kin: MechanismKinematics, S: Array) -> Array:
-        from ._dyn_kernels import task_mass_batch
-
-        M = np.empty((len(kin), model.nt, model.nt))
-        task_mass_batch(np.ascontiguousarray(S), np.ascontiguousarray(kin.G), model.body_parent, model.body_joint,
-                        model.joint_q0, model.joint_nq, np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.p),
-                        model.mass, self._state(model).inertia_factors, M)
-        if np.any(model.drive_rotor):  # the rotors' inertia k^2 I_r along each actuator's row of J_ax
-            M += np.einsum("nat,a,nas->nts", kin.J_ax, model.drive_rotor * model.drive_ratio ** 2, kin.J_ax)
-        return M
+        return task_mass_matrix(model, kin, S, self._state(model).inertia_factors)
 
     def _bias(self, model: MechanismModel, kin: MechanismKinematics, S: Array, named: dict | None = None) -> Array:
         if _load_dependent(model):

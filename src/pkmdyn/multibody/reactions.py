@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 
 from ..analysis.compliance import beam_flexibility, circular_section, segment_wrenches, unique_reactions
 from ..errors import ParameterError, SingularityError
+from ..spatial import skew
 from .joint_types import JOINT_TYPES
 from .kinematics import MechanismKinematics
 from .model import MechanismModel
@@ -208,7 +209,7 @@ def joint_spring_terms(model: MechanismModel, kin: MechanismKinematics) -> tuple
         RT = np.swapaxes(RP, 1, 2)
         P[:, 0, :3, 6 * j + 3:6 * j + 6] = RT
         P[:, 0, 3:, 6 * j:6 * j + 3] = RT
-        P[:, 0, 3:, 6 * j + 3:6 * j + 6] = -RT @ _skew(pt)
+        P[:, 0, 3:, 6 * j + 3:6 * j + 6] = -RT @ skew(pt)
         c = np.zeros(6)
         if "force_N_m" in st:
             c[:3] = 1.0 / np.asarray(st["force_N_m"], dtype=float)
@@ -232,12 +233,3 @@ def compliance_terms(model: MechanismModel, kin: MechanismKinematics, W: Array, 
     Pj, Cj = joint_spring_terms(model, kin)
     return (np.concatenate([Gb, Pj], axis=1), np.concatenate([w0b, np.zeros(Pj.shape[:3])], axis=1),
             np.concatenate([Cb, Cj], axis=1))
-
-
-def _skew(p: Array) -> Array:
-    """``[p]x (n, 3, 3)``."""
-    S = np.zeros(p.shape[:-1] + (3, 3))
-    S[..., 0, 1], S[..., 0, 2] = -p[..., 2], p[..., 1]
-    S[..., 1, 0], S[..., 1, 2] = p[..., 2], -p[..., 0]
-    S[..., 2, 0], S[..., 2, 1] = -p[..., 1], p[..., 0]
-    return S

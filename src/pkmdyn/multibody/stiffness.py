@@ -58,12 +58,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ParameterError, SingularityError
-from .dynamics import _CutRoute, body_wrenches, coordinate_twists, free_blocks, generalised_forces, inertia_factors
+from ..spatial import skew
+from .dynamics import _CutRoute, body_wrenches, coordinate_twists, free_blocks, generalised_forces, task_mass_matrix
 from .kinematics import MechanismKinematics
 from .model import MechanismModel
 from .reactions import compliance_terms
 
-__all__ = ["Stiffness", "stiffness", "deflection", "compliance_sources", "StiffnessDataMissing"]
+__all__ = ["Stiffness", "stiffness", "deflection", "compliance_sources", "reaction_route", "StiffnessDataMissing"]
 
 Array = NDArray[np.float64]
 
@@ -125,6 +126,16 @@ def compliance_sources(model: MechanismModel) -> dict[str, list[str]]:
     joints = [n for n, st in zip(model.joint_names, model.joint_stiffness)
               if st and ("force_N_m" in st or "moment_Nm_rad" in st)]
     return {"bodies": bodies, "drives": drives, "joints": joints}
+
+
+def reaction_route(model: MechanismModel) -> str:
+    """``joint_reactions``' ``overconstrained`` choice for the deflection and the wear of a
+    motion: ``"compliance"`` where links or joints are compliant or the mechanism is not
+    over-constrained; else ``"minimum-norm"``: with rigid links and joints a self-stress strains
+    no compliant member (the drives' efforts are fixed), so those reactions give the same
+    deflection (and are what ``pkmdyn run`` writes for such a mechanism)."""
+    src = compliance_sources(model)
+    return "compliance" if src["bodies"] or src["joints"] or not model.topology.overconstraints else "minimum-norm"
 
 
 class _Members:
@@ -194,11 +205,8 @@ def _task_map(model: MechanismModel, kin: MechanismKinematics) -> Array:
 
 def _point_transfer(p: Array) -> Array:
     """``X (n, 6, 6)``: ``[dtheta; dp_P] = X [dtheta; dp_O]`` for the point ``p (n, 3)``."""
-    n = p.shape[0]
-    X = np.tile(np.eye(6), (n, 1, 1))
-    X[:, 3, 1], X[:, 3, 2] = p[:, 2], -p[:, 1]
-    X[:, 4, 0], X[:, 4, 2] = -p[:, 2], p[:, 0]
-    X[:, 5, 0], X[:, 5, 1] = p[:, 1], -p[:, 0]
+    X = np.tile(np.eye(6), (p.shape[0], 1, 1))
+    X[:, 3:, :3] = -skew(p)  # dp_P = dp_O + dtheta x p
     return X
 
 
@@ -290,17 +298,6 @@ def _worst(C: Array, scale: Array) -> tuple[Array, Array]:
     return k, d
 
 
-def _mass(model: MechanismModel, kin: MechanismKinematics, S: Array) -> Array:
-    """The rigid mechanism's mass matrix in task coordinates (drives' rotors held)."""
-    from ._dyn_kernels import task_mass_batch
-
-    M = np.empty((len(kin), model.nt, model.nt))
-    task_mass_batch(np.ascontiguousarray(S), np.ascontiguousarray(kin.G), model.body_parent, model.body_joint,
-                    model.joint_q0, model.joint_nq, np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.p),
-                    model.mass, inertia_factors(model), M)
-    return M
-
-
 def stiffness(model: MechanismModel, kin: MechanismKinematics, sample_offset: int = 0) -> Stiffness:
     """The stiffness, worst directions and natural frequencies of the mechanism with its
     actuators locked at the poses of ``kin`` (module docstring).
@@ -340,7 +337,7 @@ def stiffness(model: MechanismModel, kin: MechanismKinematics, sample_offset: in
     k_t, d_t = _worst(C_point[:, 3:, 3:], scale)
     k_r, d_r = _worst(C_point[:, :3, :3], scale / L2)
     S = coordinate_twists(model, kin.q, kin)
-    M = _mass(model, kin, S)
+    M = task_mass_matrix(model, kin, S, rotors=False)  # the drives' rotors held
     freq, modes, mm, mk = _modes(model, M, K_task, sample_offset)
     return Stiffness(x=kin.x.copy(), K_task=K_task, C_task=C_task, C_point=C_point, eigenvalues=ev,
                      eigenvectors=evec, min_stiffness=k_t, min_stiffness_direction=d_t, min_rot_stiffness=k_r,

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from ..errors import ParameterError, PkmdynError
 from .kinematics import MechanismKinematics, reference_task, solve_kinematics
 from .model import MechanismModel
-from .stiffness import Stiffness, StiffnessDataMissing, compliance_sources, deflection, stiffness
+from .stiffness import Stiffness, StiffnessDataMissing, compliance_sources, deflection, reaction_route, stiffness
 from .task_grid import grid_poses
 
 __all__ = ["pose_document", "run_stiffness", "MAX_GRID_POINTS"]
@@ -205,10 +205,7 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
         from .dynamics import joint_reactions
 
         kin_all = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
-        src = compliance_sources(model)
-        # rigid links and joints: a self-stress of an over-constrained mechanism strains no member
-        # (the drives' efforts are fixed), so the minimum-norm reactions give the same deflection
-        over = "compliance" if src["bodies"] or src["joints"] else "minimum-norm"
+        over = reaction_route(model)
         n_all = len(kin_all)
         kt, kr, f1 = np.empty(n_all), np.empty(n_all), np.empty(n_all)
         dx = np.empty((n_all, model.nt))

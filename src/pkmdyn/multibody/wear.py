@@ -50,7 +50,7 @@ from numpy.typing import NDArray
 from ..errors import ParameterError
 
 __all__ = ["MarkerGrid", "marker_grid", "SlideTracks", "slide_tracks", "joint_slide_tracks", "motion_axis",
-           "geographic", "ASPECT_CAP",
+           "geographic", "pole_rotation", "joint_index", "ASPECT_CAP",
            "WEAR_FACTOR_MM3_N_M", "ASPECT_LIMIT"]
 
 Array = NDArray[np.float64]
@@ -174,11 +174,8 @@ def geographic(u: Array, axis: Array) -> Array:
     """Each track's planar coordinates (n, m, 2) [rad]: longitude about ``axis`` (unwrapped along
     the motion) times the cosine of the track's mean latitude, and latitude, each from its mean
     over the track (module docstring)."""
-    h = np.zeros(3)
-    h[int(np.argmin(np.abs(axis)))] = 1.0
-    e1 = np.cross(axis, h)
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(axis, e1)
+    B = pole_rotation(axis)
+    e1, e2 = B[:, 0], B[:, 1]
     lat = np.arcsin(np.clip(u @ axis, -1.0, 1.0))
     lon = np.unwrap(np.arctan2(u @ e2, u @ e1), axis=0)
     lat0 = lat.mean(axis=0)
@@ -235,7 +232,7 @@ def slide_tracks(R_rel: Array, t: Array, load: Array, radius_m: float, grid: Mar
     grid = marker_grid() if grid is None else grid
     if len(grid.u) == 0:
         raise ParameterError("marker grid: no marker")
-    P = _pole_rotation(np.array([0.0, 0.0, 1.0]) if pole is None else np.asarray(pole, dtype=float))
+    P = pole_rotation(np.array([0.0, 0.0, 1.0]) if pole is None else np.asarray(pole, dtype=float))
     m0 = grid.u @ P.T  # marker directions in the marker body's frame
     F = np.eye(3) if frame is None else np.asarray(frame, dtype=float)
     u = np.einsum("ij,njk,mk->nmi", F, R_rel, m0)
@@ -259,8 +256,10 @@ def slide_tracks(R_rel: Array, t: Array, load: Array, radius_m: float, grid: Mar
                        load_integral=integral, wear=wear, wear_per_million_cycles=per_million, cycles=float(cycles))
 
 
-def _pole_rotation(pole: Array) -> Array:
-    """A rotation taking +z to the unit ``pole`` (the marker grid's axis)."""
+def pole_rotation(pole: Array) -> Array:
+    """A rotation taking +z to the unit ``pole`` (the marker grid's axis; the track coordinates'
+    and the pictures' axes): x along ``normalize(h x pole)``, ``h`` the base axis least aligned
+    with the pole."""
     nrm = float(np.linalg.norm(pole))
     if not (math.isfinite(nrm) and nrm > 0):
         raise ParameterError(f"pole: {pole.tolist()!r} is not a direction")
@@ -284,20 +283,24 @@ def _law(text: str | None, cs: Array) -> Array:
     return out
 
 
+def joint_index(model, joint: str) -> int:
+    """The index of the joint named ``joint``; one line naming it when the model has none."""
+    names = list(model.joint_names)
+    if joint not in names:
+        raise ParameterError(f"--joint {joint!r}: not a joint of {model.name} ({', '.join(names[:12])}"
+                             f"{' ...' if len(names) > 12 else ''})")
+    return names.index(joint)
+
+
 def joint_slide_tracks(model, kin, joint: str, load: Array, radius_m: float, head: str = "child",
                        on: str = "cup", **kw) -> SlideTracks:
     """:func:`slide_tracks` of the spherical joint ``joint`` of a described mechanism along the
     kinematics ``kin``: the head is the joint's ``child`` (or ``parent``) body, the cup the other;
     ``on = "cup"`` the head's markers on the cup, ``"head"`` the cup's markers on the head. The
     pole defaults to the joint frame's z axis (base frame at the reference configuration)."""
-    from .kinematics import joint_frame
-
-    names = list(model.joint_names)
-    if joint not in names:
-        raise ParameterError(f"--joint {joint!r}: not a joint of {model.name} ({', '.join(names[:12])}"
-                             f"{' ...' if len(names) > 12 else ''})")
-    j = names.index(joint)
     from .joint_types import JOINT_TYPES
+
+    j = joint_index(model, joint)
 
     jt = JOINT_TYPES[model.joint_type[j]]
     if jt.name != "spherical":

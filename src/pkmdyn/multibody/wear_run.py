@@ -13,7 +13,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ParameterError
-from .wear import ASPECT_LIMIT, WEAR_FACTOR_MM3_N_M, SlideTracks, joint_slide_tracks, marker_grid
+from .wear import (ASPECT_LIMIT, WEAR_FACTOR_MM3_N_M, SlideTracks, joint_index, joint_slide_tracks, marker_grid,
+                   pole_rotation)
 
 __all__ = ["WearOptions", "joint_wear", "wear_document", "write_wear_files", "head_radius"]
 
@@ -42,13 +43,9 @@ class WearOptions:
 def head_radius(model: Any, joint: str, given: float | None) -> float:
     """The sphere's radius: ``given``, else the joint's friction ``ball_radius_m``; refused by
     name when neither is there."""
-    names = list(model.joint_names)
-    if joint not in names:
-        raise ParameterError(f"--joint {joint!r}: not a joint of {model.name} ({', '.join(names[:12])}"
-                             f"{' ...' if len(names) > 12 else ''})")
+    j = joint_index(model, joint)
     if given is not None:
         return float(given)
-    j = names.index(joint)
     fr = model.joint_friction[j] or {}
     r = float(fr.get("ball_radius_m", 0.0) or 0.0)
     if r <= 0:
@@ -65,13 +62,10 @@ def _load(model: Any, kin: Any, joint: str, opts: WearOptions, named: dict) -> t
             raise ParameterError(f"--load {opts.load!r}: not a named load of the motion ({have})")
         return np.abs(np.asarray(named[opts.load], dtype=float)), f"named load {opts.load}"
     from .dynamics import joint_reactions
-    from .stiffness import compliance_sources
+    from .stiffness import reaction_route
 
-    src = compliance_sources(model)
-    over = "compliance" if (src["bodies"] or src["joints"]) else "minimum-norm"
-    reac = joint_reactions(model, kin, named=named or None,
-                           overconstrained=over if model.topology.overconstraints else "compliance")
-    j = list(model.joint_names).index(joint)
+    reac = joint_reactions(model, kin, named=named or None, overconstrained=reaction_route(model))
+    j = joint_index(model, joint)
     return np.linalg.norm(reac.joint_force[:, j], axis=1), f"the reaction force of joint {joint}"
 
 
@@ -93,7 +87,7 @@ def joint_wear(model: Any, kin: Any, joint: str, opts: WearOptions, named: dict 
 def wear_document(model: Any, joint: str, on_cup: SlideTracks, on_head: SlideTracks, what: str,
                   opts: WearOptions) -> dict[str, Any]:
     """One joint's entry of ``wear.json`` (``docs/wear.md``)."""
-    j = list(model.joint_names).index(joint)
+    j = joint_index(model, joint)
     bodies = ("ground" if model.joint_child[j] < 0 else model.body_names[model.joint_child[j]],
               "ground" if model.joint_parent[j] < 0 else model.body_names[model.joint_parent[j]])
     head, cup = bodies if opts.head == "child" else bodies[::-1]
@@ -116,13 +110,8 @@ def wear_document(model: Any, joint: str, on_cup: SlideTracks, on_head: SlideTra
 
 def _projection(points: Array, pole: Array) -> tuple[Array, Array]:
     """Orthographic coordinates (.., 2) of unit points viewed along ``pole``."""
-    z = pole / np.linalg.norm(pole)
-    h = np.zeros(3)
-    h[int(np.argmin(np.abs(z)))] = 1.0
-    x = np.cross(h, z)
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    return points @ x, points @ y
+    B = pole_rotation(pole)
+    return points @ B[:, 0], points @ B[:, 1]
 
 
 def _png(path: Path, joint: str, on_cup: SlideTracks, on_head: SlideTracks) -> Path:

@@ -30,7 +30,7 @@ from ..io import atomic_file, check_inputs_outside, dumps_toml, write_json
 from ..sweep_protocol import STATUSES, SweepAdapter
 from .execute import PARTS_DIR, BatchJob, ExecutionStats, execute, finished_ids, part_schema
 from .pareto import minimised, pareto_mask
-from .space import SweepSpace, design_description, load_space, refine_designs, sample_designs
+from .space import SweepSpace, design_description, from_unit, load_space, refine_designs, sample_designs
 
 __all__ = ["run_sweep", "SweepReport", "prepare_sweep", "PreparedSweep", "RECORD", "PREFLIGHT_DESIGNS"]
 
@@ -295,11 +295,11 @@ def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: in
 
             if search is None:
                 search = Nsga2Search(prep.space)
-                if not np.array_equal(search.ask(), prep.X):
+                if not np.array_equal(from_unit(prep.space, search.ask()), prep.X):
                     raise PkmdynError("internal error: the NSGA-II search does not replay its first generation")
             N = prep.space.designs
             search.tell(*generation_values(table, (r - 1) * N, r * N, prep.space))
-            Xg = search.ask()
+            Xg = from_unit(prep.space, search.ask())
             _check_replay(table, prep.space, r * N, Xg)
             X = np.vstack([X, Xg])
         else:

@@ -31,7 +31,8 @@ FAILED_VIOLATION = 1e9
 
 class Nsga2Search:
     """NSGA-II over the space's parameters (module docstring): ``ask()`` the next generation's
-    designs ``(designs, d)``, ``tell(F, cv)`` their minimised objectives and violations."""
+    points of the unit cube ``(designs, d)``, ``tell(F, cv)`` their minimised objectives and
+    violations."""
 
     def __init__(self, space: Any) -> None:
         from pymoo.algorithms.moo.nsga2 import NSGA2
@@ -47,8 +48,8 @@ class Nsga2Search:
         self._pending: Any = None
 
     def ask(self) -> Array:
-        from .space import from_unit
-
+        """The next generation as ``designs`` points of the unit cube (``space.from_unit`` maps
+        them to designs)."""
         pop = self._algorithm.ask()
         U = np.clip(np.asarray(pop.get("X"), dtype=float), 0.0, 1.0 - 1e-12)
         self._pending = pop
@@ -60,7 +61,7 @@ class Nsga2Search:
                               "duplicates); fewer generations or a larger population")
         if U.shape[0] < n:
             U = np.vstack([U, U[np.arange(n - U.shape[0]) % U.shape[0]]])
-        return from_unit(self.space, U[:n])
+        return U[:n]
 
     def tell(self, F: Array, cv: Array) -> None:
         """The minimised objectives ``F (designs, k)`` and violations ``cv (designs,)`` of the

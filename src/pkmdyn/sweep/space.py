@@ -487,7 +487,7 @@ def sample_designs(space: SweepSpace) -> Array:
     if space.method == "nsga2":
         from .search import Nsga2Search
 
-        return Nsga2Search(space).ask()
+        return from_unit(space, Nsga2Search(space).ask())
     u = _unit_sample(space)
     return np.stack([_from_unit(p, u[:, j]) for j, p in enumerate(space.parameters)], axis=-1)
 
