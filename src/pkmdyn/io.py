@@ -902,6 +902,15 @@ def dumps_toml(data: Mapping[str, Any], header: str = "", notes: Mapping[str, st
     return tomlkit.dumps(doc)
 
 
+def dumps_yaml(data: Mapping[str, Any]) -> str:
+    """YAML text (written by PyYAML, keys in the given order) of tables, lists, strings and
+    numbers; a non-finite number is refused."""
+    import yaml
+
+    _check_toml_values(data, "")
+    return yaml.safe_dump(dict(data), sort_keys=False, default_flow_style=None)
+
+
 def write_json(path: str | Path, data: Mapping[str, Any]) -> None:
     """Write a JSON document with unit-suffixed keys; refuses non-finite numbers."""
     text = json.dumps(data, indent=2, default=_plain)

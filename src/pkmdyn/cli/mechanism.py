@@ -414,25 +414,63 @@ def identify(machine: str, measured_path: Path, rank_tol: float, sg_window: int,
                + (f"least explained actuator {worst:.4g} %" if worst is not None else "no effort explained"))
 
 
+def _numbers(text: str | None, n: int, flag: str) -> tuple[float, ...] | None:
+    from ..errors import ParameterError
+
+    if text is None:
+        return None
+    try:
+        vals = tuple(float(x) for x in text.split(","))
+    except ValueError:
+        vals = ()
+    if len(vals) != n:
+        raise ParameterError(f"{flag}: {n} numbers, comma-separated")
+    return vals
+
+
 @cli.command("export")
 @click.option("--machine", required=True, help=MACHINE_HELP)
-@click.option("--format", "fmt", type=click.Choice(["mjcf"]), required=True,
-              help="mjcf: a MuJoCo model (the spanning tree; spherical, revolute and fixed cut joints as "
-                   "equality constraints; motors on the actuated joints; no friction, no loads).")
+@click.option("--format", "fmt", type=click.Choice(["mjcf", "urdf"]), required=True,
+              help="mjcf: a MuJoCo model (the spanning tree; spherical, revolute and fixed cut joints as stiff "
+                   "equality constraints; motors with gear and armature; no loads). urdf: URDF plus a loop "
+                   "sidecar FILE.yaml beside it (Pinocchio's parser and Gepetto's Extended-URDF loader; "
+                   "docs/import.md).")
+@click.option("--solref", default=None, help="mjcf: the equality constraints' solref 'timeconst,dampratio' "
+                                             "(default 0.0005,1: stiff).")
+@click.option("--solimp", default=None, help="mjcf: the equality constraints' solimp 'd0,dwidth,width,midpoint,power' "
+                                             "(default 0.9999,0.9999,0.001,0.5,2).")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
-              help="File to write (e.g. machine.xml).")
-def export(machine: str, fmt: str, out_path: Path) -> None:
-    """Write a described mechanism in another engine's format; the file is written only when the
-    whole model can be written (a cut joint MuJoCo cannot express is an error naming it)."""
-    from ..io import atomic_file, check_output_file
+              help="File to write (e.g. machine.xml, machine.urdf).")
+def export(machine: str, fmt: str, solref: str | None, solimp: str | None, out_path: Path) -> None:
+    """Write a described mechanism in another engine's format; the files are written only when
+    the whole model can be written (a cut joint the format cannot express, a body without
+    mass for MuJoCo: an error naming it)."""
+    from ..errors import ParameterError
+    from ..io import atomic_file, check_output_file, dumps_yaml
     from ..machines.registry import resolve
-    from ..multibody.mjcf import mechanism_mjcf
+    from ..multibody.mjcf import SOLIMP, SOLREF, mechanism_mjcf
+    from ..multibody.urdf_export import mechanism_urdf
 
     entry, path = resolve(machine)
     inputs = {"--machine": path}
     check_output_file(out_path, inputs)
+    if fmt != "mjcf" and (solref or solimp):
+        raise ParameterError("--solref, --solimp: only for --format mjcf")
     model, _ = _load(machine)
-    text = mechanism_mjcf(model)
-    with atomic_file(out_path, inputs=inputs) as tmp:
-        tmp.write_text(text, encoding="utf-8")
-        click.echo(f"{fmt}: {out_path}")
+    files = {out_path: ""}
+    if fmt == "mjcf":
+        files[out_path] = mechanism_mjcf(model, solref=_numbers(solref, 2, "--solref") or SOLREF,
+                                         solimp=_numbers(solimp, 5, "--solimp") or SOLIMP)
+    else:
+        side_path = out_path.with_suffix(".yaml")
+        if side_path == out_path:
+            raise ParameterError("--out: a URDF file name not ending in .yaml (its sidecar is FILE.yaml)")
+        check_output_file(side_path, inputs)
+        text, sidecar, notes = mechanism_urdf(model)
+        files = {out_path: text, side_path: dumps_yaml(sidecar)}
+        for line in notes:
+            click.echo(f"note: {line}", err=True)
+    for fpath, text in files.items():
+        with atomic_file(fpath, inputs=inputs) as tmp:
+            tmp.write_text(text, encoding="utf-8")
+        click.echo(f"{fmt if fpath == out_path else 'sidecar'}: {fpath}")

@@ -26,6 +26,14 @@ Actuated joints get a ``motor`` (control = effort [N or N m]); a joint with a dr
 motor friction as ``damping`` (``k^2 b``) and ``frictionloss`` (``k C``, MuJoCo's dry friction,
 not the regularised law). Not exported: joint friction, loads, sections (MuJoCo has no
 load-dependent joint friction).
+
+**Loop constraints.** MuJoCo closes loops softly; its defaults (``solref`` 0.02 s, ``solimp``
+0.9 to 0.95) let a Stewart platform's accelerations under pkmdyn's efforts differ by several
+hundred percent from the rigid mechanism's. The equalities are therefore written stiff
+(:data:`SOLREF`, :data:`SOLIMP`: time constant 0.5 ms, critical damping, impedance 0.9999),
+with ``refsafe`` off so that MuJoCo keeps a time constant below two time steps; both are
+arguments of :func:`mechanism_mjcf` and options of ``pkmdyn export``. A body without mass is
+refused, naming it (MuJoCo needs a mass on every moving body; pkmdyn does not silently add one).
 """
 
 from __future__ import annotations
@@ -37,7 +45,12 @@ from ..errors import ParameterError
 from .joint_types import JOINT_TYPES
 from .model import MechanismModel
 
-__all__ = ["mechanism_mjcf", "mujoco_qpos", "mujoco_order", "coordinate_names"]
+__all__ = ["mechanism_mjcf", "mujoco_qpos", "mujoco_order", "coordinate_names", "SOLREF", "SOLIMP"]
+
+#: the equality constraints' ``solref`` (time constant [s], damping ratio): stiff (module docstring)
+SOLREF = (0.0005, 1.0)
+#: the equality constraints' ``solimp`` (d0, d_width, width [m], midpoint, power)
+SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 
 Array = NDArray[np.float64]
 
@@ -77,8 +90,19 @@ def mujoco_qpos(model: MechanismModel, q: Array, mj_model) -> Array:
     return out
 
 
-def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3) -> str:
-    """The MJCF document of ``model`` (module docstring)."""
+def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3, solref: tuple[float, float] = SOLREF,
+                   solimp: tuple[float, ...] = SOLIMP) -> str:
+    """The MJCF document of ``model`` (module docstring): the equality constraints with
+    ``solref`` and ``solimp`` (MuJoCo's meaning)."""
+    if len(solref) != 2 or not all(np.isfinite(solref)) or solref[0] <= 0 or solref[1] <= 0:
+        raise ParameterError(f"solref {solref}: two positive numbers (time constant [s], damping ratio)")
+    if len(solimp) != 5 or not all(np.isfinite(solimp)) or not (0 < solimp[0] < 1 and 0 < solimp[1] < 1) \
+            or solimp[2] <= 0:
+        raise ParameterError(f"solimp {solimp}: five numbers, the first two in (0, 1), the width > 0")
+    for b in range(model.nb):
+        if float(model.mass[b]) <= 0.0:
+            raise ParameterError(f"[bodies] {model.body_names[b]}: no mass; MuJoCo needs a mass on every moving body "
+                                 "(give it one, or fix it to a neighbour)")
     for j in model.loop_joint:
         t = JOINT_TYPES[model.joint_type[j]].name
         if t not in ("spherical", "revolute", "fixed"):
@@ -89,8 +113,11 @@ def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3) -> str:
     for b in range(model.nb):
         children.setdefault(int(model.body_parent[b]), []).append(b)
     lines = [f'<mujoco model="{model.name}">',
-             f'  <option timestep="{timestep:g}" gravity="{_v(model.gravity)}" integrator="RK4"/>',
-             '  <compiler angle="radian" autolimits="true"/>', "  <worldbody>"]
+             f'  <option timestep="{timestep:g}" gravity="{_v(model.gravity)}" integrator="RK4">',
+             '    <flag refsafe="disable"/>', "  </option>",
+             '  <compiler angle="radian" autolimits="true"/>',
+             "  <default>", f'    <equality solref="{_v(solref)}" solimp="{_v(solimp)}"/>', "  </default>",
+             "  <worldbody>"]
 
     # a drive on the joint (multibody.actuators): its rotor reflected as armature k^2 I_r, its
     # motor's viscous friction as damping k^2 b and Coulomb friction as frictionloss k C
@@ -111,10 +138,8 @@ def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3) -> str:
         quat = _quat(Rp.T @ model.R0[b])
         lines.append(f'{ind}<body name="{model.body_names[b]}" pos="{_v(pos)}" quat="{_v(quat)}">')
         I = model.inertia[b]
-        mass = max(float(model.mass[b]), 1e-9)
+        mass = float(model.mass[b])
         full = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]
-        if float(model.mass[b]) == 0.0:
-            full = [1e-12, 1e-12, 1e-12, 0, 0, 0]
         lines.append(f'{ind}  <inertial pos="{_v(model.com[b])}" mass="{mass:.17g}" fullinertia="{_v(full)}"/>')
         k = int(model.body_joint[b])
         Rc, pc = model.tree_R_child[k], model.tree_p_child[k]

@@ -318,8 +318,10 @@ def _frame_in(R0: Array, p0: Array, frame: Array, point: Array) -> tuple[Array, 
     return R0.T @ frame, R0.T @ (point - p0)
 
 
-def compile_model(desc: Description) -> MechanismModel:
+def compile_model(desc: Description, *, topology_only: bool = False) -> MechanismModel:
     """Compile a description into the arrays of :class:`MechanismModel` (see there).
+    ``topology_only``: the tree, loops and task rows alone, before the solver's equations are
+    chosen (for :func:`~.topology.analyse_topology` of a task that does not match yet).
 
     Raises :class:`~pkmdyn.errors.ParameterError` when the cut joints named in the file
     disconnect a body or an actuated joint would have to be cut.
@@ -452,6 +454,8 @@ def compile_model(desc: Description) -> MechanismModel:
         load_magnitude=np.array([ld.magnitude for ld in desc.loads], dtype=float),
         named_loads=tuple(dict.fromkeys(ld.name for ld in desc.loads if ld.name is not None)),
     )
+    if topology_only:
+        return model
     rows, idle, rep = solver_selection(model)
     prow, pcol, blocks = block_structure(model, rows, idle)
     model = replace(model, solver_rows=rows, solver_idle=idle, solver_prow=prow, solver_pcol=pcol,
