@@ -101,6 +101,9 @@ class Closure:
     R2: Array = field(default_factory=lambda: np.eye(3))
     #: the residual a reader measured itself (MuJoCo's own constraint residual): [m], [rad]
     gap: tuple[float, float] | None = None
+    #: ``kind == "joint"``: a joint of the file that closes a loop (SDFormat: a link's second
+    #: parent), as a description joint's ``type`` and ``axis``/``axes``, at ``point1``
+    joint: dict | None = None
 
 
 @dataclass
@@ -323,6 +326,9 @@ class _Builder:
             where = f"{self.g.source}: loop closure {c.name}"
             if a == b:
                 raise ParameterError(f"{where}: both frames are on link {a}")
+            if c.kind == "joint":  # assembled by construction; pkmdyn chooses where to cut
+                out.append({"name": c.name, "parent": a, "child": b, "point_m": list(map(float, c.point1)), **c.joint})
+                continue
             gap, ang = c.gap if c.gap is not None else (float(np.linalg.norm(c.point1 - c.point2)), None)
             if gap > CLOSE_TOL * self.size:
                 raise ParameterError(f"{where}: its frames are {gap:.6g} m apart at the reference configuration "
@@ -381,7 +387,7 @@ def _actuators(b: _Builder, joints: list[dict]) -> list[dict]:
         if a.joint in seen:
             raise ParameterError(f"{where}: a second actuator on joint {a.joint}")
         seen.add(a.joint)
-        j, e = by_name[a.joint], elementary[a.joint]
+        j, e = by_name[a.joint], elementary.get(a.joint, Joint(a.joint, "hinge", "", "", np.zeros(3), np.ones(3)))
         if j["type"] not in ("revolute", "prismatic"):
             raise ParameterError(f"{where}: joint {a.joint} is {j['type']}; only hinge and slide joints are driven")
         if not np.isfinite(a.gear) or a.gear <= 0:
@@ -513,13 +519,13 @@ def description_from_graph(g: Graph, choice: TaskChoice = TaskChoice()) -> tuple
     for j in joints:
         j["parent"], j["child"] = b.owner(j["parent"]), b.owner(j["child"])
     cuts = b.closures()
-    drives = _actuators(b, joints)
+    drives = _actuators(b, joints + cuts)
     if not any(j.get("actuated") for j in joints):
         raise ParameterError(f"{g.source}: no actuated joint (an MJCF <actuator>, the sidecar's name_mot, or --actuated)")
     for lk in b.links.values():
         if lk.mass <= 0.0:
             raise ParameterError(f"{g.source}: link {lk.name}: no mass (a moving body needs a mass and an inertia)")
-    body, point = _task_body(b, joints, choice)
+    body, point = _task_body(b, joints + cuts, choice)
     bodies = [{"name": lk.name, "mass_kg": float(lk.mass), "com_m": list(map(float, lk.com)),
                "inertia_kgm2": [[float(x) for x in row] for row in 0.5 * (lk.inertia + lk.inertia.T)]}
               for lk in b.links.values()]
@@ -530,8 +536,8 @@ def description_from_graph(g: Graph, choice: TaskChoice = TaskChoice()) -> tuple
         "joints": joints + cuts,
         "task": {"body": body, "point_m": list(map(float, point)), "euler_sequence": choice.sequence or "XYZ"},
     }
-    if cuts:
-        desc["mechanism"]["cut_joints"] = [c["name"] for c in cuts]
+    if cuts and not any(c.kind == "joint" for c in g.closures):
+        desc["mechanism"]["cut_joints"] = [c["name"] for c in cuts]  # the file's tree is the spanning tree
     given = {d.get("joint") for d in g.drives}
     drives = [d for d in drives if d["joint"] not in given] + [dict(d) for d in g.drives]
     if drives:

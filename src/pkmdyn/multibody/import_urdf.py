@@ -22,7 +22,10 @@ refused by name; a continuous joint is a revolute joint without limits.
 
 from __future__ import annotations
 
+import contextlib
+import os
 import re
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +45,25 @@ def _pinocchio():
     except ImportError as exc:  # pragma: no cover - the extra is in the test dependencies
         raise ParameterError("reading URDF needs Pinocchio: pip install 'pkmdyn[import]'") from exc
     return pinocchio
+
+
+@contextlib.contextmanager
+def _stderr_captured():
+    """What the C++ parser writes on the process's stderr meanwhile (``said()``: its lines)."""
+    import tempfile
+
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile(mode="w+b") as tmp:
+        os.dup2(tmp.fileno(), 2)
+        try:
+            lines: list[str] = []
+            yield lambda: lines
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            lines += tmp.read().decode("utf-8", "replace").splitlines()
 
 
 def read_sidecar(path: str | Path) -> dict[str, Any]:
@@ -168,10 +190,14 @@ def urdf_graph(path: str | Path, sidecar: dict[str, Any] | None = None,
     """The mechanism of a URDF file and its loop closures (module docstring)."""
     pin = _pinocchio()
     src = Path(path).name
-    try:
-        model = pin.buildModelFromUrdf(str(path))
-    except Exception as exc:  # the parser's message names the element
-        raise ParameterError(f"{src}: cannot read it as URDF: {' '.join(str(exc).split())[:300]}") from None
+    with _stderr_captured() as said:
+        try:
+            model = pin.buildModelFromUrdf(str(path))
+        except Exception as exc:  # the parser's message names the element
+            raise ParameterError(f"{src}: cannot read it as URDF: {' '.join(str(exc).split())[:300]}") from None
+    errors = [ln.strip() for ln in said() if ln.strip().startswith("Error")]
+    if errors:  # urdfdom reports some errors on stderr and goes on without the element
+        raise ParameterError(f"{src}: cannot read it as URDF: {' '.join(errors[:2])[:300]}")
     data = model.createData()
     q0 = pin.neutral(model)
     pin.forwardKinematics(model, data, q0)

@@ -84,7 +84,11 @@ def import_description(path: Path, fmt: str, *, sidecar: Path | None = None, act
 
     graph, side = read_graph(path, fmt, sidecar, actuated, assemble, keyframe)
     desc, notes = description_from_graph(graph, _merge(choice, side))
-    load_mechanism(desc)  # what describe and run will do with the file
+    model = load_mechanism(desc)  # what describe and run will do with the file
+    if model.topology.overconstraints:
+        notes.append(f"over-constrained ({model.topology.overconstraints} self-stress states): the efforts are unique; "
+                     "unique joint reactions need [[bodies]] section and material, else pkmdyn run "
+                     "--minimum-norm-reactions")
     _fit_default_motion(desc, notes)
     header = "\n".join([f"Imported by pkmdyn import from {graph.source} ({fmt.upper()}).",
                         "Base frame, reference configuration: the file's (docs/import.md).", *notes])
