@@ -385,3 +385,33 @@ def test_export_options_and_refusals(tmp_path, capsys):
     d["bodies"][1]["mass_kg"] = 0.0
     with pytest.raises(ParameterError, match=r"\[bodies\] coupler: no mass"):
         mechanism_mjcf(load_mechanism(d))
+
+
+
+@pytest.mark.parametrize("name", ex.BUILTIN)
+def test_pinocchio_with_the_urdf_export_gives_pkmdyn_efforts(name, tmp_path):
+    """The URDF + sidecar export in Pinocchio: its parser's model, the sidecar's loop frames,
+    Pinocchio's own RNEA and frame Jacobians, projected, give pkmdyn's efforts (the Delta's
+    rod spins held by pkmdyn's documented rule, whose force directions the projection takes)."""
+    m = load_mechanism(ex.builtin_dict(name))
+    text, side, _ = mechanism_urdf(m)
+    urdf = tmp_path / "m.urdf"
+    urdf.write_text(text)
+    closures = [(a, b, k) for (a, b), k in zip(side["closed_loop"], side["type"])]
+    mo, kin = _moving(m)
+    u = _efforts(m, kin)
+    act = list(side["name_mot"])
+    H = np.asarray(m.solver_idle, dtype=float).T  # the idle freedoms' holding rules (dynamics.idle_holding)
+    for s in range(0, len(mo.t), 40):
+        q_of, qd_of, qdd_of, held = {}, {}, {}, {}
+        for k, jn in enumerate(m.joint_names):
+            n = 0 if m.joint_cut[k] else int(m.joint_nq[k])
+            for i in range(n):  # the export's one-coordinate joints: <joint> or <joint>_<i>
+                c = int(m.joint_q0[k]) + i
+                nm = jn if n == 1 else f"{jn}_{i + 1}"
+                q_of[nm], qd_of[nm], qdd_of[nm] = kin.q[s, c] - m.coord_offset[c], kin.qd[s, c], kin.qdd[s, c]
+                held[nm] = H[c]
+        u_pin, res, spread = pinocchio_efforts(str(urdf), closures, act, q_of, qd_of, qdd_of, gravity=m.gravity,
+                                               held=held if H.shape[1] else None)
+        assert res <= 1e-9 * np.abs(u_pin).max() and spread < 1e-9
+        assert np.abs(u[s] - u_pin).max() <= REL * np.abs(u_pin).max()

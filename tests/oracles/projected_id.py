@@ -17,11 +17,32 @@ from __future__ import annotations
 import numpy as np
 
 
-def projected_efforts(tau: np.ndarray, S: np.ndarray, Jc: np.ndarray) -> tuple[np.ndarray, float, float]:
-    """``u`` from ``tau (nv,) = S^T u + Jc^T lambda``, ``S (na, nv)``, ``Jc (nc, nv)``; returns
-    ``(u, residual, spread)``: the balance's residual and how much of the solution set's
-    freedom reaches ``u`` (0: ``u`` unique)."""
-    A = np.hstack([S.T, Jc.T])
+def _null(a: np.ndarray, n: int) -> np.ndarray:
+    if a.shape[0] == 0:
+        return np.eye(n)
+    _, sv, vh = np.linalg.svd(a)
+    r = int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1e-300)))
+    return vh[r:].T
+
+
+def projected_efforts(tau: np.ndarray, S: np.ndarray, Jc: np.ndarray,
+                      held: np.ndarray | None = None) -> tuple[np.ndarray, float, float]:
+    """``u`` from ``tau (nv,) = S^T u + Jc^T lambda + N_i mu``, ``S (na, nv)``, ``Jc (nc, nv)``;
+    returns ``(u, residual, spread)``: the balance's residual and how much of the solution
+    set's freedom reaches ``u`` (0: ``u`` unique).
+
+    ``N_i``: the idle motions (allowed by the loops, moving no actuator, e.g. a rod's spin
+    between two ball joints). A motion prescribes their accelerations kinematically, so their
+    balance is left out: by virtual power, ``n . tau = (S n) . u`` for every motion ``n`` the
+    loops allow, and those with ``S n = 0`` say nothing of ``u``. Where the motion's idle
+    accelerations come from a holding rule (pkmdyn's ``n_k . (q - q_ref) = 0``), ``held (nv, k)``
+    gives the rule's force directions instead, and ``u`` is that of the held motion."""
+    if held is not None:
+        idle = held
+    else:
+        N = _null(Jc, S.shape[1])
+        idle = N @ _null(S @ N, N.shape[1]) if N.size else np.zeros((S.shape[1], 0))
+    A = np.hstack([S.T, Jc.T, idle])
     sol, *_ = np.linalg.lstsq(A, tau, rcond=None)
     res = float(np.abs(A @ sol - tau).max())
     _, sv, vh = np.linalg.svd(A)
@@ -32,10 +53,12 @@ def projected_efforts(tau: np.ndarray, S: np.ndarray, Jc: np.ndarray) -> tuple[n
 
 
 def pinocchio_efforts(urdf: str, closures: list[tuple[str, str, str]], actuated: list[str], q_of: dict,
-                      qd_of: dict, qdd_of: dict, gravity=(0.0, 0.0, -9.81)) -> tuple[np.ndarray, float, float]:
+                      qd_of: dict, qdd_of: dict, gravity=(0.0, 0.0, -9.81),
+                      held: dict | None = None) -> tuple[np.ndarray, float, float]:
     """Efforts of the joints ``actuated`` of the URDF file ``urdf`` closed by the frame pairs
     ``closures`` ((frame_A, frame_B, '3d' | '6d')), at the joint positions, rates and
-    accelerations ``q_of``, ``qd_of``, ``qdd_of`` (joint name -> value; one-coordinate joints)."""
+    accelerations ``q_of``, ``qd_of``, ``qdd_of`` (joint name -> value; one-coordinate joints);
+    ``held``: joint name -> the idle holding rules' force directions on it ((k,) each)."""
     import pinocchio as pin
 
     model = pin.buildModelFromUrdf(urdf)
@@ -62,7 +85,12 @@ def pinocchio_efforts(urdf: str, closures: list[tuple[str, str, str]], actuated:
     S = np.zeros((len(actuated), model.nv))
     for i, nm in enumerate(actuated):
         S[i, model.idx_vs[model.getJointId(nm)]] = 1.0
-    return projected_efforts(tau, S, np.vstack(rows))
+    H = None
+    if held is not None:
+        H = np.zeros((model.nv, len(next(iter(held.values())))))
+        for nm, row in held.items():
+            H[model.idx_vs[model.getJointId(nm)]] = row
+    return projected_efforts(tau, S, np.vstack(rows), H)
 
 
 def mujoco_efforts(xml: str, q_of: dict, qd_of: dict, qdd_of: dict) -> tuple[np.ndarray, float, float]:

@@ -56,7 +56,9 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
     def name(obj, i: int, kind: str) -> str:
         return safe_name(mujoco.mj_id2name(m, obj, i) or "", f"{kind}_{i}")
 
-    bname = [GROUND] + [name(mujoco.mjtObj.mjOBJ_BODY, b, "body") for b in range(1, m.nbody)]
+    # a body called ground (pkmdyn's exports hang the tree from one) is not the world itself
+    bname = [GROUND] + [nm if nm != GROUND else "ground_body"
+                        for nm in (name(mujoco.mjtObj.mjOBJ_BODY, b, "body") for b in range(1, m.nbody))]
     links = []
     for b in range(1, m.nbody):
         R = d.ximat[b].reshape(3, 3)

@@ -34,6 +34,7 @@ hundred percent from the rigid mechanism's. The equalities are therefore written
 with ``refsafe`` off so that MuJoCo keeps a time constant below two time steps; both are
 arguments of :func:`mechanism_mjcf` and options of ``pkmdyn export``. A body without mass is
 refused, naming it (MuJoCo needs a mass on every moving body; pkmdyn does not silently add one).
+
 """
 
 from __future__ import annotations
