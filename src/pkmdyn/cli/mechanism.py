@@ -439,28 +439,34 @@ def _numbers(text: str | None, n: int, flag: str) -> tuple[float, ...] | None:
                                              "(default 0.0005,1: stiff).")
 @click.option("--solimp", default=None, help="mjcf: the equality constraints' solimp 'd0,dwidth,width,midpoint,power' "
                                              "(default 0.9999,0.9999,0.001,0.5,2).")
+@click.option("--massless-mass-kg", "massless_kg", type=FiniteFloat(1e-12, 1e6), default=None,
+              help="mjcf: the mass [kg] given to bodies without one (MuJoCo needs a mass; default: refused).")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="File to write (e.g. machine.xml, machine.urdf).")
-def export(machine: str, fmt: str, solref: str | None, solimp: str | None, out_path: Path) -> None:
+def export(machine: str, fmt: str, solref: str | None, solimp: str | None, massless_kg: float | None,
+           out_path: Path) -> None:
     """Write a described mechanism in another engine's format; the files are written only when
     the whole model can be written (a cut joint the format cannot express, a body without
     mass for MuJoCo: an error naming it)."""
     from ..errors import ParameterError
     from ..io import atomic_file, check_output_file, dumps_yaml
     from ..machines.registry import resolve
-    from ..multibody.mjcf import SOLIMP, SOLREF, mechanism_mjcf
+    from ..multibody.mjcf import SOLIMP, SOLREF, massless_bodies, mechanism_mjcf
     from ..multibody.urdf_export import mechanism_urdf
 
     entry, path = resolve(machine)
     inputs = {"--machine": path}
     check_output_file(out_path, inputs)
-    if fmt != "mjcf" and (solref or solimp):
-        raise ParameterError("--solref, --solimp: only for --format mjcf")
+    if fmt != "mjcf" and (solref or solimp or massless_kg is not None):
+        raise ParameterError("--solref, --solimp, --massless-mass-kg: only for --format mjcf")
     model, _ = _load(machine)
     files = {out_path: ""}
     if fmt == "mjcf":
         files[out_path] = mechanism_mjcf(model, solref=_numbers(solref, 2, "--solref") or SOLREF,
-                                         solimp=_numbers(solimp, 5, "--solimp") or SOLIMP)
+                                         solimp=_numbers(solimp, 5, "--solimp") or SOLIMP, massless_kg=massless_kg)
+        light = massless_bodies(model)
+        if light:
+            click.echo(f"note: bodies without mass given {massless_kg:g} kg: {', '.join(light)}", err=True)
     else:
         side_path = out_path.with_suffix(".yaml")
         if side_path == out_path:

@@ -249,6 +249,9 @@ class _Builder:
                    and len(children.get(chain[-1].child, [])) == 1 and len(chain) < 3):
                 chain.append(children[chain[-1].child][0])
             last = chain[-1].child
+            if last in self.links and _massless(self.links[last]) and len(chain) == 1:
+                raise ParameterError(f"{self.g.source}: link {last}: no mass and no inertia (a moving body needs an "
+                                     "inertia; give it one, or fix it to a neighbour)")
             if last in self.links and _massless(self.links[last]):
                 raise ParameterError(
                     f"{self.g.source}: link {last}: no mass and no inertia, and its joints "
@@ -522,9 +525,6 @@ def description_from_graph(g: Graph, choice: TaskChoice = TaskChoice()) -> tuple
     drives = _actuators(b, joints + cuts)
     if not any(j.get("actuated") for j in joints):
         raise ParameterError(f"{g.source}: no actuated joint (an MJCF <actuator>, the sidecar's name_mot, or --actuated)")
-    for lk in b.links.values():
-        if lk.mass <= 0.0:
-            raise ParameterError(f"{g.source}: link {lk.name}: no mass (a moving body needs a mass and an inertia)")
     body, point = _task_body(b, joints + cuts, choice)
     bodies = [{"name": lk.name, "mass_kg": float(lk.mass), "com_m": list(map(float, lk.com)),
                "inertia_kgm2": [[float(x) for x in row] for row in 0.5 * (lk.inertia + lk.inertia.T)]}

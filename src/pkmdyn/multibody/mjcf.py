@@ -33,7 +33,9 @@ hundred percent from the rigid mechanism's. The equalities are therefore written
 (:data:`SOLREF`, :data:`SOLIMP`: time constant 0.5 ms, critical damping, impedance 0.9999),
 with ``refsafe`` off so that MuJoCo keeps a time constant below two time steps; both are
 arguments of :func:`mechanism_mjcf` and options of ``pkmdyn export``. A body without mass is
-refused, naming it (MuJoCo needs a mass on every moving body; pkmdyn does not silently add one).
+refused, naming it (MuJoCo needs a mass on every moving body; pkmdyn does not silently add one),
+unless a mass is given for it (``massless_kg``, ``pkmdyn export --massless-mass-kg``), said in a
+comment of the file and on stderr.
 
 """
 
@@ -91,19 +93,27 @@ def mujoco_qpos(model: MechanismModel, q: Array, mj_model) -> Array:
     return out
 
 
+def massless_bodies(model: MechanismModel) -> list[str]:
+    """The moving bodies without mass (MuJoCo needs one)."""
+    return [model.body_names[b] for b in range(model.nb) if float(model.mass[b]) <= 0.0]
+
+
 def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3, solref: tuple[float, float] = SOLREF,
-                   solimp: tuple[float, ...] = SOLIMP) -> str:
+                   solimp: tuple[float, ...] = SOLIMP, massless_kg: float | None = None) -> str:
     """The MJCF document of ``model`` (module docstring): the equality constraints with
-    ``solref`` and ``solimp`` (MuJoCo's meaning)."""
+    ``solref`` and ``solimp`` (MuJoCo's meaning). A body without mass is refused unless
+    ``massless_kg`` [kg] is given: it then gets that mass, said in a comment of the file."""
     if len(solref) != 2 or not all(np.isfinite(solref)) or solref[0] <= 0 or solref[1] <= 0:
         raise ParameterError(f"solref {solref}: two positive numbers (time constant [s], damping ratio)")
     if len(solimp) != 5 or not all(np.isfinite(solimp)) or not (0 < solimp[0] < 1 and 0 < solimp[1] < 1) \
             or solimp[2] <= 0:
         raise ParameterError(f"solimp {solimp}: five numbers, the first two in (0, 1), the width > 0")
-    for b in range(model.nb):
-        if float(model.mass[b]) <= 0.0:
-            raise ParameterError(f"[bodies] {model.body_names[b]}: no mass; MuJoCo needs a mass on every moving body "
-                                 "(give it one, or fix it to a neighbour)")
+    light = massless_bodies(model)
+    if light and massless_kg is None:
+        raise ParameterError(f"[bodies] {light[0]}: no mass; MuJoCo needs a mass on every moving body "
+                             "(give it one, fix it to a neighbour, or export with --massless-mass-kg)")
+    if massless_kg is not None and not (np.isfinite(massless_kg) and massless_kg > 0):
+        raise ParameterError(f"massless_kg {massless_kg}: a positive mass [kg]")
     for j in model.loop_joint:
         t = JOINT_TYPES[model.joint_type[j]].name
         if t not in ("spherical", "revolute", "fixed"):
@@ -113,7 +123,11 @@ def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3, solref: tuple[
     children: dict[int, list[int]] = {}
     for b in range(model.nb):
         children.setdefault(int(model.body_parent[b]), []).append(b)
-    lines = [f'<mujoco model="{model.name}">',
+    lines = [f'<mujoco model="{model.name}">']
+    if light:
+        lines.append(f"  <!-- pkmdyn: bodies without mass given {massless_kg:g} kg (MuJoCo needs a mass): "
+                     f"{', '.join(light)} -->")
+    lines += [
              f'  <option timestep="{timestep:g}" gravity="{_v(model.gravity)}" integrator="RK4">',
              '    <flag refsafe="disable"/>', "  </option>",
              '  <compiler angle="radian" autolimits="true"/>',
@@ -139,7 +153,7 @@ def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3, solref: tuple[
         quat = _quat(Rp.T @ model.R0[b])
         lines.append(f'{ind}<body name="{model.body_names[b]}" pos="{_v(pos)}" quat="{_v(quat)}">')
         I = model.inertia[b]
-        mass = float(model.mass[b])
+        mass = float(model.mass[b]) if float(model.mass[b]) > 0.0 else float(massless_kg)
         full = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]
         lines.append(f'{ind}  <inertial pos="{_v(model.com[b])}" mass="{mass:.17g}" fullinertia="{_v(full)}"/>')
         k = int(model.body_joint[b])

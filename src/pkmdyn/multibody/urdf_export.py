@@ -89,8 +89,7 @@ def mechanism_urdf(model: MechanismModel) -> tuple[str, dict, list[str]]:
 
     def link(name: str, mass: float, com, inertia, origin) -> None:
         lines.append(f"  <link name={quoteattr(name)}>")
-        if mass > 0:
-            lines.append(_inertial(mass, com - origin, inertia))
+        lines.append(_inertial(mass, com - origin, inertia))  # a body's inertia even without mass
         lines.append("  </link>")
 
     for b in range(model.nb):  # the model's body order is the tree's: parents first
@@ -138,7 +137,7 @@ def mechanism_urdf(model: MechanismModel) -> tuple[str, dict, list[str]]:
                     "coulomb_torque_Nm", "coulomb_force_N", "viscous_Nm_s_rad", "viscous_N_s_m")]
                 if rest:
                     notes.append(f"joint {jname}: friction {', '.join(rest)} not written (no URDF equivalent)")
-            elif fr and any(v for v in fr.values()):
+            elif i == 0 and fr and any(v for v in fr.values()):
                 notes.append(f"joint {jname}: friction not written (a joint of several coordinates)")
             lines.append(text + "</joint>")
             if last:
