@@ -11,7 +11,7 @@ configuration (MJCF: ``qpos0`` or a keyframe; URDF, SDFormat: zero joint positio
   task;
 * a chain of hinges (or a slide and a hinge) through links without mass becomes one joint
   where the description has one: two hinges through one point with perpendicular axes a
-  universal joint, three with mutually perpendicular axes a spherical joint, a slide and a
+  universal joint, three whose axes are not in one plane a spherical joint, a slide and a
   hinge along one axis a cylindrical joint; any other massless link is refused by name (the
   description's bodies need a positive definite inertia);
 * a 3D loop closure (MJCF ``connect``, a URDF frame pair of type ``3d``, an onshape-to-robot
@@ -22,8 +22,9 @@ configuration (MJCF: ``qpos0`` or a keyframe; URDF, SDFormat: zero joint positio
 * actuators give the actuated joints and, with a gear, armature or motor friction, a drive
   (``[[actuators]]``); joint damping and dry friction become the joint's viscous and Coulomb
   friction;
-* the task: the body, point and coordinates given (options or sidecar), or else the body
-  nearest to an end-effector frame or site by name, or the moving body with the most joints;
+* the task: the body, point and coordinates given (options or sidecar), or else the first of
+  these whose coordinates can determine the pose: the body of an end-effector frame or site
+  (by name), then the moving bodies with the most joints, the deepest in the tree first;
   its coordinates are chosen among ``x y z`` first, then the ``XYZ`` Euler angles, as many
   as the mechanism's degrees of freedom, independent at the reference configuration
   (pivoted QR of the task rows on the loops' null space).
@@ -50,6 +51,10 @@ GROUND = "ground"
 MASSLESS_KG = 1e-9
 #: a loop closure closes where its frames' points differ by at most this fraction of the size
 CLOSE_TOL = 1e-6
+#: axes within this (cosine, or 1 - |cosine|) are perpendicular or parallel: files written with six decimals
+AXIS_TOL = 1e-6
+#: task bodies tried, in order, until one has independent coordinates enough
+MAX_CANDIDATES = 12
 #: names taken for the end-effector body or point, in this order of preference
 EFFECTOR_WORDS = ("end_effector", "effector", "tcp", "tool", "platform", "ee")
 
@@ -276,7 +281,7 @@ class _Builder:
         entry: dict = {"name": name, "parent": j0.parent, "child": chain[-1].child, "point_m": list(map(float, j0.point))}
         same_point = all(np.linalg.norm(k.point - j0.point) <= CLOSE_TOL * self.size for k in chain)
         axes = [_unit(k.axis) for k in chain]
-        perp = all(abs(float(axes[a] @ axes[b])) <= 1e-9 for a in range(len(axes)) for b in range(a + 1, len(axes)))
+        perp = all(abs(float(axes[a] @ axes[b])) <= AXIS_TOL for a in range(len(axes)) for b in range(a + 1, len(axes)))
         where = f"{self.g.source}: joints {', '.join(k.name for k in chain)}"
         if kinds == ["hinge"] or kinds == ["slide"]:
             entry["type"] = "revolute" if kinds[0] == "hinge" else "prismatic"
@@ -305,12 +310,15 @@ class _Builder:
             entry["type"] = "universal"
             entry["axes"] = [list(map(float, axes[0])), list(map(float, axes[1]))]
             return entry
-        if kinds == ["hinge", "hinge", "hinge"] and same_point and perp:
+        if kinds == ["hinge", "hinge", "hinge"] and same_point and abs(float(np.linalg.det(np.column_stack(axes)))) >= 1e-3:
+            # three hinges through one point with axes not in one plane: a spherical joint (its
+            # coordinates are pkmdyn's XYZ angles in the frame x = first axis, z = last axis,
+            # not the hinges' angles; the axes need not be perpendicular away from the zero pose)
             entry["type"] = "spherical"
             entry["axis"] = list(map(float, axes[2]))
             entry["x_axis"] = list(map(float, axes[0]))
             return entry
-        if sorted(kinds) == ["hinge", "slide"] and abs(abs(float(axes[0] @ axes[1])) - 1.0) <= 1e-9:
+        if sorted(kinds) == ["hinge", "slide"] and abs(abs(float(axes[0] @ axes[1])) - 1.0) <= AXIS_TOL:
             d = chain[1].point - j0.point
             if np.linalg.norm(d - (d @ axes[0]) * axes[0]) <= CLOSE_TOL * self.size:
                 entry["type"] = "cylindrical"
@@ -425,43 +433,50 @@ def _actuators(b: _Builder, joints: list[dict]) -> list[dict]:
     return drives
 
 
-def _task_body(b: _Builder, joints: list[dict], choice: TaskChoice) -> tuple[str, Array]:
-    """The task body and point (module docstring)."""
+def _task_candidates(b: _Builder, joints: list[dict], choice: TaskChoice) -> list[tuple[str, Array]]:
+    """The task body and point asked for, or the candidates in the order the module docstring
+    gives (an end-effector frame's body; the bodies with the most joints, the deepest first)."""
     frames = {f.name: f for f in b.g.frames}
     point: Array | None = None
+    body = choice.body
     if isinstance(choice.point, str):
         if choice.point not in frames:
             raise ParameterError(f"{b.g.source}: task point {choice.point!r}: no site or frame of that name")
         f = frames[choice.point]
         point = f.point
-        body = choice.body or b.owner(f.link)
+        body = body or b.owner(f.link)
     elif choice.point is not None:
         point = np.asarray(choice.point, dtype=float)
-        body = choice.body
-    else:
-        body = choice.body
-    if body is None:
-        for word in EFFECTOR_WORDS:
-            hit = [f for f in b.g.frames if word in f.name.lower() and b.owner(f.link) != GROUND]
-            if hit:
-                body, point = b.owner(hit[0].link), hit[0].point
-                break
-            hit2 = [nm for nm in b.links if word in nm.lower()]
-            if hit2:
-                body = hit2[0]
-                break
-    if body is None:
-        count: dict[str, int] = {}
-        for j in joints:
-            for s in (j["parent"], j["child"]):
-                count[s] = count.get(s, 0) + 1
-        body = max((nm for nm in b.links), key=lambda nm: (count.get(nm, 0), b.links[nm].mass))
-    body = b.owner(body) if body not in b.links else body
-    if body not in b.links:
-        raise ParameterError(f"{b.g.source}: task body {body!r}: no moving link of that name")
-    if point is None:
-        point = b.links[body].com
-    return body, np.asarray(point, dtype=float)
+    if body is not None:
+        body = b.owner(body) if body not in b.links else body
+        if body not in b.links:
+            raise ParameterError(f"{b.g.source}: task body {body!r}: no moving link of that name")
+        return [(body, np.asarray(point if point is not None else b.links[body].com, dtype=float))]
+    out: list[tuple[str, Array]] = []
+    for word in EFFECTOR_WORDS:
+        out += [(b.owner(f.link), f.point) for f in b.g.frames if word in f.name.lower() and b.owner(f.link) in b.links]
+        out += [(nm, b.links[nm].com) for nm in b.links if word in nm.lower()]
+    count: dict[str, int] = {}
+    parent: dict[str, str] = {}
+    for j in joints:
+        parent.setdefault(j["child"], j["parent"])
+        for side in (j["parent"], j["child"]):
+            count[side] = count.get(side, 0) + 1
+
+    def depth(nm: str) -> int:
+        d = 0
+        while nm in parent and d < len(parent):
+            nm, d = parent[nm], d + 1
+        return d
+
+    ranked = sorted(b.links, key=lambda nm: (-count.get(nm, 0), -depth(nm), -b.links[nm].mass))
+    out += [(nm, b.links[nm].com) for nm in ranked]
+    seen, unique = set(), []
+    for nm, p in out:
+        if nm not in seen:
+            seen.add(nm)
+            unique.append((nm, np.asarray(p if point is None else point, dtype=float)))
+    return unique
 
 
 def _choose_coordinates(desc: dict, choice: TaskChoice, source: str) -> None:
@@ -525,7 +540,8 @@ def description_from_graph(g: Graph, choice: TaskChoice = TaskChoice()) -> tuple
     drives = _actuators(b, joints + cuts)
     if not any(j.get("actuated") for j in joints):
         raise ParameterError(f"{g.source}: no actuated joint (an MJCF <actuator>, the sidecar's name_mot, or --actuated)")
-    body, point = _task_body(b, joints + cuts, choice)
+    candidates = _task_candidates(b, joints + cuts, choice)
+    body, point = candidates[0]
     bodies = [{"name": lk.name, "mass_kg": float(lk.mass), "com_m": list(map(float, lk.com)),
                "inertia_kgm2": [[float(x) for x in row] for row in 0.5 * (lk.inertia + lk.inertia.T)]}
               for lk in b.links.values()]
@@ -542,7 +558,14 @@ def description_from_graph(g: Graph, choice: TaskChoice = TaskChoice()) -> tuple
     drives = [d for d in drives if d["joint"] not in given] + [dict(d) for d in g.drives]
     if drives:
         desc["actuators"] = drives
-    _choose_coordinates(desc, choice, g.source)
+    for k, (body, point) in enumerate(candidates[:MAX_CANDIDATES]):
+        desc["task"].update(body=body, point_m=list(map(float, point)))
+        try:
+            _choose_coordinates(desc, choice, g.source)
+            break
+        except ParameterError:
+            if k == min(len(candidates), MAX_CANDIDATES) - 1:
+                raise
     amp = {f"{c}_m": 0.01 * b.size for c in desc["task"]["position"]}
     amp.update({f"euler{k}_rad": 0.02 for k in desc["task"]["orientation"]})
     desc["default_motion"] = {"period_s": 2.0, "samples": 201, "amplitude": amp}

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
-from .import_graph import GROUND, Actuator, Closure, Frame, Graph, Joint, Link, TaskChoice, safe_name
+from .import_graph import CLOSE_TOL, GROUND, Actuator, Closure, Frame, Graph, Joint, Link, TaskChoice, safe_name
 
 
 #: URDF holds no gravity: Pinocchio's and MuJoCo's default, unless the sidecar gives gravity_m_s2
@@ -145,8 +145,8 @@ def _closure_pairs(model, src: str, sidecar: dict[str, Any] | None) -> list[tupl
 
 
 def _assemble(model, data, q0, pairs: list[tuple[str, str, str]], src: str):
-    """The configuration nearest to ``q0`` (Gauss-Newton, least-norm steps) at which every
-    closure holds; refused naming the pair and its gap where it does not converge."""
+    """A configuration near ``q0`` at which every closure holds (Levenberg-Marquardt from
+    ``q0``); refused naming the pair and its gap where it does not converge."""
     pin = _pinocchio()
     ids = [(model.getFrameId(a), model.getFrameId(b), kind) for a, b, kind in pairs]
     q = q0.copy()
@@ -168,17 +168,28 @@ def _assemble(model, data, q0, pairs: list[tuple[str, str, str]], src: str):
                 Js.append(Ja[3:] - Jb[3:])
         return np.concatenate(rs), np.vstack(Js)
 
-    for _ in range(100):
-        r, J = residual(q)
+    # Levenberg-Marquardt (a Gauss-Newton step where it reduces the residual, damped where not)
+    r, J = residual(q)
+    mu = 1e-6
+    for _ in range(500):
         if np.abs(r).max() < 1e-14:
             break
-        q = pin.integrate(model, q, -np.linalg.lstsq(J, r, rcond=None)[0])
+        A = J.T @ J
+        step = -np.linalg.solve(A + mu * (np.trace(A) / len(A) + 1e-12) * np.eye(len(A)), J.T @ r)
+        q_new = pin.integrate(model, q, step)
+        r_new, J_new = residual(q_new)
+        if r_new @ r_new < r @ r:
+            q, r, J, mu = q_new, r_new, J_new, max(mu / 10, 1e-12)
+        else:
+            mu *= 10
+            if mu > 1e8:
+                break
     r, _ = residual(q)
     k = 0
     for fa, fb, kind in ids:
         n = 6 if kind == "6d" else 3
         gap = float(np.linalg.norm(r[k:k + 3])) * size
-        if gap > 1e-9 * size or np.linalg.norm(r[k + 3:k + n]) > 1e-9:
+        if gap > CLOSE_TOL * size or np.linalg.norm(r[k + 3:k + n]) > 1e-6:
             raise ParameterError(f"{src}: loop closure {model.frames[fa].name}-{model.frames[fb].name}: the loops do "
                                  f"not close near the zero configuration (gap {gap:.6g} m after assembly)")
         k += n
