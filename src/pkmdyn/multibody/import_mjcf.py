@@ -61,6 +61,8 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
                         for nm in (name(mujoco.mjtObj.mjOBJ_BODY, b, "body") for b in range(1, m.nbody))]
     links = []
     for b in range(1, m.nbody):
+        if hasattr(m, "body_gravcomp") and m.body_gravcomp[b]:
+            raise ParameterError(f"{src}: body {bname[b]}: gravity compensation (gravcomp) has no equivalent")
         R = d.ximat[b].reshape(3, 3)
         links.append(Link(bname[b], float(m.body_mass[b]), d.xipos[b].copy(), R @ np.diag(m.body_inertia[b]) @ R.T))
     joints: list[Joint] = []
@@ -82,6 +84,9 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
             if n < len(ids) - 1:  # an intermediate massless link between two joints of one body
                 links.append(Link(child, 0.0, d.xpos[b].copy(), np.zeros((3, 3))))
             dof = int(m.jnt_dofadr[j])
+            if m.jnt_stiffness[j]:
+                raise ParameterError(f"{src}: joint {jname[j]}: a joint spring (stiffness {m.jnt_stiffness[j]:g}) has no "
+                                     "equivalent in a description's dynamics")
             lim = (float(m.jnt_range[j, 0]), float(m.jnt_range[j, 1])) if m.jnt_limited[j] and kind != "ball" else None
             joints.append(Joint(
                 jname[j], kind, parent, child, d.xanchor[j].copy(), d.xaxis[j].copy(),
