@@ -188,8 +188,14 @@ def test_onshape_closing_frames_match_pinocchio(tmp_path):
     assert model.topology.overconstraints == 1 and model.topology.dof == 2
     d = tomllib.loads(out.read_text())
     assert d["task"]["position"] == ["x", "z"]  # chosen: the plane's two translations
+    assert d["mechanism"]["reactions"] == "minimum-norm"  # no compliance in the file: its runs say so
     mo, kin = _moving(model)
     _pin_check(model, kin, urdf, [("closing_end_1", "closing_end_2", "3d")])
+    import json
+
+    assert main(["run", "--machine", str(out), "--out", str(tmp_path / "run")]) == 0
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["reactions"]["unique"] is False
 
 
 def five_bar_mjcf(site_connect: bool = False) -> str:

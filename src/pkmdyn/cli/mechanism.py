@@ -190,12 +190,13 @@ def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_w
 
     try:
         summary = run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files, description_text=text,
-                                unique_reactions=not minimum_norm_reactions, fmt=fmt, limits=limits, progress=True,
+                                unique_reactions=not (minimum_norm_reactions or model.reactions == "minimum-norm"),
+                                fmt=fmt, limits=limits, progress=True,
                                 deflection=deflection,
                                 plot_window=window)
     except ComplianceDataMissing as exc:
-        raise ComplianceDataMissing(f"{exc}; or --minimum-norm-reactions for reactions that balance every body "
-                                    "but are not unique") from None
+        raise ComplianceDataMissing(f"{exc}; or --minimum-norm-reactions ([mechanism] reactions = \"minimum-norm\") "
+                                    "for reactions that balance every body but are not unique") from None
     beyond = summary["joint_limits"]["first_beyond"]
     if beyond is not None:
         click.echo(f"pkmdyn: warning: the motion leaves the joint limits: {beyond}", err=True)

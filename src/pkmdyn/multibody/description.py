@@ -282,6 +282,10 @@ class _Mechanism(Section):
     source: str = ""
     gravity_m_s2: Vec3 = [0.0, 0.0, -9.80665]
     cut_joints: list[str] | None = None
+    #: an over-constrained mechanism without the compliance that makes its reactions unique:
+    #: "unique" refuses its run (the default), "minimum-norm" writes the minimum-norm reactions
+    #: (flagged, as pkmdyn run --minimum-norm-reactions)
+    reactions: Literal["unique", "minimum-norm"] = "unique"
 
 
 class _File(Section):
@@ -427,6 +431,9 @@ class Description:
     limits: dict[str, float] = field(default_factory=dict)
     #: the named design parameters and their values (``[parameters]``, :mod:`.expressions`)
     parameters: dict[str, Any] = field(default_factory=dict)
+    #: ``[mechanism] reactions``: ``"unique"`` or ``"minimum-norm"`` (an over-constrained
+    #: mechanism's run without compliance data)
+    reactions: str = "unique"
 
 
 def _rot(axis: Array, angle: float) -> Array:
@@ -857,7 +864,7 @@ def load_description(source: str | Path | dict[str, Any], limits: dict[str, Any]
                        gravity=np.array(data.mechanism.gravity_m_s2, dtype=float),
                        bodies=tuple(body_specs.values()), joints=tuple(joints), task=task, loads=tuple(loads),
                        cut_joints=cuts, motion=motion, path=path, actuators=actuators, groups=groups,
-                       limits=data.limits.model_dump(), parameters=parameters)
+                       limits=data.limits.model_dump(), parameters=parameters, reactions=data.mechanism.reactions)
 
 
 #: the keys of an actuator entry for each kind of motor (rotary, linear), by role

@@ -86,9 +86,10 @@ def import_description(path: Path, fmt: str, *, sidecar: Path | None = None, act
     desc, notes = description_from_graph(graph, _merge(choice, side))
     model = load_mechanism(desc)  # what describe and run will do with the file
     if model.topology.overconstraints:
+        desc["mechanism"]["reactions"] = "minimum-norm"
         notes.append(f"over-constrained ({model.topology.overconstraints} self-stress states): the efforts are unique; "
-                     "unique joint reactions need [[bodies]] section and material, else pkmdyn run "
-                     "--minimum-norm-reactions")
+                     "the file holds no link compliance, so [mechanism] reactions = \"minimum-norm\" (runs write "
+                     "the minimum-norm joint reactions, flagged); [[bodies]] section and material make them unique")
     _fit_default_motion(desc, notes)
     header = "\n".join([f"Imported by pkmdyn import from {graph.source} ({fmt.upper()}).",
                         "Base frame, reference configuration: the file's (docs/import.md).", *notes])

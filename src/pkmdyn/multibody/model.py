@@ -218,6 +218,9 @@ class MechanismModel:
     limits: dict = field(default_factory=dict)
     #: the description's named design parameters and their values (``[parameters]``)
     parameters: dict = field(default_factory=dict)
+    #: ``[mechanism] reactions``: ``"unique"`` (an over-constrained run without compliance data
+    #: is refused) or ``"minimum-norm"``
+    reactions: str = "unique"
 
     @property
     def nb(self) -> int:
@@ -460,7 +463,7 @@ def compile_model(desc: Description, *, topology_only: bool = False) -> Mechanis
     prow, pcol, blocks = block_structure(model, rows, idle)
     model = replace(model, solver_rows=rows, solver_idle=idle, solver_prow=prow, solver_pcol=pcol,
                     solver_blocks=blocks, topology=rep, **_drives(desc, act), **_body_groups(desc, order),
-                    limits=dict(desc.limits), parameters=dict(desc.parameters))
+                    limits=dict(desc.limits), parameters=dict(desc.parameters), reactions=desc.reactions)
     return replace(model, legs=explicit_legs(model))
 
 
