@@ -440,12 +440,14 @@ def _numbers(text: str | None, n: int, flag: str) -> tuple[float, ...] | None:
                                              "(default 0.0005,1: stiff).")
 @click.option("--solimp", default=None, help="mjcf: the equality constraints' solimp 'd0,dwidth,width,midpoint,power' "
                                              "(default 0.9999,0.9999,0.001,0.5,2).")
+@click.option("--timestep", "timestep_s", type=FiniteFloat(1e-6, 1.0), default=None,
+              help="mjcf: MuJoCo's integration step [s], 1e-6 to 1 (default 0.001).")
 @click.option("--massless-mass-kg", "massless_kg", type=FiniteFloat(1e-12, 1e6), default=None,
               help="mjcf: the mass [kg] given to bodies without one (MuJoCo needs a mass; default: refused).")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="File to write (e.g. machine.xml, machine.urdf).")
-def export(machine: str, fmt: str, solref: str | None, solimp: str | None, massless_kg: float | None,
-           out_path: Path) -> None:
+def export(machine: str, fmt: str, solref: str | None, solimp: str | None, timestep_s: float | None,
+           massless_kg: float | None, out_path: Path) -> None:
     """Write a described mechanism in another engine's format; the files are written only when
     the whole model can be written (a cut joint the format cannot express, a body without
     mass for MuJoCo: an error naming it)."""
@@ -458,12 +460,12 @@ def export(machine: str, fmt: str, solref: str | None, solimp: str | None, massl
     entry, path = resolve(machine)
     inputs = {"--machine": path}
     check_output_file(out_path, inputs)
-    if fmt != "mjcf" and (solref or solimp or massless_kg is not None):
-        raise ParameterError("--solref, --solimp, --massless-mass-kg: only for --format mjcf")
+    if fmt != "mjcf" and (solref or solimp or massless_kg is not None or timestep_s is not None):
+        raise ParameterError("--solref, --solimp, --timestep, --massless-mass-kg: only for --format mjcf")
     model, _ = _load(machine)
     files = {out_path: ""}
     if fmt == "mjcf":
-        files[out_path] = mechanism_mjcf(model, solref=_numbers(solref, 2, "--solref") or SOLREF,
+        files[out_path] = mechanism_mjcf(model, 1e-3 if timestep_s is None else timestep_s, solref=_numbers(solref, 2, "--solref") or SOLREF,
                                          solimp=_numbers(solimp, 5, "--solimp") or SOLIMP, massless_kg=massless_kg)
         light = massless_bodies(model)
         if light:
