@@ -421,3 +421,36 @@ def test_pinocchio_with_the_urdf_export_gives_pkmdyn_efforts(name, tmp_path):
                                                held=held if H.shape[1] else None)
         assert res <= 1e-9 * np.abs(u_pin).max() and spread < 1e-9
         assert np.abs(u[s] - u_pin).max() <= REL * np.abs(u_pin).max()
+
+
+SERIAL = """<robot name="arm">
+  <link name="base"/>
+  <link name="a"><inertial><origin xyz="0.25 0 0"/><mass value="1"/><inertia ixx="0.01" iyy="0.02" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="b"><inertial><origin xyz="0.2 0 0"/><mass value="0.5"/><inertia ixx="0.005" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="a"/><child link="b"/><origin xyz="0.5 0 0"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+</robot>
+"""
+
+
+def test_a_serial_urdf_takes_its_last_link_as_task(tmp_path):
+    """No loop: the link with most joints (the first) cannot see both freedoms; the task
+    body chosen is the one whose coordinates determine the pose."""
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(SERIAL)
+    text, _ = import_description(urdf, "urdf", actuated=("j1", "j2"))
+    d = tomllib.loads(text)
+    assert d["task"]["body"] == "b" and len(d["task"]["position"]) + len(d["task"]["orientation"]) == 2
+    load_mechanism(d)
+
+
+def test_more_bad_input(tmp_path, capsys):
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(SERIAL.replace('<axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>\n</robot>',
+                                   '<axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/>'
+                                   '<mimic joint="j1"/></joint>\n</robot>'))
+    _refused(tmp_path, capsys, ["--from", str(urdf), "--actuated", "j1"], r"joint j2: a mimic joint")
+    urdf.write_text(SERIAL)
+    side = tmp_path / "arm.yaml"
+    side.write_text("name_mot: [j1, j2]\ntask: {point: [1, a, 2]}\n")
+    _refused(tmp_path, capsys, ["--from", str(urdf), "--sidecar", str(side)], r"arm\.yaml: task point: expected")

@@ -197,7 +197,14 @@ class _Builder:
         self.g = g
         self.links = {lk.name: lk for lk in g.links}
         if len(self.links) != len(g.links):
-            raise ParameterError(f"{g.source}: two links share a name")
+            dup = next(lk.name for k, lk in enumerate(g.links) if any(o.name == lk.name for o in g.links[:k]))
+            raise ParameterError(f"{g.source}: two links are named {dup!r} (after replacing the characters a "
+                                 "description name cannot hold by _)")
+        names = [j.name for j in g.joints] + [c.name for c in g.closures]
+        if len(set(names)) != len(names):
+            dup = next(n for k, n in enumerate(names) if n in names[:k])
+            raise ParameterError(f"{g.source}: two joints or closures are named {dup!r} (after replacing the "
+                                 "characters a description name cannot hold by _)")
         self.alias: dict[str, str] = {}  # a merged link -> the link it went into
         self.notes = list(g.notes)
         scale = [np.linalg.norm(j.point) for j in g.joints] + [np.linalg.norm(c.point1) for c in g.closures]
@@ -218,16 +225,16 @@ class _Builder:
                 continue
             par, ch = self.owner(j.parent), self.owner(j.child)
             if ch == GROUND:
-                raise ParameterError(f"{self.g.source}: joint {j.name}: a fixed joint to the base from link {j.parent}")
+                raise ParameterError(f"{self.g.source}: joint {j.name}: a fixed joint whose child is the base "
+                                     f"(from link {j.parent})")
             if par == GROUND:
+                self.links.pop(ch, None)
                 self.alias[ch] = GROUND
                 self.notes.append(f"link {ch} is fixed to the base (joint {j.name})")
             else:
                 self.links[par] = _lump(self.links[par], self.links.pop(ch))
                 self.alias[ch] = par
                 self.notes.append(f"link {ch} merged into {par} (fixed joint {j.name})")
-            if ch in self.links and self.alias.get(ch) == GROUND:
-                self.links.pop(ch)
         for j in kept:
             j.parent, j.child = self.owner(j.parent), self.owner(j.child)
         return kept
@@ -306,6 +313,12 @@ class _Builder:
             if k.damping or k.frictionloss or k.armature:
                 raise ParameterError(f"{where}: friction or armature on a joint inside a combined "
                                      f"{'/'.join(kinds)} joint has no equivalent (joint {k.name})")
+        kept_out = [k.name for k in chain if k.limits is not None]
+        if kept_out:
+            self.notes.append(f"joints {', '.join(kept_out)}: their limits are not kept (a combined joint has none)")
+        if any(k.value for k in chain):
+            self.notes.append(f"joints {', '.join(k.name for k in chain)}: the combined joint's coordinates are "
+                              "zero at the reference configuration, not the file's joint positions")
         if kinds == ["hinge", "hinge"] and same_point and perp:
             entry["type"] = "universal"
             entry["axes"] = [list(map(float, axes[0])), list(map(float, axes[1]))]
@@ -389,6 +402,7 @@ def _actuators(b: _Builder, joints: list[dict]) -> list[dict]:
     elementary = {j.name: j for j in b.g.joints}
     drives = []
     seen: set[str] = set()
+    given = {d.get("joint") for d in b.g.drives}
     for a in b.g.actuators:
         where = f"{b.g.source}: actuator {a.name}"
         if a.joint not in by_name:
@@ -404,6 +418,8 @@ def _actuators(b: _Builder, joints: list[dict]) -> list[dict]:
         if not np.isfinite(a.gear) or a.gear <= 0:
             raise ParameterError(f"{where}: gear {a.gear:g}; a drive needs a positive gear (reverse the joint's axis)")
         j["actuated"] = True
+        if a.joint in given:  # a drive given whole: the joint's own friction stays the joint's
+            continue
         j.pop("friction", None)  # an actuated joint's damping and dry friction are its drive's
         arm, damp, fric = e.armature, e.damping, e.frictionloss
         if a.gear == 1.0 and not (arm or damp or fric):
@@ -438,11 +454,11 @@ def _task_candidates(b: _Builder, joints: list[dict], choice: TaskChoice) -> lis
     gives (an end-effector frame's body; the bodies with the most joints, the deepest first)."""
     frames = {f.name: f for f in b.g.frames}
     point: Array | None = None
-    body = choice.body
+    body = safe_name(choice.body, "") if choice.body else None
     if isinstance(choice.point, str):
-        if choice.point not in frames:
+        f = frames.get(safe_name(choice.point, ""))
+        if f is None:
             raise ParameterError(f"{b.g.source}: task point {choice.point!r}: no site or frame of that name")
-        f = frames[choice.point]
         point = f.point
         body = body or b.owner(f.link)
     elif choice.point is not None:
@@ -453,9 +469,13 @@ def _task_candidates(b: _Builder, joints: list[dict], choice: TaskChoice) -> lis
             raise ParameterError(f"{b.g.source}: task body {body!r}: no moving link of that name")
         return [(body, np.asarray(point if point is not None else b.links[body].com, dtype=float))]
     out: list[tuple[str, Array]] = []
+    def named(nm: str, word: str) -> bool:  # a long word anywhere, a short one as a whole token (not "knee")
+        low = nm.lower()
+        return word in low if len(word) > 4 else word in re.split(r"[^a-z0-9]+", low)
+
     for word in EFFECTOR_WORDS:
-        out += [(b.owner(f.link), f.point) for f in b.g.frames if word in f.name.lower() and b.owner(f.link) in b.links]
-        out += [(nm, b.links[nm].com) for nm in b.links if word in nm.lower()]
+        out += [(b.owner(f.link), f.point) for f in b.g.frames if named(f.name, word) and b.owner(f.link) in b.links]
+        out += [(nm, b.links[nm].com) for nm in b.links if named(nm, word)]
     count: dict[str, int] = {}
     parent: dict[str, str] = {}
     for j in joints:
@@ -506,6 +526,9 @@ def _choose_coordinates(desc: dict, choice: TaskChoice, source: str) -> None:
     T = task @ N
     if rep.dof <= 0:
         raise ParameterError(f"{source}: the mechanism does not move (mobility {rep.mobility}, {rep.idle} idle)")
+    if rep.dof < model.na:  # motions that leave this body still are idle for it: another body is needed
+        raise ParameterError(f"{source}: task body {desc['task']['body']} sees {rep.dof} of the mechanism's "
+                             f"freedoms, fewer than its {model.na} actuators (choose another with --task-body)")
     chosen: list[int] = []
     for group in ([0, 1, 2], [3, 4, 5]):
         if len(chosen) == rep.dof:

@@ -8,12 +8,15 @@ defaults, classes, frames and inertia from geoms are resolved as MuJoCo resolves
   ``ximat diag(body_inertia) ximat^T``; a body without joints is fixed to its parent;
 * joints: ``hinge`` and ``slide`` at ``xanchor`` along ``xaxis`` with their coordinate
   ``qpos`` (the description's reference value, so that its coordinates are MuJoCo's
-  ``qpos``), ``range`` where limited, ``damping``, ``frictionloss`` and ``armature``; ``ball``;
+  ``qpos``), ``range`` where limited, ``damping``, ``frictionloss`` and ``armature``; ``ball``
+  (its ``range`` not kept, said);
   several joints of one body are a chain through massless links; a ``free`` joint is refused;
 * equality constraints: ``connect`` (3D closure) and ``weld`` (6D closure), between bodies
   or sites; ``joint``, ``tendon``, ``flex`` and ``distance`` equalities are refused by name,
   an inactive one (``active="false"``) is left out and said so in the notes;
-* actuators with a joint transmission and their ``gear``; other transmissions are refused;
+* actuators with a joint transmission and their ``gear`` (a servo's gain, bias or dynamics,
+  and ``ctrlrange``/``forcerange``, are not kept: said in the notes); other transmissions, and
+  tendons with a spring, damping or limit, are refused;
 * sites: task points (``--task-point SITE``).
 """
 
@@ -35,6 +38,11 @@ def _mujoco():
     return mujoco
 
 
+def name_of(mujoco, m, obj, i: int, kind: str) -> str:
+    """A MuJoCo element's name as a description name (``<kind>_<i>`` for an unnamed one)."""
+    return safe_name(mujoco.mj_id2name(m, obj, i) or "", f"{kind}_{i}")
+
+
 def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
     """The mechanism of an MJCF file (module docstring)."""
     mujoco = _mujoco()
@@ -43,6 +51,12 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
         m = mujoco.MjModel.from_xml_path(str(path))
     except Exception as exc:  # MuJoCo's own message names the element and line
         raise ParameterError(f"{src}: MuJoCo cannot read it: {' '.join(str(exc).split())[:300]}") from None
+    # the equalities' residuals are read from MuJoCo's constraint rows: computed even where disabled
+    m.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_EQUALITY)
+    for t in range(m.ntendon):
+        if m.tendon_stiffness[t] or m.tendon_damping[t] or m.tendon_limited[t]:
+            raise ParameterError(f"{src}: tendon {name_of(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, 'tendon')}: "
+                                 "a tendon's spring, damping or limit has no equivalent in a description")
     d = mujoco.MjData(m)
     if keyframe is None:
         d.qpos[:] = m.qpos0
@@ -54,7 +68,7 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
     mujoco.mj_forward(m, d)  # the poses, and the equality constraints' residuals (efc_pos)
 
     def name(obj, i: int, kind: str) -> str:
-        return safe_name(mujoco.mj_id2name(m, obj, i) or "", f"{kind}_{i}")
+        return name_of(mujoco, m, obj, i, kind)
 
     # a body called ground (pkmdyn's exports hang the tree from one) is not the world itself
     bname = [GROUND] + [nm if nm != GROUND else "ground_body"
@@ -66,6 +80,7 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
         R = d.ximat[b].reshape(3, 3)
         links.append(Link(bname[b], float(m.body_mass[b]), d.xipos[b].copy(), R @ np.diag(m.body_inertia[b]) @ R.T))
     joints: list[Joint] = []
+    notes: list[str] = []
     jname = [name(mujoco.mjtObj.mjOBJ_JOINT, j, "joint") for j in range(m.njnt)]
     for b in range(1, m.nbody):
         ids = [j for j in range(m.njnt) if m.jnt_bodyid[j] == b]
@@ -93,11 +108,13 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
                 value=float(d.qpos[m.jnt_qposadr[j]]) if kind != "ball" else 0.0, limits=lim,
                 damping=float(m.dof_damping[dof]), frictionloss=float(m.dof_frictionloss[dof]),
                 armature=float(m.dof_armature[dof])))
+            if kind == "ball" and m.jnt_limited[j]:
+                notes.append(f"joint {jname[j]}: a ball joint's range is not kept (a spherical joint has no limits)")
             if kind == "ball" and (m.dof_damping[dof] or m.dof_frictionloss[dof] or m.dof_armature[dof]):
                 raise ParameterError(f"{src}: joint {jname[j]}: damping, frictionloss or armature on a ball joint has "
                                      "no equivalent in a description")
             parent = child
-    closures, notes = [], []
+    closures = []
     for e in range(m.neq):
         ename = name(mujoco.mjtObj.mjOBJ_EQUALITY, e, "equality")
         t = int(m.eq_type[e])
@@ -132,6 +149,14 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
         g = m.actuator_gear[i]
         if np.any(g[1:] != 0):
             raise ParameterError(f"{src}: actuator {aname}: a gear with more than one entry")
+        plain = (int(m.actuator_dyntype[i]) == int(mujoco.mjtDyn.mjDYN_NONE)
+                 and int(m.actuator_gaintype[i]) == int(mujoco.mjtGain.mjGAIN_FIXED) and m.actuator_gainprm[i, 0] == 1.0
+                 and int(m.actuator_biastype[i]) == int(mujoco.mjtBias.mjBIAS_NONE))
+        if not plain:
+            notes.append(f"actuator {aname}: not a plain motor (gain, bias or dynamics): pkmdyn's effort is the force "
+                         "it must apply, not its control")
+        if m.actuator_ctrllimited[i] or m.actuator_forcelimited[i]:
+            notes.append(f"actuator {aname}: its ctrlrange and forcerange are not kept")
         actuators.append(Actuator(aname, jname[int(m.actuator_trnid[i, 0])], float(g[0])))
     frames = [Frame(name(mujoco.mjtObj.mjOBJ_SITE, s, "site"), bname[int(m.site_bodyid[s])], d.site_xpos[s].copy())
               for s in range(m.nsite)]

@@ -4,17 +4,20 @@ No maintained SDFormat parser installs from PyPI with current numpy (libsdformat
 come with Gazebo; python-sdformat pins numpy < 2), so the few elements a mechanism needs are
 read here, following the SDFormat specification (sdformat.org, versions 1.4 to 1.11):
 
-* ``<model>`` (the first one; inside a ``<world>`` its ``<gravity>``, else ``0 0 -9.8``);
-  nested models and ``<include>`` are refused by name;
+* ``<model>`` (one; inside a ``<world>`` its ``<gravity>``, or SDFormat 1.4's
+  ``<physics><gravity>``, else ``0 0 -9.8``, turned into the model frame, which is the base
+  frame); nested models, ``<include>``, several models and a static model are refused by name;
 * ``<link>``: ``<pose>`` (default relative to the model frame), ``<inertial>`` with its
-  ``<pose>`` (relative to the link), ``<mass>`` and ``<inertia>``;
+  ``<pose>`` (relative to the link), ``<mass>`` and ``<inertia>`` (SDFormat's defaults: 1 kg,
+  ``ixx = iyy = izz = 1`` kg m^2, also for a link without ``<inertial>``, said in the notes);
 * ``<frame>`` (``attached_to``, ``<pose>``) for ``relative_to``;
 * ``<joint type>``: ``revolute``, ``continuous``, ``prismatic``, ``ball``, ``universal``
   (``<axis>`` fixed in the parent, ``<axis2>`` in the child), ``fixed``; ``<pose>``
   (default relative to the child link), ``<parent>``, ``<child>`` (``world``: the ground),
   ``<axis><xyz expressed_in>`` (default the joint frame; ``use_parent_model_frame`` of
-  SDFormat 1.4-1.6: the model frame), ``<limit><lower><upper>``,
-  ``<dynamics><damping><friction>``; ``revolute2``, ``screw``, ``gearbox`` are refused;
+  SDFormat 1.5-1.6, and every axis of 1.4: the model frame), ``<limit><lower><upper>``,
+  ``<dynamics><damping><friction>`` (a one-axis joint in the tree only; elsewhere refused, as
+  is a ``spring_stiffness``); ``revolute2``, ``screw``, ``gearbox`` are refused;
 * poses ``x y z roll pitch yaw`` (fixed axes, radians; ``degrees="true"``), ``relative_to``.
 
 **Loops.** SDFormat lets a link be the child of several joints: the first joint of each
@@ -76,7 +79,7 @@ class _Frames:
             return None, np.eye(3), np.zeros(3)
         if pe.get("rotation_format", "euler_rpy") != "euler_rpy":
             raise ParameterError(f"{where} pose: only rotation_format euler_rpy is read")
-        v = _floats(pe.text, 6, f"{where} pose")
+        v = _floats(pe.text if (pe.text or "").strip() else "0 0 0 0 0 0", 6, f"{where} pose")  # empty: zero
         if pe.get("degrees", "false").lower() == "true":
             v[3:] = np.radians(v[3:])
         return pe.get("relative_to") or None, _rpy(*v[3:]), v[:3]
@@ -113,36 +116,61 @@ def sdf_graph(path: str | Path, actuated: tuple[str, ...] = (), assemble: bool =
     if root.tag != "sdf":
         raise ParameterError(f"{src}: the root element is <{root.tag}>, not <sdf>")
     world = root.find("world")
-    model = (world if world is not None else root).find("model")
-    if model is None:
+    models = (world if world is not None else root).findall("model")
+    if not models:
         raise ParameterError(f"{src}: no <model>")
+    if len(models) > 1:
+        raise ParameterError(f"{src}: model {models[1].get('name')}: more than one <model>; import one mechanism")
+    model = models[0]
+    if (model.findtext("static") or "").strip().lower() in ("true", "1"):
+        raise ParameterError(f"{src}: model {model.get('name')}: a static model does not move")
+    try:
+        version = tuple(int(x) for x in (root.get("version") or "1.11").split(".")[:2])
+    except ValueError:
+        raise ParameterError(f"{src}: sdf version {root.get('version')!r} is not a version number") from None
     for bad in ("model", "include"):
         e = model.find(bad)
         if e is not None:
             raise ParameterError(f"{src}: model {model.get('name')}: a nested <{bad}> {e.get('name') or ''} "
                                  "is not read (flatten the model)")
     gravity = np.array(SDF_GRAVITY)
-    if world is not None and world.find("gravity") is not None:
-        gravity = _floats(world.findtext("gravity"), 3, f"{src}: world gravity")
+    if world is not None:
+        g_text = world.findtext("gravity")
+        if g_text is None and world.find("physics") is not None:  # SDFormat 1.4 keeps it under <physics>
+            g_text = world.find("physics").findtext("gravity")
+        if g_text is not None:
+            gravity = _floats(g_text, 3, f"{src}: world gravity")
     fr = _Frames(model, src)
+    notes: list[str] = []
+    # the base frame is the model frame: the world (and its gravity) as seen from it
+    _, Rm, pm = fr.local(model, f"{src}: model {model.get('name')}")
+    fr.cache["world"] = (Rm.T, -Rm.T @ pm)
+    gravity = Rm.T @ gravity
     links, frames = [], []
+    def link_name(raw: str) -> str:
+        nm = safe_name(raw, "link")
+        return nm if nm != GROUND else "ground_body"  # a moving link called ground is not the base
+
     for e in model.findall("link"):
-        nm = safe_name(e.get("name"), "link")
+        nm = link_name(e.get("name"))
         R, p = fr.pose(e.get("name"))
+        # SDFormat's defaults: an <inertial> (or none) without <mass> is 1 kg, ixx = iyy = izz = 1 kg m^2
         ine = e.find("inertial")
-        mass, com, I = 0.0, p.copy(), np.zeros((3, 3))
-        if ine is not None:
-            where = f"{src}: link {nm} inertial"
-            mass = float(_floats(ine.findtext("mass", "0"), 1, f"{where} mass")[0])
-            rel, Ri, pi = fr.local(ine, where)
-            Rb, pb = fr.pose(rel) if rel else (R, p)  # default: relative to the link
-            ie = ine.find("inertia")
-            vals = {k: float(_floats(ie.findtext(k, "0") if ie is not None else "0", 1, f"{where} {k}")[0])
-                    for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
-            Il = np.array([[vals["ixx"], vals["ixy"], vals["ixz"]], [vals["ixy"], vals["iyy"], vals["iyz"]],
-                           [vals["ixz"], vals["iyz"], vals["izz"]]])
-            Rw = Rb @ Ri
-            com, I = pb + Rb @ pi, Rw @ Il @ Rw.T
+        if ine is None:
+            ine = ET.Element("inertial")
+            notes.append(f"link {nm}: no <inertial>: SDFormat's default, 1 kg and 1 kg m^2")
+        where = f"{src}: link {nm} inertial"
+        mass = float(_floats(ine.findtext("mass", "1"), 1, f"{where} mass")[0])
+        rel, Ri, pi = fr.local(ine, where)
+        Rb, pb = fr.pose(rel) if rel else (R, p)  # default: relative to the link
+        ie = ine.find("inertia")
+        defaults = {"ixx": "1", "iyy": "1", "izz": "1", "ixy": "0", "ixz": "0", "iyz": "0"}
+        vals = {k: float(_floats(ie.findtext(k, d) if ie is not None else d, 1, f"{where} {k}")[0])
+                for k, d in defaults.items()}
+        Il = np.array([[vals["ixx"], vals["ixy"], vals["ixz"]], [vals["ixy"], vals["iyy"], vals["iyz"]],
+                       [vals["ixz"], vals["iyz"], vals["izz"]]])
+        Rw = Rb @ Ri
+        com, I = pb + Rb @ pi, Rw @ Il @ Rw.T
         links.append(Link(nm, mass, com, I))
         frames.append(Frame(nm, nm, p))
     link_names = {e.get("name") for e in model.findall("link")}
@@ -157,8 +185,10 @@ def sdf_graph(path: str | Path, actuated: tuple[str, ...] = (), assemble: bool =
                 raise ParameterError(f"{where} {end}: no link {val!r}")
         if ch == "world":
             raise ParameterError(f"{where}: the world as a child")
-        par_l = GROUND if par == "world" else safe_name(par, "link")
-        ch_l = safe_name(ch, "link")
+        if typ not in ("revolute", "continuous", "prismatic", "ball", "universal", "fixed"):
+            raise ParameterError(f"{where}: a {typ or 'untyped'} joint has no equivalent in a description")
+        par_l = GROUND if par == "world" else link_name(par)
+        ch_l = link_name(ch)
         R, p = fr.pose(raw)
         axes = []
         for tag in ("axis", "axis2"):
@@ -169,8 +199,8 @@ def sdf_graph(path: str | Path, actuated: tuple[str, ...] = (), assemble: bool =
             xe = ae.find("xyz")
             a = _floats(xe.text if xe is not None else "0 0 1", 3, f"{where} {tag} xyz")
             exp = xe.get("expressed_in") if xe is not None else None
-            if (ae.findtext("use_parent_model_frame") or "").strip().lower() in ("true", "1"):
-                exp = "__model__"
+            if (ae.findtext("use_parent_model_frame") or "").strip().lower() in ("true", "1") or version < (1, 5):
+                exp = "__model__"  # SDFormat 1.4: axes in the model frame
             Rx = fr.pose(exp)[0] if exp else R
             axes.append(Rx @ a)
         ax = axes[0]
@@ -181,16 +211,27 @@ def sdf_graph(path: str | Path, actuated: tuple[str, ...] = (), assemble: bool =
             if le is not None and le.find("lower") is not None and le.find("upper") is not None:
                 lo, hi = (float(_floats(le.findtext(k), 1, f"{where} limit {k}")[0]) for k in ("lower", "upper"))
                 lim = (lo, hi) if lo < hi and max(abs(lo), abs(hi)) < 1e15 else None
-            de = e.find("axis").find("dynamics")
-            if de is not None:
-                dyn = {"damping": float(_floats(de.findtext("damping", "0"), 1, f"{where} damping")[0]),
-                       "frictionloss": float(_floats(de.findtext("friction", "0"), 1, f"{where} friction")[0])}
+        for tag in ("axis", "axis2"):
+            ae = e.find(tag)
+            de = ae.find("dynamics") if ae is not None else None
+            if de is None:
+                continue
+            if float(_floats(de.findtext("spring_stiffness", "0"), 1, f"{where} spring_stiffness")[0]):
+                raise ParameterError(f"{where}: a joint spring (spring_stiffness) has no equivalent in a "
+                                     "description's dynamics")
+            d = {"damping": float(_floats(de.findtext("damping", "0"), 1, f"{where} damping")[0]),
+                 "frictionloss": float(_floats(de.findtext("friction", "0"), 1, f"{where} friction")[0])}
+            if any(d.values()) and (tag == "axis2" or typ not in ("revolute", "continuous", "prismatic")
+                                    or ch_l in seen_child):
+                raise ParameterError(f"{where}: damping or friction on a {typ} joint "
+                                     f"{'that closes a loop ' if ch_l in seen_child else ''}has no equivalent")
+            dyn = d
         if typ in ("revolute", "continuous", "prismatic", "universal") and ax is None:
             raise ParameterError(f"{where}: a {typ} joint without <axis>")
         if typ == "universal" and axes[1] is None:
             raise ParameterError(f"{where}: a universal joint without <axis2>")
-        if typ not in ("revolute", "continuous", "prismatic", "ball", "universal", "fixed"):
-            raise ParameterError(f"{where}: a {typ or 'untyped'} joint has no equivalent in a description")
+        if lim is not None and (typ == "universal" or ch_l in seen_child):
+            notes.append(f"joint {nm}: its limits are not kept (a universal joint or a cut joint has none)")
         if ch_l in seen_child:  # a second parent: a cut joint of this joint's own type
             entry = {"type": {"revolute": "revolute", "continuous": "revolute", "prismatic": "prismatic",
                               "ball": "spherical", "universal": "universal", "fixed": "fixed"}[typ]}
@@ -213,9 +254,10 @@ def sdf_graph(path: str | Path, actuated: tuple[str, ...] = (), assemble: bool =
             joints.append(Joint(nm, "slide" if typ == "prismatic" else "hinge", par_l, ch_l, p, ax,
                                 limits=lim if typ != "continuous" else None, **dyn))
     names = {j.name for j in joints} | {c.name for c in closures}
-    for a in actuated:
+    acts = [safe_name(a, "joint") for a in actuated]
+    for a, raw in zip(acts, actuated):
         if a not in names:
-            raise ParameterError(f"{src}: actuated joint {a!r}: no joint of that name")
+            raise ParameterError(f"{src}: actuated joint {raw!r}: no joint of that name")
     return Graph(name=model.get("name") or Path(path).stem, source=src, gravity=gravity, links=links,
-                 joints=joints, closures=closures, actuators=[Actuator(a, a) for a in dict.fromkeys(actuated)],
-                 frames=frames)
+                 joints=joints, closures=closures, actuators=[Actuator(a, a) for a in dict.fromkeys(acts)],
+                 frames=frames, notes=notes)

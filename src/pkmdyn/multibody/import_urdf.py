@@ -8,7 +8,7 @@ A URDF file holds a tree; its loops are closed by pairs of frames that must coin
   (the two frames coincide, or only their origins; default ``6d``), ``name_mot: [joint, ...]``
   (the actuated joints); optional ``joint_name`` / ``joint_type`` (``SPHERICAL`` replaces a
   revolute joint by a spherical joint at its origin, ``UJOINT_XY`` ... by a universal joint
-  about two axes of its frame); and pkmdyn's own optional ``task: {body, point, position,
+  about two axes of its frame, ``FIXED`` locks it where it is); and pkmdyn's own optional ``task: {body, point, position,
   orientation, euler_sequence}``, ``actuators`` (drives, as ``[[actuators]]`` entries) and
   ``gravity_m_s2`` (URDF holds none: default ``[0, 0, -9.81]``, Pinocchio's and MuJoCo's);
 * or, without a sidecar, **onshape-to-robot's** frames ``closing_<name>_1`` and
@@ -66,6 +66,19 @@ def _stderr_captured():
             lines += tmp.read().decode("utf-8", "replace").splitlines()
 
 
+def _refuse_mimic(path: Path, src: str) -> None:
+    """A ``<mimic>`` joint (Pinocchio's parser reads it as an independent joint by default)."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(str(path)).getroot()
+    except (ET.ParseError, OSError) as exc:
+        raise ParameterError(f"{src}: cannot read it as URDF: {exc}") from None
+    for j in root.iter("joint"):
+        if j.find("mimic") is not None:
+            raise ParameterError(f"{src}: joint {j.get('name')}: a mimic joint has no equivalent in a description")
+
+
 def read_sidecar(path: str | Path) -> dict[str, Any]:
     """The sidecar YAML (module docstring), checked."""
     import yaml
@@ -98,6 +111,22 @@ def read_sidecar(path: str | Path) -> dict[str, Any]:
     if not isinstance(task, dict) or set(task) - {"body", "point", "position", "orientation", "euler_sequence"}:
         raise ParameterError(f"{src}: task: a mapping of body, point, position, orientation, euler_sequence "
                              "is expected")
+    point = task.get("point")
+    checks = {"body": isinstance(task.get("body", ""), str),
+              "point": point is None or isinstance(point, str) or (
+                  isinstance(point, list) and len(point) == 3
+                  and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in point)),
+              "position": isinstance(task.get("position", []), list) and all(
+                  x in ("x", "y", "z") for x in task.get("position", [])),
+              "orientation": isinstance(task.get("orientation", []), list) and all(
+                  x in (1, 2, 3) and not isinstance(x, bool) for x in task.get("orientation", [])),
+              "euler_sequence": isinstance(task.get("euler_sequence", "XYZ"), str)}
+    for key, ok in checks.items():
+        if not ok:
+            raise ParameterError(f"{src}: task {key}: expected "
+                                 + {"body": "a link name", "point": "a frame name or three numbers",
+                                    "position": "a list of x, y, z", "orientation": "a list of 1, 2, 3",
+                                    "euler_sequence": "a sequence such as XYZ"}[key])
     drives = data.get("actuators") or []
     if not isinstance(drives, list) or not all(isinstance(d, dict) for d in drives):
         raise ParameterError(f"{src}: actuators: a list of drive tables ([[actuators]] of a description) is expected")
@@ -201,6 +230,7 @@ def urdf_graph(path: str | Path, sidecar: dict[str, Any] | None = None,
     """The mechanism of a URDF file and its loop closures (module docstring)."""
     pin = _pinocchio()
     src = Path(path).name
+    _refuse_mimic(Path(path), src)
     with _stderr_captured() as said:
         try:
             model = pin.buildModelFromUrdf(str(path))
@@ -231,7 +261,8 @@ def urdf_graph(path: str | Path, sidecar: dict[str, Any] | None = None,
     link_of = {0: GROUND}
     for f in model.frames:
         if f.type == pin.FrameType.BODY and f.parentJoint > 0 and f.parentJoint not in link_of:
-            link_of[int(f.parentJoint)] = safe_name(f.name, f"link_{f.parentJoint}")
+            nm = safe_name(f.name, f"link_{f.parentJoint}")
+            link_of[int(f.parentJoint)] = nm if nm != GROUND else "ground_body"  # a moving link called ground
     links, joints = [], []
     for j in range(1, model.njoints):
         jm, name = model.joints[j], safe_name(model.names[j], f"joint_{j}")
@@ -264,8 +295,12 @@ def urdf_graph(path: str | Path, sidecar: dict[str, Any] | None = None,
         kw = dict(value=value, limits=lim, damping=float(model.damping[v]),
                   frictionloss=float(model.friction[v]))
         sp = special.get(model.names[j])
-        if sp is None or sp == "FIXED":
+        if sp is not None and (kw["damping"] or kw["frictionloss"]):
+            raise ParameterError(f"{src}: joint {name}: friction on a joint the sidecar makes {sp} has no equivalent")
+        if sp is None:
             joints.append(Joint(name, kind, parent, child, p, axis, **kw))
+        elif sp == "FIXED":  # locked where it is (Gepetto's loader reduces the model there)
+            joints.append(Joint(name, "fixed", parent, child, p, axis))
         elif sp == "SPHERICAL":
             joints.append(Joint(name, "ball", parent, child, p, axis))
         elif re.fullmatch(r"UJOINT_[XYZ]{2}", sp):
@@ -295,7 +330,7 @@ def urdf_graph(path: str | Path, sidecar: dict[str, Any] | None = None,
         closures.append(Closure(safe_name(cname, "closure"), kind, l1, l2, p1, p2, R1, R2))
 
     mot = list(side.get("name_mot", [])) + list(actuated)
-    names = {model.names[j] for j in range(1, model.njoints)}
+    names = {model.names[j] for j in range(1, model.njoints)} | {safe_name(model.names[j], "") for j in range(1, model.njoints)}
     for nm in mot:
         if nm not in names:
             raise ParameterError(f"{src}: actuated joint {nm!r}: no joint of that name")

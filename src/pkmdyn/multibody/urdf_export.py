@@ -9,7 +9,8 @@ parser and Gepetto's Extended-URDF loader read, and that ``pkmdyn import`` reads
   one-coordinate URDF joints through massless links ``<child>__<k>`` (a universal joint two
   revolute joints, a spherical joint three), named ``<joint>_<k>``; a one-coordinate joint
   keeps its name. A revolute joint without limits is ``continuous``; a prismatic one without
-  limits gets ``lower = -1000``, ``upper = 1000`` [m] (URDF requires a range).
+  limits gets ``lower = -1e9``, ``upper = 1e9`` [m] (URDF requires a range; import leaves out a
+  range a million or more wide).
 * **Loops.** Each cut joint gets two frames, fixed links ``<joint>_A`` on its parent body and
   ``<joint>_B`` on its child body at the joint centre, turned as the joint frame; the sidecar
   closes a spherical cut joint with a ``3d`` pair and a fixed one with a ``6d`` pair, and a
@@ -35,6 +36,10 @@ from .joint_types import JOINT_TYPES
 from .model import MechanismModel
 
 __all__ = ["mechanism_urdf"]
+
+#: the range written for a prismatic joint without limits [m] (URDF requires one); pkmdyn import
+#: leaves out any range a million or more wide
+NO_RANGE_M = 1e9
 
 
 def _v(a) -> str:
@@ -124,8 +129,8 @@ def mechanism_urdf(model: MechanismModel) -> tuple[str, dict, list[str]]:
                     f'<axis xyz="{_v(axis)}"/>')
             if lim is not None:
                 text += f'<limit lower="{lim[0] - off:.17g}" upper="{lim[1] - off:.17g}" effort="0" velocity="0"/>'
-            elif kind == "prismatic":
-                text += '<limit lower="-1000" upper="1000" effort="0" velocity="0"/>'
+            elif kind == "prismatic":  # URDF needs a range: one no mechanism reaches (import drops it)
+                text += f'<limit lower="{-NO_RANGE_M:g}" upper="{NO_RANGE_M:g}" effort="0" velocity="0"/>'
             fr = model.joint_friction[k] or {}
             if nq == 1 and fr:
                 rot = mcode < 3
