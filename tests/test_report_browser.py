@@ -70,12 +70,20 @@ class _Page:
     def __init__(self, browser, path: Path) -> None:
         self.errors: list[str] = []
         self.page = browser.new_page(viewport={"width": 1400, "height": 1000})
+        self.page.set_default_timeout(120_000)  # every action on a page drawn in software (below)
         self.page.on("console", lambda m: self.errors.append(m.text) if m.type == "error" else None)
         self.page.on("pageerror", lambda e: self.errors.append(f"uncaught: {e}"))
-        self.page.goto(path.as_uri())
-        self.page.wait_for_function("window.PKMDYN_REPORT && window.PKMDYN_REPORT.ready === true", timeout=120_000)
-        # the 3D scene is drawn once its WebGL canvas exists
-        self.page.wait_for_selector("#pkmdyn-scene .gl-container canvas", state="attached", timeout=120_000)
+        try:
+            # a multi-megabyte page parsed and drawn in software (SwiftShader) on two cores: the hip's
+            # report takes about 30 s to its load event, Playwright's default navigation limit
+            self.page.goto(path.as_uri())
+            self.page.wait_for_function("window.PKMDYN_REPORT && window.PKMDYN_REPORT.ready === true",
+                                        timeout=120_000)
+            # the 3D scene is drawn once its WebGL canvas exists
+            self.page.wait_for_selector("#pkmdyn-scene .gl-container canvas", state="attached", timeout=120_000)
+        except Exception:
+            self.page.close()  # a page left open keeps drawing and slows every page after it
+            raise
         self.page.wait_for_timeout(500)
 
     def scene_shot(self, path: Path) -> np.ndarray:
