@@ -561,7 +561,7 @@ def description_from_graph(g: Graph, choice: TaskChoice = TaskChoice()) -> tuple
         j["parent"], j["child"] = b.owner(j["parent"]), b.owner(j["child"])
     cuts = b.closures()
     drives = _actuators(b, joints + cuts)
-    if not any(j.get("actuated") for j in joints):
+    if not any(j.get("actuated") for j in joints + cuts):
         raise ParameterError(f"{g.source}: no actuated joint (an MJCF <actuator>, the sidecar's name_mot, or --actuated)")
     candidates = _task_candidates(b, joints + cuts, choice)
     body, point = candidates[0]
