@@ -868,7 +868,7 @@ def load_description(source: str | Path | dict[str, Any], limits: dict[str, Any]
 
 
 #: the keys of an actuator entry for each kind of motor (rotary, linear), by role
-_MOTOR_KEYS = {
+MOTOR_KEYS = {
     "rotary": {"rotor": "rotor_inertia_kgm2", "coulomb": "coulomb_torque_Nm", "viscous": "viscous_Nm_s_rad",
                "max_effort": "max_torque_Nm", "max_speed": "max_speed_rad_s",
                "max_acceleration": "max_acceleration_rad_s2", "encoder": "encoder_counts_per_turn"},
@@ -934,8 +934,8 @@ def _actuators(label: str, entries: list[tuple[_Actuator, str]], joints: list[Jo
         if not ratio <= _MAX_RATIO:
             raise ParameterError(f"{where} gear_ratio: with screw_lead_m the transmission ratio {ratio:.4g} (motor "
                                  f"radians per joint metre) exceeds {_MAX_RATIO:g}")
-        keys = _MOTOR_KEYS[kind]
-        other = _MOTOR_KEYS["linear" if kind == "rotary" else "rotary"]
+        keys = MOTOR_KEYS[kind]
+        other = MOTOR_KEYS["linear" if kind == "rotary" else "rotary"]
         for key in other.values():
             if getattr(a, key) is not None and key not in keys.values():
                 raise ParameterError(f"{where} {key}: the motor of joint {a.joint!r} is {kind}; give "

@@ -43,10 +43,12 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from ..errors import ParameterError
+from .description import GROUND, MOTOR_KEYS, load_description
+from .model import compile_model
+from .topology import _null, analyse_topology, column_scale, constraint_jacobian, row_scale
 
 Array = NDArray[np.float64]
 
-GROUND = "ground"
 #: a link lighter than this [kg] with no inertia is massless (a frame or an intermediate link)
 MASSLESS_KG = 1e-9
 #: a loop closure closes where its frames' points differ by at most this fraction of the size
@@ -261,14 +263,11 @@ class _Builder:
                    and len(children.get(chain[-1].child, [])) == 1 and len(chain) < 3):
                 chain.append(children[chain[-1].child][0])
             last = chain[-1].child
-            if last in self.links and _massless(self.links[last]) and len(chain) == 1:
-                raise ParameterError(f"{self.g.source}: link {last}: no mass and no inertia (a moving body needs an "
-                                     "inertia; give it one, or fix it to a neighbour)")
             if last in self.links and _massless(self.links[last]):
-                raise ParameterError(
-                    f"{self.g.source}: link {last}: no mass and no inertia, and its joints "
-                    f"({', '.join(k.name for k in chain)}) are not a universal, spherical or cylindrical joint "
-                    "(give it a mass and an inertia, or fix it to a neighbour)")
+                why = "" if len(chain) == 1 else (f", and its joints ({', '.join(k.name for k in chain)}) are not a "
+                                                  "universal, spherical or cylindrical joint")
+                raise ParameterError(f"{self.g.source}: link {last}: no mass and no inertia{why} (a moving body needs "
+                                     "an inertia; give it one, or fix it to a neighbour)")
             consumed.update(k.name for k in chain)
             for k in chain[:-1]:
                 self.alias[k.child] = last
@@ -412,7 +411,7 @@ def _actuators(b: _Builder, joints: list[dict]) -> list[dict]:
         if a.joint in seen:
             raise ParameterError(f"{where}: a second actuator on joint {a.joint}")
         seen.add(a.joint)
-        j, e = by_name[a.joint], elementary.get(a.joint, Joint(a.joint, "hinge", "", "", np.zeros(3), np.ones(3)))
+        j, e = by_name[a.joint], elementary.get(a.joint)  # None: a joint of the file that closes a loop
         if j["type"] not in ("revolute", "prismatic"):
             raise ParameterError(f"{where}: joint {a.joint} is {j['type']}; only hinge and slide joints are driven")
         if not np.isfinite(a.gear) or a.gear <= 0:
@@ -421,7 +420,7 @@ def _actuators(b: _Builder, joints: list[dict]) -> list[dict]:
         if a.joint in given:  # a drive given whole: the joint's own friction stays the joint's
             continue
         j.pop("friction", None)  # an actuated joint's damping and dry friction are its drive's
-        arm, damp, fric = e.armature, e.damping, e.frictionloss
+        arm, damp, fric = (e.armature, e.damping, e.frictionloss) if e is not None else (0.0, 0.0, 0.0)
         if a.gear == 1.0 and not (arm or damp or fric):
             continue
         k = a.gear
@@ -429,18 +428,12 @@ def _actuators(b: _Builder, joints: list[dict]) -> list[dict]:
         d: dict = {"joint": a.joint, "name": a.name if a.name not in taken else f"{a.joint}_motor"}
         if j["type"] == "revolute":
             d["gear_ratio"] = k
-            rot = True
         elif k != 1.0:
             d["screw_lead_m"] = 2 * np.pi / k  # transmission ratio 2 pi / lead = gear (motor turns per screw turn 1)
-            rot = True
-        else:
-            rot = False
-        if arm:
-            d["rotor_inertia_kgm2" if rot else "moving_mass_kg"] = arm / (k * k)
-        if damp:
-            d["viscous_Nm_s_rad" if rot else "viscous_N_s_m"] = damp / (k * k)
-        if fric:
-            d["coulomb_torque_Nm" if rot else "coulomb_force_N"] = fric / k
+        keys = MOTOR_KEYS["rotary" if j["type"] == "revolute" or k != 1.0 else "linear"]
+        for role, v in (("rotor", arm / (k * k)), ("viscous", damp / (k * k)), ("coulomb", fric / k)):
+            if v:
+                d[keys[role]] = v
         drives.append(d)
     for j in b.g.joints:
         if j.armature and j.name not in seen:
@@ -501,10 +494,6 @@ def _task_candidates(b: _Builder, joints: list[dict], choice: TaskChoice) -> lis
 
 def _choose_coordinates(desc: dict, choice: TaskChoice, source: str) -> None:
     """Set ``[task] position`` and ``orientation`` (module docstring)."""
-    from .description import load_description
-    from .model import compile_model
-    from .topology import analyse_topology, column_scale, constraint_jacobian, row_scale
-
     if choice.position is not None or choice.orientation is not None:
         desc["task"]["position"] = list(choice.position or [])
         desc["task"]["orientation"] = list(choice.orientation or [])
@@ -517,13 +506,7 @@ def _choose_coordinates(desc: dict, choice: TaskChoice, source: str) -> None:
     Js = J[0] * row_scale(model)[:, None] * column_scale(model)[None, :]
     nr = model.row_loop.shape[0]
     phi, task = Js[:nr], Js[nr:]
-    if phi.shape[0]:
-        _, sv, vh = np.linalg.svd(phi)
-        r = int(np.sum(sv > 1e-9 * max(sv.max(initial=0.0), 1e-300)))
-        N = vh[r:].T
-    else:
-        N = np.eye(model.nq)
-    T = task @ N
+    T = task @ _null(phi, model.nq)
     if rep.dof <= 0:
         raise ParameterError(f"{source}: the mechanism does not move (mobility {rep.mobility}, {rep.idle} idle)")
     if rep.dof < model.na:  # motions that leave this body still are idle for it: another body is needed

@@ -27,7 +27,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ParameterError
-from .import_graph import GROUND, Actuator, Closure, Frame, Graph, Joint, Link, safe_name
+from .description import GROUND
+from .import_graph import Actuator, Closure, Frame, Graph, Joint, Link, safe_name
 
 
 def _mujoco():

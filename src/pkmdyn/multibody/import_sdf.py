@@ -34,7 +34,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ParameterError
-from .import_graph import GROUND, Closure, Frame, Graph, Joint, Link, Actuator, safe_name
+from .description import GROUND
+from .import_graph import Closure, Frame, Graph, Joint, Link, Actuator, safe_name
 
 SDF_GRAVITY = (0.0, 0.0, -9.8)
 

@@ -32,7 +32,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
-from .import_graph import CLOSE_TOL, GROUND, Actuator, Closure, Frame, Graph, Joint, Link, TaskChoice, safe_name
+from .description import GROUND
+from .import_graph import CLOSE_TOL, Actuator, Closure, Frame, Graph, Joint, Link, TaskChoice, safe_name
 
 
 #: URDF holds no gravity: Pinocchio's and MuJoCo's default, unless the sidecar gives gravity_m_s2
@@ -241,8 +242,6 @@ def urdf_graph(path: str | Path, sidecar: dict[str, Any] | None = None,
         raise ParameterError(f"{src}: cannot read it as URDF: {' '.join(errors[:2])[:300]}")
     data = model.createData()
     q0 = pin.neutral(model)
-    pin.forwardKinematics(model, data, q0)
-    pin.updateFramePlacements(model, data)
     pairs = _closure_pairs(model, src, sidecar)
     notes = []
     if assemble and pairs:
@@ -273,8 +272,6 @@ def urdf_graph(path: str | Path, sidecar: dict[str, Any] | None = None,
         parent = link_of[int(model.parents[j])]
         Y = model.inertias[j]
         links.append(Link(child, float(Y.mass), p + R @ np.array(Y.lever), R @ np.array(Y.inertia) @ R.T))
-        if "Mimic" in short:
-            raise ParameterError(f"{src}: joint {name}: a mimic joint has no equivalent in a description")
         iq = model.idx_qs[j]
         value = float(q0[iq])
         revolute = re.fullmatch(r"JointModel(R[XYZ]|RUB[XYZ]|RevoluteUnaligned|RevoluteUnboundedUnaligned)", short)

@@ -49,18 +49,19 @@ SHRINK = 4.0
 TRIES = 5
 
 
-def _fit_default_motion(desc: dict, notes: list[str]) -> None:
-    """Shrink ``[default_motion]`` until the kinematics follows it (an imported reference
-    configuration may lie near a singularity); none at all after ``TRIES``, said in the notes."""
+def _fit_default_motion(model, desc: dict, notes: list[str]) -> None:
+    """Shrink ``[default_motion]`` until the kinematics of ``model`` (``desc`` compiled) follows
+    it (an imported reference configuration may lie near a singularity); none at all after
+    ``TRIES``, said in the notes."""
+    from dataclasses import replace
+
     from ..errors import PkmdynError
-    from . import load_mechanism
     from .kinematics import solve_kinematics
     from .motion import default_motion
 
     amp = desc["default_motion"]["amplitude"]
     for k in range(TRIES):
-        model = load_mechanism(desc)
-        mo = default_motion(model)
+        mo = default_motion(replace(model, motion=replace(model.motion, amplitude=dict(amp))))
         try:
             solve_kinematics(model, mo.x, mo.xd, mo.xdd, mo.t)
             if k:
@@ -90,7 +91,7 @@ def import_description(path: Path, fmt: str, *, sidecar: Path | None = None, act
         notes.append(f"over-constrained ({model.topology.overconstraints} self-stress states): the efforts are unique; "
                      "the file holds no link compliance, so [mechanism] reactions = \"minimum-norm\" (runs write "
                      "the minimum-norm joint reactions, flagged); [[bodies]] section and material make them unique")
-    _fit_default_motion(desc, notes)
+    _fit_default_motion(model, desc, notes)
     header = "\n".join([f"Imported by pkmdyn import from {graph.source} ({fmt.upper()}).",
                         "Base frame, reference configuration: the file's (docs/import.md).", *notes])
     return dumps_toml(desc, header=header), notes

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from ..errors import PkmdynError
 from .actuators import motor_effort_column
+from .description import MOTOR_KEYS
 from .dynamics import effort_unit
 from .joint_types import JOINT_TYPES
 from .kinematics import MechanismKinematics
@@ -135,14 +136,13 @@ def _drive_entry(model: MechanismModel, i: int) -> dict[str, Any]:
     def val(v: float) -> float | None:
         return float(v) if np.isfinite(v) else None
 
+    keys = MOTOR_KEYS["rotary" if rot else "linear"]
     return {"name": model.drive_name[i], "joint": model.actuator_names[i], "kind": model.drive_kind[i],
             "ratio": float(model.drive_ratio[i]), "screw_lead_m": spec.lead, "gear_ratio": spec.gear_ratio,
-            ("rotor_inertia_kgm2" if rot else "moving_mass_kg"): float(model.drive_rotor[i]),
-            ("coulomb_torque_Nm" if rot else "coulomb_force_N"): float(model.drive_coulomb[i]),
-            ("viscous_Nm_s_rad" if rot else "viscous_N_s_m"): float(model.drive_viscous[i]),
-            ("max_torque_Nm" if rot else "max_force_N"): val(model.drive_max_effort[i]),
-            ("max_speed_rad_s" if rot else "max_speed_m_s"): val(model.drive_max_speed[i]),
-            ("max_acceleration_rad_s2" if rot else "max_acceleration_m_s2"): val(model.drive_max_acceleration[i]),
+            keys["rotor"]: float(model.drive_rotor[i]), keys["coulomb"]: float(model.drive_coulomb[i]),
+            keys["viscous"]: float(model.drive_viscous[i]), keys["max_effort"]: val(model.drive_max_effort[i]),
+            keys["max_speed"]: val(model.drive_max_speed[i]),
+            keys["max_acceleration"]: val(model.drive_max_acceleration[i]),
             ("encoder_resolution_rad" if rot else "encoder_resolution_m"): float(model.drive_encoder[i]) or None}
 
 

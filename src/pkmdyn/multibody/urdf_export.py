@@ -32,6 +32,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from ..errors import ParameterError
+from .description import MOTOR_KEYS
 from .joint_types import JOINT_TYPES
 from .model import MechanismModel
 
@@ -64,18 +65,14 @@ def _drives(model: MechanismModel) -> list[dict]:
     for spec in model.drive_specs or ():
         if spec is None:
             continue
-        rot = spec.kind == "rotary"
         d = {"joint": spec.joint, "name": spec.name}
         if spec.lead is not None:
             d["screw_lead_m"] = float(spec.lead)
+        if spec.kind == "rotary":
             d["gear_ratio"] = float(spec.gear_ratio)
-        elif rot:
-            d["gear_ratio"] = float(spec.gear_ratio)
-        for key_rot, key_lin, v in (("rotor_inertia_kgm2", "moving_mass_kg", spec.rotor),
-                                    ("coulomb_torque_Nm", "coulomb_force_N", spec.coulomb),
-                                    ("viscous_Nm_s_rad", "viscous_N_s_m", spec.viscous)):
+        for role, v in (("rotor", spec.rotor), ("coulomb", spec.coulomb), ("viscous", spec.viscous)):
             if v:
-                d[key_rot if rot else key_lin] = float(v)
+                d[MOTOR_KEYS[spec.kind][role]] = float(v)
         out.append(d)
     return out
 
