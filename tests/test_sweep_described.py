@@ -182,3 +182,24 @@ def test_params_of_another_mechanism_are_refused(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 2 and "'delta' is not 'stewart'" in err and err.count("\n") == 1
     assert not (tmp_path / "out").exists()
+
+
+def test_an_under_actuated_mechanism_sweeps_without_a_direct_measure(tmp_path):
+    """A planar 2R arm with one of its two joints driven (one actuator, two task coordinates):
+    the direct singularity measure is not defined, so it is no metric of the sweep, and every
+    design is evaluated (a declared metric that a design cannot give makes it nonfinite)."""
+    d = ex.serial_arm()
+    d["joints"][1]["actuated"] = False
+    d["default_motion"] = {"period_s": 1.0, "samples": 51, "amplitude": {"x_m": 0.05, "y_m": 0.05}}
+    machine = tmp_path / "arm_one_drive.toml"
+    machine.write_text(dumps_toml(d))
+    space = tmp_path / "space.toml"
+    space.write_text('[sampling]\nmethod = "random"\ndesigns = 3\nseed = 2\n[motion]\nreactions = false\n'
+                     '[parameters]\n"bodies[l1].mass_kg" = { min = 0.5, max = 2.0 }\n'
+                     '[objectives]\npeak_effort_Nm = "min"\n')
+    out = tmp_path / "sweep"
+    assert main(["sweep", "--machine", str(machine), "--space", str(space), "--workers", "0", "--no-plots",
+                 "--out", str(out)]) == 0
+    table = pq.read_table(out / "designs.parquet")
+    assert "min_direct_measure" not in table.column_names and "min_inverse_measure" in table.column_names
+    assert table.column("status").to_pylist() == ["ok"] * 3

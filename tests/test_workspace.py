@@ -8,11 +8,12 @@ import json
 
 import numpy as np
 import pytest
+from scipy import ndimage
 
 from oracles import delta, stewart
 from pkmdyn.cli import main
 from pkmdyn.multibody import load_mechanism
-from pkmdyn.multibody.kinematics import reference_task
+from pkmdyn.multibody.kinematics import reference_task, solve_kinematics
 from pkmdyn.multibody.workspace import workspace
 
 from multibody_examples import MACHINES
@@ -55,6 +56,38 @@ def test_delta_workspace_against_the_closed_form():
     near = np.any((np.abs(np.nan_to_num(th) + 1.2) < 1e-9) | (np.abs(np.nan_to_num(th) - 1.5) < 1e-9), axis=1)
     assert ref.sum() > 20 and (~ref).sum() > 20
     assert np.array_equal(ws.reached[~near], ref[~near])
+
+
+@pytest.mark.parametrize("name, axes", [
+    ("stewart", [(0, np.linspace(-0.5, 0.5, 6)), (1, np.linspace(-0.5, 0.5, 6)), (2, np.linspace(0.7, 1.5, 5))]),
+    ("rrr3", [(0, np.linspace(-0.4, 0.4, 9)), (2, np.linspace(-1.5, 1.5, 9))]),
+])
+def test_grid_continuation_gives_each_pose_as_solved_alone(name, axes):
+    """Every inside pose's joint coordinates by continuation over the grid equal those of the
+    pose solved by itself from the reference configuration (the first sample of a motion)."""
+    m = load_mechanism(MACHINES / name / f"{name}.toml")
+    ws = workspace(m, axes, threshold=1e-3)
+    assert ws.inside.sum() > 20
+    for k in np.flatnonzero(ws.inside):
+        alone = solve_kinematics(m, ws.x[k:k + 1])
+        assert np.max(np.abs(alone.q[0] - ws.q[k])) < 1e-9
+
+
+def test_the_workspace_is_the_part_connected_to_the_start():
+    """A planar 3-RRR over position and orientation: the poses away from every singularity fall
+    in several parts; the workspace is the one about the held pose, the others (reached only
+    across a singularity) are outside."""
+    m = load_mechanism(MACHINES / "rrr3" / "rrr3.toml")
+    axes = [(0, np.linspace(-0.4, 0.4, 41)), (2, np.linspace(-1.5, 1.5, 41))]
+    thr = 0.01
+    ws = workspace(m, axes, threshold=thr)
+    good = (ws.reached & (ws.measure >= thr)).reshape(41, 41)
+    labels, count = ndimage.label(good)
+    assert count >= 2
+    start = labels[20, 20]  # the reference pose (x = 0, phi = 0) is a grid pose
+    assert start > 0
+    assert np.array_equal(ws.inside.reshape(41, 41), labels == start)
+    assert ws.inside.sum() < good.sum()
 
 
 def test_the_size_error_estimate_covers_a_finer_grid():

@@ -1226,7 +1226,7 @@ solve_sample = njit(cache=True, _nrt=False)(solve_sample)
 
 
 @njit(cache=True)
-def solve_batch(tm, x, xd, xdd, q_start, legs,
+def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
                 body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
                 tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
                 row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
@@ -1254,7 +1254,14 @@ def solve_batch(tm, x, xd, xdd, q_start, legs,
     ``K qd = (0; xd_s)``, ``K qdd = (-gamma_loops; xdd_s - gamma_task)`` and
     ``G = K^-1 (0; I; 0)`` (tree rates per task rate). Writes the per-sample outputs and
     ``status[s]`` (OK, NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN) with ``worst[s]``
-    the row of the largest residual; stops at the first failed sample. Also the classical
+    the row of the largest residual; stops at the first failed sample.
+
+    With ``nbr`` (n, k) (empty: the motion's order above), the samples are the poses of a grid
+    with ``nbr[s]`` the neighbours of pose s (-1: none), solved by continuation over the grid
+    in breadth-first order from pose ``root`` (which starts from ``q_start``): each pose once, from
+    the solved neighbour that reached it first, by the first-order predictor
+    ``q_p + G_p (x_s - x_p)``; a failed pose does not stop the others, and a pose with no
+    solved neighbour is left unsolved (``status`` -1). Also the classical
     velocity and acceleration of every body origin (``ov_out, oa_out``), centre of mass
     (``com`` (nb, 3) body frame -> ``cp_out, cv_out, ca_out``) and joint centre (the origin of
     the joint frame on ``joint_child``, ``pC_all`` (nj, 3) -> ``jp_out, jv_out, ja_out``).
@@ -1302,8 +1309,31 @@ def solve_batch(tm, x, xd, xdd, q_start, legs,
     solver = (sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter, rowpos, colpos, idlepos)
     work = (R, p, S, val, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2,
             np.zeros((nq, 3)))
-    for s in range(n):
-        if s > 0 and tm.shape[0] == n:
+    grid = nbr.shape[0] == n
+    order = np.arange(n)
+    came = np.full(n if grid else 0, -2)  # grid: the pose each pose starts from (-1: q_start; -2: none yet)
+    tail = n
+    if grid and n > 0:
+        came[root] = -1
+        order[0] = root
+        tail = 1
+    k = 0
+    while k < tail:
+        s = order[k]
+        k += 1
+        if grid:
+            pa = came[s]
+            for c in range(nq):
+                q[c] = q_start[c]
+                if pa >= 0:
+                    acc = q_out[pa, c]
+                    for t in range(nt):
+                        dx = x[s, t] - x[pa, t]
+                        if task_kind[t] == 1:
+                            dx = _wrap(dx)
+                        acc += G_out[pa, c, t] * dx
+                    q[c] = acc
+        elif s > 0 and tm.shape[0] == n:
             dt = tm[s] - tm[s - 1]
             for c in range(nq):
                 q[c] += qd[c] * dt + 0.5 * qdd[c] * dt * dt
@@ -1318,7 +1348,7 @@ def solve_batch(tm, x, xd, xdd, q_start, legs,
                 q[c] += acc
         info[1] = 0.0
         # the second-order predictor is close enough for a first step with the previous factors
-        chord = s > 0 and tm.shape[0] == n and pause == 0
+        chord = s > 0 and tm.shape[0] == n and pause == 0 and not grid
         st = solve_sample(x[s], xd[s], xdd[s], q, q_ref, chord, tree, loops, task, solver, work, info)
         pause = chord_pause(chord, info, pause)
         worst[s] = int(info[0])
@@ -1328,6 +1358,8 @@ def solve_batch(tm, x, xd, xdd, q_start, legs,
             if st != EULER_SINGULAR:
                 for c in range(nq):
                     q_out[s, c] = q[c]
+            if grid:
+                continue
             return
         for c in range(nq):
             q_out[s, c] = q[c]
@@ -1347,19 +1379,26 @@ def solve_batch(tm, x, xd, xdd, q_start, legs,
             for i in range(3):
                 cp_out[s, b, i] = p[b, i] + R[b, i, 0] * com[b, 0] + R[b, i, 1] * com[b, 1] + R[b, i, 2] * com[b, 2]
             _point_motion(b, cp_out[s, b], V, A, cv_out[s, b], ca_out[s, b])
-        for k in range(joint_child.shape[0]):
-            b = joint_child[k]
+        for j in range(joint_child.shape[0]):
+            b = joint_child[j]
             if b < 0:
                 for i in range(3):
-                    jp_out[s, k, i] = pC_all[k, i]
-                    jv_out[s, k, i] = 0.0
-                    ja_out[s, k, i] = 0.0
+                    jp_out[s, j, i] = pC_all[j, i]
+                    jv_out[s, j, i] = 0.0
+                    ja_out[s, j, i] = 0.0
             else:
                 for i in range(3):
-                    jp_out[s, k, i] = (p[b, i] + R[b, i, 0] * pC_all[k, 0] + R[b, i, 1] * pC_all[k, 1]
-                                       + R[b, i, 2] * pC_all[k, 2])
-                _point_motion(b, jp_out[s, k], V, A, jv_out[s, k], ja_out[s, k])
+                    jp_out[s, j, i] = (p[b, i] + R[b, i, 0] * pC_all[j, 0] + R[b, i, 1] * pC_all[j, 1]
+                                       + R[b, i, 2] * pC_all[j, 2])
+                _point_motion(b, jp_out[s, j], V, A, jv_out[s, j], ja_out[s, j])
         status[s] = OK
+        if grid:
+            for i in range(nbr.shape[1]):
+                u = nbr[s, i]
+                if u >= 0 and came[u] == -2:
+                    came[u] = s
+                    order[tail] = u
+                    tail += 1
 
 
 @njit(cache=True)

@@ -127,7 +127,8 @@ def loop_residuals(model: MechanismModel, q: Array) -> Array:
     return val[:, : model.row_loop.shape[0]]
 
 
-def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array, t: Array | None = None) -> dict:
+def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array, t: Array | None = None,
+         nbr: NDArray[np.int64] | None = None, root: int = 0) -> dict:
     n, nq, nb, nt = x.shape[0], model.nq, model.nb, model.nt
     nj = len(model.joint_names)
     shapes = {"q": (nq,), "qd": (nq,), "qdd": (nq,), "R": (nb, 3, 3), "p": (nb, 3), "V": (nb, 6), "A": (nb, 6),
@@ -145,7 +146,8 @@ def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array,
     out["status"] = np.full(n, -1, dtype=np.int64)
     out["worst"] = np.zeros(n, dtype=np.int64)
     tt = np.zeros(0) if t is None else np.ascontiguousarray(t, dtype=float)
-    K.solve_batch(tt, x, xd, xdd, q_start, model.legs.arrays(), model.body_parent, model.body_joint, model.joint_q0,
+    grid_nbr = np.zeros((0, 0), dtype=np.int64) if nbr is None else np.ascontiguousarray(nbr, dtype=np.int64)
+    K.solve_batch(tt, x, xd, xdd, q_start, grid_nbr, root, model.legs.arrays(), model.body_parent, model.body_joint, model.joint_q0,
                   model.joint_nq,
                   model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent,
                   model.tree_R_child, model.tree_p_child, model.joint_R_parent, model.joint_p_parent,
@@ -179,6 +181,33 @@ def _start(model: MechanismModel, x0: Array) -> Array:
             return out["q"][-1]
         last = out
     return q_ref if last is None else q_ref
+
+
+def solve_grid(model: MechanismModel, x: Array, shape: tuple[int, ...], roots: Array,
+               tries: int = 16) -> tuple[MechanismKinematics, NDArray[np.bool_]]:
+    """Kinematics at every pose ``x (n, nt)`` of a grid of ``shape`` (``prod(shape) = n``, the
+    first axis slowest) by continuation over the grid: the first pose of ``roots`` (grid
+    indices in order of preference) that the reference configuration reaches (along the
+    straight task path, as the first sample of :func:`solve_kinematics`; at most ``tries`` of
+    them) is solved first, and every other pose from a solved neighbour along a grid axis,
+    breadth-first (``_kernels.solve_batch``), so each pose on the root's assembly branch.
+    Returns the kinematics (n rows; zeros where not solved) and which poses were solved (n,)."""
+    n = x.shape[0]
+    idx = np.arange(n).reshape(shape)
+    nbr = np.full((n, 2 * len(shape)), -1, dtype=np.int64)
+    for ax in range(len(shape)):
+        lo = [slice(None)] * len(shape)
+        hi = [slice(None)] * len(shape)
+        lo[ax], hi[ax] = slice(0, -1), slice(1, None)
+        nbr[idx[tuple(hi)].reshape(-1), 2 * ax] = idx[tuple(lo)].reshape(-1)
+        nbr[idx[tuple(lo)].reshape(-1), 2 * ax + 1] = idx[tuple(hi)].reshape(-1)
+    zero = np.zeros((n, model.nt))
+    x = np.ascontiguousarray(x)
+    for root in list(roots)[:tries]:
+        out = _run(model, x, zero, zero, _start(model, x[root]), nbr=nbr, root=int(root))
+        if out["status"][root] == K.OK:
+            break
+    return _assemble(model, None, x, zero, zero, out), out["status"] == K.OK
 
 
 def _fail(model: MechanismModel, out: dict, t: Array | None, x: Array, offset: int = 0) -> None:
@@ -313,14 +342,16 @@ def joint_frame(model: MechanismModel, kin: MechanismKinematics, j: int, child: 
 
 
 def joint_coordinates(model: MechanismModel, kin: MechanismKinematics, joints: list[int] | None = None,
-                      previous: Array | None = None) -> Array:
+                      previous: Array | None = None, along: bool = True) -> Array:
     """Coordinate (n, k) of each one-coordinate joint in ``joints`` (default:
     :func:`limited_joints`), [rad] for a revolute, [m] for a prismatic joint, the description's
     sense and reference value included. A tree joint's is its tree coordinate; a cut joint's
     is its reference value plus the child frame's rotation about (displacement along) the
     joint frame's z axis relative to the parent frame, the angle unwrapped along the samples
     from the first sample's, taken within pi of the reference value, or within pi of
-    ``previous`` (k,), the coordinates of the sample before (a motion taken in chunks)."""
+    ``previous`` (k,), the coordinates of the sample before (a motion taken in chunks);
+    ``along=False`` (the poses of a grid, not a motion): each angle within pi of the
+    reference value."""
     joints = limited_joints(model) if joints is None else list(joints)
     n = len(kin)
     out = np.empty((n, len(joints)))
@@ -335,7 +366,9 @@ def joint_coordinates(model: MechanismModel, kin: MechanismKinematics, joints: l
         if JOINT_TYPES[model.joint_type[j]].motions[0] == "RZ":
             rel = np.einsum("nki,nkj->nij", RP, RC)  # child frame in the parent frame
             ang = np.arctan2(rel[:, 1, 0], rel[:, 0, 0])
-            if previous is None:
+            if not along:
+                out[:, i] = model.joint_offset[j] + ang
+            elif previous is None:
                 out[:, i] = model.joint_offset[j] + np.unwrap(ang)
             else:
                 before = float(previous[i]) - model.joint_offset[j]
@@ -345,15 +378,21 @@ def joint_coordinates(model: MechanismModel, kin: MechanismKinematics, joints: l
     return out
 
 
-def limit_hit(model: MechanismModel, c: Array, joints: list[int]) -> tuple[int, int] | None:
-    """The first sample and the index into ``joints`` of a coordinate ``c (n, k)``
-    (:func:`joint_coordinates`) beyond its joint's limits by more than :data:`LIMIT_TOLERANCE`,
-    or None."""
+def beyond_limits(model: MechanismModel, c: Array, joints: list[int]) -> NDArray[np.bool_]:
+    """Whether each coordinate ``c (n, k)`` (:func:`joint_coordinates`) lies beyond its joint's
+    limits by more than :data:`LIMIT_TOLERANCE` (n, k)."""
     lo = np.array([model.joint_limits[j][0] for j in joints])
     hi = np.array([model.joint_limits[j][1] for j in joints])
     tol = np.array([LIMIT_TOLERANCE * (model.length_scale if JOINT_TYPES[model.joint_type[j]].units[0] == "m" else 1.0)
                     for j in joints])
-    bad = (c < lo - tol) | (c > hi + tol)
+    return (c < lo - tol) | (c > hi + tol)
+
+
+def limit_hit(model: MechanismModel, c: Array, joints: list[int]) -> tuple[int, int] | None:
+    """The first sample and the index into ``joints`` of a coordinate ``c (n, k)``
+    (:func:`joint_coordinates`) beyond its joint's limits by more than :data:`LIMIT_TOLERANCE`,
+    or None."""
+    bad = beyond_limits(model, c, joints)
     if not bad.any():
         return None
     s = int(np.flatnonzero(bad.any(axis=1))[0])

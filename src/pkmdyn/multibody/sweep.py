@@ -71,15 +71,16 @@ class DescribedSweepContext:
     required: tuple[str, str] | None = None
 
 
-def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[str]]:
+def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[str], bool]:
     """The actuators (name, effort unit ``N`` or ``Nm``) and the joints of a description, as
-    the compiled model names them."""
+    the compiled model names them, and whether it has as many actuators as task coordinates
+    (the direct singularity measure is defined)."""
     from . import load_mechanism
     from .dynamics import effort_unit
 
     model = load_mechanism(copy.deepcopy(dict(description)))
     acts = [(name, effort_unit(model, i)) for i, name in enumerate(model.actuator_names)]
-    return acts, list(model.joint_names)
+    return acts, list(model.joint_names), model.na == model.nt
 
 
 def _speed_unit(effort_unit: str) -> str:
@@ -141,18 +142,18 @@ class DescribedSweep:
                 ) -> tuple[MetricInfo, ...]:
         """The metrics of the base ``description`` (named after its actuators and joints); the
         joint reactions only with ``reactions = true`` (the default) in ``[motion]``."""
-        acts, joints = _names(self.raw if description is None else description)
+        acts, joints, direct = _names(self.raw if description is None else description)
         out = [
             MetricInfo("gci", "-", "(1/T) int mu(t) dt, mu = the direct singularity measure where there are as "
                                    "many actuators as task coordinates, else the inverse one"),
             MetricInfo("min_inverse_measure", "-", "min over samples of sigma_min/sigma_max of the scaled "
                                                    "[Phi_q; tau_q] (serial / type I singularity at 0)"),
-            MetricInfo("min_direct_measure", "-", "min over samples of sigma_min/sigma_max of the scaled "
-                                                  "[Phi_q; E_a] (parallel / type II singularity at 0; "
-                                                  "null without as many actuators as task coordinates)"),
-            MetricInfo("min_constraint_measure", "-", "min over samples of sigma_min/sigma_max of the scaled "
-                                                      "Phi_q (constraint singularity at 0)"),
         ]
+        if direct:  # defined with as many actuators as task coordinates only
+            out.append(MetricInfo("min_direct_measure", "-", "min over samples of sigma_min/sigma_max of the scaled "
+                                                             "[Phi_q; E_a] (parallel / type II singularity at 0)"))
+        out.append(MetricInfo("min_constraint_measure", "-", "min over samples of sigma_min/sigma_max of the scaled "
+                                                             "Phi_q (constraint singularity at 0)"))
         for unit in sorted({u for _, u in acts}):
             kind = "force" if unit == "N" else "torque"
             out.append(MetricInfo(f"peak_effort_{unit}", unit.replace("Nm", "N m"),

@@ -1,14 +1,20 @@
 """The workspace of any described mechanism on a grid of task poses (``docs/workspace.md``).
 
 **Method.** A regular grid over one to three task coordinates (the others held at a given
-pose, e.g. a constant orientation); each grid pose is *in the workspace* when
+pose, e.g. a constant orientation), solved by continuation over the grid
+(:func:`.kinematics.solve_grid`): the grid pose nearest the held pose is reached from the
+reference configuration along the straight task path (as the first sample of a motion; where
+it is not, the next nearest, up to 16), and every other pose from a solved neighbour along a
+grid axis, breadth first, so every pose on the description's assembly branch. A grid pose
+is *reached* where it is solved with every joint within its limits (``limits_rad``/``limits_m``,
+actuated joints included). It is *in the workspace* where
 
-1. the inverse kinematics reaches it from the reference configuration along the straight task
-   path (in 1, then 8, then 64 steps, the description's assembly branch kept; a pose reached
-   only along another path or on another branch reads outside: conservative), every joint
-   within its limits (``limits_rad``/``limits_m``, actuated joints included);
-2. every singularity measure (:func:`.kinematics.singularity_measures`: inverse, direct,
-   constraint) at it is at least ``threshold``.
+1. it is reached and every singularity measure (:func:`.kinematics.singularity_measures`:
+   inverse, direct, constraint) at it is at least ``threshold``, and
+2. it is connected to the start through such poses (neighbours along the grid's axes): the
+   part of the grid the mechanism moves through from its reference without crossing a
+   singularity or a joint limit. A region reached only across a singularity, or on another
+   assembly branch, reads outside (conservative).
 
 **Size.** Each grid pose stands for its cell (the product of the grid steps); the workspace's
 size (volume [m^3] for three position coordinates, area for two, length for one; angles count
@@ -34,9 +40,11 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy import ndimage
 
-from ..errors import ParameterError, PkmdynError
-from .kinematics import limit_violation, reference_task, singularity_measures, solve_kinematics
+from ..errors import ParameterError
+from .kinematics import (beyond_limits, joint_coordinates, limited_joints, reference_task, singularity_measures,
+                         solve_grid)
 from .model import MechanismModel
 from .task_grid import grid_poses
 
@@ -49,7 +57,8 @@ Array = NDArray[np.float64]
 class Workspace:
     """A workspace on a grid (module docstring): ``axes`` the grid's (task coordinate, values);
     ``x (N, nt)`` every grid pose (first axis slowest); ``reached (N,)`` reached within the
-    joint limits; ``inside (N,)`` reached and away from every singularity; ``measure (N,)`` the
+    joint limits; ``inside (N,)`` reached, away from every singularity and connected to the
+    start (module docstring); ``q (N, nq)`` the tree coordinates (zeros where not reached); ``measure (N,)`` the
     smallest singularity measure (0 where not reached); ``size``, ``size_error`` in the unit of
     the grid's cells (``unit``, :func:`size_unit`); ``cube_half_width``, ``cylinder_radius``
     about ``centre`` (None for a grid of lengths and angles together)."""
@@ -58,6 +67,7 @@ class Workspace:
     x: Array
     reached: NDArray[np.bool_]
     inside: NDArray[np.bool_]
+    q: Array
     measure: Array
     cell: float
     size: float
@@ -77,20 +87,12 @@ def check_centre(centre: object, n: int) -> Array:
     return c
 
 
-def _reach(model: MechanismModel, x: Array) -> tuple[NDArray[np.bool_], Array]:
-    """Whether each pose is reached within the limits, and its tree coordinates (zeros where not)."""
-    n = x.shape[0]
-    ok = np.zeros(n, dtype=bool)
-    q = np.zeros((n, model.nq))
-    for k in range(n):
-        try:
-            kin = solve_kinematics(model, x[k:k + 1])
-        except PkmdynError:
-            continue
-        if limit_violation(model, kin) is None:
-            ok[k] = True
-            q[k] = kin.q[0]
-    return ok, q
+def _roots(axes: list[tuple[int, Array]], base: Array) -> NDArray[np.int64]:
+    """The grid's poses in order of distance from the held pose ``base`` (in grid steps)."""
+    where = [(base[i] - v[0]) / (v[1] - v[0]) for i, v in axes]
+    mesh = np.meshgrid(*[np.arange(len(v)) for _, v in axes], indexing="ij")
+    d = sum((m.reshape(-1) - w) ** 2 for m, w in zip(mesh, where))
+    return np.argsort(d, kind="stable")
 
 
 def _boundary(inside: NDArray[np.bool_], shape: tuple[int, ...]) -> int:
@@ -116,20 +118,29 @@ def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array 
         raise ParameterError(f"--threshold: {threshold!r} is not in [0, 1)")
     base = reference_task(model) if base is None else np.asarray(base, dtype=float)
     x = grid_poses(model, axes, base)
-    reached, q = _reach(model, x)
+    shape = tuple(len(v) for _, v in axes)
+    roots = _roots(axes, base)
+    kin, reached = solve_grid(model, x, shape, roots)
+    joints = limited_joints(model)
+    if joints and reached.any():
+        reached &= ~beyond_limits(model, joint_coordinates(model, kin, joints, along=False), joints).any(axis=1)
     measure = np.zeros(len(x))
     if reached.any():
-        sm = singularity_measures(model, q[reached])
+        sm = singularity_measures(model, kin.q[reached])
         m = np.minimum(sm.inverse, sm.constraint)
         if model.na == model.nt:
             m = np.minimum(m, sm.direct)
         measure[reached] = m
-    inside = reached & (measure >= threshold)
+    good = reached & (measure >= threshold)
+    inside = np.zeros(len(x), dtype=bool)
+    if good.any():
+        labels, _ = ndimage.label(good.reshape(shape))
+        labels = labels.reshape(-1)
+        inside = labels == labels[roots[good[roots]][0]]  # the part about the start
     steps = np.array([float(v[1] - v[0]) for _, v in axes])
     cell = float(np.prod(steps))
     units = [model.task_units[i] for i, _ in axes]
     unit = size_unit(units)
-    shape = tuple(len(v) for _, v in axes)
     c = np.array([base[i] for i, _ in axes]) if centre is None else check_centre(centre, len(axes))
     pts = x[:, [i for i, _ in axes]]
     out = ~inside
@@ -148,7 +159,8 @@ def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array 
     else:  # the whole grid is inside: bounded by the grid itself
         cube = float(np.minimum(pts.max(axis=0) - c, c - pts.min(axis=0)).min())
         cylinder = cube
-    return Workspace(axes=axes, x=x, reached=reached, inside=inside, measure=measure, cell=cell,
+    return Workspace(axes=axes, x=x, reached=reached, inside=inside, q=np.where(reached[:, None], kin.q, 0.0),
+                     measure=measure, cell=cell,
                      size=float(inside.sum()) * cell, size_error=0.5 * _boundary(inside, shape) * cell, unit=unit,
                      centre=c, cube_half_width=None if cube is None else max(cube, 0.0),
                      cylinder_radius=None if cylinder is None else max(cylinder, 0.0), threshold=float(threshold))
