@@ -350,7 +350,8 @@ def test_interrupting_a_run_leaves_nothing(tmp_path, sig):
 def test_motion_model_paper_fit_is_the_fitted_cycle(tmp_path, capsys):
     """``--motion-model paper-fit`` runs the fitted ISO cycle: the run's slider maxima are those of
     the preset computed by the library, and differ from the default cycle's."""
-    from pkmdyn.machines.hip_simulator.iso_fit import iso_cycle_preset, slider_maxima
+    from pkmdyn.machines.hip_simulator.iso_fit import iso_cycle_preset
+    from pkmdyn.machines.hip_simulator.paper import slider_maxima
 
     out = tmp_path / "fit"
     assert main(["hip", "run", "--motion-model", "paper-fit", "--samples-per-cycle", "400", "--no-plots",

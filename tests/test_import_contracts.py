@@ -58,3 +58,93 @@ def test_the_machine_name_scan_finds_a_comparison():
     probe = 'def f(m):\n    a = "hip"\n    return 1 if m == "hip" else (2 if m in ("x", "pdm") else 3)\n'
     assert _machine_compares(probe, "probe") == ["probe:3", "probe:3"]
     assert _machine_compares('a = "hip"\nb = a + "pdm"\n', "probe") == []
+
+
+def _import_graph(files: dict[str, str], packages: set[str]) -> dict[str, set[str]]:
+    """Module -> the project's modules it imports, function-local imports included and
+    ``if TYPE_CHECKING:`` blocks (annotations only) left out; ``files``: module name -> source
+    (a package under its own name, from its ``__init__``), ``packages`` the packages' names.
+    ``from . import x`` names the submodule ``x`` where there is one, else the package."""
+    import ast
+
+    graph: dict[str, set[str]] = {m: set() for m in files}
+    for mod, text in files.items():
+        pkg = mod if mod in packages else mod.rsplit(".", 1)[0]
+        tree = ast.parse(text)
+        typing_only = {id(x) for n in ast.walk(tree) if isinstance(n, ast.If) and "TYPE_CHECKING" in ast.unparse(n.test)
+                       for b in n.body for x in ast.walk(b)}
+        for node in ast.walk(tree):
+            if id(node) in typing_only:
+                continue
+            if isinstance(node, ast.ImportFrom):
+                if node.level:
+                    parts = pkg.split(".")[: len(pkg.split(".")) - node.level + 1]
+                    target = ".".join(parts + ([node.module] if node.module else []))
+                else:
+                    target = node.module or ""
+                subs = [f"{target}.{a.name}" for a in node.names if f"{target}.{a.name}" in files]
+                names = subs if len(subs) == len(node.names) else [target, *subs]
+            elif isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            else:
+                continue
+            graph[mod] |= {t for t in names if t in files and t != mod}
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan's algorithm)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_module_imports_itself_through_others():
+    """No import circle between the project's modules, counting the imports inside functions
+    (which hide a circle from the import system but not from the reader)."""
+    src = ROOT / "src"
+    files, packages = {}, set()
+    for p in sorted((src / "pkmdyn").rglob("*.py")):
+        parts = p.relative_to(src).with_suffix("").parts
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+            packages.add(".".join(parts))
+        files[".".join(parts)] = p.read_text(encoding="utf-8")
+    assert _cycles(_import_graph(files, packages)) == []
+
+
+def test_the_circle_check_finds_a_function_local_circle():
+    files = {"p": "", "p.a": "from .b import f\n", "p.b": "def f():\n    from .a import g\n",
+             "p.c": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from .a import g\n",
+             "p.d": "from . import c\n"}
+    graph = _import_graph(files, {"p"})
+    assert _cycles(graph) == [["p.a", "p.b"]]
+    assert graph["p.d"] == {"p.c"} and graph["p.c"] == set()

@@ -52,7 +52,9 @@ from numpy.typing import NDArray
 
 from ..errors import ParameterError, SingularityError
 from .joint_types import JOINT_TYPES
+from .friction import JointFriction, friction_diverges, known_friction
 from .kinematics import MechanismKinematics, joint_frame
+from .loads import load_forces, named_magnitudes
 from .model import MechanismModel
 
 __all__ = ["body_wrenches", "named_magnitudes", "load_forces", "coordinate_twists", "generalised_forces", "actuator_efforts",
@@ -120,47 +122,6 @@ def coordinate_twists(model: MechanismModel, q: Array, kin: MechanismKinematics 
                  model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,
                  model.tree_p_child, S)
     return S
-
-
-def named_magnitudes(model: MechanismModel, n: int, named: Mapping[str, object] | None = None) -> dict[str, Array]:
-    """Magnitude (n,) [N] of every named load (``model.named_loads``) per sample: from
-    ``named`` (``{name: scalar or (n,)}``), else the description's ``magnitude_N``. Unknown
-    names, wrong lengths and non-finite values are a :class:`~pkmdyn.errors.ParameterError`
-    naming the load."""
-    out: dict[str, Array] = {}
-    given = dict(named or {})
-    for nm in given:
-        if nm not in model.named_loads:
-            known = ", ".join(model.named_loads) or "none"
-            raise ParameterError(f"load {nm!r}: not a named load of mechanism {model.name!r} (named loads: {known})")
-    for k, nm in enumerate(model.load_name):
-        if nm is None or nm in out:
-            continue
-        if nm in given:
-            v = np.asarray(given[nm], dtype=float)
-            if v.ndim > 1 or (v.ndim == 1 and v.shape[0] != n):
-                raise ParameterError(f"load {nm!r}: expected one value or {n} values, got shape {v.shape}")
-            bad = np.flatnonzero(~np.isfinite(np.broadcast_to(v, (n,))))
-            if bad.size:
-                raise ParameterError(f"load {nm!r}: sample {int(bad[0])} is not finite")
-            out[nm] = np.array(np.broadcast_to(v, (n,)), dtype=float)
-        else:
-            out[nm] = np.full(n, float(model.load_magnitude[k]))
-    return out
-
-
-def load_forces(model: MechanismModel, n: int, named: Mapping[str, object] | None = None) -> tuple[Array, Array]:
-    """Force (n, nl, 3) [N] and moment (n, nl, 3) [N m] (base frame) of every ``[[loads]]``
-    entry per sample: constant, or a named load's direction times its magnitude
-    (:func:`named_magnitudes`)."""
-    F = np.broadcast_to(model.load_force, (n,) + model.load_force.shape).copy()
-    M = np.broadcast_to(model.load_moment, (n,) + model.load_moment.shape).copy()
-    if model.named_loads:
-        mags = named_magnitudes(model, n, named)
-        for k, nm in enumerate(model.load_name):
-            if nm is not None:
-                F[:, k] = mags[nm][:, None] * model.load_direction[k]
-    return F, M
 
 
 def body_wrenches(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
@@ -287,7 +248,6 @@ def inverse_dynamics(model: MechanismModel, kin: MechanismKinematics, loads: dic
             r = joint_reactions(model, kin, loads, named=named)
             W = body_wrenches(model, kin, loads, named)
             return InverseDynamics(u=r.u, Q=generalised_forces(model, S, W), W=W, S=S, kin=kin)
-        from .friction import known_friction
 
         Qf = known_friction(model, kin, S, named)
     W = body_wrenches(model, kin, loads, named)
@@ -466,8 +426,6 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     generalised force that holds them. ``split``: also the efforts' shares of every body group
     and joint's friction (:func:`effort_shares`). ``sample_offset``: the first sample's number
     in the whole motion, for messages (a motion processed in chunks)."""
-    from .friction import JointFriction, friction_diverges
-
     if solver not in ("auto", "dense"):
         raise ParameterError(f"solver: {solver!r} is not 'auto' or 'dense'")
     if overconstrained not in ("compliance", "minimum-norm"):

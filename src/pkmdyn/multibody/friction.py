@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..friction import regularised_sign
-from .dynamics import named_magnitudes
+from .loads import named_magnitudes
 from .model import MechanismModel
 
 __all__ = ["JointFriction", "known_friction", "friction_diverges", "EPS_ROTATION", "EPS_TRANSLATION"]
