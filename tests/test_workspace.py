@@ -90,6 +90,30 @@ def test_the_workspace_is_the_part_connected_to_the_start():
     assert ws.inside.sum() < good.sum()
 
 
+def test_total_orientation_workspace_against_the_closed_form():
+    """Over a range of orientations (two values of each Euler angle: eight orientations), a
+    position is reached where every orientation of the range reaches it within the strokes
+    (Merlet's total orientation workspace); it lies inside each constant-orientation workspace."""
+    m = load_mechanism(MACHINES / "stewart" / "stewart.toml")
+    axes = [(0, np.linspace(-0.5, 0.5, 9)), (1, np.linspace(-0.5, 0.5, 9)), (2, np.linspace(0.7, 1.5, 7))]
+    ranges = [(3, np.array([-0.1, 0.1])), (4, np.array([-0.1, 0.1])), (5, np.array([0.05, 0.25]))]
+    ws = workspace(m, axes, threshold=0.0, ranges=ranges)
+    every, near_any = np.ones(len(ws.x), dtype=bool), np.zeros(len(ws.x), dtype=bool)
+    for a in ranges[0][1]:
+        for b in ranges[1][1]:
+            for c in ranges[2][1]:
+                x = ws.x.copy()
+                x[:, 3:] = a, b, c
+                ref, near = _stewart_inside(x, 1e-9)
+                every &= ref
+                near_any |= near
+                one = workspace(m, axes, x[0], threshold=0.0)
+                assert np.all(one.inside[ws.inside])
+    assert every.sum() > 30 and (~every).sum() > 30
+    assert np.array_equal(ws.reached[~near_any], every[~near_any])
+    assert ws.q is None and ws.size == pytest.approx(ws.inside.sum() * 0.125 * 0.125 * (0.8 / 6))
+
+
 def test_the_size_error_estimate_covers_a_finer_grid():
     """The Stewart platform's constant-orientation area at one height on a coarse and a 4x finer
     grid: the two sizes differ by less than the sum of their error estimates, and the finer
@@ -133,6 +157,13 @@ def test_workspace_command(tmp_path):
     assert doc["fixed"]["z_m"] == -1.2 and doc["size_m2"] == pytest.approx(doc["inside"] * 0.04)
     rows = (out / "workspace.csv").read_text().splitlines()
     assert len(rows) == 50 and (out / "workspace.png").stat().st_size > 0
+    # over a range of heights: fewer poses inside, the range in the file, z no longer fixed
+    wide = tmp_path / "wide"
+    assert main(["workspace", "--machine", "delta", "--grid", "x=-0.6:0.6:7,y=-0.6:0.6:7",
+                 "--orientation-range", "z=-1.6:-0.8:3", "--out", str(wide)]) == 0
+    both = json.loads((wide / "workspace.json").read_text())
+    assert both["orientation_range"] == {"z_m": {"low": -1.6, "high": -0.8, "count": 3}} and "z_m" not in both["fixed"]
+    assert both["inside"] < doc["inside"]
 
 
 @pytest.mark.parametrize("args, words", [
@@ -140,6 +171,8 @@ def test_workspace_command(tmp_path):
     (["--grid", "x=1:0:3"], "LOW < HIGH"),
     (["--grid", "x=0:1:3", "--threshold", "2"], "--threshold"),
     (["--grid", "x=0:1:3,y=0:1:3", "--centre", "0.1"], "--centre"),
+    (["--grid", "x=0:1:3", "--orientation-range", "x=0:1:3"], "--orientation-range"),
+    (["--grid", "x=0:1:3", "--orientation-range", "z=-1:1"], "--orientation-range"),
 ])
 def test_bad_workspace_input(tmp_path, capsys, args, words):
     out = tmp_path / "ws"
@@ -179,6 +212,20 @@ def test_sweep_reports_the_workspace_of_every_design(tmp_path):
         assert r["workspace_size_m3"] == pytest.approx(ws.size, rel=1e-12)
         assert r["workspace_inside_share"] == pytest.approx(ws.inside.mean())
     assert rows[0]["workspace_size_m3"] != rows[1]["workspace_size_m3"]
+
+
+def test_sweep_reports_the_total_orientation_workspace(tmp_path):
+    """``workspace_orientation_range``: each row's size is that design's workspace over the range."""
+    grid, turn = "x=-0.4:0.4:5,y=-0.4:0.4:5,z=0.9:1.3:3", "euler3=-0.3:0.3:3"
+    rows = _stewart_sweep(tmp_path, f'workspace_grid = "{grid}"\nworkspace_orientation_range = "{turn}"\n'
+                                    '[parameters]\n"parameters.base_radius_m" = { values = [1.0] }\n'
+                                    '[objectives]\nworkspace_size_m3 = "max"\n')
+    from pkmdyn.multibody.task_grid import parse_grid
+
+    m = load_mechanism(MACHINES / "stewart" / "stewart.toml")
+    ws = workspace(m, parse_grid(m, grid, max_axes=3), threshold=1e-3, ranges=parse_grid(m, turn))
+    fixed = workspace(m, parse_grid(m, grid, max_axes=3), threshold=1e-3)
+    assert rows[0]["workspace_size_m3"] == pytest.approx(ws.size, rel=1e-12) and ws.size < fixed.size
 
 
 def test_a_required_region_constrains_a_sweep(tmp_path):

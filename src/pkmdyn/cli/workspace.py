@@ -17,14 +17,17 @@ from ._groups import MACHINE_HELP, FiniteFloat, cli, list_files
 @click.option("--pose", default="", metavar="NAME=VALUE,...",
               help="The task coordinates held while the grid varies the others (default: the reference pose's), "
                    "e.g. a constant orientation \"euler3_rad=0.2\".")
+@click.option("--orientation-range", "orientation_range", default=None, metavar="NAME=LOW:HIGH:COUNT[,...]",
+              help="Held coordinates over ranges, e.g. \"euler1=-0.1:0.1:3,euler2=-0.1:0.1:3\": a pose is inside only "
+                   "where it is inside at every combination of their values (the total orientation workspace).")
 @click.option("--threshold", type=FiniteFloat(0.0, 1.0), default=1e-3, show_default=True,
               help="A pose is inside only where every singularity measure is at least this.")
 @click.option("--centre", default=None, metavar="V1,V2,...",
               help="Centre of the inscribed cube and cylinder, one value per grid coordinate (default: the pose's).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder (an earlier run there is replaced whole).")
-def workspace_command(machine: str, grid: str, pose: str, threshold: float, centre: str | None,
-                      out_dir: Path) -> None:
+def workspace_command(machine: str, grid: str, pose: str, orientation_range: str | None, threshold: float,
+                      centre: str | None, out_dir: Path) -> None:
     """The reachable workspace within the joint limits and away from every singularity, on a grid
     of task poses: its size with an error estimate, the largest inscribed cube and cylinder about a
     centre, dexterity statistics, a map."""
@@ -44,6 +47,8 @@ def workspace_command(machine: str, grid: str, pose: str, threshold: float, cent
     model, _ = _load(machine)
     axes = parse_grid(model, grid, max_axes=3)
     base = parse_pose(model, pose)
+    ranges = None if orientation_range is None else parse_grid(model, orientation_range, max_axes=3, max_points=1000,
+                                                               what="--orientation-range")
     c = None
     if centre is not None:
         try:
@@ -51,7 +56,7 @@ def workspace_command(machine: str, grid: str, pose: str, threshold: float, cent
         except ValueError:
             raise ParameterError(f"--centre {centre!r}: expected numbers separated by commas") from None
         c = check_centre(c, len(axes))
-    ws = workspace(model, axes, base, threshold, c)
+    ws = workspace(model, axes, base, threshold, c, ranges)
     doc = workspace_document(model, ws)
     final = Path(out_dir)
     with output_dir(out_dir, inputs=inputs) as out:

@@ -52,6 +52,8 @@ class _Motion(Section):
     workspace_grid: str | None = Field(default=None, max_length=400)
     #: the poses the grid holds fixed (``--pose``)
     workspace_pose: str = Field(default="", max_length=400)
+    #: held coordinates over ranges (``--orientation-range``): the total orientation workspace
+    workspace_orientation_range: str | None = Field(default=None, max_length=400)
 
 
 @dataclass(frozen=True)
@@ -65,10 +67,11 @@ class DescribedSweepContext:
     reactions: bool
     #: the stiffness metrics the base description has (:func:`_stiffness_metrics`)
     stiffness: tuple[str, ...] = ()
-    #: ``[motion] workspace_grid`` and ``workspace_pose`` (None: no workspace metrics)
-    workspace: tuple[str, str] | None = None
+    #: ``[motion] workspace_grid``, ``workspace_pose`` and ``workspace_orientation_range`` (None:
+    #: no workspace metrics)
+    workspace: tuple[str, str, str | None] | None = None
     #: ``[requirements]`` ``grid`` and ``pose`` (None: no coverage metric)
-    required: tuple[str, str] | None = None
+    required: tuple[str, str, str | None] | None = None
 
 
 def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[str], bool]:
@@ -231,9 +234,11 @@ class DescribedSweep:
             try:  # refused here, once, when it names no task coordinate
                 parse_grid(model, opt.workspace_grid, max_axes=3)
                 parse_pose(model, opt.workspace_pose)
+                if opt.workspace_orientation_range is not None:
+                    _ranges(model, opt.workspace_orientation_range)
             except ParameterError as exc:
-                raise ParameterError(f"[motion] workspace_grid/workspace_pose: {exc}") from None
-            ws = (opt.workspace_grid, opt.workspace_pose)
+                raise ParameterError(f"[motion] workspace_grid/workspace_pose/workspace_orientation_range: {exc}") from None
+            ws = (opt.workspace_grid, opt.workspace_pose, opt.workspace_orientation_range)
         req = None
         if opt.requirements is not None:
             from .task_grid import parse_grid, parse_pose
@@ -243,7 +248,7 @@ class DescribedSweep:
                 parse_pose(model, opt.requirements.pose)
             except ParameterError as exc:
                 raise ParameterError(f"[requirements] {exc}") from None
-            req = (opt.requirements.grid, opt.requirements.pose)
+            req = (opt.requirements.grid, opt.requirements.pose, None)
         return DescribedSweepContext(motion=motion, threshold=opt.singularity_threshold, reactions=opt.reactions,
                                      stiffness=tuple(_stiffness_metrics(description)), workspace=ws, required=req)
 
@@ -307,12 +312,22 @@ def _workspace_size_name(source: Any, grid: str) -> tuple[str, str]:
     return f"workspace_size_{unit}", unit.replace("_", " ")
 
 
-def _on_grid(model: Any, spec: tuple[str, str], threshold: float) -> Any:
-    """The workspace of ``model`` on the grid and held pose ``spec`` (``--grid``, ``--pose`` syntax)."""
+def _ranges(model: Any, text: str) -> list:
+    """``workspace_orientation_range`` (``--orientation-range`` syntax) as held ranges."""
+    from .task_grid import parse_grid
+
+    return parse_grid(model, text, max_axes=3, max_points=1000, what="--orientation-range")
+
+
+def _on_grid(model: Any, spec: tuple[str, str, str | None], threshold: float) -> Any:
+    """The workspace of ``model`` on the grid, held pose and orientation range ``spec``
+    (``--grid``, ``--pose``, ``--orientation-range`` syntax)."""
     from .task_grid import parse_grid, parse_pose
     from .workspace import workspace
 
-    return workspace(model, parse_grid(model, spec[0], max_axes=3), parse_pose(model, spec[1]), threshold)
+    ranges = None if spec[2] is None else _ranges(model, spec[2])
+    return workspace(model, parse_grid(model, spec[0], max_axes=3), parse_pose(model, spec[1]), threshold,
+                     ranges=ranges)
 
 
 def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> DesignOutcome:

@@ -57,32 +57,32 @@ def parse_pose(model: MechanismModel, text: str) -> Array:
     return x
 
 
-def parse_grid(model: MechanismModel, text: str, max_axes: int = 2, max_points: int = MAX_GRID_POINTS
-               ) -> list[tuple[int, Array]]:
+def parse_grid(model: MechanismModel, text: str, max_axes: int = 2, max_points: int = MAX_GRID_POINTS,
+               what: str = "--grid") -> list[tuple[int, Array]]:
     """``"x=-0.1:0.1:21,y=-0.1:0.1:21"`` -> up to ``max_axes`` (task coordinate, values) axes,
     each ``lo:hi:count`` (count 2 to 1,000), about the reference pose; at most ``max_points``
-    poses in all."""
+    poses in all; ``what``: the option named in messages."""
     axes: list[tuple[int, Array]] = []
     for item in filter(None, (s.strip() for s in text.split(","))):
         key, sep, val = item.partition("=")
         parts = val.split(":")
         if not sep or len(parts) != 3:
-            raise ParameterError(f"--grid: {item!r} is not NAME=LOW:HIGH:COUNT")
-        i = _coordinate(model, key.strip(), "--grid")
+            raise ParameterError(f"{what}: {item!r} is not NAME=LOW:HIGH:COUNT")
+        i = _coordinate(model, key.strip(), what)
         if any(i == a for a, _ in axes):
-            raise ParameterError(f"--grid: {key.strip()!r} given twice")
-        lo, hi = (_number(p.strip(), f"--grid {key.strip()}") for p in parts[:2])
+            raise ParameterError(f"{what}: {key.strip()!r} given twice")
+        lo, hi = (_number(p.strip(), f"{what} {key.strip()}") for p in parts[:2])
         try:
             count = int(parts[2])
         except ValueError:
-            raise ParameterError(f"--grid {key.strip()}: count {parts[2]!r} is not an integer") from None
+            raise ParameterError(f"{what} {key.strip()}: count {parts[2]!r} is not an integer") from None
         if not 2 <= count <= 1000 or not lo < hi:
-            raise ParameterError(f"--grid {key.strip()}: expected LOW < HIGH and a count from 2 to 1,000")
+            raise ParameterError(f"{what} {key.strip()}: expected LOW < HIGH and a count from 2 to 1,000")
         axes.append((i, np.linspace(lo, hi, count)))
     if not 1 <= len(axes) <= max_axes:
-        raise ParameterError(f"--grid: give one to {max_axes} task coordinates")
+        raise ParameterError(f"{what}: give one to {max_axes} task coordinates")
     if math.prod(len(v) for _, v in axes) > max_points:
-        raise ParameterError(f"--grid: more than {max_points:,} poses")
+        raise ParameterError(f"{what}: more than {max_points:,} poses")
     return axes
 
 

@@ -48,9 +48,12 @@ from .kinematics import (beyond_limits, joint_coordinates, limited_joints, refer
 from .model import MechanismModel
 from .task_grid import grid_poses
 
-__all__ = ["Workspace", "workspace"]
+__all__ = ["Workspace", "workspace", "MAX_RANGE_POSES"]
 
 Array = NDArray[np.float64]
+
+#: the most poses a workspace over an orientation range solves (grid poses times held poses)
+MAX_RANGE_POSES = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -58,7 +61,8 @@ class Workspace:
     """A workspace on a grid (module docstring): ``axes`` the grid's (task coordinate, values);
     ``x (N, nt)`` every grid pose (first axis slowest); ``reached (N,)`` reached within the
     joint limits; ``inside (N,)`` reached, away from every singularity and connected to the
-    start (module docstring); ``q (N, nq)`` the tree coordinates (zeros where not reached); ``measure (N,)`` the
+    start (module docstring); ``q (N, nq)`` the tree coordinates (zeros where not reached;
+    None over ``ranges``, the held coordinates taken over ranges, :func:`workspace`); ``measure (N,)`` the
     smallest singularity measure (0 where not reached); ``size``, ``size_error`` in the unit of
     the grid's cells (``unit``, :func:`size_unit`); ``cube_half_width``, ``cylinder_radius``
     about ``centre`` (None for a grid of lengths and angles together)."""
@@ -67,7 +71,8 @@ class Workspace:
     x: Array
     reached: NDArray[np.bool_]
     inside: NDArray[np.bool_]
-    q: Array
+    q: Array | None
+    ranges: list
     measure: Array
     cell: float
     size: float
@@ -109,14 +114,10 @@ def _boundary(inside: NDArray[np.bool_], shape: tuple[int, ...]) -> int:
     return int(edge.sum())
 
 
-def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array | None = None,
-              threshold: float = 1e-3, centre: Array | None = None) -> Workspace:
-    """The workspace on the grid ``axes`` (:func:`.task_grid.parse_grid`) about the pose
-    ``base`` (default: the reference pose), with the singularity ``threshold`` and the inscribed
-    shapes about ``centre`` (the grid coordinates' values; default: ``base``'s)."""
-    if not (math.isfinite(threshold) and 0.0 <= threshold < 1.0):
-        raise ParameterError(f"--threshold: {threshold!r} is not in [0, 1)")
-    base = reference_task(model) if base is None else np.asarray(base, dtype=float)
+def _held(model: MechanismModel, axes: list[tuple[int, Array]], base: Array, threshold: float
+          ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], Array, Array]:
+    """The workspace on the grid at one held pose ``base`` (module docstring): reached, inside,
+    the smallest singularity measure (0 where not reached), the tree coordinates."""
     x = grid_poses(model, axes, base)
     shape = tuple(len(v) for _, v in axes)
     roots = _roots(axes, base)
@@ -137,6 +138,42 @@ def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array 
         labels, _ = ndimage.label(good.reshape(shape))
         labels = labels.reshape(-1)
         inside = labels == labels[roots[good[roots]][0]]  # the part about the start
+    return reached, inside, measure, np.where(reached[:, None], kin.q, 0.0)
+
+
+def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array | None = None,
+              threshold: float = 1e-3, centre: Array | None = None,
+              ranges: list[tuple[int, Array]] | None = None) -> Workspace:
+    """The workspace on the grid ``axes`` (:func:`.task_grid.parse_grid`) about the pose
+    ``base`` (default: the reference pose), with the singularity ``threshold`` and the inscribed
+    shapes about ``centre`` (the grid coordinates' values; default: ``base``'s).
+
+    ``ranges``: held coordinates (not on the grid) taken over ranges of values (the same
+    syntax), e.g. the three Euler angles: a pose is reached (inside) where it is reached
+    (inside) at every combination of their values, the *total orientation workspace* of
+    Merlet (Parallel Robots, 2006, §6.2) for a range of orientations; its measure is the
+    least over the combinations."""
+    if not (math.isfinite(threshold) and 0.0 <= threshold < 1.0):
+        raise ParameterError(f"--threshold: {threshold!r} is not in [0, 1)")
+    base = reference_task(model) if base is None else np.asarray(base, dtype=float)
+    ranges = list(ranges or [])
+    if {i for i, _ in ranges} & {i for i, _ in axes}:
+        raise ParameterError("--orientation-range: a coordinate is on the grid too")
+    x = grid_poses(model, axes, base)
+    held = grid_poses(model, ranges, base) if ranges else base[None]
+    if len(x) * len(held) > MAX_RANGE_POSES:
+        raise ParameterError(f"--orientation-range: {len(held):,} held poses times {len(x):,} grid poses is more than "
+                             f"{MAX_RANGE_POSES:,} poses")
+    reached = np.ones(len(x), dtype=bool)
+    inside = np.ones(len(x), dtype=bool)
+    measure = np.full(len(x), np.inf)
+    for b in held:
+        r, i, m, q = _held(model, axes, b, threshold)
+        reached &= r
+        inside &= i
+        measure = np.minimum(measure, m)
+    measure = np.where(reached, measure, 0.0)
+    shape = tuple(len(v) for _, v in axes)
     steps = np.array([float(v[1] - v[0]) for _, v in axes])
     cell = float(np.prod(steps))
     units = [model.task_units[i] for i, _ in axes]
@@ -159,8 +196,8 @@ def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array 
     else:  # the whole grid is inside: bounded by the grid itself
         cube = float(np.minimum(pts.max(axis=0) - c, c - pts.min(axis=0)).min())
         cylinder = cube
-    return Workspace(axes=axes, x=x, reached=reached, inside=inside, q=np.where(reached[:, None], kin.q, 0.0),
-                     measure=measure, cell=cell,
+    return Workspace(axes=axes, x=x, reached=reached, inside=inside, q=q if not ranges else None,
+                     ranges=ranges, measure=measure, cell=cell,
                      size=float(inside.sum()) * cell, size_error=0.5 * _boundary(inside, shape) * cell, unit=unit,
                      centre=c, cube_half_width=None if cube is None else max(cube, 0.0),
                      cylinder_radius=None if cylinder is None else max(cylinder, 0.0), threshold=float(threshold))
@@ -180,11 +217,15 @@ def workspace_document(model: MechanismModel, ws: Workspace) -> dict:
     ins = ws.measure[ws.inside]
     return {
         "mechanism": model.name,
-        "method": "grid of task poses; inside: reached from the reference configuration within the joint limits "
-                  "and every singularity measure at least the threshold (docs/workspace.md)",
+        "method": "grid of task poses solved by continuation from the reference configuration; inside: reached "
+                  "within the joint limits, every singularity measure at least the threshold, and connected to the "
+                  "start through such poses" + ("; at every combination of the orientation range's values"
+                                                if ws.ranges else "") + " (docs/workspace.md)",
         "grid": {n: {"low": float(v[0]), "high": float(v[-1]), "count": int(len(v))} for n, (_, v) in zip(names, ws.axes)},
         "fixed": {f"{n}_{u}": float(ws.x[0, i]) for i, (n, u) in enumerate(zip(model.task_names, model.task_units))
-                  if i not in [a for a, _ in ws.axes]},
+                  if i not in [a for a, _ in ws.axes + ws.ranges]},
+        "orientation_range": {f"{model.task_names[i]}_{model.task_units[i]}":
+                              {"low": float(v[0]), "high": float(v[-1]), "count": int(len(v))} for i, v in ws.ranges},
         "singularity_threshold": ws.threshold,
         "poses": int(len(ws.x)), "reached": int(ws.reached.sum()), "inside": int(ws.inside.sum()),
         f"size_{ws.unit}": ws.size, f"size_error_{ws.unit}": ws.size_error, f"cell_{ws.unit}": ws.cell,
