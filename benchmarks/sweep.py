@@ -2,7 +2,7 @@
 an NSGA-II search. Prints one JSON object; with ``--json`` nothing else is printed.
 
     python benchmarks/sweep.py --json [--part hip,stewart,delta] [--designs 10000]
-        [--stewart-designs 10000] [--delta-population 16 --delta-generations 8]
+        [--stewart-designs 10000] [--delta-population 20 --delta-generations 8]
 
 **hip** (``--designs``): the hip simulator, Sobol over five geometry keys, one ISO 14242-1
 cycle of 500 samples; every design: validation, kinematics and conditioning along the cycle,
@@ -234,7 +234,7 @@ def main() -> None:
     ap.add_argument("--part", default="hip,stewart,delta", help="which benchmarks, comma-separated")
     ap.add_argument("--designs", type=int, default=10_000, help="hip designs")
     ap.add_argument("--stewart-designs", type=int, default=10_000)
-    ap.add_argument("--delta-population", type=int, default=16)
+    ap.add_argument("--delta-population", type=int, default=20)
     ap.add_argument("--delta-generations", type=int, default=8, help="the short run's (the long run: 10x)")
     args = ap.parse_args()
     parts = {p.strip() for p in args.part.split(",") if p.strip()}
