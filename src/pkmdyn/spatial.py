@@ -42,7 +42,12 @@ def skew(v: Array) -> Array:
 
 
 def cross(a: Array, b: Array) -> Array:
-    """Cross product over the last axis, written out (faster than ``np.cross`` on batches)."""
+    """Cross product over the last axis, written out (faster than ``np.cross`` on batches and,
+    by far, on two single vectors)."""
+    if np.ndim(a) == 1 and np.ndim(b) == 1:
+        a0, a1, a2 = (float(v) for v in a)
+        b0, b1, b2 = (float(v) for v in b)
+        return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
     return np.stack((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=-1)

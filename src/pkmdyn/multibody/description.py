@@ -26,6 +26,7 @@ from pydantic import Field, ValidationError, field_validator
 
 from ..errors import ParameterError
 from ..params_util import Section, _rule, read_toml
+from ..spatial import cross
 from .expressions import resolve_parameters
 from .joint_types import JOINT_TYPES, joint_type
 
@@ -497,7 +498,7 @@ def _joint_frame(j: _Joint, where: str) -> Array:
         if abs(float(x @ y)) > 1e-6:
             raise ParameterError(f"{where} axes: the two axes of a {j.type} joint must be perpendicular "
                                  f"(cosine {float(x @ y):.3g})")
-        return np.column_stack([x, y, np.cross(x, y)])
+        return np.column_stack([x, y, cross(x, y)])
     if j.axes is not None:
         raise ParameterError(f"{where} a {j.type} joint takes no axes list (use axis)")
     if jt.axes == 1 and j.axis is None:
@@ -514,7 +515,7 @@ def _joint_frame(j: _Joint, where: str) -> Array:
         x /= np.linalg.norm(x)
     else:
         x = _perpendicular(z)
-    return np.column_stack([x, np.cross(z, x), z])
+    return np.column_stack([x, cross(z, x), z])
 
 
 def _body(b: _Body, where: str) -> BodySpec:

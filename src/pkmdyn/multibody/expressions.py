@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
+from ..spatial import cross
 
 __all__ = ["evaluate", "resolve_parameters", "parameter_values", "FUNCTIONS", "MAX_LENGTH"]
 
@@ -92,7 +93,7 @@ FUNCTIONS: dict[str, Callable[..., Any]] = {
     "min": _scalar(min), "max": _scalar(max),
     "norm": lambda v: float(np.linalg.norm(_vec(v, "norm"))), "unit": _unit,
     "dot": lambda a, b: float(np.dot(_vec(a, "dot"), _vec(b, "dot"))),
-    "cross": lambda a, b: np.cross(_vec(a, "cross", 3), _vec(b, "cross", 3)),
+    "cross": lambda a, b: cross(_vec(a, "cross", 3), _vec(b, "cross", 3)),
     "rotx": lambda a: _rot(0, float(a)), "roty": lambda a: _rot(1, float(a)), "rotz": lambda a: _rot(2, float(a)),
     "rotxd": lambda a: _rot(0, math.radians(float(a))), "rotyd": lambda a: _rot(1, math.radians(float(a))),
     "rotzd": lambda a: _rot(2, math.radians(float(a))),

@@ -67,6 +67,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ..spatial import cross
 from ._kernels import forward_positions, place_legs
 from .poses import body_poses, positions_args
 
@@ -169,15 +170,15 @@ def _unit(v: Array) -> Array:
 def _intersection(p1: Array, w1: Array, p2: Array, w2: Array, tol: float) -> Array | None:
     """The common point of two non-parallel lines ``p_i + t w_i`` (unit ``w_i``), or None when
     they are parallel or pass more than ``tol`` apart."""
-    n = np.cross(w1, w2)
+    n = cross(w1, w2)
     nn = float(n @ n)
     if nn < 1e-12:
         return None
     d = p2 - p1
     if abs(float(d @ n)) / np.sqrt(nn) > tol:
         return None
-    t1 = float(np.cross(d, w2) @ n) / nn
-    t2 = float(np.cross(d, w1) @ n) / nn
+    t1 = float(cross(d, w2) @ n) / nn
+    t2 = float(cross(d, w1) @ n) / nn
     return 0.5 * (p1 + t1 * w1 + p2 + t2 * w2)
 
 
@@ -282,14 +283,14 @@ def _geometry(model, cols: IntArray, R: Array, p: Array, S: Array, base: int, e_
         w, v = S[c, :3], S[c, 3:]
         if turns[i]:
             axis[i] = _unit(Rb.T @ w)
-            r_world = np.cross(w, v) / float(w @ w)  # the point of the axis nearest the origin
+            r_world = cross(w, v) / float(w @ w)  # the point of the axis nearest the origin
             point[i] = Rb.T @ (r_world - pb)
         else:
             axis[i] = _unit(Rb.T @ v)
     n = len(cols)
     kind, m0 = 0, None
     if n == 2 and turns[1]:  # A1: planar, the first joint in the plane of the turn
-        if (turns[0] and np.linalg.norm(np.cross(axis[0], axis[1])) < 1e-9) or \
+        if (turns[0] and np.linalg.norm(cross(axis[0], axis[1])) < 1e-9) or \
                 (not turns[0] and abs(float(axis[0] @ axis[1])) < 1e-9):
             kind, m0 = 1, _foot(point[1], axis[1], e0)
     elif n == 2 and turns[0] and not turns[1]:  # B1: a turn, then a slide normal to it
@@ -299,7 +300,7 @@ def _geometry(model, cols: IntArray, R: Array, p: Array, S: Array, base: int, e_
         m0 = _intersection(point[1], axis[1], point[2], axis[2], tol)
         if m0 is not None and _ball_ok(e0 - m0, axis[1], axis[2]):
             kind = 2
-            if turns[0] and np.linalg.norm(np.cross(axis[0], m0 - point[0])) < tol:
+            if turns[0] and np.linalg.norm(cross(axis[0], m0 - point[0])) < tol:
                 kind = 0  # the ball's centre on the first axis: its distance to c does not change
     elif n == 3 and turns[0] and turns[1] and not turns[2]:  # B2: two turns about one point, a slide
         m0 = _intersection(point[0], axis[0], point[1], axis[1], tol)
@@ -403,4 +404,4 @@ def _ball_ok(u: Array, w1: Array, w2: Array) -> bool:
     """Whether the point ``m0 + u`` is off both axes of a ball (subproblem 2 then has a unique
     angle for each axis)."""
     nu = float(np.linalg.norm(u))
-    return nu > 0 and np.linalg.norm(np.cross(u, w1)) > 1e-6 * nu and np.linalg.norm(np.cross(u, w2)) > 1e-6 * nu
+    return nu > 0 and np.linalg.norm(cross(u, w1)) > 1e-6 * nu and np.linalg.norm(cross(u, w2)) > 1e-6 * nu

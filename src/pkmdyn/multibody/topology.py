@@ -28,6 +28,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
+from ..spatial import cross
 from . import _kernels as K
 from .joint_types import JOINT_TYPES
 from .poses import body_poses
@@ -157,7 +158,7 @@ def _point_jacobian(model: MechanismModel, q: Array) -> Array:
         Jp = np.zeros((3, model.nq))
         if b >= 0:
             cols = np.flatnonzero(model.ancestors[b])
-            Jp[:, cols] = (S[cols, 3:] + np.cross(S[cols, :3], x)).T
+            Jp[:, cols] = (S[cols, 3:] + cross(S[cols, :3], x)).T
         rows.append(Jp)
     return np.concatenate(rows) if rows else np.zeros((0, model.nq))
 
