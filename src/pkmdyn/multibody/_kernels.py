@@ -1254,17 +1254,17 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
     ``K qd = (0; xd_s)``, ``K qdd = (-gamma_loops; xdd_s - gamma_task)`` and
     ``G = K^-1 (0; I; 0)`` (tree rates per task rate). Writes the per-sample outputs and
     ``status[s]`` (OK, NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN) with ``worst[s]``
-    the row of the largest residual; stops at the first failed sample.
-
-    With ``nbr`` (n, k) (empty: the motion's order above), the samples are the poses of a grid
-    with ``nbr[s]`` the neighbours of pose s (-1: none), solved by continuation over the grid
-    in breadth-first order from pose ``root`` (which starts from ``q_start``): each pose once, from
-    the solved neighbour that reached it first, by the first-order predictor
-    ``q_p + G_p (x_s - x_p)``; a failed pose does not stop the others, and a pose with no
-    solved neighbour is left unsolved (``status`` -1). Also the classical
+    the row of the largest residual; stops at the first failed sample. Also the classical
     velocity and acceleration of every body origin (``ov_out, oa_out``), centre of mass
     (``com`` (nb, 3) body frame -> ``cp_out, cv_out, ca_out``) and joint centre (the origin of
     the joint frame on ``joint_child``, ``pC_all`` (nj, 3) -> ``jp_out, jv_out, ja_out``).
+
+    With ``nbr`` (n, k) (empty: the motion's order above), the samples are the poses of a grid
+    with ``nbr[s]`` the neighbours of pose s (-1: none), solved by continuation over the grid
+    in breadth-first order from pose ``root`` (which starts from ``q_start``): each pose once,
+    from the solved neighbour that reached it first, by the first-order predictor
+    ``q_p + G_p (x_s - x_p)``; a failed pose does not stop the others, and a pose with no
+    solved neighbour is left unsolved (``status`` -1).
     """
     n = x.shape[0]
     nq = q_start.shape[0]

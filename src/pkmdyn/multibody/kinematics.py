@@ -147,8 +147,8 @@ def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array,
     out["worst"] = np.zeros(n, dtype=np.int64)
     tt = np.zeros(0) if t is None else np.ascontiguousarray(t, dtype=float)
     grid_nbr = np.zeros((0, 0), dtype=np.int64) if nbr is None else np.ascontiguousarray(nbr, dtype=np.int64)
-    K.solve_batch(tt, x, xd, xdd, q_start, grid_nbr, root, model.legs.arrays(), model.body_parent, model.body_joint, model.joint_q0,
-                  model.joint_nq,
+    K.solve_batch(tt, x, xd, xdd, q_start, grid_nbr, root, model.legs.arrays(), model.body_parent, model.body_joint,
+                  model.joint_q0, model.joint_nq,
                   model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent,
                   model.tree_R_child, model.tree_p_child, model.joint_R_parent, model.joint_p_parent,
                   model.joint_R_child, model.joint_p_child, model.ancestor_list, model.row_loop, model.row_kind,

@@ -237,7 +237,8 @@ class DescribedSweep:
                 if opt.workspace_orientation_range is not None:
                     _ranges(model, opt.workspace_orientation_range)
             except ParameterError as exc:
-                raise ParameterError(f"[motion] workspace_grid/workspace_pose/workspace_orientation_range: {exc}") from None
+                raise ParameterError(f"[motion] workspace_grid/workspace_pose/workspace_orientation_range: "
+                                     f"{exc}") from None
             ws = (opt.workspace_grid, opt.workspace_pose, opt.workspace_orientation_range)
         req = None
         if opt.requirements is not None:
