@@ -36,7 +36,7 @@ def workspace_command(machine: str, grid: str, pose: str, orientation_range: str
     from ..errors import ParameterError
     from ..io import check_output_dir, output_dir, write_csv, write_json
     from ..machines.registry import resolve
-    from ..multibody.task_grid import parse_grid, parse_pose
+    from ..multibody.task_grid import parse_grid, parse_pose, parse_ranges
     from ..multibody.workspace import check_centre, workspace, workspace_document, workspace_png
     from ..report import write_report
     from .mechanism import _load
@@ -47,8 +47,7 @@ def workspace_command(machine: str, grid: str, pose: str, orientation_range: str
     model, _ = _load(machine)
     axes = parse_grid(model, grid, max_axes=3)
     base = parse_pose(model, pose)
-    ranges = None if orientation_range is None else parse_grid(model, orientation_range, max_axes=3, max_points=1000,
-                                                               what="--orientation-range")
+    ranges = None if orientation_range is None else parse_ranges(model, orientation_range)
     c = None
     if centre is not None:
         try:

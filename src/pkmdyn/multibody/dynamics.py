@@ -51,8 +51,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ParameterError, SingularityError
-from .joint_types import JOINT_TYPES
 from .friction import JointFriction, friction_diverges, known_friction
+from .joint_types import JOINT_TYPES
 from .kinematics import MechanismKinematics, joint_frame
 from .loads import load_forces, named_magnitudes
 from .model import MechanismModel

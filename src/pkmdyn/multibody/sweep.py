@@ -229,13 +229,13 @@ class DescribedSweep:
                 pass  # the base design's own trouble is its row's, not the sweep's
         ws = None
         if opt.workspace_grid is not None:
-            from .task_grid import parse_grid, parse_pose
+            from .task_grid import parse_grid, parse_pose, parse_ranges
 
             try:  # refused here, once, when it names no task coordinate
                 parse_grid(model, opt.workspace_grid, max_axes=3)
                 parse_pose(model, opt.workspace_pose)
                 if opt.workspace_orientation_range is not None:
-                    _ranges(model, opt.workspace_orientation_range)
+                    parse_ranges(model, opt.workspace_orientation_range)
             except ParameterError as exc:
                 raise ParameterError(f"[motion] workspace_grid/workspace_pose/workspace_orientation_range: "
                                      f"{exc}") from None
@@ -313,20 +313,13 @@ def _workspace_size_name(source: Any, grid: str) -> tuple[str, str]:
     return f"workspace_size_{unit}", unit.replace("_", " ")
 
 
-def _ranges(model: Any, text: str) -> list:
-    """``workspace_orientation_range`` (``--orientation-range`` syntax) as held ranges."""
-    from .task_grid import parse_grid
-
-    return parse_grid(model, text, max_axes=3, max_points=1000, what="--orientation-range")
-
-
 def _on_grid(model: Any, spec: tuple[str, str, str | None], threshold: float) -> Any:
     """The workspace of ``model`` on the grid, held pose and orientation range ``spec``
     (``--grid``, ``--pose``, ``--orientation-range`` syntax)."""
-    from .task_grid import parse_grid, parse_pose
+    from .task_grid import parse_grid, parse_pose, parse_ranges
     from .workspace import workspace
 
-    ranges = None if spec[2] is None else _ranges(model, spec[2])
+    ranges = None if spec[2] is None else parse_ranges(model, spec[2])
     return workspace(model, parse_grid(model, spec[0], max_axes=3), parse_pose(model, spec[1]), threshold,
                      ranges=ranges)
 

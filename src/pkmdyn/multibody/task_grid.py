@@ -13,7 +13,7 @@ from ..errors import ParameterError
 from .kinematics import reference_task
 from .model import MechanismModel
 
-__all__ = ["parse_pose", "parse_grid", "grid_poses", "MAX_GRID_POINTS"]
+__all__ = ["parse_pose", "parse_grid", "parse_ranges", "grid_poses", "MAX_GRID_POINTS"]
 
 Array = NDArray[np.float64]
 
@@ -84,6 +84,12 @@ def parse_grid(model: MechanismModel, text: str, max_axes: int = 2, max_points: 
     if math.prod(len(v) for _, v in axes) > max_points:
         raise ParameterError(f"{what}: more than {max_points:,} poses")
     return axes
+
+
+def parse_ranges(model: MechanismModel, text: str) -> list[tuple[int, Array]]:
+    """``--orientation-range "euler1=-0.1:0.1:3,..."``: held task coordinates over ranges (the
+    grid syntax, at most three coordinates and 1,000 combinations)."""
+    return parse_grid(model, text, max_axes=3, max_points=1000, what="--orientation-range")
 
 
 def grid_poses(model: MechanismModel, axes: list[tuple[int, Array]], base: Array | None = None) -> Array:
