@@ -195,11 +195,11 @@ def test_adding_a_joint_type_is_adding_a_table_entry(monkeypatch):
     monkeypatch.setattr(joint_types, "JOINT_TYPES", table)
     monkeypatch.setattr(joint_types, "_BY_NAME", {t.name: k for k, t in enumerate(table)})
     import pkmdyn.multibody.description as description
-    import pkmdyn.multibody.model as model
+    import pkmdyn.multibody.records as records
     import pkmdyn.multibody.topology as topology
 
     monkeypatch.setattr(description, "_TYPES", tuple(t.name for t in table))
-    monkeypatch.setattr(model, "JOINT_TYPES", table)
+    monkeypatch.setattr(records, "JOINT_TYPES", table)
     monkeypatch.setattr(topology, "JOINT_TYPES", table)
     d = ex.slider_crank()
     d["joints"][3]["type"] = "slot"  # the slider may also turn about the base z axis ...

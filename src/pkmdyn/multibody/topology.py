@@ -22,7 +22,6 @@ multiplied, by the model's length scale) with the threshold ``1e-9 sigma_max``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
@@ -32,9 +31,7 @@ from ..spatial import cross
 from . import _kernels as K
 from .joint_types import JOINT_TYPES
 from .poses import body_poses
-
-if TYPE_CHECKING:  # annotations only: the model module compiles through this one
-    from .model import MechanismModel
+from .records import MechanismModel
 
 __all__ = ["TopologyReport", "analyse_topology", "kutzbach_count", "constraint_jacobian", "solver_selection",
            "row_scale", "column_scale", "row_labels"]

@@ -20,18 +20,17 @@ from numpy.typing import NDArray
 
 from ...errors import SingularityError, UnreachablePoseError
 from ...spatial import axis_rotation, cross, dot
+from .params import PdmModel, crank_angle
 
 if TYPE_CHECKING:
     from ...analysis.mobility import Joint
     from ...profiles.pdm_motion import PdmMotion
-    from .params import PdmModel
 
 __all__ = [
     "BodyState",
     "PdmPositions",
     "PdmKinematics",
     "BODY_NAMES",
-    "crank_angle",
     "unit_with_rates",
     "atan2_rates",
     "acos_rates",
@@ -51,25 +50,6 @@ BODY_NAMES = (
 
 
 # ----------------------------------------------------------------------------- helpers
-def crank_angle(R1: Array, R3: Array, r2: float, r3: float, branch: Array) -> tuple[Array, Array]:
-    """Crank angle theta_1i closing the loop R1i-R2i-R3i, Eq. 5-7 and App. B.
-
-    Solves ``a cos(theta) + b sin(theta) = d`` (Eq. 6) with ``a = r2 dx``, ``b = r2 dy``,
-    ``d = (dx^2 + dy^2 + r2^2 - r3^2) / 2``, ``(dx, dy) = R3i - R1i`` (App. B), as
-    ``theta = atan2(b, a) + branch * atan2(sqrt(a^2 + b^2 - d^2), d)`` (Eq. 7).
-    ``R1, R3`` (..., 3) [m]; ``branch`` broadcasts (+1 or -1). Returns ``theta`` [rad] and the
-    discriminant ``a^2 + b^2 - d^2`` [m^4]; a negative one means the loop cannot close (the
-    returned angle then uses a clipped root and must not be used).
-    """
-    dx = R3[..., 0] - R1[..., 0]
-    dy = R3[..., 1] - R1[..., 1]
-    a, b = r2 * dx, r2 * dy
-    d = 0.5 * (dx * dx + dy * dy + r2 * r2 - r3 * r3)
-    disc = a * a + b * b - d * d
-    theta = np.arctan2(b, a) + branch * np.arctan2(np.sqrt(np.maximum(disc, 0.0)), d)
-    return theta, disc
-
-
 def unit_with_rates(L: Array, Ld: Array, Ldd: Array) -> tuple[Array, Array, Array, Array, Array, Array]:
     """Unit vector ``u = L / l`` of a limb and the rates of ``u`` and ``l``, Eq. 33-34, 42-47.
 

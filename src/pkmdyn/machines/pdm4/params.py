@@ -26,7 +26,8 @@ from ...errors import ParameterError
 from ...params_util import Section as _Section
 from ...params_util import check_limit, read_toml, validate
 
-__all__ = ["PdmModel", "TrajectorySettings", "WorkspaceSettings", "load_params", "default_params_path", "LIMIT_KEYS"]
+__all__ = ["PdmModel", "TrajectorySettings", "WorkspaceSettings", "load_params", "default_params_path", "LIMIT_KEYS",
+           "crank_angle"]
 
 #: the run limits ``--limit KEY=VALUE`` may override (``[limits]`` of the parameter file)
 LIMIT_KEYS: dict[str, type] = {"max_samples": int, "max_limb_speed_m_s": float, "max_limb_acceleration_m_s2": float,
@@ -235,14 +236,32 @@ def _validate(raw: dict[str, Any], name: str) -> _Description:
     return validate(_Description, raw, name)
 
 
+def crank_angle(R1: Array, R3: Array, r2: float, r3: float, branch: Array) -> tuple[Array, Array]:
+    """Crank angle theta_1i closing the loop R1i-R2i-R3i, Eq. 5-7 and App. B.
+
+    Solves ``a cos(theta) + b sin(theta) = d`` (Eq. 6) with ``a = r2 dx``, ``b = r2 dy``,
+    ``d = (dx^2 + dy^2 + r2^2 - r3^2) / 2``, ``(dx, dy) = R3i - R1i`` (App. B), as
+    ``theta = atan2(b, a) + branch * atan2(sqrt(a^2 + b^2 - d^2), d)`` (Eq. 7).
+    ``R1, R3`` (..., 3) [m]; ``branch`` broadcasts (+1 or -1). Returns ``theta`` [rad] and the
+    discriminant ``a^2 + b^2 - d^2`` [m^4]; a negative one means the loop cannot close (the
+    returned angle then uses a clipped root and must not be used). It lives with the parameters,
+    which check the home pose with it, below the kinematics, which use it along a motion.
+    """
+    dx = R3[..., 0] - R1[..., 0]
+    dy = R3[..., 1] - R1[..., 1]
+    a, b = r2 * dx, r2 * dy
+    d = 0.5 * (dx * dx + dy * dy + r2 * r2 - r3 * r3)
+    disc = a * a + b * b - d * d
+    theta = np.arctan2(b, a) + branch * np.arctan2(np.sqrt(np.maximum(disc, 0.0)), d)
+    return theta, disc
+
+
 def _unit(deg: float) -> Array:
     a = math.radians(deg)
     return np.array([math.cos(a), math.sin(a), 0.0])
 
 
 def _build(d: _Description, name: str) -> PdmModel:
-    from .kinematics import crank_angle  # Eq. 7; imported here to keep the module graph acyclic
-
     g, lim = d.geometry, d.limbs
     r1, r2, r3, r4 = g.crank_pivot_spacing_m, g.crank_length_m, g.coupler_length_m, g.output_link_length_m
     side = np.array([-1.0, 1.0])
