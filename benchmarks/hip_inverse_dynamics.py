@@ -21,6 +21,7 @@ import resource
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -71,7 +72,9 @@ def main() -> None:
 
     import pinocchio
 
-    from pkmdyn.machines.hip_simulator.pinocchio_reference import reference_torques, spanning_tree_rnea_inputs
+    # the independent Pinocchio spanning-tree reference lives beside the tests (tests/oracles)
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from oracles.hip_pinocchio import reference_torques, spanning_tree_rnea_inputs
 
     model, t, R, w, wd, load = _inputs(args.samples)
     n = t.shape[0]

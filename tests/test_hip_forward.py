@@ -167,7 +167,7 @@ def test_friction_dissipates() -> None:
 def test_forward_against_pinocchio_inverse_dynamics() -> None:
     """Pinocchio's spanning tree + loop closures gives torques; ours must give back omega_dot."""
     pytest.importorskip("pinocchio")
-    from pkmdyn.machines.hip_simulator.pinocchio_reference import reference_torques
+    from oracles.hip_pinocchio import reference_torques
 
     rng = np.random.default_rng(31)
     model = random_model(rng, friction=True)

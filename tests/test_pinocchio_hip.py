@@ -1,6 +1,6 @@
 """The closed-form hip-simulator dynamics against an independent Pinocchio reference.
 
-The reference (``pkmdyn.machines.hip_simulator.pinocchio_reference``) solves the machine as a spanning tree with
+The reference (``tests/oracles/hip_pinocchio.py``) solves the machine as a spanning tree with
 loop-closure multipliers; it shares no formula with the closed form. Cases: the built-in
 parameters and random variants (geometry, inertia, friction, load) driven by smooth analytic
 Euler-angle motions.
@@ -20,7 +20,7 @@ from pkmdyn.machines.hip_simulator.dynamics import inverse_dynamics  # noqa: E40
 from pkmdyn.machines.hip_simulator.kinematics import platform_kinematics  # noqa: E402
 from pkmdyn.machines.hip_simulator.params import HipModel, default_params_dict, model_from_dict  # noqa: E402
 from pkmdyn.spatial import euler_kinematics  # noqa: E402
-from pkmdyn.machines.hip_simulator.pinocchio_reference import (  # noqa: E402
+from oracles.hip_pinocchio import (  # noqa: E402
     build_tree,
     closure_residual,
     reference_torques,

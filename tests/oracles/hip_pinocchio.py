@@ -41,12 +41,14 @@ otherwise. Pinocchio's spherical joint uses the *local* (platform-frame) angular
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from .params import HipModel
+if TYPE_CHECKING:  # the parameters' container only: every formula here is the oracle's own
+    from pkmdyn.machines.hip_simulator.params import HipModel
 
 __all__ = [
     "TreeInfo",
@@ -462,7 +464,7 @@ def spanning_tree_rnea_inputs(model: HipModel) -> tuple[pin.Model, pin.Data, Arr
     The platforms sit at ``R = Rx(10 deg) Ry(-5 deg) Rz(8 deg)`` with a non-zero angular velocity
     and acceleration; ``(q, v, a)`` close every loop. Returns ``(pin_model, data, q, v, a)``.
     """
-    from ...spatial import euler_kinematics
+    from pkmdyn.spatial import euler_kinematics
 
     angles = np.deg2rad([[10.0, -5.0, 8.0]])
     rates = np.array([[0.8, -0.5, 0.6]])
