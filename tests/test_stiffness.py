@@ -428,6 +428,36 @@ def test_sweep_reports_stiffness_metrics_that_scale_with_the_drives(tmp_path):
     assert rows[1]["lowest_frequency_Hz"] == pytest.approx(np.sqrt(2) * rows[0]["lowest_frequency_Hz"], rel=1e-9)
 
 
+def test_sweep_without_stiffness_has_no_stiffness_columns(tmp_path, capsys):
+    """[motion] stiffness = false: the same rows without the stiffness metrics, and an objective
+    naming one is refused before any work, naming it."""
+    pq = pytest.importorskip("pyarrow.parquet")
+    from pkmdyn.cli import main
+
+    text = ('[sampling]\nmethod = "grid"\n[motion]\nreactions = false\nstiffness = {flag}\n[parameters]\n'
+            '"parameters.height_m" = {{ values = [0.95, 1.05] }}\n[objectives]\n{objective} = "max"\n')
+    tables = {}
+    for flag in ("true", "false"):
+        space = tmp_path / f"space_{flag}.toml"
+        space.write_text(text.format(flag=flag, objective="gci"))
+        out = tmp_path / flag
+        assert main(["sweep", "--machine", "stewart", "--space", str(space), "--workers", "0", "--no-plots",
+                     "--out", str(out)]) == 0
+        tables[flag] = pq.read_table(out / "designs.parquet")
+    names = {"min_stiffness_N_m", "min_rot_stiffness_Nm_rad", "lowest_frequency_Hz"}
+    assert names <= set(tables["true"].column_names)
+    assert not names & set(tables["false"].column_names)
+    assert tables["false"].column_names == [c for c in tables["true"].column_names if c not in names]
+    assert tables["false"].column("gci").to_pylist() == tables["true"].column("gci").to_pylist()
+    space = tmp_path / "space_bad.toml"
+    space.write_text(text.format(flag="false", objective="min_stiffness_N_m"))
+    capsys.readouterr()
+    assert main(["sweep", "--machine", "stewart", "--space", str(space), "--workers", "0", "--no-plots",
+                 "--out", str(tmp_path / "bad")]) == 2
+    assert "min_stiffness_N_m" in capsys.readouterr().err
+    assert not (tmp_path / "bad").exists()
+
+
 def test_a_long_motion_in_chunks_equals_one_chunk(tmp_path, monkeypatch):
     """pkmdyn stiffness --motion computes the structure chunk by chunk: the same rows and the
     same worst sample with a chunk of 37 samples as with one chunk."""

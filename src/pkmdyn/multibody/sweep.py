@@ -48,6 +48,8 @@ class _Motion(Section):
     requirements: _Requirements | None = None
     singularity_threshold: Annotated[float, Field(ge=0.0, le=1.0)] = 1e-3
     reactions: bool = True
+    #: the stiffness metrics (with a compliance source in the description); false: none
+    stiffness: bool = True
     #: a grid of task poses (``pkmdyn workspace --grid``): each design's workspace size on it
     workspace_grid: str | None = Field(default=None, max_length=400)
     #: the poses the grid holds fixed (``--pose``)
@@ -144,7 +146,8 @@ class DescribedSweep:
     def metrics(self, options: Mapping[str, Any], description: Mapping[str, Any] | None = None
                 ) -> tuple[MetricInfo, ...]:
         """The metrics of the base ``description`` (named after its actuators and joints); the
-        joint reactions only with ``reactions = true`` (the default) in ``[motion]``."""
+        joint reactions only with ``reactions = true``, the stiffness metrics only with
+        ``stiffness = true`` (both the default) in ``[motion]``."""
         acts, joints, direct = _names(self.raw if description is None else description)
         out = [
             MetricInfo("gci", "-", "(1/T) int mu(t) dt, mu = the direct singularity measure where there are as "
@@ -174,8 +177,9 @@ class DescribedSweep:
             MetricInfo("peak_power_W", "W", "max over samples of sum_k u_k s_dot_k"),
             MetricInfo("motor_energy_per_cycle_J", "J", "int sum_k |u_k s_dot_k| dt over the motion"),
         ]
-        out += [MetricInfo(name, unit, text) for name, unit, text in _STIFFNESS_METRICS
-                if name in _stiffness_metrics(self.raw if description is None else description)]
+        if options.get("stiffness", True) is True:
+            out += [MetricInfo(name, unit, text) for name, unit, text in _STIFFNESS_METRICS
+                    if name in _stiffness_metrics(self.raw if description is None else description)]
         if options.get("workspace_grid"):
             name, unit = _workspace_size_name(self.raw if description is None else description,
                                               str(options["workspace_grid"]))
@@ -251,7 +255,8 @@ class DescribedSweep:
                 raise ParameterError(f"[requirements] {exc}") from None
             req = (opt.requirements.grid, opt.requirements.pose, None)
         return DescribedSweepContext(motion=motion, threshold=opt.singularity_threshold, reactions=opt.reactions,
-                                     stiffness=tuple(_stiffness_metrics(description)), workspace=ws, required=req)
+                                     stiffness=tuple(_stiffness_metrics(description)) if opt.stiffness else (),
+                                     workspace=ws, required=req)
 
     def evaluate(self, descriptions: Sequence[Mapping[str, Any]], context: DescribedSweepContext
                  ) -> list[DesignOutcome]:
