@@ -178,8 +178,8 @@ class DescribedSweep:
             MetricInfo("motor_energy_per_cycle_J", "J", "int sum_k |u_k s_dot_k| dt over the motion"),
         ]
         if options.get("stiffness", True) is True:
-            out += [MetricInfo(name, unit, text) for name, unit, text in _STIFFNESS_METRICS
-                    if name in _stiffness_metrics(self.raw if description is None else description)]
+            have = _stiffness_metrics(self.raw if description is None else description)
+            out += [MetricInfo(name, unit, text) for name, unit, text in _STIFFNESS_METRICS if name in have]
         if options.get("workspace_grid"):
             name, unit = _workspace_size_name(self.raw if description is None else description,
                                               str(options["workspace_grid"]))
