@@ -166,6 +166,28 @@ def test_round_trips_with_the_inverse_kinematics(name):
         assert np.abs((xp - xm) / (2 * e[a]) - rate).max() <= 1e-6 * max(np.abs(rate).max(), 1.0)
 
 
+@pytest.mark.parametrize("name", BUILTINS)
+def test_one_sample_at_a_time_gives_the_motion_back(name):
+    """The controller's route (``direct_one``: one compiled call per sample from the previous
+    sample's solution, the checked route where that call cannot answer) gives the motion's
+    poses and rates back from its actuator coordinates, also after a jump from the last sample
+    back to the first; the compiled call answered the motion's samples."""
+    from pkmdyn.multibody import _direct as D
+    from pkmdyn.multibody.direct import one_state
+    from pkmdyn.multibody.machine import machine_verbs
+
+    m = _model(name)
+    t, x, xd, xdd = _smooth(m, seed=5)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    V = machine_verbs(m)
+    sc = _scaled(m)
+    for _ in range(2):
+        got = np.array([np.concatenate(V.direct_one(m, kin.act_q[k], kin.act_qd[k])) for k in range(len(t))])
+        assert np.abs((got[:, :m.nt] - x) * sc).max() <= 1e-10
+        assert np.abs((got[:, m.nt:] - xd) * sc).max() <= 1e-8 * max(np.abs(xd * sc).max(), 1e-12)
+        assert one_state(V._state(m).direct[0])[0] == D.ONE_FACTORED
+
+
 def test_the_first_sample_is_reached_from_the_reference_pose():
     """Without a start, the first sample comes by continuation from the reference actuator
     coordinates: the assembly mode of the description's reference pose."""

@@ -31,13 +31,19 @@ from numba import njit
 
 from ._kernels import (LOOP_OPEN, NOT_CONVERGED, OK, ROWS_DRIFT, ROWS_JACOBIAN, ROWS_VALUES, SINGULAR, _wrap,
                        bias_motion, forward_positions, largest_scaled, rows)
+from ._one import _fview, _iview
 
-__all__ = ["CROSSED", "EULER_SINGULAR_RATES", "direct_batch", "direct_starts"]
+__all__ = ["CROSSED", "EULER_SINGULAR_RATES", "COLD", "BAD_INPUT", "direct_batch", "direct_starts", "direct_one",
+           "ONE_ARRAYS"]
 
 #: status of a sample where the determinant of ``K`` changed sign since the previous one
 CROSSED = 5
 #: status of a solved sample whose task Euler angles are at their singularity (no task rates)
 EULER_SINGULAR_RATES = 6
+#: status of a call of :func:`direct_one` without a previous solution to start from
+COLD = 10
+#: status of a call of :func:`direct_one` with a non-finite input
+BAD_INPUT = 12
 
 
 @njit(cache=True, _nrt=False)
@@ -352,11 +358,131 @@ def direct_starts(s, starts, tree, loops, task, sol, q_out, res_out, det_out, ra
             q_out[i, c] = q[c]
 
 
+# ---- one sample in one call: the model's arrays, the state and the work space packed into one
+# buffer (:func:`.direct.pack_one`), so that a call passes four arguments whatever the mechanism
+
+#: the arrays of the packed buffer in order, each (name, kind, ndim): kind "i" int64, "f" float64
+ONE_ARRAYS = (
+    ("body_parent", "i", 1), ("body_joint", "i", 1), ("joint_q0", "i", 1), ("joint_nq", "i", 1),
+    ("coord_motion", "i", 1), ("coord_offset", "f", 1), ("coord_sign", "f", 1), ("tree_R_parent", "f", 3),
+    ("tree_p_parent", "f", 2), ("tree_R_child", "f", 3), ("tree_p_child", "f", 2),
+    ("joint_R_parent", "f", 3), ("joint_p_parent", "f", 2), ("joint_R_child", "f", 3), ("joint_p_child", "f", 2),
+    ("ancestor_list", "i", 2), ("row_loop", "i", 1), ("row_kind", "i", 1), ("row_i", "i", 1), ("row_j", "i", 1),
+    ("loop_joint", "i", 1), ("joint_parent", "i", 1), ("joint_child", "i", 1),
+    ("task_point", "f", 1), ("task_kind", "i", 1), ("task_index", "i", 1), ("euler_axes", "i", 1),
+    ("act", "i", 1), ("unk", "i", 1), ("cut", "i", 1), ("idle", "f", 2), ("q_ref", "f", 1), ("row_scale", "f", 1),
+    ("scalars", "f", 1),  # tolerance, check tolerance, task body, Newton steps at most
+    # the work space of :func:`direct_sample` (:func:`_work`, in its order)
+    ("R", "f", 3), ("p", "f", 2), ("S", "f", 2), ("val", "f", 1), ("J", "f", 2), ("gamma", "f", 1), ("V", "f", 2),
+    ("Vpre", "f", 2), ("A", "f", 2), ("K", "f", 2), ("piv", "i", 1), ("r", "f", 1), ("G", "f", 2), ("qd", "f", 1),
+    ("qdd", "f", 1), ("w33", "f", 3), ("w3", "f", 2), ("trig", "f", 2), ("late", "i", 1), ("rowpos", "i", 1),
+    ("colpos", "i", 1), ("q0", "f", 1), ("step", "f", 1),
+    ("state", "f", 1),  # flag, det K, q (nq), x (nt), s (na) of the last solved sample
+    ("info", "f", 1), ("sdd", "f", 1), ("q", "f", 1),
+)
+#: the state's flag: nothing solved, a solution (set by the caller), a solution with its
+#: factors and ``G`` in the work space (after a call)
+ONE_COLD, ONE_PRIMED, ONE_FACTORED = 0.0, 1.0, 2.0
+
+
+@njit(cache=True, inline="always")
+def _v1(b, k, kind):  # pragma: no cover - compiled
+    return kind(b, b[4 * k], (b[4 * k + 1],))
+
+
+@njit(cache=True, inline="always")
+def _v2(b, k, kind):  # pragma: no cover - compiled
+    return kind(b, b[4 * k], (b[4 * k + 1], b[4 * k + 2]))
+
+
+@njit(cache=True, inline="always")
+def _v33(b, k):  # pragma: no cover - compiled
+    return _fview(b, b[4 * k], (b[4 * k + 1], 3, 3))
+
+
+@njit(cache=True, inline="always")
+def _vn3(b, k):  # pragma: no cover - compiled
+    return _fview(b, b[4 * k], (b[4 * k + 1], 3))
+
+
+@njit(cache=True, _nrt=False)
+def direct_one(b, s, sd, out):  # pragma: no cover - compiled
+    """One sample of the direct kinematics from the previous call's solution, as
+    :func:`direct_batch` solves its next sample (the predictor ``q + G (s - s_prev)`` and a
+    simplified Newton step with the previous factors; from a solution the caller set, Newton
+    alone), with the model, state and work space in the packed buffer ``b`` (:data:`ONE_ARRAYS`).
+    Writes the task pose and rate into ``out (2 nt,)`` and returns the status: OK, or
+    :data:`COLD`, :data:`BAD_INPUT`, a failure of :func:`direct_sample` or :data:`CROSSED`
+    (the caller then solves the sample by the checked route, which names what is wrong)."""
+    F, I = _fview, _iview
+    tree = (_v1(b, 0, I), _v1(b, 1, I), _v1(b, 2, I), _v1(b, 3, I), _v1(b, 4, I), _v1(b, 5, F), _v1(b, 6, F),
+            _v33(b, 7), _vn3(b, 8), _v33(b, 9), _vn3(b, 10))
+    loops = (_v33(b, 11), _vn3(b, 12), _v33(b, 13), _vn3(b, 14), _v2(b, 15, I), _v1(b, 16, I), _v1(b, 17, I),
+             _v1(b, 18, I), _v1(b, 19, I), _v1(b, 20, I), _v1(b, 21, I), _v1(b, 22, I))
+    sc = _v1(b, 33, F)
+    task_kind = _v1(b, 24, I)
+    task = (int(sc[2]), _v1(b, 23, F), task_kind, _v1(b, 25, I), _v1(b, 26, I))
+    act = _v1(b, 27, I)
+    nq = tree[4].shape[0]
+    sol = (act, _v1(b, 28, I), _v1(b, 29, I), _v2(b, 30, F), _v1(b, 31, F), _v1(b, 32, F), sc[0], sc[1], int(sc[3]),
+           nq < 0)
+    work = (_v33(b, 34), _vn3(b, 35), _v2(b, 36, F), _v1(b, 37, F), _v2(b, 38, F), _v1(b, 39, F), _v2(b, 40, F),
+            _v2(b, 41, F), _v2(b, 42, F), _v2(b, 43, F), _v1(b, 44, I), _v1(b, 45, F), _v2(b, 46, F), _v1(b, 47, F),
+            _v1(b, 48, F), _v33(b, 49), _vn3(b, 50), _vn3(b, 51), _v1(b, 52, I), _v1(b, 53, I), _v1(b, 54, I),
+            _v1(b, 55, F), _v1(b, 56, F))
+    st, info, sdd, q = _v1(b, 57, F), _v1(b, 58, F), _v1(b, 59, F), _v1(b, 60, F)
+    na = act.shape[0]
+    nt = task_kind.shape[0]
+    nr = loops[5].shape[0]
+    if st[0] == ONE_COLD:
+        return COLD
+    for a in range(na):
+        if not (np.isfinite(s[a]) and np.isfinite(sd[a])):
+            return BAD_INPUT
+    chord = st[0] == ONE_FACTORED
+    G = work[12]
+    for c in range(nq):
+        acc = st[2 + c]
+        if chord:
+            for a in range(na):
+                acc += G[c, a] * (s[a] - st[2 + nq + nt + a])
+        q[c] = acc
+    status = direct_sample(s, sd, sdd, q, chord, tree, loops, task, sol, work, info)
+    if status == OK and info[3] * st[1] < 0.0:
+        status = CROSSED
+    if status != OK:
+        st[0] = ONE_PRIMED  # the work space holds no factors of the last solution now
+        return status
+    val, J, qd = work[3], work[4], work[13]
+    for t in range(nt):
+        rr = nr + t
+        v = val[rr]
+        if task_kind[t] == 1:  # continuous from the previous pose
+            ref = st[2 + nq + t]
+            v = ref + _wrap(v - ref)
+        out[t] = v
+        acc = 0.0
+        for c in range(nq):
+            acc += J[rr, c] * qd[c]
+        out[nt + t] = acc
+    st[0] = ONE_FACTORED
+    st[1] = info[3]
+    for c in range(nq):
+        st[2 + c] = q[c]
+    for t in range(nt):
+        st[2 + nq + t] = out[t]
+    for a in range(na):
+        st[2 + nq + nt + a] = s[a]
+    return OK
+
+
 def _refresh_cache() -> None:
-    """The kernels above link and inline functions of :mod:`._kernels` (:mod:`._cache`)."""
-    from . import _cache, _kernels
+    """The kernels above link and inline functions of :mod:`._kernels` and :mod:`._one`'s
+    views (:mod:`._cache`)."""
+    from . import _cache, _kernels, _one
 
     _cache.refresh((direct_sample, direct_batch, direct_starts), (_kernels,))
+    _cache.refresh((direct_one,), (_kernels, _one))
 
 
 _refresh_cache()

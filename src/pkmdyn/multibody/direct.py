@@ -146,6 +146,49 @@ def _arrays(model: MechanismModel, damped: bool = False, max_iter: int = MAX_ITE
     return tree, loops, task, sol
 
 
+def pack_one(model: MechanismModel) -> NDArray[np.int64]:
+    """The packed buffer of :func:`._direct.direct_one` (its ``ONE_ARRAYS``): a header of
+    ``(offset, d0, d1, d2)`` per array, then each array's bits; the state cold."""
+    tree, loops, task, sol = _arrays(model)
+    act, unk, cut, idle, q_ref, rs, tol, check_tol, max_iter, _ = sol
+    nq, nb, na, nt = model.nq, model.body_parent.shape[0], model.na, model.nt
+    nrow, nu = model.row_loop.shape[0] + nt, unk.shape[0]
+    scalars = np.array([tol, check_tol, task[0], max_iter], dtype=float)
+    work = [np.zeros((nb, 3, 3)), np.zeros((nb, 3)), np.zeros((nq, 6)), np.zeros(nrow), np.zeros((nrow, nq)),
+            np.zeros(nrow), np.zeros((nb, 6)), np.zeros((nq, 6)), np.zeros((nb, 6)), np.zeros((nu, nu)),
+            np.zeros(nu, dtype=np.int64), np.zeros(nu), np.zeros((nq, na)), np.zeros(nq), np.zeros(nq),
+            np.zeros((5, 3, 3)), np.zeros((20, 3)), np.zeros((nq, 3)), np.full(nb, -1, dtype=np.int64),
+            np.arange(nrow, dtype=np.int64), np.arange(nq, dtype=np.int64), np.zeros(nq), np.zeros(nu)]
+    arrays = [*tree, *loops, *task[1:], act, unk, cut, idle, q_ref, rs, scalars, *work,
+              np.zeros(2 + nq + nt + na), np.zeros(5), np.zeros(na), np.zeros(nq)]
+    head = np.zeros(4 * len(arrays), dtype=np.int64)
+    parts, at = [], head.size
+    for i, (a, (name, kind, ndim)) in enumerate(zip(arrays, D.ONE_ARRAYS)):
+        a = np.ascontiguousarray(a, dtype=np.int64 if kind == "i" else float)
+        if a.ndim != ndim:
+            raise RuntimeError(f"internal error: {name} has {a.ndim} dimensions, the kernel takes {ndim}")
+        head[4 * i:4 * i + 4] = [at, *a.shape, *[1] * (3 - a.ndim)]
+        parts.append(a.ravel().view(np.int64))
+        at += a.size
+    return np.concatenate([head, *parts])
+
+
+def one_state(pk: NDArray[np.int64]) -> Array:
+    """The state of a packed buffer (:func:`pack_one`; a view): ``[flag, det K, q (nq), x (nt),
+    s (na)]`` of the last solved sample."""
+    k = len(D.ONE_ARRAYS) - 4
+    o, n = int(pk[4 * k]), int(pk[4 * k + 1])
+    return pk[o:o + n].view(np.float64)
+
+
+def prime_one(pk: NDArray[np.int64], q: Array, x: Array, s: Array, det: float) -> None:
+    """Set the solution a packed buffer's next call starts from (Newton alone, no predictor)."""
+    st = one_state(pk)
+    nq, nt = q.shape[0], x.shape[0]
+    st[0], st[1] = D.ONE_PRIMED, det
+    st[2:2 + nq], st[2 + nq:2 + nq + nt], st[2 + nq + nt:] = q, x, s
+
+
 def actuator_reference(model: MechanismModel) -> Array:
     """The actuator coordinates (na,) at the reference configuration."""
     return model.coord_offset[model.act_coord].copy()

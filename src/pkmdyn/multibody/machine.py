@@ -329,30 +329,32 @@ class MechanismVerbs:
         """The task pose and rate ``(nt,), (nt,)`` at actuated joint coordinates ``a`` and rates
         ``ad`` by the direct kinematics (:mod:`.direct`), warm-started from the previous call
         (the first from the reference configuration): the controller's pose from its encoders.
-        Raises where the actuators reach no pose or sit on a singularity."""
-        from . import _kernels as K
-        from .direct import _arrays, _batch, _outputs, direct_kinematics
+        One compiled call with a packed buffer (:func:`._direct.direct_one`); where it cannot
+        answer, the checked route. Raises where the actuators reach no pose or sit on a
+        singularity."""
+        from . import _direct as D
+        from .direct import direct_kinematics, one_state, pack_one, prime_one
 
         st = self._state(model)
-        a1 = np.ascontiguousarray(a, dtype=float).reshape(1, -1)
-        ad1 = np.ascontiguousarray(ad, dtype=float).reshape(1, -1)
-        if st.direct is None:
-            dk = direct_kinematics(model, a1, ad1)
-            st.direct = {"args": _arrays(model), "out": _outputs(model, 1), "q": dk.q[0].copy(), "x": dk.x[0].copy(),
-                         "det": float(dk.det[0])}
-            return dk.x[0].copy(), dk.xd[0].copy()
-        d = st.direct
-        out = _batch(model, a1, ad1, np.zeros_like(a1), d["q"], d["x"], None, out=d["out"], args=d["args"])
-        if out["status"][0] != K.OK or out["det"][0] * d["det"] < 0:  # the checked route names what is wrong
-            dk = direct_kinematics(model, a1, ad1, q_start=d["q"])
-            if dk.det[0] * d["det"] < 0:
+        a = np.ascontiguousarray(a, dtype=float).reshape(-1)
+        ad = np.ascontiguousarray(ad, dtype=float).reshape(-1)
+        if st.direct is not None:
+            pk, out = st.direct
+            if D.direct_one(pk, a, ad, out) == D.OK:
+                nt = model.nt
+                return out[:nt].copy(), out[nt:].copy()
+            prev = one_state(pk)
+            q_prev, det_prev = prev[2:2 + model.nq].copy(), float(prev[1])
+            dk = direct_kinematics(model, a[None], ad[None], q_start=q_prev)
+            if dk.det[0] * det_prev < 0:  # the checked route names what is wrong otherwise
                 from ..errors import SingularityError
 
                 raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
-            d.update(q=dk.q[0].copy(), x=dk.x[0].copy(), det=float(dk.det[0]))
-            return dk.x[0].copy(), dk.xd[0].copy()
-        d.update(q=out["q"][0].copy(), x=out["x"][0].copy(), det=float(out["det"][0]))
-        return out["x"][0].copy(), out["xd"][0].copy()
+        else:
+            dk = direct_kinematics(model, a[None], ad[None])
+            st.direct = (pack_one(model), np.zeros(2 * model.nt))
+        prime_one(st.direct[0], dk.q[0], dk.x[0], a, float(dk.det[0]))
+        return dk.x[0].copy(), dk.xd[0].copy()
 
 
 def machine_verbs(model: MechanismModel) -> MechanismVerbs:
