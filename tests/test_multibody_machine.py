@@ -292,3 +292,30 @@ def test_encoder_readings_follow_their_own_previous_reading():
         want = solve_kinematics(m, x[None]).act_q[0]
         assert np.abs(got - want).max() <= 1e-12
     assert np.abs(first - solve_kinematics(m, x0[None]).act_q[0]).max() <= 1e-12
+
+
+@pytest.mark.parametrize("name", ["stewart", "delta", "bennett"])
+def test_encoder_readings_one_at_a_time_are_the_inverse_kinematics(name):
+    """The plant's encoders one reading at a time (``actuator_coordinates_one``: one compiled
+    call from the previous reading's solution, the checked route where it cannot answer) read
+    the batched inverse kinematics' actuated coordinates along a motion; the compiled call
+    answered; a non-finite pose is refused by the checked route."""
+    from pkmdyn.errors import MotionError
+    from pkmdyn.multibody import _one
+
+    m = load_mechanism(ex.builtin_dict(name))
+    t = np.linspace(0.0, 0.8, 200)
+    amp = np.where(m.task_kind == 1, 0.04, 0.02 * m.length_scale)
+    x, xd, xdd = ex.smooth_motion(reference_task(m), amp, t, 3)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    V = machine_verbs(m)
+    got = np.array([V.actuator_coordinates_one(m, x[k], xd[k], fresh=k == 0) for k in range(len(t))])
+    scale = np.where(m.coord_motion[m.act_coord] >= 3, 1.0 / m.length_scale, 1.0)
+    assert np.abs((got - kin.act_q) * scale).max() <= 1e-12
+    st = V._state(m)
+    if _one.supported(m):
+        assert _one.state(st.encoder_pk)[0] == _one.FACTORED
+    bad = x[5].copy()
+    bad[0] = np.nan
+    with pytest.raises(MotionError):
+        V.actuator_coordinates_one(m, bad, xd[5])

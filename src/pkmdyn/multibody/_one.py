@@ -51,7 +51,7 @@ from .friction import EPS_ROTATION as EPS_R
 from .friction import EPS_TRANSLATION as EPS_T
 from .model import MechanismModel
 
-__all__ = ["pack", "supported", "state", "prime", "solution", "forward_one", "inverse_one", "COLD"]
+__all__ = ["pack", "supported", "state", "prime", "solution", "forward_one", "inverse_one", "positions_one", "COLD"]
 
 Array = NDArray[np.float64]
 
@@ -63,6 +63,9 @@ SINGULAR_DYNAMICS = 11
 BAD_INPUT = 12
 #: status of a work space shorter than the kernel's views (a defect of :func:`_sizes`)
 SHORT_WORK = 13
+#: what a call of the kernel computes: the task accelerations, the efforts, the actuated
+#: coordinates alone
+FORWARD, INVERSE, POSITIONS = 1, 0, 2
 
 _INT = ("body_parent", "body_joint", "joint_q0", "joint_nq", "coord_motion", "ancestor_list", "row_loop", "row_kind",
         "row_i", "row_j", "loop_joint", "joint_parent", "joint_child", "task_kind", "task_index", "euler_axes",
@@ -284,8 +287,10 @@ def _take3(pk, o, a, b, c):  # pragma: no cover - compiled
 
 
 @njit(cache=True, _nrt=False)
-def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
-    """The kernel (module docstring): ``v`` is ``u`` (forward) or ``xdd`` (inverse); writes the
+def _dynamics(pk, x, xd, v, load, mode, out):  # pragma: no cover - compiled
+    """The kernel (module docstring); ``mode`` :data:`FORWARD`, :data:`INVERSE` or
+    :data:`POSITIONS` (step 1 alone: the actuated coordinates into ``out``, ``v`` unused);
+    ``v`` is ``u`` (forward) or ``xdd`` (inverse); writes the
     other into ``out``; returns the status (0 OK)."""
     nq, nt = pk[4], pk[5]
     st = _fview(pk, pk[7], (1 + nq + nt + nq * nt + nq + nt + 1,))
@@ -418,6 +423,10 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
     for c in range(nq):
         qddp[c] = qdd[c]
     st[0] = FACTORED  # solve_sample left the factors of K at q in K, wi
+    if mode == POSITIONS:
+        for a in range(act_coord.shape[0]):
+            out[a] = q[act_coord[a]]
+        return OK
     # ---- 2. friction that does not depend on the reactions, from the rates (V = [w; v_O])
     for c in range(nq):
         Qf[c] = 0.0
@@ -481,7 +490,7 @@ def _dynamics(pk, x, xd, v, load, forward, out):  # pragma: no cover - compiled
                 for j in range(nt):
                     M[t, j] += ir * Gp[ca, t] * Gp[ca, j]
     # ---- 5. the equation of motion, M xdd + h = J_ax^T k tau (tau the motor efforts)
-    if forward:
+    if mode == FORWARD:
         for t in range(nt):
             acc = -h[t]
             for a in range(nt):
@@ -529,12 +538,19 @@ def forward_one(pk: NDArray[np.int64], x: Array, xd: Array, u: Array, load: floa
     magnitude [N], if the mechanism has one); returns the status (0 OK). The compiled kernel is
     :func:`_dynamics`, one for both directions (a compiled entry point per direction cost a
     second linking of the whole kernel, some seconds of cold compilation each)."""
-    return _dynamics(pk, x, xd, u, load, True, out)
+    return _dynamics(pk, x, xd, u, load, FORWARD, out)
 
 
 def inverse_one(pk: NDArray[np.int64], x: Array, xd: Array, xdd: Array, load: float, out: Array) -> int:
     """``out = u (na,)`` of one sample; returns the status (0 OK) (:func:`forward_one`)."""
-    return _dynamics(pk, x, xd, xdd, load, False, out)
+    return _dynamics(pk, x, xd, xdd, load, INVERSE, out)
+
+
+def positions_one(pk: NDArray[np.int64], x: Array, xd: Array, out: Array) -> int:
+    """``out = q_a (na,)``, the actuated joints' coordinates at task pose ``x`` (one sample of
+    the inverse kinematics from the previous call's solution, ``xd`` the pose's rate for the
+    predictor: a plant's encoders); returns the status (0 OK) (:func:`forward_one`)."""
+    return _dynamics(pk, x, xd, xd, 0.0, POSITIONS, out)
 
 
 def _refresh_cache() -> None:

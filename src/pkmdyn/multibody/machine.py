@@ -63,6 +63,13 @@ class _State:
         self.pk = _one.pack(model) if _one.supported(model) else None
         self.direct: Any = None  # the direct kinematics' warm start (:meth:`MechanismVerbs.direct_one`)
         self.encoder_q: Array | None = None  # the last reading's tree coordinates (``actuator_coordinates_one``)
+        # the readings' own compiled path (a buffer of its own: its state is the last reading)
+        self.encoder_pk = _one.pack(model) if self.pk is not None else None
+        self.encoder_out = np.zeros(model.na)
+        # that path's solution (a view) and its copy before each call (the start of the checked
+        # route where the call cannot answer)
+        self.encoder_view = _one.state(self.encoder_pk)[1:1 + model.nq] if self.encoder_pk is not None else None
+        self.encoder_prev = np.zeros(model.nq)
 
     def last_q(self) -> Array | None:
         """The last solved tree coordinates: the compiled path's when it holds a solution (it
@@ -308,22 +315,37 @@ class MechanismVerbs:
         """The actuated joints' coordinates ``(na,)`` at task pose ``q`` (one sample of the
         inverse kinematics, warm-started from the last solved sample: the plant's encoders; with
         ``fresh``, reached from the reference configuration instead, the assembly of a run's
-        first pose)."""
+        first pose). ``qd``, the pose's rate, makes the start closer. One compiled call
+        (:func:`._one.positions_one`) where it answers, else the checked route."""
         from . import _kernels as K
+        from . import _one
         from .kinematics import _run
 
         st = self._state(model)
+        nt = model.nt
+        if not fresh and st.encoder_q is not None and st.encoder_pk is not None:
+            xa, xda = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+            if xa.shape == (nt,) and xda.shape == (nt,):
+                np.copyto(st.encoder_prev, st.encoder_view)
+                if _one.positions_one(st.encoder_pk, np.ascontiguousarray(xa), np.ascontiguousarray(xda),
+                                      st.encoder_out) == K.OK:
+                    return st.encoder_out.copy()
+                st.encoder_q = st.encoder_prev.copy()  # the last reading's solution
         x1 = np.ascontiguousarray(self._x(q))
+        q_sol = G_sol = None
         if not fresh and st.encoder_q is not None and np.all(np.isfinite(x1)):
             # from the previous reading (near: one control cycle ago), not from whatever the
             # other verbs solved last, which may lie on another branch of a leg
             out = _run(model, x1, np.zeros_like(x1), np.zeros_like(x1), st.encoder_q)
             if out["status"][0] == K.OK:
-                st.encoder_q = out["q"][0].copy()
-                return out["q"][0][model.act_coord].copy()
-        kin = solve_kinematics(model, x1, q_start=None if fresh or st.encoder_q is None else st.encoder_q)
-        st.encoder_q = kin.q[0].copy()
-        return kin.act_q[0].copy()
+                q_sol, G_sol = out["q"][0].copy(), out["G"][0].copy()
+        if q_sol is None:
+            kin = solve_kinematics(model, x1, q_start=None if fresh or st.encoder_q is None else st.encoder_q)
+            q_sol, G_sol = kin.q[0].copy(), kin.G[0].copy()
+        st.encoder_q = q_sol
+        if st.encoder_pk is not None:
+            _one.prime(st.encoder_pk, q_sol, x1[0], G_sol)
+        return q_sol[model.act_coord].copy()
 
     def direct_one(self, model: MechanismModel, a: Array, ad: Array) -> tuple[Array, Array]:
         """The task pose and rate ``(nt,), (nt,)`` at actuated joint coordinates ``a`` and rates
