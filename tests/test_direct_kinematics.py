@@ -186,6 +186,8 @@ def test_one_sample_at_a_time_gives_the_motion_back(name):
         assert np.abs((got[:, :m.nt] - x) * sc).max() <= 1e-10
         assert np.abs((got[:, m.nt:] - xd) * sc).max() <= 1e-8 * max(np.abs(xd * sc).max(), 1e-12)
         assert one_state(V._state(m).direct[0])[0] == D.ONE_FACTORED
+    with pytest.raises((MotionError, ParameterError), match="actuator|column|shape|expected"):
+        V.direct_one(m, kin.act_q[0][:-1], kin.act_qd[0][:-1])  # one actuator short: the checked route refuses
 
 
 def test_the_first_sample_is_reached_from_the_reference_pose():

@@ -362,7 +362,7 @@ class MechanismVerbs:
         ad = np.ascontiguousarray(ad, dtype=float).reshape(-1)
         if st.direct is not None:
             pk, out = st.direct
-            if D.direct_one(pk, a, ad, out) == D.OK:
+            if a.shape == ad.shape == (model.na,) and D.direct_one(pk, a, ad, out) == D.OK:
                 nt = model.nt
                 return out[:nt].copy(), out[nt:].copy()
             prev = one_state(pk)
