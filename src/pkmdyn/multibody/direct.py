@@ -161,6 +161,8 @@ def pack_one(model: MechanismModel) -> NDArray[np.int64]:
             np.arange(nrow, dtype=np.int64), np.arange(nq, dtype=np.int64), np.zeros(nq), np.zeros(nu)]
     arrays = [*tree, *loops, *task[1:], act, unk, cut, idle, q_ref, rs, scalars, *work,
               np.zeros(2 + nq + nt + na), np.zeros(5), np.zeros(na), np.zeros(nq)]
+    if len(arrays) != len(D.ONE_ARRAYS):
+        raise RuntimeError(f"internal error: {len(arrays)} arrays packed, the kernel takes {len(D.ONE_ARRAYS)}")
     head = np.zeros(4 * len(arrays), dtype=np.int64)
     parts, at = [], head.size
     for i, (a, (name, kind, ndim)) in enumerate(zip(arrays, D.ONE_ARRAYS)):
