@@ -154,11 +154,7 @@ def pack_one(model: MechanismModel) -> NDArray[np.int64]:
     nq, nb, na, nt = model.nq, model.body_parent.shape[0], model.na, model.nt
     nrow, nu = model.row_loop.shape[0] + nt, unk.shape[0]
     scalars = np.array([tol, check_tol, task[0], max_iter], dtype=float)
-    work = [np.zeros((nb, 3, 3)), np.zeros((nb, 3)), np.zeros((nq, 6)), np.zeros(nrow), np.zeros((nrow, nq)),
-            np.zeros(nrow), np.zeros((nb, 6)), np.zeros((nq, 6)), np.zeros((nb, 6)), np.zeros((nu, nu)),
-            np.zeros(nu, dtype=np.int64), np.zeros(nu), np.zeros((nq, na)), np.zeros(nq), np.zeros(nq),
-            np.zeros((5, 3, 3)), np.zeros((20, 3)), np.zeros((nq, 3)), np.full(nb, -1, dtype=np.int64),
-            np.arange(nrow, dtype=np.int64), np.arange(nq, dtype=np.int64), np.zeros(nq), np.zeros(nu)]
+    work = D._work(nq, nb, nrow, nu, na)  # the batched route's own work space
     arrays = [*tree, *loops, *task[1:], act, unk, cut, idle, q_ref, rs, scalars, *work,
               np.zeros(2 + nq + nt + na), np.zeros(5), np.zeros(na), np.zeros(nq)]
     if len(arrays) != len(D.ONE_ARRAYS):
