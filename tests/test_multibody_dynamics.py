@@ -649,7 +649,7 @@ def test_normal_equation_kernel_equals_least_squares_and_flags_dependent_columns
     """The cut route's compiled least squares (normal equations, Cholesky) equals numpy's
     least squares on consistent and inconsistent systems, and flags a sample whose columns
     are dependent instead of returning a number for it."""
-    from pkmdyn.multibody._dyn_kernels import normal_solve_batch
+    from pkmdyn.multibody._reaction_kernels import normal_solve
 
     rng = np.random.default_rng(3)
     n, m, k = 6, 21, 15
@@ -657,8 +657,8 @@ def test_normal_equation_kernel_equals_least_squares_and_flags_dependent_columns
     r = rng.normal(size=(n, m))
     r[:3] = np.einsum("nmk,nk->nm", A[:3], rng.normal(size=(3, k)))  # three consistent systems
     A[4, :, 7] = 2.0 * A[4, :, 2] - A[4, :, 5]  # sample 4: a dependent column
-    lam, ok = np.full((n, k), np.nan), np.ones(n, dtype=np.bool_)
-    normal_solve_batch(np.ascontiguousarray(np.swapaxes(A, 1, 2)), r, np.empty((k, k)), lam, ok)
+    lam = np.full((n, k), np.nan)
+    ok = np.array([normal_solve(np.ascontiguousarray(A[s].T), r[s], np.empty((k, k)), lam[s]) for s in range(n)])
     assert ok.tolist() == [True, True, True, True, False, True]
     for s in np.flatnonzero(ok):
         ref = np.linalg.lstsq(A[s], r[s], rcond=None)[0]
@@ -669,19 +669,24 @@ def test_cut_route_solves_a_sample_with_dependent_columns_by_least_squares():
     """Where the cut joints' columns become dependent at one sample, the cut route still returns
     wrenches that satisfy that sample's equations (least squares, not a failed factorisation),
     and the other samples are untouched."""
-    from pkmdyn.multibody.dynamics import _CutRoute, coordinate_twists, free_blocks
+    from pkmdyn.multibody.dynamics import _cut_solve, _CutRoute, coordinate_twists, cut_table
 
     m, kin = _kin(ex.builtin_dict("stewart"), n=5)
     S = coordinate_twists(m, kin.q, kin)
-    cuts = _CutRoute(m, kin, S, free_blocks(m, kin, S), 1e-10)
     W = np.zeros((5, m.nb, 6))
+    zero = np.zeros((5, m.nq))
     rng = np.random.default_rng(0)
-    lam = rng.normal(size=(5, cuts.A.shape[2]))
-    before, _ = cuts.solve(m, W, np.einsum("nqk,nk->nq", cuts.A, lam), np.zeros((5, m.nq)), None)
-    cuts.A[2, :, 7] = cuts.A[2, :, 2] - 0.5 * cuts.A[2, :, 4]
+    lam = rng.normal(size=(5, cut_table(m).K))
+    before, _, _ = _cut_solve(m, kin, S, W, np.einsum("nqk,nk->nq", _CutRoute(m, kin, S, 1e-10).A, lam), zero, None)
+    # sample 2: the twists of the coordinates that move the first cut joint's child vanish, so
+    # its columns do; the same multipliers make the right side
+    S2 = S.copy()
+    S2[2, np.flatnonzero(cut_table(m).cut_sign[0])] = 0.0
+    cuts = _CutRoute(m, kin, S2, 1e-10)
+    assert np.abs(cuts.A[2, :, :3]).max() == 0.0
     rhs = np.einsum("nqk,nk->nq", cuts.A, lam)
-    z, _ = cuts.solve(m, W, rhs, np.zeros((5, m.nq)), None)
-    assert np.all(np.isfinite(z))
+    z, _, res = _cut_solve(m, kin, S2, W, rhs, zero, None)
+    assert np.all(np.isfinite(z)) and np.all(np.isfinite(res))
     keep = [0, 1, 3, 4]
     assert np.abs(z[keep] - before[keep]).max() <= 1e-9 * np.abs(before).max()
     # sample 2: the least-squares multipliers of its (now rank-deficient) equations

@@ -368,57 +368,6 @@ def apply_loads(R, origin, load_body, load_point, LF, LM, W):  # pragma: no cove
                         W[s, b])
 
 
-@njit(cache=True, _nrt=False, fastmath={"reassoc", "contract"})
-def normal_solve_batch(At, r, M, lam, ok):  # pragma: no cover - compiled
-    """Least squares ``lam[s] (K,)`` of ``A[s] lam = r[s]`` by the normal equations, every sample:
-    ``At (n, K, m)`` the transposed matrices, ``r (n, m)``; ``A^T A`` factored by Cholesky in
-    ``M (K, K)`` (work space). ``ok[s]`` is false where ``A^T A`` is not safely positive definite:
-    a column whose part outside the span of the columns before it is below 3e-7 of its length
-    (dependent at that sample; ``lam[s]`` is then left unsolved)."""
-    K, m = At.shape[1], At.shape[2]
-    for s in range(At.shape[0]):
-        a = At[s]
-        x = lam[s]
-        for i in range(K):
-            for j in range(i + 1):
-                acc = 0.0
-                for q in range(m):
-                    acc += a[i, q] * a[j, q]
-                M[i, j] = acc
-            acc = 0.0
-            for q in range(m):
-                acc += a[i, q] * r[s, q]
-            x[i] = acc
-        good = True
-        for j in range(K):
-            d = M[j, j]
-            for k in range(j):
-                d -= M[j, k] * M[j, k]
-            if not d > 1e-13 * M[j, j]:  # column j (nearly) in the span of the ones before it
-                good = False
-                break
-            d = math.sqrt(d)
-            M[j, j] = d
-            for i in range(j + 1, K):
-                v = M[i, j]
-                for k in range(j):
-                    v -= M[i, k] * M[j, k]
-                M[i, j] = v / d
-        ok[s] = good
-        if not good:
-            continue
-        for i in range(K):
-            v = x[i]
-            for k in range(i):
-                v -= M[i, k] * x[k]
-            x[i] = v / M[i, i]
-        for i in range(K - 1, -1, -1):
-            v = x[i]
-            for k in range(i + 1, K):
-                v -= M[k, i] * x[k]
-            x[i] = v / M[i, i]
-
-
 def _refresh_cache() -> None:
     """The twist kernels link or inline the kinematics kernels' ``forward_positions``,
     ``_frame``, ``_unit_twist`` and ``_advance``, the mass matrix kernels ``_matmul3``

@@ -52,7 +52,7 @@ from numpy.typing import NDArray
 
 from ..errors import ParameterError, SingularityError
 from .friction import JointFriction, friction_diverges, known_friction
-from .joint_types import JOINT_TYPES
+from .joint_types import JOINT_TYPES, MOTION_CODES, type_code
 from .kinematics import MechanismKinematics, joint_frame
 from .loads import load_forces, named_magnitudes
 from .model import MechanismModel
@@ -435,25 +435,30 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
 
     S = coordinate_twists(model, kin.q, kin)
     n = len(kin)
-    blocks = free_blocks(model, kin, S)
     scale = _column_scale(model)
     k = 6 * len(model.joint_names)
-    cuts = None if solver == "dense" else _CutRoute(model, kin, S, blocks, rtol)
-    over = cuts is not None and not cuts.full_rank and model.topology is not None and \
-        model.topology.overconstraints > 0 and cuts.A.shape[2] > 0
+    fast = over = False
+    cuts = None
+    if solver != "dense":  # the rank is the topology's: checked on the first, middle and last samples
+        probe = _CutRoute(model, kin, S, rtol, samples=np.unique([0, n // 2, n - 1]))
+        fast = probe.full_rank
+        over = not fast and model.topology is not None and model.topology.overconstraints > 0 and \
+            probe.A.shape[2] > 0
+        if over:  # compliance in the cut joints' unknowns (no dense SVD)
+            cuts = _CutRoute(model, kin, S, rtol)
+    fr_on = friction and fr_any(model)
+    blocks = free_blocks(model, kin, S) if not fast or fr_on else []
     A = None
-    if over:  # compliance in the cut joints' unknowns (no dense SVD)
+    if over:
         r = -1
-    elif cuts is None or not cuts.full_rank:
-        cuts = None
+    elif not fast:
         A = equilibrium_matrix(model, blocks)
         U, sv, Vt = np.linalg.svd(A * scale[None, None, :], full_matrices=False)
         ranks = (sv > rtol * sv[:, :1]).sum(axis=1)
         r = int(ranks.min())
-        cuts = None
-    elif cuts is not None:
+    else:
         r = k
-    fr = JointFriction(model, kin, S, blocks, named) if friction and fr_any(model) else None
+    fr = JointFriction(model, kin, S, blocks, named) if fr_on else None
     F: dict | None = fr.initial() if fr is not None else None
     Qf = fr.generalised(F) if fr is not None else None
     history: list[float] = []
@@ -465,7 +470,7 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
         u = actuator_efforts(model, kin, Q if Qf is None else Q + Qf, sample_offset=sample_offset)
         eff = np.zeros((n, model.nq))
         eff[:, model.act_coord] = u
-        b = equilibrium_rhs(model, blocks, W, eff, F)
+        b = None if fast else equilibrium_rhs(model, blocks, W, eff, F)
         mu = None  # the idle freedoms' holding forces where the solve gives them
         if over:
             from .reactions import compliant_reactions
@@ -474,8 +479,8 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
             z, t = compliant_reactions(model, kin, cuts.A, (Q if Qf is None else Q + Qf) - eff, -1, W,
                                        affine=(z0, Z))
             method = "compliance"
-        elif cuts is not None:
-            z, mu = cuts.solve(model, W, Q if Qf is None else Q + Qf, eff, F)
+        elif fast:
+            z, mu, res = _cut_solve(model, kin, S, W, (Q if Qf is None else Q + Qf) - eff, eff, F)
             method, t = "rigid", 0
         elif r < A.shape[2] and overconstrained == "minimum-norm":
             coef = np.einsum("nmr,nm->nr", U[:, :, :r], b) / sv[:, :r]
@@ -509,7 +514,10 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
             raise ParameterError(f"joint {model.joint_names[worst_joint]}: the load-dependent friction does not "
                                  f"converge at {when} (relative change {history[-1]:.3g} after {it} iterations): "
                                  "the friction coefficients lock the mechanism")
-    res, hold = _residual(model, blocks, z, b, mu)
+    if fast:
+        hold = mu @ cut_table(model).H.T
+    else:
+        res, hold = _residual(model, blocks, z, b, mu)
     Wj = z.reshape(n, -1, 6)
     pts = kin.joint_point
     force = Wj[..., 3:]
@@ -596,6 +604,73 @@ def _residual(model: MechanismModel, blocks: list, z: Array, b: Array, mu: Array
     return r, hold
 
 
+@dataclass(frozen=True)
+class _CutTable:
+    """The cut joints of a model as the compiled route takes them (:mod:`._reaction_kernels`):
+    ``cut_j`` each cut joint (those with freedoms, then the fixed ones), ``cut_f`` its freedoms,
+    ``cut_pos`` its first multiplier (``6 - f`` each), ``cut_sign (nc, nq)`` +1 on the tree
+    coordinates that move its child and not its parent, -1 on the reverse; ``joint_cut_index``
+    (nj,) each joint's place in ``cut_j`` (-1 for a tree joint); ``type_motion`` (types, 3) the
+    elementary motions of each joint type (:data:`.joint_types.MOTION_CODES`); ``H`` the idle
+    freedoms' holding directions (:func:`idle_holding`), whose forces follow the multipliers."""
+
+    cut_j: NDArray[np.int64]
+    cut_f: NDArray[np.int64]
+    cut_pos: NDArray[np.int64]
+    cut_sign: Array
+    joint_cut_index: NDArray[np.int64]
+    type_motion: NDArray[np.int64]
+    spherical: int
+    H: Array
+
+    @property
+    def n_cut(self) -> int:
+        return int(np.sum(6 - self.cut_f))
+
+    @property
+    def K(self) -> int:
+        return self.n_cut + self.H.shape[1]
+
+    def model_args(self, model: MechanismModel) -> tuple:
+        """The model's arrays in the order of the kernels' arguments after ``cut_sign``."""
+        return (model.joint_type, model.joint_child, model.joint_parent, model.joint_R_child, model.joint_p_child,
+                model.joint_R_parent, model.joint_p_parent, self.type_motion, self.spherical)
+
+
+def cut_table(model: MechanismModel) -> _CutTable:
+    """The :class:`_CutTable` of ``model``."""
+    nj, nq = len(model.joint_names), model.nq
+    free = [j for j in range(nj) if model.joint_cut[j] and JOINT_TYPES[model.joint_type[j]].freedoms]
+    fixed = [j for j in range(nj) if model.joint_cut[j] and not JOINT_TYPES[model.joint_type[j]].freedoms]
+    cut_j = np.array(free + fixed, dtype=np.int64)
+    cut_f = np.array([JOINT_TYPES[model.joint_type[j]].freedoms for j in cut_j], dtype=np.int64)
+    anc = model.ancestors.astype(float)
+    sign = np.zeros((cut_j.size, nq))
+    for i, j in enumerate(cut_j):
+        c, p = model.joint_child[j], model.joint_parent[j]
+        sign[i] = (anc[c] if c >= 0 else 0.0) - (anc[p] if p >= 0 else 0.0)
+    where = np.full(nj, -1, dtype=np.int64)
+    where[cut_j] = np.arange(cut_j.size)
+    motion = np.zeros((len(JOINT_TYPES), 3), dtype=np.int64)
+    for t, jt in enumerate(JOINT_TYPES):
+        motion[t, :jt.freedoms] = [MOTION_CODES[mn] for mn in jt.motions]
+    return _CutTable(cut_j=cut_j, cut_f=cut_f, cut_pos=np.concatenate([[0], np.cumsum(6 - cut_f)[:-1]]).astype(np.int64),
+                     cut_sign=sign, joint_cut_index=where, type_motion=motion, spherical=type_code("spherical"),
+                     H=idle_holding(model))
+
+
+def _full_rank(A: Array, rtol: float) -> bool:
+    """Whether the columns of every ``A (n, m, K)`` are independent (QR, relative ``100 rtol``)."""
+    if A.shape[2] > A.shape[1]:
+        return False
+    if not A.shape[2]:
+        return True
+    _, R = np.linalg.qr(A)
+    d = np.abs(np.diagonal(R, axis1=1, axis2=2))
+    colmax = np.abs(A).max(axis=(1, 2))
+    return bool(np.all(d > rtol * 1e2 * np.maximum(colmax[:, None], 1e-300)))
+
+
 class _CutRoute:
     """Reactions through the cut joints' constraint wrenches (Featherstone's loop-closure form).
 
@@ -610,72 +685,29 @@ class _CutRoute:
     efforts on their coordinates) give the ``lambda`` by least squares (normal equations; the
     system is consistent where the efforts come from Eq. 3; its full column rank is checked by
     QR on three samples); every tree joint's wrench then follows leaves first,
-    ``W_tree(b) = W_b + sum_children W_tree(child) - (cut wrenches on b)``. When the columns are
+    ``W_tree(b) = W_b + sum_children W_tree(child) - (cut wrenches on b)``
+    (:func:`._reaction_kernels.cut_reactions_batch`, :func:`_cut_solve`). When the columns are
     rank deficient (an over-constrained mechanism) ``full_rank`` is false and the dense
-    equations decide."""
+    equations or the compliance decide. This class holds the matrix ``A`` (n, nq, K) of the
+    samples ``samples`` (default all) and assembles the wrenches in numpy for the compliance
+    and stiffness routes."""
 
-    def __init__(self, model: MechanismModel, kin: MechanismKinematics, S: Array, blocks: list,
-                 rtol: float) -> None:
-        n, nq = S.shape[0], S.shape[1]
-        anc = model.ancestors.astype(float)
+    def __init__(self, model: MechanismModel, kin: MechanismKinematics, S: Array, rtol: float,
+                 samples: Array | None = None) -> None:
+        from ._reaction_kernels import cut_setup_batch
 
-        def rel(c: int, p: int) -> tuple[Array, Array]:
-            """The rows of ``J_c - J_p``: the coordinates that move the child and not the parent
-            (sign +1), less those that move the parent and not the child (-1)."""
-            mask = (anc[c] if c >= 0 else np.zeros(nq)) - (anc[p] if p >= 0 else np.zeros(nq))
-            rows = np.flatnonzero(mask)
-            return rows, mask[rows]
-
-        self.cut = []  # (joint, C (n, 6, m), free twists T (n, f, 6))
+        tab = cut_table(model)
+        pick = (lambda a: np.ascontiguousarray(a)) if samples is None else (lambda a: np.ascontiguousarray(a[samples]))
+        R, origin, Ss = pick(kin.R), pick(kin.origin), pick(S)
+        n, nc = R.shape[0], tab.cut_j.size
+        T, C = np.zeros((n, nc, 3, 6)), np.zeros((n, nc, 6, 6))
+        self.A = np.empty((n, model.nq, tab.K))
+        cut_setup_batch(R, origin, Ss, tab.cut_j, tab.cut_f, tab.cut_pos, tab.cut_sign, *tab.model_args(model), tab.H,
+                        T, C, self.A)
+        self.cut = [(int(j), C[:, i, :, :6 - f], T[:, i, :f]) for i, (j, f) in enumerate(zip(tab.cut_j, tab.cut_f))]
+        self.n_cut = tab.n_cut
         self._D: dict[int, Array] = {}
-        cols = []
-        sph = JOINT_TYPES.index(next(t for t in JOINT_TYPES if t.name == "spherical"))
-        for j, T, coords in blocks:
-            if coords[0] >= 0:
-                continue
-            c, p = model.joint_child[j], model.joint_parent[j]
-            if model.joint_type[j] == sph:
-                # three forces through the centre o (the child frame's origin, where every free
-                # rotation axis passes): C = [[o]x; 1]
-                o = joint_frame(model, kin, j, child=True)[1]
-                C = np.zeros((n, 6, 3))
-                C[:, 0, 1], C[:, 0, 2] = -o[:, 2], o[:, 1]
-                C[:, 1, 0], C[:, 1, 2] = o[:, 2], -o[:, 0]
-                C[:, 2, 0], C[:, 2, 1] = -o[:, 1], o[:, 0]
-                C[:, 3, 0] = C[:, 4, 1] = C[:, 5, 2] = 1.0
-            else:
-                _, _, Vt = np.linalg.svd(T)  # T (n, f, 6): rows f.. of Vt span its annihilator
-                C = np.swapaxes(Vt[:, T.shape[1]:], 1, 2)  # (n, 6, 6 - f)
-            self.cut.append((j, C, T))
-            cols.append(rel(c, p))
-        for j in range(len(model.joint_names)):  # fixed cut joints have no free twist: no block
-            if model.joint_cut[j] and not any(j == c[0] for c in self.cut):
-                C = np.broadcast_to(np.eye(6), (n, 6, 6))
-                self.cut.append((j, C, np.zeros((n, 0, 6))))
-                cols.append(rel(model.joint_child[j], model.joint_parent[j]))
-        # column block of each cut joint: (J_c - J_p)^T C (n, nq, m), nonzero on its rows only;
-        # then the idle freedoms' holding forces H (idle_holding), which the assembly leaves out
-        H = idle_holding(model)
-        self.n_cut = sum(C.shape[2] for _, C, _ in self.cut)
-        self.A = np.zeros((n, nq, self.n_cut + H.shape[1]))
-        pos = 0
-        for (_, C, _), (rows, sign) in zip(self.cut, cols):
-            self.A[:, rows, pos:pos + C.shape[2]] = (S[:, rows] @ C) * sign[None, :, None]
-            pos += C.shape[2]
-        self.A[:, :, pos:] = H[None]
-        if self.A.shape[2] > self.A.shape[1]:
-            self.full_rank = False
-            return
-        # the rank is the topology's: checked by QR on the first, middle and last samples;
-        # the solve is by the normal equations (A^T A is small and, with full column rank, SPD)
-        some = np.unique([0, n // 2, n - 1])
-        if self.A.shape[2]:
-            _, R = np.linalg.qr(self.A[some])
-            d = np.abs(np.diagonal(R, axis1=1, axis2=2))
-            colmax = np.abs(self.A[some]).max(axis=(1, 2))
-            self.full_rank = bool(np.all(d > rtol * 1e2 * np.maximum(colmax[:, None], 1e-300)))
-        else:
-            self.full_rank = True
+        self.full_rank = _full_rank(self.A[np.unique([0, n // 2, n - 1])] if n else self.A, rtol)
 
     def _friction_map(self, j: int, T: Array) -> Array:
         """``D_j = T_j (T_j^T T_j)^-1`` (n, 6, f) of cut joint j (class docstring), on first use."""
@@ -683,23 +715,6 @@ class _CutRoute:
             Tc = np.swapaxes(T, 1, 2)
             self._D[j] = Tc @ np.linalg.inv(T @ Tc)
         return self._D[j]
-
-    def solve(self, model: MechanismModel, W: Array, Qtot: Array, eff: Array, F: dict | None
-              ) -> tuple[Array, Array]:
-        """Every joint wrench ``z (n, 6 nj)`` (full column rank) and the idle freedoms' holding
-        forces ``mu (n, k)`` (:func:`idle_holding`)."""
-        n, K = W.shape[0], self.A.shape[2]
-        rhs = np.ascontiguousarray(Qtot - eff)
-        lam = np.zeros((n, K))
-        if K:
-            from ._dyn_kernels import normal_solve_batch
-
-            ok = np.ones(n, dtype=np.bool_)
-            normal_solve_batch(np.ascontiguousarray(np.swapaxes(self.A, 1, 2)), rhs, np.empty((K, K)), lam, ok)
-            for s in np.flatnonzero(~ok):  # columns dependent at this sample (a constraint singularity):
-                # the minimum-norm multipliers, which balance every body but are one choice of many
-                lam[s] = np.linalg.lstsq(self.A[s], rhs[s], rcond=None)[0]
-        return self.assemble(model, W, lam, F), lam[:, self.n_cut:]
 
     def assemble(self, model: MechanismModel, W: Array, lam: Array, F: dict | None) -> Array:
         """Every joint wrench ``z (n, 6 nj)`` from the cut joints' ``lam (n, K)``: the cut wrenches,
@@ -741,6 +756,48 @@ class _CutRoute:
             e[:, col] = 1.0
             Z[:, :, col] = self.assemble(model, zero, e, None)
         return z0, Z
+
+
+def _cut_solve(model: MechanismModel, kin: MechanismKinematics, S: Array, W: Array, rhs: Array, eff: Array,
+               F: dict | None) -> tuple[Array, Array, Array]:
+    """Every joint wrench ``z (n, 6 nj)`` by the cut-wrench route (:class:`_CutRoute`, full
+    column rank), the idle freedoms' holding forces ``mu (n, k)`` and the largest equilibrium
+    residual (n,), in one compiled pass (:func:`._reaction_kernels.cut_reactions_batch`):
+    ``rhs = Q + Q_f - E_a u`` (n, nq), ``eff`` (n, nq) the efforts along the tree coordinates,
+    ``F`` each joint's friction along its free twists. Where the columns are dependent at a
+    sample (a constraint singularity) the multipliers are the minimum-norm least-squares ones,
+    which balance every body but are one choice of many."""
+    from ._reaction_kernels import cut_reactions_batch
+
+    tab = cut_table(model)
+    n, nj = W.shape[0], len(model.joint_names)
+    Fa = np.zeros((n, nj, 3))
+    for j, Fj in (F or {}).items():
+        Fa[:, j, :Fj.shape[1]] = Fj
+    R, origin = np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.origin)
+    S, W, rhs, eff = (np.ascontiguousarray(a) for a in (S, W, rhs, eff))
+    lam = np.zeros((n, tab.K))
+    z = np.zeros((n, nj, 6))
+    res = np.zeros(n)
+    ok = np.ones(n, dtype=np.bool_)
+
+    def run(idx: Array | slice, given: Array, lam_: Array) -> tuple[Array, Array, Array]:
+        z_, r_, ok_ = np.zeros((lam_.shape[0], nj, 6)), np.zeros(lam_.shape[0]), np.ones(lam_.shape[0], np.bool_)
+        cut_reactions_batch(R[idx], origin[idx], S[idx], W[idx], rhs[idx], eff[idx], Fa[idx], given, lam_, tab.cut_j,
+                            tab.cut_f, tab.cut_pos, tab.cut_sign, tab.joint_cut_index, model.joint_type,
+                            model.joint_child, model.joint_parent, model.joint_q0, model.joint_nq, model.joint_flipped,
+                            model.joint_R_child, model.joint_p_child, model.joint_R_parent, model.joint_p_parent,
+                            tab.type_motion, tab.spherical, tab.H, model.body_parent, model.body_joint, z_, r_, ok_)
+        return z_, r_, ok_
+
+    z, res, ok = run(slice(None), np.zeros(n, dtype=np.bool_), lam)
+    bad = np.flatnonzero(~ok)
+    if bad.size:
+        A = _CutRoute(model, kin, S, 0.0, samples=bad).A
+        lb = np.stack([np.linalg.lstsq(A[i], rhs[s], rcond=None)[0] for i, s in enumerate(bad)])
+        z[bad], res[bad], _ = run(bad, np.ones(bad.size, dtype=np.bool_), lb)
+        lam[bad] = lb
+    return z.reshape(n, -1), lam[:, tab.n_cut:], res
 
 
 def fr_any(model: MechanismModel) -> bool:

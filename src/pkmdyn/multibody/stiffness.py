@@ -59,7 +59,7 @@ from numpy.typing import NDArray
 
 from ..errors import ParameterError, SingularityError
 from ..spatial import skew
-from .dynamics import _CutRoute, body_wrenches, coordinate_twists, free_blocks, generalised_forces, task_mass_matrix
+from .dynamics import _CutRoute, body_wrenches, coordinate_twists, generalised_forces, task_mass_matrix
 from .kinematics import MechanismKinematics
 from .model import MechanismModel
 from .reactions import compliance_terms
@@ -227,8 +227,7 @@ class _Structure:
     def __init__(self, model: MechanismModel, kin: MechanismKinematics, sample_offset: int = 0) -> None:
         n = len(kin)
         S = coordinate_twists(model, kin.q, kin)
-        blocks = free_blocks(model, kin, S)
-        cuts = _CutRoute(model, kin, S, blocks, 1e-10)
+        cuts = _CutRoute(model, kin, S, 1e-10)
         K = cuts.A.shape[2]
         members = _Members(model, kin, S)
         self.members = members
