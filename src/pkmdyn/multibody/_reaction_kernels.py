@@ -160,24 +160,6 @@ def _columns_t(S, C, cut_f, cut_pos, cut_sign, H, At):  # pragma: no cover - com
             At[n_cut + k, r] = H[r, k]
 
 
-@njit(cache=True)
-def cut_setup_batch(R, origin, S, cut_j, cut_f, cut_pos, cut_sign, joint_type, joint_child, joint_parent, jRc, jpc,
-                    jRp, jpp, type_motion, spherical, H, T_out, C_out, A_out):  # pragma: no cover - compiled
-    """Every sample's cut-joint free twists ``T_out (n, nc, 3, 6)``, wrench bases ``C_out (n,
-    nc, 6, 6)`` (:func:`cut_bases`) and tree equations' matrix ``A_out (n, nq, K)``."""
-    RP, RC = np.empty((3, 3)), np.empty((3, 3))
-    oP, oC = np.empty(3), np.empty(3)
-    v, Mw = np.empty((3, 6)), np.empty((6, 3))
-    At = np.empty((A_out.shape[2], A_out.shape[1]))
-    for s in range(R.shape[0]):
-        cut_bases(R[s], origin[s], cut_j, cut_f, joint_type, joint_child, joint_parent, jRc, jpc, jRp, jpp,
-                  type_motion, spherical, T_out[s], C_out[s], RP, oP, RC, oC, v, Mw)
-        _columns_t(S[s], C_out[s], cut_f, cut_pos, cut_sign, H, At)
-        for r in range(At.shape[1]):
-            for c in range(At.shape[0]):
-                A_out[s, r, c] = At[c, r]
-
-
 @njit(cache=True, _nrt=False, fastmath={"reassoc", "contract"})
 def normal_solve(a, r, M, x):  # pragma: no cover - compiled
     """Least squares ``x (K,)`` of ``A x = r`` by the normal equations: ``a (K, m)`` the
@@ -272,8 +254,8 @@ def _friction_wrench(T, f, F, G, out):  # pragma: no cover - compiled
 @njit(cache=True)
 def cut_reactions_batch(R, origin, S, W, rhs, eff, F, given, lam, cut_j, cut_f, cut_pos, cut_sign, joint_cut_index,
                         joint_type, joint_child, joint_parent, joint_q0, joint_nq, joint_flipped, jRc, jpc, jRp, jpp,
-                        type_motion, spherical, H, body_parent, body_joint, z_out, res_out,
-                        ok_out):  # pragma: no cover - compiled
+                        type_motion, spherical, H, body_parent, body_joint, z_out, res_out, ok_out, setup, T_out,
+                        C_out, A_out):  # pragma: no cover - compiled
     """Every joint wrench ``z_out (n, nj, 6)`` ``[n_O; f]`` by the cut-wrench route and the
     largest equilibrium residual ``res_out (n,)`` (bodies' balances and joints' power rows).
 
@@ -282,10 +264,14 @@ def cut_reactions_batch(R, origin, S, W, rhs, eff, F, given, lam, cut_j, cut_f, 
     each joint's friction along its free twists (zero where none). ``lam (n, K)``: the cut
     joints' multipliers then the idle freedoms' holding forces, solved here (normal equations)
     or, where ``given[s]``, taken as they are. ``ok_out[s]`` false where the columns are
-    dependent at sample s (nothing else written for it)."""
+    dependent at sample s (nothing else written for it).
+
+    ``setup``: instead, only every sample's cut-joint free twists ``T_out (n, nc, 3, 6)``,
+    wrench bases ``C_out (n, nc, 6, 6)`` (:func:`cut_bases`) and the tree equations' matrix
+    ``A_out (n, nq, K)`` (the other arguments unread: one kernel to compile for both uses)."""
     n, nq = S.shape[0], S.shape[1]
     nc, nj, nb = cut_j.shape[0], joint_type.shape[0], W.shape[1]
-    K = lam.shape[1]
+    K = A_out.shape[2] if setup else lam.shape[1]
     n_cut = K - H.shape[1]
     T = np.empty((nc, 3, 6))
     C = np.empty((nc, 6, 6))
@@ -297,6 +283,14 @@ def cut_reactions_batch(R, origin, S, W, rhs, eff, F, given, lam, cut_j, cut_f, 
     onbody = np.empty((nb, 6))
     DF = np.empty(6)
     for s in range(n):
+        if setup:
+            cut_bases(R[s], origin[s], cut_j, cut_f, joint_type, joint_child, joint_parent, jRc, jpc, jRp, jpp,
+                      type_motion, spherical, T_out[s], C_out[s], RP, oP, RC, oC, v, Mw)
+            _columns_t(S[s], C_out[s], cut_f, cut_pos, cut_sign, H, At)
+            for r in range(nq):
+                for c in range(K):
+                    A_out[s, r, c] = At[c, r]
+            continue
         cut_bases(R[s], origin[s], cut_j, cut_f, joint_type, joint_child, joint_parent, jRc, jpc, jRp, jpp,
                   type_motion, spherical, T, C, RP, oP, RC, oC, v, Mw)
         if not given[s] and K:

@@ -631,11 +631,6 @@ class _CutTable:
     def K(self) -> int:
         return self.n_cut + self.H.shape[1]
 
-    def model_args(self, model: MechanismModel) -> tuple:
-        """The model's arrays in the order of the kernels' arguments after ``cut_sign``."""
-        return (model.joint_type, model.joint_child, model.joint_parent, model.joint_R_child, model.joint_p_child,
-                model.joint_R_parent, model.joint_p_parent, self.type_motion, self.spherical)
-
 
 def cut_table(model: MechanismModel) -> _CutTable:
     """The :class:`_CutTable` of ``model``."""
@@ -694,16 +689,13 @@ class _CutRoute:
 
     def __init__(self, model: MechanismModel, kin: MechanismKinematics, S: Array, rtol: float,
                  samples: Array | None = None) -> None:
-        from ._reaction_kernels import cut_setup_batch
-
         tab = cut_table(model)
         pick = (lambda a: np.ascontiguousarray(a)) if samples is None else (lambda a: np.ascontiguousarray(a[samples]))
         R, origin, Ss = pick(kin.R), pick(kin.origin), pick(S)
         n, nc = R.shape[0], tab.cut_j.size
         T, C = np.zeros((n, nc, 3, 6)), np.zeros((n, nc, 6, 6))
         self.A = np.empty((n, model.nq, tab.K))
-        cut_setup_batch(R, origin, Ss, tab.cut_j, tab.cut_f, tab.cut_pos, tab.cut_sign, *tab.model_args(model), tab.H,
-                        T, C, self.A)
+        _cut_kernel(model, tab, R, origin, Ss, setup=(T, C, self.A))
         self.cut = [(int(j), C[:, i, :, :6 - f], T[:, i, :f]) for i, (j, f) in enumerate(zip(tab.cut_j, tab.cut_f))]
         self.n_cut = tab.n_cut
         self._D: dict[int, Array] = {}
@@ -758,6 +750,30 @@ class _CutRoute:
         return z0, Z
 
 
+def _cut_kernel(model: MechanismModel, tab: _CutTable, R: Array, origin: Array, S: Array, W: Array | None = None,
+                rhs: Array | None = None, eff: Array | None = None, F: Array | None = None,
+                given: Array | None = None, lam: Array | None = None, out: tuple | None = None,
+                setup: tuple | None = None) -> None:
+    """One call of :func:`._reaction_kernels.cut_reactions_batch` (contiguous arrays): the
+    solve into ``out = (z, res, ok)``, or with ``setup = (T, C, A)`` the cut joints' twists,
+    wrench bases and the tree equations' matrix alone (the solve's arrays left out)."""
+    from ._reaction_kernels import cut_reactions_batch
+
+    n = R.shape[0]
+    if setup is not None:
+        e1, e2 = np.empty((n, 0)), np.empty((n, 0, 0))
+        W, rhs, eff, F, lam, given = e2, e1, e1, np.empty((n, 0, 0)), e1, np.empty(n, dtype=np.bool_)
+        out = (np.empty((n, 0, 0)), np.empty(n), np.empty(n, dtype=np.bool_))
+        T, C, A = setup
+    else:
+        T, C, A = np.empty((0, 0, 0, 0)), np.empty((0, 0, 0, 0)), np.empty((0, 0, 0))
+    cut_reactions_batch(R, origin, S, W, rhs, eff, F, given, lam, tab.cut_j, tab.cut_f, tab.cut_pos, tab.cut_sign,
+                        tab.joint_cut_index, model.joint_type, model.joint_child, model.joint_parent, model.joint_q0,
+                        model.joint_nq, model.joint_flipped, model.joint_R_child, model.joint_p_child,
+                        model.joint_R_parent, model.joint_p_parent, tab.type_motion, tab.spherical, tab.H,
+                        model.body_parent, model.body_joint, *out, setup is not None, T, C, A)
+
+
 def _cut_solve(model: MechanismModel, kin: MechanismKinematics, S: Array, W: Array, rhs: Array, eff: Array,
                F: dict | None) -> tuple[Array, Array, Array]:
     """Every joint wrench ``z (n, 6 nj)`` by the cut-wrench route (:class:`_CutRoute`, full
@@ -767,8 +783,6 @@ def _cut_solve(model: MechanismModel, kin: MechanismKinematics, S: Array, W: Arr
     ``F`` each joint's friction along its free twists. Where the columns are dependent at a
     sample (a constraint singularity) the multipliers are the minimum-norm least-squares ones,
     which balance every body but are one choice of many."""
-    from ._reaction_kernels import cut_reactions_batch
-
     tab = cut_table(model)
     n, nj = W.shape[0], len(model.joint_names)
     Fa = np.zeros((n, nj, 3))
@@ -777,17 +791,11 @@ def _cut_solve(model: MechanismModel, kin: MechanismKinematics, S: Array, W: Arr
     R, origin = np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.origin)
     S, W, rhs, eff = (np.ascontiguousarray(a) for a in (S, W, rhs, eff))
     lam = np.zeros((n, tab.K))
-    z = np.zeros((n, nj, 6))
-    res = np.zeros(n)
-    ok = np.ones(n, dtype=np.bool_)
 
     def run(idx: Array | slice, given: Array, lam_: Array) -> tuple[Array, Array, Array]:
         z_, r_, ok_ = np.zeros((lam_.shape[0], nj, 6)), np.zeros(lam_.shape[0]), np.ones(lam_.shape[0], np.bool_)
-        cut_reactions_batch(R[idx], origin[idx], S[idx], W[idx], rhs[idx], eff[idx], Fa[idx], given, lam_, tab.cut_j,
-                            tab.cut_f, tab.cut_pos, tab.cut_sign, tab.joint_cut_index, model.joint_type,
-                            model.joint_child, model.joint_parent, model.joint_q0, model.joint_nq, model.joint_flipped,
-                            model.joint_R_child, model.joint_p_child, model.joint_R_parent, model.joint_p_parent,
-                            tab.type_motion, tab.spherical, tab.H, model.body_parent, model.body_joint, z_, r_, ok_)
+        _cut_kernel(model, tab, R[idx], origin[idx], S[idx], W[idx], rhs[idx], eff[idx], Fa[idx], given, lam_,
+                    (z_, r_, ok_))
         return z_, r_, ok_
 
     z, res, ok = run(slice(None), np.zeros(n, dtype=np.bool_), lam)
