@@ -29,6 +29,9 @@ Image = pytest.importorskip("PIL.Image")
 _NAMES = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
 #: the colour of the links in the 3D view (report._figures._LINK)
 _LINK = np.array([0x34, 0x49, 0x5E])
+#: the browser window: a small laptop's. Software WebGL (SwiftShader) draws every pixel of the 3D
+#: view and of its picking buffer on the CPU, so the pages' time grows with the window's area
+_VIEWPORT = {"width": 1024, "height": 700}
 
 
 def _chromium() -> str:
@@ -69,7 +72,7 @@ class _Page:
 
     def __init__(self, browser, path: Path) -> None:
         self.errors: list[str] = []
-        self.page = browser.new_page(viewport={"width": 1400, "height": 1000})
+        self.page = browser.new_page(viewport=_VIEWPORT)
         self.page.set_default_timeout(120_000)  # every action on a page drawn in software (below)
         self.page.on("console", lambda m: self.errors.append(m.text) if m.type == "error" else None)
         self.page.on("pageerror", lambda e: self.errors.append(f"uncaught: {e}"))
