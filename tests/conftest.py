@@ -40,3 +40,10 @@ def pytest_runtest_makereport(item, call):
 def pytest_make_collect_report(collector):
     outcome = yield
     _fail_import_skip(outcome.get_result())
+
+
+def pytest_collection_modifyitems(config, items):
+    """The long tests (marked slow: browser pages, memory, worker kills) first, each file's in
+    its order, so that with two workers none of them starts near the end of the run while the
+    other worker has nothing left to do."""
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
