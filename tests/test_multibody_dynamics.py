@@ -676,16 +676,17 @@ def test_cut_route_solves_a_sample_with_dependent_columns_by_least_squares():
     W = np.zeros((5, m.nb, 6))
     zero = np.zeros((5, m.nq))
     rng = np.random.default_rng(0)
-    lam = rng.normal(size=(5, cut_table(m).K))
-    before, _, _ = _cut_solve(m, kin, S, W, np.einsum("nqk,nk->nq", _CutRoute(m, kin, S, 1e-10).A, lam), zero, None)
+    tab = cut_table(m)
+    lam = rng.normal(size=(5, tab.K))
+    before, _, _ = _cut_solve(m, tab, kin, S, W, np.einsum("nqk,nk->nq", _CutRoute(m, kin, S, 1e-10).A, lam), zero, None)
     # sample 2: the twists of the coordinates that move the first cut joint's child vanish, so
     # its columns do; the same multipliers make the right side
     S2 = S.copy()
-    S2[2, np.flatnonzero(cut_table(m).cut_sign[0])] = 0.0
+    S2[2, np.flatnonzero(tab.cut_sign[0])] = 0.0
     cuts = _CutRoute(m, kin, S2, 1e-10)
     assert np.abs(cuts.A[2, :, :3]).max() == 0.0
     rhs = np.einsum("nqk,nk->nq", cuts.A, lam)
-    z, _, res = _cut_solve(m, kin, S2, W, rhs, zero, None)
+    z, _, res = _cut_solve(m, tab, kin, S2, W, rhs, zero, None)
     assert np.all(np.isfinite(z)) and np.all(np.isfinite(res))
     keep = [0, 1, 3, 4]
     assert np.abs(z[keep] - before[keep]).max() <= 1e-9 * np.abs(before).max()

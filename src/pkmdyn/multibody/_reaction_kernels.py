@@ -20,27 +20,7 @@ import math
 import numpy as np
 from numba import njit
 
-
-@njit(cache=True, _nrt=False, inline="always")
-def _joint_frame(Rs, os, body, Rl, pl, Rout, oout):  # pragma: no cover - compiled
-    """A joint frame ``Rl, pl`` fixed in ``body`` (the ground where negative) in the base frame."""
-    if body < 0:
-        for a in range(3):
-            oout[a] = pl[a]
-            for b in range(3):
-                Rout[a, b] = Rl[a, b]
-        return
-    Rb = Rs[body]
-    for a in range(3):
-        acc = os[body, a]
-        for k in range(3):
-            acc += Rb[a, k] * pl[k]
-        oout[a] = acc
-        for b in range(3):
-            acc = 0.0
-            for k in range(3):
-                acc += Rb[a, k] * Rl[k, b]
-            Rout[a, b] = acc
+from ._kernels import _cross, _frame
 
 
 @njit(cache=True, _nrt=False)
@@ -100,8 +80,8 @@ def cut_bases(Rs, os, cut_j, cut_f, joint_type, joint_child, joint_parent, jRc, 
         j = cut_j[i]
         f = cut_f[i]
         ty = joint_type[j]
-        _joint_frame(Rs, os, joint_parent[j], jRp[j], jpp[j], RP, oP)
-        _joint_frame(Rs, os, joint_child[j], jRc[j], jpc[j], RC, oC)
+        _frame(joint_parent[j], Rs, os, jRp[j], jpp[j], RP, oP)
+        _frame(joint_child[j], Rs, os, jRc[j], jpc[j], RC, oC)
         for k in range(f):
             mc = type_motion[ty, k]
             ax = mc % 3
@@ -115,9 +95,7 @@ def cut_bases(Rs, os, cut_j, cut_f, joint_type, joint_child, joint_parent, jRc, 
                     T[i, k, a] = 0.0
                     T[i, k, 3 + a] = e
             if mc < 3:  # v_O of a rotation about the axis through oC: oC x axis
-                T[i, k, 3] = oC[1] * T[i, k, 2] - oC[2] * T[i, k, 1]
-                T[i, k, 4] = oC[2] * T[i, k, 0] - oC[0] * T[i, k, 2]
-                T[i, k, 5] = oC[0] * T[i, k, 1] - oC[1] * T[i, k, 0]
+                _cross(oC, T[i, k, :3], T[i, k, 3:])
         Ci = C[i]
         if ty == spherical:  # three forces through the centre: C = [[o]x; 1]
             for a in range(6):
@@ -356,3 +334,13 @@ def cut_reactions_batch(R, origin, S, W, rhs, eff, F, given, lam, cut_j, cut_f, 
                         acc -= lam[s, n_cut + h] * H[c, h]
                 worst = max(worst, abs(acc))
         res_out[s] = worst
+
+
+def _refresh_cache() -> None:
+    """The kernels inline the kinematics kernels' ``_frame`` and ``_cross`` (:mod:`._cache`)."""
+    from . import _cache, _kernels
+
+    _cache.refresh((cut_bases, cut_reactions_batch), (_kernels,))
+
+
+_refresh_cache()

@@ -480,7 +480,7 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
                                        affine=(z0, Z))
             method = "compliance"
         elif fast:
-            z, mu, res = _cut_solve(model, kin, S, W, (Q if Qf is None else Q + Qf) - eff, eff, F)
+            z, mu, res = _cut_solve(model, probe.tab, kin, S, W, (Q if Qf is None else Q + Qf) - eff, eff, F)
             method, t = "rigid", 0
         elif r < A.shape[2] and overconstrained == "minimum-norm":
             coef = np.einsum("nmr,nm->nr", U[:, :, :r], b) / sv[:, :r]
@@ -515,7 +515,7 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
                                  f"converge at {when} (relative change {history[-1]:.3g} after {it} iterations): "
                                  "the friction coefficients lock the mechanism")
     if fast:
-        hold = mu @ cut_table(model).H.T
+        hold = mu @ probe.tab.H.T
     else:
         res, hold = _residual(model, blocks, z, b, mu)
     Wj = z.reshape(n, -1, 6)
@@ -694,6 +694,7 @@ class _CutRoute:
         R, origin, Ss = pick(kin.R), pick(kin.origin), pick(S)
         n, nc = R.shape[0], tab.cut_j.size
         T, C = np.zeros((n, nc, 3, 6)), np.zeros((n, nc, 6, 6))
+        self.tab = tab
         self.A = np.empty((n, model.nq, tab.K))
         _cut_kernel(model, tab, R, origin, Ss, setup=(T, C, self.A))
         self.cut = [(int(j), C[:, i, :, :6 - f], T[:, i, :f]) for i, (j, f) in enumerate(zip(tab.cut_j, tab.cut_f))]
@@ -774,16 +775,15 @@ def _cut_kernel(model: MechanismModel, tab: _CutTable, R: Array, origin: Array, 
                         model.body_parent, model.body_joint, *out, setup is not None, T, C, A)
 
 
-def _cut_solve(model: MechanismModel, kin: MechanismKinematics, S: Array, W: Array, rhs: Array, eff: Array,
-               F: dict | None) -> tuple[Array, Array, Array]:
+def _cut_solve(model: MechanismModel, tab: _CutTable, kin: MechanismKinematics, S: Array, W: Array, rhs: Array,
+               eff: Array, F: dict | None) -> tuple[Array, Array, Array]:
     """Every joint wrench ``z (n, 6 nj)`` by the cut-wrench route (:class:`_CutRoute`, full
     column rank), the idle freedoms' holding forces ``mu (n, k)`` and the largest equilibrium
     residual (n,), in one compiled pass (:func:`._reaction_kernels.cut_reactions_batch`):
     ``rhs = Q + Q_f - E_a u`` (n, nq), ``eff`` (n, nq) the efforts along the tree coordinates,
     ``F`` each joint's friction along its free twists. Where the columns are dependent at a
     sample (a constraint singularity) the multipliers are the minimum-norm least-squares ones,
-    which balance every body but are one choice of many."""
-    tab = cut_table(model)
+    which balance every body but are one choice of many (``tab``: :func:`cut_table`)."""
     n, nj = W.shape[0], len(model.joint_names)
     Fa = np.zeros((n, nj, 3))
     for j, Fj in (F or {}).items():
