@@ -1,8 +1,9 @@
 """The reports in a real browser: headless Chromium (the distribution's package) opens the
 ``report.html`` of ``hip run``, ``pdm run``, ``hip control`` and of a described mechanism's
 ``run --machine stewart``, and the ``view`` page, and checks that nothing
-fails on the console, that the 3D view draws the mechanism, that moving the time slider moves
-it (and the time marker of every plot), and that every plot is there.
+fails on the console, that the 3D view draws the mechanism and waits for its play button, that
+moving the time slider moves it (and the time marker of every plot), that play and pause work,
+and that every plot is there.
 
 Screenshots are written under pytest's ``tmp_path``, never into the repository. Without
 Playwright or a Chromium binary the tests are skipped on a developer's machine and fail under
@@ -121,6 +122,7 @@ def test_report_draws_moves_and_shows_every_plot(browser, reports, tmp_path, whi
         assert info["frames"] > 100 and len(info["plots"]) == n_plots
         first = page.scene_shot(tmp_path / f"{which}_first.png")
         assert _distinct(first) > 50, "the 3D view is blank"
+        assert page.info().get("current") is None, "the 3D view played before its play button was pressed"
         assert _link_pixels(first) > 300, "the 3D view shows no links of the mechanism"
 
         # move the time slider as a user does: a click on its rail, 80 % along
@@ -147,6 +149,16 @@ def test_report_draws_moves_and_shows_every_plot(browser, reports, tmp_path, whi
         assert page.page.locator("#figures img").count() == n_images
         assert page.page.locator("#summary table").count() >= 1
         assert parameters in page.page.locator("#parameters pre").inner_text()
+
+        # the play button plays on from the slider's frame, and pause stops it
+        buttons = page.page.locator("#pkmdyn-scene .updatemenu-button")
+        buttons.filter(has_text="\u00d74").click()
+        page.page.wait_for_function(f"window.PKMDYN_REPORT.current > {k}", timeout=60_000)
+        buttons.filter(has_text="pause").click()
+        page.page.wait_for_timeout(1000)
+        stopped = page.info()["current"]
+        page.page.wait_for_timeout(1000)
+        assert page.info()["current"] == stopped, "pause did not stop the playback"
         assert not page.errors, page.errors
     finally:
         page.page.close()

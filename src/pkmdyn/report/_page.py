@@ -100,9 +100,11 @@ def _table(obj: Any, depth: int = 0) -> str:
 def _div(fig: Any, div_id: str) -> str:
     import plotly.io as pio
 
-    # a figure dictionary (the 3D scene) is written as built; a graph_objects figure was validated
+    # a figure dictionary (the 3D scene) is written as built; a graph_objects figure was validated.
+    # The scene waits for its play button (auto_play off): played on opening, every frame would also
+    # move the time marker of every plot, redrawing them all while the reader scrolls through them
     return pio.to_html(fig, full_html=False, include_plotlyjs=False, div_id=div_id, validate=False,
-                       config={"displaylogo": False, "responsive": True})
+                       auto_play=False, config={"displaylogo": False, "responsive": True})
 
 
 def _plotly_js() -> str:
