@@ -445,7 +445,7 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
         over = not fast and model.topology is not None and model.topology.overconstraints > 0 and \
             probe.A.shape[2] > 0
         if over:  # compliance in the cut joints' unknowns (no dense SVD)
-            cuts = _CutRoute(model, kin, S, rtol)
+            cuts = _CutRoute(model, kin, S, rtol, tab=probe.tab)
     fr_on = friction and fr_any(model)
     blocks = free_blocks(model, kin, S) if not fast or fr_on else []
     A = None
@@ -685,11 +685,11 @@ class _CutRoute:
     rank deficient (an over-constrained mechanism) ``full_rank`` is false and the dense
     equations or the compliance decide. This class holds the matrix ``A`` (n, nq, K) of the
     samples ``samples`` (default all) and assembles the wrenches in numpy for the compliance
-    and stiffness routes."""
+    and stiffness routes; ``tab`` the model's :func:`cut_table`, where the caller has it."""
 
     def __init__(self, model: MechanismModel, kin: MechanismKinematics, S: Array, rtol: float,
-                 samples: Array | None = None) -> None:
-        tab = cut_table(model)
+                 samples: Array | None = None, tab: _CutTable | None = None) -> None:
+        tab = cut_table(model) if tab is None else tab
         pick = (lambda a: np.ascontiguousarray(a)) if samples is None else (lambda a: np.ascontiguousarray(a[samples]))
         R, origin, Ss = pick(kin.R), pick(kin.origin), pick(S)
         n, nc = R.shape[0], tab.cut_j.size
@@ -801,7 +801,7 @@ def _cut_solve(model: MechanismModel, tab: _CutTable, kin: MechanismKinematics, 
     z, res, ok = run(slice(None), np.zeros(n, dtype=np.bool_), lam)
     bad = np.flatnonzero(~ok)
     if bad.size:
-        A = _CutRoute(model, kin, S, 0.0, samples=bad).A
+        A = _CutRoute(model, kin, S, 0.0, samples=bad, tab=tab).A
         lb = np.stack([np.linalg.lstsq(A[i], rhs[s], rcond=None)[0] for i, s in enumerate(bad)])
         z[bad], res[bad], _ = run(bad, np.ones(bad.size, dtype=np.bool_), lb)
         lam[bad] = lb
