@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import signal
+import socket
 import subprocess
 import sys
 import textwrap
@@ -99,6 +100,29 @@ def test_pdm_serial_and_dask_rows_bit_identical(tmp_path):
 
 
 @pytest.mark.slow
+def test_a_local_cluster_is_silent_when_the_dashboard_port_is_taken(tmp_path):
+    # another cluster (or anything) on Dask's default HTTP port 8787: the sweep's own cluster
+    # must not warn about it on stderr (a sweep's stderr is its progress and its one-line errors)
+    held = socket.socket()
+    held.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        held.bind(("0.0.0.0", 8787))
+        held.listen()
+    except OSError:
+        pass  # taken already: the situation under test
+    try:
+        space = _space(tmp_path, 4, 2, 60)
+        env = {**os.environ, "PYTHONPATH": str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+        cmd = [sys.executable, "-m", "pkmdyn.cli", "sweep", "--machine", "hip", "--space", str(space),
+               "--out", str(tmp_path / "out"), "--workers", "1", "--no-plots"]
+        done = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
+    finally:
+        held.close()
+    assert done.returncode == 0, done.stderr
+    assert "8787" not in done.stderr and "Warning" not in done.stderr, done.stderr
+    assert (tmp_path / "out" / "designs.parquet").is_file()
+
+
 def test_worker_killed_mid_run_every_design_exactly_once(tmp_path):
     from distributed import LocalCluster
 

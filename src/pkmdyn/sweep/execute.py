@@ -237,7 +237,10 @@ def _client(workers: int, scheduler: str | None) -> tuple[Any, Any]:
     main = threading.current_thread() is threading.main_thread()
     old = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
     try:
+        # no dashboard; the scheduler's HTTP server (health routes) on a free local port: its
+        # default port 8787 may be held by another cluster, and Dask then warns on stderr
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                               scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
                                silence_logs=logging.CRITICAL)
     finally:
         if main:
