@@ -267,7 +267,8 @@ def _work(nq, nb, nrow, nu, na):  # pragma: no cover - compiled
 def direct_batch(tm, s, sd, sdd, q_start, x_start, tree, loops, task, sol, q_out, qd_out, qdd_out, x_out, xd_out,
                  xdd_out, res_out, it_out, det_out, ratio_out, status, worst):  # pragma: no cover - compiled
     """Every sample of the actuator motion ``s, sd, sdd (n, na)`` in order, each from the
-    previous one's solution: ``q_{k-1} + qd dt + qdd dt^2 / 2`` (times ``tm``; without times
+    previous one's solution: ``q_{k-1} + qd dt + qdd dt^2 / 2 + (qdd_{k-1} - qdd_{k-2}) dt^3 /
+    (6 dt_{k-1})`` (times ``tm``: Taylor to the third order, the jerk by the last step; without times
     ``q_{k-1} + G (s_k - s_{k-1})``), ``q_start`` for the first. Task angles are taken
     continuous, the first sample's nearest ``x_start``. Stops at the first sample that fails
     (``status``: NOT_CONVERGED, SINGULAR, LOOP_OPEN, :data:`CROSSED` where ``det K`` changed sign
@@ -285,18 +286,24 @@ def direct_batch(tm, s, sd, sdd, q_start, x_start, tree, loops, task, sol, q_out
     q = q_start.copy()
     task_kind = task[2]
     det_prev = 0.0
+    qdd_prev = np.zeros(nq)
     for k in range(n):
         if k > 0:
             if tm.shape[0] == n:
                 dt = tm[k] - tm[k - 1]
+                # the third-order term by the change of the accelerations over the previous step
+                dtp = tm[k - 1] - tm[k - 2] if k > 1 else 0.0
+                j3 = dt * dt * dt / (6.0 * dtp) if dtp > 0.0 else 0.0
                 for c in range(nq):
-                    q[c] += qd[c] * dt + 0.5 * qdd[c] * dt * dt
+                    q[c] += qd[c] * dt + 0.5 * qdd[c] * dt * dt + j3 * (qdd[c] - qdd_prev[c])
             else:
                 for c in range(nq):
                     acc = 0.0
                     for a in range(na):
                         acc += G[c, a] * (s[k, a] - s[k - 1, a])
                     q[c] += acc
+        for c in range(nq):
+            qdd_prev[c] = qdd[c]
         st = direct_sample(s[k], sd[k], sdd[k], q, k > 0, tree, loops, task, sol, work, info)
         worst[k] = int(info[0])
         res_out[k] = info[1]

@@ -309,7 +309,7 @@ def direct_kinematics(model: MechanismModel, s: Array, sd: Array | None = None, 
                       sample_offset: int = 0) -> DirectKinematics:
     """The direct kinematics along the actuator motion ``s, sd, sdd (n, na)`` (SI; module
     docstring): each sample warm-started from the one before (``t`` (n,) [s] gives the
-    second-order predictor and the messages' times), the first from ``q_start`` (nq,) or else
+    third-order predictor and the messages' times), the first from ``q_start`` (nq,) or else
     by continuation from the reference configuration. Refused, naming the sample (counted from
     ``sample_offset``) and an actuator, where the actuator coordinates reach no pose
     (:class:`~pkmdyn.errors.UnreachablePoseError`) or the motion crosses a singularity or meets
