@@ -168,6 +168,41 @@ def test_hip_and_pdm_descriptions_routes_agree():
     assert _compare(pdm, np.array([0.01, 0.01, 0.02, 0.02])) <= AGREE
 
 
+def test_legs_placed_from_the_task_alone():
+    """The legs whose closed form depends on the task alone (from and to the ground or bodies
+    only such legs move) are solved once per sample; Newton leaves their coordinates."""
+    from pkmdyn.machines.hip_simulator.description import hip_description
+    from pkmdyn.machines.hip_simulator.params import load_params
+    from pkmdyn.machines.pdm4.description import pdm_description
+    from pkmdyn.machines.pdm4.params import load_params as pdm_params
+
+    stewart = load_mechanism(MACHINES / "stewart" / "stewart.toml")
+    assert stewart.legs.fixed.tolist() == [1] * 6 and stewart.legs.fixed_coord.tolist() == [1] * stewart.nq
+    hip = load_mechanism(hip_description(load_params()))
+    assert hip.legs.fixed.tolist() == [1, 1, 1, 1]
+    joint_of = {}
+    for b in range(hip.nb):
+        k = int(hip.body_joint[b])
+        for c in range(hip.joint_q0[k], hip.joint_q0[k] + hip.joint_nq[k]):
+            joint_of[c] = hip.joint_names[k]
+    names = [joint_of[int(c)] for c in np.flatnonzero(hip.legs.fixed_coord)]
+    # the upper ball's three angles, each upper leg's slide and universal joint; nothing of the
+    # lower platform, which hangs on the slides but is closed by Newton
+    assert len(names) == 12 and not any("lower" in nm for nm in names)
+    # the 3-RRR's and the PDM's legs meet a platform that Newton places
+    assert load_mechanism(MACHINES / "rrr3" / "rrr3.toml").legs.fixed.tolist() == [0, 0]
+    pdm = load_mechanism(pdm_description(pdm_params()))
+    assert pdm.legs.count > 0 and not pdm.legs.fixed.any() and not pdm.legs.fixed_coord.any()
+    # along a timed motion the upper legs keep their closed form: the solution's coordinates
+    # are the closed form's at the solution to rounding
+    t, x, xd, xdd = _motion(hip, 0.1)
+    kin = solve_kinematics(hip, x, xd, xdd, t)
+    fx = hip.legs.fixed_coord.astype(bool)
+    for k in (0, 37, len(t) - 1):
+        again = place(hip, kin.q[k], x[k])
+        assert np.abs(again[fx] - kin.q[k][fx]).max() <= 1e-14 * max(1.0, np.abs(kin.q[k]).max())
+
+
 @pytest.mark.parametrize("leg,pattern", [("UPS", 4), ("RUS", 2), ("PUS", 2)])
 @pytest.mark.parametrize("turned", [False, True])
 def test_leg_types_in_any_orientation(leg, pattern, turned):

@@ -382,22 +382,31 @@ def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_moti
 
 @njit(cache=True, _nrt=False)
 def place_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
-               RP, pP, RC, pC, R, p, S, w33, w3, trig, reuse, legs, xs, task):  # pragma: no cover - compiled
+               RP, pP, RC, pC, R, p, S, w33, w3, trig, reuse, legs, xs, task, skip):  # pragma: no cover - compiled
     """After :func:`forward_positions` with ``explicit``: each leg of ``legs`` (:mod:`.legs`) in
     turn has its coordinates in ``q`` set in closed form, the leg that carries the task body
     from the task coordinates ``xs`` (:func:`_task_leg`; ``task`` the model's task arrays), the
-    others from the body they meet (:func:`_explicit_leg`), and the bodies it moves placed."""
-    redo, kind = legs[11], legs[1]
+    others from the body they meet (:func:`_explicit_leg`), and the bodies it moves placed.
+    With ``skip``, the legs placed from the task alone (``fixed``) keep their coordinates, set
+    by an earlier pass at the same ``xs``; their bodies are placed again all the same (their
+    descendants may hang on coordinates that Newton moved). Returns whether every such leg
+    reached its point (False: one is left to Newton)."""
+    redo, kind, fixed = legs[11], legs[1], legs[17]
+    reached = True
     for L in range(redo.shape[0]):
-        if kind[L] >= LEG_TASK:
-            _task_leg(L, xs, q, legs, task, RP, RC, pC, w3, w33)
-        else:
-            _explicit_leg(L, q, R, p, legs, w3)
+        if skip and fixed[L] != 0:
+            pass
+        elif kind[L] >= LEG_TASK:
+            if not _task_leg(L, xs, q, legs, task, RP, RC, pC, w3, w33) and fixed[L] != 0:
+                reached = False
+        elif not _explicit_leg(L, q, R, p, legs, w3) and fixed[L] != 0:
+            reached = False
         Rf = w33[0]
         o = w3[18]
         for i in range(1, _nn(redo[L, 0] + 1)):
             _forward_body(redo[L, i], q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
                           coord_sign, RP, pP, RC, pC, R, p, S, Rf, o, trig, reuse)
+    return reached
 
 
 @njit(cache=True, _nrt=False)
@@ -1131,6 +1140,7 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
     mk = m + ni
     prev = 1e300
     explicit = legs[1].shape[0] > 0
+    fixed = False  # the legs placed from the task alone are (their closed forms reached the task)
     # every block an explicit leg: the positions are exact at the first evaluation, which is
     # Newton's check; no simplified step before it
     phase = _CHORD if chord and legs[1].shape[0] < blocks.shape[0] - 1 else _NEWTON
@@ -1147,8 +1157,11 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
             forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
                               coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, again, legs[0], explicit)
             if explicit:
-                place_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
-                           tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, again, legs, xs, task)
+                # the legs placed from the task alone once per sample (the task does not change
+                # within it), and Newton's steps leave their coordinates as they are
+                fixed = place_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                                   coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, again, legs, xs, task,
+                                   fixed) or fixed
             # the pass after the simplified step (a step within rounding of the solution) starts from this
             # one's sines and cosines; a Newton step computes them afresh
             again = phase == _CHORD
@@ -1213,8 +1226,10 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
                 qdd[j] = rhs[j]
             add_joint_accelerations(qdd, body_parent, body_joint, joint_q0, joint_nq, S, A)
             return OK
+        fixed_coord = legs[18]
         for j in range(mk):
-            q[j] += rhs[j]
+            if not (fixed and fixed_coord[j] != 0):
+                q[j] += rhs[j]
         phase = _NEWTON
 
 

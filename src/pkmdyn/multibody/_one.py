@@ -72,7 +72,7 @@ _INT = ("body_parent", "body_joint", "joint_q0", "joint_nq", "coord_motion", "an
         "solver_rows", "solver_prow", "solver_pcol", "solver_blocks", "act_coord", "load_body",
         "fj", "fch", "fpa", "frot", "fslide", "fidx", "fcnt", "eload", "load_named", "solver_rowpos",
         "solver_colpos", "solver_idlepos", "leg_late", "leg_kind", "leg_coord", "leg_base", "leg_placed", "leg_redo",
-        "leg_ball", "leg_ball_axes")
+        "leg_ball", "leg_ball_axes", "leg_fixed", "leg_fixed_coord")
 _FLOAT = ("coord_offset", "coord_sign", "tree_R_parent", "tree_p_parent", "tree_R_child", "tree_p_child",
           "joint_R_parent", "joint_p_parent", "joint_R_child", "joint_p_child", "task_point", "solver_idle",
           "row_scale", "mass", "inertia", "com", "gravity", "load_point", "load_force", "load_moment",
@@ -128,7 +128,7 @@ def pack(model: MechanismModel) -> NDArray[np.int64]:
                    "leg_placed": lg.placed, "leg_redo": lg.redo, "leg_cpt": lg.cpt, "leg_axis": lg.axis,
                    "leg_point": lg.point, "leg_m0": lg.m0, "leg_e0": lg.e0, "leg_q0": lg.q0, "leg_ball": lg.ball,
                    "leg_ball_axes": lg.ball_axes, "leg_ball_offset": lg.ball_offset, "leg_ball_sign": lg.ball_sign,
-                   "leg_R_end0": lg.R_end0})
+                   "leg_R_end0": lg.R_end0, "leg_fixed": lg.fixed, "leg_fixed_coord": lg.fixed_coord})
     arrays["solver_rowpos"] = np.empty(model.row_loop.shape[0] + model.nt, dtype=np.int64)
     arrays["solver_colpos"] = np.empty(model.nq, dtype=np.int64)
     arrays["solver_idlepos"] = np.empty(model.solver_idle.shape[0], dtype=np.int64)
@@ -315,7 +315,7 @@ def _dynamics(pk, x, xd, v, load, mode, out):  # pragma: no cover - compiled
     rowpos, colpos, idlepos = _i(pk, 31), _i(pk, 32), _i(pk, 33)
     legs = (_i(pk, 34), _i(pk, 35), _i2(pk, 36), _i(pk, 37), _i(pk, 38), _fn3(pk, 32), _f33(pk, 33), _f33(pk, 34),
             _fn3(pk, 35), _fn3(pk, 36), _fn3(pk, 37), _i2(pk, 39), _i2(pk, 40), _i2(pk, 41), _fn3(pk, 38),
-            _fn3(pk, 39), _f33(pk, 40))
+            _fn3(pk, 39), _f33(pk, 40), _i(pk, 42), _i(pk, 43))
     nb = body_parent.shape[0]
     nl = load_body.shape[0]
     coord_offset, coord_sign = _f(pk, 0), _f(pk, 1)

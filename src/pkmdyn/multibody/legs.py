@@ -106,6 +106,10 @@ class LegTable:
     joint's three coordinates (-1 for another leg), ``ball_axes`` their turning axes (0-2 of
     the joint frame), ``ball_offset``, ``ball_sign`` their reference values and signs,
     ``R_end0 (nL, 3, 3)`` the reference rotation of the body before the ball.
+    ``fixed (nL,)``: 1 for a leg placed from the task coordinates alone (it starts from and
+    meets the ground or bodies that only such legs move: the task leg, a Stewart platform's or
+    the hip's upper legs), whose closed form the solver evaluates once per sample, and
+    ``fixed_coord (nq,)``: 1 for the coordinates such legs set.
     ``names``: per leg, its cut joint's name, the chain's joint names and the pattern."""
 
     late: IntArray
@@ -125,6 +129,8 @@ class LegTable:
     ball_offset: Array = field(default_factory=lambda: np.zeros((0, 3)))
     ball_sign: Array = field(default_factory=lambda: np.zeros((0, 3)))
     R_end0: Array = field(default_factory=lambda: np.zeros((0, 3, 3)))
+    fixed: IntArray = field(default_factory=lambda: _empty_int(0))
+    fixed_coord: IntArray = field(default_factory=lambda: _empty_int(0))
     names: tuple[tuple[str, tuple[str, ...], int], ...] = ()
 
     @property
@@ -135,7 +141,7 @@ class LegTable:
         """The tuple the kernels take (:func:`._kernels.forward_positions`)."""
         return (self.late, self.kind, self.coord, self.base, self.placed, self.cpt, self.axis, self.point,
                 self.m0, self.e0, self.q0, self.redo, self.ball, self.ball_axes, self.ball_offset, self.ball_sign,
-                self.R_end0)
+                self.R_end0, self.fixed, self.fixed_coord)
 
 
 def no_legs(nb: int) -> LegTable:
@@ -159,7 +165,7 @@ def place(model, q: Array, x: Array) -> Array:
     args = positions_args(model, np.empty((model.nb, 3, 3)), np.empty((model.nb, 3)), np.empty((model.nq, 6)))
     forward_positions(q, *args, model.legs.late, True)
     task = (int(model.task_body), model.task_point, model.task_kind, model.task_index, model.euler_axes)
-    place_legs(q, *args, model.legs.arrays(), np.ascontiguousarray(x, dtype=float), task)
+    place_legs(q, *args, model.legs.arrays(), np.ascontiguousarray(x, dtype=float), task, False)
     return q
 
 
@@ -242,9 +248,11 @@ def explicit_legs(model) -> LegTable:
         late[mv] = i
         redo[i, 0] = len(mv)
         redo[i, 1:1 + len(mv)] = mv
+    fixed, fixed_coord = _fixed(model, found)
     pad = lambda c: list(c) + [0] * (3 - len(c))  # noqa: E731
     nan3 = np.full((3, 3), np.nan)
     return LegTable(
+        fixed=fixed, fixed_coord=fixed_coord,
         late=late, redo=redo,
         kind=np.array([g["kind"] for g in found], dtype=np.int64),
         coord=np.array([pad(g["coords"]) for g in found], dtype=np.int64),
@@ -263,6 +271,33 @@ def explicit_legs(model) -> LegTable:
         R_end0=np.array([g.get("R_end0", np.eye(3)) for g in found], dtype=float),
         names=tuple((g["cut"], g["joints"], g["kind"]) for g in found),
     )
+
+
+def _leg_coords(leg: dict) -> list[int]:
+    """The coordinates a leg's closed form sets: its chain's, and the ball's of the task leg."""
+    return [int(c) for c in leg["coords"]] + [int(c) for c in leg.get("ball", [-1])[1:]]
+
+
+def _fixed(model, found: list[dict]) -> tuple[IntArray, IntArray]:
+    """Which legs are placed from the task coordinates alone (:class:`LegTable`'s ``fixed``) and
+    the coordinates they set: in block order, a leg whose base and met bodies are the ground or
+    bodies whose every tree coordinate from the ground is set by such a leg."""
+    fixed = np.zeros(len(found), dtype=np.int64)
+    fixed_coord = np.zeros(model.nq, dtype=np.int64)
+
+    def placed_by_fixed(b: int) -> bool:
+        while b >= 0:
+            k = model.body_joint[b]
+            if not np.all(fixed_coord[model.joint_q0[k]:model.joint_q0[k] + model.joint_nq[k]]):
+                return False
+            b = int(model.body_parent[b])
+        return True
+
+    for i, leg in enumerate(found):
+        if placed_by_fixed(int(leg["base"])) and placed_by_fixed(int(leg["placed"])):
+            fixed[i] = 1
+            fixed_coord[_leg_coords(leg)] = 1
+    return fixed, fixed_coord
 
 
 def _moved_by_any(b: int, moved: list[list[int]]) -> bool:
