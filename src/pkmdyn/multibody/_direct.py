@@ -415,8 +415,9 @@ def _vn3(b, k):  # pragma: no cover - compiled
 @njit(cache=True, _nrt=False)
 def direct_one(b, s, sd, out):  # pragma: no cover - compiled
     """One sample of the direct kinematics from the previous call's solution, as
-    :func:`direct_batch` solves its next sample (the predictor ``q + G (s - s_prev)`` and a
-    simplified Newton step with the previous factors; from a solution the caller set, Newton
+    :func:`direct_batch` solves its next sample (the predictor ``q + G (s - s_prev) + b h^2 / 2``,
+    ``b`` the previous call's bias accelerations and ``h`` the step along its rate ``sd_prev``,
+    and a simplified Newton step with the previous factors; from a solution the caller set, Newton
     alone), with the model, state and work space in the packed buffer ``b`` (:data:`ONE_ARRAYS`).
     Writes the task pose and rate into ``out (2 nt,)`` and returns the status: OK, or
     :data:`COLD`, :data:`BAD_INPUT`, a failure of :func:`direct_sample` or :data:`CROSSED`
@@ -447,12 +448,30 @@ def direct_one(b, s, sd, out):  # pragma: no cover - compiled
         if not (np.isfinite(s[a]) and np.isfinite(sd[a])):
             return BAD_INPUT
     chord = st[0] == ONE_FACTORED
-    G = work[12]
+    G, qdd = work[12], work[14]
+    # along the previous call's rate, ``s - s_prev = sd_prev h`` to first order: the tree
+    # coordinates' second-order term ``b h^2 / 2`` (``b = qdd`` of the previous call, at
+    # ``sdd = 0``: the bias accelerations), where the step runs along that rate (within about 6
+    # degrees)
+    so = 2 + nq + nt
+    h2 = 0.0
+    if chord:
+        ss = 0.0
+        vv = 0.0
+        dd = 0.0
+        for a in range(na):
+            da = s[a] - st[so + a]
+            ss += da * st[so + na + a]
+            vv += st[so + na + a] * st[so + na + a]
+            dd += da * da
+        if vv > 0.0 and dd * vv - ss * ss <= 0.01 * dd * vv:
+            h2 = 0.5 * (ss / vv) ** 2
     for c in range(nq):
         acc = st[2 + c]
         if chord:
             for a in range(na):
-                acc += G[c, a] * (s[a] - st[2 + nq + nt + a])
+                acc += G[c, a] * (s[a] - st[so + a])
+            acc += h2 * qdd[c]
         q[c] = acc
     status = direct_sample(s, sd, sdd, q, chord, tree, loops, task, sol, work, info)
     if status == OK and info[3] * st[1] < 0.0:
@@ -479,7 +498,8 @@ def direct_one(b, s, sd, out):  # pragma: no cover - compiled
     for t in range(nt):
         st[2 + nq + t] = out[t]
     for a in range(na):
-        st[2 + nq + nt + a] = s[a]
+        st[so + a] = s[a]
+        st[so + na + a] = sd[a]
     return OK
 
 

@@ -156,7 +156,7 @@ def pack_one(model: MechanismModel) -> NDArray[np.int64]:
     scalars = np.array([tol, check_tol, task[0], max_iter], dtype=float)
     work = D._work(nq, nb, nrow, nu, na)  # the batched route's own work space
     arrays = [*tree, *loops, *task[1:], act, unk, cut, idle, q_ref, rs, scalars, *work,
-              np.zeros(2 + nq + nt + na), np.zeros(5), np.zeros(na), np.zeros(nq)]
+              np.zeros(2 + nq + nt + 2 * na), np.zeros(5), np.zeros(na), np.zeros(nq)]
     if len(arrays) != len(D.ONE_ARRAYS):
         raise RuntimeError(f"internal error: {len(arrays)} arrays packed, the kernel takes {len(D.ONE_ARRAYS)}")
     head = np.zeros(4 * len(arrays), dtype=np.int64)
@@ -173,7 +173,7 @@ def pack_one(model: MechanismModel) -> NDArray[np.int64]:
 
 def one_state(pk: NDArray[np.int64]) -> Array:
     """The state of a packed buffer (:func:`pack_one`; a view): ``[flag, det K, q (nq), x (nt),
-    s (na)]`` of the last solved sample."""
+    s (na), sd (na)]`` of the last solved sample."""
     k = len(D.ONE_ARRAYS) - 4
     o, n = int(pk[4 * k]), int(pk[4 * k + 1])
     return pk[o:o + n].view(np.float64)
@@ -184,7 +184,9 @@ def prime_one(pk: NDArray[np.int64], q: Array, x: Array, s: Array, det: float) -
     st = one_state(pk)
     nq, nt = q.shape[0], x.shape[0]
     st[0], st[1] = D.ONE_PRIMED, det
-    st[2:2 + nq], st[2 + nq:2 + nq + nt], st[2 + nq + nt:] = q, x, s
+    na = s.shape[0]
+    st[2:2 + nq], st[2 + nq:2 + nq + nt], st[2 + nq + nt:2 + nq + nt + na] = q, x, s
+    st[2 + nq + nt + na:] = 0.0  # no rate: the next call's predictor is of the first order
 
 
 def actuator_reference(model: MechanismModel) -> Array:
