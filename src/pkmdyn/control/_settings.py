@@ -14,16 +14,20 @@ from __future__ import annotations
 
 import math
 import tomllib
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..errors import ParameterError
 from ..params_util import read_toml
 
-__all__ = ["default_settings_text", "load_settings", "loop_settings", "gains", "si", "scale_description",
-           "POSITIVE", "INTEGER", "MAXIMUM"]
+__all__ = ["default_settings_text", "load_settings", "loop_settings", "LoopSettings", "gains", "si",
+           "scale_description", "POSITIVE", "INTEGER", "MAXIMUM"]
+
+Array = NDArray[np.float64]
 
 #: keys (prefixes) whose values must be > 0
 POSITIVE = ("control_cycle_s", "integration_step_s", "effort_limit", "encoder_counts_per_turn",
@@ -127,6 +131,39 @@ def scale_description(desc: dict[str, Any], mass_factor: float, friction_factor:
     return walk(desc)
 
 
+@dataclass(frozen=True)
+class LoopSettings:
+    """Timing, sensors and limits of a closed loop (SI; displacement unit of the actuators).
+
+    ``cycle_s`` control cycle; ``step_s`` integration step (divides the cycle);
+    ``effort_limit (nu,)`` [N m or N]; ``divergence_limit (nq,)`` [rad or m];
+    ``encoder_resolution`` actuator displacement per count [rad or m], one for every actuator
+    or one each (nu,);
+    ``velocity_cutoff_Hz``, ``acceleration_cutoff_Hz`` encoder filters (0: none);
+    ``pose_noise (nq,)`` standard deviation [rad or m]; ``pose_delay_cycles``; ``seed``;
+    ``pose_from_sensor``: the controller's pose from the pose sensor (else from the encoders);
+    ``exact_encoders``: the encoders read the plant's true actuator coordinates and the
+    controller's pose comes from its direct kinematics (:mod:`pkmdyn.simulate`'s loop; else both
+    to first order about the reference); ``method``: the plant's step (:data:`pkmdyn.simulate.METHODS`;
+    by default a third-order explicit step away from the friction band and ROS2 in it).
+    """
+
+    cycle_s: float
+    step_s: float
+    effort_limit: Array
+    divergence_limit: Array
+    encoder_resolution: float | Array
+    velocity_cutoff_Hz: float
+    acceleration_cutoff_Hz: float
+    pose_noise: Array
+    pose_delay_cycles: int
+    seed: int
+    pose_from_sensor: bool = False
+    method: str = "rk3-ros2"
+    exact_encoders: bool = False
+
+
+
 def _prefixed(table: dict[str, Any], prefix: str) -> np.ndarray:
     """The values of every key starting with ``prefix``, in SI, concatenated in file order."""
     parts = [si(table, k) for k in table if k.startswith(prefix)]
@@ -135,10 +172,8 @@ def _prefixed(table: dict[str, Any], prefix: str) -> np.ndarray:
     return np.concatenate(parts)
 
 
-def loop_settings(settings: dict[str, dict[str, Any]]) -> "LoopSettings":
-    """The :class:`~pkmdyn.simulate.LoopSettings` of a settings dict (:func:`load_settings`)."""
-    from ..simulate._loop import LoopSettings
-
+def loop_settings(settings: dict[str, dict[str, Any]]) -> LoopSettings:
+    """The :class:`LoopSettings` of a settings dict (:func:`load_settings`)."""
     tm, act, sen, run = settings["timing"], settings["actuators"], settings["sensors"], settings["run"]
     travel = float(_prefixed(sen, "encoder_travel_per_turn")[0])
     return LoopSettings(

@@ -44,6 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import PkmdynError
+from ..control._settings import LoopSettings
 from ._plant import Plant, hold_interval, make_work
 
 __all__ = ["LoopSettings", "LoopResult", "LoopState", "DivergenceError", "ExactEncoders", "closed_loop", "run_span",
@@ -63,38 +64,6 @@ class DivergenceError(PkmdynError):
                  limit: float = float("nan"), t: float = float("nan")) -> None:
         super().__init__(message)
         self.coordinate, self.error, self.limit, self.t = coordinate, error, limit, t
-
-
-@dataclass(frozen=True)
-class LoopSettings:
-    """Timing, sensors and limits of a closed loop (SI; displacement unit of the actuators).
-
-    ``cycle_s`` control cycle; ``step_s`` integration step (divides the cycle);
-    ``effort_limit (nu,)`` [N m or N]; ``divergence_limit (nq,)`` [rad or m];
-    ``encoder_resolution`` actuator displacement per count [rad or m], one for every actuator
-    or one each (nu,);
-    ``velocity_cutoff_Hz``, ``acceleration_cutoff_Hz`` encoder filters (0: none);
-    ``pose_noise (nq,)`` standard deviation [rad or m]; ``pose_delay_cycles``; ``seed``;
-    ``pose_from_sensor``: the controller's pose from the pose sensor (else from the encoders);
-    ``exact_encoders``: the encoders read the plant's true actuator coordinates and the
-    controller's pose comes from its direct kinematics (module docstring; else both to first
-    order about the reference); ``method``: the plant's step (:data:`pkmdyn.simulate.METHODS`;
-    by default a third-order explicit step away from the friction band and ROS2 in it).
-    """
-
-    cycle_s: float
-    step_s: float
-    effort_limit: Array
-    divergence_limit: Array
-    encoder_resolution: float | Array
-    velocity_cutoff_Hz: float
-    acceleration_cutoff_Hz: float
-    pose_noise: Array
-    pose_delay_cycles: int
-    seed: int
-    pose_from_sensor: bool = False
-    method: str = "rk3-ros2"
-    exact_encoders: bool = False
 
 
 @dataclass(frozen=True)
