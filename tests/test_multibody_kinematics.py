@@ -362,3 +362,26 @@ def test_a_cut_joints_coordinate_carries_its_reference_value_as_the_same_joint_i
         values.append(joint_coordinates(m, kin, [m.joint_index("B")])[:, 0])
     assert np.abs(values[0] - values[1]).max() < 1e-10
     assert abs(values[0][0] - ref) < 1e-12 and np.abs(values[0] - ref).max() > 0.1  # it starts at ref and moves
+
+
+@pytest.mark.parametrize("name,amp", [("stewart", 0.05), ("rrr3", 0.04)])
+@pytest.mark.parametrize("eps", [1e-14, 1e-12, 1e-9, 0.0])
+def test_a_near_repeated_time_at_an_acceleration_jump_keeps_the_solution(name, amp, eps):
+    """Two motion segments joined at a time repeated to within ``eps``, the accelerations
+    jumping there (bang-bang): the predictor's jerk term from the last step's change of the
+    accelerations must not take a near-zero step as a jerk; the solution along the times is
+    the one without times (the same loops closed, no turn gained)."""
+    m = load_mechanism(ex.builtin_dict(name))
+    x0 = reference_task(m)
+    a = np.full(m.nt, 200.0 * amp)  # [m/s^2, rad/s^2]: amp at the switch, twice amp at the end
+    T, dt = 0.1, 1e-3
+    t = np.concatenate([np.arange(0.0, T + dt / 2, dt), T + eps + np.arange(0.0, T + dt / 2, dt)])
+    acc = np.where(t <= T, 1.0, -1.0)[:, None] * a[None, :]
+    tt = np.where(t <= T, t, t - eps)  # the motion's own clock: continuous through the switch
+    vel = np.where(tt[:, None] <= T, a * tt[:, None], a * T - a * (tt[:, None] - T))
+    pos = np.where(tt[:, None] <= T, 0.5 * a * tt[:, None] ** 2,
+                   0.5 * a * T**2 + a * T * (tt[:, None] - T) - 0.5 * a * (tt[:, None] - T) ** 2)
+    x = x0 + pos
+    timed = solve_kinematics(m, x, vel, acc, t)
+    untimed = solve_kinematics(m, x, vel, acc)
+    assert np.abs(timed.q - untimed.q).max() < 1e-9

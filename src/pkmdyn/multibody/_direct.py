@@ -268,7 +268,8 @@ def direct_batch(tm, s, sd, sdd, q_start, x_start, tree, loops, task, sol, q_out
                  xdd_out, res_out, it_out, det_out, ratio_out, status, worst):  # pragma: no cover - compiled
     """Every sample of the actuator motion ``s, sd, sdd (n, na)`` in order, each from the
     previous one's solution: ``q_{k-1} + qd dt + qdd dt^2 / 2 + (qdd_{k-1} - qdd_{k-2}) dt^3 /
-    (6 dt_{k-1})`` (times ``tm``: Taylor to the third order, the jerk by the last step; without times
+    (6 dt_{k-1})`` (times ``tm``: Taylor to the third order, the jerk by the last step where it is at
+    least a quarter of this one; without times
     ``q_{k-1} + G (s_k - s_{k-1})``), ``q_start`` for the first. Task angles are taken
     continuous, the first sample's nearest ``x_start``. Stops at the first sample that fails
     (``status``: NOT_CONVERGED, SINGULAR, LOOP_OPEN, :data:`CROSSED` where ``det K`` changed sign
@@ -291,9 +292,10 @@ def direct_batch(tm, s, sd, sdd, q_start, x_start, tree, loops, task, sol, q_out
         if k > 0:
             if tm.shape[0] == n:
                 dt = tm[k] - tm[k - 1]
-                # the third-order term by the change of the accelerations over the previous step
+                # the third-order term by the change of the accelerations over the previous step,
+                # where that step is not much shorter than this one
                 dtp = tm[k - 1] - tm[k - 2] if k > 1 else 0.0
-                j3 = dt * dt * dt / (6.0 * dtp) if dtp > 0.0 else 0.0
+                j3 = dt * dt * dt / (6.0 * dtp) if dtp >= 0.25 * dt and dtp > 0.0 else 0.0
                 for c in range(nq):
                     q[c] += qd[c] * dt + 0.5 * qdd[c] * dt * dt + j3 * (qdd[c] - qdd_prev[c])
             else:
@@ -384,7 +386,7 @@ ONE_ARRAYS = (
     ("Vpre", "f", 2), ("A", "f", 2), ("K", "f", 2), ("piv", "i", 1), ("r", "f", 1), ("G", "f", 2), ("qd", "f", 1),
     ("qdd", "f", 1), ("w33", "f", 3), ("w3", "f", 2), ("trig", "f", 2), ("late", "i", 1), ("rowpos", "i", 1),
     ("colpos", "i", 1), ("q0", "f", 1), ("step", "f", 1),
-    ("state", "f", 1),  # flag, det K, q (nq), x (nt), s (na) of the last solved sample
+    ("state", "f", 1),  # flag, det K, q (nq), x (nt), s (na), sd (na) of the last solved sample
     ("info", "f", 1), ("sdd", "f", 1), ("q", "f", 1),
 )
 #: the state's flag: nothing solved, a solution (set by the caller), a solution with its

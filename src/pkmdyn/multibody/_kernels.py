@@ -1261,7 +1261,8 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
     form with diagonal blocks starting at ``blocks`` (legs that are independent once the
     platform is placed are solved one by one), starting from
     ``q_{s-1} + qd_{s-1} dt + qdd_{s-1} dt^2 / 2 + (qdd_{s-1} - qdd_{s-2}) dt^3 / (6 dt_{s-1})``
-    (Taylor to the third order, the jerk by the last step's difference; it leaves ``q`` close
+    (Taylor to the third order, the jerk by the last step's difference where that step is at
+    least a quarter of this one, else to the second order; it leaves ``q`` close
     enough for the simplified step to close the loops where the second order did not at a
     thousand samples a second) (the explicit legs' coordinates then set in
     closed form at every evaluation, ``legs``: :mod:`.legs`) (``dt = tm_s - tm_{s-1}``; the first-order
@@ -1358,9 +1359,10 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
         elif s > 0 and tm.shape[0] == n:
             dt = tm[s] - tm[s - 1]
             # the third-order term from the change of the accelerations over the previous step
-            # (jerk (qdd_{s-1} - qdd_{s-2}) / dt_{s-1}) where there is one
+            # (jerk (qdd_{s-1} - qdd_{s-2}) / dt_{s-1}) where that step is not much shorter than
+            # this one (a jump of the accelerations over a near-repeated time is no jerk)
             dtp = tm[s - 1] - tm[s - 2] if s > 1 else 0.0
-            j3 = dt * dt * dt / (6.0 * dtp) if dtp > 0.0 else 0.0
+            j3 = dt * dt * dt / (6.0 * dtp) if dtp >= 0.25 * dt and dtp > 0.0 else 0.0
             for c in range(nq):
                 q[c] += qd[c] * dt + 0.5 * qdd[c] * dt * dt + j3 * (qdd[c] - qdd_prev[c])
         elif s > 0:

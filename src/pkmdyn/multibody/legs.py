@@ -109,7 +109,7 @@ class LegTable:
     ``fixed (nL,)``: 1 for a leg placed from the task coordinates alone (it starts from and
     meets the ground or bodies that only such legs move: the task leg, a Stewart platform's or
     the hip's upper legs), whose closed form the solver evaluates once per sample, and
-    ``fixed_coord (nq,)``: 1 for the coordinates such legs set.
+    ``fixed_coord (nq,)``: 1 for the coordinates such legs set (both empty without legs).
     ``names``: per leg, its cut joint's name, the chain's joint names and the pattern."""
 
     late: IntArray
