@@ -385,3 +385,20 @@ def test_a_near_repeated_time_at_an_acceleration_jump_keeps_the_solution(name, a
     timed = solve_kinematics(m, x, vel, acc, t)
     untimed = solve_kinematics(m, x, vel, acc)
     assert np.abs(timed.q - untimed.q).max() < 1e-9
+
+
+@pytest.mark.parametrize("name,amp", [("delta", 0.1), ("rrr3", 0.04)])
+@pytest.mark.parametrize("scale", [1e-6, 1.0, 1e3])
+def test_positions_do_not_depend_on_the_rates_given_without_times(name, amp, scale):
+    """Without times the predictor's second-order term follows the given rates; rates out of
+    scale with the positions' own steps (other units, a wrong column) must not move the
+    solved positions off the branch the positions alone give."""
+    m = load_mechanism(ex.builtin_dict(name))
+    t = np.linspace(0.0, 1.0, 201)
+    w = 2.0 * np.pi
+    amp = amp * np.linspace(1.0, 0.6, m.nt) * (m.task_kind == m.task_kind)
+    x = reference_task(m) + amp * np.sin(w * t)[:, None]
+    xd = amp * w * np.cos(w * t)[:, None]
+    plain = solve_kinematics(m, x)
+    rated = solve_kinematics(m, x, scale * xd)
+    assert np.abs(rated.q - plain.q).max() < 1e-9

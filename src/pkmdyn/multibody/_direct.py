@@ -454,7 +454,7 @@ def direct_one(b, s, sd, out):  # pragma: no cover - compiled
     # along the previous call's rate, ``s - s_prev = sd_prev h`` to first order: the tree
     # coordinates' second-order term ``b h^2 / 2`` (``b = qdd`` of the previous call, at
     # ``sdd = 0``: the bias accelerations), where the step runs along that rate (within about 6
-    # degrees)
+    # degrees) and the term is at most half the first-order one
     so = 2 + nq + nt
     h2 = 0.0
     if chord:
@@ -468,13 +468,19 @@ def direct_one(b, s, sd, out):  # pragma: no cover - compiled
             dd += da * da
         if vv > 0.0 and dd * vv - ss * ss <= 0.01 * dd * vv:
             h2 = 0.5 * (ss / vv) ** 2
+    first = 0.0
+    second = 0.0
     for c in range(nq):
-        acc = st[2 + c]
+        acc = 0.0
         if chord:
             for a in range(na):
                 acc += G[c, a] * (s[a] - st[so + a])
-            acc += h2 * qdd[c]
-        q[c] = acc
+        q[c] = st[2 + c] + acc
+        first = max(first, abs(acc))
+        second = max(second, h2 * abs(qdd[c]))
+    if 0.0 < second <= 0.5 * first:  # the smaller term, else the first order alone
+        for c in range(nq):
+            q[c] += h2 * qdd[c]
     status = direct_sample(s, sd, sdd, q, chord, tree, loops, task, sol, work, info)
     if status == OK and info[3] * st[1] < 0.0:
         status = CROSSED

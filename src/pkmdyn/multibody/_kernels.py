@@ -1383,13 +1383,25 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
                 dd += dx * dx
             along = vv > 0.0 and dd * vv - ss * ss <= 0.01 * dd * vv
             h2 = 0.5 * (ss / vv) ** 2 if along else 0.0
+            first = 0.0
+            second = 0.0
             for c in range(nq):
                 acc = 0.0
                 bias = qdd[c]
                 for t in range(nt):
                     acc += G[c, t] * dxs[t]
                     bias -= G[c, t] * xdd[s - 1, t]
-                q[c] += acc + h2 * bias
+                q[c] += acc
+                first = max(first, abs(acc))
+                second = max(second, h2 * abs(bias))
+            # and only where it is the smaller term (rates far from the positions' own, or a
+            # coarse sampling, keep the first order)
+            if 0.0 < second <= 0.5 * first:
+                for c in range(nq):
+                    bias = qdd[c]
+                    for t in range(nt):
+                        bias -= G[c, t] * xdd[s - 1, t]
+                    q[c] += h2 * bias
         for c in range(nq):
             qdd_prev[c] = qdd[c]
         info[1] = 0.0
