@@ -163,7 +163,6 @@ class LoopSettings:
     exact_encoders: bool = False
 
 
-
 def _prefixed(table: dict[str, Any], prefix: str) -> np.ndarray:
     """The values of every key starting with ``prefix``, in SI, concatenated in file order."""
     parts = [si(table, k) for k in table if k.startswith(prefix)]

@@ -30,7 +30,8 @@ import numpy as np
 from numba import njit
 
 from ._kernels import (LOOP_OPEN, NOT_CONVERGED, OK, ROWS_DRIFT, ROWS_JACOBIAN, ROWS_VALUES, SINGULAR, _wrap,
-                       bias_motion, forward_positions, largest_scaled, rows)
+                       along_h2, bias_motion, forward_positions, jerk_factor, largest_scaled, rows,
+                       second_order_applies)
 from ._one import _fview, _iview
 
 __all__ = ["CROSSED", "EULER_SINGULAR_RATES", "COLD", "BAD_INPUT", "direct_batch", "direct_starts", "direct_one",
@@ -292,10 +293,7 @@ def direct_batch(tm, s, sd, sdd, q_start, x_start, tree, loops, task, sol, q_out
         if k > 0:
             if tm.shape[0] == n:
                 dt = tm[k] - tm[k - 1]
-                # the third-order term by the change of the accelerations over the previous step,
-                # where that step is not much shorter than this one
-                dtp = tm[k - 1] - tm[k - 2] if k > 1 else 0.0
-                j3 = dt * dt * dt / (6.0 * dtp) if dtp >= 0.25 * dt and dtp > 0.0 else 0.0
+                j3 = jerk_factor(tm, k)
                 for c in range(nq):
                     q[c] += qd[c] * dt + 0.5 * qdd[c] * dt * dt + j3 * (qdd[c] - qdd_prev[c])
             else:
@@ -453,8 +451,7 @@ def direct_one(b, s, sd, out):  # pragma: no cover - compiled
     G, qdd = work[12], work[14]
     # along the previous call's rate, ``s - s_prev = sd_prev h`` to first order: the tree
     # coordinates' second-order term ``b h^2 / 2`` (``b = qdd`` of the previous call, at
-    # ``sdd = 0``: the bias accelerations), where the step runs along that rate (within about 6
-    # degrees) and the term is at most half the first-order one
+    # ``sdd = 0``: the bias accelerations)
     so = 2 + nq + nt
     h2 = 0.0
     if chord:
@@ -466,8 +463,7 @@ def direct_one(b, s, sd, out):  # pragma: no cover - compiled
             ss += da * st[so + na + a]
             vv += st[so + na + a] * st[so + na + a]
             dd += da * da
-        if vv > 0.0 and dd * vv - ss * ss <= 0.01 * dd * vv:
-            h2 = 0.5 * (ss / vv) ** 2
+        h2 = along_h2(ss, vv, dd)
     first = 0.0
     second = 0.0
     for c in range(nq):
@@ -478,7 +474,7 @@ def direct_one(b, s, sd, out):  # pragma: no cover - compiled
         q[c] = st[2 + c] + acc
         first = max(first, abs(acc))
         second = max(second, h2 * abs(qdd[c]))
-    if 0.0 < second <= 0.5 * first:  # the smaller term, else the first order alone
+    if second_order_applies(first, second):
         for c in range(nq):
             q[c] += h2 * qdd[c]
     status = direct_sample(s, sd, sdd, q, chord, tree, loops, task, sol, work, info)

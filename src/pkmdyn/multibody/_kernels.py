@@ -1089,6 +1089,36 @@ _CHORD, _NEWTON, _RATES = 0, 1, 2
 CHORD_PAUSE = 8
 
 
+@njit(cache=True)
+def jerk_factor(tm, s):
+    """``dt^3 / (6 dt_prev)``: the factor of ``qdd_{s-1} - qdd_{s-2}`` in the third-order
+    predictor of sample ``s`` at times ``tm`` (the jerk by the last step's change of the
+    accelerations), where the previous step is at least a quarter of this one (a jump of the
+    accelerations over a near-repeated time is no jerk); else 0 (the second order)."""
+    dt = tm[s] - tm[s - 1]
+    dtp = tm[s - 1] - tm[s - 2] if s > 1 else 0.0
+    return dt * dt * dt / (6.0 * dtp) if dtp >= 0.25 * dt and dtp > 0.0 else 0.0
+
+
+@njit(cache=True)
+def along_h2(ss, vv, dd):
+    """``h^2 / 2`` of a step ``d`` taken along the previous rate ``r`` (``d = r h`` to first
+    order; ``ss = d . r``, ``vv = r . r``, ``dd = d . d``), the factor of the bias accelerations
+    in a second-order predictor without times; 0 where the step is not along that rate within
+    about 6 degrees (poses with unrelated rates keep the first order)."""
+    if vv > 0.0 and dd * vv - ss * ss <= 0.01 * dd * vv:
+        return 0.5 * (ss / vv) ** 2
+    return 0.0
+
+
+@njit(cache=True)
+def second_order_applies(first, second):
+    """Whether a predictor's second-order term (largest entry ``second``) is at most half its
+    first-order one (``first``): rates out of scale with the positions' own steps, or a coarse
+    sampling, keep the first order."""
+    return 0.0 < second <= 0.5 * first
+
+
 @njit(cache=True, inline="always")
 def chord_pause(chord, info, pause):
     """The next sample's count of samples left without the simplified step of
@@ -1299,6 +1329,7 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
     qdd = np.zeros(nq)
     qdd_prev = np.zeros(nq)
     dxs = np.empty(nt)
+    bias_q = np.empty(nq)
     R = np.empty((nb, 3, 3))
     p = np.empty((nb, 3))
     S = np.empty((nq, 6))
@@ -1358,18 +1389,13 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
                     q[c] = acc
         elif s > 0 and tm.shape[0] == n:
             dt = tm[s] - tm[s - 1]
-            # the third-order term from the change of the accelerations over the previous step
-            # (jerk (qdd_{s-1} - qdd_{s-2}) / dt_{s-1}) where that step is not much shorter than
-            # this one (a jump of the accelerations over a near-repeated time is no jerk)
-            dtp = tm[s - 1] - tm[s - 2] if s > 1 else 0.0
-            j3 = dt * dt * dt / (6.0 * dtp) if dtp >= 0.25 * dt and dtp > 0.0 else 0.0
+            j3 = jerk_factor(tm, s)
             for c in range(nq):
                 q[c] += qd[c] * dt + 0.5 * qdd[c] * dt * dt + j3 * (qdd[c] - qdd_prev[c])
         elif s > 0:
             # along the previous sample's rate: x_s - x_{s-1} = xd_{s-1} h to first order, and
             # q_s = q_{s-1} + G dx + b h^2 / 2 to second (b = qdd - G xdd, the bias part of the
-            # tree accelerations); only where the step runs along that rate (within about 6
-            # degrees: a smooth motion's samples, not poses with unrelated rates)
+            # tree accelerations)
             ss = 0.0
             vv = 0.0
             dd = 0.0
@@ -1381,8 +1407,7 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
                 ss += dx * xd[s - 1, t]
                 vv += xd[s - 1, t] * xd[s - 1, t]
                 dd += dx * dx
-            along = vv > 0.0 and dd * vv - ss * ss <= 0.01 * dd * vv
-            h2 = 0.5 * (ss / vv) ** 2 if along else 0.0
+            h2 = along_h2(ss, vv, dd)
             first = 0.0
             second = 0.0
             for c in range(nq):
@@ -1392,16 +1417,12 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
                     acc += G[c, t] * dxs[t]
                     bias -= G[c, t] * xdd[s - 1, t]
                 q[c] += acc
+                bias_q[c] = bias
                 first = max(first, abs(acc))
                 second = max(second, h2 * abs(bias))
-            # and only where it is the smaller term (rates far from the positions' own, or a
-            # coarse sampling, keep the first order)
-            if 0.0 < second <= 0.5 * first:
+            if second_order_applies(first, second):
                 for c in range(nq):
-                    bias = qdd[c]
-                    for t in range(nt):
-                        bias -= G[c, t] * xdd[s - 1, t]
-                    q[c] += h2 * bias
+                    q[c] += h2 * bias_q[c]
         for c in range(nq):
             qdd_prev[c] = qdd[c]
         info[1] = 0.0
