@@ -13,7 +13,7 @@ import pytest
 
 from pkmdyn.cli import main
 from pkmdyn.machines.pdm4 import default_params_path
-from pkmdyn.profiles.pdm_motion import cycloidal_motion, write_pdm_motion
+from pkmdyn.profiles.pdm_motion import cycloidal_motion, read_pdm_motion, write_pdm_motion
 
 
 def _read(path):
@@ -141,3 +141,77 @@ def test_motion_file_rows_follow_the_limits_table(tmp_path, capsys):
     loose = tmp_path / "loose.toml"
     loose.write_text(base + "\n[limits]\nmax_samples = 41\n", encoding="utf-8")
     assert main(["pdm", "run", "--params", str(loose), "--motion", str(motion), "--no-plots", "--out", str(out)]) == 0
+
+
+def _closed_form_columns(pm, motion):
+    """The paper's columns from the hand-derived Eq. 2-83 (kinematics of every body and the
+    Newton-Euler reactions with compliance), independent of the engine that ``pdm run`` uses."""
+    from pkmdyn.machines.pdm4 import inverse_kinematics
+    from pkmdyn.machines.pdm4.dynamics import JOINTS, REDUNDANT_LABELS, inverse_dynamics
+
+    kin = inverse_kinematics(pm, motion)
+    reac = inverse_dynamics(pm, kin)
+    cols = {"t_s": kin.t}
+    for k, names in enumerate((("x_m", "xd_m_s", "xdd_m_s2"), ("y_m", "yd_m_s", "ydd_m_s2"),
+                               ("alpha_rad", "alphad_rad_s", "alphadd_rad_s2"),
+                               ("gamma_rad", "gammad_rad_s", "gammadd_rad_s2"))):
+        for name, x in zip(names, (kin.q, kin.qd, kin.qdd)):
+            cols[name] = x[:, k]
+    for k in range(4):
+        cols[f"l{k + 1}_m"], cols[f"ld{k + 1}_m_s"], cols[f"ldd{k + 1}_m_s2"] = kin.pos.l[:, k], kin.ld[:, k], kin.ldd[:, k]
+        cols[f"s{k + 1}_m"] = kin.pos.l[:, k] - pm.home_lengths[k]
+        cols[f"f{k + 1}_N"] = reac.force[:, k]
+    cols["z_m"] = kin.pos.P[:, 2]
+    for i in range(2):
+        for sym, v in ((f"crank{i + 1}_theta", (kin.pos.theta1, kin.theta1d, kin.theta1dd)),
+                       (f"coupler{i + 1}_theta", (kin.pos.theta2, kin.theta2d, kin.theta2dd)),
+                       (f"rpr{i + 1}_phi", (kin.rpr_angle, kin.rpr_angle_d, kin.rpr_angle_dd))):
+            for suffix, x in zip(("_rad", "d_rad_s", "dd_rad_s2"), v):
+                cols[sym + suffix] = x[:, i]
+    for j in range(2):
+        for e, ang in enumerate(("alpha", "beta", "gamma")):
+            for suffix, x in zip(("_rad", "d_rad_s", "dd_rad_s2"), (kin.euler, kin.euler_d, kin.euler_dd)):
+                cols[f"spu{j + 3}_{ang}{suffix}"] = x[:, j, e]
+    for b in kin.bodies:
+        for f, unit in (("p", "m"), ("v", "m_s"), ("a", "m_s2"), ("w", "rad_s"), ("wd", "rad_s2")):
+            for c in range(3):
+                cols[f"{b.name}_{f}{'xyz'[c]}_{unit}"] = getattr(b, f)[:, c]
+    for c, label in enumerate(REDUNDANT_LABELS):
+        cols[label] = reac.redundant[:, c]
+    cols["U23_torque_Nm"], cols["U24_torque_Nm"] = reac.u_joint_torque[:, 0], reac.u_joint_torque[:, 1]
+    npz = {f: np.stack([getattr(b, f) for b in kin.bodies], axis=1) for f in ("R", "p", "v", "w", "a", "wd")}
+    npz.update(joint_point=reac.joint_point, joint_force=reac.joint_force, joint_moment=reac.joint_moment)
+    return cols, npz, [j[0] for j in JOINTS], [b.name for b in kin.bodies]
+
+
+@pytest.mark.parametrize("seed", [3, 4])
+def test_run_agrees_with_the_closed_forms_of_the_paper(seed, tmp_path):
+    """``pkmdyn pdm run`` (the generic engine on the PDM's description) against the hand-derived
+    kinematics and Newton-Euler reactions with compliance, computed here on a random variant
+    and a random Eq. 84 motion: every column of results.csv and every array of bodies.npz to
+    1e-9 of its column's scale (the loop residual, zero in both, below 1e-12 m)."""
+    from test_pdm_description import _variant
+
+    from pkmdyn.machines.pdm4 import load_params
+
+    pm = _variant(seed, tmp_path)
+    rng = np.random.default_rng(seed)
+    tr = pm.trajectory
+    strokes = tuple(np.array(tr.strokes) * rng.uniform(-1, 1, 4))
+    motion = cycloidal_motion(strokes, tr.period_s * rng.uniform(0.5, 2.0), 157)
+    write_pdm_motion(tmp_path / "m.csv", motion)
+    params = tmp_path / f"pdm_{seed}.toml"
+    assert main(["pdm", "run", "--params", str(params), "--motion", str(tmp_path / "m.csv"), "--no-plots",
+                 "--out", str(tmp_path / "out")]) == 0
+    got = _read(tmp_path / "out" / "results.csv")
+    pm = load_params(params)
+    want, npz, joints, bodies = _closed_form_columns(pm, read_pdm_motion(tmp_path / "m.csv"))
+    assert set(got) == set(want) | {"loop_residual_m"}
+    for name, ref in want.items():
+        scale = max(float(np.abs(ref).max()), 1e-300)
+        assert np.abs(got[name] - ref).max() <= 1e-9 * scale + 1e-12, name
+    assert got["loop_residual_m"].max() < 1e-12
+    z = np.load(tmp_path / "out" / "bodies.npz")
+    assert list(z["joint_names"]) == joints and list(z["body_names"]) == bodies
+    for name, ref in npz.items():
+        assert np.abs(z[name] - ref).max() <= 1e-9 * np.abs(ref).max(), name

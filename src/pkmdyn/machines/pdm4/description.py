@@ -65,11 +65,11 @@ def pdm_description(model: PdmModel, q_ref: np.ndarray | None = None) -> dict[st
                                       "poisson_ratio": float(model.poisson_ratio)}
     # the prismatic joints' centres at the cylinder's mouth, 2 c1 from its fixed joint (as the
     # reactions of .dynamics.joint_points): the node of the cylinder and piston beams
-    mouth = joint_points(model, kin)[0]
+    centres = joint_points(model, kin)[0]
     lengths = {"P11": kin.pos.l[0, 0], "P12": kin.pos.l[0, 1], "P23": kin.pos.l[0, 2], "P24": kin.pos.l[0, 3]}
     joints = []
     for j in mechanism_joints(model, q):
-        point = mouth[_JOINT_NAMES.index(j.name)] if j.kind == "P" else j.point
+        point = centres[_JOINT_NAMES.index(j.name)]
         entry: dict[str, Any] = {"name": j.name, "type": _TYPES[j.kind], "parent": j.body_a, "child": j.body_b,
                                  "point_m": [float(v) for v in point]}
         if j.kind in ("R", "P"):

@@ -27,79 +27,18 @@ from ...analysis.mobility import analyse
 from ...errors import PkmdynError
 from ...io import check_output_dir, output_dir, write_csv, write_json
 from ...profiles.pdm_motion import PdmMotion, cycloidal_motion, read_pdm_motion
-from .dynamics import JOINTS, REDUNDANT_LABELS, PdmReactions, inverse_dynamics
-from .kinematics import BODY_NAMES, LIMB_LABELS, PdmKinematics, inverse_kinematics, mechanism_joints
+from . import paper
+from .kinematics import inverse_position, mechanism_joints
+from .paper import BODY_NAMES, JOINTS, LIMB_LABELS, REDUNDANT_LABELS
 from ...params_util import check_limit, parse_limit_options
 from .params import LIMIT_KEYS, PdmModel, TrajectorySettings, load_params
 from .workspace import reachable_workspace, write_projection_csv, write_workspace_csv
 
-__all__ = ["run_pdm", "results_columns", "dynamics_columns", "mobility_summary", "geometry_summary",
-           "model_summary", "trajectory_with", "CHUNK"]
+__all__ = ["run_pdm", "mobility_summary", "geometry_summary", "model_summary", "trajectory_with", "CHUNK"]
 
 Array = NDArray[np.float64]
 #: samples per block of the kinematics loop (one progress-bar step per block)
 CHUNK = 2000
-_XYZ = "xyz"
-_EULER = ("alpha", "beta", "gamma")
-
-
-def _vec(cols: dict[str, Array], prefix: str, unit: str, v: Array) -> None:
-    for c in range(3):
-        cols[f"{prefix}{_XYZ[c]}_{unit}"] = v[:, c]
-
-
-def results_columns(model: PdmModel, kin: PdmKinematics) -> dict[str, Array]:
-    """The columns of ``results.csv`` for one block of samples (names in docs/pdm4.md)."""
-    cols: dict[str, Array] = {"t_s": kin.t}
-    for k, name in enumerate(("x_m", "y_m", "alpha_rad", "gamma_rad")):
-        cols[name] = kin.q[:, k]
-    for k in range(4):
-        cols[f"l{k + 1}_m"] = kin.pos.l[:, k]
-        cols[f"ld{k + 1}_m_s"] = kin.ld[:, k]
-        cols[f"ldd{k + 1}_m_s2"] = kin.ldd[:, k]
-    for k, name in enumerate(("xd_m_s", "yd_m_s", "alphad_rad_s", "gammad_rad_s")):
-        cols[name] = kin.qd[:, k]
-    for k, name in enumerate(("xdd_m_s2", "ydd_m_s2", "alphadd_rad_s2", "gammadd_rad_s2")):
-        cols[name] = kin.qdd[:, k]
-    cols["z_m"] = kin.pos.P[:, 2]
-    for k in range(4):
-        cols[f"s{k + 1}_m"] = kin.pos.l[:, k] - model.home_lengths[k]
-    for i in range(2):
-        for sym, v, vd, vdd in ((f"crank{i + 1}_theta", kin.pos.theta1, kin.theta1d, kin.theta1dd),
-                                (f"coupler{i + 1}_theta", kin.pos.theta2, kin.theta2d, kin.theta2dd),
-                                (f"rpr{i + 1}_phi", kin.rpr_angle, kin.rpr_angle_d, kin.rpr_angle_dd)):
-            cols[f"{sym}_rad"] = v[:, i]
-            cols[f"{sym}d_rad_s"] = vd[:, i]
-            cols[f"{sym}dd_rad_s2"] = vdd[:, i]
-    for j in range(2):
-        for e in range(3):
-            base = f"spu{j + 3}_{_EULER[e]}"
-            cols[f"{base}_rad"] = kin.euler[:, j, e]
-            cols[f"{base}d_rad_s"] = kin.euler_d[:, j, e]
-            cols[f"{base}dd_rad_s2"] = kin.euler_dd[:, j, e]
-    for name in BODY_NAMES:
-        b = kin.body(name)
-        _vec(cols, f"{name}_p", "m", b.p)
-        _vec(cols, f"{name}_v", "m_s", b.v)
-        _vec(cols, f"{name}_a", "m_s2", b.a)
-        _vec(cols, f"{name}_w", "rad_s", b.w)
-        _vec(cols, f"{name}_wd", "rad_s2", b.wd)
-    cols["loop_residual_m"] = kin.residual
-    return cols
-
-
-def dynamics_columns(reac: PdmReactions) -> dict[str, Array]:
-    """Actuator forces ``f{k}_N`` (k = 1..4, the order of ``l{k}_m``), the nine over-constrained
-    reaction components (``R21_fz_N`` ... ``R32_my_Nm``, ``dynamics.REDUNDANT_LABELS``) and the
-    U-joint constraint torques ``U23_torque_Nm, U24_torque_Nm``."""
-    cols: dict[str, Array] = {f"f{k + 1}_N": reac.force[:, k] for k in range(4)}
-    for c, label in enumerate(REDUNDANT_LABELS):
-        cols[label] = reac.redundant[:, c]
-    cols["U23_torque_Nm"] = reac.u_joint_torque[:, 0]
-    cols["U24_torque_Nm"] = reac.u_joint_torque[:, 1]
-    return cols
-
-
 def model_summary(model: PdmModel) -> dict[str, Any]:
     """``model.json``: gravity, every body (mass, inertia about its centre of mass in its own
     frame) and every joint (type and the two bodies; the reaction is what ``body_a`` exerts
@@ -198,21 +137,31 @@ def geometry_summary(model: PdmModel) -> dict[str, Any]:
     }
 
 
-_BODY_FIELDS = ("R", "p", "v", "w", "a", "wd")
-
-
 def _compute(model: PdmModel, motion: PdmMotion) -> tuple[dict[str, Array], dict[str, Array]]:
     """``results.csv`` columns and ``bodies.npz`` arrays, in blocks of ``CHUNK`` samples
-    (progress bar on a terminal when there is more than one block)."""
+    (progress bar on a terminal when there is more than one block), through the generic engine:
+    the kinematics of the PDM's description (:func:`pkmdyn.multibody.solve_kinematics`, each block
+    warm-started from the last one) and its joint reactions, unique by the links' compliance
+    (:func:`pkmdyn.multibody.dynamics.joint_reactions`), in the paper's names (:mod:`.paper`).
+    The paper's geometry checks each block first (Eq. 2-9: a six-bar loop that cannot close, a
+    limb beyond its stroke), so that a message names the limb."""
+    from ...multibody import load_mechanism, solve_kinematics
+    from ...multibody.dynamics import joint_reactions
+    from .description import pdm_description
+
+    m = load_mechanism(pdm_description(model))
     blocks, arrays = [], []
     starts = range(0, len(motion), CHUNK)
+    q_start = None
     for s in tqdm(starts, desc="pdm dynamics", unit="block", disable=None if len(starts) > 1 else True):
-        kin = inverse_kinematics(model, motion.slice(s, s + CHUNK))
-        reac = inverse_dynamics(model, kin)
-        blocks.append({**results_columns(model, kin), **dynamics_columns(reac)})
-        arr = {f: np.stack([getattr(b, f) for b in kin.bodies], axis=1) for f in _BODY_FIELDS}
-        arr.update(joint_point=reac.joint_point, joint_force=reac.joint_force, joint_moment=reac.joint_moment)
-        arrays.append(arr)
+        part = motion.slice(s, s + CHUNK)
+        inverse_position(model, part.q, part.t)
+        kin = solve_kinematics(m, part.q, part.qd, part.qdd, part.t, q_start=q_start, sample_offset=s)
+        q_start = kin.q[-1]
+        reac = joint_reactions(m, kin, sample_offset=s)
+        blocks.append({**paper.results_columns(m, kin, model.home_lengths),
+                       **paper.dynamics_columns(m, kin, reac, model.U1_local)})
+        arrays.append(paper.bodies_arrays(m, kin, reac))
     cols = {k: np.concatenate([b[k] for b in blocks]) for k in blocks[0]}
     npz = {k: np.concatenate([b[k] for b in arrays]) for k in arrays[0]}
     npz["t"] = motion.t
