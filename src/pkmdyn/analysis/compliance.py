@@ -98,18 +98,21 @@ def segment_wrenches(s: Array, loads: Array) -> tuple[Array, Array]:
     Returns ``lengths`` (n, N-1) [m] and ``F`` (n, N-1, 6, *cols).
     """
     order = np.argsort(s, axis=1, kind="stable")
-    ss = np.take_along_axis(s, order, axis=1)
     extra = loads.ndim - 3
-    idx = order.reshape(order.shape + (1,) * (extra + 1))
-    L = np.take_along_axis(loads, idx, axis=1)
+    if len(order) and np.all(order == order[:1]):  # the same order at every sample: plain indexing
+        ss, L = s[:, order[0]], loads[:, order[0]]
+    else:
+        ss = np.take_along_axis(s, order, axis=1)
+        L = np.take_along_axis(loads, order.reshape(order.shape + (1,) * (extra + 1)), axis=1)
     f, m = L[:, :, :3], L[:, :, 3:]
     sx = ss.reshape(ss.shape + (1,) * extra)
     # moment about the beam origin: m + s e_x x f, with e_x x f = (0, -fz, fy)
     mo = m.copy()
     mo[:, :, 1] -= sx * f[:, :, 2]
     mo[:, :, 2] += sx * f[:, :, 1]
-    Sf = np.cumsum(f[:, ::-1], axis=1)[:, ::-1][:, 1:]
-    Sm = np.cumsum(mo[:, ::-1], axis=1)[:, ::-1][:, 1:]
+    # the resultant beyond each segment: the sums of the nodes after it (a suffix sum)
+    Sf = np.cumsum(f[:, :0:-1], axis=1)[:, ::-1]
+    Sm = np.cumsum(mo[:, :0:-1], axis=1)[:, ::-1]
     tip = sx[:, 1:]
     Sm[:, :, 1] += tip * Sf[:, :, 2]
     Sm[:, :, 2] -= tip * Sf[:, :, 1]

@@ -742,13 +742,27 @@ class _CutRoute:
         ``Z (n, 6 nj, K)`` (one column per cut-wrench component)."""
         n, K = W.shape[0], self.A.shape[2]
         z0 = self.assemble(model, W, np.zeros((n, K)), F)
-        zero = np.zeros_like(W)
-        Z = np.empty((n, z0.shape[1], K))
-        for col in range(K):
-            e = np.zeros((n, K))
-            e[:, col] = 1.0
-            Z[:, :, col] = self.assemble(model, zero, e, None)
-        return z0, Z
+        # Z: assemble's cut part and tree sums for every unit lam at once (a trailing column axis)
+        nj = len(model.joint_names)
+        Z = np.zeros((n, nj, 6, K))
+        onbody = np.zeros((n, model.nb, 6, K))
+        pos = 0
+        for j, C, _ in self.cut:
+            m_ = C.shape[2]
+            Z[:, j, :, pos:pos + m_] = C
+            if model.joint_child[j] >= 0:
+                onbody[:, model.joint_child[j], :, pos:pos + m_] += C
+            if model.joint_parent[j] >= 0:
+                onbody[:, model.joint_parent[j], :, pos:pos + m_] -= C
+            pos += m_
+        Wt = -onbody
+        for b in range(model.nb - 1, -1, -1):
+            par = model.body_parent[b]
+            if par >= 0:
+                Wt[:, par] += Wt[:, b]
+            k = model.body_joint[b]
+            Z[:, k] = -Wt[:, b] if model.joint_flipped[k] else Wt[:, b]
+        return z0, Z.reshape(n, 6 * nj, K)
 
 
 def _cut_kernel(model: MechanismModel, tab: _CutTable, R: Array, origin: Array, S: Array, W: Array | None = None,

@@ -99,17 +99,14 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
         raise ComplianceDataMissing(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no "
                                     f"body carries a section and a material ({names}): the joint reactions cannot be "
                                     "made unique (give [[bodies]] section and material)")
-    G, w0, C = compliance_terms(model, kin, W, elastic)
+    G, w0, C = compliance_terms(model, kin, W, elastic, affine)
     if G.shape[1] == 0:
         raise ComplianceDataMissing(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no "
                                     "elastic body joins two joints: the joint reactions cannot be made unique")
     # the compatibility equations are homogeneous in the flexibilities: normalise them (no change
     # in the result, O(1) numbers for any modulus)
     C = C / np.abs(C).max()
-    if affine is not None:
-        z0, Z = affine
-        w0 = w0 + np.einsum("nsak,nk->nsa", G, z0)
-        G = np.einsum("nsak,nkl->nsal", G, Z)
+    if affine is not None:  # G and w0 are already in the unknowns lam (compliance_terms)
         scale = np.ones(A.shape[2])
     else:
         scale = np.ones((nj, 6))
@@ -131,12 +128,17 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
     return lam[:, :k], t
 
 
-def beam_terms(model: MechanismModel, kin: MechanismKinematics, W: Array, elastic: list[int] | None = None
-               ) -> tuple[Array, Array, Array]:
+def beam_terms(model: MechanismModel, kin: MechanismKinematics, W: Array, elastic: list[int] | None = None,
+               affine: tuple[Array, Array] | None = None) -> tuple[Array, Array, Array]:
     """The elastic bodies' beam segments (module docstring): ``G (n, S, 6, 6 nj)`` and
     ``w0 (n, S, 6)`` with the internal wrench of segment s at its far end ``G_s z + w0_s``
     (beam frame) for the joint wrenches ``z`` and the required body wrenches ``W (n, nb, 6)``,
-    and its flexibility ``C (n, S, 6, 6)`` (Eq. 64)."""
+    and its flexibility ``C (n, S, 6, 6)`` (Eq. 64).
+
+    ``affine = (z0, Z)`` with ``z = z0 + Z lam`` (``Z (n, 6 nj, l)``): ``G`` and ``w0`` in the
+    unknowns ``lam`` instead, ``G Z (n, S, 6, l)`` and ``w0 + G z0``. A body's segments depend on
+    the wrenches of its own joints only: they are formed in those columns and never as the
+    full ``6 nj`` columns when ``affine`` is given."""
     n = len(kin)
     nj = len(model.joint_names)
     k = 6 * nj
@@ -163,17 +165,17 @@ def beam_terms(model: MechanismModel, kin: MechanismKinematics, W: Array, elasti
         s = np.einsum("nmi,ni->nm", nodes - origin[:, None], Rb[:, :, 0])
         on_axis = origin[:, None] + s[..., None] * Rb[:, None, :, 0]
         N = nodes.shape[1]
-        L = np.zeros((n, N, 6, k))
+        cols = np.array([6 * j + c for j, _ in joints for c in range(6)])
+        L = np.zeros((n, N, 6, len(cols)))
         L0 = np.zeros((n, N, 6))
+        RbT = np.swapaxes(Rb, 1, 2)
         for m_, (j, sg) in enumerate(joints):
-            # wrench sg W_j about O -> [f; moment about the node on the axis], beam frame
-            for c in range(6):
-                e = np.zeros(6)
-                e[c] = sg
-                f = np.broadcast_to(e[3:], (n, 3))
-                mom = np.broadcast_to(e[:3], (n, 3)) - np.cross(on_axis[:, m_], f)
-                L[:, m_, :3, 6 * j + c] = np.einsum("nji,nj->ni", Rb, f)
-                L[:, m_, 3:, 6 * j + c] = np.einsum("nji,nj->ni", Rb, mom)
+            # wrench sg W_j about O -> [f; moment about the node on the axis], beam frame:
+            # a unit moment e_c (c < 3) gives R^T e_c; a unit force e_c gives f' = R^T e_c and
+            # the moment R^T (-x e_c) about the node x
+            L[:, m_, 3:, 6 * m_:6 * m_ + 3] = sg * RbT
+            L[:, m_, :3, 6 * m_ + 3:6 * m_ + 6] = sg * RbT
+            L[:, m_, 3:, 6 * m_ + 3:6 * m_ + 6] = -sg * (RbT @ skew(on_axis[:, m_]))
         f0 = -W[:, bi, 3:]
         m0 = -W[:, bi, :3] - np.cross(on_axis[:, -1], f0)
         L0[:, -1, :3] = np.einsum("nji,nj->ni", Rb, f0)
@@ -181,11 +183,20 @@ def beam_terms(model: MechanismModel, kin: MechanismKinematics, W: Array, elasti
         lengths, Gs = segment_wrenches(s, L)
         _, w0 = segment_wrenches(s, L0)
         C = beam_flexibility(lengths, _section(model, bi))
-        G_list.append(Gs)
+        nS = Gs.shape[1]
+        if affine is None:
+            full = np.zeros((n, nS, 6, k))
+            full[..., cols] = Gs
+            G_list.append(full)
+        else:
+            Gf = Gs.reshape(n, 6 * nS, len(cols))
+            w0 = w0 + (Gf @ affine[0][:, cols, None]).reshape(n, nS, 6)
+            G_list.append((Gf @ affine[1][:, cols]).reshape(n, nS, 6, affine[1].shape[2]))
         w0_list.append(w0)
         C_list.append(C)
     if not G_list:
-        return np.zeros((n, 0, 6, k)), np.zeros((n, 0, 6)), np.zeros((n, 0, 6, 6))
+        width = k if affine is None else affine[1].shape[2]
+        return np.zeros((n, 0, 6, width)), np.zeros((n, 0, 6)), np.zeros((n, 0, 6, 6))
     return np.concatenate(G_list, axis=1), np.concatenate(w0_list, axis=1), np.concatenate(C_list, axis=1)
 
 
@@ -224,12 +235,21 @@ def joint_spring_terms(model: MechanismModel, kin: MechanismKinematics) -> tuple
     return np.concatenate(P_list, axis=1), np.concatenate(C_list, axis=1)
 
 
-def compliance_terms(model: MechanismModel, kin: MechanismKinematics, W: Array, elastic: list[int] | None = None
-                     ) -> tuple[Array, Array, Array]:
+def compliance_terms(model: MechanismModel, kin: MechanismKinematics, W: Array, elastic: list[int] | None = None,
+                     affine: tuple[Array, Array] | None = None) -> tuple[Array, Array, Array]:
     """Every compliant member's internal wrench ``G_s z + w0_s`` and flexibility ``C_s``: the
     elastic bodies' beam segments (:func:`beam_terms`), then the joints' springs
-    (:func:`joint_spring_terms`, ``w0 = 0``)."""
-    Gb, w0b, Cb = beam_terms(model, kin, W, elastic)
+    (:func:`joint_spring_terms`, ``w0 = 0``); with ``affine = (z0, Z)`` in the unknowns ``lam`` of
+    ``z = z0 + Z lam`` (:func:`beam_terms`)."""
+    Gb, w0b, Cb = beam_terms(model, kin, W, elastic, affine)
     Pj, Cj = joint_spring_terms(model, kin)
+    if affine is not None and Pj.shape[1]:
+        nP = Pj.shape[1]
+        Pf = Pj.reshape(n := len(kin), 6 * nP, -1)
+        return (np.concatenate([Gb, (Pf @ affine[1]).reshape(n, nP, 6, -1)], axis=1),
+                np.concatenate([w0b, (Pf @ affine[0][..., None]).reshape(n, nP, 6)], axis=1),
+                np.concatenate([Cb, Cj], axis=1))
+    if affine is not None:
+        return Gb, w0b, Cb
     return (np.concatenate([Gb, Pj], axis=1), np.concatenate([w0b, np.zeros(Pj.shape[:3])], axis=1),
             np.concatenate([Cb, Cj], axis=1))
