@@ -39,6 +39,7 @@ __all__ = [
     "beam_flexibility",
     "segment_wrenches",
     "unique_reactions",
+    "unique_reactions_energy",
     "compatibility_rows",
     "solve_redundants",
     "UniqueReactions",
@@ -140,6 +141,12 @@ def unique_reactions(A: Array, b: Array, G: Array, w0: Array, C: Array, rtol: fl
     :class:`~pkmdyn.errors.SingularityError` when some self-stress state strains no elastic
     segment (the compliance cannot decide it).
     """
+    return unique_reactions_energy(A, b, *_energy_matrices(G, w0, C), rtol)
+
+
+def unique_reactions_energy(A: Array, b: Array, H: Array, h: Array, rtol: float = 1e-10) -> UniqueReactions:
+    """:func:`unique_reactions` from the complementary energy ``lam^T H lam / 2 + h^T lam``
+    (``H`` (n, k, k), ``h`` (n, k): ``sum_s G_s^T C_s G_s`` and ``sum_s G_s^T C_s w0_s``)."""
     n, m, k = A.shape
     U, sv, Vt = np.linalg.svd(A)
     ranks = (sv > rtol * sv[:, :1]).sum(axis=1)
@@ -151,7 +158,6 @@ def unique_reactions(A: Array, b: Array, G: Array, w0: Array, C: Array, rtol: fl
     # particular solution: minimum norm, lambda_p = V_r S_r^-1 U_r^T b
     coef = np.einsum("nmr,nm->nr", U[:, :, :r], b) / sv[:, :r]
     lam_p = np.einsum("nkr,nr->nk", V[:, :, :r], coef)
-    H, h = _energy_matrices(G, w0, C)
     K = np.swapaxes(N, 1, 2) @ H @ N
     rhs = -np.einsum("nkz,nk->nz", N, np.einsum("nkl,nl->nk", H, lam_p) + h)
     _check_definite(K)

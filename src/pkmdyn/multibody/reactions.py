@@ -27,7 +27,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..analysis.compliance import beam_flexibility, circular_section, segment_wrenches, unique_reactions
+from ..analysis.compliance import (beam_flexibility, circular_section, segment_wrenches, unique_reactions,
+                                   unique_reactions_energy)
 from ..errors import ParameterError, SingularityError
 from ..spatial import skew
 from .joint_types import JOINT_TYPES
@@ -76,6 +77,60 @@ def _parent_point(model: MechanismModel, kin: MechanismKinematics, j: int) -> Ar
     return kin.origin[:, b] + np.einsum("nij,j->ni", kin.R[:, b], model.joint_p_parent[j])
 
 
+def _beam_bodies(model: MechanismModel, kin: MechanismKinematics, elastic: list[int]) -> list[tuple]:
+    """The elastic bodies that are beams (module docstring): ``(body, [(joint, sign), ...], mode,
+    (i0, i1))``, mode 0 for the body's x axis, 1 for the line from node i0 to node i1 (the two
+    joint centres farthest apart at the first sample); a body with fewer than two joints, or
+    with every joint at one point, is left out (it stays rigid)."""
+    nj = len(model.joint_names)
+    out = []
+    for bi in elastic:
+        joints = [(j, 1.0) for j in range(nj) if model.joint_child[j] == bi]
+        joints += [(j, -1.0) for j in range(nj) if model.joint_parent[j] == bi]
+        if len(joints) < 2:
+            continue
+        if model.body_extra[bi]["section"].get("beam_axis", "joints") == "body_x":
+            out.append((bi, joints, 0, (0, 0)))
+            continue
+        pts = np.stack([_parent_point(model, kin, j)[0] for j, _ in joints])
+        d = np.linalg.norm(pts[:, None] - pts[None], axis=-1)
+        i0, i1 = np.unravel_index(int(np.argmax(d)), d.shape)
+        if d[i0, i1] <= 1e-9 * model.length_scale:
+            continue
+        out.append((bi, joints, 1, (int(i0), int(i1))))
+    return out
+
+
+def _compiled_energy(model: MechanismModel, kin: MechanismKinematics, W: Array, elastic: list[int],
+                     affine: tuple[Array, Array]) -> tuple[Array, Array, int] | None:
+    """``(H, h, segments)`` of the elastic bodies in the unknowns ``lam`` of ``affine`` by the
+    compiled pass (:mod:`._compliance_kernels`), or None where the joints carry springs (their
+    terms: :func:`compliance_terms`)."""
+    if any(st and ("force_N_m" in st or "moment_Nm_rad" in st) for st in model.joint_stiffness):
+        return None
+    from ._compliance_kernels import beam_energy_batch
+
+    beams = _beam_bodies(model, kin, elastic)
+    z0, Z = affine
+    n, K = Z.shape[0], Z.shape[2]
+    if not beams:
+        return np.zeros((n, K, K)), np.zeros((n, K)), 0
+    secs = [_section(model, bi) for bi, *_ in beams]
+    start = np.cumsum([0] + [len(js) for _, js, _, _ in beams]).astype(np.int64)
+    H, h = np.empty((n, K, K)), np.empty((n, K))
+    beam_energy_batch(np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.origin), np.ascontiguousarray(kin.p),
+                      np.ascontiguousarray(W), np.ascontiguousarray(z0), np.ascontiguousarray(Z),
+                      np.array([bi for bi, *_ in beams], dtype=np.int64),
+                      np.array([md for _, _, md, _ in beams], dtype=np.int64),
+                      np.array([ends for *_, ends in beams], dtype=np.int64).reshape(-1, 2), start,
+                      np.array([j for _, js, _, _ in beams for j, _ in js], dtype=np.int64),
+                      np.array([sg for _, js, _, _ in beams for _, sg in js]),
+                      model.joint_parent.astype(np.int64), np.ascontiguousarray(model.joint_p_parent, dtype=float),
+                      np.array([sc.E * sc.A for sc in secs]), np.array([sc.E * sc.Iy for sc in secs]),
+                      np.array([sc.E * sc.Iz for sc in secs]), np.array([sc.G * sc.Ip for sc in secs]), H, h)
+    return H, h, int(sum(len(js) for _, js, _, _ in beams))
+
+
 def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Array, b: Array, rank: int,
                         W: Array | None = None, affine: tuple[Array, Array] | None = None) -> tuple[Array, int]:
     """Joint wrenches ``z (n, 6 nj)`` (Plücker at the origin, see :mod:`.dynamics`) solving
@@ -99,14 +154,20 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
         raise ComplianceDataMissing(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no "
                                     f"body carries a section and a material ({names}): the joint reactions cannot be "
                                     "made unique (give [[bodies]] section and material)")
-    G, w0, C = compliance_terms(model, kin, W, elastic, affine)
-    if G.shape[1] == 0:
+    energy = _compiled_energy(model, kin, W, elastic, affine) if affine is not None else None
+    if energy is None:
+        G, w0, C = compliance_terms(model, kin, W, elastic, affine)
+        segments = G.shape[1]
+    else:
+        segments = energy[2]
+    if segments == 0:
         raise ComplianceDataMissing(f"mechanism {model.name!r} is over-constrained ({t} self-stress states) and no "
                                     "elastic body joins two joints: the joint reactions cannot be made unique")
-    # the compatibility equations are homogeneous in the flexibilities: normalise them (no change
-    # in the result, O(1) numbers for any modulus)
-    C = C / np.abs(C).max()
-    if affine is not None:  # G and w0 are already in the unknowns lam (compliance_terms)
+    if energy is None:
+        # the compatibility equations are homogeneous in the flexibilities: normalise them (no
+        # change in the result, O(1) numbers for any modulus)
+        C = C / np.abs(C).max()
+    if affine is not None:  # G and w0 (or the energy) are already in the unknowns lam
         scale = np.ones(A.shape[2])
     else:
         scale = np.ones((nj, 6))
@@ -115,7 +176,10 @@ def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Arra
         if A.shape[2] > k:  # the idle freedoms' holding forces (dynamics.idle_holding) strain no body
             G = np.concatenate([G, np.zeros(G.shape[:3] + (A.shape[2] - k,))], axis=3)
     try:
-        res = unique_reactions(A * scale, b, G * scale, w0, C)
+        if energy is None:
+            res = unique_reactions(A * scale, b, G * scale, w0, C)
+        else:
+            res = unique_reactions_energy(A, b, energy[0], energy[1])
     except SingularityError:
         missing = [model.body_names[i] for i in range(nb) if i not in elastic]
         raise ComplianceDataMissing(f"mechanism {model.name!r}: a self-stress state strains no elastic body; give a section "
