@@ -111,3 +111,30 @@ def test_a_self_stress_that_strains_no_link_is_refused():
     A, b, G, w0, C = _clamped_clamped(0.4, np.array([0, -1.0, 0, 0, 0, 0]))
     with pytest.raises(SingularityError):
         unique_reactions(A, b, G * 0.0, w0, C)
+
+
+def test_pivot_basis_gives_the_reactions_of_the_singular_value_route():
+    """A stack of rank-deficient systems (random, with dependent rows and columns) and a random
+    positive definite energy: the null space from pivots chosen at the first sample (a square
+    solve per sample) and from every sample's SVD give the same unique reactions; where the
+    rank changes along the stack the pivots are refused and the SVD says so."""
+    from pkmdyn.analysis.compliance import _pivot_basis, unique_reactions_energy
+
+    rng = np.random.default_rng(5)
+    n, m, k, r = 40, 9, 12, 6
+    left = rng.standard_normal((m, r)) + 0.2 * rng.standard_normal((n, m, r))
+    A = left @ (rng.standard_normal((r, k)) + 0.2 * rng.standard_normal((n, r, k)))  # rank r at every sample
+    b = np.einsum("nmk,nk->nm", A, rng.standard_normal((n, k)))
+    Q = rng.standard_normal((n, k, k))
+    H = Q @ np.swapaxes(Q, 1, 2) + 0.1 * np.eye(k)
+    h = rng.standard_normal((n, k))
+    assert _pivot_basis(A, b, 1e-10) is not None
+    a = unique_reactions_energy(A, b, H, h)
+    s = unique_reactions_energy(A, b, H, h, method="svd")
+    assert np.abs(a.lam - s.lam).max() <= 1e-9 * np.abs(s.lam).max()
+    assert np.all(a.rank == r) and a.residual.max() <= 1e-10 * np.abs(b).max()
+    A2 = A.copy()
+    A2[n // 2] += 0.3 * rng.standard_normal((m, k))  # one sample of full rank
+    assert _pivot_basis(A2, b, 1e-10) is None
+    with pytest.raises(SingularityError):
+        unique_reactions_energy(A2, b, H, h)

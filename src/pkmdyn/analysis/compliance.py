@@ -144,20 +144,31 @@ def unique_reactions(A: Array, b: Array, G: Array, w0: Array, C: Array, rtol: fl
     return unique_reactions_energy(A, b, *_energy_matrices(G, w0, C), rtol)
 
 
-def unique_reactions_energy(A: Array, b: Array, H: Array, h: Array, rtol: float = 1e-10) -> UniqueReactions:
+def unique_reactions_energy(A: Array, b: Array, H: Array, h: Array, rtol: float = 1e-10,
+                            method: str = "auto") -> UniqueReactions:
     """:func:`unique_reactions` from the complementary energy ``lam^T H lam / 2 + h^T lam``
-    (``H`` (n, k, k), ``h`` (n, k): ``sum_s G_s^T C_s G_s`` and ``sum_s G_s^T C_s w0_s``)."""
+    (``H`` (n, k, k), ``h`` (n, k): ``sum_s G_s^T C_s G_s`` and ``sum_s G_s^T C_s w0_s``).
+
+    The null space of ``A`` and a particular solution: ``method="svd"`` from every sample's
+    singular value decomposition; ``"auto"`` from pivots chosen once (:func:`_pivot_basis`, a
+    square solve per sample), and from the SVD where those pivots do not hold along the motion.
+    The reactions do not depend on the basis or the particular solution taken: the energy is
+    minimised over the same set ``lam_p + N z``."""
     n, m, k = A.shape
-    U, sv, Vt = np.linalg.svd(A)
-    ranks = (sv > rtol * sv[:, :1]).sum(axis=1)
-    r = int(ranks[0])
-    if np.any(ranks != r):
-        raise SingularityError("the rank of the equilibrium equations changes along the motion")
-    V = np.swapaxes(Vt, 1, 2)
-    N = V[:, :, r:]
-    # particular solution: minimum norm, lambda_p = V_r S_r^-1 U_r^T b
-    coef = np.einsum("nmr,nm->nr", U[:, :, :r], b) / sv[:, :r]
-    lam_p = np.einsum("nkr,nr->nk", V[:, :, :r], coef)
+    basis = _pivot_basis(A, b, rtol) if method == "auto" else None
+    if basis is not None:
+        lam_p, N, ranks = basis
+    else:
+        U, sv, Vt = np.linalg.svd(A)
+        ranks = (sv > rtol * sv[:, :1]).sum(axis=1)
+        r = int(ranks[0])
+        if np.any(ranks != r):
+            raise SingularityError("the rank of the equilibrium equations changes along the motion")
+        V = np.swapaxes(Vt, 1, 2)
+        N = V[:, :, r:]
+        # particular solution: minimum norm, lambda_p = V_r S_r^-1 U_r^T b
+        coef = np.einsum("nmr,nm->nr", U[:, :, :r], b) / sv[:, :r]
+        lam_p = np.einsum("nkr,nr->nk", V[:, :, :r], coef)
     K = np.swapaxes(N, 1, 2) @ H @ N
     rhs = -np.einsum("nkz,nk->nz", N, np.einsum("nkl,nl->nk", H, lam_p) + h)
     _check_definite(K)
@@ -165,6 +176,52 @@ def unique_reactions_energy(A: Array, b: Array, H: Array, h: Array, rtol: float 
     lam = lam_p + np.einsum("nkz,nz->nk", N, z)
     res = np.abs(np.einsum("nmk,nk->nm", A, lam) - b).max(axis=1)
     return UniqueReactions(lam=lam, null=N, rank=ranks, residual=res)
+
+
+def _pivot_basis(A: Array, b: Array, rtol: float) -> tuple[Array, Array, Array] | None:
+    """Null space and particular solution of ``A lam = b`` from pivots chosen at the first sample.
+
+    The rank ``r`` and ``r`` independent columns ``c`` and rows ``p`` come from the first
+    sample (its SVD, then QR with column pivoting of ``A`` and of the pivot columns'
+    transpose); at every sample the square block ``M = A[p, c]`` gives
+    ``lam_c = M^-1 (b_p - A[p, f] lam_f)`` in the other unknowns ``f``: the basis
+    ``N = [-M^-1 A[p, f]; I]`` and ``lam_p = [M^-1 b_p; 0]`` (reduced row echelon form).
+    None where the pivots do not hold at some sample: ``A N`` not zero on every row (the rank
+    changed) or the block near singular (entries of ``M^-1 A[p, f]`` above 1e6, or ``A lam_p``
+    away from ``b``); the caller then takes the SVD."""
+    import scipy.linalg as sl
+
+    n, m, k = A.shape
+    if n == 0:
+        return None
+    sv = np.linalg.svd(A[0], compute_uv=False)
+    r = int((sv > rtol * sv[0]).sum())
+    if r == 0 or r == k:
+        return None
+    _, _, pc = sl.qr(A[0], pivoting=True, mode="economic")
+    cols, free = np.sort(pc[:r]), np.sort(pc[r:])
+    _, _, pr = sl.qr(A[0][:, cols].T, pivoting=True, mode="economic")
+    rows = np.sort(pr[:r])
+    Ap = A[:, rows]
+    rhs = np.concatenate([Ap[:, :, free], b[:, rows, None]], axis=2)
+    try:
+        X = np.linalg.solve(Ap[:, :, cols], rhs)
+    except np.linalg.LinAlgError:
+        return None
+    if not np.all(np.isfinite(X)) or np.abs(X[:, :, :-1]).max(initial=0.0) > 1e6:
+        return None
+    N = np.zeros((n, k, k - r))
+    N[:, cols] = -X[:, :, :-1]
+    N[:, free, np.arange(k - r)] = 1.0
+    lam_p = np.zeros((n, k))
+    lam_p[:, cols] = X[:, :, -1]
+    scale = np.abs(A).max(axis=(1, 2))
+    AN = np.abs(A @ N).max(axis=(1, 2))
+    res = np.abs(np.einsum("nmk,nk->nm", A, lam_p) - b).max(axis=1)
+    bs = np.maximum(np.abs(b).max(axis=1), scale * np.abs(lam_p).max(axis=1))
+    if np.any(AN > 1e3 * rtol * scale * np.abs(N).max(axis=(1, 2))) or np.any(res > 1e3 * rtol * np.maximum(bs, 1e-300)):
+        return None
+    return lam_p, N, np.full(n, r)
 
 
 def compatibility_rows(G: Array, C: Array, w0: Array, N: Array) -> tuple[Array, Array]:
