@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = ["BODY_NAMES", "JOINTS", "LIMBS", "LIMB_LABELS", "REDUNDANT_LABELS", "results_columns",
-           "dynamics_columns", "bodies_arrays", "loop_gap"]
+           "dynamics_columns", "bodies_arrays", "loop_gap", "planar_angle", "paper_wrenches"]
 
 Array = NDArray[np.float64]
 
@@ -66,7 +66,7 @@ def _vec(cols: dict[str, Array], prefix: str, unit: str, v: Array) -> None:
         cols[f"{prefix}{_XYZ[c]}_{unit}"] = v[:, c]
 
 
-def _planar_angle(R: Array) -> Array:
+def planar_angle(R: Array) -> Array:
     """theta of ``R = Rz(theta)`` (n, 3, 3) -> (n,), in (-pi, pi]."""
     return np.arctan2(R[:, 1, 0], R[:, 0, 0])
 
@@ -130,7 +130,7 @@ def results_columns(m, kin, home_lengths: Array) -> dict[str, Array]:
         for sym, name in ((f"crank{i + 1}_theta", f"crank{i + 1}"), (f"coupler{i + 1}_theta", f"coupler{i + 1}"),
                           (f"rpr{i + 1}_phi", f"cylinder{i + 1}")):
             b = body[name]
-            cols[f"{sym}_rad"] = _planar_angle(kin.R[:, b])
+            cols[f"{sym}_rad"] = planar_angle(kin.R[:, b])
             cols[f"{sym}d_rad_s"] = kin.w[:, b, 2]
             cols[f"{sym}dd_rad_s2"] = kin.wd[:, b, 2]
     for j in range(2):
@@ -152,7 +152,7 @@ def results_columns(m, kin, home_lengths: Array) -> dict[str, Array]:
     return cols
 
 
-def _paper_wrenches(m, kin, reac) -> tuple[Array, Array, Array]:
+def paper_wrenches(m, kin, reac) -> tuple[Array, Array, Array]:
     """Points, forces and moments (n, 19, 3) of :data:`JOINTS`: what body_a exerts on body_b,
     about the joint's centre fixed in body_a (a prismatic joint's at the cylinder's mouth), base
     frame."""
@@ -177,7 +177,7 @@ def dynamics_columns(m, kin, reac, u1_local: Array) -> dict[str, Array]:
     (:data:`REDUNDANT_LABELS`) and the U-joint constraint torques ``U23_torque_Nm, U24_torque_Nm`` (``u1_local`` (3,): the U joints'
     first axis in the platform frame)."""
     cols: dict[str, Array] = {f"f{k + 1}_N": reac.u[:, m.actuator_names.index(n)] for k, n in enumerate(LIMBS)}
-    _, f, mo = _paper_wrenches(m, kin, reac)
+    _, f, mo = paper_wrenches(m, kin, reac)
     names = [j[0] for j in JOINTS]
     for r, joint in enumerate(("R21'", "R22'", "R32")):
         j = names.index(joint)
@@ -197,5 +197,5 @@ def bodies_arrays(m, kin, reac) -> dict[str, Array]:
     :data:`JOINTS` order."""
     b = [m.body_index(name) for name in BODY_NAMES]
     out = {f: getattr(kin, f)[:, b] for f in ("R", "p", "v", "w", "a", "wd")}
-    out["joint_point"], out["joint_force"], out["joint_moment"] = _paper_wrenches(m, kin, reac)
+    out["joint_point"], out["joint_force"], out["joint_moment"] = paper_wrenches(m, kin, reac)
     return out
