@@ -1170,7 +1170,8 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
     mk = m + ni
     prev = 1e300
     explicit = legs[1].shape[0] > 0
-    fixed = False  # the legs placed from the task alone are (their closed forms reached the task)
+    fixed = nq < 0  # False, typed as a run-time value: whether the legs placed from the task alone are
+    # (their closed forms reached the task)
     # every block an explicit leg: the positions are exact at the first evaluation, which is
     # Newton's check; no simplified step before it
     phase = _CHORD if chord and legs[1].shape[0] < blocks.shape[0] - 1 else _NEWTON
