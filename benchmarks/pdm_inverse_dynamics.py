@@ -16,6 +16,10 @@ Fields (us = microseconds, best of ``--repeat``): ``samples``; ``actuator_us_per
 and ``reactions_with_kinematics_us_per_sample`` (from q, qd, qdd); ``reference_us_per_sample``
 (the independent route, from q, qd, qdd); ``dense_general_us_per_sample``; ``single_sample_us``
 (one sample, kinematics + every reaction, as a controller would call it); agreement figures;
+the generic engine on the PDM's description (the route of ``pkmdyn pdm run``):
+``engine_kinematics_us_per_sample``, ``engine_reactions_us_per_sample`` (every joint reaction,
+unique by compliance), ``engine_reactions_over_newton_euler`` and
+``engine_max_rel_difference_forces``;
 the targets (actuator <= 10 us, reactions <= 50 us per sample on 10,000 samples) and whether
 they are met.
 """
@@ -72,6 +76,23 @@ def main() -> None:
             lambda: minimal.inverse_dynamics(model, motion.q, motion.qd, motion.qdd, None), args.repeat) * us
         out["max_rel_difference_vs_reference"] = float(np.abs(ref - reac.force).max() / np.abs(ref).max())
         out["speedup_actuator_vs_reference"] = out["reference_us_per_sample"] / out["actuator_with_kinematics_us_per_sample"]
+    # the generic engine on the PDM's description (the route of `pkmdyn pdm run`): its kinematics and
+    # every joint reaction by the compiled complementary energy in the cut unknowns
+    from pkmdyn.machines.pdm4.description import pdm_description
+    from pkmdyn.multibody import load_mechanism, solve_kinematics
+    from pkmdyn.multibody.dynamics import joint_reactions
+
+    mech = load_mechanism(pdm_description(model))
+    gkin = solve_kinematics(mech, motion.q, motion.qd, motion.qdd, motion.t)
+    limbs = [mech.actuator_names.index(k) for k in ("P11", "P12", "P23", "P24")]
+    greac = joint_reactions(mech, gkin)
+    out["engine_kinematics_us_per_sample"] = best_time(
+        lambda: solve_kinematics(mech, motion.q, motion.qd, motion.qdd, motion.t), args.repeat) * us
+    out["engine_reactions_us_per_sample"] = best_time(lambda: joint_reactions(mech, gkin), args.repeat) * us
+    out["engine_max_rel_difference_forces"] = float(np.abs(greac.u[:, limbs] - reac.force).max()
+                                                    / np.abs(reac.force).max())
+    out["engine_reactions_over_newton_euler"] = (out["engine_reactions_us_per_sample"]
+                                                 / out["reactions_us_per_sample"])
     m = min(args.dense_samples, n)
     small = inverse_kinematics(model, motion.slice(0, m))
 
