@@ -728,13 +728,7 @@ class _CutRoute:
                 onbody[:, model.joint_child[j]] += Wc
             if model.joint_parent[j] >= 0:
                 onbody[:, model.joint_parent[j]] -= Wc
-        Wt = W - onbody
-        for b in range(model.nb - 1, -1, -1):
-            par = model.body_parent[b]
-            if par >= 0:
-                Wt[:, par] += Wt[:, b]
-            k = model.body_joint[b]
-            z[:, k] = -Wt[:, b] if model.joint_flipped[k] else Wt[:, b]
+        _leaves_first(model, W - onbody, z)
         return z.reshape(n, -1)
 
     def affine(self, model: MechanismModel, W: Array, F: dict | None) -> tuple[Array, Array]:
@@ -755,14 +749,20 @@ class _CutRoute:
             if model.joint_parent[j] >= 0:
                 onbody[:, model.joint_parent[j], :, pos:pos + m_] -= C
             pos += m_
-        Wt = -onbody
-        for b in range(model.nb - 1, -1, -1):
-            par = model.body_parent[b]
-            if par >= 0:
-                Wt[:, par] += Wt[:, b]
-            k = model.body_joint[b]
-            Z[:, k] = -Wt[:, b] if model.joint_flipped[k] else Wt[:, b]
+        _leaves_first(model, -onbody, Z)
         return z0, Z.reshape(n, 6 * nj, K)
+
+
+def _leaves_first(model: MechanismModel, Wt: Array, z: Array) -> None:
+    """Every tree joint's wrench into ``z (n, nj, 6, ...)``: the wrench that body b requires
+    beyond what its cut joints give, ``Wt (n, nb, 6, ...)`` (summed in place), accumulated
+    from the leaves towards the ground (any trailing axes ride along)."""
+    for b in range(model.nb - 1, -1, -1):
+        par = model.body_parent[b]
+        if par >= 0:
+            Wt[:, par] += Wt[:, b]
+        k = model.body_joint[b]
+        z[:, k] = -Wt[:, b] if model.joint_flipped[k] else Wt[:, b]
 
 
 def _cut_kernel(model: MechanismModel, tab: _CutTable, R: Array, origin: Array, S: Array, W: Array | None = None,

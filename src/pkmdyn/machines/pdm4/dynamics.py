@@ -49,6 +49,7 @@ from ...errors import SingularityError
 from ...spatial import cross
 from .inertia import ELASTIC_BODIES
 from .kinematics import BODY_NAMES, PdmKinematics
+from .paper import JOINTS, REDUNDANT_LABELS
 from .params import PdmModel
 
 __all__ = [
@@ -67,20 +68,6 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-#: every joint: (name, type, body_a, body_b); the reaction is what body_a exerts on body_b.
-#: R2i is a compound joint (crank-coupler R2i and crank-piston R2i').
-JOINTS: tuple[tuple[str, str, str, str], ...] = (
-    ("R11", "R", "ground", "crank1"), ("R12", "R", "ground", "crank2"),
-    ("R21", "R", "crank1", "coupler1"), ("R22", "R", "crank2", "coupler2"),
-    ("R21'", "R", "crank1", "piston1"), ("R22'", "R", "crank2", "piston2"),
-    ("R31", "R", "coupler1", "link4"), ("R32", "R", "coupler2", "link4"),
-    ("R41", "R", "ground", "cylinder1"), ("R42", "R", "ground", "cylinder2"),
-    ("P11", "P", "cylinder1", "piston1"), ("P12", "P", "cylinder2", "piston2"),
-    ("R4", "R", "link4", "platform"),
-    ("S23", "S", "ground", "cylinder3"), ("S24", "S", "ground", "cylinder4"),
-    ("P23", "P", "cylinder3", "piston3"), ("P24", "P", "cylinder4", "piston4"),
-    ("U23", "U", "platform", "piston3"), ("U24", "U", "platform", "piston4"),
-)
 _JN = [j[0] for j in JOINTS]
 _NJ = len(JOINTS)
 _NB = len(BODY_NAMES)
@@ -89,10 +76,6 @@ _CUTS = ("R21'", "R22'", "R32", "U23", "U24")
 _CUT_IDX = [_JN.index(c) for c in _CUTS]
 _P_IDX = [_JN.index(p) for p in ("P11", "P12", "P23", "P24")]
 _U_IDX = [_JN.index("U23"), _JN.index("U24")]
-#: the nine over-constrained components (Eq. 70, Fig. 22): force along z and moments about x, y
-#: (base frame, moment about the joint point) of the reaction at R21' (crank 1 on piston 1), R22'
-#: and R32 (coupler 2 on the output link)
-REDUNDANT_LABELS = tuple(f"{j}_{c}" for j in ("R21", "R22", "R32") for c in ("fz_N", "mx_Nm", "my_Nm"))
 _COMPONENTS = {"R": 5, "P": 6, "S": 3, "U": 4}
 _EZ = np.array([0.0, 0.0, 1.0])
 

@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from ...errors import SingularityError, UnreachablePoseError
 from ...spatial import axis_rotation, cross, dot
+from .paper import BODY_NAMES, LIMB_LABELS
 from .params import PdmModel, crank_angle
 
 if TYPE_CHECKING:
@@ -42,11 +43,6 @@ __all__ = [
 
 Array = NDArray[np.float64]
 _Z = np.array([0.0, 0.0, 1.0])
-LIMB_LABELS = ("limb 1 (RPR, l11)", "limb 2 (RPR, l12)", "limb 3 (SPU, l23)", "limb 4 (SPU, l24)")
-BODY_NAMES = (
-    "platform", "link4", "crank1", "crank2", "coupler1", "coupler2",
-    "cylinder1", "cylinder2", "cylinder3", "cylinder4", "piston1", "piston2", "piston3", "piston4",
-)
 
 
 # ----------------------------------------------------------------------------- helpers
