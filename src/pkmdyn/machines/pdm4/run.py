@@ -25,7 +25,7 @@ from tqdm import tqdm
 
 from ...analysis.mobility import analyse
 from ...errors import PkmdynError
-from ...io import check_output_dir, output_dir, write_csv, write_json
+from ...io import check_output_dir, open_table_writer, output_dir, write_json
 from ...profiles.pdm_motion import PdmMotion, cycloidal_motion, read_pdm_motion
 from . import paper
 from .kinematics import inverse_position, mechanism_joints
@@ -264,7 +264,8 @@ def _write(model: PdmModel, out: Path, cols: dict[str, Array], npz: dict[str, Ar
            ws: Any, plots: bool) -> dict[str, Path]:
     """Write every file of a run into the (temporary) folder ``out``."""
     files: dict[str, Path] = {"results": out / "results.csv"}
-    write_csv(files["results"], cols)
+    with open_table_writer(files["results"], "csv") as table:  # the shortest exact form of each number
+        table.write(cols)
     files["mobility"] = out / "mobility.json"
     write_json(files["mobility"], mob)
     files["geometry"] = out / "geometry.json"
