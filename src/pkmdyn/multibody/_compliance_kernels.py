@@ -80,8 +80,8 @@ def beam_energy_batch(R, origin, com, W, z0, Z, bodies, mode, ends, start, joint
                 x0, x1, x2 = pts[i1, 0] - pts[i0, 0], pts[i1, 1] - pts[i0, 1], pts[i1, 2] - pts[i0, 2]
                 nx = np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
                 x0, x1, x2 = x0 / nx, x1 / nx, x2 / nx
-                ax = np.array([abs(x0), abs(x1), abs(x2)])
-                pick = np.argmin(ax)
+                a0, a1, a2 = abs(x0), abs(x1), abs(x2)
+                pick = 0 if (a0 <= a1 and a0 <= a2) else (1 if a1 <= a2 else 2)  # the first smallest
                 hx, hy, hz = (1.0 if pick == 0 else 0.0), (1.0 if pick == 1 else 0.0), (1.0 if pick == 2 else 0.0)
                 y0, y1, y2 = x1 * hz - x2 * hy, x2 * hx - x0 * hz, x0 * hy - x1 * hx
                 ny = np.sqrt(y0 * y0 + y1 * y1 + y2 * y2)

@@ -209,20 +209,12 @@ def beam_terms(model: MechanismModel, kin: MechanismKinematics, W: Array, elasti
     if elastic is None:
         elastic = elastic_bodies(model)
     G_list, w0_list, C_list = [], [], []
-    for bi in elastic:
-        joints = [(j, 1.0) for j in range(nj) if model.joint_child[j] == bi]
-        joints += [(j, -1.0) for j in range(nj) if model.joint_parent[j] == bi]
-        if len(joints) < 2:
-            continue
+    for bi, joints, mode, (i0, i1) in _beam_bodies(model, kin, elastic):
         pts = np.stack([_parent_point(model, kin, j) for j, _ in joints], axis=1)  # (n, N, 3)
-        if model.body_extra[bi]["section"].get("beam_axis", "joints") == "body_x":
+        if mode == 0:
             Rb = kin.R[:, bi]
             origin = kin.p[:, bi]
         else:
-            d = np.linalg.norm(pts[:, :, None] - pts[:, None], axis=-1)[0]
-            i0, i1 = np.unravel_index(int(np.argmax(d)), d.shape)
-            if d[i0, i1] <= 1e-9 * model.length_scale:
-                continue  # every joint at one point: no beam, the body stays rigid
             Rb = _beam_frame(pts[:, i1] - pts[:, i0])
             origin = pts[:, i0]
         nodes = np.concatenate([pts, kin.p[:, bi][:, None]], axis=1)  # (n, N+1, 3)
