@@ -215,3 +215,18 @@ def test_run_agrees_with_the_closed_forms_of_the_paper(seed, tmp_path):
     assert list(z["joint_names"]) == joints and list(z["body_names"]) == bodies
     for name, ref in npz.items():
         assert np.abs(z[name] - ref).max() <= 1e-9 * np.abs(ref).max(), name
+
+
+def test_a_limb_along_the_base_z_axis_is_named_as_the_euler_singularity():
+    """The SPU limbs' z-x-z angles of results.csv are singular where a limb stands along the base
+    z axis: one line naming the sample and the limb (the engine itself is regular there)."""
+    from pkmdyn.errors import SingularityError
+    from pkmdyn.machines.pdm4 import paper
+
+    R = np.tile(np.eye(3), (3, 1, 1))
+    R[1] = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])  # limb (x axis) along base z
+    w = np.zeros((3, 3))
+    with pytest.raises(SingularityError, match=r"t = 0\.5 s: limb 3 \(SPU, l23\) is parallel to the base z axis"):
+        paper._spu_euler(R, w, w, np.array([0.0, 0.5, 1.0]), paper.LIMB_LABELS[2])
+    e, ed, edd = paper._spu_euler(R[[0, 2]], w[:2], w[:2], None, paper.LIMB_LABELS[2])
+    assert np.allclose(e[:, 1], np.pi / 2) and np.all(ed == 0) and np.all(edd == 0)

@@ -26,6 +26,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ...errors import SingularityError
+
 __all__ = ["BODY_NAMES", "JOINTS", "LIMBS", "LIMB_LABELS", "REDUNDANT_LABELS", "results_columns",
            "dynamics_columns", "bodies_arrays", "loop_gap", "planar_angle", "paper_wrenches"]
 
@@ -71,9 +73,16 @@ def planar_angle(R: Array) -> Array:
     return np.arctan2(R[:, 1, 0], R[:, 0, 0])
 
 
-def _spu_euler(R: Array, w: Array, wd: Array) -> tuple[Array, Array, Array]:
-    """z-x-z angles (n, 3) of an SPU limb body and their first and second rates (Eq. 23-32)."""
+def _spu_euler(R: Array, w: Array, wd: Array, t: Array | None, limb: str) -> tuple[Array, Array, Array]:
+    """z-x-z angles (n, 3) of an SPU limb body and their first and second rates (Eq. 23-32).
+    Raises :class:`~pkmdyn.errors.SingularityError` naming the sample and the limb where the limb
+    is parallel to the base z axis (the angles' singularity, ``sin b < 1e-6``)."""
     Q, U2, Y = R[:, :, 0], R[:, :, 1], R[:, :, 2]
+    bad = np.flatnonzero(np.hypot(Q[:, 0], Q[:, 1]) < 1e-6)
+    if bad.size:
+        s = int(bad[0])
+        when = f"t = {t[s]:.6g} s" if t is not None else f"sample {s + 1}"
+        raise SingularityError(f"{when}: {limb} is parallel to the base z axis (Euler singularity)")
     a = np.arctan2(Q[:, 0], -Q[:, 1])
     b = np.arccos(np.clip(Q[:, 2], -1.0, 1.0))
     g = np.arctan2(U2[:, 2], Y[:, 2])
@@ -135,7 +144,7 @@ def results_columns(m, kin, home_lengths: Array) -> dict[str, Array]:
             cols[f"{sym}dd_rad_s2"] = kin.wd[:, b, 2]
     for j in range(2):
         b = body[f"cylinder{j + 3}"]
-        e, ed, edd = _spu_euler(kin.R[:, b], kin.w[:, b], kin.wd[:, b])
+        e, ed, edd = _spu_euler(kin.R[:, b], kin.w[:, b], kin.wd[:, b], kin.t, LIMB_LABELS[j + 2])
         for c in range(3):
             base = f"spu{j + 3}_{_EULER[c]}"
             cols[f"{base}_rad"] = e[:, c]
