@@ -1,11 +1,14 @@
 """The 4-DOF parallel driving mechanism as a described mechanism, made from its parameters.
 
-The generic engine (:mod:`pkmdyn.multibody`) then reproduces the hand-derived kinematics of
-:mod:`.kinematics` (Eq. 2-48), which stay the fast path and serve as its oracle. Described at
-a reference pose (default: home, q = 0): the 14 bodies with the frames of
-:class:`.kinematics.BodyState` (origin at the centre of mass, docs/pdm4.md) and their masses
-and inertias; the joints of Table I as :func:`.kinematics.mechanism_joints` gives them at
-that pose (R2i, the compound joint, as crank-coupler R2i and crank-piston R2i'); the four
+The generic engine (:mod:`pkmdyn.multibody`) solves it for ``pkmdyn pdm run`` (and for
+``pkmdyn run --machine pdm``); the hand-derived kinematics of :mod:`.kinematics` (Eq. 2-48)
+and dynamics of :mod:`.dynamics` (Eq. 49-83) are its oracle and still the route of the sweep
+and the closed loop. Described at a reference pose (default: home, q = 0): the 14 bodies with
+the frames of :class:`.kinematics.BodyState` (origin at the centre of mass, docs/pdm4.md) and
+their masses and inertias; the joints of Table I as :func:`.kinematics.mechanism_joints`
+gives them at that pose (R2i, the compound joint, as crank-coupler R2i and crank-piston R2i'),
+each at the paper's centre (:func:`.dynamics.joint_points`: a revolute joint between two
+planar layers half-way between them, a prismatic joint at the cylinder's mouth); the four
 prismatic joints actuated, each coordinate the limb length (fixed to moving joint); the
 task: x, y of the platform point P and the angles alpha (about the base z axis) and gamma
 (about the platform x axis), i.e. the first two angles of the intrinsic sequence ZXY since
