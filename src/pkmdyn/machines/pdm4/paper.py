@@ -180,13 +180,14 @@ def paper_wrenches(m, kin, reac) -> tuple[Array, Array, Array]:
     return pts, force, moment
 
 
-def dynamics_columns(m, kin, reac, u1_local: Array) -> dict[str, Array]:
+def dynamics_columns(m, kin, reac, wrenches: tuple[Array, Array, Array], u1_local: Array) -> dict[str, Array]:
     """Actuator forces ``f{k}_N`` (k = 1..4, the order of ``l{k}_m``: the axial force that each
     cylinder exerts on its piston), the nine over-constrained reaction components
-    (:data:`REDUNDANT_LABELS`) and the U-joint constraint torques ``U23_torque_Nm, U24_torque_Nm`` (``u1_local`` (3,): the U joints'
-    first axis in the platform frame)."""
+    (:data:`REDUNDANT_LABELS`) and the U-joint constraint torques ``U23_torque_Nm, U24_torque_Nm``
+    (``wrenches``: :func:`paper_wrenches` of ``reac``; ``u1_local`` (3,): the U joints' first
+    axis in the platform frame)."""
     cols: dict[str, Array] = {f"f{k + 1}_N": reac.u[:, m.actuator_names.index(n)] for k, n in enumerate(LIMBS)}
-    _, f, mo = paper_wrenches(m, kin, reac)
+    _, f, mo = wrenches
     names = [j[0] for j in JOINTS]
     for r, joint in enumerate(("R21'", "R22'", "R32")):
         j = names.index(joint)
@@ -200,11 +201,11 @@ def dynamics_columns(m, kin, reac, u1_local: Array) -> dict[str, Array]:
     return cols
 
 
-def bodies_arrays(m, kin, reac) -> dict[str, Array]:
+def bodies_arrays(m, kin, wrenches: tuple[Array, Array, Array]) -> dict[str, Array]:
     """``bodies.npz``'s arrays of one block: ``R, p, v, w, a, wd`` (n, 14, ...) in
     :data:`BODY_NAMES` order and ``joint_point, joint_force, joint_moment`` (n, 19, 3) in
-    :data:`JOINTS` order."""
+    :data:`JOINTS` order (``wrenches``: :func:`paper_wrenches`)."""
     b = [m.body_index(name) for name in BODY_NAMES]
     out = {f: getattr(kin, f)[:, b] for f in ("R", "p", "v", "w", "a", "wd")}
-    out["joint_point"], out["joint_force"], out["joint_moment"] = paper_wrenches(m, kin, reac)
+    out["joint_point"], out["joint_force"], out["joint_moment"] = wrenches
     return out

@@ -159,9 +159,10 @@ def _compute(model: PdmModel, motion: PdmMotion) -> tuple[dict[str, Array], dict
         kin = solve_kinematics(m, part.q, part.qd, part.qdd, part.t, q_start=q_start, sample_offset=s)
         q_start = kin.q[-1]
         reac = joint_reactions(m, kin, sample_offset=s)
+        wrenches = paper.paper_wrenches(m, kin, reac)
         blocks.append({**paper.results_columns(m, kin, model.home_lengths),
-                       **paper.dynamics_columns(m, kin, reac, model.U1_local)})
-        arrays.append(paper.bodies_arrays(m, kin, reac))
+                       **paper.dynamics_columns(m, kin, reac, wrenches, model.U1_local)})
+        arrays.append(paper.bodies_arrays(m, kin, wrenches))
     cols = {k: np.concatenate([b[k] for b in blocks]) for k in blocks[0]}
     npz = {k: np.concatenate([b[k] for b in arrays]) for k in arrays[0]}
     npz["t"] = motion.t
