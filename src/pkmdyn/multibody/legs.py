@@ -165,8 +165,7 @@ def place(model, q: Array, x: Array) -> Array:
     args = positions_args(model, np.empty((model.nb, 3, 3)), np.empty((model.nb, 3)), np.empty((model.nq, 6)))
     forward_positions(q, *args, model.legs.late, True)
     task = (int(model.task_body), model.task_point, model.task_kind, model.task_index, model.euler_axes)
-    place_legs(q, *args, model.legs.arrays(), np.ascontiguousarray(x, dtype=float), task, np.False_)  # a run-time flag:
-    # a Python bool would be typed as a literal and compile another copy of the kernel
+    place_legs(q, *args, model.legs.arrays(), np.ascontiguousarray(x, dtype=float), task, False)
     return q
 
 
