@@ -26,7 +26,10 @@ same shares by CPU time, which the other load of a shared machine does not infla
 parameters (base and platform radii, the two pair half-angles, the home height; Sobol), every
 design with its kinematics, efforts and every joint reaction along its default motion and its
 constant-orientation workspace on a 16 x 16 x 16 grid (4,096 poses), on 1 and on 2 workers
-with the same batches; no stiffness metrics (``stiffness = false``: the target names none).
+with the same batches; no stiffness metrics (``stiffness = false``: the target names none)
+and no least singularity measure over the workspace (``workspace_measure = false``: likewise;
+the workspace's poses are still inside only where every measure is proven at least the
+threshold).
 Fields ``stewart_geometry_designs``, ``stewart_geometry_seconds_2_workers`` (the whole library call),
 ``stewart_geometry_evaluate_s_<1_worker|2_workers>``,
 ``stewart_geometry_throughput_ratio_2_vs_1``, ``stewart_geometry_ms_per_design_2_workers``,
@@ -88,6 +91,7 @@ seed = 11
 
 [motion]
 workspace_grid = "x=-0.4:0.4:16,y=-0.4:0.4:16,z=0.7:1.3:16"
+workspace_measure = false
 stiffness = false
 
 [parameters]

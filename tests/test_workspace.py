@@ -185,6 +185,7 @@ def _stewart_sweep(tmp_path, rest):
     """The rows (by design id) of a serial grid sweep of the Stewart platform without reactions,
     its space file's ``[motion]`` table continued by ``rest``."""
     pq = pytest.importorskip("pyarrow.parquet")
+    tmp_path.mkdir(exist_ok=True)
     space = tmp_path / "space.toml"
     space.write_text('[sampling]\nmethod = "grid"\n[motion]\nreactions = false\n' + rest)
     out = tmp_path / "out"
@@ -211,7 +212,18 @@ def test_sweep_reports_the_workspace_of_every_design(tmp_path):
         ws = workspace(m, parse_grid(m, "x=-0.4:0.4:5,y=-0.4:0.4:5,z=0.9:1.3:3", max_axes=3), threshold=1e-3)
         assert r["workspace_size_m3"] == pytest.approx(ws.size, rel=1e-12)
         assert r["workspace_inside_share"] == pytest.approx(ws.inside.mean())
+        assert r["workspace_min_measure"] == pytest.approx(ws.measure[ws.inside].min(), rel=1e-12)
     assert rows[0]["workspace_size_m3"] != rows[1]["workspace_size_m3"]
+
+
+def test_a_sweep_without_the_workspace_measure(tmp_path):
+    """``workspace_measure = false``: the same workspace size, no ``workspace_min_measure``."""
+    grid = 'workspace_grid = "x=-0.4:0.4:5,y=-0.4:0.4:5,z=0.9:1.3:3"\n'
+    rest = '[parameters]\n"parameters.base_radius_m" = { values = [0.8] }\n[objectives]\nworkspace_size_m3 = "max"\n'
+    with_measure = _stewart_sweep(tmp_path / "a", grid + rest)
+    without = _stewart_sweep(tmp_path / "b", grid + "workspace_measure = false\n" + rest)
+    assert "workspace_min_measure" in with_measure[0] and "workspace_min_measure" not in without[0]
+    assert without[0]["workspace_size_m3"] == with_measure[0]["workspace_size_m3"] > 0
 
 
 def test_sweep_reports_the_total_orientation_workspace(tmp_path):
@@ -245,3 +257,59 @@ def test_a_required_region_constrains_a_sweep(tmp_path):
     assert rows[0]["required_region_coverage"] == pytest.approx(ref.mean()) == 1.0
     assert rows[1]["required_region_coverage"] < 1.0
     assert [r["status"] for r in rows] == ["ok", "infeasible"]
+
+
+def _least(m, q):
+    from pkmdyn.multibody.kinematics import singularity_measures
+
+    sm = singularity_measures(m, q)
+    least = np.minimum(sm.inverse, sm.constraint)
+    return np.minimum(least, sm.direct) if m.na == m.nt else least
+
+
+@pytest.mark.parametrize("name", ["stewart", "delta", "rrr3", "bennett"])
+def test_the_cheap_measure_bounds_hold_and_decide(name):
+    """``least_measure_bounds``: where it proves the least singularity measure above a level, the
+    singular values agree; its upper bound is never below the measure; and at a level below the
+    measure by the factor its proof may lose (the square root of the coordinates, twice over)
+    it proves every pose."""
+    from pkmdyn.multibody import default_motion
+    from pkmdyn.multibody.kinematics import least_measure_bounds
+
+    m = load_mechanism(MACHINES / name / f"{name}.toml")
+    mo = default_motion(m)
+    q = solve_kinematics(m, mo.x, mo.xd, mo.xdd, mo.t).q
+    least = _least(m, q)
+    for f in (0.25, 0.5, 0.9, 1.0, 1.1, 2.0):
+        level = f * float(np.median(least))
+        passed, upper = least_measure_bounds(m, q, level)
+        assert np.all(least[passed] > level)
+        assert np.all(upper >= least * (1.0 - 1e-12))
+    passed, _ = least_measure_bounds(m, q, float(least.min()) / (2.0 * np.sqrt(m.nq)))
+    assert passed.all()
+
+
+@pytest.mark.parametrize("name, axes, base", [
+    ("stewart", [(0, np.linspace(-0.4, 0.4, 8)), (1, np.linspace(-0.4, 0.4, 8)), (2, np.linspace(0.7, 1.3, 8))], None),
+    ("delta", [(0, np.linspace(-0.85, 0.85, 14)), (1, np.linspace(-0.85, 0.85, 14))], [0.0, 0.0, -1.25]),
+    ("rrr3", [(0, np.linspace(-0.4, 0.4, 9)), (2, np.linspace(-1.5, 1.5, 9))], None),
+])
+def test_the_least_measure_route_gives_the_workspace_of_every_measure(name, axes, base):
+    """``measures="least"`` and ``"none"`` (a sweep's workspace): the same reached and inside
+    poses and size as every pose's singular values give, and (``"least"``) the same least
+    measure over the inside poses, at the default threshold and at one that cuts through the
+    measures (where the bounds decide nothing and the measures are computed)."""
+    m = load_mechanism(MACHINES / name / f"{name}.toml")
+    base = None if base is None else np.array(base)
+    full = workspace(m, axes, base, threshold=1e-3)
+    cut = float(np.quantile(full.measure[full.reached], 0.3))
+    for threshold in (1e-3, cut):
+        ref = workspace(m, axes, base, threshold=threshold)
+        assert ref.inside.sum() > 5
+        for mode in ("least", "none"):
+            ws = workspace(m, axes, base, threshold=threshold, measures=mode)
+            assert np.array_equal(ws.reached, ref.reached) and np.array_equal(ws.inside, ref.inside)
+            assert ws.size == ref.size and ws.measure is None
+        assert workspace(m, axes, base, threshold=threshold, measures="least").least_measure == pytest.approx(
+            ref.measure[ref.inside].min(), rel=1e-12)
+        assert ws.least_measure is None

@@ -42,7 +42,7 @@ from .joint_types import JOINT_TYPES
 from .model import MechanismModel
 from .topology import constraint_jacobian, row_labels, row_scale
 
-__all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals",
+__all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals", "least_measure_bounds",
            "singularity_measures", "SingularityMeasures", "reachable", "TOLERANCE", "joint_coordinates",
            "limited_joints", "limit_violation", "limit_message", "limit_hit", "limit_line", "joint_frame"]
 
@@ -495,17 +495,24 @@ def _ratio(M: Array) -> Array:
     return sv[..., -1] / np.maximum(sv[..., 0], 1e-300)
 
 
-def singularity_measures(model: MechanismModel, q: Array) -> SingularityMeasures:
-    """:class:`SingularityMeasures` at tree coordinates ``q (n, nq)`` (``kin.q``)."""
+def _scaled(model: MechanismModel, q: Array) -> tuple[Array, Array]:
+    """The dimensionless constraint Jacobian (n, nr + nt, nq) at ``q (n, nq)`` and the scaled
+    idle rows (ni, nq) of :class:`SingularityMeasures`."""
     from .topology import column_scale
 
-    q = np.atleast_2d(np.asarray(q, dtype=float))
     _, J = constraint_jacobian(model, q)
-    Js = J * row_scale(model)[None, :, None] * column_scale(model)[None, None, :]
+    cs = column_scale(model)
+    return J * row_scale(model)[None, :, None] * cs[None, None, :], model.solver_idle * cs[None, :]
+
+
+def singularity_measures(model: MechanismModel, q: Array) -> SingularityMeasures:
+    """:class:`SingularityMeasures` at tree coordinates ``q (n, nq)`` (``kin.q``)."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    Js, idle_s = _scaled(model, q)
     rows = model.solver_rows
     nr = model.row_loop.shape[0]
     n = q.shape[0]
-    idle = np.broadcast_to(model.solver_idle * column_scale(model)[None, :], (n, *model.solver_idle.shape))
+    idle = np.broadcast_to(idle_s, (n, *idle_s.shape))
     inverse = _ratio(np.concatenate([Js[:, rows], idle], axis=1))
     cut = rows[rows < nr]
     Phi = np.concatenate([Js[:, cut], idle], axis=1)
@@ -518,3 +525,32 @@ def singularity_measures(model: MechanismModel, q: Array) -> SingularityMeasures
     else:
         direct = np.full(q.shape[0], np.nan)
     return SingularityMeasures(inverse=inverse, direct=direct, constraint=constraint)
+
+
+def least_measure_bounds(model: MechanismModel, q: Array, level: float) -> tuple[NDArray[np.bool_], Array]:
+    """Cheap bounds on the least of the :class:`SingularityMeasures` at ``q (n, nq)`` (the
+    direct one only for as many actuators as degrees of freedom), from a Cholesky factorisation
+    of each matrix's Gram matrix (:mod:`._measure_kernels`): ``passed (n,)`` where every measure
+    is proven above ``level`` (by more than the rounding of its singular value decomposition),
+    and ``upper (n,)`` an upper bound of the least measure (to rounding). Where ``passed`` is
+    False, nothing is proven either way."""
+    from ._measure_kernels import measure_bounds
+
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    n = q.shape[0]
+    passed = np.zeros(n, dtype=np.bool_)
+    upper = np.zeros(n)
+    if n == 0:
+        return passed, upper
+    from .topology import column_scale
+
+    _, J = constraint_jacobian(model, q)
+    cs = column_scale(model)
+    rows = model.solver_rows
+    nr = model.row_loop.shape[0]
+    measure_bounds(np.ascontiguousarray(J), np.ascontiguousarray(row_scale(model)), np.ascontiguousarray(cs),
+                   np.ascontiguousarray(rows[rows < nr]), np.ascontiguousarray(rows[rows >= nr]),
+                   np.ascontiguousarray(model.solver_idle * cs[None, :]),
+                   np.ascontiguousarray(model.act_coord, dtype=np.int64), model.na == model.nt, float(level),
+                   passed, upper)
+    return passed, upper

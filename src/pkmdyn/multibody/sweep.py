@@ -56,6 +56,8 @@ class _Motion(Section):
     workspace_pose: str = Field(default="", max_length=400)
     #: held coordinates over ranges (``--orientation-range``): the total orientation workspace
     workspace_orientation_range: str | None = Field(default=None, max_length=400)
+    #: the least singularity measure over each design's workspace (``workspace_min_measure``)
+    workspace_measure: bool = True
 
 
 @dataclass(frozen=True)
@@ -74,6 +76,8 @@ class DescribedSweepContext:
     workspace: tuple[str, str, str | None] | None = None
     #: ``[requirements]`` ``grid`` and ``pose`` (None: no coverage metric)
     required: tuple[str, str, str | None] | None = None
+    #: ``[motion] workspace_measure``: the metric ``workspace_min_measure``
+    workspace_measure: bool = True
 
 
 def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[str], bool]:
@@ -185,8 +189,10 @@ class DescribedSweep:
                                               str(options["workspace_grid"]))
             out += [MetricInfo(name, unit, "the size of the workspace on [motion] workspace_grid (inside poses times "
                                            "the grid cell, docs/workspace.md)"),
-                    MetricInfo("workspace_inside_share", "-", "the share of the grid's poses inside the workspace"),
-                    MetricInfo("workspace_min_measure", "-", "the least singularity measure over the inside poses")]
+                    MetricInfo("workspace_inside_share", "-", "the share of the grid's poses inside the workspace")]
+            if options.get("workspace_measure", True) is True:
+                out.append(MetricInfo("workspace_min_measure", "-",
+                                      "the least singularity measure over the inside poses"))
         if isinstance(options.get("requirements"), dict):
             out.append(MetricInfo("required_region_coverage", "-",
                                   "the share of the [requirements] grid's poses inside the workspace (reached within "
@@ -256,7 +262,7 @@ class DescribedSweep:
             req = (opt.requirements.grid, opt.requirements.pose, None)
         return DescribedSweepContext(motion=motion, threshold=opt.singularity_threshold, reactions=opt.reactions,
                                      stiffness=tuple(_stiffness_metrics(description)) if opt.stiffness else (),
-                                     workspace=ws, required=req)
+                                     workspace=ws, required=req, workspace_measure=opt.workspace_measure)
 
     def evaluate(self, descriptions: Sequence[Mapping[str, Any]], context: DescribedSweepContext
                  ) -> list[DesignOutcome]:
@@ -318,15 +324,16 @@ def _workspace_size_name(source: Any, grid: str) -> tuple[str, str]:
     return f"workspace_size_{unit}", unit.replace("_", " ")
 
 
-def _on_grid(model: Any, spec: tuple[str, str, str | None], threshold: float) -> Any:
+def _on_grid(model: Any, spec: tuple[str, str, str | None], threshold: float, least: bool) -> Any:
     """The workspace of ``model`` on the grid, held pose and orientation range ``spec``
-    (``--grid``, ``--pose``, ``--orientation-range`` syntax)."""
+    (``--grid``, ``--pose``, ``--orientation-range`` syntax), with its size and least measure
+    (``least``; else only its size: :func:`.workspace.workspace`, ``measures``)."""
     from .task_grid import parse_grid, parse_pose, parse_ranges
     from .workspace import workspace
 
     ranges = None if spec[2] is None else parse_ranges(model, spec[2])
     return workspace(model, parse_grid(model, spec[0], max_axes=3), parse_pose(model, spec[1]), threshold,
-                     ranges=ranges)
+                     ranges=ranges, measures="least" if least else "none")
 
 
 def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> DesignOutcome:
@@ -404,7 +411,7 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
     for key, spec in (("workspace", ctx.workspace), ("required", ctx.required)):
         if spec is not None:
             try:
-                grids[key] = _on_grid(model, spec, ctx.threshold)
+                grids[key] = _on_grid(model, spec, ctx.threshold, key == "workspace" and ctx.workspace_measure)
             except PkmdynError as exc:
                 return DesignOutcome("invalid", str(exc), m)
     if "workspace" in grids:
@@ -413,7 +420,8 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
         m["workspace_inside_share"] = float(ws.inside.mean())
         if not ws.inside.any():
             return DesignOutcome("unreachable", "no pose of [motion] workspace_grid is inside the workspace", m)
-        m["workspace_min_measure"] = float(ws.measure[ws.inside].min())
+        if ctx.workspace_measure:
+            m["workspace_min_measure"] = float(ws.least_measure)
     if "required" in grids:
         m["required_region_coverage"] = float(grids["required"].inside.mean())
     m["peak_power_W"] = float(power.sum(axis=1).max())

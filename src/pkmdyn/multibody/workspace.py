@@ -43,8 +43,8 @@ from numpy.typing import NDArray
 from scipy import ndimage
 
 from ..errors import ParameterError
-from .kinematics import (beyond_limits, joint_coordinates, limited_joints, reference_task, singularity_measures,
-                         solve_grid)
+from .kinematics import (beyond_limits, joint_coordinates, least_measure_bounds, limited_joints, reference_task,
+                         singularity_measures, solve_grid)
 from .model import MechanismModel
 from .task_grid import grid_poses
 
@@ -63,7 +63,9 @@ class Workspace:
     joint limits; ``inside (N,)`` reached, away from every singularity and connected to the
     start (module docstring); ``q (N, nq)`` the tree coordinates (zeros where not reached;
     None over ``ranges``, the held coordinates taken over ranges, :func:`workspace`); ``measure (N,)`` the
-    smallest singularity measure (0 where not reached); ``size``, ``size_error`` in the unit of
+    smallest singularity measure (0 where not reached; None where not every measure was asked
+    for, :func:`workspace`); ``least_measure`` the least of it over the inside poses (None where
+    no pose is inside); ``size``, ``size_error`` in the unit of
     the grid's cells (``unit``, :func:`size_unit`); ``cube_half_width``, ``cylinder_radius``
     about ``centre`` (None for a grid of lengths and angles together)."""
 
@@ -73,7 +75,8 @@ class Workspace:
     inside: NDArray[np.bool_]
     q: Array | None
     ranges: list
-    measure: Array
+    measure: Array | None
+    least_measure: float | None
     cell: float
     size: float
     size_error: float
@@ -114,10 +117,21 @@ def _boundary(inside: NDArray[np.bool_], shape: tuple[int, ...]) -> int:
     return int(edge.sum())
 
 
-def _held(model: MechanismModel, axes: list[tuple[int, Array]], base: Array, threshold: float
-          ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], Array, Array]:
+def _least(model: MechanismModel, q: Array) -> Array:
+    """The least singularity measure (inverse, constraint, and direct where as many actuators
+    as degrees of freedom) at ``q (n, nq)``, from the singular values."""
+    sm = singularity_measures(model, q)
+    m = np.minimum(sm.inverse, sm.constraint)
+    return np.minimum(m, sm.direct) if model.na == model.nt else m
+
+
+def _held(model: MechanismModel, axes: list[tuple[int, Array]], base: Array, threshold: float,
+          all_measures: bool = True) -> tuple[NDArray[np.bool_], NDArray[np.bool_], Array, Array, Array]:
     """The workspace on the grid at one held pose ``base`` (module docstring): reached, inside,
-    the smallest singularity measure (0 where not reached), the tree coordinates."""
+    the smallest singularity measure (0 where not reached), the tree coordinates, and an upper
+    bound of the measure (the measure itself where computed). Without ``all_measures`` the
+    measure is computed only where its bounds (:func:`.kinematics.least_measure_bounds`) do not
+    prove it at least ``threshold``, and is NaN elsewhere."""
     x = grid_poses(model, axes, base)
     shape = tuple(len(v) for _, v in axes)
     roots = _roots(axes, base)
@@ -126,24 +140,58 @@ def _held(model: MechanismModel, axes: list[tuple[int, Array]], base: Array, thr
     if joints and reached.any():
         reached &= ~beyond_limits(model, joint_coordinates(model, kin, joints, along=False), joints).any(axis=1)
     measure = np.zeros(len(x))
-    if reached.any():
-        sm = singularity_measures(model, kin.q[reached])
-        m = np.minimum(sm.inverse, sm.constraint)
-        if model.na == model.nt:
-            m = np.minimum(m, sm.direct)
-        measure[reached] = m
-    good = reached & (measure >= threshold)
+    upper = np.zeros(len(x))
+    proven = np.zeros(len(x), dtype=bool)
+    if reached.any() and all_measures:
+        measure[reached] = _least(model, kin.q[reached])
+        upper = measure.copy()
+    elif reached.any():
+        at = np.flatnonzero(reached)
+        passed, upper[at] = least_measure_bounds(model, kin.q[at], threshold)
+        proven[at[passed]] = True
+        rest = at[~passed]
+        measure[at[passed]] = np.nan
+        if rest.size:
+            measure[rest] = upper[rest] = _least(model, kin.q[rest])
+    good = reached & (proven | (measure >= threshold))
     inside = np.zeros(len(x), dtype=bool)
     if good.any():
         labels, _ = ndimage.label(good.reshape(shape))
         labels = labels.reshape(-1)
         inside = labels == labels[roots[good[roots]][0]]  # the part about the start
-    return reached, inside, measure, np.where(reached[:, None], kin.q, 0.0)
+    return reached, inside, measure, np.where(reached[:, None], kin.q, 0.0), upper
+
+
+def _least_inside(model: MechanismModel, q: Array, inside: NDArray[np.bool_], measure: Array, upper: Array
+                  ) -> float:
+    """The least singularity measure over the inside poses where only some measures are known
+    (``measure`` NaN elsewhere, ``upper`` their upper bounds): ``U`` the least of the known
+    measures and of the bounds; every other inside pose is proven above ``U`` or its measure is
+    computed (:func:`.kinematics.least_measure_bounds` at the level ``U``). The pose that gives
+    ``U`` is never proven above it, so the least is among the computed ones (to rounding).
+    Where the measures vary little over the workspace, few poses are proven above ``U`` (the
+    bounds are within a factor of about 2); when most of a first sample of 64 poses is not, the
+    measures of every unknown pose are computed at once."""
+    ins = np.flatnonzero(inside)
+    vals = measure[ins]
+    unknown = ins[np.isnan(vals)]
+    known = vals[~np.isnan(vals)]
+    level = min(float(known.min()) if known.size else math.inf, float(upper[unknown].min()) if unknown.size else math.inf)
+    if unknown.size > 128:
+        probe = unknown[np.linspace(0, unknown.size - 1, 64).astype(np.int64)]
+        if least_measure_bounds(model, q[probe], level)[0].mean() < 0.5:
+            return float(np.concatenate([known, _least(model, q[unknown])]).min())
+    if unknown.size:
+        passed, _ = least_measure_bounds(model, q[unknown], level)
+        rest = unknown[~passed]
+        if rest.size:
+            known = np.concatenate([known, _least(model, q[rest])])
+    return float(known.min())
 
 
 def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array | None = None,
               threshold: float = 1e-3, centre: Array | None = None,
-              ranges: list[tuple[int, Array]] | None = None) -> Workspace:
+              ranges: list[tuple[int, Array]] | None = None, measures: str = "all") -> Workspace:
     """The workspace on the grid ``axes`` (:func:`.task_grid.parse_grid`) about the pose
     ``base`` (default: the reference pose), with the singularity ``threshold`` and the inscribed
     shapes about ``centre`` (the grid coordinates' values; default: ``base``'s).
@@ -152,7 +200,16 @@ def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array 
     syntax), e.g. the three Euler angles: a pose is reached (inside) where it is reached
     (inside) at every combination of their values, the *total orientation workspace* of
     Merlet (Parallel Robots, 2006, §6.2) for a range of orientations; its measure is the
-    least over the combinations."""
+    least over the combinations.
+
+    ``measures``: ``"all"`` every reached pose's singularity measures (``measure``);
+    ``"least"`` (a sweep's workspace, where the size and the least measure count) a pose's
+    measures only where their cheap bounds do not prove them at least ``threshold``
+    (:func:`.kinematics.least_measure_bounds`, some ten times cheaper than the singular
+    values), and the least over the inside poses as :func:`_least_inside` finds it: the same
+    ``reached``, ``inside``, size and ``least_measure`` as ``"all"`` (to rounding), no
+    ``measure`` per pose; ``"none"`` as ``"least"`` without ``least_measure`` (None). Over
+    ``ranges`` every measure is computed."""
     if not (math.isfinite(threshold) and 0.0 <= threshold < 1.0):
         raise ParameterError(f"--threshold: {threshold!r} is not in [0, 1)")
     base = reference_task(model) if base is None else np.asarray(base, dtype=float)
@@ -167,12 +224,21 @@ def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array 
     reached = np.ones(len(x), dtype=bool)
     inside = np.ones(len(x), dtype=bool)
     measure = np.full(len(x), np.inf)
+    if measures not in ("all", "least", "none"):
+        raise ParameterError(f"measures: {measures!r} is not one of all, least, none")
+    every = measures == "all" or bool(ranges)
     for b in held:
-        r, i, m, q = _held(model, axes, b, threshold)
+        r, i, m, q, upper = _held(model, axes, b, threshold, every)
         reached &= r
         inside &= i
-        measure = np.minimum(measure, m)
-    measure = np.where(reached, measure, 0.0)
+        measure = np.minimum(measure, m) if every else m
+    if not inside.any() or measures == "none":
+        least = None
+    elif every:
+        least = float(np.where(reached, measure, 0.0)[inside].min())
+    else:
+        least = _least_inside(model, q, inside, measure, upper)
+    measure = np.where(reached, measure, 0.0) if every else None
     shape = tuple(len(v) for _, v in axes)
     steps = np.array([float(v[1] - v[0]) for _, v in axes])
     cell = float(np.prod(steps))
@@ -197,7 +263,7 @@ def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array 
         cube = float(np.minimum(pts.max(axis=0) - c, c - pts.min(axis=0)).min())
         cylinder = cube
     return Workspace(axes=axes, x=x, reached=reached, inside=inside, q=q if not ranges else None,
-                     ranges=ranges, measure=measure, cell=cell,
+                     ranges=ranges, measure=measure, least_measure=least, cell=cell,
                      size=float(inside.sum()) * cell, size_error=0.5 * _boundary(inside, shape) * cell, unit=unit,
                      centre=c, cube_half_width=None if cube is None else max(cube, 0.0),
                      cylinder_radius=None if cylinder is None else max(cylinder, 0.0), threshold=float(threshold))
