@@ -118,6 +118,7 @@ file = "pick_and_place.csv"
 reactions = false
 stiffness = false
 workspace_grid = "x=-1.5:1.5:13,y=-1.5:1.5:13,z=-2.2:-0.2:9"
+workspace_measure = false
 
 [parameters]
 "parameters.base_side_m" = {{ min = 0.45, max = 0.70 }}

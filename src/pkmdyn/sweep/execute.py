@@ -31,8 +31,8 @@ from ..errors import PkmdynError
 from ..sweep_protocol import STATUSES, DesignOutcome, MetricInfo
 from .space import Bound, Parameter, design_description
 
-__all__ = ["BatchJob", "run_batch", "make_batches", "finished_ids", "execute", "part_schema", "PARTS_DIR",
-           "default_batch_size", "ExecutionStats"]
+__all__ = ["BatchJob", "run_batch", "make_batches", "finished_ids", "execute", "Executor", "part_schema",
+           "PARTS_DIR", "default_batch_size", "ExecutionStats"]
 
 Array = NDArray[np.float64]
 PARTS_DIR = "parts"
@@ -248,34 +248,96 @@ def _client(workers: int, scheduler: str | None) -> tuple[Any, Any]:
     return Client(cluster), cluster
 
 
-def _on_dask(job: BatchJob, batches: list[Array], X: Array, parts: Path, bar: Any, workers: int,
-             scheduler: str | None, stats: ExecutionStats, retries: int) -> None:
-    import dask
-    from distributed import as_completed
-    from distributed.scheduler import KilledWorker
+class Executor:
+    """Evaluates batches of designs (:meth:`run`): in this process (``workers = 0`` and no
+    ``scheduler``), or on Dask, a local cluster of ``workers`` processes or the cluster of
+    ``scheduler``. A context manager: the cluster (or the connection) is started at the first
+    :meth:`run` with work to do and kept for every later one (each generation of a search, each
+    refinement round), then closed on exit; ``retries``: re-runs of a batch that raised (a
+    worker that dies is handled by the scheduler, which moves its tasks to the other
+    workers)."""
 
-    t0 = time.perf_counter()
-    # a task whose worker dies is moved to another worker up to this many times (then the
-    # sweep stops with KilledWorker; the finished batches stay for a rerun). Local workers keep
-    # glibc's own malloc trimming: Dask's default MALLOC_TRIM_THRESHOLD_ = 64 KiB returns memory
-    # to the system after every freed temporary, which costs the many small numpy arrays of an
-    # evaluation about a third more time (system time of brk calls)
-    environ = {k: v for k, v in dask.config.get("distributed.nanny.pre-spawn-environ", {}).items()
-               if k != "MALLOC_TRIM_THRESHOLD_"}
-    with dask.config.set({"distributed.scheduler.allowed-failures": max(retries, 0) + 3,
-                          "distributed.nanny.pre-spawn-environ": environ}):
-        client, cluster = _client(workers, scheduler)
-    try:
+    def __init__(self, workers: int = 0, scheduler: str | None = None, retries: int = 2) -> None:
+        self.workers, self.scheduler, self.retries = workers, scheduler, retries
+        self.on_dask = workers > 0 or scheduler is not None
+        self._client: Any = None
+        self._cluster: Any = None
+        self._shared: dict[int, Any] = {}
+
+    def __enter__(self) -> Executor:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Close the client and the local cluster, if started."""
+        client, cluster, self._client, self._cluster = self._client, self._cluster, None, None
+        self._shared.clear()
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+
+    def _start(self, job: BatchJob, stats: ExecutionStats) -> None:
+        import dask
+        import distributed  # noqa: F401  (its configuration defaults, read below)
+
+        t0 = time.perf_counter()
+        # a task whose worker dies is moved to another worker up to this many times (then the
+        # sweep stops with KilledWorker; the finished batches stay for a rerun). Local workers
+        # keep glibc's own malloc trimming: Dask's default MALLOC_TRIM_THRESHOLD_ = 64 KiB
+        # returns memory to the system after every freed temporary, which costs the many small
+        # numpy arrays of an evaluation about a third more time (system time of brk calls)
+        environ = {k: v for k, v in dask.config.get("distributed.nanny.pre-spawn-environ", {}).items()
+                   if k != "MALLOC_TRIM_THRESHOLD_"}
+        with dask.config.set({"distributed.scheduler.allowed-failures": max(self.retries, 0) + 3,
+                              "distributed.nanny.pre-spawn-environ": environ}):
+            self._client, self._cluster = _client(self.workers, self.scheduler)
         # start-up: every worker imports the machine's adapter (numpy, scipy, the model) once
-        client.run(importlib.import_module, job.evaluate.__module__)
+        self._client.run(importlib.import_module, job.evaluate.__module__)
         stats.cluster_start_s = time.perf_counter() - t0
+
+    def run(self, job: BatchJob, X: Array, todo: Array, parts: Path, batch_size: int | None = None,
+            progress: bool | None = None) -> ExecutionStats:
+        """Evaluate the designs ``todo`` (ids into ``X``) and write one part file per batch."""
+        parts.mkdir(parents=True, exist_ok=True)
+        total = X.shape[0]
+        size = batch_size or default_batch_size(todo.shape[0], self.workers if self.on_dask else 1)
+        batches = make_batches(todo, size)
+        stats = ExecutionStats(mode="dask" if self.on_dask else "serial", workers=self.workers, batches=len(batches))
+        bar = _progress(total, total - todo.shape[0], progress)
+        try:
+            if not batches:
+                return stats
+            if not self.on_dask:
+                t0, c0 = time.perf_counter(), _cpu_seconds()
+                _serial(job, batches, X, parts, bar)
+                stats.evaluate_s = time.perf_counter() - t0
+                stats.driver_cpu_s = _cpu_seconds() - c0
+            else:
+                if self._client is None:
+                    self._start(job, stats)
+                self._on_dask(job, batches, X, parts, bar, stats)
+        finally:
+            bar.close()
+        return stats
+
+    def _on_dask(self, job: BatchJob, batches: list[Array], X: Array, parts: Path, bar: Any,
+                 stats: ExecutionStats) -> None:
+        from distributed import as_completed
+        from distributed.scheduler import KilledWorker
+
+        client = self._client
         stats.workers = len(client.scheduler_info().get("workers", {}))
         t1, c1 = time.perf_counter(), _cpu_seconds()
         cpu_before = client.run(_cpu_seconds)
-        shared = client.scatter(job, broadcast=True, hash=False)
+        if id(job) not in self._shared:  # the job is sent to every worker once
+            self._shared[id(job)] = client.scatter(job, broadcast=True, hash=False)
+        shared = self._shared[id(job)]
         token = uuid.uuid4().hex[:12]
         futures = [client.submit(run_batch, shared, ids, X[ids], key=f"pkmdyn-sweep-{token}-{int(ids[0])}",
-                                 retries=retries, pure=False) for ids in batches]
+                                 retries=self.retries, pure=False) for ids in batches]
         try:
             for fut in as_completed(futures):
                 table = fut.result()
@@ -292,38 +354,12 @@ def _on_dask(job: BatchJob, batches: list[Array], X: Array, parts: Path, bar: An
         cpu_after = client.run(_cpu_seconds)
         stats.worker_cpu_s = (sum(cpu_after[w] - cpu_before[w] for w in cpu_after)
                               if set(cpu_after) == set(cpu_before) else None)
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
 
 
 def execute(job: BatchJob, X: Array, todo: Array, parts: Path, workers: int = 0, scheduler: str | None = None,
             batch_size: int | None = None, progress: bool | None = None, retries: int = 2) -> ExecutionStats:
-    """Evaluate the designs ``todo`` (ids into ``X``) and write one part file per batch.
-
-    ``workers = 0`` and no ``scheduler``: in this process, batch after batch. Otherwise on Dask:
-    a local cluster of ``workers`` processes, or the cluster of ``scheduler``; ``retries``:
-    re-runs of a batch that raised (a worker that dies is handled by the scheduler, which
-    moves its tasks to the other workers).
-    """
-    parts.mkdir(parents=True, exist_ok=True)
-    total = X.shape[0]
-    on_dask = workers > 0 or scheduler is not None
-    size = batch_size or default_batch_size(todo.shape[0], workers if on_dask else 1)
-    batches = make_batches(todo, size)
-    stats = ExecutionStats(mode="dask" if on_dask else "serial", workers=workers, batches=len(batches))
-    bar = _progress(total, total - todo.shape[0], progress)
-    try:
-        if not batches:
-            return stats
-        if not on_dask:
-            t0, c0 = time.perf_counter(), _cpu_seconds()
-            _serial(job, batches, X, parts, bar)
-            stats.evaluate_s = time.perf_counter() - t0
-            stats.driver_cpu_s = _cpu_seconds() - c0
-        else:
-            _on_dask(job, batches, X, parts, bar, workers, scheduler, stats, retries)
-    finally:
-        bar.close()
-    return stats
+    """Evaluate the designs ``todo`` (ids into ``X``) and write one part file per batch, on an
+    :class:`Executor` of its own (``workers = 0`` and no ``scheduler``: in this process, batch
+    after batch; otherwise on Dask, started and closed here)."""
+    with Executor(workers, scheduler, retries) as ex:
+        return ex.run(job, X, todo, parts, batch_size, progress)

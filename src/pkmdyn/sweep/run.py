@@ -28,7 +28,7 @@ import numpy as np
 from ..errors import ParameterError, PkmdynError
 from ..io import atomic_file, check_inputs_outside, dumps_toml, write_json
 from ..sweep_protocol import STATUSES, SweepAdapter
-from .execute import PARTS_DIR, BatchJob, ExecutionStats, execute, finished_ids, part_schema
+from .execute import PARTS_DIR, BatchJob, ExecutionStats, Executor, finished_ids, part_schema
 from .pareto import minimised, pareto_mask
 from .space import SweepSpace, design_description, from_unit, load_space, refine_designs, sample_designs
 
@@ -278,39 +278,40 @@ def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: in
     todo = np.setdiff1d(np.arange(n, dtype=np.int64), done)
     n_workers = (os.cpu_count() or 1) if workers is None and scheduler is None else (workers or 0)
     size = batch_size or prep.space.batch_size
-    try:
-        stats = execute(prep.job, prep.X, todo, parts, n_workers, scheduler, size, progress, retries)
-    except BaseException:
-        if fresh:
-            _remove_if_unused(out)
-        raise
-    evaluated = int(todo.shape[0])
-    X, rounds = prep.X, 0
-    schema = part_schema(prep.job)
-    search = None
-    for r in range(1, prep.space.refine_rounds + 1):
-        table = _collect(parts, schema, X.shape[0], later=True)
-        if prep.space.method == "nsga2":  # the next generation from the last one's rows (search.py)
-            from .search import Nsga2Search, generation_values
+    with Executor(n_workers, scheduler, retries) as ex:  # one cluster for every round
+        try:
+            stats = ex.run(prep.job, prep.X, todo, parts, size, progress)
+        except BaseException:
+            if fresh:
+                _remove_if_unused(out)
+            raise
+        evaluated = int(todo.shape[0])
+        X, rounds = prep.X, 0
+        schema = part_schema(prep.job)
+        search = None
+        for r in range(1, prep.space.refine_rounds + 1):
+            table = _collect(parts, schema, X.shape[0], later=True)
+            if prep.space.method == "nsga2":  # the next generation from the last one's rows (search.py)
+                from .search import Nsga2Search, generation_values
 
-            if search is None:
-                search = Nsga2Search(prep.space)
-                if not np.array_equal(from_unit(prep.space, search.ask()), prep.X):
-                    raise PkmdynError("internal error: the NSGA-II search does not replay its first generation")
-            N = prep.space.designs
-            search.tell(*generation_values(table, (r - 1) * N, r * N, prep.space))
-            Xg = from_unit(prep.space, search.ask())
-            _check_replay(table, prep.space, r * N, Xg)
-            X = np.vstack([X, Xg])
-        else:
-            _, front = _front(table, prep.space.objectives)
-            if not front.size:
-                break  # nothing feasible to refine around
-            X = np.vstack([X, refine_designs(prep.space, X, np.sort(front), r)])
-        todo = np.setdiff1d(np.arange(X.shape[0] - prep.space.refine_designs, X.shape[0]), done)
-        _add(stats, execute(prep.job, X, todo, parts, n_workers, scheduler, size, progress, retries))
-        evaluated += int(todo.shape[0])
-        rounds = r
+                if search is None:
+                    search = Nsga2Search(prep.space)
+                    if not np.array_equal(from_unit(prep.space, search.ask()), prep.X):
+                        raise PkmdynError("internal error: the NSGA-II search does not replay its first generation")
+                N = prep.space.designs
+                search.tell(*generation_values(table, (r - 1) * N, r * N, prep.space))
+                Xg = from_unit(prep.space, search.ask())
+                _check_replay(table, prep.space, r * N, Xg)
+                X = np.vstack([X, Xg])
+            else:
+                _, front = _front(table, prep.space.objectives)
+                if not front.size:
+                    break  # nothing feasible to refine around
+                X = np.vstack([X, refine_designs(prep.space, X, np.sort(front), r)])
+            todo = np.setdiff1d(np.arange(X.shape[0] - prep.space.refine_designs, X.shape[0]), done)
+            _add(stats, ex.run(prep.job, X, todo, parts, size, progress))
+            evaluated += int(todo.shape[0])
+            rounds = r
     t0 = time.perf_counter()
     files, counts, n_pareto, best = _results(prep, X, rounds, out, plots, stats)
     return SweepReport(out=out, designs=int(X.shape[0]), evaluated=evaluated, counts=counts, pareto=n_pareto,
