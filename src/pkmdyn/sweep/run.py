@@ -193,16 +193,22 @@ def _remove_if_unused(out: Path) -> None:
             pass
 
 
-def _collect(parts: Path, schema: Any, n: int, later: bool = False) -> Any:
+def _collect(parts: Path, schema: Any, n: int, later: bool = False, read: dict[str, Any] | None = None) -> Any:
     """Every part's rows as one table sorted by design_id; each design exactly once.
 
     ``later``: rows of designs ``>= n`` (refinement rounds of an interrupted earlier run that
-    went further) are left out instead of refused."""
+    went further) are left out instead of refused. ``read``: the part files read by an earlier
+    call of the same run, by name (a part file is written once and never changed), filled with
+    the ones read now."""
     import pyarrow as pa
     import pyarrow.compute as pc
     import pyarrow.parquet as pq
 
-    tables = [pq.read_table(p, schema=schema) for p in sorted(parts.glob("part-*.parquet"))]
+    read = {} if read is None else read
+    for p in sorted(parts.glob("part-*.parquet")):
+        if p.name not in read:
+            read[p.name] = pq.read_table(p, schema=schema)
+    tables = [read[k] for k in sorted(read)]
     table = pa.concat_tables(tables) if tables else schema.empty_table()
     table = table.take(pc.sort_indices(table, sort_keys=[("design_id", "ascending")]))
     if later:
@@ -289,8 +295,9 @@ def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: in
         X, rounds = prep.X, 0
         schema = part_schema(prep.job)
         search = None
+        read: dict[str, Any] = {}
         for r in range(1, prep.space.refine_rounds + 1):
-            table = _collect(parts, schema, X.shape[0], later=True)
+            table = _collect(parts, schema, X.shape[0], later=True, read=read)
             if prep.space.method == "nsga2":  # the next generation from the last one's rows (search.py)
                 from .search import Nsga2Search, generation_values
 
