@@ -84,6 +84,8 @@ def _bounds(G, d, level):  # pragma: no cover - compiled
         G[i, i] -= shift
     least = math.inf
     ok = True
+    # Cholesky by rows, its own loop: the reactions' normal equations (``normal_solve``) are
+    # compiled with reassociation, and the margin above assumes the operations in order
     for k in range(d):
         p = G[k, k]
         for j in range(k):
