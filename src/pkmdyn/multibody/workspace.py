@@ -162,31 +162,30 @@ def _held(model: MechanismModel, axes: list[tuple[int, Array]], base: Array, thr
     return reached, inside, measure, np.where(reached[:, None], kin.q, 0.0), upper
 
 
-def _least_inside(model: MechanismModel, q: Array, inside: NDArray[np.bool_], measure: Array, upper: Array
-                  ) -> float:
+def _least_inside(model: MechanismModel, q: Array, inside: NDArray[np.bool_], measure: Array, upper: Array,
+                  candidates: int = 16) -> float:
     """The least singularity measure over the inside poses where only some measures are known
-    (``measure`` NaN elsewhere, ``upper`` their upper bounds): ``U`` the least of the known
-    measures and of the bounds; every other inside pose is proven above ``U`` or its measure is
-    computed (:func:`.kinematics.least_measure_bounds` at the level ``U``). The pose that gives
-    ``U`` is never proven above it, so the least is among the computed ones (to rounding).
-    Where the measures vary little over the workspace, few poses are proven above ``U`` (the
-    bounds are within a factor of about 2); when most of a first sample of 64 poses is not, the
-    measures of every unknown pose are computed at once."""
+    (``measure`` NaN elsewhere, ``upper`` their upper bounds): the measures of the
+    ``candidates`` unknown poses of least upper bound are computed, ``U`` the least known
+    measure; every other inside pose is proven above ``U`` (:func:`.kinematics.least_measure_bounds`,
+    ``tight``: where its measure exceeds ``U`` by more than a few per cent) or its measure is
+    computed. ``U`` is a pose's measure, so the
+    least is among the computed ones."""
     ins = np.flatnonzero(inside)
     vals = measure[ins]
     unknown = ins[np.isnan(vals)]
-    known = vals[~np.isnan(vals)]
-    level = min(float(known.min()) if known.size else math.inf, float(upper[unknown].min()) if unknown.size else math.inf)
-    if unknown.size > 128:
-        probe = unknown[np.linspace(0, unknown.size - 1, 64).astype(np.int64)]
-        if least_measure_bounds(model, q[probe], level)[0].mean() < 0.5:
-            return float(np.concatenate([known, _least(model, q[unknown])]).min())
+    known = [vals[~np.isnan(vals)]]
+    order = np.argsort(upper[unknown], kind="stable")
+    first, unknown = unknown[order[:candidates]], unknown[order[candidates:]]
+    if first.size:
+        known.append(_least(model, q[first]))
+    level = float(np.concatenate(known).min())
     if unknown.size:
-        passed, _ = least_measure_bounds(model, q[unknown], level)
+        passed, _ = least_measure_bounds(model, q[unknown], level, tight=True)
         rest = unknown[~passed]
         if rest.size:
-            known = np.concatenate([known, _least(model, q[rest])])
-    return float(known.min())
+            known.append(_least(model, q[rest]))
+    return float(np.concatenate(known).min())
 
 
 def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array | None = None,
