@@ -167,9 +167,9 @@ def _least_inside(model: MechanismModel, q: Array, inside: NDArray[np.bool_], me
     """The least singularity measure over the inside poses where only some measures are known
     (``measure`` NaN elsewhere, ``upper`` their upper bounds): the measures of the
     ``candidates`` unknown poses of least upper bound are computed, ``U`` the least known
-    measure; every other inside pose is proven above ``U`` (:func:`.kinematics.least_measure_bounds`,
-    ``tight``: where its measure exceeds ``U`` by more than a few per cent) or its measure is
-    computed. ``U`` is a pose's measure, so the
+    measure; every other inside pose is proven above ``U``
+    (:func:`.kinematics.least_measure_bounds`, ``tight``: where its measure exceeds ``U`` by
+    more than a few per cent) or its measure is computed. ``U`` is a pose's measure, so the
     least is among the computed ones."""
     ins = np.flatnonzero(inside)
     vals = measure[ins]
