@@ -635,15 +635,6 @@ def euler_rate_map(ang, axes, E):
 
 
 @njit(cache=True, inline="always")
-def _rotate_vec(m, c, s, x, out):
-    """``out = Rot_m(angle) x`` with ``c, s`` the cosine and sine of the angle."""
-    i, j = (m + 1) % 3, (m + 2) % 3
-    out[m] = x[m]
-    out[i] = c * x[i] - s * x[j]
-    out[j] = s * x[i] + c * x[j]
-
-
-@njit(cache=True, inline="always")
 def _inv3(M, out):
     """Inverse of a 3 x 3 matrix; returns the determinant (out untouched when it is 0)."""
     det = (M[0, 0] * (M[1, 1] * M[2, 2] - M[1, 2] * M[2, 1]) - M[0, 1] * (M[1, 0] * M[2, 2] - M[1, 2] * M[2, 0])

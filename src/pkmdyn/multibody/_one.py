@@ -251,14 +251,8 @@ def _f2(pk, k):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _f3(pk, k):  # pragma: no cover - compiled
-    h = _HEAD + 4 * (pk[0] + k)
-    return _fview(pk, pk[h], (pk[h + 1], pk[h + 2], pk[h + 3]))
-
-
-@njit(cache=True, inline="always")
 def _f33(pk, k):  # pragma: no cover - compiled
-    """:func:`_f3` of an (n, 3, 3) array, its 3s constants of the compiled code (the compiler
+    """The packed (n, 3, 3) array ``k``, its 3s constants of the compiled code (the compiler
     then folds them into the indexing)."""
     h = _HEAD + 4 * (pk[0] + k)
     return _fview(pk, pk[h], (pk[h + 1], 3, 3))

@@ -198,10 +198,6 @@ class SweepSpace:
     refine_designs: int = 0
     refine_shrink: float = 0.5
 
-    def round_of(self, design_id: int) -> int:
-        """The round that made a design: 0 the sample, 1.. the refinement rounds."""
-        return 0 if design_id < self.designs else 1 + (design_id - self.designs) // self.refine_designs
-
     def record(self) -> dict[str, Any]:
         """A plain, JSON-able echo of the space (what a resumed run must match)."""
         return {
