@@ -151,7 +151,8 @@ class DescribedSweep:
                 ) -> tuple[MetricInfo, ...]:
         """The metrics of the base ``description`` (named after its actuators and joints); the
         joint reactions only with ``reactions = true``, the stiffness metrics only with
-        ``stiffness = true`` (both the default) in ``[motion]``."""
+        ``stiffness = true``, the workspace's least measure only with ``workspace_measure = true``
+        (each the default) in ``[motion]``."""
         acts, joints, direct = _names(self.raw if description is None else description)
         out = [
             MetricInfo("gci", "-", "(1/T) int mu(t) dt, mu = the direct singularity measure where there are as "
