@@ -262,7 +262,8 @@ class Executor:
         self.on_dask = workers > 0 or scheduler is not None
         self._client: Any = None
         self._cluster: Any = None
-        self._shared: dict[int, Any] = {}
+        self._job: BatchJob | None = None  # the job on the workers (scattered once) and its future
+        self._shared: Any = None
 
     def __enter__(self) -> Executor:
         return self
@@ -273,7 +274,7 @@ class Executor:
     def close(self) -> None:
         """Close the client and the local cluster, if started."""
         client, cluster, self._client, self._cluster = self._client, self._cluster, None, None
-        self._shared.clear()
+        self._job = self._shared = None
         if client is not None:
             client.close()
         if cluster is not None:
@@ -332,9 +333,9 @@ class Executor:
         stats.workers = len(client.scheduler_info().get("workers", {}))
         t1, c1 = time.perf_counter(), _cpu_seconds()
         cpu_before = client.run(_cpu_seconds)
-        if id(job) not in self._shared:  # the job is sent to every worker once
-            self._shared[id(job)] = client.scatter(job, broadcast=True, hash=False)
-        shared = self._shared[id(job)]
+        if job is not self._job:  # the job is sent to every worker once
+            self._job, self._shared = job, client.scatter(job, broadcast=True, hash=False)
+        shared = self._shared
         token = uuid.uuid4().hex[:12]
         futures = [client.submit(run_batch, shared, ids, X[ids], key=f"pkmdyn-sweep-{token}-{int(ids[0])}",
                                  retries=self.retries, pure=False) for ids in batches]
