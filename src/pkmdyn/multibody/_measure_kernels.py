@@ -223,7 +223,7 @@ def measure_bounds(J, rs, cs, cut, task, idle, act, direct, level, tight, passed
                     r = task[a]
                     for j in range(nq):
                         M[mp + a, j] = J[s, r, j] * rs[r] * cs[j]
-            elif which == 2:
+            elif which == 2 and m < nq:  # the rows of E_a, for M M^T (else added to the diagonal below)
                 for a in range(na):
                     for j in range(nq):
                         M[mp + a, j] = 0.0

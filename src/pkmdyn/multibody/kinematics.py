@@ -40,7 +40,7 @@ from ..errors import MotionError, SingularityError, UnreachablePoseError, as_arr
 from . import _kernels as K
 from .joint_types import JOINT_TYPES
 from .model import MechanismModel
-from .topology import constraint_jacobian, row_labels, row_scale
+from .topology import column_scale, constraint_jacobian, row_labels, row_scale
 
 __all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals", "least_measure_bounds",
            "singularity_measures", "SingularityMeasures", "reachable", "TOLERANCE", "joint_coordinates",
@@ -235,8 +235,6 @@ def _fail(model: MechanismModel, out: dict, t: Array | None, x: Array, offset: i
 
 def _singular_row(model: MechanismModel, q: Array) -> str:
     """The row that carries the most of the null direction of the Newton matrix at ``q``."""
-    from .topology import column_scale
-
     _, J = constraint_jacobian(model, q)
     Ks = (J[0] * row_scale(model)[:, None] * column_scale(model)[None, :])[model.solver_rows]
     Ks = np.concatenate([Ks, model.solver_idle * column_scale(model)[None, :]])
@@ -495,24 +493,15 @@ def _ratio(M: Array) -> Array:
     return sv[..., -1] / np.maximum(sv[..., 0], 1e-300)
 
 
-def _scaled(model: MechanismModel, q: Array) -> tuple[Array, Array]:
-    """The dimensionless constraint Jacobian (n, nr + nt, nq) at ``q (n, nq)`` and the scaled
-    idle rows (ni, nq) of :class:`SingularityMeasures`."""
-    from .topology import column_scale
-
-    _, J = constraint_jacobian(model, q)
-    cs = column_scale(model)
-    return J * row_scale(model)[None, :, None] * cs[None, None, :], model.solver_idle * cs[None, :]
-
-
 def singularity_measures(model: MechanismModel, q: Array) -> SingularityMeasures:
     """:class:`SingularityMeasures` at tree coordinates ``q (n, nq)`` (``kin.q``)."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    Js, idle_s = _scaled(model, q)
+    _, J = constraint_jacobian(model, q)
+    Js = J * row_scale(model)[None, :, None] * column_scale(model)[None, None, :]
     rows = model.solver_rows
     nr = model.row_loop.shape[0]
     n = q.shape[0]
-    idle = np.broadcast_to(idle_s, (n, *idle_s.shape))
+    idle = np.broadcast_to(model.solver_idle * column_scale(model)[None, :], (n, *model.solver_idle.shape))
     inverse = _ratio(np.concatenate([Js[:, rows], idle], axis=1))
     cut = rows[rows < nr]
     Phi = np.concatenate([Js[:, cut], idle], axis=1)
@@ -546,8 +535,6 @@ def least_measure_bounds(model: MechanismModel, q: Array, level: float, tight: b
     upper = np.zeros(n)
     if n == 0:
         return passed, upper
-    from .topology import column_scale
-
     _, J = constraint_jacobian(model, q)
     cs = column_scale(model)
     rows = model.solver_rows

@@ -144,7 +144,7 @@ def _held(model: MechanismModel, axes: list[tuple[int, Array]], base: Array, thr
     proven = np.zeros(len(x), dtype=bool)
     if reached.any() and all_measures:
         measure[reached] = _least(model, kin.q[reached])
-        upper = measure.copy()
+        upper = measure
     elif reached.any():
         at = np.flatnonzero(reached)
         passed, upper[at] = least_measure_bounds(model, kin.q[at], threshold)
