@@ -73,6 +73,31 @@ def test_grid_continuation_gives_each_pose_as_solved_alone(name, axes):
         assert np.max(np.abs(alone.q[0] - ws.q[k])) < 1e-9
 
 
+@pytest.mark.parametrize("name, grid", [
+    ("delta", "x=-1.5:1.5:13,y=-1.5:1.5:13,z=-2.2:-0.2:9"),
+    ("rrr3", "x=-0.4:0.4:41,euler1=-1.5:1.5:41"),
+])
+def test_giving_up_on_stalled_poses_leaves_the_grid_as_it_was(name, grid):
+    """A grid pose whose Newton iteration stalls is given up after a few steps (``stall``)
+    instead of ``MAX_ITER``: the same poses are reached, with the same coordinates, as
+    without giving up; wide grids, so that many poses lie out of reach (a Stewart platform's
+    unlimited legs reach every pose)."""
+    from pkmdyn.multibody.kinematics import GRID_STALL, solve_grid
+    from pkmdyn.multibody.task_grid import parse_grid
+    from pkmdyn.multibody.workspace import _roots, grid_poses
+
+    m = load_mechanism(MACHINES / name / f"{name}.toml")
+    axes = parse_grid(m, grid, max_axes=4, max_points=10**5)
+    base = reference_task(m)
+    x = grid_poses(m, axes, base)
+    shape = tuple(len(v) for _, v in axes)
+    kin, reached = solve_grid(m, x, shape, _roots(axes, base), stall=GRID_STALL)
+    kin0, reached0 = solve_grid(m, x, shape, _roots(axes, base), stall=0)
+    assert 20 < reached0.sum() < 0.9 * len(x)
+    assert np.array_equal(reached, reached0)
+    assert np.max(np.abs(kin.q[reached] - kin0.q[reached])) < 1e-12
+
+
 def test_the_workspace_is_the_part_connected_to_the_start():
     """A planar 3-RRR over position and orientation: the poses away from every singularity fall
     in several parts; the workspace is the one about the held pose, the others (reached only

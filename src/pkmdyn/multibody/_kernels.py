@@ -1141,6 +1141,9 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
     turning coordinates' cosines and sines (:func:`_cos_sin`). Returns the status (OK,
     NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN); ``info[0]`` the worst row, ``info[1]``
     the scaled residual, ``info[2]`` the Newton evaluations (1: the first closed the loops).
+    ``info[3]`` (where ``info`` has four entries), when positive: give up (NOT_CONVERGED) once
+    Newton has taken that many steps and its residual has not halved over the last three (a
+    pose out of reach, where Newton wanders instead of converging; :func:`solve_batch`'s grid).
     On OK the poses ``R, p`` and twists ``S`` are those of the converged ``q``. The Jacobian's
     solved rows go straight into ``K`` at their permuted places (``rowpos``, ``colpos``,
     ``idlepos`` of :func:`solver_positions`, in ``solver``). The poses, the rows, the
@@ -1160,6 +1163,9 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
     ni = idle.shape[0]
     mk = m + ni
     prev = 1e300
+    prev2 = 1e300
+    prev3 = 1e300
+    stall = info[3] if info.shape[0] > 3 else 0.0
     explicit = legs[1].shape[0] > 0
     fixed = nq < 0  # False, typed as a run-time value: whether the legs placed from the task alone are
     # (their closed forms reached the task)
@@ -1230,9 +1236,11 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
                     # LOOP_OPEN: the solved rows closed but a redundant direction of a loop stays open
                     info[0] = wa
                     return LOOP_OPEN
-                prev = big_sel
-                if not done and it == max_iter:
+                if not done and (it == max_iter or (0.0 < stall <= it and big_sel > 0.5 * prev3)):
                     return NOT_CONVERGED
+                prev3 = prev2
+                prev2 = prev
+                prev = big_sel
                 it += 1
                 info[2] = it
                 _fill_idle(K, idle, idlepos, colpos)
@@ -1268,7 +1276,7 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
                 tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
                 row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
                 task_body, task_point, task_kind, task_index, euler_axes,
-                sel_rows, idle, prow, pcol, blocks, q_ref, row_scale, tol, check_tol, max_iter,
+                sel_rows, idle, prow, pcol, blocks, q_ref, row_scale, tol, check_tol, max_iter, stall,
                 com, pC_all,
                 q_out, qd_out, qdd_out, R_out, p_out, V_out, A_out, G_out, res_out, status, worst,
                 ov_out, oa_out, cp_out, cv_out, ca_out, jp_out, jv_out, ja_out):
@@ -1307,7 +1315,10 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
     in breadth-first order from pose ``root`` (which starts from ``q_start``): each pose once,
     from the solved neighbour that reached it first, by the first-order predictor
     ``q_p + G_p (x_s - x_p)``; a failed pose does not stop the others, and a pose with no
-    solved neighbour is left unsolved (``status`` -1).
+    solved neighbour is left unsolved (``status`` -1). A grid pose gives up once Newton has
+    taken ``stall`` steps without halving its residual over the last three (0: never;
+    :func:`solve_sample`, ``info[3]``): most of a grid's time goes to the poses just out of
+    reach, each of which would otherwise take ``max_iter`` steps.
     """
     n = x.shape[0]
     nq = q_start.shape[0]
@@ -1339,7 +1350,9 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
     G = np.zeros((nq, nt))
     w33 = np.empty((5, 3, 3))
     w3 = np.empty((20, 3))
-    info = np.zeros(3)
+    grid = nbr.shape[0] == n
+    info = np.zeros(4)
+    info[3] = stall if grid else 0.0
     pause = 0
     Gw = np.empty((mk, nt))
     task_unit_rhs(sel_rows, nr, Gw)
@@ -1355,7 +1368,6 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
     solver = (sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter, rowpos, colpos, idlepos)
     work = (R, p, S, val, res, K, piv, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, G, w33, w3, Gw, Gw2,
             np.zeros((nq, 3)))
-    grid = nbr.shape[0] == n
     order = np.arange(n)
     came = np.full(n if grid else 0, -2)  # grid: the pose each pose starts from (-1: q_start; -2: none yet)
     tail = n

@@ -54,6 +54,10 @@ TOLERANCE = 1e-13
 #: every row, the redundant directions of an over-constrained loop included, must close to this
 CHECK_TOLERANCE = 1e-9
 MAX_ITER = 30
+#: a workspace grid's pose is given up once Newton has taken this many steps without halving its
+#: residual over the last three (:func:`solve_grid`): a pose just out of reach, where Newton
+#: wanders; a reachable pose, predicted from a solved neighbour, converges in fewer steps
+GRID_STALL = 8
 #: a joint coordinate may pass its limit by this (times the length scale for a sliding
 #: joint; radians for a turning one) before the sample counts as beyond it: rounding at a
 #: limit reached exactly is not a violation
@@ -128,7 +132,7 @@ def loop_residuals(model: MechanismModel, q: Array) -> Array:
 
 
 def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array, t: Array | None = None,
-         nbr: NDArray[np.int64] | None = None, root: int = 0) -> dict:
+         nbr: NDArray[np.int64] | None = None, root: int = 0, stall: int = 0) -> dict:
     n, nq, nb, nt = x.shape[0], model.nq, model.nb, model.nt
     nj = len(model.joint_names)
     shapes = {"q": (nq,), "qd": (nq,), "qdd": (nq,), "R": (nb, 3, 3), "p": (nb, 3), "V": (nb, 6), "A": (nb, 6),
@@ -155,7 +159,7 @@ def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array,
                   model.row_i, model.row_j, model.loop_joint, model.joint_parent, model.joint_child,
                   model.task_body, model.task_point, model.task_kind, model.task_index, model.euler_axes,
                   model.solver_rows, model.solver_idle, model.solver_prow, model.solver_pcol,
-                  model.solver_blocks, model.coord_offset, row_scale(model), TOLERANCE, CHECK_TOLERANCE, MAX_ITER,
+                  model.solver_blocks, model.coord_offset, row_scale(model), TOLERANCE, CHECK_TOLERANCE, MAX_ITER, float(stall),
                   model.com, model.joint_p_child,
                   out["q"], out["qd"], out["qdd"], out["R"], out["p"], out["V"], out["A"], out["G"], out["res"],
                   out["status"], out["worst"], out["ov"], out["oa"], out["cp"], out["cv"], out["ca"],
@@ -184,13 +188,15 @@ def _start(model: MechanismModel, x0: Array) -> Array:
 
 
 def solve_grid(model: MechanismModel, x: Array, shape: tuple[int, ...], roots: Array,
-               tries: int = 16) -> tuple[MechanismKinematics, NDArray[np.bool_]]:
+               tries: int = 16, stall: int = GRID_STALL) -> tuple[MechanismKinematics, NDArray[np.bool_]]:
     """Kinematics at every pose ``x (n, nt)`` of a grid of ``shape`` (``prod(shape) = n``, the
     first axis slowest) by continuation over the grid: the first pose of ``roots`` (grid
     indices in order of preference) that the reference configuration reaches (along the
     straight task path, as the first sample of :func:`solve_kinematics`; at most ``tries`` of
     them) is solved first, and every other pose from a solved neighbour along a grid axis,
-    breadth-first (``_kernels.solve_batch``), so each pose on the root's assembly branch.
+    breadth-first (``_kernels.solve_batch``), so each pose on the root's assembly branch. A
+    pose is given up as out of reach once Newton has taken ``stall`` steps (0: never, only
+    after ``MAX_ITER``) without halving its residual over the last three.
     Returns the kinematics (n rows; zeros where not solved) and which poses were solved (n,)."""
     n = x.shape[0]
     idx = np.arange(n).reshape(shape)
@@ -204,7 +210,7 @@ def solve_grid(model: MechanismModel, x: Array, shape: tuple[int, ...], roots: A
     zero = np.zeros((n, model.nt))
     x = np.ascontiguousarray(x)
     for root in list(roots)[:tries]:
-        out = _run(model, x, zero, zero, _start(model, x[root]), nbr=nbr, root=int(root))
+        out = _run(model, x, zero, zero, _start(model, x[root]), nbr=nbr, root=int(root), stall=stall)
         if out["status"][root] == K.OK:
             break
     return _assemble(model, None, x, zero, zero, out), out["status"] == K.OK
