@@ -106,11 +106,28 @@ def test_a_foreign_file_in_the_pareto_designs_folder_is_not_replaced(tmp_path):
     shutil.rmtree(a / "pareto_designs")
 
 
+def test_the_distribution_indices_reach_the_search(tmp_path):
+    """``crossover_eta`` and ``mutation_eta``: the same first (random) population as the
+    defaults, other offspring; the defaults are pymoo's (15 and 20: given explicitly, the same
+    designs as without)."""
+    _, a = _sweep(tmp_path, "a")
+    _, b = _sweep(tmp_path, "b", SPACE.replace("seed = 5\n", "seed = 5\ncrossover_eta = 60\nmutation_eta = 60\n"))
+    _, c = _sweep(tmp_path, "c", SPACE.replace("seed = 5\n", "seed = 5\ncrossover_eta = 15\nmutation_eta = 20\n"))
+    ra, rb, rc = _rows(a), _rows(b), _rows(c)
+    key = "parameters.base_radius_m"
+    assert [r[key] for r in ra[:8]] == [r[key] for r in rb[:8]]
+    assert [r[key] for r in ra[8:]] != [r[key] for r in rb[8:]]
+    assert rc == ra
+
+
 @pytest.mark.parametrize("change, words", [
     (lambda s: s.replace("generations = 2\n", ""), "generations"),
     (lambda s: s.replace('method = "nsga2"', 'method = "sobol"'), "generations"),
     (lambda s: s + "[refine]\nrounds = 2\n", "[refine]"),
     (lambda s: s.replace("designs = 8", "designs = 2"), "at least 4"),
+    (lambda s: s.replace('method = "nsga2"', 'method = "sobol"').replace("generations = 2\n", "crossover_eta = 30\n"),
+     "crossover_eta"),
+    (lambda s: s.replace("seed = 5\n", "seed = 5\nmutation_eta = 0\n"), "mutation_eta"),
 ])
 def test_bad_nsga2_space_files(tmp_path, capsys, change, words):
     rc, out = _sweep(tmp_path, "bad", change(SPACE))

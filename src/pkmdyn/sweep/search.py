@@ -3,7 +3,9 @@ ask-and-tell interface, its designs evaluated by the sweep's own executor (seria
 
 Generation 0 is the first population (``designs`` random points of the unit cube, seeded);
 each further generation asks pymoo for ``designs`` offspring (binary tournament on rank and
-crowding distance, simulated binary crossover, polynomial mutation: pymoo's NSGA-II defaults)
+crowding distance, simulated binary crossover, polynomial mutation: pymoo's NSGA-II defaults,
+with the distribution indices of the space's ``crossover_eta`` and ``mutation_eta``, by default
+pymoo's 15 and 20)
 and tells it their objectives (every ``"max"`` objective negated) and constraint violation.
 The violation of a design is 0 when it is feasible, the sum of its metrics' relative
 distances beyond their ``[constraints]`` bounds when it is ``infeasible``, and 1e9 when its
@@ -42,7 +44,12 @@ class Nsga2Search:
         self.space = space
         d, k = len(space.parameters), len(space.objectives)
         self._problem = Problem(n_var=d, n_obj=k, n_ieq_constr=1, xl=np.zeros(d), xu=np.ones(d))
-        self._algorithm = NSGA2(pop_size=int(space.designs), eliminate_duplicates=True)
+        from pymoo.operators.crossover.sbx import SBX
+        from pymoo.operators.mutation.pm import PM
+
+        self._algorithm = NSGA2(pop_size=int(space.designs), eliminate_duplicates=True,
+                                crossover=SBX(eta=float(space.crossover_eta), prob=0.9),
+                                mutation=PM(eta=float(space.mutation_eta)))
         self._algorithm.setup(self._problem, termination=get_termination("n_gen", 10**9), seed=int(space.seed) % 2**32,
                               verbose=False)
         self._pending: Any = None

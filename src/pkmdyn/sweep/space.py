@@ -71,6 +71,10 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
+#: NSGA-II's default distribution indices of simulated binary crossover and polynomial mutation
+#: (pymoo's, after Deb et al. 2002)
+CROSSOVER_ETA = 15.0
+MUTATION_ETA = 20.0
 #: designs of one sweep unless raised (``[sampling] max_designs`` or ``--limit max_designs=N``)
 DEFAULT_MAX_DESIGNS = 100_000
 METHODS = ("grid", "random", "lhs", "sobol", "nsga2")
@@ -110,6 +114,9 @@ class _Sampling(Section):
     seed: Annotated[int, Field(ge=0, le=2**63 - 1)] = 0
     max_designs: Annotated[int, Field(ge=1)] = DEFAULT_MAX_DESIGNS
     batch_size: Annotated[int, Field(ge=1, le=1_000_000)] | None = None
+    #: nsga2: the distribution indices of simulated binary crossover and polynomial mutation
+    crossover_eta: Annotated[float, Field(gt=0.0, le=1000.0)] | None = None
+    mutation_eta: Annotated[float, Field(gt=0.0, le=1000.0)] | None = None
 
 
 class _Refine(Section):
@@ -197,6 +204,9 @@ class SweepSpace:
     refine_rounds: int = 0
     refine_designs: int = 0
     refine_shrink: float = 0.5
+    #: NSGA-II's distribution indices of crossover and mutation (pymoo's defaults)
+    crossover_eta: float = CROSSOVER_ETA
+    mutation_eta: float = MUTATION_ETA
 
     def record(self) -> dict[str, Any]:
         """A plain, JSON-able echo of the space (what a resumed run must match)."""
@@ -209,6 +219,9 @@ class SweepSpace:
             "constraints": [{"metric": b.metric, "min": b.lo, "max": b.hi} for b in self.constraints],
             "objectives": [list(o) for o in self.objectives],
             "refine": {"rounds": self.refine_rounds, "designs": self.refine_designs, "shrink": self.refine_shrink},
+            # only where not the defaults: the record of a run made before these keys existed
+            **({"eta": [self.crossover_eta, self.mutation_eta]}
+               if (self.crossover_eta, self.mutation_eta) != (CROSSOVER_ETA, MUTATION_ETA) else {}),
         }
 
 
@@ -365,6 +378,9 @@ def space_from_dict(raw: Mapping[str, Any], description: Mapping[str, Any], metr
                                  "leave [refine] out")
     elif s.generations is not None:
         raise ParameterError(f"{source}: [sampling] generations: applies to method = \"nsga2\" only")
+    for key in ("crossover_eta", "mutation_eta"):
+        if s.method != "nsga2" and getattr(s, key) is not None:
+            raise ParameterError(f"{source}: [sampling] {key}: applies to method = \"nsga2\" only")
     if s.method == "nsga2" and s.designs < 4:  # type: ignore[operator]
         raise ParameterError(f"{source}: [sampling] designs: an NSGA-II population needs at least 4 designs")
     params_path = None
@@ -383,6 +399,8 @@ def space_from_dict(raw: Mapping[str, Any], description: Mapping[str, Any], metr
         refine_rounds=s.generations if s.method == "nsga2" else d.refine.rounds,
         refine_designs=(s.designs if s.method == "nsga2" else d.refine.designs if d.refine.rounds else 0),
         refine_shrink=d.refine.shrink,
+        crossover_eta=CROSSOVER_ETA if s.crossover_eta is None else s.crossover_eta,
+        mutation_eta=MUTATION_ETA if s.mutation_eta is None else s.mutation_eta,
     )
     n = design_count(space) + space.refine_rounds * space.refine_designs
     if n > space.max_designs:
