@@ -56,31 +56,17 @@ def test_a_group_without_a_command_prints_its_help(capsys, args, first):
 
 
 def test_a_compile_is_said_once_and_only_after_a_run_that_succeeded(monkeypatch, capsys):
-    """Kernels compiled during a command that succeeded: one summary line at its end; a
-    command that failed keeps to its error line."""
     import numba
 
-    from pkmdyn import compile_notice
+    monkeypatch.setattr(_groups, "_TOLD", False)
+    _groups.announce_compiles()
 
-    monkeypatch.setattr(compile_notice, "_state", {"listener": None})
-    compile_notice.install()
-    g = {"__name__": "pkmdyn.example3"}
-    exec("def f(x):\n    return x + 1\n", g)
-    fresh = numba.njit(g["f"])  # not cached: compiled when called
-    lst = compile_notice._state["listener"]
+    @numba.njit
+    def fresh(x):  # not cached: compiled here
+        return x + 1
 
-    @_groups.cli.command("compile-twice", hidden=True)
-    def _twice() -> None:
-        assert fresh(1) == 2 and fresh(2.5) == 3.5
-
-    try:
-        assert main(["compile-twice"]) == 0
-        err = capsys.readouterr().err
-        assert err.count("compiled the kernels in") == 1
-        assert main(["compile-twice"]) == 0  # nothing left to compile: nothing said
-        assert "compiled" not in capsys.readouterr().err
-        assert main(["run", "--machine", "no-such-machine"]) == 2
-        assert "compiled" not in capsys.readouterr().err
-    finally:
-        _groups.cli.commands.pop("compile-twice", None)
-        numba.core.event.unregister("numba:compile", lst)
+    assert fresh(1) == 2 and fresh(2.5) == 3.5
+    assert _groups.HELD_NOTES == [_groups._COMPILE_NOTE]  # once, though compiled twice
+    assert main(["pdm"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("compiling the numerical kernels") == 1 and not _groups.HELD_NOTES

@@ -26,7 +26,7 @@ from . import stiffness as _stiffness_commands  # noqa: F401
 from . import wear as _wear_commands  # noqa: F401
 from . import workspace as _workspace_commands  # noqa: F401
 from . import imports as _import_commands  # noqa: F401
-from ._groups import cli
+from ._groups import HELD_NOTES, cli
 
 __all__ = ["main", "cli", "run"]
 
@@ -43,17 +43,23 @@ def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the exit status (0 ok, 2 user error, 130 interrupted).
 
     Ctrl-C and SIGTERM end a run cleanly (its temporary output removed) with one line; a run
-    that failed says nothing but its error line (no compile summary).
+    that failed says nothing but its error line (notes held back are dropped).
     """
-    from ..compile_notice import install, mark, summary
+    from ..compile_notice import install, summary
 
     install()
-    before = mark()
     status = _main(argv)
-    done = summary(before)
+    done = summary()
     if done is not None and status == 0:
         try:
             click.echo(done, err=True)
+        except OSError:
+            pass
+    notes = list(HELD_NOTES) if status == 0 else []
+    HELD_NOTES.clear()
+    for note in notes:
+        try:
+            click.echo(f"pkmdyn: note: {note}", err=True)
         except OSError:
             pass
     return status
