@@ -244,23 +244,19 @@ def hip_project_loop(model: Any, seconds: float) -> dict[str, Any]:
 
 
 def pdm_part(seconds: float) -> dict[str, Any]:
-    from pkmdyn.machines.pdm4 import minimal as pdm
+    from pkmdyn.machines.pdm4 import control_job
     from pkmdyn.machines.pdm4.params import load_params as load_pdm
     from pkmdyn.profiles.pdm_motion import cycloidal_motion
 
-    model = load_pdm()
+    model = control_job.control_model(load_pdm())  # what pkmdyn pdm control runs: the engine on the description
+    pdm = control_job.verbs(model)
     mo = cycloidal_motion((0.02, 0.02, np.deg2rad(5.0), np.deg2rad(5.0)), 1.0, 200)
     q, qd, qdd = mo.q, mo.qd, mo.qdd
     u = pdm.inverse_dynamics(model, q, qd, qdd, None)
-    out: dict[str, Any] = {}
-    if hasattr(pdm, "inverse_dynamics_one") and hasattr(pdm, "forward_dynamics_one"):
-        out["single_sample_path"] = "minimal.inverse_dynamics_one / forward_dynamics_one"
-        out["id_single_us"] = _per_call_us(pdm.inverse_dynamics_one, [(model, q[k], qd[k], qdd[k], None) for k in range(len(q))])
-        out["fd_single_us"] = _per_call_us(pdm.forward_dynamics_one, [(model, q[k], qd[k], u[k], None) for k in range(len(q))])
-    else:
-        out["single_sample_path"] = "none: the batched verbs at n = 1"
-        out["id_single_us"] = _per_call_us(pdm.inverse_dynamics, [(model, q[k : k + 1], qd[k : k + 1], qdd[k : k + 1], None) for k in range(len(q))], 3)
-        out["fd_single_us"] = _per_call_us(pdm.forward_dynamics, [(model, q[k : k + 1], qd[k : k + 1], u[k : k + 1], None) for k in range(len(q))], 3)
+    out: dict[str, Any] = {"single_sample_path": "the engine's inverse_dynamics_one / forward_dynamics_one on the "
+                                                 "PDM's description"}
+    out["id_single_us"] = _per_call_us(pdm.inverse_dynamics_one, [(model, q[k], qd[k], qdd[k], None) for k in range(len(q))])
+    out["fd_single_us"] = _per_call_us(pdm.forward_dynamics_one, [(model, q[k], qd[k], u[k], None) for k in range(len(q))])
     try:
         from pkmdyn.control import gains, load_settings, loop_settings
         from pkmdyn.simulate._run import track

@@ -78,6 +78,27 @@ def test_pdm_controllers_run(tmp_path, controller):
     assert (out / "limb_tracking.png").exists() == (controller == "pid")
 
 
+def test_pdm_exact_encoders_read_the_plants_limb_lengths(tmp_path):
+    """``exact_encoders = 1``: the encoders count the plant's true limb lengths (its inverse
+    kinematics, one sample per cycle) and the controller's pose comes from the direct kinematics
+    of the reading; the reading is the truth to within one count (5 mm / 10,000 = 0.5 um)."""
+    gains = tmp_path / "g.toml"
+    gains.write_text("[sensors]\nexact_encoders = 1\n", encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["pdm", "control", "--controller", "pid", "--cycles", "0.1", "--gains", str(gains), "--no-plots",
+                 "--out", str(out)]) == 0
+    header, data = _read(out / "control.csv")
+    count_mm = 5.0 / 10_000
+    moved = 0.0
+    for limb in ("l11", "l12", "l23", "l24"):
+        true, enc = data[:, header.index(f"{limb}_mm")], data[:, header.index(f"{limb}_enc_mm")]
+        assert np.abs(enc - true).max() <= count_mm * (1 + 1e-9)
+        moved = max(moved, np.ptp(true))
+    assert moved > 20 * count_mm  # the limbs travel many counts
+    # the pose the controller sees, from the direct kinematics of whole counts, is near the true one
+    assert np.abs(data[:, header.index("x_sensed_mm")] - data[:, header.index("x_mm")]).max() < 10 * count_mm
+
+
 def test_pdm_pid_follows_a_motion_file(tmp_path):
     """A motion file (Hermite-interpolated between its rows) at the PDM's 2 ms cycle: the joint
     reference's rate differences must stay inside the motion's time span (regression: they

@@ -411,8 +411,8 @@ def test_pdm_description_reproduces_the_hand_built_efforts_and_all_reactions(see
 
     from pkmdyn.machines.pdm4 import inverse_kinematics
     from pkmdyn.machines.pdm4.description import pdm_description
-    from pkmdyn.machines.pdm4.dynamics import JOINTS
-    from pkmdyn.machines.pdm4.dynamics import inverse_dynamics as pdm_inverse_dynamics
+    from oracles.pdm_newton_euler import JOINTS
+    from oracles.pdm_newton_euler import inverse_dynamics as pdm_inverse_dynamics
     from pkmdyn.profiles.pdm_motion import cycloidal_motion
 
     pm = _variant(seed, tmp_path)

@@ -55,6 +55,28 @@ def test_forward_of_inverse_is_identity(name):
                            atol=1e-10 * np.abs(u).max())
 
 
+@pytest.mark.parametrize("name", ["stewart", "delta_friction", "four_bar_cut_b"])
+def test_actuator_accelerations_are_the_time_derivative_of_the_actuator_rates(name):
+    """``actuator_accelerations`` against a central difference in time of ``B^T xd`` along a
+    smooth motion (step 1e-4 s: truncation ~1e-8 relative, round-off ~1e-16 / 1e-4 ~ 1e-12
+    relative; allowed 1e-6 of the largest acceleration)."""
+    m = load_mechanism(CASES[name]())
+    V = machine_verbs(m)
+    amp = np.where(m.task_kind == 1, 0.04, 0.02 * m.length_scale)
+    t = np.linspace(0.1, 0.7, 7)
+    x, xd, xdd = ex.smooth_motion(reference_task(m), amp, t, 3)
+    sdd = V.actuator_accelerations(m, x, xd, xdd)
+    h = 1e-4
+
+    def rates(s):
+        xs, xds, _ = ex.smooth_motion(reference_task(m), amp, t + s, 3)
+        return np.einsum("nij,ni->nj", V.actuator_map(m, xs), xds)
+
+    fd = (rates(h) - rates(-h)) / (2 * h)
+    assert np.abs(sdd).max() > 1e-3
+    assert np.abs(sdd - fd).max() <= 1e-6 * np.abs(sdd).max()
+
+
 @pytest.mark.parametrize("name", sorted(set(CASES) - {"delta_friction"}))
 def test_verbs_agree_with_the_reactions_route(name):
     """B u = M xdd + h gives the efforts of the Newton-Euler route with its friction (no

@@ -1,5 +1,7 @@
-"""PDM dynamics (issue 7): Newton-Euler of every body from the public outputs, the independent
-route, the compliance solution (Eq. 63-83) and its invariances, the U-joint study, bad inputs."""
+"""PDM dynamics: Newton-Euler of every body from the public outputs of ``pdm run``, the
+hand-derived oracles (Newton-Euler, Eq. 49-83, and the virtual-power route in minimal
+coordinates) against each other, the compliance solution (Eq. 63-83) and its invariances, the
+U-joint study, bad inputs."""
 
 from __future__ import annotations
 
@@ -14,10 +16,11 @@ from pkmdyn.analysis.compliance import compatibility_rows, unique_reactions
 from pkmdyn.cli import main
 from pkmdyn.errors import ParameterError
 from pkmdyn.machines.pdm4 import BODY_NAMES, default_params_path, inverse_kinematics, load_params
-from pkmdyn.machines.pdm4 import dynamics as dyn
-from pkmdyn.machines.pdm4 import minimal
 from pkmdyn.machines.pdm4.params import params_from_dict
 from pkmdyn.profiles.pdm_motion import PdmMotion
+
+from oracles import pdm_minimal as minimal
+from oracles import pdm_newton_euler as dyn
 
 MODEL = load_params()
 H = 1e-5

@@ -147,7 +147,7 @@ def _closed_form_columns(pm, motion):
     """The paper's columns from the hand-derived Eq. 2-83 (kinematics of every body and the
     Newton-Euler reactions with compliance), independent of the engine that ``pdm run`` uses."""
     from pkmdyn.machines.pdm4 import inverse_kinematics
-    from pkmdyn.machines.pdm4.dynamics import JOINTS, REDUNDANT_LABELS, inverse_dynamics
+    from oracles.pdm_newton_euler import JOINTS, REDUNDANT_LABELS, inverse_dynamics
 
     kin = inverse_kinematics(pm, motion)
     reac = inverse_dynamics(pm, kin)

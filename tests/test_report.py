@@ -14,7 +14,7 @@ from pkmdyn.cli import main
 from pkmdyn.errors import ParameterError, PkmdynError
 from pkmdyn.machines.hip_simulator import load_params as hip_params
 from pkmdyn.machines.hip_simulator.scene import hip_scene_from_angles, hip_topology
-from pkmdyn.machines.pdm4.dynamics import JOINTS
+from pkmdyn.machines.pdm4.paper import JOINTS
 from pkmdyn.machines.pdm4.params import load_params as pdm_params
 from pkmdyn.machines.pdm4.scene import pdm_scene_from_pose, pdm_topology
 from pkmdyn.report import (MAX_FRAMES, Curve, Scene, SceneBody, TimePlot, Topology, decimate_minmax,

@@ -77,8 +77,9 @@ class ControlJob(Protocol):
     #: names of its task coordinates in messages, by their column base (``{"alpha": "alpha (FE)"}``)
     COORDINATE_NAMES: dict[str, str]
 
-    def verbs(self) -> Any:
-        """The machine's ``minimal`` verbs module (:mod:`pkmdyn.simulate`)."""
+    def verbs(self, model: Any) -> Any:
+        """The machine's verbs (:mod:`pkmdyn.simulate`) for ``model`` and models like it (the
+        plant's)."""
         ...
 
     def read_description(self, params: Path | None) -> tuple[dict[str, Any], str]:

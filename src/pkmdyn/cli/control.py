@@ -95,7 +95,7 @@ def machine_setup(machine: str, params: Path | None, plant_params: Path | None, 
         fn = hermite_motion(mo.t, mo.q, mo.qd, mo.qdd, mo.load)
         duration = float(mo.t[-1] - mo.t[0])
         motion_source, span, fold = str(motion), duration, 0.0
-    return _Setup(job.NAME, job.verbs(), model, plant, fn, duration, job.HAS_LOAD, str(params or "built-in parameters"),
+    return _Setup(job.NAME, job.verbs(model), model, plant, fn, duration, job.HAS_LOAD, str(params or "built-in parameters"),
                   plant_source, motion_source, span, fold, job=job)
 
 

@@ -114,7 +114,9 @@ def reference_window(motion: MotionFn, T: float, first: int, last: int) -> Refer
 
 def joint_reference(verbs: Any, model: Any, ref: Reference, motion: MotionFn, accelerations: bool = True) -> JointReference:
     """Actuator displacements, rates and (with ``accelerations``, else zeros) accelerations
-    along ``ref`` (batched verb calls)."""
+    along ``ref`` (batched verb calls): the accelerations from the verbs'
+    ``actuator_accelerations`` where they have it, else a central difference of the rates
+    ``B^T qd`` in time."""
     Bt = np.swapaxes(verbs.actuator_map(model, ref.q), -1, -2)
     sd = np.einsum("kij,kj->ki", Bt, ref.qd)
     T = ref.T
@@ -126,6 +128,9 @@ def joint_reference(verbs: Any, model: Any, ref: Reference, motion: MotionFn, ac
         s[1:] = np.cumsum(0.5 * T * (sd[:-1] + sd[1:]), axis=0)
     if not accelerations:
         return JointReference(Bt, s, sd, np.zeros_like(sd))
+    exact = getattr(verbs, "actuator_accelerations", None)
+    if exact is not None:  # a solved mechanism: its second-order kinematics
+        return JointReference(Bt, s, sd, exact(model, ref.q, ref.qd, ref.qdd))
     d = 1e-6 * ref.T
     # one-sided at the ends of the reference, so that no instant falls outside the motion
     lo, hi = np.maximum(ref.t - d, ref.t[0]), np.minimum(ref.t + d, ref.t[-1])

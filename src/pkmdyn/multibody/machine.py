@@ -41,7 +41,7 @@ from .actuators import motor_effort_unit, motor_efforts
 from .kinematics import MechanismKinematics, solve_kinematics
 from .model import MechanismModel
 
-__all__ = ["MechanismVerbs", "machine_verbs"]
+__all__ = ["MechanismVerbs", "machine_verbs", "RenamedVerbs"]
 
 Array = NDArray[np.float64]
 
@@ -206,6 +206,16 @@ class MechanismVerbs:
         """``B(x) = J_ax^T k (n, nt, na)`` (``k`` the drives' transmission ratios, 1 without a drive)."""
         kin = self._kin(model, self._x(q))
         return np.swapaxes(kin.J_ax, 1, 2) * model.drive_ratio
+
+    def actuator_accelerations(self, model: MechanismModel, q: Array, qd: Array, qdd: Array) -> Array:
+        """The drives' accelerations ``k qdd_a (n, na)`` (motor side, ``k`` as in :meth:`actuator_map`)
+        along task poses ``q``, rates ``qd`` and accelerations ``qdd``, from the kinematics'
+        second-order solution: exact, where a difference of :meth:`actuator_map` in time would
+        carry the solver's round-off divided by the step."""
+        st = self._state(model)
+        kin = solve_kinematics(model, self._x(q), self._x(qd, "qd"), self._x(qdd, "qdd"), q_start=st.last_q())
+        st.remember(kin)
+        return kin.act_qdd * model.drive_ratio
 
     def bias_forces(self, model: MechanismModel, q: Array, qd: Array, load: Array | None = None) -> Array:
         """``h(x, xd) (n, nt)``."""
@@ -382,3 +392,31 @@ class MechanismVerbs:
 def machine_verbs(model: MechanismModel) -> MechanismVerbs:
     """The :class:`pkmdyn.machine.MachineDynamics` verbs of a described mechanism."""
     return MechanismVerbs(model)
+
+
+class RenamedVerbs:
+    """The verbs of a machine generated as a description (a paper's machine), under its own
+    names: ``COORDINATES`` and ``ACTUATORS`` renamed (same order and units as the
+    description's), every verb the :class:`MechanismVerbs` one of the compiled mechanism that
+    its models carry as ``.mechanism`` (a model object that also carries the paper's
+    parameters, for its motions and drawings)."""
+
+    def __init__(self, mechanism: MechanismModel, coordinates: tuple[str, ...], actuators: tuple[str, ...]) -> None:
+        if len(coordinates) != mechanism.nt or len(actuators) != mechanism.na:
+            raise ParameterError(f"mechanism {mechanism.name!r}: {mechanism.nt} task coordinates and {mechanism.na} "
+                                 f"actuators, renamed as {len(coordinates)} and {len(actuators)}")
+        self._verbs = MechanismVerbs(mechanism)
+        self.COORDINATES = tuple(coordinates)
+        self.ACTUATORS = tuple(actuators)
+
+    def __getattr__(self, name: str) -> Any:
+        verb = None if name.startswith("_") else getattr(self._verbs, name, None)
+        if not callable(verb):
+            raise AttributeError(name)
+
+        def on_mechanism(model: Any, *args: Any, **kwargs: Any) -> Any:
+            return verb(model.mechanism, *args, **kwargs)
+
+        on_mechanism.__doc__ = verb.__doc__
+        return on_mechanism
+

@@ -27,7 +27,7 @@ EFFORTS_TITLE = "motor torques"
 COORDINATE_NAMES = {"alpha": "alpha (FE)", "beta": "beta (AA)", "gamma": "gamma (IER)"}
 
 
-def verbs() -> Any:
+def verbs(model: Any) -> Any:
     from . import minimal
 
     return minimal

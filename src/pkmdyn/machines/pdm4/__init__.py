@@ -11,7 +11,6 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from . import minimal  # the MachineDynamics verbs in (x, y, alpha, gamma)
     from .kinematics import (
         BODY_NAMES,
         BodyState,
@@ -46,6 +45,4 @@ __all__ = [
 def __getattr__(name: str) -> Any:
     if name in _LAZY:
         return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
-    if name == "minimal":
-        return importlib.import_module(".minimal", __name__)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,11 +1,19 @@
 """The PDM's control adapter (:class:`pkmdyn.control_protocol.ControlJob`): its models and
 motions, the columns and labels of ``control.csv`` and its plots, the limb-tracking figure (the
-paper's Fig. 26) and the 3D scene of ``pkmdyn pdm control``."""
+paper's Fig. 26) and the 3D scene of ``pkmdyn pdm control``.
+
+The dynamics are the generic engine's (:class:`pkmdyn.multibody.machine.MechanismVerbs`) on the
+PDM's description (:func:`.description.pdm_description`), under the paper's names: coordinates
+``x_m, y_m, alpha_rad, gamma_rad``, efforts ``f1_N .. f4_N`` (the limbs l11, l12, l23, l24; the
+description's ``P11 .. P24`` in the same order). A model is a :class:`PdmControlModel`: the
+parameters (for the motion and the scene) and their compiled description.
+"""
 
 from __future__ import annotations
 
 import copy
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -25,12 +33,31 @@ EFFORTS_TITLE = "limb forces"
 COORDINATE_NAMES: dict[str, str] = {}
 #: limb names, in the order of the actuators (``l{k}_m`` columns)
 LIMBS = ("l11", "l12", "l23", "l24")
+#: the paper's task coordinates (Eq. 2-4) and actuator efforts, in the description's order
+COORDINATES = ("x_m", "y_m", "alpha_rad", "gamma_rad")
+ACTUATORS = ("f1_N", "f2_N", "f3_N", "f4_N")
 
 
-def verbs() -> Any:
-    from . import minimal
+@dataclass(frozen=True)
+class PdmControlModel:
+    """The PDM's parameters (:class:`.params.PdmModel`) and the compiled mechanism of their
+    description, the model the engine's verbs run on."""
 
-    return minimal
+    params: Any
+    mechanism: Any
+
+
+def control_model(params: Any) -> PdmControlModel:
+    from ...multibody import load_mechanism
+    from .description import pdm_description
+
+    return PdmControlModel(params, load_mechanism(pdm_description(params)))
+
+
+def verbs(model: PdmControlModel) -> Any:
+    from ...multibody.machine import RenamedVerbs
+
+    return RenamedVerbs(model.mechanism, COORDINATES, ACTUATORS)
 
 
 def read_description(params: Path | None) -> tuple[dict[str, Any], str]:
@@ -44,13 +71,13 @@ def read_description(params: Path | None) -> tuple[dict[str, Any], str]:
 def model_from_dict(description: dict[str, Any], source: str) -> Any:
     from .params import params_from_dict
 
-    return params_from_dict(copy.deepcopy(description), source)
+    return control_model(params_from_dict(copy.deepcopy(description), source))
 
 
 def load_params(path: Path) -> Any:
     from .params import load_params as load
 
-    return load(path)
+    return control_model(load(path))
 
 
 def builtin_motion(model: Any, cycles: float) -> BuiltinMotion:
@@ -58,7 +85,7 @@ def builtin_motion(model: Any, cycles: float) -> BuiltinMotion:
     alternately out and back."""
     from ...profiles.cycloidal import cycloidal
 
-    tr = model.trajectory
+    tr = model.params.trajectory
     S, P = np.asarray(tr.strokes, dtype=float), float(tr.period_s)
     n_cyc = max(1, int(np.ceil(cycles - 1e-9)))
 
@@ -143,7 +170,7 @@ def report_plots(curve: Callable[[str, int, str], Any], t: np.ndarray, note: str
 def scene(model: Any, t: np.ndarray, q: np.ndarray, u: np.ndarray) -> Any:
     from .scene import pdm_scene_from_pose
 
-    return pdm_scene_from_pose(model, t, q, u)
+    return pdm_scene_from_pose(model.params, t, q, u)
 
 
 def parameters_text(params: str | None) -> str:

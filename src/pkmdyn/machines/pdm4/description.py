@@ -1,13 +1,14 @@
 """The 4-DOF parallel driving mechanism as a described mechanism, made from its parameters.
 
-The generic engine (:mod:`pkmdyn.multibody`) solves it for ``pkmdyn pdm run`` (and for
-``pkmdyn run --machine pdm``); the hand-derived kinematics of :mod:`.kinematics` (Eq. 2-48)
-and dynamics of :mod:`.dynamics` (Eq. 49-83) are its oracle and still the route of the sweep
-and the closed loop. Described at a reference pose (default: home, q = 0): the 14 bodies with
+The generic engine (:mod:`pkmdyn.multibody`) solves it for every PDM command (``pkmdyn pdm
+run``, ``pdm control``, ``sweep --machine pdm``, ``pkmdyn run --machine pdm``); the
+hand-derived kinematics of :mod:`.kinematics` (Eq. 2-48) place its bodies and joints, and the
+hand-derived dynamics (Eq. 49-83) are its test oracle (``tests/oracles/pdm_newton_euler.py``).
+Described at a reference pose (default: home, q = 0): the 14 bodies with
 the frames of :class:`.kinematics.BodyState` (origin at the centre of mass, docs/pdm4.md) and
 their masses and inertias; the joints of Table I as :func:`.kinematics.mechanism_joints`
 gives them at that pose (R2i, the compound joint, as crank-coupler R2i and crank-piston R2i'),
-each at the paper's centre (:func:`.dynamics.joint_points`: a revolute joint between two
+each at the paper's centre (:func:`.kinematics.joint_points`: a revolute joint between two
 planar layers half-way between them, a prismatic joint at the cylinder's mouth); the four
 prismatic joints actuated, each coordinate the limb length (fixed to moving joint); the
 task: x, y of the platform point P and the angles alpha (about the base z axis) and gamma
@@ -26,14 +27,15 @@ from typing import Any
 
 import numpy as np
 
-from .dynamics import JOINTS, joint_points
 from .inertia import ELASTIC_BODIES
-from .kinematics import BODY_NAMES, inverse_kinematics, mechanism_joints
+from .kinematics import BODY_NAMES, inverse_kinematics, joint_points, mechanism_joints
+from .paper import JOINTS
 from .params import PdmModel
 
 __all__ = ["pdm_description", "CUT_JOINTS"]
 
 _JOINT_NAMES = [j[0] for j in JOINTS]
+#: the joints opened to leave the spanning tree of the dynamics (one per independent loop)
 CUT_JOINTS = ("R21'", "R22'", "R32", "U23", "U24")
 _TYPES = {"R": "revolute", "P": "prismatic", "S": "spherical", "U": "universal"}
 
@@ -67,7 +69,7 @@ def pdm_description(model: PdmModel, q_ref: np.ndarray | None = None) -> dict[st
             bodies[-1]["material"] = {"youngs_modulus_Pa": float(model.youngs_modulus_Pa),
                                       "poisson_ratio": float(model.poisson_ratio)}
     # the prismatic joints' centres at the cylinder's mouth, 2 c1 from its fixed joint (as the
-    # reactions of .dynamics.joint_points): the node of the cylinder and piston beams
+    # reactions of .kinematics.joint_points): the node of the cylinder and piston beams
     centres = joint_points(model, kin)[0]
     lengths = {"P11": kin.pos.l[0, 0], "P12": kin.pos.l[0, 1], "P23": kin.pos.l[0, 2], "P24": kin.pos.l[0, 3]}
     joints = []

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from ...errors import SingularityError, UnreachablePoseError
 from ...spatial import axis_rotation, cross, dot
-from .paper import BODY_NAMES, LIMB_LABELS
+from .paper import BODY_NAMES, JOINTS, LIMB_LABELS
 from .params import PdmModel, crank_angle
 
 if TYPE_CHECKING:
@@ -39,6 +39,7 @@ __all__ = [
     "reachable",
     "inverse_kinematics",
     "mechanism_joints",
+    "joint_points",
 ]
 
 Array = NDArray[np.float64]
@@ -518,3 +519,41 @@ def mechanism_joints(model: PdmModel, q: Array | None = None) -> list[Joint]:
             Joint(f"U2{k}", "U", "platform", f"piston{k}", pt(pos.U[0, j]), (pt(U1), pt(U2 / np.linalg.norm(U2)))),
         ]
     return joints
+
+
+_JOINT_NAMES = [j[0] for j in JOINTS]
+
+
+def joint_points(model: PdmModel, kin: PdmKinematics) -> Array:
+    """Joint centres (n, 19, 3) [m], base frame, in ``JOINTS`` order.
+
+    Revolute joints between two planar layers sit half-way between the layers on the joint's
+    axis; R1i and R4i sit in the crank and RPR-limb layers; P1i and P2j at the cylinder's
+    mouth, ``2 c1`` from its fixed joint (the cylinder is a tube of length 2 c1, centre of
+    mass at c1, section 4.2); R4 at C, S2j and U2j at their centres.
+    """
+    n = kin.q.shape[0]
+    zk, zc, zl = (model.layer_z[BODY_NAMES.index(b)] for b in ("crank1", "coupler1", "cylinder1"))
+    pos = kin.pos
+    P = np.zeros((n, len(JOINTS), 3))
+
+    def at(xy: Array, z: float) -> Array:
+        out = np.array(xy, dtype=float, copy=True)
+        out[..., 2] = z
+        return out
+
+    for i in range(2):
+        k = i + 1
+        P[:, _JOINT_NAMES.index(f"R1{k}")] = at(np.broadcast_to(model.R1[i], (n, 3)), zk)
+        P[:, _JOINT_NAMES.index(f"R2{k}")] = at(pos.R2[:, i], 0.5 * (zk + zc))
+        P[:, _JOINT_NAMES.index(f"R2{k}'")] = at(pos.R2[:, i], 0.5 * (zk + zl))
+        P[:, _JOINT_NAMES.index(f"R3{k}")] = at(pos.R3[:, i], 0.5 * zc)
+        P[:, _JOINT_NAMES.index(f"R4{k}")] = at(np.broadcast_to(model.R4[i], (n, 3)), zl)
+        P[:, _JOINT_NAMES.index(f"P1{k}")] = at(model.R4[i] + 2.0 * model.cylinder_com[i] * kin.u[:, i], zl)
+    P[:, _JOINT_NAMES.index("R4")] = pos.C
+    for j in range(2):
+        k = j + 3
+        P[:, _JOINT_NAMES.index(f"S2{k}")] = model.S[j]
+        P[:, _JOINT_NAMES.index(f"P2{k}")] = model.S[j] + 2.0 * model.cylinder_com[k - 1] * kin.u[:, k - 1]
+        P[:, _JOINT_NAMES.index(f"U2{k}")] = pos.U[:, j]
+    return P

@@ -108,7 +108,7 @@ def plot_forces(t: Array, force: Array, path: str | Path) -> Path:
 def plot_overconstraints(t: Array, redundant: Array, path: str | Path) -> Path:
     """The nine over-constrained reaction components (Fig. 22 style): force along z [N] and
     moments about x and y [N m] at R32, R21 (crank 1 - piston 1) and R22; ``redundant`` (n, 9)
-    in the order of ``dynamics.REDUNDANT_LABELS``. SI units, as in the files."""
+    in the order of ``paper.REDUNDANT_LABELS``. SI units, as in the files."""
     fig = Figure(figsize=(12.0, 7.0), layout="constrained")
     axes = fig.subplots(2, 3, sharex=True)
     for c, (joint, col) in enumerate((("R32", 2), ("R21", 0), ("R22", 1))):

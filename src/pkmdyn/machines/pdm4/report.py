@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...report import Curve, TimePlot, write_report
-from .dynamics import REDUNDANT_LABELS
+from .paper import REDUNDANT_LABELS
 from .params import PdmModel, default_params_path
 from .scene import pdm_scene
 

@@ -34,7 +34,8 @@ from ...params_util import check_limit, parse_limit_options
 from .params import LIMIT_KEYS, PdmModel, TrajectorySettings, load_params
 from .workspace import reachable_workspace, write_projection_csv, write_workspace_csv
 
-__all__ = ["run_pdm", "mobility_summary", "geometry_summary", "model_summary", "trajectory_with", "CHUNK"]
+__all__ = ["run_pdm", "compute", "EngineResults", "mobility_summary", "geometry_summary", "model_summary", "trajectory_with",
+           "CHUNK"]
 
 Array = NDArray[np.float64]
 #: samples per block of the kinematics loop (one progress-bar step per block)
@@ -137,11 +138,23 @@ def geometry_summary(model: PdmModel) -> dict[str, Any]:
     }
 
 
-def _compute(model: PdmModel, motion: PdmMotion) -> tuple[dict[str, Array], dict[str, Array]]:
-    """``results.csv`` columns and ``bodies.npz`` arrays, in blocks of ``CHUNK`` samples
-    (progress bar on a terminal when there is more than one block), through the generic engine:
-    the kinematics of the PDM's description (:func:`pkmdyn.multibody.solve_kinematics`, each block
-    warm-started from the last one) and its joint reactions, unique by the links' compliance
+@dataclasses.dataclass(frozen=True)
+class EngineResults:
+    """A motion of the PDM through the generic engine: the ``results.csv`` columns ``cols``, the
+    ``bodies.npz`` arrays ``npz`` and the limbs' Jacobian ``limb_jacobian`` (n, 4, 4)
+    ``dl/dq`` (rows l11, l12, l23, l24; columns x, y, alpha, gamma) [m/m, m/rad]."""
+
+    cols: dict[str, Array]
+    npz: dict[str, Array]
+    limb_jacobian: Array
+
+
+def compute(model: PdmModel, motion: PdmMotion, progress: bool | None = None) -> EngineResults:
+    """``results.csv`` columns, ``bodies.npz`` arrays and the limbs' Jacobian, in blocks of
+    ``CHUNK`` samples (``progress``: a bar per block, None: on a terminal when there is more than
+    one block), through the generic engine: the kinematics of the PDM's description
+    (:func:`pkmdyn.multibody.solve_kinematics`, each block warm-started from the last one) and
+    its joint reactions, unique by the links' compliance
     (:func:`pkmdyn.multibody.dynamics.joint_reactions`), in the paper's names (:mod:`.paper`).
     The paper's geometry checks each block first (Eq. 2-9: a six-bar loop that cannot close, a
     limb beyond its stroke), so that a message names the limb."""
@@ -150,10 +163,12 @@ def _compute(model: PdmModel, motion: PdmMotion) -> tuple[dict[str, Array], dict
     from .description import pdm_description
 
     m = load_mechanism(pdm_description(model))
-    blocks, arrays = [], []
+    limbs = [m.actuator_names.index(n) for n in paper.LIMBS]
+    blocks, arrays, jac = [], [], []
     starts = range(0, len(motion), CHUNK)
     q_start = None
-    for s in tqdm(starts, desc="pdm dynamics", unit="block", disable=None if len(starts) > 1 else True):
+    disable = (None if len(starts) > 1 else True) if progress is None else not progress
+    for s in tqdm(starts, desc="pdm dynamics", unit="block", disable=disable):
         part = motion.slice(s, s + CHUNK)
         inverse_position(model, part.q, part.t)
         kin = solve_kinematics(m, part.q, part.qd, part.qdd, part.t, q_start=q_start, sample_offset=s)
@@ -163,13 +178,14 @@ def _compute(model: PdmModel, motion: PdmMotion) -> tuple[dict[str, Array], dict
         blocks.append({**paper.results_columns(m, kin, model.home_lengths),
                        **paper.dynamics_columns(m, kin, reac, wrenches, model.U1_local)})
         arrays.append(paper.bodies_arrays(m, kin, wrenches))
+        jac.append(kin.J_ax[:, limbs])
     cols = {k: np.concatenate([b[k] for b in blocks]) for k in blocks[0]}
     npz = {k: np.concatenate([b[k] for b in arrays]) for k in arrays[0]}
     npz["t"] = motion.t
     for k, v in npz.items():
         if not np.all(np.isfinite(v)):
             raise PkmdynError(f"bodies.npz: {k} has a non-finite value; refusing to write it")
-    return cols, npz
+    return EngineResults(cols, npz, np.concatenate(jac))
 
 
 def _check_plausible(model: PdmModel, cols: dict[str, Array]) -> None:
@@ -238,7 +254,8 @@ def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_
         motion_source = str(motion_path)
     source = "motion" if motion_path is None else str(Path(motion_path).absolute())
     check_limit(float(motion.t[-1] - motion.t[0]), model.max_duration_s, f"{source}: duration", "max_duration_s", "s")
-    cols, npz = _compute(model, motion)
+    res = compute(model, motion)
+    cols, npz = res.cols, res.npz
     _check_plausible(model, cols)
     mob = mobility_summary(model, motion.q[0])
     ws = reachable_workspace(model)

@@ -1,7 +1,7 @@
 """The PDM as a report scene and a topology (``pkmdyn.report``).
 
 The scene is the generic one of :func:`pkmdyn.report.scene_from_joints`: every body drawn
-through its joint centres (``dynamics.joint_points``, the ``joint_point`` of ``bodies.npz``),
+through its joint centres (``kinematics.joint_points``, the ``joint_point`` of ``bodies.npz``),
 the platform as a filled triangle R4-U23-U24, each limb (cylinder and piston) as one chain in
 the colour of its actuator force, and the path of the platform point P.
 """
@@ -12,8 +12,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...report import Scene, Topology, scene_from_joints
-from .dynamics import _CUTS, JOINTS, joint_points
-from .kinematics import inverse_kinematics, mechanism_joints
+from .description import CUT_JOINTS
+from .kinematics import inverse_kinematics, joint_points, mechanism_joints
+from .paper import JOINTS
 from .params import PdmModel
 
 __all__ = ["pdm_scene", "pdm_scene_from_pose", "pdm_topology", "pdm_mobility", "ACTUATED_JOINTS", "CUT_JOINTS"]
@@ -22,8 +23,6 @@ Array = NDArray[np.float64]
 
 #: the prismatic joints driven by the actuators, in the order of the forces ``f1_N .. f4_N``
 ACTUATED_JOINTS = ("P11", "P12", "P23", "P24")
-#: the joints opened to leave the spanning tree of the dynamics (one per independent loop)
-CUT_JOINTS = tuple(_CUTS)
 _LIMBS = ("l11", "l12", "l23", "l24")
 
 
@@ -50,7 +49,7 @@ def pdm_scene_from_pose(model: PdmModel, t: Array, q: Array, force: Array) -> Sc
 
 
 def pdm_topology() -> Topology:
-    """The 14 moving bodies and 19 joints of ``dynamics.JOINTS``; the four limb P joints actuated."""
+    """The 14 moving bodies and 19 joints of ``paper.JOINTS``; the four limb P joints actuated."""
     return Topology(tuple(JOINTS), "ground", ACTUATED_JOINTS, CUT_JOINTS)
 
 

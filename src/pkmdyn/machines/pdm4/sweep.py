@@ -3,12 +3,12 @@
 The functions of :class:`pkmdyn.sweep_protocol.SweepAdapter`. Each design performs the Eq. 84
 cycloidal motion of its own ``[trajectory]`` table (so the strokes and the period can be
 swept too), or one motion file for all designs. Per design: the validated model
-(:func:`~pkmdyn.machines.pdm4.params.params_from_dict`), the kinematics of every body
-(:func:`~pkmdyn.machines.pdm4.inverse_kinematics`, which refuses a pose beyond a stroke or a
-six-bar that cannot close), the Newton-Euler dynamics with every joint reaction made unique by
-link compliance (:func:`~pkmdyn.machines.pdm4.dynamics.inverse_dynamics`) and the actuator
-map ``B(q) = (dl/dq)^T`` (:func:`~pkmdyn.machines.pdm4.minimal.actuator_map`). The PDM has no
-friction model, so it has no friction metric. Metrics, formulas, units: ``docs/sweep.md``.
+(:func:`~pkmdyn.machines.pdm4.params.params_from_dict`) and the route of ``pkmdyn pdm run``
+(:func:`.run.compute`): the paper's geometry check (a pose beyond a stroke or a six-bar that
+cannot close is refused), the generic engine's kinematics of every body of the PDM's
+description, its joint reactions made unique by link compliance, and the limbs' Jacobian
+``dl/dq``. The PDM has no friction model, so it has no friction metric. Metrics, formulas,
+units: ``docs/sweep.md``.
 """
 
 from __future__ import annotations
@@ -27,14 +27,13 @@ from ...errors import PkmdynError, SingularityError, UnreachablePoseError
 from ...params_util import Section, read_toml, validate
 from ...profiles.pdm_motion import PdmMotion, cycloidal_motion, read_pdm_motion
 from ...sweep_protocol import DesignOutcome, MetricInfo, time_integral
-from . import minimal
-from .dynamics import JOINTS, inverse_dynamics
-from .kinematics import inverse_kinematics
-from .params import PdmModel, default_params_path, params_from_dict
+from .paper import JOINTS
+from .params import default_params_path, params_from_dict
+from .run import compute
 from .workspace import reachable_workspace
 
 __all__ = ["NAME", "PdmSweepContext", "base_description", "check_description", "metrics", "prepare", "evaluate",
-           "evaluate_one", "joint_column", "scaled_limb_jacobian"]
+           "evaluate_one", "joint_column"]
 
 NAME = "pdm"
 Array = NDArray[np.float64]
@@ -119,15 +118,8 @@ def prepare(description: Mapping[str, Any], options: Mapping[str, Any], base_dir
                            characteristic_length_m=opt.characteristic_length_m, workspace=opt.workspace)
 
 
-def scaled_limb_jacobian(model: PdmModel, q: Array, length: float) -> Array:
-    """``J' = (dl/dq) diag(1, 1, 1/L_c, 1/L_c)`` (n, 4, 4), dimensionless: the angular columns
-    [m/rad] divided by the characteristic length ``L_c`` [m]."""
-    J = np.swapaxes(minimal.actuator_map(model, q), -1, -2)
-    return J * np.array([1.0, 1.0, 1.0 / length, 1.0 / length])
-
-
 def evaluate_one(description: Mapping[str, Any], ctx: PdmSweepContext) -> DesignOutcome:
-    """One design: validated model -> motion -> kinematics -> dynamics and reactions -> metrics."""
+    """One design: validated model -> motion -> kinematics, efforts and reactions -> metrics."""
     try:
         model = params_from_dict(dict(description), "design")
         tr = model.trajectory
@@ -135,26 +127,31 @@ def evaluate_one(description: Mapping[str, Any], ctx: PdmSweepContext) -> Design
     except PkmdynError as exc:
         return DesignOutcome("invalid", str(exc))
     try:
-        kin = inverse_kinematics(model, motion)
-        reac = inverse_dynamics(model, kin)
-        J = scaled_limb_jacobian(model, motion.q, ctx.characteristic_length_m or model.r4)
+        res = compute(model, motion, progress=False)
     except UnreachablePoseError as exc:
         return DesignOutcome("unreachable", str(exc))
     except SingularityError as exc:
         return DesignOutcome("singular", str(exc))
+    cols = res.cols
+    # J' = (dl/dq) diag(1, 1, 1/L_c, 1/L_c), dimensionless: the angular columns [m/rad] over L_c [m]
+    length = ctx.characteristic_length_m or model.r4
+    J = res.limb_jacobian * np.array([1.0, 1.0, 1.0 / length, 1.0 / length])
     t = motion.t
     T = t[-1] - t[0]
     s = np.linalg.svd(J, compute_uv=False)
     inv_cond = s[:, -1] / s[:, 0]
-    f, ld, l = reac.force, kin.ld, kin.pos.l
+    f, ld, l = (np.stack([cols[f"{c}{k}_{u}"] for k in range(1, 5)], axis=-1)
+                for c, u in (("f", "N"), ("ld", "m_s"), ("l", "m")))
     power = np.sum(f * ld, axis=1)
+    transmission = min(float(np.arcsin(np.minimum(np.abs(np.sin(cols[f"coupler{i}_theta_rad"]
+                                                                   - cols[f"crank{i}_theta_rad"])), 1.0)).min())
+                       for i in (1, 2))
     m: dict[str, float] = {
         "gci": float(time_integral(inv_cond, t) / T),
         "min_inverse_condition": float(inv_cond.min()),
         "stroke_m": float((l.max(axis=0) - l.min(axis=0)).max()),
         "max_extension_m": float(np.abs(l - model.home_lengths).max()),
-        "min_transmission_angle_deg": math.degrees(float(np.arcsin(np.minimum(
-            np.abs(np.sin(kin.pos.theta2 - kin.pos.theta1)), 1.0)).min())),
+        "min_transmission_angle_deg": math.degrees(transmission),
         "peak_force_N": float(np.abs(f).max()),
         "rms_force_N": float(np.sqrt(time_integral(f * f, t) / T).max()),
         "peak_limb_speed_m_s": float(np.abs(ld).max()),
@@ -162,8 +159,8 @@ def evaluate_one(description: Mapping[str, Any], ctx: PdmSweepContext) -> Design
         "peak_power_W": float(power.max()),
         "motor_energy_per_cycle_J": float(time_integral(np.abs(f * ld).sum(axis=1), t)),
     }
-    force = np.linalg.norm(reac.joint_force, axis=-1).max(axis=0)
-    moment = np.linalg.norm(reac.joint_moment, axis=-1).max(axis=0)
+    force = np.linalg.norm(res.npz["joint_force"], axis=-1).max(axis=0)
+    moment = np.linalg.norm(res.npz["joint_moment"], axis=-1).max(axis=0)
     for j, (name, *_) in enumerate(JOINTS):
         m[f"peak_force_{joint_column(name)}_N"] = float(force[j])
         m[f"peak_moment_{joint_column(name)}_Nm"] = float(moment[j])

@@ -1,4 +1,7 @@
-"""Newton-Euler dynamics of the PDM's 14 bodies and its unique joint reactions (Eq. 49-83).
+"""Test oracle: the hand-derived Newton-Euler dynamics of the PDM's 14 bodies and its unique
+joint reactions (Eq. 49-83 of the PDM paper), on the hand-derived kinematics of
+:mod:`pkmdyn.machines.pdm4.kinematics` (Eq. 2-48); nothing of the generic engine. The product
+computes the same quantities with the engine on the PDM's description (``pkmdyn pdm run``).
 
 Every body ``b`` obeys (Eq. 49-51, 55, 57, 61 written once for all bodies, base frame A)
 
@@ -44,13 +47,13 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import NDArray
 
-from ...analysis.compliance import beam_flexibility, circular_section, segment_wrenches, solve_redundants
-from ...errors import SingularityError
-from ...spatial import cross
-from .inertia import ELASTIC_BODIES
-from .kinematics import BODY_NAMES, PdmKinematics
-from .paper import JOINTS, REDUNDANT_LABELS
-from .params import PdmModel
+from pkmdyn.analysis.compliance import beam_flexibility, circular_section, segment_wrenches, solve_redundants
+from pkmdyn.errors import SingularityError
+from pkmdyn.machines.pdm4.inertia import ELASTIC_BODIES
+from pkmdyn.machines.pdm4.kinematics import BODY_NAMES, PdmKinematics, joint_points
+from pkmdyn.machines.pdm4.paper import JOINTS, REDUNDANT_LABELS
+from pkmdyn.machines.pdm4.params import PdmModel
+from pkmdyn.spatial import cross
 
 __all__ = [
     "JOINTS",
@@ -152,42 +155,6 @@ def body_loads(model: PdmModel, kin: PdmKinematics) -> Array:
     f = model.mass[None, :, None] * (a - model.gravity)
     m = (I @ wd[..., None])[..., 0] + cross(w, (I @ w[..., None])[..., 0]) + cross(p, f)
     return np.concatenate([f, m], axis=-1)
-
-
-def joint_points(model: PdmModel, kin: PdmKinematics) -> Array:
-    """Joint centres (n, 19, 3) [m], base frame, in ``JOINTS`` order.
-
-    Revolute joints between two planar layers sit half-way between the layers on the joint's
-    axis; R1i and R4i sit in the crank and RPR-limb layers; P1i and P2j at the cylinder's
-    mouth, ``2 c1`` from its fixed joint (the cylinder is a tube of length 2 c1, centre of
-    mass at c1, section 4.2); R4 at C, S2j and U2j at their centres.
-    """
-    n = kin.q.shape[0]
-    lz = model.layer_z
-    zk, zc, zl = lz[_B["crank1"]], lz[_B["coupler1"]], lz[_B["cylinder1"]]
-    pos = kin.pos
-    P = np.zeros((n, _NJ, 3))
-
-    def at(xy: Array, z: float) -> Array:
-        out = np.array(xy, dtype=float, copy=True)
-        out[..., 2] = z
-        return out
-
-    for i in range(2):
-        k = i + 1
-        P[:, _JN.index(f"R1{k}")] = at(np.broadcast_to(model.R1[i], (n, 3)), zk)
-        P[:, _JN.index(f"R2{k}")] = at(pos.R2[:, i], 0.5 * (zk + zc))
-        P[:, _JN.index(f"R2{k}'")] = at(pos.R2[:, i], 0.5 * (zk + zl))
-        P[:, _JN.index(f"R3{k}")] = at(pos.R3[:, i], 0.5 * zc)
-        P[:, _JN.index(f"R4{k}")] = at(np.broadcast_to(model.R4[i], (n, 3)), zl)
-        P[:, _JN.index(f"P1{k}")] = at(model.R4[i] + 2.0 * model.cylinder_com[i] * kin.u[:, i], zl)
-    P[:, _JN.index("R4")] = pos.C
-    for j in range(2):
-        k = j + 3
-        P[:, _JN.index(f"S2{k}")] = model.S[j]
-        P[:, _JN.index(f"P2{k}")] = model.S[j] + 2.0 * model.cylinder_com[k - 1] * kin.u[:, k - 1]
-        P[:, _JN.index(f"U2{k}")] = pos.U[:, j]
-    return P
 
 
 def _axes(kin: PdmKinematics) -> Array:
@@ -384,7 +351,7 @@ def _tables() -> dict[str, Array]:
 def _fast(model: PdmModel, kin: PdmKinematics, compliance: bool) -> tuple[Array, Array, Array]:
     """Joint wrenches (n, 19, 6) about the origin, redundants (n, 9) and joint points (n, 19, 3)
     from the compiled kernel (same computation as ``_solve_cuts`` + ``_segments``)."""
-    from ._kernel import ne_kernel
+    from ._pdm_ne_kernel import ne_kernel
 
     pts = joint_points(model, kin)
     n = pts.shape[0]

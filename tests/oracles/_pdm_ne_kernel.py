@@ -1,6 +1,7 @@
-"""Compiled per-sample kernel of the PDM's Newton-Euler and compliance solution (numba).
+"""Compiled per-sample kernel of the PDM's Newton-Euler and compliance solution (numba), of the
+test oracle :mod:`.pdm_newton_euler`.
 
-The batched numpy route of :mod:`.dynamics` (``_solve_cuts``, ``_segments``) states the same
+The batched numpy route of :mod:`.pdm_newton_euler` (``_solve_cuts``, ``_segments``) states the same
 computation with arrays; this kernel does it sample by sample in compiled loops so that the
 sample-independent structure (the spanning tree, the cut columns, which joint loads which
 link) is read from small constant tables and nothing of size (n, 19, 23, 6) is ever formed.
@@ -12,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..._dense import solve_in_place
+from pkmdyn._dense import solve_in_place
 
 __all__ = ["ne_kernel"]
 
