@@ -134,3 +134,36 @@ def test_bad_nsga2_space_files(tmp_path, capsys, change, words):
     assert rc == 2
     assert words in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_convergence_fronts_equal_the_pareto_sets_of_the_designs_so_far():
+    """The per-generation Pareto sets, kept incrementally, against the Pareto set of every
+    feasible design so far computed afresh, on values with ties, duplicates and infeasible rows."""
+    from types import SimpleNamespace
+
+    import pyarrow as pa
+
+    from pkmdyn.sweep.pareto import minimised, pareto_mask
+    from pkmdyn.sweep.run import _convergence
+    from pkmdyn.sweep.search import hypervolumes, normalise
+
+    rng = np.random.default_rng(4)
+    N, gens = 12, 9
+    n = N * gens
+    a = np.round(rng.uniform(0, 1, n), 1)  # coarse values: ties and duplicate points
+    b = np.round(rng.uniform(0, 1, n), 1)
+    feasible = rng.uniform(size=n) > 0.2
+    table = pa.table({"design_id": np.arange(n), "feasible": feasible, "cost": a, "gain": b})
+    space = SimpleNamespace(objectives=(("cost", "min"), ("gain", "max")), designs=N)
+    rows = _convergence(table, space, n)
+    F = minimised(np.column_stack([a, b])[feasible], ["min", "max"])
+    ids = np.arange(n)[feasible]
+    Fn, ref, _ = normalise(F)
+    fronts = []
+    for g, row in enumerate(rows):
+        Fg = Fn[ids < (g + 1) * N]
+        front = Fg[pareto_mask(Fg)]
+        fronts.append(front)
+        assert row["pareto_designs"] == len(front) and row["feasible"] == len(Fg) and row["designs"] == (g + 1) * N
+    assert [r["hypervolume"] for r in rows] == pytest.approx(hypervolumes(fronts, ref), rel=1e-12)
+    assert len(rows) == gens and rows[-1]["pareto_designs"] > 1

@@ -156,6 +156,11 @@ def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_w
     limits = parse_limit_options(limit_items, LIMIT_KEYS)
     if minimum_norm_reactions and unique_reactions:
         raise click.UsageError("--minimum-norm-reactions and --unique-reactions contradict each other")
+    from ..multibody import ahead
+
+    # a fresh install: the single-sample kernel compiles on another core meanwhile, and with it the
+    # solver's sample that the batched kinematics call too (for a later control run)
+    ahead.start(("one",))
     model, entry = _load(machine, limits)
     lim = effective_limits(model, limits)
     window = None
@@ -318,6 +323,9 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
                                + ", ".join(DESCRIBED_CONTROLLERS))
     inputs = {"--machine": path, "--motion": motion_path, "--gains": gains_path}
     check_output_dir(out_dir, inputs)
+    from ..multibody import ahead
+
+    ahead.start(ahead.STAGES)  # a fresh install: the loop's kernels compile on another core meanwhile
     model, _ = _load(machine)
     if motion_path is not None:
         motion = read_task_motion(model, Path(motion_path).absolute())

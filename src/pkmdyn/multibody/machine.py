@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MotionError, ParameterError, as_array
+from . import ahead
 from .dynamics import actuator_efforts, body_wrenches, inertia_factors, coordinate_twists, effort_unit, fr_any, \
     generalised_forces, joint_reactions, task_mass_matrix
 from .actuators import motor_effort_unit, motor_efforts
@@ -261,6 +262,7 @@ class MechanismVerbs:
         pk = self._state(model).pk
         if pk is None or np.any(model.load_magnitude != 0.0):
             return None  # (a caller without a load passes 0.0: right only for a zero default magnitude)
+        ahead.wait("one")
         return pk, _one.inverse_one, _one.forward_one
 
     def _kernel(self, model: MechanismModel, forward: bool, q: object, qd: object, v: object,
@@ -269,6 +271,7 @@ class MechanismVerbs:
         pk = self._state(model).pk
         if pk is None:
             return None
+        ahead.wait("one")
         from . import _one
 
         if model.named_loads:
@@ -333,6 +336,7 @@ class MechanismVerbs:
 
         st = self._state(model)
         nt = model.nt
+        ahead.wait("one")
         if not fresh and st.encoder_q is not None and st.encoder_pk is not None:
             xa, xda = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
             if xa.shape == (nt,) and xda.shape == (nt,):
@@ -370,6 +374,7 @@ class MechanismVerbs:
         st = self._state(model)
         a = np.ascontiguousarray(a, dtype=float).reshape(-1)
         ad = np.ascontiguousarray(ad, dtype=float).reshape(-1)
+        ahead.wait("direct")
         if st.direct is not None:
             pk, out = st.direct
             if a.shape == ad.shape == (model.na,) and D.direct_one(pk, a, ad, out) == D.OK:

@@ -437,13 +437,17 @@ def _convergence(table: Any, space: Any, n: int) -> list[dict[str, Any]]:
     Fn, ref, _ = normalise(F) if len(F) else (F, np.ones(F.shape[1]), None)
     per = []
     fronts = []
+    front = Fn[:0]
     for g in range(gens):
-        sel = ids < (g + 1) * N
-        Fg = Fn[sel]
-        mask = pareto_mask(Fg) if len(Fg) else np.zeros(0, dtype=bool)
-        fronts.append(Fg[mask])
-        per.append({"generation": g, "designs": int((g + 1) * N), "feasible": int(sel.sum()),
-                    "pareto_designs": int(mask.sum())})
+        # the Pareto set of the designs so far is that of the last one and this generation's
+        # designs (a design dominated by some of the designs stays dominated by all of them):
+        # each generation costs (front + N)^2 comparisons, not (g N)^2
+        new = Fn[(ids >= g * N) & (ids < (g + 1) * N)]
+        both = np.concatenate([front, new]) if len(new) else front
+        front = both[pareto_mask(both)] if len(both) else both
+        fronts.append(front)
+        per.append({"generation": g, "designs": int((g + 1) * N), "feasible": int((ids < (g + 1) * N).sum()),
+                    "pareto_designs": int(len(front))})
     for row, hv in zip(per, hypervolumes(fronts, ref)):
         row["hypervolume"] = hv
     return per

@@ -1,0 +1,134 @@
+"""Compiling ahead: on a fresh install (an empty numba cache) a command compiles its kernels in
+the order it meets them, one after the other on one core. A closed loop meets its
+single-sample kernels (:func:`._one._dynamics`, :func:`._direct.direct_one`) last, after the
+batched kinematics, dynamics and references have compiled and run. :func:`start` hands those
+to a child process at the command's start, so that they compile on a second core meanwhile and
+the command later loads them from the cache (numba writes each cache file whole, under a new
+name that replaces the old, so a reader never sees half a file). The child says each stage on
+its standard output when done; :func:`wait`, called where a stage's kernel is first needed,
+waits for that line rather than compiling the same kernel a second time.
+
+Those kernels read every number of the mechanism from one packed buffer, so their argument
+types do not depend on the mechanism: the child compiles them for their signatures
+(:func:`signatures`) without loading a mechanism or running anything. It is started only where
+it can help: two cores or more, a cache that lacks a kernel of the stages, and
+``PKMDYN_COMPILE_AHEAD`` not ``0``. It writes nothing but the cache, says nothing, and is
+ended when the command ends.
+
+    python -m pkmdyn.multibody.ahead one direct
+"""
+
+from __future__ import annotations
+
+import atexit
+import os
+import subprocess
+import sys
+from collections.abc import Iterable
+from typing import Any
+
+__all__ = ["STAGES", "cold", "start", "wait", "compile_stages", "signatures"]
+
+#: the stages a child can compile: the closed loop's single-sample dynamics and encoders
+#: (``one``) and its direct kinematics of the encoders' reading (``direct``)
+STAGES = ("one", "direct")
+
+
+def _kernels(stage: str) -> list[Any]:
+    """The compiled functions (numba dispatchers) of ``stage``."""
+    if stage == "one":
+        from . import _one
+
+        return [_one._dynamics]
+    if stage == "direct":
+        from . import _direct
+
+        return [_direct.direct_one]
+    raise ValueError(f"compile-ahead stage {stage!r}: unknown (known: {', '.join(STAGES)})")
+
+
+def signatures(stage: str) -> list[tuple[Any, ...]]:
+    """The argument types each kernel of ``stage`` is called with (a packed int64 buffer, float64
+    vectors, C-contiguous; :func:`._one.forward_one`, :meth:`.machine.MechanismVerbs.direct_one`)."""
+    from numba import types
+
+    buf, vec = types.Array(types.int64, 1, "C"), types.Array(types.float64, 1, "C")
+    if stage == "one":  # _dynamics(pk, x, xd, v, load, mode, out)
+        return [(buf, vec, vec, vec, types.float64, types.int64, vec)]
+    if stage == "direct":  # direct_one(b, s, sd, out)
+        return [(buf, vec, vec, vec)]
+    raise ValueError(f"compile-ahead stage {stage!r}: unknown (known: {', '.join(STAGES)})")
+
+
+def _cached(dispatcher: Any) -> bool | None:
+    """Whether numba's cache holds a compiled version of ``dispatcher`` for its present source
+    (None where this numba does not say)."""
+    try:
+        return bool(dispatcher._cache._cache_file._load_index())
+    except (AttributeError, OSError):
+        return None
+
+
+def cold(stages: Iterable[str]) -> bool:
+    """Whether a kernel of ``stages`` is missing from the cache (False where numba does not say)."""
+    return any(_cached(k) is False for s in stages for k in _kernels(s))
+
+
+def _stop(child: subprocess.Popen) -> None:
+    if child.poll() is None:
+        child.terminate()
+        try:
+            child.wait(timeout=5)
+        except subprocess.TimeoutExpired:  # pragma: no cover - a child that ignores the signal
+            child.kill()
+
+
+#: the running child of :func:`start` and the stages it has reported done
+_child: subprocess.Popen | None = None
+_done: set[str] = set()
+
+
+def start(stages: Iterable[str]) -> subprocess.Popen | None:
+    """A child compiling the kernels of ``stages`` in that order, or None where it would not help
+    (module docstring). The child ends with this process."""
+    global _child
+    stages = tuple(stages)
+    if os.environ.get("PKMDYN_COMPILE_AHEAD", "1") == "0" or (os.cpu_count() or 1) < 2 or not cold(stages):
+        return None
+    _done.clear()
+    _child = subprocess.Popen([sys.executable, "-m", __name__, *stages], stdin=subprocess.DEVNULL,
+                              stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    atexit.register(_stop, _child)
+    return _child
+
+
+def wait(stage: str) -> None:
+    """Return once the child has compiled ``stage`` (at once without a child, or once it has
+    ended: then the caller compiles what is missing itself)."""
+    child = _child
+    if child is None or stage in _done or child.stdout is None:
+        return
+    for line in child.stdout:
+        _done.add(line.strip())
+        if line.strip() == stage:
+            return
+
+
+def compile_stages(stages: Iterable[str], report: bool = False) -> None:
+    """Compile (or load from the cache) every kernel of ``stages`` for its signatures; with
+    ``report`` print each stage's name when it is done."""
+    for stage in stages:
+        for kernel, sig in zip(_kernels(stage), signatures(stage)):
+            kernel.compile(sig)
+        if report:
+            print(stage, flush=True)
+
+
+def main(argv: list[str]) -> int:
+    """The child: compile the stages ``argv``, saying each when done."""
+    compile_stages(argv, report=True)
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover - the child process
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,80 @@
+"""Compiling ahead (pkmdyn.multibody.ahead): the signatures the child compiles are the ones the
+closed loop calls, which kernels a fresh cache lacks, and when no child is started."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from pkmdyn.machines.registry import description_path
+from pkmdyn.multibody import ahead, load_mechanism, reference_task
+from pkmdyn.multibody.machine import machine_verbs
+
+
+def _loop_calls():
+    """The single-sample calls a closed loop makes: dynamics, encoders, direct kinematics."""
+    m = load_mechanism(description_path("stewart"))
+    V = machine_verbs(m)
+    x, z = reference_task(m), np.zeros(m.nt)
+    u = V.inverse_dynamics_one(m, x, z, z)
+    V.forward_dynamics_one(m, x, z, u)
+    a = V.actuator_coordinates_one(m, x, z, fresh=True)
+    V.actuator_coordinates_one(m, x, z)
+    V.direct_one(m, a, np.zeros(m.na))
+    V.direct_one(m, a, np.zeros(m.na))
+
+
+@pytest.mark.parametrize("stage", ahead.STAGES)
+def test_the_child_compiles_the_signatures_the_loop_calls(stage):
+    _loop_calls()
+    ahead.compile_stages([stage])
+    for kernel, sig in zip(ahead._kernels(stage), ahead.signatures(stage)):
+        assert set(kernel.signatures) == {sig}  # the loop's calls compiled nothing else
+    assert not ahead.cold([stage])
+    with pytest.raises(ValueError, match="unknown"):
+        ahead.signatures("no-such-stage")
+
+
+def test_a_fresh_cache_is_cold(tmp_path):
+    code = "from pkmdyn.multibody import ahead; print(ahead.cold(ahead.STAGES), ahead.cold(()))"
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["True", "False"]
+
+
+def test_no_child_where_it_cannot_help(monkeypatch):
+    ahead.compile_stages(ahead.STAGES)
+    monkeypatch.setenv("PKMDYN_COMPILE_AHEAD", "1")
+    assert ahead.start(ahead.STAGES) is None  # every kernel cached already
+    monkeypatch.setattr(ahead, "cold", lambda stages: True)
+    monkeypatch.setenv("PKMDYN_COMPILE_AHEAD", "0")
+    assert ahead.start(ahead.STAGES) is None  # switched off
+    monkeypatch.setenv("PKMDYN_COMPILE_AHEAD", "1")
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    assert ahead.start(ahead.STAGES) is None  # one core: it would only slow the command
+
+
+def test_a_started_child_reports_its_stages_and_ends_with_the_command(monkeypatch):
+    """A child started on a (pretended) cold cache runs the module (here on the suite's cache:
+    it loads the kernels), reports each stage, which ``wait`` reads, and ends with status 0; or
+    is ended by ``_stop``, after which ``wait`` returns at once."""
+    monkeypatch.setattr(ahead, "_child", None)
+    ahead.wait("one")  # no child: nothing to wait for
+    monkeypatch.setenv("PKMDYN_COMPILE_AHEAD", "1")
+    monkeypatch.setattr(ahead, "cold", lambda stages: True)
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    child = ahead.start(("one", "direct"))
+    assert child is not None and ahead._child is child
+    ahead.wait("direct")
+    assert ahead._done == {"one", "direct"}
+    assert child.wait(timeout=120) == 0
+    ahead.wait("one")
+    stopped = ahead.start(("one", "direct"))
+    assert ahead._done == set()
+    ahead._stop(stopped)
+    assert stopped.poll() is not None
+    ahead.wait("direct")  # the stopped child's output ends: no wait
