@@ -78,3 +78,19 @@ def test_a_started_child_reports_its_stages_and_ends_with_the_command(monkeypatc
     ahead._stop(stopped)
     assert stopped.poll() is not None
     ahead.wait("direct")  # the stopped child's output ends: no wait
+
+
+def test_a_silent_child_is_waited_for_at_most_wait_s(monkeypatch):
+    import time
+
+    silent = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"], stdout=subprocess.PIPE,
+                              bufsize=0)
+    try:
+        monkeypatch.setattr(ahead, "_child", silent)
+        monkeypatch.setattr(ahead, "WAIT_S", 0.3)
+        t0 = time.monotonic()
+        ahead.wait("one")
+        assert 0.25 <= time.monotonic() - t0 < 10.0
+        assert "one" not in ahead._done
+    finally:
+        ahead._stop(silent)

@@ -22,8 +22,10 @@ from __future__ import annotations
 
 import atexit
 import os
+import selectors
 import subprocess
 import sys
+import time
 from collections.abc import Iterable
 from typing import Any
 
@@ -81,37 +83,54 @@ def _stop(child: subprocess.Popen) -> None:
             child.wait(timeout=5)
         except subprocess.TimeoutExpired:  # pragma: no cover - a child that ignores the signal
             child.kill()
+            child.wait()
+    if child.stdout is not None:
+        child.stdout.close()
 
 
-#: the running child of :func:`start` and the stages it has reported done
+#: the running child of :func:`start`, the stages it has reported done and its unread output
 _child: subprocess.Popen | None = None
 _done: set[str] = set()
+_unread = b""
+#: the longest wait for a stage [s]; past it the command compiles the kernel itself
+WAIT_S = 600.0
 
 
 def start(stages: Iterable[str]) -> subprocess.Popen | None:
     """A child compiling the kernels of ``stages`` in that order, or None where it would not help
     (module docstring). The child ends with this process."""
-    global _child
+    global _child, _unread
     stages = tuple(stages)
     if os.environ.get("PKMDYN_COMPILE_AHEAD", "1") == "0" or (os.cpu_count() or 1) < 2 or not cold(stages):
         return None
     _done.clear()
+    _unread = b""
     _child = subprocess.Popen([sys.executable, "-m", __name__, *stages], stdin=subprocess.DEVNULL,
-                              stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+                              stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, bufsize=0)
     atexit.register(_stop, _child)
     return _child
 
 
 def wait(stage: str) -> None:
-    """Return once the child has compiled ``stage`` (at once without a child, or once it has
-    ended: then the caller compiles what is missing itself)."""
+    """Return once the child has compiled ``stage``: at once without a child, once it has ended
+    (the caller then compiles what is missing itself), or after :data:`WAIT_S`."""
+    global _unread
     child = _child
-    if child is None or stage in _done or child.stdout is None:
+    if child is None or stage in _done or child.stdout is None or child.stdout.closed:
         return
-    for line in child.stdout:
-        _done.add(line.strip())
-        if line.strip() == stage:
-            return
+    deadline = time.monotonic() + WAIT_S
+    with selectors.DefaultSelector() as sel:
+        sel.register(child.stdout, selectors.EVENT_READ)
+        while stage not in _done:
+            left = deadline - time.monotonic()
+            if left <= 0 or not sel.select(left):
+                return
+            chunk = os.read(child.stdout.fileno(), 4096)
+            if not chunk:  # the child has ended
+                child.stdout.close()
+                return
+            *lines, _unread = (_unread + chunk).split(b"\n")
+            _done.update(line.decode("ascii", "replace").strip() for line in lines)
 
 
 def compile_stages(stages: Iterable[str], report: bool = False) -> None:
