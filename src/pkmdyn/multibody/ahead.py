@@ -12,8 +12,11 @@ Those kernels read every number of the mechanism from one packed buffer, so thei
 types do not depend on the mechanism: the child compiles them for their signatures
 (:func:`signatures`) without loading a mechanism or running anything. It is started only where
 it can help: two cores or more, a cache that lacks a kernel of the stages, and
-``PKMDYN_COMPILE_AHEAD`` not ``0``. It writes nothing but the cache, says nothing, and is
-ended when the command ends.
+``PKMDYN_COMPILE_AHEAD`` not ``0``. It writes nothing but the cache and its stage lines to the
+command's pipe (nothing on the terminal), and is ended when the command ends. ``pkmdyn run``
+starts it too: the single-sample kernel calls the batched kinematics' own compiled sample
+solver, so the child compiles that in parallel with the command's first kernels, and a later
+``pkmdyn control`` finds the loop's kernel cached.
 
     python -m pkmdyn.multibody.ahead one direct
 """
