@@ -81,16 +81,15 @@ def test_a_started_child_reports_its_stages_and_ends_with_the_command(monkeypatc
 
 
 def test_a_silent_child_is_waited_for_at_most_wait_s(monkeypatch):
-    import time
-
+    """``wait`` gives up after ``WAIT_S`` on a child that says nothing: it returns while the
+    child (asleep for 30 s) still runs, the stage not done."""
     silent = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"], stdout=subprocess.PIPE,
                               bufsize=0)
     try:
         monkeypatch.setattr(ahead, "_child", silent)
         monkeypatch.setattr(ahead, "WAIT_S", 0.3)
-        t0 = time.monotonic()
         ahead.wait("one")
-        assert 0.25 <= time.monotonic() - t0 < 10.0
+        assert silent.poll() is None
         assert "one" not in ahead._done
     finally:
         ahead._stop(silent)

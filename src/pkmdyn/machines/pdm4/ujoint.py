@@ -22,6 +22,7 @@ import numpy as np
 
 from ...profiles.pdm_motion import cycloidal_motion
 from .description import pdm_description
+from .paper import LIMBS
 from .params import PdmModel, load_params
 from .run import compute
 
@@ -52,7 +53,7 @@ def u_joint_study(model: PdmModel, peaks_m_s2: tuple[float, ...] = PAPER_PEAKS_M
     from ...multibody.dynamics import joint_reactions
 
     free = _without_u_joint_torque(model)
-    limbs = [free.actuator_names.index(n) for n in ("P11", "P12", "P23", "P24")]
+    limbs = [free.actuator_names.index(n) for n in LIMBS]
     rows = []
     S = model.trajectory.strokes
     for peak in peaks_m_s2:
