@@ -3,6 +3,7 @@ an NSGA-II search. Prints one JSON object; with ``--json`` nothing else is print
 
     python benchmarks/sweep.py --json [--part hip,stewart,delta] [--designs 10000]
         [--stewart-designs 10000] [--delta-population 20 --delta-generations 150]
+        [--delta-fronts FRONTS.csv]
 
 **hip** (``--designs``): the hip simulator, Sobol over five geometry keys, one ISO 14242-1
 cycle of 500 samples; every design: validation, kinematics and conditioning along the cycle,
@@ -46,7 +47,8 @@ which converged faster on this problem than pymoo's 15 and 20, ``docs/sweep.md``
 ``delta_nsga2_hypervolume_rel_gap`` = 1 - HV(short) / HV(long), each the hypervolume of that
 run's feasible Pareto set with both runs' objectives scaled together to [0, 1] (reference
 point 1.1); ``delta_nsga2_designs_short``, ``delta_nsga2_designs_long``,
-``delta_nsga2_seconds_short``, ``delta_nsga2_seconds_long`` (2 workers).
+``delta_nsga2_seconds_short``, ``delta_nsga2_seconds_long`` (2 workers). ``--delta-fronts FILE``
+writes both runs' Pareto fronts (``run_long_0_1,workspace_size_m3,peak_effort_Nm``).
 """
 
 from __future__ import annotations
@@ -202,7 +204,7 @@ def _front_objectives(out: Path) -> "object":
     return F[pareto_mask(F)]
 
 
-def _delta(population: int, generations: int, result: dict, quiet: bool) -> None:
+def _delta(population: int, generations: int, result: dict, quiet: bool, fronts_csv: str | None = None) -> None:
     import numpy as np
 
     from pkmdyn.machines.registry import sweep_adapter
@@ -226,6 +228,10 @@ def _delta(population: int, generations: int, result: dict, quiet: bool) -> None
             if not quiet:
                 print(f"delta nsga2 {label}: {result[f'delta_nsga2_seconds_{label}']:.1f} s, "
                       f"{len(fronts[label])} Pareto designs", file=sys.stderr)
+    if fronts_csv:  # both fronts in the objectives' own units, for a look at where they differ
+        rows = [(k, -f[0], f[1]) for k in ("short", "long") for f in fronts[k]]  # (the volume was negated)
+        np.savetxt(fronts_csv, np.array([(0 if k == "short" else 1, a, b) for k, a, b in rows]), delimiter=",",
+                   header="run_long_0_1,workspace_size_m3,peak_effort_Nm", comments="", fmt="%.12g")
     both = np.vstack([fronts["short"], fronts["long"]])
     lo, hi = both.min(axis=0), both.max(axis=0)
     span = np.where(hi > lo, hi - lo, 1.0)
@@ -247,6 +253,7 @@ def main() -> None:
     ap.add_argument("--stewart-designs", type=int, default=10_000)
     ap.add_argument("--delta-population", type=int, default=20)
     ap.add_argument("--delta-generations", type=int, default=150, help="the short run's (the long run: 10x)")
+    ap.add_argument("--delta-fronts", default=None, help="a CSV file for both runs' Pareto fronts (objectives)")
     args = ap.parse_args()
     parts = {p.strip() for p in args.part.split(",") if p.strip()}
     result: dict[str, object] = {"cpu_count": os.cpu_count(), "load_average_1min_before": os.getloadavg()[0]}
@@ -255,7 +262,7 @@ def main() -> None:
     if "stewart" in parts:
         _stewart(args.stewart_designs, result, args.json)
     if "delta" in parts:
-        _delta(args.delta_population, args.delta_generations, result, args.json)
+        _delta(args.delta_population, args.delta_generations, result, args.json, args.delta_fronts)
     print(json.dumps(result, indent=2))
 
 
