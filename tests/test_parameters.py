@@ -82,11 +82,26 @@ def test_parameters_in_order_with_bounds_and_derived_values():
     with pytest.raises(ParameterError, match=r"\[parameters\] b_m: 6.0 is above its max 5"):
         parameter_values(bad, "d")
     later = {"parameters": {"b_m": "a_m * 3", "a_m": 2.0}}  # a parameter uses only the ones before it
-    with pytest.raises(ParameterError, match=r"\[parameters\] b_m: .*unknown name 'a_m'"):
+    with pytest.raises(ParameterError, match=r"\[parameters\] b_m: uses a_m, which is defined below it"):
         parameter_values(later, "d")
     for name in ("sqrt", "pi", "1x", "a b"):
         with pytest.raises(ParameterError, match="not a usable parameter name"):
             parameter_values({"parameters": {name: 1.0}}, "d")
+
+
+@pytest.mark.parametrize("table, pattern", [
+    ({"a_m": "a_m + 1"}, r"\[parameters\] a_m: uses itself$"),
+    ({"a_m": "b_m - 1", "b_m": "a_m + 1"}, r"\[parameters\] a_m: a cycle between parameters: a_m -> b_m -> a_m$"),
+    ({"x_m": 1.0, "a_m": "[x_m, c_m, 0]", "b_m": {"value": "norm(a_m)", "max": 9.0}, "c_m": "b_m * 2"},
+     r"\[parameters\] a_m: a cycle between parameters: a_m -> c_m -> b_m -> a_m$"),
+    ({"a_m": "2 * b_m", "b_m": "c_m", "c_m": 1.0}, r"\[parameters\] a_m: uses b_m, which is defined below it"),
+])
+def test_cycles_and_forward_references_are_named(table, pattern):
+    """A parameter that reads itself, a cycle (named in its order) and a parameter read above
+    its definition are each refused in one line naming the parameters."""
+    with pytest.raises(ParameterError, match=pattern) as err:
+        parameter_values({"parameters": table}, "d")
+    assert "\n" not in str(err.value)
 
 
 @pytest.mark.parametrize("name", ["stewart", "delta", "rrr3", "bennett"])

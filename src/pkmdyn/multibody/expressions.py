@@ -2,7 +2,8 @@
 
 A description may name its design parameters in a ``[parameters]`` table, each a number or an
 expression of the parameters before it (``base_radius_m = 1.0``, ``leg_m = "norm(top_m -
-base_m)"``; a table ``{ value = 1.0, min = 0.5, max = 2.0 }`` gives bounds), and any numeric field
+base_m)"``; a table ``{ value = 1.0, min = 0.5, max = 2.0 }`` gives bounds; one that uses
+itself, a cycle or a parameter below it is refused by name), and any numeric field
 may then be an expression string (``point_m = "rotz(-half_angle_deg * deg) @ [base_radius_m, 0,
 0]"``). Expressions are evaluated here, before validation, by walking Python's own parse tree
 of the text (:func:`ast.parse`) with a closed set of nodes: numbers, the parameters' names,
@@ -194,8 +195,11 @@ def parameter_values(raw: Mapping[str, Any], label: str) -> dict[str, Any]:
     if not isinstance(table, dict):
         raise ParameterError(f"{label}: [parameters]: expected a table of named values")
     out: dict[str, Any] = {}
+    uses = {str(k): _names_used(v.get("value") if isinstance(v, dict) else v) & set(map(str, table)) for k, v in
+            table.items()}
     for name, spec in table.items():
         where = f"{label}: [parameters] {name}"
+        _check_order(str(name), uses, out, where)
         if not _NAME.match(str(name)) or name in _CONSTANTS or name in FUNCTIONS:
             raise ParameterError(f"{where}: not a usable parameter name (a letter, then letters, digits, underscores; "
                                  "not a function or constant of the grammar)")
@@ -215,6 +219,40 @@ def parameter_values(raw: Mapping[str, Any], label: str) -> dict[str, Any]:
                 raise ParameterError(f"{where}: {v} is {word} {bound:g}")
         out[str(name)] = v
     return out
+
+
+def _names_used(spec: Any) -> set[str]:
+    """The names that a parameter's value (a number, an expression or a list of them) reads;
+    an expression that does not parse reads none here (:func:`evaluate` reports it)."""
+    if isinstance(spec, list):
+        return set().union(*(_names_used(v) for v in spec))
+    if not isinstance(spec, str) or len(spec) > MAX_LENGTH:
+        return set()
+    try:
+        tree = ast.parse(spec.strip(), mode="eval")
+    except SyntaxError:
+        return set()
+    return {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+
+
+def _check_order(name: str, uses: Mapping[str, set[str]], done: Mapping[str, Any], where: str) -> None:
+    """Refuse a parameter that reads itself, one of a cycle, or one defined below it (each
+    parameter is evaluated over those above it), naming the names involved."""
+    if name in uses[name]:
+        raise ParameterError(f"{where}: uses itself")
+    for other in sorted(uses[name] - set(done)):
+        path, seen = [other], {other}
+        while path:  # depth first from `other` back to `name`
+            nxt = next((u for u in sorted(uses[path[-1]]) if u == name or u not in seen), None)
+            if nxt is None:
+                path.pop()
+            elif nxt == name:
+                raise ParameterError(f"{where}: a cycle between parameters: {' -> '.join([name] + path + [name])}")
+            else:
+                seen.add(nxt)
+                path.append(nxt)
+        raise ParameterError(f"{where}: uses {other}, which is defined below it (a parameter may use only "
+                             "the parameters above it: move it up)")
 
 
 def _value(spec: Any, names: Mapping[str, Any], where: str) -> Any:
