@@ -121,6 +121,41 @@ peak_effort_Nm = "min"
     assert rows[0]["peak_effort_Nm"] > 0 and rows[2]["peak_effort_Nm"] is None
 
 
+def test_a_bounded_parameter_is_swept_and_its_best_design_file_loads(tmp_path, capsys):
+    """A parameter given as ``{ value, min, max }`` is swept through its value: a design outside
+    its bounds is a row with the description's reason, and the best design's file (its bounded
+    parameter written back as a sub-table, after the parameters that use it) loads with the
+    swept value."""
+    from pkmdyn.multibody import load_mechanism
+
+    d = ex.builtin_dict("stewart", parametric=True)
+    d["parameters"]["height_m"] = {"value": 1.0, "min": 0.95, "max": 1.05}
+    base = tmp_path / "bounded.toml"
+    base.write_text(dumps_toml(d), encoding="utf-8")
+    space = tmp_path / "space.toml"
+    space.write_text("""
+[sampling]
+method = "grid"
+
+[parameters]
+"parameters.height_m" = { values = [0.9, 1.02, 1.1] }
+
+[objectives]
+peak_effort_N = "min"
+""", encoding="utf-8")
+    assert main(["sweep", "--machine", str(base), "--space", str(space), "--workers", "0", "--no-plots",
+                 "--out", str(tmp_path / "out")]) == 0
+    rows = sorted(pq.read_table(tmp_path / "out" / "designs.parquet").to_pylist(), key=lambda r: r["design_id"])
+    assert [r["status"] for r in rows] == ["invalid", "ok", "invalid"]
+    assert "height_m: 0.9 is below its min 0.95" in rows[0]["reason"]
+    assert "height_m: 1.1 is above its max 1.05" in rows[2]["reason"]
+    best = tmp_path / "out" / "best_params.toml"
+    m = load_mechanism(best)
+    assert m.parameters["height_m"] == pytest.approx(1.02, abs=1e-15)
+    top = tomllib.loads(best.read_text(encoding="utf-8"))["parameters"]
+    assert top["height_m"] == {"value": 1.02, "min": 0.95, "max": 1.05}
+
+
 def test_overconstrained_without_sections_refused_unless_reactions_are_off(tmp_path, capsys):
     d = ex.builtin_dict("bennett")
     for b in d["bodies"]:

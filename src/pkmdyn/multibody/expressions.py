@@ -1,10 +1,10 @@
 """Parametric descriptions: named design parameters and the expressions that use them.
 
 A description may name its design parameters in a ``[parameters]`` table, each a number or an
-expression of the parameters before it (``base_radius_m = 1.0``, ``leg_m = "norm(top_m -
-base_m)"``; a table ``{ value = 1.0, min = 0.5, max = 2.0 }`` gives bounds; one that uses
-itself, a cycle or a parameter below it is refused by name), and any numeric field
-may then be an expression string (``point_m = "rotz(-half_angle_deg * deg) @ [base_radius_m, 0,
+expression of the others (``base_radius_m = 1.0``, ``leg_m = "norm(top_m - base_m)"``; a table
+``{ value = 1.0, min = 0.5, max = 2.0 }`` gives bounds; each is evaluated after those it uses,
+whatever the file's order, and a cycle is refused by name), and any numeric field may then be
+an expression string (``point_m = "rotz(-half_angle_deg * deg) @ [base_radius_m, 0,
 0]"``). Expressions are evaluated here, before validation, by walking Python's own parse tree
 of the text (:func:`ast.parse`) with a closed set of nodes: numbers, the parameters' names,
 ``+ - * / ** @``, unary signs, parentheses, ``[a, b, c]`` vectors, ``v[0]`` (an entry, by a whole
@@ -188,28 +188,30 @@ def evaluate(text: str, names: Mapping[str, Any], where: str = "expression") -> 
 
 
 def parameter_values(raw: Mapping[str, Any], label: str) -> dict[str, Any]:
-    """The ``[parameters]`` of a description, in order, each evaluated over the ones before it
-    (a number, an expression, or a table ``{ value, min, max }`` whose value must lie within
-    its bounds). Errors name the parameter."""
+    """The ``[parameters]`` of a description (a number, an expression, or a table ``{ value,
+    min, max }`` whose value must lie within its bounds), each evaluated after the parameters
+    it uses, whatever their order in the file; returned in the file's order. A parameter that
+    uses itself or one of a cycle is refused. Errors name the parameter."""
     table = raw.get("parameters", {})
     if not isinstance(table, dict):
         raise ParameterError(f"{label}: [parameters]: expected a table of named values")
-    out: dict[str, Any] = {}
+    for name in table:
+        if not _NAME.match(str(name)) or name in _CONSTANTS or name in FUNCTIONS:
+            raise ParameterError(f"{label}: [parameters] {name}: not a usable parameter name (a letter, then "
+                                 "letters, digits, underscores; not a function or constant of the grammar)")
     uses = {str(k): _names_used(v.get("value") if isinstance(v, dict) else v) & set(map(str, table)) for k, v in
             table.items()}
-    for name, spec in table.items():
+    done: dict[str, Any] = {}
+    for name in _dependency_order(list(map(str, table)), uses, label):
+        spec = table[name]
         where = f"{label}: [parameters] {name}"
-        _check_order(str(name), uses, out, where)
-        if not _NAME.match(str(name)) or name in _CONSTANTS or name in FUNCTIONS:
-            raise ParameterError(f"{where}: not a usable parameter name (a letter, then letters, digits, underscores; "
-                                 "not a function or constant of the grammar)")
         lo = hi = None
         if isinstance(spec, dict):
             unknown = set(spec) - {"value", "min", "max"}
             if unknown or "value" not in spec:
                 raise ParameterError(f"{where}: a table takes value, min and max (value required)")
             lo, hi, spec = spec.get("min"), spec.get("max"), spec["value"]
-        v = _value(spec, out, where)
+        v = _value(spec, done, where)
         for bound, ok, word in ((lo, lambda x, b: x >= b, "below its min"), (hi, lambda x, b: x <= b, "above its max")):
             if bound is None:
                 continue
@@ -217,8 +219,8 @@ def parameter_values(raw: Mapping[str, Any], label: str) -> dict[str, Any]:
                 raise ParameterError(f"{where}: min and max must be finite numbers")
             if isinstance(v, list) or not ok(v, bound):
                 raise ParameterError(f"{where}: {v} is {word} {bound:g}")
-        out[str(name)] = v
-    return out
+        done[name] = v
+    return {str(k): done[str(k)] for k in table}
 
 
 def _names_used(spec: Any) -> set[str]:
@@ -235,24 +237,35 @@ def _names_used(spec: Any) -> set[str]:
     return {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
 
 
-def _check_order(name: str, uses: Mapping[str, set[str]], done: Mapping[str, Any], where: str) -> None:
-    """Refuse a parameter that reads itself, one of a cycle, or one defined below it (each
-    parameter is evaluated over those above it), naming the names involved."""
-    if name in uses[name]:
-        raise ParameterError(f"{where}: uses itself")
-    for other in sorted(uses[name] - set(done)):
-        path, seen = [other], {other}
-        while path:  # depth first from `other` back to `name`
-            nxt = next((u for u in sorted(uses[path[-1]]) if u == name or u not in seen), None)
-            if nxt is None:
-                path.pop()
-            elif nxt == name:
-                raise ParameterError(f"{where}: a cycle between parameters: {' -> '.join([name] + path + [name])}")
-            else:
-                seen.add(nxt)
+def _dependency_order(names: list[str], uses: Mapping[str, set[str]], label: str) -> list[str]:
+    """``names`` ordered so that each comes after the parameters it uses (a depth-first
+    topological sort that keeps the file's order where the uses allow). A parameter that uses
+    itself, or a cycle, is refused, the cycle named in its order (``a_m -> b_m -> a_m``)."""
+    order: list[str] = []
+    state: dict[str, int] = {}  # 1: on the path being followed, 2: placed
+    for root in names:
+        if state.get(root):
+            continue
+        path = [root]
+        state[root] = 1
+        pending = [iter(sorted(uses[root], key=names.index))]
+        while path:
+            nxt = next(pending[-1], None)
+            if nxt is None:  # every parameter it uses is placed: place it
+                state[path[-1]] = 2
+                order.append(path.pop())
+                pending.pop()
+            elif state.get(nxt) == 1:
+                where = f"{label}: [parameters] {nxt}"
+                if nxt == path[-1]:
+                    raise ParameterError(f"{where}: uses itself")
+                cycle = path[path.index(nxt):] + [nxt]
+                raise ParameterError(f"{where}: a cycle between parameters: {' -> '.join(cycle)}")
+            elif not state.get(nxt):
+                state[nxt] = 1
                 path.append(nxt)
-        raise ParameterError(f"{where}: uses {other}, which is defined below it (a parameter may use only "
-                             "the parameters above it: move it up)")
+                pending.append(iter(sorted(uses[nxt], key=names.index)))
+    return order
 
 
 def _value(spec: Any, names: Mapping[str, Any], where: str) -> Any:

@@ -342,6 +342,11 @@ def space_from_dict(raw: Mapping[str, Any], description: Mapping[str, Any], metr
                                  f"({exc.args[0]})") from None
         except ParameterError as exc:
             raise ParameterError(f"{source}: [parameters] {exc}") from None
+        if (path and path[0] == "parameters" and isinstance(value, dict) and "value" in value
+                and set(value) <= {"value", "min", "max"}):
+            # a bounded parameter { value, min, max }: its value is swept, and a design outside
+            # its bounds becomes a row with the description's reason
+            path, value = tuple(path) + ("value",), value["value"]
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ParameterError(f"{source}: [parameters] {key}: not a numeric key "
                                  f"(it holds {type(value).__name__}); only numbers can be swept")
