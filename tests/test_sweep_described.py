@@ -122,10 +122,10 @@ peak_effort_Nm = "min"
 
 
 def test_a_bounded_parameter_is_swept_and_its_best_design_file_loads(tmp_path, capsys):
-    """A parameter given as ``{ value, min, max }`` is swept through its value: a design outside
-    its bounds is a row with the description's reason, and the best design's file (its bounded
-    parameter written back as a sub-table, after the parameters that use it) loads with the
-    swept value."""
+    """A parameter given as ``{ value, min, max }`` is swept, by its bare name, through its
+    value: a design outside its bounds is a row with the description's reason, and the best
+    design's file (its bounded parameter written back as a sub-table, after the parameters that
+    use it) loads with the swept value."""
     from pkmdyn.multibody import load_mechanism
 
     d = ex.builtin_dict("stewart", parametric=True)
@@ -138,7 +138,7 @@ def test_a_bounded_parameter_is_swept_and_its_best_design_file_loads(tmp_path, c
 method = "grid"
 
 [parameters]
-"parameters.height_m" = { values = [0.9, 1.02, 1.1] }
+height_m = { values = [0.9, 1.02, 1.1] }
 
 [objectives]
 peak_effort_N = "min"

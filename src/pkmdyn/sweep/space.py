@@ -335,7 +335,11 @@ def space_from_dict(raw: Mapping[str, Any], description: Mapping[str, Any], metr
     params = []
     for key, spec in d.parameters.items():
         try:
-            path = index_path(description, parse_path(key))
+            path = parse_path(key)
+            top = description.get("parameters")
+            if len(path) == 1 and path[0] not in description and isinstance(top, dict) and path[0] in top:
+                path = ("parameters", path[0])  # a parameter by its bare name
+            path = index_path(description, path)
             value = get_value(description, path)
         except KeyError as exc:
             raise ParameterError(f"{source}: [parameters] {key}: unknown key of the machine's description "
