@@ -120,6 +120,30 @@ def test_the_distribution_indices_reach_the_search(tmp_path):
     assert rc == ra
 
 
+def test_search_option_takes_the_place_of_the_space_files_method(tmp_path, capsys):
+    """``--search nsga2`` on a space file that says ``method = "sobol"`` runs the NSGA-II of the
+    same file with the method written ``nsga2`` (same rows); without it the file's own
+    method refuses the NSGA-II keys."""
+    text = SPACE.replace('method = "nsga2"', 'method = "sobol"')
+    space = tmp_path / "s.toml"
+    space.write_text(text)
+    rc = main(["sweep", "--machine", "stewart", "--space", str(space), "--workers", "0", "--no-plots",
+               "--search", "nsga2", "--out", str(tmp_path / "by_option")])
+    assert rc == 0
+    rc_file, by_file = _sweep(tmp_path, "by_file")
+    assert rc_file == 0
+    a, b = _rows(tmp_path / "by_option"), _rows(by_file)
+    assert len(a) == 8 * 3 and [r["design_id"] for r in a] == [r["design_id"] for r in b]
+    for ra, rb in zip(a, b):
+        assert ra["parameters.base_radius_m"] == rb["parameters.base_radius_m"]
+        assert ra["status"] == rb["status"]
+    assert (tmp_path / "by_option" / "pareto_designs").is_dir()
+    capsys.readouterr()
+    rc = main(["sweep", "--machine", "stewart", "--space", str(space), "--workers", "0", "--no-plots",
+               "--out", str(tmp_path / "refused")])
+    assert rc == 2 and "generations" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("change, words", [
     (lambda s: s.replace("generations = 2\n", ""), "generations"),
     (lambda s: s.replace('method = "nsga2"', 'method = "sobol"'), "generations"),

@@ -51,11 +51,14 @@ _MACHINE_HELP = ("Machine to sweep: hip, pdm, a described built-in machine (see 
               help="Designs per task (default: [sampling] batch_size, else about 8 tasks per worker, 10 to 250).")
 @click.option("--limit", "limits", multiple=True, metavar="max_designs=N",
               help="Raise the design limit (default 100,000; also [sampling] max_designs).")
+@click.option("--search", type=click.Choice(["grid", "random", "lhs", "sobol", "nsga2"]), default=None,
+              help="Sampling method, in place of the space file's [sampling] method (nsga2: the population is "
+                   "[sampling] designs, run for [sampling] generations).")
 @click.option("--no-plots", is_flag=True, help="Write no PNG plots.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder; a rerun on the same folder and space resumes, skipping finished designs.")
 def sweep(machine: str, space_path: Path, params_path: Path | None, workers: int | None, scheduler: str | None,
-          batch_size: int | None, limits: tuple[str, ...], no_plots: bool, out_dir: Path) -> None:
+          batch_size: int | None, limits: tuple[str, ...], search: str | None, no_plots: bool, out_dir: Path) -> None:
     """Evaluate many designs of a machine; write designs.parquet, the Pareto set, the best design, plots."""
     from ..machines.registry import sweep_adapter
     from ..params_util import parse_limit_options
@@ -69,7 +72,7 @@ def sweep(machine: str, space_path: Path, params_path: Path | None, workers: int
     adapter = sweep_adapter(machine)
     try:
         report = run_sweep(adapter, space_path, out_dir, workers=workers, scheduler=scheduler, params=params_path,
-                           batch_size=batch_size, max_designs=max_designs, plots=not no_plots)
+                           batch_size=batch_size, max_designs=max_designs, plots=not no_plots, search=search)
     except KeyboardInterrupt:
         # not the generic line of a single run: a sweep's folder keeps what it finished
         click.echo(f"pkmdyn: interrupted; the finished batches are kept in {out_dir / 'parts'}; rerun the same "

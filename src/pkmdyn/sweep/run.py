@@ -82,16 +82,17 @@ def _preflight(adapter: SweepAdapter, space: SweepSpace, base: Mapping[str, Any]
 
 
 def prepare_sweep(adapter: Any, space_path: str | Path, params: str | Path | None = None,
-                  max_designs: int | None = None) -> PreparedSweep:
+                  max_designs: int | None = None, search: str | None = None) -> PreparedSweep:
     """Read and check everything (space file, base parameters, motion, designs) before any work.
 
     ``adapter``: the machine's sweep module (``pkmdyn.machines.registry.sweep_adapter``);
-    ``params``: a base parameter file overriding the space file's ``params``.
+    ``params``: a base parameter file overriding the space file's ``params``; ``search``: the
+    sampling method overriding the space file's ``[sampling] method``.
     """
     def description_for(path: Path | None) -> dict[str, Any]:
         return adapter.base_description(Path(params) if params is not None else path)
 
-    space, base = load_space(space_path, description_for, adapter.metrics, max_designs)
+    space, base = load_space(space_path, description_for, adapter.metrics, max_designs, search)
     context = adapter.prepare(base, space.motion, space.base_dir)
     X = sample_designs(space)
     _preflight(adapter, space, base, X)
@@ -257,8 +258,11 @@ def _write_table(path: Path, table: Any) -> Path:
 def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: int | None = None,
               scheduler: str | None = None, params: str | Path | None = None, batch_size: int | None = None,
               max_designs: int | None = None, plots: bool = True, progress: bool | None = None,
-              retries: int = 2) -> SweepReport:
+              retries: int = 2, search: str | None = None) -> SweepReport:
     """Run (or resume) a sweep and write its results into ``out``.
+
+    ``search`` (``--search``): the sampling method (grid, random, lhs, sobol, nsga2) in place of
+    the space file's ``[sampling] method``.
 
     ``workers``: local Dask worker processes (``None``: one per CPU core; ``0``: evaluate in
     this process without Dask); ``scheduler``: the address of a running Dask scheduler
@@ -274,7 +278,7 @@ def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: in
     from ..io import check_table_format
 
     check_table_format("parquet")
-    prep = prepare_sweep(adapter, space_path, params, max_designs)
+    prep = prepare_sweep(adapter, space_path, params, max_designs, search)
     out = Path(out)
     fresh = not out.exists()
     _open_out(out, prep.record, {"--space": space_path, "--params": params})

@@ -427,12 +427,16 @@ def read_space(path: str | Path) -> dict[str, Any]:
 
 
 def load_space(path: str | Path, description_for: Any, metrics_for: Any,
-               max_designs: int | None = None) -> tuple[SweepSpace, dict[str, Any]]:
+               max_designs: int | None = None, search: str | None = None) -> tuple[SweepSpace, dict[str, Any]]:
     """Read and validate a space file. ``description_for(params_path)`` returns the base
     description (``params`` of the space file, or ``None``), ``metrics_for(motion_options, description)``
-    the metrics; returns the space and the base description."""
+    the metrics; ``search`` (``--search``) replaces ``[sampling] method``; returns the space and
+    the base description."""
     p = Path(path)
     raw = read_space(p)
+    if search is not None and isinstance(raw, dict):
+        sampling = raw.get("sampling", {})
+        raw["sampling"] = {**(sampling if isinstance(sampling, dict) else {}), "method": search}
     params = raw.get("params") if isinstance(raw, dict) else None
     base_dir = p.absolute().parent
     params_path = None
