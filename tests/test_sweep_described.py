@@ -6,6 +6,7 @@ before any work unless its reactions are off, and Dask gives the serial rows."""
 
 from __future__ import annotations
 
+import copy
 import json
 import tomllib
 
@@ -154,6 +155,60 @@ peak_effort_N = "min"
     assert m.parameters["height_m"] == pytest.approx(1.02, abs=1e-15)
     top = tomllib.loads(best.read_text(encoding="utf-8"))["parameters"]
     assert top["height_m"] == {"value": 1.02, "min": 0.95, "max": 1.05}
+
+
+def test_limit_metrics_are_those_of_the_designs_run_and_a_too_fast_motion_is_a_limit(tmp_path, capsys):
+    """``joint_limit_margin`` and ``peak_effort_over_rated`` of a design are computed again from
+    its own ``pkmdyn run`` files (the legs' positions against their limits, the motors' forces
+    against their ratings); a design whose motion exceeds a joint speed limit is a ``limit``
+    row naming the joint."""
+    import csv
+
+    d = ex.builtin_dict("stewart", parametric=True)
+    d["actuators"] = [{"joint": f"P_{i}", "max_force_N": 150.0 + 10.0 * i, "moving_mass_kg": 0.4,
+                       "coulomb_force_N": 2.0} for i in range(1, 7)]
+    d["limits"] = {"max_joint_speed_m_s": 10.0}
+    base = tmp_path / "rated.toml"
+    base.write_text(dumps_toml(d), encoding="utf-8")
+    space = tmp_path / "space.toml"
+    space.write_text("""
+[sampling]
+method = "grid"
+
+[motion]
+reactions = false
+stiffness = false
+
+[parameters]
+height_m = { values = [0.95, 1.05] }
+"limits.max_joint_speed_m_s" = { values = [10.0, 1e-3] }
+
+[objectives]
+peak_effort_N = "min"
+""", encoding="utf-8")
+    assert main(["sweep", "--machine", str(base), "--space", str(space), "--workers", "0", "--no-plots",
+                 "--out", str(tmp_path / "out")]) == 0
+    rows = sorted(pq.read_table(tmp_path / "out" / "designs.parquet").to_pylist(), key=lambda r: r["design_id"])
+    slow = [r for r in rows if r["limits.max_joint_speed_m_s"] == 1e-3]
+    assert len(slow) == 2 and all(r["status"] == "limit" and "max_joint_speed_m_s" in r["reason"]
+                                  and "actuated joint 'P_" in r["reason"] for r in slow)
+    lo, hi = d["legs"][0]["joints"][1]["limits_m"]
+    for r in (r for r in rows if r["limits.max_joint_speed_m_s"] == 10.0):
+        assert r["status"] == "ok"
+        dd = copy.deepcopy(d)
+        dd["parameters"]["height_m"] = r["height_m"]
+        design = tmp_path / f"design_{r['design_id']}.toml"
+        design.write_text(dumps_toml(dd), encoding="utf-8")
+        out = tmp_path / f"run_{r['design_id']}"
+        assert main(["run", "--machine", str(design), "--out", str(out)]) == 0
+        with open(out / "results.csv", newline="") as fh:
+            table = list(csv.DictReader(fh))
+        legs = np.array([[float(row[f"P_{i}_pos_m"]) for i in range(1, 7)] for row in table])
+        margin = np.minimum(legs - lo, hi - legs).min() / (hi - lo)
+        assert r["joint_limit_margin"] == pytest.approx(margin, rel=1e-9, abs=1e-12)
+        force = np.array([[float(row[f"P_{i}_motor_force_N"]) for i in range(1, 7)] for row in table])
+        assert r["peak_effort_over_rated"] == pytest.approx(
+            (np.abs(force) / (150.0 + 10.0 * np.arange(1, 7))).max(), rel=1e-9)
 
 
 def test_overconstrained_without_sections_refused_unless_reactions_are_off(tmp_path, capsys):

@@ -80,16 +80,44 @@ class DescribedSweepContext:
     workspace_measure: bool = True
 
 
-def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[str], bool]:
+def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[str], bool, bool, bool]:
     """The actuators (name, effort unit ``N`` or ``Nm``) and the joints of a description, as
-    the compiled model names them, and whether it has as many actuators as task coordinates
-    (the direct singularity measure is defined)."""
+    the compiled model names them, whether it has as many actuators as task coordinates
+    (the direct singularity measure is defined), whether a joint has limits and whether a
+    drive has a rated effort."""
     from . import load_mechanism
     from .dynamics import effort_unit
+    from .kinematics import limited_joints
 
     model = load_mechanism(copy.deepcopy(dict(description)))
     acts = [(name, effort_unit(model, i)) for i, name in enumerate(model.actuator_names)]
-    return acts, list(model.joint_names), model.na == model.nt
+    return (acts, list(model.joint_names), model.na == model.nt, bool(limited_joints(model)),
+            bool(np.isfinite(model.drive_max_effort).any()) if model.has_drives else False)
+
+
+def _limit_metrics(model: Any, kin: Any, u: Array) -> dict[str, float]:
+    """``joint_limit_margin`` where a joint has limits: the least, over the samples and the
+    limited joints, of the distance to the nearer limit over the joint's range (0 at a limit,
+    0.5 mid-range, negative beyond it); ``peak_effort_over_rated`` where a drive has a rated
+    effort: the largest motor effort (Eq. A1 of :mod:`.actuators`: transmitted, rotor and
+    motor friction) over its rating, over the samples and the rated drives (above 1: beyond
+    it)."""
+    from .actuators import motor_efforts
+    from .kinematics import joint_coordinates, limited_joints
+
+    out: dict[str, float] = {}
+    joints = limited_joints(model)
+    if joints:
+        c = joint_coordinates(model, kin, joints)
+        lo = np.array([model.joint_limits[j][0] for j in joints])
+        hi = np.array([model.joint_limits[j][1] for j in joints])
+        out["joint_limit_margin"] = float((np.minimum(c - lo, hi - c) / (hi - lo)).min())
+    if model.has_drives:
+        rated = np.isfinite(model.drive_max_effort)
+        if rated.any():
+            tau = motor_efforts(model, kin.act_q, kin.act_qd, kin.act_qdd, u).effort
+            out["peak_effort_over_rated"] = float((np.abs(tau[:, rated]) / model.drive_max_effort[rated]).max())
+    return out
 
 
 def _speed_unit(effort_unit: str) -> str:
@@ -153,7 +181,7 @@ class DescribedSweep:
         joint reactions only with ``reactions = true``, the stiffness metrics only with
         ``stiffness = true``, the workspace's least measure only with ``workspace_measure = true``
         (each the default) in ``[motion]``."""
-        acts, joints, direct = _names(self.raw if description is None else description)
+        acts, joints, direct, limited, rated = _names(self.raw if description is None else description)
         out = [
             MetricInfo("gci", "-", "(1/T) int mu(t) dt, mu = the direct singularity measure where there are as "
                                    "many actuators as task coordinates, else the inverse one"),
@@ -182,6 +210,12 @@ class DescribedSweep:
             MetricInfo("peak_power_W", "W", "max over samples of sum_k u_k s_dot_k"),
             MetricInfo("motor_energy_per_cycle_J", "J", "int sum_k |u_k s_dot_k| dt over the motion"),
         ]
+        if limited:
+            out.append(MetricInfo("joint_limit_margin", "-", "min over samples and limited joints of min(q - lo, "
+                                                             "hi - q) / (hi - lo) (negative: beyond a limit)"))
+        if rated:
+            out.append(MetricInfo("peak_effort_over_rated", "-", "max over samples and rated drives of |motor "
+                                                                 "effort| / rated effort (above 1: beyond it)"))
         if options.get("stiffness", True) is True:
             have = _stiffness_metrics(self.raw if description is None else description)
             out += [MetricInfo(name, unit, text) for name, unit, text in _STIFFNESS_METRICS if name in have]
@@ -357,6 +391,15 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
         return DesignOutcome("singular", str(exc))
     except PkmdynError as exc:
         return DesignOutcome("invalid", str(exc))
+    from ..errors import LimitError
+    from .actuators import check_actuator_rates, check_task_rates, effective_limits
+
+    try:  # the plausibility limits that pkmdyn run holds a motion to (its [limits], the drives' motors)
+        lim = effective_limits(model)
+        check_task_rates(model, kin.t, motion.xd, motion.xdd, lim)
+        check_actuator_rates(model, kin.t, kin.act_qd, kin.act_qdd, lim)
+    except LimitError as exc:
+        return DesignOutcome("limit", str(exc))
     sm = singularity_measures(model, kin.q)
     t = motion.t
     direct = model.na == model.nt
@@ -425,6 +468,7 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
             m["workspace_min_measure"] = float(ws.least_measure)
     if "required" in grids:
         m["required_region_coverage"] = float(grids["required"].inside.mean())
+    m.update(_limit_metrics(model, kin, u))
     m["peak_power_W"] = float(power.sum(axis=1).max())
     m["motor_energy_per_cycle_J"] = float(time_integral(np.abs(power).sum(axis=1), t))
     if ctx.reactions:
