@@ -10,8 +10,7 @@ Per cycle ``k`` (instant ``t_k = k T``):
    is taken to first order in the tracking error about the plant's own reference displacement,
    ``s = s_ref + B_p(q_ref)^T (q - q_ref)`` (``B_p`` the plant's actuator map; the neglected
    second-order term is ``O(|q - q_ref|^2)``, below one count for the errors these loops
-   produce; the machines without single-sample kinematics verbs, the hip and the PDM, take
-   this one). Rate: backward difference ``(s_enc,k - s_enc,k-1) / T`` through a first-order
+   produce; the hip's and the PDM's default). Rate: backward difference ``(s_enc,k - s_enc,k-1) / T`` through a first-order
    low-pass filter (cutoff ``velocity_cutoff_Hz``); acceleration: backward difference of the
    filtered rate through a second low-pass filter (``acceleration_cutoff_Hz``) - the chain of
    the PDM paper's section 7 (position differentiated twice, filtered). A cutoff of 0 means no

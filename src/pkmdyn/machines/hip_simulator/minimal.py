@@ -46,6 +46,9 @@ __all__ = [
     "forward_dynamics_one",
     "one_sample_kernels",
     "rate_map",
+    "drive_ratios",
+    "actuator_coordinates_one",
+    "direct_one",
 ]
 
 Array = NDArray[np.float64]
@@ -148,3 +151,49 @@ def one_sample_kernels(model: HipModel) -> tuple[Array, object, object]:
     :func:`forward_dynamics_one` without their input checks (see :func:`.fast.kernels`), for the
     plant integrator and the controllers' per-cycle calls."""
     return kernels(model)
+
+
+def drive_ratios(model: HipModel) -> Array:
+    """``(3,)`` [rad/m]: each motor's angle per metre of its slider's travel, ``2 pi / p``
+    (the ball screws' lead ``p``): the encoders' displacement is ``k (L - L_0)``."""
+    return np.full(3, 2.0 * np.pi / float(model.geometry.p))
+
+
+#: the engine's compiled verbs of each model's description (:func:`_engine`), by the model's id
+#: (the model kept beside them, so that an id is not reused while its entry lives)
+_ENGINES: dict[int, tuple[HipModel, object, object]] = {}
+
+
+def _engine(model: HipModel) -> tuple[object, object]:
+    """``(mechanism, verbs)``: the model's description compiled (:mod:`.description`) and the
+    generic engine's verbs of it, made once per model."""
+    hit = _ENGINES.get(id(model))
+    if hit is None or hit[0] is not model:
+        from ...multibody import load_mechanism
+        from ...multibody.machine import MechanismVerbs
+        from .description import hip_description
+
+        mech = load_mechanism(hip_description(model))
+        hit = (model, mech, MechanismVerbs(mech))
+        _ENGINES[id(model)] = hit
+    return hit[1], hit[2]
+
+
+def actuator_coordinates_one(model: HipModel, q: Array, qd: Array, fresh: bool = False) -> Array:
+    """The three sliders' positions ``L (3,)`` [m] at the platforms' angles ``q`` (one sample
+    of the inverse kinematics, Eq. 2, warm-started from the last call; ``fresh``: from the
+    reference configuration), by the engine's compiled kinematics of the model's description
+    (:meth:`pkmdyn.multibody.machine.MechanismVerbs.actuator_coordinates_one`): the plant's
+    exact encoders."""
+    mech, verbs = _engine(model)
+    return verbs.actuator_coordinates_one(mech, q, qd, fresh=fresh)
+
+
+def direct_one(model: HipModel, a: Array, ad: Array) -> tuple[Array, Array]:
+    """The platforms' angles and rates ``(3,), (3,)`` from the sliders' positions ``a`` [m] and
+    rates ``ad`` [m/s] (the direct kinematics, warm-started from the previous call), by the
+    engine's compiled direct kinematics of the model's description: the controller's pose from
+    exact encoders."""
+    mech, verbs = _engine(model)
+    return verbs.direct_one(mech, a, ad)
+
