@@ -211,8 +211,11 @@ def hip_compiled_loop(model: Any, seconds: float) -> dict[str, float]:
     }
 
 
-def hip_project_loop(model: Any, seconds: float) -> dict[str, Any]:
-    """The project's closed-loop simulator on the default settings, exact plant, computed torque."""
+def hip_project_loop(model: Any, seconds: float,
+                     kinds: tuple[str, ...] = ("computed-torque", "augmented-pd", "computed-torque-exact-encoders")
+                     ) -> dict[str, Any]:
+    """The project's closed-loop simulator on the default settings, exact plant: each of
+    ``kinds`` (a control law, ``-exact-encoders``: with ``exact_encoders = 1``)."""
     from pkmdyn.control import gains, hermite_motion, load_settings, loop_settings
     from pkmdyn.simulate import track  # noqa: F401  (raises if the simulator is absent)
     from pkmdyn.simulate._run import track as _track
@@ -224,9 +227,10 @@ def hip_project_loop(model: Any, seconds: float) -> dict[str, Any]:
     out: dict[str, Any] = {"loop_settings": {"control_cycle_s": ls.cycle_s, "integration_step_s": ls.step_s}}
     exact = copy.deepcopy(st)
     exact["sensors"]["exact_encoders"] = 1  # the encoders through the kinematics, the pose by the direct kinematics
-    for kind, ls in (("computed-torque", ls), ("augmented-pd", ls), ("computed-torque-exact-encoders", loop_settings(exact))):
-        g = gains(st, kind.replace("-exact-encoders", ""), 3)
+    for kind in kinds:
         kind_law = kind.replace("-exact-encoders", "")
+        ls = loop_settings(exact if kind.endswith("-exact-encoders") else st)
+        g = gains(st, kind_law, 3)
         _track(minimal, model, model, motion, 0.05, kind_law, g, ls, True)  # compile and warm up
         t0 = time.perf_counter()
         tr = _track(minimal, model, model, motion, seconds, kind_law, g, ls, True)

@@ -308,6 +308,24 @@ def _stewart_loops(out: dict, m, seconds: float = 2.0) -> None:
         "mujoco_stewart_loop_realtime_factor"]
 
 
+def _hip_loops(out: dict, seconds: float = 2.0) -> None:
+    """The hip's closed loop with exact encoders (computed torque, the default hip settings;
+    ``benchmarks/control.py``, ``hip_project_loop``) beside MuJoCo's loop of the exported hip
+    (``mujoco_part``), in this process."""
+    import control as bc
+
+    ex = bc.hip_project_loop(bc.load_params(), seconds, ("computed-torque-exact-encoders",))
+    out["hip_exact_encoder_loop_realtime_factor"] = ex["computed-torque-exact-encoders"]["realtime_factor"]
+    out["hip_exact_encoder_loop_max_error_deg"] = ex["computed-torque-exact-encoders"]["max_error_deg"]
+    try:
+        out["mujoco_hip_loop_realtime_factor"] = bc.mujoco_part(seconds)["realtime_factor"]
+    except ImportError:  # pragma: no cover - MuJoCo is optional
+        out["mujoco_hip_loop_realtime_factor"] = None
+        return
+    out["hip_exact_encoder_loop_over_mujoco"] = (out["hip_exact_encoder_loop_realtime_factor"]
+                                                 / out["mujoco_hip_loop_realtime_factor"])
+
+
 def _stiffness(out: dict, m, repeat: int, oracle) -> None:
     """The stiffness of the Stewart platform with its drives locked at 1,000 poses, batched
     (kinematics solved first, not timed), and its agreement with Gosselin's J^T diag(k) J from
@@ -431,6 +449,7 @@ def main() -> None:
     _dynamics(out, n, args.repeat, m, hip, mh, pm)
     _direct(out, n, args.repeat, {"stewart": m, "hip": mh, "delta": md, "pdm": mp})
     _stewart_loops(out, m)
+    _hip_loops(out)
     _stiffness(out, m, args.repeat, stewart_oracle)
     out["targets"] = {"stewart_kinematics_us_per_sample<=20": out["stewart_kinematics_us_per_sample"] <= 20.0,
                       "hip_max_rel_diff<=1e-9": out["hip_max_rel_diff"] <= 1e-9,
@@ -453,7 +472,8 @@ def main() -> None:
                       "stiffness_1000_poses_s<=1": out["stiffness_1000_poses_s"] <= 1.0,
                       "stiffness_gosselin_max_rel_diff<=1e-10": out.get("stiffness_gosselin_max_rel_diff", 0.0) <= 1e-10,
                       "stewart_exact_encoder_loop_at_least_mujoco":
-                          out.get("stewart_exact_encoder_loop_over_mujoco", 0.0) >= 1.0}
+                          out.get("stewart_exact_encoder_loop_over_mujoco", 0.0) >= 1.0,
+                      "hip_exact_encoder_loop_at_least_mujoco": out.get("hip_exact_encoder_loop_over_mujoco", 0.0) >= 1.0}
     print(json.dumps(out, indent=None if args.json else 2))
 
 
