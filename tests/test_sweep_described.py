@@ -122,6 +122,18 @@ peak_effort_Nm = "min"
     assert rows[0]["peak_effort_Nm"] > 0 and rows[2]["peak_effort_Nm"] is None
 
 
+def _sweep_of(tmp_path, d, space_text):
+    """Sweep the description ``d`` (written as a file) over the space ``space_text`` in this
+    process; the rows by design id."""
+    base = tmp_path / "base.toml"
+    base.write_text(dumps_toml(d), encoding="utf-8")
+    space = tmp_path / "space.toml"
+    space.write_text(space_text, encoding="utf-8")
+    assert main(["sweep", "--machine", str(base), "--space", str(space), "--workers", "0", "--no-plots",
+                 "--out", str(tmp_path / "out")]) == 0
+    return sorted(pq.read_table(tmp_path / "out" / "designs.parquet").to_pylist(), key=lambda r: r["design_id"])
+
+
 def test_a_bounded_parameter_is_swept_and_its_best_design_file_loads(tmp_path, capsys):
     """A parameter given as ``{ value, min, max }`` is swept, by its bare name, through its
     value: a design outside its bounds is a row with the description's reason, and the best
@@ -131,10 +143,7 @@ def test_a_bounded_parameter_is_swept_and_its_best_design_file_loads(tmp_path, c
 
     d = ex.builtin_dict("stewart", parametric=True)
     d["parameters"]["height_m"] = {"value": 1.0, "min": 0.95, "max": 1.05}
-    base = tmp_path / "bounded.toml"
-    base.write_text(dumps_toml(d), encoding="utf-8")
-    space = tmp_path / "space.toml"
-    space.write_text("""
+    rows = _sweep_of(tmp_path, d, """
 [sampling]
 method = "grid"
 
@@ -143,10 +152,7 @@ height_m = { values = [0.9, 1.02, 1.1] }
 
 [objectives]
 peak_effort_N = "min"
-""", encoding="utf-8")
-    assert main(["sweep", "--machine", str(base), "--space", str(space), "--workers", "0", "--no-plots",
-                 "--out", str(tmp_path / "out")]) == 0
-    rows = sorted(pq.read_table(tmp_path / "out" / "designs.parquet").to_pylist(), key=lambda r: r["design_id"])
+""")
     assert [r["status"] for r in rows] == ["invalid", "ok", "invalid"]
     assert "height_m: 0.9 is below its min 0.95" in rows[0]["reason"]
     assert "height_m: 1.1 is above its max 1.05" in rows[2]["reason"]
@@ -168,10 +174,7 @@ def test_limit_metrics_are_those_of_the_designs_run_and_a_too_fast_motion_is_a_l
     d["actuators"] = [{"joint": f"P_{i}", "max_force_N": 150.0 + 10.0 * i, "moving_mass_kg": 0.4,
                        "coulomb_force_N": 2.0} for i in range(1, 7)]
     d["limits"] = {"max_joint_speed_m_s": 10.0}
-    base = tmp_path / "rated.toml"
-    base.write_text(dumps_toml(d), encoding="utf-8")
-    space = tmp_path / "space.toml"
-    space.write_text("""
+    rows = _sweep_of(tmp_path, d, """
 [sampling]
 method = "grid"
 
@@ -185,10 +188,7 @@ height_m = { values = [0.95, 1.05] }
 
 [objectives]
 peak_effort_N = "min"
-""", encoding="utf-8")
-    assert main(["sweep", "--machine", str(base), "--space", str(space), "--workers", "0", "--no-plots",
-                 "--out", str(tmp_path / "out")]) == 0
-    rows = sorted(pq.read_table(tmp_path / "out" / "designs.parquet").to_pylist(), key=lambda r: r["design_id"])
+""")
     slow = [r for r in rows if r["limits.max_joint_speed_m_s"] == 1e-3]
     assert len(slow) == 2 and all(r["status"] == "limit" and "max_joint_speed_m_s" in r["reason"]
                                   and "actuated joint 'P_" in r["reason"] for r in slow)
