@@ -175,6 +175,8 @@ def _engine(model: HipModel) -> tuple[object, object]:
 
         mech = load_mechanism(hip_description(model))
         hit = (model, mech, MechanismVerbs(mech))
+        while len(_ENGINES) >= 8:  # a run holds two models (plant, controller); keep the latest few
+            _ENGINES.pop(next(iter(_ENGINES)))
         _ENGINES[id(model)] = hit
     return hit[1], hit[2]
 
