@@ -216,9 +216,8 @@ def hip_project_loop(model: Any, seconds: float,
                      ) -> dict[str, Any]:
     """The project's closed-loop simulator on the default settings, exact plant: each of
     ``kinds`` (a control law, ``-exact-encoders``: with ``exact_encoders = 1``)."""
-    from pkmdyn.control import gains, hermite_motion, load_settings, loop_settings
+    from pkmdyn.control import hermite_motion, load_settings, loop_settings
     from pkmdyn.simulate import track  # noqa: F401  (raises if the simulator is absent)
-    from pkmdyn.simulate._run import track as _track
 
     st = load_settings("hip")
     ls = loop_settings(st)
@@ -228,27 +227,42 @@ def hip_project_loop(model: Any, seconds: float,
     exact = copy.deepcopy(st)
     exact["sensors"]["exact_encoders"] = 1  # the encoders through the kinematics, the pose by the direct kinematics
     for kind in kinds:
-        kind_law = kind.replace("-exact-encoders", "")
-        ls = loop_settings(exact if kind.endswith("-exact-encoders") else st)
-        g = gains(st, kind_law, 3)
-        _track(minimal, model, model, motion, 0.05, kind_law, g, ls, True)  # compile and warm up
-        t0 = time.perf_counter()
-        tr = _track(minimal, model, model, motion, seconds, kind_law, g, ls, True)
-        wall = time.perf_counter() - t0
-        res = tr.result
-        K = res.q.shape[0]
-        seq = model.geometry.euler_sequence
-        R_ref = euler_kinematics(seq, tr.reference.q[:K], res.qd, res.qd)[0]
-        R = euler_kinematics(seq, res.q, res.qd, res.qd)[0]
-        err = _angle_error_deg(R_ref, R)
-        out[kind] = {
-            "realtime_factor": seconds / wall,
-            "us_per_cycle": wall / K * 1e6,
-            "rms_error_deg": float(np.sqrt(np.mean(err**2))),
-            "max_error_deg": float(err.max()),
-            "fast_path": bool(tr.fast_path),
-        }
+        if kind.endswith("-exact-encoders"):  # its own failure leaves the other loops' figures
+            try:
+                out[kind] = _project_loop_run(model, motion, st, exact, kind, seconds)
+            except Exception as exc:
+                out[kind] = {"error": f"{type(exc).__name__}: {exc}"}
+            continue
+        out[kind] = _project_loop_run(model, motion, st, st, kind, seconds)
     return out
+
+
+def _project_loop_run(model: Any, motion: Any, st: dict, settings: dict, kind: str, seconds: float) -> dict[str, Any]:
+    """One closed loop of :func:`hip_project_loop`: the law of ``kind`` (its gains from ``st``)
+    under the loop ``settings``."""
+    from pkmdyn.control import gains, loop_settings
+    from pkmdyn.simulate._run import track as _track
+
+    kind_law = kind.replace("-exact-encoders", "")
+    ls = loop_settings(settings)
+    g = gains(st, kind_law, 3)
+    _track(minimal, model, model, motion, 0.05, kind_law, g, ls, True)  # compile and warm up
+    t0 = time.perf_counter()
+    tr = _track(minimal, model, model, motion, seconds, kind_law, g, ls, True)
+    wall = time.perf_counter() - t0
+    res = tr.result
+    K = res.q.shape[0]
+    seq = model.geometry.euler_sequence
+    R_ref = euler_kinematics(seq, tr.reference.q[:K], res.qd, res.qd)[0]
+    R = euler_kinematics(seq, res.q, res.qd, res.qd)[0]
+    err = _angle_error_deg(R_ref, R)
+    return {
+        "realtime_factor": seconds / wall,
+        "us_per_cycle": wall / K * 1e6,
+        "rms_error_deg": float(np.sqrt(np.mean(err**2))),
+        "max_error_deg": float(err.max()),
+        "fast_path": bool(tr.fast_path),
+    }
 
 
 def pdm_part(seconds: float) -> dict[str, Any]:
@@ -420,9 +434,11 @@ def main(argv: list[str] | None = None) -> int:
             "hip_fd_single_vs_mj_forward": hip["fd_single_us"] / m["mj_forward_us"],
             "hip_realtime_vs_mujoco": hip["realtime_factor"] / m["realtime_factor"],
         }
-        ex = hip.get("closed_loop", {}).get("computed-torque-exact-encoders")
-        if ex is not None:  # issue target: at least MuJoCo's real-time factor with exact encoders
-            result["ratios"]["hip_exact_encoder_realtime_vs_mujoco"] = ex["realtime_factor"] / m["realtime_factor"]
+        ex = hip.get("closed_loop", {}).get("computed-torque-exact-encoders", {})
+        if "realtime_factor" in ex:  # at least MuJoCo's real-time factor with exact encoders
+            r = ex["realtime_factor"] / m["realtime_factor"]
+            result["ratios"]["hip_exact_encoder_realtime_vs_mujoco"] = r
+            result["ratios_targets_met"] = {"hip_exact_encoder_realtime_vs_mujoco": r >= 1.0}
     except ImportError:
         result["mujoco"] = {"error": "MuJoCo not installed (pip install 'pkmdyn[validate]')"}
     result["python"] = sys.version.split()[0]

@@ -315,8 +315,12 @@ def _hip_loops(out: dict, seconds: float = 2.0) -> None:
     import control as bc
 
     ex = bc.hip_project_loop(bc.load_params(), seconds, ("computed-torque-exact-encoders",))
-    out["hip_exact_encoder_loop_realtime_factor"] = ex["computed-torque-exact-encoders"]["realtime_factor"]
-    out["hip_exact_encoder_loop_max_error_deg"] = ex["computed-torque-exact-encoders"]["max_error_deg"]
+    ex = ex["computed-torque-exact-encoders"]
+    if "error" in ex:
+        out["hip_exact_encoder_loop_error"] = ex["error"]
+        return
+    out["hip_exact_encoder_loop_realtime_factor"] = ex["realtime_factor"]
+    out["hip_exact_encoder_loop_max_error_deg"] = ex["max_error_deg"]
     try:
         out["mujoco_hip_loop_realtime_factor"] = bc.mujoco_part(seconds)["realtime_factor"]
     except ImportError:  # pragma: no cover - MuJoCo is optional

@@ -199,8 +199,13 @@ def parameter_values(raw: Mapping[str, Any], label: str) -> dict[str, Any]:
         if not _NAME.match(str(name)) or name in _CONSTANTS or name in FUNCTIONS:
             raise ParameterError(f"{label}: [parameters] {name}: not a usable parameter name (a letter, then "
                                  "letters, digits, underscores; not a function or constant of the grammar)")
-    uses = {str(k): _names_used(v.get("value") if isinstance(v, dict) else v) & set(map(str, table)) for k, v in
-            table.items()}
+    read = {str(k): _names_used(v.get("value") if isinstance(v, dict) else v) for k, v in table.items()}
+    known = set(map(str, table))
+    for name, names in read.items():
+        for other in sorted(names - known - set(_CONSTANTS) - set(FUNCTIONS)):
+            raise ParameterError(f"{label}: [parameters] {name}: unknown name {other!r} (the parameters are: "
+                                 f"{', '.join(map(str, table))})")
+    uses = {k: v & known for k, v in read.items()}
     done: dict[str, Any] = {}
     for name in _dependency_order(list(map(str, table)), uses, label):
         spec = table[name]
@@ -239,7 +244,7 @@ def _names_used(spec: Any) -> set[str]:
 
 def _dependency_order(names: list[str], uses: Mapping[str, set[str]], label: str) -> list[str]:
     """``names`` ordered so that each comes after the parameters it uses (a depth-first
-    topological sort that keeps the file's order where the uses allow). A parameter that uses
+    topological sort from each name in the file's order). A parameter that uses
     itself, or a cycle, is refused, the cycle named in its order (``a_m -> b_m -> a_m``)."""
     order: list[str] = []
     state: dict[str, int] = {}  # 1: on the path being followed, 2: placed

@@ -97,13 +97,13 @@ def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[
 
 def _limit_metrics(model: Any, kin: Any, u: Array) -> dict[str, float]:
     """``joint_limit_margin`` where a joint has limits: the least, over the samples and the
-    limited joints, of the distance to the nearer limit over the joint's range (0 at a limit,
-    0.5 mid-range, negative beyond it); ``peak_effort_over_rated`` where a drive has a rated
+    limited joints, of the distance to the nearer limit over the joint's range (0 at a limit or
+    within ``pkmdyn run``'s tolerance beyond it, 0.5 mid-range, negative beyond it); ``peak_effort_over_rated`` where a drive has a rated
     effort: the largest motor effort (Eq. A1 of :mod:`.actuators`: transmitted, rotor and
     motor friction) over its rating, over the samples and the rated drives (above 1: beyond
     it)."""
     from .actuators import motor_efforts
-    from .kinematics import joint_coordinates, limited_joints
+    from .kinematics import beyond_limits, joint_coordinates, limited_joints
 
     out: dict[str, float] = {}
     joints = limited_joints(model)
@@ -111,7 +111,10 @@ def _limit_metrics(model: Any, kin: Any, u: Array) -> dict[str, float]:
         c = joint_coordinates(model, kin, joints)
         lo = np.array([model.joint_limits[j][0] for j in joints])
         hi = np.array([model.joint_limits[j][1] for j in joints])
-        out["joint_limit_margin"] = float((np.minimum(c - lo, hi - c) / (hi - lo)).min())
+        margin = np.minimum(c - lo, hi - c) / (hi - lo)
+        # within the tolerance that pkmdyn run allows at a limit (beyond_limits): at the limit, 0
+        margin = np.where((margin < 0.0) & ~beyond_limits(model, c, joints), 0.0, margin)
+        out["joint_limit_margin"] = float(margin.min())
     if model.has_drives:
         rated = np.isfinite(model.drive_max_effort)
         if rated.any():

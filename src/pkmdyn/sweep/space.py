@@ -333,12 +333,13 @@ def space_from_dict(raw: Mapping[str, Any], description: Mapping[str, Any], metr
     if not d.parameters:
         raise ParameterError(f"{source}: [parameters]: no parameter to vary")
     params = []
+    seen: dict[tuple, str] = {}
     for key, spec in d.parameters.items():
         try:
             path = parse_path(key)
             top = description.get("parameters")
-            if len(path) == 1 and path[0] not in description and isinstance(top, dict) and path[0] in top:
-                path = ("parameters", path[0])  # a parameter by its bare name
+            if path[0] not in description and isinstance(top, dict) and path[0] in top:
+                path = ("parameters", *path)  # a parameter by its bare name (an entry of a vector one too)
             path = index_path(description, path)
             value = get_value(description, path)
         except KeyError as exc:
@@ -354,7 +355,12 @@ def space_from_dict(raw: Mapping[str, Any], description: Mapping[str, Any], metr
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ParameterError(f"{source}: [parameters] {key}: not a numeric key "
                                  f"(it holds {type(value).__name__}); only numbers can be swept")
-        integer = isinstance(value, int)
+        if tuple(path) in seen:
+            raise ParameterError(f"{source}: [parameters] {key}: the same key as {seen[tuple(path)]}; sweep it once")
+        seen[tuple(path)] = key
+        # a description's parameter is a real number whatever its spelling (1 or 1.0); another
+        # key written as a whole number is swept on whole numbers
+        integer = isinstance(value, int) and not (path and path[0] == "parameters")
         if s.method == "grid" and spec.values is None and spec.points is None:
             raise ParameterError(f"{source}: [parameters] {key}: method = \"grid\" needs points = N "
                                  "(or values = [...])")

@@ -167,7 +167,7 @@ _ENGINES: dict[int, tuple[HipModel, object, object]] = {}
 def _engine(model: HipModel) -> tuple[object, object]:
     """``(mechanism, verbs)``: the model's description compiled (:mod:`.description`) and the
     generic engine's verbs of it, made once per model."""
-    hit = _ENGINES.get(id(model))
+    hit = _ENGINES.pop(id(model), None)  # taken out and put back last: the latest used stay
     if hit is None or hit[0] is not model:
         from ...multibody import load_mechanism
         from ...multibody.machine import MechanismVerbs
@@ -177,7 +177,7 @@ def _engine(model: HipModel) -> tuple[object, object]:
         hit = (model, mech, MechanismVerbs(mech))
         while len(_ENGINES) >= 8:  # a run holds two models (plant, controller); keep the latest few
             _ENGINES.pop(next(iter(_ENGINES)))
-        _ENGINES[id(model)] = hit
+    _ENGINES[id(model)] = hit
     return hit[1], hit[2]
 
 
@@ -198,4 +198,3 @@ def direct_one(model: HipModel, a: Array, ad: Array) -> tuple[Array, Array]:
     exact encoders."""
     mech, verbs = _engine(model)
     return verbs.direct_one(mech, a, ad)
-
