@@ -91,6 +91,12 @@ def test_parameters_in_order_with_bounds_and_derived_values():
             parameter_values({"parameters": {name: 1.0}}, "d")
 
 
+def test_an_unknown_name_lists_every_parameter():
+    with pytest.raises(ParameterError, match=r"\[parameters\] a_m: unknown name 'zz_m' \(the parameters are: a_m, "
+                                             r"b_m, c_m\)$"):
+        parameter_values({"parameters": {"a_m": "zz_m * 2", "b_m": 1.0, "c_m": "sqrt(b_m) + pi"}}, "d")
+
+
 @pytest.mark.parametrize("table, pattern", [
     ({"a_m": "a_m + 1"}, r"\[parameters\] a_m: uses itself$"),
     ({"a_m": "b_m - 1", "b_m": "a_m + 1"}, r"\[parameters\] a_m: a cycle between parameters: a_m -> b_m -> a_m$"),

@@ -163,6 +163,43 @@ peak_effort_N = "min"
     assert top["height_m"] == {"value": 1.02, "min": 0.95, "max": 1.05}
 
 
+def test_a_number_swept_under_two_keys_is_refused_and_a_whole_parameter_sweeps_as_real(tmp_path, capsys):
+    """``height_m`` and ``parameters.height_m`` name one number: refused by name. A parameter
+    written as a whole number (``height_m = 1``) is a real number: a range sweeps real values."""
+    d = ex.builtin_dict("stewart", parametric=True)
+    d["parameters"]["height_m"] = 1
+    base = tmp_path / "whole.toml"
+    base.write_text(dumps_toml(d), encoding="utf-8")
+    space = tmp_path / "twice.toml"
+    space.write_text("""[sampling]
+method = "random"
+designs = 2
+[parameters]
+height_m = { min = 0.95, max = 1.05 }
+"parameters.height_m" = { min = 0.95, max = 1.05 }
+[objectives]
+peak_effort_N = "min"
+""", encoding="utf-8")
+    assert main(["sweep", "--machine", str(base), "--space", str(space), "--workers", "0", "--no-plots",
+                 "--out", str(tmp_path / "twice")]) == 2
+    err = capsys.readouterr().err
+    assert "parameters.height_m: the same key as height_m" in err and len(err.strip().splitlines()) == 1
+    rows = _sweep_of(tmp_path, d, """[sampling]
+method = "random"
+designs = 3
+seed = 2
+[motion]
+reactions = false
+stiffness = false
+[parameters]
+height_m = { min = 0.95, max = 1.05 }
+[objectives]
+peak_effort_N = "min"
+""")
+    values = [r["height_m"] for r in rows]
+    assert all(0.95 <= v <= 1.05 for v in values) and len(set(values)) == 3 and any(v != round(v) for v in values)
+
+
 def test_limit_metrics_are_those_of_the_designs_run_and_a_too_fast_motion_is_a_limit(tmp_path, capsys):
     """``joint_limit_margin`` and ``peak_effort_over_rated`` of a design are computed again from
     its own ``pkmdyn run`` files (the legs' positions against their limits, the motors' forces
