@@ -164,6 +164,17 @@ def test_describe_prints_the_parameters(capsys):
     assert "parameters: base_radius_m = 1; platform_radius_m = 0.5;" in out
 
 
+def test_describe_prints_the_bounds_of_a_bounded_parameter(capsys, tmp_path):
+    text = (ex.MACHINES / "stewart" / "stewart.toml").read_text().replace(
+        "base_radius_m = 1.0", "base_radius_m = { value = 1.0, min = 0.75, max = 1.25 }", 1)
+    assert "min = 0.75" in text
+    f = tmp_path / "s.toml"
+    f.write_text(text)
+    assert main(["describe", "--machine", str(f)]) == 0
+    out = capsys.readouterr().out
+    assert "parameters: base_radius_m = 1 (min 0.75, max 1.25); platform_radius_m = 0.5;" in out
+
+
 def test_a_sweep_varies_a_dimension_that_many_numbers_share(tmp_path):
     """The base radius of the Stewart platform (every base joint, leg axis and reference length
     depends on it), swept: the designs differ, and the best design's file stays parametric."""

@@ -79,10 +79,19 @@ def describe(machine: str) -> None:
     lines.append("compliance (pkmdyn stiffness): " + ("; ".join(f"{k} {', '.join(v)}" for k, v in src.items() if v)
                                                       or "none (every body, joint and drive rigid)"))
     if model.parameters:
-        lines.append("parameters: " + "; ".join(f"{k} = {_shown(v)}" for k, v in model.parameters.items()))
+        lines.append("parameters: " + "; ".join(f"{k} = {_shown(v)}{_range(model.parameter_bounds.get(k))}"
+                                                for k, v in model.parameters.items()))
     for line in lines:
         if line is not None:
             click.echo(line)
+
+
+def _range(bounds) -> str:
+    """A bounded parameter's bounds as ``describe`` prints them: `` (min 0.1, max 0.3)``."""
+    if not bounds:
+        return ""
+    parts = [f"{w} {b:.9g}" for w, b in zip(("min", "max"), bounds) if b is not None]
+    return f" ({', '.join(parts)})"
 
 
 def _shown(v) -> str:

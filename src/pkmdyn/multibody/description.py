@@ -27,7 +27,7 @@ from pydantic import Field, ValidationError, field_validator
 from ..errors import ParameterError
 from ..params_util import Section, _rule, read_toml
 from ..spatial import cross
-from .expressions import resolve_parameters
+from .expressions import parameter_bounds, resolve_parameters
 from .joint_types import JOINT_TYPES, joint_type
 
 __all__ = ["MAGNITUDES", "Description", "BodySpec", "JointSpec", "TaskSpec", "LoadSpec", "MotionSpec", "ActuatorSpec",
@@ -432,6 +432,8 @@ class Description:
     limits: dict[str, float] = field(default_factory=dict)
     #: the named design parameters and their values (``[parameters]``, :mod:`.expressions`)
     parameters: dict[str, Any] = field(default_factory=dict)
+    #: the bounded parameters' ``(min, max)`` (either None where absent)
+    parameter_bounds: dict[str, tuple[float | None, float | None]] = field(default_factory=dict)
     #: ``[mechanism] reactions``: ``"unique"`` or ``"minimum-norm"`` (an over-constrained
     #: mechanism's run without compliance data)
     reactions: str = "unique"
@@ -802,6 +804,7 @@ def load_description(source: str | Path | dict[str, Any], limits: dict[str, Any]
     else:
         path = str(Path(source).absolute())
         raw, label = read_toml(source), str(source)
+    bounds = parameter_bounds(raw) if isinstance(raw, dict) else {}
     raw, parameters = resolve_parameters(raw, label)
     data = _validate(raw, label)
     _check_magnitudes(raw, label, {**data.limits.model_dump(), **(limits or {})})
@@ -865,7 +868,8 @@ def load_description(source: str | Path | dict[str, Any], limits: dict[str, Any]
                        gravity=np.array(data.mechanism.gravity_m_s2, dtype=float),
                        bodies=tuple(body_specs.values()), joints=tuple(joints), task=task, loads=tuple(loads),
                        cut_joints=cuts, motion=motion, path=path, actuators=actuators, groups=groups,
-                       limits=data.limits.model_dump(), parameters=parameters, reactions=data.mechanism.reactions)
+                       limits=data.limits.model_dump(), parameters=parameters, parameter_bounds=bounds,
+                       reactions=data.mechanism.reactions)
 
 
 #: the keys of an actuator entry for each kind of motor (rotary, linear), by role

@@ -38,7 +38,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..spatial import cross
 
-__all__ = ["evaluate", "resolve_parameters", "parameter_values", "FUNCTIONS", "MAX_LENGTH"]
+__all__ = ["evaluate", "resolve_parameters", "parameter_values", "parameter_bounds", "FUNCTIONS", "MAX_LENGTH"]
 
 #: the longest expression text taken
 MAX_LENGTH = 2000
@@ -228,6 +228,17 @@ def parameter_values(raw: Mapping[str, Any], label: str) -> dict[str, Any]:
     return {str(k): done[str(k)] for k in table}
 
 
+def parameter_bounds(raw: Mapping[str, Any]) -> dict[str, tuple[float | None, float | None]]:
+    """The bounds ``(min, max)`` (either None where absent) of the bounded parameters of a
+    description's ``[parameters]`` (``{ value, min, max }``), in the file's order; after
+    :func:`parameter_values` has checked them."""
+    table = raw.get("parameters", {})
+    if not isinstance(table, dict):
+        return {}
+    return {str(k): (None if v.get("min") is None else float(v["min"]), None if v.get("max") is None else float(v["max"]))
+            for k, v in table.items() if isinstance(v, dict) and ("min" in v or "max" in v)}
+
+
 def _names_used(spec: Any) -> set[str]:
     """The names that a parameter's value (a number, an expression or a list of them) reads;
     an expression that does not parse reads none here (:func:`evaluate` reports it)."""
@@ -294,7 +305,7 @@ _TEXT_KEYS = {"name", "type", "parent", "child", "body", "joint", "kind", "euler
 
 def resolve_parameters(raw: dict[str, Any], label: str) -> tuple[dict[str, Any], dict[str, Any]]:
     """The description ``raw`` with every expression evaluated (a copy; ``[parameters]`` left
-    out), and the parameters' values. Only text in numeric fields is an expression: a string
+    out), and the parameters' values (their bounds: :func:`parameter_bounds` of ``raw``). Only text in numeric fields is an expression: a string
     under a key that names a body, joint, type, sequence or other text is left as it is."""
     if not isinstance(raw, dict) or "parameters" not in raw:
         return raw, {}

@@ -229,7 +229,8 @@ def compile_model(desc: Description, *, topology_only: bool = False) -> Mechanis
     prow, pcol, blocks = block_structure(model, rows, idle)
     model = replace(model, solver_rows=rows, solver_idle=idle, solver_prow=prow, solver_pcol=pcol,
                     solver_blocks=blocks, topology=rep, **_drives(desc, act), **_body_groups(desc, order),
-                    limits=dict(desc.limits), parameters=dict(desc.parameters), reactions=desc.reactions)
+                    limits=dict(desc.limits), parameters=dict(desc.parameters),
+                    parameter_bounds=dict(desc.parameter_bounds), reactions=desc.reactions)
     return replace(model, legs=explicit_legs(model))
 
 

@@ -199,6 +199,8 @@ class MechanismModel:
     limits: dict = field(default_factory=dict)
     #: the description's named design parameters and their values (``[parameters]``)
     parameters: dict = field(default_factory=dict)
+    #: the bounded parameters' ``(min, max)`` (either None where absent)
+    parameter_bounds: dict = field(default_factory=dict)
     #: ``[mechanism] reactions``: ``"unique"`` (an over-constrained run without compliance data
     #: is refused) or ``"minimum-norm"``
     reactions: str = "unique"
