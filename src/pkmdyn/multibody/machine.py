@@ -59,10 +59,13 @@ class _State:
     def __init__(self, model: MechanismModel) -> None:
         from . import _one
 
+        self.one = _one  # the single-sample kernels, bound once (an import in a call costs a microsecond)
         self.q_last: Array | None = None
         self.inertia_factors = inertia_factors(model)
         self.pk = _one.pack(model) if _one.supported(model) else None
-        self.direct: Any = None  # the direct kinematics' warm start (:meth:`MechanismVerbs.direct_one`)
+        # the direct kinematics' warm start (:meth:`MechanismVerbs.direct_one`): its buffer, output
+        # and kernel
+        self.direct: Any = None
         self.encoder_q: Array | None = None  # the last reading's tree coordinates (``actuator_coordinates_one``)
         # the readings' own compiled path (a buffer of its own: its state is the last reading)
         self.encoder_pk = _one.pack(model) if self.pk is not None else None
@@ -268,12 +271,12 @@ class MechanismVerbs:
     def _kernel(self, model: MechanismModel, forward: bool, q: object, qd: object, v: object,
                 load: object) -> Array | None:
         """The compiled path's answer, or None (then the general route answers and primes it)."""
-        pk = self._state(model).pk
+        st = self._state(model)
+        pk = st.pk
         if pk is None:
             return None
         ahead.wait("one")
-        from . import _one
-
+        _one = st.one
         if model.named_loads:
             mag = float(model.load_magnitude[list(model.load_name).index(model.named_loads[0])])
             lv = np.asarray(mag if load is None else load, dtype=float)
@@ -330,21 +333,20 @@ class MechanismVerbs:
         ``fresh``, reached from the reference configuration instead, the assembly of a run's
         first pose). ``qd``, the pose's rate, makes the start closer. One compiled call
         (:func:`._one.positions_one`) where it answers, else the checked route."""
-        from . import _kernels as K
-        from . import _one
-        from .kinematics import _run
-
         st = self._state(model)
         nt = model.nt
         ahead.wait("one")
+        _one = st.one
         if not fresh and st.encoder_q is not None and st.encoder_pk is not None:
-            xa, xda = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+            xa, xda = np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(qd, dtype=float)
             if xa.shape == (nt,) and xda.shape == (nt,):
                 np.copyto(st.encoder_prev, st.encoder_view)
-                if _one.positions_one(st.encoder_pk, np.ascontiguousarray(xa), np.ascontiguousarray(xda),
-                                      st.encoder_out) == K.OK:
+                if _one.positions_one(st.encoder_pk, xa, xda, st.encoder_out) == _one.OK:
                     return st.encoder_out.copy()
                 st.encoder_q = st.encoder_prev.copy()  # the last reading's solution
+        from . import _kernels as K
+        from .kinematics import _run
+
         x1 = np.ascontiguousarray(self._x(q))
         q_sol = G_sol = None
         if not fresh and st.encoder_q is not None and np.all(np.isfinite(x1)):
@@ -368,18 +370,19 @@ class MechanismVerbs:
         One compiled call with a packed buffer (:func:`._direct.direct_one`); where it cannot
         answer, the checked route. Raises where the actuators reach no pose or sit on a
         singularity."""
-        from . import _direct as D
-        from .direct import direct_kinematics, one_state, pack_one, prime_one
-
         st = self._state(model)
         a = np.ascontiguousarray(a, dtype=float).reshape(-1)
         ad = np.ascontiguousarray(ad, dtype=float).reshape(-1)
-        ahead.wait("direct")
-        if st.direct is not None:
-            pk, out = st.direct
-            if a.shape == ad.shape == (model.na,) and D.direct_one(pk, a, ad, out) == D.OK:
+        if st.direct is not None:  # (the kernel has run: nothing to wait for)
+            pk, out, kernel, ok = st.direct
+            if a.shape == ad.shape == (model.na,) and kernel(pk, a, ad, out) == ok:
                 nt = model.nt
                 return out[:nt].copy(), out[nt:].copy()
+        from . import _direct as D
+        from .direct import direct_kinematics, one_state, pack_one, prime_one
+
+        ahead.wait("direct")
+        if st.direct is not None:
             prev = one_state(pk)
             q_prev, det_prev = prev[2:2 + model.nq].copy(), float(prev[1])
             dk = direct_kinematics(model, a[None], ad[None], q_start=q_prev)
@@ -389,7 +392,7 @@ class MechanismVerbs:
                 raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
         else:
             dk = direct_kinematics(model, a[None], ad[None])
-            st.direct = (pack_one(model), np.zeros(2 * model.nt))
+            st.direct = (pack_one(model), np.zeros(2 * model.nt), D.direct_one, D.OK)
         prime_one(st.direct[0], dk.q[0], dk.x[0], a, float(dk.det[0]))
         return dk.x[0].copy(), dk.xd[0].copy()
 
