@@ -2,8 +2,8 @@
 explicit and the Newton routes giving the same kinematics, branches included.
 
 The mechanisms beside the built-ins are made here: six-legged platforms whose legs are
-U-P-S, R-U-S or P-U-S, turned as a whole by an arbitrary rotation (legs in unusual
-orientations), and a planar 3-RPR; each is solved by both routes on random smooth motions.
+U-P-S, R-U-S or P-U-S, or R-S-S and P-S-S rods, turned as a whole by an arbitrary rotation
+(legs in unusual orientations), and a planar 3-RPR; each is solved by both routes on random smooth motions.
 """
 
 from __future__ import annotations
@@ -77,6 +77,48 @@ def platform(leg: str, Q: np.ndarray = np.eye(3)) -> dict:
         bodies += [{"name": n1, "mass_kg": 1.0, "com_m": T(u), "inertia_kgm2": [0.01, 0.01, 0.01, 0, 0, 0]},
                    {"name": n2, "mass_kg": 1.0, "com_m": T(0.5 * (u + s)), "inertia_kgm2": [0.02, 0.02, 0.02, 0, 0, 0]}]
     return {"mechanism": {"name": f"hexa_{leg.lower()}", "gravity_m_s2": T([0, 0, -9.80665])},
+            "bodies": bodies, "joints": joints,
+            "task": {"body": "platform", "point_m": T([0, 0, 1.0]), "position": ["x", "y", "z"],
+                     "euler_sequence": "XYZ", "orientation": [1, 2, 3]}}
+
+
+def rod_platform(first: str, Q: np.ndarray = np.eye(3), along: bool = True) -> dict:
+    """A six-legged platform on S-S rods: per leg a first joint (``R``: a revolute on the
+    ground, tangential; ``P``: a vertical slider), a ball at the rod's lower end and a ball
+    (the cut) on the platform; with ``along``, the lower ball's frame z lies along the rod (its
+    spin about the rod one of its coordinates), else the description's default frame. Turned
+    as a whole by ``Q``."""
+    T = lambda v: [float(x) for x in Q @ np.asarray(v, float)]  # noqa: E731
+    bodies = [{"name": "platform", "mass_kg": 10.0, "com_m": T([0, 0, 1.0]),
+               "inertia_kgm2": [0.6, 0.6, 1.2, 0, 0, 0]}]
+    joints = []
+    for i in range(6):
+        pair, side = divmod(i, 2)
+        sg = -1.0 if side == 0 else 1.0
+        ab = np.radians(120 * pair + 10 * sg)
+        ap = np.radians(120 * pair + 50 * sg)
+        b = np.array([np.cos(ab), np.sin(ab), 0.0])
+        s = np.array([0.5 * np.cos(ap), 0.5 * np.sin(ap), 1.0])
+        radial, tangent = b.copy(), np.array([-np.sin(ab), np.cos(ab), 0.0])
+        u = b + 0.3 * radial + np.array([0, 0, 0.1])
+        d = _unit(s - u)
+        n1, n2 = f"first_{i + 1}", f"rod_{i + 1}"
+        if first == "R":
+            joints.append({"name": f"R_{i + 1}", "type": "revolute", "parent": "ground", "child": n1, "point_m": T(b),
+                           "axis": T(tangent), "actuated": True, "angle_at_reference_rad": 0.0})
+        else:
+            joints.append({"name": f"P_{i + 1}", "type": "prismatic", "parent": "ground", "child": n1,
+                           "point_m": T(b), "axis": T([0, 0, 1.0]), "actuated": True,
+                           "position_at_reference_m": 0.1})
+        lower = {"name": f"SA_{i + 1}", "type": "spherical", "parent": n1, "child": n2, "point_m": T(u)}
+        if along:
+            lower["axis"] = T(d)
+        joints += [lower, {"name": f"SB_{i + 1}", "type": "spherical", "parent": n2, "child": "platform",
+                           "point_m": T(s), "axis": T(d)}]
+        bodies += [{"name": n1, "mass_kg": 1.0, "com_m": T(0.5 * (b + u)), "inertia_kgm2": [0.01, 0.01, 0.01, 0, 0, 0]},
+                   {"name": n2, "mass_kg": 1.0, "com_m": T(0.5 * (u + s)),
+                    "inertia_kgm2": [0.02, 0.02, 0.001, 0, 0, 0]}]
+    return {"mechanism": {"name": f"hexa_{first.lower()}ss", "gravity_m_s2": T([0, 0, -9.80665])},
             "bodies": bodies, "joints": joints,
             "task": {"body": "platform", "point_m": T([0, 0, 1.0]), "position": ["x", "y", "z"],
                      "euler_sequence": "XYZ", "orientation": [1, 2, 3]}}
@@ -215,6 +257,42 @@ def test_leg_types_in_any_orientation(leg, pattern, turned):
     assert _compare(model, np.array([0.03, 0.03, 0.03, 0.05, 0.05, 0.05])) <= AGREE
 
 
+@pytest.mark.parametrize("first", ["R", "P"])
+@pytest.mark.parametrize("turned", [False, True])
+def test_rods_between_two_balls_are_explicit_with_their_spin_held(first, turned):
+    """R-S-S and P-S-S legs: each rod's spin about its axis is an idle freedom, held by an
+    idle row of its own (the lower ball's coordinate about the rod); the five legs off the
+    spanning tree are then A2 legs (first joint, two turns of the ball) and agree with Newton.
+    The leg that carries the platform keeps its spin in the task block (the difference of its
+    two balls' spins), which Newton solves: a mechanism where only some legs are explicit."""
+    Q = _rot([0.3, -0.8, 0.5], 2.1) if turned else np.eye(3)
+    model = load_mechanism(rod_platform(first, Q))
+    idle = model.solver_idle
+    assert idle.shape[0] == 6
+    units = [int(np.flatnonzero(r)[0]) for r in idle if np.count_nonzero(r) == 1]
+    spins = {model.joint_q0[model.joint_index(f"SA_{i}")] + 2 for i in range(2, 7)}
+    assert set(units) == spins
+    assert model.legs.count == 5 and [nm[2] for nm in model.legs.names] == [2] * 5
+    assert sorted(nm[0] for nm in model.legs.names) == [f"SB_{i}" for i in range(2, 7)]
+    assert _compare(model, np.array([0.03, 0.03, 0.03, 0.05, 0.05, 0.05])) <= AGREE
+
+
+def test_a_ball_frame_off_the_rod_leaves_the_leg_to_newton():
+    """Where the lower ball's frame has no axis along the rod, the spin is a mix of the ball's
+    coordinates: no coordinate is held alone, no leg is explicit, and Newton solves (the same
+    kinematics as with the frame along the rod: the frame changes the coordinates, not the
+    motion of the bodies)."""
+    model = load_mechanism(rod_platform("R", along=False))
+    assert model.legs.count == 0
+    along = load_mechanism(rod_platform("R"))
+    t, x, xd, xdd = _motion(model, np.array([0.03, 0.03, 0.03, 0.05, 0.05, 0.05]))
+    a = solve_kinematics(model, x, xd, xdd, t)
+    b = solve_kinematics(along, x, xd, xdd, t)
+    acts = [model.joint_q0[model.joint_index(f"R_{i}")] for i in range(1, 7)]
+    assert np.abs(a.q[:, acts] - b.q[:, acts]).max() <= AGREE
+    assert np.abs(a.qd[:, acts] - b.qd[:, acts]).max() <= AGREE * max(1.0, np.abs(b.qd[:, acts]).max())
+
+
 def test_planar_rpr():
     model = load_mechanism(rpr3())
     assert [nm[2] for nm in model.legs.names] == [3, 3]
@@ -304,3 +382,15 @@ def test_describe_lists_the_explicit_legs(capsys):
     assert "(closed form, 6)" in line and "U_1-P_1-S_1 to the task body (T+B2)" in line and "S_6 (B2)" in line
     assert main(["describe", "--machine", "delta"]) == 0
     assert "explicit legs (closed form, 0): none" in capsys.readouterr().out
+
+
+def test_describe_names_a_held_spin(capsys, tmp_path):
+    import tomlkit
+
+    from pkmdyn.cli import main
+
+    f = tmp_path / "rss.toml"
+    f.write_text(tomlkit.dumps(rod_platform("R")))
+    assert main(["describe", "--machine", str(f)]) == 0
+    line = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("explicit legs")][0]
+    assert "(closed form, 5)" in line and "R_2-SA_2 to SB_2 (A2, SA_2 spin held)" in line

@@ -3,6 +3,7 @@ and cut joints, against the textbook answers and the independent count of tests/
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import multibody_examples as ex
@@ -95,3 +96,26 @@ def test_a_rigid_loop_is_refused():
     d["joints"][2]["axis"] = [0.3, 0.0, 1.0]
     with pytest.raises(ParameterError, match="mechanism has 0 degree"):
         load_mechanism(d)
+
+
+def test_sparse_basis_spans_the_same_space_with_fewest_entries():
+    """The idle rows' basis: the same row space as the given basis, unit rows, and a
+    coordinate direction that the space holds comes out as a unit vector on it."""
+    from pkmdyn.multibody.topology import sparse_basis
+
+    rng = np.random.default_rng(7)
+    # a space holding e_2 and e_5 and one mixed direction over coordinates 0, 1, 3
+    mixed = np.zeros(7)
+    mixed[[0, 1, 3]] = [0.3, -1.2, 0.8]
+    E = np.zeros((3, 7))
+    E[0, 2] = E[1, 5] = 1.0
+    E[2] = mixed
+    B = rng.normal(size=(3, 3)) @ E  # an arbitrary basis of that space
+    S = sparse_basis(B)
+    assert S.shape == (3, 7)
+    assert np.allclose(np.linalg.norm(S, axis=1), 1.0, atol=1e-14)
+    assert np.linalg.matrix_rank(np.vstack([S, E]), tol=1e-10) == 3  # the same space
+    supports = sorted(tuple(np.flatnonzero(r)) for r in S)
+    assert supports == [(0, 1, 3), (2,), (5,)]
+    assert np.allclose(abs(S[[tuple(np.flatnonzero(r)) for r in S].index((0, 1, 3))]), abs(mixed) / np.linalg.norm(mixed),
+                       atol=1e-12)

@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+import numpy as np
 
 from ._groups import MACHINE_HELP, PATH_IN, FiniteFloat, cli, list_files
 from .control import MAX_CYCLES, hand_built_controllers
@@ -69,7 +70,7 @@ def describe(machine: str) -> None:
         f"task coordinates: {', '.join(f'{n} [{u}]' for n, u in zip(model.task_names, model.task_units))} "
         f"of body {model.body_names[model.task_body]}",
         f"explicit legs (closed form, {model.legs.count}): "
-        + (", ".join(f"{'-'.join(chain)} to {cut} ({LEG_PATTERNS[kind].split(' ')[0]})"
+        + (", ".join(f"{'-'.join(chain)} to {cut} ({LEG_PATTERNS[kind].split(' ')[0]}{_held(model, chain)})"
                      for cut, chain, kind in model.legs.names) or "none; Newton solves every loop")
         + (" (every block: Newton only checks)" if model.legs.count == model.solver_blocks.shape[0] - 1 else ""),
     ]
@@ -84,6 +85,16 @@ def describe(machine: str) -> None:
     for line in lines:
         if line is not None:
             click.echo(line)
+
+
+def _held(model, chain) -> str:
+    """``, J spin held`` for the joints of an explicit leg's chain with a coordinate that an idle
+    row of its own holds (an S-S rod's spin; docs/mechanism_format.md, "Explicit legs")."""
+    held = {int(np.flatnonzero(r)[0]) for r in model.solver_idle if np.count_nonzero(r) == 1}
+    names = [j for j in chain if any(c in held for c in range(model.joint_q0[model.joint_index(j)],
+                                                                model.joint_q0[model.joint_index(j)]
+                                                                + model.joint_nq[model.joint_index(j)]))]
+    return "".join(f", {j} spin held" for j in names)
 
 
 def _range(bounds) -> str:

@@ -17,8 +17,11 @@ A block is an **explicit leg** when
   or idle row;
 * its coordinates are those of a serial chain of whole tree joints, from a base body (the
   ground or a body placed by earlier blocks) to the body that carries the cut joint's point
-  ``e`` on the leg's side; the cut joint's other body (the one the leg meets, holding the
-  point ``c``) is placed by earlier blocks (or by an explicit leg solved before this one);
+  ``e`` on the leg's side, but for coordinates that an idle row of their own holds at their
+  reference values (an S-S rod's spin about the rod where the first ball's frame has an axis
+  along it; :func:`.topology.sparse_basis`): an R-S-S leg is then A2 with the spin held;
+  the cut joint's other body (the one the leg meets, holding the point ``c``) is placed by
+  earlier blocks (or by an explicit leg solved before this one);
 * the chain, written as the product of exponentials about the reference configuration
   (``e(th) = exp(xi_1 th_1) ... exp(xi_k th_k) e0``, ``th = q - q_ref``; Murray, Li &
   Sastry 1994, ch. 3) has one of four patterns, each solved by the subproblems of Paden and
@@ -32,7 +35,8 @@ A block is an **explicit leg** when
         normal to the second turn)           subproblem 1                          planar
   A2    turn or slide, then two turns about  subproblem 3 or a quadratic for the   R-U-S, P-U-S
         one point ``m0`` (a universal        first joint, subproblem 2 for the     (the hip's
-        joint)                               two turns                             PUS legs)
+        joint, or a ball with its spin held) two turns                             PUS legs),
+                                                                                   R-S-S, P-S-S
   B1    a turn, then a slide normal to it    quadratic in the plane, then          R-P-R planar
                                              subproblem 1
   B2    two turns about one point ``m0``,    quadratic ``|e0 + s a - m0| = |c -    U-P-S
@@ -207,6 +211,10 @@ def explicit_legs(model) -> LegTable:
     for b in range(nb):
         k = model.body_joint[b]
         coord_body[model.joint_q0[k]:model.joint_q0[k] + model.joint_nq[k]] = b
+    # coordinates held at their reference values by an idle row of their own (a rod's spin
+    # about its axis: :func:`.topology.sparse_basis`): a leg's chain may hold such a coordinate
+    idle = np.asarray(model.solver_idle)
+    held = {int(np.flatnonzero(r)[0]) for r in idle if np.count_nonzero(r) == 1}
     found: list[dict] = []
     for bk in range(blocks.shape[0] - 1):
         r_idx = prow[blocks[bk]:blocks[bk + 1]]
@@ -215,14 +223,14 @@ def explicit_legs(model) -> LegTable:
             continue
         rr = rows[r_idx]
         if np.all(rr >= nr):  # the task rows: the leg that carries the task body
-            leg = _task_chain(model, cols, coord_body, R, p, S, tol)
+            leg = _task_chain(model, cols, coord_body, R, p, S, tol, held)
         elif np.any(rr >= nr) or cols.size not in (2, 3):
             continue
         else:
             loops = set(int(model.row_loop[i]) for i in rr)
             if len(loops) != 1 or np.any(model.row_kind[rr] != 0):
                 continue
-            leg = _chain(model, cols, coord_body, int(model.loop_joint[loops.pop()]), R, p, S, tol)
+            leg = _chain(model, cols, coord_body, int(model.loop_joint[loops.pop()]), R, p, S, tol, held)
         if leg is not None:
             found.append(leg)
     # each leg's bodies: its chain's and their descendants', placed once the leg is solved (in
@@ -248,7 +256,7 @@ def explicit_legs(model) -> LegTable:
         late[mv] = i
         redo[i, 0] = len(mv)
         redo[i, 1:1 + len(mv)] = mv
-    fixed, fixed_coord = _fixed(model, found)
+    fixed, fixed_coord = _fixed(model, found, held)
     pad = lambda c: list(c) + [0] * (3 - len(c))  # noqa: E731
     nan3 = np.full((3, 3), np.nan)
     return LegTable(
@@ -278,17 +286,18 @@ def _leg_coords(leg: dict) -> list[int]:
     return [int(c) for c in leg["coords"]] + [int(c) for c in leg.get("ball", [-1])[1:]]
 
 
-def _fixed(model, found: list[dict]) -> tuple[IntArray, IntArray]:
+def _fixed(model, found: list[dict], held: set[int] = frozenset()) -> tuple[IntArray, IntArray]:
     """Which legs are placed from the task coordinates alone (:class:`LegTable`'s ``fixed``) and
     the coordinates they set: in block order, a leg whose base and met bodies are the ground or
-    bodies whose every tree coordinate from the ground is set by such a leg."""
+    bodies whose every tree coordinate from the ground is set by such a leg (or ``held`` at
+    its reference value)."""
     fixed = np.zeros(len(found), dtype=np.int64)
     fixed_coord = np.zeros(model.nq, dtype=np.int64)
 
     def placed_by_fixed(b: int) -> bool:
         while b >= 0:
             k = model.body_joint[b]
-            if not np.all(fixed_coord[model.joint_q0[k]:model.joint_q0[k] + model.joint_nq[k]]):
+            if not all(fixed_coord[c] or c in held for c in range(model.joint_q0[k], model.joint_q0[k] + model.joint_nq[k])):
                 return False
             b = int(model.body_parent[b])
         return True
@@ -346,8 +355,10 @@ def _geometry(model, cols: IntArray, R: Array, p: Array, S: Array, base: int, e_
     return {"kind": kind, "axis": axis, "point": point, "m0": m0, "e0": e0}
 
 
-def _path(model, cols: IntArray, coord_body: IntArray) -> list[int] | None:
-    """The bodies of a chain of whole tree joints with coordinates ``cols``, base first, or None."""
+def _path(model, cols: IntArray, coord_body: IntArray, held: set[int] = frozenset()) -> list[int] | None:
+    """The bodies of a chain of whole tree joints with coordinates ``cols``, base first, or None;
+    a joint's coordinates in ``held`` (held at their reference values by idle rows of their
+    own) need not be among ``cols``."""
     bodies: list[int] = []
     for c in cols:
         b = int(coord_body[c])
@@ -356,7 +367,7 @@ def _path(model, cols: IntArray, coord_body: IntArray) -> list[int] | None:
     have = set(int(c) for c in cols)
     for b in bodies:
         j = model.body_joint[b]
-        if not set(range(model.joint_q0[j], model.joint_q0[j] + model.joint_nq[j])) <= have:
+        if not set(range(model.joint_q0[j], model.joint_q0[j] + model.joint_nq[j])) <= have | held:
             return None
     for a, b in zip(bodies, bodies[1:]):
         if model.body_parent[b] != a:
@@ -365,10 +376,10 @@ def _path(model, cols: IntArray, coord_body: IntArray) -> list[int] | None:
 
 
 def _chain(model, cols: IntArray, coord_body: IntArray, k: int, R: Array, p: Array, S: Array,
-           tol: float) -> dict | None:
+           tol: float, held: set[int] = frozenset()) -> dict | None:
     """The explicit leg of the block with coordinates ``cols`` closed by cut joint ``k``, or
     None (module docstring)."""
-    bodies = _path(model, cols, coord_body)
+    bodies = _path(model, cols, coord_body, held)
     if bodies is None:
         return None
     end, first = bodies[-1], bodies[0]
@@ -391,7 +402,7 @@ def _chain(model, cols: IntArray, coord_body: IntArray, k: int, R: Array, p: Arr
 
 
 def _task_chain(model, cols: IntArray, coord_body: IntArray, R: Array, p: Array, S: Array,
-                tol: float) -> dict | None:
+                tol: float, held: set[int] = frozenset()) -> dict | None:
     """The leg that carries the task body (the block of the task rows), or None: the task gives
     the body's three Euler angles and, where the chain places its ball, its position too; the
     chain ends with a spherical joint (three turns about its centre) into the task body, from
@@ -399,7 +410,7 @@ def _task_chain(model, cols: IntArray, coord_body: IntArray, R: Array, p: Array,
     tb = int(model.task_body)
     n_ang = int(np.sum(model.task_kind == 1))
     n_pos = int(np.sum(model.task_kind == 0))
-    bodies = _path(model, cols, coord_body)
+    bodies = _path(model, cols, coord_body, held)
     if bodies is None or bodies[-1] != tb or n_ang != 3 or n_pos not in (0, 3) or cols.size != model.nt:
         return None
     if int(model.body_parent[bodies[0]]) >= 0:
@@ -407,6 +418,8 @@ def _task_chain(model, cols: IntArray, coord_body: IntArray, R: Array, p: Array,
     k = int(model.body_joint[tb])
     bc = list(range(model.joint_q0[k], model.joint_q0[k] + model.joint_nq[k]))
     motions = [int(model.coord_motion[c]) for c in bc]
+    if not set(bc) <= set(int(c) for c in cols):
+        return None  # (a ball coordinate held by an idle row: the task cannot set it)
     if len(bc) != 3 or any(mo >= 3 for mo in motions) or motions[0] == motions[1] or motions[1] == motions[2]:
         return None
     front = [int(c) for c in cols if c not in bc]

@@ -34,7 +34,7 @@ from .poses import body_poses
 from .records import MechanismModel
 
 __all__ = ["TopologyReport", "analyse_topology", "kutzbach_count", "constraint_jacobian", "solver_selection",
-           "row_scale", "column_scale", "row_labels"]
+           "row_scale", "column_scale", "row_labels", "sparse_basis"]
 
 Array = NDArray[np.float64]
 RANK_TOL = 1e-9
@@ -135,6 +135,33 @@ def _rank(a: Array) -> int:
         return 0
     sv = np.linalg.svd(a, compute_uv=False)
     return int(np.sum(sv > RANK_TOL * max(sv.max(), 1e-300)))
+
+
+def sparse_basis(B: Array) -> Array:
+    """The rows of ``B (k, n)`` (independent) replaced by the reduced row echelon basis of the
+    same row space (Gauss-Jordan with the largest remaining entry as pivot), each row scaled to
+    unit length, entries below ``1e-12`` of their row's largest set to zero: rows with as few
+    nonzero entries as the space allows (a unit row where the space holds one coordinate's
+    direction). Holding ``B (q - q_ref) = 0`` is the same set of equations in either basis."""
+    A = np.array(B, dtype=float)
+    k, n = A.shape
+    free = list(range(n))
+    for r in range(k):
+        sub = np.abs(A[r:, free])
+        i, j = np.unravel_index(int(np.argmax(sub)), sub.shape)
+        c = free.pop(int(j))
+        A[[r, r + int(i)]] = A[[r + int(i), r]]
+        A[r] /= A[r, c]
+        for o in range(k):
+            if o != r:
+                A[o] -= A[o, c] * A[r]
+        A[:, c] = 0.0
+        A[r, c] = 1.0
+    for r in range(k):
+        big = float(np.abs(A[r]).max(initial=0.0))
+        A[r, np.abs(A[r]) < 1e-12 * big] = 0.0
+        A[r] /= max(float(np.linalg.norm(A[r])), 1e-300)
+    return A
 
 
 def _null(a: Array, ncols: int) -> Array:
@@ -259,7 +286,11 @@ def solver_selection(model: MechanismModel, q: Array | None = None) -> tuple[Arr
     directions of an over-constrained mechanism are left out and only checked) followed by
     every task row. Idle rows ``(ni, nq)``: a basis ``n_k`` of the null space of those rows
     (the idle freedoms), each held by the linear equation ``n_k . (q - q_ref) = 0``; a
-    smooth choice, so that the coordinates stay differentiable functions of the task. Raises :class:`~pkmdyn.errors.ParameterError` when the task coordinates do not
+    smooth choice, so that the coordinates stay differentiable functions of the task. The
+    basis is the sparse one of :func:`sparse_basis` (the same equations as any other basis of
+    that space): a rod's spin about the line through its two spherical joints is its own row,
+    the rod's own coordinate where one of its joint's axes lies along that line, which leaves
+    the leg to its closed form (:mod:`.legs`). Raises :class:`~pkmdyn.errors.ParameterError` when the task coordinates do not
     determine the mechanism (fewer or more than its degrees of freedom, or dependent) or
     when there are more actuators than degrees of freedom.
     """
@@ -289,7 +320,7 @@ def solver_selection(model: MechanismModel, q: Array | None = None) -> tuple[Arr
     if _rank(Ks) != sel.size:
         raise ParameterError(f"{src}: [task]: the task coordinates {', '.join(model.task_names)} are not independent "
                              "at the reference configuration (they do not determine the mechanism's pose)")
-    N = _null(Ks, model.nq)  # scaled coordinates; dq = D dq_s with D = column_scale
+    N = sparse_basis(_null(Ks, model.nq).T).T  # scaled coordinates; dq = D dq_s with D = column_scale
     idle = (N / column_scale(model)[:, None]).T.copy()
     Kfull = np.concatenate([Ks, N.T])
     if _rank(Kfull) != model.nq:  # pragma: no cover - N completes the rank by construction
