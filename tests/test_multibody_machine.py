@@ -336,8 +336,30 @@ def test_encoder_readings_one_at_a_time_are_the_inverse_kinematics(name):
     assert np.abs((got - kin.act_q) * scale).max() <= 1e-12
     st = V._state(m)
     if _one.supported(m):
-        assert _one.state(st.encoder_pk)[0] == _one.FACTORED
+        # the compiled call answered: by the closed forms alone where every actuated coordinate
+        # belongs to a leg placed from the task alone, else by the full solve
+        alone = m.legs.count > 0 and np.all(m.legs.fixed_coord[m.act_coord] == 1)
+        assert _one.state(st.encoder_pk)[0] == (_one.ALONE if alone else _one.FACTORED)
+        assert alone == (name == "stewart")
     bad = x[5].copy()
     bad[0] = np.nan
     with pytest.raises(MotionError):
         V.actuator_coordinates_one(m, bad, xd[5])
+
+
+def test_hip_encoder_readings_by_the_upper_legs_alone():
+    """The hip's sliders are set by its upper legs, placed from the task alone: the readings
+    one at a time come from those closed forms alone (no Newton on the lower platform) and are
+    the batched inverse kinematics' sliders."""
+    from pkmdyn.machines.hip_simulator import load_params
+    from pkmdyn.machines.hip_simulator.description import hip_description
+    from pkmdyn.multibody import _one
+
+    m = load_mechanism(hip_description(load_params()))
+    t = np.linspace(0.0, 0.8, 200)
+    x, xd, xdd = ex.smooth_motion(reference_task(m), np.full(m.nt, 0.1), t, 5)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    V = machine_verbs(m)
+    got = np.array([V.actuator_coordinates_one(m, x[k], xd[k], fresh=k == 0) for k in range(len(t))])
+    assert np.abs((got - kin.act_q) / m.length_scale).max() <= 1e-12
+    assert _one.state(V._state(m).encoder_pk)[0] == _one.ALONE

@@ -410,6 +410,32 @@ def place_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coo
 
 
 @njit(cache=True, _nrt=False)
+def place_fixed_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                     RP, pP, RC, pC, R, p, S, w33, w3, trig, legs, xs, task):  # pragma: no cover - compiled
+    """The legs placed from the task alone (``fixed``, :mod:`.legs`) and nothing else: each in
+    turn has its coordinates in ``q`` set in closed form from the task coordinates ``xs`` (the
+    task leg) or from the body it meets (placed by an earlier such leg), and its bodies placed;
+    the branch nearest the coordinates ``q`` holds. The coordinates such a leg sets are the
+    ones the full solve gives (it solves these legs once per sample and keeps them). Returns
+    False at the first that does not reach its point (``q`` then partly set)."""
+    redo, kind, fixed = legs[11], legs[1], legs[17]
+    Rf = w33[0]
+    o = w3[18]
+    for L in range(redo.shape[0]):
+        if fixed[L] == 0:
+            continue
+        if kind[L] >= LEG_TASK:
+            if not _task_leg(L, xs, q, legs, task, RP, RC, pC, w3, w33):
+                return False
+        elif not _explicit_leg(L, q, R, p, legs, w3):
+            return False
+        for i in range(1, _nn(redo[L, 0] + 1)):
+            _forward_body(redo[L, i], q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                          coord_sign, RP, pP, RC, pC, R, p, S, Rf, o, trig, False)
+    return True
+
+
+@njit(cache=True, _nrt=False)
 def _task_leg(L, xs, q, legs, task, RP, RC, pC, w3, w33):  # pragma: no cover - compiled
     """The leg ``L`` that carries the task body, in closed form from the task coordinates ``xs``
     (:mod:`.legs`): the task body's rotation ``R_T = Rot_a1(phi_1) Rot_a2(phi_2) Rot_a3(phi_3)``

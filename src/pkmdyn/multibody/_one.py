@@ -45,13 +45,15 @@ from numpy.typing import NDArray
 
 from .._dense import solve_in_place
 from ._dyn_kernels import body_wrench, generalised, joint_friction, load_wrench, task_mass
-from ._kernels import OK, _nn, _point_motion, _wrap, chord_pause, solve_sample, solver_positions, task_unit_rhs
+from ._kernels import (OK, _nn, _point_motion, _wrap, chord_pause, place_fixed_legs, solve_sample, solver_positions,
+                       task_unit_rhs)
 from .dynamics import SINGULAR_ACTUATION, inertia_factors
 from .friction import EPS_ROTATION as EPS_R
 from .friction import EPS_TRANSLATION as EPS_T
 from .model import MechanismModel
 
-__all__ = ["pack", "supported", "state", "prime", "solution", "forward_one", "inverse_one", "positions_one", "COLD"]
+__all__ = ["pack", "supported", "state", "prime", "solution", "forward_one", "inverse_one", "positions_one", "COLD",
+           "ALONE"]
 
 Array = NDArray[np.float64]
 
@@ -159,8 +161,10 @@ def pack(model: MechanismModel) -> NDArray[np.int64]:
 
 
 #: the state's first entry: nothing known, a solution (:func:`prime`), a solution with the
-#: factors of its Jacobian in the work space and its bias accelerations (after a call)
-COLD_STATE, PRIMED, FACTORED = 0.0, 1.0, 2.0
+#: factors of its Jacobian in the work space and its bias accelerations (after a call), the
+#: legs placed from the task alone solved at the last ``x`` and every other coordinate of an
+#: earlier solution (after :func:`positions_one`'s closed forms alone)
+COLD_STATE, PRIMED, FACTORED, ALONE = 0.0, 1.0, 2.0, 3.0
 
 
 def state(pk: NDArray[np.int64]) -> Array:
@@ -381,6 +385,24 @@ def _dynamics(pk, x, xd, v, load, mode, out):  # pragma: no cover - compiled
     qddp = _fview(pk, so + o2, (nq,))
     xdp = _fview(pk, so + o2 + nq, (nt,))
     pause = int(st[o2 + nq + nt])
+    if mode == POSITIONS:
+        # every actuated coordinate set by a leg placed from the task alone: those legs' closed
+        # forms alone (the values the full solve keeps), from the previous solution's branch
+        alone = legs[1].shape[0] > 0
+        for a in range(act_coord.shape[0]):
+            if legs[18][act_coord[a]] == 0:
+                alone = False
+        if alone and place_fixed_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                                      coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, legs, x,
+                                      (task_body, task_point, task_kind, task_index, euler_axes)):
+            for a in range(act_coord.shape[0]):
+                out[a] = q[act_coord[a]]
+            # the other coordinates are those of an earlier sample: a later full solve starts
+            # from them as they are (no extrapolation, no simplified step)
+            st[0] = ALONE
+            for t in range(nt):
+                xp[t] = x[t]
+            return OK
     factored = st[0] == FACTORED
     chord = factored and pause == 0
     ss = 0.0
@@ -543,7 +565,10 @@ def inverse_one(pk: NDArray[np.int64], x: Array, xd: Array, xdd: Array, load: fl
 def positions_one(pk: NDArray[np.int64], x: Array, xd: Array, out: Array) -> int:
     """``out = q_a (na,)``, the actuated joints' coordinates at task pose ``x`` (one sample of
     the inverse kinematics from the previous call's solution, ``xd`` the pose's rate for the
-    predictor: a plant's encoders); returns the status (0 OK) (:func:`forward_one`)."""
+    predictor: a plant's encoders); returns the status (0 OK) (:func:`forward_one`). Where
+    every actuated coordinate is set by a leg placed from the task alone (:mod:`.legs`: the
+    Stewart platform's legs, the hip's upper legs), those legs' closed forms alone answer, the
+    values the full solve keeps (no Newton, no rates; the state then :data:`ALONE`)."""
     return _dynamics(pk, x, xd, xd, 0.0, POSITIONS, out)
 
 
