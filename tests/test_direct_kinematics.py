@@ -173,7 +173,7 @@ def test_one_sample_at_a_time_gives_the_motion_back(name):
     poses and rates back from its actuator coordinates, also after a jump from the last sample
     back to the first; the compiled call answered the motion's samples."""
     from pkmdyn.multibody import _direct as D
-    from pkmdyn.multibody.direct import one_state
+    from pkmdyn.multibody.direct import one_state, task_state
     from pkmdyn.multibody.machine import machine_verbs
 
     m = _model(name)
@@ -185,7 +185,11 @@ def test_one_sample_at_a_time_gives_the_motion_back(name):
         got = np.array([np.concatenate(V.direct_one(m, kin.act_q[k], kin.act_qd[k])) for k in range(len(t))])
         assert np.abs((got[:, :m.nt] - x) * sc).max() <= 1e-10
         assert np.abs((got[:, m.nt:] - xd) * sc).max() <= 1e-8 * max(np.abs(xd * sc).max(), 1e-12)
-        assert one_state(V._state(m).direct[0])[0] == D.ONE_FACTORED
+        st = V._state(m)
+        # the task-space route where every actuator belongs to a leg placed from the task alone
+        assert bool(st.direct_task) == (name in ("stewart", "hip"))
+        state = task_state(st.direct_task[1]) if st.direct_task else one_state(st.direct[0])
+        assert state[0] == D.ONE_FACTORED
     with pytest.raises((MotionError, ParameterError), match="actuator|column|shape|expected"):
         V.direct_one(m, kin.act_q[0][:-1], kin.act_qd[0][:-1])  # one actuator short: the checked route refuses
 
@@ -547,3 +551,33 @@ def test_rpr3_with_six_real_assembly_modes():
         d = [max(np.abs(a.x[:2] - w_[:2]).max(), abs((a.x[2] + want[0][2] - w_[2] + np.pi) % (2 * np.pi) - np.pi))
              for a in got.modes]
         assert min(d) <= 1e-9, (w_, d)
+
+
+def test_one_sample_at_a_time_refuses_a_crossing_instead_of_turning_back():
+    """The Stewart platform turned about its vertical axis through the singularity where the
+    inverse kinematics' Jacobian ``d(legs)/d(pose)`` changes sign (found here from that
+    Jacobian alone). The legs' lengths turn back there, so the same lengths also belong to the
+    pose turning back on the other assembly mode: the controller's route (``direct_one``, in
+    task space for this platform) follows the motion up to the crossing and then refuses with
+    a singularity error, instead of returning the turned-back pose."""
+    from pkmdyn.multibody.machine import machine_verbs
+
+    m = _model("stewart")
+    n = 801
+    t = np.linspace(0.0, 1.0, n)
+    x = np.tile(reference_task(m), (n, 1))
+    x[:, 5] = np.linspace(0.0, 2.0, n)
+    xd = np.zeros_like(x)
+    xd[:, 5] = 2.0
+    kin = solve_kinematics(m, x, xd, np.zeros_like(x), t)
+    det = np.linalg.det(kin.G[:, m.act_coord, :])
+    k = np.flatnonzero(np.sign(det[:-1]) != np.sign(det[1:]))
+    assert k.size == 1 and 100 < k[0] < n - 100
+    V = machine_verbs(m)
+    for i in range(k[0] + 1):
+        got, _ = V.direct_one(m, kin.act_q[i], kin.act_qd[i])
+        assert np.abs(got - x[i]).max() <= 1e-9
+    assert V._state(m).direct_task
+    with pytest.raises(SingularityError, match="crossed a singularity"):
+        for i in range(k[0] + 1, k[0] + 4):
+            V.direct_one(m, kin.act_q[i], kin.act_qd[i])

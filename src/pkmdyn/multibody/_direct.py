@@ -29,10 +29,10 @@ import math
 import numpy as np
 from numba import njit
 
-from ._kernels import (LOOP_OPEN, NOT_CONVERGED, OK, ROWS_DRIFT, ROWS_JACOBIAN, ROWS_VALUES, SINGULAR, _wrap,
-                       along_h2, bias_motion, forward_positions, jerk_factor, largest_scaled, rows,
-                       second_order_applies)
-from ._one import _fview, _iview
+from ._kernels import (LEG_TASK, LOOP_OPEN, NOT_CONVERGED, OK, ROWS_DRIFT, ROWS_JACOBIAN, ROWS_VALUES, SINGULAR, _inv3,
+                       _nn, _wrap, along_h2, bias_motion, euler_rate_map, forward_positions, jerk_factor,
+                       largest_scaled, place_fixed_legs, rows, second_order_applies)
+from ._one import _f, _f33, _fn3, _fview, _i, _i2, _iview
 
 __all__ = ["CROSSED", "EULER_SINGULAR_RATES", "COLD", "BAD_INPUT", "direct_batch", "direct_starts", "direct_one",
            "ONE_ARRAYS"]
@@ -517,3 +517,199 @@ def _refresh_cache() -> None:
 
 
 _refresh_cache()
+
+
+# ---- the task-space route of one sample: legs placed from the task alone carry every actuator
+
+#: status of :func:`direct_task_one` where a leg's closed form does not reach its point
+NOT_REACHED = 21
+#: the header of the task-space route's buffer (:func:`.direct.pack_task`): the offsets of its
+#: parts (22), then ``npos`` (task positions given: 3, or 0 for a task body on a ball fixed to the
+#: ground) and ``nb``
+TASK_HEAD = 24
+
+
+@njit(cache=True, _nrt=False)
+def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
+    """One sample of the direct kinematics in task space, for a mechanism whose every actuated
+    coordinate belongs to a leg placed from the task alone (:mod:`.legs`: the Gough-Stewart
+    platform, the hip's upper legs) and whose task gives the task body's three Euler angles (and
+    its position, or the body sits on a ball fixed to the ground). Unknowns: the task coordinates
+    ``x (nt)``; equations: ``q_a(x) = s`` with ``q_a(x)`` the legs' closed forms
+    (:func:`._kernels.place_fixed_legs`), by Newton from the previous call's solution plus
+    ``A^-1 (s - s_prev)``, or plus ``xd_prev h`` where that step turns the pose back against
+    its previous rate (``h`` the previous call's step along its rate: the pose keeps moving
+    through a singularity, where the actuators turn back, so that the crossing shows as
+    ``det A`` changing sign instead of the pose turning back onto the other assembly mode). The Jacobian ``A = dq_a/dx`` row by row: an actuated coordinate in
+    the chain of leg L (coordinates ``c_1..c_3``, end point at the point ``c`` of the task body)
+    moves with ``J_L qd_L = v_c``, ``J_L = [S_v + S_w x c]`` the chain's point velocities at
+    ``c``, so its row is ``(J_L^-1)_i v_c(xd)``, with ``v_c = v_o + w x (c - o)``, ``w = E(phi)
+    phi_dot`` (``E`` the Euler rate map) and ``o`` the task point (its velocity the task's
+    positions) or the fixed ball's centre. Then ``xd = A^-1 sd``. ``pk``: the single-sample
+    kinematics' packed model (:func:`._one.pack`, read only); ``d``: this route's state and
+    work (:func:`.direct.pack_task`). Writes ``x, xd`` into ``out (2 nt)``; returns OK,
+    :data:`COLD`, :data:`BAD_INPUT`, :data:`NOT_REACHED`, NOT_CONVERGED, SINGULAR or
+    :data:`CROSSED` (``det A`` changed sign since the previous call), each for the caller's
+    checked route."""
+    nq, nt, task_body, max_iter = pk[4], pk[5], pk[2], pk[3]
+    na = nt
+    nb = d[TASK_HEAD - 1]
+    npos = d[TASK_HEAD - 2]
+    st = _fview(d, d[0], (2,))
+    if st[0] == ONE_COLD:
+        return COLD
+    for a in range(na):
+        if not (np.isfinite(s[a]) and np.isfinite(sd[a])):
+            return BAD_INPUT
+    x = _fview(d, d[1], (nt,))
+    sp = _fview(d, d[2], (na,))
+    Ap = _fview(d, d[3], (nt, nt))
+    scale = _fview(d, d[4], (na,))
+    o = _fview(d, d[5], (3,))
+    lmap = _iview(d, d[6], (na, 2))
+    q = _fview(d, d[7], (nq,))
+    R = _fview(d, d[8], (nb, 3, 3))
+    p = _fview(d, d[9], (nb, 3))
+    S = _fview(d, d[10], (nq, 6))
+    w33 = _fview(d, d[11], (5, 3, 3))
+    w3 = _fview(d, d[12], (20, 3))
+    trig = _fview(d, d[13], (nq, 3))
+    A = _fview(d, d[14], (nt, nt))
+    LU = _fview(d, d[15], (nt, nt))
+    r = _fview(d, d[16], (nt,))
+    E = _fview(d, d[17], (3, 3))
+    J = _fview(d, d[18], (6, 3))  # the chain's point velocities (3 x 3), then its inverse
+    piv = _iview(d, d[19], (nt,))
+    xdp = _fview(d, d[20], (nt + 1,))  # the previous call's task rate, then its step h
+    x0 = _fview(d, d[21], (nt,))
+    tol = _fview(pk, pk[6], (2,))[0]
+    body_parent, body_joint, joint_q0, joint_nq, coord_motion = _i(pk, 0), _i(pk, 1), _i(pk, 2), _i(pk, 3), _i(pk, 4)
+    task_kind, task_index, euler_axes = _i(pk, 13), _i(pk, 14), _i(pk, 15)
+    act = _i(pk, 20)
+    legs = (_i(pk, 34), _i(pk, 35), _i2(pk, 36), _i(pk, 37), _i(pk, 38), _fn3(pk, 32), _f33(pk, 33), _f33(pk, 34),
+            _fn3(pk, 35), _fn3(pk, 36), _fn3(pk, 37), _i2(pk, 39), _i2(pk, 40), _i2(pk, 41), _fn3(pk, 38),
+            _fn3(pk, 39), _f33(pk, 40), _i(pk, 42), _i(pk, 43))
+    coord_offset, coord_sign = _f(pk, 0), _f(pk, 1)
+    tRP, tpP, tRC, tpC = _f33(pk, 2), _fn3(pk, 3), _f33(pk, 4), _fn3(pk, 5)
+    task_point = _f(pk, 10)
+    task = (task_body, task_point, task_kind, task_index, euler_axes)
+    tb = _nn(task_body)
+    c, u, y, ang, cmo, wy = w3[13], w3[14], w3[15], w3[16], w3[17], w3[19]
+    Ji = J[3:]
+    known = st[0] == ONE_FACTORED
+    for i in range(nt):
+        x0[i] = x[i]
+    if known:
+        # the first-order predictor with the previous Jacobian, ``A^-1 (s - s_prev)``; where it
+        # turns the pose back against the previous rate (the actuators turning back, as they do
+        # at a singularity), along that rate by the previous step instead: the pose keeps moving,
+        # and a crossing shows as det A changing sign rather than the pose turning back onto the
+        # other assembly mode (an ordinary turning point costs a Newton step)
+        for i in range(nt):
+            r[i] = s[i] - sp[i]
+            for j in range(nt):
+                LU[i, j] = Ap[i, j]
+        _lu(LU, piv)
+        _lu_solve(LU, piv, r)
+        back = 0.0
+        for i in range(nt):
+            back += r[i] * xdp[i]
+        along = back < 0.0 and xdp[nt] > 0.0
+        for i in range(nt):
+            x[i] += xdp[i] * xdp[nt] if along else r[i]
+    prev = math.inf
+    it = 0
+    det = 0.0
+    while True:
+        if not place_fixed_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                                coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, legs, x, task):
+            st[0] = ONE_PRIMED  # the previous solution is gone: no extrapolation next time
+            return NOT_REACHED
+        big = 0.0
+        for a in range(na):
+            r[a] = q[act[a]] - s[a]
+            big = max(big, abs(r[a]) * scale[a])
+        # the Jacobian at x
+        for t in range(nt):
+            if task_kind[t] == 1:
+                ang[_nn(task_index[t])] = x[t]
+        euler_rate_map(ang, euler_axes, E)
+        if npos == 3:
+            for i in range(3):
+                o[i] = p[tb, i] + R[tb, i, 0] * task_point[0] + R[tb, i, 1] * task_point[1] + R[tb, i, 2] * task_point[2]
+        for a in range(na):
+            L = _nn(lmap[a, 0])
+            k = legs[1][L]
+            if k >= LEG_TASK:  # the chain reaches the centre of the ball that carries the task body
+                kb = _nn(legs[12][L, 0])
+                for i in range(3):
+                    c[i] = p[tb, i] + R[tb, i, 0] * tpC[kb, 0] + R[tb, i, 1] * tpC[kb, 1] + R[tb, i, 2] * tpC[kb, 2]
+            else:  # the cut joint's point on the task body
+                cp = legs[5][L]
+                for i in range(3):
+                    c[i] = p[tb, i] + R[tb, i, 0] * cp[0] + R[tb, i, 1] * cp[1] + R[tb, i, 2] * cp[2]
+            for j in range(3):
+                cj = _nn(legs[2][L, j])
+                J[0, j] = S[cj, 3] + S[cj, 1] * c[2] - S[cj, 2] * c[1]
+                J[1, j] = S[cj, 4] + S[cj, 2] * c[0] - S[cj, 0] * c[2]
+                J[2, j] = S[cj, 5] + S[cj, 0] * c[1] - S[cj, 1] * c[0]
+            if _inv3(J[:3], Ji) == 0.0:
+                return SINGULAR
+            i0 = _nn(lmap[a, 1])
+            for i in range(3):
+                y[i] = Ji[i0, i]
+                cmo[i] = c[i] - o[i]
+            wy[0] = cmo[1] * y[2] - cmo[2] * y[1]
+            wy[1] = cmo[2] * y[0] - cmo[0] * y[2]
+            wy[2] = cmo[0] * y[1] - cmo[1] * y[0]
+            for t in range(nt):
+                m = _nn(task_index[t])
+                if task_kind[t] == 1:
+                    A[a, t] = wy[0] * E[0, m] + wy[1] * E[1, m] + wy[2] * E[2, m]
+                else:
+                    A[a, t] = y[m]
+        for i in range(nt):
+            for j in range(nt):
+                LU[i, j] = A[i, j]
+        det, ratio = _lu(LU, piv)
+        if not ratio > 1e-13:
+            st[0] = ONE_PRIMED
+            return SINGULAR
+        if big <= tol or (big <= 1e3 * tol and big > 0.5 * prev):
+            break
+        if it >= max_iter or not big < math.inf:
+            st[0] = ONE_PRIMED
+            return NOT_CONVERGED
+        for a in range(na):
+            r[a] = -r[a]
+        _lu_solve(LU, piv, r)
+        for t in range(nt):
+            x[t] += r[t]
+        prev = big
+        it += 1
+    if known and det * st[1] < 0.0:
+        st[0] = ONE_PRIMED
+        return CROSSED
+    for a in range(na):
+        r[a] = sd[a]
+    _lu_solve(LU, piv, r)
+    # this call's step along its rate, ``h = dx . xd / |xd|^2`` (the time between the calls
+    # where the pose moved along its rate), for the next call's predictor
+    num = 0.0
+    den = 0.0
+    for t in range(nt):
+        num += (x[t] - x0[t]) * r[t]
+        den += r[t] * r[t]
+    h = num / den if den > 0.0 else 0.0
+    xdp[nt] = h if known and h > 0.0 else 0.0
+    for t in range(nt):
+        out[t] = x[t]
+        out[nt + t] = r[t]
+        xdp[t] = r[t]
+        for j in range(nt):
+            Ap[t, j] = A[t, j]
+    for a in range(na):
+        sp[a] = s[a]
+    st[0] = ONE_FACTORED
+    st[1] = det
+    return OK

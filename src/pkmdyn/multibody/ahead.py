@@ -48,7 +48,7 @@ def _kernels(stage: str) -> list[Any]:
     if stage == "direct":
         from . import _direct
 
-        return [_direct.direct_one]
+        return [_direct.direct_one, _direct.direct_task_one]
     raise ValueError(f"compile-ahead stage {stage!r}: unknown (known: {', '.join(STAGES)})")
 
 
@@ -60,8 +60,8 @@ def signatures(stage: str) -> list[tuple[Any, ...]]:
     buf, vec = types.Array(types.int64, 1, "C"), types.Array(types.float64, 1, "C")
     if stage == "one":  # _dynamics(pk, x, xd, v, load, mode, out)
         return [(buf, vec, vec, vec, types.float64, types.int64, vec)]
-    if stage == "direct":  # direct_one(b, s, sd, out)
-        return [(buf, vec, vec, vec)]
+    if stage == "direct":  # direct_one(b, s, sd, out); direct_task_one(pk, d, s, sd, out)
+        return [(buf, vec, vec, vec), (buf, buf, vec, vec, vec)]
     raise ValueError(f"compile-ahead stage {stage!r}: unknown (known: {', '.join(STAGES)})")
 
 

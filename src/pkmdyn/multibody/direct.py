@@ -189,6 +189,81 @@ def prime_one(pk: NDArray[np.int64], q: Array, x: Array, s: Array, det: float) -
     st[2 + nq + nt + na:] = 0.0  # no rate: the next call's predictor is of the first order
 
 
+def task_route_map(model: MechanismModel) -> NDArray[np.int64] | None:
+    """``(na, 2)``: for each actuated coordinate, the explicit leg that sets it and its place in
+    that leg's chain, where :func:`._direct.direct_task_one` answers for ``model``: as many
+    actuators as task coordinates; a task of three Euler angles with three positions, or none
+    (a task body on a ball fixed to the ground); every actuated coordinate in the chain of a leg
+    placed from the task alone (:mod:`.legs`) with three coordinates (patterns A2, B2), from
+    the ground, either the leg that carries the task body (T+A2, T+B2) or one that meets it.
+    None otherwise (the tree-space route answers)."""
+    lg = model.legs
+    n_ang, n_pos = int(np.sum(model.task_kind == 1)), int(np.sum(model.task_kind == 0))
+    if lg.count == 0 or model.na != model.nt or n_ang != 3 or n_pos not in (0, 3):
+        return None
+    if not any(lg.kind[L] >= 10 and lg.fixed[L] for L in range(lg.count)):
+        return None  # the task body is not placed by a leg from the task alone
+    out = np.zeros((model.na, 2), dtype=np.int64)
+    for a, c in enumerate(model.act_coord):
+        hit = None
+        for L in range(lg.count):
+            if not lg.fixed[L] or lg.kind[L] % 10 not in (2, 4) or lg.base[L] != -1:
+                continue
+            if lg.kind[L] < 10 and lg.placed[L] != model.task_body:
+                continue
+            where = np.flatnonzero(lg.coord[L] == c)
+            if where.size:
+                hit = (L, int(where[0]))
+                break
+        if hit is None:
+            return None
+        out[a] = hit
+    return out
+
+
+def pack_task(model: MechanismModel) -> NDArray[np.int64] | None:
+    """The state and work of :func:`._direct.direct_task_one` (a header of offsets, then the
+    parts; the state cold), or None where that route does not answer (:func:`task_route_map`)."""
+    lmap = task_route_map(model)
+    if lmap is None:
+        return None
+    nq, nt, na, nb = model.nq, model.nt, model.na, model.nb
+    npos = int(np.sum(model.task_kind == 0))
+    o = np.zeros(3)
+    if npos == 0:  # the centre of the ball on the ground that carries the task body
+        R, p, _ = body_poses(model, model.coord_offset)
+        k = int(model.body_joint[model.task_body])
+        o = p[model.task_body] + R[model.task_body] @ model.tree_p_child[k]
+    scale = np.where(model.coord_motion[model.act_coord] >= 3, 1.0 / model.length_scale, 1.0)
+    parts = [np.zeros(2), np.zeros(nt), np.zeros(na), np.zeros(nt * nt), scale, o, lmap.ravel(),
+             np.zeros(nq), np.zeros(nb * 9), np.zeros(nb * 3), np.zeros(nq * 6), np.zeros(45), np.zeros(60),
+             np.zeros(nq * 3), np.zeros(nt * nt), np.zeros(nt * nt), np.zeros(nt), np.zeros(9), np.zeros(18),
+             np.zeros(nt, dtype=np.int64), np.zeros(nt + 1), np.zeros(nt)]
+    head = np.zeros(D.TASK_HEAD, dtype=np.int64)
+    head[D.TASK_HEAD - 2], head[D.TASK_HEAD - 1] = npos, nb
+    at, bits = D.TASK_HEAD, []
+    for i, a in enumerate(parts):
+        head[i] = at
+        bits.append(np.ascontiguousarray(a).view(np.int64))
+        at += a.size
+    return np.concatenate([head, *bits])
+
+
+def prime_task(d: NDArray[np.int64], q: Array, x: Array, s: Array) -> None:
+    """Set the solution the task-space route's next call starts from (no predictor)."""
+    f = d.view(np.float64)
+    f[d[0]] = D.ONE_PRIMED
+    f[d[1]:d[1] + x.shape[0]] = x
+    f[d[2]:d[2] + s.shape[0]] = s
+    f[d[7]:d[7] + q.shape[0]] = q
+    f[d[20]:d[20] + x.shape[0] + 1] = 0.0  # no rate: the next call's predictor uses the Jacobian
+
+
+def task_state(d: NDArray[np.int64]) -> Array:
+    """The task-space route's ``[flag, det A]`` (a view)."""
+    return d.view(np.float64)[d[0]:d[0] + 2]
+
+
 def actuator_reference(model: MechanismModel) -> Array:
     """The actuator coordinates (na,) at the reference configuration."""
     return model.coord_offset[model.act_coord].copy()

@@ -66,6 +66,8 @@ class _State:
         # the direct kinematics' warm start (:meth:`MechanismVerbs.direct_one`): its buffer, output
         # and kernel
         self.direct: Any = None
+        # the task-space route's model, state, output and kernel (False where it does not answer)
+        self.direct_task: Any = None
         self.encoder_q: Array | None = None  # the last reading's tree coordinates (``actuator_coordinates_one``)
         # the readings' own compiled path (a buffer of its own: its state is the last reading)
         self.encoder_pk = _one.pack(model) if self.pk is not None else None
@@ -367,33 +369,53 @@ class MechanismVerbs:
         """The task pose and rate ``(nt,), (nt,)`` at actuated joint coordinates ``a`` and rates
         ``ad`` by the direct kinematics (:mod:`.direct`), warm-started from the previous call
         (the first from the reference configuration): the controller's pose from its encoders.
-        One compiled call with a packed buffer (:func:`._direct.direct_one`); where it cannot
-        answer, the checked route. Raises where the actuators reach no pose or sit on a
+        One compiled call: in task space where every actuator belongs to a leg placed from the
+        task alone (:func:`._direct.direct_task_one`: the Gough-Stewart platform, the hip), else
+        on the tree coordinates with a packed buffer (:func:`._direct.direct_one`); where it
+        cannot answer, the checked route. Raises where the actuators reach no pose or sit on a
         singularity."""
         st = self._state(model)
-        a = np.ascontiguousarray(a, dtype=float).reshape(-1)
-        ad = np.ascontiguousarray(ad, dtype=float).reshape(-1)
-        if st.direct is not None:  # (the kernel has run: nothing to wait for)
-            pk, out, kernel, ok = st.direct
-            if a.shape == ad.shape == (model.na,) and kernel(pk, a, ad, out) == ok:
-                nt = model.nt
+        a = np.ascontiguousarray(a, dtype=float)
+        ad = np.ascontiguousarray(ad, dtype=float)
+        if a.ndim != 1 or ad.ndim != 1:
+            a, ad = a.reshape(-1), ad.reshape(-1)
+        nt = model.nt
+        fit = a.shape == ad.shape == (model.na,)
+        if st.direct_task:  # (the kernels have run: nothing to wait for)
+            pk1, d, out, kernel, ok, crossed = st.direct_task
+            status = kernel(pk1, d, a, ad, out) if fit else ok - 1
+            if status == ok:
                 return out[:nt].copy(), out[nt:].copy()
+        elif st.direct is not None:
+            pk, out, kernel, ok = st.direct
+            if fit and kernel(pk, a, ad, out) == ok:
+                return out[:nt].copy(), out[nt:].copy()
+        from ..errors import SingularityError
         from . import _direct as D
-        from .direct import direct_kinematics, one_state, pack_one, prime_one
+        from . import _one
+        from .direct import direct_kinematics, one_state, pack_one, pack_task, prime_one, prime_task
 
         ahead.wait("direct")
-        if st.direct is not None:
+        if st.direct_task:
+            if fit and status == crossed:
+                raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
+            f = d.view(np.float64)
+            dk = direct_kinematics(model, a[None], ad[None], q_start=f[d[7]:d[7] + model.nq].copy())
+        elif st.direct is not None:
             prev = one_state(pk)
             q_prev, det_prev = prev[2:2 + model.nq].copy(), float(prev[1])
             dk = direct_kinematics(model, a[None], ad[None], q_start=q_prev)
             if dk.det[0] * det_prev < 0:  # the checked route names what is wrong otherwise
-                from ..errors import SingularityError
-
                 raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
         else:
             dk = direct_kinematics(model, a[None], ad[None])
             st.direct = (pack_one(model), np.zeros(2 * model.nt), D.direct_one, D.OK)
+            d = pack_task(model)
+            st.direct_task = False if d is None else (_one.pack(model), d, np.zeros(2 * model.nt), D.direct_task_one,
+                                                      D.OK, D.CROSSED)
         prime_one(st.direct[0], dk.q[0], dk.x[0], a, float(dk.det[0]))
+        if st.direct_task:
+            prime_task(st.direct_task[1], dk.q[0], dk.x[0], a)
         return dk.x[0].copy(), dk.xd[0].copy()
 
 
