@@ -29,23 +29,32 @@ def _unit(v):
     return v / np.linalg.norm(v)
 
 
-def platform(leg: str, Q: np.ndarray = np.eye(3)) -> dict:
-    """A six-legged platform with legs of type ``leg`` (``UPS``, ``RUS``, ``PUS``), base joints
-    in pairs on a 1 m circle, platform joints on a 0.5 m circle 1 m above, every point and
-    axis turned by ``Q``."""
+def _hexagon(Q: np.ndarray):
+    """The six-legged platforms' common parts: the turn ``T`` of a point or axis by ``Q``, the
+    platform body, and per leg its base joint ``b`` (pairs on a 1 m circle), platform joint
+    ``s`` (on a 0.5 m circle 1 m above) and the base circle's tangent there."""
     T = lambda v: [float(x) for x in Q @ np.asarray(v, float)]  # noqa: E731
     bodies = [{"name": "platform", "mass_kg": 10.0, "com_m": T([0, 0, 1.0]),
                "inertia_kgm2": [0.6, 0.6, 1.2, 0, 0, 0]}]
-    joints = []
+    legs = []
     for i in range(6):
         pair, side = divmod(i, 2)
         sg = -1.0 if side == 0 else 1.0
         ab = np.radians(120 * pair + 10 * sg)
         ap = np.radians(120 * pair + 50 * sg)
-        b = np.array([np.cos(ab), np.sin(ab), 0.0])
-        s = np.array([0.5 * np.cos(ap), 0.5 * np.sin(ap), 1.0])
-        radial = np.array([np.cos(ab), np.sin(ab), 0.0])
-        tangent = np.array([-np.sin(ab), np.cos(ab), 0.0])
+        legs.append((np.array([np.cos(ab), np.sin(ab), 0.0]), np.array([0.5 * np.cos(ap), 0.5 * np.sin(ap), 1.0]),
+                     np.array([-np.sin(ab), np.cos(ab), 0.0])))
+    return T, bodies, legs
+
+
+def platform(leg: str, Q: np.ndarray = np.eye(3)) -> dict:
+    """A six-legged platform with legs of type ``leg`` (``UPS``, ``RUS``, ``PUS``), base joints
+    in pairs on a 1 m circle, platform joints on a 0.5 m circle 1 m above, every point and
+    axis turned by ``Q``."""
+    T, bodies, layout = _hexagon(Q)
+    joints = []
+    for i, (b, s, tangent) in enumerate(layout):
+        radial = b.copy()
         n1, n2 = f"first_{i + 1}", f"second_{i + 1}"
         if leg == "UPS":
             u = b
@@ -88,19 +97,10 @@ def rod_platform(first: str, Q: np.ndarray = np.eye(3), along: bool = True) -> d
     (the cut) on the platform; with ``along``, the lower ball's frame z lies along the rod (its
     spin about the rod one of its coordinates), else the description's default frame. Turned
     as a whole by ``Q``."""
-    T = lambda v: [float(x) for x in Q @ np.asarray(v, float)]  # noqa: E731
-    bodies = [{"name": "platform", "mass_kg": 10.0, "com_m": T([0, 0, 1.0]),
-               "inertia_kgm2": [0.6, 0.6, 1.2, 0, 0, 0]}]
+    T, bodies, layout = _hexagon(Q)
     joints = []
-    for i in range(6):
-        pair, side = divmod(i, 2)
-        sg = -1.0 if side == 0 else 1.0
-        ab = np.radians(120 * pair + 10 * sg)
-        ap = np.radians(120 * pair + 50 * sg)
-        b = np.array([np.cos(ab), np.sin(ab), 0.0])
-        s = np.array([0.5 * np.cos(ap), 0.5 * np.sin(ap), 1.0])
-        radial, tangent = b.copy(), np.array([-np.sin(ab), np.cos(ab), 0.0])
-        u = b + 0.3 * radial + np.array([0, 0, 0.1])
+    for i, (b, s, tangent) in enumerate(layout):
+        u = 1.3 * b + np.array([0, 0, 0.1])
         d = _unit(s - u)
         n1, n2 = f"first_{i + 1}", f"rod_{i + 1}"
         if first == "R":
