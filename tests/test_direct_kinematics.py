@@ -581,3 +581,43 @@ def test_one_sample_at_a_time_refuses_a_crossing_instead_of_turning_back():
     with pytest.raises(SingularityError, match="crossed a singularity"):
         for i in range(k[0] + 1, k[0] + 4):
             V.direct_one(m, kin.act_q[i], kin.act_qd[i])
+
+
+@pytest.mark.parametrize("leg", ["RUS", "UPS"])
+def test_one_sample_at_a_time_after_large_jumps(leg):
+    """A platform whose legs are turned by an arbitrary rotation, its actuators jumping from a
+    pose near the reference to one far from it (each pose's actuators from the inverse
+    kinematics continued from the reference pose; pairs out of reach left out): the controller's
+    route gives the far pose (a move too large for one call is followed in smaller steps)."""
+    from test_explicit_legs import _rot, platform
+
+    from pkmdyn.errors import UnreachablePoseError
+    from pkmdyn.multibody.machine import machine_verbs
+
+    m = load_mechanism(platform(leg, _rot([0.3, -0.8, 0.5], 2.1)))
+    x0 = reference_task(m)
+    scale = np.where(m.task_kind == 0, m.length_scale, 1.0)
+    rng = np.random.default_rng(3)
+    tt = np.linspace(0.0, 1.0, 60)
+
+    def actuators(xb):
+        path = x0 + tt[:, None] * (xb - x0)
+        k = solve_kinematics(m, path, np.tile(xb - x0, (60, 1)), np.zeros_like(path), tt)
+        return k.act_q[-1], k.act_qd[-1]
+
+    done = 0
+    for _ in range(80):
+        xa = x0 + rng.uniform(-1, 1, 6) * 0.03 * scale
+        xb = x0 + rng.uniform(-1, 1, 6) * 0.15 * scale
+        try:
+            (aa, ada), (ab, adb) = actuators(xa), actuators(xb)
+        except UnreachablePoseError:
+            continue
+        V = machine_verbs(m)
+        V.direct_one(m, aa, ada)
+        V.direct_one(m, aa + 1e-4 * ada, ada)
+        got, _ = V.direct_one(m, ab, adb)
+        assert np.abs((got - xb) / scale).max() <= 1e-9
+        assert V._state(m).direct_task
+        done += 1
+    assert done >= 10

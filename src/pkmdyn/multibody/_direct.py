@@ -524,9 +524,33 @@ _refresh_cache()
 #: status of :func:`direct_task_one` where a leg's closed form does not reach its point
 NOT_REACHED = 21
 #: the header of the task-space route's buffer (:func:`.direct.pack_task`): the offsets of its
-#: parts (22), then ``npos`` (task positions given: 3, or 0 for a task body on a ball fixed to the
+#: parts (23), then ``npos`` (task positions given: 3, or 0 for a task body on a ball fixed to the
 #: ground) and ``nb``
-TASK_HEAD = 24
+TASK_HEAD = 25
+
+
+#: the pivot ratio of the previous call's Jacobian below which :func:`direct_task_one` takes the
+#: pose along its previous rate where the actuators turn back (near a singularity, where they turn
+#: back while the pose goes on; elsewhere the pose turns back with them)
+TASK_NEAR = 1e-2
+#: Newton steps of :func:`direct_task_one` at most (a warm-started call takes one or two)
+TASK_STEPS = 4
+#: the largest move of the pose in one call of :func:`direct_task_one` (radians, or lengths over
+#: the length scale): a larger one goes to the checked route, which follows it in small steps
+#: (the legs' closed forms keep the branch nearest the previous solution only for small moves)
+TASK_MOVE = 0.05
+
+
+@njit(cache=True, _nrt=False)
+def _task_fail(st, x, x0, q, q0, status):  # pragma: no cover - compiled
+    """The previous solution back (the caller's checked route starts from it), no
+    extrapolation on the next call; returns ``status``."""
+    for i in range(x.shape[0]):
+        x[i] = x0[i]
+    for i in range(q.shape[0]):
+        q[i] = q0[i]
+    st[0] = ONE_PRIMED
+    return status
 
 
 @njit(cache=True, _nrt=False)
@@ -537,10 +561,14 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     its position, or the body sits on a ball fixed to the ground). Unknowns: the task coordinates
     ``x (nt)``; equations: ``q_a(x) = s`` with ``q_a(x)`` the legs' closed forms
     (:func:`._kernels.place_fixed_legs`), by Newton from the previous call's solution plus
-    ``A^-1 (s - s_prev)``, or plus ``xd_prev h`` where that step turns the pose back against
-    its previous rate (``h`` the previous call's step along its rate: the pose keeps moving
+    ``A^-1 (s - s_prev)``, or, near a singularity (the previous ``A``'s pivot ratio below
+    :data:`TASK_NEAR`), plus ``xd_prev h`` where that step turns the pose back against its
+    previous rate (``h`` the previous call's step along its rate: the pose keeps moving
     through a singularity, where the actuators turn back, so that the crossing shows as
-    ``det A`` changing sign instead of the pose turning back onto the other assembly mode). The Jacobian ``A = dq_a/dx`` row by row: an actuated coordinate in
+    ``det A`` changing sign instead of the pose turning back onto the other assembly mode). A
+    call that would move the pose by more than :data:`TASK_MOVE` or take more than
+    :data:`TASK_STEPS` Newton steps leaves the previous solution as it was and answers
+    NOT_CONVERGED (the caller follows the move in smaller steps). The Jacobian ``A = dq_a/dx`` row by row: an actuated coordinate in
     the chain of leg L (coordinates ``c_1..c_3``, end point at the point ``c`` of the task body)
     moves with ``J_L qd_L = v_c``, ``J_L = [S_v + S_w x c]`` the chain's point velocities at
     ``c``, so its row is ``(J_L^-1)_i v_c(xd)``, with ``v_c = v_o + w x (c - o)``, ``w = E(phi)
@@ -580,8 +608,10 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     E = _fview(d, d[17], (3, 3))
     J = _fview(d, d[18], (6, 3))  # the chain's point velocities (3 x 3), then its inverse
     piv = _iview(d, d[19], (nt,))
-    xdp = _fview(d, d[20], (nt + 1,))  # the previous call's task rate, then its step h
+    # the previous call's task rate, its step h, 1 / the length scale, its A's pivot ratio
+    xdp = _fview(d, d[20], (nt + 3,))
     x0 = _fview(d, d[21], (nt,))
+    q0 = _fview(d, d[22], (nq,))
     tol = _fview(pk, pk[6], (2,))[0]
     body_parent, body_joint, joint_q0, joint_nq, coord_motion = _i(pk, 0), _i(pk, 1), _i(pk, 2), _i(pk, 3), _i(pk, 4)
     task_kind, task_index, euler_axes = _i(pk, 13), _i(pk, 14), _i(pk, 15)
@@ -599,6 +629,8 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     known = st[0] == ONE_FACTORED
     for i in range(nt):
         x0[i] = x[i]
+    for i in range(nq):
+        q0[i] = q[i]
     if known:
         # the first-order predictor with the previous Jacobian, ``A^-1 (s - s_prev)``; where it
         # turns the pose back against the previous rate (the actuators turning back, as they do
@@ -614,17 +646,17 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
         back = 0.0
         for i in range(nt):
             back += r[i] * xdp[i]
-        along = back < 0.0 and xdp[nt] > 0.0
+        along = back < 0.0 and xdp[nt] > 0.0 and xdp[nt + 2] < TASK_NEAR
         for i in range(nt):
             x[i] += xdp[i] * xdp[nt] if along else r[i]
     prev = math.inf
     it = 0
     det = 0.0
+    ratio = 0.0
     while True:
         if not place_fixed_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
                                 coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, legs, x, task):
-            st[0] = ONE_PRIMED  # the previous solution is gone: no extrapolation next time
-            return NOT_REACHED
+            return _task_fail(st, x, x0, q, q0, NOT_REACHED)
         big = 0.0
         for a in range(na):
             r[a] = q[act[a]] - s[a]
@@ -654,7 +686,7 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
                 J[1, j] = S[cj, 4] + S[cj, 2] * c[0] - S[cj, 0] * c[2]
                 J[2, j] = S[cj, 5] + S[cj, 0] * c[1] - S[cj, 1] * c[0]
             if _inv3(J[:3], Ji) == 0.0:
-                return SINGULAR
+                return _task_fail(st, x, x0, q, q0, SINGULAR)
             i0 = _nn(lmap[a, 1])
             for i in range(3):
                 y[i] = Ji[i0, i]
@@ -673,13 +705,11 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
                 LU[i, j] = A[i, j]
         det, ratio = _lu(LU, piv)
         if not ratio > 1e-13:
-            st[0] = ONE_PRIMED
-            return SINGULAR
+            return _task_fail(st, x, x0, q, q0, SINGULAR)
         if big <= tol or (big <= 1e3 * tol and big > 0.5 * prev):
             break
-        if it >= max_iter or not big < math.inf:
-            st[0] = ONE_PRIMED
-            return NOT_CONVERGED
+        if it >= TASK_STEPS or not big < math.inf:
+            return _task_fail(st, x, x0, q, q0, NOT_CONVERGED)
         for a in range(na):
             r[a] = -r[a]
         _lu_solve(LU, piv, r)
@@ -687,9 +717,13 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
             x[t] += r[t]
         prev = big
         it += 1
+    move = 0.0
+    for t in range(nt):
+        move = max(move, abs(x[t] - x0[t]) * (1.0 if task_kind[t] == 1 else xdp[nt + 1]))
+    if move > TASK_MOVE:
+        return _task_fail(st, x, x0, q, q0, NOT_CONVERGED)
     if known and det * st[1] < 0.0:
-        st[0] = ONE_PRIMED
-        return CROSSED
+        return _task_fail(st, x, x0, q, q0, CROSSED)
     for a in range(na):
         r[a] = sd[a]
     _lu_solve(LU, piv, r)
@@ -712,4 +746,5 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
         sp[a] = s[a]
     st[0] = ONE_FACTORED
     st[1] = det
+    xdp[nt + 2] = ratio
     return OK

@@ -238,7 +238,8 @@ def pack_task(model: MechanismModel) -> NDArray[np.int64] | None:
     parts = [np.zeros(2), np.zeros(nt), np.zeros(na), np.zeros(nt * nt), scale, o, lmap.ravel(),
              np.zeros(nq), np.zeros(nb * 9), np.zeros(nb * 3), np.zeros(nq * 6), np.zeros(45), np.zeros(60),
              np.zeros(nq * 3), np.zeros(nt * nt), np.zeros(nt * nt), np.zeros(nt), np.zeros(9), np.zeros(18),
-             np.zeros(nt, dtype=np.int64), np.zeros(nt + 1), np.zeros(nt)]
+             np.zeros(nt, dtype=np.int64), np.concatenate([np.zeros(nt + 1), [1.0 / model.length_scale, 1.0]]),
+             np.zeros(nt), np.zeros(nq)]
     head = np.zeros(D.TASK_HEAD, dtype=np.int64)
     head[D.TASK_HEAD - 2], head[D.TASK_HEAD - 1] = npos, nb
     at, bits = D.TASK_HEAD, []

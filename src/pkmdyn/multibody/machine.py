@@ -393,14 +393,38 @@ class MechanismVerbs:
         from ..errors import SingularityError
         from . import _direct as D
         from . import _one
-        from .direct import direct_kinematics, one_state, pack_one, pack_task, prime_one, prime_task
+        from .direct import direct_kinematics, one_state, pack_one, pack_task, prime_one, prime_task, task_state
 
         ahead.wait("direct")
         if st.direct_task:
             if fit and status == crossed:
                 raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
+            # a move too large for one call (or one it cannot solve): the same route along the
+            # straight actuator path in 8, then 64 steps, else the checked route from the last
+            # solution; the branch checked by the sign of det A against the last solution's
             f = d.view(np.float64)
-            dk = direct_kinematics(model, a[None], ad[None], q_start=f[d[7]:d[7] + model.nq].copy())
+            q_last, x_last = f[d[7]:d[7] + model.nq].copy(), f[d[1]:d[1] + nt].copy()
+            s_last, det_last = f[d[2]:d[2] + model.na].copy(), float(task_state(d)[1])
+            for steps in (8, 64) if fit and np.all(np.isfinite(a)) and np.all(np.isfinite(ad)) else ():
+                prime_task(d, q_last, x_last, s_last)
+                way = a - s_last
+                for k in range(1, steps + 1):
+                    status = kernel(pk1, d, s_last + (k / steps) * way, ad if k == steps else way, out)
+                    if k == 1 and status == ok and det_last * float(task_state(d)[1]) < 0:
+                        status = crossed
+                    if status != ok:
+                        break
+                if status == crossed:
+                    raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
+                if status == ok:
+                    return out[:nt].copy(), out[nt:].copy()
+            dk = direct_kinematics(model, a[None], ad[None], q_start=q_last)
+            prime_task(d, dk.q[0], dk.x[0], a)
+            if kernel(pk1, d, a, ad, out) != ok:  # at its own solution: the task route's det A and rates
+                raise SingularityError("the direct kinematics is singular at these actuator coordinates")
+            if det_last * float(task_state(d)[1]) < 0:
+                raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
+            return out[:nt].copy(), out[nt:].copy()
         elif st.direct is not None:
             prev = one_state(pk)
             q_prev, det_prev = prev[2:2 + model.nq].copy(), float(prev[1])
