@@ -621,3 +621,59 @@ def test_one_sample_at_a_time_after_large_jumps(leg):
         assert V._state(m).direct_task
         done += 1
     assert done >= 10
+
+
+def test_one_sample_at_a_time_through_a_legs_own_singularity():
+    """An R-U-S platform (legs turned by an arbitrary rotation) moved along its second task
+    coordinate until one leg's crank lines up with its rod (a singularity of that leg alone:
+    the pose can go no further there), then back, the crank turning on through the fold. The
+    direct kinematics is regular there: the controller's route follows every sample, with no
+    singularity error (the Jacobian of the actuators changes sign through infinity there, the
+    branch measure must not)."""
+    from test_explicit_legs import _rot, platform
+
+    from pkmdyn.multibody.kinematics import loop_residuals
+    from pkmdyn.multibody.legs import place
+    from pkmdyn.multibody.machine import machine_verbs
+
+    m = load_mechanism(platform("RUS", _rot([0.3, -0.8, 0.5], 2.1)))
+    x0 = reference_task(m)
+    d = np.zeros(6)
+    d[2] = 1.0
+
+    def reach(q, al):
+        qn = place(m, q, x0 + al * d)
+        return qn if np.abs(loop_residuals(m, qn[None])).max() < 1e-10 else None
+
+    q, al, step = place(m, m.coord_offset.copy(), x0), 0.0, 0.01
+    while step > 1e-13:  # the fold: the farthest pose the legs' closed forms reach along d
+        qn = reach(q, al + step)
+        if qn is None:
+            step /= 2
+        else:
+            q, al = qn, al + step
+        assert al < 1.0
+    qa = reach(q, al - 1e-4)
+    i_fold = int(np.argmax(np.abs(qa[m.act_coord] - reach(qa, al - 2e-4)[m.act_coord])))
+    c, th_star = m.act_coord[i_fold], q[m.act_coord[i_fold]]
+    taus = np.linspace(-1.0, 1.0, 80)
+    X = np.array([x0 + (al - 0.02 * t**2) * d for t in taus])
+    qq = m.coord_offset.copy()
+    for a_ in np.linspace(0.0, 1.0, 50):
+        qq = place(m, qq, x0 + a_ * (X[0] - x0))
+    Qs = []
+    for j in range(40):
+        qq = place(m, qq, X[j])
+        Qs.append(qq.copy())
+    for j in range(40, 80):  # back along the same poses, the folding crank mirrored past the fold
+        qm = Qs[79 - j].copy()
+        qm[c] = 2.0 * th_star - qm[c]
+        Qs.append(place(m, qm, X[j]))
+    S = np.array(Qs)[:, m.act_coord]
+    assert np.all(np.diff(S[:, i_fold]) * np.sign(S[-1, i_fold] - S[0, i_fold]) > 0)  # the crank turns on
+    SD = np.gradient(S, taus, axis=0)
+    V = machine_verbs(m)
+    for j in range(80):
+        got, _ = V.direct_one(m, S[j], SD[j])
+        assert np.abs(got - X[j]).max() <= 1e-9
+    assert V._state(m).direct_task

@@ -578,7 +578,9 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     work (:func:`.direct.pack_task`). Writes ``x, xd`` into ``out (2 nt)``; returns OK,
     :data:`COLD`, :data:`BAD_INPUT`, :data:`NOT_REACHED`, NOT_CONVERGED, SINGULAR or
     :data:`CROSSED` (``det A`` changed sign since the previous call), each for the caller's
-    checked route."""
+    checked route. The branch is the sign of ``det A`` times the legs' ``det J_L`` (``det A``
+    alone also changes sign where a leg passes its own singularity, as an R-U-S crank lines up
+    with its rod, while the direct kinematics stays regular)."""
     nq, nt, task_body, max_iter = pk[4], pk[5], pk[2], pk[3]
     na = nt
     nb = d[TASK_HEAD - 1]
@@ -653,6 +655,7 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     it = 0
     det = 0.0
     ratio = 0.0
+    legs_det = 1.0
     while True:
         if not place_fixed_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
                                 coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, legs, x, task):
@@ -669,6 +672,7 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
         if npos == 3:
             for i in range(3):
                 o[i] = p[tb, i] + R[tb, i, 0] * task_point[0] + R[tb, i, 1] * task_point[1] + R[tb, i, 2] * task_point[2]
+        legs_det = 1.0
         for a in range(na):
             L = _nn(lmap[a, 0])
             k = legs[1][L]
@@ -685,8 +689,15 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
                 J[0, j] = S[cj, 3] + S[cj, 1] * c[2] - S[cj, 2] * c[1]
                 J[1, j] = S[cj, 4] + S[cj, 2] * c[0] - S[cj, 0] * c[2]
                 J[2, j] = S[cj, 5] + S[cj, 0] * c[1] - S[cj, 1] * c[0]
-            if _inv3(J[:3], Ji) == 0.0:
+            dl = _inv3(J[:3], Ji)
+            if dl == 0.0:
                 return _task_fail(st, x, x0, q, q0, SINGULAR)
+            first = True
+            for b in range(a):
+                if lmap[b, 0] == lmap[a, 0]:
+                    first = False
+            if first:  # each leg's det J_L once
+                legs_det *= dl
             i0 = _nn(lmap[a, 1])
             for i in range(3):
                 y[i] = Ji[i0, i]
@@ -704,6 +715,10 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
             for j in range(nt):
                 LU[i, j] = A[i, j]
         det, ratio = _lu(LU, piv)
+        # the branch: det A times the legs' det J_L (A = J_L^-1 ... changes sign through a leg's
+        # own singularity too, where the direct kinematics is regular; the product only where
+        # the direct kinematics is singular)
+        det *= legs_det
         if not ratio > 1e-13:
             return _task_fail(st, x, x0, q, q0, SINGULAR)
         if big <= tol or (big <= 1e3 * tol and big > 0.5 * prev):
