@@ -265,6 +265,23 @@ def test_a_motion_through_a_singularity_is_refused():
         # up to the crossing the motion is followed exactly
         dk = direct_kinematics(m, s[:45], sd[:45], sdd[:45], t[:45], q_start=start)
         assert np.abs(dk.x - P[:45]).max() <= 1e-10
+        # one sample at a time (the controller's route, on the tree coordinates here): the
+        # same, not the pose turning back with the actuators onto the other assembly mode
+        from pkmdyn.multibody.machine import machine_verbs
+
+        from pkmdyn.multibody.direct import prime_one
+
+        V = machine_verbs(m)
+        V.direct_one(m, s[0], sd[0])  # (from the reference pose: another mode) then from the motion's start
+        assert not V._state(m).direct_task
+        prime_one(V._state(m).direct[0], dk.q[0], dk.x[0], s[0], float(dk.det[0]))
+        with pytest.raises(SingularityError, match="crossed a singularity"):
+            for i in range(1, len(t)):
+                got, _ = V.direct_one(m, s[i], sd[i])
+                # exact away from the singularity; near it the pose the actuators give is
+                # ill-conditioned, but it never turns back (a turned-back pose is a step away)
+                assert np.abs(got - P[i]).max() <= (1e-9 if i < 45 else 1e-6)
+        assert 47 <= i <= 53
     assert found
 
 

@@ -384,7 +384,8 @@ ONE_ARRAYS = (
     ("Vpre", "f", 2), ("A", "f", 2), ("K", "f", 2), ("piv", "i", 1), ("r", "f", 1), ("G", "f", 2), ("qd", "f", 1),
     ("qdd", "f", 1), ("w33", "f", 3), ("w3", "f", 2), ("trig", "f", 2), ("late", "i", 1), ("rowpos", "i", 1),
     ("colpos", "i", 1), ("q0", "f", 1), ("step", "f", 1),
-    ("state", "f", 1),  # flag, det K, q (nq), x (nt), s (na), sd (na) of the last solved sample
+    # flag, det K, q (nq), x (nt), s (na), sd (na), step known, pivot ratio, step of q (nq)
+    ("state", "f", 1),
     ("info", "f", 1), ("sdd", "f", 1), ("q", "f", 1),
 )
 #: the state's flag: nothing solved, a solution (set by the caller), a solution with its
@@ -466,18 +467,30 @@ def direct_one(b, s, sd, out):  # pragma: no cover - compiled
         h2 = along_h2(ss, vv, dd)
     first = 0.0
     second = 0.0
+    qdp = st[so + 2 * na + 2:so + 2 * na + 2 + nq]  # the previous call's step of the tree coordinates
+    back = 0.0
     for c in range(nq):
         acc = 0.0
         if chord:
             for a in range(na):
                 acc += G[c, a] * (s[a] - st[so + a])
         q[c] = st[2 + c] + acc
+        back += acc * qdp[c]
         first = max(first, abs(acc))
         second = max(second, h2 * abs(qdd[c]))
-    if second_order_applies(first, second):
+    hp, near = st[so + 2 * na], st[so + 2 * na + 1]
+    along = chord and back < 0.0 and hp > 0.0 and near < TASK_NEAR
+    if along:
+        # near a singularity the actuators turn back while the tree coordinates go on: the
+        # previous step again (not the rates, which the singularity spoils), so that a crossing
+        # shows as det K changing sign instead of the pose turning back onto the other mode
+        for c in range(nq):
+            q[c] = st[2 + c] + qdp[c]
+    elif second_order_applies(first, second):
         for c in range(nq):
             q[c] += h2 * qdd[c]
-    status = direct_sample(s, sd, sdd, q, chord, tree, loops, task, sol, work, info)
+    # (no simplified step with the factors of a matrix that near a singularity)
+    status = direct_sample(s, sd, sdd, q, chord and not along, tree, loops, task, sol, work, info)
     if status == OK and info[3] * st[1] < 0.0:
         status = CROSSED
     if status != OK:
@@ -495,6 +508,11 @@ def direct_one(b, s, sd, out):  # pragma: no cover - compiled
         for c in range(nq):
             acc += J[rr, c] * qd[c]
         out[nt + t] = acc
+    # this call's step of the tree coordinates (known: 1) and pivot ratio, for the next
+    st[so + 2 * na] = 1.0 if chord else 0.0
+    st[so + 2 * na + 1] = info[4]
+    for c in range(nq):
+        qdp[c] = q[c] - st[2 + c]
     st[0] = ONE_FACTORED
     st[1] = info[3]
     for c in range(nq):
@@ -562,10 +580,10 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     ``x (nt)``; equations: ``q_a(x) = s`` with ``q_a(x)`` the legs' closed forms
     (:func:`._kernels.place_fixed_legs`), by Newton from the previous call's solution plus
     ``A^-1 (s - s_prev)``, or, near a singularity (the previous ``A``'s pivot ratio below
-    :data:`TASK_NEAR`), plus ``xd_prev h`` where that step turns the pose back against its
-    previous rate (``h`` the previous call's step along its rate: the pose keeps moving
-    through a singularity, where the actuators turn back, so that the crossing shows as
-    ``det A`` changing sign instead of the pose turning back onto the other assembly mode). A
+    :data:`TASK_NEAR`), plus the previous call's step where ``A^-1 (s - s_prev)`` turns the
+    pose back against it: the pose keeps moving through a singularity, where the actuators
+    turn back, so that the crossing shows as ``det A`` changing sign instead of the pose
+    turning back onto the other assembly mode. A
     call that would move the pose by more than :data:`TASK_MOVE` or take more than
     :data:`TASK_STEPS` Newton steps leaves the previous solution as it was and answers
     NOT_CONVERGED (the caller follows the move in smaller steps). The Jacobian ``A = dq_a/dx`` row by row: an actuated coordinate in
@@ -610,7 +628,8 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     E = _fview(d, d[17], (3, 3))
     J = _fview(d, d[18], (6, 3))  # the chain's point velocities (3 x 3), then its inverse
     piv = _iview(d, d[19], (nt,))
-    # the previous call's task rate, its step h, 1 / the length scale, its A's pivot ratio
+    # the previous call's step of the task coordinates, whether known, 1 / the length scale, its
+    # A's pivot ratio
     xdp = _fview(d, d[20], (nt + 3,))
     x0 = _fview(d, d[21], (nt,))
     q0 = _fview(d, d[22], (nq,))
@@ -650,7 +669,7 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
             back += r[i] * xdp[i]
         along = back < 0.0 and xdp[nt] > 0.0 and xdp[nt + 2] < TASK_NEAR
         for i in range(nt):
-            x[i] += xdp[i] * xdp[nt] if along else r[i]
+            x[i] += xdp[i] if along else r[i]
     prev = math.inf
     it = 0
     det = 0.0
@@ -742,19 +761,12 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     for a in range(na):
         r[a] = sd[a]
     _lu_solve(LU, piv, r)
-    # this call's step along its rate, ``h = dx . xd / |xd|^2`` (the time between the calls
-    # where the pose moved along its rate), for the next call's predictor
-    num = 0.0
-    den = 0.0
-    for t in range(nt):
-        num += (x[t] - x0[t]) * r[t]
-        den += r[t] * r[t]
-    h = num / den if den > 0.0 else 0.0
-    xdp[nt] = h if known and h > 0.0 else 0.0
+    # this call's step (known: 1), for the next call's predictor
+    xdp[nt] = 1.0 if known else 0.0
     for t in range(nt):
         out[t] = x[t]
         out[nt + t] = r[t]
-        xdp[t] = r[t]
+        xdp[t] = x[t] - x0[t]
         for j in range(nt):
             Ap[t, j] = A[t, j]
     for a in range(na):

@@ -156,7 +156,7 @@ def pack_one(model: MechanismModel) -> NDArray[np.int64]:
     scalars = np.array([tol, check_tol, task[0], max_iter], dtype=float)
     work = D._work(nq, nb, nrow, nu, na)  # the batched route's own work space
     arrays = [*tree, *loops, *task[1:], act, unk, cut, idle, q_ref, rs, scalars, *work,
-              np.zeros(2 + nq + nt + 2 * na), np.zeros(5), np.zeros(na), np.zeros(nq)]
+              np.zeros(2 + nq + nt + 2 * na + 2 + nq), np.zeros(5), np.zeros(na), np.zeros(nq)]
     if len(arrays) != len(D.ONE_ARRAYS):
         raise RuntimeError(f"internal error: {len(arrays)} arrays packed, the kernel takes {len(D.ONE_ARRAYS)}")
     head = np.zeros(4 * len(arrays), dtype=np.int64)
@@ -173,7 +173,7 @@ def pack_one(model: MechanismModel) -> NDArray[np.int64]:
 
 def one_state(pk: NDArray[np.int64]) -> Array:
     """The state of a packed buffer (:func:`pack_one`; a view): ``[flag, det K, q (nq), x (nt),
-    s (na), sd (na)]`` of the last solved sample."""
+    s (na), sd (na), step known, pivot ratio, step of q (nq)]`` of the last solved sample."""
     k = len(D.ONE_ARRAYS) - 4
     o, n = int(pk[4 * k]), int(pk[4 * k + 1])
     return pk[o:o + n].view(np.float64)

@@ -388,7 +388,8 @@ class MechanismVerbs:
                 return out[:nt].copy(), out[nt:].copy()
         elif st.direct is not None:
             pk, out, kernel, ok = st.direct
-            if fit and kernel(pk, a, ad, out) == ok:
+            status = kernel(pk, a, ad, out) if fit else ok - 1
+            if status == ok:
                 return out[:nt].copy(), out[nt:].copy()
         from ..errors import SingularityError
         from . import _direct as D
@@ -426,6 +427,8 @@ class MechanismVerbs:
                 raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
             return out[:nt].copy(), out[nt:].copy()
         elif st.direct is not None:
+            if status == D.CROSSED:
+                raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
             prev = one_state(pk)
             q_prev, det_prev = prev[2:2 + model.nq].copy(), float(prev[1])
             dk = direct_kinematics(model, a[None], ad[None], q_start=q_prev)
