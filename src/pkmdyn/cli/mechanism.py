@@ -10,7 +10,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
-import numpy as np
 
 from ._groups import MACHINE_HELP, PATH_IN, FiniteFloat, cli, list_files
 from .control import MAX_CYCLES, hand_built_controllers
@@ -90,11 +89,15 @@ def describe(machine: str) -> None:
 def _held(model, chain) -> str:
     """``, J spin held`` for the joints of an explicit leg's chain with a coordinate that an idle
     row of its own holds (an S-S rod's spin; docs/mechanism_format.md, "Explicit legs")."""
-    held = {int(np.flatnonzero(r)[0]) for r in model.solver_idle if np.count_nonzero(r) == 1}
-    names = [j for j in chain if any(c in held for c in range(model.joint_q0[model.joint_index(j)],
-                                                                model.joint_q0[model.joint_index(j)]
-                                                                + model.joint_nq[model.joint_index(j)]))]
-    return "".join(f", {j} spin held" for j in names)
+    from ..multibody.legs import held_coordinates
+
+    held = held_coordinates(model)
+    out = ""
+    for j in chain:
+        k = model.joint_index(j)
+        if held & set(range(model.joint_q0[k], model.joint_q0[k] + model.joint_nq[k])):
+            out += f", {j} spin held"
+    return out
 
 
 def _range(bounds) -> str:

@@ -489,7 +489,7 @@ def direct_one(b, s, sd, out):  # pragma: no cover - compiled
     elif second_order_applies(first, second):
         for c in range(nq):
             q[c] += h2 * qdd[c]
-    # (no simplified step with the factors of a matrix that near a singularity)
+    # (no simplified step with the factors of a matrix so near a singularity)
     status = direct_sample(s, sd, sdd, q, chord and not along, tree, loops, task, sol, work, info)
     if status == OK and info[3] * st[1] < 0.0:
         status = CROSSED
@@ -547,15 +547,17 @@ NOT_REACHED = 21
 TASK_HEAD = 25
 
 
-#: the pivot ratio of the previous call's Jacobian below which :func:`direct_task_one` takes the
-#: pose along its previous rate where the actuators turn back (near a singularity, where they turn
-#: back while the pose goes on; elsewhere the pose turns back with them)
+#: the pivot ratio of the previous call's Jacobian below which the single-sample calls
+#: (:func:`direct_one`, :func:`direct_task_one`) repeat the previous step where the actuators
+#: turn back (near a singularity, where they turn back while the pose goes on; elsewhere the
+#: pose turns back with them)
 TASK_NEAR = 1e-2
 #: Newton steps of :func:`direct_task_one` at most (a warm-started call takes one or two)
 TASK_STEPS = 4
 #: the largest move of the pose in one call of :func:`direct_task_one` (radians, or lengths over
-#: the length scale): a larger one goes to the checked route, which follows it in small steps
-#: (the legs' closed forms keep the branch nearest the previous solution only for small moves)
+#: the length scale): a larger one is refused (NOT_CONVERGED), for the caller to follow in
+#: smaller steps (the legs' closed forms keep the branch nearest the previous solution only for
+#: small moves)
 TASK_MOVE = 0.05
 
 
@@ -583,11 +585,11 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     :data:`TASK_NEAR`), plus the previous call's step where ``A^-1 (s - s_prev)`` turns the
     pose back against it: the pose keeps moving through a singularity, where the actuators
     turn back, so that the crossing shows as ``det A`` changing sign instead of the pose
-    turning back onto the other assembly mode. A
-    call that would move the pose by more than :data:`TASK_MOVE` or take more than
-    :data:`TASK_STEPS` Newton steps leaves the previous solution as it was and answers
-    NOT_CONVERGED (the caller follows the move in smaller steps). The Jacobian ``A = dq_a/dx`` row by row: an actuated coordinate in
-    the chain of leg L (coordinates ``c_1..c_3``, end point at the point ``c`` of the task body)
+    turning back onto the other assembly mode. A call that would move the pose by more than
+    :data:`TASK_MOVE` or take more than :data:`TASK_STEPS` Newton steps leaves the previous
+    solution as it was and answers NOT_CONVERGED (the caller follows the move in smaller
+    steps). The Jacobian ``A = dq_a/dx`` row by row: an actuated coordinate in the chain of
+    leg L (coordinates ``c_1..c_3``, end point at the point ``c`` of the task body)
     moves with ``J_L qd_L = v_c``, ``J_L = [S_v + S_w x c]`` the chain's point velocities at
     ``c``, so its row is ``(J_L^-1)_i v_c(xd)``, with ``v_c = v_o + w x (c - o)``, ``w = E(phi)
     phi_dot`` (``E`` the Euler rate map) and ``o`` the task point (its velocity the task's
@@ -599,7 +601,7 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     checked route. The branch is the sign of ``det A`` times the legs' ``det J_L`` (``det A``
     alone also changes sign where a leg passes its own singularity, as an R-U-S crank lines up
     with its rod, while the direct kinematics stays regular)."""
-    nq, nt, task_body, max_iter = pk[4], pk[5], pk[2], pk[3]
+    nq, nt, task_body = pk[4], pk[5], pk[2]
     na = nt
     nb = d[TASK_HEAD - 1]
     npos = d[TASK_HEAD - 2]
@@ -645,7 +647,7 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     task_point = _f(pk, 10)
     task = (task_body, task_point, task_kind, task_index, euler_axes)
     tb = _nn(task_body)
-    c, u, y, ang, cmo, wy = w3[13], w3[14], w3[15], w3[16], w3[17], w3[19]
+    c, y, ang, cmo, wy = w3[13], w3[15], w3[16], w3[17], w3[19]
     Ji = J[3:]
     known = st[0] == ONE_FACTORED
     for i in range(nt):
@@ -653,11 +655,11 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     for i in range(nq):
         q0[i] = q[i]
     if known:
-        # the first-order predictor with the previous Jacobian, ``A^-1 (s - s_prev)``; where it
-        # turns the pose back against the previous rate (the actuators turning back, as they do
-        # at a singularity), along that rate by the previous step instead: the pose keeps moving,
-        # and a crossing shows as det A changing sign rather than the pose turning back onto the
-        # other assembly mode (an ordinary turning point costs a Newton step)
+        # the first-order predictor with the previous Jacobian, ``A^-1 (s - s_prev)``; near a
+        # singularity, where it turns the pose back against the previous step (the actuators
+        # turning back, as they do there), that step again: the pose keeps moving, and a
+        # crossing shows as det A changing sign rather than the pose turning back onto the
+        # other assembly mode
         for i in range(nt):
             r[i] = s[i] - sp[i]
             for j in range(nt):
@@ -690,7 +692,8 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
         euler_rate_map(ang, euler_axes, E)
         if npos == 3:
             for i in range(3):
-                o[i] = p[tb, i] + R[tb, i, 0] * task_point[0] + R[tb, i, 1] * task_point[1] + R[tb, i, 2] * task_point[2]
+                o[i] = (p[tb, i] + R[tb, i, 0] * task_point[0] + R[tb, i, 1] * task_point[1]
+                        + R[tb, i, 2] * task_point[2])
         legs_det = 1.0
         for a in range(na):
             L = _nn(lmap[a, 0])

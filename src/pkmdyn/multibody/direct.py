@@ -257,7 +257,7 @@ def prime_task(d: NDArray[np.int64], q: Array, x: Array, s: Array) -> None:
     f[d[1]:d[1] + x.shape[0]] = x
     f[d[2]:d[2] + s.shape[0]] = s
     f[d[7]:d[7] + q.shape[0]] = q
-    f[d[20]:d[20] + x.shape[0] + 1] = 0.0  # no rate: the next call's predictor uses the Jacobian
+    f[d[20]:d[20] + x.shape[0] + 1] = 0.0  # no step known: the next call's predictor uses the Jacobian
 
 
 def task_state(d: NDArray[np.int64]) -> Array:

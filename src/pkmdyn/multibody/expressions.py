@@ -305,8 +305,9 @@ _TEXT_KEYS = {"name", "type", "parent", "child", "body", "joint", "kind", "euler
 
 def resolve_parameters(raw: dict[str, Any], label: str) -> tuple[dict[str, Any], dict[str, Any]]:
     """The description ``raw`` with every expression evaluated (a copy; ``[parameters]`` left
-    out), and the parameters' values (their bounds: :func:`parameter_bounds` of ``raw``). Only text in numeric fields is an expression: a string
-    under a key that names a body, joint, type, sequence or other text is left as it is."""
+    out), and the parameters' values (their bounds: :func:`parameter_bounds` of ``raw``). Only
+    text in numeric fields is an expression: a string under a key that names a body, joint,
+    type, sequence or other text is left as it is."""
     if not isinstance(raw, dict) or "parameters" not in raw:
         return raw, {}
     names = parameter_values(raw, label)

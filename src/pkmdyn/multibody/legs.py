@@ -75,7 +75,7 @@ from ..spatial import cross
 from ._kernels import forward_positions, place_legs
 from .poses import body_poses, positions_args
 
-__all__ = ["LegTable", "explicit_legs", "newton_only", "place", "LEG_PATTERNS"]
+__all__ = ["LegTable", "explicit_legs", "newton_only", "place", "held_coordinates", "LEG_PATTERNS"]
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -86,6 +86,13 @@ LEG_PATTERNS = {1: "A1 (first joint, then one turn; planar)", 2: "A2 (first join
                 10: "T (the task body on a ball joint)"}
 LEG_PATTERNS.update({10 + k: f"T+{v.split(' ')[0]} (the task body on a ball joint placed by {v.split(' ', 1)[1][1:-1]})"
                      for k, v in list(LEG_PATTERNS.items()) if k < 10})
+
+
+def held_coordinates(model) -> set[int]:
+    """The tree coordinates held at their reference values by an idle row of their own (a rod's
+    spin about its axis, where a ball's frame has an axis along the rod:
+    :func:`.topology.sparse_basis`)."""
+    return {int(np.flatnonzero(r)[0]) for r in np.asarray(model.solver_idle) if np.count_nonzero(r) == 1}
 
 
 def _empty_int(*shape: int) -> IntArray:
@@ -211,10 +218,7 @@ def explicit_legs(model) -> LegTable:
     for b in range(nb):
         k = model.body_joint[b]
         coord_body[model.joint_q0[k]:model.joint_q0[k] + model.joint_nq[k]] = b
-    # coordinates held at their reference values by an idle row of their own (a rod's spin
-    # about its axis: :func:`.topology.sparse_basis`): a leg's chain may hold such a coordinate
-    idle = np.asarray(model.solver_idle)
-    held = {int(np.flatnonzero(r)[0]) for r in idle if np.count_nonzero(r) == 1}
+    held = held_coordinates(model)  # a leg's chain may hold such a coordinate
     found: list[dict] = []
     for bk in range(blocks.shape[0] - 1):
         r_idx = prow[blocks[bk]:blocks[bk + 1]]
@@ -297,7 +301,8 @@ def _fixed(model, found: list[dict], held: set[int] = frozenset()) -> tuple[IntA
     def placed_by_fixed(b: int) -> bool:
         while b >= 0:
             k = model.body_joint[b]
-            if not all(fixed_coord[c] or c in held for c in range(model.joint_q0[k], model.joint_q0[k] + model.joint_nq[k])):
+            coords = range(model.joint_q0[k], model.joint_q0[k] + model.joint_nq[k])
+            if not all(fixed_coord[c] or c in held for c in coords):
                 return False
             b = int(model.body_parent[b])
         return True

@@ -438,8 +438,10 @@ class MechanismVerbs:
             dk = direct_kinematics(model, a[None], ad[None])
             st.direct = (pack_one(model), np.zeros(2 * model.nt), D.direct_one, D.OK)
             d = pack_task(model)
-            st.direct_task = False if d is None else (_one.pack(model), d, np.zeros(2 * model.nt), D.direct_task_one,
-                                                      D.OK, D.CROSSED)
+            st.direct_task = False
+            if d is not None:  # (the task route only reads the model's arrays from a single-sample buffer)
+                pk1 = st.pk if st.pk is not None else _one.pack(model)
+                st.direct_task = (pk1, d, np.zeros(2 * model.nt), D.direct_task_one, D.OK, D.CROSSED)
         prime_one(st.direct[0], dk.q[0], dk.x[0], a, float(dk.det[0]))
         if st.direct_task:
             prime_task(st.direct_task[1], dk.q[0], dk.x[0], a)

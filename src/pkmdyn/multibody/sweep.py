@@ -99,9 +99,9 @@ def _limit_metrics(model: Any, kin: Any, u: Array) -> dict[str, float]:
     """``joint_limit_margin`` where a joint has limits: the least, over the samples and the
     limited joints, of the distance to the nearer limit over the joint's range (0 at a limit or
     within ``pkmdyn run``'s tolerance beyond it, 0.5 mid-range, negative beyond it);
-    ``peak_effort_over_rated`` where a drive has a rated effort: the largest motor effort (Eq. A1 of :mod:`.actuators`: transmitted, rotor and
-    motor friction) over its rating, over the samples and the rated drives (above 1: beyond
-    it)."""
+    ``peak_effort_over_rated`` where a drive has a rated effort: the largest motor effort (Eq.
+    A1 of :mod:`.actuators`: transmitted, rotor and motor friction) over its rating, over the
+    samples and the rated drives (above 1: beyond it)."""
     from .actuators import motor_efforts
     from .kinematics import beyond_limits, joint_coordinates, limited_joints
 

@@ -290,9 +290,9 @@ def solver_selection(model: MechanismModel, q: Array | None = None) -> tuple[Arr
     basis is the sparse one of :func:`sparse_basis` (the same equations as any other basis of
     that space): a rod's spin about the line through its two spherical joints is its own row,
     the rod's own coordinate where one of its joint's axes lies along that line, which leaves
-    the leg to its closed form (:mod:`.legs`). Raises :class:`~pkmdyn.errors.ParameterError` when the task coordinates do not
-    determine the mechanism (fewer or more than its degrees of freedom, or dependent) or
-    when there are more actuators than degrees of freedom.
+    the leg to its closed form (:mod:`.legs`). Raises :class:`~pkmdyn.errors.ParameterError`
+    when the task coordinates do not determine the mechanism (fewer or more than its degrees
+    of freedom, or dependent) or when there are more actuators than degrees of freedom.
     """
     from ..errors import ParameterError
 
