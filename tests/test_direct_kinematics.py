@@ -694,3 +694,59 @@ def test_one_sample_at_a_time_through_a_legs_own_singularity():
         got, _ = V.direct_one(m, S[j], SD[j])
         assert np.abs(got - X[j]).max() <= 1e-9
     assert V._state(m).direct_task
+
+
+@pytest.mark.parametrize("name", ["stewart", "hip", "UPS", "RUS", "PUS"])
+def test_task_route_by_the_actuated_coordinates_alone_matches_every_leg_placed(name):
+    """The task-space route of one sample takes each actuated coordinate and its row of the
+    Jacobian from the task alone where the coordinate is the one its leg's closed form gives
+    first (A2's first joint, B2's slide), placing the legs' other coordinates only now and
+    then. Along a smooth motion of legs of every such kind (turned by an arbitrary rotation),
+    it gives the poses, rates and branch signs of the same route placing every leg at every
+    call (its branch measure up to one sign: its legs' factors are those of ``det J_L`` that the
+    actuated coordinates bring), the motion's poses back, and, after its last placement, every
+    coordinate of those legs as the inverse kinematics gives it."""
+    from test_explicit_legs import _rot, platform
+
+    from pkmdyn.multibody import _direct as D
+    from pkmdyn.multibody import _one
+    from pkmdyn.multibody.direct import pack_task, prime_task, task_state
+
+    turn = _rot([0.3, -0.8, 0.5], 2.1)
+    if name in ("stewart", "hip"):
+        m = _model(name)
+    else:
+        m = load_mechanism(platform(name, turn))
+    n = 1 + 25 * D.TASK_REFRESH  # the last call places every leg
+    t, x, xd, _ = _smooth(m, n=n, seed=5, size=0.5)
+    kin = solve_kinematics(m, x, xd, np.zeros_like(x), t)
+    pk = _one.pack(m)
+    alone = pack_task(m)
+    flag = alone.view(np.float64)[alone[24]:alone[24] + 1]  # part 24: [alone, calls since placed]
+    assert flag[0] == 1.0
+    every = alone.copy()
+    every.view(np.float64)[every[24]] = 0.0
+    outs = {}
+    for key, d in (("alone", alone), ("every", every)):
+        prime_task(d, kin.q[0], x[0], kin.act_q[0])
+        out, got, dets = np.zeros(2 * m.nt), [], []
+        for i in range(1, n):
+            assert D.direct_task_one(pk, d, kin.act_q[i], kin.act_qd[i], out) == D.OK, (key, i)
+            got.append(out.copy())
+            dets.append(float(task_state(d)[1]))
+        outs[key] = (np.array(got), np.sign(dets), d.view(np.float64)[d[7]:d[7] + m.nq].copy())
+    sc = np.concatenate([_scaled(m), _scaled(m)])
+    rate = np.abs(xd * _scaled(m)).max()
+    a, e = outs["alone"][0], outs["every"][0]
+    assert np.abs((a - e)[:, :m.nt] * sc[:m.nt]).max() <= 1e-12
+    assert np.abs((a - e)[:, m.nt:] * sc[m.nt:]).max() <= 1e-10 * rate
+    assert np.abs((a[:, :m.nt] - x[1:]) * _scaled(m)).max() <= 1e-9
+    prod = outs["alone"][1] * outs["every"][1]  # the two branch measures differ by a factor of one sign
+    assert np.all(prod == prod[0])
+    legs = m.legs.fixed_coord != 0
+    assert legs[m.act_coord].all() and legs.sum() > m.na
+    dq = (outs["alone"][2] - kin.q[-1])[legs]
+    turns = m.coord_motion[legs] < 3
+    dq[turns] = (dq[turns] + np.pi) % (2 * np.pi) - np.pi
+    dq[~turns] /= m.length_scale
+    assert np.abs(dq).max() <= 1e-9

@@ -29,9 +29,10 @@ import math
 import numpy as np
 from numba import njit
 
-from ._kernels import (LEG_TASK, LOOP_OPEN, NOT_CONVERGED, OK, ROWS_DRIFT, ROWS_JACOBIAN, ROWS_VALUES, SINGULAR, _inv3,
-                       _nn, _wrap, along_h2, bias_motion, euler_rate_map, forward_positions, jerk_factor,
-                       largest_scaled, place_fixed_legs, rows, second_order_applies)
+from ._kernels import (LEG_A2, LEG_TASK, LOOP_OPEN, NOT_CONVERGED, OK, ROWS_DRIFT, ROWS_JACOBIAN, ROWS_VALUES, SINGULAR,
+                       _dot, _inv3, _matmul3, _nn, _near, _quadratic_nearest, _rot, _rotate_about, _sp1, _wrap, along_h2,
+                       bias_motion, euler_rate_map, forward_positions, jerk_factor, largest_scaled, place_fixed_legs,
+                       rows, second_order_applies)
 from ._one import _f, _f33, _fn3, _fview, _i, _i2, _iview
 
 __all__ = ["CROSSED", "EULER_SINGULAR_RATES", "COLD", "BAD_INPUT", "direct_batch", "direct_starts", "direct_one",
@@ -542,9 +543,9 @@ _refresh_cache()
 #: status of :func:`direct_task_one` where a leg's closed form does not reach its point
 NOT_REACHED = 21
 #: the header of the task-space route's buffer (:func:`.direct.pack_task`): the offsets of its
-#: parts (23), then ``npos`` (task positions given: 3, or 0 for a task body on a ball fixed to the
+#: parts (25), then ``npos`` (task positions given: 3, or 0 for a task body on a ball fixed to the
 #: ground) and ``nb``
-TASK_HEAD = 25
+TASK_HEAD = 27
 
 
 #: the pivot ratio of the previous call's Jacobian below which the single-sample calls
@@ -559,6 +560,90 @@ TASK_STEPS = 4
 #: smaller steps (the legs' closed forms keep the branch nearest the previous solution only for
 #: small moves)
 TASK_MOVE = 0.05
+
+
+#: calls of :func:`direct_task_one` by the actuated coordinates' closed forms alone between two
+#: placements of every leg (the legs' other coordinates, which those calls leave as they were,
+#: brought up to the pose for a later checked route to start from)
+TASK_REFRESH = 8
+
+
+@njit(cache=True, _nrt=False)
+def _actuated(kind, c, axis, point, m0, e0, q0, cur, y, w3):  # pragma: no cover - compiled
+    """The actuated coordinate of a leg from the ground whose end reaches the point ``c`` (base
+    frame), for pattern ``kind`` (:mod:`.legs`): A2's first joint (a slide or a turn), B2's slide,
+    by the first step of :func:`._kernels._reach` alone (the leg's other coordinates are not
+    needed), on the branch nearest ``cur`` (the coordinate's present value less its reference);
+    ``y (3,)`` its gradient ``d th / d c`` from the closure ``f(th, c) = 0`` (``y = -f_c / f_th``).
+    Returns ``(th, D)``, ``D`` the closure's derivative along the coordinate, which changes sign
+    where the leg passes its own singularity (an R-U-S crank in line with its rod), or ``(nan,
+    0)`` out of reach.
+
+    * B2, ``|e0 - m0 + t a|^2 = |c - m0|^2``: ``D = t + a . (e0 - m0)``, ``y = (c - m0) / D``;
+    * A2 from a slide, ``|m0 + t a - c|^2 = |e0 - m0|^2``: ``m = m0 + t a``, ``D = (c - m) . a``,
+      ``y = (c - m) / D``;
+    * A2 from a turn about ``a`` through ``r``: ``m = r + Rot(a, th) (m0 - r)`` at the distance
+      ``|e0 - m0|`` from ``c``: ``D = (m - c) . (a x (m - r))``, ``y = (m - c) / D``."""
+    u, v, m = w3[2], w3[3], w3[4]
+    a = axis[0]
+    scale = _dot(e0, e0) + _dot(m0, m0) + _dot(c, c) + 1e-300
+    if kind != LEG_A2:  # B2: the slide, the leg's third coordinate
+        a = axis[2]
+        for i in range(3):
+            u[i] = e0[i] - m0[i]
+            v[i] = c[i] - m0[i]
+        au = _dot(a, u)
+        t = _quadratic_nearest(au, _dot(u, u) - _dot(v, v), cur, 1e-12 * scale)
+        den = t + au
+        for i in range(3):
+            y[i] = v[i] / den
+        return t, den
+    d2 = 0.0
+    for i in range(3):
+        d2 += (e0[i] - m0[i]) ** 2
+    if point[0, 0] != point[0, 0]:  # a slide
+        bq = 0.0
+        cq = -d2
+        for i in range(3):
+            bq += a[i] * (m0[i] - c[i])
+            cq += (m0[i] - c[i]) ** 2
+        t = _quadratic_nearest(bq, cq, cur, 1e-12 * scale)
+        den = 0.0
+        for i in range(3):
+            y[i] = c[i] - m0[i] - t * a[i]
+            den += y[i] * a[i]
+        for i in range(3):
+            y[i] /= den
+        return t, den
+    r = point[0]
+    for i in range(3):
+        u[i] = m0[i] - r[i]
+        v[i] = c[i] - r[i]
+    ua, va = _dot(a, u), _dot(a, v)
+    for i in range(3):
+        u[i] -= ua * a[i]
+        v[i] -= va * a[i]
+    nu, nv = math.sqrt(_dot(u, u)), math.sqrt(_dot(v, v))
+    if nu * nv == 0.0:
+        return math.nan, 0.0
+    cs = (nu * nu + nv * nv - d2 + (ua - va) ** 2) / (2.0 * nu * nv)
+    if abs(cs) > 1.0:
+        if abs(cs) > 1.0 + 1e-10:
+            return math.nan, 0.0
+        cs = 1.0 if cs > 0 else -1.0
+    thc = _sp1(a, u, v)
+    h = math.acos(cs)
+    t1, t2 = _near(thc + h, cur), _near(thc - h, cur)
+    th = t1 if abs(t1 - cur) <= abs(t2 - cur) else t2
+    _rotate_about(a, r, th, m0, m)
+    for i in range(3):
+        y[i] = m[i] - c[i]
+    # (m - c) . (a x (m - r))
+    den = (y[0] * (a[1] * (m[2] - r[2]) - a[2] * (m[1] - r[1])) + y[1] * (a[2] * (m[0] - r[0]) - a[0] * (m[2] - r[2]))
+           + y[2] * (a[0] * (m[1] - r[1]) - a[1] * (m[0] - r[0])))
+    for i in range(3):
+        y[i] /= den
+    return th, den
 
 
 @njit(cache=True, _nrt=False)
@@ -593,7 +678,16 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     moves with ``J_L qd_L = v_c``, ``J_L = [S_v + S_w x c]`` the chain's point velocities at
     ``c``, so its row is ``(J_L^-1)_i v_c(xd)``, with ``v_c = v_o + w x (c - o)``, ``w = E(phi)
     phi_dot`` (``E`` the Euler rate map) and ``o`` the task point (its velocity the task's
-    positions) or the fixed ball's centre. Then ``xd = A^-1 sd``. ``pk``: the single-sample
+    positions) or the fixed ball's centre. Where each actuated coordinate is the one its leg's
+    closed form gives first (A2's first joint, B2's slide: the Gough-Stewart platform's and the
+    hip's legs), that coordinate and its row come from the task alone (:func:`_actuated`: the
+    leg's end ``c = o + R_T c_rel``, ``q_a`` and ``y = dq_a / dc``, the row's ``(J_L^-1)_i``), and
+    the legs' other coordinates are placed every :data:`TASK_REFRESH` calls only (they do not
+    enter the pose; a later checked route starts from them); the branch is then ``det A`` times
+    the legs' ``D`` (:func:`_actuated`), the factor of ``det J_L`` that the actuated coordinate
+    brings (the other, the universal joint's, vanishes only where the leg's passive angles are
+    singular, which the pose does not see). Then
+    ``xd = A^-1 sd``. ``pk``: the single-sample
     kinematics' packed model (:func:`._one.pack`, read only); ``d``: this route's state and
     work (:func:`.direct.pack_task`). Writes ``x, xd`` into ``out (2 nt)``; returns OK,
     :data:`COLD`, :data:`BAD_INPUT`, :data:`NOT_REACHED`, NOT_CONVERGED, SINGULAR or
@@ -635,6 +729,11 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     xdp = _fview(d, d[20], (nt + 3,))
     x0 = _fview(d, d[21], (nt,))
     q0 = _fview(d, d[22], (nq,))
+    # each actuator's point on the task body less the task point (or the fixed ball's centre),
+    # in the task body's frame; whether the actuated coordinates' closed forms alone answer, and
+    # the calls since every leg was last placed
+    crel = _fview(d, d[23], (na, 3))
+    alone = _fview(d, d[24], (2,))
     tol = _fview(pk, pk[6], (2,))[0]
     body_parent, body_joint, joint_q0, joint_nq, coord_motion = _i(pk, 0), _i(pk, 1), _i(pk, 2), _i(pk, 3), _i(pk, 4)
     task_kind, task_index, euler_axes = _i(pk, 13), _i(pk, 14), _i(pk, 15)
@@ -677,20 +776,26 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     det = 0.0
     ratio = 0.0
     legs_det = 1.0
+    closed = alone[0] != 0.0
+    RT, Rt, Rb = w33[1], w33[2], w33[3]
     while True:
-        if not place_fixed_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
-                                coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, legs, x, task):
-            return _task_fail(st, x, x0, q, q0, NOT_REACHED)
-        big = 0.0
-        for a in range(na):
-            r[a] = q[act[a]] - s[a]
-            big = max(big, abs(r[a]) * scale[a])
-        # the Jacobian at x
         for t in range(nt):
             if task_kind[t] == 1:
                 ang[_nn(task_index[t])] = x[t]
+            elif closed:
+                o[_nn(task_index[t])] = x[t]
+        if closed:  # the task body's rotation R_T = Rot_a1(phi_1) Rot_a2(phi_2) Rot_a3(phi_3)
+            _rot(euler_axes[0], ang[0], RT)
+            _rot(euler_axes[1], ang[1], Rt)
+            _matmul3(RT, Rt, Rb)
+            _rot(euler_axes[2], ang[2], Rt)
+            _matmul3(Rb, Rt, RT)
+        elif not place_fixed_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+                                  coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, legs, x, task):
+            return _task_fail(st, x, x0, q, q0, NOT_REACHED)
+        # the Jacobian at x
         euler_rate_map(ang, euler_axes, E)
-        if npos == 3:
+        if npos == 3 and not closed:
             for i in range(3):
                 o[i] = (p[tb, i] + R[tb, i, 0] * task_point[0] + R[tb, i, 1] * task_point[1]
                         + R[tb, i, 2] * task_point[2])
@@ -698,7 +803,20 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
         for a in range(na):
             L = _nn(lmap[a, 0])
             k = legs[1][L]
-            if k >= LEG_TASK:  # the chain reaches the centre of the ball that carries the task body
+            if closed:  # the point from the task alone, the coordinate and its row in closed form
+                for i in range(3):
+                    c[i] = o[i] + RT[i, 0] * crel[a, 0] + RT[i, 1] * crel[a, 1] + RT[i, 2] * crel[a, 2]
+                ca = _nn(act[a])
+                i0 = _nn(lmap[a, 1])
+                th, dl = _actuated(k % LEG_TASK, c, legs[6][L], legs[7][L], legs[8][L], legs[9][L], legs[10][L],
+                                   q[ca] - legs[10][L, i0], y, w3)
+                if th != th:
+                    return _task_fail(st, x, x0, q, q0, NOT_REACHED)
+                if dl == 0.0:
+                    return _task_fail(st, x, x0, q, q0, SINGULAR)
+                q[ca] = legs[10][L, i0] + th
+                legs_det *= dl
+            elif k >= LEG_TASK:  # the chain reaches the centre of the ball that carries the task body
                 kb = _nn(legs[12][L, 0])
                 for i in range(3):
                     c[i] = p[tb, i] + R[tb, i, 0] * tpC[kb, 0] + R[tb, i, 1] * tpC[kb, 1] + R[tb, i, 2] * tpC[kb, 2]
@@ -706,23 +824,25 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
                 cp = legs[5][L]
                 for i in range(3):
                     c[i] = p[tb, i] + R[tb, i, 0] * cp[0] + R[tb, i, 1] * cp[1] + R[tb, i, 2] * cp[2]
-            for j in range(3):
-                cj = _nn(legs[2][L, j])
-                J[0, j] = S[cj, 3] + S[cj, 1] * c[2] - S[cj, 2] * c[1]
-                J[1, j] = S[cj, 4] + S[cj, 2] * c[0] - S[cj, 0] * c[2]
-                J[2, j] = S[cj, 5] + S[cj, 0] * c[1] - S[cj, 1] * c[0]
-            dl = _inv3(J[:3], Ji)
-            if dl == 0.0:
-                return _task_fail(st, x, x0, q, q0, SINGULAR)
-            first = True
-            for b in range(a):
-                if lmap[b, 0] == lmap[a, 0]:
-                    first = False
-            if first:  # each leg's det J_L once
-                legs_det *= dl
-            i0 = _nn(lmap[a, 1])
+            if not closed:
+                for j in range(3):
+                    cj = _nn(legs[2][L, j])
+                    J[0, j] = S[cj, 3] + S[cj, 1] * c[2] - S[cj, 2] * c[1]
+                    J[1, j] = S[cj, 4] + S[cj, 2] * c[0] - S[cj, 0] * c[2]
+                    J[2, j] = S[cj, 5] + S[cj, 0] * c[1] - S[cj, 1] * c[0]
+                dl = _inv3(J[:3], Ji)
+                if dl == 0.0:
+                    return _task_fail(st, x, x0, q, q0, SINGULAR)
+                first = True
+                for b in range(a):
+                    if lmap[b, 0] == lmap[a, 0]:
+                        first = False
+                if first:  # each leg's det J_L once
+                    legs_det *= dl
+                i0 = _nn(lmap[a, 1])
+                for i in range(3):
+                    y[i] = Ji[i0, i]
             for i in range(3):
-                y[i] = Ji[i0, i]
                 cmo[i] = c[i] - o[i]
             wy[0] = cmo[1] * y[2] - cmo[2] * y[1]
             wy[1] = cmo[2] * y[0] - cmo[0] * y[2]
@@ -733,6 +853,10 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
                     A[a, t] = wy[0] * E[0, m] + wy[1] * E[1, m] + wy[2] * E[2, m]
                 else:
                     A[a, t] = y[m]
+        big = 0.0
+        for a in range(na):
+            r[a] = q[act[a]] - s[a]
+            big = max(big, abs(r[a]) * scale[a])
         for i in range(nt):
             for j in range(nt):
                 LU[i, j] = A[i, j]
@@ -761,6 +885,12 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
         return _task_fail(st, x, x0, q, q0, NOT_CONVERGED)
     if known and det * st[1] < 0.0:
         return _task_fail(st, x, x0, q, q0, CROSSED)
+    if closed:  # every TASK_REFRESH calls the legs' other coordinates follow (their branches nearest)
+        alone[1] += 1.0
+        if alone[1] >= TASK_REFRESH:
+            alone[1] = 0.0
+            place_fixed_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
+                             tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, legs, x, task)
     for a in range(na):
         r[a] = sd[a]
     _lu_solve(LU, piv, r)

@@ -221,6 +221,24 @@ def task_route_map(model: MechanismModel) -> NDArray[np.int64] | None:
     return out
 
 
+def _actuated_points(model: MechanismModel, lmap: NDArray[np.int64], npos: int) -> tuple[Array, bool]:
+    """For :func:`pack_task`: each actuator's leg end on the task body (the cut joint's point, or
+    the centre of the ball that carries the task body) less the task point (or, without task
+    positions, the centre of the task body's ball on the ground), in the task body's frame
+    ``(na, 3)``; and whether each actuated coordinate is one that its leg's closed form gives
+    before the others (A2's first joint, B2's slide: :func:`._direct._actuated`), so that the
+    route needs the other coordinates of no leg."""
+    lg = model.legs
+    origin = model.task_point if npos == 3 else model.tree_p_child[model.body_joint[model.task_body]]
+    crel = np.zeros((model.na, 3))
+    alone = True
+    for a, (L, i) in enumerate(lmap):
+        end = model.tree_p_child[lg.ball[L, 0]] if lg.kind[L] >= 10 else lg.cpt[L]
+        crel[a] = end - origin
+        alone = alone and (lg.kind[L] % 10, int(i)) in ((2, 0), (4, 2))
+    return crel, alone
+
+
 def pack_task(model: MechanismModel) -> NDArray[np.int64] | None:
     """The state and work of :func:`._direct.direct_task_one` (a header of offsets, then the
     parts; the state cold), or None where that route does not answer (:func:`task_route_map`)."""
@@ -235,11 +253,12 @@ def pack_task(model: MechanismModel) -> NDArray[np.int64] | None:
         k = int(model.body_joint[model.task_body])
         o = p[model.task_body] + R[model.task_body] @ model.tree_p_child[k]
     scale = np.where(model.coord_motion[model.act_coord] >= 3, 1.0 / model.length_scale, 1.0)
+    crel, alone = _actuated_points(model, lmap, npos)
     parts = [np.zeros(2), np.zeros(nt), np.zeros(na), np.zeros(nt * nt), scale, o, lmap.ravel(),
              np.zeros(nq), np.zeros(nb * 9), np.zeros(nb * 3), np.zeros(nq * 6), np.zeros(45), np.zeros(60),
              np.zeros(nq * 3), np.zeros(nt * nt), np.zeros(nt * nt), np.zeros(nt), np.zeros(9), np.zeros(18),
              np.zeros(nt, dtype=np.int64), np.concatenate([np.zeros(nt + 1), [1.0 / model.length_scale, 1.0]]),
-             np.zeros(nt), np.zeros(nq)]
+             np.zeros(nt), np.zeros(nq), crel.ravel(), np.array([1.0 if alone else 0.0, 0.0])]
     head = np.zeros(D.TASK_HEAD, dtype=np.int64)
     head[D.TASK_HEAD - 2], head[D.TASK_HEAD - 1] = npos, nb
     at, bits = D.TASK_HEAD, []
