@@ -381,8 +381,9 @@ class MechanismVerbs:
             a, ad = a.reshape(-1), ad.reshape(-1)
         nt = model.nt
         fit = a.shape == ad.shape == (model.na,)
+        status = -1
         if st.direct_task:  # (the kernels have run: nothing to wait for)
-            pk1, d, out, kernel, ok, crossed = st.direct_task
+            pk1, d, out, kernel, ok, _ = st.direct_task
             status = kernel(pk1, d, a, ad, out) if fit else ok - 1
             if status == ok:
                 return out[:nt].copy(), out[nt:].copy()
@@ -391,45 +392,63 @@ class MechanismVerbs:
             status = kernel(pk, a, ad, out) if fit else ok - 1
             if status == ok:
                 return out[:nt].copy(), out[nt:].copy()
+        ahead.wait("direct")
+        if st.direct_task:
+            return self._direct_task_on(model, st, a, ad, fit, status)
+        return self._direct_checked(model, st, a, ad, status)
+
+    def _direct_task_on(self, model: MechanismModel, st: _State, a: Array, ad: Array, fit: bool,
+                        status: int) -> tuple[Array, Array]:
+        """:meth:`direct_one` where the task-space call did not answer: a move too large for one
+        call (or one it cannot solve) along the straight actuator path in 8, then 64 steps, else
+        the checked route from the last solution; the branch checked by the sign of ``det A``
+        against the last solution's. Raises on a crossing."""
+        from ..errors import SingularityError
+        from .direct import direct_kinematics, prime_task, task_state
+
+        crossing = "the actuator coordinates crossed a singularity of the direct kinematics"
+        pk1, d, out, kernel, ok, crossed = st.direct_task
+        nt = model.nt
+        if fit and status == crossed:
+            raise SingularityError(crossing)
+        f = d.view(np.float64)
+        q_last, x_last = f[d[7]:d[7] + model.nq].copy(), f[d[1]:d[1] + nt].copy()
+        s_last, det_last = f[d[2]:d[2] + model.na].copy(), float(task_state(d)[1])
+        for steps in (8, 64) if fit and np.all(np.isfinite(a)) and np.all(np.isfinite(ad)) else ():
+            prime_task(d, q_last, x_last, s_last)
+            way = a - s_last
+            for k in range(1, steps + 1):
+                status = kernel(pk1, d, s_last + (k / steps) * way, ad if k == steps else way, out)
+                if k == 1 and status == ok and det_last * float(task_state(d)[1]) < 0:
+                    status = crossed
+                if status != ok:
+                    break
+            if status == crossed:
+                raise SingularityError(crossing)
+            if status == ok:
+                return out[:nt].copy(), out[nt:].copy()
+        dk = direct_kinematics(model, a[None], ad[None], q_start=q_last)
+        prime_task(d, dk.q[0], dk.x[0], a)
+        if kernel(pk1, d, a, ad, out) != ok:  # at its own solution: the task route's det A and rates
+            raise SingularityError("the direct kinematics is singular at these actuator coordinates")
+        if det_last * float(task_state(d)[1]) < 0:
+            raise SingularityError(crossing)
+        return out[:nt].copy(), out[nt:].copy()
+
+    def _direct_checked(self, model: MechanismModel, st: _State, a: Array, ad: Array,
+                        status: int) -> tuple[Array, Array]:
+        """:meth:`direct_one` by the checked route: where the tree-space call did not answer
+        (from its last solution; raises on a crossing), or on the first call (from the reference
+        configuration), which packs both single-sample routes and primes them."""
         from ..errors import SingularityError
         from . import _direct as D
         from . import _one
-        from .direct import direct_kinematics, one_state, pack_one, pack_task, prime_one, prime_task, task_state
+        from .direct import direct_kinematics, one_state, pack_one, pack_task, prime_one, prime_task
 
-        ahead.wait("direct")
-        if st.direct_task:
-            if fit and status == crossed:
-                raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
-            # a move too large for one call (or one it cannot solve): the same route along the
-            # straight actuator path in 8, then 64 steps, else the checked route from the last
-            # solution; the branch checked by the sign of det A against the last solution's
-            f = d.view(np.float64)
-            q_last, x_last = f[d[7]:d[7] + model.nq].copy(), f[d[1]:d[1] + nt].copy()
-            s_last, det_last = f[d[2]:d[2] + model.na].copy(), float(task_state(d)[1])
-            for steps in (8, 64) if fit and np.all(np.isfinite(a)) and np.all(np.isfinite(ad)) else ():
-                prime_task(d, q_last, x_last, s_last)
-                way = a - s_last
-                for k in range(1, steps + 1):
-                    status = kernel(pk1, d, s_last + (k / steps) * way, ad if k == steps else way, out)
-                    if k == 1 and status == ok and det_last * float(task_state(d)[1]) < 0:
-                        status = crossed
-                    if status != ok:
-                        break
-                if status == crossed:
-                    raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
-                if status == ok:
-                    return out[:nt].copy(), out[nt:].copy()
-            dk = direct_kinematics(model, a[None], ad[None], q_start=q_last)
-            prime_task(d, dk.q[0], dk.x[0], a)
-            if kernel(pk1, d, a, ad, out) != ok:  # at its own solution: the task route's det A and rates
-                raise SingularityError("the direct kinematics is singular at these actuator coordinates")
-            if det_last * float(task_state(d)[1]) < 0:
-                raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
-            return out[:nt].copy(), out[nt:].copy()
-        elif st.direct is not None:
+        if st.direct is not None:
             if status == D.CROSSED:
                 raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
-            prev = one_state(pk)
+            prev = one_state(st.direct[0])
             q_prev, det_prev = prev[2:2 + model.nq].copy(), float(prev[1])
             dk = direct_kinematics(model, a[None], ad[None], q_start=q_prev)
             if dk.det[0] * det_prev < 0:  # the checked route names what is wrong otherwise
