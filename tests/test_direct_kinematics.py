@@ -750,3 +750,26 @@ def test_task_route_by_the_actuated_coordinates_alone_matches_every_leg_placed(n
     dq[turns] = (dq[turns] + np.pi) % (2 * np.pi) - np.pi
     dq[~turns] /= m.length_scale
     assert np.abs(dq).max() <= 1e-9
+
+
+def test_task_route_by_the_actuated_coordinates_alone_only_where_the_joint_reaches_every_direction():
+    """A U-P-S platform whose universal joints' second axes lean 18 deg towards the rod: a leg
+    length in reach may then be a direction the joint cannot take, which the actuated
+    coordinate alone does not tell; the task route then places every leg (and says where a
+    leg is out of reach). The same platform with square joints takes the route by the actuated
+    coordinates alone."""
+    from test_explicit_legs import _unit, platform
+
+    from pkmdyn.multibody.direct import pack_task
+
+    def flag(desc):
+        d = pack_task(load_mechanism(desc))
+        return d.view(np.float64)[d[24]]
+
+    assert flag(platform("UPS")) == 1.0
+    desc = platform("UPS")
+    for j in desc["joints"]:
+        if j["type"] == "universal":
+            a1, a2 = np.array(j["axes"][0]), np.array(j["axes"][1])
+            j["axes"][1] = [float(v) for v in _unit(a2 + 3.0 * _unit(np.cross(a1, a2)))]
+    assert flag(desc) == 0.0

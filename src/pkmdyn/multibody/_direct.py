@@ -595,6 +595,8 @@ def _actuated(kind, c, axis, point, m0, e0, q0, cur, y, w3):  # pragma: no cover
         au = _dot(a, u)
         t = _quadratic_nearest(au, _dot(u, u) - _dot(v, v), cur, 1e-12 * scale)
         den = t + au
+        if den == 0.0:  # the leg's own singularity, at its reach's end
+            return t, den
         for i in range(3):
             y[i] = v[i] / den
         return t, den
@@ -612,6 +614,8 @@ def _actuated(kind, c, axis, point, m0, e0, q0, cur, y, w3):  # pragma: no cover
         for i in range(3):
             y[i] = c[i] - m0[i] - t * a[i]
             den += y[i] * a[i]
+        if den == 0.0:
+            return t, den
         for i in range(3):
             y[i] /= den
         return t, den
@@ -641,6 +645,8 @@ def _actuated(kind, c, axis, point, m0, e0, q0, cur, y, w3):  # pragma: no cover
     # (m - c) . (a x (m - r))
     den = (y[0] * (a[1] * (m[2] - r[2]) - a[2] * (m[1] - r[1])) + y[1] * (a[2] * (m[0] - r[0]) - a[0] * (m[2] - r[2]))
            + y[2] * (a[0] * (m[1] - r[1]) - a[1] * (m[0] - r[0])))
+    if den == 0.0:
+        return th, den
     for i in range(3):
         y[i] /= den
     return th, den
@@ -889,6 +895,8 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
         alone[1] += 1.0
         if alone[1] >= TASK_REFRESH:
             alone[1] = 0.0
+            # (every such leg's joint points its rod in every direction, .direct._reaches_around: a
+            # leg whose actuated coordinate reached its point places the rest)
             place_fixed_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
                              tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, legs, x, task)
     for a in range(na):

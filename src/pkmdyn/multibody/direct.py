@@ -235,8 +235,23 @@ def _actuated_points(model: MechanismModel, lmap: NDArray[np.int64], npos: int) 
     for a, (L, i) in enumerate(lmap):
         end = model.tree_p_child[lg.ball[L, 0]] if lg.kind[L] >= 10 else lg.cpt[L]
         crel[a] = end - origin
-        alone = alone and (lg.kind[L] % 10, int(i)) in ((2, 0), (4, 2))
+        alone = alone and (lg.kind[L] % 10, int(i)) in ((2, 0), (4, 2)) and _reaches_around(lg, L)
     return crel, alone
+
+
+def _reaches_around(lg, L: int) -> bool:
+    """Whether leg ``L``'s two turns about ``m0`` (its universal joint, or its ball with the spin
+    held) point its rod in every direction, so that the actuated coordinate alone tells whether
+    the leg reaches its point: the two axes normal to each other and the rod normal to the
+    second (A2: axes 1, 2; B2: axes 0, 1, the slide normal to the second too). Elsewhere a rod
+    length in reach may still be a direction out of reach (the route placing every leg says
+    so)."""
+    ax, rod = lg.axis[L], lg.e0[L] - lg.m0[L]
+    size = max(float(np.linalg.norm(rod)), 1e-300)
+    tol = 1e-9
+    if lg.kind[L] % 10 == 2:
+        return abs(ax[1] @ ax[2]) < tol and abs(rod @ ax[2]) < tol * size
+    return abs(ax[0] @ ax[1]) < tol and abs(ax[2] @ ax[1]) < tol and abs(rod @ ax[1]) < tol * size
 
 
 def pack_task(model: MechanismModel) -> NDArray[np.int64] | None:

@@ -405,6 +405,7 @@ class MechanismVerbs:
         against the last solution's. Raises on a crossing."""
         from ..errors import SingularityError
         from .direct import direct_kinematics, prime_task, task_state
+        from .legs import place
 
         crossing = "the actuator coordinates crossed a singularity of the direct kinematics"
         pk1, d, out, kernel, ok, crossed = st.direct_task
@@ -427,6 +428,9 @@ class MechanismVerbs:
                 raise SingularityError(crossing)
             if status == ok:
                 return out[:nt].copy(), out[nt:].copy()
+        # the legs' other coordinates at the last pose (the route by the actuated coordinates alone
+        # places them every few calls only), for the checked route to start from
+        q_last = place(model, q_last, x_last)
         dk = direct_kinematics(model, a[None], ad[None], q_start=q_last)
         prime_task(d, dk.q[0], dk.x[0], a)
         if kernel(pk1, d, a, ad, out) != ok:  # at its own solution: the task route's det A and rates
