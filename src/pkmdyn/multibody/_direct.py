@@ -30,8 +30,8 @@ import numpy as np
 from numba import njit
 
 from ._kernels import (LEG_A2, LEG_TASK, LOOP_OPEN, NOT_CONVERGED, OK, ROWS_DRIFT, ROWS_JACOBIAN, ROWS_VALUES, SINGULAR,
-                       _dot, _inv3, _matmul3, _nn, _near, _quadratic_nearest, _rot, _rotate_about, _sp1, _wrap, along_h2,
-                       bias_motion, euler_rate_map, forward_positions, jerk_factor, largest_scaled, place_fixed_legs,
+                       _dot, _inv3, _matmul3, _nn, _quadratic_nearest, _rot, _rotate_about, _wrap, along_h2, bias_motion,
+                       euler_rate_map, first_joint, forward_positions, jerk_factor, largest_scaled, place_fixed_legs,
                        rows, second_order_applies)
 from ._one import _f, _f33, _fn3, _fview, _i, _i2, _iview
 
@@ -603,42 +603,20 @@ def _actuated(kind, c, axis, point, m0, e0, q0, cur, y, w3):  # pragma: no cover
     d2 = 0.0
     for i in range(3):
         d2 += (e0[i] - m0[i]) ** 2
+    th = first_joint(a, point[0], m0, c, d2, cur, scale, u, v)
+    if th != th:
+        return th, 0.0
+    den = 0.0
     if point[0, 0] != point[0, 0]:  # a slide
-        bq = 0.0
-        cq = -d2
         for i in range(3):
-            bq += a[i] * (m0[i] - c[i])
-            cq += (m0[i] - c[i]) ** 2
-        t = _quadratic_nearest(bq, cq, cur, 1e-12 * scale)
-        den = 0.0
-        for i in range(3):
-            y[i] = c[i] - m0[i] - t * a[i]
+            y[i] = c[i] - m0[i] - th * a[i]
             den += y[i] * a[i]
         if den == 0.0:
-            return t, den
+            return th, den
         for i in range(3):
             y[i] /= den
-        return t, den
+        return th, den
     r = point[0]
-    for i in range(3):
-        u[i] = m0[i] - r[i]
-        v[i] = c[i] - r[i]
-    ua, va = _dot(a, u), _dot(a, v)
-    for i in range(3):
-        u[i] -= ua * a[i]
-        v[i] -= va * a[i]
-    nu, nv = math.sqrt(_dot(u, u)), math.sqrt(_dot(v, v))
-    if nu * nv == 0.0:
-        return math.nan, 0.0
-    cs = (nu * nu + nv * nv - d2 + (ua - va) ** 2) / (2.0 * nu * nv)
-    if abs(cs) > 1.0:
-        if abs(cs) > 1.0 + 1e-10:
-            return math.nan, 0.0
-        cs = 1.0 if cs > 0 else -1.0
-    thc = _sp1(a, u, v)
-    h = math.acos(cs)
-    t1, t2 = _near(thc + h, cur), _near(thc - h, cur)
-    th = t1 if abs(t1 - cur) <= abs(t2 - cur) else t2
     _rotate_about(a, r, th, m0, m)
     for i in range(3):
         y[i] = m[i] - c[i]

@@ -263,6 +263,42 @@ def _explicit_leg(L, q, R, p, legs, w3):  # pragma: no cover - compiled
 
 
 @njit(cache=True, _nrt=False)
+def first_joint(a0, r, m0, c, d2, cur, scale, u, v):  # pragma: no cover - compiled
+    """The first joint of an A1 or A2 leg (:func:`_reach`): the value that brings the point
+    ``m0`` to the distance ``sqrt(d2)`` from ``c``, for a slide along ``a0`` (``r`` NaN:
+    ``|m0 + t a0 - c|^2 = d2``) or a turn about ``a0`` through ``r`` (``cos(th - th_c) = (|u'|^2 +
+    |v'|^2 - d'^2) / (2 |u'| |v'|)``), on the branch nearest ``cur``; NaN out of reach
+    (``u, v (3,)`` work space)."""
+    if r[0] != r[0]:
+        bq = 0.0
+        cq = -d2
+        for i in range(3):
+            bq += a0[i] * (m0[i] - c[i])
+            cq += (m0[i] - c[i]) ** 2
+        return _quadratic_nearest(bq, cq, cur, 1e-12 * scale)
+    for i in range(3):
+        u[i] = m0[i] - r[i]
+        v[i] = c[i] - r[i]
+    ua, va = _dot(a0, u), _dot(a0, v)
+    for i in range(3):
+        u[i] -= ua * a0[i]
+        v[i] -= va * a0[i]
+    nu, nv = math.sqrt(_dot(u, u)), math.sqrt(_dot(v, v))
+    dd = d2 - (ua - va) ** 2
+    if nu * nv == 0.0:
+        return math.nan
+    cs = (nu * nu + nv * nv - dd) / (2.0 * nu * nv)
+    if abs(cs) > 1.0:
+        if abs(cs) > 1.0 + 1e-10:
+            return math.nan
+        cs = 1.0 if cs > 0 else -1.0
+    thc = _sp1(a0, u, v)
+    h = math.acos(cs)
+    t1, t2 = _near(thc + h, cur), _near(thc - h, cur)
+    return t1 if abs(t1 - cur) <= abs(t2 - cur) else t2
+
+
+@njit(cache=True, _nrt=False)
 def _reach(kind, q, coord, axis, point, m0, e0, q0, w3):  # pragma: no cover - compiled
     """A leg's coordinates in ``q`` such that its end point reaches ``c = w3[0]`` (base frame),
     by pattern ``kind`` (:mod:`.legs`; the leg's rows of the table: ``coord (3,)``, ``axis,
@@ -281,40 +317,14 @@ def _reach(kind, q, coord, axis, point, m0, e0, q0, w3):  # pragma: no cover - c
         d2 = 0.0
         for i in range(3):
             d2 += (e0[i] - m0[i]) ** 2
-        if point[0, 0] != point[0, 0]:  # a slide (no axis point): |m0 + t a - c|^2 = d2
-            bq = 0.0
-            cq = -d2
-            for i in range(3):
-                bq += a0[i] * (m0[i] - c[i])
-                cq += (m0[i] - c[i]) ** 2
-            th0 = _quadratic_nearest(bq, cq, cur0, 1e-12 * scale)
-            if th0 != th0:
-                return False
+        th0 = first_joint(a0, point[0], m0, c, d2, cur0, scale, u, v)
+        if th0 != th0:
+            return False
+        if point[0, 0] != point[0, 0]:
             for i in range(3):
                 cb[i] = c[i] - th0 * a0[i]  # c taken back through the first joint
-        else:  # a turn about a0 through r: cos(th - th_c) = (|u'|^2 + |v'|^2 - d'^2) / (2 |u'| |v'|)
-            r = point[0]
-            for i in range(3):
-                u[i] = m0[i] - r[i]
-                v[i] = c[i] - r[i]
-            ua, va = _dot(a0, u), _dot(a0, v)
-            for i in range(3):
-                u[i] -= ua * a0[i]
-                v[i] -= va * a0[i]
-            nu, nv = math.sqrt(_dot(u, u)), math.sqrt(_dot(v, v))
-            dd = d2 - (ua - va) ** 2
-            if nu * nv == 0.0:
-                return False
-            cs = (nu * nu + nv * nv - dd) / (2.0 * nu * nv)
-            if abs(cs) > 1.0:
-                if abs(cs) > 1.0 + 1e-10:
-                    return False
-                cs = 1.0 if cs > 0 else -1.0
-            thc = _sp1(a0, u, v)
-            h = math.acos(cs)
-            t1, t2 = _near(thc + h, cur0), _near(thc - h, cur0)
-            th0 = t1 if abs(t1 - cur0) <= abs(t2 - cur0) else t2
-            _rotate_about(a0, r, -th0, c, cb)
+        else:
+            _rotate_about(a0, point[0], -th0, c, cb)
         q[c0] = q0[0] + th0
         # 2. the ball about m0 turns e0 - m0 into cb - m0
         for i in range(3):
