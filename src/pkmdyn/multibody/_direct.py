@@ -30,7 +30,7 @@ import numpy as np
 from numba import njit
 
 from ._kernels import (LEG_A2, LEG_TASK, LOOP_OPEN, NOT_CONVERGED, OK, ROWS_DRIFT, ROWS_JACOBIAN, ROWS_VALUES, SINGULAR,
-                       _dot, _inv3, _matmul3, _nn, _quadratic_nearest, _rot, _rotate_about, _wrap, along_h2, bias_motion,
+                       _dot, _inv3, _nn, _quadratic_nearest, _rotate_about, _wrap, along_h2, bias_motion, euler_matrix,
                        euler_rate_map, first_joint, forward_positions, jerk_factor, largest_scaled, place_fixed_legs,
                        rows, second_order_applies)
 from ._one import _f, _f33, _fn3, _fview, _i, _i2, _iview
@@ -769,11 +769,7 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
             elif closed:
                 o[_nn(task_index[t])] = x[t]
         if closed:  # the task body's rotation R_T = Rot_a1(phi_1) Rot_a2(phi_2) Rot_a3(phi_3)
-            _rot(euler_axes[0], ang[0], RT)
-            _rot(euler_axes[1], ang[1], Rt)
-            _matmul3(RT, Rt, Rb)
-            _rot(euler_axes[2], ang[2], Rt)
-            _matmul3(Rb, Rt, RT)
+            euler_matrix(euler_axes, ang, RT, Rt, Rb)
         elif not place_fixed_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
                                   coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, legs, x, task):
             return _task_fail(st, x, x0, q, q0, NOT_REACHED)
@@ -845,9 +841,9 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
             for j in range(nt):
                 LU[i, j] = A[i, j]
         det, ratio = _lu(LU, piv)
-        # the branch: det A times the legs' det J_L (A = J_L^-1 ... changes sign through a leg's
-        # own singularity too, where the direct kinematics is regular; the product only where
-        # the direct kinematics is singular)
+        # the branch: det A times the legs' det J_L, or their actuated factors D where closed (A =
+        # J_L^-1 ... changes sign through a leg's own singularity too, where the direct kinematics
+        # is regular; the product only where the direct kinematics is singular)
         det *= legs_det
         if not ratio > 1e-13:
             return _task_fail(st, x, x0, q, q0, SINGULAR)

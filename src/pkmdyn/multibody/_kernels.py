@@ -445,6 +445,17 @@ def place_fixed_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motio
     return True
 
 
+@njit(cache=True, inline="always")
+def euler_matrix(axes, ang, out, t1, t2):  # pragma: no cover - compiled
+    """``out = Rot_a1(ang_0) Rot_a2(ang_1) Rot_a3(ang_2)`` (intrinsic Euler angles about the axes
+    ``axes``; ``t1, t2 (3, 3)`` work space): the task body's rotation from its task angles."""
+    _rot(axes[0], ang[0], out)
+    _rot(axes[1], ang[1], t1)
+    _matmul3(out, t1, t2)
+    _rot(axes[2], ang[2], t1)
+    _matmul3(t2, t1, out)
+
+
 @njit(cache=True, _nrt=False)
 def _task_leg(L, xs, q, legs, task, RP, RC, pC, w3, w33):  # pragma: no cover - compiled
     """The leg ``L`` that carries the task body, in closed form from the task coordinates ``xs``
@@ -470,11 +481,7 @@ def _task_leg(L, xs, q, legs, task, RP, RC, pC, w3, w33):  # pragma: no cover - 
             ang[_nn(task_index[t])] = xs[t]
         else:
             pos[_nn(task_index[t])] = xs[t]
-    _rot(euler_axes[0], ang[0], RT)
-    _rot(euler_axes[1], ang[1], Rt)
-    _matmul3(RT, Rt, Rb)
-    _rot(euler_axes[2], ang[2], Rt)
-    _matmul3(Rb, Rt, RT)
+    euler_matrix(euler_axes, ang, RT, Rt, Rb)
     k = _nn(ball[L, 0])
     for i in range(3):
         for j in range(3):

@@ -46,6 +46,9 @@ __all__ = ["MechanismVerbs", "machine_verbs", "RenamedVerbs"]
 
 Array = NDArray[np.float64]
 
+#: the error of a single-sample direct kinematics call whose actuators crossed a singularity
+_CROSSING = "the actuator coordinates crossed a singularity of the direct kinematics"
+
 
 def _load_dependent(model: MechanismModel) -> bool:
     return any(f is not None and f.get("coefficient", 0.0) for f in model.joint_friction)
@@ -407,11 +410,10 @@ class MechanismVerbs:
         from .direct import direct_kinematics, prime_task, task_state
         from .legs import place
 
-        crossing = "the actuator coordinates crossed a singularity of the direct kinematics"
         pk1, d, out, kernel, ok, crossed = st.direct_task
         nt = model.nt
         if fit and status == crossed:
-            raise SingularityError(crossing)
+            raise SingularityError(_CROSSING)
         f = d.view(np.float64)
         q_last, x_last = f[d[7]:d[7] + model.nq].copy(), f[d[1]:d[1] + nt].copy()
         s_last, det_last = f[d[2]:d[2] + model.na].copy(), float(task_state(d)[1])
@@ -425,7 +427,7 @@ class MechanismVerbs:
                 if status != ok:
                     break
             if status == crossed:
-                raise SingularityError(crossing)
+                raise SingularityError(_CROSSING)
             if status == ok:
                 return out[:nt].copy(), out[nt:].copy()
         # the legs' other coordinates at the last pose (the route by the actuated coordinates alone
@@ -436,7 +438,7 @@ class MechanismVerbs:
         if kernel(pk1, d, a, ad, out) != ok:  # at its own solution: the task route's det A and rates
             raise SingularityError("the direct kinematics is singular at these actuator coordinates")
         if det_last * float(task_state(d)[1]) < 0:
-            raise SingularityError(crossing)
+            raise SingularityError(_CROSSING)
         return out[:nt].copy(), out[nt:].copy()
 
     def _direct_checked(self, model: MechanismModel, st: _State, a: Array, ad: Array,
@@ -451,12 +453,12 @@ class MechanismVerbs:
 
         if st.direct is not None:
             if status == D.CROSSED:
-                raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
+                raise SingularityError(_CROSSING)
             prev = one_state(st.direct[0])
             q_prev, det_prev = prev[2:2 + model.nq].copy(), float(prev[1])
             dk = direct_kinematics(model, a[None], ad[None], q_start=q_prev)
             if dk.det[0] * det_prev < 0:  # the checked route names what is wrong otherwise
-                raise SingularityError("the actuator coordinates crossed a singularity of the direct kinematics")
+                raise SingularityError(_CROSSING)
         else:
             dk = direct_kinematics(model, a[None], ad[None])
             st.direct = (pack_one(model), np.zeros(2 * model.nt), D.direct_one, D.OK)
