@@ -640,23 +640,25 @@ def test_one_sample_at_a_time_after_large_jumps(leg):
     assert done >= 10
 
 
-def test_one_sample_at_a_time_through_a_legs_own_singularity():
-    """An R-U-S platform (legs turned by an arbitrary rotation) moved along its second task
-    coordinate until one leg's crank lines up with its rod (a singularity of that leg alone:
-    the pose can go no further there), then back, the crank turning on through the fold. The
-    direct kinematics is regular there: the controller's route follows every sample, with no
-    singularity error (the Jacobian of the actuators changes sign through infinity there, the
-    branch measure must not)."""
+@pytest.mark.parametrize("leg, axis", [("RUS", 2), ("PUS", 0)])
+def test_one_sample_at_a_time_through_a_legs_own_singularity(leg, axis):
+    """A platform (legs turned by an arbitrary rotation) moved along one task coordinate until
+    one leg folds (a singularity of that leg alone: the pose can go no further there), then
+    back, the leg's actuated coordinate moving on through the fold: an R-U-S leg whose crank
+    lines up with its rod, moved along the third coordinate; a P-U-S leg whose rod comes
+    normal to its slide, moved along the first. The direct kinematics is regular there: the
+    controller's route follows every sample, with no singularity error (the Jacobian of the
+    actuators changes sign through infinity there, the branch measure must not)."""
     from test_explicit_legs import _rot, platform
 
     from pkmdyn.multibody.kinematics import loop_residuals
     from pkmdyn.multibody.legs import place
     from pkmdyn.multibody.machine import machine_verbs
 
-    m = load_mechanism(platform("RUS", _rot([0.3, -0.8, 0.5], 2.1)))
+    m = load_mechanism(platform(leg, _rot([0.3, -0.8, 0.5], 2.1)))
     x0 = reference_task(m)
     d = np.zeros(6)
-    d[2] = 1.0
+    d[axis] = 1.0
 
     def reach(q, al):
         qn = place(m, q, x0 + al * d)
