@@ -15,8 +15,11 @@ The PDM likewise (``pdm4/description.py``; every one of its 14 bodies' pose, vel
 acceleration on the Eq. 84 motion).
 
 Direct kinematics (``pkmdyn.multibody.direct``) of the Stewart platform, the hip, the Delta and
-the PDM: batched along a motion and one sample at a time as a controller calls it
-(``direct_one``, warm-started), with the round trips through the inverse kinematics; and the
+the PDM: batched along a motion, the task motion alone (``bodies=False``, what ``pkmdyn run
+--actuator-motion`` and identification from a measured log take: ``<machine>_dk_batched_us_per_sample``)
+and with every body's coordinates (``<machine>_dk_batched_with_bodies_us_per_sample``), and one
+sample at a time as a controller calls it (``direct_one``, warm-started), with the round trips
+through the inverse kinematics (of each batched route); and the
 Stewart platform's closed loop with exact encoders (``pkmdyn.simulate.track``, computed torque,
 the pose from the encoders by the direct kinematics) beside MuJoCo simulating the exported
 platform (``mj_step`` at 1 ms, actuator PD plus pkmdyn's feedforward) for the same seconds.
@@ -233,14 +236,18 @@ def _direct(out: dict, n: int, repeat: int, machines: dict) -> None:
         t, x, xd, xdd = _motion(reference_task(mech), amp, n, seed=4)
         kin = solve_kinematics(mech, x, xd, xdd, t)
         q0 = kin.q[0]
-        sec = best_time(lambda: direct_kinematics(mech, kin.act_q, kin.act_qd, kin.act_qdd, t, q_start=q0), repeat)
-        out[f"{name}_dk_batched_us_per_sample"] = sec / n * 1e6
-        dk = direct_kinematics(mech, kin.act_q, kin.act_qd, kin.act_qdd, t, q_start=q0)
         sc = np.where(mech.task_kind == 0, 1.0 / mech.length_scale, 1.0)
-        back = solve_kinematics(mech, dk.x, dk.xd, dk.xdd, t, q_start=q0)
         act_sc = np.where(mech.coord_motion[mech.act_coord] >= 3, 1.0 / mech.length_scale, 1.0)
-        out[f"{name}_dk_direct_of_inverse_max_err"] = float(np.abs((dk.x - x) * sc).max())
-        out[f"{name}_dk_inverse_of_direct_max_err"] = float(np.abs((back.act_q - kin.act_q) * act_sc).max())
+        for label, bodies in (("", False), ("_with_bodies", True)):
+            def batched(bodies: bool = bodies):
+                return direct_kinematics(mech, kin.act_q, kin.act_qd, kin.act_qdd, t, q_start=q0, bodies=bodies)
+
+            sec = best_time(batched, repeat)
+            out[f"{name}_dk_batched{label}_us_per_sample"] = sec / n * 1e6
+            dk = batched()
+            back = solve_kinematics(mech, dk.x, dk.xd, dk.xdd, t, q_start=q0)
+            out[f"{name}_dk{label}_direct_of_inverse_max_err"] = float(np.abs((dk.x - x) * sc).max())
+            out[f"{name}_dk{label}_inverse_of_direct_max_err"] = float(np.abs((back.act_q - kin.act_q) * act_sc).max())
         V = machine_verbs(mech)
         m1 = min(n, 2000)
         V.direct_one(mech, kin.act_q[0], kin.act_qd[0])
@@ -470,9 +477,9 @@ def main() -> None:
                       "explicit_vs_newton_max_rel_diff<=1e-11": out["explicit_vs_newton_max_rel_diff"] <= 1e-11,
                       "stewart_dk_single_us<=5": out["stewart_dk_single_us"] <= 5.0,
                       "stewart_dk_batched_us_per_sample<=3": out["stewart_dk_batched_us_per_sample"] <= 3.0,
-                      "dk_round_trips": all(out[f"{k}_dk_direct_of_inverse_max_err"] <= 1e-10
-                                            and out[f"{k}_dk_inverse_of_direct_max_err"] <= 1e-12
-                                            for k in ("stewart", "hip", "delta", "pdm")),
+                      "dk_round_trips": all(out[f"{k}_dk{r}_direct_of_inverse_max_err"] <= 1e-10
+                                            and out[f"{k}_dk{r}_inverse_of_direct_max_err"] <= 1e-12
+                                            for k in ("stewart", "hip", "delta", "pdm") for r in ("", "_with_bodies")),
                       "stiffness_1000_poses_s<=1": out["stiffness_1000_poses_s"] <= 1.0,
                       "stiffness_gosselin_max_rel_diff<=1e-10": out.get("stiffness_gosselin_max_rel_diff", 0.0) <= 1e-10,
                       "stewart_exact_encoder_loop_at_least_mujoco":

@@ -203,15 +203,45 @@ def test_the_first_sample_is_reached_from_the_reference_pose():
     assert np.abs((dk.x[0] - reference_task(m)) * _scaled(m)).max() <= 1e-12
 
 
+@pytest.mark.parametrize("name", ["stewart", "hip", "UPS", "RUS", "PUS"])
+def test_task_motion_by_the_actuated_coordinates_alone_matches_the_tree_route(name):
+    """Asked for the task motion alone, the direct kinematics along a motion takes each sample
+    after the first from the legs' actuated coordinates' closed forms (their slides and cranks:
+    Gough-Stewart, hip, and U-P-S, R-U-S, P-U-S platforms turned by an arbitrary rotation). Its
+    poses, rates and accelerations are those of the tree-space route (whose accelerations come
+    from the loop rows' drift, not from the legs' closure derivatives) and of the motion the
+    actuators came from, its branch keeps one sign, and it leaves out the tree coordinates."""
+    from test_explicit_legs import _rot, platform
+
+    from pkmdyn.multibody.direct import _by_the_actuated_coordinates
+
+    m = _model(name) if name in ("stewart", "hip") else load_mechanism(platform(name, _rot([0.3, -0.8, 0.5], 2.1)))
+    t, x, xd, xdd = _smooth(m, n=300, seed=7, size=0.7)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    s, sd, sdd = kin.act_q, kin.act_qd, kin.act_qdd
+    full = direct_kinematics(m, s, sd, sdd, t)
+    assert _by_the_actuated_coordinates(m, s, sd, sdd, full.q[0], full.x[0]) is not None
+    alone = direct_kinematics(m, s, sd, sdd, t, bodies=False)
+    assert alone.q is None and alone.qd is None and alone.qdd is None
+    sc = _scaled(m)
+    for got, ref, true in ((alone.x, full.x, x), (alone.xd, full.xd, xd), (alone.xdd, full.xdd, xdd)):
+        size = np.abs(true * sc).max()
+        assert np.abs((got - ref) * sc).max() <= 1e-11 * size
+        assert np.abs((got - true) * sc).max() <= 1e-10 * size
+    assert np.all(alone.det * alone.det[0] > 0)
+    assert np.all(alone.residual <= 1e-12) and np.all(alone.iterations <= 3)
+
+
 # ----------------------------------------------------------------------------- refusals
-def test_unreachable_actuator_coordinates_name_the_sample_and_an_actuator():
+@pytest.mark.parametrize("bodies", [True, False])
+def test_unreachable_actuator_coordinates_name_the_sample_and_an_actuator(bodies):
     m = _model("stewart")
     t, x, xd, xdd = _smooth(m)
     s = solve_kinematics(m, x, xd, xdd, t).act_q.copy()
     k = m.actuator_names.index("P_4")
     s[150:, k] += np.linspace(0.0, 3.0, len(t) - 150) ** 2  # leg 4 far longer than the others allow
     with pytest.raises(UnreachablePoseError, match=r"sample 1[5-9]\d .*actuator 'P_\d'.*reach no pose"):
-        direct_kinematics(m, s, t=t)
+        direct_kinematics(m, s, t=t, bodies=bodies)
 
 
 def _five_bar():

@@ -84,7 +84,8 @@ def read_measured(model: MechanismModel, path: Path, sg_window: int = 15, sg_ord
                               f"({', '.join(apos)})")
         sd, sdd = actuator_rates(path, t, s, column_group(path, cols, avel), column_group(path, cols, aacc), avel,
                                  sg_window, sg_order)
-        dk = direct_kinematics(model, np.ascontiguousarray(s), np.ascontiguousarray(sd), np.ascontiguousarray(sdd), t)
+        dk = direct_kinematics(model, np.ascontiguousarray(s), np.ascontiguousarray(sd), np.ascontiguousarray(sdd), t,
+                               bodies=False)
         x, xd, xdd = dk.x, dk.xd, dk.xdd
     u = np.column_stack([cols[c] for c in eff])
     _check_efforts(model, path, eff, u)

@@ -709,8 +709,8 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     J = _fview(d, d[18], (6, 3))  # the chain's point velocities (3 x 3), then its inverse
     piv = _iview(d, d[19], (nt,))
     # the previous call's step of the task coordinates, whether known, 1 / the length scale, its
-    # A's pivot ratio
-    xdp = _fview(d, d[20], (nt + 3,))
+    # A's pivot ratio, Newton steps and scaled residual
+    xdp = _fview(d, d[20], (nt + 5,))
     x0 = _fview(d, d[21], (nt,))
     q0 = _fview(d, d[22], (nq,))
     # each actuator's point on the task body less the task point (or the fixed ball's centre),
@@ -876,8 +876,10 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     for a in range(na):
         r[a] = sd[a]
     _lu_solve(LU, piv, r)
-    # this call's step (known: 1), for the next call's predictor
+    # this call's step (known: 1), for the next call's predictor; its Newton steps and residual
     xdp[nt] = 1.0 if known else 0.0
+    xdp[nt + 3] = it
+    xdp[nt + 4] = big
     for t in range(nt):
         out[t] = x[t]
         out[nt + t] = r[t]
@@ -890,3 +892,144 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     st[1] = det
     xdp[nt + 2] = ratio
     return OK
+
+
+@njit(cache=True, _nrt=False)
+def _actuated_bias(kind, c, w, axis, point, m0, th, den, y, t3):  # pragma: no cover - compiled
+    """The actuated coordinate's acceleration at a still leg end's acceleration, ``d2 th / dt2 -
+    y . c_dd``, for its end moving at ``w = c_dot`` (:func:`_actuated`'s closure ``f(th, c) = 0``
+    differentiated twice: ``-(f_thth th_d^2 + 2 th_d f_thc . w + w . f_cc w) / f_th``, with
+    ``th_d = y . w``; ``t3 (3, 3)`` work space):
+
+    * B2: ``(|w|^2 - th_d^2) / D``;
+    * A2 from a slide along ``a``: ``|w - th_d a|^2 / D``;
+    * A2 from a turn: ``-(|w - th_d m_th|^2 + th_d^2 (m - c) . m_thth) / D``, with ``m_th = a x (m
+      - r)``, ``m_thth = a x m_th``."""
+    td = _dot(y, w)
+    if kind != LEG_A2:
+        return (_dot(w, w) - td * td) / den
+    a = axis[0]
+    e = t3[0]
+    if point[0, 0] != point[0, 0]:  # a slide
+        for i in range(3):
+            e[i] = w[i] - td * a[i]
+        return _dot(e, e) / den
+    r = point[0]
+    m, mt = t3[1], t3[2]
+    _rotate_about(a, r, th, m0, m)
+    mt[0] = a[1] * (m[2] - r[2]) - a[2] * (m[1] - r[1])
+    mt[1] = a[2] * (m[0] - r[0]) - a[0] * (m[2] - r[2])
+    mt[2] = a[0] * (m[1] - r[1]) - a[1] * (m[0] - r[0])
+    gm = 0.0  # (m - c) . (a x m_th)
+    gm += (m[0] - c[0]) * (a[1] * mt[2] - a[2] * mt[1])
+    gm += (m[1] - c[1]) * (a[2] * mt[0] - a[0] * mt[2])
+    gm += (m[2] - c[2]) * (a[0] * mt[1] - a[1] * mt[0])
+    for i in range(3):
+        e[i] = w[i] - td * mt[i]
+    return -(_dot(e, e) + td * td * gm) / den
+
+
+@njit(cache=True, _nrt=False)
+def _task_accelerations(pk, d, xd, sdd, xdd):  # pragma: no cover - compiled
+    """The task accelerations ``xdd`` at the solution that :func:`direct_task_one` just left in
+    ``d`` (by the actuated coordinates alone), at task rates ``xd`` and actuator accelerations
+    ``sdd``: ``A xdd = sdd - beta`` with ``A``'s factors as that call left them and ``beta`` the
+    actuated coordinates' accelerations at ``xdd = 0``, per actuator ``y . c_dd0 + b``, where
+    the leg end ``c = o + r`` moves at ``w = v_o + omega x r`` with ``c_dd0 = omega_d0 x r + omega x
+    (omega x r)``, ``omega = E phi_dot``, ``omega_d0 = phi_dot_1 (phi_dot_0 e_0 x e_1) + phi_dot_2
+    ((phi_dot_0 e_0 + phi_dot_1 e_1) x e_2)`` (``e_k`` the columns of ``E``: the rate map's
+    derivative), and ``b`` the leg's own term (:func:`_actuated_bias`). Returns the largest
+    scaled difference between an actuated coordinate from the closed form and the one the call
+    left (0 but for rounding)."""
+    nq, nt = pk[4], pk[5]
+    na = nt
+    npos = d[TASK_HEAD - 2]
+    x = _fview(d, d[1], (nt,))
+    scale = _fview(d, d[4], (na,))
+    o = _fview(d, d[5], (3,))
+    lmap = _iview(d, d[6], (na, 2))
+    q = _fview(d, d[7], (nq,))
+    w33 = _fview(d, d[11], (5, 3, 3))
+    w3 = _fview(d, d[12], (20, 3))
+    LU = _fview(d, d[15], (nt, nt))
+    E = _fview(d, d[17], (3, 3))
+    piv = _iview(d, d[19], (nt,))
+    crel = _fview(d, d[23], (na, 3))
+    task_kind, task_index, euler_axes = _i(pk, 13), _i(pk, 14), _i(pk, 15)
+    act = _i(pk, 20)
+    kinds, axes, points = _i(pk, 35), _f33(pk, 33), _f33(pk, 34)
+    m0s, e0s, q0s = _fn3(pk, 35), _fn3(pk, 36), _fn3(pk, 37)
+    RT = w33[1]
+    c, y, rr, w, cdd, om, omd, vo, phd, ang = w3[5], w3[6], w3[7], w3[8], w3[9], w3[10], w3[11], w3[12], w3[14], w3[16]
+    t3 = w33[4]
+    for i in range(3):
+        vo[i] = 0.0
+        phd[i] = 0.0
+    for t in range(nt):
+        if task_kind[t] == 1:
+            phd[_nn(task_index[t])] = xd[t]
+            ang[_nn(task_index[t])] = x[t]
+        elif npos == 3:
+            vo[_nn(task_index[t])] = xd[t]
+    euler_matrix(euler_axes, ang, RT, w33[2], w33[3])  # (a placement of every leg may have used RT's room)
+    for i in range(3):
+        om[i] = E[i, 0] * phd[0] + E[i, 1] * phd[1] + E[i, 2] * phd[2]
+    # omega_d0 = phd1 phd0 (e0 x e1) + phd2 ((phd0 e0 + phd1 e1) x e2)
+    for i in range(3):
+        j, k = (i + 1) % 3, (i + 2) % 3
+        u_j = phd[0] * E[j, 0] + phd[1] * E[j, 1]
+        u_k = phd[0] * E[k, 0] + phd[1] * E[k, 1]
+        omd[i] = (phd[1] * phd[0] * (E[j, 0] * E[k, 1] - E[k, 0] * E[j, 1])
+                  + phd[2] * (u_j * E[k, 2] - u_k * E[j, 2]))
+    rhs = _fview(d, d[16], (nt,))
+    worst = 0.0
+    for a in range(na):
+        L = _nn(lmap[a, 0])
+        i0 = _nn(lmap[a, 1])
+        ca = _nn(act[a])
+        for i in range(3):
+            rr[i] = RT[i, 0] * crel[a, 0] + RT[i, 1] * crel[a, 1] + RT[i, 2] * crel[a, 2]
+            c[i] = o[i] + rr[i]
+        k = kinds[L] % LEG_TASK
+        th, den = _actuated(k, c, axes[L], points[L], m0s[L], e0s[L], q0s[L], q[ca] - q0s[L, i0], y, w3)
+        worst = max(worst, abs(q0s[L, i0] + th - q[ca]) * scale[a])
+        # the leg end's velocity and its acceleration at xdd = 0
+        for i in range(3):
+            j, kk = (i + 1) % 3, (i + 2) % 3
+            w[i] = vo[i] + om[j] * rr[kk] - om[kk] * rr[j]
+        for i in range(3):
+            j, kk = (i + 1) % 3, (i + 2) % 3
+            cdd[i] = omd[j] * rr[kk] - omd[kk] * rr[j] + om[j] * (w[kk] - vo[kk]) - om[kk] * (w[j] - vo[j])
+        beta = _dot(y, cdd) + _actuated_bias(k, c, w, axes[L], points[L], m0s[L], th, den, y, t3)
+        rhs[a] = sdd[a] - beta
+    _lu_solve(LU, piv, rhs)
+    for t in range(nt):
+        xdd[t] = rhs[t]
+    return worst
+
+
+@njit(cache=True, _nrt=False)
+def direct_task_batch(pk, d, s, sd, sdd, work, x_out, xd_out, xdd_out, res_out, it_out, det_out, ratio_out,
+                      status):  # pragma: no cover - compiled
+    """Every sample of the actuator motion ``s, sd, sdd (n, na)`` in order by
+    :func:`direct_task_one` (by the actuated coordinates alone; ``d`` primed with the first
+    sample's solution), with the task accelerations (:func:`_task_accelerations`). Stops at the
+    first sample that the call does not answer (``status`` its status, -1 after it); ``work
+    (2 nt)``."""
+    n = s.shape[0]
+    nt = pk[5]
+    xdp = _fview(d, d[20], (nt + 5,))
+    st = _fview(d, d[0], (2,))
+    for k in range(n):
+        r = direct_task_one(pk, d, s[k], sd[k], work)
+        status[k] = r
+        if r != OK:
+            return
+        for t in range(nt):
+            x_out[k, t] = work[t]
+            xd_out[k, t] = work[nt + t]
+        res = _task_accelerations(pk, d, xd_out[k], sdd[k], xdd_out[k])
+        res_out[k] = max(res, xdp[nt + 4])
+        it_out[k] = int(xdp[nt + 3])
+        det_out[k] = st[1]
+        ratio_out[k] = xdp[nt + 2]

@@ -60,7 +60,8 @@ class DirectKinematics:
 
     ``t (n,)`` [s] or None; ``s, sd, sdd (n, na)``: actuator coordinates and their rates (SI);
     ``x, xd, xdd (n, nt)``: task coordinates ([m], Euler angles [rad], continuous along the
-    motion) and their rates; ``q, qd, qdd (n, nq)``: tree coordinates; ``residual (n,)``: the
+    motion) and their rates; ``q, qd, qdd (n, nq)``: tree coordinates (None where the call
+    asked for the task motion alone, :func:`direct_kinematics`); ``residual (n,)``: the
     largest scaled loop residual; ``iterations (n,)``: Newton steps; ``det (n,)``: determinant
     of the direct kinematics Jacobian ``K`` (its sign: the assembly branch); ``pivot_ratio
     (n,)``: the smallest over the largest pivot of ``K``'s factorisation (near 0 close to a
@@ -73,9 +74,9 @@ class DirectKinematics:
     x: Array
     xd: Array
     xdd: Array
-    q: Array
-    qd: Array
-    qdd: Array
+    q: Array | None
+    qd: Array | None
+    qdd: Array | None
     residual: Array
     iterations: NDArray[np.int64]
     det: Array
@@ -272,7 +273,8 @@ def pack_task(model: MechanismModel) -> NDArray[np.int64] | None:
     parts = [np.zeros(2), np.zeros(nt), np.zeros(na), np.zeros(nt * nt), scale, o, lmap.ravel(),
              np.zeros(nq), np.zeros(nb * 9), np.zeros(nb * 3), np.zeros(nq * 6), np.zeros(45), np.zeros(60),
              np.zeros(nq * 3), np.zeros(nt * nt), np.zeros(nt * nt), np.zeros(nt), np.zeros(9), np.zeros(18),
-             np.zeros(nt, dtype=np.int64), np.concatenate([np.zeros(nt + 1), [1.0 / model.length_scale, 1.0]]),
+             np.zeros(nt, dtype=np.int64),
+             np.concatenate([np.zeros(nt + 1), [1.0 / model.length_scale, 1.0, 0.0, 0.0]]),
              np.zeros(nt), np.zeros(nq), crel.ravel(), np.array([1.0 if alone else 0.0, 0.0])]
     head = np.zeros(D.TASK_HEAD, dtype=np.int64)
     head[D.TASK_HEAD - 2], head[D.TASK_HEAD - 1] = npos, nb
@@ -416,16 +418,50 @@ JUMP_STEPS = 3
 NEAR_SINGULAR = 1e-4
 
 
+def _by_the_actuated_coordinates(model: MechanismModel, s: Array, sd: Array, sdd: Array, q0: Array,
+                                 x0: Array) -> dict | None:
+    """The task motion along ``s, sd, sdd`` by the task-space route of one sample
+    (:func:`._direct.direct_task_batch`), each actuated coordinate from its leg's closed form
+    alone, from the first sample's solution ``q0, x0``; None where that route does not apply
+    (:func:`pack_task`, its flag) or any sample is not a plain continuation step (a call it does
+    not answer, more than :data:`JUMP_STEPS` Newton steps, a Jacobian whose pivot ratio is below
+    :data:`._direct.TASK_NEAR`): the tree-space route then answers, with its checks."""
+    d = pack_task(model)
+    if d is None or d.view(np.float64)[d[24]] != 1.0:
+        return None
+    from . import _one
+
+    d.view(np.float64)[d[24] + 1] = -1e18  # no placement of the legs' other coordinates on the way
+    prime_task(d, q0, x0, s[0])
+    n, nt = s.shape[0], model.nt
+    out = {"x": np.zeros((n, nt)), "xd": np.zeros((n, nt)), "xdd": np.zeros((n, nt)), "res": np.zeros(n),
+           "it": np.zeros(n, dtype=np.int64), "det": np.zeros(n), "ratio": np.zeros(n),
+           "status": np.full(n, -1, dtype=np.int64)}
+    D.direct_task_batch(_one.pack(model), d, s, sd, sdd, np.zeros(2 * nt), *out.values())
+    if np.any(out["status"] != K.OK) or out["it"].max() > JUMP_STEPS or out["ratio"].min() < D.TASK_NEAR:
+        return None
+    return out
+
+
 def direct_kinematics(model: MechanismModel, s: Array, sd: Array | None = None, sdd: Array | None = None,
                       t: Array | None = None, q_start: Array | None = None,
-                      sample_offset: int = 0) -> DirectKinematics:
+                      sample_offset: int = 0, bodies: bool = True) -> DirectKinematics:
     """The direct kinematics along the actuator motion ``s, sd, sdd (n, na)`` (SI; module
     docstring): each sample warm-started from the one before (``t`` (n,) [s] gives the
     third-order predictor and the messages' times), the first from ``q_start`` (nq,) or else
     by continuation from the reference configuration. Refused, naming the sample (counted from
     ``sample_offset``) and an actuator, where the actuator coordinates reach no pose
     (:class:`~pkmdyn.errors.UnreachablePoseError`) or the motion crosses a singularity or meets
-    one (:class:`~pkmdyn.errors.SingularityError`)."""
+    one (:class:`~pkmdyn.errors.SingularityError`).
+
+    Without ``bodies`` the result holds the task motion alone (``q, qd, qdd`` None): where each
+    actuated coordinate is the one its leg's closed form gives first (the task-space route of
+    one sample, ``docs/mechanism_format.md``: the Gough-Stewart platform, the hip, R-U-S,
+    P-U-S and U-P-S platforms), the samples after the first then come from the actuated
+    coordinates' closed forms alone (:func:`._direct.direct_task_batch`; ``det`` is then
+    ``det A`` times the legs' actuated factors, of the same sign along a motion, and
+    ``pivot_ratio`` that of ``A = ds/dx``), and from the tree-space route wherever that route
+    meets anything but a plain continuation step."""
     _check(model)
     na = model.na
     s = np.ascontiguousarray(as_array(s, (None, na), "s", MotionError))
@@ -442,6 +478,14 @@ def direct_kinematics(model: MechanismModel, s: Array, sd: Array | None = None, 
         raise MotionError("s: the actuator motion has no samples")
     q0 = _start(model, s[0], t, sample_offset) if q_start is None else \
         np.ascontiguousarray(as_array(q_start, (model.nq,), "q_start"))
+    if not bodies and n > 1:
+        first = _batch(model, s[:1], sd[:1], sdd[:1], q0, reference_task(model), None if t is None else t[:1])
+        fast = None if first["status"][0] != K.OK else \
+            _by_the_actuated_coordinates(model, s, sd, sdd, first["q"][0], first["x"][0])
+        if fast is not None:
+            return DirectKinematics(t=t, s=s, sd=sd, sdd=sdd, x=fast["x"], xd=fast["xd"], xdd=fast["xdd"], q=None,
+                                    qd=None, qdd=None, residual=fast["res"], iterations=fast["it"], det=fast["det"],
+                                    pivot_ratio=fast["ratio"])
     out = _batch(model, s, sd, sdd, q0, reference_task(model), t)
     if out["status"][0] != K.OK:
         _fail(model, out, 0, s, t, sample_offset)
@@ -476,17 +520,18 @@ def direct_kinematics(model: MechanismModel, s: Array, sd: Array | None = None, 
         if flip.size:
             out["status"][flip[0] + 1] = D.CROSSED
             _fail(model, out, int(flip[0]) + 1, s, t, sample_offset)
-    return DirectKinematics(t=t, s=s, sd=sd, sdd=sdd, x=out["x"], xd=out["xd"], xdd=out["xdd"], q=out["q"],
-                            qd=out["qd"], qdd=out["qdd"], residual=out["res"], iterations=out["it"], det=out["det"],
+    keep = (out["q"], out["qd"], out["qdd"]) if bodies else (None, None, None)
+    return DirectKinematics(t=t, s=s, sd=sd, sdd=sdd, x=out["x"], xd=out["xd"], xdd=out["xdd"], q=keep[0],
+                            qd=keep[1], qdd=keep[2], residual=out["res"], iterations=out["it"], det=out["det"],
                             pivot_ratio=out["ratio"])
 
 
 def task_motion(model: MechanismModel, motion: ActuatorMotion,
                 q_start: Array | None = None) -> tuple[TaskMotion, DirectKinematics]:
     """The task motion of an actuator motion (:func:`.motion.read_actuator_motion`) by the
-    direct kinematics along it (:func:`direct_kinematics`), with its named loads; and the
-    direct kinematics itself (residuals, iterations, branch)."""
-    dk = direct_kinematics(model, motion.s, motion.sd, motion.sdd, motion.t, q_start=q_start)
+    direct kinematics along it (:func:`direct_kinematics`, the task motion alone), with its named
+    loads; and the direct kinematics itself (residuals, iterations, branch; no tree coordinates)."""
+    dk = direct_kinematics(model, motion.s, motion.sd, motion.sdd, motion.t, q_start=q_start, bodies=False)
     return TaskMotion(motion.t, dk.x, dk.xd, dk.xdd, dict(motion.loads)), dk
 
 
