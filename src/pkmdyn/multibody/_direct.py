@@ -526,16 +526,6 @@ def direct_one(b, s, sd, out):  # pragma: no cover - compiled
     return OK
 
 
-def _refresh_cache() -> None:
-    """The kernels above link and inline functions of :mod:`._kernels` and :mod:`._one`'s
-    views (:mod:`._cache`)."""
-    from . import _cache, _kernels, _one
-
-    _cache.refresh((direct_sample, direct_batch, direct_starts), (_kernels,))
-    _cache.refresh((direct_one,), (_kernels, _one))
-
-
-_refresh_cache()
 
 
 # ---- the task-space route of one sample: legs placed from the task alone carry every actuator
@@ -1033,3 +1023,16 @@ def direct_task_batch(pk, d, s, sd, sdd, work, x_out, xd_out, xdd_out, res_out, 
         it_out[k] = int(xdp[nt + 3])
         det_out[k] = st[1]
         ratio_out[k] = xdp[nt + 2]
+
+
+def _refresh_cache() -> None:
+    """The kernels of this module link and inline functions of :mod:`._kernels` and
+    :mod:`._one`'s views (:mod:`._cache`)."""
+    from . import _cache, _kernels, _one
+
+    _cache.refresh((direct_sample, direct_batch, direct_starts), (_kernels,))
+    _cache.refresh((direct_one, _actuated, _task_fail, direct_task_one, _actuated_bias, _task_accelerations,
+                    direct_task_batch), (_kernels, _one))
+
+
+_refresh_cache()
