@@ -2,7 +2,7 @@
 an NSGA-II search. Prints one JSON object; with ``--json`` nothing else is printed.
 
     python benchmarks/sweep.py --json [--part hip,stewart,delta] [--designs 10000]
-        [--stewart-designs 10000] [--delta-population 20 --delta-generations 150]
+        [--stewart-designs 10000] [--delta-population 20 --delta-generations 150 --delta-seed 3]
         [--delta-fronts FRONTS.csv]
 
 **hip** (``--designs``): the hip simulator, Sobol over five geometry keys, one ISO 14242-1
@@ -115,7 +115,7 @@ DELTA_SPACE = """
 method = "nsga2"
 designs = {population}
 generations = {generations}
-seed = 3
+seed = {seed}
 crossover_eta = 30
 mutation_eta = 30
 
@@ -204,7 +204,8 @@ def _front_objectives(out: Path) -> "object":
     return F[pareto_mask(F)]
 
 
-def _delta(population: int, generations: int, result: dict, quiet: bool, fronts_csv: str | None = None) -> None:
+def _delta(population: int, generations: int, result: dict, quiet: bool, fronts_csv: str | None = None,
+           seed: int = 3) -> None:
     import numpy as np
 
     from pkmdyn.machines.registry import sweep_adapter
@@ -216,7 +217,7 @@ def _delta(population: int, generations: int, result: dict, quiet: bool, fronts_
     with tempfile.TemporaryDirectory() as tmp:
         _pick_and_place(Path(tmp) / "pick_and_place.csv")
         for label, gens in (("short", generations), ("long", 10 * generations)):
-            text = DELTA_SPACE.format(population=population, generations=gens)
+            text = DELTA_SPACE.format(population=population, generations=gens, seed=seed)
             space = Path(tmp) / f"space_{label}.toml"
             space.write_text(text, encoding="utf-8")
             t0 = time.perf_counter()
@@ -237,6 +238,7 @@ def _delta(population: int, generations: int, result: dict, quiet: bool, fronts_
     span = np.where(hi > lo, hi - lo, 1.0)
     hv_short, hv_long = hypervolumes([(fronts[k] - lo) / span for k in ("short", "long")], np.full(2, 1.1))
     result["delta_nsga2_population"] = population
+    result["delta_nsga2_seed"] = seed
     result["delta_nsga2_generations_short"] = generations
     result["delta_nsga2_hypervolume_short"] = hv_short
     result["delta_nsga2_hypervolume_long"] = hv_long
@@ -253,6 +255,7 @@ def main() -> None:
     ap.add_argument("--stewart-designs", type=int, default=10_000)
     ap.add_argument("--delta-population", type=int, default=20)
     ap.add_argument("--delta-generations", type=int, default=150, help="the short run's (the long run: 10x)")
+    ap.add_argument("--delta-seed", type=int, default=3, help="the NSGA-II seed of both runs")
     ap.add_argument("--delta-fronts", default=None, help="a CSV file for both runs' Pareto fronts (objectives)")
     args = ap.parse_args()
     parts = {p.strip() for p in args.part.split(",") if p.strip()}
@@ -262,7 +265,7 @@ def main() -> None:
     if "stewart" in parts:
         _stewart(args.stewart_designs, result, args.json)
     if "delta" in parts:
-        _delta(args.delta_population, args.delta_generations, result, args.json, args.delta_fronts)
+        _delta(args.delta_population, args.delta_generations, result, args.json, args.delta_fronts, args.delta_seed)
     print(json.dumps(result, indent=2))
 
 
