@@ -65,7 +65,10 @@ class DirectKinematics:
     largest scaled loop residual; ``iterations (n,)``: Newton steps; ``det (n,)``: determinant
     of the direct kinematics Jacobian ``K`` (its sign: the assembly branch); ``pivot_ratio
     (n,)``: the smallest over the largest pivot of ``K``'s factorisation (near 0 close to a
-    singularity)."""
+    singularity). Where the task motion alone came by the actuated coordinates' closed forms,
+    ``residual`` is the largest scaled difference of the actuated coordinates, ``det`` is ``det A``
+    (``A = ds/dx``) times the legs' actuated factors, of the sign ``det K`` has at the first
+    sample, and ``pivot_ratio`` is that of ``A``."""
 
     t: Array | None
     s: Array
@@ -461,7 +464,9 @@ def direct_kinematics(model: MechanismModel, s: Array, sd: Array | None = None, 
     coordinates' closed forms alone (:func:`._direct.direct_task_batch`; ``det`` is then
     ``det A`` times the legs' actuated factors, of the same sign along a motion, and
     ``pivot_ratio`` that of ``A = ds/dx``), and from the tree-space route wherever that route
-    meets anything but a plain continuation step."""
+    meets anything but a plain continuation step. That route does not see the legs' passive
+    joints: a universal joint at its own singularity (its two axes in line), which the
+    tree-space route refuses, passes there."""
     _check(model)
     na = model.na
     s = np.ascontiguousarray(as_array(s, (None, na), "s", MotionError))
@@ -483,6 +488,8 @@ def direct_kinematics(model: MechanismModel, s: Array, sd: Array | None = None, 
         fast = None if first["status"][0] != K.OK else \
             _by_the_actuated_coordinates(model, s, sd, sdd, first["q"][0], first["x"][0])
         if fast is not None:
+            # the branch's sign as the tree-space route gives it (its det K at the first sample)
+            fast["det"] *= np.sign(first["det"][0] * fast["det"][0])
             return DirectKinematics(t=t, s=s, sd=sd, sdd=sdd, x=fast["x"], xd=fast["xd"], xdd=fast["xdd"], q=None,
                                     qd=None, qdd=None, residual=fast["res"], iterations=fast["it"], det=fast["det"],
                                     pivot_ratio=fast["ratio"])
