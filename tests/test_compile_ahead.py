@@ -60,17 +60,21 @@ def test_no_child_where_it_cannot_help(monkeypatch):
 
 def test_a_started_child_reports_its_stages_and_ends_with_the_command(monkeypatch):
     """A child started on a (pretended) cold cache runs the module (here on the suite's cache:
-    it loads the kernels), reports each stage, which ``wait`` reads, and ends with status 0; or
+    it loads the kernels), reports each stage, which ``wait`` reads (``ready`` says so without
+    waiting), and ends with status 0; or
     is ended by ``_stop``, after which ``wait`` returns at once."""
     monkeypatch.setattr(ahead, "_child", None)
     ahead.wait("one")  # no child: nothing to wait for
+    assert ahead.ready("task")  # nor to hold back for
     monkeypatch.setenv("PKMDYN_COMPILE_AHEAD", "1")
     monkeypatch.setattr(ahead, "cold", lambda stages: True)
     monkeypatch.setattr(os, "cpu_count", lambda: 2)
-    child = ahead.start(("one", "direct"))
+    child = ahead.start(("one", "task", "direct"))
     assert child is not None and ahead._child is child
+    ahead.wait("task")
+    assert "task" in ahead._done and ahead.ready("task")
     ahead.wait("direct")
-    assert ahead._done == {"one", "direct"}
+    assert ahead._done == {"one", "task", "direct"}
     assert child.wait(timeout=120) == 0
     ahead.wait("one")
     stopped = ahead.start(("one", "direct"))

@@ -1,6 +1,7 @@
 """Compiling ahead: on a fresh install (an empty numba cache) a command compiles its kernels in
 the order it meets them, one after the other on one core. A closed loop meets its
-single-sample kernels (:func:`._one._dynamics`, :func:`._direct.direct_one`) last, after the
+single-sample kernels (:func:`._one._dynamics`, :func:`._direct.direct_task_one`,
+:func:`._direct.direct_one`) last, after the
 batched kinematics, dynamics and references have compiled and run. :func:`start` hands those
 to a child process at the command's start, so that they compile on a second core meanwhile and
 the command later loads them from the cache (numba writes each cache file whole, under a new
@@ -18,7 +19,7 @@ starts it too: the single-sample kernel calls the batched kinematics' own compil
 solver, so the child compiles that in parallel with the command's first kernels, and a later
 ``pkmdyn control`` finds the loop's kernel cached.
 
-    python -m pkmdyn.multibody.ahead one direct
+    python -m pkmdyn.multibody.ahead one task direct
 """
 
 from __future__ import annotations
@@ -32,11 +33,12 @@ import time
 from collections.abc import Iterable
 from typing import Any
 
-__all__ = ["STAGES", "cold", "start", "wait", "compile_stages", "signatures"]
+__all__ = ["STAGES", "cold", "start", "wait", "ready", "compile_stages", "signatures"]
 
-#: the stages a child can compile: the closed loop's single-sample dynamics and encoders
-#: (``one``) and its direct kinematics of the encoders' reading (``direct``)
-STAGES = ("one", "direct")
+#: the stages a child can compile, in this order: the closed loop's single-sample dynamics and
+#: encoders (``one``), its direct kinematics of the encoders' reading in task space (``task``:
+#: the Gough-Stewart platform, the hip), and in tree space (``direct``: any other mechanism)
+STAGES = ("one", "task", "direct")
 
 
 def _kernels(stage: str) -> list[Any]:
@@ -45,10 +47,14 @@ def _kernels(stage: str) -> list[Any]:
         from . import _one
 
         return [_one._dynamics]
+    if stage == "task":
+        from . import _direct
+
+        return [_direct.direct_task_one]
     if stage == "direct":
         from . import _direct
 
-        return [_direct.direct_one, _direct.direct_task_one]
+        return [_direct.direct_one]
     raise ValueError(f"compile-ahead stage {stage!r}: unknown (known: {', '.join(STAGES)})")
 
 
@@ -60,8 +66,10 @@ def signatures(stage: str) -> list[tuple[Any, ...]]:
     buf, vec = types.Array(types.int64, 1, "C"), types.Array(types.float64, 1, "C")
     if stage == "one":  # _dynamics(pk, x, xd, v, load, mode, out)
         return [(buf, vec, vec, vec, types.float64, types.int64, vec)]
-    if stage == "direct":  # direct_one(b, s, sd, out); direct_task_one(pk, d, s, sd, out)
-        return [(buf, vec, vec, vec), (buf, buf, vec, vec, vec)]
+    if stage == "task":  # direct_task_one(pk, d, s, sd, out)
+        return [(buf, buf, vec, vec, vec)]
+    if stage == "direct":  # direct_one(b, s, sd, out)
+        return [(buf, vec, vec, vec)]
     raise ValueError(f"compile-ahead stage {stage!r}: unknown (known: {', '.join(STAGES)})")
 
 
@@ -114,19 +122,19 @@ def start(stages: Iterable[str]) -> subprocess.Popen | None:
     return _child
 
 
-def wait(stage: str) -> None:
+def wait(stage: str, timeout_s: float = -1.0) -> None:
     """Return once the child has compiled ``stage``: at once without a child, once it has ended
-    (the caller then compiles what is missing itself), or after :data:`WAIT_S`."""
+    (the caller then compiles what is missing itself), or after :data:`WAIT_S` (or
+    ``timeout_s`` where that is 0 or more: 0 reads what the child has said so far)."""
     global _unread
     child = _child
     if child is None or stage in _done or child.stdout is None or child.stdout.closed:
         return
-    deadline = time.monotonic() + WAIT_S
+    deadline = time.monotonic() + (WAIT_S if timeout_s < 0 else timeout_s)
     with selectors.DefaultSelector() as sel:
         sel.register(child.stdout, selectors.EVENT_READ)
         while stage not in _done:
-            left = deadline - time.monotonic()
-            if left <= 0 or not sel.select(left):
+            if not sel.select(max(deadline - time.monotonic(), 0.0)):
                 return
             chunk = os.read(child.stdout.fileno(), 4096)
             if not chunk:  # the child has ended
@@ -134,6 +142,14 @@ def wait(stage: str) -> None:
                 return
             *lines, _unread = (_unread + chunk).split(b"\n")
             _done.update(line.decode("ascii", "replace").strip() for line in lines)
+
+
+def ready(stage: str) -> bool:
+    """Whether ``stage`` is compiled, or no child compiles it (what the child has said so far,
+    without waiting)."""
+    wait(stage, 0.0)
+    child = _child
+    return child is None or stage in _done or child.stdout is None or child.stdout.closed
 
 
 def compile_stages(stages: Iterable[str], report: bool = False) -> None:

@@ -395,10 +395,24 @@ class MechanismVerbs:
             status = kernel(pk, a, ad, out) if fit else ok - 1
             if status == ok:
                 return out[:nt].copy(), out[nt:].copy()
-        ahead.wait("direct")
+        if st.direct is None:  # the first call packs both routes (compiling the batched kernel meanwhile)
+            answer = self._direct_checked(model, st, a, ad, status)
+            self._direct_ahead(st)
+            return answer
+        self._direct_ahead(st)
         if st.direct_task:
             return self._direct_task_on(model, st, a, ad, fit, status)
         return self._direct_checked(model, st, a, ad, status)
+
+    @staticmethod
+    def _direct_ahead(st: _State) -> None:
+        """Wait for the single-sample kernel that the next :meth:`direct_one` call takes where a
+        compile-ahead child compiles it (:mod:`.ahead`: the task-space one, then the tree-space
+        one); the tree-space one is compiled here instead while the child is still on the other."""
+        if st.direct_task:
+            ahead.wait("task")
+        elif ahead.ready("task"):
+            ahead.wait("direct")
 
     def _direct_task_on(self, model: MechanismModel, st: _State, a: Array, ad: Array, fit: bool,
                         status: int) -> tuple[Array, Array]:
