@@ -526,16 +526,14 @@ def direct_one(b, s, sd, out):  # pragma: no cover - compiled
     return OK
 
 
-
-
 # ---- the task-space route of one sample: legs placed from the task alone carry every actuator
 
 #: status of :func:`direct_task_one` where a leg's closed form does not reach its point
 NOT_REACHED = 21
 #: the header of the task-space route's buffer (:func:`.direct.pack_task`): the offsets of its
-#: parts (25), then ``npos`` (task positions given: 3, or 0 for a task body on a ball fixed to the
+#: parts (26), then ``npos`` (task positions given: 3, or 0 for a task body on a ball fixed to the
 #: ground) and ``nb``
-TASK_HEAD = 27
+TASK_HEAD = 28
 
 
 #: the pivot ratio of the previous call's Jacobian below which the single-sample calls
@@ -708,6 +706,9 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     # the calls since every leg was last placed
     crel = _fview(d, d[23], (na, 3))
     alone = _fview(d, d[24], (2,))
+    # by the actuated coordinates alone: each one's gradient y = dq_a/dc and closure derivative D
+    # at the last evaluation (at the solution, once converged: for the accelerations)
+    yd = _fview(d, d[25], (na, 4))
     tol = _fview(pk, pk[6], (2,))[0]
     body_parent, body_joint, joint_q0, joint_nq, coord_motion = _i(pk, 0), _i(pk, 1), _i(pk, 2), _i(pk, 3), _i(pk, 4)
     task_kind, task_index, euler_axes = _i(pk, 13), _i(pk, 14), _i(pk, 15)
@@ -786,6 +787,9 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
                     return _task_fail(st, x, x0, q, q0, SINGULAR)
                 q[ca] = legs[10][L, i0] + th
                 legs_det *= dl
+                for i in range(3):
+                    yd[a, i] = y[i]
+                yd[a, 3] = dl
             elif k >= LEG_TASK:  # the chain reaches the centre of the ball that carries the task body
                 kb = _nn(legs[12][L, 0])
                 for i in range(3):
@@ -923,19 +927,17 @@ def _actuated_bias(kind, c, w, axis, point, m0, th, den, y, t3):  # pragma: no c
 def _task_accelerations(pk, d, xd, sdd, xdd):  # pragma: no cover - compiled
     """The task accelerations ``xdd`` at the solution that :func:`direct_task_one` just left in
     ``d`` (by the actuated coordinates alone), at task rates ``xd`` and actuator accelerations
-    ``sdd``: ``A xdd = sdd - beta`` with ``A``'s factors as that call left them and ``beta`` the
+    ``sdd``: ``A xdd = sdd - beta`` with ``A``'s factors, each actuated coordinate's gradient
+    ``y`` and closure derivative ``D`` as that call left them and ``beta`` the
     actuated coordinates' accelerations at ``xdd = 0``, per actuator ``y . c_dd0 + b``, where
     the leg end ``c = o + r`` moves at ``w = v_o + omega x r`` with ``c_dd0 = omega_d0 x r + omega x
     (omega x r)``, ``omega = E phi_dot``, ``omega_d0 = phi_dot_1 (phi_dot_0 e_0 x e_1) + phi_dot_2
     ((phi_dot_0 e_0 + phi_dot_1 e_1) x e_2)`` (``e_k`` the columns of ``E``: the rate map's
-    derivative), and ``b`` the leg's own term (:func:`_actuated_bias`). Returns the largest
-    scaled difference between an actuated coordinate from the closed form and the one the call
-    left (0 but for rounding)."""
+    derivative), and ``b`` the leg's own term (:func:`_actuated_bias`)."""
     nq, nt = pk[4], pk[5]
     na = nt
     npos = d[TASK_HEAD - 2]
     x = _fview(d, d[1], (nt,))
-    scale = _fview(d, d[4], (na,))
     o = _fview(d, d[5], (3,))
     lmap = _iview(d, d[6], (na, 2))
     q = _fview(d, d[7], (nq,))
@@ -945,12 +947,12 @@ def _task_accelerations(pk, d, xd, sdd, xdd):  # pragma: no cover - compiled
     E = _fview(d, d[17], (3, 3))
     piv = _iview(d, d[19], (nt,))
     crel = _fview(d, d[23], (na, 3))
+    yd = _fview(d, d[25], (na, 4))
     task_kind, task_index, euler_axes = _i(pk, 13), _i(pk, 14), _i(pk, 15)
     act = _i(pk, 20)
-    kinds, axes, points = _i(pk, 35), _f33(pk, 33), _f33(pk, 34)
-    m0s, e0s, q0s = _fn3(pk, 35), _fn3(pk, 36), _fn3(pk, 37)
+    kinds, axes, points, m0s, q0s = _i(pk, 35), _f33(pk, 33), _f33(pk, 34), _fn3(pk, 35), _fn3(pk, 37)
     RT = w33[1]
-    c, y, rr, w, cdd, om, omd, vo, phd, ang = w3[5], w3[6], w3[7], w3[8], w3[9], w3[10], w3[11], w3[12], w3[14], w3[16]
+    c, rr, w, cdd, om, omd, vo, phd, ang = w3[5], w3[7], w3[8], w3[9], w3[10], w3[11], w3[12], w3[14], w3[16]
     t3 = w33[4]
     for i in range(3):
         vo[i] = 0.0
@@ -972,7 +974,6 @@ def _task_accelerations(pk, d, xd, sdd, xdd):  # pragma: no cover - compiled
         omd[i] = (phd[1] * phd[0] * (E[j, 0] * E[k, 1] - E[k, 0] * E[j, 1])
                   + phd[2] * (u_j * E[k, 2] - u_k * E[j, 2]))
     rhs = _fview(d, d[16], (nt,))
-    worst = 0.0
     for a in range(na):
         L = _nn(lmap[a, 0])
         i0 = _nn(lmap[a, 1])
@@ -980,9 +981,7 @@ def _task_accelerations(pk, d, xd, sdd, xdd):  # pragma: no cover - compiled
         for i in range(3):
             rr[i] = RT[i, 0] * crel[a, 0] + RT[i, 1] * crel[a, 1] + RT[i, 2] * crel[a, 2]
             c[i] = o[i] + rr[i]
-        k = kinds[L] % LEG_TASK
-        th, den = _actuated(k, c, axes[L], points[L], m0s[L], e0s[L], q0s[L], q[ca] - q0s[L, i0], y, w3)
-        worst = max(worst, abs(q0s[L, i0] + th - q[ca]) * scale[a])
+        y = yd[a, :3]
         # the leg end's velocity and its acceleration at xdd = 0
         for i in range(3):
             j, kk = (i + 1) % 3, (i + 2) % 3
@@ -990,12 +989,12 @@ def _task_accelerations(pk, d, xd, sdd, xdd):  # pragma: no cover - compiled
         for i in range(3):
             j, kk = (i + 1) % 3, (i + 2) % 3
             cdd[i] = omd[j] * rr[kk] - omd[kk] * rr[j] + om[j] * (w[kk] - vo[kk]) - om[kk] * (w[j] - vo[j])
-        beta = _dot(y, cdd) + _actuated_bias(k, c, w, axes[L], points[L], m0s[L], th, den, y, t3)
+        beta = _dot(y, cdd) + _actuated_bias(kinds[L] % LEG_TASK, c, w, axes[L], points[L], m0s[L],
+                                              q[ca] - q0s[L, i0], yd[a, 3], y, t3)
         rhs[a] = sdd[a] - beta
     _lu_solve(LU, piv, rhs)
     for t in range(nt):
         xdd[t] = rhs[t]
-    return worst
 
 
 @njit(cache=True, _nrt=False)
@@ -1018,8 +1017,8 @@ def direct_task_batch(pk, d, s, sd, sdd, work, x_out, xd_out, xdd_out, res_out, 
         for t in range(nt):
             x_out[k, t] = work[t]
             xd_out[k, t] = work[nt + t]
-        res = _task_accelerations(pk, d, xd_out[k], sdd[k], xdd_out[k])
-        res_out[k] = max(res, xdp[nt + 4])
+        _task_accelerations(pk, d, xd_out[k], sdd[k], xdd_out[k])
+        res_out[k] = xdp[nt + 4]
         it_out[k] = int(xdp[nt + 3])
         det_out[k] = st[1]
         ratio_out[k] = xdp[nt + 2]

@@ -278,7 +278,7 @@ def pack_task(model: MechanismModel) -> NDArray[np.int64] | None:
              np.zeros(nq * 3), np.zeros(nt * nt), np.zeros(nt * nt), np.zeros(nt), np.zeros(9), np.zeros(18),
              np.zeros(nt, dtype=np.int64),
              np.concatenate([np.zeros(nt + 1), [1.0 / model.length_scale, 1.0, 0.0, 0.0]]),
-             np.zeros(nt), np.zeros(nq), crel.ravel(), np.array([1.0 if alone else 0.0, 0.0])]
+             np.zeros(nt), np.zeros(nq), crel.ravel(), np.array([1.0 if alone else 0.0, 0.0]), np.zeros(4 * na)]
     head = np.zeros(D.TASK_HEAD, dtype=np.int64)
     head[D.TASK_HEAD - 2], head[D.TASK_HEAD - 1] = npos, nb
     at, bits = D.TASK_HEAD, []
