@@ -764,7 +764,9 @@ def test_task_route_by_the_actuated_coordinates_alone_matches_every_leg_placed(n
         prime_task(d, kin.q[0], x[0], kin.act_q[0])
         out, got, dets = np.zeros(2 * m.nt), [], []
         for i in range(1, n):
-            assert D.direct_task_one(pk, d, kin.act_q[i], kin.act_qd[i], out) == D.OK, (key, i)
+            # (contiguous rows, as the verbs pass them: the kernel compiled for no other signature)
+            s_i, sd_i = np.ascontiguousarray(kin.act_q[i]), np.ascontiguousarray(kin.act_qd[i])
+            assert D.direct_task_one(pk, d, s_i, sd_i, out) == D.OK, (key, i)
             got.append(out.copy())
             dets.append(float(task_state(d)[1]))
         outs[key] = (np.array(got), np.sign(dets), d.view(np.float64)[d[7]:d[7] + m.nq].copy())
