@@ -96,6 +96,9 @@ class Controller:
     id_one: Any
     out: Array
     acc: Array
+    #: ``(p, inverse, has_load)`` where ``id_one`` is the machine's compiled single-sample kernel
+    #: ``inverse(p, q, qd, qdd, load, out)`` (``one_sample_kernels``), for a compiled loop; else None
+    id_kernel: Any = None
 
 
 def _id_one(verbs: Any, model: Any, has_load: bool) -> Any:
@@ -112,6 +115,7 @@ def _id_one(verbs: Any, model: Any, has_load: bool) -> Any:
                 return one(model, q, qd, qdd, load if has_load else None)  # raises the machine's error
             return out
 
+        id_kernel.kernel = (p, inverse, has_load)  # type: ignore[attr-defined]
         return id_kernel
     if one is not None:
         if has_load:
@@ -160,7 +164,7 @@ def make_controller(kind: str, gains: Gains, verbs: Any, model: Any, ref: Refere
     id_one = _id_one(verbs, model, has_load) if kind == "computed-torque" else None
     g = Gains(*(np.ascontiguousarray(getattr(gains, n), dtype=float) for n in ("kp", "kd", "ki")))
     return Controller(kind, g, u_ff, B_inv, joint if kind == "pid" else None, id_one, np.zeros(nu),
-                      np.zeros(nq))
+                      np.zeros(nq), getattr(id_one, "kernel", None))
 
 
 def held_efforts(u_mid: Array) -> Array:

@@ -145,7 +145,10 @@ class LoopSettings:
     ``exact_encoders``: the encoders read the plant's true actuator coordinates and the
     controller's pose comes from its direct kinematics (:mod:`pkmdyn.simulate`'s loop; else both
     to first order about the reference); ``method``: the plant's step (:data:`pkmdyn.simulate.METHODS`;
-    by default a third-order explicit step away from the friction band and ROS2 in it).
+    by default a third-order explicit step away from the friction band and ROS2 in it);
+    ``compiled_cycles``: where the loop's kernel is compiled and every kernel of the cycle is
+    the described mechanism's own, the cycles in one compiled call (``pkmdyn.simulate._cycles``,
+    the same records); False: every cycle in Python.
     """
 
     cycle_s: float
@@ -161,6 +164,7 @@ class LoopSettings:
     pose_from_sensor: bool = False
     method: str = "rk3-ros2"
     exact_encoders: bool = False
+    compiled_cycles: bool = True
 
 
 def _prefixed(table: dict[str, Any], prefix: str) -> np.ndarray:

@@ -19,12 +19,17 @@ starts it too: the single-sample kernel calls the batched kinematics' own compil
 solver, so the child compiles that in parallel with the command's first kernels, and a later
 ``pkmdyn control`` finds the loop's kernel cached.
 
-    python -m pkmdyn.multibody.ahead one task direct
+Its last stage, ``loop``, is the closed loop's cycles in one compiled call
+(:mod:`pkmdyn.simulate._cycles`), which links the kernels above a second time (some 20-30 s):
+no command waits for it; the loop takes its Python cycles until it is compiled (:func:`compiled`).
+
+    python -m pkmdyn.multibody.ahead one task direct loop
 """
 
 from __future__ import annotations
 
 import atexit
+import importlib
 import os
 import selectors
 import subprocess
@@ -33,12 +38,18 @@ import time
 from collections.abc import Iterable
 from typing import Any
 
-__all__ = ["STAGES", "cold", "start", "wait", "ready", "compile_stages", "signatures"]
+__all__ = ["STAGES", "cold", "start", "wait", "ready", "compiled", "compile_stages", "signatures"]
 
 #: the stages a child can compile, in this order: the closed loop's single-sample dynamics and
 #: encoders (``one``), its direct kinematics of the encoders' reading in task space (``task``:
-#: the Gough-Stewart platform, the hip), and in tree space (``direct``: any other mechanism)
-STAGES = ("one", "task", "direct")
+#: the Gough-Stewart platform, the hip), and in tree space (``direct``: any other mechanism),
+#: and the loop's cycles in one compiled call (``loop``, :mod:`pkmdyn.simulate._cycles`: some
+#: 30 s, which a command does not wait for; until it is compiled the loop runs its cycles in
+#: Python)
+STAGES = ("one", "task", "direct", "loop")
+#: the module of the ``loop`` stage's kernel: the simulation layer's, above this one, so named
+#: here rather than imported
+_LOOP_MODULE = "pkmdyn.simulate._cycles"
 
 
 def _kernels(stage: str) -> list[Any]:
@@ -55,6 +66,8 @@ def _kernels(stage: str) -> list[Any]:
         from . import _direct
 
         return [_direct.direct_one]
+    if stage == "loop":
+        return [importlib.import_module(_LOOP_MODULE).run_cycles]
     raise ValueError(f"compile-ahead stage {stage!r}: unknown (known: {', '.join(STAGES)})")
 
 
@@ -70,6 +83,8 @@ def signatures(stage: str) -> list[tuple[Any, ...]]:
         return [(buf, buf, vec, vec, vec)]
     if stage == "direct":  # direct_one(b, s, sd, out)
         return [(buf, vec, vec, vec)]
+    if stage == "loop":  # run_cycles(...): the types of a run's arguments
+        return [importlib.import_module(_LOOP_MODULE).example_signature()]
     raise ValueError(f"compile-ahead stage {stage!r}: unknown (known: {', '.join(STAGES)})")
 
 
@@ -150,6 +165,16 @@ def ready(stage: str) -> bool:
     wait(stage, 0.0)
     child = _child
     return child is None or stage in _done or child.stdout is None or child.stdout.closed
+
+
+def compiled(stage: str) -> bool:
+    """Whether every kernel of ``stage`` is compiled: in this process, in numba's cache, or by
+    the child (what it has said so far, without waiting). Unlike :func:`ready`, False where no
+    child compiles it and the cache lacks it."""
+    wait(stage, 0.0)
+    if stage in _done:
+        return True
+    return all(bool(k.signatures) or _cached(k) is True for k in _kernels(stage))
 
 
 def compile_stages(stages: Iterable[str], report: bool = False) -> None:

@@ -368,6 +368,27 @@ class MechanismVerbs:
             _one.prime(st.encoder_pk, q_sol, x1[0], G_sol)
         return q_sol[model.act_coord].copy()
 
+    def encoder_buffers(self, model: MechanismModel) -> tuple[NDArray[np.int64], Array, Array, Array] | None:
+        """``(pk, view, prev, out)``: what :meth:`actuator_coordinates_one` hands its compiled call
+        once a reading has been solved (``pk`` the packed buffer, ``view`` its solution, ``prev``
+        where the call keeps the previous one, ``out (na,)`` the answer), for a caller that makes
+        the same call in its own compiled loop (:mod:`pkmdyn.simulate`); None before."""
+        st = self._state(model)
+        if st.encoder_q is None or st.encoder_pk is None:
+            return None
+        return st.encoder_pk, st.encoder_view, st.encoder_prev, st.encoder_out
+
+    def direct_task_buffers(self, model: MechanismModel) -> tuple[NDArray[np.int64], NDArray[np.int64], Array,
+                                                                    int] | None:
+        """``(pk, d, out, ok)``: what :meth:`direct_one` hands :func:`._direct.direct_task_one`
+        once primed, where the mechanism takes the task-space route (``out (2 nt,)`` the pose
+        and its rate, ``ok`` the status of an answer); None otherwise."""
+        st = self._state(model)
+        if not st.direct_task:
+            return None
+        pk1, d, out, _, ok, _ = st.direct_task
+        return pk1, d, out, int(ok)
+
     def direct_one(self, model: MechanismModel, a: Array, ad: Array) -> tuple[Array, Array]:
         """The task pose and rate ``(nt,), (nt,)`` at actuated joint coordinates ``a`` and rates
         ``ad`` by the direct kinematics (:mod:`.direct`), warm-started from the previous call

@@ -89,6 +89,10 @@ class LoopResult:
     saturated: Array
 
 
+#: cycles per compiled call (the progress bar moves between calls)
+CHUNK = 1000
+
+
 def check_timing(cycle_s: float, step_s: float) -> int:
     """Integration steps per cycle; the cycle must be a positive whole multiple of the step."""
     from ..errors import ParameterError
@@ -324,7 +328,9 @@ def run_span(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_joi
             from_sensor, state.s_prev, state.sd_prev, y.q, y.qd, y.s, y.sd, y.sdd, out_q, out_qd, out_att, out_s,
             out_qs, out_qds, out_se, out_sde, out_sdde)
     done = state.done
-    for i in range(n):
+
+    def cycle(i: int) -> None:
+        """Cycle ``i`` of the span in Python (the compiled cycles hand back any cycle they do not take)."""
         kr, k, g = first + i, pre + i, done + i
         if exact is not None:
             try:
@@ -353,8 +359,27 @@ def run_span(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_joi
             hold_interval(plant, q, qd, u, loads[2 * kr * steps:2 * (kr + 1) * steps + 1], dt, work)
         except PkmdynError as exc:
             raise DivergenceError(f"run diverged at t = {ref.t[kr]:.4f} s: {exc}") from None
-        if bar is not None and (g + 1) % 1000 == 0:
-            bar.update(1000)
+
+    from . import _cycles
+
+    fast = None
+    next_try = 0
+    i = 0
+    while i < n:
+        if fast is None and i >= next_try and settings.compiled_cycles:
+            if _cycles.available():
+                fast = _cycles.compiled_cycles(plant, controller, ref, exact, work, settings.method, args, loads, lim,
+                                               u, out_u, sat, memory, s_exact, steps, dt)
+            next_try = i + (1 if i < 2 else CHUNK)
+        j = i
+        if fast is not None:
+            j = fast.run(i, min(n, i + CHUNK), first, pre, done, delay)
+        if j < n and (fast is None or j < min(n, i + CHUNK)):
+            cycle(j)  # a cycle the compiled call did not take (or no compiled call)
+            j += 1
+        if bar is not None and (done + j) // 1000 > (done + i) // 1000:
+            bar.update(1000 * ((done + j) // 1000 - (done + i) // 1000))
+        i = j
     state.done = done + n
     state.history = out_q[max(0, rows - delay):rows].copy() if delay else np.empty((0, nq))
     if last and not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):

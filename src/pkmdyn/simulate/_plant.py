@@ -112,6 +112,9 @@ class Plant:
     has_load: bool
     fast: bool
     f: Callable[[Array, Array, Array, float], Array]
+    #: ``(p, forward)`` where ``f`` is the machine's compiled single-sample kernel
+    #: ``forward(p, q, qd, u, load, out)`` (``one_sample_kernels``), for a compiled loop; else None
+    kernel: Any = None
 
 
 def make_plant(verbs: Any, model: Any, has_load: bool) -> Plant:
@@ -146,7 +149,8 @@ def make_plant(verbs: Any, model: Any, has_load: bool) -> Plant:
         else:
             def f(q: Array, qd: Array, u: Array, load: float) -> Array:
                 return batched(model, q[None], qd[None], u[None], None)[0]
-    return Plant(verbs, model, nq, nu, has_load, one is not None, f)
+    return Plant(verbs, model, nq, nu, has_load, one is not None, f,
+                 None if compiled is None else (compiled[0], compiled[2]))
 
 
 def accelerations(plant: Plant, q: Array, qd: Array, u: Array, load: float) -> Array:

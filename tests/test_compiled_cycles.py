@@ -1,0 +1,146 @@
+"""The closed loop's cycles in one compiled call (pkmdyn.simulate._cycles) against the same
+cycles in Python (``compiled_cycles = False``): the same records, step counts and end state for
+every law, with exact and first-order encoders, a plant other than the controller's model, joint
+friction that takes the integrator into its ROS2 and refined steps; the same message where a run
+diverges; and a run compiles nothing but the signature the compile-ahead child compiles."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import multibody_examples as ex
+from pkmdyn.cli.mechanism import described_control_settings
+from pkmdyn.control import gains, hermite_motion, loop_settings
+from pkmdyn.multibody import ahead, default_motion, load_mechanism
+from pkmdyn.multibody.machine import machine_verbs
+from pkmdyn.simulate import DivergenceError, _cycles, track
+
+FIELDS = ("q", "qd", "u", "q_s", "qd_s", "q_att", "s", "s_enc", "sd_enc", "sdd_enc", "q_end", "qd_end")
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _compiled():
+    ahead.compile_stages(["loop"])  # once per cache (some 30 s cold)
+
+
+def _stewart(mass=1.0, friction=None):
+    d = ex.builtin_dict("stewart")
+    for body in d["bodies"]:
+        if "mass_kg" in body:
+            body["mass_kg"] *= mass
+    for leg in d["legs"]:
+        for body in leg["bodies"]:
+            if "mass_kg" in body:
+                body["mass_kg"] *= mass
+        for j in leg["joints"]:
+            if friction is not None and j["name"] == "P":
+                j["friction"] = dict(friction)
+    return load_mechanism(d)
+
+
+def _both(m, plant, law, seconds, ls, monkeypatch):
+    """The run through the compiled cycles and through Python, and the cycles the compiled
+    calls took."""
+    settings = described_control_settings(m)
+    g = gains(settings, law, m.nt)
+    mo = default_motion(m)
+    fn = hermite_motion(mo.t, mo.x, mo.xd, mo.xdd, None)
+    taken = []
+    run = _cycles.CompiledCycles.run
+
+    def counted(self, i0, i1, *rest):
+        j = run(self, i0, i1, *rest)
+        taken.append(j - i0)
+        return j
+
+    monkeypatch.setattr(_cycles.CompiledCycles, "run", counted)
+    out = {}
+    for flag in (True, False):
+        tr = track(machine_verbs(m), m, plant, fn, seconds, law, g, replace(ls, compiled_cycles=flag), False)
+        out[flag] = tr
+    return out[True], out[False], sum(taken)
+
+
+def _settings(m, exact=True):
+    settings = described_control_settings(m)
+    settings["sensors"]["pose_feedback_from_sensor"] = 0
+    return replace(loop_settings(settings), exact_encoders=exact)
+
+
+def _same(a, b, what):
+    for f in FIELDS:
+        x, y = np.asarray(getattr(a, f), dtype=float), np.asarray(getattr(b, f), dtype=float)
+        scale = max(1.0, float(np.abs(y).max()))
+        assert np.abs(x - y).max() <= 1e-12 * scale, f"{what}: {f}"
+    assert np.array_equal(a.saturated, b.saturated), what
+
+
+@pytest.mark.parametrize("law", ["computed-torque", "pd", "augmented-pd", "feedforward", "pid"])
+def test_compiled_cycles_keep_the_python_cycles_records(law, monkeypatch):
+    """Exact encoders (the pose by the direct kinematics of the reading) on a plant 1.3 times as
+    heavy as the controller's model (the open loop on the model itself): every record equal to
+    rounding, and all but the run's first cycle (which primes the kernels' warm starts) taken by
+    the compiled calls."""
+    m, plant = _stewart(), _stewart(mass=1.0 if law == "feedforward" else 1.3)
+    fast, slow, taken = _both(m, plant, law, 0.4, _settings(m), monkeypatch)
+    _same(fast.result, slow.result, law)
+    K = slow.result.q.shape[0]
+    assert taken == K - 1
+    assert np.abs(fast.result.q - slow.reference.q[:K]).max() < 0.05  # a tracking run, not a stopped one
+
+
+def test_first_order_encoders_and_friction_through_the_stiff_and_refined_steps(monkeypatch):
+    """First-order encoders, and Coulomb and viscous friction in the six slides sharp enough
+    that the plant's steps at the legs' reversals are refined and some are ROS2: the same
+    records and the same counts of explicit and refined steps by both routes."""
+    m = _stewart(friction={"coulomb_force_N": 40.0, "viscous_N_s_m": 20.0})
+    ls = _settings(m, exact=False)
+    counts = {}
+    from pkmdyn.simulate import _loop
+
+    made = _loop.make_work
+
+    def kept(plant, method="rk3-ros2"):
+        w = made(plant, method)
+        counts.setdefault(len(counts), w)
+        return w
+
+    monkeypatch.setattr(_loop, "make_work", kept)
+    fast, slow, taken = _both(m, m, "computed-torque", 1.0, ls, monkeypatch)
+    _same(fast.result, slow.result, "friction")
+    wf, ws = counts[0], counts[1]
+    assert wf.refined_steps == ws.refined_steps > 0
+    assert wf.explicit_steps == ws.explicit_steps
+    assert taken >= slow.result.q.shape[0] - 2
+
+
+def test_a_diverging_run_stops_with_the_python_cycles_message(monkeypatch):
+    """A divergence limit the run crosses: the compiled call hands the cycle back and the same
+    error, at the same time and coordinate, is raised."""
+    m = _stewart()
+    ls = _settings(m)
+    ls = replace(ls, divergence_limit=np.full(m.nt, 1e-7))
+    settings = described_control_settings(m)
+    g = gains(settings, "pd", m.nt)
+    mo = default_motion(m)
+    fn = hermite_motion(mo.t, mo.x, mo.xd, mo.xdd, None)
+    errors = []
+    for flag in (True, False):
+        with pytest.raises(DivergenceError) as info:
+            track(machine_verbs(m), m, _stewart(mass=2.0), fn, 0.4, "pd", replace(g, kp=g.kp * 0.1),
+                  replace(ls, compiled_cycles=flag), False)
+        errors.append((str(info.value), info.value.coordinate, info.value.t))
+    assert errors[0] == errors[1]
+    assert errors[0][2] > 0.0  # past the first cycle: the compiled cycles ran before it
+
+
+def test_a_run_compiles_only_the_signature_compiled_ahead(monkeypatch):
+    """The loop's arguments have the types of ``example_signature`` (which the compile-ahead
+    child compiles): a run adds no signature, and the stage is reported compiled."""
+    m = _stewart()
+    _both(m, m, "computed-torque", 0.1, _settings(m), monkeypatch)
+    assert set(_cycles.run_cycles.signatures) == {_cycles.example_signature()}
+    assert ahead.compiled("loop") and _cycles.available()
