@@ -412,3 +412,18 @@ def available() -> bool:
     from ..multibody import ahead
 
     return bool(run_cycles.signatures) or ahead.compiled("loop")
+
+
+def _refresh_cache() -> None:
+    """The kernels above link the single-sample dynamics and direct kinematics, the integrator's,
+    the sensors' and the laws' kernels of other modules (:mod:`pkmdyn.multibody._cache`)."""
+    from .. import _dense
+    from ..control import _laws
+    from ..multibody import _cache, _dyn_kernels, _kernels, dynamics, friction
+    from . import _loop, _plant
+
+    _cache.refresh((_f, _jacobian, _ros2, _hold, run_cycles),
+                   (_one, _direct, _kernels, _dyn_kernels, _dense, friction, dynamics, _loop, _plant, _laws))
+
+
+_refresh_cache()
