@@ -56,9 +56,11 @@ _FORWARD, _INVERSE, _POSITIONS, _OK = _one.FORWARD, _one.INVERSE, _one.POSITIONS
 
 @numba.njit(cache=True)
 def _f(pk, q, qd, u, load, has_load, out):  # pragma: no cover - compiled
-    """The plant's accelerations (:func:`._plant.make_plant`'s ``f``); the kernel's status."""
+    """The plant's accelerations (:func:`._plant.make_plant`'s ``f``); the kernel's status.
+    ``pk``: the packed buffer and the kernel's modes (forward, inverse, positions) as values: a
+    mode written here as a constant would compile the kernel once more for that literal value."""
     ld = load if has_load else 0.0
-    return _one._dynamics(pk, q, qd, u, ld, _FORWARD, out)
+    return _one._dynamics(pk[0], q, qd, u, ld, pk[1][0], out)
 
 
 @numba.njit(cache=True)
@@ -194,7 +196,8 @@ def run_cycles(i0, i1, first, pre, done, delay, steps, dt, method, law, exact, s
     takes it; returns the first cycle it did not take (``i1`` where it took them all).
 
     ``sense``: :func:`._loop._sense`'s arrays and scalars after ``s_exact``, in its order;
-    ``plant``: ``(pk, has_load, loads)``; ``encoders``: ``(pk, view, prev, out, ratio, a0,
+    ``plant``: ``(pk, has_load, loads, modes)`` (``modes``: the
+    single-sample kernel's forward, inverse and positions modes); ``encoders``: ``(pk, view, prev, out, ratio, a0,
     s_exact)``; ``direct``: ``(pk, d, out, ok, a0, ratio, a, ad)``; ``ctrl``: ``(pk, has_load,
     ref_load, qd_ref, qdd_ref, kp, kd, ki, B_inv, u_ff, with_ff, s_ref, sd_ref, T, memory, acc, out)``;
     ``act``: ``(lim, u, out_u, sat)``; ``integ``: ``(A, W, vp, buf, qd_A, ws, f0, a2, a3, a4,
@@ -202,7 +205,8 @@ def run_cycles(i0, i1, first, pre, done, delay, steps, dt, method, law, exact, s
     """
     (q, qd, q_ref, div, s_ref_p, Bt_p, s_ref_c, rate_map, res, T, a_v, a_a, noise, from_sensor, s_prev, sd_prev,
      yq, yqd, ys, ysd, ysdd, out_q, out_qd, out_att, out_s, out_qs, out_qds, out_se, out_sde, out_sdde) = sense
-    pk, has_load, loads = plant
+    pk, has_load, loads, modes = plant
+    pk = (pk, modes)
     e_pk, e_view, e_prev, e_out, e_ratio, e_a0, s_exact = encoders
     d_pk, d_d, d_out, d_ok, d_a0, d_ratio, d_a, d_ad = direct
     (c_pk, c_has_load, ref_load, qd_ref, qdd_ref, kp, kd, ki, B_inv, u_ff, with_ff, j_s, j_sd, T_c, memory, acc,
@@ -228,7 +232,7 @@ def run_cycles(i0, i1, first, pre, done, delay, steps, dt, method, law, exact, s
         ok = True
         if exact:  # the plant's encoders (:meth:`._loop.ExactEncoders.read`)
             _save(e_view, e_prev)
-            if _one._dynamics(e_pk, q, qd, qd, 0.0, _POSITIONS, e_out) != _OK:
+            if _one._dynamics(e_pk, q, qd, qd, 0.0, modes[2], e_out) != _OK:
                 _save(e_prev, e_view)
                 ok = False
             else:
@@ -263,7 +267,7 @@ def run_cycles(i0, i1, first, pre, done, delay, steps, dt, method, law, exact, s
             elif law == 2:
                 _ct_acc(kr, q_ref, qd_ref, qdd_ref, yq, yqd, kp, kd, acc)
                 ld = ref_load[kr] if ref_load.shape[0] > 0 and c_has_load else 0.0
-                ok = _one._dynamics(c_pk, yq, yqd, acc, ld, _INVERSE, c_out) == _OK
+                ok = _one._dynamics(c_pk, yq, yqd, acc, ld, modes[1], c_out) == _OK
                 u_raw = c_out
             else:
                 _pd(kr, q_ref, qd_ref, yq, yqd, kp, kd, B_inv, u_ff, with_ff, c_out)
@@ -310,7 +314,8 @@ class CompiledCycles:
         self.keep = (np.empty(n), np.empty(n), np.empty(nu), np.empty(nu), np.empty(nu), np.empty(nu),
                      np.empty(ctrl[14].shape[0]), np.empty(5), np.empty(n), np.empty((n, n)))
         self.head = (steps, float(dt), method, law, exact)
-        self.tail = (args, (plant.kernel[0], bool(plant.has_load), loads), encoders, direct, ctrl, act, self.integ,
+        modes = np.array([_FORWARD, _INVERSE, _POSITIONS], dtype=np.int64)
+        self.tail = (args, (plant.kernel[0], bool(plant.has_load), loads, modes), encoders, direct, ctrl, act, self.integ,
                      self.keep)
 
     def run(self, i0: int, i1: int, first: int, pre: int, done: int, delay: int) -> int:
@@ -393,7 +398,7 @@ def example_arguments() -> tuple:
     act = (v, v, m2, np.zeros((1, n), dtype=bool))
     integ = (np.zeros((n, n)), np.zeros((2, n, n)), v, np.zeros((8, n)), v, np.zeros(5), v, v, v, v, v)
     keep = (v, v, v, v, v, v, v, np.zeros(5), v, np.zeros((n, n)))
-    return (0, 0, 0, 0, 0, 0, 1, 1.0, 0, 0, False, args, (ipk, False, v), encoders, direct, ctrl, act, integ, keep)
+    return (0, 0, 0, 0, 0, 0, 1, 1.0, 0, 0, False, args, (ipk, False, v, ipk), encoders, direct, ctrl, act, integ, keep)
 
 
 _SIGNATURE: list[tuple] = []
