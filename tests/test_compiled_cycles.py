@@ -144,3 +144,26 @@ def test_a_run_compiles_only_the_signature_compiled_ahead(monkeypatch):
     _both(m, m, "computed-torque", 0.1, _settings(m), monkeypatch)
     assert set(_cycles.run_cycles.signatures) == {_cycles.example_signature()}
     assert ahead.compiled("loop") and _cycles.available()
+
+
+def test_spans_and_a_delayed_noisy_pose_sensor(monkeypatch):
+    """The pose fed back from a pose sensor two cycles late with noise (the rate from the
+    direct kinematics of the encoders), run whole and in spans of 37 cycles: the compiled
+    cycles' spans join to the Python cycles' whole run."""
+    from pkmdyn.simulate import track_spans
+
+    m = _stewart()
+    ls = replace(_settings(m), pose_from_sensor=True, pose_delay_cycles=2, pose_noise=np.full(m.nt, 1e-6))
+    fast, slow, taken = _both(m, m, "pd", 0.3, ls, monkeypatch)
+    _same(fast.result, slow.result, "pose sensor")
+    assert taken == slow.result.q.shape[0] - 1
+    settings = described_control_settings(m)
+    mo = default_motion(m)
+    fn = hermite_motion(mo.t, mo.x, mo.xd, mo.xdd, None)
+    parts = list(track_spans(machine_verbs(m), m, m, fn, 0.3, "pd", gains(settings, "pd", m.nt), ls, False,
+                             span_cycles=37))
+    assert len(parts) > 3
+    for f in ("q", "qd", "u", "q_s", "qd_s", "q_att", "s_enc", "sd_enc"):
+        joined = np.concatenate([getattr(p.result, f) for p in parts])
+        ref = getattr(slow.result, f)
+        assert np.abs(joined - ref).max() <= 1e-9 * max(1.0, float(np.abs(ref).max())), f
