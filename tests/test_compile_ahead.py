@@ -97,3 +97,22 @@ def test_a_silent_child_is_waited_for_at_most_wait_s(monkeypatch):
         assert "one" not in ahead._done
     finally:
         ahead._stop(silent)
+
+
+def test_stages_that_follow_ride_along_but_start_no_child(monkeypatch):
+    """``then`` stages join a child that the other stages start (after them, where cold) but
+    start none alone; while a child runs no second one starts; a long closed loop is worth a
+    child for the loop's cycles, a short one is not."""
+    monkeypatch.setenv("PKMDYN_COMPILE_AHEAD", "1")
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    monkeypatch.setattr(ahead, "_child", None)
+    monkeypatch.setattr(ahead, "cold", lambda stages: "loop" in stages)
+    assert ahead.start(("one", "task"), then=("loop",)) is None
+    monkeypatch.setattr(ahead, "cold", lambda stages: True)
+    child = ahead.start(("one",), then=("one", "loop"))
+    try:
+        assert child is not None and child.args[-2:] == ["one", "loop"]
+        assert ahead.start(("task",)) is None  # the running child's
+    finally:
+        ahead._stop(child)
+    assert not ahead.worth_compiling_loop(500) and ahead.worth_compiling_loop(10**7)

@@ -348,7 +348,9 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     check_output_dir(out_dir, inputs)
     from ..multibody import ahead
 
-    ahead.start(ahead.STAGES)  # a fresh install: the loop's kernels compile on another core meanwhile
+    # a fresh install: the loop's kernels compile on another core meanwhile, and the loop's cycles
+    # in one call after them (the run takes them once compiled)
+    ahead.start(("one", "task", "direct"), then=("loop",))
     model, _ = _load(machine)
     if motion_path is not None:
         motion = read_task_motion(model, Path(motion_path).absolute())
@@ -374,6 +376,8 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
         ls = replace(ls, encoder_resolution=np.where(model.drive_encoder > 0, model.drive_encoder,
                                                      float(ls.encoder_resolution)))
     check_loop(ls, duration_s, gains_path)
+    if ahead.worth_compiling_loop(int(round(duration_s / ls.cycle_s))):
+        ahead.start(("loop",))  # a long run: the rest of it in the compiled cycles once they are compiled
     verbs = machine_verbs(model)
     load, column = _control_load(model, motion, what, verbs.ACTUATORS)
     fn = hermite_motion(motion.t, motion.x, motion.xd, motion.xdd, load)

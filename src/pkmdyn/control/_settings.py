@@ -147,8 +147,9 @@ class LoopSettings:
     to first order about the reference); ``method``: the plant's step (:data:`pkmdyn.simulate.METHODS`;
     by default a third-order explicit step away from the friction band and ROS2 in it);
     ``compiled_cycles``: where the loop's kernel is compiled and every kernel of the cycle is
-    the described mechanism's own, the cycles in one compiled call (``pkmdyn.simulate._cycles``,
-    the same records); False: every cycle in Python.
+    the described mechanism's own, the cycles in one compiled call (``pkmdyn.simulate._cycles``:
+    the same records, to rounding, except within the solvers' tolerances after a cycle it hands
+    back); False: every cycle in Python.
     """
 
     cycle_s: float

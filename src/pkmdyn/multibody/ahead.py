@@ -20,8 +20,10 @@ solver, so the child compiles that in parallel with the command's first kernels,
 ``pkmdyn control`` finds the loop's kernel cached.
 
 Its last stage, ``loop``, is the closed loop's cycles in one compiled call
-(:mod:`pkmdyn.simulate._cycles`), which links the kernels above a second time (some 20-30 s):
+(:mod:`pkmdyn.simulate._cycles`), which links the kernels above a second time (some 15-30 s):
 no command waits for it; the loop takes its Python cycles until it is compiled (:func:`compiled`).
+``pkmdyn control`` hands it to a child started for the other stages, and starts one for it alone
+where the run is long (:data:`LOOP_WORTH_S`).
 
     python -m pkmdyn.multibody.ahead one task direct loop
 """
@@ -38,7 +40,8 @@ import time
 from collections.abc import Iterable
 from typing import Any
 
-__all__ = ["STAGES", "cold", "start", "wait", "ready", "compiled", "compile_stages", "signatures"]
+__all__ = ["STAGES", "LOOP_WORTH_S", "cold", "start", "wait", "ready", "compiled", "worth_compiling_loop",
+           "compile_stages", "signatures"]
 
 #: the stages a child can compile, in this order: the closed loop's single-sample dynamics and
 #: encoders (``one``), its direct kinematics of the encoders' reading in task space (``task``:
@@ -47,6 +50,10 @@ __all__ = ["STAGES", "cold", "start", "wait", "ready", "compiled", "compile_stag
 #: 30 s, which a command does not wait for; until it is compiled the loop runs its cycles in
 #: Python)
 STAGES = ("one", "task", "direct", "loop")
+#: a run whose cycles in Python would take about this long [s] or more starts a child compiling
+#: the ``loop`` stage alone (:func:`worth_compiling_loop`): it is done before the run is, and the
+#: rest of the run takes the compiled cycles
+LOOP_WORTH_S = 60.0
 #: the module of the ``loop`` stage's kernel: the simulation layer's, above this one, so named
 #: here rather than imported
 _LOOP_MODULE = "pkmdyn.simulate._cycles"
@@ -122,13 +129,18 @@ _unread = b""
 WAIT_S = 600.0
 
 
-def start(stages: Iterable[str]) -> subprocess.Popen | None:
-    """A child compiling the kernels of ``stages`` in that order, or None where it would not help
-    (module docstring). The child ends with this process."""
+def start(stages: Iterable[str], then: Iterable[str] = ()) -> subprocess.Popen | None:
+    """A child compiling the kernels of ``stages`` and then those of ``then`` in that order, or
+    None where it would not help (module docstring): where every kernel of ``stages`` is cached
+    (``then`` alone does not start it), or a child of this process still runs. The child ends
+    with this process."""
     global _child, _unread
     stages = tuple(stages)
     if os.environ.get("PKMDYN_COMPILE_AHEAD", "1") == "0" or (os.cpu_count() or 1) < 2 or not cold(stages):
         return None
+    if _child is not None and _child.poll() is None:
+        return None
+    stages = stages + tuple(s for s in then if s not in stages and cold((s,)))
     _done.clear()
     _unread = b""
     _child = subprocess.Popen([sys.executable, "-m", __name__, *stages], stdin=subprocess.DEVNULL,
@@ -165,6 +177,13 @@ def ready(stage: str) -> bool:
     wait(stage, 0.0)
     child = _child
     return child is None or stage in _done or child.stdout is None or child.stdout.closed
+
+
+def worth_compiling_loop(cycles: int, cycle_cost_s: float = 1e-4) -> bool:
+    """Whether a closed loop of ``cycles`` cycles, at about ``cycle_cost_s`` each in Python (0.1 ms:
+    a six-legged platform's cycle of two steps), runs long enough (:data:`LOOP_WORTH_S`) to start
+    a child compiling the ``loop`` stage."""
+    return cycles * cycle_cost_s >= LOOP_WORTH_S
 
 
 def compiled(stage: str) -> bool:

@@ -45,8 +45,6 @@ Array = NDArray[np.float64]
 
 #: the laws' codes in the compiled call
 LAWS = {"feedforward": 0, "pid": 1, "computed-torque": 2, "pd": 3, "augmented-pd": 4}
-#: the integrator's step methods' codes (:data:`._plant.METHODS`)
-_METHODS = {"rk3-ros2": 0, "rk4-ros2": 1, "ros2": 2}
 #: the integrator's scalars in one array: the load at the Jacobian, whether the Jacobian is
 #: fresh, whether the motion is in the friction band, explicit and refined step counts
 _LD_A, _FRESH, _STIFF, _EXPLICIT, _REFINED = range(5)
@@ -328,13 +326,23 @@ class CompiledCycles:
         return int(j)
 
 
-def compiled_cycles(plant: Any, controller: Any, ref: Any, exact: Any, work: Any, method: str, args: tuple,
+def compiled_cycles(plant: Any, controller: Any, ref: Any, exact: Any, work: Any, args: tuple,
                     loads: Array, lim: Array, u: Array, out_u: Array, sat: Array, memory: Array, s_exact: Array,
                     steps: int, dt: float) -> CompiledCycles | None:
     """The compiled cycles of a span, or None where a kernel of the cycle is not the described
     mechanism's own, a buffer is not primed yet (exact encoders: after the run's first cycle), or
     the kernel is not compiled yet (:func:`available`)."""
-    if plant.kernel is None or plant.kernel[1] is not _one.forward_one or method not in _METHODS:
+    if plant.kernel is None or plant.kernel[1] is not _one.forward_one:
+        return None
+    from ._plant import _rk3_step, _rk4_step
+
+    if not work.explicit:  # the integrator's own method (:func:`._plant.make_work`)
+        method = 2
+    elif work.step is _rk3_step:
+        method = 0
+    elif work.step is _rk4_step:
+        method = 1
+    else:
         return None
     kind = controller.kind
     if kind not in LAWS or (kind == "computed-torque" and (controller.id_kernel is None
@@ -344,8 +352,11 @@ def compiled_cycles(plant: Any, controller: Any, ref: Any, exact: Any, work: Any
         return None
     nu, nq = plant.nu, plant.nq
     if exact is not None:
-        enc = exact.verbs.encoder_buffers(exact.plant_model)
-        dk = exact.verbs.direct_task_buffers(exact.ctrl_model)
+        enc_of = getattr(exact.verbs, "encoder_buffers", None)
+        dk_of = getattr(exact.verbs, "direct_task_buffers", None)
+        if enc_of is None or dk_of is None:
+            return None
+        enc, dk = enc_of(exact.plant_model), dk_of(exact.ctrl_model)
         if enc is None or dk is None:
             return None
         encoders = (*enc, _c(exact.ratio), _c(exact.a0_plant), s_exact)
@@ -367,7 +378,7 @@ def compiled_cycles(plant: Any, controller: Any, ref: Any, exact: Any, work: Any
             float(ref.T), memory, controller.acc, controller.out)
     if not all(isinstance(a, np.ndarray) and a.flags.c_contiguous for a in (*args[:9], *args[12:13], *args[14:])):
         return None
-    cc = CompiledCycles(args, plant, loads, encoders, direct, ctrl, (lim, u, out_u, sat), work, _METHODS[method],
+    cc = CompiledCycles(args, plant, loads, encoders, direct, ctrl, (lim, u, out_u, sat), work, method,
                         LAWS[kind], exact is not None, steps, dt)
     if _kinds((0, 0, 0, 0, 0, 0, *cc.head, *cc.tail)) != _kinds(example_arguments()):
         return None  # another type than the compiled one: the Python cycles, rather than a compilation here

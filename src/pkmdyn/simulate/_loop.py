@@ -368,8 +368,8 @@ def run_span(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_joi
     while i < n:
         if fast is None and i >= next_try and settings.compiled_cycles:
             if _cycles.available():
-                fast = _cycles.compiled_cycles(plant, controller, ref, exact, work, settings.method, args, loads, lim,
-                                               u, out_u, sat, memory, s_exact, steps, dt)
+                fast = _cycles.compiled_cycles(plant, controller, ref, exact, work, args, loads, lim, u, out_u, sat,
+                                               memory, s_exact, steps, dt)
             next_try = i + (1 if i < 2 else CHUNK)
         j = i
         if fast is not None:
