@@ -99,20 +99,22 @@ def test_a_silent_child_is_waited_for_at_most_wait_s(monkeypatch):
         ahead._stop(silent)
 
 
-def test_stages_that_follow_ride_along_but_start_no_child(monkeypatch):
-    """``then`` stages join a child that the other stages start (after them, where cold) but
-    start none alone; while a child runs no second one starts; a long closed loop is worth a
-    child for the loop's cycles, a short one is not."""
+def test_no_second_child_while_one_runs_and_the_loop_stage_for_long_runs(monkeypatch):
+    """While a child runs no second one starts; a long closed loop is worth a child for the
+    loop's cycles, a short one is not."""
     monkeypatch.setenv("PKMDYN_COMPILE_AHEAD", "1")
     monkeypatch.setattr(os, "cpu_count", lambda: 2)
     monkeypatch.setattr(ahead, "_child", None)
-    monkeypatch.setattr(ahead, "cold", lambda stages: "loop" in stages)
-    assert ahead.start(("one", "task"), then=("loop",)) is None
     monkeypatch.setattr(ahead, "cold", lambda stages: True)
-    child = ahead.start(("one",), then=("one", "loop"))
+    child = ahead.start(("one",))
     try:
-        assert child is not None and child.args[-2:] == ["one", "loop"]
-        assert ahead.start(("task",)) is None  # the running child's
+        assert child is not None and child.args[-1] == "one"
+        assert ahead.start(("loop",)) is None  # the running child's
     finally:
         ahead._stop(child)
+    second = ahead.start(("task",))  # the first has ended
+    try:
+        assert second is not None and second is not child
+    finally:
+        ahead._stop(second)
     assert not ahead.worth_compiling_loop(500) and ahead.worth_compiling_loop(10**7)

@@ -348,9 +348,9 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     check_output_dir(out_dir, inputs)
     from ..multibody import ahead
 
-    # a fresh install: the loop's kernels compile on another core meanwhile, and the loop's cycles
-    # in one call after them (the run takes them once compiled)
-    ahead.start(("one", "task", "direct"), then=("loop",))
+    # a fresh install: the loop's kernels compile on another core meanwhile (the loop's cycles in
+    # one call only for a long run, below: a short first run would end before they compile)
+    ahead.start(("one", "task", "direct"))
     model, _ = _load(machine)
     if motion_path is not None:
         motion = read_task_motion(model, Path(motion_path).absolute())

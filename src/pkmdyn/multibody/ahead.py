@@ -22,8 +22,7 @@ solver, so the child compiles that in parallel with the command's first kernels,
 Its last stage, ``loop``, is the closed loop's cycles in one compiled call
 (:mod:`pkmdyn.simulate._cycles`), which links the kernels above a second time (some 15-30 s):
 no command waits for it; the loop takes its Python cycles until it is compiled (:func:`compiled`).
-``pkmdyn control`` hands it to a child started for the other stages, and starts one for it alone
-where the run is long (:data:`LOOP_WORTH_S`).
+``pkmdyn control`` starts a child for it where the run is long (:data:`LOOP_WORTH_S`).
 
     python -m pkmdyn.multibody.ahead one task direct loop
 """
@@ -129,18 +128,15 @@ _unread = b""
 WAIT_S = 600.0
 
 
-def start(stages: Iterable[str], then: Iterable[str] = ()) -> subprocess.Popen | None:
-    """A child compiling the kernels of ``stages`` and then those of ``then`` in that order, or
-    None where it would not help (module docstring): where every kernel of ``stages`` is cached
-    (``then`` alone does not start it), or a child of this process still runs. The child ends
-    with this process."""
+def start(stages: Iterable[str]) -> subprocess.Popen | None:
+    """A child compiling the kernels of ``stages`` in that order, or None where it would not help
+    (module docstring) or a child of this process still runs. The child ends with this process."""
     global _child, _unread
     stages = tuple(stages)
     if os.environ.get("PKMDYN_COMPILE_AHEAD", "1") == "0" or (os.cpu_count() or 1) < 2 or not cold(stages):
         return None
     if _child is not None and _child.poll() is None:
         return None
-    stages = stages + tuple(s for s in then if s not in stages and cold((s,)))
     _done.clear()
     _unread = b""
     _child = subprocess.Popen([sys.executable, "-m", __name__, *stages], stdin=subprocess.DEVNULL,
