@@ -75,6 +75,11 @@ def test_a_started_child_reports_its_stages_and_ends_with_the_command(monkeypatc
     assert "task" in ahead._done and ahead.ready("task")
     ahead.wait("direct")
     assert ahead._done == {"one", "task", "direct"}
+    ahead.request(("one", "loop"))  # handed to the running child: the stage it was not given
+    assert ahead._queued == ["one", "task", "direct", "loop"]
+    ahead.wait("loop")
+    assert "loop" in ahead._done
+    child.stdin.close()  # the command's end: the child stops listening for more
     assert child.wait(timeout=120) == 0
     ahead.wait("one")
     stopped = ahead.start(("one", "direct"))
@@ -118,3 +123,19 @@ def test_no_second_child_while_one_runs_and_the_loop_stage_for_long_runs(monkeyp
     finally:
         ahead._stop(second)
     assert not ahead.worth_compiling_loop(500) and ahead.worth_compiling_loop(10**7)
+
+
+def test_a_stage_coming_next_is_waited_for(monkeypatch):
+    """``coming``: the child compiles the stage next (every stage given before it done), so a
+    command waits for it rather than compiling it itself; not where another stage comes first,
+    nor where no child was given it."""
+    monkeypatch.setattr(ahead, "_child", subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"],
+                                                          stdout=subprocess.PIPE, bufsize=0))
+    try:
+        monkeypatch.setattr(ahead, "_queued", ["one", "task", "direct"])
+        monkeypatch.setattr(ahead, "_done", {"one"})
+        assert ahead.coming("task") and not ahead.coming("direct") and not ahead.coming("loop")
+        ahead._done.add("task")
+        assert ahead.coming("direct")
+    finally:
+        ahead._stop(ahead._child)

@@ -93,13 +93,13 @@ def _same(a, b, what):
 def test_compiled_cycles_keep_the_python_cycles_records(law, monkeypatch):
     """Exact encoders (the pose by the direct kinematics of the reading) on a plant 1.3 times as
     heavy as the controller's model (the open loop on the model itself): every record equal to
-    rounding, and all but the run's first cycle (which primes the kernels' warm starts) taken by
-    the compiled calls."""
+    rounding, and every cycle taken by the compiled calls (the encoders and the direct
+    kinematics primed at the run's first pose)."""
     m, plant = _stewart(), _stewart(mass=1.0 if law == "feedforward" else 1.3)
     fast, slow, taken = _both(m, plant, law, 0.4, _settings(m), monkeypatch)
     _same(fast.result, slow.result, law)
     K = slow.result.q.shape[0]
-    assert taken == K - 1
+    assert taken == K
     assert np.abs(fast.result.q - slow.reference.q[:K]).max() < 0.05  # a tracking run, not a stopped one
 
 
@@ -176,7 +176,7 @@ def test_spans_and_a_delayed_noisy_pose_sensor(monkeypatch):
     ls = replace(_settings(m), pose_from_sensor=True, pose_delay_cycles=2, pose_noise=np.full(m.nt, 1e-6))
     fast, slow, taken = _both(m, m, "pd", 0.3, ls, monkeypatch)
     _same(fast.result, slow.result, "pose sensor")
-    assert taken == slow.result.q.shape[0] - 1
+    assert taken == slow.result.q.shape[0]
     settings = described_control_settings(m)
     mo = default_motion(m)
     fn = hermite_motion(mo.t, mo.x, mo.xd, mo.xdd, None)
@@ -184,7 +184,7 @@ def test_spans_and_a_delayed_noisy_pose_sensor(monkeypatch):
     parts = list(track_spans(machine_verbs(m), m, m, fn, 0.3, "pd", gains(settings, "pd", m.nt), ls, False,
                              span_cycles=37))
     assert len(parts) > 3
-    assert sum(taken) == slow.result.q.shape[0] - 1
+    assert sum(taken) == slow.result.q.shape[0]
     for f in ("q", "qd", "u", "q_s", "qd_s", "q_att", "s_enc", "sd_enc"):
         joined = np.concatenate([getattr(p.result, f) for p in parts])
         ref = getattr(slow.result, f)
@@ -241,6 +241,6 @@ def test_a_named_load_reaches_the_compiled_plant_and_law(monkeypatch):
 
     fast, slow, taken = _both(m, m, "computed-torque", 0.3, _settings(m), monkeypatch, load=load)
     _same(fast.result, slow.result, "named load")
-    assert taken == slow.result.q.shape[0] - 1
+    assert taken == slow.result.q.shape[0]
     none, _, _ = _both(m, m, "computed-torque", 0.3, _settings(m), monkeypatch)
     assert np.abs(none.result.u - fast.result.u).max() > 1.0

@@ -808,3 +808,30 @@ def test_task_route_by_the_actuated_coordinates_alone_only_where_the_joint_reach
             a1, a2 = np.array(j["axes"][0]), np.array(j["axes"][1])
             j["axes"][1] = [float(v) for v in _unit(a2 + 3.0 * _unit(np.cross(a1, a2)))]
     assert flag(desc) == 0.0
+
+
+@pytest.mark.parametrize("name", ["stewart", "delta", "hip"])
+def test_direct_one_primed_at_a_known_pose_starts_from_it(name, monkeypatch):
+    """``prime_direct`` at a pose away from the reference configuration (the pose a run starts
+    from, whose actuated coordinates the encoders solved): the next ``direct_one`` calls answer
+    by the single-sample kernel alone (the checked route, which solves from the reference
+    configuration, is never taken) and follow a motion from there: the poses of the motion the
+    actuator values came from, and its rates."""
+    from pkmdyn.multibody.machine import MechanismVerbs, machine_verbs
+
+    m = _model(name)
+    t, x, xd, xdd = _smooth(m, n=60, seed=5)
+    V = machine_verbs(m)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    V.actuator_coordinates_one(m, x[10], np.zeros(m.nt), fresh=True)
+
+    def refused(*args, **kwargs):
+        raise AssertionError("the checked route was taken")
+
+    monkeypatch.setattr(MechanismVerbs, "_direct_checked", refused)
+    V.prime_direct(m, x[10])
+    sc = _scaled(m)
+    for k in range(10, 60):
+        pose, rate = V.direct_one(m, kin.act_q[k], kin.act_qd[k])
+        assert np.abs((pose - x[k]) * sc).max() <= 1e-10
+        assert np.abs((rate - xd[k]) * sc).max() <= 1e-8 * max(1.0, float(np.abs(xd * sc).max()))

@@ -348,10 +348,14 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     check_output_dir(out_dir, inputs)
     from ..multibody import ahead
 
-    # a fresh install: the loop's kernels compile on another core meanwhile (the loop's cycles in
-    # one call only for a long run, below: a short first run would end before they compile)
-    ahead.start(("one", "task", "direct"))
+    # a fresh install: the loop's dynamics compile on another core meanwhile, then the direct
+    # kinematics of the route the mechanism takes (the loop's cycles in one call only for a long
+    # run, below: a short first run would end before they compile)
+    ahead.start(("one",))
     model, _ = _load(machine)
+    from ..multibody.direct import task_route_map
+
+    ahead.request(("task",) if task_route_map(model) is not None else ("direct",))
     if motion_path is not None:
         motion = read_task_motion(model, Path(motion_path).absolute())
         what = str(motion_path)
@@ -377,7 +381,7 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
                                                      float(ls.encoder_resolution)))
     check_loop(ls, duration_s, gains_path)
     if ahead.worth_compiling_loop(int(round(duration_s / ls.cycle_s))):
-        ahead.start(("loop",))  # a long run: the rest of it in the compiled cycles once they are compiled
+        ahead.request(("loop",))  # a long run: the rest of it in the compiled cycles once they are compiled
     verbs = machine_verbs(model)
     load, column = _control_load(model, motion, what, verbs.ACTUATORS)
     fn = hermite_motion(motion.t, motion.x, motion.xd, motion.xdd, load)

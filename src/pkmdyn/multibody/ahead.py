@@ -19,6 +19,10 @@ starts it too: the single-sample kernel calls the batched kinematics' own compil
 solver, so the child compiles that in parallel with the command's first kernels, and a later
 ``pkmdyn control`` finds the loop's kernel cached.
 
+A command starts the child with the stage it surely needs (``one``) and hands it more on its
+standard input once it knows them (:func:`request`): the direct kinematics of the route its
+mechanism takes, so that the child does not spend seconds on the other one first.
+
 Its last stage, ``loop``, is the closed loop's cycles in one compiled call
 (:mod:`pkmdyn.simulate._cycles`), which links the kernels above a second time (some 15-30 s):
 no command waits for it; the loop takes its Python cycles until it is compiled (:func:`compiled`).
@@ -39,8 +43,8 @@ import time
 from collections.abc import Iterable
 from typing import Any
 
-__all__ = ["STAGES", "LOOP_WORTH_S", "cold", "start", "wait", "ready", "compiled", "worth_compiling_loop",
-           "compile_stages", "signatures"]
+__all__ = ["STAGES", "LOOP_WORTH_S", "cold", "start", "request", "coming", "wait", "ready", "compiled",
+           "worth_compiling_loop", "compile_stages", "signatures"]
 
 #: the stages a child can compile, in this order: the closed loop's single-sample dynamics and
 #: encoders (``one``), its direct kinematics of the encoders' reading in task space (``task``:
@@ -109,6 +113,11 @@ def cold(stages: Iterable[str]) -> bool:
 
 
 def _stop(child: subprocess.Popen) -> None:
+    if child.stdin is not None and not child.stdin.closed:
+        try:
+            child.stdin.close()
+        except OSError:  # pragma: no cover - a child that has gone
+            pass
     if child.poll() is None:
         child.terminate()
         try:
@@ -120,8 +129,10 @@ def _stop(child: subprocess.Popen) -> None:
         child.stdout.close()
 
 
-#: the running child of :func:`start`, the stages it has reported done and its unread output
+#: the running child of :func:`start`, the stages it was given (in order), those it has
+#: reported done and its unread output
 _child: subprocess.Popen | None = None
+_queued: list[str] = []
 _done: set[str] = set()
 _unread = b""
 #: the longest wait for a stage [s]; past it the command compiles the kernel itself
@@ -139,10 +150,40 @@ def start(stages: Iterable[str]) -> subprocess.Popen | None:
         return None
     _done.clear()
     _unread = b""
-    _child = subprocess.Popen([sys.executable, "-m", __name__, *stages], stdin=subprocess.DEVNULL,
+    _child = subprocess.Popen([sys.executable, "-m", __name__, "--more", *stages], stdin=subprocess.PIPE,
                               stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, bufsize=0)
+    _queued[:] = stages
     atexit.register(_stop, _child)
     return _child
+
+
+def request(stages: Iterable[str]) -> None:
+    """Have ``stages`` compiled ahead: handed to the running child (after what it was given;
+    each cold one not given yet), else a child started for them (:func:`start`). A command calls
+    it once it knows which kernels it will take (the direct kinematics' route of its mechanism,
+    a long closed loop's cycles)."""
+    child = _child
+    if child is None or child.poll() is not None or child.stdin is None or child.stdin.closed:
+        start(stages)
+        return
+    new = [s for s in stages if s not in _queued and cold((s,))]
+    if not new:
+        return
+    try:
+        child.stdin.write("".join(f"{s}\n" for s in new).encode("ascii"))
+        child.stdin.flush()
+    except OSError:  # pragma: no cover - the child has just ended: the command compiles them itself
+        return
+    _queued.extend(new)
+
+
+def coming(stage: str) -> bool:
+    """Whether the child compiles ``stage`` next or has (every stage it was given before it is
+    done): then waiting for it beats compiling it here."""
+    wait(stage, 0.0)
+    if _child is None or stage not in _queued:
+        return False
+    return all(s in _done for s in _queued[:_queued.index(stage)])
 
 
 def wait(stage: str, timeout_s: float = -1.0) -> None:
@@ -203,8 +244,14 @@ def compile_stages(stages: Iterable[str], report: bool = False) -> None:
 
 
 def main(argv: list[str]) -> int:
-    """The child: compile the stages ``argv``, saying each when done."""
-    compile_stages(argv, report=True)
+    """The child: compile the stages ``argv``, saying each when done; after ``--more`` (a
+    command's child), then each stage named on a line of its standard input (:func:`request`)
+    until that closes."""
+    more = bool(argv) and argv[0] == "--more"
+    compile_stages(argv[1:] if more else argv, report=True)
+    for line in sys.stdin if more else ():
+        if line.strip():
+            compile_stages([line.strip()], report=True)
     return 0
 
 

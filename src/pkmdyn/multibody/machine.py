@@ -368,6 +368,37 @@ class MechanismVerbs:
             _one.prime(st.encoder_pk, q_sol, x1[0], G_sol)
         return q_sol[model.act_coord].copy()
 
+    def prime_direct(self, model: MechanismModel, q: Array) -> None:
+        """Let the next :meth:`direct_one` call start from the task pose ``q`` whose actuated
+        coordinates the last ``actuator_coordinates_one(model, q, qd, fresh=True)`` solved (its
+        tree coordinates, kept as the encoders' solution): a controller that knows the pose its
+        run starts from, instead of solving the direct kinematics from the reference
+        configuration by the checked route (whose batched kernels a fresh install would compile
+        for some seconds). The branch is that of ``q``; the sign of its determinant is taken
+        from that next call. Nothing where no such solution is kept."""
+        from . import _direct as D
+        from . import _one
+        from .direct import pack_one, pack_task, prime_one, prime_task, task_state
+
+        st = self._state(model)
+        x = np.asarray(q, dtype=float).reshape(-1)
+        if st.encoder_q is None or x.shape != (model.nt,) or not np.all(np.isfinite(x)):
+            return
+        qt = st.encoder_q.copy()
+        a = qt[model.act_coord].copy()
+        if st.direct is None:
+            st.direct = (pack_one(model), np.zeros(2 * model.nt), D.direct_one, D.OK)
+            d = pack_task(model)
+            st.direct_task = False
+            if d is not None:
+                pk1 = st.pk if st.pk is not None else _one.pack(model)
+                st.direct_task = (pk1, d, np.zeros(2 * model.nt), D.direct_task_one, D.OK, D.CROSSED)
+        prime_one(st.direct[0], qt, x, a, 0.0)
+        if st.direct_task:
+            prime_task(st.direct_task[1], qt, x, a)
+            task_state(st.direct_task[1])[1] = 0.0
+        self._direct_ahead(st)  # the next call takes the single-sample kernel at once
+
     def encoder_buffers(self, model: MechanismModel) -> tuple[NDArray[np.int64], Array, Array, Array] | None:
         """``(pk, view, prev, out)``: what :meth:`actuator_coordinates_one` hands its compiled call
         once a reading has been solved (``pk`` the packed buffer, ``view`` its solution, ``prev``
@@ -406,7 +437,7 @@ class MechanismVerbs:
         nt = model.nt
         fit = a.shape == ad.shape == (model.na,)
         status = -1
-        if st.direct_task:  # (the kernels have run: nothing to wait for)
+        if st.direct_task:  # (the kernels have run or been waited for: nothing to wait for)
             pk1, d, out, kernel, ok, _ = st.direct_task
             status = kernel(pk1, d, a, ad, out) if fit else ok - 1
             if status == ok:
@@ -428,11 +459,11 @@ class MechanismVerbs:
     @staticmethod
     def _direct_ahead(st: _State) -> None:
         """Wait for the single-sample kernel that the next :meth:`direct_one` call takes where a
-        compile-ahead child compiles it (:mod:`.ahead`: the task-space one, then the tree-space
-        one); the tree-space one is compiled here instead while the child is still on the other."""
+        compile-ahead child compiles it (:mod:`.ahead`); the tree-space one is compiled here
+        instead while the child is still on another stage given before it (the task-space one)."""
         if st.direct_task:
             ahead.wait("task")
-        elif ahead.ready("task"):
+        elif ahead.coming("direct") or ahead.ready("task"):
             ahead.wait("direct")
 
     def _direct_task_on(self, model: MechanismModel, st: _State, a: Array, ad: Array, fit: bool,

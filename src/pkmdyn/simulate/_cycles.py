@@ -330,7 +330,8 @@ def compiled_cycles(plant: Any, controller: Any, ref: Any, exact: Any, work: Any
                     loads: Array, lim: Array, u: Array, out_u: Array, sat: Array, memory: Array, s_exact: Array,
                     steps: int, dt: float) -> CompiledCycles | None:
     """The compiled cycles of a span, or None where a kernel of the cycle is not the described
-    mechanism's own, a buffer is not primed yet (exact encoders: after the run's first cycle), or
+    mechanism's own, a buffer is not primed yet (exact encoders: the encoders' and the direct
+    kinematics' solutions at the run's first pose), or
     the kernel is not compiled yet (:func:`available`)."""
     if plant.kernel is None or plant.kernel[1] is not _one.forward_one:
         return None

@@ -199,6 +199,33 @@ class LoopState:
     exact: Any = None
 
 
+def compile_cycle_kernels() -> None:
+    """Compile (or load) the cycle's own small kernels - the sensors', the limits', the laws' and
+    the integrator's - by calling each once on small arrays of the types the loop passes, so
+    that a fresh install compiles them while the compile-ahead child still compiles the direct
+    kinematics' kernel, which the loop then waits for (:meth:`ExactEncoders.__init__`), rather
+    than after it."""
+    from ..control._laws import _ct_acc, _pd, _pid
+    from ._plant import _rk3_finish, _rk_finish, _rk_stage, _stage1, _stage2, _stale, _stiffness
+
+    v, m2, m3 = np.zeros(2), np.zeros((1, 2)), np.zeros((1, 2, 2))
+    one = np.ones(2)
+    _sense(0, 0, 0, True, True, v, v, v, m2, one, m2, m3, m2, m3, one, 1.0, 1.0, 1.0, m2, False, v.copy(),
+           v.copy(), v.copy(), v.copy(), v.copy(), v.copy(), v.copy(), *(np.zeros((1, 2)) for _ in range(9)))
+    _actuate(0, v, one, v.copy(), np.zeros((1, 2)), np.zeros((1, 2), dtype=bool))
+    _ct_acc(0, m2, m2, m2, v, v, v, v, v.copy())
+    _pd(0, m2, m2, v, v, v, v, m3, m2, False, v.copy())
+    _pid(0, 1.0, m2, m2, v, v, v, v, v, v.copy(), v.copy())
+    buf, A, W = np.zeros((8, 2)), np.zeros((2, 2)), np.zeros((2, 2, 2))
+    _rk_stage(v, v, v, v, 1.0, buf[2], buf[3])
+    _rk3_finish(v.copy(), v.copy(), v, v, v, 1.0, buf[6:8])
+    _rk_finish(v.copy(), v.copy(), v, v, v, v, 1.0, buf[6:8])
+    _stage1(v, v, v, A, 1.0, W, buf)
+    _stage2(v.copy(), v.copy(), v, 1.0, W, buf)
+    _stiffness(A)
+    _stale(v, v, 0.05)
+
+
 class ExactEncoders:
     """The encoders of a plant read through its kinematics (module docstring, items 1-2): the
     plant's actuated joint coordinates at its pose (``verbs.actuator_coordinates_one``) as the
@@ -218,6 +245,11 @@ class ExactEncoders:
         zero = np.zeros_like(q0)
         self.a0_plant = verbs.actuator_coordinates_one(plant.model, q0, zero, fresh=True)
         self.a0_ctrl = verbs.actuator_coordinates_one(ctrl_model, q0, zero, fresh=True)
+        prime = getattr(verbs, "prime_direct", None)
+        if prime is not None:  # the controller knows the pose its run starts from
+            compile_cycle_kernels()  # (on a fresh install, while a compile-ahead child may still compile the next)
+            prime(ctrl_model, q0)
+
 
     def read(self, q: Array, qd: Array, out: Array) -> None:
         """The plant's motor displacement at its pose ``q`` into ``out (nu,)``."""
