@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 
 from ..control._laws import _ct_acc, _pd, _pid
 from ..multibody import _direct, _one
-from ._loop import _actuate, _sense
+from ._sensors import _actuate, _sense
 from ._plant import (EXPLICIT_LIMIT, FD_STEP, JACOBIAN_REUSE, REFINE, _rk3_finish, _rk_finish, _rk_stage, _stage1,
                      _stage2, _stale, _stiffness)
 
@@ -193,7 +193,7 @@ def run_cycles(i0, i1, first, pre, done, delay, steps, dt, method, law, exact, s
     cycles before the span, ``delay`` the sensor's delay in cycles), each as its Python cycle
     takes it; returns the first cycle it did not take (``i1`` where it took them all).
 
-    ``sense``: :func:`._loop._sense`'s arrays and scalars after ``s_exact``, in its order;
+    ``sense``: :func:`._sensors._sense`'s arrays and scalars after ``s_exact``, in its order;
     ``plant``: ``(pk, has_load, loads, modes)`` (``modes``: the
     single-sample kernel's forward, inverse and positions modes); ``encoders``: ``(pk, view, prev, out, ratio, a0,
     s_exact)``; ``direct``: ``(pk, d, out, ok, a0, ratio, a, ad)``; ``ctrl``: ``(pk, has_load,
@@ -437,10 +437,10 @@ def _refresh_cache() -> None:
     from .. import _dense
     from ..control import _laws
     from ..multibody import _cache, _dyn_kernels, _kernels, dynamics, friction
-    from . import _loop, _plant
+    from . import _plant, _sensors
 
     _cache.refresh((_f, _jacobian, _ros2, _hold, run_cycles),
-                   (_one, _direct, _kernels, _dyn_kernels, _dense, friction, dynamics, _loop, _plant, _laws))
+                   (_one, _direct, _kernels, _dyn_kernels, _dense, friction, dynamics, _sensors, _plant, _laws))
 
 
 _refresh_cache()

@@ -38,13 +38,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import PkmdynError
 from ..control._settings import LoopSettings
 from ._plant import Plant, hold_interval, make_work
+from ._sensors import _actuate, _sense
 
 __all__ = ["LoopSettings", "LoopResult", "LoopState", "DivergenceError", "ExactEncoders", "closed_loop", "run_span",
            "new_loop_state", "check_timing"]
@@ -111,69 +111,6 @@ def check_timing(cycle_s: float, step_s: float) -> int:
 
 def _alpha(fc: float, T: float) -> float:
     return 1.0 if fc <= 0 else float(1.0 - np.exp(-2.0 * np.pi * fc * T))
-
-
-@numba.njit(cache=True)
-def _sense(kr: int, k: int, j: int, first: bool, exact: bool, s_exact: Array, q: Array, qd: Array, q_ref: Array,
-           div: Array, s_ref_p: Array, Bt_p: Array, s_ref_c: Array, rate_map: Array, res: Array, T: float, a_v: float,
-           a_a: float, noise: Array, pose_from_sensor: bool,
-           s_prev: Array, sd_prev: Array, yq: Array, yqd: Array, ys: Array, ysd: Array, ysdd: Array,
-           out_q: Array, out_qd: Array, out_att: Array, out_s: Array, out_qs: Array, out_qds: Array,
-           out_se: Array, out_sde: Array, out_sdde: Array) -> int:  # pragma: no cover - compiled
-    """Sensors of a cycle (module docstring, items 1-2); records the true and sensed state.
-    ``kr`` is the cycle's row in the reference arrays, ``k`` in the records (and ``noise``),
-    ``j`` the record row the delayed pose sensor reads; ``first``: the run's first cycle (the
-    filters start there); with ``exact`` the encoders read ``s_exact`` (the plant's true
-    displacement). Returns the index of a coordinate beyond its divergence limit (or
-    not finite), else -1."""
-    nq = q.shape[0]
-    nu = ys.shape[0]
-    for i in range(nq):
-        e = q[i] - q_ref[kr, i]
-        if not (np.isfinite(e) and np.isfinite(qd[i]) and abs(e) <= div[i]):
-            return i
-        out_q[k, i] = q[i]
-        out_qd[k, i] = qd[i]
-    for a in range(nu):
-        if exact:
-            s = s_exact[a]
-        else:
-            s = s_ref_p[kr, a]
-            for i in range(nq):
-                s += Bt_p[kr, a, i] * (q[i] - q_ref[kr, i])
-        out_s[k, a] = s
-        se = res[a] * np.floor(s / res[a]) if res[a] > 0 else s
-        if not first:
-            ysd[a] += a_v * ((se - s_prev[a]) / T - ysd[a])
-            ysdd[a] += a_a * ((ysd[a] - sd_prev[a]) / T - ysdd[a])
-        s_prev[a] = se
-        sd_prev[a] = ysd[a]
-        ys[a] = se
-        out_se[k, a] = se
-        out_sde[k, a] = ysd[a]
-        out_sdde[k, a] = ysdd[a]
-    for i in range(nq):
-        out_att[k, i] = out_q[j, i] + noise[k, i]
-        r = 0.0
-        p = q_ref[kr, i]
-        for a in range(nu):
-            r += rate_map[kr, i, a] * ysd[a]
-            p += rate_map[kr, i, a] * (ys[a] - s_ref_c[kr, a])
-        yqd[i] = r
-        yq[i] = out_att[k, i] if pose_from_sensor else p
-        out_qs[k, i] = yq[i]
-        out_qds[k, i] = r
-    return -1
-
-
-@numba.njit(cache=True)
-def _actuate(k: int, u_raw: Array, lim: Array, u: Array, out_u: Array, sat: Array) -> None:  # pragma: no cover
-    """Clip the efforts to their limits and record them."""
-    for a in range(u.shape[0]):
-        v = min(max(u_raw[a], -lim[a]), lim[a])
-        u[a] = v
-        out_u[k, a] = v
-        sat[k, a] = abs(u_raw[a]) >= lim[a]
 
 
 @dataclass
