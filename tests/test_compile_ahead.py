@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -96,6 +97,7 @@ def test_a_silent_child_is_waited_for_at_most_wait_s(monkeypatch):
                               bufsize=0)
     try:
         monkeypatch.setattr(ahead, "_child", silent)
+        monkeypatch.setattr(ahead, "_queued", ["one"])
         monkeypatch.setattr(ahead, "WAIT_S", 0.3)
         ahead.wait("one")
         assert silent.poll() is None
@@ -115,6 +117,9 @@ def test_no_second_child_while_one_runs_and_the_loop_stage_for_long_runs(monkeyp
     try:
         assert child is not None and child.args[-1] == "one"
         assert ahead.start(("loop",)) is None  # the running child's
+        t0 = time.monotonic()
+        ahead.wait("task")  # not given to the child, which listens for more stages: no wait
+        assert time.monotonic() - t0 < 5.0 and ahead.ready("task") and child.poll() is None
     finally:
         ahead._stop(child)
     second = ahead.start(("task",))  # the first has ended

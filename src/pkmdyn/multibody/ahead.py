@@ -187,12 +187,13 @@ def coming(stage: str) -> bool:
 
 
 def wait(stage: str, timeout_s: float = -1.0) -> None:
-    """Return once the child has compiled ``stage``: at once without a child, once it has ended
-    (the caller then compiles what is missing itself), or after :data:`WAIT_S` (or
+    """Return once the child has compiled ``stage``: at once without a child or where it was not
+    given ``stage`` (it listens for more until the command ends: it would not say it), once it
+    has ended (the caller then compiles what is missing itself), or after :data:`WAIT_S` (or
     ``timeout_s`` where that is 0 or more: 0 reads what the child has said so far)."""
     global _unread
     child = _child
-    if child is None or stage in _done or child.stdout is None or child.stdout.closed:
+    if child is None or stage in _done or stage not in _queued or child.stdout is None or child.stdout.closed:
         return
     deadline = time.monotonic() + (WAIT_S if timeout_s < 0 else timeout_s)
     with selectors.DefaultSelector() as sel:
@@ -213,7 +214,7 @@ def ready(stage: str) -> bool:
     without waiting)."""
     wait(stage, 0.0)
     child = _child
-    return child is None or stage in _done or child.stdout is None or child.stdout.closed
+    return child is None or stage in _done or stage not in _queued or child.stdout is None or child.stdout.closed
 
 
 def worth_compiling_loop(cycles: int, cycle_cost_s: float = 1e-4) -> bool:

@@ -138,12 +138,12 @@ class LoopState:
 
 def compile_cycle_kernels() -> None:
     """Compile (or load) the cycle's own small kernels - the sensors', the limits', the laws' and
-    the integrator's - by calling each once on small arrays of the types the loop passes, so
+    the default integrator's - by calling each once on small arrays of the types the loop passes, so
     that a fresh install compiles them while the compile-ahead child still compiles the direct
     kinematics' kernel, which the loop then waits for (:meth:`ExactEncoders.__init__`), rather
     than after it."""
     from ..control._laws import _ct_acc, _pd, _pid
-    from ._plant import _rk3_finish, _rk_finish, _rk_stage, _stage1, _stage2, _stale, _stiffness
+    from ._plant import _rk3_finish, _rk_stage, _stage1, _stage2, _stale, _stiffness
 
     v, m2, m3 = np.zeros(2), np.zeros((1, 2)), np.zeros((1, 2, 2))
     one = np.ones(2)
@@ -156,7 +156,6 @@ def compile_cycle_kernels() -> None:
     buf, A, W = np.zeros((8, 2)), np.zeros((2, 2)), np.zeros((2, 2, 2))
     _rk_stage(v, v, v, v, 1.0, buf[2], buf[3])
     _rk3_finish(v.copy(), v.copy(), v, v, v, 1.0, buf[6:8])
-    _rk_finish(v.copy(), v.copy(), v, v, v, v, 1.0, buf[6:8])
     _stage1(v, v, v, A, 1.0, W, buf)
     _stage2(v.copy(), v.copy(), v, 1.0, W, buf)
     _stiffness(A)
@@ -167,8 +166,9 @@ class ExactEncoders:
     """The encoders of a plant read through its kinematics (module docstring, items 1-2): the
     plant's actuated joint coordinates at its pose (``verbs.actuator_coordinates_one``) as the
     motors' displacement from the run's first pose, and the controller's pose from the reading
-    by its model's direct kinematics (``verbs.direct_one``). ``ratio (nu,)`` the drives' ratios
-    (1 for a joint without one)."""
+    by its model's direct kinematics (``verbs.direct_one``), primed at the run's first pose where
+    the verbs can (``verbs.prime_direct``: the controller knows where its run starts). ``ratio
+    (nu,)`` the drives' ratios (1 for a joint without one)."""
 
     def __init__(self, plant: Plant, ctrl_model: Any, q0: Array) -> None:
         from ..errors import ParameterError
@@ -186,7 +186,6 @@ class ExactEncoders:
         if prime is not None:  # the controller knows the pose its run starts from
             compile_cycle_kernels()  # (on a fresh install, while a compile-ahead child may still compile the next)
             prime(ctrl_model, q0)
-
 
     def read(self, q: Array, qd: Array, out: Array) -> None:
         """The plant's motor displacement at its pose ``q`` into ``out (nu,)``."""
