@@ -144,3 +144,16 @@ def test_a_stage_coming_next_is_waited_for(monkeypatch):
         assert ahead.coming("direct")
     finally:
         ahead._stop(ahead._child)
+
+
+@pytest.mark.parametrize("machine, route", [("stewart", "task"), ("delta", "direct")])
+def test_control_hands_the_child_the_direct_kinematics_its_mechanism_takes(machine, route, monkeypatch, tmp_path):
+    """``pkmdyn control`` of a described mechanism requests the direct kinematics of the route
+    its mechanism takes (the task-space one for the Gough-Stewart platform, the tree-space one
+    for the Delta), and the loop's cycles only for a long run (not the default one second)."""
+    from pkmdyn.cli import main
+
+    asked = []
+    monkeypatch.setattr(ahead, "request", lambda stages: asked.append(tuple(stages)))
+    assert main(["control", "--machine", machine, "--out", str(tmp_path / "out")]) == 0
+    assert asked == [(route,)]
