@@ -22,7 +22,14 @@ sample at a time as a controller calls it (``direct_one``, warm-started), with t
 through the inverse kinematics (of each batched route); and the
 Stewart platform's closed loop with exact encoders (``pkmdyn.simulate.track``, computed torque,
 the pose from the encoders by the direct kinematics) beside MuJoCo simulating the exported
-platform (``mj_step`` at 1 ms, actuator PD plus pkmdyn's feedforward) for the same seconds.
+platform (``mj_step`` at 1 ms, actuator PD plus pkmdyn's feedforward) for the same seconds,
+best of three each: ``stewart_exact_encoder_loop_over_mujoco`` times the whole pkmdyn run (its
+reference's batched preparation included) against MuJoCo's loop alone;
+``..._loop_alone_over_mujoco_loop`` the loops alone; ``..._loop_over_mujoco_with_preparation``
+each with its reference's preparation (MuJoCo's kinematics and feedforward along its 1 ms
+steps, by pkmdyn's batched verbs). The pkmdyn loop runs its cycles in one compiled call
+(``pkmdyn.simulate._cycles``, compiled first: ``stewart_loop_kernel_compile_or_load_s``);
+``..._python_cycles_...`` fields time the same run with its cycles in Python.
 """
 
 from __future__ import annotations
