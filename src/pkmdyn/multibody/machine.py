@@ -376,9 +376,7 @@ class MechanismVerbs:
         configuration by the checked route (whose batched kernels a fresh install would compile
         for some seconds). The branch is that of ``q``; the sign of its determinant is taken
         from that next call. Nothing where no such solution is kept."""
-        from . import _direct as D
-        from . import _one
-        from .direct import pack_one, pack_task, prime_one, prime_task, task_state
+        from .direct import prime_one, prime_task, task_state
 
         st = self._state(model)
         x = np.asarray(q, dtype=float).reshape(-1)
@@ -387,12 +385,7 @@ class MechanismVerbs:
         qt = st.encoder_q.copy()
         a = qt[model.act_coord].copy()
         if st.direct is None:
-            st.direct = (pack_one(model), np.zeros(2 * model.nt), D.direct_one, D.OK)
-            d = pack_task(model)
-            st.direct_task = False
-            if d is not None:
-                pk1 = st.pk if st.pk is not None else _one.pack(model)
-                st.direct_task = (pk1, d, np.zeros(2 * model.nt), D.direct_task_one, D.OK, D.CROSSED)
+            self._pack_direct(model, st)
         prime_one(st.direct[0], qt, x, a, 0.0)
         if st.direct_task:
             prime_task(st.direct_task[1], qt, x, a)
@@ -457,6 +450,21 @@ class MechanismVerbs:
         return self._direct_checked(model, st, a, ad, status)
 
     @staticmethod
+    def _pack_direct(model: MechanismModel, st: _State) -> None:
+        """Pack both single-sample routes of :meth:`direct_one` into ``st`` (the task-space one
+        where the mechanism takes it, else ``False``), neither primed."""
+        from . import _direct as D
+        from . import _one
+        from .direct import pack_one, pack_task
+
+        st.direct = (pack_one(model), np.zeros(2 * model.nt), D.direct_one, D.OK)
+        d = pack_task(model)
+        st.direct_task = False
+        if d is not None:  # (the task route only reads the model's arrays from a single-sample buffer)
+            pk1 = st.pk if st.pk is not None else _one.pack(model)
+            st.direct_task = (pk1, d, np.zeros(2 * model.nt), D.direct_task_one, D.OK, D.CROSSED)
+
+    @staticmethod
     def _direct_ahead(st: _State) -> None:
         """Wait for the single-sample kernel that the next :meth:`direct_one` call takes where a
         compile-ahead child compiles it (:mod:`.ahead`); the tree-space one is compiled here
@@ -514,8 +522,7 @@ class MechanismVerbs:
         configuration), which packs both single-sample routes and primes them."""
         from ..errors import SingularityError
         from . import _direct as D
-        from . import _one
-        from .direct import direct_kinematics, one_state, pack_one, pack_task, prime_one, prime_task
+        from .direct import direct_kinematics, one_state, prime_one, prime_task
 
         if st.direct is not None:
             if status == D.CROSSED:
@@ -527,12 +534,7 @@ class MechanismVerbs:
                 raise SingularityError(_CROSSING)
         else:
             dk = direct_kinematics(model, a[None], ad[None])
-            st.direct = (pack_one(model), np.zeros(2 * model.nt), D.direct_one, D.OK)
-            d = pack_task(model)
-            st.direct_task = False
-            if d is not None:  # (the task route only reads the model's arrays from a single-sample buffer)
-                pk1 = st.pk if st.pk is not None else _one.pack(model)
-                st.direct_task = (pk1, d, np.zeros(2 * model.nt), D.direct_task_one, D.OK, D.CROSSED)
+            self._pack_direct(model, st)
         prime_one(st.direct[0], dk.q[0], dk.x[0], a, float(dk.det[0]))
         if st.direct_task:
             prime_task(st.direct_task[1], dk.q[0], dk.x[0], a)
