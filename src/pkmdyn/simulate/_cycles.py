@@ -38,8 +38,8 @@ from numpy.typing import NDArray
 from ..control._laws import _ct_acc, _pd, _pid
 from ..multibody import _direct, _one
 from ._sensors import _actuate, _sense
-from ._plant import (EXPLICIT_LIMIT, FD_STEP, JACOBIAN_REUSE, REFINE, _rk3_finish, _rk_finish, _rk_stage, _stage1,
-                     _stage2, _stale, _stiffness)
+from ._plant import (EXPLICIT_LIMIT, FD_STEP, JACOBIAN_REUSE, REFINE, _piecewise, _rk3_finish, _rk_finish, _rk_stage,
+                     _stage1, _stage2, _stale, _stiffness)
 
 __all__ = ["LAWS", "CompiledCycles", "compiled_cycles", "run_cycles", "example_arguments", "example_signature", "available"]
 
@@ -106,11 +106,10 @@ def _ros2(pk, has_load, q, qd, u, ld0, ld1, dt, force, have_f0, f0, A, W, vp, bu
 
 
 @numba.njit(cache=True)
-def _piecewise(l0, lm, l1, x):  # pragma: no cover - compiled
-    """:func:`._plant._piecewise`."""
-    if x <= 0.5:
-        return l0 + (lm - l0) * (2.0 * x)
-    return lm + (l1 - lm) * (2.0 * x - 1.0)
+def _save(src, dst):  # pragma: no cover - compiled
+    """``dst[:] = src`` (1-D) element by element."""
+    for i in range(src.shape[0]):
+        dst[i] = src[i]
 
 
 @numba.njit(cache=True)
@@ -154,9 +153,8 @@ def _hold(pk, has_load, q, qd, u, loads, lo, n, dt, method, A, W, vp, buf, qd_A,
             if dt * rho >= EXPLICIT_LIMIT:  # entered the friction band: retake by ROS2
                 ws[_STIFF] = 1.0
                 rev = False
-                for i in range(q.shape[0]):
-                    q[i] = buf[6, i]
-                    qd[i] = buf[7, i]
+                _save(buf[6], q)
+                _save(buf[7], qd)
             elif not rev:
                 ws[_EXPLICIT] += 1.0
         if method == 2 or ws[_STIFF] != 0.0:
@@ -166,9 +164,8 @@ def _hold(pk, has_load, q, qd, u, loads, lo, n, dt, method, A, W, vp, buf, qd_A,
             ws[_STIFF] = 1.0 if dt * _stiffness(A) >= EXPLICIT_LIMIT else 0.0
         if rev:
             ws[_REFINED] += 1.0
-            for i in range(q.shape[0]):
-                q[i] = buf[6, i]
-                qd[i] = buf[7, i]
+            _save(buf[6], q)
+            _save(buf[7], qd)
             h = dt / REFINE
             fresh = ws[_STIFF] != 0.0 or method == 2
             for r in range(REFINE):
@@ -179,12 +176,6 @@ def _hold(pk, has_load, q, qd, u, loads, lo, n, dt, method, A, W, vp, buf, qd_A,
                     return st
             ws[_STIFF] = 1.0 if dt * _stiffness(A) >= EXPLICIT_LIMIT else 0.0
     return _OK
-
-
-@numba.njit(cache=True)
-def _save(src, dst):  # pragma: no cover - compiled
-    for i in range(src.shape[0]):
-        dst[i] = src[i]
 
 
 @numba.njit(cache=True)

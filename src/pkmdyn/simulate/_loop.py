@@ -143,7 +143,7 @@ def compile_cycle_kernels() -> None:
     kinematics' kernel, which the loop then waits for (:meth:`ExactEncoders.__init__`), rather
     than after it."""
     from ..control._laws import _ct_acc, _pd, _pid
-    from ._plant import _rk3_finish, _rk_stage, _stage1, _stage2, _stale, _stiffness
+    from ._plant import _piecewise, _rk3_finish, _rk_stage, _stage1, _stage2, _stale, _stiffness
 
     v, m2, m3 = np.zeros(2), np.zeros((1, 2)), np.zeros((1, 2, 2))
     one = np.ones(2)
@@ -160,6 +160,7 @@ def compile_cycle_kernels() -> None:
     _stage2(v.copy(), v.copy(), v, 1.0, W, buf)
     _stiffness(A)
     _stale(v, v, 0.05)
+    _piecewise(0.0, 0.5, 1.0, 0.25)
 
 
 class ExactEncoders:

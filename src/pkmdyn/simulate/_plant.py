@@ -449,7 +449,8 @@ def hold_interval(plant: Plant, q: Array, qd: Array, u: Array, loads: Array, dt:
             w.stiff = dt * _stiffness(w.A) >= EXPLICIT_LIMIT
 
 
-def _piecewise(l0: float, lm: float, l1: float, x: float) -> float:
+@numba.njit(cache=True)
+def _piecewise(l0: float, lm: float, l1: float, x: float) -> float:  # pragma: no cover - compiled
     """The load at the fraction ``x`` of a step, linear through its start, middle and end."""
     if x <= 0.5:
         return l0 + (lm - l0) * (2.0 * x)
