@@ -241,3 +241,35 @@ def test_joint_reference_integrates_the_actuator_rates():
     np.testing.assert_allclose(j.s, (ref.q - ref.q[0]) @ Bt.T, atol=1e-9)
     np.testing.assert_allclose(j.sd, ref.qd @ Bt.T, atol=1e-12)
     np.testing.assert_allclose(j.sdd, ref.qdd @ Bt.T, rtol=1e-5, atol=1e-5)
+
+
+def test_hermite_motion_reproduces_a_quintic_and_its_samples():
+    """The quintic Hermite interpolant through samples of one quintic polynomial per coordinate
+    is that polynomial (value, rate and acceleration between the samples, to rounding); times
+    beyond the samples are refused."""
+    from pkmdyn.control import hermite_motion
+    from pkmdyn.errors import MotionError
+
+    rng = np.random.default_rng(7)
+    coef = rng.normal(size=(6, 3))  # six powers, three coordinates
+    t = np.sort(np.concatenate([[0.0, 1.5], rng.uniform(0.0, 1.5, 9)]))
+
+    def poly(tt, d):
+        out = np.zeros((tt.size, 3))
+        for k in range(d, 6):
+            f = np.prod(np.arange(k - d + 1, k + 1)) if d else 1.0
+            out += f * np.outer(tt ** (k - d), coef[k])
+        return out
+
+    fn = hermite_motion(t, poly(t, 0), poly(t, 1), poly(t, 2), np.linspace(0.0, 3.0, t.size))
+    tt = rng.uniform(0.0, 1.5, 200)
+    q, qd, qdd, load = fn(tt)
+    for d, got in enumerate((q, qd, qdd)):
+        want = poly(tt, d)
+        assert np.max(np.abs(got - want)) <= 1e-10 * np.max(np.abs(want))
+    assert np.allclose(load, np.interp(tt, t, np.linspace(0.0, 3.0, t.size)), rtol=0, atol=1e-14)
+    q, qd, qdd, _ = fn(t - t[0])
+    for d, got in enumerate((q, qd, qdd)):
+        assert np.max(np.abs(got - poly(t, d))) <= 1e-11 * np.max(np.abs(poly(t, d)))
+    with pytest.raises(MotionError, match="beyond"):
+        fn(np.array([1.6]))
