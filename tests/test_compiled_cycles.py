@@ -246,3 +246,47 @@ def test_a_named_load_reaches_the_compiled_plant_and_law(monkeypatch):
     assert taken == slow.result.q.shape[0]
     none, _, _ = _both(m, m, "computed-torque", 0.3, _settings(m), monkeypatch)
     assert np.abs(none.result.u - fast.result.u).max() > 1.0
+
+
+@pytest.mark.parametrize("law", ["computed-torque", "feedforward"])
+@pytest.mark.parametrize("flag", [True, False])
+def test_exact_encoders_read_the_joint_references_at_the_first_instant_alone(law, flag):
+    """With exact encoders, computed torque and feedforward read the controller's joint
+    reference at the run's first instant alone (the filters' start) and neither the plant's nor
+    the rate map: a loop given those with every other entry NaN keeps the records of one given
+    the real ones (compiled and Python cycles); :func:`track`'s result computes the joint
+    reference when read, with the numbers of the direct call."""
+    from pkmdyn.control import joint_reference, make_controller, sample_reference
+    from pkmdyn.simulate import closed_loop
+    from pkmdyn.simulate import make_plant
+    from pkmdyn.simulate._run import loop_reads_joint
+
+    m = _stewart()
+    ls = replace(_settings(m), compiled_cycles=flag)
+    assert not loop_reads_joint(law, ls) and loop_reads_joint(law, replace(ls, exact_encoders=False))
+    assert loop_reads_joint("pid", ls) and loop_reads_joint("pd", ls)
+    V = machine_verbs(m)
+    fn = _motion(m)
+    ref = sample_reference(fn, 0.2, ls.cycle_s)
+    joint = joint_reference(V, m, ref, fn, False)  # as track computes it by default
+    g = gains(described_control_settings(m), law, m.nt)
+    runs = []
+    for blind in (False, True):
+        cj, pj, rm = joint, joint, np.linalg.inv(joint.Bt)
+        if blind:
+            nan = np.full_like(joint.s, np.nan)
+            cj = type(joint)(joint.Bt * np.nan, np.vstack([joint.s[:1], nan[1:]]),
+                             np.vstack([joint.sd[:1], nan[1:]]), np.vstack([joint.sdd[:1], nan[1:]]))
+            pj = type(joint)(joint.Bt * np.nan, nan, nan, nan)
+            rm = rm * np.nan
+        ctrl = make_controller(law, g, V, m, ref, cj)
+        runs.append(closed_loop(make_plant(V, m, False), ctrl, ref, pj, cj, rm, ls, ctrl_model=m))
+    for f in FIELDS:
+        x, y = np.asarray(getattr(runs[1], f), dtype=float), np.asarray(getattr(runs[0], f), dtype=float)
+        assert np.all(np.isfinite(x)), f
+        assert np.abs(x - y).max() <= 1e-12 * max(1.0, float(np.abs(y).max())), f
+    tr = track(V, m, m, fn, 0.2, law, g, ls, False)
+    assert callable(tr.joint_source)
+    for f in ("Bt", "s", "sd", "sdd"):
+        a, b = getattr(tr.joint, f), getattr(joint, f)
+        assert a.shape == b.shape and np.abs(a - b).max() <= 1e-12 * max(1.0, float(np.abs(b).max())), f

@@ -43,7 +43,7 @@ from numpy.typing import NDArray
 
 from ..errors import PkmdynError
 from ..control._settings import LoopSettings
-from ._plant import Plant, hold_interval, make_work
+from ._plant import Plant, accelerations, hold_interval, make_work
 from ._sensors import _actuate, _sense
 
 __all__ = ["LoopSettings", "LoopResult", "LoopState", "DivergenceError", "ExactEncoders", "closed_loop", "run_span",
@@ -209,6 +209,14 @@ def new_loop_state(plant: Plant, controller: Any, ref: Any, ctrl_joint: Any, set
     y = Sensed(np.empty(nq), np.empty(nq), np.empty(nu), ctrl_joint.sd[0].astype(float).copy(),
                ctrl_joint.sdd[0].astype(float).copy())
     q0 = ref.q[0].astype(float).copy()
+    if plant.kernel is not None:
+        # the plant's single-sample kernel started at the run's first state, so that the first
+        # cycle finds it solved (a cold kernel sends its first call to the checked route); a
+        # state it cannot solve is left to the first cycle to report
+        try:
+            accelerations(plant, q0, ref.qd[0].astype(float), np.zeros(nu), 0.0)
+        except PkmdynError:
+            pass
     exact = ExactEncoders(plant, plant.model if ctrl_model is None else ctrl_model, q0) \
         if settings.exact_encoders else None
     return LoopState(q0, ref.qd[0].astype(float).copy(), y, new_memory(controller, nu),
@@ -224,7 +232,10 @@ def closed_loop(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_
     ``controller`` from :func:`pkmdyn.control.make_controller`; ``ref`` its
     :class:`~pkmdyn.control.Reference`; ``plant_joint``, ``ctrl_joint`` the plant's and the
     controller's :class:`~pkmdyn.control.JointReference` (encoder model; pose from the
-    encoders); ``rate_map (K + 1, nq, nu)`` the controller's ``(B^T)^-1`` along the reference;
+    encoders); ``rate_map (K + 1, nq, nu)`` the controller's ``(B^T)^-1`` along the reference
+    (with exact encoders the loop reads the controller's joint reference at its first instant
+    alone, the filters' start, and neither the plant's nor ``rate_map``: they may hold that
+    instant alone, :func:`pkmdyn.simulate.track`);
     ``loads (2 K steps + 1,)`` the load [N] at every integration step boundary and middle,
     ``j dt / 2`` (None: the reference load, linear within a cycle; zeros for a machine without
     load; :func:`pkmdyn.simulate.track` passes the motion's own load); ``ctrl_model`` the

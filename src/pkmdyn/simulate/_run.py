@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property, partial
 from typing import Any
 
 import numpy as np
@@ -24,14 +25,49 @@ Array = NDArray[np.float64]
 
 @dataclass(frozen=True)
 class Tracking:
-    """A run: the reference on the control grid, the joint reference of the controller's model,
-    the loop's records and the controller (see :class:`~pkmdyn.simulate.LoopResult`)."""
+    """A run: the reference on the control grid, the joint reference of the controller's model
+    (:attr:`joint`), the loop's records and the controller (see
+    :class:`~pkmdyn.simulate.LoopResult`). ``joint_source`` is the joint reference, or a function
+    that computes it on first use (a run whose loop did not read it, :func:`track`)."""
 
     reference: Any
-    joint: Any
+    joint_source: Any
     result: LoopResult
     controller: Any
     fast_path: bool
+
+    @cached_property
+    def joint(self) -> Any:
+        """The controller's :class:`~pkmdyn.control.JointReference` along :attr:`reference`."""
+        src = self.joint_source
+        return src() if callable(src) else src
+
+
+def loop_reads_joint(kind: str, settings: LoopSettings) -> bool:
+    """Whether a loop with controller ``kind`` reads the joint references along the run: the
+    encoders' first-order model and its pose estimate do, and so do the joint-space PID and the
+    task-space PD laws (the actuator map); with exact encoders, computed torque and feedforward
+    read only the first instant's actuator rates and accelerations (the filters' start)."""
+    return not settings.exact_encoders or kind not in ("computed-torque", "feedforward")
+
+
+def _part(r: Any, o: int, n: int) -> Any:
+    """Cycles ``o .. o + n`` of the reference ``r`` (its instants ``o .. o + n``)."""
+    from ..control._reference import Reference
+
+    mid = slice(o, o + n)
+    full = slice(o, o + n + 1)
+    return Reference(r.T, r.t[full], r.q[full], r.qd[full], r.qdd[full], None if r.load is None else r.load[full],
+                     r.mid_q[mid], r.mid_qd[mid], r.mid_qdd[mid], None if r.mid_load is None else r.mid_load[mid])
+
+
+def _first_instant(joint: Any, nq: int) -> tuple[Any, Array]:
+    """A joint reference and a rate map of the first instant alone, for a loop that reads no more
+    of them (:func:`loop_reads_joint`)."""
+    from ..control._reference import JointReference
+
+    one = JointReference(joint.Bt[:1], joint.s[:1], joint.sd[:1], joint.sdd[:1])
+    return one, np.zeros((1, nq, joint.Bt.shape[1]))
 
 
 def track(verbs: Any, model: Any, plant_model: Any, motion: Any, duration: float, kind: str,
@@ -42,7 +78,11 @@ def track(verbs: Any, model: Any, plant_model: Any, motion: Any, duration: float
     ``model`` is the controller's model, ``plant_model`` the simulated machine's (they may
     differ); ``verbs`` the machine's ``minimal`` module. Everything the controller needs from
     its model along the reference is computed first, in batched calls; the loop then calls the
-    plant's single-sample forward dynamics (fast path) where the machine offers it.
+    plant's single-sample forward dynamics (fast path) where the machine offers it. Where the
+    loop reads no more than the first instant of the joint references
+    (:func:`loop_reads_joint`: exact encoders, computed torque or feedforward), the result's
+    joint reference is computed when first read (:attr:`Tracking.joint`), with the same
+    numbers.
     """
     from ..control._laws import make_controller
     from ..control._reference import joint_reference, sample_reference
@@ -50,11 +90,20 @@ def track(verbs: Any, model: Any, plant_model: Any, motion: Any, duration: float
 
     check_timing(settings.cycle_s, settings.step_s)
     ref = sample_reference(motion, duration, settings.cycle_s)
-    joint = joint_reference(verbs, model, ref, motion, joint_accelerations)
-    plant_joint = joint if plant_model is model else joint_reference(verbs, plant_model, ref, motion, False)
-    ctrl = make_controller(kind, gains, verbs, model, ref, joint)
-    rate_map = np.linalg.inv(joint.Bt)
     plant = make_plant(verbs, plant_model, has_load)
+    if loop_reads_joint(kind, settings):
+        joint = joint_reference(verbs, model, ref, motion, joint_accelerations)
+        plant_joint = joint if plant_model is model else joint_reference(verbs, plant_model, ref, motion, False)
+        rate_map = np.linalg.inv(joint.Bt)
+        joint_source: Any = joint
+    else:
+        # the loop reads the first instant alone: the whole joint reference when the result's
+        # reader asks for it (Tracking.joint), not before the run
+        joint, rate_map = _first_instant(joint_reference(verbs, model, _part(ref, 0, 1), motion, joint_accelerations),
+                                         plant.nq)
+        plant_joint = joint
+        joint_source = partial(joint_reference, verbs, model, ref, motion, joint_accelerations)
+    ctrl = make_controller(kind, gains, verbs, model, ref, joint)
     loads = None
     if ref.load is not None:
         # the plant feels the motion's own load at every step boundary and middle (with one
@@ -69,7 +118,7 @@ def track(verbs: Any, model: Any, plant_model: Any, motion: Any, duration: float
             loads = np.asarray(motion(tt)[3], dtype=float)
     res = closed_loop(plant, ctrl, ref, plant_joint, joint, rate_map, settings, loads=loads, progress=progress,
                       ctrl_model=model)
-    return Tracking(ref, joint, res, ctrl, plant.fast)
+    return Tracking(ref, joint_source, res, ctrl, plant.fast)
 
 
 def track_spans(verbs: Any, model: Any, plant_model: Any, motion: Any, duration: float, kind: str,
@@ -86,7 +135,7 @@ def track_spans(verbs: Any, model: Any, plant_model: Any, motion: Any, duration:
     over. The spans' records joined equal :func:`track`'s up to rounding.
     """
     from ..control._laws import make_controller
-    from ..control._reference import JointReference, Reference, joint_reference, reference_window
+    from ..control._reference import JointReference, joint_reference, reference_window
     from ..errors import MotionError
     from ._loop import check_timing
 
@@ -99,15 +148,10 @@ def track_spans(verbs: Any, model: Any, plant_model: Any, motion: Any, duration:
     if span_cycles < 1:
         raise ValueError(f"span_cycles: {span_cycles} must be >= 1")
     plant = make_plant(verbs, plant_model, has_load)
+    reads = loop_reads_joint(kind, settings)
 
     def anchored(joint: JointReference, o: int, s0: Array | None) -> JointReference:
         return joint if s0 is None else replace(joint, s=joint.s - joint.s[o] + s0)
-
-    def part(r: Reference, o: int, n: int) -> Reference:
-        mid = slice(o, o + n)
-        full = slice(o, o + n + 1)
-        return Reference(r.T, r.t[full], r.q[full], r.qd[full], r.qdd[full], None if r.load is None else r.load[full],
-                         r.mid_q[mid], r.mid_qd[mid], r.mid_qdd[mid], None if r.mid_load is None else r.mid_load[mid])
 
     state = None
     s_ctrl = s_plant = None
@@ -123,10 +167,13 @@ def track_spans(verbs: Any, model: Any, plant_model: Any, motion: Any, duration:
             o, n = k0 - w0, k1 - k0
             ref = reference_window(motion, T, w0, w1)
             joint = anchored(joint_reference(verbs, model, ref, motion, joint_accelerations), o, s_ctrl)
-            plant_joint = joint if plant_model is model else anchored(
-                joint_reference(verbs, plant_model, ref, motion, False), o, s_plant)
+            if reads:
+                plant_joint = joint if plant_model is model else anchored(
+                    joint_reference(verbs, plant_model, ref, motion, False), o, s_plant)
+                rate_map = np.linalg.inv(joint.Bt)
+            else:  # the span's records carry the controller's joint reference; the loop reads neither
+                plant_joint, rate_map = _first_instant(joint, plant.nq)
             ctrl = make_controller(kind, gains, verbs, model, ref, joint)
-            rate_map = np.linalg.inv(joint.Bt)
             loads = None
             if ref.load is not None:
                 if steps == 1 and ref.mid_load is not None:
@@ -140,9 +187,10 @@ def track_spans(verbs: Any, model: Any, plant_model: Any, motion: Any, duration:
                 state = new_loop_state(plant, ctrl, ref, joint, settings, model)
             res = run_span(plant, ctrl, ref, plant_joint, joint, rate_map, settings, state, o, n, loads=loads, bar=bar,
                            last=k1 == K)
-            s_ctrl, s_plant = joint.s[o + n].copy(), plant_joint.s[o + n].copy()
+            s_ctrl = joint.s[o + n].copy()
+            s_plant = plant_joint.s[o + n].copy() if reads else None
             jp = slice(o, o + n + 1)
-            yield Tracking(part(ref, o, n), JointReference(joint.Bt[jp], joint.s[jp], joint.sd[jp], joint.sdd[jp]), res,
+            yield Tracking(_part(ref, o, n), JointReference(joint.Bt[jp], joint.s[jp], joint.sd[jp], joint.sdd[jp]), res,
                            ctrl, plant.fast)
     finally:
         if bar is not None:

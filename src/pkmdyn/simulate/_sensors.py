@@ -22,7 +22,9 @@ def _sense(kr: int, k: int, j: int, first: bool, exact: bool, s_exact: Array, q:
     ``kr`` is the cycle's row in the reference arrays, ``k`` in the records (and ``noise``),
     ``j`` the record row the delayed pose sensor reads; ``first``: the run's first cycle (the
     filters start there); with ``exact`` the encoders read ``s_exact`` (the plant's true
-    displacement). Returns the index of a coordinate beyond its divergence limit (or
+    displacement) and the first-order estimate is left out: the caller takes the pose (unless
+    from the pose sensor) and the rate from the direct kinematics of the reading, and
+    ``s_ref_p``, ``Bt_p``, ``s_ref_c`` and ``rate_map`` are not read (they may be empty). Returns the index of a coordinate beyond its divergence limit (or
     not finite), else -1."""
     nq = q.shape[0]
     nu = ys.shape[0]
@@ -52,6 +54,11 @@ def _sense(kr: int, k: int, j: int, first: bool, exact: bool, s_exact: Array, q:
         out_sdde[k, a] = ysdd[a]
     for i in range(nq):
         out_att[k, i] = out_q[j, i] + noise[k, i]
+        if exact:  # the rate (and the pose, unless from the sensor) by the direct kinematics, after
+            if pose_from_sensor:
+                yq[i] = out_att[k, i]
+                out_qs[k, i] = yq[i]
+            continue
         r = 0.0
         p = q_ref[kr, i]
         for a in range(nu):
