@@ -149,14 +149,20 @@ def hermite_motion(t: Array, q: Array, qd: Array, qdd: Array, load: Array | None
 
     The coordinates' Bernstein pieces are stacked into one piecewise polynomial and converted
     once to the power basis (``PPoly.from_bernstein_basis``), whose evaluation (Horner's rule,
-    derivatives included) is an order of magnitude cheaper than the Bernstein form's for the
-    same values to a few units of rounding (the conversion is exact in exact arithmetic)."""
+    derivatives included) is an order of magnitude cheaper than the Bernstein form's. Each
+    piece's value at its start is taken out before the conversion and put back into its
+    constant term, so that a large offset (a coordinate of 1 m moving by millimetres) does not
+    enter the conversion's sums: the rates and accelerations keep the Bernstein form's
+    accuracy."""
     from scipy.interpolate import BPoly, PPoly
 
     t = np.asarray(t, dtype=float)
     nq = q.shape[1]
     polys = [BPoly.from_derivatives(t, np.stack([q[:, c], qd[:, c], qdd[:, c]], axis=-1)) for c in range(nq)]
-    poly = PPoly.from_bernstein_basis(BPoly(np.stack([p.c for p in polys], axis=-1), polys[0].x))
+    c = np.stack([p.c for p in polys], axis=-1)
+    start = c[0].copy()  # each piece's value at its start (the first Bernstein coefficient)
+    poly = PPoly.from_bernstein_basis(BPoly(c - start, polys[0].x))
+    poly.c[-1] += start
     t0, t1 = float(t[0]), float(t[-1])
 
     def motion(tt: Array) -> tuple[Array, Array, Array, Array | None]:

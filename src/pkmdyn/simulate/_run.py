@@ -81,8 +81,11 @@ def track(verbs: Any, model: Any, plant_model: Any, motion: Any, duration: float
     plant's single-sample forward dynamics (fast path) where the machine offers it. Where the
     loop reads no more than the first instant of the joint references
     (:func:`loop_reads_joint`: exact encoders, computed torque or feedforward), the result's
-    joint reference is computed when first read (:attr:`Tracking.joint`), with the same
-    numbers.
+    joint reference is computed when first read (:attr:`Tracking.joint`: the same numbers, to
+    the kinematics' tolerance, or the same error). A reference that leaves the controller
+    model's workspace is then not refused before the run, naming its sample, but stops the run
+    where the loop gets there (a :class:`DivergenceError` naming the time; feedforward's
+    batched inverse dynamics still refuses it before).
     """
     from ..control._laws import make_controller
     from ..control._reference import joint_reference, sample_reference

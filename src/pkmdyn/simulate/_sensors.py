@@ -24,8 +24,8 @@ def _sense(kr: int, k: int, j: int, first: bool, exact: bool, s_exact: Array, q:
     filters start there); with ``exact`` the encoders read ``s_exact`` (the plant's true
     displacement) and the first-order estimate is left out: the caller takes the pose (unless
     from the pose sensor) and the rate from the direct kinematics of the reading, and
-    ``s_ref_p``, ``Bt_p``, ``s_ref_c`` and ``rate_map`` are not read (they may be empty). Returns the index of a coordinate beyond its divergence limit (or
-    not finite), else -1."""
+    ``s_ref_p``, ``Bt_p``, ``s_ref_c`` and ``rate_map`` are not read (they may be empty).
+    Returns the index of a coordinate beyond its divergence limit (or not finite), else -1."""
     nq = q.shape[0]
     nu = ys.shape[0]
     for i in range(nq):
