@@ -273,3 +273,23 @@ def test_hermite_motion_reproduces_a_quintic_and_its_samples():
         assert np.max(np.abs(got - poly(t, d))) <= 1e-11 * np.max(np.abs(poly(t, d)))
     with pytest.raises(MotionError, match="beyond"):
         fn(np.array([1.6]))
+
+
+def test_hermite_motion_keeps_the_rates_of_a_small_motion_about_a_large_offset():
+    """A coordinate of 1 m moving by 1 mm, sampled every millisecond: the interpolant's rates and
+    accelerations between the samples are those of the Bernstein form (scipy's BPoly, one per
+    coordinate) to 1e-12 and 1e-10 of their peaks; converted to the power basis as it is, the
+    offset's rounding would cost them some 1e-9 and 1e-7."""
+    from scipy.interpolate import BPoly
+
+    from pkmdyn.control import hermite_motion
+
+    t = np.arange(201) * 1e-3
+    w = 2 * np.pi * 5.0
+    q, qd, qdd = 1.0 + 1e-3 * np.sin(w * t), 1e-3 * w * np.cos(w * t), -1e-3 * w * w * np.sin(w * t)
+    fn = hermite_motion(t, q[:, None], qd[:, None], qdd[:, None], None)
+    ref = BPoly.from_derivatives(t, np.stack([q, qd, qdd], axis=-1))
+    tt = np.random.default_rng(5).uniform(0.0, t[-1], 300)
+    _, rate, acc, _ = fn(tt)
+    assert np.max(np.abs(rate[:, 0] - ref(tt, 1))) <= 1e-12 * np.max(np.abs(qd))
+    assert np.max(np.abs(acc[:, 0] - ref(tt, 2))) <= 1e-10 * np.max(np.abs(qdd))
