@@ -168,22 +168,24 @@ def test_a_run_compiles_only_the_signature_compiled_ahead(monkeypatch):
     assert ahead.compiled("loop") and _cycles.available()
 
 
-def test_spans_and_a_delayed_noisy_pose_sensor(monkeypatch):
+@pytest.mark.parametrize("law", ["pd", "computed-torque"])
+def test_spans_and_a_delayed_noisy_pose_sensor(law, monkeypatch):
     """The pose fed back from a pose sensor two cycles late with noise (the rate from the
     direct kinematics of the encoders), run whole and in spans of 37 cycles: the compiled
-    cycles' spans join to the Python cycles' whole run."""
+    cycles' spans join to the Python cycles' whole run, the spans' joint references to the
+    whole run's (computed when read where the loop does not read it: computed torque)."""
     from pkmdyn.simulate import track_spans
 
     m = _stewart()
     ls = replace(_settings(m), pose_from_sensor=True, pose_delay_cycles=2, pose_noise=np.full(m.nt, 1e-6))
-    fast, slow, taken = _both(m, m, "pd", 0.3, ls, monkeypatch)
+    fast, slow, taken = _both(m, m, law, 0.3, ls, monkeypatch)
     _same(fast.result, slow.result, "pose sensor")
     assert taken == slow.result.q.shape[0]
     settings = described_control_settings(m)
     mo = default_motion(m)
     fn = hermite_motion(mo.t, mo.x, mo.xd, mo.xdd, None)
     taken = _counted(monkeypatch)
-    parts = list(track_spans(machine_verbs(m), m, m, fn, 0.3, "pd", gains(settings, "pd", m.nt), ls, False,
+    parts = list(track_spans(machine_verbs(m), m, m, fn, 0.3, law, gains(settings, law, m.nt), ls, False,
                              span_cycles=37))
     assert len(parts) > 3
     assert sum(taken) == slow.result.q.shape[0]
@@ -191,6 +193,10 @@ def test_spans_and_a_delayed_noisy_pose_sensor(monkeypatch):
         joined = np.concatenate([getattr(p.result, f) for p in parts])
         ref = getattr(slow.result, f)
         assert np.abs(joined - ref).max() <= 1e-9 * max(1.0, float(np.abs(ref).max())), f
+    for f in ("s", "sd", "Bt"):
+        joined = np.concatenate([getattr(p.joint, f)[:-1] for p in parts])
+        ref = getattr(slow.joint, f)[:-1]
+        assert np.abs(joined - ref).max() <= 1e-12 * max(1.0, float(np.abs(ref).max())), f
 
 
 @pytest.mark.parametrize("where", ["direct kinematics", "law"])
