@@ -383,6 +383,19 @@ def _hip_loops(out: dict, seconds: float = 2.0) -> None:
         return
     out["hip_exact_encoder_loop_over_mujoco"] = (out["hip_exact_encoder_loop_realtime_factor"]
                                                  / out["mujoco_hip_loop_realtime_factor"])
+    # the same loop through the generic engine on the hip's description (the compiled cycles):
+    # what routing the hip's control through the engine would run at
+    from pkmdyn.multibody import ahead
+
+    ahead.compile_stages(["loop"])
+    gen = bc.hip_project_loop(bc.load_params(), seconds, ("computed-torque-exact-encoders",), generic=True)
+    gen = gen["computed-torque-exact-encoders"]
+    if "error" in gen:
+        out["hip_generic_exact_encoder_loop_error"] = gen["error"]
+        return
+    out["hip_generic_exact_encoder_loop_realtime_factor"] = gen["realtime_factor"]
+    out["hip_generic_exact_encoder_loop_over_mujoco"] = gen["realtime_factor"] / out["mujoco_hip_loop_realtime_factor"]
+    out["hip_generic_vs_hand_built_loop_max_error_diff_deg"] = abs(gen["max_error_deg"] - ex["max_error_deg"])
 
 
 def _stiffness(out: dict, m, repeat: int, oracle) -> None:
