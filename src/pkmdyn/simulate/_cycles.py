@@ -113,6 +113,16 @@ def _save(src, dst):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
+def _save_all(src, dst, A_src, A_dst):  # pragma: no cover - compiled
+    """:func:`_save` of each vector of the tuple ``src`` into that of ``dst``, and of each row of
+    the matrix ``A_src`` into ``A_dst``: a cycle's state kept, or put back."""
+    for j in range(len(src)):
+        _save(src[j], dst[j])
+    for r in range(A_src.shape[0]):
+        _save(A_src[r], A_dst[r])
+
+
+@numba.njit(cache=True)
 def _hold(pk, has_load, q, qd, u, loads, lo, n, dt, method, A, W, vp, buf, qd_A, ws, f0, a2, a3, a4,
           fv):  # pragma: no cover - compiled
     """:func:`._plant.hold_interval` over ``n`` steps, the loads from ``loads[lo]``; the status."""
@@ -207,19 +217,12 @@ def run_cycles(i0, i1, first, pre, done, delay, steps, dt, method, law, exact, s
     k_q, k_qd, k_sp, k_sdp, k_sd, k_sdd, k_mem, k_ws, k_qdA, k_A = keep
     nq = q.shape[0]
     nu = u.shape[0]
+    # what a cycle changes and puts back where it returns early
+    state = (q, qd, s_prev, sd_prev, ysd, ysdd, memory, ws, qd_A)
+    kept = (k_q, k_qd, k_sp, k_sdp, k_sd, k_sdd, k_mem, k_ws, k_qdA)
     for i in range(i0, i1):
         kr, k, g = first + i, pre + i, done + i
-        _save(q, k_q)
-        _save(qd, k_qd)
-        _save(s_prev, k_sp)
-        _save(sd_prev, k_sdp)
-        _save(ysd, k_sd)
-        _save(ysdd, k_sdd)
-        _save(memory, k_mem)
-        _save(ws, k_ws)
-        _save(qd_A, k_qdA)
-        for r in range(nq):
-            _save(A[r], k_A[r])
+        _save_all(state, kept, A, k_A)
         ok = True
         if exact:  # the plant's encoders (:meth:`._loop.ExactEncoders.read`)
             _save(e_view, e_prev)
@@ -269,17 +272,7 @@ def run_cycles(i0, i1, first, pre, done, delay, steps, dt, method, law, exact, s
             ok = _hold(pk, has_load, q, qd, u, loads, lo, steps, dt, method, A, W, vp, buf, qd_A, ws,
                        f0, a2, a3, a4, fv) == _OK
         if not ok:
-            _save(k_q, q)
-            _save(k_qd, qd)
-            _save(k_sp, s_prev)
-            _save(k_sdp, sd_prev)
-            _save(k_sd, ysd)
-            _save(k_sdd, ysdd)
-            _save(k_mem, memory)
-            _save(k_ws, ws)
-            _save(k_qdA, qd_A)
-            for r in range(nq):
-                _save(k_A[r], A[r])
+            _save_all(kept, state, k_A, A)
             return i
     return i1
 
