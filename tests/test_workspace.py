@@ -189,6 +189,14 @@ def test_workspace_command(tmp_path):
     both = json.loads((wide / "workspace.json").read_text())
     assert both["orientation_range"] == {"z_m": {"low": -1.6, "high": -0.8, "count": 3}} and "z_m" not in both["fixed"]
     assert both["inside"] < doc["inside"]
+    # the refined size: the same poses, the size from the boundary's crossings, the method named
+    fine = tmp_path / "fine"
+    for refine, folder in ((0, tmp_path / "coarse"), (4, tmp_path / "fine")):
+        assert main(["workspace", "--machine", "delta", "--grid", "x=-1.4:1.4:8,y=-1.4:1.4:8", "--pose", "z=-1.2",
+                     "--refine", str(refine), "--out", str(folder)]) == 0
+    coarse, ref = (json.loads((f / "workspace.json").read_text()) for f in (tmp_path / "coarse", tmp_path / "fine"))
+    assert 0 < ref["inside"] == coarse["inside"] < 64 and ref["size_method"].endswith("4 steps an edge")
+    assert coarse["size_method"] == "inside poses times the cell" and ref["size_error_m2"] < coarse["size_error_m2"]
 
 
 @pytest.mark.parametrize("args, words", [
@@ -198,6 +206,8 @@ def test_workspace_command(tmp_path):
     (["--grid", "x=0:1:3,y=0:1:3", "--centre", "0.1"], "--centre"),
     (["--grid", "x=0:1:3", "--orientation-range", "x=0:1:3"], "--orientation-range"),
     (["--grid", "x=0:1:3", "--orientation-range", "z=-1:1"], "--orientation-range"),
+    (["--grid", "x=0:1:3", "--orientation-range", "z=-1:1:3", "--refine", "4"], "--refine"),
+    (["--grid", "x=0:1:3", "--refine", "65"], "--refine"),
 ])
 def test_bad_workspace_input(tmp_path, capsys, args, words):
     out = tmp_path / "ws"
@@ -249,6 +259,49 @@ def test_a_sweep_without_the_workspace_measure(tmp_path):
     without = _stewart_sweep(tmp_path / "b", grid + "workspace_measure = false\n" + rest)
     assert "workspace_min_measure" in with_measure[0] and "workspace_min_measure" not in without[0]
     assert without[0]["workspace_size_m3"] == with_measure[0]["workspace_size_m3"] > 0
+
+
+def test_a_sweep_with_the_refined_size(tmp_path):
+    """``workspace_refine = 4``: each row's size is the refined size of that design's workspace
+    (the least-measure route, as a sweep computes it), and the share inside is the count's."""
+    grid = "x=-0.4:0.4:5,y=-0.4:0.4:5,z=0.9:1.3:3"
+    rows = _stewart_sweep(tmp_path, f'workspace_grid = "{grid}"\nworkspace_refine = 4\n'
+                                    '[parameters]\n"parameters.base_radius_m" = { values = [0.8, 1.1] }\n'
+                                    '[objectives]\nworkspace_size_m3 = "max"\n')
+    from pkmdyn.multibody.task_grid import parse_grid
+
+    import multibody_examples as ex
+
+    for r, radius in zip(rows, (0.8, 1.1)):
+        d = ex.builtin_dict("stewart", parametric=True)
+        d["parameters"]["base_radius_m"] = radius
+        m = load_mechanism(d)
+        ws = workspace(m, parse_grid(m, grid, max_axes=3), threshold=1e-3, refine=4)
+        count = workspace(m, parse_grid(m, grid, max_axes=3), threshold=1e-3)
+        assert r["status"] == "ok" and r["workspace_size_m3"] == pytest.approx(ws.size, rel=1e-12)
+        assert r["workspace_inside_share"] == pytest.approx(count.inside.mean())
+        assert ws.size != pytest.approx(count.size, rel=1e-6)
+
+
+@pytest.mark.parametrize("motion, words", [
+    ('workspace_refine = 4\n', "workspace_refine"),
+    ('workspace_grid = "x=-0.4:0.4:5"\nworkspace_refine = 65\n', "workspace_refine"),
+    ('workspace_grid = "x=-0.4:0.4:5"\nworkspace_orientation_range = "euler3=-0.3:0.3:3"\nworkspace_refine = 4\n',
+     "workspace_refine"),
+])
+def test_bad_refine_in_a_sweep(tmp_path, capsys, motion, words):
+    """A refined size without a grid, beyond 64 steps, or over an orientation range: one line
+    naming the key, exit status 2, nothing written."""
+    space = tmp_path / "space.toml"
+    space.write_text('[sampling]\nmethod = "grid"\n[motion]\nreactions = false\n' + motion
+                     + '[parameters]\n"parameters.base_radius_m" = { values = [1.0] }\n'
+                       '[objectives]\npeak_effort_N = "min"\n')
+    out = tmp_path / "out"
+    assert main(["sweep", "--machine", "stewart", "--space", str(space), "--workers", "0", "--no-plots",
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
 
 
 def test_sweep_reports_the_total_orientation_workspace(tmp_path):
@@ -344,3 +397,64 @@ def test_the_least_measure_route_gives_the_workspace_of_every_measure(name, axes
         assert workspace(m, axes, base, threshold=threshold, measures="least").least_measure == pytest.approx(
             ref.measure[ref.inside].min(), rel=1e-12)
         assert ws.least_measure is None
+
+
+def _stewart_area(base, half, count):
+    """The Stewart platform's constant-orientation area at ``base``'s height and orientation
+    over the square of half-width ``half``, by the closed-form leg lengths (every leg within
+    its limits) on a fine ``count x count`` grid, with its own error estimate (half the
+    boundary's cells)."""
+    v = np.linspace(-half, half, count)
+    X, Y = np.meshgrid(v, v, indexing="ij")
+    x = np.tile(base, (count * count, 1))
+    x[:, 0], x[:, 1] = X.reshape(-1), Y.reshape(-1)
+    inside, _ = _stewart_inside(x, 0.0)
+    g = inside.reshape(count, count)
+    edge = np.zeros_like(g)
+    for ax in (0, 1):
+        d = np.diff(g.astype(np.int8), axis=ax) != 0
+        lo, hi = [slice(None)] * 2, [slice(None)] * 2
+        lo[ax], hi[ax] = slice(0, -1), slice(1, None)
+        edge[tuple(lo)] |= d
+        edge[tuple(hi)] |= d
+    cell = (v[1] - v[0]) ** 2
+    return g.sum() * cell, 0.5 * edge.sum() * cell
+
+
+@pytest.mark.parametrize("height, turn", [(0.95, 0.0), (1.15, 0.2)])
+def test_the_refined_size_against_the_closed_form(height, turn):
+    """The Stewart platform's constant-orientation area on a coarse 13 x 13 grid, refined by
+    the boundary's crossings of its edges (8 steps an edge), against the area of the
+    closed-form leg lengths on a 601 x 601 grid: within the two error estimates, and the
+    refined estimate far below the count's (which covers the same area)."""
+    m = load_mechanism(MACHINES / "stewart" / "stewart.toml")
+    base = reference_task(m)
+    base[2], base[5] = height, turn
+    axes = [(0, np.linspace(-0.6, 0.6, 13)), (1, np.linspace(-0.6, 0.6, 13))]
+    count = workspace(m, axes, base, threshold=0.0)
+    refined = workspace(m, axes, base, threshold=0.0, refine=8)
+    area, area_error = _stewart_area(base, 0.6 + 0.05, 601)  # the coarse grid's cells reach half a step beyond
+    assert refined.refine == 8 and np.array_equal(refined.inside, count.inside)
+    assert 40 < count.inside.sum() < 13 * 13 - 20  # the boundary lies inside the grid
+    assert abs(refined.size - area) <= refined.size_error + area_error
+    assert abs(count.size - area) <= count.size_error + area_error
+    assert refined.size_error < 0.25 * count.size_error
+
+
+def test_the_refined_size_moves_with_the_boundary():
+    """As the Stewart platform's height changes in steps of 0.2 mm (the area by some 6 % of a
+    cell a step), the count of inside poses jumps by whole cells; the refined size moves by a
+    small part of a cell at each step (each crossing moving by one step of its edge changes it
+    by 1/16 of a cell over two axes)."""
+    m = load_mechanism(MACHINES / "stewart" / "stewart.toml")
+    axes = [(0, np.linspace(-0.6, 0.6, 13)), (1, np.linspace(-0.6, 0.6, 13))]
+    cell = 0.1 * 0.1
+    counts, sizes = [], []
+    for h in np.arange(1.20, 1.22, 0.0002):
+        base = reference_task(m)
+        base[2] = h
+        counts.append(workspace(m, axes, base, threshold=0.0).size)
+        sizes.append(workspace(m, axes, base, threshold=0.0, refine=8).size)
+    jumps, moves = np.abs(np.diff(counts)), np.abs(np.diff(sizes))
+    assert jumps.max() >= cell * (1 - 1e-9)  # the count moves in whole cells
+    assert moves.max() < 0.25 * cell

@@ -24,10 +24,13 @@ from ._groups import MACHINE_HELP, FiniteFloat, cli, list_files
               help="A pose is inside only where every singularity measure is at least this.")
 @click.option("--centre", default=None, metavar="V1,V2,...",
               help="Centre of the inscribed cube and cylinder, one value per grid coordinate (default: the pose's).")
+@click.option("--refine", type=click.IntRange(0, 64), default=0, show_default=True,
+              help="Steps along each grid edge the workspace's boundary crosses, for a size that varies smoothly with "
+                   "the design (0: inside poses times the cell; docs/workspace.md).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder (an earlier run there is replaced whole).")
 def workspace_command(machine: str, grid: str, pose: str, orientation_range: str | None, threshold: float,
-                      centre: str | None, out_dir: Path) -> None:
+                      centre: str | None, refine: int, out_dir: Path) -> None:
     """The reachable workspace within the joint limits and away from every singularity, on a grid
     of task poses: its size with an error estimate, the largest inscribed cube and cylinder about a
     centre, dexterity statistics, a map."""
@@ -55,7 +58,7 @@ def workspace_command(machine: str, grid: str, pose: str, orientation_range: str
         except ValueError:
             raise ParameterError(f"--centre {centre!r}: expected numbers separated by commas") from None
         c = check_centre(c, len(axes))
-    ws = workspace(model, axes, base, threshold, c, ranges)
+    ws = workspace(model, axes, base, threshold, c, ranges, refine=refine)
     doc = workspace_document(model, ws)
     final = Path(out_dir)
     with output_dir(out_dir, inputs=inputs) as out:

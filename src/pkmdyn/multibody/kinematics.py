@@ -44,7 +44,8 @@ from .topology import column_scale, constraint_jacobian, row_labels, row_scale
 
 __all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals", "least_measure_bounds",
            "singularity_measures", "SingularityMeasures", "reachable", "TOLERANCE", "joint_coordinates",
-           "limited_joints", "limit_violation", "limit_message", "limit_hit", "limit_line", "joint_frame"]
+           "limited_joints", "limit_violation", "limit_message", "limit_hit", "limit_line", "joint_frame",
+           "solve_graph"]
 
 Array = NDArray[np.float64]
 
@@ -214,6 +215,19 @@ def solve_grid(model: MechanismModel, x: Array, shape: tuple[int, ...], roots: A
         out = _run(model, x, zero, zero, _start(model, x[root]), nbr=nbr, root=int(root), stall=stall)
         if out["status"][root] == K.OK:
             break
+    return _assemble(model, None, x, zero, zero, out), out["status"] == K.OK
+
+
+def solve_graph(model: MechanismModel, x: Array, nbr: NDArray[np.int64], root: int, q_root: Array,
+                stall: int = GRID_STALL) -> tuple[MechanismKinematics, NDArray[np.bool_]]:
+    """Tree coordinates at task poses ``x (n, nt)`` joined by the directed graph ``nbr (n, k)``
+    (``nbr[s]`` the poses that pose s leads to; -1: none), by continuation from pose ``root``
+    (solved from ``q_root``), each pose from the solved pose that reached it first, as
+    :func:`solve_grid` over its grid. Returns the kinematics (n rows; zeros where not solved) and
+    which poses were solved (n,)."""
+    zero = np.zeros((x.shape[0], model.nt))
+    out = _run(model, np.ascontiguousarray(x), zero, zero, np.asarray(q_root, dtype=float), nbr=nbr, root=int(root),
+               stall=stall)
     return _assemble(model, None, x, zero, zero, out), out["status"] == K.OK
 
 

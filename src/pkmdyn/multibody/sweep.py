@@ -58,6 +58,9 @@ class _Motion(Section):
     workspace_orientation_range: str | None = Field(default=None, max_length=400)
     #: the least singularity measure over each design's workspace (``workspace_min_measure``)
     workspace_measure: bool = True
+    #: steps of each boundary edge for the workspace's size (``pkmdyn workspace --refine``;
+    #: 0: inside poses times the cell)
+    workspace_refine: Annotated[int, Field(ge=0, le=64)] = 0
 
 
 @dataclass(frozen=True)
@@ -78,6 +81,8 @@ class DescribedSweepContext:
     required: tuple[str, str, str | None] | None = None
     #: ``[motion] workspace_measure``: the metric ``workspace_min_measure``
     workspace_measure: bool = True
+    #: ``[motion] workspace_refine``: the steps of each boundary edge for the size
+    workspace_refine: int = 0
 
 
 def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[str], bool, bool, bool]:
@@ -226,7 +231,8 @@ class DescribedSweep:
             name, unit = _workspace_size_name(self.raw if description is None else description,
                                               str(options["workspace_grid"]))
             out += [MetricInfo(name, unit, "the size of the workspace on [motion] workspace_grid (inside poses times "
-                                           "the grid cell, docs/workspace.md)"),
+                                           "the grid cell, or from the boundary's crossings of the grid's edges with "
+                                           "workspace_refine; docs/workspace.md)"),
                     MetricInfo("workspace_inside_share", "-", "the share of the grid's poses inside the workspace")]
             if options.get("workspace_measure", True) is True:
                 out.append(MetricInfo("workspace_min_measure", "-",
@@ -276,6 +282,9 @@ class DescribedSweep:
             except PkmdynError:
                 pass  # the base design's own trouble is its row's, not the sweep's
         ws = None
+        if opt.workspace_refine and (opt.workspace_grid is None or opt.workspace_orientation_range is not None):
+            raise ParameterError("[motion] workspace_refine: needs workspace_grid, and not workspace_orientation_range "
+                                 "(docs/workspace.md, refined size)")
         if opt.workspace_grid is not None:
             from .task_grid import parse_grid, parse_pose, parse_ranges
 
@@ -300,7 +309,8 @@ class DescribedSweep:
             req = (opt.requirements.grid, opt.requirements.pose, None)
         return DescribedSweepContext(motion=motion, threshold=opt.singularity_threshold, reactions=opt.reactions,
                                      stiffness=tuple(_stiffness_metrics(description)) if opt.stiffness else (),
-                                     workspace=ws, required=req, workspace_measure=opt.workspace_measure)
+                                     workspace=ws, required=req, workspace_measure=opt.workspace_measure,
+                                     workspace_refine=opt.workspace_refine)
 
     def evaluate(self, descriptions: Sequence[Mapping[str, Any]], context: DescribedSweepContext
                  ) -> list[DesignOutcome]:
@@ -362,16 +372,17 @@ def _workspace_size_name(source: Any, grid: str) -> tuple[str, str]:
     return f"workspace_size_{unit}", unit.replace("_", " ")
 
 
-def _on_grid(model: Any, spec: tuple[str, str, str | None], threshold: float, least: bool) -> Any:
+def _on_grid(model: Any, spec: tuple[str, str, str | None], threshold: float, least: bool, refine: int = 0) -> Any:
     """The workspace of ``model`` on the grid, held pose and orientation range ``spec``
-    (``--grid``, ``--pose``, ``--orientation-range`` syntax), with its size and least measure
-    (``least``; else only its size: :func:`.workspace.workspace`, ``measures``)."""
+    (``--grid``, ``--pose``, ``--orientation-range`` syntax), with its size (from the boundary's
+    crossings of the grid's edges where ``refine``) and least measure (``least``; else only its
+    size: :func:`.workspace.workspace`, ``measures``, ``refine``)."""
     from .task_grid import parse_grid, parse_pose, parse_ranges
     from .workspace import workspace
 
     ranges = None if spec[2] is None else parse_ranges(model, spec[2])
     return workspace(model, parse_grid(model, spec[0], max_axes=3), parse_pose(model, spec[1]), threshold,
-                     ranges=ranges, measures="least" if least else "none")
+                     ranges=ranges, measures="least" if least else "none", refine=refine)
 
 
 def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> DesignOutcome:
@@ -458,7 +469,8 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
     for key, spec in (("workspace", ctx.workspace), ("required", ctx.required)):
         if spec is not None:
             try:
-                grids[key] = _on_grid(model, spec, ctx.threshold, key == "workspace" and ctx.workspace_measure)
+                grids[key] = _on_grid(model, spec, ctx.threshold, key == "workspace" and ctx.workspace_measure,
+                                      ctx.workspace_refine if key == "workspace" else 0)
             except PkmdynError as exc:
                 return DesignOutcome("invalid", str(exc), m)
     if "workspace" in grids:
