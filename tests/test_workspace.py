@@ -399,16 +399,22 @@ def test_the_least_measure_route_gives_the_workspace_of_every_measure(name, axes
         assert ws.least_measure is None
 
 
-def _stewart_area(base, half, count):
-    """The Stewart platform's constant-orientation area at ``base``'s height and orientation
-    over the square of half-width ``half``, by the closed-form leg lengths (every leg within
-    its limits) on a fine ``count x count`` grid, with its own error estimate (half the
-    boundary's cells)."""
+def _oracle_area(name, base, half, count):
+    """The constant-orientation area at ``base``'s other coordinates over the square of
+    half-width ``half`` by the closed-form inverse kinematics (every actuated joint within its
+    limits; the Delta's arms also within reach) on a fine ``count x count`` grid, with its own
+    error estimate (half the boundary's cells)."""
     v = np.linspace(-half, half, count)
     X, Y = np.meshgrid(v, v, indexing="ij")
     x = np.tile(base, (count * count, 1))
     x[:, 0], x[:, 1] = X.reshape(-1), Y.reshape(-1)
-    inside, _ = _stewart_inside(x, 0.0)
+    if name == "stewart":
+        inside, _ = _stewart_inside(x, 0.0)
+    else:
+        g = delta.williams_irb360_geometry()
+        with np.errstate(invalid="ignore"):
+            th = delta.inverse_kinematics(x[:, :3], g["R_b"], g["R_p"], g["L_A"], g["L_B"])
+        inside = np.all(np.isfinite(th) & (np.nan_to_num(th) >= -1.2) & (np.nan_to_num(th) <= 1.5), axis=1)
     g = inside.reshape(count, count)
     edge = np.zeros_like(g)
     for ax in (0, 1):
@@ -421,19 +427,25 @@ def _stewart_area(base, half, count):
     return g.sum() * cell, 0.5 * edge.sum() * cell
 
 
-@pytest.mark.parametrize("height, turn", [(0.95, 0.0), (1.15, 0.2)])
-def test_the_refined_size_against_the_closed_form(height, turn):
-    """The Stewart platform's constant-orientation area on a coarse 13 x 13 grid, refined by
-    the boundary's crossings of its edges (8 steps an edge), against the area of the
-    closed-form leg lengths on a 601 x 601 grid: within the two error estimates, and the
-    refined estimate far below the count's (which covers the same area)."""
-    m = load_mechanism(MACHINES / "stewart" / "stewart.toml")
+@pytest.mark.parametrize("name, half, pose", [
+    ("stewart", 0.6, {2: 0.95}),
+    ("stewart", 0.6, {2: 1.15, 5: 0.2}),
+    ("delta", 1.2, {2: -1.25}),  # its boundary partly the arms' limits, partly their reach
+])
+def test_the_refined_size_against_the_closed_form(name, half, pose):
+    """A constant-orientation area on a coarse 13 x 13 grid, refined by the boundary's
+    crossings of its edges (8 steps an edge), against the area of the closed-form inverse
+    kinematics on a 601 x 601 grid: within the two error estimates, and the refined estimate
+    far below the count's (which covers the same area)."""
+    m = load_mechanism(MACHINES / name / f"{name}.toml")
     base = reference_task(m)
-    base[2], base[5] = height, turn
-    axes = [(0, np.linspace(-0.6, 0.6, 13)), (1, np.linspace(-0.6, 0.6, 13))]
+    for i, v in pose.items():
+        base[i] = v
+    axes = [(0, np.linspace(-half, half, 13)), (1, np.linspace(-half, half, 13))]
     count = workspace(m, axes, base, threshold=0.0)
     refined = workspace(m, axes, base, threshold=0.0, refine=8)
-    area, area_error = _stewart_area(base, 0.6 + 0.05, 601)  # the coarse grid's cells reach half a step beyond
+    step = 2 * half / 12
+    area, area_error = _oracle_area(name, base, half + step / 2, 601)  # the cells reach half a step beyond
     assert refined.refine == 8 and np.array_equal(refined.inside, count.inside)
     assert 40 < count.inside.sum() < 13 * 13 - 20  # the boundary lies inside the grid
     assert abs(refined.size - area) <= refined.size_error + area_error
