@@ -34,14 +34,15 @@ measure less the threshold) reaches zero, linear between the step's ends, and ``
 where the step's end is out of reach (``t = 1`` when every step is good). Along grid axis
 ``d`` the size is the line integral over the grid's lines along ``d`` (the cross-section of a
 cell times each line's inside length), ``V_d = cell (inside poses + sum over the edges along d
-of (t - 1/2))``, and the size is the mean of ``V_d`` over the axes. It moves continuously with the boundary where the boundary is a
-joint limit or a singularity threshold, and to ``cell / (2 N)`` an edge where it is the reach
-(a pose that joins the workspace adds its cell and takes its edges' half cells away at once).
-Its error estimate (:func:`refined_size`): the midpoint rule's across the lines, an eighth of the
-second difference of the lines' inside lengths (bounded so by the chords where those lengths are
-concave or convex between lines), plus ``cell / (2 N)`` an edge over the axes.
-The steps cost some ``N / 2`` solves an edge: ``N = 4`` about doubles the time of a Delta
-robot's 13 x 13 x 9 grid. Not over an orientation range.
+of (t - 1/2))``, and the size is the mean of ``V_d`` over the axes. It moves continuously
+with the boundary where the boundary is a joint limit or a singularity threshold, and to
+``cell / (2 N)`` an edge where it is the reach (a pose that joins the workspace adds its cell
+and takes its edges' half cells away at once). Its error estimate (:func:`refined_size`): the
+midpoint rule's across the lines, an eighth of the second difference of the lines' inside
+lengths (bounded so by the chords where those lengths are concave or convex between lines),
+plus ``cell / (2 N)`` an edge over the axes. The steps cost up to ``N`` solves an edge:
+``N = 4`` about doubles the time of a Delta robot's 13 x 13 x 9 grid. Not over an orientation
+range.
 
 **Inscribed shapes about a centre** ``c`` (default: the reference pose): the largest cube
 (the same half-width ``a`` along every grid axis) and the largest cylinder (axis along the last
