@@ -2,7 +2,8 @@
 an NSGA-II search. Prints one JSON object; with ``--json`` nothing else is printed.
 
     python benchmarks/sweep.py --json [--part hip,stewart,delta] [--designs 10000]
-        [--stewart-designs 10000] [--delta-population 20 --delta-generations 150 --delta-seed 3]
+        [--stewart-designs 10000] [--delta-population 20 --delta-generations 200 --delta-seed 3]
+        [--delta-refine 4]
         [--delta-fronts FRONTS.csv]
 
 **hip** (``--designs``): the hip simulator, Sobol over five geometry keys, one ISO 14242-1
@@ -38,16 +39,20 @@ Fields ``stewart_geometry_designs``, ``stewart_geometry_seconds_2_workers`` (the
 
 **delta** (``--delta-population``, ``--delta-generations``): NSGA-II over the Delta robot's
 arm, forearm, base and platform sizes (the sides of the two triangles; their inradii are
-side x sqrt(3) / 6), maximising the workspace volume (a 13 x 13 x 9 grid) and minimising the
-peak motor torque on a pick-and-place cycle (a 305 mm arch 25 mm high and back, 0.5 s),
-keeping the least direct singularity measure along the cycle (the inverse of a condition
-number) at least 0.023, run for G generations and for 10 G generations with the same seed
-(population 20, G = 150 by default; the distribution indices of crossover and mutation 30,
-which converged faster on this problem than pymoo's 15 and 20, ``docs/sweep.md``).
+side x sqrt(3) / 6), maximising the workspace volume (a 13 x 13 x 9 grid, the size refined by
+where the boundary crosses the grid's edges, ``workspace_refine``, ``--delta-refine``, 4 steps
+an edge by default: a volume that moves continuously with the design, where the count of inside
+poses moves in whole cells, ``docs/workspace.md``) and minimising the peak motor torque on a
+pick-and-place cycle (a 305 mm arch 25 mm high and back, 0.5 s), keeping the least direct
+singularity measure along the cycle (the inverse of a condition number) at least 0.023, run
+for G generations and for 10 G generations with the same seed (population 20, G = 200 by
+default; the distribution indices of crossover and mutation 30, which converged faster on this
+problem than pymoo's 15 and 20, ``docs/sweep.md``).
 ``delta_nsga2_hypervolume_rel_gap`` = 1 - HV(short) / HV(long), each the hypervolume of that
 run's feasible Pareto set with both runs' objectives scaled together to [0, 1] (reference
 point 1.1); ``delta_nsga2_designs_short``, ``delta_nsga2_designs_long``,
-``delta_nsga2_seconds_short``, ``delta_nsga2_seconds_long`` (2 workers). ``--delta-fronts FILE``
+``delta_nsga2_seconds_short``, ``delta_nsga2_seconds_long`` (2 workers),
+``delta_nsga2_workspace_refine``. ``--delta-fronts FILE``
 writes both runs' Pareto fronts (``run_long_0_1,workspace_size_m3,peak_effort_Nm``).
 """
 
@@ -125,6 +130,7 @@ reactions = false
 stiffness = false
 workspace_grid = "x=-1.5:1.5:13,y=-1.5:1.5:13,z=-2.2:-0.2:9"
 workspace_measure = false
+workspace_refine = {refine}
 
 [parameters]
 "parameters.base_side_m" = {{ min = 0.45, max = 0.70 }}
@@ -205,7 +211,7 @@ def _front_objectives(out: Path) -> "object":
 
 
 def _delta(population: int, generations: int, result: dict, quiet: bool, fronts_csv: str | None = None,
-           seed: int = 3) -> None:
+           seed: int = 3, refine: int = 4) -> None:
     import numpy as np
 
     from pkmdyn.machines.registry import sweep_adapter
@@ -217,7 +223,7 @@ def _delta(population: int, generations: int, result: dict, quiet: bool, fronts_
     with tempfile.TemporaryDirectory() as tmp:
         _pick_and_place(Path(tmp) / "pick_and_place.csv")
         for label, gens in (("short", generations), ("long", 10 * generations)):
-            text = DELTA_SPACE.format(population=population, generations=gens, seed=seed)
+            text = DELTA_SPACE.format(population=population, generations=gens, seed=seed, refine=refine)
             space = Path(tmp) / f"space_{label}.toml"
             space.write_text(text, encoding="utf-8")
             t0 = time.perf_counter()
@@ -239,6 +245,7 @@ def _delta(population: int, generations: int, result: dict, quiet: bool, fronts_
     hv_short, hv_long = hypervolumes([(fronts[k] - lo) / span for k in ("short", "long")], np.full(2, 1.1))
     result["delta_nsga2_population"] = population
     result["delta_nsga2_seed"] = seed
+    result["delta_nsga2_workspace_refine"] = refine
     result["delta_nsga2_generations_short"] = generations
     result["delta_nsga2_hypervolume_short"] = hv_short
     result["delta_nsga2_hypervolume_long"] = hv_long
@@ -254,8 +261,10 @@ def main() -> None:
     ap.add_argument("--designs", type=int, default=10_000, help="hip designs")
     ap.add_argument("--stewart-designs", type=int, default=10_000)
     ap.add_argument("--delta-population", type=int, default=20)
-    ap.add_argument("--delta-generations", type=int, default=150, help="the short run's (the long run: 10x)")
+    ap.add_argument("--delta-generations", type=int, default=200, help="the short run's (the long run: 10x)")
     ap.add_argument("--delta-seed", type=int, default=3, help="the NSGA-II seed of both runs")
+    ap.add_argument("--delta-refine", type=int, default=4,
+                    help="steps along each boundary edge for the refined workspace size (0: inside poses times the cell)")
     ap.add_argument("--delta-fronts", default=None, help="a CSV file for both runs' Pareto fronts (objectives)")
     args = ap.parse_args()
     parts = {p.strip() for p in args.part.split(",") if p.strip()}
@@ -265,7 +274,8 @@ def main() -> None:
     if "stewart" in parts:
         _stewart(args.stewart_designs, result, args.json)
     if "delta" in parts:
-        _delta(args.delta_population, args.delta_generations, result, args.json, args.delta_fronts, args.delta_seed)
+        _delta(args.delta_population, args.delta_generations, result, args.json, args.delta_fronts, args.delta_seed,
+               args.delta_refine)
     print(json.dumps(result, indent=2))
 
 

@@ -197,6 +197,7 @@ def test_workspace_command(tmp_path):
     coarse, ref = (json.loads((f / "workspace.json").read_text()) for f in (tmp_path / "coarse", tmp_path / "fine"))
     assert 0 < ref["inside"] == coarse["inside"] < 64 and ref["size_method"].endswith("4 steps an edge")
     assert coarse["size_method"] == "inside poses times the cell" and ref["size_error_m2"] < coarse["size_error_m2"]
+    assert abs(ref["size_m2"] - coarse["size_m2"]) <= coarse["size_error_m2"]
 
 
 @pytest.mark.parametrize("args, words", [
@@ -262,8 +263,9 @@ def test_a_sweep_without_the_workspace_measure(tmp_path):
 
 
 def test_a_sweep_with_the_refined_size(tmp_path):
-    """``workspace_refine = 4``: each row's size is the refined size of that design's workspace
-    (the least-measure route, as a sweep computes it), and the share inside is the count's."""
+    """``workspace_refine = 4``: each row's size (the sweep's route, the measures bounded
+    cheaply) is the refined size of that design's workspace with every measure computed, and
+    the share inside is the count's."""
     grid = "x=-0.4:0.4:5,y=-0.4:0.4:5,z=0.9:1.3:3"
     rows = _stewart_sweep(tmp_path, f'workspace_grid = "{grid}"\nworkspace_refine = 4\n'
                                     '[parameters]\n"parameters.base_radius_m" = { values = [0.8, 1.1] }\n'
@@ -451,6 +453,39 @@ def test_the_refined_size_against_the_closed_form(name, half, pose):
     assert abs(refined.size - area) <= refined.size_error + area_error
     assert abs(count.size - area) <= count.size_error + area_error
     assert refined.size_error < 0.25 * count.size_error
+
+
+def test_the_refined_size_of_a_segment_and_a_box():
+    """The refined size's sum on given crossings, against the lengths they put the boundary
+    at: a segment of three inside poses whose ends cross at fractions t1, t2 of the edges out
+    is (2 + t1 + t2) steps long; a box of 3 x 2 x 1 inside poses whose faces along axis d cross
+    at fraction t_d is, along each axis's lines, its length (the poses' extent plus 2 t_d steps)
+    times the lines' cross-section (the other axes' inside cells), and the size their mean."""
+    from pkmdyn.multibody.workspace import _edges, refined_size
+
+    inside = np.array([False, True, True, True, False])
+    a, _, axis = _edges(inside, (5,))
+    frac = np.where(a == 1, 0.3, 0.8)
+    size, error = refined_size(inside, (5,), a, axis, frac, 0.1, 8)
+    assert size == pytest.approx(0.1 * (2 + 0.3 + 0.8), rel=1e-12)
+    assert error == pytest.approx(0.1 * 2 / (2 * 8), rel=1e-12)  # a line's length has no quadrature error
+
+    shape, cell = (5, 4, 3), 0.1 * 0.2 * 0.3
+    box = np.zeros(shape, dtype=bool)
+    box[1:4, 1:3, 1:2] = True
+    a, _, axis = _edges(box.reshape(-1), shape)
+    t = np.array([0.3, 0.6, 0.2])
+    size, error = refined_size(box.reshape(-1), shape, a, axis, t[axis], cell, 8)
+    counts = np.array([3, 2, 1])
+    extent = counts - 1 + 2 * t  # in steps
+    per_axis = [extent[d] * np.prod(np.delete(counts, d)) * cell for d in range(3)]
+    assert len(a) == 2 * (2 * 1 + 3 * 1 + 3 * 2)
+    assert size == pytest.approx(np.mean(per_axis), rel=1e-12)
+    # the error estimate: the lines along d are all extent[d] long over the box's cross-section
+    # and empty around it, so along each transverse axis e each row of lines has second
+    # differences summing to 4 extent[d]; there are as many rows as the third axis's count
+    quad = [sum(4 * extent[d] * np.prod(np.delete(counts, [d, e])) for e in range(3) if e != d) / 8 for d in range(3)]
+    assert error == pytest.approx(cell * (np.mean(quad) + len(a) / (2 * 8 * 3)), rel=1e-12)
 
 
 def test_the_refined_size_moves_with_the_boundary():

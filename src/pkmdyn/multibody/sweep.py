@@ -260,6 +260,9 @@ class DescribedSweep:
         from .reactions import ComplianceDataMissing
 
         opt = validate(_Motion, dict(options), "[motion]")
+        if opt.workspace_refine and (opt.workspace_grid is None or opt.workspace_orientation_range is not None):
+            raise ParameterError("[motion] workspace_refine: needs workspace_grid, and not workspace_orientation_range "
+                                 "(docs/workspace.md, refined size)")
         try:
             model = load_mechanism(copy.deepcopy(dict(description)))
         except PkmdynError as exc:
@@ -282,9 +285,6 @@ class DescribedSweep:
             except PkmdynError:
                 pass  # the base design's own trouble is its row's, not the sweep's
         ws = None
-        if opt.workspace_refine and (opt.workspace_grid is None or opt.workspace_orientation_range is not None):
-            raise ParameterError("[motion] workspace_refine: needs workspace_grid, and not workspace_orientation_range "
-                                 "(docs/workspace.md, refined size)")
         if opt.workspace_grid is not None:
             from .task_grid import parse_grid, parse_pose, parse_ranges
 

@@ -29,20 +29,21 @@ is stepped from ``a`` to ``b`` in ``N`` equal steps, each solved from the step b
 screened as a grid pose (reached within the limits, every measure at least the threshold), the
 boundary crosses the edge within the first step that ends outside, after ``k`` good steps: at
 ``t = (k + f) / N`` of the edge, ``f`` where the margin of the condition the step's end fails
-(its distance to the nearer joint limit over the joint's range, or its least singularity
-measure less the threshold) reaches zero, linear between the step's ends, and ``f = 1/2``
+(each joint's distance to the limit it is beyond there, or the least singularity measure less
+the threshold) reaches zero, linear between the step's ends, and ``f = 1/2``
 where the step's end is out of reach (``t = 1`` when every step is good). Along grid axis
 ``d`` the size is the line integral over the grid's lines along ``d`` (the cross-section of a
 cell times each line's inside length), ``V_d = cell (inside poses + sum over the edges along d
-of (t - 1/2))``, and the size is the mean of ``V_d`` over the axes. It moves continuously
-with the boundary where the boundary is a joint limit or a singularity threshold, and to
-``cell / (2 N)`` an edge where it is the reach (a pose that joins the workspace adds its cell
-and takes its edges' half cells away at once). Its error estimate (:func:`refined_size`): the
-midpoint rule's across the lines, an eighth of the second difference of the lines' inside
-lengths (bounded so by the chords where those lengths are concave or convex between lines),
-plus ``cell / (2 N)`` an edge over the axes. The steps cost up to ``N`` solves an edge:
-``N = 4`` about doubles the time of a Delta robot's 13 x 13 x 9 grid. Not over an orientation
-range.
+of (t - 1/2))``, and the size is the mean of ``V_d`` over the axes. A pose that joins the
+workspace adds its cell and takes its edges' half cells away at once, so the size moves
+continuously with a boundary of joint limits or singularity thresholds, and in steps of
+``cell / (N D)`` (``D`` grid axes) with a boundary of reach; it still jumps where separate
+parts of the workspace join or split. Its error estimate (:func:`refined_size`): the midpoint
+rule's across the lines, an eighth of the second difference of the lines' inside lengths (its
+bound where those lengths are concave or convex between lines, from the chords), plus half a
+step an edge over the axes for the crossings. The steps cost up to ``N`` solves an edge, and
+every inside pose is solved once more: with ``N = 4`` a Delta robot's 13 x 13 x 9 grid took
+about twice the count's time (measured once). Not over an orientation range.
 
 **Inscribed shapes about a centre** ``c`` (default: the reference pose): the largest cube
 (the same half-width ``a`` along every grid axis) and the largest cylinder (axis along the last
@@ -206,7 +207,7 @@ def _crossings(model: MechanismModel, x: Array, shape: tuple[int, ...], inside: 
     pose solved again from ``root`` over the inside poses, :func:`.kinematics.solve_graph`)
     and screened as a grid pose (:func:`_screen`). After ``k`` good steps the crossing lies in
     step ``k + 1``: where its end is solved, where the margin of the condition it fails
-    (:func:`_margins`) falls to zero, linear between the step's two ends; where it is not
+    (:func:`_between`) falls to zero, linear between the step's two ends; where it is not
     solved (out of reach), the step's middle. The fraction is 1 where every step is good.
     Returns each edge's inside pose, axis and fraction."""
     a, b, axis = _edges(inside, shape)
@@ -234,7 +235,9 @@ def _crossings(model: MechanismModel, x: Array, shape: tuple[int, ...], inside: 
     s = np.arange(1, steps + 1) / steps
     xs = x[a][:, None, :] + s[None, :, None] * (x[b] - x[a])[:, None, :]
     kin, ok = solve_graph(model, np.concatenate([x[ins], xs.reshape(-1, x.shape[1])]), nbr, int(pos[root]), q[root])
-    _, good, _, _ = _screen(model, kin, ok, threshold, all_measures)
+    steps_ok = ok.copy()
+    steps_ok[:m] = False  # the inside poses are screened already
+    _, good, _, _ = _screen(model, kin, steps_ok, threshold, all_measures)
     g = good[m:].reshape(e, steps)
     k = np.where(g.all(axis=1), steps, np.argmin(g, axis=1))
     frac = np.full(e, 0.5)
@@ -244,32 +247,45 @@ def _crossings(model: MechanismModel, x: Array, shape: tuple[int, ...], inside: 
     if part.size:
         bad = m + part * steps + k[part]
         last = np.where(k[part] == 0, pos[a[part]], bad - 1)
-        g1, g2 = _margins(model, kin, last, bad, threshold)
-        with np.errstate(all="ignore"):
-            frac[part] = np.where((g1 >= 0.0) & (g2 < 0.0), g1 / (g1 - g2), 0.5)
-    return a, axis, np.where(k == steps, 1.0, (k + frac) / steps)
+        frac[part] = _between(model, kin, last, bad, threshold)
+    t = np.where(k == steps, 1.0, (k + frac) / steps)
+    # an inside pose that its second solve did not reach again (or reached elsewhere, another
+    # branch) leaves its edges as the count has them: half a step
+    again = ok[:m] & (np.abs(kin.q[:m] - q[ins]).max(axis=1, initial=0.0) <= 1e-6 * (1.0 + np.abs(q[ins]).max()))
+    return a, axis, np.where(again[pos[a]], t, 0.5)
 
 
-def _margins(model: MechanismModel, kin, good: NDArray[np.int64], bad: NDArray[np.int64], threshold: float
-             ) -> tuple[Array, Array]:
-    """How far the poses ``good`` and ``bad`` of ``kin`` (pairs, the latter outside) lie inside
-    the condition the latter fails (negative: beyond it): where ``bad`` is beyond a joint
-    limit, the least over the limited joints of the distance to the nearer limit over the
-    joint's range; else the least singularity measure less ``threshold``."""
-    g1, g2 = np.zeros(len(good)), np.zeros(len(good))
+def _between(model: MechanismModel, kin, good: NDArray[np.int64], bad: NDArray[np.int64], threshold: float
+             ) -> Array:
+    """Where between the poses ``good`` and ``bad`` of ``kin`` (pairs, the latter outside) the
+    condition the latter fails is crossed, as a fraction of the way, linear between their
+    margins: for each joint beyond its limit at ``bad``, its distance to that limit; where no
+    joint is, the least singularity measure less ``threshold``; the first crossing over the
+    joints. 1/2 where the margins do not bracket a crossing."""
+    f = np.full(len(good), np.inf)
     by_measure = np.ones(len(good), dtype=bool)
     joints = limited_joints(model)
     if joints:
         c = joint_coordinates(model, kin, joints, along=False)
         lo = np.array([model.joint_limits[j][0] for j in joints])
         hi = np.array([model.joint_limits[j][1] for j in joints])
-        g1 = (np.minimum(c[good] - lo, hi - c[good]) / (hi - lo)).min(axis=1)
-        g2 = (np.minimum(c[bad] - lo, hi - c[bad]) / (hi - lo)).min(axis=1)
-        by_measure = ~beyond_limits(model, c[bad], joints).any(axis=1)
+        beyond = beyond_limits(model, c[bad], joints)
+        by_measure = ~beyond.any(axis=1)
+        over = c[bad] > hi  # the limit each joint beyond one is beyond
+        m1 = np.where(over, hi - c[good], c[good] - lo)
+        m2 = np.where(over, hi - c[bad], c[bad] - lo)
+        f = np.where(beyond, _fraction(m1, m2), np.inf).min(axis=1)
     if by_measure.any():
         both = _least(model, kin.q[np.concatenate([good[by_measure], bad[by_measure]])]) - threshold
-        g1[by_measure], g2[by_measure] = np.split(both, 2)
-    return g1, g2
+        f[by_measure] = _fraction(*np.split(both, 2))
+    return np.where(np.isfinite(f), f, 0.5)
+
+
+def _fraction(g1: Array, g2: Array) -> Array:
+    """Where a margin linear from ``g1`` to ``g2`` falls to zero, as a fraction in [0, 1] (1/2
+    where it does not fall from a value above to one below ``g2``)."""
+    with np.errstate(all="ignore"):
+        return np.where((g2 < 0.0) & (g1 > g2), np.clip(g1 / (g1 - g2), 0.0, 1.0), 0.5)
 
 
 def _held(model: MechanismModel, axes: list[tuple[int, Array]], base: Array, threshold: float,
@@ -426,7 +442,8 @@ def refined_size(inside: NDArray[np.bool_], shape: tuple[int, ...], a: NDArray[n
     across the lines where ``c`` is concave or convex between them (the chords through the
     neighbouring lines bound it), summed over the transverse axes (the grid's outer lines
     repeated beyond it); the mean over ``d``, plus ``cell / (2 steps)`` an edge over the axes
-    for the crossings' resolution."""
+    for the crossings (half a step: exact where the crossing is a step's middle, generous
+    where it is interpolated between margins). An estimate, not a bound."""
     dims = len(shape)
     g = inside.reshape(shape).astype(float)
     idx = np.array(np.unravel_index(a, shape))
