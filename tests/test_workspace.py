@@ -455,6 +455,39 @@ def test_the_refined_size_against_the_closed_form(name, half, pose):
     assert refined.size_error < 0.25 * count.size_error
 
 
+def test_the_refined_volume_of_the_delta_against_the_closed_form():
+    """The Delta robot's volume on the 13 x 13 x 9 grid of the sweep benchmark (singularity
+    threshold 0: reach and arm limits), refined (4 steps an edge), against the volume of its
+    closed-form arm angles within their limits on a 121 x 121 x 121 grid of the same box (the
+    coarse cells' extent), with that grid's own error estimate (half its boundary cells):
+    within the two estimates, the refined estimate under half the count's."""
+    m = load_mechanism(MACHINES / "delta" / "delta.toml")
+    axes = [(0, np.linspace(-1.5, 1.5, 13)), (1, np.linspace(-1.5, 1.5, 13)), (2, np.linspace(-2.2, -0.2, 9))]
+    count = workspace(m, axes, threshold=0.0, measures="none")
+    refined = workspace(m, axes, threshold=0.0, measures="none", refine=4)
+    g = delta.williams_irb360_geometry()
+    xs, zs = np.linspace(-1.625, 1.625, 121), np.linspace(-2.325, -0.075, 121)
+    X, Y, Z = np.meshgrid(xs, xs, zs, indexing="ij")
+    with np.errstate(invalid="ignore"):
+        th = delta.inverse_kinematics(np.column_stack([X.ravel(), Y.ravel(), Z.ravel()]), g["R_b"], g["R_p"],
+                                      g["L_A"], g["L_B"])
+    inside = np.all(np.isfinite(th) & (np.nan_to_num(th) >= -1.2) & (np.nan_to_num(th) <= 1.5), axis=1)
+    inside = inside.reshape(X.shape)
+    fine = (xs[1] - xs[0]) ** 2 * (zs[1] - zs[0])
+    edge = np.zeros_like(inside)
+    for ax in range(3):
+        d = np.diff(inside.astype(np.int8), axis=ax) != 0
+        lo, hi = [slice(None)] * 3, [slice(None)] * 3
+        lo[ax], hi[ax] = slice(0, -1), slice(1, None)
+        edge[tuple(lo)] |= d
+        edge[tuple(hi)] |= d
+    volume, volume_error = inside.sum() * fine, 0.5 * edge.sum() * fine
+    assert 100 < count.inside.sum() < 1000  # the boundary lies inside the grid
+    assert abs(refined.size - volume) <= refined.size_error + volume_error
+    assert abs(count.size - volume) <= count.size_error + volume_error
+    assert refined.size_error < 0.5 * count.size_error
+
+
 def test_the_refined_size_of_a_segment_and_a_box():
     """The refined size's sum on given crossings, against the lengths they put the boundary
     at: a segment of three inside poses whose ends cross at fractions t1, t2 of the edges out
