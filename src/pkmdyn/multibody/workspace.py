@@ -282,8 +282,8 @@ def _between(model: MechanismModel, kin, good: NDArray[np.int64], bad: NDArray[n
 
 
 def _fraction(g1: Array, g2: Array) -> Array:
-    """Where a margin linear from ``g1`` to ``g2`` falls to zero, as a fraction in [0, 1] (1/2
-    where it does not fall from a value above to one below ``g2``)."""
+    """Where a margin linear from ``g1`` to ``g2`` falls to zero, as a fraction of the way in
+    [0, 1]; 1/2 where ``g2`` is not below zero or not below ``g1``."""
     with np.errstate(all="ignore"):
         return np.where((g2 < 0.0) & (g1 > g2), np.clip(g1 / (g1 - g2), 0.0, 1.0), 0.5)
 
