@@ -401,6 +401,28 @@ def test_the_least_measure_route_gives_the_workspace_of_every_measure(name, axes
         assert ws.least_measure is None
 
 
+def _delta_inside(p):
+    """Which positions ``p (n, 3)`` the Delta robot reaches with every arm within its limits
+    ([-1.2, 1.5] rad, the description's), by its closed-form arm angles."""
+    g = delta.williams_irb360_geometry()
+    with np.errstate(invalid="ignore"):
+        th = delta.inverse_kinematics(p, g["R_b"], g["R_p"], g["L_A"], g["L_B"])
+    return np.all(np.isfinite(th) & (np.nan_to_num(th) >= -1.2) & (np.nan_to_num(th) <= 1.5), axis=1)
+
+
+def _size_and_error(inside, cell):
+    """An oracle grid's size (inside points times the cell) and its error estimate (half the
+    cells with a neighbour of the other state along an axis), ``inside`` shaped as the grid."""
+    edge = np.zeros_like(inside)
+    for ax in range(inside.ndim):
+        d = np.diff(inside.astype(np.int8), axis=ax) != 0
+        lo, hi = [slice(None)] * inside.ndim, [slice(None)] * inside.ndim
+        lo[ax], hi[ax] = slice(0, -1), slice(1, None)
+        edge[tuple(lo)] |= d
+        edge[tuple(hi)] |= d
+    return inside.sum() * cell, 0.5 * edge.sum() * cell
+
+
 def _oracle_area(name, base, half, count):
     """The constant-orientation area at ``base``'s other coordinates over the square of
     half-width ``half`` by the closed-form inverse kinematics (every actuated joint within its
@@ -410,23 +432,8 @@ def _oracle_area(name, base, half, count):
     X, Y = np.meshgrid(v, v, indexing="ij")
     x = np.tile(base, (count * count, 1))
     x[:, 0], x[:, 1] = X.reshape(-1), Y.reshape(-1)
-    if name == "stewart":
-        inside, _ = _stewart_inside(x, 0.0)
-    else:
-        g = delta.williams_irb360_geometry()
-        with np.errstate(invalid="ignore"):
-            th = delta.inverse_kinematics(x[:, :3], g["R_b"], g["R_p"], g["L_A"], g["L_B"])
-        inside = np.all(np.isfinite(th) & (np.nan_to_num(th) >= -1.2) & (np.nan_to_num(th) <= 1.5), axis=1)
-    g = inside.reshape(count, count)
-    edge = np.zeros_like(g)
-    for ax in (0, 1):
-        d = np.diff(g.astype(np.int8), axis=ax) != 0
-        lo, hi = [slice(None)] * 2, [slice(None)] * 2
-        lo[ax], hi[ax] = slice(0, -1), slice(1, None)
-        edge[tuple(lo)] |= d
-        edge[tuple(hi)] |= d
-    cell = (v[1] - v[0]) ** 2
-    return g.sum() * cell, 0.5 * edge.sum() * cell
+    inside = _stewart_inside(x, 0.0)[0] if name == "stewart" else _delta_inside(x[:, :3])
+    return _size_and_error(inside.reshape(count, count), (v[1] - v[0]) ** 2)
 
 
 @pytest.mark.parametrize("name, half, pose", [
@@ -465,23 +472,10 @@ def test_the_refined_volume_of_the_delta_against_the_closed_form():
     axes = [(0, np.linspace(-1.5, 1.5, 13)), (1, np.linspace(-1.5, 1.5, 13)), (2, np.linspace(-2.2, -0.2, 9))]
     count = workspace(m, axes, threshold=0.0, measures="none")
     refined = workspace(m, axes, threshold=0.0, measures="none", refine=4)
-    g = delta.williams_irb360_geometry()
     xs, zs = np.linspace(-1.625, 1.625, 121), np.linspace(-2.325, -0.075, 121)
     X, Y, Z = np.meshgrid(xs, xs, zs, indexing="ij")
-    with np.errstate(invalid="ignore"):
-        th = delta.inverse_kinematics(np.column_stack([X.ravel(), Y.ravel(), Z.ravel()]), g["R_b"], g["R_p"],
-                                      g["L_A"], g["L_B"])
-    inside = np.all(np.isfinite(th) & (np.nan_to_num(th) >= -1.2) & (np.nan_to_num(th) <= 1.5), axis=1)
-    inside = inside.reshape(X.shape)
-    fine = (xs[1] - xs[0]) ** 2 * (zs[1] - zs[0])
-    edge = np.zeros_like(inside)
-    for ax in range(3):
-        d = np.diff(inside.astype(np.int8), axis=ax) != 0
-        lo, hi = [slice(None)] * 3, [slice(None)] * 3
-        lo[ax], hi[ax] = slice(0, -1), slice(1, None)
-        edge[tuple(lo)] |= d
-        edge[tuple(hi)] |= d
-    volume, volume_error = inside.sum() * fine, 0.5 * edge.sum() * fine
+    inside = _delta_inside(np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])).reshape(X.shape)
+    volume, volume_error = _size_and_error(inside, (xs[1] - xs[0]) ** 2 * (zs[1] - zs[0]))
     assert 100 < count.inside.sum() < 1000  # the boundary lies inside the grid
     assert abs(refined.size - volume) <= refined.size_error + volume_error
     assert abs(count.size - volume) <= count.size_error + volume_error

@@ -45,7 +45,7 @@ from .topology import column_scale, constraint_jacobian, row_labels, row_scale
 __all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals", "least_measure_bounds",
            "singularity_measures", "SingularityMeasures", "reachable", "TOLERANCE", "joint_coordinates",
            "limited_joints", "limit_violation", "limit_message", "limit_hit", "limit_line", "joint_frame",
-           "solve_graph"]
+           "solve_graph", "neighbour_pairs"]
 
 Array = NDArray[np.float64]
 
@@ -200,22 +200,29 @@ def solve_grid(model: MechanismModel, x: Array, shape: tuple[int, ...], roots: A
     pose is given up as out of reach once Newton has taken ``stall`` steps (0: never, only
     after ``MAX_ITER``) without halving its residual over the last three.
     Returns the kinematics (n rows; zeros where not solved) and which poses were solved (n,)."""
-    n = x.shape[0]
-    idx = np.arange(n).reshape(shape)
-    nbr = np.full((n, 2 * len(shape)), -1, dtype=np.int64)
+    nbr = np.full((x.shape[0], 2 * len(shape)), -1, dtype=np.int64)
+    for ax, (i, j) in enumerate(neighbour_pairs(shape)):
+        nbr[j, 2 * ax] = i
+        nbr[i, 2 * ax + 1] = j
+    x = np.ascontiguousarray(x)
+    for root in list(roots)[:tries]:
+        kin, ok = solve_graph(model, x, nbr, int(root), _start(model, x[root]), stall)
+        if ok[root]:
+            break
+    return kin, ok
+
+
+def neighbour_pairs(shape: tuple[int, ...]) -> list[tuple[NDArray[np.int64], NDArray[np.int64]]]:
+    """The neighbours along each axis of a grid of ``shape`` (the first axis slowest): per axis,
+    the flat indices ``i`` and ``j`` of every pose and of the next one along the axis."""
+    idx = np.arange(int(np.prod(shape))).reshape(shape)
+    pairs = []
     for ax in range(len(shape)):
         lo = [slice(None)] * len(shape)
         hi = [slice(None)] * len(shape)
         lo[ax], hi[ax] = slice(0, -1), slice(1, None)
-        nbr[idx[tuple(hi)].reshape(-1), 2 * ax] = idx[tuple(lo)].reshape(-1)
-        nbr[idx[tuple(lo)].reshape(-1), 2 * ax + 1] = idx[tuple(hi)].reshape(-1)
-    zero = np.zeros((n, model.nt))
-    x = np.ascontiguousarray(x)
-    for root in list(roots)[:tries]:
-        out = _run(model, x, zero, zero, _start(model, x[root]), nbr=nbr, root=int(root), stall=stall)
-        if out["status"][root] == K.OK:
-            break
-    return _assemble(model, None, x, zero, zero, out), out["status"] == K.OK
+        pairs.append((idx[tuple(lo)].reshape(-1), idx[tuple(hi)].reshape(-1)))
+    return pairs
 
 
 def solve_graph(model: MechanismModel, x: Array, nbr: NDArray[np.int64], root: int, q_root: Array,

@@ -66,8 +66,8 @@ from numpy.typing import NDArray
 from scipy import ndimage
 
 from ..errors import ParameterError
-from .kinematics import (beyond_limits, joint_coordinates, least_measure_bounds, limited_joints, reference_task,
-                         singularity_measures, solve_graph, solve_grid)
+from .kinematics import (beyond_limits, joint_coordinates, least_measure_bounds, limited_joints, neighbour_pairs,
+                         reference_task, singularity_measures, solve_graph, solve_grid)
 from .model import MechanismModel
 from .task_grid import grid_poses
 
@@ -132,15 +132,10 @@ def _roots(axes: list[tuple[int, Array]], base: Array) -> NDArray[np.int64]:
 
 def _boundary(inside: NDArray[np.bool_], shape: tuple[int, ...]) -> int:
     """Cells whose state differs from a neighbour's along a grid axis."""
-    g = inside.reshape(shape)
-    edge = np.zeros(shape, dtype=bool)
-    for ax in range(len(shape)):
-        diff = np.diff(g.astype(np.int8), axis=ax) != 0
-        lo = [slice(None)] * len(shape)
-        hi = [slice(None)] * len(shape)
-        lo[ax], hi[ax] = slice(0, -1), slice(1, None)
-        edge[tuple(lo)] |= diff
-        edge[tuple(hi)] |= diff
+    edge = np.zeros(inside.size, dtype=bool)
+    for i, j in neighbour_pairs(shape):
+        differ = inside[i] != inside[j]
+        edge[i[differ]] = edge[j[differ]] = True
     return int(edge.sum())
 
 
@@ -184,13 +179,8 @@ def _edges(inside: NDArray[np.bool_], shape: tuple[int, ...]) -> tuple[NDArray[n
                                                                         NDArray[np.int64]]:
     """The boundary's edges: pairs of neighbours along a grid axis, ``a`` inside and ``b``
     outside, and the axis of each."""
-    idx = np.arange(inside.size).reshape(shape)
     a, b, axis = [], [], []
-    for ax in range(len(shape)):
-        lo = [slice(None)] * len(shape)
-        hi = [slice(None)] * len(shape)
-        lo[ax], hi[ax] = slice(0, -1), slice(1, None)
-        i, j = idx[tuple(lo)].reshape(-1), idx[tuple(hi)].reshape(-1)
+    for ax, (i, j) in enumerate(neighbour_pairs(shape)):
         up, down = inside[i] & ~inside[j], ~inside[i] & inside[j]
         a += [i[up], j[down]]
         b += [j[up], i[down]]
@@ -215,13 +205,8 @@ def _crossings(model: MechanismModel, x: Array, shape: tuple[int, ...], inside: 
     m, e, d = len(ins), len(a), len(shape)
     pos = np.full(inside.size, -1, dtype=np.int64)
     pos[ins] = np.arange(m)
-    idx = np.arange(inside.size).reshape(shape)
     nbr = np.full((m + e * steps, 4 * d), -1, dtype=np.int64)
-    for ax in range(d):  # inside poses lead to their inside neighbours
-        lo = [slice(None)] * d
-        hi = [slice(None)] * d
-        lo[ax], hi[ax] = slice(0, -1), slice(1, None)
-        i, j = idx[tuple(lo)].reshape(-1), idx[tuple(hi)].reshape(-1)
+    for ax, (i, j) in enumerate(neighbour_pairs(shape)):  # inside poses lead to their inside neighbours
         both = inside[i] & inside[j]
         nbr[pos[i[both]], 2 * ax] = pos[j[both]]
         nbr[pos[j[both]], 2 * ax + 1] = pos[i[both]]
