@@ -37,6 +37,25 @@ def test_spans_join_to_the_whole_run(machine, kind, n):
         np.testing.assert_allclose(joined, getattr(whole.joint, f)[:-1], rtol=0, atol=1e-12, err_msg=f)
 
 
+def test_a_run_does_not_depend_on_what_the_verbs_solved_before():
+    """The PDM's PID run from rest, once on fresh verbs and once after another run has left its
+    warm starts (the solvers' last solutions) elsewhere: the same records. Two of the PDM's
+    coordinates stay at rest by symmetry; their velocities' rounding signs once decided whether
+    the first steps were refined (5e-6 m apart)."""
+    s = load_settings("pdm")
+    ls = loop_settings(s)
+    g = gains(s, "pid", 4)
+
+    def run(su, duration):
+        return track(su.verbs, su.model, su.plant_model, su.motion, duration, "pid", g, ls, su.has_load).result.q
+
+    fresh = run(machine_setup("pdm", None, None, None, 0.4, s), 0.25)
+    for before in (0.1, 0.17, 0.2, 0.3):
+        su = machine_setup("pdm", None, None, None, 0.4, s)
+        run(su, before)
+        np.testing.assert_allclose(run(su, 0.25), fresh, rtol=0, atol=1e-9, err_msg=f"after a run of {before} s")
+
+
 def test_parquet_holds_the_numbers_of_the_csv(tmp_path):
     base = ["hip", "control", "--controller", "pd", "--no-plots", "--cycles", "0.05"]
     assert main([*base, "--out", str(tmp_path / "c")]) == 0

@@ -57,12 +57,19 @@ acceleration)``, and that error then grows linearly in the position. A step (of 
 method) in which any velocity component changes sign is therefore taken again as
 ``REFINE = 16`` ROS2 steps of ``dt / 16`` (a fixed refinement, not an adaptive collapse:
 reversals are a few per cycle, so the cost is small), with a fresh Jacobian at every one in
-the band and the reuse rule above outside it.
+the band and the reuse rule above outside it. A step in which a component leaves zero (a start
+from rest, where friction turns on) or comes to it is refined alike. A velocity within
+``REVERSAL_FLOOR = 1e-10`` of the step's largest counts as zero: a coordinate held at rest by
+the machine's symmetry has a velocity of rounding size whose sign is the rounding's, and a
+step refined or not on that sign made a run depend on the solvers' warm starts (the PDM's PID
+run from rest moved by 2e-4 of its first step's size, one way or the other).
 
 Accuracy per cost (``tests/test_simulate.py`` against ``solve_ivp`` Radau at tolerances 1e-10;
 docs/control.md). One step per 1 ms cycle on a two-link machine with friction as sharp as the
-hip's, max position error over 0.15 s: ROS2 alone 9.9e-4 rad (2 evaluations per step plus its
-Jacobians, about 3 in all), Nystroem/ROS2 2.9e-5, RK4/ROS2 3.0e-5 rad; with smooth friction
+hip's, from rest, max position error over 0.15 s: ROS2 alone 4.2e-5 rad (2 evaluations per
+step plus its Jacobians, about 3 in all; 9.9e-4 while a start from rest counted as a reversal
+only where a velocity left zero downwards), Nystroem/ROS2 2.9e-5, RK4/ROS2 3.0e-5 rad (ROS2
+alone stops converging near 3e-6 rad at 0.125 ms steps, the explicit steps do not); with smooth friction
 (eps = 0.1 rad/s) 8.1e-5, 9.6e-7 and 5.3e-7 rad. On the hip's ISO cycle no step outside the
 velocity reversals is in the band at 1 ms; the feedforward replay on the exact plant is off
 by 3.0e-3 deg with ROS2 alone, 7e-6 deg with Nystroem/ROS2 and 6e-6 deg with RK4/ROS2, for
@@ -95,6 +102,9 @@ FD_STEP = 1e-7
 JACOBIAN_REUSE = 0.05
 #: sub-steps of a step in which a velocity component reverses
 REFINE = 16
+#: a velocity component within this fraction of the largest velocity counts as zero when a
+#: step is checked for a reversal (:func:`_reversed`)
+REVERSAL_FLOOR = 1e-10
 #: a step is explicit (third order or RK4) where ``dt |d f / d qd|`` is below this
 EXPLICIT_LIMIT = 0.5
 
@@ -197,8 +207,30 @@ def _stage1(q: Array, v: Array, f0: Array, A: Array, dt: float, W: Array, buf: A
 
 
 @numba.njit(cache=True)
+def _side(v: float, floor: float) -> int:  # pragma: no cover - compiled
+    """-1, 0 or 1: the side of zero ``v`` is on, within ``floor`` of zero counting as zero."""
+    return 1 if v > floor else (-1 if v < -floor else 0)
+
+
+@numba.njit(cache=True)
+def _reversed(v0: Array, v1: Array) -> bool:  # pragma: no cover - compiled
+    """Whether a velocity component changed its side of zero from ``v0`` to ``v1``: crossed it,
+    left it (a start from rest, where friction turns on) or came to it, a velocity within
+    ``REVERSAL_FLOOR`` of the largest of the two counting as zero (a coordinate held at rest by
+    symmetry has a velocity of rounding size, whose sign is the rounding's)."""
+    scale = 0.0
+    for i in range(v0.shape[0]):
+        scale = max(scale, abs(v0[i]), abs(v1[i]))
+    floor = REVERSAL_FLOOR * scale
+    for i in range(v0.shape[0]):
+        if _side(v0[i], floor) != _side(v1[i], floor):
+            return True
+    return False
+
+
+@numba.njit(cache=True)
 def _stage2(q: Array, v: Array, f2: Array, dt: float, W: Array, buf: Array) -> bool:  # pragma: no cover
-    """Solve stage 2 and advance ``q, v`` in place; whether a velocity component changed sign."""
+    """Solve stage 2 and advance ``q, v`` in place; whether a velocity component reversed (:func:`_reversed`)."""
     n = q.shape[0]
     g = ROS2_GAMMA * dt
     for i in range(n):
@@ -209,10 +241,7 @@ def _stage2(q: Array, v: Array, f2: Array, dt: float, W: Array, buf: Array) -> b
         k2q = buf[3, i] - 2.0 * buf[0, i] + g * buf[5, i]
         q[i] += dt * (1.5 * buf[0, i] + 0.5 * k2q)
         v[i] += dt * (1.5 * buf[1, i] + 0.5 * buf[5, i])
-    for i in range(n):
-        if (v[i] < 0.0) != (buf[7, i] < 0.0):
-            return True
-    return False
+    return _reversed(buf[7], v)
 
 
 class _Work:
@@ -280,7 +309,7 @@ def _stale(qd: Array, qd_A: Array, rel: float) -> bool:  # pragma: no cover - co
 def _ros2_step(plant: Plant, q: Array, qd: Array, u: Array, ld0: float, ld1: float, dt: float, w: _Work,
                force_jacobian: bool = False, f0: Array | None = None) -> bool:
     """One ROS2 step of ``dt`` in place (loads at the step's two ends); returns whether a
-    velocity component changed sign (the state before the step is kept in ``w.buf[6:8]``).
+    velocity component reversed (:func:`_reversed`; the state before the step is kept in ``w.buf[6:8]``).
     ``f0``: ``f`` at the step's start if already evaluated."""
     f = plant.f
     if f0 is None:
@@ -321,11 +350,10 @@ def _rk_finish(q: Array, v: Array, a1: Array, a2: Array, a3: Array, a4: Array, h
                old: Array) -> tuple[bool, float]:  # pragma: no cover - compiled
     """Advance ``q, v`` in place by the classical RK4 weights for ``q' = v, v' = a`` (stage
     velocities ``v, v + h/2 a1, v + h/2 a2, v + h a3``); keeps the old state in ``old[0:2]``.
-    Returns whether a velocity component changed sign and the stiffness estimate
+    Returns whether a velocity component reversed (:func:`_reversed`) and the stiffness estimate
     ``|a3 - a2| / |v3 - v2|`` (max norms; stages 2 and 3 differ by ``h/2 (a2 - a1)`` in the
     velocity), 0 where that difference is below rounding."""
     n = q.shape[0]
-    rev = False
     da = 0.0
     dv = 0.0
     vs = 0.0
@@ -334,12 +362,11 @@ def _rk_finish(q: Array, v: Array, a1: Array, a2: Array, a3: Array, a4: Array, h
         old[1, i] = v[i]
         q[i] += h * v[i] + h * h / 6.0 * (a1[i] + a2[i] + a3[i])
         vn = v[i] + h / 6.0 * (a1[i] + 2.0 * a2[i] + 2.0 * a3[i] + a4[i])
-        if (vn < 0.0) != (v[i] < 0.0):
-            rev = True
         da = max(da, abs(a3[i] - a2[i]))
         dv = max(dv, 0.5 * h * abs(a2[i] - a1[i]))
         vs = max(vs, abs(v[i]))
         v[i] = vn
+    rev = _reversed(old[1], v)
     if dv <= 1e-12 * (1.0 + vs):
         return rev, 0.0
     return rev, da / dv
@@ -350,11 +377,10 @@ def _rk3_finish(q: Array, v: Array, a1: Array, a2: Array, a3: Array, h: float,
                 old: Array) -> tuple[bool, float]:  # pragma: no cover - compiled
     """Advance ``q, v`` in place by Nystroem's third-order weights ``(1/4, 3/8, 3/8)`` for
     ``q' = v, v' = a`` (stage velocities ``v, v + 2h/3 a1, v + 2h/3 a2``); keeps the old state
-    in ``old[0:2]``. Returns whether a velocity component changed sign and the stiffness
+    in ``old[0:2]``. Returns whether a velocity component reversed (:func:`_reversed`) and the stiffness
     estimate ``|a3 - a2| / |v3 - v2|`` (stages 2 and 3 differ by ``2h/3 (a2 - a1)`` in the
     velocity; 0 where that difference is below rounding)."""
     n = q.shape[0]
-    rev = False
     da = 0.0
     dv = 0.0
     vs = 0.0
@@ -363,12 +389,11 @@ def _rk3_finish(q: Array, v: Array, a1: Array, a2: Array, a3: Array, h: float,
         old[1, i] = v[i]
         q[i] += h * v[i] + 0.25 * h * h * (a1[i] + a2[i])
         vn = v[i] + h * (0.25 * a1[i] + 0.375 * (a2[i] + a3[i]))
-        if (vn < 0.0) != (v[i] < 0.0):
-            rev = True
         da = max(da, abs(a3[i] - a2[i]))
         dv = max(dv, 2.0 / 3.0 * h * abs(a2[i] - a1[i]))
         vs = max(vs, abs(v[i]))
         v[i] = vn
+    rev = _reversed(old[1], v)
     if dv <= 1e-12 * (1.0 + vs):
         return rev, 0.0
     return rev, da / dv
@@ -392,7 +417,7 @@ def _rk3_step(plant: Plant, q: Array, qd: Array, u: Array, ld0: float, ldm: floa
 def _rk4_step(plant: Plant, q: Array, qd: Array, u: Array, ld0: float, ldm: float, ld1: float, dt: float, w: _Work,
               f0: Array) -> tuple[bool, float]:
     """One classical RK4 step of ``dt`` in place (loads at the start, middle and end; ``f0`` =
-    ``f`` at the start); returns whether a velocity component changed sign and the stiffness
+    ``f`` at the start); returns whether a velocity component reversed (:func:`_reversed`) and the stiffness
     estimate of :func:`_rk_finish` (the state before the step is kept in ``w.buf[6:8]``)."""
     f = plant.f
     q4, v4, q2, v2, q3, v3 = w.rows[:6]
@@ -414,7 +439,7 @@ def hold_interval(plant: Plant, q: Array, qd: Array, u: Array, loads: Array, dt:
     Each step (module docstring) is explicit (third-order Nystroem or RK4, per
     :func:`make_work`) while the friction's slope ``dt |d f / d qd|`` estimated from the step's
     stages stays below ``EXPLICIT_LIMIT``, else ROS2 (retaken, and kept while ``dt |A|`` of its
-    Jacobian stays at or above the limit); a step in which a velocity component changes sign
+    Jacobian stays at or above the limit); a step in which a velocity component reverses
     is taken again as ``REFINE`` ROS2 steps of ``dt / REFINE`` (fresh Jacobians in the band).
     ``make_work(plant, "ros2")`` takes every step by ROS2."""
     w = work
