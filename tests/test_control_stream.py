@@ -41,7 +41,7 @@ def test_a_run_does_not_depend_on_what_the_verbs_solved_before():
     """The PDM's PID run from rest, once on fresh verbs and once after another run has left its
     warm starts (the solvers' last solutions) elsewhere: the same records. Two of the PDM's
     coordinates stay at rest by symmetry; their velocities' rounding signs once decided whether
-    the first steps were refined (5e-6 m apart)."""
+    the first steps were refined (5e-6 rad apart in gamma)."""
     s = load_settings("pdm")
     ls = loop_settings(s)
     g = gains(s, "pid", 4)

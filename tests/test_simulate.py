@@ -81,13 +81,23 @@ def test_error_against_radau_through_reversals(reference):
 
 
 @pytest.mark.parametrize("method", ["ros2", "rk3-ros2"])
-def test_a_start_from_rest_is_refined(reference, method):
-    """The machine starts at rest, its friction turning on in the first step: that step is
-    refined as a reversal is, whichever way each velocity leaves zero. Unrefined, a start whose
-    velocities all left zero upwards made a velocity error in the first step that the position
-    then carried, growing by about 3e-5 rad a cycle (ROS2 alone)."""
-    x = _simulate(10, 1, method=method)
-    assert np.max(np.abs(x[:, :2] - reference[:10, :2])) < 3e-5  # rad, over the first 10 cycles
+@pytest.mark.parametrize("effort", [(2.5, 1.6), (-2.5, -1.6)])
+def test_a_start_from_rest_is_refined_whichever_way_it_goes(method, effort):
+    """The machine at rest, its friction turning on in the first step: that step is refined as
+    a reversal is, whether the velocities leave zero upwards or downwards."""
+    plant = make_plant(toy.verbs(True), MODEL, has_load=True)
+    work = make_work(plant, method)
+    q, qd = np.array([0.1, 0.5]), np.zeros(2)
+    hold_interval(plant, q, qd, np.array(effort), np.full(3, 1000.0), T, work)
+    assert np.all(np.sign(qd) == np.sign(effort))  # both velocities left zero the effort's way
+    assert work.refined_steps == 1
+
+
+def test_a_start_from_rest_stays_close(reference):
+    """ROS2 alone from rest against Radau over the first 10 cycles. Unrefined, its first step
+    made a velocity error that the position then carried, growing by about 3e-5 rad a cycle."""
+    x = _simulate(10, 1, method="ros2")
+    assert np.max(np.abs(x[:, :2] - reference[:10, :2])) < 3e-5  # rad
 
 
 @pytest.mark.parametrize("method", ["rk3-ros2", "rk4-ros2"])
@@ -231,3 +241,4 @@ def test_a_velocity_of_rounding_size_does_not_reverse():
     assert _reversed(np.array([0.3, moving]), np.array([-0.1, moving]))
     assert not _reversed(np.array([0.3, moving]), np.array([0.1, moving]))
     assert not _reversed(np.zeros(2), np.zeros(2))
+    assert not _reversed(np.array([1e-18, -1e-18]), np.array([-1e-18, 1e-18]))  # a machine held still

@@ -87,7 +87,8 @@ def _jacobian(pk, has_load, q, qd, u, ld, f0, A, vp, qd_A, ws, fv):  # pragma: n
 @numba.njit(cache=True)
 def _ros2(pk, has_load, q, qd, u, ld0, ld1, dt, force, have_f0, f0, A, W, vp, buf, qd_A, ws,
           fv):  # pragma: no cover - compiled
-    """:func:`._plant._ros2_step`; returns the status and whether a velocity reversed (:func:`._plant._reversed`)."""
+    """:func:`._plant._ros2_step`; returns the status and whether a velocity reversed
+    (:func:`._plant._reversed`)."""
     if not have_f0:
         st = _f(pk, q, qd, u, ld0, has_load, f0)
         if st != _OK:

@@ -58,23 +58,24 @@ method) in which any velocity component changes sign is therefore taken again as
 ``REFINE = 16`` ROS2 steps of ``dt / 16`` (a fixed refinement, not an adaptive collapse:
 reversals are a few per cycle, so the cost is small), with a fresh Jacobian at every one in
 the band and the reuse rule above outside it. A step in which a component leaves zero (a start
-from rest, where friction turns on) or comes to it is refined alike. A velocity within
-``REVERSAL_FLOOR = 1e-10`` of the step's largest counts as zero: a coordinate held at rest by
-the machine's symmetry has a velocity of rounding size whose sign is the rounding's, and a
-step refined or not on that sign made a run depend on the solvers' warm starts (the PDM's PID
-run from rest moved by 2e-4 of its first step's size, one way or the other).
+from rest, where friction turns on) or comes to it is refined alike. A velocity smaller than
+``REVERSAL_FLOOR = 1e-10`` times the step's largest ``|velocity|`` (or than 1e-10 m/s or
+rad/s) counts as zero: a coordinate held at rest by the machine's symmetry has a velocity of
+rounding size whose sign is the rounding's, and a step refined or not on that sign made a
+run depend on the solvers' warm starts (the PDM's PID run from rest: 2e-4 of its first
+step's size one way or the other, 5e-6 rad of its angle gamma after 0.25 s).
 
 Accuracy per cost (``tests/test_simulate.py`` against ``solve_ivp`` Radau at tolerances 1e-10;
 docs/control.md). One step per 1 ms cycle on a two-link machine with friction as sharp as the
 hip's, from rest, max position error over 0.15 s: ROS2 alone 4.2e-5 rad (2 evaluations per
 step plus its Jacobians, about 3 in all; 9.9e-4 while a start from rest counted as a reversal
 only where a velocity left zero downwards), Nystroem/ROS2 2.9e-5, RK4/ROS2 3.0e-5 rad (ROS2
-alone stops converging near 3e-6 rad at 0.125 ms steps, the explicit steps do not); with smooth friction
-(eps = 0.1 rad/s) 8.1e-5, 9.6e-7 and 5.3e-7 rad. On the hip's ISO cycle no step outside the
-velocity reversals is in the band at 1 ms; the feedforward replay on the exact plant is off
-by 3.0e-3 deg with ROS2 alone, 7e-6 deg with Nystroem/ROS2 and 6e-6 deg with RK4/ROS2, for
-3.0, 3.2 and 4.2 evaluations per cycle. Nystroem/ROS2 is the default: the third order costs
-what ROS2 costs and leaves the replay error to the zero-order hold.
+alone stops converging near 3e-6 rad at 0.125 ms steps, the explicit steps do not); with
+smooth friction (eps = 0.1 rad/s) 8.1e-5, 9.6e-7 and 5.3e-7 rad. On the hip's ISO cycle no
+step outside the velocity reversals is in the band at 1 ms; the feedforward replay on the
+exact plant is off by 3.0e-3 deg with ROS2 alone, 7e-6 deg with Nystroem/ROS2 and 6e-6 deg
+with RK4/ROS2, for 3.0, 3.2 and 4.2 evaluations per cycle. Nystroem/ROS2 is the default: the
+third order costs what ROS2 costs and leaves the replay error to the zero-order hold.
 """
 
 from __future__ import annotations
@@ -102,8 +103,8 @@ FD_STEP = 1e-7
 JACOBIAN_REUSE = 0.05
 #: sub-steps of a step in which a velocity component reverses
 REFINE = 16
-#: a velocity component within this fraction of the largest velocity counts as zero when a
-#: step is checked for a reversal (:func:`_reversed`)
+#: a velocity component smaller than this times the largest velocity (or than this, in m/s or
+#: rad/s) counts as zero when a step is checked for a reversal (:func:`_reversed`)
 REVERSAL_FLOOR = 1e-10
 #: a step is explicit (third order or RK4) where ``dt |d f / d qd|`` is below this
 EXPLICIT_LIMIT = 0.5
@@ -215,10 +216,11 @@ def _side(v: float, floor: float) -> int:  # pragma: no cover - compiled
 @numba.njit(cache=True)
 def _reversed(v0: Array, v1: Array) -> bool:  # pragma: no cover - compiled
     """Whether a velocity component changed its side of zero from ``v0`` to ``v1``: crossed it,
-    left it (a start from rest, where friction turns on) or came to it, a velocity within
-    ``REVERSAL_FLOOR`` of the largest of the two counting as zero (a coordinate held at rest by
-    symmetry has a velocity of rounding size, whose sign is the rounding's)."""
-    scale = 0.0
+    left it (a start from rest, where friction turns on) or came to it. A velocity smaller
+    than ``REVERSAL_FLOOR`` times the largest ``|velocity|`` of the two, or than
+    ``REVERSAL_FLOOR`` itself [m/s or rad/s], counts as zero: a coordinate held at rest by
+    symmetry has a velocity of rounding size, whose sign is the rounding's."""
+    scale = 1.0
     for i in range(v0.shape[0]):
         scale = max(scale, abs(v0[i]), abs(v1[i]))
     floor = REVERSAL_FLOOR * scale
@@ -230,7 +232,8 @@ def _reversed(v0: Array, v1: Array) -> bool:  # pragma: no cover - compiled
 
 @numba.njit(cache=True)
 def _stage2(q: Array, v: Array, f2: Array, dt: float, W: Array, buf: Array) -> bool:  # pragma: no cover
-    """Solve stage 2 and advance ``q, v`` in place; whether a velocity component reversed (:func:`_reversed`)."""
+    """Solve stage 2 and advance ``q, v`` in place; whether a velocity component reversed
+    (:func:`_reversed`)."""
     n = q.shape[0]
     g = ROS2_GAMMA * dt
     for i in range(n):
@@ -309,8 +312,8 @@ def _stale(qd: Array, qd_A: Array, rel: float) -> bool:  # pragma: no cover - co
 def _ros2_step(plant: Plant, q: Array, qd: Array, u: Array, ld0: float, ld1: float, dt: float, w: _Work,
                force_jacobian: bool = False, f0: Array | None = None) -> bool:
     """One ROS2 step of ``dt`` in place (loads at the step's two ends); returns whether a
-    velocity component reversed (:func:`_reversed`; the state before the step is kept in ``w.buf[6:8]``).
-    ``f0``: ``f`` at the step's start if already evaluated."""
+    velocity component reversed (:func:`_reversed`; the state before the step is kept in
+    ``w.buf[6:8]``). ``f0``: ``f`` at the step's start if already evaluated."""
     f = plant.f
     if f0 is None:
         f0 = f(q, qd, u, ld0)
@@ -350,9 +353,9 @@ def _rk_finish(q: Array, v: Array, a1: Array, a2: Array, a3: Array, a4: Array, h
                old: Array) -> tuple[bool, float]:  # pragma: no cover - compiled
     """Advance ``q, v`` in place by the classical RK4 weights for ``q' = v, v' = a`` (stage
     velocities ``v, v + h/2 a1, v + h/2 a2, v + h a3``); keeps the old state in ``old[0:2]``.
-    Returns whether a velocity component reversed (:func:`_reversed`) and the stiffness estimate
-    ``|a3 - a2| / |v3 - v2|`` (max norms; stages 2 and 3 differ by ``h/2 (a2 - a1)`` in the
-    velocity), 0 where that difference is below rounding."""
+    Returns whether a velocity component reversed (:func:`_reversed`) and the stiffness
+    estimate ``|a3 - a2| / |v3 - v2|`` (max norms; stages 2 and 3 differ by ``h/2 (a2 - a1)``
+    in the velocity), 0 where that difference is below rounding."""
     n = q.shape[0]
     da = 0.0
     dv = 0.0
@@ -377,9 +380,9 @@ def _rk3_finish(q: Array, v: Array, a1: Array, a2: Array, a3: Array, h: float,
                 old: Array) -> tuple[bool, float]:  # pragma: no cover - compiled
     """Advance ``q, v`` in place by Nystroem's third-order weights ``(1/4, 3/8, 3/8)`` for
     ``q' = v, v' = a`` (stage velocities ``v, v + 2h/3 a1, v + 2h/3 a2``); keeps the old state
-    in ``old[0:2]``. Returns whether a velocity component reversed (:func:`_reversed`) and the stiffness
-    estimate ``|a3 - a2| / |v3 - v2|`` (stages 2 and 3 differ by ``2h/3 (a2 - a1)`` in the
-    velocity; 0 where that difference is below rounding)."""
+    in ``old[0:2]``. Returns whether a velocity component reversed (:func:`_reversed`) and the
+    stiffness estimate ``|a3 - a2| / |v3 - v2|`` (stages 2 and 3 differ by ``2h/3 (a2 - a1)``
+    in the velocity; 0 where that difference is below rounding)."""
     n = q.shape[0]
     da = 0.0
     dv = 0.0
@@ -417,8 +420,9 @@ def _rk3_step(plant: Plant, q: Array, qd: Array, u: Array, ld0: float, ldm: floa
 def _rk4_step(plant: Plant, q: Array, qd: Array, u: Array, ld0: float, ldm: float, ld1: float, dt: float, w: _Work,
               f0: Array) -> tuple[bool, float]:
     """One classical RK4 step of ``dt`` in place (loads at the start, middle and end; ``f0`` =
-    ``f`` at the start); returns whether a velocity component reversed (:func:`_reversed`) and the stiffness
-    estimate of :func:`_rk_finish` (the state before the step is kept in ``w.buf[6:8]``)."""
+    ``f`` at the start); returns whether a velocity component reversed (:func:`_reversed`) and
+    the stiffness estimate of :func:`_rk_finish` (the state before the step is kept in
+    ``w.buf[6:8]``)."""
     f = plant.f
     q4, v4, q2, v2, q3, v3 = w.rows[:6]
     h2 = 0.5 * dt
