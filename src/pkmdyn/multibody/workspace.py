@@ -147,17 +147,19 @@ def _least(model: MechanismModel, q: Array) -> Array:
     return np.minimum(m, sm.direct) if model.na == model.nt else m
 
 
-def _screen(model: MechanismModel, kin, reached: NDArray[np.bool_], threshold: float, all_measures: bool
-            ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], Array, Array]:
+def _screen(model: MechanismModel, kin, reached: NDArray[np.bool_], threshold: float, all_measures: bool,
+            coords: Array | None = None) -> tuple[NDArray[np.bool_], NDArray[np.bool_], Array, Array]:
     """Of solved poses (``kin``, ``reached``): reached within the joint limits, and good (also
     every singularity measure at least ``threshold``); the least measure (0 where not reached;
     NaN where ``all_measures`` is False and its bounds prove it at least ``threshold``) and an
-    upper bound of it (:func:`_held`)."""
+    upper bound of it (:func:`_held`). ``coords``: the limited joints' coordinates of every
+    pose of ``kin`` (:func:`_limited_coordinates`), where already at hand."""
     n = len(reached)
     joints = limited_joints(model)
     if joints and reached.any():
-        reached = reached & ~beyond_limits(model, joint_coordinates(model, kin, joints, along=False),
-                                           joints).any(axis=1)
+        if coords is None:
+            coords = _limited_coordinates(model, kin)
+        reached = reached & ~beyond_limits(model, coords, joints).any(axis=1)
     measure = np.zeros(n)
     upper = np.zeros(n)
     proven = np.zeros(n, dtype=bool)
@@ -173,6 +175,13 @@ def _screen(model: MechanismModel, kin, reached: NDArray[np.bool_], threshold: f
         if rest.size:
             measure[rest] = upper[rest] = _least(model, kin.q[rest])
     return reached, reached & (proven | (measure >= threshold)), measure, upper
+
+
+def _limited_coordinates(model: MechanismModel, kin) -> Array | None:
+    """The coordinates of the limited joints (:func:`.kinematics.limited_joints`) at every pose
+    of ``kin``; None without such joints."""
+    joints = limited_joints(model)
+    return joint_coordinates(model, kin, joints, along=False) if joints else None
 
 
 def _edges(inside: NDArray[np.bool_], shape: tuple[int, ...]) -> tuple[NDArray[np.int64], NDArray[np.int64],
@@ -222,7 +231,8 @@ def _crossings(model: MechanismModel, x: Array, shape: tuple[int, ...], inside: 
     kin, ok = solve_graph(model, np.concatenate([x[ins], xs.reshape(-1, x.shape[1])]), nbr, int(pos[root]), q[root])
     steps_ok = ok.copy()
     steps_ok[:m] = False  # the inside poses are screened already
-    _, good, _, _ = _screen(model, kin, steps_ok, threshold, all_measures)
+    coords = _limited_coordinates(model, kin)  # for the screen and the crossings' margins alike
+    _, good, _, _ = _screen(model, kin, steps_ok, threshold, all_measures, coords)
     g = good[m:].reshape(e, steps)
     k = np.where(g.all(axis=1), steps, np.argmin(g, axis=1))
     frac = np.full(e, 0.5)
@@ -232,7 +242,7 @@ def _crossings(model: MechanismModel, x: Array, shape: tuple[int, ...], inside: 
     if part.size:
         bad = m + part * steps + k[part]
         last = np.where(k[part] == 0, pos[a[part]], bad - 1)
-        frac[part] = _between(model, kin, last, bad, threshold)
+        frac[part] = _between(model, kin, last, bad, threshold, coords)
     t = np.where(k == steps, 1.0, (k + frac) / steps)
     # an inside pose that its second solve did not reach again (or reached elsewhere, another
     # branch) leaves its edges as the count has them: half a step
@@ -240,18 +250,19 @@ def _crossings(model: MechanismModel, x: Array, shape: tuple[int, ...], inside: 
     return a, axis, np.where(again[pos[a]], t, 0.5)
 
 
-def _between(model: MechanismModel, kin, good: NDArray[np.int64], bad: NDArray[np.int64], threshold: float
-             ) -> Array:
+def _between(model: MechanismModel, kin, good: NDArray[np.int64], bad: NDArray[np.int64], threshold: float,
+             coords: Array | None) -> Array:
     """Where between the poses ``good`` and ``bad`` of ``kin`` (pairs, the latter outside) the
     condition the latter fails is crossed, as a fraction of the way, linear between their
     margins: for each joint beyond its limit at ``bad``, its distance to that limit; where no
     joint is, the least singularity measure less ``threshold``; the first crossing over the
-    joints. 1/2 where the margins do not bracket a crossing."""
+    joints. 1/2 where the margins do not bracket a crossing. ``coords``: the limited joints'
+    coordinates at every pose of ``kin`` (:func:`_limited_coordinates`; None without them)."""
     f = np.full(len(good), np.inf)
     by_measure = np.ones(len(good), dtype=bool)
     joints = limited_joints(model)
     if joints:
-        c = joint_coordinates(model, kin, joints, along=False)
+        c = coords
         lo = np.array([model.joint_limits[j][0] for j in joints])
         hi = np.array([model.joint_limits[j][1] for j in joints])
         beyond = beyond_limits(model, c[bad], joints)
