@@ -45,7 +45,7 @@ from .topology import column_scale, constraint_jacobian, row_labels, row_scale
 __all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals", "least_measure_bounds",
            "singularity_measures", "SingularityMeasures", "reachable", "TOLERANCE", "joint_coordinates",
            "limited_joints", "limit_violation", "limit_message", "limit_hit", "limit_line", "joint_frame",
-           "solve_graph", "neighbour_pairs"]
+           "solve_graph", "neighbour_pairs", "limit_bounds"]
 
 Array = NDArray[np.float64]
 
@@ -404,11 +404,17 @@ def joint_coordinates(model: MechanismModel, kin: MechanismKinematics, joints: l
     return out
 
 
+def limit_bounds(model: MechanismModel, joints: list[int]) -> tuple[Array, Array]:
+    """The lower and upper limits ``(k,)`` of the limited joints ``joints``
+    (:func:`limited_joints`), in their coordinates' units."""
+    return (np.array([model.joint_limits[j][0] for j in joints]),
+            np.array([model.joint_limits[j][1] for j in joints]))
+
+
 def beyond_limits(model: MechanismModel, c: Array, joints: list[int]) -> NDArray[np.bool_]:
     """Whether each coordinate ``c (n, k)`` (:func:`joint_coordinates`) lies beyond its joint's
     limits by more than :data:`LIMIT_TOLERANCE` (n, k)."""
-    lo = np.array([model.joint_limits[j][0] for j in joints])
-    hi = np.array([model.joint_limits[j][1] for j in joints])
+    lo, hi = limit_bounds(model, joints)
     tol = np.array([LIMIT_TOLERANCE * (model.length_scale if JOINT_TYPES[model.joint_type[j]].units[0] == "m" else 1.0)
                     for j in joints])
     return (c < lo - tol) | (c > hi + tol)

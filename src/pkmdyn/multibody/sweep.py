@@ -108,14 +108,13 @@ def _limit_metrics(model: Any, kin: Any, u: Array) -> dict[str, float]:
     A1 of :mod:`.actuators`: transmitted, rotor and motor friction) over its rating, over the
     samples and the rated drives (above 1: beyond it)."""
     from .actuators import motor_efforts
-    from .kinematics import beyond_limits, joint_coordinates, limited_joints
+    from .kinematics import beyond_limits, joint_coordinates, limit_bounds, limited_joints
 
     out: dict[str, float] = {}
     joints = limited_joints(model)
     if joints:
         c = joint_coordinates(model, kin, joints)
-        lo = np.array([model.joint_limits[j][0] for j in joints])
-        hi = np.array([model.joint_limits[j][1] for j in joints])
+        lo, hi = limit_bounds(model, joints)
         margin = np.minimum(c - lo, hi - c) / (hi - lo)
         # within the tolerance that pkmdyn run allows at a limit (beyond_limits): at the limit, 0
         margin = np.where((margin < 0.0) & ~beyond_limits(model, c, joints), 0.0, margin)

@@ -66,8 +66,8 @@ from numpy.typing import NDArray
 from scipy import ndimage
 
 from ..errors import ParameterError
-from .kinematics import (beyond_limits, joint_coordinates, least_measure_bounds, limited_joints, neighbour_pairs,
-                         reference_task, singularity_measures, solve_graph, solve_grid)
+from .kinematics import (beyond_limits, joint_coordinates, least_measure_bounds, limit_bounds, limited_joints,
+                         neighbour_pairs, reference_task, singularity_measures, solve_graph, solve_grid)
 from .model import MechanismModel
 from .task_grid import grid_poses
 
@@ -262,14 +262,12 @@ def _between(model: MechanismModel, kin, good: NDArray[np.int64], bad: NDArray[n
     by_measure = np.ones(len(good), dtype=bool)
     joints = limited_joints(model)
     if joints:
-        c = coords
-        lo = np.array([model.joint_limits[j][0] for j in joints])
-        hi = np.array([model.joint_limits[j][1] for j in joints])
-        beyond = beyond_limits(model, c[bad], joints)
+        lo, hi = limit_bounds(model, joints)
+        beyond = beyond_limits(model, coords[bad], joints)
         by_measure = ~beyond.any(axis=1)
-        over = c[bad] > hi  # the limit each joint beyond one is beyond
-        m1 = np.where(over, hi - c[good], c[good] - lo)
-        m2 = np.where(over, hi - c[bad], c[bad] - lo)
+        over = coords[bad] > hi  # the limit each joint beyond one is beyond
+        m1 = np.where(over, hi - coords[good], coords[good] - lo)
+        m2 = np.where(over, hi - coords[bad], coords[bad] - lo)
         f = np.where(beyond, _fraction(m1, m2), np.inf).min(axis=1)
     if by_measure.any():
         both = _least(model, kin.q[np.concatenate([good[by_measure], bad[by_measure]])]) - threshold
