@@ -190,11 +190,11 @@ def test_workspace_command(tmp_path):
     assert both["orientation_range"] == {"z_m": {"low": -1.6, "high": -0.8, "count": 3}} and "z_m" not in both["fixed"]
     assert both["inside"] < doc["inside"]
     # the refined size: the same poses, the size from the boundary's crossings, the method named
-    fine = tmp_path / "fine"
-    for refine, folder in ((0, tmp_path / "coarse"), (4, tmp_path / "fine")):
+    folders = (tmp_path / "coarse", tmp_path / "fine")
+    for refine, folder in zip((0, 4), folders):
         assert main(["workspace", "--machine", "delta", "--grid", "x=-1.4:1.4:8,y=-1.4:1.4:8", "--pose", "z=-1.2",
                      "--refine", str(refine), "--out", str(folder)]) == 0
-    coarse, ref = (json.loads((f / "workspace.json").read_text()) for f in (tmp_path / "coarse", tmp_path / "fine"))
+    coarse, ref = (json.loads((f / "workspace.json").read_text()) for f in folders)
     assert 0 < ref["inside"] == coarse["inside"] < 64 and ref["size_method"].endswith("4 steps an edge")
     assert coarse["size_method"] == "inside poses times the cell" and ref["size_error_m2"] < coarse["size_error_m2"]
     assert abs(ref["size_m2"] - coarse["size_m2"]) <= coarse["size_error_m2"]
