@@ -159,3 +159,76 @@ def test_control_hands_the_child_the_direct_kinematics_its_mechanism_takes(machi
     monkeypatch.setattr(ahead, "request", lambda stages: asked.append(tuple(stages)))
     assert main(["control", "--machine", machine, "--out", str(tmp_path / "out")]) == 0
     assert asked == [(route,)]
+
+
+@pytest.mark.slow
+def test_the_sample_stage_is_the_version_both_callers_take(tmp_path):
+    """In a fresh cache: the ``sample`` stage compiled first, the single-sample dynamics and
+    the batched kinematics then compiled (the loop's calls) take that version of the sample
+    solver and compile no other."""
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); import test_compile_ahead as t\n"
+            "from pkmdyn.multibody import ahead, _kernels as K, solve_kinematics, load_mechanism\n"
+            "from pkmdyn.multibody import reference_task\n"
+            "from pkmdyn.machines.registry import description_path\n"
+            "ahead.compile_stages(['sample'])\n"
+            "t._loop_calls()\n"
+            "m = load_mechanism(description_path('stewart')); x = reference_task(m)\n"
+            "solve_kinematics(m, x[None], 0 * x[None], 0 * x[None])\n"
+            "print(len(K.solve_sample.signatures), K.solve_sample.signatures[0] == ahead.signatures('sample')[0])")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    out = subprocess.run([sys.executable, "-c", code, os.path.dirname(__file__)], env=env, capture_output=True,
+                         text=True, check=True)
+    assert out.stdout.split() == ["1", "True"]
+
+
+def test_the_child_skips_a_stage_the_command_has_claimed(tmp_path, capsys):
+    """The child (``main``) compiles and reports the stages it claims, and skips one whose
+    claim file the command made first; a claim succeeds once."""
+    assert ahead._claim("task", str(tmp_path))
+    assert not ahead._claim("task", str(tmp_path))  # the second process to ask
+    assert ahead._claim("task", None)  # no shared folder: this process compiles it
+    assert ahead.main(["--claims", str(tmp_path), "one", "task"]) == 0
+    assert capsys.readouterr().out.split() == ["one"]
+    assert (tmp_path / "one").exists()
+
+
+def test_a_command_compiles_the_direct_kinematics_while_it_waits(monkeypatch, tmp_path):
+    """While the child is still on ``one`` (here a child that says nothing), ``wait("one")``
+    compiles the queued direct kinematics the child has not started, claimed, and counts it
+    done; not where the child claimed it first, nor in a wait that only reads (timeout 0)."""
+    silent = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"], stdout=subprocess.PIPE,
+                              bufsize=0)
+    compiled = []
+    try:
+        monkeypatch.setattr(ahead, "_child", silent)
+        monkeypatch.setattr(ahead, "_queued", ["sample", "one", "task"])
+        monkeypatch.setattr(ahead, "_done", {"sample"})
+        monkeypatch.setattr(ahead, "_claims", str(tmp_path))
+        monkeypatch.setattr(ahead, "WAIT_S", 0.3)
+        monkeypatch.setattr(ahead, "compile_stages", lambda stages, **kw: compiled.append(list(stages)))
+        ahead.wait("one", 0.0)
+        assert compiled == []
+        ahead.wait("one")
+        assert compiled == [["task"]] and ahead._done == {"sample", "task"} and (tmp_path / "task").exists()
+        ahead._done.discard("task")
+        ahead.wait("one")  # the claim is taken (here by this process's first wait): no second compile
+        assert compiled == [["task"]] and "task" not in ahead._done
+    finally:
+        ahead._stop(silent)
+
+
+@pytest.mark.parametrize("command", [["run"], ["control"]])
+def test_a_command_waits_for_the_sample_solver_before_its_batched_kinematics(command, monkeypatch, tmp_path):
+    """``pkmdyn run`` and ``pkmdyn control`` of a described mechanism wait for the child's
+    ``sample`` stage before their first batched kinematics (whose kernel calls the sample
+    solver), once each."""
+    from pkmdyn.cli import main
+    from pkmdyn.multibody import _kernels as K
+
+    calls = []
+    batch = K.solve_batch
+    monkeypatch.setattr(ahead, "wait", lambda stage, timeout_s=-1.0: calls.append(stage))
+    monkeypatch.setattr(ahead, "request", lambda stages: None)
+    monkeypatch.setattr(K, "solve_batch", lambda *a: (calls.append("solve_batch"), batch(*a))[1])
+    assert main([*command, "--machine", "stewart", "--out", str(tmp_path / "out")]) == 0
+    assert calls.index("sample") < calls.index("solve_batch") and calls.count("sample") == 1

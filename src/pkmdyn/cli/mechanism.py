@@ -181,10 +181,11 @@ def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_w
         raise click.UsageError("--minimum-norm-reactions and --unique-reactions contradict each other")
     from ..multibody import ahead
 
-    # a fresh install: the single-sample kernel compiles on another core meanwhile, and with it the
-    # solver's sample that the batched kinematics call too (for a later control run)
-    ahead.start(("one",))
+    # a fresh install: the sample solver that the batched kinematics call compiles on another core
+    # meanwhile, then the single-sample kernel (for a later control run)
+    ahead.start(("sample", "one"))
     model, entry = _load(machine, limits)
+    ahead.wait("sample")  # before the first batched kinematics, which call the child's sample solver
     lim = effective_limits(model, limits)
     window = None
     if motion_path is not None or actuator_path is not None:
@@ -348,14 +349,15 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     check_output_dir(out_dir, inputs)
     from ..multibody import ahead
 
-    # a fresh install: the loop's dynamics compile on another core meanwhile, then the direct
-    # kinematics of the route the mechanism takes (the loop's cycles in one call only for a long
-    # run, below: a short first run would end before they compile)
-    ahead.start(("one",))
+    # a fresh install: the sample solver and the loop's dynamics compile on another core meanwhile,
+    # then the direct kinematics of the route the mechanism takes (the loop's cycles in one call
+    # only for a long run, below: a short first run would end before they compile)
+    ahead.start(("sample", "one"))
     model, _ = _load(machine)
     from ..multibody.direct import task_route_map
 
     ahead.request(("task",) if task_route_map(model) is not None else ("direct",))
+    ahead.wait("sample")  # before the first batched kinematics (meanwhile the direct kinematics here)
     if motion_path is not None:
         motion = read_task_motion(model, Path(motion_path).absolute())
         what = str(motion_path)

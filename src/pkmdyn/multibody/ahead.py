@@ -14,21 +14,29 @@ types do not depend on the mechanism: the child compiles them for their signatur
 (:func:`signatures`) without loading a mechanism or running anything. It is started only where
 it can help: two cores or more, a cache that lacks a kernel of the stages, and
 ``PKMDYN_COMPILE_AHEAD`` not ``0``. It writes nothing but the cache and its stage lines to the
-command's pipe (nothing on the terminal), and is ended when the command ends. ``pkmdyn run``
-starts it too: the single-sample kernel calls the batched kinematics' own compiled sample
-solver, so the child compiles that in parallel with the command's first kernels, and a later
-``pkmdyn control`` finds the loop's kernel cached.
+command's pipe (nothing on the terminal), and is ended when the command ends.
 
-A command starts the child with the stage it surely needs (``one``) and hands it more on its
-standard input once it knows them (:func:`request`): the direct kinematics of the route its
-mechanism takes, so that the child does not spend seconds on the other one first.
+A command starts the child with the stages it surely needs (``sample``, ``one``) and hands it
+more on its standard input once it knows them (:func:`request`): the direct kinematics of the
+route its mechanism takes, so that the child does not spend seconds on the other one first.
+
+The first stage, ``sample``, is the sample solver (:func:`._kernels.solve_sample`) alone: the
+command's batched kinematics and the child's single-sample dynamics both call it, and each
+process would compile it (some 6 s of a core) at about the same time. The child compiles it
+first and the command waits for it (:func:`wait`) once its mechanism is loaded, before its
+first batched kinematics, which then load it; ``pkmdyn run`` starts a child for that too (and for a later ``pkmdyn control``,
+which then finds the loop's kernel cached). Where the command waits for a stage the child is
+still on, it compiles meanwhile a later stage it will need (:data:`WHILE_WAITING`: the direct
+kinematics) rather than wait idle: each stage is claimed by whichever process starts it first
+(a file created in a folder the two share, :func:`_claim`), and the child skips a stage the
+command has claimed.
 
 Its last stage, ``loop``, is the closed loop's cycles in one compiled call
 (:mod:`pkmdyn.simulate._cycles`), which links the kernels above a second time (some 15-30 s):
 no command waits for it; the loop takes its Python cycles until it is compiled (:func:`compiled`).
 ``pkmdyn control`` starts a child for it where the run is long (:data:`LOOP_WORTH_S`).
 
-    python -m pkmdyn.multibody.ahead one task direct loop
+    python -m pkmdyn.multibody.ahead sample one task direct loop
 """
 
 from __future__ import annotations
@@ -37,8 +45,10 @@ import atexit
 import importlib
 import os
 import selectors
+import shutil
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Iterable
 from typing import Any
@@ -46,13 +56,18 @@ from typing import Any
 __all__ = ["STAGES", "LOOP_WORTH_S", "cold", "start", "request", "coming", "wait", "ready", "compiled",
            "worth_compiling_loop", "compile_stages", "signatures"]
 
-#: the stages a child can compile, in this order: the closed loop's single-sample dynamics and
+#: the stages a child can compile, in this order: the sample solver that the batched kinematics
+#: and the single-sample kernels share (``sample``), the closed loop's single-sample dynamics and
 #: encoders (``one``), its direct kinematics of the encoders' reading in task space (``task``:
 #: the Gough-Stewart platform, the hip), and in tree space (``direct``: any other mechanism),
 #: and the loop's cycles in one compiled call (``loop``, :mod:`pkmdyn.simulate._cycles`: some
 #: 30 s, which a command does not wait for; until it is compiled the loop runs its cycles in
 #: Python)
-STAGES = ("one", "task", "direct", "loop")
+STAGES = ("sample", "one", "task", "direct", "loop")
+#: while the command waits for the stage named (the child still on it), it compiles these
+#: itself where the child was given them and has not started them: the direct kinematics, which
+#: a closed loop needs later, rather than wait idle for the child to reach them
+WHILE_WAITING = {"sample": ("task", "direct"), "one": ("task", "direct")}
 #: a run whose cycles in Python would take about this long [s] or more starts a child compiling
 #: the ``loop`` stage alone (:func:`worth_compiling_loop`): it is done before the run is, and the
 #: rest of the run takes the compiled cycles
@@ -64,6 +79,10 @@ _LOOP_MODULE = "pkmdyn.simulate._cycles"
 
 def _kernels(stage: str) -> list[Any]:
     """The compiled functions (numba dispatchers) of ``stage``."""
+    if stage == "sample":
+        from . import _kernels as K
+
+        return [K.solve_sample]
     if stage == "one":
         from . import _one
 
@@ -87,6 +106,8 @@ def signatures(stage: str) -> list[tuple[Any, ...]]:
     from numba import types
 
     buf, vec = types.Array(types.int64, 1, "C"), types.Array(types.float64, 1, "C")
+    if stage == "sample":  # solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work, info)
+        return [tuple(_numba_type(c) for c in _SAMPLE_ARGS)]
     if stage == "one":  # _dynamics(pk, x, xd, v, load, mode, out)
         return [(buf, vec, vec, vec, types.float64, types.int64, vec)]
     if stage == "task":  # direct_task_one(pk, d, s, sd, out)
@@ -96,6 +117,33 @@ def signatures(stage: str) -> list[tuple[Any, ...]]:
     if stage == "loop":  # run_cycles(...): the types of a run's arguments
         return [importlib.import_module(_LOOP_MODULE).example_signature()]
     raise ValueError(f"compile-ahead stage {stage!r}: unknown (known: {', '.join(STAGES)})")
+
+
+#: the argument types of :func:`._kernels.solve_sample` as :func:`._one._dynamics` and
+#: :func:`._kernels.solve_batch` call it (``f2``: a C-contiguous float64 array of two
+#: dimensions, ``i1`` an int64 vector, ``i`` / ``f`` / ``b`` an int64, a float64, a bool; a
+#: tuple: a tuple of those); tests/test_compile_ahead.py checks that both callers then compile
+#: no other version
+_SAMPLE_ARGS = (*"f1 f1 f1 f1 f1 b".split(),
+                (*"i1 i1 i1 i1 i1 f1 f1 f3 f2 f3 f2".split(),  # tree, ending with the explicit legs' table
+                 tuple("i1 i1 i2 i1 i1 f2 f3 f3 f2 f2 f2 i2 i2 i2 f2 f2 f3 i1 i1".split())),
+                tuple("f3 f2 f3 f2 i2 i1 i1 i1 i1 i1 i1 i1".split()),  # loops
+                tuple("i f1 i1 i1 i1".split()),  # task
+                tuple("i1 f2 i1 i1 i1 f1 f f i i1 i1 i1".split()),  # solver
+                tuple("f3 f2 f2 f1 f1 f2 i1 f1 f1 f1 f1 f1 f2 f2 f2 f1 f2 f3 f2 f2 f2 f2".split()),  # work
+                "f1")
+
+
+def _numba_type(code: str | tuple) -> Any:
+    """The numba type of one code of :data:`_SAMPLE_ARGS`."""
+    from numba import types
+
+    if isinstance(code, tuple):
+        return types.Tuple(tuple(_numba_type(c) for c in code))
+    scalar = {"i": types.int64, "f": types.float64, "b": types.boolean}
+    if code in scalar:
+        return scalar[code]
+    return types.Array(types.int64 if code[0] == "i" else types.float64, int(code[1:]), "C")
 
 
 def _cached(dispatcher: Any) -> bool | None:
@@ -135,6 +183,8 @@ _child: subprocess.Popen | None = None
 _queued: list[str] = []
 _done: set[str] = set()
 _unread = b""
+#: the folder of claimed stages that this process shares with its child (:func:`_claim`)
+_claims: str | None = None
 #: the longest wait for a stage [s]; past it the command compiles the kernel itself
 WAIT_S = 600.0
 
@@ -142,7 +192,7 @@ WAIT_S = 600.0
 def start(stages: Iterable[str]) -> subprocess.Popen | None:
     """A child compiling the kernels of ``stages`` in that order, or None where it would not help
     (module docstring) or a child of this process still runs. The child ends with this process."""
-    global _child, _unread
+    global _child, _unread, _claims
     stages = tuple(stages)
     if os.environ.get("PKMDYN_COMPILE_AHEAD", "1") == "0" or (os.cpu_count() or 1) < 2 or not cold(stages):
         return None
@@ -150,11 +200,28 @@ def start(stages: Iterable[str]) -> subprocess.Popen | None:
         return None
     _done.clear()
     _unread = b""
-    _child = subprocess.Popen([sys.executable, "-m", __name__, "--more", *stages], stdin=subprocess.PIPE,
-                              stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, bufsize=0)
+    _claims = tempfile.mkdtemp(prefix="pkmdyn-compile-")
+    atexit.register(shutil.rmtree, _claims, True)
+    _child = subprocess.Popen([sys.executable, "-m", __name__, "--claims", _claims, "--more", *stages],
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, bufsize=0)
     _queued[:] = stages
     atexit.register(_stop, _child)
     return _child
+
+
+def _claim(stage: str, folder: str | None) -> bool:
+    """Whether this process takes ``stage``: it creates the stage's file in ``folder``, the
+    folder it shares with the other process, first (an exclusive create, so one process alone
+    succeeds); True without a folder."""
+    if folder is None:
+        return True
+    try:
+        os.close(os.open(os.path.join(folder, stage), os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+    except FileExistsError:
+        return False
+    except OSError:  # pragma: no cover - the folder has gone (the command ends): compile it here
+        return True
+    return True
 
 
 def request(stages: Iterable[str]) -> None:
@@ -195,6 +262,10 @@ def wait(stage: str, timeout_s: float = -1.0) -> None:
     child = _child
     if child is None or stage in _done or stage not in _queued or child.stdout is None or child.stdout.closed:
         return
+    if timeout_s < 0 and WHILE_WAITING.get(stage):
+        _compile_meanwhile(stage)
+        if stage in _done:
+            return
     deadline = time.monotonic() + (WAIT_S if timeout_s < 0 else timeout_s)
     with selectors.DefaultSelector() as sel:
         sel.register(child.stdout, selectors.EVENT_READ)
@@ -207,6 +278,22 @@ def wait(stage: str, timeout_s: float = -1.0) -> None:
                 return
             *lines, _unread = (_unread + chunk).split(b"\n")
             _done.update(line.decode("ascii", "replace").strip() for line in lines)
+
+
+def _compile_meanwhile(stage: str) -> None:
+    """While the child is still on ``stage``: compile here each stage of
+    :data:`WHILE_WAITING` that it was given and has not started (claimed: :func:`_claim`)."""
+    wait(stage, 0.0)
+    for later in WHILE_WAITING[stage]:
+        if stage in _done:
+            return
+        if later in _queued and later not in _done and _claim(later, _claims):
+            try:
+                compile_stages([later])
+            except Exception:  # pragma: no cover - compiled again where first called, which then says why
+                continue
+            _done.add(later)
+        wait(stage, 0.0)
 
 
 def ready(stage: str) -> bool:
@@ -234,10 +321,13 @@ def compiled(stage: str) -> bool:
     return all(bool(k.signatures) or _cached(k) is True for k in _kernels(stage))
 
 
-def compile_stages(stages: Iterable[str], report: bool = False) -> None:
+def compile_stages(stages: Iterable[str], report: bool = False, claims: str | None = None) -> None:
     """Compile (or load from the cache) every kernel of ``stages`` for its signatures; with
-    ``report`` print each stage's name when it is done."""
+    ``report`` print each stage's name when it is done; with ``claims`` (the folder of
+    :func:`_claim`) skip each stage that the command has taken."""
     for stage in stages:
+        if not _claim(stage, claims):
+            continue
         for kernel, sig in zip(_kernels(stage), signatures(stage)):
             kernel.compile(sig)
         if report:
@@ -245,14 +335,18 @@ def compile_stages(stages: Iterable[str], report: bool = False) -> None:
 
 
 def main(argv: list[str]) -> int:
-    """The child: compile the stages ``argv``, saying each when done; after ``--more`` (a
-    command's child), then each stage named on a line of its standard input (:func:`request`)
-    until that closes."""
+    """The child: compile the stages ``argv``, saying each when done; after ``--claims FOLDER``
+    each stage that the command has not claimed (:func:`_claim`); after ``--more`` (a command's
+    child), then each stage named on a line of its standard input (:func:`request`) until that
+    closes."""
+    claims = None
+    if argv[:1] == ["--claims"]:
+        claims, argv = argv[1], argv[2:]
     more = bool(argv) and argv[0] == "--more"
-    compile_stages(argv[1:] if more else argv, report=True)
+    compile_stages(argv[1:] if more else argv, report=True, claims=claims)
     for line in sys.stdin if more else ():
         if line.strip():
-            compile_stages([line.strip()], report=True)
+            compile_stages([line.strip()], report=True, claims=claims)
     return 0
 
 

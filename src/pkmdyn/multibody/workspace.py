@@ -43,7 +43,8 @@ rule's across the lines, an eighth of the second difference of the lines' inside
 bound where those lengths are concave or convex between lines, from the chords), plus half a
 step an edge over the axes for the crossings. The steps cost up to ``N`` solves an edge, and
 every inside pose is solved once more: with ``N = 4`` a Delta robot's 13 x 13 x 9 grid took
-about twice the count's time (measured once). Not over an orientation range.
+about three times the count's time (90-95 ms against 31-36 ms, every measure computed). Not
+over an orientation range.
 
 **Inscribed shapes about a centre** ``c`` (default: the reference pose): the largest cube
 (the same half-width ``a`` along every grid axis) and the largest cylinder (axis along the last
