@@ -24,12 +24,12 @@ The first stage, ``sample``, is the sample solver (:func:`._kernels.solve_sample
 command's batched kinematics and the child's single-sample dynamics both call it, and each
 process would compile it (some 6 s of a core) at about the same time. The child compiles it
 first and the command waits for it (:func:`wait`) once its mechanism is loaded, before its
-first batched kinematics, which then load it; ``pkmdyn run`` starts a child for that too (and for a later ``pkmdyn control``,
-which then finds the loop's kernel cached). Where the command waits for a stage the child is
-still on, it compiles meanwhile a later stage it will need (:data:`WHILE_WAITING`: the direct
-kinematics) rather than wait idle: each stage is claimed by whichever process starts it first
-(a file created in a folder the two share, :func:`_claim`), and the child skips a stage the
-command has claimed.
+first batched kinematics, which then load it; ``pkmdyn run`` starts a child for that too (and
+for a later ``pkmdyn control``, which then finds the loop's kernel cached). Where the command
+waits for a stage the child is still on, it compiles meanwhile a later stage it will need
+(:data:`WHILE_WAITING`: the direct kinematics) rather than wait idle: each stage is claimed by
+whichever process starts it first (a file created in a folder the two share, :func:`_claim`),
+and the child skips a stage the command has claimed.
 
 Its last stage, ``loop``, is the closed loop's cycles in one compiled call
 (:mod:`pkmdyn.simulate._cycles`), which links the kernels above a second time (some 15-30 s):
