@@ -198,10 +198,14 @@ def start(stages: Iterable[str]) -> subprocess.Popen | None:
         return None
     if _child is not None and _child.poll() is None:
         return None
+    try:
+        claims = tempfile.mkdtemp(prefix="pkmdyn-compile-")
+    except OSError:  # pragma: no cover - no writable temporary folder: the command compiles alone
+        return None
     _done.clear()
     _unread = b""
-    _claims = tempfile.mkdtemp(prefix="pkmdyn-compile-")
-    atexit.register(shutil.rmtree, _claims, True)
+    _claims = claims
+    atexit.register(shutil.rmtree, claims, True)
     _child = subprocess.Popen([sys.executable, "-m", __name__, "--claims", _claims, "--more", *stages],
                               stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, bufsize=0)
     _queued[:] = stages
