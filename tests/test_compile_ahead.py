@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -192,29 +193,77 @@ def test_the_child_skips_a_stage_the_command_has_claimed(tmp_path, capsys):
     assert (tmp_path / "one").exists()
 
 
+def _silent_child(monkeypatch, tmp_path, code="import time; time.sleep(30)"):
+    """A child that says nothing (by default for 30 s), given ``sample``, ``one`` and ``task``,
+    ``sample`` reported; the claims' folder ``tmp_path``; waits of at most 0.3 s."""
+    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, bufsize=0)
+    monkeypatch.setattr(ahead, "_child", child)
+    monkeypatch.setattr(ahead, "_queued", ["sample", "one", "task"])
+    monkeypatch.setattr(ahead, "_done", {"sample"})
+    monkeypatch.setattr(ahead, "_claims", str(tmp_path))
+    monkeypatch.setattr(ahead, "WAIT_S", 0.3)
+    return child
+
+
 def test_a_command_compiles_the_direct_kinematics_while_it_waits(monkeypatch, tmp_path):
-    """While the child is still on ``one`` (here a child that says nothing), ``wait("one")``
-    compiles the queued direct kinematics the child has not started, claimed, and counts it
-    done; not where the child claimed it first, nor in a wait that only reads (timeout 0)."""
-    silent = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"], stdout=subprocess.PIPE,
-                              bufsize=0)
+    """While the child has not reported ``one``, ``wait("one")`` compiles the queued direct
+    kinematics the child has not started, claimed, and counts it done; not in a wait that only
+    reads (timeout 0), nor where the child claimed it first."""
     compiled = []
+    child = _silent_child(monkeypatch, tmp_path)
     try:
-        monkeypatch.setattr(ahead, "_child", silent)
-        monkeypatch.setattr(ahead, "_queued", ["sample", "one", "task"])
-        monkeypatch.setattr(ahead, "_done", {"sample"})
-        monkeypatch.setattr(ahead, "_claims", str(tmp_path))
-        monkeypatch.setattr(ahead, "WAIT_S", 0.3)
         monkeypatch.setattr(ahead, "compile_stages", lambda stages, **kw: compiled.append(list(stages)))
         ahead.wait("one", 0.0)
         assert compiled == []
         ahead.wait("one")
         assert compiled == [["task"]] and ahead._done == {"sample", "task"} and (tmp_path / "task").exists()
-        ahead._done.discard("task")
-        ahead.wait("one")  # the claim is taken (here by this process's first wait): no second compile
+    finally:
+        ahead._stop(child)
+    child = _silent_child(monkeypatch, tmp_path / "child-first")
+    try:
+        (tmp_path / "child-first").mkdir()
+        (tmp_path / "child-first" / "task").touch()  # the child's claim
+        ahead.wait("one")
         assert compiled == [["task"]] and "task" not in ahead._done
     finally:
-        ahead._stop(silent)
+        ahead._stop(child)
+
+
+def test_a_failed_compilation_meanwhile_is_not_waited_for(monkeypatch, tmp_path):
+    """Where the command's own compilation of a stage meanwhile fails, the stage counts as done
+    (the child skips it, claimed): a later wait for it returns at once, and the caller's call
+    compiles it again and says why."""
+    def fail(stages, **kw):
+        raise RuntimeError("typing failed")
+
+    child = _silent_child(monkeypatch, tmp_path)
+    try:
+        monkeypatch.setattr(ahead, "compile_stages", fail)
+        ahead.wait("one")  # the direct kinematics meanwhile: it fails; then 0.3 s for "one"
+        assert "task" in ahead._done and (tmp_path / "task").exists()
+        monkeypatch.setattr(ahead, "WAIT_S", 5.0)
+        t0 = time.monotonic()
+        ahead.wait("task")
+        assert "task" in ahead._done and time.monotonic() - t0 < 2.0
+    finally:
+        ahead._stop(child)
+
+
+@pytest.mark.parametrize("stage", ["sample", "one"])
+def test_a_child_that_ends_without_a_word_is_not_waited_for(stage, monkeypatch, tmp_path):
+    """A child that ends at once (a compilation that failed in it): the wait returns without
+    error (the command then compiles the kernel itself), also where it first compiles a later
+    stage meanwhile."""
+    compiled = []
+    child = _silent_child(monkeypatch, tmp_path, code="pass")
+    try:
+        child.wait(timeout=60)
+        monkeypatch.setattr(ahead, "_done", set())
+        monkeypatch.setattr(ahead, "compile_stages", lambda stages, **kw: compiled.append(list(stages)))
+        ahead.wait(stage)
+        assert stage not in ahead._done and child.stdout.closed
+    finally:
+        ahead._stop(child)
 
 
 @pytest.mark.parametrize("command", [["run"], ["control"]])

@@ -26,10 +26,10 @@ process would compile it (some 6 s of a core) at about the same time. The child 
 first and the command waits for it (:func:`wait`) once its mechanism is loaded, before its
 first batched kinematics, which then load it; ``pkmdyn run`` starts a child for that too (and
 for a later ``pkmdyn control``, which then finds the loop's kernel cached). Where the command
-waits for a stage the child is still on, it compiles meanwhile a later stage it will need
-(:data:`WHILE_WAITING`: the direct kinematics) rather than wait idle: each stage is claimed by
-whichever process starts it first (a file created in a folder the two share, :func:`_claim`),
-and the child skips a stage the command has claimed.
+waits for a stage the child has not reported yet, it compiles meanwhile a later stage it will
+need (:data:`WHILE_WAITING`: the direct kinematics) rather than wait idle: each stage is
+claimed by whichever process starts it first (a file created in a folder the two share,
+:func:`_claim`), and the child skips a stage the command has claimed.
 
 Its last stage, ``loop``, is the closed loop's cycles in one compiled call
 (:mod:`pkmdyn.simulate._cycles`), which links the kernels above a second time (some 15-30 s):
@@ -64,9 +64,9 @@ __all__ = ["STAGES", "LOOP_WORTH_S", "cold", "start", "request", "coming", "wait
 #: 30 s, which a command does not wait for; until it is compiled the loop runs its cycles in
 #: Python)
 STAGES = ("sample", "one", "task", "direct", "loop")
-#: while the command waits for the stage named (the child still on it), it compiles these
-#: itself where the child was given them and has not started them: the direct kinematics, which
-#: a closed loop needs later, rather than wait idle for the child to reach them
+#: while the command waits for the stage named (not yet reported by the child), it compiles
+#: these itself where the child was given them and has not started them: the direct kinematics,
+#: which a closed loop needs later, rather than wait idle for the child to reach them
 WHILE_WAITING = {"sample": ("task", "direct"), "one": ("task", "direct")}
 #: a run whose cycles in Python would take about this long [s] or more starts a child compiling
 #: the ``loop`` stage alone (:func:`worth_compiling_loop`): it is done before the run is, and the
@@ -120,10 +120,9 @@ def signatures(stage: str) -> list[tuple[Any, ...]]:
 
 
 #: the argument types of :func:`._kernels.solve_sample` as :func:`._one._dynamics` and
-#: :func:`._kernels.solve_batch` call it (``f2``: a C-contiguous float64 array of two
-#: dimensions, ``i1`` an int64 vector, ``i`` / ``f`` / ``b`` an int64, a float64, a bool; a
-#: tuple: a tuple of those); tests/test_compile_ahead.py checks that both callers then compile
-#: no other version
+#: :func:`._kernels.solve_batch` call it (``fN`` / ``iN``: a C-contiguous float64 / int64 array
+#: of N dimensions; ``i`` / ``f`` / ``b`` an int64, a float64, a bool; a tuple: a tuple of
+#: those); tests/test_compile_ahead.py checks that both callers then compile no other version
 _SAMPLE_ARGS = (*"f1 f1 f1 f1 f1 b".split(),
                 (*"i1 i1 i1 i1 i1 f1 f1 f3 f2 f3 f2".split(),  # tree, ending with the explicit legs' table
                  tuple("i1 i1 i2 i1 i1 f2 f3 f3 f2 f2 f2 i2 i2 i2 f2 f2 f3 i1 i1".split())),
@@ -185,7 +184,8 @@ _done: set[str] = set()
 _unread = b""
 #: the folder of claimed stages that this process shares with its child (:func:`_claim`)
 _claims: str | None = None
-#: the longest wait for a stage [s]; past it the command compiles the kernel itself
+#: the longest wait for a stage [s] (after what the command compiles meanwhile, :func:`wait`);
+#: past it the command compiles the kernel itself
 WAIT_S = 600.0
 
 
@@ -261,14 +261,16 @@ def wait(stage: str, timeout_s: float = -1.0) -> None:
     """Return once the child has compiled ``stage``: at once without a child or where it was not
     given ``stage`` (it listens for more until the command ends: it would not say it), once it
     has ended (the caller then compiles what is missing itself), or after :data:`WAIT_S` (or
-    ``timeout_s`` where that is 0 or more: 0 reads what the child has said so far)."""
+    ``timeout_s`` where that is 0 or more: 0 reads what the child has said so far). Without
+    ``timeout_s``, the stages of :data:`WHILE_WAITING` that the child has not started are first
+    compiled here (:func:`_compile_meanwhile`)."""
     global _unread
     child = _child
     if child is None or stage in _done or stage not in _queued or child.stdout is None or child.stdout.closed:
         return
     if timeout_s < 0 and WHILE_WAITING.get(stage):
         _compile_meanwhile(stage)
-        if stage in _done:
+        if stage in _done or child.stdout.closed:  # done, or the child has ended meanwhile
             return
     deadline = time.monotonic() + (WAIT_S if timeout_s < 0 else timeout_s)
     with selectors.DefaultSelector() as sel:
@@ -285,8 +287,10 @@ def wait(stage: str, timeout_s: float = -1.0) -> None:
 
 
 def _compile_meanwhile(stage: str) -> None:
-    """While the child is still on ``stage``: compile here each stage of
-    :data:`WHILE_WAITING` that it was given and has not started (claimed: :func:`_claim`)."""
+    """While the child has not reported ``stage``: compile here each stage of
+    ``WHILE_WAITING[stage]`` that it was given and has not started (claimed: :func:`_claim`).
+    Such a stage counts as done here even where its compilation failed: the child skips it, and
+    the caller compiles it again where first called, which then says why."""
     wait(stage, 0.0)
     for later in WHILE_WAITING[stage]:
         if stage in _done:
@@ -294,8 +298,8 @@ def _compile_meanwhile(stage: str) -> None:
         if later in _queued and later not in _done and _claim(later, _claims):
             try:
                 compile_stages([later])
-            except Exception:  # pragma: no cover - compiled again where first called, which then says why
-                continue
+            except Exception:  # any failure: the caller's own call compiles it again and says why
+                pass
             _done.add(later)
         wait(stage, 0.0)
 
@@ -339,8 +343,8 @@ def compile_stages(stages: Iterable[str], report: bool = False, claims: str | No
 
 
 def main(argv: list[str]) -> int:
-    """The child: compile the stages ``argv``, saying each when done; after ``--claims FOLDER``
-    each stage that the command has not claimed (:func:`_claim`); after ``--more`` (a command's
+    """The child: compile the stages ``argv``, saying each when done; with ``--claims FOLDER``
+    only those the command has not claimed (:func:`_claim`); after ``--more`` (a command's
     child), then each stage named on a line of its standard input (:func:`request`) until that
     closes."""
     claims = None
