@@ -23,18 +23,20 @@ from __future__ import annotations
 
 import heapq
 from dataclasses import replace
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ParameterError
-from .description import GROUND, Description
+from .description import GROUND, Description, load_description
 from .joint_types import MOTION_CODES, joint_type, type_code
 from .legs import explicit_legs
 from .records import LoopRecord, MechanismModel
 from .topology import block_structure, solver_selection
 
-__all__ = ["MechanismModel", "LoopRecord", "compile_model", "spanning_tree"]
+__all__ = ["MechanismModel", "LoopRecord", "compile_model", "load_mechanism", "spanning_tree"]
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -232,6 +234,12 @@ def compile_model(desc: Description, *, topology_only: bool = False) -> Mechanis
                     limits=dict(desc.limits), parameters=dict(desc.parameters),
                     parameter_bounds=dict(desc.parameter_bounds), reactions=desc.reactions)
     return replace(model, legs=explicit_legs(model))
+
+
+def load_mechanism(source: str | Path | dict[str, Any], limits: dict[str, Any] | None = None) -> MechanismModel:
+    """Read, validate and compile a description (a TOML path or a dict); ``limits`` lay over its
+    ``[limits]`` for the plausibility of its numbers (:func:`~.description.load_description`)."""
+    return compile_model(load_description(source, limits))
 
 
 def _drives(desc: Description, act: list[int]) -> dict:
