@@ -22,16 +22,26 @@ multiplied, by the model's length scale) with the threshold ``1e-9 sigma_max``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import NDArray
 
+from .._lazy import lazy_module
+from ..errors import ParameterError
 from ..spatial import cross
 from . import _kernels as K
 from .joint_types import JOINT_TYPES
 from .poses import body_poses
 from .records import MechanismModel
+
+if TYPE_CHECKING:
+    import scipy.linalg as linalg
+    import scipy.sparse as sparse
+    from scipy.sparse import csgraph
+else:  # imported by the first model compiled
+    linalg, sparse = lazy_module("scipy.linalg"), lazy_module("scipy.sparse")
+    csgraph = lazy_module("scipy.sparse.csgraph")
 
 __all__ = ["TopologyReport", "analyse_topology", "kutzbach_count", "constraint_jacobian", "solver_selection",
            "row_scale", "column_scale", "row_labels", "sparse_basis"]
@@ -200,7 +210,7 @@ def analyse_topology(model: MechanismModel, q: Array | None = None) -> TopologyR
     mobility = model.nq - rank_c
     labels = []
     if nr > rank_c:
-        _, _, piv = scipy.linalg.qr(phi.T, pivoting=True, mode="economic")
+        _, _, piv = linalg.qr(phi.T, pivoting=True, mode="economic")
         redundant = sorted(piv[rank_c:])
         for rr in redundant:
             loop = model.loops[model.row_loop[rr]]
@@ -235,9 +245,6 @@ def block_structure(model: MechanismModel, rows: Array, idle: Array) -> tuple[Ar
     leg that carries the platform, then each other leg's three closure rows with its three
     coordinates. Returns ``(prow, pcol, blocks)``; a single block when no structure is found.
     """
-    from scipy.sparse import csr_matrix
-    from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
-
     nq, m = model.nq, rows.size
     n = m + idle.shape[0]
     P = np.zeros((n, nq), dtype=bool)
@@ -254,11 +261,12 @@ def block_structure(model: MechanismModel, rows: Array, idle: Array) -> tuple[Ar
     single = (np.arange(n, dtype=np.int64), np.arange(n, dtype=np.int64), np.array([0, n], dtype=np.int64))
     if n != nq or n == 0:
         return single
-    match = maximum_bipartite_matching(csr_matrix(P.astype(np.int8)), perm_type="column")
+    match = csgraph.maximum_bipartite_matching(sparse.csr_matrix(P.astype(np.int8)), perm_type="column")
     if np.any(match < 0):
         return single
     dep = P[:, match]  # dep[i, j]: row i uses the column matched to row j
-    ncomp, label = connected_components(csr_matrix(dep.astype(np.int8)), directed=True, connection="strong")
+    ncomp, label = csgraph.connected_components(sparse.csr_matrix(dep.astype(np.int8)), directed=True,
+                                                connection="strong")
     # order the components so that each comes after every component it depends on
     needs = [set() for _ in range(ncomp)]
     for i, j in zip(*np.nonzero(dep)):
@@ -294,8 +302,6 @@ def solver_selection(model: MechanismModel, q: Array | None = None) -> tuple[Arr
     when the task coordinates do not determine the mechanism (fewer or more than its degrees
     of freedom, or dependent) or when there are more actuators than degrees of freedom.
     """
-    from ..errors import ParameterError
-
     rep = analyse_topology(model, q)
     q = model.coord_offset.copy() if q is None else np.asarray(q, dtype=float)
     _, J = constraint_jacobian(model, q)
@@ -311,7 +317,7 @@ def solver_selection(model: MechanismModel, q: Array | None = None) -> tuple[Arr
                              f"(redundant actuation is not supported): {', '.join(model.actuator_names)}")
     rank_c = model.nq - rep.mobility
     if nr and rank_c:
-        _, _, piv = scipy.linalg.qr(Js[:nr].T, pivoting=True, mode="economic")
+        _, _, piv = linalg.qr(Js[:nr].T, pivoting=True, mode="economic")
         cut_rows = np.sort(piv[:rank_c])
     else:
         cut_rows = np.zeros(0, dtype=np.int64)

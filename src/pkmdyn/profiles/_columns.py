@@ -7,13 +7,18 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import make_interp_spline
-from scipy.signal import savgol_filter
 
+from .._lazy import lazy_module
 from ..errors import MotionError
+
+if TYPE_CHECKING:
+    from scipy import interpolate, signal
+else:  # imported by the first derivatives taken (scipy.signal alone costs a third of a second)
+    interpolate, signal = lazy_module("scipy.interpolate"), lazy_module("scipy.signal")
 
 __all__ = ["require_increasing", "require_rows", "column_group", "derivatives", "savgol_derivatives",
            "check_smoothing"]
@@ -71,10 +76,10 @@ def derivatives(
     try:
         with np.errstate(all="ignore"):
             if qd is None:
-                spline = make_interp_spline(t, q, k=5, axis=0)
+                spline = interpolate.make_interp_spline(t, q, k=5, axis=0)
                 qd, qdd = spline.derivative(1)(t), spline.derivative(2)(t)
             else:
-                qdd = make_interp_spline(t, qd, k=5, axis=0).derivative(1)(t)
+                qdd = interpolate.make_interp_spline(t, qd, k=5, axis=0).derivative(1)(t)
     except (ValueError, np.linalg.LinAlgError):  # e.g. times so far apart that the spline is singular
         qdd = None
     if qdd is None or not (np.all(np.isfinite(qd)) and np.all(np.isfinite(qdd))):
@@ -113,8 +118,8 @@ def savgol_derivatives(t: Array, x: Array, window: int, order: int, source: str)
         )
     try:
         with np.errstate(all="ignore"):
-            d1 = savgol_filter(x, window, order, deriv=1, delta=h, axis=0, mode="interp")
-            d2 = savgol_filter(x, window, order, deriv=2, delta=h, axis=0, mode="interp")
+            d1 = signal.savgol_filter(x, window, order, deriv=1, delta=h, axis=0, mode="interp")
+            d2 = signal.savgol_filter(x, window, order, deriv=2, delta=h, axis=0, mode="interp")
     except (ValueError, np.linalg.LinAlgError):
         d1 = d2 = np.full_like(x, np.nan)
     if not (np.all(np.isfinite(d1)) and np.all(np.isfinite(d2))):
