@@ -7,11 +7,18 @@ the simulation imports the controllers, never the other way); ``_laws``: the con
 PDM paper's joint-space PID, computed torque) behind one function, :func:`effort`.
 """
 
-from ._laws import (CONTROLLERS, Controller, Gains, Sensed, check_gains, effort, held_efforts, make_controller,
-                    new_memory)
-from ._settings import (LoopSettings, default_settings_text, gains, load_settings, loop_settings, overlay_settings,
-                        scale_description)
-from ._reference import JointReference, Reference, hermite_motion, joint_reference, sample_reference
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .._lazy import attach
+
+if TYPE_CHECKING:
+    from ._laws import (CONTROLLERS, Controller, Gains, Sensed, check_gains, effort, held_efforts, make_controller,
+                        new_memory)
+    from ._settings import (LoopSettings, default_settings_text, gains, load_settings, loop_settings, overlay_settings,
+                            scale_description)
+    from ._reference import JointReference, Reference, hermite_motion, joint_reference, sample_reference
 
 __all__ = [
     "CONTROLLERS",
@@ -36,3 +43,14 @@ __all__ = [
     "gains",
     "scale_description",
 ]
+
+#: where each public name lives, imported on first use: ``import pkmdyn.control`` loads
+#: neither Numba nor SciPy until a function is looked up
+__getattr__, __dir__ = attach(__name__, {
+    **dict.fromkeys(("CONTROLLERS", "Controller", "Gains", "Sensed", "check_gains", "effort", "held_efforts",
+                     "make_controller", "new_memory"), "._laws"),
+    **dict.fromkeys(("LoopSettings", "default_settings_text", "gains", "load_settings", "loop_settings",
+                     "overlay_settings", "scale_description"), "._settings"),
+    **dict.fromkeys(("JointReference", "Reference", "hermite_motion", "joint_reference", "sample_reference"),
+                     "._reference"),
+})

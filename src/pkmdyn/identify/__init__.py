@@ -7,6 +7,20 @@ constrained least squares with standard errors (:mod:`._solve`), bounded Fourier
 (:mod:`.hip`, :mod:`.hip_excite`, :mod:`.hip_run`). See ``docs/identification.md``.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .._lazy import attach
+
+if TYPE_CHECKING:
+    from ._base import DEFAULT_RANK_TOL, BaseParameters, base_parameters
+    from ._excite import bounded_fourier, minimize_excitation
+    from ._identify import fit_regressor
+    from ._regressor import Regressor, affine_regressor
+    from ._report import explained_percent, identification_report
+    from ._solve import Estimate, constrained_least_squares
+
 __all__ = [
     "Regressor",
     "affine_regressor",
@@ -22,17 +36,13 @@ __all__ = [
     "minimize_excitation",
 ]
 
-#: where each public name lives; loaded on first use (PEP 562), so that importing a light
+#: where each public name lives, imported on first use (PEP 562), so that importing a light
 #: submodule (``pkmdyn.identify.bounds``) does not load the solvers
-_WHERE = {"Regressor": "._regressor", "affine_regressor": "._regressor", "BaseParameters": "._base",
-          "base_parameters": "._base", "DEFAULT_RANK_TOL": "._base", "Estimate": "._solve",
-          "constrained_least_squares": "._solve", "bounded_fourier": "._excite", "minimize_excitation": "._excite",
-          "fit_regressor": "._identify", "identification_report": "._report", "explained_percent": "._report"}
-
-
-def __getattr__(name: str) -> object:
-    if name in _WHERE:
-        from importlib import import_module
-
-        return getattr(import_module(_WHERE[name], __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__, __dir__ = attach(__name__, {
+    **dict.fromkeys(("Regressor", "affine_regressor"), "._regressor"),
+    **dict.fromkeys(("BaseParameters", "base_parameters", "DEFAULT_RANK_TOL"), "._base"),
+    **dict.fromkeys(("Estimate", "constrained_least_squares"), "._solve"),
+    **dict.fromkeys(("bounded_fourier", "minimize_excitation"), "._excite"),
+    "fit_regressor": "._identify",
+    **dict.fromkeys(("identification_report", "explained_percent"), "._report"),
+})

@@ -7,10 +7,17 @@ points per sample and which points each body joins), :class:`TimePlot` curves, i
 parameters and warnings (``docs/report.md``).
 """
 
-from ._figures import Curve, TimePlot, decimate_minmax
-from ._page import REPORT_NAME, write_report, write_view
-from ._scene import MAX_FRAMES, FramePicker, Scene, SceneActuator, SceneBody, frame_indices, scene_from_files, scene_from_joints
-from ._topology import Topology, fundamental_loops, layered_layout, topology_from_model
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .._lazy import attach
+
+if TYPE_CHECKING:
+    from ._figures import Curve, TimePlot, decimate_minmax
+    from ._page import REPORT_NAME, write_report, write_view
+    from ._scene import MAX_FRAMES, FramePicker, Scene, SceneActuator, SceneBody, frame_indices, scene_from_files, scene_from_joints
+    from ._topology import Topology, fundamental_loops, layered_layout, topology_from_model
 
 __all__ = [
     "Scene",
@@ -32,3 +39,13 @@ __all__ = [
     "fundamental_loops",
     "layered_layout",
 ]
+
+#: where each public name lives, imported on first use: ``import pkmdyn.report`` loads
+#: nothing heavy until a function is looked up
+__getattr__, __dir__ = attach(__name__, {
+    **dict.fromkeys(("Curve", "TimePlot", "decimate_minmax"), "._figures"),
+    **dict.fromkeys(("REPORT_NAME", "write_report", "write_view"), "._page"),
+    **dict.fromkeys(("MAX_FRAMES", "FramePicker", "Scene", "SceneActuator", "SceneBody", "frame_indices",
+                     "scene_from_files", "scene_from_joints"), "._scene"),
+    **dict.fromkeys(("Topology", "fundamental_loops", "layered_layout", "topology_from_model"), "._topology"),
+})

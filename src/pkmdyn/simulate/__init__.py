@@ -6,9 +6,16 @@ friction band); ``_loop``: encoders, pose sensor, controller and effort limits, 
 per control cycle. Nothing here imports a machine.
 """
 
-from ._loop import DivergenceError, LoopResult, LoopSettings, check_timing, closed_loop
-from ._run import SPAN_CYCLES, Tracking, track, track_spans
-from ._plant import EXPLICIT_LIMIT, METHODS, ROS2_GAMMA, Plant, accelerations, hold_interval, make_plant, make_work
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .._lazy import attach
+
+if TYPE_CHECKING:
+    from ._loop import DivergenceError, LoopResult, LoopSettings, check_timing, closed_loop
+    from ._run import SPAN_CYCLES, Tracking, track, track_spans
+    from ._plant import EXPLICIT_LIMIT, METHODS, ROS2_GAMMA, Plant, accelerations, hold_interval, make_plant, make_work
 
 __all__ = [
     "Plant",
@@ -29,3 +36,12 @@ __all__ = [
     "track_spans",
     "SPAN_CYCLES",
 ]
+
+#: where each public name lives, imported on first use: ``import pkmdyn.simulate`` loads
+#: neither Numba nor SciPy until a function is looked up
+__getattr__, __dir__ = attach(__name__, {
+    **dict.fromkeys(("DivergenceError", "LoopResult", "LoopSettings", "check_timing", "closed_loop"), "._loop"),
+    **dict.fromkeys(("SPAN_CYCLES", "Tracking", "track", "track_spans"), "._run"),
+    **dict.fromkeys(("EXPLICIT_LIMIT", "METHODS", "ROS2_GAMMA", "Plant", "accelerations", "hold_interval",
+                     "make_plant", "make_work"), "._plant"),
+})

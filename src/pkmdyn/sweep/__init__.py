@@ -10,10 +10,17 @@ side (``pkmdyn.machines.registry.sweep_adapter(name)``); then
     report = run_sweep(adapter, "space.toml", "out", workers=2)
 """
 
-from ..sweep_protocol import STATUSES, DesignOutcome, MetricInfo, SweepAdapter
-from .pareto import best_index, minimised, pareto_mask
-from .run import PreparedSweep, SweepReport, prepare_sweep, run_sweep
-from .space import SweepSpace, load_space, parse_path, sample_designs, space_from_dict
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .._lazy import attach
+
+if TYPE_CHECKING:
+    from ..sweep_protocol import STATUSES, DesignOutcome, MetricInfo, SweepAdapter
+    from .pareto import best_index, minimised, pareto_mask
+    from .run import PreparedSweep, SweepReport, prepare_sweep, run_sweep
+    from .space import SweepSpace, load_space, parse_path, sample_designs, space_from_dict
 
 __all__ = [
     "SweepAdapter",
@@ -33,3 +40,12 @@ __all__ = [
     "run_sweep",
     "SweepReport",
 ]
+
+#: where each public name lives, imported on first use: ``import pkmdyn.sweep`` loads
+#: neither pydantic nor Dask nor pymoo until a function is looked up
+__getattr__, __dir__ = attach(__name__, {
+    **dict.fromkeys(("STATUSES", "DesignOutcome", "MetricInfo", "SweepAdapter"), "..sweep_protocol"),
+    **dict.fromkeys(("best_index", "minimised", "pareto_mask"), ".pareto"),
+    **dict.fromkeys(("PreparedSweep", "SweepReport", "prepare_sweep", "run_sweep"), ".run"),
+    **dict.fromkeys(("SweepSpace", "load_space", "parse_path", "sample_designs", "space_from_dict"), ".space"),
+})

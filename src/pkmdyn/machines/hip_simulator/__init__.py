@@ -2,20 +2,15 @@
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from ..._lazy import attach
 
 if TYPE_CHECKING:
     from .dynamics import HipTorques, inverse_dynamics
     from .forward import forward_dynamics
     from .kinematics import HipKinematics, inverse_kinematics, platform_kinematics
     from .params import HipModel, load_params, model_from_dict
-
-#: the package's names and their modules, imported on first use (so that the registry and the
-#: command line can read the machine's entry without loading its dynamics)
-_LAZY = {"HipModel": "params", "load_params": "params", "model_from_dict": "params",
-         "HipKinematics": "kinematics", "inverse_kinematics": "kinematics", "platform_kinematics": "kinematics",
-         "HipTorques": "dynamics", "inverse_dynamics": "dynamics", "forward_dynamics": "forward"}
 
 __all__ = [
     "HipModel",
@@ -29,8 +24,11 @@ __all__ = [
     "forward_dynamics",
 ]
 
-
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+#: the package's names and their modules, imported on first use (so that the registry and the
+#: command line can read the machine's entry without loading its dynamics)
+__getattr__, __dir__ = attach(__name__, {
+    **dict.fromkeys(("HipModel", "load_params", "model_from_dict"), ".params"),
+    **dict.fromkeys(("HipKinematics", "inverse_kinematics", "platform_kinematics"), ".kinematics"),
+    **dict.fromkeys(("HipTorques", "inverse_dynamics"), ".dynamics"),
+    "forward_dynamics": ".forward",
+})

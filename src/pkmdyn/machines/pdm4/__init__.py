@@ -7,8 +7,9 @@ the revolute joint R4. Data flows one way: TOML -> :class:`PdmModel` -> motion -
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from ..._lazy import attach
 
 if TYPE_CHECKING:
     from .kinematics import (
@@ -21,12 +22,6 @@ if TYPE_CHECKING:
         reachable,
     )
     from .params import PdmModel, default_params_path, load_params
-
-#: the package's names and their modules, imported on first use (so that the registry and the
-#: command line can read the machine's entry without loading its dynamics)
-_LAZY = {"PdmModel": "params", "load_params": "params", "default_params_path": "params",
-         **dict.fromkeys(("BODY_NAMES", "BodyState", "PdmPositions", "PdmKinematics", "inverse_position",
-                          "inverse_kinematics", "reachable"), "kinematics")}
 
 __all__ = [
     "PdmModel",
@@ -41,8 +36,10 @@ __all__ = [
     "reachable",
 ]
 
-
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+#: the package's names and their modules, imported on first use (so that the registry and the
+#: command line can read the machine's entry without loading its dynamics)
+__getattr__, __dir__ = attach(__name__, {
+    **dict.fromkeys(("PdmModel", "load_params", "default_params_path"), ".params"),
+    **dict.fromkeys(("BODY_NAMES", "BodyState", "PdmPositions", "PdmKinematics", "inverse_position",
+                     "inverse_kinematics", "reachable"), ".kinematics"),
+})
