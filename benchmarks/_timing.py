@@ -8,7 +8,7 @@ import sys
 import time
 from collections.abc import Callable
 
-__all__ = ["best_time", "cli_peak_memory"]
+__all__ = ["best_time", "best_times", "cli_peak_memory"]
 
 _CHILD = """
 import resource, sys, time
@@ -28,6 +28,23 @@ def best_time(fn: Callable[[], object], repeat: int) -> float:
         t0 = time.perf_counter()
         fn()
         best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def best_times(fns: dict[str, Callable[[], object]], repeat: int,
+               clock: Callable[[], float] = time.process_time) -> dict[str, float]:
+    """Best time [s] of each of ``fns`` over ``repeat`` rounds, each round calling every one in
+    turn (after one warm-up call each), so that a change of a shared machine's load falls on
+    all of them; CPU time of the process by default (what other jobs take from it is then not
+    counted), wall time with ``clock=time.perf_counter``."""
+    for fn in fns.values():
+        fn()
+    best = dict.fromkeys(fns, float("inf"))
+    for _ in range(repeat):
+        for k, fn in fns.items():
+            t0 = clock()
+            fn()
+            best[k] = min(best[k], clock() - t0)
     return best
 
 

@@ -30,6 +30,15 @@ each with its reference's preparation (MuJoCo's kinematics and feedforward along
 steps, by pkmdyn's batched verbs). The pkmdyn loop runs its cycles in one compiled call
 (``pkmdyn.simulate._cycles``, compiled first: ``stewart_loop_kernel_compile_or_load_s``);
 ``..._python_cycles_...`` fields time the same run with its cycles in Python.
+
+Single-state forward dynamics of the Stewart platform and the Delta beside two peers, in this
+process on the same 2000 consecutive states of a 1 kHz loop and the same efforts, CPU time:
+pkmdyn's compiled kernel, Pinocchio's exact closed-loop ``constraintDynamics`` (the URDF export
+and its loop sidecar: the spanning tree, rigid 3D constraints at the cut joints) and MuJoCo's
+``mj_forward`` on the exported MJCF (soft loop equalities), with the accelerations' agreement
+in pkmdyn's tree coordinates (``<machine>_fd_*``, :func:`_forward_peers`). Only these:
+
+    python benchmarks/mechanism.py --json --part fd
 """
 
 from __future__ import annotations
@@ -43,7 +52,7 @@ import numpy as np
 
 from pkmdyn.multibody import load_mechanism, newton_only, reference_task, solve_kinematics
 
-from _timing import best_time
+from _timing import best_time, best_times
 
 ROOT = Path(__file__).resolve().parents[1]
 MACHINES = ROOT / "src" / "pkmdyn" / "machines"
@@ -192,45 +201,230 @@ def _dynamics(out: dict, n: int, repeat: int, m, hip, mh, pm) -> None:
 
     sec = best_time(lambda: [one() for _ in range(200)], repeat)
     out["stewart_fd_single_verb_us"] = sec / 200 * 1e6
-    # the compiled kernel as the plant integrator and the controllers call it (no input checks),
-    # on consecutive states of a 1 kHz loop (the same motion sampled every 1 ms; every 2000th
-    # call jumps back 2 s); MuJoCo below does not depend on where it was called before
-    p, _, forward = V.one_sample_kernels(m)
-    acc = np.empty(m.nt)
-    t1, x1, xd1, xdd1 = _motion(reference_task(m), np.array([0.05, 0.05, 0.05, 0.1, 0.1, 0.1]), 10001, seed=2)
-    x1, xd1, xdd1 = x1[:2000].copy(), xd1[:2000].copy(), xdd1[:2000].copy()
-    u1 = V.inverse_dynamics(m, x1, xd1, xdd1)
-    a1 = np.empty_like(x1)
-    for i in range(len(x1)):
-        if forward(p, x1[i], xd1[i], u1[i], 0.0, acc):
-            acc[:] = V.forward_dynamics_one(m, x1[i], xd1[i], u1[i])
-        a1[i] = acc
-    out["stewart_fd_single_max_rel_diff"] = _rel(a1, xdd1)
 
-    def kernel() -> None:
-        for i in range(len(x1)):
-            if forward(p, x1[i], xd1[i], u1[i], 0.0, acc):
-                V.forward_dynamics_one(m, x1[i], xd1[i], u1[i])
 
-    sec = best_time(kernel, repeat)
-    out["stewart_fd_single_us"] = sec / len(x1) * 1e6
+#: the forward-dynamics comparison's states: the first 2000 samples of ``_motion`` over 10 s
+#: sampled every 1 ms (consecutive states of a 1 kHz loop), amplitude and seed per machine
+FD_STATES = 2000
+FD_MOTION = {"stewart": ([0.05, 0.05, 0.05, 0.1, 0.1, 0.1], 2), "delta": ([0.15, 0.15, 0.1], 1)}
+#: Pinocchio's proximal settings for ``constraintDynamics``: absolute and relative accuracy,
+#: proximal parameter mu, iterations at most (converged in 3 on both machines; a state that
+#: reaches the limit is reported)
+PIN_PROXIMAL = (1e-12, 1e-12, 1e-8, 100)
+
+
+def pinocchio_closed_loop(m):
+    """Pinocchio model of the described mechanism ``m`` from its URDF export and loop sidecar
+    (``pkmdyn.multibody.urdf_export.mechanism_urdf``, what ``pkmdyn export --format urdf``
+    writes): Pinocchio's URDF parser builds the spanning tree (gravity from the sidecar), and
+    each of the sidecar's frame pairs becomes a ``RigidConstraintModel`` (``3d``: CONTACT_3D,
+    ``6d``: CONTACT_6D) between the two frames' joints at the frames' placements. Returns
+    ``(model, constraints, frame_pairs, cmap, act_v)``: ``frame_pairs`` the pairs' frame ids
+    and kinds; ``cmap`` for every tree coordinate of ``m``, (pkmdyn coordinate, Pinocchio q
+    index, its nq, v index), the URDF joint position being ``q - coord_offset`` (a continuous
+    joint's (cos, sin)); ``act_v`` the actuated joints' v indices (order of ``name_mot``, the
+    description's actuators)."""
+    import pinocchio as pin
+
+    from pkmdyn.multibody.urdf_export import mechanism_urdf
+
+    text, side, _ = mechanism_urdf(m)
+    model = pin.buildModelFromXML(text)
+    model.gravity.linear = np.array(side["gravity_m_s2"], dtype=float)
+    # Pinocchio's own vectors: a Python list is converted (copied) at every call, twice the time
+    cms, pairs = pin.StdVec_RigidConstraintModel(), []
+    for (fa, fb), kind in zip(side["closed_loop"], side["type"]):
+        ia, ib = model.getFrameId(fa), model.getFrameId(fb)
+        A, B = model.frames[ia], model.frames[ib]
+        ct = pin.ContactType.CONTACT_3D if kind == "3d" else pin.ContactType.CONTACT_6D
+        cms.append(pin.RigidConstraintModel(ct, model, A.parentJoint, A.placement, B.parentJoint, B.placement,
+                                            pin.ReferenceFrame.LOCAL))
+        pairs.append((ia, ib, kind))
+    cmap = []
+    for k, jn in enumerate(m.joint_names):
+        nq = 0 if m.joint_cut[k] else int(m.joint_nq[k])
+        for i in range(nq):
+            jid = model.getJointId(jn if nq == 1 else f"{jn}_{i + 1}")
+            cmap.append((int(m.joint_q0[k]) + i, int(model.idx_qs[jid]), int(model.nqs[jid]), int(model.idx_vs[jid])))
+    act_v = [int(model.idx_vs[model.getJointId(nm)]) for nm in side["name_mot"]]
+    return model, cms, pairs, cmap, act_v
+
+
+def _pinocchio_state(m, model, cmap, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pinocchio's configuration and velocity of pkmdyn's tree coordinates ``q``, rates ``qd``."""
+    import pinocchio as pin
+
+    qp, vp = pin.neutral(model), np.zeros(model.nv)
+    for c, iq, nq, iv in cmap:
+        a = q[c] - m.coord_offset[c]
+        if nq == 2:  # a continuous joint
+            qp[iq], qp[iq + 1] = np.cos(a), np.sin(a)
+        else:
+            qp[iq] = a
+        vp[iv] = qd[c]
+    return qp, vp
+
+
+def _forward_peers(out: dict, repeat: int, machines: dict) -> None:
+    """Single-state forward dynamics of each machine: pkmdyn's compiled kernel (as the plant
+    integrator and the controllers call it, no input checks), Pinocchio's exact closed-loop
+    ``constraintDynamics`` (tree + rigid loop constraints, :func:`pinocchio_closed_loop`) and
+    MuJoCo's ``mj_forward`` on the exported MJCF (soft loop equalities), in this process on
+    the same 2000 consecutive states of a 1 kHz loop and the same efforts (pkmdyn's inverse
+    dynamics of the motion), CPU time, best of ``repeat`` rounds that run the three in turn
+    (``_timing.best_times``); the accelerations compared in pkmdyn's tree coordinates
+    (pkmdyn's task accelerations mapped by its kinematics).
+
+    Neither machine has drives (rotor inertia) or joint friction: the three engines solve the
+    same rigid-body problem. pkmdyn holds idle freedoms (the Delta's six rod spins) by its
+    rule ``n_k . (q - q_ref) = 0`` (``dynamics.idle_holding``), Pinocchio and MuJoCo let them
+    spin freely: for the Delta the held case is also solved by Pinocchio
+    (``pinocchio.forwardDynamics``: its mass matrix, bias forces and the loops' frame
+    Jacobians and drifts, with the holding rows added), not timed."""
+    from pkmdyn.multibody.dynamics import fr_any
+    from pkmdyn.multibody.machine import machine_verbs
+
+    try:
+        import pinocchio as pin
+    except ImportError:  # pragma: no cover - Pinocchio is optional (the validate extra)
+        pin = None
     try:
         import mujoco
 
         from pkmdyn.multibody.mjcf import mechanism_mjcf, mujoco_order, mujoco_qpos
-
-        mm = mujoco.MjModel.from_xml_string(mechanism_mjcf(m))
-        md = mujoco.MjData(mm)
-        o = mujoco_order(m, mm)
-        md.qpos[:] = mujoco_qpos(m, ks.q[0], mm)
-        md.qvel[o] = ks.qd[0]
-        sec = best_time(lambda: [mujoco.mj_forward(mm, md) for _ in range(1000)], repeat)
-        out["mujoco_stewart_forward_us"] = sec / 1000 * 1e6
-        out["stewart_fd_over_mujoco"] = out["stewart_fd_single_us"] / out["mujoco_stewart_forward_us"]
     except ImportError:  # pragma: no cover - MuJoCo is optional
-        out["mujoco_stewart_forward_us"] = None
-        out["stewart_fd_over_mujoco"] = float("inf")
-    out["stewart_fd_over_mj_forward"] = out["stewart_fd_over_mujoco"]
+        mujoco = None
+    for name, m in machines.items():
+        if m.has_drives or fr_any(m):
+            raise ValueError(f"{name}: drives or joint friction; the peers' models here are rigid bodies alone")
+        V = machine_verbs(m)
+        amp, seed = FD_MOTION[name]
+        t1, x1, xd1, xdd1 = _motion(reference_task(m), np.array(amp), 10001, seed=seed)
+        t1, x1, xd1, xdd1 = (a[:FD_STATES].copy() for a in (t1, x1, xd1, xdd1))
+        n1 = len(x1)
+        u1 = V.inverse_dynamics(m, x1, xd1, xdd1)
+        kin = solve_kinematics(m, x1, xd1, xdd1, t1)  # the tree states every engine is given
+        # pkmdyn: the compiled kernel on consecutive states (every 2000th call jumps back 2 s)
+        p, _, forward = V.one_sample_kernels(m)
+        acc = np.empty(m.nt)
+        a1 = np.empty_like(x1)
+        for i in range(n1):
+            if forward(p, x1[i], xd1[i], u1[i], 0.0, acc):
+                acc[:] = V.forward_dynamics_one(m, x1[i], xd1[i], u1[i])
+            a1[i] = acc
+        out[f"{name}_fd_single_max_rel_diff"] = _rel(a1, xdd1)  # forward(inverse) = identity
+
+        def kernel() -> None:
+            for i in range(n1):
+                if forward(p, x1[i], xd1[i], u1[i], 0.0, acc):
+                    V.forward_dynamics_one(m, x1[i], xd1[i], u1[i])
+
+        runs = {"pkmdyn": kernel}
+        tree = solve_kinematics(m, x1, xd1, a1, t1).qdd  # pkmdyn's accelerations in its tree coordinates
+        act = m.act_coord
+        if pin is not None:
+            model, cms, pairs, cmap, act_v = pinocchio_closed_loop(m)
+            data = model.createData()
+            cds = pin.StdVec_RigidConstraintData()
+            for c in cms:
+                cds.append(c.createData())
+            pin.initConstraintDynamics(model, data, cms, cds)
+            prox = pin.ProximalSettings(*PIN_PROXIMAL)
+            cidx = np.array([c for c, *_ in cmap])
+            vidx = np.array([iv for *_, iv in cmap])
+            qp = np.empty((n1, model.nq))
+            vp = np.empty((n1, model.nv))
+            tau = np.zeros((n1, model.nv))
+            tau[:, act_v] = u1 * m.drive_ratio
+            gap = 0.0
+            for i in range(n1):
+                qp[i], vp[i] = _pinocchio_state(m, model, cmap, kin.q[i], kin.qd[i])
+                pin.framesForwardKinematics(model, data, qp[i])
+                gap = max(gap, max(float(np.linalg.norm(data.oMf[a].translation - data.oMf[b].translation))
+                                   for a, b, _ in pairs))
+            out[f"{name}_fd_pinocchio_loop_gap_m"] = gap  # the loops closed at the given states
+            ap = np.empty((n1, m.nq))
+            iters = 0
+            for i in range(n1):
+                ddq = pin.constraintDynamics(model, data, qp[i], vp[i], tau[i], cms, cds, prox)
+                ap[i, cidx] = ddq[vidx]
+                iters = max(iters, prox.iter)
+            out[f"{name}_fd_pinocchio_proximal_iterations"] = iters  # PIN_PROXIMAL's limit: not converged
+
+            def pinocchio() -> None:
+                for i in range(n1):
+                    pin.constraintDynamics(model, data, qp[i], vp[i], tau[i], cms, cds, prox)
+
+            runs["pinocchio"] = pinocchio
+            out[f"{name}_fd_pinocchio_agreement"] = _rel(tree, ap)
+            out[f"{name}_fd_pinocchio_actuated_agreement"] = _rel(tree[:, act], ap[:, act])
+            if m.solver_idle.shape[0]:  # the idle freedoms held as pkmdyn holds them (docstring)
+                W = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+                H = np.zeros((m.solver_idle.shape[0], model.nv))
+                H[:, vidx] = np.asarray(m.solver_idle, dtype=float)[:, cidx]
+                ah = np.empty((n1, m.nq))
+                dh = model.createData()  # forwardDynamics resizes its data's multipliers
+                for i in range(n1):
+                    pin.computeJointJacobians(model, dh, qp[i])
+                    pin.forwardKinematics(model, dh, qp[i], vp[i], np.zeros(model.nv))
+                    pin.updateFramePlacements(model, dh)
+                    rows, drift = [H], [np.zeros(len(H))]
+                    for a, b, kind in pairs:
+                        k = 3 if kind == "3d" else 6
+                        Jab = pin.getFrameJacobian(model, dh, a, W) - pin.getFrameJacobian(model, dh, b, W)
+                        rows.append(Jab[:k])
+                        ca = pin.getFrameClassicalAcceleration(model, dh, a, W)
+                        cb = pin.getFrameClassicalAcceleration(model, dh, b, W)
+                        drift.append((ca - cb).vector[:k] if k == 6 else ca.linear - cb.linear)
+                    ddq = pin.forwardDynamics(model, dh, qp[i], vp[i], tau[i], np.vstack(rows), np.concatenate(drift))
+                    ah[i, cidx] = ddq[vidx]
+                out[f"{name}_fd_pinocchio_idle_held_agreement"] = _rel(tree, ah)
+        if mujoco is not None:
+            mm = mujoco.MjModel.from_xml_string(mechanism_mjcf(m))
+            md = mujoco.MjData(mm)
+            o = mujoco_order(m, mm)
+            qpos = np.array([mujoco_qpos(m, kin.q[i], mm) for i in range(n1)])
+            qvel = np.zeros((n1, mm.nv))
+            qvel[:, o] = kin.qd
+            ctrl = np.ascontiguousarray(u1)
+            am = np.empty((n1, m.nq))
+            for i in range(n1):
+                md.qpos[:], md.qvel[:], md.ctrl[:] = qpos[i], qvel[i], ctrl[i]
+                mujoco.mj_forward(mm, md)
+                am[i] = md.qacc[o]
+
+            def mj() -> None:  # the inputs set, as a caller does, then mj_forward
+                for i in range(n1):
+                    md.qpos[:], md.qvel[:], md.ctrl[:] = qpos[i], qvel[i], ctrl[i]
+                    mujoco.mj_forward(mm, md)
+
+            runs["mujoco"] = mj
+            out[f"{name}_fd_mujoco_soft_agreement"] = _rel(tree, am)  # soft loops: approximate
+            out[f"{name}_fd_mujoco_soft_actuated_agreement"] = _rel(tree[:, act], am[:, act])
+            if pin is not None:
+                out[f"{name}_fd_mujoco_soft_vs_pinocchio_actuated_agreement"] = _rel(am[:, act], ap[:, act])
+            if name == "stewart":  # the earlier figure: mj_forward alone, the first state repeated
+                def mj_one_state() -> None:
+                    md.qpos[:], md.qvel[:], md.ctrl[:] = qpos[0], qvel[0], ctrl[0]
+                    for _ in range(n1):
+                        mujoco.mj_forward(mm, md)
+
+                runs["mujoco_one_state"] = mj_one_state
+        best = best_times(runs, repeat)
+        peers = {k: best[k] / n1 * 1e6 for k in ("pinocchio", "mujoco") if k in best}
+        out[f"{name}_fd_pkmdyn_us"] = best["pkmdyn"] / n1 * 1e6
+        if "mujoco_one_state" in best:
+            out["mujoco_stewart_forward_us"] = best["mujoco_one_state"] / n1 * 1e6
+        for peer in ("pinocchio", "mujoco"):
+            out[f"{name}_fd_{peer}_us"] = peers.get(peer)
+        out[f"{name}_fd_over_fastest_peer"] = (out[f"{name}_fd_pkmdyn_us"] / min(peers.values())
+                                               if peers else None)
+    if "stewart" in machines:  # the earlier keys
+        out["stewart_fd_single_us"] = out["stewart_fd_pkmdyn_us"]
+        mj = out.get("mujoco_stewart_forward_us")
+        out["mujoco_stewart_forward_us"] = mj
+        out["stewart_fd_over_mujoco"] = out["stewart_fd_single_us"] / mj if mj else float("inf")
+        out["stewart_fd_over_mj_forward"] = out["stewart_fd_over_mujoco"]
 
 
 def _direct(out: dict, n: int, repeat: int, machines: dict) -> None:
@@ -427,7 +621,15 @@ def main() -> None:
     ap.add_argument("--json", action="store_true", help="print only the JSON object")
     ap.add_argument("--samples", type=int, default=4000)
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--part", choices=("all", "fd"), default="all",
+                    help="fd: only the single-state forward dynamics beside Pinocchio and MuJoCo (Stewart, Delta)")
     args = ap.parse_args()
+    if args.part == "fd":
+        machines = {k: load_mechanism(MACHINES / k / f"{k}.toml") for k in ("stewart", "delta")}
+        out = {"samples": FD_STATES}
+        _forward_peers(out, args.repeat, machines)
+        print(json.dumps(out, indent=None if args.json else 2))
+        return
     sys.path.insert(0, str(ROOT / "tests"))
     try:
         from oracles import delta as delta_oracle
@@ -519,6 +721,7 @@ def main() -> None:
         diffs += [_rel(getattr(kin, f)[:, k], getattr(ref.bodies[b], f)) for f in ("R", "p", "v", "a", "w", "wd")]
     out["pdm_max_rel_diff"] = max(diffs)
     _dynamics(out, n, args.repeat, m, hip, mh, pm)
+    _forward_peers(out, args.repeat, {"stewart": m, "delta": md})
     _direct(out, n, args.repeat, {"stewart": m, "hip": mh, "delta": md, "pdm": mp})
     _stewart_loops(out, m)
     _hip_loops(out)
