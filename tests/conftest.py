@@ -14,8 +14,6 @@ from pathlib import Path
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-# no compile-ahead children beside the test workers (tests/test_compile_ahead.py tests them)
-os.environ.setdefault("PKMDYN_COMPILE_AHEAD", "0")
 
 
 def _engines_required() -> bool:

@@ -2,7 +2,7 @@
 cycles in Python (``compiled_cycles = False``): the same records, step counts and end state for
 every law, with exact and first-order encoders, a plant other than the controller's model, joint
 friction that takes the integrator into its ROS2 and refined steps; the same message where a run
-diverges; and a run compiles nothing but the signature the compile-ahead child compiles."""
+diverges; and a run compiles nothing but the signature the install compiles."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import pytest
 import multibody_examples as ex
 from pkmdyn.cli.mechanism import described_control_settings
 from pkmdyn.control import gains, hermite_motion, loop_settings
-from pkmdyn.multibody import ahead, default_motion, load_mechanism
+from pkmdyn.multibody import default_motion, load_mechanism
 from pkmdyn.multibody.machine import machine_verbs
 from pkmdyn.simulate import DivergenceError, _cycles, track
 
@@ -23,7 +23,7 @@ FIELDS = ("q", "qd", "u", "q_s", "qd_s", "q_att", "s", "s_enc", "sd_enc", "sdd_e
 
 @pytest.fixture(scope="module", autouse=True)
 def _compiled():
-    ahead.compile_stages(["loop"])  # once per cache (some 30 s cold)
+    _cycles.compile_for_runs()  # once per cache (some 30 s cold)
 
 
 def _stewart(mass=1.0, friction=None):
@@ -158,14 +158,14 @@ def test_a_diverging_run_stops_with_the_python_cycles_message(monkeypatch):
     assert errors[0][2] > 0.01 and sum(taken) > 0  # the compiled cycles ran before it
 
 
-def test_a_run_compiles_only_the_signature_compiled_ahead(monkeypatch):
-    """The loop's arguments have the types of ``example_signature`` (which the compile-ahead
-    child compiles): a run adds no signature, and the stage is reported compiled."""
+def test_a_run_compiles_only_the_signature_compiled_at_install(monkeypatch):
+    """The loop's arguments have the types of ``example_signature`` (which the install compiles,
+    ``pkmdyn compile``): a run adds no signature, and the kernel is reported available."""
     m = _stewart()
     _, _, taken = _both(m, m, "computed-torque", 0.1, _settings(m), monkeypatch)
     assert taken > 0
     assert set(_cycles.run_cycles.signatures) == {_cycles.example_signature()}
-    assert ahead.compiled("loop") and _cycles.available()
+    assert _cycles.available()
 
 
 @pytest.mark.parametrize("law", ["pd", "computed-torque"])

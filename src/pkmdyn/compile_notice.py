@@ -1,29 +1,33 @@
-"""Tell the user when pkmdyn's compiled kernels are being compiled, once, on stderr.
+"""Say on stderr when a command compiles pkmdyn's numerical kernels, what and why, once.
 
-The kinematics and dynamics kernels (numba) are compiled on their first use after an
-install and cached on disk (beside the package, or in the user's cache folder where that is
-not writable); a later run loads them in a fraction of a second. The first run of a command
-compiles what that command needs: measured on a 2-core machine with an empty cache, about
-40-45 s for ``pkmdyn run --machine stewart`` and 20 s more for the single-sample kernels of a
-first ``pkmdyn control`` (about 60 s for ``control`` alone from an empty cache). :func:`install` (called by the command line, never on import) registers
-a listener on numba's compile events that says so once, when the first kernel of pkmdyn starts
-compiling, and :func:`summary` gives the time it took, for the command line to print at the
-end of a run that succeeded. Like the progress bars, both are written where stderr is a
-terminal (a person waiting); a script or a pipeline that reads stderr gets only what the
-command itself says (one line for an error).
+An install compiles every kernel the commands use into numba's cache inside the package
+(``setup.py``, ``pkmdyn compile``), so a command normally loads them in a fraction of a second.
+Where that cache cannot serve (built for another CPU or by another numba, an editable install,
+a read-only install whose user cache is empty, a cache cleared), a command compiles what it
+misses on first use: up to about a minute on two cores for ``pkmdyn run`` or ``pkmdyn control``
+of a six-legged platform (:data:`ESTIMATE`). :func:`install` (called by the command line, never
+on import) registers a listener on numba's compile events that says so once, when the first
+kernel of pkmdyn starts compiling: its name, why the cache did not serve it (:func:`_why`) and
+about how long it takes. :func:`summary` gives the kernels compiled and the time they took, for
+the command line to print at the end of a run that succeeded. Both are said whether or not
+stderr is a terminal: a wait of a minute is explained in a log too.
 """
 
 from __future__ import annotations
 
+import pickle
 import sys
 import time
+from typing import Any
 
-__all__ = ["install", "summary", "MESSAGE"]
+__all__ = ["install", "summary", "ESTIMATE"]
 
-MESSAGE = ("pkmdyn: compiling the numerical kernels for their first use (up to a minute or so on two cores, "
-           "once: they are cached for later runs)")
+#: what the first use of a command costs where nothing is cached, as said to the user: measured
+#: on a two-core machine (``pkmdyn run --machine stewart`` 38 s, a first ``pkmdyn control`` then
+#: 13 s more; ``pkmdyn compile`` all of them in about two minutes, two processes)
+ESTIMATE = "up to about a minute on two cores, once"
 
-_state = {"listener": None}
+_state: dict[str, Any] = {"listener": None}
 
 
 def _is_ours(ev) -> bool:
@@ -31,22 +35,55 @@ def _is_ours(ev) -> bool:
     return str(getattr(fn, "__module__", "")).startswith("pkmdyn")
 
 
-def install(force: bool = False) -> None:
-    """Register the compile listener (once per process) where stderr is a terminal, or always
-    with ``force``."""
-    if _state["listener"] is not None:
-        return
+def _name(ev) -> str:
+    fn = getattr(ev.data.get("dispatcher"), "py_func", None)
+    return f"{getattr(fn, '__module__', '?')}.{getattr(fn, '__qualname__', '?')}"
+
+
+def _why(dispatcher: Any) -> str:
+    """Why numba's cache did not serve ``dispatcher``: read from its index file (the numba
+    version, then the source stamp and each entry's CPU), in words; a general reason where the
+    index says nothing more."""
+    impl = getattr(getattr(dispatcher, "_cache", None), "_cache_file", None)
+    if impl is None:
+        return "a kernel not cached on disk"
     try:
-        tty = sys.stderr.isatty()
-    except (AttributeError, ValueError):  # pragma: no cover - a replaced or closed stderr
-        tty = False
-    if not (tty or force):
+        path = impl._index_path
+        with open(path, "rb") as f:
+            version = pickle.load(f)
+            data = f.read()
+    except FileNotFoundError:
+        return "no cache of it here (an editable install, a cache cleared, or one not writable)"
+    except (AttributeError, OSError, pickle.UnpicklingError, EOFError):
+        return "the cache could not be read"
+    try:
+        import numba
+
+        if version != numba.__version__:
+            return f"the cache was built by numba {version}, this is numba {numba.__version__}"
+        stamp, overloads = pickle.loads(data)
+        if stamp != impl._source_stamp:
+            return "its source changed since the cache was built"
+        from numba.core.registry import cpu_target
+
+        here = cpu_target.target_context.codegen().magic_tuple()
+        cpus = {key[1][1] for key in overloads if isinstance(key, tuple) and len(key) > 1}
+        if cpus and not any(key[1] == here for key in overloads):
+            return f"the cache was built for CPU {', '.join(sorted(map(str, cpus)))}, this is {here[1]}"
+        return "the cache holds it for other argument types"
+    except Exception:  # numba's internals differ: say what is sure
+        return "the cache does not hold it"
+
+
+def install() -> None:
+    """Register the compile listener (once per process)."""
+    if _state["listener"] is not None:
         return
     from numba.core import event
 
     class _Notice(event.Listener):
         def __init__(self) -> None:
-            self.said = False
+            self.names: list[str] = []
             self.depth = 0
             self.start = 0.0
             self.seconds = 0.0
@@ -54,14 +91,18 @@ def install(force: bool = False) -> None:
         def on_start(self, ev) -> None:
             if not _is_ours(ev):
                 return
+            name = _name(ev)
+            if not self.names:
+                try:
+                    print(f"pkmdyn: compiling numerical kernels missing from the cache, first {name} "
+                          f"({_why(ev.data.get('dispatcher'))}); {ESTIMATE}: `pkmdyn compile` compiles them all",
+                          file=sys.stderr, flush=True)
+                except OSError:  # pragma: no cover - a closed stderr
+                    pass
+            if name not in self.names:
+                self.names.append(name)
             if self.depth == 0:
                 self.start = time.perf_counter()
-                if not self.said:
-                    self.said = True
-                    try:
-                        print(MESSAGE, file=sys.stderr, flush=True)
-                    except OSError:  # pragma: no cover - a closed stderr
-                        pass
             self.depth += 1
 
         def on_end(self, ev) -> None:
@@ -76,9 +117,10 @@ def install(force: bool = False) -> None:
 
 
 def summary() -> str | None:
-    """One line with the time spent compiling pkmdyn's kernels in this process, or None when
+    """One line with the kernels compiled in this process and the time it took, or None when
     nothing was compiled."""
     lst = _state["listener"]
-    if lst is None or not lst.said:
+    if lst is None or not lst.names:
         return None
-    return f"pkmdyn: compiled the kernels in {lst.seconds:.0f} s; later runs load them from the cache"
+    return (f"pkmdyn: compiled {len(lst.names)} kernel{'s' if len(lst.names) != 1 else ''} in {lst.seconds:.0f} s "
+            "(cached for later runs)")

@@ -26,6 +26,7 @@ from . import stiffness as _stiffness_commands  # noqa: F401
 from . import wear as _wear_commands  # noqa: F401
 from . import workspace as _workspace_commands  # noqa: F401
 from . import imports as _import_commands  # noqa: F401
+from . import compile as _compile_commands  # noqa: F401
 from ._groups import HELD_NOTES, cli
 
 __all__ = ["main", "cli", "run"]

@@ -179,13 +179,7 @@ def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_w
     limits = parse_limit_options(limit_items, LIMIT_KEYS)
     if minimum_norm_reactions and unique_reactions:
         raise click.UsageError("--minimum-norm-reactions and --unique-reactions contradict each other")
-    from ..multibody import ahead
-
-    # a fresh install: the sample solver that the batched kinematics call compiles on another core
-    # meanwhile, then the single-sample kernel (for a later control run)
-    ahead.start(("sample", "one"))
     model, entry = _load(machine, limits)
-    ahead.wait("sample")  # before the first batched kinematics, which call the child's sample solver
     lim = effective_limits(model, limits)
     window = None
     if motion_path is not None or actuator_path is not None:
@@ -347,17 +341,7 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
                                + ", ".join(DESCRIBED_CONTROLLERS))
     inputs = {"--machine": path, "--motion": motion_path, "--gains": gains_path}
     check_output_dir(out_dir, inputs)
-    from ..multibody import ahead
-
-    # a fresh install: the sample solver and the loop's dynamics compile on another core meanwhile,
-    # then the direct kinematics of the route the mechanism takes (the loop's cycles in one call
-    # only for a long run, below: a short first run would end before they compile)
-    ahead.start(("sample", "one"))
     model, _ = _load(machine)
-    from ..multibody.direct import task_route_map
-
-    ahead.request(("task",) if task_route_map(model) is not None else ("direct",))
-    ahead.wait("sample")  # before the first batched kinematics (meanwhile the direct kinematics here)
     if motion_path is not None:
         motion = read_task_motion(model, Path(motion_path).absolute())
         what = str(motion_path)
@@ -382,8 +366,6 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
         ls = replace(ls, encoder_resolution=np.where(model.drive_encoder > 0, model.drive_encoder,
                                                      float(ls.encoder_resolution)))
     check_loop(ls, duration_s, gains_path)
-    if ahead.worth_compiling_loop(int(round(duration_s / ls.cycle_s))):
-        ahead.request(("loop",))  # a long run: the rest of it in the compiled cycles once they are compiled
     verbs = machine_verbs(model)
     load, column = _control_load(model, motion, what, verbs.ACTUATORS)
     fn = hermite_motion(motion.t, motion.x, motion.xd, motion.xdd, load)

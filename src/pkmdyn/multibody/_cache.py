@@ -16,7 +16,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-__all__ = ["refresh"]
+__all__ = ["refresh", "cached"]
 
 
 def _stamp(modules: Iterable[ModuleType]) -> str:
@@ -44,3 +44,12 @@ def refresh(dispatchers: Iterable[Any], modules: Iterable[ModuleType]) -> None:
             marker.write_text(stamp, encoding="ascii")
         except OSError:
             cache.disable()
+
+
+def cached(dispatcher: Any) -> bool:
+    """Whether numba's cache holds a compiled version of ``dispatcher`` for its present source
+    (False where this numba's cache cannot be read so)."""
+    try:
+        return bool(dispatcher._cache._cache_file._load_index())
+    except (AttributeError, OSError):
+        return False

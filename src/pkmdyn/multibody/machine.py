@@ -35,7 +35,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MotionError, ParameterError, as_array
-from . import ahead
 from .dynamics import actuator_efforts, body_wrenches, inertia_factors, coordinate_twists, effort_unit, fr_any, \
     generalised_forces, joint_reactions, task_mass_matrix
 from .actuators import motor_effort_unit, motor_efforts
@@ -270,7 +269,6 @@ class MechanismVerbs:
         pk = self._state(model).pk
         if pk is None or np.any(model.load_magnitude != 0.0):
             return None  # (a caller without a load passes 0.0: right only for a zero default magnitude)
-        ahead.wait("one")
         return pk, _one.inverse_one, _one.forward_one
 
     def _kernel(self, model: MechanismModel, forward: bool, q: object, qd: object, v: object,
@@ -280,7 +278,6 @@ class MechanismVerbs:
         pk = st.pk
         if pk is None:
             return None
-        ahead.wait("one")
         _one = st.one
         if model.named_loads:
             mag = float(model.load_magnitude[list(model.load_name).index(model.named_loads[0])])
@@ -340,7 +337,6 @@ class MechanismVerbs:
         (:func:`._one.positions_one`) where it answers, else the checked route."""
         st = self._state(model)
         nt = model.nt
-        ahead.wait("one")
         _one = st.one
         if not fresh and st.encoder_q is not None and st.encoder_pk is not None:
             xa, xda = np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(qd, dtype=float)
@@ -390,7 +386,6 @@ class MechanismVerbs:
         if st.direct_task:
             prime_task(st.direct_task[1], qt, x, a)
             task_state(st.direct_task[1])[1] = 0.0
-        self._direct_ahead(st)  # the next call takes the single-sample kernel at once
 
     def encoder_buffers(self, model: MechanismModel) -> tuple[NDArray[np.int64], Array, Array, Array] | None:
         """``(pk, view, prev, out)``: what :meth:`actuator_coordinates_one` hands its compiled call
@@ -440,11 +435,8 @@ class MechanismVerbs:
             status = kernel(pk, a, ad, out) if fit else ok - 1
             if status == ok:
                 return out[:nt].copy(), out[nt:].copy()
-        if st.direct is None:  # the first call packs both routes (compiling the batched kernel meanwhile)
-            answer = self._direct_checked(model, st, a, ad, status)
-            self._direct_ahead(st)
-            return answer
-        self._direct_ahead(st)
+        if st.direct is None:  # the first call packs both routes
+            return self._direct_checked(model, st, a, ad, status)
         if st.direct_task:
             return self._direct_task_on(model, st, a, ad, fit, status)
         return self._direct_checked(model, st, a, ad, status)
@@ -463,16 +455,6 @@ class MechanismVerbs:
         if d is not None:  # (the task route only reads the model's arrays from a single-sample buffer)
             pk1 = st.pk if st.pk is not None else _one.pack(model)
             st.direct_task = (pk1, d, np.zeros(2 * model.nt), D.direct_task_one, D.OK, D.CROSSED)
-
-    @staticmethod
-    def _direct_ahead(st: _State) -> None:
-        """Wait for the single-sample kernel that the next :meth:`direct_one` call takes where a
-        compile-ahead child compiles it (:mod:`.ahead`); the tree-space one is compiled here
-        instead while the child is still on another stage given before it (the task-space one)."""
-        if st.direct_task:
-            ahead.wait("task")
-        elif ahead.coming("direct") or ahead.ready("task"):
-            ahead.wait("direct")
 
     def _direct_task_on(self, model: MechanismModel, st: _State, a: Array, ad: Array, fit: bool,
                         status: int) -> tuple[Array, Array]:

@@ -19,11 +19,10 @@ the next ones back. (The kernels' warm starts are not restored: a Python cycle a
 return starts its Newton solves from where the compiled one left them, so its results may differ
 from a wholly Python run's within the solvers' tolerances.)
 
-Its kernel takes some 15-30 s to compile on a fresh install (it links the single-sample
-dynamics and direct kinematics a second time), so it runs only once compiled: in numba's cache,
-in this process, or by the compile-ahead child (its stage ``loop``, :mod:`pkmdyn.multibody.ahead`,
-which ``pkmdyn control`` requests for a long run; ``python -m pkmdyn.multibody.ahead loop``
-compiles it by hand). Until then the Python cycles run. Both routes give the same records
+Its kernel takes some 15-30 s to compile where numba's cache lacks it (it links the single-sample
+dynamics and direct kinematics a second time; the install compiles it, ``pkmdyn compile``), so it
+runs where it is compiled in this process or cached, or where the run is long enough to repay its
+compilation (:func:`available`); otherwise the Python cycles run. Both routes give the same records
 (tests/test_compiled_cycles.py: to 1e-12 of each record's size where no cycle is handed back).
 """
 
@@ -385,7 +384,7 @@ def _kinds(args: Any) -> Any:
 
 def example_arguments() -> tuple:
     """Arguments of :func:`run_cycles` of the types a run passes (two coordinates, nothing to
-    run): what the compile-ahead child compiles it for."""
+    run): what the install compiles it for (:func:`compile_for_runs`)."""
     n = 2
     v, m2, m3 = np.zeros(n), np.zeros((1, n)), np.zeros((1, n, n))
     ipk = np.zeros(1, dtype=np.int64)
@@ -410,12 +409,30 @@ def example_signature() -> tuple:
     return _SIGNATURE[0]
 
 
-def available() -> bool:
-    """Whether :func:`run_cycles` is compiled for :func:`example_signature` in this process or
-    in numba's cache, or the compile-ahead child has compiled it (its ``loop`` stage)."""
-    from ..multibody import ahead
+#: a run of this many cycles or more compiles :func:`run_cycles` where the cache lacks it: at
+#: about 0.1 ms a cycle in Python (a six-legged platform's cycle of two steps), about a minute,
+#: which its compilation (some 15-30 s) repays
+WORTH_COMPILING_CYCLES = 600_000
 
-    return bool(run_cycles.signatures) or ahead.compiled("loop")
+
+def compile_for_runs() -> None:
+    """Compile (or load from numba's cache) :func:`run_cycles` for the signature every run
+    passes (:func:`example_signature`)."""
+    run_cycles.compile(example_signature())
+
+
+def available(cycles: int = 0) -> bool:
+    """Whether :func:`run_cycles` is compiled for :func:`example_signature` in this process or
+    in numba's cache; a run of ``cycles`` at least :data:`WORTH_COMPILING_CYCLES` compiles it
+    here where it is neither (said on stderr by a command, :mod:`pkmdyn.compile_notice`)."""
+    from ..multibody._cache import cached
+
+    if run_cycles.signatures or cached(run_cycles):
+        return True
+    if cycles >= WORTH_COMPILING_CYCLES:
+        compile_for_runs()
+        return True
+    return False
 
 
 def _refresh_cache() -> None:

@@ -139,9 +139,7 @@ class LoopState:
 def compile_cycle_kernels() -> None:
     """Compile (or load) the cycle's own small kernels - the sensors', the limits', the laws' and
     the default integrator's - by calling each once on small arrays of the types the loop passes, so
-    that a fresh install compiles them while the compile-ahead child still compiles the direct
-    kinematics' kernel, which the loop then waits for (:meth:`ExactEncoders.__init__`), rather
-    than after it."""
+    that they are compiled (or loaded from the cache) before the loop's first cycle."""
     from ..control._laws import _ct_acc, _pd, _pid
     from ._plant import _piecewise, _rk3_finish, _rk_stage, _stage1, _stage2, _stale, _stiffness
 
@@ -185,7 +183,7 @@ class ExactEncoders:
         self.a0_ctrl = verbs.actuator_coordinates_one(ctrl_model, q0, zero, fresh=True)
         prime = getattr(verbs, "prime_direct", None)
         if prime is not None:  # the controller knows the pose its run starts from
-            compile_cycle_kernels()  # (on a fresh install, while a compile-ahead child may still compile the next)
+            compile_cycle_kernels()
             prime(ctrl_model, q0)
 
     def read(self, q: Array, qd: Array, out: Array) -> None:
@@ -347,7 +345,7 @@ def run_span(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_joi
     i = 0
     while i < n:
         if fast is None and i >= next_try and settings.compiled_cycles:
-            if _cycles.available():
+            if _cycles.available(n - i):
                 fast = _cycles.compiled_cycles(plant, controller, ref, exact, work, args, loads, lim, u, out_u, sat,
                                                memory, s_exact, steps, dt)
             next_try = i + (1 if i < 2 else CHUNK)

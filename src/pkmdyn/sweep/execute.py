@@ -241,7 +241,11 @@ def _client(workers: int, scheduler: str | None) -> tuple[Any, Any]:
         # default port 8787 may be held by another cluster, and Dask then warns on stderr
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
                                scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
-                               silence_logs=logging.CRITICAL)
+                               # nothing of the cluster's own logging on stderr, its CRITICAL lines included:
+                               # a Ctrl-C just after the job was scattered makes the scheduler log the
+                               # closed connection with a traceback; a failure reaches the sweep as an
+                               # exception and is said in one line
+                               silence_logs=logging.CRITICAL + 10)
     finally:
         if main:
             signal.signal(signal.SIGINT, old)
@@ -264,6 +268,7 @@ class Executor:
         self._cluster: Any = None
         self._job: BatchJob | None = None  # the job on the workers (scattered once) and its future
         self._shared: Any = None
+        self._warm = False  # whether a first design ran on one worker of each host (:meth:`_on_dask`)
 
     def __enter__(self) -> Executor:
         return self
@@ -275,6 +280,7 @@ class Executor:
         """Close the client and the local cluster, if started."""
         client, cluster, self._client, self._cluster = self._client, self._cluster, None, None
         self._job = self._shared = None
+        self._warm = False
         if client is not None:
             client.close()
         if cluster is not None:
@@ -326,7 +332,6 @@ class Executor:
 
     def _on_dask(self, job: BatchJob, batches: list[Array], X: Array, parts: Path, bar: Any,
                  stats: ExecutionStats) -> None:
-        from distributed import as_completed
         from distributed.scheduler import KilledWorker
 
         client = self._client
@@ -337,14 +342,26 @@ class Executor:
             self._job, self._shared = job, client.scatter(job, broadcast=True, hash=False)
         shared = self._shared
         token = uuid.uuid4().hex[:12]
-        futures = [client.submit(run_batch, shared, ids, X[ids], key=f"pkmdyn-sweep-{token}-{int(ids[0])}",
-                                 retries=self.retries, pure=False) for ids in batches]
+
+        def submit(ids: Array, **where: Any) -> Any:
+            return client.submit(run_batch, shared, ids, X[ids], key=f"pkmdyn-sweep-{token}-{int(ids[0])}",
+                                 retries=self.retries, pure=False, **where)
+
+        futures: list[Any] = []
         try:
-            for fut in as_completed(futures):
-                table = fut.result()
-                _write_part(parts, table)
-                bar.update(table.num_rows)
-                fut.release()
+            if not self._warm:
+                # the first design of the first batches alone, on one worker of each host, before
+                # the rest: a kernel missing from a host's cache is compiled there once, and the
+                # other workers of the host then load it, rather than compile it all at once
+                # into the one cache (numba has no lock of its own)
+                first = _one_worker_per_host(client.scheduler_info().get("workers", {}))
+                head = [b[:1] for b in batches[:len(first)]]
+                batches = [*[b[1:] for b in batches[:len(first)] if b.shape[0] > 1], *batches[len(first):]]
+                futures = [submit(ids, workers=[w], allow_other_workers=True) for ids, w in zip(head, first)]
+                self._collect(futures, parts, bar)
+                self._warm = True
+            futures = [submit(ids) for ids in batches]
+            self._collect(futures, parts, bar)
         except KilledWorker as exc:
             raise PkmdynError(f"a batch killed its worker repeatedly ({exc}); the finished batches are kept in "
                               f"{parts}, rerun the same command to continue") from None
@@ -355,6 +372,26 @@ class Executor:
         cpu_after = client.run(_cpu_seconds)
         stats.worker_cpu_s = (sum(cpu_after[w] - cpu_before[w] for w in cpu_after)
                               if set(cpu_after) == set(cpu_before) else None)
+
+    @staticmethod
+    def _collect(futures: list[Any], parts: Path, bar: Any) -> None:
+        """Write each batch's part as its future completes."""
+        from distributed import as_completed
+
+        for fut in as_completed(futures):
+            table = fut.result()
+            _write_part(parts, table)
+            bar.update(table.num_rows)
+            fut.release()
+
+
+def _one_worker_per_host(workers: Mapping[str, Any]) -> list[str]:
+    """One worker address of each host among the scheduler's ``workers`` (address -> info)."""
+    chosen: dict[str, str] = {}
+    for addr, info in sorted(workers.items()):
+        host = (info or {}).get("host") or addr.rsplit(":", 1)[0]
+        chosen.setdefault(str(host), addr)
+    return list(chosen.values()) or list(workers)[:1]
 
 
 def execute(job: BatchJob, X: Array, todo: Array, parts: Path, workers: int = 0, scheduler: str | None = None,
