@@ -473,8 +473,7 @@ def _stewart_loops(out: dict, m, seconds: float = 2.0) -> None:
 
     from dataclasses import replace
 
-    from pkmdyn.multibody import ahead
-    from pkmdyn.simulate import _run
+    from pkmdyn.simulate import _cycles, _run
 
     settings = described_control_settings(m)
     settings["sensors"]["pose_feedback_from_sensor"] = 0  # the pose from the encoders, by the direct kinematics
@@ -484,7 +483,7 @@ def _stewart_loops(out: dict, m, seconds: float = 2.0) -> None:
     V = machine_verbs(m)
     g = gains(settings, "computed-torque", m.nt)
     t0 = time.perf_counter()
-    ahead.compile_stages(["loop"])  # the cycles in one compiled call (a fresh cache: some 30 s, once)
+    _cycles.compile_for_runs()  # the cycles in one compiled call (cached at install; else some 30 s, once)
     out["stewart_loop_kernel_compile_or_load_s"] = time.perf_counter() - t0
     real = _run.closed_loop
     loop_wall: list[float] = []
@@ -579,9 +578,9 @@ def _hip_loops(out: dict, seconds: float = 2.0) -> None:
                                                  / out["mujoco_hip_loop_realtime_factor"])
     # the same loop through the generic engine on the hip's description (the compiled cycles):
     # what routing the hip's control through the engine would run at
-    from pkmdyn.multibody import ahead
+    from pkmdyn.simulate import _cycles
 
-    ahead.compile_stages(["loop"])
+    _cycles.compile_for_runs()
     gen = bc.hip_project_loop(bc.load_params(), seconds, ("computed-torque-exact-encoders",), generic=True)
     gen = gen["computed-torque-exact-encoders"]
     if "error" in gen:
