@@ -167,8 +167,125 @@ def _bounds(G, d, level, tight, W, v, w):  # pragma: no cover - compiled
     return ok, min(upper, 1.0)
 
 
+@njit(cache=True, _nrt=False)
+def _solve_chol(L, d, x):  # pragma: no cover - compiled
+    """``x = (L L^T)^-1 x`` in place, ``L`` the lower factor of :func:`_cholesky` in ``L[:d, :d]``."""
+    for i in range(d):
+        acc = x[i]
+        for j in range(i):
+            acc -= L[i, j] * x[j]
+        x[i] = acc / L[i, i]
+    for i in range(d - 1, -1, -1):
+        acc = x[i]
+        for j in range(i + 1, d):
+            acc -= L[j, i] * x[j]
+        x[i] = acc / L[i, i]
+
+
+@njit(cache=True, _nrt=False)
+def _rayleigh(G, d, x, w):  # pragma: no cover - compiled
+    """``x`` normalised in place, ``w = G x`` and the Rayleigh quotient ``x^T G x``."""
+    nx = 0.0
+    for i in range(d):
+        nx += x[i] * x[i]
+    nx = math.sqrt(nx)
+    for i in range(d):
+        x[i] /= nx
+    rq = 0.0
+    for i in range(d):
+        acc = 0.0
+        for j in range(d):
+            acc += G[i, j] * x[j]
+        w[i] = acc
+        rq += x[i] * acc
+    return rq
+
+
+@njit(cache=True, _nrt=False)
+def _factor(G, d, W, shift, sign):  # pragma: no cover - compiled
+    """Whether ``sign (G - shift I)`` is positive definite; its Cholesky factor then in ``W``."""
+    for i in range(d):
+        for j in range(i + 1):
+            W[i, j] = sign * G[i, j]
+    ok, _ = _cholesky(W, d, sign * shift)
+    return ok
+
+
+@njit(cache=True, _nrt=False)
+def _extreme(G, d, W, x, w, guess, margin, sign, guard, tr):  # pragma: no cover - compiled
+    """A proven bracket ``(lo, hi)`` of the largest (``sign`` -1) or least (``sign`` +1)
+    eigenvalue of ``G[:d, :d]``, and ``x`` refined towards its eigenvector (module docstring,
+    "Brackets"): the shift ``sigma = guess -+ margin`` beyond the eigenvalue, proven by the
+    Cholesky factorisation of ``sign (G - sigma I)`` (moved further out until it holds), then
+    two steps of inverse iteration on that factor from ``x``, whose Rayleigh quotient bounds
+    the eigenvalue on the other side (to rounding, ``guard``)."""
+    sigma = guess - sign * margin
+    found = False
+    for _ in range(24):
+        if sign < 0.0 and sigma + guard >= tr:
+            sigma = tr
+        if sign > 0.0 and sigma - guard <= 0.0:
+            sigma = 0.0
+        if _factor(G, d, W, sigma, sign):
+            found = True
+            break
+        if sigma == tr or sigma == 0.0:
+            break
+        margin *= 4.0
+        sigma = guess - sign * margin
+    if not found:
+        return 0.0, tr
+    for _ in range(2):
+        _rayleigh(G, d, x, w)
+        _solve_chol(W, d, x)
+    rho = _rayleigh(G, d, x, w)
+    if sign < 0.0:  # largest: rho - guard <= lambda_max < sigma + guard
+        return rho - guard, sigma + guard
+    return max(sigma - guard, 0.0), rho + guard  # least: sigma - guard < lambda_min <= rho + guard
+
+
+@njit(cache=True, _nrt=False)
+def _bracket(G, d, W, top, low, w, est, first):  # pragma: no cover - compiled
+    """A proven bracket ``lo <= sigma_min / sigma_max <= hi`` of the matrix whose Gram matrix is
+    ``G[:d, :d]``, from brackets of the largest and least eigenvalues of ``G``
+    (:func:`_extreme`). ``top`` and ``low`` are the eigenvector estimates, ``est`` the two
+    eigenvalues of the last sample and their change from the sample before (``first``: none
+    yet, ten power steps instead), updated in place: each shift is the eigenvalue extrapolated
+    from the last two samples, moved out by twice its last change (and 1e-9 of it). ``(0, 1)``
+    where nothing is proven."""
+    if d == 0:
+        return 1.0, 1.0
+    tr = 0.0
+    for i in range(d):
+        tr += G[i, i]
+    if not tr > 0.0:
+        return 0.0, 0.0
+    guard = 4.0 * (d + 1) * (d + 1) * _U * tr
+    if first:
+        for _ in range(10):
+            _rayleigh(G, d, top, w)
+            for i in range(d):
+                top[i] = w[i]
+        est[0] = _rayleigh(G, d, top, w)
+        est[1] = 0.02 * est[0]
+        est[2] = 0.0
+        est[3] = 0.0
+    top_guess = est[0] + est[1]
+    c, e = _extreme(G, d, W, top, w, top_guess, 2.0 * abs(est[1]) + 1e-9 * top_guess, -1.0, guard, tr)
+    low_guess = max(est[2] + est[3], 0.0)
+    a, b = _extreme(G, d, W, low, w, low_guess, 2.0 * abs(est[3]) + 1e-9 * low_guess, 1.0, guard, tr)
+    if not first:
+        est[1] = 0.5 * (c + e) - est[0]
+        est[3] = 0.5 * (a + b) - est[2]
+    est[0] = 0.5 * (c + e)
+    est[2] = 0.5 * (a + b)
+    if not c > 0.0:
+        return 0.0, 1.0
+    return math.sqrt(max(a, 0.0) / e), min(math.sqrt(max(b, 0.0) / c), 1.0)
+
+
 @njit(cache=True)
-def measure_bounds(J, rs, cs, cut, task, idle, act, direct, level, tight, passed, upper):  # pragma: no cover - compiled
+def measure_bounds(J, rs, cs, cut, task, idle, act, direct, levels, tight, passed, upper, brackets):  # pragma: no cover - compiled
     """Bounds on the three singularity measures of every sample (module docstring).
 
     ``J (n, nrow, nq)`` the constraint Jacobian (loop and task rows), ``rs (nrow,)`` and
@@ -176,12 +293,18 @@ def measure_bounds(J, rs, cs, cut, task, idle, act, direct, level, tight, passed
     rows, ``task`` the solved task rows, ``idle (ni, nq)`` the scaled idle rows, ``act`` the
     actuated coordinates, ``direct`` whether the direct measure applies (as many actuators as
     degrees of freedom). The matrices are those of :func:`.kinematics.singularity_measures`:
-    ``Phi = [Js[cut]; idle]`` (constraint), ``[Phi; Js[task]]`` (inverse), ``[Phi; E_a]``
-    (direct); where one has at least ``nq`` rows its Gram matrix is ``Phi^T Phi`` (computed once
-    a sample) plus its own rows' part. Writes ``passed[s]`` (every measure proven above
-    ``level``) and ``upper[s]`` (an upper bound of the least of them). ``tight``: each
-    ``sigma_max^2`` bounded within 1 % to 25 % (:func:`_largest`, some twice the cost) rather
-    than by ``trace G``, which may exceed it by the number of rows."""
+    ``Phi = [Js[cut]; idle]`` (constraint, measure 0), ``[Phi; Js[task]]`` (inverse, 1),
+    ``[Phi; E_a]`` (direct, 2); where one has at least ``nq`` rows its Gram matrix is
+    ``Phi^T Phi`` (computed once a sample) plus its own rows' part. Writes ``passed[s, k]``
+    (measure ``k`` proven above ``levels[k]``; True for the direct one where it does not
+    apply) and ``upper[s, k, 0]`` (an upper bound of measure ``k``; 1 where it does not apply;
+    ``upper (n, 3, 2)``).
+    ``tight``: each ``sigma_max^2`` bounded within 1 % to 25 % (:func:`_largest`, some twice the
+    cost) rather than by ``trace G``, which may exceed it by the number of rows. With
+    ``brackets`` (``levels``, ``tight`` and ``passed`` unread), ``upper[s, k]`` holds a bracket
+    ``(lo, hi)`` in which measure ``k`` of sample ``s`` is proven (:func:`_bracket`; ``(0, 1)``
+    where none was found, ``(1, 1)`` where the measure does not apply), the iterations
+    warm-started from the sample before."""
     n = J.shape[0]
     nq = J.shape[2]
     nc = cut.shape[0]
@@ -198,6 +321,13 @@ def measure_bounds(J, rs, cs, cut, task, idle, act, direct, level, tight, passed
     v = np.empty(big)
     w = np.empty(big)
     nz = np.empty(nq, dtype=np.int64)
+    tops = np.empty((3, big))
+    lows = np.empty((3, big))
+    est = np.zeros((3, 4))
+    for k in range(3):
+        for i in range(big):  # a fixed start without the symmetry of a mechanism's matrix (:func:`_largest`)
+            tops[k, i] = 0.5 + (0.6180339887498949 * (i + 1)) % 1.0
+            lows[k, i] = 0.5 + (0.7548776662466927 * (i + 1)) % 1.0
     for s in range(n):
         for a in range(nc):
             r = cut[a]
@@ -210,9 +340,10 @@ def measure_bounds(J, rs, cs, cut, task, idle, act, direct, level, tight, passed
             for j in range(nq):
                 GP[i, j] = 0.0
         _add_outer(GP, M, mp, nq, nz)
-        ok = True
-        up = 1.0
         for which in range(3):
+            passed[s, which] = True
+            upper[s, which, 0] = 1.0
+            upper[s, which, 1] = 1.0
             if which == 2 and not direct:
                 break
             m = mp + (0 if which == 0 else (nt if which == 1 else na))
@@ -244,8 +375,11 @@ def measure_bounds(J, rs, cs, cut, task, idle, act, direct, level, tight, passed
             else:
                 _outer_gram(M, m, nq, G)
                 d = m
-            good, u = _bounds(G, d, level, tight, W, v, w)
-            ok = ok and good
-            up = min(up, u)
-        passed[s] = ok
-        upper[s] = up
+            if brackets:
+                lo, hi = _bracket(G, d, W, tops[which], lows[which], w, est[which], s == 0)
+                upper[s, which, 0] = lo
+                upper[s, which, 1] = hi
+                continue
+            good, u = _bounds(G, d, levels[which], tight, W, v, w)
+            passed[s, which] = good
+            upper[s, which, 0] = u

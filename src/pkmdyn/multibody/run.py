@@ -29,8 +29,8 @@ from ..errors import PkmdynError
 from ..io import NpzWriter, check_table_format, open_table_writer, output_dir, write_json
 from .actuators import check_actuator_rates, check_task_rates, effective_limits, motor_effort_column, motor_efforts
 from .dynamics import joint_reactions, load_forces, named_magnitudes
-from .kinematics import MechanismKinematics, joint_coordinates, limit_hit, limit_line, limited_joints, \
-    singularity_measures, solve_kinematics
+from .kinematics import MechanismKinematics, joint_coordinates, least_measures, limit_hit, limit_line, \
+    limited_joints, solve_kinematics
 from .model import MechanismModel
 from .output import bodies_arrays, joint_effort_column, model_summary, motion_columns, report_columns, results_columns, \
     actuator_effort_column, write_run_report
@@ -139,15 +139,16 @@ class _Summary:
         self.limit_first: str | None = None
         self.reactions: dict[str, Any] = {}
 
-    def add(self, start: int, kin: MechanismKinematics, sm: Any, reac: Any, cols: dict[str, Array]) -> None:
+    def add(self, start: int, kin: MechanismKinematics, sm: dict[str, float] | None, reac: Any,
+            cols: dict[str, Array]) -> None:
         model = self.model
         self.residual = max(self.residual, float(kin.residual.max()))
         if sm is not None:  # (None: a chunk beyond the bodies' window without a sample of the stride)
             for key in ("inverse", "constraint"):
-                self.sing[key] = min(self.sing[key], float(getattr(sm, key).min()))
-            if not np.isnan(sm.direct).all():
+                self.sing[key] = min(self.sing[key], sm[key])
+            if not np.isnan(sm["direct"]):
                 self.direct_nan = False
-                self.sing["direct"] = min(self.sing["direct"], float(np.nanmin(sm.direct)))
+                self.sing["direct"] = min(self.sing["direct"], sm["direct"])
         self.eq_residual = max(self.eq_residual, float(reac.residual.max()))
         self.iterations = max(self.iterations, int(reac.iterations))
         if reac.holding is not None and reac.holding.size:
@@ -262,11 +263,11 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
                         if hit is not None:
                             s, k = hit
                             summ.limit_first = limit_line(model, kin, s, limited[k], float(c[s, k]), start)
-                    # every sample of the bodies' window, then every SINGULARITY_STRIDE-th (three SVDs
-                    # a sample cost more than the rest of the run)
+                    # every sample of the bodies' window, then every SINGULARITY_STRIDE-th: the least of
+                    # each measure, the singular value decompositions only where bounds leave it open
                     idx = np.arange(start, stop)
                     pick = np.flatnonzero((idx < body_rows) | (idx % SINGULARITY_STRIDE == 0))
-                    sm = singularity_measures(model, kin.q[pick]) if pick.size else None
+                    sm = least_measures(model, kin.q[pick]) if pick.size else None
                     try:
                         reac = joint_reactions(model, kin, named=m.loads, split=True, sample_offset=start,
                                                overconstrained=overconstrained)

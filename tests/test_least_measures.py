@@ -1,0 +1,86 @@
+"""The least singularity measures of a run (pkmdyn.multibody.kinematics.least_measures): equal,
+bit for bit, to the least of every sample's singular value decompositions
+(``singularity_measures``), whatever the order of the samples (a smooth motion, shuffled poses,
+one pose repeated, a pose near a singularity), on every built-in mechanism and on mechanisms
+without a direct measure or without loop rows; and the brackets it decides by hold every
+sample's decomposition (to its rounding)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import multibody_examples as ex
+from pkmdyn.machines.registry import resolve
+from pkmdyn.multibody import default_motion, load_mechanism, solve_kinematics
+from pkmdyn.multibody.kinematics import _measure_bounds, least_measures, singularity_measures
+from pkmdyn.multibody.model import compile_model
+from pkmdyn.multibody.description import load_description
+
+
+def _reference(model, q):
+    sm = singularity_measures(model, q)
+    return {"inverse": float(sm.inverse.min()), "constraint": float(sm.constraint.min()),
+            "direct": float("nan") if np.isnan(sm.direct).all() else float(np.nanmin(sm.direct))}
+
+
+def _same(a, b):
+    return all((np.isnan(a[k]) and np.isnan(b[k])) or a[k] == b[k] for k in a)
+
+
+def _fine(q, factor):
+    """``q`` with ``factor - 1`` poses linearly between each two (a finer motion)."""
+    s = np.linspace(0, q.shape[0] - 1, (q.shape[0] - 1) * factor + 1)
+    return np.stack([np.interp(s, np.arange(q.shape[0]), q[:, j]) for j in range(q.shape[1])], axis=1)
+
+
+def _builtin(name):
+    entry, path = resolve(name)
+    m = load_mechanism(path if entry is None else entry.description())
+    mo = default_motion(m)
+    return m, solve_kinematics(m, mo.x, mo.xd, mo.xdd, mo.t).q
+
+
+@pytest.mark.parametrize("name", ["stewart", "delta", "rrr3", "bennett", "pdm", "hip"])
+def test_equal_to_every_samples_decomposition(name):
+    m, q = _builtin(name)
+    rng = np.random.default_rng(3)
+    for order in (_fine(q, 4), q[rng.permutation(q.shape[0])], np.repeat(q[:7], 3, axis=0), q[:1]):
+        assert _same(least_measures(m, order), _reference(m, order))
+
+
+@pytest.mark.parametrize("name", ["stewart", "delta", "rrr3"])
+def test_brackets_hold_every_samples_decomposition(name):
+    m, q = _builtin(name)
+    q = np.concatenate([_fine(q, 3), q[::-1]])  # a jump back to the start, then backwards
+    _, lohi = _measure_bounds(m, q, np.zeros(3), False, brackets=True)
+    sm = singularity_measures(m, q)
+    vals = np.stack([sm.constraint, sm.inverse, sm.direct], axis=1)
+    have = ~np.isnan(vals)
+    lo, hi = lohi[:, :, 0], lohi[:, :, 1]
+    # the decomposition's own rounding: relative 1e-12 of each value (least_measures allows 1e-8)
+    assert np.all((lo <= vals * (1 + 1e-12) + 1e-15)[have]) and np.all((vals <= hi * (1 + 1e-12) + 1e-15)[have])
+    assert np.all(lo <= hi)
+    # along the fine motion (after its first samples) the brackets are narrow: few decompositions
+    width = ((hi - lo) / vals)[5:q.shape[0] // 2]
+    assert np.nanmedian(width) < 1e-2
+
+
+def test_near_a_singularity_and_without_a_direct_measure():
+    """A Gough-Stewart platform turned about its vertical axis through its type II singularity
+    (the direct measure near 0 about 1.6 rad), forwards and backwards; and mechanisms whose
+    direct measure does not apply (a planar platform with redundant rows) or without loop rows
+    (a serial arm)."""
+    m, q = _builtin("stewart")
+    xs = np.tile(default_motion(m).x[0], (301, 1))
+    xs[:, 5] += np.linspace(0.0, 3.0, 301)
+    kin = solve_kinematics(m, xs, np.zeros_like(xs), np.zeros_like(xs), None)
+    ref = _reference(m, kin.q)
+    assert ref["direct"] < 0.1 * _reference(m, q)["direct"]  # the path passes near the singularity
+    assert _same(least_measures(m, kin.q), ref) and _same(least_measures(m, kin.q[::-1]), ref)
+    for d in (ex.rrr3_planar_platform(), ex.serial_arm(), ex.four_bar(), ex.sarrus()):
+        mm = compile_model(load_description(d))
+        mo = default_motion(mm)
+        qm = solve_kinematics(mm, mo.x, mo.xd, mo.xdd, mo.t).q
+        got, ref = least_measures(mm, qm), _reference(mm, qm)
+        assert _same(got, ref), (mm.name, got, ref)
