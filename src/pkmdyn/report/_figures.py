@@ -107,20 +107,24 @@ def _effort_range(scene: Scene) -> tuple[float, str, bool]:
     return 1.0, "effort / peak", True
 
 
-def _actuator_colours(scene: Scene, k: int, m: float, normalised: bool) -> list[str]:
-    """The colour of each actuated chain at frame ``k`` on the diverging scale over ``[-m, m]``
-    (one fixed colour when every effort is zero, e.g. a machine shown at rest)."""
+def _actuator_colours(scene: Scene, m: float, normalised: bool) -> list[list[str]]:
+    """The colour of each actuated chain at each frame (``[frame][actuator]``) on the diverging
+    scale over ``[-m, m]`` (one fixed colour when every effort is zero, e.g. a machine shown at
+    rest): every frame's in one call of plotly's sampler, which checks the scale once a call."""
     from plotly.colors import sample_colorscale
 
-    if m <= 0:
-        return [_ACTUATOR] * len(scene.actuators)
-    vals = []
-    for a in scene.actuators:
-        e = float(a.effort[k])
+    n = scene.t.shape[0]
+    na = len(scene.actuators)
+    if m <= 0 or not na:
+        return [[_ACTUATOR] * na for _ in range(n)]
+    vals = np.empty((n, na))
+    for i, a in enumerate(scene.actuators):
+        e = np.asarray(a.effort, dtype=float)[:n]
         if normalised:
-            e /= float(np.max(np.abs(a.effort))) or 1.0
-        vals.append(min(max(0.5 + 0.5 * e / m, 0.0), 1.0))
-    return sample_colorscale(_EFFORT_SCALE, vals) if vals else []
+            e = e / (float(np.max(np.abs(a.effort))) or 1.0)
+        vals[:, i] = np.clip(0.5 + 0.5 * e / m, 0.0, 1.0)
+    flat = sample_colorscale(_EFFORT_SCALE, [float(v) for v in vals.ravel()])
+    return [flat[k * na:(k + 1) * na] for k in range(n)]
 
 
 def scene_figure(scene: Scene, title: str, frame_s: float | None = None) -> dict:
@@ -145,6 +149,7 @@ def scene_figure(scene: Scene, title: str, frame_s: float | None = None) -> dict
     ground_pts = np.asarray(sorted({p for b in ground for p in b.points}), dtype=int)
     m, cbar_title, normalised = _effort_range(scene) if scene.actuators else (0.0, "", False)
     names = [scene.point_names[k] for k in joint_pts]
+    colours = _actuator_colours(scene, m, normalised)
 
     def moving_traces(k: int) -> list[dict]:
         P = scene.points[k]
@@ -157,7 +162,7 @@ def scene_figure(scene: Scene, title: str, frame_s: float | None = None) -> dict
                        "flatshading": True})
         # one trace per actuated chain in one colour: plotly.js draws a per-vertex colour array on a
         # gapped 3D line with warnings, so the colour is sampled here from the scale
-        for a, idx, colour in zip(scene.actuators, act_idx, _actuator_colours(scene, k, m, normalised)):
+        for a, idx, colour in zip(scene.actuators, act_idx, colours[k]):
             ax, ay, az = _coords(P, idx)
             traces.append({"type": "scatter3d", "x": ax, "y": ay, "z": az, "mode": "lines", "name": a.label,
                            "line": {"width": 12, "color": colour}, "showlegend": False, "hoverinfo": "text",
