@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
-from ..errors import ParameterError
+from ..errors import ParameterError, PkmdynError
+from ..io import dumps_toml
 from .import_graph import Graph, TaskChoice, description_from_graph
+from .kinematics import solve_kinematics
+from .model import load_mechanism
+from .motion import default_motion
 
 
 def read_graph(path: Path, fmt: str, sidecar: Path | None = None, actuated: tuple[str, ...] = (),
@@ -53,12 +58,6 @@ def _fit_default_motion(model, desc: dict, notes: list[str]) -> None:
     """Shrink ``[default_motion]`` until the kinematics of ``model`` (``desc`` compiled) follows
     it (an imported reference configuration may lie near a singularity); none at all after
     ``TRIES``, said in the notes."""
-    from dataclasses import replace
-
-    from ..errors import PkmdynError
-    from .kinematics import solve_kinematics
-    from .motion import default_motion
-
     amp = desc["default_motion"]["amplitude"]
     for k in range(TRIES):
         mo = default_motion(replace(model, motion=replace(model.motion, amplitude=dict(amp))))
@@ -80,9 +79,6 @@ def import_description(path: Path, fmt: str, *, sidecar: Path | None = None, act
                        choice: TaskChoice = TaskChoice()) -> tuple[str, list[str]]:
     """TOML text of the description of ``path`` (loaded and checked as ``run`` loads it) and
     the import's notes."""
-    from ..io import dumps_toml
-    from . import load_mechanism
-
     graph, side = read_graph(path, fmt, sidecar, actuated, assemble, keyframe)
     desc, notes = description_from_graph(graph, _merge(choice, side))
     model = load_mechanism(desc)  # what describe and run will do with the file
