@@ -183,6 +183,17 @@ def _solve_chol(L, d, x):  # pragma: no cover - compiled
 
 
 @njit(cache=True, _nrt=False)
+def _normalise(x, d):  # pragma: no cover - compiled
+    """``x[:d]`` scaled to unit length in place."""
+    nx = 0.0
+    for i in range(d):
+        nx += x[i] * x[i]
+    nx = math.sqrt(nx)
+    for i in range(d):
+        x[i] /= nx
+
+
+@njit(cache=True, _nrt=False)
 def _rayleigh(G, d, x, w):  # pragma: no cover - compiled
     """``x`` normalised in place, ``w = G x`` and the Rayleigh quotient ``x^T G x``."""
     nx = 0.0
@@ -212,13 +223,15 @@ def _factor(G, d, W, shift, sign):  # pragma: no cover - compiled
 
 
 @njit(cache=True, _nrt=False)
-def _extreme(G, d, W, x, w, guess, margin, sign, guard, tr):  # pragma: no cover - compiled
+def _extreme(G, d, W, x, w, guess, margin, sign, guard, tr, steps):  # pragma: no cover - compiled
     """A proven bracket ``(lo, hi)`` of the largest (``sign`` -1) or least (``sign`` +1)
     eigenvalue of ``G[:d, :d]``, and ``x`` refined towards its eigenvector (module docstring,
     "Brackets"): the shift ``sigma = guess -+ margin`` beyond the eigenvalue, proven by the
     Cholesky factorisation of ``sign (G - sigma I)`` (moved further out until it holds), then
-    two steps of inverse iteration on that factor from ``x``, whose Rayleigh quotient bounds
-    the eigenvalue on the other side (to rounding, ``guard``)."""
+    ``steps`` of inverse iteration on that factor from ``x``, whose Rayleigh quotient bounds the
+    eigenvalue on the other side (to rounding, ``guard``). The shift lies within about twice
+    the eigenvalue's change over a sample of it, so that one step from the last sample's vector
+    leaves the quotient within rounding of the eigenvalue along a smooth motion."""
     sigma = guess - sign * margin
     found = False
     for _ in range(24):
@@ -235,8 +248,8 @@ def _extreme(G, d, W, x, w, guess, margin, sign, guard, tr):  # pragma: no cover
         sigma = guess - sign * margin
     if not found:
         return 0.0, tr
-    for _ in range(2):
-        _rayleigh(G, d, x, w)
+    for _ in range(steps):
+        _normalise(x, d)
         _solve_chol(W, d, x)
     rho = _rayleigh(G, d, x, w)
     if sign < 0.0:  # largest: rho - guard <= lambda_max < sigma + guard
@@ -271,9 +284,10 @@ def _bracket(G, d, W, top, low, w, est, first):  # pragma: no cover - compiled
         est[2] = 0.0
         est[3] = 0.0
     top_guess = est[0] + est[1]
-    c, e = _extreme(G, d, W, top, w, top_guess, 2.0 * abs(est[1]) + 1e-9 * top_guess, -1.0, guard, tr)
+    steps = 3 if first else 1
+    c, e = _extreme(G, d, W, top, w, top_guess, 2.0 * abs(est[1]) + 1e-9 * top_guess, -1.0, guard, tr, steps)
     low_guess = max(est[2] + est[3], 0.0)
-    a, b = _extreme(G, d, W, low, w, low_guess, 2.0 * abs(est[3]) + 1e-9 * low_guess, 1.0, guard, tr)
+    a, b = _extreme(G, d, W, low, w, low_guess, 2.0 * abs(est[3]) + 1e-9 * low_guess, 1.0, guard, tr, steps)
     if not first:
         est[1] = 0.5 * (c + e) - est[0]
         est[3] = 0.5 * (a + b) - est[2]
