@@ -25,7 +25,11 @@ from pkmdyn.sweep import run_sweep  # noqa: E402
 
 import sweep_flaky  # noqa: E402  (a test adapter whose first batch fails once)
 
-SRC = Path(__file__).resolve().parents[1] / "src"
+import pkmdyn  # noqa: E402
+
+#: the folder holding the pkmdyn under test (the installed one, or the checkout's src/), for a
+#: command run in a child process: the same package and so the same compiled kernels' cache
+SRC = Path(pkmdyn.__file__).resolve().parents[1]
 
 HIP_SPACE = """
 [sampling]
