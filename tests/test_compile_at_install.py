@@ -1,0 +1,69 @@
+"""Kernels compiled at install (pkmdyn compile, setup.py): an installed pkmdyn carries numba's
+cache of its kernels for this machine; every exercise of ``pkmdyn compile`` is a command line
+the command line takes; a lane says each exercise that failed and still runs the others."""
+
+from __future__ import annotations
+
+import importlib
+from pathlib import Path
+
+import click
+import pytest
+
+import pkmdyn
+from pkmdyn.cli import cli
+from pkmdyn.cli import compile as comp
+from pkmdyn.multibody._cache import cached
+
+#: a source checkout (``src/pkmdyn`` beside ``pyproject.toml``): the kernels compile on first use
+#: there; an installed package carries them
+FROM_SOURCE = (Path(pkmdyn.__file__).resolve().parents[2] / "pyproject.toml").is_file()
+
+
+@pytest.mark.skipif(FROM_SOURCE, reason="pkmdyn runs from its source checkout: the install is what compiles")
+@pytest.mark.parametrize("module, kernel", [
+    ("pkmdyn.multibody._kernels", "solve_sample"), ("pkmdyn.multibody._kernels", "solve_batch"),
+    ("pkmdyn.multibody._one", "_dynamics"), ("pkmdyn.multibody._direct", "direct_one"),
+    ("pkmdyn.multibody._direct", "direct_task_one"), ("pkmdyn.multibody._reaction_kernels", "cut_reactions_batch"),
+    ("pkmdyn.multibody._measure_kernels", "measure_bounds"), ("pkmdyn.simulate._cycles", "run_cycles"),
+])
+def test_the_installed_package_carries_its_compiled_kernels(module, kernel):
+    dispatcher = getattr(importlib.import_module(module), kernel)
+    assert cached(dispatcher), f"{module}.{kernel}: not in numba's cache of the installed package"
+    index = Path(dispatcher._cache._cache_file._index_path)
+    assert Path(pkmdyn.__file__).resolve().parent in index.resolve().parents  # inside the package
+
+
+@pytest.mark.parametrize("args", [a for lane in comp.LANES for a in lane if a[0] != "@cycles"],
+                         ids=lambda a: " ".join(a[:3]))
+def test_every_exercise_is_a_command_line(args, tmp_path):
+    """Each exercise parses as its command's options (an option renamed or removed would leave
+    the install's compilation short, said by one warning in pip's output at most)."""
+    (tmp_path / "results.csv").write_text("t_s\n0\n", encoding="utf-8")  # an earlier exercise's file
+    line = [str(tmp_path) + a[a.index("}") + 1:] if "{" in a else ("P=1" if a == "@reference" else a) for a in args]
+    cmd: click.Command = cli
+    while isinstance(cmd, click.Group):  # down to the command itself
+        name, line = line[0], line[1:]
+        cmd = cmd.get_command(click.Context(cmd), name)
+        assert cmd is not None, f"{' '.join(args)}: no command {name!r}"
+    with cmd.make_context(name, [*line, "--out", str(tmp_path / "out")]) as ctx:
+        assert not ctx.args, f"{' '.join(args)}: arguments left over: {ctx.args}"
+
+
+def test_a_lane_says_each_failed_exercise_and_runs_the_rest(monkeypatch, capsys):
+    monkeypatch.setattr(comp, "LANES", ((("hip", "params"), ("run", "--machine", "no-such-machine"),
+                                         ("pdm", "params")),))
+    ran = []
+    real = comp._exercise
+
+    def spy(args, outs, root):
+        status, last = real(args, outs, root)
+        ran.append((args[0], status, outs[-1].exists()))
+        return status, last
+
+    monkeypatch.setattr(comp, "_exercise", spy)
+    assert comp._lane(0) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no-such-machine" in err[0] and "exit 2" in err[0]
+    assert [(a, s) for a, s, _ in ran] == [("hip", 0), ("run", 2), ("pdm", 0)]
+    assert ran[0][2] and ran[2][2]  # the good ones wrote their file (into the lane's temporary folder)
