@@ -19,6 +19,11 @@ from pkmdyn import compile_notice
 
 @pytest.fixture
 def listener(monkeypatch):
+    """A listener of this test's own: the process's (a command run earlier in it installed one)
+    taken off meanwhile, then put back."""
+    earlier = compile_notice._state["listener"]
+    if earlier is not None:
+        event.unregister("numba:compile", earlier)
     monkeypatch.setattr(compile_notice, "_state", {"listener": None})
     assert not sys.stderr.isatty()  # not a terminal (captured): said all the same
     compile_notice.install()
@@ -26,6 +31,8 @@ def listener(monkeypatch):
     assert lst is not None
     yield
     event.unregister("numba:compile", lst)
+    if earlier is not None:
+        event.register("numba:compile", earlier)
 
 
 def test_notice_once_with_the_kernel_and_the_time(listener, capsys):

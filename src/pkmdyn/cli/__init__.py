@@ -46,9 +46,8 @@ def main(argv: list[str] | None = None) -> int:
     Ctrl-C and SIGTERM end a run cleanly (its temporary output removed) with one line; a run
     that failed says nothing but its error line (notes held back are dropped).
     """
-    from ..compile_notice import install, summary
+    from ..compile_notice import summary
 
-    install()
     status = _main(argv)
     done = summary()
     if done is not None and status == 0:
@@ -85,6 +84,11 @@ def _main(argv: list[str] | None) -> int:
             # written with its consequences (and never the warnings' own lines on stderr)
             warnings.filterwarnings("error", message=_NUMERIC, category=RuntimeWarning)
             with cli.make_context("pkmdyn", args) as ctx:
+                # once the arguments are read (a --help or a usage error compiles nothing and
+                # imports no numba): say where a command compiles kernels the cache lacks
+                from ..compile_notice import install
+
+                install()
                 cli.invoke(ctx)
     except RuntimeWarning as exc:
         click.echo(f"pkmdyn: error: the computation overflowed ({' '.join(str(exc).split())}); an input is beyond "

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import click
 
+from ..errors import PkmdynError
 from ._groups import cli, echo
 
 __all__ = ["LANES", "compile_kernels"]
@@ -79,9 +80,8 @@ def _reference_actuators(machine: str) -> str:
 
 
 def _exercise(args: tuple[str, ...], outs: list[Path], root: Path) -> tuple[int, str]:
-    """Run one exercise in this process; its exit status and its last stderr line."""
-    from . import main
-
+    """Run one exercise in this process (the command tree of :mod:`._groups`, every command
+    registered by then); its exit status and what it said last."""
     if args == ("@cycles",):
         from ..simulate._cycles import compile_for_runs
 
@@ -93,10 +93,15 @@ def _exercise(args: tuple[str, ...], outs: list[Path], root: Path) -> tuple[int,
     out = root / f"x{len(outs)}"
     outs.append(out)
     err = io.StringIO()
-    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
-        status = main([*line, "--out", str(out)])
+    try:
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+            cli.main([*line, "--out", str(out)], prog_name="pkmdyn", standalone_mode=False)
+    except click.exceptions.Exit as exc:
+        return int(exc.exit_code), ""
+    except (click.ClickException, PkmdynError) as exc:
+        return 2, " ".join(str(exc).split())
     lines = err.getvalue().strip().splitlines()
-    return status, lines[-1] if lines else ""
+    return 0, lines[-1] if lines else ""
 
 
 def _lane(index: int) -> int:
