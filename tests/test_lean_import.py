@@ -32,7 +32,7 @@ LAZY_PACKAGES = ("pkmdyn.multibody", "pkmdyn.simulate", "pkmdyn.control", "pkmdy
 def _loaded(code: str, watch: tuple[str, ...] = HEAVY) -> list[str]:
     """The modules of ``watch`` that a fresh interpreter holds after running ``code``."""
     probe = f"{code}\nimport sys\nprint(' '.join(m for m in {watch!r} if m in sys.modules))"
-    env = dict(os.environ, PYTHONPATH=str(SRC), PKMDYN_COMPILE_AHEAD="0")
+    env = dict(os.environ, PYTHONPATH=str(SRC))
     out = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True)
     return out.stdout.split()
 
@@ -43,9 +43,15 @@ def test_a_package_import_loads_nothing_heavy(module):
 
 
 def test_the_command_line_and_its_help_load_nothing_heavy():
-    """The command tree and its help (parsed by the group itself: :func:`pkmdyn.cli.main` also
-    sets up the compile notice, which listens on Numba's events)."""
+    """The command tree and its help, by the group itself and through :func:`pkmdyn.cli.main`
+    (which sets up the compile notice, listening on Numba's events, only once the arguments are
+    read and a command runs)."""
     assert _loaded("import pkmdyn.cli") == []
+    for argv in (["--help"], ["run", "--help"], ["hip", "run", "--help"], ["run"]):  # (the last: a usage error)
+        code = ("import contextlib, io\nfrom pkmdyn.cli import main\n"
+                "with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):\n"
+                f"    main({argv!r})")
+        assert _loaded(code) == [], argv
     for argv in (["--help"], ["machines"], ["hip", "--help"], ["run", "--help"], ["sweep", "--help"]):
         code = ("import contextlib, io\nfrom pkmdyn.cli import cli\n"
                 "with contextlib.redirect_stdout(io.StringIO()), contextlib.suppress(SystemExit):\n"
