@@ -94,3 +94,20 @@ def test_the_reason_names_the_numba_version_the_cpu_or_a_missing_cache(tmp_path,
         assert "no cache" in compile_notice._why(kernel)
     finally:
         sys.modules.pop("notice_probe", None)
+
+
+def test_installed_before_numba_it_listens_from_numbas_import_on():
+    """``install`` imports no numba (a command's help, a command that compiles nothing); the
+    listener is registered as numba is imported, and says a compilation."""
+    import subprocess
+
+    code = ("import sys\nfrom pkmdyn import compile_notice as c\nc.install()\nassert 'numba' not in sys.modules\n"
+            "from numba import njit\nassert c._state['listener'] is not None\n"
+            "g = {'__name__': 'pkmdyn.example'}\nexec('def f(x):\\n    return x + 1\\n', g)\nnjit(g['f'])(1)\n"
+            "print(c.summary())")
+    import pkmdyn
+    from pathlib import Path
+
+    env = {**os.environ, "PYTHONPATH": str(Path(pkmdyn.__file__).resolve().parents[1])}
+    r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert "compiled 1 kernel" in r.stdout and "pkmdyn.example.f" in r.stderr

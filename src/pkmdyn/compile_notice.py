@@ -15,6 +15,8 @@ stderr is a terminal: a wait of a minute is explained in a log too.
 
 from __future__ import annotations
 
+import importlib.abc
+import importlib.util
 import pickle
 import sys
 import time
@@ -75,8 +77,41 @@ def _why(dispatcher: Any) -> str:
         return "the cache does not hold it"
 
 
+class _AfterNumba(importlib.abc.MetaPathFinder):
+    """Registers the listener once numba is imported (:func:`install` before it): a command that
+    compiles nothing, or only prints its help, imports no numba for the notice's sake."""
+
+    def find_spec(self, name, path, target=None):
+        if name != "numba":
+            return None
+        if self in sys.meta_path:
+            sys.meta_path.remove(self)
+        spec = importlib.util.find_spec(name)
+        loader = getattr(spec, "loader", None)
+        if loader is None or not hasattr(loader, "exec_module"):
+            return spec
+        run = loader.exec_module
+
+        def exec_module(module):
+            run(module)
+            _register()
+
+        loader.exec_module = exec_module
+        return spec
+
+
 def install() -> None:
-    """Register the compile listener (once per process)."""
+    """Have the compile listener registered (once per process): now where numba is imported,
+    else as soon as it is."""
+    if _state["listener"] is not None or any(isinstance(f, _AfterNumba) for f in sys.meta_path):
+        return
+    if "numba" in sys.modules:
+        _register()
+    else:
+        sys.meta_path.insert(0, _AfterNumba())
+
+
+def _register() -> None:
     if _state["listener"] is not None:
         return
     from numba.core import event
