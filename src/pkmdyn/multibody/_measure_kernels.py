@@ -20,6 +20,20 @@ Algorithms*, 2002, Thm. 10.3: the computed factor is exact for ``G + E``, ``|E|_
 of its singular value decomposition. The pivots bound the measure from above (``upper``). Both cost a few thousand operations for a matrix of
 21 rows, against some 15 us for its singular value decomposition; where a bound decides nothing,
 the caller computes the measure itself.
+
+Brackets (``brackets``: :func:`_bracket`, for :func:`.kinematics.least_measures`). Along a
+motion each measure is bracketed from both sides by bracketing the largest and the least
+eigenvalue of ``G`` (:func:`_extreme`). For the largest, a shift ``s`` a little above the last
+samples' value (extrapolated, moved out by twice its last change) is proven above it by the
+Cholesky factorisation of ``s I - G`` (moved further out until that holds; its rounding covered
+by the margin ``g``, as above): ``lambda_max < s + g``. One step of inverse iteration on that
+factor from the last sample's vector gives ``x``, and the Rayleigh quotient
+``x^T G x / x^T x <= lambda_max`` bounds it from below (to ``g``). The least eigenvalue is
+bracketed the other way round: ``G - s I`` positive definite proves ``lambda_min > s - g``, and
+the quotient after one step bounds it from above. The shift lies within about twice the
+eigenvalue's change over a sample of it, so that the step converges by that ratio to the gap
+and the bracket is about as wide as the change from one sample to the next. Then
+``sqrt(lo_min / hi_max) <= sigma_min / sigma_max <= sqrt(hi_min / lo_max)``.
 """
 
 from __future__ import annotations
@@ -196,12 +210,7 @@ def _normalise(x, d):  # pragma: no cover - compiled
 @njit(cache=True, _nrt=False)
 def _rayleigh(G, d, x, w):  # pragma: no cover - compiled
     """``x`` normalised in place, ``w = G x`` and the Rayleigh quotient ``x^T G x``."""
-    nx = 0.0
-    for i in range(d):
-        nx += x[i] * x[i]
-    nx = math.sqrt(nx)
-    for i in range(d):
-        x[i] /= nx
+    _normalise(x, d)
     rq = 0.0
     for i in range(d):
         acc = 0.0

@@ -626,13 +626,3 @@ def least_measures(model: MechanismModel, q: Array) -> dict[str, float]:
             if applies[k]:
                 least[k] = float(np.min(getattr(sm, key)[pick[k][rows]]))
     return {key: (float(least[k]) if (k < 2 or direct) else float("nan")) for k, key in enumerate(_MEASURES)}
-    _, J = constraint_jacobian(model, q)
-    cs = column_scale(model)
-    rows = model.solver_rows
-    nr = model.row_loop.shape[0]
-    measure_bounds(np.ascontiguousarray(J), np.ascontiguousarray(row_scale(model)), np.ascontiguousarray(cs),
-                   np.ascontiguousarray(rows[rows < nr]), np.ascontiguousarray(rows[rows >= nr]),
-                   np.ascontiguousarray(model.solver_idle * cs[None, :]),
-                   np.ascontiguousarray(model.act_coord, dtype=np.int64), model.na == model.nt, float(level),
-                   bool(tight), passed, upper)
-    return passed, upper
