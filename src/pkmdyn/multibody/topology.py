@@ -21,6 +21,7 @@ multiplied, by the model's length scale) with the threshold ``1e-9 sigma_max``.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -29,7 +30,6 @@ from numpy.typing import NDArray
 
 from .._lazy import lazy_module
 from ..errors import ParameterError
-from ..spatial import cross
 from . import _kernels as K
 from .joint_types import JOINT_TYPES
 from .poses import body_poses
@@ -44,7 +44,8 @@ else:  # imported by the first model compiled
     csgraph = lazy_module("scipy.sparse.csgraph")
 
 __all__ = ["TopologyReport", "analyse_topology", "kutzbach_count", "constraint_jacobian", "solver_selection",
-           "row_scale", "column_scale", "row_labels", "sparse_basis"]
+           "row_scale", "column_scale", "row_labels", "sparse_basis", "block_structure", "block_pattern",
+           "blocks_of_pattern"]
 
 Array = NDArray[np.float64]
 RANK_TOL = 1e-9
@@ -183,32 +184,53 @@ def _null(a: Array, ncols: int) -> Array:
 
 
 def _point_jacobian(model: MechanismModel, q: Array) -> Array:
-    """(3 nj, nq): velocity of every joint centre (the child frame's origin) per tree rate."""
+    """(3 nj, nq): velocity of every joint centre (the child frame's origin) per tree rate:
+    ``S_c[3:] + S_c[:3] x x_k`` for every coordinate c that moves joint k's child, written out
+    for every such pair at once (the same products and sums, entry by entry, as one joint at a
+    time with :func:`~pkmdyn.spatial.cross`)."""
     R, p, S = body_poses(model, q)
-    rows = []
-    for k in range(len(model.joint_names)):
+    nj = len(model.joint_names)
+    out = np.zeros((nj, 3, model.nq))
+    x = np.zeros((nj, 3))
+    for k in range(nj):
         b = int(model.joint_child[k])
-        x = p[b] + R[b] @ model.joint_p_child[k] if b >= 0 else model.joint_p_child[k]
-        Jp = np.zeros((3, model.nq))
-        if b >= 0:
-            cols = np.flatnonzero(model.ancestors[b])
-            Jp[:, cols] = (S[cols, 3:] + cross(S[cols, :3], x)).T
-        rows.append(Jp)
-    return np.concatenate(rows) if rows else np.zeros((0, model.nq))
+        x[k] = p[b] + R[b] @ model.joint_p_child[k] if b >= 0 else model.joint_p_child[k]
+    child = model.joint_child
+    moved = np.zeros((nj, model.nq), dtype=bool)
+    moved[child >= 0] = model.ancestors[child[child >= 0]]
+    k, c = np.nonzero(moved)
+    a, b = S[c, :3], x[k]
+    a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
+    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
+    w = S[c, 3:] + np.stack((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=-1)
+    out[k, :, c] = w
+    return out.reshape(3 * nj, model.nq)
+
+
+def _scaled_jacobian(model: MechanismModel, q: Array) -> Array:
+    """The dimensionless Jacobian (nr + nt, nq) of the cut joints' constraint rows and the task
+    rows at ``q`` (:func:`constraint_jacobian`, :func:`row_scale`, :func:`column_scale`)."""
+    _, J = constraint_jacobian(model, q)
+    return J[0] * row_scale(model)[:, None] * column_scale(model)[None, :]
 
 
 def analyse_topology(model: MechanismModel, q: Array | None = None) -> TopologyReport:
     """Topology and mobility of ``model`` at tree coordinates ``q (nq,)`` (default: the
     reference configuration, which is assembled by construction)."""
     q = model.coord_offset.copy() if q is None else np.asarray(q, dtype=float)
-    _, J = constraint_jacobian(model, q)
-    J = J[0]
+    return _analyse(model, q, _scaled_jacobian(model, q))[0]
+
+
+def _analyse(model: MechanismModel, q: Array, Js: Array) -> tuple[TopologyReport, Array | None]:
+    """:func:`analyse_topology` at ``q`` of the scaled Jacobian ``Js`` there, and the column
+    pivots of the pivoted QR of the constraint rows' ``Js^T`` where it was taken (an
+    over-constrained mechanism; else None), which :func:`solver_selection` takes again."""
     nr = model.row_loop.shape[0]
-    Js = J * row_scale(model)[:, None] * column_scale(model)[None, :]
     phi = Js[:nr]
     rank_c = _rank(phi)
     mobility = model.nq - rank_c
     labels = []
+    piv = None
     if nr > rank_c:
         _, _, piv = linalg.qr(phi.T, pivoting=True, mode="economic")
         redundant = sorted(piv[rank_c:])
@@ -229,22 +251,29 @@ def analyse_topology(model: MechanismModel, q: Array | None = None) -> TopologyR
         kutzbach=kutzbach_count(model), mobility=mobility, overconstraints=nr - rank_c,
         overconstrained=tuple(labels), idle=idle, dof=mobility - idle, actuators=model.na,
         task_coordinates=model.nt,
-    )
+    ), piv
 
 
 def block_structure(model: MechanismModel, rows: Array, idle: Array) -> tuple[Array, Array, Array]:
     """Row and column orders making the Newton matrix ``[J[rows]; idle]`` block lower-triangular.
 
-    From the structural pattern (a loop row depends on the coordinates that move either of
-    its bodies, a task row on those that move the task body, an idle row on its nonzero
-    entries): a perfect matching of rows to columns (``maximum_bipartite_matching``), the
-    strongly connected components of the row graph ``i -> j`` where row i uses the column
+    From the structural pattern (:func:`block_pattern`: a loop row depends on the coordinates
+    that move either of its bodies, a task row on those that move the task body, an idle row on
+    its nonzero entries): a perfect matching of rows to columns (``maximum_bipartite_matching``),
+    the strongly connected components of the row graph ``i -> j`` where row i uses the column
     matched to row j (``connected_components``), put in an order where every block uses only
     the columns of itself and of the blocks before it (the block triangular form of
     Duff & Reid). For a Stewart platform: the six task rows with the six coordinates of the
     leg that carries the platform, then each other leg's three closure rows with its three
     coordinates. Returns ``(prow, pcol, blocks)``; a single block when no structure is found.
     """
+    return blocks_of_pattern(block_pattern(model, rows, idle))
+
+
+def block_pattern(model: MechanismModel, rows: Array, idle: Array) -> NDArray[np.bool_]:
+    """The structural pattern ``(m + ni, nq)`` of the Newton matrix ``[J[rows]; idle]`` (see
+    :func:`block_structure`): which coordinates each row may depend on. The block order is a
+    function of this pattern alone (:func:`blocks_of_pattern`)."""
     nq, m = model.nq, rows.size
     n = m + idle.shape[0]
     P = np.zeros((n, nq), dtype=bool)
@@ -258,6 +287,25 @@ def block_structure(model: MechanismModel, rows: Array, idle: Array) -> tuple[Ar
         else:
             P[i] = model.ancestors[model.task_body]
     P[m:] = np.abs(idle) > 1e-14 * max(float(np.abs(idle).max(initial=0.0)), 1e-300)
+    return P
+
+
+def blocks_of_pattern(P: NDArray[np.bool_]) -> tuple[Array, Array, Array]:
+    """:func:`block_structure`'s ``(prow, pcol, blocks)`` of the pattern ``P (n, nq)``
+    (:func:`block_pattern`), remembered by the pattern (:func:`_blocks_of`): the designs of a
+    sweep (:func:`.model.compile_with`) have one pattern, or a few (the idle rows of a
+    symmetric mechanism come in another order where rounding picks another pivot), and the
+    order is a function of the pattern alone, so it is found once for each."""
+    P = np.ascontiguousarray(P, dtype=bool)
+    return tuple(a.copy() for a in _blocks_of(P.shape, P.tobytes()))  # type: ignore[return-value]
+
+
+@functools.lru_cache(maxsize=64)
+def _blocks_of(shape: tuple[int, int], pattern: bytes) -> tuple[Array, Array, Array]:
+    """:func:`blocks_of_pattern` of the pattern of ``shape`` whose entries are the bytes
+    ``pattern`` (the cached computation)."""
+    P = np.frombuffer(pattern, dtype=bool).reshape(shape)
+    n, nq = P.shape
     single = (np.arange(n, dtype=np.int64), np.arange(n, dtype=np.int64), np.array([0, n], dtype=np.int64))
     if n != nq or n == 0:
         return single
@@ -302,11 +350,10 @@ def solver_selection(model: MechanismModel, q: Array | None = None) -> tuple[Arr
     when the task coordinates do not determine the mechanism (fewer or more than its degrees
     of freedom, or dependent) or when there are more actuators than degrees of freedom.
     """
-    rep = analyse_topology(model, q)
     q = model.coord_offset.copy() if q is None else np.asarray(q, dtype=float)
-    _, J = constraint_jacobian(model, q)
+    Js = _scaled_jacobian(model, q)  # (one Jacobian and one pivoted QR for the report and the rows)
+    rep, piv = _analyse(model, q, Js)
     nr = model.row_loop.shape[0]
-    Js = J[0] * row_scale(model)[:, None] * column_scale(model)[None, :]
     src = model.path or model.name
     if model.nt != rep.dof:
         raise ParameterError(
@@ -317,7 +364,8 @@ def solver_selection(model: MechanismModel, q: Array | None = None) -> tuple[Arr
                              f"(redundant actuation is not supported): {', '.join(model.actuator_names)}")
     rank_c = model.nq - rep.mobility
     if nr and rank_c:
-        _, _, piv = linalg.qr(Js[:nr].T, pivoting=True, mode="economic")
+        if piv is None:
+            _, _, piv = linalg.qr(Js[:nr].T, pivoting=True, mode="economic")
         cut_rows = np.sort(piv[:rank_c])
     else:
         cut_rows = np.zeros(0, dtype=np.int64)
