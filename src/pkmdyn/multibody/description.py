@@ -446,14 +446,63 @@ def _rot(axis: Array, angle: float) -> Array:
     return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
 
 
+#: results of :func:`_euler_xyz` and :func:`inertia_matrix` by their arguments' exact text
+#: (:func:`_exact_key`), at most :data:`_MEMO_SIZE` each: a design sweep compiles the same
+#: angles and inertias (those it does not vary, and every leg copy's turned frame) for every
+#: design, and these are pure functions of the numbers, so a stored result is the same to the
+#: last bit as a fresh one
+_EULER_MEMO: dict[str, Array] = {}
+_INERTIA_MEMO: dict[str, Array] = {}
+_MEMO_SIZE = 1024
+
+
+def _exact_key(values: Any) -> str | None:
+    """A key that tells apart any two different lists of plain numbers (a list of ``float`` and
+    ``int``, or of such lists): their ``repr``, which writes every float to its last bit and
+    keeps the sign of a zero; None for anything else (not memoised)."""
+    if type(values) is not list:
+        return None
+    for v in values:
+        if type(v) is list:
+            if not all(type(x) is float or type(x) is int for x in v):
+                return None
+        elif type(v) is not float and type(v) is not int:
+            return None
+    return repr(values)
+
+
+def _memo(table: dict[str, Array], key: str | None, value: Array) -> Array:
+    """``value`` stored under ``key`` (unless None or the table is full); returned as it is."""
+    if key is not None and len(table) < _MEMO_SIZE:
+        table[key] = value.copy()
+    return value
+
+
 def _euler_xyz(deg: Vec3) -> Array:
+    """``Rx(a) Ry(b) Rz(c)`` of intrinsic XYZ angles ``deg`` [deg] (memoised by their exact
+    values, :data:`_EULER_MEMO`)."""
+    key = _exact_key(deg)
+    hit = _EULER_MEMO.get(key) if key is not None else None
+    if hit is not None:
+        return hit.copy()
     a, b, c = np.radians(deg)
-    return _rot(np.array([1.0, 0, 0]), a) @ _rot(np.array([0, 1.0, 0]), b) @ _rot(np.array([0, 0, 1.0]), c)
+    R = _rot(np.array([1.0, 0, 0]), a) @ _rot(np.array([0, 1.0, 0]), b) @ _rot(np.array([0, 0, 1.0]), c)
+    return _memo(_EULER_MEMO, key, R)
 
 
 def inertia_matrix(values: list, where: str) -> Array:
     """``[Ixx, Iyy, Izz, Ixy, Ixz, Iyz]`` or a 3 x 3 list -> symmetric (3, 3) [kg m^2], checked:
-    symmetric, positive definite, principal moments obeying the triangle inequality."""
+    symmetric, positive definite, principal moments obeying the triangle inequality (a checked
+    result memoised by the exact values, :data:`_INERTIA_MEMO`)."""
+    key = _exact_key(values)
+    hit = _INERTIA_MEMO.get(key) if key is not None else None
+    if hit is not None:
+        return hit.copy()
+    return _memo(_INERTIA_MEMO, key, _checked_inertia(values, where))
+
+
+def _checked_inertia(values: list, where: str) -> Array:
+    """:func:`inertia_matrix` without the memo."""
     if len(values) == 6 and all(isinstance(v, (int, float)) for v in values):
         xx, yy, zz, xy, xz, yz = (float(v) for v in values)
         inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
@@ -763,6 +812,8 @@ def _check_magnitudes(raw: dict[str, Any], label: str, limits: dict[str, Any]) -
     and the key: ``[legs][0] joints U point_m[0]: 1e+300 is beyond ...``. Directions (axes,
     load directions) are left alone: they are normalised where read."""
 
+    bounds: dict[str, tuple[str, float]] = {}  # (:func:`_bound` of each key, once)
+
     def walk(v: Any, where: str, key: str) -> None:
         if isinstance(v, dict):
             for k, x in v.items():
@@ -781,7 +832,11 @@ def _check_magnitudes(raw: dict[str, Any], label: str, limits: dict[str, Any]) -
             for i, e in enumerate(v):
                 walk(e, where, f"{key}[{i}]")
         elif isinstance(v, (int, float)) and not isinstance(v, bool):
-            name, bound = _bound(key.split("[")[0], limits)
+            base = key.split("[")[0]
+            found = bounds.get(base)
+            if found is None:
+                found = bounds[base] = _bound(base, limits)
+            name, bound = found
             if not abs(v) <= bound:
                 raise ParameterError(f"{label}: {where} {key}: {v:g} is beyond the plausibility limit {name} = "
                                      f"{limits[name]:g} (raise it in the description's [limits])")

@@ -28,6 +28,7 @@ list takes a list of the right length (the validation that follows says so, nami
 from __future__ import annotations
 
 import ast
+import functools
 import math
 import re
 from collections.abc import Callable, Mapping
@@ -170,11 +171,10 @@ def evaluate(text: str, names: Mapping[str, Any], where: str = "expression") -> 
         raise ParameterError(f"{where}: expected an expression (text), got {type(text).__name__}")
     if len(text) > MAX_LENGTH:
         raise ParameterError(f"{where}: the expression is longer than {MAX_LENGTH} characters")
-    try:
-        tree = ast.parse(text.strip(), mode="eval")
-    except SyntaxError as exc:
-        raise ParameterError(f"{where}: {text!r} is not an expression ({exc.msg})") from None
-    if sum(1 for _ in ast.walk(tree)) > _MAX_NODES:
+    tree, error, nodes, _ = _parsed(text)
+    if error is not None:
+        raise ParameterError(f"{where}: {text!r} is not an expression ({error})") from None
+    if nodes > _MAX_NODES or tree is None:
         raise ParameterError(f"{where}: the expression has more than {_MAX_NODES} parts")
     try:
         with np.errstate(all="raise"):
@@ -246,11 +246,23 @@ def _names_used(spec: Any) -> set[str]:
         return set().union(*(_names_used(v) for v in spec))
     if not isinstance(spec, str) or len(spec) > MAX_LENGTH:
         return set()
+    return set(_parsed(spec)[3])
+
+
+@functools.lru_cache(maxsize=512)
+def _parsed(text: str) -> tuple[ast.Expression | None, str | None, int, frozenset[str]]:
+    """The parse tree of an expression's ``text`` (stripped; None where it does not parse or
+    has more than :data:`_MAX_NODES` parts), the syntax error's message (None where it parses),
+    its number of parts and the names it reads. Cached by text (at most :data:`MAX_LENGTH`
+    characters): a sweep evaluates the same texts with other parameter values for every
+    design, and :func:`_eval` only reads the tree, so a value is the same to the last bit."""
     try:
-        tree = ast.parse(spec.strip(), mode="eval")
-    except SyntaxError:
-        return set()
-    return {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+        tree = ast.parse(text.strip(), mode="eval")
+    except SyntaxError as exc:
+        return None, str(exc.msg), 0, frozenset()
+    nodes = list(ast.walk(tree))
+    names = frozenset(n.id for n in nodes if isinstance(n, ast.Name))
+    return (tree if len(nodes) <= _MAX_NODES else None), None, len(nodes), names
 
 
 def _dependency_order(names: list[str], uses: Mapping[str, set[str]], label: str) -> list[str]:
