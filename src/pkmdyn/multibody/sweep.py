@@ -4,7 +4,9 @@ evaluates per design of any mechanism description (:class:`pkmdyn.sweep_protocol
 A design is the description with some numbers changed (masses, inertias, joint points and
 axes, friction coefficients, the default motion...). Each design performs its own
 ``[default_motion]`` (so its amplitudes and period can be swept too) or one task-motion file
-for all designs. Per design: the validated, compiled model (:func:`pkmdyn.multibody.load_mechanism`),
+for all designs. Per design: the validated, compiled model (:func:`pkmdyn.multibody.load_mechanism`'s,
+to the last bit: the description validated in full, its structure compiled once for the sweep
+and its numbers per design, :func:`pkmdyn.multibody.model.compile_with`),
 the kinematics along the motion (:func:`~pkmdyn.multibody.solve_kinematics`, which refuses a loop
 that does not close), the singularity measures (:func:`~pkmdyn.multibody.singularity_measures`),
 and the actuator efforts with every joint reaction and the joints' friction
@@ -66,8 +68,8 @@ class _Motion(Section):
 @dataclass(frozen=True)
 class DescribedSweepContext:
     """Design-independent data: the motion of a motion file (None: each design's own
-    ``[default_motion]``), the threshold on the singularity measures and whether the joint
-    reactions are computed."""
+    ``[default_motion]``), the threshold on the singularity measures, whether the joint
+    reactions are computed, and the base description's compiled structure (``template``)."""
 
     motion: Any
     threshold: float
@@ -83,6 +85,10 @@ class DescribedSweepContext:
     workspace_measure: bool = True
     #: ``[motion] workspace_refine``: the steps of each boundary edge for the size
     workspace_refine: int = 0
+    #: the base description's compiled structure (:class:`pkmdyn.multibody.model.ModelStructure`),
+    #: made once in :meth:`DescribedSweep.prepare` and sent with the context to every worker: a
+    #: design of the same structure compiles only its numbers (None: every design in full)
+    template: Any = None
 
 
 def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[str], bool, bool, bool]:
@@ -254,7 +260,8 @@ class DescribedSweep:
         """Check the ``[motion]`` options; read the motion file, if any, against the base
         description's task; with reactions, an over-constrained base needs its bodies' sections
         and materials (one line naming what is missing, or ``reactions = false``)."""
-        from . import load_mechanism
+        from .description import load_description
+        from .model import compile_with, model_structure, structure_key
         from .motion import read_task_motion
         from .reactions import ComplianceDataMissing
 
@@ -262,8 +269,10 @@ class DescribedSweep:
         if opt.workspace_refine and (opt.workspace_grid is None or opt.workspace_orientation_range is not None):
             raise ParameterError("[motion] workspace_refine: needs workspace_grid, and not workspace_orientation_range "
                                  "(docs/workspace.md, refined size)")
-        try:
-            model = load_mechanism(copy.deepcopy(dict(description)))
+        try:  # the structure every design of the same structure reuses, and load_mechanism's model
+            desc = load_description(copy.deepcopy(dict(description)))
+            template = model_structure(structure_key(desc))
+            model = compile_with(template, desc)
         except PkmdynError as exc:
             raise ParameterError(f"base description: {exc}") from None
         motion = None
@@ -309,7 +318,7 @@ class DescribedSweep:
         return DescribedSweepContext(motion=motion, threshold=opt.singularity_threshold, reactions=opt.reactions,
                                      stiffness=tuple(_stiffness_metrics(description)) if opt.stiffness else (),
                                      workspace=ws, required=req, workspace_measure=opt.workspace_measure,
-                                     workspace_refine=opt.workspace_refine)
+                                     workspace_refine=opt.workspace_refine, template=template)
 
     def evaluate(self, descriptions: Sequence[Mapping[str, Any]], context: DescribedSweepContext
                  ) -> list[DesignOutcome]:
@@ -384,15 +393,29 @@ def _on_grid(model: Any, spec: tuple[str, str, str | None], threshold: float, le
                      ranges=ranges, measures="least" if least else "none", refine=refine)
 
 
+def design_model(description: Mapping[str, Any], ctx: DescribedSweepContext) -> Any:
+    """The compiled model of one design: :func:`pkmdyn.multibody.load_mechanism`'s, to the last
+    bit. The description is read and validated in full (every error as ``load_mechanism`` says
+    it); where it has the structure of the base description (``ctx.template``: the same bodies,
+    joints and types, actuators, cut joints, task and loads), the compiled structure is reused
+    and only the numbers, the solver's rows and the explicit legs are computed, else (a swept
+    value that changes the structure, e.g. a leg count) it is compiled in full
+    (:func:`pkmdyn.multibody.model.compile_with`)."""
+    from .description import load_description
+    from .model import compile_with
+
+    return compile_with(ctx.template, load_description(copy.deepcopy(dict(description))))
+
+
 def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> DesignOutcome:
-    """One design: model -> motion -> kinematics and singularity measures -> efforts (and every
-    joint reaction with the friction) -> metrics."""
-    from . import load_mechanism, singularity_measures, solve_kinematics
+    """One design: model (:func:`design_model`) -> motion -> kinematics and singularity measures
+    -> efforts (and every joint reaction with the friction) -> metrics."""
+    from . import singularity_measures, solve_kinematics
     from .dynamics import effort_unit, inverse_dynamics, joint_reactions
     from .motion import default_motion
 
     try:
-        model = load_mechanism(copy.deepcopy(dict(description)))
+        model = design_model(description, ctx)
         motion = ctx.motion if ctx.motion is not None else default_motion(model)
     except PkmdynError as exc:
         return DesignOutcome("invalid", str(exc))
