@@ -53,6 +53,10 @@ def test_notice_once_with_the_kernel_and_the_time(listener, capsys):
     assert len(err) == 1 and "pkmdyn.example.f" in err[0] and "pkmdyn compile" in err[0]
     line = compile_notice.summary()
     assert line is not None and "compiled 1 kernel in" in line
+    compile_notice.reset()  # a next command in the same process speaks of its own compilations
+    assert compile_notice.summary() is None
+    njit(cache=False)(g["f"])(3.0)
+    assert len(capsys.readouterr().err.splitlines()) == 1 and "compiled 1 kernel" in compile_notice.summary()
 
 
 def _cached_module(tmp_path, monkeypatch):

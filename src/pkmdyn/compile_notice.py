@@ -22,7 +22,7 @@ import sys
 import time
 from typing import Any
 
-__all__ = ["install", "summary", "ESTIMATE"]
+__all__ = ["install", "reset", "summary", "ESTIMATE"]
 
 #: what the first use of a command costs where nothing is cached, as said to the user: measured
 #: on a two-core machine (``pkmdyn run --machine stewart`` 38 s, a first ``pkmdyn control`` then
@@ -149,6 +149,15 @@ def _register() -> None:
 
     _state["listener"] = _Notice()
     event.register("numba:compile", _state["listener"])
+
+
+def reset() -> None:
+    """Forget what was compiled so far (a command starting in a process that ran others: the
+    notice and :func:`summary` speak of its own compilations)."""
+    lst = _state["listener"]
+    if lst is not None:
+        lst.names.clear()
+        lst.seconds = 0.0
 
 
 def summary() -> str | None:

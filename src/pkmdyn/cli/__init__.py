@@ -46,8 +46,9 @@ def main(argv: list[str] | None = None) -> int:
     Ctrl-C and SIGTERM end a run cleanly (its temporary output removed) with one line; a run
     that failed says nothing but its error line (notes held back are dropped).
     """
-    from ..compile_notice import summary
+    from ..compile_notice import reset, summary
 
+    reset()
     status = _main(argv)
     done = summary()
     if done is not None and status == 0:
