@@ -84,3 +84,52 @@ def test_near_a_singularity_and_without_a_direct_measure():
         qm = solve_kinematics(mm, mo.x, mo.xd, mo.xdd, mo.t).q
         got, ref = least_measures(mm, qm), _reference(mm, qm)
         assert _same(got, ref), (mm.name, got, ref)
+
+
+@pytest.mark.parametrize("name", ["stewart", "delta", "rrr3"])
+def test_one_measure_alone_is_that_field_of_all_three(name):
+    m, q = _builtin(name)
+    full = singularity_measures(m, q)
+    for key in ("inverse", "direct", "constraint"):
+        one = singularity_measures(m, q, only=key)
+        assert np.array_equal(getattr(one, key), getattr(full, key), equal_nan=True)
+        assert all(np.isnan(getattr(one, other)).all() for other in ("inverse", "direct", "constraint") if other != key)
+    with pytest.raises(ValueError, match="not a singularity measure"):
+        singularity_measures(m, q, only="worst")
+
+
+def test_a_pose_that_is_not_a_number_fails_as_every_samples_decompositions_do():
+    m, q = _builtin("bennett")
+    bad = q.copy()
+    bad[3, 0] = np.nan
+    with pytest.raises(np.linalg.LinAlgError):
+        singularity_measures(m, bad)
+    with pytest.raises(np.linalg.LinAlgError):  # (its bracket is not a number: decided by its decomposition)
+        least_measures(m, bad)
+
+
+@pytest.mark.parametrize("name", ["stewart", "delta"])
+def test_a_sweeps_measure_metrics_are_every_samples_decompositions(name, tmp_path):
+    """The sweep's conditioning index (the time mean of the direct measure) and least measures of
+    a design, against every sample's three decompositions; a threshold above the least names the
+    sample where the worst measure is least, as before."""
+    from pkmdyn.machines.registry import sweep_adapter
+    from pkmdyn.multibody.sweep import evaluate_one
+    from pkmdyn.sweep_protocol import time_mean
+
+    ad = sweep_adapter(name)
+    d = ad.base_description(None)
+    ctx = ad.prepare(d, {}, tmp_path)
+    out = evaluate_one(d, ctx)
+    m = load_mechanism(d)
+    mo = default_motion(m)
+    sm = singularity_measures(m, solve_kinematics(m, mo.x, mo.xd, mo.xdd, mo.t).q)
+    assert out.metrics["gci"] == float(time_mean(sm.direct, mo.t))
+    assert out.metrics["min_inverse_measure"] == float(sm.inverse.min())
+    assert out.metrics["min_constraint_measure"] == float(sm.constraint.min())
+    assert out.metrics["min_direct_measure"] == float(sm.direct.min())
+    worst = np.minimum(sm.inverse, sm.direct)
+    k = int(np.argmin(worst))
+    high = ad.prepare(d, {"singularity_threshold": float(worst[k]) * 1.5}, tmp_path)
+    singular = evaluate_one(d, high)
+    assert singular.status == "singular" and f"(sample {k + 1})" in singular.reason

@@ -527,8 +527,12 @@ def _ratio(M: Array) -> Array:
     return sv[..., -1] / np.maximum(sv[..., 0], 1e-300)
 
 
-def singularity_measures(model: MechanismModel, q: Array) -> SingularityMeasures:
-    """:class:`SingularityMeasures` at tree coordinates ``q (n, nq)`` (``kin.q``)."""
+def singularity_measures(model: MechanismModel, q: Array, only: str | None = None) -> SingularityMeasures:
+    """:class:`SingularityMeasures` at tree coordinates ``q (n, nq)`` (``kin.q``); ``only`` one of
+    the fields' names: that measure alone computed (one singular value decomposition a sample
+    instead of three), the others NaN."""
+    if only not in (None, "inverse", "direct", "constraint"):
+        raise ValueError(f"only: {only!r} is not a singularity measure (inverse, direct, constraint)")
     q = np.atleast_2d(np.asarray(q, dtype=float))
     _, J = constraint_jacobian(model, q)
     Js = J * row_scale(model)[None, :, None] * column_scale(model)[None, None, :]
@@ -536,17 +540,18 @@ def singularity_measures(model: MechanismModel, q: Array) -> SingularityMeasures
     nr = model.row_loop.shape[0]
     n = q.shape[0]
     idle = np.broadcast_to(model.solver_idle * column_scale(model)[None, :], (n, *model.solver_idle.shape))
-    inverse = _ratio(np.concatenate([Js[:, rows], idle], axis=1))
+    none = np.full(n, np.nan)
+    inverse = _ratio(np.concatenate([Js[:, rows], idle], axis=1)) if only in (None, "inverse") else none
     cut = rows[rows < nr]
     Phi = np.concatenate([Js[:, cut], idle], axis=1)
-    constraint = _ratio(Phi) if Phi.shape[1] else np.ones(n)
-    if model.na == model.nt:
+    constraint = (_ratio(Phi) if Phi.shape[1] else np.ones(n)) if only in (None, "constraint") else none
+    if model.na == model.nt and only in (None, "direct"):
         Ea = np.zeros((n, model.na, model.nq))
         for i, c in enumerate(model.act_coord):
             Ea[:, i, c] = 1.0
         direct = _ratio(np.concatenate([Phi, Ea], axis=1))
     else:
-        direct = np.full(q.shape[0], np.nan)
+        direct = none
     return SingularityMeasures(inverse=inverse, direct=direct, constraint=constraint)
 
 
@@ -617,7 +622,11 @@ def least_measures(model: MechanismModel, q: Array) -> dict[str, float]:
     cand = np.zeros(q.shape[0], dtype=bool)
     pick = []
     for k in range(3):
-        pick.append(lo[:, k] <= np.min(hi[:, k]) if applies[k] else np.zeros(q.shape[0], dtype=bool))
+        # a sample whose bracket is not a number (a pose of non-finite coordinates) is decided by
+        # its decomposition too: the least is then NaN, as the least of every decomposition is
+        bad = ~(np.isfinite(lo[:, k]) & np.isfinite(hi[:, k]))
+        top = np.min(hi[~bad, k]) if np.any(~bad) else np.inf
+        pick.append((lo[:, k] <= top) | bad if applies[k] else np.zeros(q.shape[0], dtype=bool))
         cand |= pick[k]
     rows = np.flatnonzero(cand)
     if rows.size:

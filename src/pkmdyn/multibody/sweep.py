@@ -410,8 +410,8 @@ def design_model(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
 def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> DesignOutcome:
     """One design: model (:func:`design_model`) -> motion -> kinematics and singularity measures
     -> efforts (and every joint reaction with the friction) -> metrics."""
-    from . import singularity_measures, solve_kinematics
     from .dynamics import effort_unit, inverse_dynamics, joint_reactions
+    from .kinematics import least_measures, singularity_measures, solve_kinematics
     from .motion import default_motion
 
     try:
@@ -436,20 +436,24 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
         check_actuator_rates(model, kin.t, kin.act_qd, kin.act_qdd, lim)
     except LimitError as exc:
         return DesignOutcome("limit", str(exc))
-    sm = singularity_measures(model, kin.q)
     t = motion.t
     direct = model.na == model.nt
-    mu = sm.direct if direct else sm.inverse
+    # the conditioning index's measure at every sample, the least of each from proven brackets
+    # (the decompositions only where a sample can hold the least: the same values to the bit)
+    mu = getattr(singularity_measures(model, kin.q, only="direct" if direct else "inverse"),
+                 "direct" if direct else "inverse")
+    least = least_measures(model, kin.q)
     m: dict[str, float] = {
         "gci": _mean(mu, t),
-        "min_inverse_measure": float(sm.inverse.min()),
-        "min_constraint_measure": float(sm.constraint.min()),
+        "min_inverse_measure": least["inverse"],
+        "min_constraint_measure": least["constraint"],
     }
     if direct:
-        m["min_direct_measure"] = float(sm.direct.min())
-    worst = np.minimum(sm.inverse, sm.direct) if direct else sm.inverse
-    k = int(np.argmin(worst))
-    if not worst[k] >= ctx.threshold:
+        m["min_direct_measure"] = least["direct"]
+    if not np.minimum(least["inverse"], least["direct"] if direct else np.inf) >= ctx.threshold:  # (NaN: singular)
+        sm = singularity_measures(model, kin.q)  # the first sample where the worst is least, named
+        worst = np.minimum(sm.inverse, sm.direct) if direct else sm.inverse
+        k = int(np.argmin(worst))
         return DesignOutcome("singular", f"t = {t[k]:.6g} s (sample {k + 1}): the singularity measure "
                                          f"{worst[k]:.3g} is below the threshold {ctx.threshold:g}", m)
     try:
