@@ -31,6 +31,7 @@ class BuildPyCompiled(build_py):
             return
         lib = Path(self.build_lib).resolve()
         env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}  # the cache beside the sources
+        env["PYTHONDONTWRITEBYTECODE"] = "1"  # numba's cache in the wheel, not the build's own bytecode
         env["PYTHONPATH"] = os.pathsep.join([str(lib), *([os.environ["PYTHONPATH"]] if os.environ.get("PYTHONPATH") else [])])
         with tempfile.TemporaryDirectory(prefix="pkmdyn-build-") as cwd:
             done = subprocess.run([sys.executable, "-m", "pkmdyn.cli", "compile"], env=env, cwd=cwd, check=False)
