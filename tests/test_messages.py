@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from pkmdyn.cli import _groups, main
+from pkmdyn.cli import main
 
 
 def _one_error(capsys):
@@ -53,20 +53,3 @@ def test_a_group_without_a_command_prints_its_help(capsys, args, first):
     assert main(args) == 0
     captured = capsys.readouterr()
     assert captured.out.startswith(first) and "Commands:" in captured.out and captured.err == ""
-
-
-def test_a_compile_is_said_once_and_only_after_a_run_that_succeeded(monkeypatch, capsys):
-    import numba
-
-    monkeypatch.setattr(_groups, "_TOLD", False)
-    _groups.announce_compiles()
-
-    @numba.njit
-    def fresh(x):  # not cached: compiled here
-        return x + 1
-
-    assert fresh(1) == 2 and fresh(2.5) == 3.5
-    assert _groups.HELD_NOTES == [_groups._COMPILE_NOTE]  # once, though compiled twice
-    assert main(["pdm"]) == 0
-    err = capsys.readouterr().err
-    assert err.count("compiling the numerical kernels") == 1 and not _groups.HELD_NOTES

@@ -4,7 +4,6 @@ the option types they share."""
 from __future__ import annotations
 
 import math
-import sys
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -85,38 +84,6 @@ def echo_lines(lines: list[str]) -> None:
 #: notes held back until the command has succeeded (stderr not a terminal: a failed run keeps to
 #: its one error line)
 HELD_NOTES: list[str] = []
-_COMPILE_NOTE = ("compiling the numerical kernels this command needs (once: later runs load them from the cache, "
-                 "in a second or two)")
-
-
-def announce_compiles() -> None:
-    """Say once, on stderr, when Numba compiles kernels (the first run after installing or
-    updating, some seconds): at once on a terminal, else at the end of a run that succeeded."""
-    global _LISTENING
-    if _LISTENING:
-        return
-    from numba.core import event
-
-    class _Say(event.Listener):
-        def on_start(self, ev: object) -> None:
-            global _TOLD
-            if _TOLD:
-                return
-            _TOLD = True
-            if sys.stderr is not None and sys.stderr.isatty():
-                click.echo(f"pkmdyn: note: {_COMPILE_NOTE}", err=True)
-            else:
-                HELD_NOTES.append(_COMPILE_NOTE)
-
-        def on_end(self, ev: object) -> None:
-            pass
-
-    event.register("numba:compile", _Say())
-    _LISTENING = True
-
-
-_LISTENING = False
-_TOLD = False
 
 
 def write_default_file(machine: str, control: bool, out_path: Path) -> None:

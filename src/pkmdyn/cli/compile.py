@@ -46,7 +46,9 @@ LANES: tuple[tuple[tuple[str, ...], ...], ...] = (
         ("@cycles",),  # the closed loop's cycles in one compiled call (a long run's route)
         ("control", "--machine", "stewart", "--controller", "computed-torque", "--duration", "0.02"),
         ("control", "--machine", "delta", "--controller", "pid", "--duration", "0.02"),
+        ("control", "--machine", "bennett", "--duration", "0.02"),  # one actuator: other array types
         ("hip", "control", "--controller", "augmented-pd", "--cycles", "0.01", "--no-plots"),
+        ("hip", "control", "--controller", "feedforward", "--cycles", "0.01", "--no-plots"),
         ("hip", "control", "--controller", "computed-torque", "--cycles", "0.01", "--no-plots"),
         ("pdm", "control", "--controller", "pid", "--cycles", "0.01", "--no-plots"),
         ("assemble", "--machine", "stewart", "--actuators", "@reference", "--starts", "8"),

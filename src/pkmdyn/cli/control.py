@@ -25,7 +25,7 @@ import numpy as np
 from ..errors import MotionError, ParameterError, PkmdynError
 from ..machines.hip_simulator import control_job as _hip_job
 from ..machines.pdm4 import control_job as _pdm_job
-from ._groups import PATH_IN, announce_compiles, hip, list_files, pdm
+from ._groups import PATH_IN, hip, list_files, pdm
 from ._groups import FiniteFloat
 from ._hip_options import paper_option
 
@@ -717,7 +717,6 @@ def _command(machine: str, controller: str, params_path, plant_path, motion_path
              fmt: str = "csv") -> None:
     from ..io import check_output_dir, check_table_format
 
-    announce_compiles()
     if motion_path is not None and cycles != 1.0:
         raise click.UsageError("--cycles applies to the built-in motion, not to --motion")
     check_table_format(fmt)

@@ -9,7 +9,7 @@ import click
 from ..identify import bounds as _ex
 from ..identify.bounds import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW
 from ._groups import PATH_IN as _PATH_IN
-from ._groups import announce_compiles, echo_lines, hip
+from ._groups import echo_lines, hip
 from ._groups import FiniteFloat
 from ._hip_options import paper_option
 
@@ -36,8 +36,6 @@ def hip_identify(measured_path, params_path, which, sg_window, sg_order, rank_to
     """Identify friction and/or inertia from measured motor torques; writes identified.toml,
     identification.json, torques.csv and plots."""
     from ..identify.hip_run import run_identify
-
-    announce_compiles()
 
     run_identify(out_dir, measured_path, params_path, which, sg_window, sg_order, rank_tol, make_plots=not no_plots,
                  report=echo_lines)
@@ -94,8 +92,6 @@ def hip_excite(params_path, which, period_s, harmonics, cycles, samples_per_cycl
     """Design an excitation motion and load (optimised Fourier series) for identification."""
     from ..identify.hip_excite import ExcitationLimits
     from ..identify.hip_run import run_excite
-
-    announce_compiles()
 
     limits = ExcitationLimits(alpha_range_deg, beta_range_deg, gamma_range_deg, load_range, max_slider_speed_m_s,
                               max_slider_accel_m_s2, max_cond_j)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ._groups import PATH_IN, announce_compiles, list_files, params_command, pdm
+from ._groups import PATH_IN, list_files, params_command, pdm
 
 
 @pdm.command("run")
@@ -36,8 +36,6 @@ def pdm_run(params_path: Path | None, motion_path: Path | None, stroke_x_m: floa
             out_dir: Path) -> None:
     """Kinematics, Newton-Euler dynamics and unique joint reactions, mobility, workspace and plots of the PDM."""
     from ..machines.pdm4.run import run_pdm
-
-    announce_compiles()
 
     trajectory = {"stroke_x_m": stroke_x_m, "stroke_y_m": stroke_y_m, "stroke_alpha_deg": stroke_alpha_deg,
                   "stroke_gamma_deg": stroke_gamma_deg, "period_s": period_s, "peak_y_accel_m_s2": peak_y_accel}
