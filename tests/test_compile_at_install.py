@@ -67,3 +67,33 @@ def test_a_lane_says_each_failed_exercise_and_runs_the_rest(monkeypatch, capsys)
     assert len(err) == 1 and "no-such-machine" in err[0] and "exit 2" in err[0]
     assert [(a, s) for a, s, _ in ran] == [("hip", 0), ("run", 2), ("pdm", 0)]
     assert ran[0][2] and ran[2][2]  # the good ones wrote their file (into the lane's temporary folder)
+
+
+#: commands beside :data:`pkmdyn.cli.compile.LANES`' own: other machines, controllers and analyses
+OTHER_COMMANDS = [
+    ["run", "--machine", "bennett"],
+    ["run", "--machine", "rrr3"],
+    ["control", "--machine", "rrr3", "--duration", "0.02"],
+    ["control", "--machine", "stewart", "--controller", "pd", "--duration", "0.02"],
+    ["stiffness", "--machine", "stewart"],
+    ["workspace", "--machine", "stewart", "--grid", "x=-0.2:0.2:5,y=-0.2:0.2:5", "--pose", "z=1.0"],
+    ["hip", "control", "--controller", "pd", "--cycles", "0.02", "--no-plots"],
+    ["pdm", "control", "--controller", "computed-torque", "--cycles", "0.02", "--no-plots"],
+]
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(FROM_SOURCE, reason="pkmdyn runs from its source checkout: the install is what compiles")
+@pytest.mark.parametrize("args", OTHER_COMMANDS, ids=lambda a: " ".join(a[:3]))
+def test_commands_after_the_install_compile_nothing(args, tmp_path):
+    """The first run of a command the install did not run itself, in a process of its own:
+    every kernel it takes is in the installed cache (no compile notice on stderr)."""
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    r = subprocess.run([sys.executable, "-m", "pkmdyn.cli", *args, "--out", str(tmp_path / "out")], env=env,
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "compiling numerical kernels" not in r.stderr and "compiled" not in r.stderr, r.stderr
