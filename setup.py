@@ -22,6 +22,11 @@ from setuptools import setup
 from setuptools.command.build_py import build_py
 
 
+#: the longest the build waits for the kernels' compilation [s] (about two minutes on two cores):
+#: past it the install goes on, and the commands compile what is missing on first use
+COMPILE_TIMEOUT_S = 1800
+
+
 class BuildPyCompiled(build_py):
     """``build_py``, then ``pkmdyn compile`` on the build folder (module docstring)."""
 
@@ -34,7 +39,13 @@ class BuildPyCompiled(build_py):
         env["PYTHONDONTWRITEBYTECODE"] = "1"  # numba's cache in the wheel, not the build's own bytecode
         env["PYTHONPATH"] = os.pathsep.join([str(lib), *([os.environ["PYTHONPATH"]] if os.environ.get("PYTHONPATH") else [])])
         with tempfile.TemporaryDirectory(prefix="pkmdyn-build-") as cwd:
-            done = subprocess.run([sys.executable, "-m", "pkmdyn.cli", "compile"], env=env, cwd=cwd, check=False)
+            try:
+                done = subprocess.run([sys.executable, "-m", "pkmdyn.cli", "compile"], env=env, cwd=cwd, check=False,
+                                      timeout=COMPILE_TIMEOUT_S)
+            except subprocess.TimeoutExpired:
+                self.warn(f"pkmdyn compile took over {COMPILE_TIMEOUT_S} s and was stopped: the kernels it had not "
+                          "compiled compile on their first use")
+                return
         if done.returncode != 0:
             self.warn("pkmdyn compile failed: the kernels it missed compile on their first use")
 
