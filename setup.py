@@ -13,6 +13,7 @@ sources); ``PKMDYN_COMPILE_AT_INSTALL=0`` skips the step.
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -27,6 +28,15 @@ from setuptools.command.build_py import build_py
 COMPILE_TIMEOUT_S = 1800
 
 
+def _stop(proc: subprocess.Popen) -> None:
+    """End ``proc`` and the lanes it started (its process group, where the system has them)."""
+    if hasattr(os, "killpg"):
+        os.killpg(proc.pid, signal.SIGKILL)
+    else:  # pragma: no cover - no process groups
+        proc.kill()
+    proc.wait()
+
+
 class BuildPyCompiled(build_py):
     """``build_py``, then ``pkmdyn compile`` on the build folder (module docstring)."""
 
@@ -39,14 +49,20 @@ class BuildPyCompiled(build_py):
         env["PYTHONDONTWRITEBYTECODE"] = "1"  # numba's cache in the wheel, not the build's own bytecode
         env["PYTHONPATH"] = os.pathsep.join([str(lib), *([os.environ["PYTHONPATH"]] if os.environ.get("PYTHONPATH") else [])])
         with tempfile.TemporaryDirectory(prefix="pkmdyn-build-") as cwd:
+            # its own process group: stopped whole (its lanes included) when it takes too long
+            proc = subprocess.Popen([sys.executable, "-m", "pkmdyn.cli", "compile"], env=env, cwd=cwd,
+                                    start_new_session=True)
             try:
-                done = subprocess.run([sys.executable, "-m", "pkmdyn.cli", "compile"], env=env, cwd=cwd, check=False,
-                                      timeout=COMPILE_TIMEOUT_S)
+                proc.wait(timeout=COMPILE_TIMEOUT_S)
             except subprocess.TimeoutExpired:
+                _stop(proc)
                 self.warn(f"pkmdyn compile took over {COMPILE_TIMEOUT_S} s and was stopped: the kernels it had not "
                           "compiled compile on their first use")
                 return
-        if done.returncode != 0:
+            except BaseException:  # Ctrl-C: the lanes end with it
+                _stop(proc)
+                raise
+        if proc.returncode != 0:
             self.warn("pkmdyn compile failed: the kernels it missed compile on their first use")
 
 
