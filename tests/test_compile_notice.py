@@ -115,3 +115,14 @@ def test_installed_before_numba_it_listens_from_numbas_import_on():
     env = {**os.environ, "PYTHONPATH": str(Path(pkmdyn.__file__).resolve().parents[1])}
     r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     assert "compiled 1 kernel" in r.stdout and "pkmdyn.example.f" in r.stderr
+
+
+def test_silenced_it_says_nothing(listener, capsys):
+    """``pkmdyn compile`` silences the notice: compiling is its work."""
+    lst = compile_notice._state["listener"]
+    compile_notice.silence()
+    g = {"__name__": "pkmdyn.example"}
+    exec("def f(x):\n    return 3 * x\n", g)
+    njit(cache=False)(g["f"])(1.0)
+    assert capsys.readouterr().err == "" and compile_notice.summary() is None
+    event.register("numba:compile", lst)  # the fixture's listener back, for its teardown

@@ -22,7 +22,7 @@ import sys
 import time
 from typing import Any
 
-__all__ = ["install", "reset", "summary", "ESTIMATE"]
+__all__ = ["install", "reset", "silence", "summary", "ESTIMATE"]
 
 #: what the first use of a command costs where nothing is cached, as said to the user: measured
 #: on a two-core machine (``pkmdyn run --machine stewart`` 38 s, a first ``pkmdyn control`` then
@@ -158,6 +158,17 @@ def reset() -> None:
     if lst is not None:
         lst.names.clear()
         lst.seconds = 0.0
+
+
+def silence() -> None:
+    """Say nothing of compilations in this process (``pkmdyn compile``, whose work they are)."""
+    sys.meta_path[:] = [f for f in sys.meta_path if not isinstance(f, _AfterNumba)]
+    lst = _state["listener"]
+    if lst is not None:
+        from numba.core import event
+
+        event.unregister("numba:compile", lst)
+        _state["listener"] = None
 
 
 def summary() -> str | None:

@@ -153,6 +153,9 @@ def compile_kernels(jobs: int | None = None, log=print) -> int:
 def compile_command(jobs: int | None, lane: int | None) -> None:
     """Compile every numerical kernel into numba's cache now (done by the install; again after
     numba was upgraded or on another CPU). Writes nothing but the cache."""
+    from ..compile_notice import silence
+
+    silence()  # compiling is this command's work: no notice of it
     if lane is not None:
         click.get_current_context().exit(_lane(lane))
     if compile_kernels(jobs, log=echo):
