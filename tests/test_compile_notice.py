@@ -83,12 +83,17 @@ def _rewrite(index, edit):
 
 def test_the_reason_names_the_numba_version_the_cpu_or_a_missing_cache(tmp_path, monkeypatch):
     kernel, index = _cached_module(tmp_path, monkeypatch)
+    from numba.core.registry import cpu_target
+
+    here = cpu_target.target_context.codegen().magic_tuple()
     try:
         assert "other argument types" in compile_notice._why(kernel)  # served, but asked for another signature
         _rewrite(index, lambda v, s, o: (v, s, {(k[0], (k[1][0], "some-other-cpu", k[1][2]), k[2]): d
                                                 for k, d in o.items()}))
         why = compile_notice._why(kernel)
         assert "some-other-cpu" in why and "built for CPU" in why
+        _rewrite(index, lambda v, s, o: (v, s, {(k[0], (k[1][0], here[1], "+other"), k[2]): d for k, d in o.items()}))
+        assert "other features of CPU" in compile_notice._why(kernel)
         _rewrite(index, lambda v, s, o: ("0.1.0", s, o))
         why = compile_notice._why(kernel)
         assert "numba 0.1.0" in why and numba.__version__ in why

@@ -71,6 +71,8 @@ def _why(dispatcher: Any) -> str:
         here = cpu_target.target_context.codegen().magic_tuple()
         cpus = {key[1][1] for key in overloads if isinstance(key, tuple) and len(key) > 1}
         if cpus and not any(key[1] == here for key in overloads):
+            if here[1] in cpus:
+                return f"the cache was built for other features of CPU {here[1]} (NUMBA_CPU_FEATURES)"
             return f"the cache was built for CPU {', '.join(sorted(map(str, cpus)))}, this is {here[1]}"
         return "the cache holds it for other argument types"
     except Exception:  # numba's internals differ: say what is sure
