@@ -125,22 +125,9 @@ def _largest(G, d, guard, W, v, w):  # pragma: no cover - compiled
         v[i] = 0.5 + (0.6180339887498949 * (i + 1)) % 1.0
     rho = G[k, k]
     for _ in range(10):
-        nv = 0.0
-        for i in range(d):
-            nv += v[i] * v[i]
-        nv = math.sqrt(nv)
-        if not nv > 0.0:
+        if not _normalise(v, d) > 0.0:
             return tr, rho
-        for i in range(d):
-            v[i] /= nv
-        num = 0.0
-        for i in range(d):
-            acc = 0.0
-            for j in range(d):
-                acc += G[i, j] * v[j]
-            w[i] = acc
-            num += v[i] * acc
-        rho = max(rho, num)
+        rho = max(rho, _product(G, d, v, w))
         for i in range(d):
             v[i] = w[i]
     for grow in (0.01, 0.05, 0.25):
@@ -198,19 +185,21 @@ def _solve_chol(L, d, x):  # pragma: no cover - compiled
 
 @njit(cache=True, _nrt=False)
 def _normalise(x, d):  # pragma: no cover - compiled
-    """``x[:d]`` scaled to unit length in place."""
+    """``x[:d]`` scaled to unit length in place; its length before (a zero ``x`` left as it is)."""
     nx = 0.0
     for i in range(d):
         nx += x[i] * x[i]
     nx = math.sqrt(nx)
+    if not nx > 0.0:
+        return nx
     for i in range(d):
         x[i] /= nx
+    return nx
 
 
 @njit(cache=True, _nrt=False)
-def _rayleigh(G, d, x, w):  # pragma: no cover - compiled
-    """``x`` normalised in place, ``w = G x`` and the Rayleigh quotient ``x^T G x``."""
-    _normalise(x, d)
+def _product(G, d, x, w):  # pragma: no cover - compiled
+    """``w = G x`` (``G[:d, :d]``) and ``x^T G x``."""
     rq = 0.0
     for i in range(d):
         acc = 0.0
@@ -219,6 +208,13 @@ def _rayleigh(G, d, x, w):  # pragma: no cover - compiled
         w[i] = acc
         rq += x[i] * acc
     return rq
+
+
+@njit(cache=True, _nrt=False)
+def _rayleigh(G, d, x, w):  # pragma: no cover - compiled
+    """``x`` normalised in place, ``w = G x`` and the Rayleigh quotient ``x^T G x``."""
+    _normalise(x, d)
+    return _product(G, d, x, w)
 
 
 @njit(cache=True, _nrt=False)
