@@ -101,13 +101,14 @@ def test_pdm_exact_encoders_read_the_plants_limb_lengths(tmp_path):
 
 def test_hip_exact_encoders_read_the_plants_motor_angles(tmp_path):
     """``exact_encoders = 1`` on the hip: the motors' true angles are those of the plant's own
-    slider positions, ``2 pi / p (L(q) - L(q_0))`` by the hand-built closed form (Eq. 2) at the
-    recorded angles, the encoders read them to within one count, and the controller's pose from
-    the direct kinematics of the counts is near the true one; the loop tracks as well as with the
+    slider positions, ``2 pi / p (L(q) - L(q_0))`` by the engine's batched kinematics of the
+    hip's description at the recorded angles (another route than the loop's single-sample
+    solve), the encoders read them to within one count, and the controller's pose from the
+    direct kinematics of the counts is near the true one; the loop tracks as well as with the
     first-order encoders."""
-    from pkmdyn.machines.hip_simulator.kinematics import inverse_kinematics
+    from pkmdyn.machines.hip_simulator.description import hip_description
     from pkmdyn.machines.hip_simulator.params import load_params
-    from pkmdyn.profiles.orientation import OrientationMotion
+    from pkmdyn.multibody import load_mechanism, solve_kinematics
 
     gains = tmp_path / "g.toml"
     gains.write_text("[sensors]\nexact_encoders = 1\n", encoding="utf-8")
@@ -120,8 +121,7 @@ def test_hip_exact_encoders_read_the_plants_motor_angles(tmp_path):
     header, data = runs["exact"]
     model = load_params()
     q = np.deg2rad(data[:, [header.index(f"{c}_deg") for c in ("alpha", "beta", "gamma")]])
-    z = np.zeros_like(q)
-    L = inverse_kinematics(model, OrientationMotion(data[:, 0], q, z, z, np.zeros(len(q)))).L[:, 0]
+    L = solve_kinematics(load_mechanism(hip_description(model)), q).act_q
     k = 2.0 * np.pi / model.geometry.p
     count = 2.0 * np.pi / 131072
     moved = 0.0

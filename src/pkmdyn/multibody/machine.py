@@ -41,7 +41,7 @@ from .actuators import motor_effort_unit, motor_efforts
 from .kinematics import MechanismKinematics, solve_kinematics
 from .model import MechanismModel
 
-__all__ = ["MechanismVerbs", "machine_verbs", "RenamedVerbs"]
+__all__ = ["MechanismVerbs", "machine_verbs", "RenamedVerbs", "motion_scene"]
 
 Array = NDArray[np.float64]
 
@@ -552,5 +552,35 @@ class RenamedVerbs:
             return verb(model.mechanism, *args, **kwargs)
 
         on_mechanism.__doc__ = verb.__doc__
+        setattr(self, name, on_mechanism)  # made once: a loop's calls then find it as an attribute
         return on_mechanism
+
+
+def motion_scene(model: MechanismModel, t: Array, x: Array, u: Array,
+                 labels: tuple[tuple[str, str], ...] | None = None) -> Any:
+    """The 3D scene (:func:`pkmdyn.report.scene_from_joints`) of the mechanism along task poses
+    ``x (n, nt)`` at times ``t (n,)`` [s]: each body drawn through its joint centres, each
+    actuated joint as a chain coloured by its effort ``u (n, na)`` (the verbs' efforts: a
+    drive's motor effort). ``labels``: per actuator its ``(name, unit)`` in the legend (default:
+    the actuator's name and the effort's unit). Raises where a pose is out of reach."""
+    from ..report import scene_from_joints
+    from .joint_types import JOINT_TYPES
+
+    x = np.atleast_2d(np.asarray(x, dtype=float))
+    kin = solve_kinematics(model, x, t=np.asarray(t, dtype=float))
+    joints = [(nm, JOINT_TYPES[model.joint_type[k]].name,
+               "ground" if model.joint_parent[k] < 0 else model.body_names[model.joint_parent[k]],
+               "ground" if model.joint_child[k] < 0 else model.body_names[model.joint_child[k]])
+              for k, nm in enumerate(model.joint_names)]
+    uu = np.asarray(u, dtype=float).reshape(x.shape[0], model.na)
+    efforts = {}
+    for i, name in enumerate(model.actuator_names):
+        if labels is not None:
+            label, unit = labels[i]
+        elif model.drive_name[i] is not None:
+            label, unit = f"{model.drive_name[i]} effort", motor_effort_unit(model, i)
+        else:
+            label, unit = f"{name} effort", effort_unit(model, i)
+        efforts[name] = (uu[:, i], label, {"Nm": "N m"}.get(unit, unit))
+    return scene_from_joints(np.asarray(t, dtype=float), kin.joint_point, joints, efforts)
 

@@ -1,11 +1,22 @@
 """The hip simulator's control adapter (:class:`pkmdyn.control_protocol.ControlJob`): its models
 and motions, the columns and labels of ``control.csv`` and its plots, the posture-error figure
-(the paper's Fig. 7) and the 3D scene of ``pkmdyn hip control``."""
+(the paper's Fig. 7) and the 3D scene of ``pkmdyn hip control``.
+
+The dynamics are the generic engine's (:class:`pkmdyn.multibody.machine.MechanismVerbs`) on the
+hip's description (:func:`.description.hip_description`), under the paper's names: coordinates
+``alpha_rad, beta_rad, gamma_rad`` (the description's ``euler1_rad .. euler3_rad``, the upper
+platform's Euler angles in the parameter file's sequence), efforts ``tau1_Nm .. tau3_Nm`` (the
+motors ``motor_1 .. motor_3``), load the hydraulic force [N] (the named load ``hydraulic_N``). A
+model is a :class:`HipControlModel`: the parameters (for the motion and the report) and their
+compiled description. The 3D scene is the engine's drawing of the description (each body
+through its joint centres, the actuated sliders as chains coloured by their motor's torque).
+"""
 
 from __future__ import annotations
 
 import copy
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -25,12 +36,32 @@ EFFORT_QUANTITY = "torque"
 EFFORTS_TITLE = "motor torques"
 #: clinical names of the Euler angles (FE, AA, IER)
 COORDINATE_NAMES = {"alpha": "alpha (FE)", "beta": "beta (AA)", "gamma": "gamma (IER)"}
+#: the paper's task coordinates and motor torques, in the description's order
+COORDINATES = ("alpha_rad", "beta_rad", "gamma_rad")
+ACTUATORS = ("tau1_Nm", "tau2_Nm", "tau3_Nm")
 
 
-def verbs(model: Any) -> Any:
-    from . import minimal
+@dataclass(frozen=True)
+class HipControlModel:
+    """The hip's parameters (:class:`.params.HipModel`) and the compiled mechanism of their
+    description, the model the engine's verbs run on."""
 
-    return minimal
+    params: Any
+    mechanism: Any
+
+
+def control_model(params: Any) -> HipControlModel:
+    """The control model of the parameters ``params`` (their description compiled)."""
+    from ...multibody import load_mechanism
+    from .description import hip_description
+
+    return HipControlModel(params, load_mechanism(hip_description(params)))
+
+
+def verbs(model: HipControlModel) -> Any:
+    from ...multibody.machine import RenamedVerbs
+
+    return RenamedVerbs(model.mechanism, COORDINATES, ACTUATORS)
 
 
 def read_description(params: Path | None) -> tuple[dict[str, Any], str]:
@@ -45,13 +76,13 @@ def read_description(params: Path | None) -> tuple[dict[str, Any], str]:
 def model_from_dict(description: dict[str, Any], source: str) -> Any:
     from .params import model_from_dict as from_dict
 
-    return from_dict(copy.deepcopy(description), source)
+    return control_model(from_dict(copy.deepcopy(description), source))
 
 
 def load_params(path: Path) -> Any:
     from .params import load_params as load
 
-    return load(path)
+    return control_model(load(path))
 
 
 def builtin_motion(model: Any, cycles: float) -> BuiltinMotion:
@@ -59,7 +90,7 @@ def builtin_motion(model: Any, cycles: float) -> BuiltinMotion:
     from ...profiles.iso14242 import angle_wave, iso_load
     from .iso_fit import iso_cycle_preset
 
-    cyc = iso_cycle_preset(model.motion_model)
+    cyc = iso_cycle_preset(model.params.motion_model)
 
     def fn(t: np.ndarray) -> tuple:
         w = [angle_wave(t, cyc.period_s, x) for x in (cyc.fe, cyc.aa, cyc.ier)]
@@ -67,7 +98,7 @@ def builtin_motion(model: Any, cycles: float) -> BuiltinMotion:
                 np.stack([a[2] for a in w], -1), iso_load(t, cyc))
 
     duration = cycles * cyc.period_s
-    return BuiltinMotion(fn, duration, f"built-in ISO 14242-1 cycle model ({model.motion_model}), {cycles:g} cycle(s)",
+    return BuiltinMotion(fn, duration, f"built-in ISO 14242-1 cycle model ({model.params.motion_model}), {cycles:g} cycle(s)",
                          max(duration, cyc.period_s), cyc.period_s)
 
 
@@ -78,7 +109,7 @@ def read_motion(model: Any, path: Path) -> MotionTable:
 
     mo = read_motion_csv(path)
     if mo.load is not None:
-        lim = float(model.limits.max_load_N)
+        lim = float(model.params.limits.max_load_N)
         big = np.flatnonzero(np.abs(mo.load) > lim)
         if big.size:
             raise MotionError(f"{path}: row {big[0] + 1}, column 'load_N': {mo.load[big[0]]:g} N is above "
@@ -123,13 +154,21 @@ def report_plots(curve: Callable[[str, int, str], Any], t: np.ndarray, note: str
                      tuple(curve("err_deg", c, n) for c, n in enumerate(COORDINATE_NAMES.values())), note)]
 
 
-def scene(model: Any, t: np.ndarray, q: np.ndarray, u: np.ndarray) -> Any:
-    from .scene import hip_scene_from_angles
+def scene(model: HipControlModel, t: np.ndarray, q: np.ndarray, u: np.ndarray) -> Any:
+    """The engine's scene of the description along the plant's angles ``q``, each slider's
+    chain coloured by its motor's torque ``u``."""
+    from ...multibody.machine import motion_scene
 
-    return hip_scene_from_angles(model, t, q, u)
+    return motion_scene(model.mechanism, t, q, u, tuple(effort_label(a) for a in range(3)))
 
 
 def parameters_text(params: str | None) -> str:
-    from .report import parameters_text as text
+    """The parameter file's text (the built-in file when None), headed by where it came from."""
+    from .params import DEFAULT_PARAMS_TEXT
 
-    return text(params)
+    if params is None:
+        return "# built-in parameters (pkmdyn/machines/hip_simulator/default.toml)\n" + DEFAULT_PARAMS_TEXT
+    try:
+        return f"# {params}\n" + Path(params).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return f"# {params}\n# (the file could not be read again for the report)"
