@@ -1,23 +1,31 @@
-"""Shared fixtures for the hip-simulator tests: random models and smooth analytic motions."""
+"""Shared fixtures for the hip-simulator tests: random models, smooth analytic motions, and the
+hip through the generic engine (its description, :mod:`pkmdyn.multibody`) in the closed-form
+oracle's terms (``tests/oracles/hip.py``)."""
 
 from __future__ import annotations
 
 import copy
+from types import SimpleNamespace
 
 import numpy as np
 
 from pkmdyn.machines.hip_simulator.params import HipModel, default_params_dict, model_from_dict
 from pkmdyn.profiles.orientation import OrientationMotion, make_motion
 
+#: the regularisation velocities of the engine's friction laws [rad/s, m/s] (a model compared
+#: with the engine must carry the same in its parameter file)
+ENGINE_EPS = (1e-3, 1e-4)
+
 
 def random_model(
-    rng: np.random.Generator, spread: float = 0.15, friction: bool = False, inertia: dict | None = None, **geometry
+    rng: np.random.Generator, spread: float = 0.15, friction: bool = False, inertia: dict | None = None,
+    eps: tuple[float, float] = ENGINE_EPS, **geometry
 ) -> HipModel:
     """The paper's machine with every length, mass and inertia scaled by up to +-spread.
 
     Angles move by up to +-8 deg, which keeps each S joint well ahead of its module. With
-    ``friction`` every friction coefficient is non-zero; ``inertia`` and ``geometry`` override
-    keys of those tables.
+    ``friction`` every friction coefficient is non-zero, regularised by ``eps`` (rad/s, m/s; the
+    engine's by default); ``inertia`` and ``geometry`` override keys of those tables.
     """
     d = copy.deepcopy(default_params_dict())
 
@@ -36,8 +44,17 @@ def random_model(
     for key in ("slider_mass_kg", "lever_mass_kg", "screw_inertia_kgm2", "gravity_m_s2"):
         i[key] = jitter(i[key])
     i["platform_mass_kg"] = float(rng.uniform(0.5, 5.0))
-    i["lever_inertia_kgm2"] = [jitter(x) for x in i["lever_inertia_kgm2"]]
-    i["platform_inertia_kgm2"] = [jitter(x) for x in i["platform_inertia_kgm2"]]
+    # principal moments that a rigid body can have (I1 + I2 >= I3, as the engine requires): the
+    # slender lever's two large moments scaled together, each within 0.5 % of the other's scale
+    lever = i["lever_inertia_kgm2"]
+    while True:
+        s = jitter(1.0)
+        li = [lever[0] * s * (1 + 0.005 * rng.uniform(-1, 1)), lever[1] * s * (1 + 0.005 * rng.uniform(-1, 1)),
+              jitter(lever[2])]
+        pi = [jitter(x) for x in i["platform_inertia_kgm2"]]
+        if all(sum(sorted(v)[:2]) >= max(v) for v in (li, pi)):
+            break
+    i["lever_inertia_kgm2"], i["platform_inertia_kgm2"] = li, pi
     i.update(inertia or {})
     if friction:
         f = d["friction"]
@@ -52,8 +69,8 @@ def random_model(
             spherical_viscous_Nms_rad=rng.uniform(0.001, 0.05),
             universal_coulomb_Nm=rng.uniform(0.01, 0.5),
             universal_viscous_Nms_rad=rng.uniform(0.001, 0.05),
-            friction_velocity_eps_rad_s=0.05,
-            friction_velocity_eps_m_s=0.01,
+            friction_velocity_eps_rad_s=eps[0],
+            friction_velocity_eps_m_s=eps[1],
         )
     return model_from_dict(d, "random model")
 
@@ -82,3 +99,66 @@ class SmoothMotion:
     def motion(self, t: np.ndarray) -> OrientationMotion:
         q, qd, qdd = self.angles(t)
         return make_motion(t, q, qd, qdd, self.load(t))
+
+
+# --------------------------------------------------------------------------- the engine's hip
+
+
+_ENGINES: dict[int, tuple[HipModel, object]] = {}
+
+
+def engine(model: HipModel):
+    """The model's description (:func:`~pkmdyn.machines.hip_simulator.description.hip_description`)
+    loaded by the generic engine (cached per model object)."""
+    from pkmdyn.machines.hip_simulator.description import hip_description
+    from pkmdyn.multibody import load_mechanism
+
+    hit = _ENGINES.get(id(model))
+    if hit is None or hit[0] is not model:
+        hit = (model, load_mechanism(hip_description(model)))
+        _ENGINES[id(model)] = hit
+    return hit[1]
+
+
+def sliders(m) -> list[int]:
+    """The actuators ``P_1 .. P_3`` (the modules' sliders) in the engine's actuator order."""
+    return [m.actuator_names.index(f"P_{i + 1}") for i in range(3)]
+
+
+def engine_kinematics(model: HipModel, q, qd=None, qdd=None, t=None):
+    """``(m, kin)``: the engine's kinematics along the upper platform's Euler angles (its task)."""
+    from pkmdyn.multibody import solve_kinematics
+
+    m = engine(model)
+    return m, solve_kinematics(m, np.atleast_2d(q), None if qd is None else np.atleast_2d(qd),
+                               None if qdd is None else np.atleast_2d(qdd), t)
+
+
+def engine_torques(model: HipModel, q, qd, qdd, load, t=None, friction: bool = True):
+    """The engine's motor torques and their parts along a motion, with the oracle's names
+    (``tau, platform, lever, slider, screw, friction, hip_friction, power``, ``(n, 3)`` per
+    module i, ``power (n,)``), from the joint reactions with the effort split
+    (:func:`pkmdyn.multibody.dynamics.joint_reactions`) and the drives' motor efforts
+    (:func:`pkmdyn.multibody.actuators.motor_efforts`); ``kin`` and the reactions ``r`` too."""
+    from pkmdyn.multibody.actuators import motor_efforts
+    from pkmdyn.multibody.dynamics import joint_reactions
+
+    m, kin = engine_kinematics(model, q, qd, qdd, t)
+    r = joint_reactions(m, kin, named={"hydraulic_N": np.asarray(load, dtype=float)}, split=True, friction=friction)
+    sl = sliders(m)
+    k = m.drive_ratio[sl]
+    mot = motor_efforts(m, kin.act_q, kin.act_qd, kin.act_qdd, r.u)
+    groups = {name: r.shares.groups[:, sl, m.group_names.index(name)] / k for name in ("platform", "lever", "slider")}
+    hip_joints = [m.joint_names.index(f"S0_{p}") for p in ("upper", "lower")]
+    tau = mot.effort[:, sl]
+    return SimpleNamespace(
+        tau=tau, **groups, screw=mot.rotor[:, sl],
+        friction=r.shares.friction[:, sl].sum(axis=2) / k + mot.friction[:, sl],
+        hip_friction=r.shares.friction[:, sl][:, :, hip_joints].sum(axis=2) / k,
+        power=np.sum(tau * mot.theta_dot[:, sl], axis=1), kin=kin, r=r, m=m)
+
+
+def rel(a, b) -> float:
+    """The largest difference relative to the largest value of ``b``."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return float(np.abs(a - b).max() / max(float(np.abs(b).max()), 1e-300))
