@@ -162,3 +162,40 @@ def rel(a, b) -> float:
     """The largest difference relative to the largest value of ``b``."""
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     return float(np.abs(a - b).max() / max(float(np.abs(b).max()), 1e-300))
+
+
+def kinematics_against_oracle(model, q, qd, qdd, t=None, tol: float = 1e-9) -> float:
+    """Every body's motion by the engine against the closed-form oracle (``tests/oracles/hip.py``)
+    along Euler angles ``q`` and rates: sliders, platforms, levers (centre, velocity, acceleration,
+    angular motion, frame), the S and U joint centres and ``J_ax = J E``, each to ``tol`` of its
+    largest value; returns the largest relative difference."""
+    from oracles import hip
+
+    PLATFORMS = ("upper", "lower")
+    m, kin = engine_kinematics(model, q, qd, qdd, t)
+    ref = hip.kinematics(model, q, qd, qdd)
+    zero = hip.kinematics(model, np.zeros((1, 3)))
+    sl = sliders(m)
+    worst = [rel(kin.act_q[:, sl], ref.L[:, 1]), rel(kin.act_qd[:, sl], ref.Ld[:, 1]),
+             rel(kin.act_qdd[:, sl], ref.Ldd[:, 1])]
+    for name in PLATFORMS:
+        b = m.body_names.index(name)
+        worst += [rel(kin.R[:, b], ref.R), rel(kin.w[:, b], ref.omega), rel(kin.wd[:, b], ref.omega_dot)]
+    for j, name in enumerate(PLATFORMS):
+        for i in range(3):
+            b = m.body_names.index(f"lever_{name}_{i + 1}")
+            worst += [rel(kin.p[:, b], ref.c_lever[:, j, i]), rel(kin.v[:, b], ref.v_lever[:, i]),
+                      rel(kin.a[:, b], ref.a_lever[:, i]), rel(kin.w[:, b], ref.omega_lever[:, i]),
+                      rel(kin.wd[:, b], ref.omega_lever_dot[:, i]),
+                      # the lever frame turns with the body (the body's frame is the base frame at the zero pose)
+                      rel(kin.R[:, b] @ zero.R_lever[0, i], ref.R_lever[:, i]),
+                      # the S joint at the platform point, the U joint at the slider
+                      rel(kin.joint_point[:, m.joint_names.index(f"S_{name}_{i + 1}")], model.geometry.o[j] + ref.r[:, i]),
+                      rel(kin.joint_point[:, m.joint_names.index(f"U_{name}_{i + 1}")],
+                          model.geometry.o[j] + ref.r[:, i] - ref.d[:, i])]
+    # J_ax = dL/dq = J E (Eq. 3 and the Euler-rate map)
+    E = hip.rate_map(model, q)
+    worst.append(rel(kin.J_ax[:, sl], ref.J @ E))
+    np.testing.assert_allclose(np.linalg.det(kin.J_ax[:, sl]), ref.det_Jb / ref.det_Ja * np.linalg.det(E), rtol=1e-9)
+    assert max(worst) < tol, max(worst)
+    return max(worst)

@@ -1,140 +1,130 @@
-"""Inverse dynamics of the hip simulator: power balance, decomposition, friction, bad input."""
-
-import dataclasses
+"""Inverse dynamics of the hip simulator through the generic engine (its description, the joint
+reactions with the effort split and the lead screws' motor efforts): against the closed form of
+Eq. 7-16 (``tests/oracles/hip.py``) part by part, the power balance, a static pose by hand, the
+hip-joint friction's load, and bad input."""
 
 import numpy as np
 import pytest
 
-from hip_helpers import SmoothMotion, random_model
-from pkmdyn.errors import MotionError
-from pkmdyn.machines.hip_simulator.dynamics import inverse_dynamics
-from pkmdyn.machines.hip_simulator.kinematics import inverse_kinematics
+from hip_helpers import SmoothMotion, engine, engine_torques, random_model, rel
+from oracles import hip
+from pkmdyn.errors import MotionError, ParameterError
 from pkmdyn.machines.hip_simulator.params import load_params
+from pkmdyn.multibody.machine import machine_verbs
 from pkmdyn.profiles.orientation import make_motion
-from pkmdyn.spatial import dot
+
+PARTS = ("tau", *hip.PARTS, "hip_friction", "power")
+TOL = 1e-9
 
 
-def _energy(model, kin):
-    """Kinetic and potential energy of every body [J], from positions and velocities only."""
-    g, m = model.geometry, model.inertia
-    n_pl = g.h.shape[0]
-
-    def rot_energy(R, I, w):
-        wb = np.einsum("...ji,...j->...i", R, w)
-        return 0.5 * np.sum(I * wb * wb, axis=-1)
-
-    T = n_pl * rot_energy(kin.R, m.I_m, kin.omega)
-    T = T + n_pl * np.sum(0.5 * m.m_l * dot(kin.v_lever, kin.v_lever) + rot_energy(kin.R_lever, m.I_l, kin.omega_lever), axis=1)
-    T = T + np.sum(0.5 * m.m_L * kin.Ld**2, axis=(1, 2))
-    T = T + np.sum(0.5 * m.I_L * (2 * np.pi * kin.Ld[:, 1] / g.p) ** 2, axis=1)
-    V = m.g * (m.m_l * kin.c_lever[..., 2].sum(axis=(1, 2)) + m.m_L * kin.L.sum(axis=(1, 2)))
-    return T + V
+def _both(model, sm, t):
+    q, qd, qdd = sm.angles(t)
+    return engine_torques(model, q, qd, qdd, sm.load(t), t), hip.inverse_dynamics(model, hip.kinematics(model, q, qd, qdd), sm.load(t))
 
 
-def _dissipation(model, kin, load):
-    """Power [W] dissipated by every friction term, from the friction laws and velocities."""
-    f, m, g = model.friction, model.inertia, model.geometry
-    n_pl = g.h.shape[0]
-
-    def u(w, eps):
-        return w / np.sqrt(np.sum(w * w, axis=-1, keepdims=True) + eps**2)
-
-    hip = (f.r_h * f.mu_h * load + f.r_t * f.mu_t * (load + m.m_m * m.g))[:, None] * u(kin.omega, f.eps_w)
-    P = n_pl * dot(kin.omega, hip)
-    w_s = kin.omega_lever - kin.omega[:, None]
-    P = P + n_pl * np.sum(dot(w_s, f.spherical_coulomb * u(w_s, f.eps_w) + f.spherical_viscous * w_s), axis=1)
-    w_u = kin.omega_lever
-    P = P + n_pl * np.sum(dot(w_u, f.universal_coulomb * u(w_u, f.eps_w) + f.universal_viscous * w_u), axis=1)
-    v = kin.Ld
-    P = P + np.sum(v * (f.slider_coulomb * v / np.sqrt(v * v + f.eps_v**2) + f.slider_viscous * v), axis=(1, 2))
-    th = 2 * np.pi * kin.Ld[:, 1] / g.p
-    P = P + np.sum(th * (f.screw_coulomb * th / np.sqrt(th * th + f.eps_w**2) + f.screw_viscous * th), axis=1)
-    return P
+@pytest.mark.parametrize("seed", range(4))
+def test_every_part_against_the_closed_form(seed):
+    """Motor torques and every part of Eq. 14 plus friction, with every friction family on
+    (seeds 0, 2) or the hip joints' Eq. 16 alone (1, 3), to 1e-9 of each part's largest value."""
+    rng = np.random.default_rng(300 + seed)
+    model = random_model(rng, friction=seed % 2 == 0, euler_sequence=["XYZ", "zxy", "ZYX", "xyz"][seed])
+    sm = SmoothMotion(rng)
+    t = np.linspace(0.0, 2.0, 50)
+    eng, ref = _both(model, sm, t)
+    for part in PARTS:
+        assert rel(getattr(eng, part), getattr(ref, part)) < TOL, part
+    assert np.abs(ref.friction).max() > 1e-3 * np.abs(ref.tau).max()  # friction counts
+    assert eng.r.residual.max() < 1e-9 * np.abs(eng.r.joint_force).max()
 
 
-def _power_residual(model, sm, t, torques=None):
+def _power_residual(model, sm, t, tau):
+    """Motor power minus the rate of the machine's energy (central differences of the oracle's
+    body-by-body energy) minus the power every friction law dissipates."""
     h = 1e-5
-    kin = inverse_kinematics(model, sm.motion(t))
-    tq = inverse_dynamics(model, kin, sm.load(t)) if torques is None else torques
-    dE = (_energy(model, inverse_kinematics(model, sm.motion(t + h))) - _energy(model, inverse_kinematics(model, sm.motion(t - h)))) / (2 * h)
-    theta_dot = 2 * np.pi * kin.Ld[:, 1] / model.geometry.p
-    motor_power = np.sum(tq.tau * theta_dot, axis=1)
-    residual = motor_power - dE - _dissipation(model, kin, sm.load(t))
-    return residual, np.abs(motor_power).max(), kin, tq
+    E = [sum(hip.energies(model, hip.kinematics(model, *sm.angles(t + s * h)))) for s in (-1, 1)]
+    k = hip.kinematics(model, *sm.angles(t))
+    power = np.sum(tau * k.theta_dot, axis=1)
+    return power - (E[1] - E[0]) / (2 * h) - hip.dissipation(model, k, sm.load(t)), np.abs(power).max()
 
 
-@pytest.mark.parametrize("seed", range(8))
+@pytest.mark.parametrize("seed", range(4))
 def test_power_balance(seed):
     """sum tau_i theta_dot_i = d(T + V)/dt + dissipated power, on random machines and motions."""
-    rng = np.random.default_rng(300 + seed)
+    rng = np.random.default_rng(400 + seed)
     model = random_model(rng, friction=seed % 2 == 0)
     sm = SmoothMotion(rng)
-    t = np.linspace(0.0, 2.0, 60)
-    residual, scale, _, tq = _power_residual(model, sm, t)
-    assert np.abs(residual).max() <= 1e-6 * scale
-    np.testing.assert_allclose(tq.power, np.sum(tq.tau * 2 * np.pi * inverse_kinematics(model, sm.motion(t)).Ld[:, 1] / model.geometry.p, axis=1))
+    t = np.linspace(0.0, 2.0, 40)
+    eng, _ = _both(model, sm, t)
+    res, scale = _power_residual(model, sm, t, eng.tau)
+    assert np.abs(res).max() <= 1e-6 * scale
+    np.testing.assert_allclose(eng.power, np.sum(eng.tau * hip.kinematics(model, *sm.angles(t)).theta_dot, axis=1),
+                               rtol=1e-12, atol=1e-12 * np.abs(eng.power).max())
 
 
-@pytest.mark.parametrize("part", ["platform", "lever", "slider", "screw", "friction"])
-def test_power_balance_detects_a_dropped_term(part):
-    """The balance is sharp enough to notice any one part of the torque missing."""
+@pytest.mark.parametrize("part", hip.PARTS)
+def test_power_balance_detects_a_dropped_part(part):
+    """The balance is sharp enough to notice any one part of the engine's torque missing, and
+    the parts add up to the torque."""
     rng = np.random.default_rng(42)
     model = random_model(rng, friction=True)
     sm = SmoothMotion(rng)
-    t = np.linspace(0.0, 2.0, 60)
-    _, _, kin, tq = _power_residual(model, sm, t)
-    broken = dataclasses.replace(tq, tau=tq.tau - getattr(tq, part))
-    residual, scale, _, _ = _power_residual(model, sm, t, broken)
-    assert np.abs(residual).max() > 1e-3 * scale
+    t = np.linspace(0.0, 2.0, 40)
+    eng, _ = _both(model, sm, t)
+    assert rel(sum(getattr(eng, p) for p in hip.PARTS), eng.tau) < 1e-12
+    res, scale = _power_residual(model, sm, t, eng.tau - getattr(eng, part))
+    assert np.abs(res).max() > 1e-3 * scale
 
 
 def test_static_pose_needs_only_gravity_and_friction_is_finite_at_rest():
     model = load_params()
     n = 3
     z = np.zeros((n, 3))
-    motion = make_motion(np.arange(n, dtype=float), np.deg2rad([[5, -3, 2]] * n), z, z, [0.0, 1000.0, 3000.0])
-    tq = inverse_dynamics(model, inverse_kinematics(model, motion), motion.load)
-    assert np.all(np.isfinite(tq.tau))
-    np.testing.assert_allclose(tq.friction, 0.0, atol=1e-15)
-    np.testing.assert_allclose(tq.platform, 0.0, atol=1e-15)
-    np.testing.assert_allclose(tq.screw, 0.0, atol=1e-15)
+    q = np.deg2rad([[5, -3, 2]] * n)
+    eng = engine_torques(model, q, z, z, np.array([0.0, 1000.0, 3000.0]))
+    assert np.all(np.isfinite(eng.tau))
+    np.testing.assert_allclose(eng.friction, 0.0, atol=1e-15)
+    np.testing.assert_allclose(eng.platform, 0.0, atol=1e-13)
+    np.testing.assert_allclose(eng.screw, 0.0, atol=1e-15)
     # the sliders' weight: p / 2 pi * 2 m_L g on each motor
     g, m = model.geometry, model.inertia
-    np.testing.assert_allclose(tq.slider, g.p / (2 * np.pi) * 2 * m.m_L * m.g, rtol=1e-12)
+    np.testing.assert_allclose(eng.slider, g.p / (2 * np.pi) * 2 * m.m_L * m.g, rtol=1e-12)
     # levers carry weight too, and loading the platforms changes nothing at rest
-    assert np.all(np.abs(tq.lever) > 0)
-    np.testing.assert_allclose(tq.tau[0], tq.tau[2], rtol=1e-12)
+    assert np.all(np.abs(eng.lever) > 0)
+    np.testing.assert_allclose(eng.tau[0], eng.tau[2], rtol=1e-12)
 
 
 def test_hip_friction_grows_with_load_and_opposes_motion():
+    """Eq. 16 through the load-driven friction of S0: it dissipates, grows with the load and is
+    proportional to r_h mu_h F + r_t mu_t (F + m_m g) (the default platform mass is zero)."""
     model = load_params()
-    rng = np.random.default_rng(9)
-    sm = SmoothMotion(rng)
+    sm = SmoothMotion(np.random.default_rng(9))
     t = np.linspace(0, 1, 40)
-    kin = inverse_kinematics(model, sm.motion(t))
-    low = inverse_dynamics(model, kin, np.full(t.shape, 300.0))
-    high = inverse_dynamics(model, kin, np.full(t.shape, 3000.0))
-    theta_dot = kin.Ld[:, 1]
+    q, qd, qdd = sm.angles(t)
+    low = engine_torques(model, q, qd, qdd, np.full(t.shape, 300.0))
+    high = engine_torques(model, q, qd, qdd, np.full(t.shape, 3000.0))
+    theta_dot = low.kin.act_qd[:, :3]
     p_low = np.sum(low.hip_friction * theta_dot, axis=1)
     p_high = np.sum(high.hip_friction * theta_dot, axis=1)
-    assert np.all(p_low >= 0) and np.all(p_high >= p_low)
-    f = model.friction
-    ratio = (f.r_h * f.mu_h * 3000 + f.r_t * f.mu_t * 3000) / (f.r_h * f.mu_h * 300 + f.r_t * f.mu_t * 300)
-    np.testing.assert_allclose(high.hip_friction, ratio * low.hip_friction, rtol=1e-12)
+    assert np.all(p_low >= 0) and np.all(p_high >= p_low) and p_low.max() > 0
+    np.testing.assert_allclose(high.hip_friction, 10.0 * low.hip_friction, rtol=1e-9, atol=1e-12)
+    # without the load there is no hip friction at all (m_m = 0)
+    none = engine_torques(model, q, qd, qdd, np.zeros(t.shape))
+    np.testing.assert_allclose(none.hip_friction, 0.0, atol=1e-15)
 
 
-@pytest.mark.parametrize("bad, word", [(-1.0, "negative"), (np.nan, "not finite"), (np.inf, "not finite")])
-def test_bad_load_names_the_row(bad, word):
+def test_bad_load_names_the_sample_and_the_motion_row():
     model = load_params()
+    m = engine(model)
     t = np.linspace(0, 1, 5)
     z = np.zeros((5, 3))
     load = np.full(5, 500.0)
-    load[3] = bad
-    kin = inverse_kinematics(model, make_motion(t, z, z, z))
-    with pytest.raises(MotionError, match=rf"row 4 .*{word}"):
-        inverse_dynamics(model, kin, load)
-    with pytest.raises(MotionError, match=r"row 4"):
-        make_motion(t, z, z, z, load)
+    load[3] = np.nan
+    with pytest.raises(ParameterError, match=r"load 'hydraulic_N': sample 3 is not finite"):
+        machine_verbs(m).inverse_dynamics(m, z, z, z, load)
+    for bad, word in ((-1.0, "negative"), (np.nan, "not finite"), (np.inf, "not finite")):
+        load[3] = bad
+        with pytest.raises(MotionError, match=rf"row 4 .*{word}"):
+            make_motion(t, z, z, z, load)
 
 
 def test_nan_in_motion_names_the_row():
@@ -143,25 +133,3 @@ def test_nan_in_motion_names_the_row():
     q[2, 1] = np.nan
     with pytest.raises(MotionError, match=r"row 3 .*angles"):
         make_motion(t, q, np.zeros((5, 3)), np.zeros((5, 3)))
-
-
-def test_perpendicular_lever_option_is_close_to_the_u_joint_model():
-    """The paper's Eq. 4 assumption drops only the small lever spin (regression: any batch size)."""
-    import copy
-
-    from pkmdyn.machines.hip_simulator.params import default_params_dict, model_from_dict
-    from pkmdyn.profiles.iso14242 import iso14242_motion
-
-    d = copy.deepcopy(default_params_dict())
-    d["geometry"]["lever_spin"] = "perpendicular"
-    perp, ujoint = model_from_dict(d), load_params()
-    motion = iso14242_motion(1, 250)
-    k_p, k_u = inverse_kinematics(perp, motion), inverse_kinematics(ujoint, motion)
-    tq_p = inverse_dynamics(perp, k_p, motion.load)
-    tq_u = inverse_dynamics(ujoint, k_u, motion.load)
-    assert np.all(np.isfinite(tq_p.tau))
-    np.testing.assert_allclose(k_p.spin, 0.0)
-    assert np.abs(k_u.spin).max() > 1e-3
-    diff = np.abs(tq_p.lever - tq_u.lever).max()
-    assert 0 < diff < 1e-2 * np.abs(tq_u.lever).max()
-    np.testing.assert_array_equal(tq_p.platform, tq_u.platform)
