@@ -5,8 +5,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pkmdyn.machines.hip_simulator import sweep as _hip
+from pkmdyn.machines.registry import sweep_adapter
 
+_hip = sweep_adapter("hip")
 NAME = "hip"
 base_description = _hip.base_description
 check_description = _hip.check_description

@@ -10,8 +10,11 @@ Two kinds of folder make a built-in machine, and nothing else has to change to a
   ``default_params_text()``, ``description()`` (its built-in parameters as a mechanism
   description), ``default_motion()`` (a :class:`pkmdyn.multibody.TaskMotion`) and
   ``view_page(params, out, listing)`` (its ``pkmdyn view`` page). A module
-  ``sweep.py`` beside it makes the machine sweepable (:mod:`pkmdyn.sweep_protocol`), a module
-  ``control_job.py`` gives it a control job (:mod:`pkmdyn.control_protocol`).
+  ``described_sweep.py`` beside it (the hooks of :class:`pkmdyn.multibody.sweep.GeneratedSweep`:
+  its parameter file's schema, the description generated from a parameter file, its motion
+  and metrics) makes the machine sweepable on the engine, or a module ``sweep.py`` with a
+  sweep of its own (:mod:`pkmdyn.sweep_protocol`); a module ``control_job.py`` gives it a
+  control job (:mod:`pkmdyn.control_protocol`).
 
 Every command that takes ``--machine`` resolves it here; an unknown name is refused, never
 routed to another machine's code.
@@ -31,6 +34,9 @@ __all__ = ["described_machines", "hand_built_machines", "hand_built", "builtin_n
            "resolve", "title", "sweep_adapter", "control_adapter"]
 
 _HERE = Path(__file__).resolve().parent
+#: the module of a hand-built machine's folder that generates its mechanism description from its
+#: parameter file, for sweeps on the engine (:class:`pkmdyn.multibody.sweep.GeneratedSweep`)
+GENERATOR = "described_sweep"
 
 
 def described_machines() -> dict[str, Path]:
@@ -100,8 +106,11 @@ def resolve(machine: str) -> tuple[ModuleType | None, Path | None]:
 
 def sweep_adapter(name: str) -> Any:
     """The sweep adapter (:class:`pkmdyn.sweep_protocol.SweepAdapter`) of ``name``: a hand-built
-    machine's ``sweep.py`` module, or for a described machine (a built-in name or a description
-    ``FILE.toml``) the generic adapter of its description (:mod:`pkmdyn.multibody.sweep`)."""
+    machine's own ``sweep.py`` module; for a hand-built machine whose folder holds a description
+    generator (``described_sweep.py``: its parameter file turned into a mechanism description)
+    the generic adapter of generated descriptions (:class:`pkmdyn.multibody.sweep.GeneratedSweep`);
+    for a described machine (a built-in name or a description ``FILE.toml``) the generic adapter
+    of its description (:class:`pkmdyn.multibody.sweep.DescribedSweep`)."""
     machines = hand_built_machines()
     shown = name if len(name) <= 60 else name[:60] + "..."
     if name not in machines:
@@ -110,13 +119,14 @@ def sweep_adapter(name: str) -> Any:
         entry, path = resolve(name)
         assert entry is None and path is not None
         return DescribedSweep.from_file(path)
-    if not _has_sweep(machines[name]):
-        raise ParameterError(f"--machine {shown!r}: this machine has no sweep adapter")
-    return importlib.import_module(f"{machines[name].__package__}.sweep")
+    folder = Path(machines[name].__file__).parent
+    if (folder / "sweep.py").is_file():
+        return importlib.import_module(f"{machines[name].__package__}.sweep")
+    if (folder / f"{GENERATOR}.py").is_file():
+        from ..multibody.sweep import GeneratedSweep
 
-
-def _has_sweep(entry: ModuleType) -> bool:
-    return (Path(entry.__file__).parent / "sweep.py").is_file()
+        return GeneratedSweep.from_module(f"{machines[name].__package__}.{GENERATOR}")
+    raise ParameterError(f"--machine {shown!r}: this machine has no sweep adapter")
 
 
 def control_adapter(name: str) -> ModuleType:

@@ -32,7 +32,8 @@ from ..errors import ParameterError, PkmdynError, SingularityError, UnreachableP
 from ..params_util import Section, read_toml, validate
 from ..sweep_protocol import DesignOutcome, MetricInfo, time_integral, time_mean
 
-__all__ = ["DescribedSweep", "DescribedSweepContext"]
+__all__ = ["DescribedSweep", "DescribedSweepContext", "DesignState", "evaluate_model", "GeneratedMotion",
+           "GeneratedSweep", "GeneratedSweepContext"]
 
 Array = NDArray[np.float64]
 
@@ -89,6 +90,9 @@ class DescribedSweepContext:
     #: made once in :meth:`DescribedSweep.prepare` and sent with the context to every worker: a
     #: design of the same structure compiles only its numbers (None: every design in full)
     template: Any = None
+    #: the conditioning index ``gci`` (the time mean of a singularity measure at every sample);
+    #: false: a machine that computes a conditioning index of its own (:class:`GeneratedSweep`)
+    gci: bool = True
 
 
 def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[str], bool, bool, bool]:
@@ -410,8 +414,6 @@ def design_model(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
 def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> DesignOutcome:
     """One design: model (:func:`design_model`) -> motion -> kinematics and singularity measures
     -> efforts (and every joint reaction with the friction) -> metrics."""
-    from .dynamics import effort_unit, inverse_dynamics, joint_reactions
-    from .kinematics import least_measures, singularity_measures, solve_kinematics
     from .motion import default_motion
 
     try:
@@ -419,14 +421,42 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
         motion = ctx.motion if ctx.motion is not None else default_motion(model)
     except PkmdynError as exc:
         return DesignOutcome("invalid", str(exc))
+    return evaluate_model(model, motion, ctx)[0]
+
+
+@dataclass(frozen=True)
+class DesignState:
+    """What :func:`evaluate_model` computed for one design, for metrics of a machine's own
+    (:class:`GeneratedSweep`): the compiled ``model``, the ``motion`` it performed, its
+    kinematics ``kin`` (None: not solved), the actuated joints' efforts ``u (n, na)`` and the
+    joint reactions ``reactions`` (:class:`pkmdyn.multibody.dynamics.JointReactions`; None
+    where not computed)."""
+
+    model: Any
+    motion: Any
+    kin: Any = None
+    u: Array | None = None
+    reactions: Any = None
+
+
+def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple[DesignOutcome, DesignState]:
+    """The evaluation of one compiled design along ``motion``: kinematics (``unreachable``,
+    ``singular``), the plausibility limits (``limit``), the singularity measures (``singular``
+    below ``ctx.threshold``), the efforts with every joint reaction and the friction, the
+    metrics; with what was computed on the way (:class:`DesignState`)."""
+    from .dynamics import effort_unit, inverse_dynamics, joint_reactions
+    from .kinematics import least_measures, singularity_measures, solve_kinematics
+
+    state = DesignState(model, motion)
     try:
         kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
     except UnreachablePoseError as exc:
-        return DesignOutcome("unreachable", str(exc))
+        return DesignOutcome("unreachable", str(exc)), state
     except SingularityError as exc:
-        return DesignOutcome("singular", str(exc))
+        return DesignOutcome("singular", str(exc)), state
     except PkmdynError as exc:
-        return DesignOutcome("invalid", str(exc))
+        return DesignOutcome("invalid", str(exc)), state
+    state = DesignState(model, motion, kin)
     from ..errors import LimitError
     from .actuators import check_actuator_rates, check_task_rates, effective_limits
 
@@ -435,19 +465,19 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
         check_task_rates(model, kin.t, motion.xd, motion.xdd, lim)
         check_actuator_rates(model, kin.t, kin.act_qd, kin.act_qdd, lim)
     except LimitError as exc:
-        return DesignOutcome("limit", str(exc))
+        return DesignOutcome("limit", str(exc)), state
     t = motion.t
     direct = model.na == model.nt
-    # the conditioning index's measure at every sample, the least of each from proven brackets
-    # (the decompositions only where a sample can hold the least: the same values to the bit)
-    mu = getattr(singularity_measures(model, kin.q, only="direct" if direct else "inverse"),
-                 "direct" if direct else "inverse")
     least = least_measures(model, kin.q)
-    m: dict[str, float] = {
-        "gci": _mean(mu, t),
-        "min_inverse_measure": least["inverse"],
-        "min_constraint_measure": least["constraint"],
-    }
+    m: dict[str, float] = {}
+    if ctx.gci:
+        # the conditioning index's measure at every sample, the least of each from proven brackets
+        # (the decompositions only where a sample can hold the least: the same values to the bit)
+        mu = getattr(singularity_measures(model, kin.q, only="direct" if direct else "inverse"),
+                     "direct" if direct else "inverse")
+        m["gci"] = _mean(mu, t)
+    m["min_inverse_measure"] = least["inverse"]
+    m["min_constraint_measure"] = least["constraint"]
     if direct:
         m["min_direct_measure"] = least["direct"]
     if not np.minimum(least["inverse"], least["direct"] if direct else np.inf) >= ctx.threshold:  # (NaN: singular)
@@ -455,7 +485,7 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
         worst = np.minimum(sm.inverse, sm.direct) if direct else sm.inverse
         k = int(np.argmin(worst))
         return DesignOutcome("singular", f"t = {t[k]:.6g} s (sample {k + 1}): the singularity measure "
-                                         f"{worst[k]:.3g} is below the threshold {ctx.threshold:g}", m)
+                                         f"{worst[k]:.3g} is below the threshold {ctx.threshold:g}", m), state
     try:
         if ctx.reactions:
             reac = joint_reactions(model, kin, named=motion.loads)
@@ -463,9 +493,10 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
         else:
             u = inverse_dynamics(model, kin, named=motion.loads).u
     except SingularityError as exc:
-        return DesignOutcome("singular", str(exc), m)
+        return DesignOutcome("singular", str(exc), m), state
     except PkmdynError as exc:  # friction that locks the mechanism, a load it cannot carry
-        return DesignOutcome("limit", str(exc), m)
+        return DesignOutcome("limit", str(exc), m), state
+    state = DesignState(model, motion, kin, u, reac if ctx.reactions else None)
     sd = kin.act_qd
     power = u * sd
     units = [effort_unit(model, i) for i in range(model.na)]
@@ -485,9 +516,9 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
         try:
             st = stiffness(model, kin)
         except SingularityError as exc:
-            return DesignOutcome("singular", str(exc), m)
+            return DesignOutcome("singular", str(exc), m), state
         except PkmdynError as exc:
-            return DesignOutcome("invalid", str(exc), m)
+            return DesignOutcome("invalid", str(exc), m), state
         values = {"min_stiffness_N_m": st.min_stiffness.min(), "min_rot_stiffness_Nm_rad": st.min_rot_stiffness.min(),
                   "lowest_frequency_Hz": st.frequencies[:, 0].min()}
         m.update({k: float(values[k]) for k in wanted})
@@ -498,13 +529,13 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
                 grids[key] = _on_grid(model, spec, ctx.threshold, key == "workspace" and ctx.workspace_measure,
                                       ctx.workspace_refine if key == "workspace" else 0)
             except PkmdynError as exc:
-                return DesignOutcome("invalid", str(exc), m)
+                return DesignOutcome("invalid", str(exc), m), state
     if "workspace" in grids:
         ws = grids["workspace"]
         m[_workspace_size_name(model, ctx.workspace[0])[0]] = ws.size  # type: ignore[index]
         m["workspace_inside_share"] = float(ws.inside.mean())
         if not ws.inside.any():
-            return DesignOutcome("unreachable", "no pose of [motion] workspace_grid is inside the workspace", m)
+            return DesignOutcome("unreachable", "no pose of [motion] workspace_grid is inside the workspace", m), state
         if ctx.workspace_measure:
             m["workspace_min_measure"] = float(ws.least_measure)
     if "required" in grids:
@@ -519,4 +550,129 @@ def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
         for j, name in enumerate(model.joint_names):
             m[f"peak_force_{name}_N"] = float(force[j])
             m[f"peak_moment_{name}_Nm"] = float(moment[j])
-    return DesignOutcome("ok", "", m)
+    return DesignOutcome("ok", "", m), state
+
+
+# ----------------------------------------------------------------------------- generated descriptions
+@dataclass(frozen=True)
+class GeneratedMotion:
+    """What a machine's description generator says of the motion (its ``motion`` hook): the
+    task motion every design performs (``motion``, a :class:`pkmdyn.multibody.TaskMotion` in
+    the generated description's task order, its named loads included), the threshold on the
+    engine's singularity measures (``threshold``; 0: only a singular sample) and the machine's
+    own design-independent data (``data``, handed back to its ``design_metrics``; picklable)."""
+
+    motion: Any
+    threshold: float = 0.0
+    data: Any = None
+
+
+@dataclass(frozen=True)
+class GeneratedSweepContext:
+    """The engine's context (:class:`DescribedSweepContext`: the motion, the compiled structure
+    of the base design's description) and the machine's own data."""
+
+    engine: DescribedSweepContext
+    data: Any = None
+
+
+@dataclass(frozen=True, eq=False)
+class GeneratedSweep:
+    """The sweep adapter of a machine that generates its mechanism description from a parameter
+    file of its own: the designs vary that file's keys, and each design is evaluated by the
+    engine (:func:`evaluate_model`) on the description generated from it.
+
+    ``module``: the import name of the machine's generator module, which provides
+
+    - ``NAME``: the machine's name;
+    - ``default_params() -> dict``: the built-in parameter file;
+    - ``check_params(params, source)``: the parameter file's schema (its own validation; a
+      :class:`~pkmdyn.errors.PkmdynError` naming the key);
+    - ``description(params) -> dict``: the mechanism description of a parameter file (raises
+      the schema's error for an invalid one);
+    - ``motion(params, options, base_dir) -> GeneratedMotion``: the ``[motion]`` options
+      checked against the base parameters, the motion every design performs;
+    - ``metrics(options, engine) -> tuple[MetricInfo, ...]``: the machine's columns, given the
+      engine's (``engine``: those of the base design's description with every joint reaction);
+    - ``design_metrics(params, outcome, state, data) -> DesignOutcome``: one design's outcome
+      in the machine's terms, from the engine's ``outcome`` and what it computed (``state``,
+      :class:`DesignState`).
+
+    The adapter holds only the module's name, so it travels to every worker as it is."""
+
+    module: str
+    NAME: str = ""
+
+    @classmethod
+    def from_module(cls, module: str) -> GeneratedSweep:
+        import importlib
+
+        return cls(module, importlib.import_module(module).NAME)
+
+    @property
+    def hooks(self) -> Any:
+        import importlib
+
+        return importlib.import_module(self.module)
+
+    def base_description(self, params_path: Path | None) -> dict[str, Any]:
+        """The parameter file to vary (``None``: the machine's built-in one) as a dict."""
+        return self.hooks.default_params() if params_path is None else read_toml(params_path)
+
+    def check_description(self, description: Mapping[str, Any], source: str) -> None:
+        """The machine's own validation of a parameter file."""
+        self.hooks.check_params(dict(description), source)
+
+    def _engine_options(self) -> dict[str, Any]:
+        return {"reactions": True, "stiffness": False}
+
+    def metrics(self, options: Mapping[str, Any], description: Mapping[str, Any] | None = None
+                ) -> tuple[MetricInfo, ...]:
+        """The machine's metrics (its ``metrics`` hook, given the engine's metrics of the
+        description generated from ``description``, the base parameter file)."""
+        params = self.hooks.default_params() if description is None else dict(description)
+        try:
+            desc = self.hooks.description(params)
+        except PkmdynError:  # an invalid base is refused with its reason by prepare
+            desc = self.hooks.description(self.hooks.default_params())
+        engine = DescribedSweep(Path("."), desc, self.NAME).metrics(self._engine_options(), desc)
+        return tuple(self.hooks.metrics(options, tuple(m for m in engine if m.name != "gci")))
+
+    def prepare(self, description: Mapping[str, Any], options: Mapping[str, Any], base_dir: Path
+                ) -> GeneratedSweepContext:
+        """The machine's motion (``motion`` hook, its ``[motion]`` options checked), and the
+        structure of the base design's description compiled once."""
+        from .description import load_description
+        from .model import model_structure, structure_key
+
+        params = dict(description)
+        gm = self.hooks.motion(params, options, base_dir)
+        try:
+            desc = load_description(self.hooks.description(copy.deepcopy(params)))
+            template = model_structure(structure_key(desc))
+        except PkmdynError as exc:
+            raise ParameterError(f"base parameters: {exc}") from None
+        engine = DescribedSweepContext(motion=gm.motion, threshold=gm.threshold, reactions=True, template=template,
+                                       gci=False)
+        return GeneratedSweepContext(engine, gm.data)
+
+    def evaluate(self, descriptions: Sequence[Mapping[str, Any]], context: GeneratedSweepContext
+                 ) -> list[DesignOutcome]:
+        """Each design of a batch by itself: rows never depend on the batch."""
+        hooks = self.hooks
+        with np.errstate(all="ignore"):  # a non-finite metric becomes the status "nonfinite", not a warning
+            return [_evaluate_generated(hooks, dict(d), context) for d in descriptions]
+
+
+def _evaluate_generated(hooks: Any, params: dict[str, Any], ctx: GeneratedSweepContext) -> DesignOutcome:
+    """One design of a generated description: parameters -> description -> model (the base's
+    structure reused) -> the engine's evaluation -> the machine's outcome."""
+    from .description import load_description
+    from .model import compile_with
+
+    try:
+        model = compile_with(ctx.engine.template, load_description(hooks.description(params)))
+    except PkmdynError as exc:
+        return DesignOutcome("invalid", str(exc))
+    outcome, state = evaluate_model(model, ctx.engine.motion, ctx.engine)
+    return hooks.design_metrics(params, outcome, state, ctx.data)
