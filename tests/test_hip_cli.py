@@ -40,19 +40,28 @@ def test_run_default_writes_everything(tmp_path, capsys):
     assert summary["sliders"]["S23"]["max_abs_acceleration_m_s2"] == pytest.approx(np.abs(data[:, col]).max())
     for name in ("motion_load", "slider_motion", "torque_parts", "torques", "friction_vs_load"):
         assert (out / f"{name}.png").stat().st_size > 10_000
-    # the file's torques and their parts are the library's on the same motion (the library's
-    # torques are checked against Pinocchio in test_pinocchio_hip.py)
-    from pkmdyn.machines.hip_simulator import inverse_dynamics, inverse_kinematics, load_params
+    # the file's torques and their parts are the engine's on the same motion, computed here from
+    # the description through the engine's public functions (the engine's torques are checked
+    # against the closed form of Eq. 7-16 and Pinocchio in the oracle tests)
+    from pkmdyn.machines.hip_simulator.description import hip_description
+    from pkmdyn.multibody import load_mechanism, solve_kinematics
+    from pkmdyn.multibody.actuators import motor_efforts
+    from pkmdyn.multibody.dynamics import joint_reactions
     from pkmdyn.profiles.iso14242 import iso14242_motion
 
-    model, motion = load_params(), iso14242_motion(cycles=1, samples_per_cycle=200)
-    tq = inverse_dynamics(model, inverse_kinematics(model, motion), motion.load)
+    motion = iso14242_motion(cycles=1, samples_per_cycle=200)
+    m = load_mechanism(hip_description(load_params()))
+    kin = solve_kinematics(m, motion.angles, motion.rates, motion.accels, motion.t)
+    r = joint_reactions(m, kin, named={"hydraulic_N": motion.load}, split=True)
+    tau = motor_efforts(m, kin.act_q, kin.act_qd, kin.act_qdd, r.u).effort
     np.testing.assert_array_equal(data[:, header.index("t_s")], motion.t)
+    scale = np.abs(tau).max()
     for i in (1, 2, 3):
-        for part in ("", "_platform", "_lever", "_slider", "_screw", "_friction"):
-            lib = getattr(tq, part[1:] or "tau")[:, i - 1]
-            np.testing.assert_allclose(data[:, header.index(f"tau{i}{part}_Nm")], lib, rtol=0,
-                                       atol=1e-12 * np.abs(tq.tau).max())
+        a = m.actuator_names.index(f"P_{i}")
+        np.testing.assert_allclose(data[:, header.index(f"tau{i}_Nm")], tau[:, a], rtol=0, atol=1e-12 * scale)
+        parts = sum(data[:, header.index(f"tau{i}_{p}_Nm")] for p in ("platform", "lever", "slider", "screw", "friction"))
+        np.testing.assert_allclose(parts, tau[:, a], rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(data[:, header.index(f"L2{i}_m")], kin.act_q[:, a], rtol=0, atol=1e-15)
 
 
 def _write_params(path, rng):
@@ -117,7 +126,7 @@ def test_unreachable_motion_exits_2_with_one_line(tmp_path):
              cwd=tmp_path)
     assert r.returncode == 2
     lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and "leg" in lines[0] and "t = " in lines[0] and "Traceback" not in r.stderr
+    assert len(lines) == 1 and "unreachable" in lines[0] and "t = 0.7 s" in lines[0] and "Traceback" not in r.stderr
     assert not (tmp_path / "o").exists()
 
 
@@ -161,16 +170,21 @@ def test_profile_command_writes_a_readable_motion(tmp_path):
 
 
 def test_streamed_run_equals_the_in_memory_path(tmp_path):
-    """run_hip in blocks of 7 samples (file + summary) against simulate() holding everything."""
-    from pkmdyn.machines.hip_simulator.run import results_columns, run_hip, simulate, summary
+    """run_hip in blocks of 7 samples (file + summary) against one solve of the whole motion."""
+    from pkmdyn.machines.hip_simulator.job import run_hip
+    from pkmdyn.machines.hip_simulator.paper import PaperView, SummaryAccumulator, block_columns
     from pkmdyn.profiles.iso14242 import iso14242_motion
 
     files, _ = run_hip(tmp_path / "o", cycles=1.5, samples_per_cycle=40, make_plots=False, chunk=7)
     header, data = _read(files["results"])
-    res = simulate(load_params(), iso14242_motion(1.5, 40))
-    cols = results_columns(res)
+    motion = iso14242_motion(1.5, 40)
+    whole = PaperView(load_params()).solve(motion)
+    cols = block_columns(motion.t, whole)
     assert header == list(cols)
-    np.testing.assert_array_equal(data, np.column_stack([cols[k] for k in header]) + 0.0)
+    tau_scale = np.abs(cols["tau1_Nm"]).max()
+    for k, name in enumerate(header):  # blocks warm-started from the block before: the same solution
+        scale = max(np.abs(cols[name]).max(), tau_scale if name.startswith("tau") else 0.0)
+        assert np.abs(data[:, k] - cols[name]).max() <= 1e-12 * scale, name
     written = json.loads(files["summary"].read_text())
     col = {name: data[:, k] for k, name in enumerate(header)}  # extremes by brute force over the file
     for j in (1, 2):
@@ -184,7 +198,9 @@ def test_streamed_run_equals_the_in_memory_path(tmp_path):
         assert written["motors"][f"motor{i}"]["max_abs_tau_lever_Nm"] == np.abs(col[f"tau{i}_lever_Nm"]).max()
     assert written["max_condJ"] == col["condJ"].max() and written["min_abs_detJb_m3"] == np.abs(col["detJb_m3"]).min()
     assert written["samples"] == data.shape[0] == 61 and written["duration_s"] == 1.5
-    assert summary(res)["max_abs_power_W"] == written["max_abs_power_W"]
+    acc = SummaryAccumulator()
+    acc.add(motion.t, whole)
+    assert acc.result()["max_abs_power_W"] == pytest.approx(written["max_abs_power_W"], rel=1e-12)
 
 
 def test_parquet_and_csv_hold_the_same_numbers(tmp_path):
@@ -200,12 +216,12 @@ def test_parquet_and_csv_hold_the_same_numbers(tmp_path):
 
 
 def test_plot_envelope_is_the_min_and_max_of_each_bin():
-    from pkmdyn.machines.hip_simulator import run as hrun
+    from pkmdyn.machines.hip_simulator import figures as hrun
 
     rng = np.random.default_rng(8)
     n = 12_345
     x = rng.standard_normal((n, 3))
-    col = hrun._PlotCollector(n)
+    col = hrun.PlotCollector(n)
     assert col.envelope
     s = 0
     while s < n:
@@ -224,9 +240,9 @@ def test_plot_envelope_is_the_min_and_max_of_each_bin():
 def test_multi_cycle_plots_show_the_first_cycle(tmp_path):
     out = tmp_path / "o"
     assert main(["hip", "run", "--cycles", "4", "--samples-per-cycle", "50", "--out", str(out)]) == 0
-    from pkmdyn.machines.hip_simulator import run as hrun
+    from pkmdyn.machines.hip_simulator.figures import PlotCollector
 
-    col = hrun._PlotCollector(51)
+    col = PlotCollector(51)
     assert not col.envelope
     assert (out / "torques.png").stat().st_size > 10_000
 
@@ -293,11 +309,9 @@ def test_sizes_and_numbers_of_options_are_checked(tmp_path, capsys, args, word):
 
 
 def test_library_entry_checks_name_the_expected_shape():
-    from pkmdyn.errors import MotionError, ParameterError
-    from pkmdyn.machines.hip_simulator import inverse_dynamics, inverse_kinematics, platform_kinematics
+    from pkmdyn.errors import MotionError
     from pkmdyn.profiles.orientation import make_motion
 
-    model = load_params()
     n = 5
     t = np.linspace(0, 1, n)
     z = np.zeros((n, 3))
@@ -307,24 +321,6 @@ def test_library_entry_checks_name_the_expected_shape():
         make_motion(t, z, z.ravel(), z)
     with pytest.raises(MotionError, match="expected a float array"):
         make_motion(t, "angles", z, z)
-    R = np.tile(np.eye(3), (n, 1, 1))
-    R[2] *= 1.01
-    with pytest.raises(MotionError, match=r"R: sample 3 is not a rotation matrix"):
-        platform_kinematics(model, t, R, z, z)
-    R[2] = np.diag([1.0, 1.0, -1.0])  # orthonormal but a reflection
-    with pytest.raises(MotionError, match=r"sample 3 is not a rotation"):
-        platform_kinematics(model, t, R, z, z)
-    with pytest.raises(MotionError, match=r"omega: expected shape \(5, 3\)"):
-        platform_kinematics(model, t, np.tile(np.eye(3), (n, 1, 1)), z[:, :2], z)
-    with pytest.raises(ParameterError, match="model: expected a HipModel"):
-        platform_kinematics({"l": 1}, t, np.tile(np.eye(3), (n, 1, 1)), z, z)
-    with pytest.raises(MotionError, match="motion: expected a OrientationMotion"):
-        inverse_kinematics(model, {"t": t})
-    kin = inverse_kinematics(model, make_motion(t, z, z, z))
-    with pytest.raises(MotionError, match=r"load: expected shape \(5,\)"):
-        inverse_dynamics(model, kin, np.zeros((5, 1)))
-    with pytest.raises(MotionError, match="kin: expected a HipKinematics"):
-        inverse_dynamics(model, "kin", np.zeros(5))
 
 
 @pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
@@ -350,8 +346,7 @@ def test_interrupting_a_run_leaves_nothing(tmp_path, sig):
 def test_motion_model_paper_fit_is_the_fitted_cycle(tmp_path, capsys):
     """``--motion-model paper-fit`` runs the fitted ISO cycle: the run's slider maxima are those of
     the preset computed by the library, and differ from the default cycle's."""
-    from pkmdyn.machines.hip_simulator.iso_fit import iso_cycle_preset
-    from pkmdyn.machines.hip_simulator.paper import slider_maxima
+    from pkmdyn.machines.hip_simulator.paper import iso_cycle_preset, slider_maxima
 
     out = tmp_path / "fit"
     assert main(["hip", "run", "--motion-model", "paper-fit", "--samples-per-cycle", "400", "--no-plots",

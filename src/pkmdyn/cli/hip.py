@@ -44,7 +44,7 @@ _LIMIT_HELP = ("Raise or lower a plausibility limit, KEY=VALUE (repeatable; over
 def hip_run(params_path, motion_path, cycles, samples_per_cycle, motion_model, singularity_threshold, fmt, limits,
             no_plots, out_dir) -> None:
     """Kinematics and driving torques along a motion; writes results.csv (or .parquet), summary.json, plots."""
-    from ..machines.hip_simulator.run import run_hip
+    from ..machines.hip_simulator.job import run_hip
 
     if motion_path is not None and (cycles != 1.0 or samples_per_cycle != 1000 or motion_model is not None):
         raise click.UsageError(

@@ -25,7 +25,7 @@ from .model import MechanismModel
 from .motion import motion_columns, task_columns
 
 __all__ = ["results_columns", "motion_columns", "joint_effort_column", "actuator_effort_column", "model_summary", "bodies_arrays",
-           "report_columns", "write_run_report"]
+           "report_columns", "write_run_report", "mechanism_scene"]
 
 Array = NDArray[np.float64]
 _MOTION_NAMES = ("RX", "RY", "RZ", "TX", "TY", "TZ")
@@ -210,7 +210,7 @@ def write_run_report(out: Path, model: MechanismModel, cols: dict[str, Array], f
     joints as chains coloured by effort), the task and actuator coordinates, rates and efforts
     against time from the results columns ``cols`` (the plots' window of the run; ``samples``:
     the run's length when the window is shorter)."""
-    from ..report import Curve, TimePlot, scene_from_joints, write_report
+    from ..report import Curve, TimePlot, write_report
 
     t = cols["t_s"]
     pos, _, _ = task_columns(model)
@@ -221,11 +221,7 @@ def write_run_report(out: Path, model: MechanismModel, cols: dict[str, Array], f
     efforts = {}
     for i, name in enumerate(model.actuator_names):
         efforts[name] = (cols[joint_effort_column(model, i)][idx], f"{name} effort", effort_unit(model, i))
-    joints = [(nm, JOINT_TYPES[model.joint_type[k]].name,
-               "ground" if model.joint_parent[k] < 0 else model.body_names[model.joint_parent[k]],
-               "ground" if model.joint_child[k] < 0 else model.body_names[model.joint_child[k]])
-              for k, nm in enumerate(model.joint_names)]
-    scene = scene_from_joints(frames["t"], frames["joint_point"], joints, efforts)
+    scene = mechanism_scene(model, frames["t"], frames["joint_point"], efforts)
     notes = [f"mechanism: {model.name}" + (f" ({model.source})" if model.source else "")]
     if samples is not None and samples > t.shape[0]:
         notes.append(f"plots and animation: the first {t.shape[0]} of {samples} samples (results hold every sample)")
@@ -233,6 +229,21 @@ def write_run_report(out: Path, model: MechanismModel, cols: dict[str, Array], f
                         plots=plots, summary=summary, parameters=description_text, notes=notes,
                         scene_note="Joint centres as in bodies.npz (joint_point); actuated joints drawn as chains.",
                         samples=t.shape[0])
+
+
+def mechanism_scene(model: MechanismModel, t: Array, joint_point: Array,
+                    efforts: dict[str, tuple[Array, str, str]] | None = None) -> Any:
+    """The report's 3D scene of ``model`` (:func:`pkmdyn.report.scene_from_joints`): every body
+    through its joint centres ``joint_point (n, nj, 3)`` [m] at the times ``t (n,)`` [s];
+    ``efforts``: ``{actuated joint: (effort (n,), label, unit)}``, those joints drawn as chains
+    coloured by their effort."""
+    from ..report import scene_from_joints
+
+    joints = [(nm, JOINT_TYPES[model.joint_type[k]].name,
+               "ground" if model.joint_parent[k] < 0 else model.body_names[model.joint_parent[k]],
+               "ground" if model.joint_child[k] < 0 else model.body_names[model.joint_child[k]])
+              for k, nm in enumerate(model.joint_names)]
+    return scene_from_joints(t, joint_point, joints, efforts)
 
 
 def frame_indices_of(t: Array, frame_t: Array) -> Array:

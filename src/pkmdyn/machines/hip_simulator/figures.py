@@ -19,10 +19,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from numpy.typing import NDArray  # noqa: E402
 
-__all__ = ["PlotData", "plot_motion_and_load", "plot_slider_motion", "plot_torque_parts", "plot_torques",
-           "plot_friction_vs_load"]
+__all__ = ["PlotData", "PlotCollector", "write_figures", "report_plots", "plot_motion_and_load", "plot_slider_motion",
+           "plot_torque_parts", "plot_torques", "plot_friction_vs_load"]
 
 Array = NDArray[np.float64]
+PLOT_RAW_MAX = 5000  # up to this many samples a plot shows every sample, beyond it an envelope
+PLOT_BINS = 1000  # bins of an envelope plot
+SCATTER_MAX = 20_000  # points of the friction-against-load scatter
 _LEG_COLOURS = ("tab:blue", "tab:orange", "tab:green")
 
 
@@ -33,7 +36,7 @@ class PlotData:
     Without ``envelope`` ``lo == hi`` are the samples; with it they are the minimum and maximum
     of each bin centred at ``t``. Curves: ``angles_deg`` (3), ``load_N`` (1), ``L`` (6: platform
     1 legs 1-3, platform 2 legs 1-3) [m], ``Ld``, ``Ldd`` (3, one per screw) [m/s, m/s^2],
-    ``tau`` and each part of :data:`~pkmdyn.machines.hip_simulator.dynamics.PARTS` (3) [N m].
+    ``tau`` and each part of :data:`~pkmdyn.machines.hip_simulator.paper.PARTS` (3) [N m].
     ``scatter_load (s,)`` [N], ``scatter_friction (s, 3)`` [N m]: thinned samples for the
     friction-against-load plot. ``note``: what the time axis shows (e.g. the first cycle).
     """
@@ -146,3 +149,93 @@ def plot_friction_vs_load(data: PlotData, path: Path) -> Path:
     ax3.grid(alpha=0.3)
     ax3.legend(fontsize=8, markerscale=4)
     return _finish(fig, data, path)
+
+
+class PlotCollector:
+    """The plots' data, gathered block by block with bounded memory.
+
+    The plots cover samples ``[0, window)`` (one cycle of the built-in motion, or the whole of
+    a motion file). Up to ``PLOT_RAW_MAX`` samples every sample is kept; beyond, ``PLOT_BINS``
+    equal bins of samples keep the minimum and maximum of every curve (an envelope). The
+    friction-against-load scatter keeps every k-th sample of the window, at most ``SCATTER_MAX``.
+    """
+
+    def __init__(self, window: int) -> None:
+        self.window = window
+        self.envelope = window > PLOT_RAW_MAX
+        self.bins = PLOT_BINS if self.envelope else window
+        self.lo: dict[str, Array] = {}
+        self.hi: dict[str, Array] = {}
+        self.scatter_step = max(1, -(-window // SCATTER_MAX))
+        self.scatter: list[Array] = []
+
+    def add(self, start: int, curves: dict[str, Array], load: Array, friction: Array) -> None:
+        k = next(iter(curves.values())).shape[0]
+        idx = np.arange(start, start + k)
+        keep = idx < self.window
+        if not keep.any():
+            return
+        idx = idx[keep]
+        curves = {key: v[keep] for key, v in curves.items()}
+        pick = (idx % self.scatter_step) == 0
+        self.scatter.append(np.column_stack([load[keep][pick], friction[keep][pick]]))
+        b = idx * self.bins // self.window
+        starts = np.concatenate(([0], np.flatnonzero(np.diff(b)) + 1))
+        target = b[starts]
+        for key, v in curves.items():
+            v2 = v.reshape(v.shape[0], -1)
+            if key not in self.lo:
+                self.lo[key] = np.full((self.bins, v2.shape[1]), np.inf)
+                self.hi[key] = np.full((self.bins, v2.shape[1]), -np.inf)
+            self.lo[key][target] = np.minimum(self.lo[key][target], np.minimum.reduceat(v2, starts, axis=0))
+            self.hi[key][target] = np.maximum(self.hi[key][target], np.maximum.reduceat(v2, starts, axis=0))
+
+    def data(self, note: str) -> PlotData:
+        used = np.isfinite(self.lo["t"][:, 0])
+        lo = {k: v[used] for k, v in self.lo.items()}
+        hi = {k: v[used] for k, v in self.hi.items()}
+        t = 0.5 * (lo.pop("t")[:, 0] + hi.pop("t")[:, 0])
+        if self.envelope:
+            note = (note + "; " if note else "") + f"envelope (min-max) of {self.window} samples in {self.bins} bins"
+        sc = np.concatenate(self.scatter)
+        return PlotData(t=t, lo=lo, hi=hi, envelope=self.envelope, note=note, scatter_load=sc[:, 0],
+                        scatter_friction=sc[:, 1:])
+
+
+def write_figures(data: PlotData, folder: Path) -> dict[str, Path]:
+    """The run's five PNG figures in ``folder``, by their file labels."""
+    return {"motion_plot": plot_motion_and_load(data, folder / "motion_load.png"),
+            "slider_plot": plot_slider_motion(data, folder / "slider_motion.png"),
+            "torque_parts_plot": plot_torque_parts(data, folder / "torque_parts.png"),
+            "torque_plot": plot_torques(data, folder / "torques.png"),
+            "friction_plot": plot_friction_vs_load(data, folder / "friction_vs_load.png")}
+
+
+def report_plots(data: PlotData) -> list:
+    """The report's time plots (:class:`pkmdyn.report.TimePlot`) of the run's plot data: samples,
+    or min-max envelopes of bins for long runs."""
+    from ...report import Curve, TimePlot
+    from .paper import PARTS
+
+    def curves(key: str, names: list[str] | tuple[str, ...], scale: float = 1.0) -> tuple:
+        lo, hi = data.lo[key] * scale, data.hi[key] * scale
+        if data.envelope:
+            return tuple(Curve(n, lo=lo[:, c], hi=hi[:, c]) for c, n in enumerate(names))
+        return tuple(Curve(n, lo[:, c]) for c, n in enumerate(names))
+
+    t, note = data.t, data.note
+    legs = [f"S{j}{i} (platform {j}, screw {i})" for j in (1, 2) for i in (1, 2, 3)]
+    motors = [f"motor {i}" for i in (1, 2, 3)]
+    screws = [f"screw {i}" for i in (1, 2, 3)]
+    plots = [
+        TimePlot("Platform angles", "angle [deg]", t, curves("angles_deg", ("alpha (FE)", "beta (AA)", "gamma (IER)")),
+                 note),
+        TimePlot("Load", "load [N]", t, curves("load_N", ("load",)), note),
+        TimePlot("Slider positions", "position [mm]", t, curves("L", legs, 1e3), note),
+        TimePlot("Slider velocities", "velocity [mm/s]", t, curves("Ld", screws, 1e3), note),
+        TimePlot("Slider accelerations", "acceleration [m/s^2]", t, curves("Ldd", screws), note),
+        TimePlot("Motor torques", "torque [N m]", t, curves("tau", motors), note),
+    ]
+    for part in PARTS:
+        plots.append(TimePlot(f"Motor torques: {part} part", "torque [N m]", t, curves(part, motors), note))
+    return plots
