@@ -13,7 +13,6 @@ import pytest
 from pkmdyn.cli import main
 from pkmdyn.errors import ParameterError, PkmdynError
 from pkmdyn.machines.hip_simulator import load_params as hip_params
-from pkmdyn.machines.hip_simulator.scene import hip_scene_from_angles, hip_topology
 from pkmdyn.machines.pdm4.paper import JOINTS
 from pkmdyn.machines.pdm4.params import load_params as pdm_params
 from pkmdyn.machines.pdm4.scene import pdm_scene_from_pose, pdm_topology
@@ -58,21 +57,43 @@ def test_frame_picker_over_blocks_equals_picking_from_the_whole(block):
     assert np.array_equal(got["x"], data[idx]) and np.array_equal(got["t"], data[idx, 0])
 
 
+def _hip_model():
+    from pkmdyn.machines.hip_simulator.description import hip_description
+    from pkmdyn.multibody import load_mechanism
+
+    return load_mechanism(hip_description(hip_params()))
+
+
+def _hip_topology():
+    from pkmdyn.multibody.output import model_summary
+    from pkmdyn.report import topology_from_model
+
+    return topology_from_model(model_summary(_hip_model()))
+
+
 def test_hip_scene_closes_every_leg_on_the_lever_length():
-    """The drawn levers join each slider to its platform joint at the lever length, sliders sit on
-    their screws and platform joints at the platform radius: the scene is the machine's geometry."""
+    """The hip run's scene (the engine's joint centres of the hip's description): the drawn levers
+    join each slider to its platform joint at the lever length, sliders sit on their screws and
+    platform joints at the platform radius, whatever the pose: the scene is the machine's geometry."""
+    from pkmdyn.multibody import solve_kinematics
+    from pkmdyn.multibody.output import mechanism_scene
+
     model = hip_params()
     g = model.geometry
+    m = _hip_model()
     rng = np.random.default_rng(1)
     angles = rng.uniform(-0.3, 0.3, size=(40, 3))
-    scene = hip_scene_from_angles(model, np.linspace(0, 1, 40), angles, rng.normal(size=(40, 3)))
+    kin = solve_kinematics(m, angles, np.zeros_like(angles), np.zeros_like(angles))
+    tau = rng.normal(size=(40, 3))
+    scene = mechanism_scene(m, np.linspace(0, 1, 40), kin.joint_point,
+                            {f"P_{i}": (tau[:, i - 1], f"motor {i} torque", "N m") for i in (1, 2, 3)})
     ix = {n: k for k, n in enumerate(scene.point_names)}
-    for j in (1, 2):
+    for j, platform in enumerate(("upper", "lower")):
         for i in (1, 2, 3):
-            u, s = scene.points[:, ix[f"U{j}{i}"]], scene.points[:, ix[f"S{j}{i}"]]
+            u, s = scene.points[:, ix[f"U_{platform}_{i}"]], scene.points[:, ix[f"S_{platform}_{i}"]]
             assert np.allclose(np.linalg.norm(s - u, axis=-1), g.l, atol=1e-12)
-            assert np.allclose(u[:, :2], g.A[i - 1, :2])
-            assert np.allclose(np.linalg.norm(s - g.o[j - 1], axis=-1), g.e, atol=1e-12)
+            assert np.allclose(u[:, :2], g.A[i - 1, :2], atol=1e-12)
+            assert np.allclose(np.linalg.norm(s - g.o[j], axis=-1), g.e, atol=1e-12)
     # the carriage of module i is coloured by motor i's torque
     assert [a.label for a in scene.actuators] == ["motor 1 torque", "motor 2 torque", "motor 3 torque"]
 
@@ -118,7 +139,7 @@ def test_minmax_decimation_keeps_the_extremes_of_every_curve():
     assert ad.max() == a.max() and ad.min() == a.min() and bd.max() == b.max() and bd.min() == b.min()
 
 
-@pytest.mark.parametrize("top, loops", [(pdm_topology(), 5), (hip_topology(), 6)])
+@pytest.mark.parametrize("top, loops", [(pdm_topology(), 5), (_hip_topology(), 6)])
 def test_each_cut_joint_closes_one_cycle(top, loops):
     found = fundamental_loops(top)
     assert len(found) == loops == len(top.joints) - len(top.bodies) + 1

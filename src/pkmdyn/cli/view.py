@@ -13,16 +13,18 @@ def _listing(path: Path) -> None:
     echo(f"view: {path}")
 
 
-def _described_page(path: Path, out: Path) -> Path:
-    """A described mechanism at its reference configuration: the scene from its joint points,
-    the topology from its model document, mobility and over-constraints by rank."""
+def _described_page(path: Path | None, out: Path, description: dict | None = None, parameters: str = "",
+                    notes: tuple[str, ...] = (), inputs: dict | None = None) -> Path:
+    """A described mechanism (the file ``path``, or a machine's generated ``description`` with
+    its parameter file's text ``parameters``) at its reference configuration: the scene from its
+    joint points, the topology from its model document, mobility and over-constraints by rank."""
     import numpy as np
 
     from ..multibody import load_mechanism, reference_task, solve_kinematics
     from ..multibody.output import model_summary
     from ..report import scene_from_joints, topology_from_model, write_view
 
-    model = load_mechanism(path)
+    model = load_mechanism(path if description is None else description)
     x = reference_task(model)[None]
     kin = solve_kinematics(model, x, np.zeros_like(x), np.zeros_like(x), np.zeros(1))
     doc = model_summary(model)
@@ -34,9 +36,12 @@ def _described_page(path: Path, out: Path) -> Path:
     mobility = {"Kutzbach-Gruebler mobility": rep.kutzbach, "mobility (rank, reference configuration)": rep.mobility,
                 "idle freedoms": rep.idle, "degrees of freedom": rep.dof, "over-constraints": rep.overconstraints}
     return write_view(out, title=f"{model.name}: machine view", scene=scene, topology=topology_from_model(doc),
-                      mobility=mobility, parameters=Path(path).read_text(encoding="utf-8", errors="replace"),
-                      notes=[f"description: {path}", "reference configuration (every joint coordinate at its reference)"],
-                      inputs={"--machine": path}, listing=_listing)
+                      mobility=mobility,
+                      parameters=parameters if description is not None else Path(path).read_text(encoding="utf-8",
+                                                                                                  errors="replace"),
+                      notes=[*(notes or [f"description: {path}"]),
+                             "reference configuration (every joint coordinate at its reference)"],
+                      inputs=inputs if inputs is not None else {"--machine": path}, listing=_listing)
 
 
 @cli.command("view")
@@ -53,7 +58,10 @@ def view(machine: str, params_path: Path | None, out_path: Path) -> None:
 
     entry, path = resolve(machine)
     check_output_file(out_path, {"--params": params_path, "--machine": path})  # the output rule, before any work
-    if entry is not None:
+    if entry is not None and not hasattr(entry, "view_page"):  # a machine that generates its description
+        _described_page(None, out_path, entry.description(params_path), entry.parameters_text(params_path),
+                        (f"machine: {entry.TITLE}", f"parameters: {params_path or 'built-in'}"), {"--params": params_path})
+    elif entry is not None:
         entry.view_page(params_path, out_path, _listing)
     elif params_path is not None:
         raise click.UsageError("--params applies to the hand-built machines (hip, pdm); a described mechanism is its file")

@@ -23,12 +23,13 @@ def default_params_text() -> str:
     return DEFAULT_PARAMS_TEXT
 
 
-def description() -> dict[str, Any]:
-    """The built-in machine as a mechanism description (:mod:`pkmdyn.multibody`)."""
+def description(params: Path | None = None) -> dict[str, Any]:
+    """The machine of the parameter file ``params`` (default: the built-in one) as a mechanism
+    description (:mod:`pkmdyn.multibody`)."""
     from .description import hip_description
     from .params import load_params
 
-    return hip_description(load_params())
+    return hip_description(load_params(params))
 
 
 def default_motion() -> Any:
@@ -37,25 +38,15 @@ def default_motion() -> Any:
     load as the description's named load ``hydraulic_N``."""
     from ...multibody import TaskMotion
     from ...profiles.iso14242 import iso14242_motion
-    from .iso_fit import iso_cycle_preset
+    from .paper import iso_cycle_preset
     from .params import load_params
 
     m = iso14242_motion(cycles=1, samples_per_cycle=1000, cycle=iso_cycle_preset(load_params().motion_model))
     return TaskMotion(m.t, m.angles, m.rates, m.accels, {"hydraulic_N": m.load})
 
 
-def view_page(params: Path | None, out: Path, listing: Any) -> Path:
-    """The ``pkmdyn view`` page of this machine (:func:`pkmdyn.report.write_view`) at its home pose."""
-    import numpy as np
+def parameters_text(params: Path | None) -> str:
+    """The parameter file's text (the built-in file when None), headed by where it came from."""
+    from .paper import parameters_text as text
 
-    from ...report import write_view
-    from .params import load_params
-    from .report import parameters_text
-    from .scene import hip_mobility, hip_scene_from_angles, hip_topology
-
-    model = load_params(params)
-    scene = hip_scene_from_angles(model, np.zeros(1), np.zeros((1, 3)), np.zeros((1, 3)))
-    return write_view(out, title="2(3PUS+S) hip simulator: machine view", scene=scene, topology=hip_topology(),
-                      mobility=hip_mobility(model), parameters=parameters_text(params),
-                      notes=[f"parameters: {params or 'built-in (paper Tables 1-2)'}", "home pose: all angles zero"],
-                      inputs={"--params": params}, listing=listing)
+    return text(params)
