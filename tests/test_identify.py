@@ -1,4 +1,6 @@
-"""Identification of the hip simulator: regressor, base parameters, constrained fit, excitation."""
+"""Identification of the hip simulator on the engine: the engine's regressor of the hip's
+description named in the hip's parameters, base parameters, constrained fit, excitation. The
+synthetic torques are the engine's inverse dynamics (joint reactions), not the regressor."""
 
 from dataclasses import replace
 
@@ -9,22 +11,25 @@ from hip_helpers import SmoothMotion, random_model
 from pkmdyn.errors import MotionError, ParameterError
 from pkmdyn.identify import base_parameters, bounded_fourier
 from pkmdyn.identify._report import identification_report
-from pkmdyn.identify.hip import (
+from pkmdyn.machines.hip_simulator.identify_view import (
+    ALL_NAMES,
     consistency_transform,
+    engine_torques,
+    engine_values,
     hip_regressor,
     identify_hip,
     parameter_names,
     parameter_vector,
+    regressor_mechanism,
     savgol_derivatives,
     with_parameters,
 )
-from pkmdyn.machines.hip_simulator import inverse_dynamics, inverse_kinematics, model_from_dict
-from pkmdyn.machines.hip_simulator.params import default_params_dict
+from pkmdyn.machines.hip_simulator.params import default_params_dict, model_from_dict
 from pkmdyn.profiles.iso14242 import iso14242_motion
 
 
 def _tau(model, motion):
-    return inverse_dynamics(model, inverse_kinematics(model, motion), motion.load).tau
+    return engine_torques(model, motion)
 
 
 def _machine(rng, platform_mass=3.0):
@@ -47,7 +52,7 @@ def _machine(rng, platform_mass=3.0):
 
 
 @pytest.mark.parametrize("which", ["friction", "inertia", "all"])
-def test_regressor_times_parameters_is_inverse_dynamics(which):
+def test_regressor_times_parameters_is_the_engines_inverse_dynamics(which):
     rng = np.random.default_rng(3)
     model = random_model(rng, friction=True)
     motion = SmoothMotion(rng).motion(np.linspace(0.0, 2.0, 80))
@@ -56,9 +61,49 @@ def test_regressor_times_parameters_is_inverse_dynamics(which):
     tau = _tau(model, motion)
     assert reg.Y.shape == (80, 3, len(names))
     assert np.max(np.abs(reg.efforts(parameter_vector(model, names)) - tau)) <= 1e-10 * np.max(np.abs(tau))
+    # other values give other torques: the regressor is not the file's torques in disguise
+    scale = {n: rng.uniform(0.5, 1.5) for n in names}
+    for body in ("lever", "platform"):  # a principal-inertia triple scaled as one, keeping it physical
+        for x in "yz":
+            if f"{body}_I{x}_kgm2" in scale:
+                scale[f"{body}_I{x}_kgm2"] = scale[f"{body}_Ix_kgm2"]
+    theta = parameter_vector(model, names) * np.array([scale[n] for n in names])
+    other = with_parameters(model, names, theta)
+    assert np.max(np.abs(reg.efforts(theta) - _tau(other, motion))) <= 1e-10 * np.max(np.abs(tau))
     # a model rebuilt from its own parameter vector gives the same torques
     again = with_parameters(model, names, parameter_vector(model, names))
     assert np.allclose(_tau(again, motion), tau, rtol=0, atol=1e-12 * np.max(np.abs(tau)))
+
+
+def test_the_hip_parameters_map_onto_the_engines_of_the_real_description():
+    """The engine's parameters that the hip's values give equal those of the hip's own
+    description, wherever that description has the parameter (the load-driven friction written
+    as the two unit-radius terms: S - C / F_REF and C / F_REF)."""
+    from pkmdyn.machines.hip_simulator.description import hip_description
+    from pkmdyn.machines.hip_simulator.identify_view import F_REF
+    from pkmdyn.multibody import load_mechanism
+    from pkmdyn.multibody.identify import regressor
+    from pkmdyn.multibody.kinematics import solve_kinematics
+
+    rng = np.random.default_rng(8)
+    model = random_model(rng, friction=True)
+    motion = SmoothMotion(rng).motion(np.linspace(0.0, 1.0, 5))
+    real = load_mechanism(hip_description(model))
+    reg_real = regressor(real, solve_kinematics(real, motion.angles), {"hydraulic_N": motion.load})
+    mech = regressor_mechanism(model)
+    reg = regressor(mech, solve_kinematics(mech, motion.angles), {"hydraulic_N": motion.load})
+    mapped = dict(zip(reg.names, engine_values(model, mech, reg.names,
+                                               dict(zip(ALL_NAMES, parameter_vector(model, ALL_NAMES))))))
+    compared = 0
+    for name, value in zip(reg_real.names, reg_real.theta):
+        if "_external" in name:
+            continue
+        assert mapped[name] == pytest.approx(value, rel=1e-12, abs=1e-15), name
+        compared += 1
+    assert compared > 150
+    S, C = parameter_vector(model, ("bearing_load_coeff_m", "bearing_weight_friction_Nm"))
+    assert mapped["S0_upper_external2_hydraulic_N_coefficient"] == pytest.approx(C / F_REF, rel=1e-12)
+    assert mapped["S0_lower_external1_hydraulic_N_coefficient"] == pytest.approx(S - C / F_REF, rel=1e-12)
 
 
 def test_base_parameters_of_a_known_dependence():
@@ -86,6 +131,17 @@ def test_noise_free_recovery_of_identifiable_combinations(which):
     assert res.base.rank >= len(res.names) - 2
     assert np.all(np.abs(res.estimate.base_values - true_b) <= 1e-6 * np.abs(true_b) + 1e-12)
     assert np.max(res.residual_rms) < 1e-9
+    # the bearing products S and C, and every separable parameter, recovered on their own
+    est = dict(zip(res.names, res.estimate.theta))
+    true = dict(zip(res.names, parameter_vector(truth, res.names)))
+    for name in ("bearing_load_coeff_m", "bearing_weight_friction_Nm"):
+        assert est[name] == pytest.approx(true[name], rel=1e-6)
+    for k in res.base.separable():
+        assert est[res.names[k]] == pytest.approx(true[res.names[k]], rel=1e-5), res.names[k]
+    # the identified file's split reproduces S and C
+    f, m = res.model.friction, res.model.inertia
+    assert f.r_h * f.mu_h + f.r_t * f.mu_t == pytest.approx(true["bearing_load_coeff_m"], rel=1e-6)
+    assert f.r_t * f.mu_t * m.m_m * m.g == pytest.approx(true["bearing_weight_friction_Nm"], rel=1e-6)
 
 
 def test_unseparable_coefficients_are_reported_only_as_combinations():
@@ -118,7 +174,9 @@ def test_constraints_hold_where_the_data_would_break_them():
         inertia=replace(truth.inertia, I_l=np.array([0.03, 0.01, 0.005])),
     )
     motion = SmoothMotion(rng, amplitude_deg=12).motion(np.linspace(0.0, 3.0, 300))
-    res = identify_hip(truth, motion, _tau(bad, motion), "all")
+    # no description holds such a machine (the engine refuses it): its torques by the regressor
+    names = parameter_names("all")
+    res = identify_hip(truth, motion, hip_regressor(truth, motion, names).efforts(parameter_vector(bad, names)), "all")
     est = dict(zip(res.names, res.estimate.theta))
     assert all(est[n] >= 0.0 for n in parameter_names("friction"))
     assert est["spherical_coulomb_Nm"] == pytest.approx(0.0, abs=1e-9)
@@ -205,23 +263,47 @@ def test_paper_fit_preset_is_closer_to_the_paper_than_the_default():
 
 
 def test_excitation_respects_its_limits_and_is_better_conditioned_than_its_start():
-    from pkmdyn.identify.hip_excite import ExcitationLimits, design_excitation, excitation_motion
+    from pkmdyn.machines.hip_simulator.identify_excite import (ExcitationLimits, design_excitation,
+                                                               excitation_motion, slider_rates)
+    from pkmdyn.machines.hip_simulator.identify_view import engine_kinematics
 
     prior = model_from_dict(default_params_dict())
     limits = ExcitationLimits(slider_speed_m_s=0.2, slider_accel_m_s2=2.0)
     ex = design_excitation(prior, "friction", limits, harmonics=2, samples=48, iterations=2, starts=1, seed=3)
     t = np.linspace(0.0, ex.period_s, 400)
     motion = excitation_motion(ex.coeffs, ex.period_s, limits, t)
-    kin = inverse_kinematics(prior, motion)
-    assert np.max(np.abs(kin.Ld)) <= 0.2 * (1 + 1e-6) and np.max(np.abs(kin.Ldd)) <= 2.0 * (1 + 1e-6)
+    mech = regressor_mechanism(prior)
+    Ld, Ldd, cond = slider_rates(mech, engine_kinematics(mech, motion), prior.geometry.euler_sequence)
+    assert np.max(np.abs(Ld)) <= 0.2 * (1 + 1e-6) and np.max(np.abs(Ldd)) <= 2.0 * (1 + 1e-6)
     assert np.all((motion.load > 300) & (motion.load < 3000)) and ex.period_s >= 2.0
-    assert np.max(kin.cond_J) <= limits.cond_J
+    assert 1.0 <= np.max(cond) <= limits.cond_J
     # the designed motion's regressor has the rank the design claims, at its condition number
     W = hip_regressor(prior, motion, parameter_names("friction")).stacked()
     names = parameter_names("friction")
     A = W[:, [names.index(n) for n in ex.parameters]]
     s = np.linalg.svd(A / np.linalg.norm(A, axis=0), compute_uv=False)
     assert s[0] / s[-1] < 1e4
+
+
+def test_cond_j_is_that_of_the_slider_speeds_per_angular_velocity():
+    """J maps the platform's angular velocity to the slider speeds: J omega = Ld along a motion."""
+    from pkmdyn.machines.hip_simulator.identify_excite import slider_rates
+    from pkmdyn.machines.hip_simulator.identify_view import engine_kinematics
+    from pkmdyn.spatial import euler_kinematics
+
+    rng = np.random.default_rng(6)
+    model = random_model(rng)
+    motion = SmoothMotion(rng).motion(np.linspace(0.0, 1.0, 30))
+    mech = regressor_mechanism(model)
+    kin = engine_kinematics(mech, motion)
+    Ld, _, cond = slider_rates(mech, kin, model.geometry.euler_sequence)
+    _, omega, _ = euler_kinematics(model.geometry.euler_sequence, motion.angles, motion.rates, motion.accels)
+    zero = np.zeros_like(motion.angles)
+    E = np.stack([euler_kinematics(model.geometry.euler_sequence, motion.angles,
+                                   np.broadcast_to(np.eye(3)[k], zero.shape), zero)[1] for k in range(3)], axis=-1)
+    J = kin.J_ax @ np.linalg.inv(E)
+    assert np.allclose(np.einsum("nij,nj->ni", J, omega), Ld, rtol=0, atol=1e-12 * np.max(np.abs(Ld)))
+    assert np.allclose(cond, np.linalg.cond(J), rtol=1e-12) and np.all(cond >= 1.0)
 
 
 def test_the_generic_layer_identifies_another_machine():
@@ -270,7 +352,7 @@ def test_paper_fit_zxy_preset_meets_the_nine_maxima_with_that_sequence():
 @pytest.mark.parametrize("m_m, S, C", [(0.0, 4e-3, 0.0), (0.0, 4e-3, 0.09), (4.0, 4e-3, 0.09), (4.0, 4e-3, 5.0),
                                        (4.0, 4e-3, 0.0), (2.0, 0.0, 0.0)])
 def test_bearing_split_reproduces_both_products(m_m, S, C):
-    from pkmdyn.identify.hip import bearing_split
+    from pkmdyn.machines.hip_simulator.identify_view import bearing_split
 
     d = default_params_dict()
     d["inertia"]["platform_mass_kg"] = m_m

@@ -1,4 +1,5 @@
-"""Identification commands: ``pkmdyn hip identify`` and ``pkmdyn hip excite``."""
+"""Identification commands: ``pkmdyn hip identify`` and ``pkmdyn hip excite`` (the options; the
+jobs are the machine's, :mod:`pkmdyn.machines.hip_simulator.identify_job`)."""
 
 from __future__ import annotations
 
@@ -6,8 +7,8 @@ from pathlib import Path
 
 import click
 
-from ..identify import bounds as _ex
-from ..identify.bounds import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW
+from ..machines.hip_simulator import identify_bounds as _ex
+from ..machines.hip_simulator.identify_bounds import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW
 from ._groups import PATH_IN as _PATH_IN
 from ._groups import echo_lines, hip
 from ._groups import FiniteFloat
@@ -35,7 +36,7 @@ from ._hip_options import paper_option
 def hip_identify(measured_path, params_path, which, sg_window, sg_order, rank_tol, no_plots, out_dir) -> None:
     """Identify friction and/or inertia from measured motor torques; writes identified.toml,
     identification.json, torques.csv and plots."""
-    from ..identify.hip_run import run_identify
+    from ..machines.hip_simulator.identify_job import run_identify
 
     run_identify(out_dir, measured_path, params_path, which, sg_window, sg_order, rank_tol, make_plots=not no_plots,
                  report=echo_lines)
@@ -90,8 +91,8 @@ def hip_excite(params_path, which, period_s, harmonics, cycles, samples_per_cycl
                alpha_range_deg, beta_range_deg, gamma_range_deg, load_range, max_slider_speed_m_s,
                max_slider_accel_m_s2, max_cond_j, out_path) -> None:
     """Design an excitation motion and load (optimised Fourier series) for identification."""
-    from ..identify.hip_excite import ExcitationLimits
-    from ..identify.hip_run import run_excite
+    from ..machines.hip_simulator.identify_excite import ExcitationLimits
+    from ..machines.hip_simulator.identify_job import run_excite
 
     limits = ExcitationLimits(alpha_range_deg, beta_range_deg, gamma_range_deg, load_range, max_slider_speed_m_s,
                               max_slider_accel_m_s2, max_cond_j)

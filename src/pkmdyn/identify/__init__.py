@@ -3,8 +3,10 @@
 Machine-independent parts: the regressor of an affine effort map (:mod:`._regressor`), base
 parameters by a rank-revealing decomposition (:mod:`._base`), physically consistent
 constrained least squares with standard errors (:mod:`._solve`), bounded Fourier excitation
-(:mod:`._excite`) and the report (:mod:`._report`). The hip simulator is the first machine
-(:mod:`.hip`, :mod:`.hip_excite`, :mod:`.hip_run`). See ``docs/identification.md``.
+(:mod:`._excite`) and the report (:mod:`._report`); described mechanisms are identified by
+:mod:`.mechanism` (their regressor is :func:`pkmdyn.multibody.identify.regressor`), and a machine
+may name the result in its own parameters (its folder under :mod:`pkmdyn.machines`). See
+``docs/identification.md``.
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ __all__ = [
 ]
 
 #: where each public name lives, imported on first use (PEP 562), so that importing a light
-#: submodule (``pkmdyn.identify.bounds``) does not load the solvers
+#: submodule (``pkmdyn.identify.plots``) does not load the solvers
 __getattr__, __dir__ = attach(__name__, {
     **dict.fromkeys(("Regressor", "affine_regressor"), "._regressor"),
     **dict.fromkeys(("BaseParameters", "base_parameters", "DEFAULT_RANK_TOL"), "._base"),

@@ -28,7 +28,7 @@ from ._base import DEFAULT_RANK_TOL, BaseParameters, base_parameters
 from ._regressor import Regressor, affine_regressor
 from ._solve import Estimate, constrained_least_squares
 
-__all__ = ["Identification", "identify_efforts", "fit_regressor"]
+__all__ = ["Identification", "identify_efforts", "fit_regressor", "check_efforts"]
 
 Array = NDArray[np.float64]
 
@@ -68,20 +68,26 @@ def identify_efforts(
     what: str = "parameters",
 ) -> Identification:
     """Identify ``names`` (module docstring); ``consistency = (T, lower, upper)``, ``theta = T s``."""
+    u = check_efforts(u_measured, np.asarray(q).shape[0], tuple(machine.ACTUATORS), len(names), source, what)
+    reg = affine_regressor(lambda th: machine.inverse_dynamics(model_with(th), q, qd, qdd, load), names)
+    return fit_regressor(reg, u, prior, consistency, rank_tol, source, what)
+
+
+def check_efforts(u_measured: Array, n: int, actuators: tuple[str, ...], p: int, source: str = "measured",
+                  what: str = "parameters") -> Array:
+    """``u_measured`` as an array of shape ``(n, len(actuators))``, checked (module docstring):
+    finite (row and actuator named) and enough samples for ``p`` parameters."""
     u = np.asarray(u_measured, dtype=float)
-    n = np.asarray(q).shape[0]
-    nu = len(machine.ACTUATORS)
+    nu = len(actuators)
     if u.shape != (n, nu):
         raise MotionError(f"{source}: expected efforts of shape ({n}, {nu}), got {u.shape}")
     bad = np.argwhere(~np.isfinite(u))
     if bad.size:
         r, c = bad[0]
-        raise MotionError(f"{source}: row {r + 1}, column {machine.ACTUATORS[c]!r}: value is not finite")
-    p = len(names)
+        raise MotionError(f"{source}: row {r + 1}, column {actuators[c]!r}: value is not finite")
     if n < p or n * nu < 2 * p:
         raise MotionError(f"{source}: {n} samples are too few to identify {p} {what}; give at least {max(p, -(-2 * p // nu))}")
-    reg = affine_regressor(lambda th: machine.inverse_dynamics(model_with(th), q, qd, qdd, load), names)
-    return fit_regressor(reg, u, prior, consistency, rank_tol, source, what)
+    return u
 
 
 def fit_regressor(reg: Regressor, u_measured: Array, prior: Array, consistency: tuple[Array, Array, Array],

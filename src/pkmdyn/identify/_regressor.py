@@ -3,7 +3,7 @@
 A machine's inverse dynamics ``u = Y(q, qd, qdd, load) theta + u_0`` is affine in its
 friction coefficients and inertial parameters ``theta (p,)`` once every other parameter is
 held (geometry, gravity, the friction regularisation, and the products that make it
-bilinear, see :mod:`pkmdyn.identify.hip`). An affine map is recovered exactly from ``p + 1``
+bilinear, written as products that are parameters of their own). An affine map is recovered exactly from ``p + 1``
 evaluations: ``u_0 = u(0)`` and column ``k`` of ``Y`` is ``u(e_k) - u(0)``.
 """
 

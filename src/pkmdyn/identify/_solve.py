@@ -4,7 +4,7 @@ Problem. With the stacked regressor ``W (m, p)`` and the measured efforts less t
 does not depend on the parameters, ``y (m,)``, and the parameters written as ``theta = T s``
 in coordinates ``s`` in which physical consistency is a box (non-negative friction,
 positive masses, and the inertia triangle inequality, which is ``s >= 0`` for the second
-moments of mass, see :mod:`pkmdyn.identify.hip`):
+moments of mass, e.g. a machine's principal inertias):
 
     minimise  |W T s - y|^2 + w^2 |C (T s - theta_0)|^2   subject to  lb <= s <= ub,
 
@@ -14,8 +14,9 @@ directions the data cannot see (a combination's split, an unexcited parameter) a
 ``theta_0``; in every direction the data do see its pull is below ``(w / sigma_r)^2`` of the
 estimate, 1e-6 or less for singular values above the rank tolerance.
 
-Rows may carry weights (weighted least squares; the hip uses the inverse residual level of
-each motor from a first, unweighted pass, so that motors with different noise count fairly).
+Rows may carry weights (weighted least squares; :func:`._identify.fit_regressor` uses the
+inverse residual level of each actuator from a first, unweighted pass, so that actuators with
+different noise count fairly).
 
 Uncertainty. ``sigma^2 = |y - W theta|^2 / (m - r)`` and the covariance of the base
 parameters ``theta_b = theta_I + K theta_D`` is ``sigma^2 (W_I^T W_I)^-1`` (the reduced

@@ -135,7 +135,7 @@ def identify_mechanism(model: MechanismModel, measured: str | Path, out_dir: str
     actuators = tuple(effort_columns(model))
     report = identification_report(fit.base, fit.estimate, reg0.theta, actuators,
                                    np.sqrt(np.mean(u ** 2, axis=0)), fit.residual_rms, fit.T)
-    # the effort unit of each actuator (the shared report names its keys after the hip's torques)
+    # the effort unit of each actuator (the shared report names its keys in N m)
     for key in ("residual_rms_Nm", "measured_rms_Nm"):
         report[key.replace("_Nm", "_si")] = report.pop(key)
     report["explained_percent"] = {a: (float(v) if np.isfinite(v) else None)

@@ -5,8 +5,11 @@ identification motion; Gaussian noise is added; the parameters are identified fr
 torques with the default parameter file as the prior; the identified model then predicts the
 torques of the same machine along a *different* motion (the ISO 14242-1 cycle model), and over
 repeated noise draws the fraction of base-parameter estimates whose interval
-``estimate +- z * standard_error`` holds the true value is counted. Run
-``python -m pkmdyn.identify.study`` to reproduce the figures of the documentation.
+``estimate +- z * standard_error`` holds the true value is counted. The torques are the
+engine's inverse dynamics of the machine's description (:func:`.identify_view.engine_torques`,
+joint reactions with friction; not the regressor). Run
+``python -m pkmdyn.machines.hip_simulator.identify_study`` to reproduce the figures of the
+documentation.
 """
 
 from __future__ import annotations
@@ -20,12 +23,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..machines.hip_simulator import HipModel, inverse_dynamics, inverse_kinematics, model_from_dict
-from ..machines.hip_simulator.params import default_params_dict
-from ..profiles.iso14242 import iso14242_motion
-from ..profiles.orientation import OrientationMotion
-from .hip import Which, identify_hip, parameter_vector
-from .hip_excite import ExcitationLimits, design_excitation, excitation_motion
+from ...profiles.iso14242 import iso14242_motion
+from ...profiles.orientation import OrientationMotion
+from .identify_excite import ExcitationLimits, design_excitation, excitation_motion
+from .identify_view import Which, engine_torques, identify_hip, parameter_vector
+from .params import HipModel, default_params_dict, model_from_dict
 
 __all__ = ["truth_description", "StudyResult", "validation_study"]
 
@@ -74,7 +76,7 @@ class StudyResult:
 
 
 def _torques(model: HipModel, motion: OrientationMotion) -> Array:
-    return inverse_dynamics(model, inverse_kinematics(model, motion), motion.load).tau
+    return engine_torques(model, motion)
 
 
 def validation_study(
