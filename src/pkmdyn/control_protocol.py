@@ -61,7 +61,7 @@ class ControlJob(Protocol):
     NAME: str
     #: the controllers it runs (:mod:`pkmdyn.control`)
     CONTROLLERS: tuple[str, ...]
-    #: the machine in a sentence's subject ("the hip simulator", "the PDM")
+    #: the machine in a sentence's subject ("the PDM", "the machine")
     SUBJECT: str
     #: the machine in a report's title
     REPORT_NAME: str
@@ -74,7 +74,7 @@ class ControlJob(Protocol):
     #: the actuators' efforts in a plot's axis and title ("torque", "motor torques")
     EFFORT_QUANTITY: str
     EFFORTS_TITLE: str
-    #: names of its task coordinates in messages, by their column base (``{"alpha": "alpha (FE)"}``)
+    #: names of its task coordinates in messages, by their column base (``{"alpha": "alpha (flexion)"}``)
     COORDINATE_NAMES: dict[str, str]
 
     def verbs(self, model: Any) -> Any:

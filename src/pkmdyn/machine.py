@@ -2,14 +2,15 @@
 
 A machine is data (its frozen model) plus free functions. The layers that drive a machine
 (``pkmdyn.simulate``, ``pkmdyn.control``, ``pkmdyn.identify``) never import a machine's
-modules: they receive a :class:`MachineDynamics` - any object, in practice a machine's
-``minimal`` module, that provides the verbs below - and the machine's model.
+modules: they receive a :class:`MachineDynamics` - any object that provides the verbs below,
+in practice the generic engine's verbs of a machine's description
+(:class:`pkmdyn.multibody.machine.MechanismVerbs`) - and the machine's model.
 
 Coordinates. ``q (n, nq)`` are the machine's minimal coordinates and ``qd, qdd`` their first
-and second time derivatives (hip simulator: the platform's Euler angles in the model's
-sequence [rad]; PDM: ``x, y`` [m], ``alpha, gamma`` [rad]). ``u (n, nu)`` are the actuator
-efforts (hip: motor torques [N m]; PDM: limb forces [N]). ``load (n,)`` is the machine's
-external load (hip: the hydraulic force [N]); a machine without one accepts ``None``.
+and second time derivatives (for instance a platform's Euler angles [rad], or positions [m]
+and angles [rad] of a planar platform). ``u (n, nu)`` are the actuator efforts (motor
+torques [N m], limb forces [N]). ``load (n,)`` is the machine's external load (a test rig's
+hydraulic force [N], say); a machine without one accepts ``None``.
 
 Equations of motion, in generalised forces dual to ``qd``:
 

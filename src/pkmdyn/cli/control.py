@@ -4,7 +4,7 @@ job of ``pkmdyn control``.
 This module wires a machine to the machine-independent layers :mod:`pkmdyn.control` and
 :mod:`pkmdyn.simulate`, and writes the files: ``control.csv`` (one row per control cycle),
 ``summary.json``, the plots and ``report.html``. What is a hand-built machine's own (its
-parameter loader, ``minimal`` verbs, motions, column names, figures such as the hip paper's
+parameter loader, verbs, motions, column names, figures such as the hip paper's
 Fig. 7 posture errors or the PDM paper's Fig. 26 limb motion, its 3D scene) comes from its
 control adapter in the registry (:mod:`pkmdyn.control_protocol`); a described mechanism has
 none and gets the generic columns of its description. Everything is computed and checked

@@ -1,10 +1,10 @@
 """Trajectory-tracking controllers for any machine, written against its verbs only.
 
 ``_reference``: the reference on the control grid and the actuator displacements along it;
-``_settings``: the settings files (timing, sensors, limits, gains; built-in ``hip.toml``,
-``pdm.toml``) and the loop's settings (:class:`LoopSettings`, which :mod:`pkmdyn.simulate` takes:
-the simulation imports the controllers, never the other way); ``_laws``: the controllers (feedforward, the hip paper's workspace PD and augmented PD, the
-PDM paper's joint-space PID, computed torque) behind one function, :func:`effort`.
+``_settings``: the settings files (timing, sensors, limits, gains; each machine's built-in
+file) and the loop's settings (:class:`LoopSettings`, which :mod:`pkmdyn.simulate` takes:
+the simulation imports the controllers, never the other way); ``_laws``: the controllers (feedforward, the workspace PD and augmented PD of Chen,
+Cheng & Pang 2022, a joint-space PID, computed torque) behind one function, :func:`effort`.
 """
 
 from __future__ import annotations

@@ -11,21 +11,21 @@ the reference at the middle of the interval, corrected by ``- T^2/24`` times its
 derivative (:func:`held_efforts`; why, in ``pkmdyn.control._reference``).
 
 - ``feedforward``: ``u = u_ff(k)``, open loop.
-- ``pd`` - the hip paper's workspace PD, Eq. (15). The printed equation,
+- ``pd`` - the workspace PD of Chen, Cheng & Pang (2022), Eq. (15). The printed equation,
   ``F_j = J_j^-1 [K_d omega_dot_j + K_p omega]`` with ``Delta omega_j = omega_j^d - omega_j``
   "the attitude angle error", is garbled: the bracket must hold the *errors* (the paper
   defines ``Delta omega`` and never uses it), ``K_p`` multiplies the posture-angle error and
   ``K_d`` its rate, and ``J_j^-1`` carries the workspace generalised force to the actuators.
   Our reading: ``u = B(q_ref)^-1 (K_p e + K_d e_dot)``, ``B^-1`` the inverse actuator map of
-  the controller's model along the reference (the workspace force -> motor torques of
-  ``tau = (p / 2 pi) J^-T Q``); ``K_p`` [N m/rad], ``K_d`` [N m s/rad] diagonal.
-- ``augmented-pd`` - the paper's Fig. 9: the PD above plus the model-based feedforward, whose
-  inverse dynamics contain the model's friction (hip joint and thrust bearing under the load,
-  Eq. 16) evaluated at the reference velocity: ``u = u_ff(k) + B(q_ref)^-1 (K_p e + K_d e_dot)``.
+  the controller's model along the reference (the workspace force -> actuator efforts; for
+  motors behind lead screws of lead ``p``, ``tau = (p / 2 pi) J^-T Q``); ``K_p`` [N m/rad], ``K_d`` [N m s/rad] diagonal.
+- ``augmented-pd`` - that paper's Fig. 9: the PD above plus the model-based feedforward, whose
+  inverse dynamics contain the model's friction (in that paper, bearing friction under the
+  load, Eq. 16) evaluated at the reference velocity: ``u = u_ff(k) + B(q_ref)^-1 (K_p e + K_d e_dot)``.
 - ``computed-torque``: ``u = ID(q_s, qd_s, qdd_ref + K_p e + K_d e_dot, load)`` with the
   model's inverse dynamics at the sensed state; ``K_p`` [1/s^2], ``K_d`` [1/s]
   (``omega_n^2``, ``2 zeta omega_n``).
-- ``pid`` - the PDM paper's position-loop PID in joint space (section 7): on each actuator's
+- ``pid`` - a position-loop PID in joint space (as in the PDM paper's section 7): on each actuator's
   displacement ``s`` (from its encoder), ``u = K_p e_s + K_i integral(e_s) + K_d e_s_dot``,
   ``e_s = s_ref - s_enc`` and ``e_s_dot = sd_ref - sd_enc`` (the encoder's differenced and
   filtered rate); the integral is a rectangle sum over cycles.

@@ -567,7 +567,7 @@ def positions_one(pk: NDArray[np.int64], x: Array, xd: Array, out: Array) -> int
     the inverse kinematics from the previous call's solution, ``xd`` the pose's rate for the
     predictor: a plant's encoders); returns the status (0 OK) (:func:`forward_one`). Where
     every actuated coordinate is set by a leg placed from the task alone (:mod:`.legs`: the
-    Stewart platform's legs, the hip's upper legs), those legs' closed forms alone answer, the
+    Stewart platform's legs, the PUS legs of a 3PUS+S platform), those legs' closed forms alone answer, the
     values the full solve keeps (no Newton, no rates; the state then :data:`ALONE`)."""
     return _dynamics(pk, x, xd, xd, 0.0, POSITIONS, out)
 

@@ -2,21 +2,21 @@
 
 Per cycle ``k`` (instant ``t_k = k T``):
 
-1. **Encoders.** The actuator displacement ``s`` (hip: motor angle [rad]; PDM: limb extension
-   [m]) from the start, read as a whole number of counts: ``s_enc = res floor(s / res)``,
+1. **Encoders.** The actuator displacement ``s`` (a motor's angle [rad] behind a
+   screw, a limb's extension [m]) from the start, read as a whole number of counts: ``s_enc = res floor(s / res)``,
    ``res`` = travel per turn / counts per turn. With ``exact_encoders`` the true ``s`` is the
    plant's own: its actuated joints' coordinates at the present pose by its inverse kinematics,
    ``s = k (a(q) - a(q_0))`` (``k`` the drives' ratios, ``q_0`` the run's first pose); else it
    is taken to first order in the tracking error about the plant's own reference displacement,
    ``s = s_ref + B_p(q_ref)^T (q - q_ref)`` (``B_p`` the plant's actuator map; the neglected
    second-order term is ``O(|q - q_ref|^2)``, below one count for the errors these loops
-   produce; the hip's and the PDM's default). Rate: backward difference ``(s_enc,k - s_enc,k-1) / T`` through a first-order
+   produce; the built-in machines' default). Rate: backward difference ``(s_enc,k - s_enc,k-1) / T`` through a first-order
    low-pass filter (cutoff ``velocity_cutoff_Hz``); acceleration: backward difference of the
    filtered rate through a second low-pass filter (``acceleration_cutoff_Hz``) - the chain of
    the PDM paper's section 7 (position differentiated twice, filtered). A cutoff of 0 means no
    filter. The filter is ``y += a (x - y)``, ``a = 1 - exp(-2 pi f_c T)``; both filters start
    on the reference's rate and acceleration (the loop starts in steady state on the reference).
-2. **Pose.** The pose sensor (the hip's attitude heading reference system) reads the pose
+2. **Pose.** The pose sensor (an attitude heading reference system, say) reads the pose
    ``delay`` cycles ago plus Gaussian noise of the given standard deviation per coordinate
    (seeded generator); it is recorded, and fed back only with ``pose_from_sensor``. By
    default the controller's pose comes from the encoders through the controller's model: with

@@ -11,7 +11,7 @@ where the machine offers it, else ``forward_dynamics_one`` itself (the fast path
 batched ``forward_dynamics`` at ``n = 1``.
 
 Where the ODE is stiff, and where it is not. Regularised Coulomb friction
-``F w / sqrt(|w|^2 + eps^2)`` has the slope ``F / eps`` at zero velocity: 4 N m of hip-joint
+``F w / sqrt(|w|^2 + eps^2)`` has the slope ``F / eps`` at zero velocity: 4 N m of bearing
 friction with ``eps = 1e-3 rad/s`` is a damper of 4000 N m s/rad, and against about 0.1-2
 kg m^2 of inertia its time constant is 25 us to 0.5 ms. But the slope falls as ``F / |w|``
 away from zero (transverse to a vector friction) and faster along it: the ODE is stiff only
@@ -66,12 +66,12 @@ run depend on the solvers' warm starts (the PDM's PID run from rest: 2e-4 of its
 step's size one way or the other, 5e-6 rad of its angle gamma after 0.25 s).
 
 Accuracy per cost (``tests/test_simulate.py`` against ``solve_ivp`` Radau at tolerances 1e-10;
-docs/control.md). One step per 1 ms cycle on a two-link machine with friction as sharp as the
-hip's, from rest, max position error over 0.15 s: ROS2 alone 4.2e-5 rad (2 evaluations per
+docs/control.md). One step per 1 ms cycle on a two-link machine with friction as sharp as a
+hip-joint wear simulator's (Chen, Cheng & Pang 2022), from rest, max position error over 0.15 s: ROS2 alone 4.2e-5 rad (2 evaluations per
 step plus its Jacobians, about 3 in all; 9.9e-4 while a start from rest counted as a reversal
 only where a velocity left zero downwards), Nystroem/ROS2 2.9e-5, RK4/ROS2 3.0e-5 rad (ROS2
 alone stops converging near 3e-6 rad at 0.125 ms steps, the explicit steps do not); with
-smooth friction (eps = 0.1 rad/s) 8.1e-5, 9.6e-7 and 5.3e-7 rad. On the hip's ISO cycle no
+smooth friction (eps = 0.1 rad/s) 8.1e-5, 9.6e-7 and 5.3e-7 rad. On that simulator's ISO 14242-1 cycle no
 step outside the velocity reversals is in the band at 1 ms; the feedforward replay on the
 exact plant is off by 3.0e-3 deg with ROS2 alone, 7e-6 deg with Nystroem/ROS2 and 6e-6 deg
 with RK4/ROS2, for 3.0, 3.2 and 4.2 evaluations per cycle. Nystroem/ROS2 is the default: the
@@ -129,9 +129,10 @@ class Plant:
 
 
 def make_plant(verbs: Any, model: Any, has_load: bool) -> Plant:
-    """Wrap a machine (``verbs`` = its ``minimal`` module, ``model`` = its plant model).
+    """Wrap a machine (``verbs`` = its verbs, :class:`pkmdyn.machine.MachineDynamics`; ``model`` = its plant model).
 
-    ``has_load``: whether the machine takes a load (hip: the hydraulic force) or ``None`` (PDM).
+    ``has_load``: whether the machine takes a load (a force along the motion, as a test rig's hydraulic
+    load) or ``None``.
     """
     nq, nu = len(verbs.COORDINATES), len(verbs.ACTUATORS)
     one = getattr(verbs, "forward_dynamics_one", None)
