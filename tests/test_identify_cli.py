@@ -183,3 +183,18 @@ def test_measured_file_with_rates_only_derives_the_accelerations(tmp_path):
     assert np.allclose(read.rates, motion.rates)
     scale = np.max(np.abs(motion.accels))
     assert np.max(np.abs(read.accels - motion.accels)[10:-10]) < 1e-3 * scale
+
+
+def test_a_parameter_file_with_another_friction_regularisation_is_warned_of(measured, tmp_path, capsys):
+    from pkmdyn.io import dumps_toml
+
+    path, _, _ = measured
+    d = truth_description()
+    d["friction"]["friction_velocity_eps_rad_s"] = 2e-3
+    params = tmp_path / "p.toml"
+    params.write_text(dumps_toml(d, "eps", {}))
+    with pytest.warns(UserWarning, match=r"friction_velocity_eps_rad_s = 0\.002.*engine's"):
+        assert main(["hip", "identify", "--no-plots", "--measured", str(path), "--params", str(params),
+                     "--out", str(tmp_path / "id")]) == 0
+    written = tomllib.loads((tmp_path / "id" / "identified.toml").read_text())["friction"]
+    assert written["friction_velocity_eps_rad_s"] == 2e-3  # written back as it was

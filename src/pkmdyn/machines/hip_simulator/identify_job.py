@@ -38,7 +38,8 @@ HELD_FIXED = (
     "gravity_m_s2",
     "hip_radius_m and thrust_radius_m (only products with the coefficients are identified)",
     "platform_mass_kg, unless the identified weight friction needs another value (see bearing_split)",
-    "friction_velocity_eps_rad_s, friction_velocity_eps_m_s",
+    "friction_velocity_eps_rad_s, friction_velocity_eps_m_s (written back as they are; the engine's "
+    "friction regularisation is 1e-3 rad/s and 1e-4 m/s)",
 )
 
 _OPTIONAL_FRICTION = {
@@ -120,6 +121,12 @@ def run_identify(
     model = model_from_dict(copy.deepcopy(description), str(params_path) if params_path is not None else
                             "built-in parameters")
     description = complete_description(description, model)
+    from ...multibody.friction import EPS_ROTATION, EPS_TRANSLATION
+
+    if (model.friction.eps_w, model.friction.eps_v) != (EPS_ROTATION, EPS_TRANSLATION):
+        warnings.warn(f"friction_velocity_eps_rad_s = {model.friction.eps_w:g}, friction_velocity_eps_m_s = "
+                      f"{model.friction.eps_v:g}: the identification regularises friction at the engine's "
+                      f"{EPS_ROTATION:g} rad/s and {EPS_TRANSLATION:g} m/s", stacklevel=2)
     motion, tau, deriv = read_measured_csv(measured_path, sg_window, sg_order)
     for i, name in enumerate(TORQUE_COLUMNS):
         if not np.any(tau[:, i]):
