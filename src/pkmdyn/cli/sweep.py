@@ -33,7 +33,7 @@ def check_scheduler(address: str) -> None:
         raise click.UsageError(f"--scheduler {address!r}: port {m['port']} is not from 1 to 65535")
 
 
-_MACHINE_HELP = ("Machine to sweep: hip, pdm, a described built-in machine (see pkmdyn machines) or a mechanism "
+_MACHINE_HELP = ("Machine to sweep: a built-in machine (see pkmdyn machines) or a mechanism "
                  "description FILE.toml.")
 
 
