@@ -413,7 +413,7 @@ class MechanismVerbs:
         ``ad`` by the direct kinematics (:mod:`.direct`), warm-started from the previous call
         (the first from the reference configuration): the controller's pose from its encoders.
         One compiled call: in task space where every actuator belongs to a leg placed from the
-        task alone (:func:`._direct.direct_task_one`: the Gough-Stewart platform, the hip), else
+        task alone (:func:`._direct.direct_task_one`: the Gough-Stewart platform, a 3PUS+S platform), else
         on the tree coordinates with a packed buffer (:func:`._direct.direct_one`); where it
         cannot answer, the checked route. Raises where the actuators reach no pose or sit on a
         singularity."""
