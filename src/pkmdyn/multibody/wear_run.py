@@ -183,11 +183,10 @@ def write_wear_files(out: Path, model: Any, results: list[tuple[str, SlideTracks
     return files
 
 
-def tracks_figure(joint: str, tracks: SlideTracks, max_points: int = 60) -> Any:
-    """A plotly 3D view of the head's markers' tracks on the cup (each track at most
-    ``max_points`` points, evenly spaced), coloured by cross-shear, on the sphere [mm]."""
-    import plotly.graph_objects as go
-
+def tracks_figure(joint: str, tracks: SlideTracks, max_points: int = 60) -> dict:
+    """A 3D view of the head's markers' tracks on the cup (each track at most ``max_points``
+    points, evenly spaced), coloured by cross-shear, on the sphere [mm]: a plotly figure
+    dictionary (plotly's figure format, written as built)."""
     n = tracks.points.shape[0]
     idx = np.unique(np.linspace(0, n - 1, min(n, max_points)).round().astype(int))
     P = np.round(tracks.points[idx] * 1e3, 3)  # [mm], to a micrometre: a light page
@@ -199,12 +198,13 @@ def tracks_figure(joint: str, tracks: SlideTracks, max_points: int = 60) -> Any:
         cs += [float(tracks.cross_shear[k])] * len(idx) + [float(tracks.cross_shear[k])]
     r = float(np.linalg.norm(tracks.points[0, 0])) * 1e3
     u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 36), np.linspace(0, np.pi, 18))
-    sphere = go.Surface(x=r * np.cos(u) * np.sin(v), y=r * np.sin(u) * np.sin(v), z=r * np.cos(v), opacity=0.15,
-                        showscale=False, colorscale=[[0, "#999"], [1, "#999"]], hoverinfo="skip")
-    lines = go.Scatter3d(x=xs, y=ys, z=zs, mode="lines", name="tracks",
-                         line=dict(color=cs, colorscale="Viridis", cmin=0.0, cmax=0.5, width=3,
-                                   colorbar=dict(title="cross-shear")))
-    fig = go.Figure([sphere, lines])
-    fig.update_layout(title=f"{joint}: the head's markers' tracks on the cup [mm]", height=560,
-                      scene=dict(aspectmode="data", xaxis_title="x [mm]", yaxis_title="y [mm]", zaxis_title="z [mm]"))
-    return fig
+    sphere = {"type": "surface", "x": (r * np.cos(u) * np.sin(v)).tolist(), "y": (r * np.sin(u) * np.sin(v)).tolist(),
+              "z": (r * np.cos(v)).tolist(),
+              "opacity": 0.15, "showscale": False, "colorscale": [[0, "#999"], [1, "#999"]], "hoverinfo": "skip"}
+    lines = {"type": "scatter3d", "x": xs, "y": ys, "z": zs, "mode": "lines", "name": "tracks",
+             "line": {"color": cs, "colorscale": "Viridis", "cmin": 0.0, "cmax": 0.5, "width": 3,
+                      "colorbar": {"title": {"text": "cross-shear"}}}}
+    return {"data": [sphere, lines],
+            "layout": {"title": {"text": f"{joint}: the head's markers' tracks on the cup [mm]"}, "height": 560,
+                       "scene": {"aspectmode": "data", "xaxis": {"title": {"text": "x [mm]"}},
+                                 "yaxis": {"title": {"text": "y [mm]"}}, "zaxis": {"title": {"text": "z [mm]"}}}}}

@@ -12,12 +12,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-import matplotlib
+from typing import Any
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from numpy.typing import NDArray  # noqa: E402
+import numpy as np
+from numpy.typing import NDArray
 
 __all__ = ["PlotData", "PlotCollector", "write_figures", "report_plots", "plot_motion_and_load", "plot_slider_motion",
            "plot_torque_parts", "plot_torques", "plot_friction_vs_load"]
@@ -50,6 +48,17 @@ class PlotData:
     scatter_friction: Array
 
 
+def _plt() -> Any:
+    """matplotlib's pyplot on the Agg backend, imported when a figure is drawn (a run without
+    plots does not load it)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
 def _curve(ax, data: PlotData, name: str, col: int, **style) -> None:
     lo, hi = data.lo[name][:, col], data.hi[name][:, col]
     if data.envelope:
@@ -66,13 +75,13 @@ def _finish(fig, data: PlotData, path: Path) -> Path:
         fig.suptitle(data.note, fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _plt().close(fig)
     return path
 
 
 def plot_motion_and_load(data: PlotData, path: Path) -> Path:
     """Fig. 4 style: (a) the three Euler angles [deg], (b) the load [N] over time."""
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4))
+    fig, (ax1, ax2) = _plt().subplots(1, 2, figsize=(11, 4))
     for k, label in enumerate(("FE (alpha)", "AA (beta)", "IER (gamma)")):
         _curve(ax1, data, "angles_deg", k, color=_LEG_COLOURS[k], label=label)
     ax1.set(xlabel="t [s]", ylabel="angle [deg]", title="(a) Motion")
@@ -90,7 +99,7 @@ def plot_slider_motion(data: PlotData, path: Path) -> Path:
     The two sliders of one screw share velocity and acceleration, so panels (b) and (c) show
     one curve per screw.
     """
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4))
+    fig, axes = _plt().subplots(1, 3, figsize=(15, 4))
     for j in (0, 1):
         for i in range(3):
             _curve(axes[0], data, "L", 3 * j + i, fmt="-" if j == 0 else "--", color=_LEG_COLOURS[i], label=f"S{j + 1}{i + 1}")
@@ -109,7 +118,7 @@ def plot_slider_motion(data: PlotData, path: Path) -> Path:
 def plot_torque_parts(data: PlotData, path: Path) -> Path:
     """Fig. 8 style: one panel per part of Eq. (14), three motors each [N m]."""
     names = (("platform", "(a) platform"), ("lever", "(b) lever"), ("slider", "(c) slider"), ("screw", "(d) screw"))
-    fig, axes = plt.subplots(1, len(names), figsize=(4.2 * len(names), 4))
+    fig, axes = _plt().subplots(1, len(names), figsize=(4.2 * len(names), 4))
     for ax, (key, title) in zip(axes, names):
         for i in range(3):
             _curve(ax, data, key, i, color=_LEG_COLOURS[i], label=f"motor {i + 1}")
@@ -121,7 +130,7 @@ def plot_torque_parts(data: PlotData, path: Path) -> Path:
 
 def plot_torques(data: PlotData, path: Path) -> Path:
     """Fig. 11 style: the total driving torque of each motor [N m]."""
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4))
+    fig, axes = _plt().subplots(1, 3, figsize=(15, 4))
     for i, ax in enumerate(axes):
         _curve(ax, data, "tau", i, color=_LEG_COLOURS[i])
         ax.set(xlabel="t [s]", ylabel="torque tau [N m]", title=f"({'abc'[i]}) Linear module {i + 1}")
@@ -131,7 +140,7 @@ def plot_torques(data: PlotData, path: Path) -> Path:
 
 def plot_friction_vs_load(data: PlotData, path: Path) -> Path:
     """Friction torque per motor [N m]: (a) with the load over time, (b) against the load."""
-    fig, (ax, ax3) = plt.subplots(1, 2, figsize=(13, 4.2))
+    fig, (ax, ax3) = _plt().subplots(1, 2, figsize=(13, 4.2))
     for i in range(3):
         _curve(ax, data, "friction", i, color=_LEG_COLOURS[i], label=f"friction, motor {i + 1}")
     ax.set(xlabel="t [s]", ylabel="friction torque [N m]", title="(a) Over time")
