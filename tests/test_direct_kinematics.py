@@ -16,7 +16,7 @@ import multibody_examples as ex
 from oracles import delta, stewart
 from pkmdyn.cli import main
 from pkmdyn.errors import MotionError, ParameterError, SingularityError, UnreachablePoseError
-from pkmdyn.machines.registry import described_machines, hand_built_machines
+from pkmdyn.machines.registry import described_machines, generated_machines
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
 from pkmdyn.multibody.direct import actuator_reference, assembly_modes, direct_kinematics, parse_actuators
 from pkmdyn.multibody.poses import body_poses
@@ -25,8 +25,8 @@ MACHINES = Path(__file__).resolve().parents[1] / "src" / "pkmdyn" / "machines"
 
 
 def _model(name):
-    if name in hand_built_machines():
-        return load_mechanism(hand_built_machines()[name].description())
+    if name in generated_machines():
+        return load_mechanism(generated_machines()[name].description())
     return load_mechanism(described_machines()[name])
 
 

@@ -183,14 +183,14 @@ def test_describe_the_hip_and_the_pdm_from_their_parameters(capsys):
 
 @pytest.mark.parametrize("name, actuator", [("hip", "P_1_pos_m"), ("pdm", "P11_pos_m")])
 def test_run_a_hand_built_machine_writes_the_common_files(capsys, tmp_path, name, actuator):
-    from pkmdyn.machines.registry import hand_built
+    from pkmdyn.machines.registry import generated
 
     code, _, err = _run(capsys, "run", "--machine", name, "--out", str(tmp_path / "o"))
     assert code == 0, err
     assert {"results.csv", "model.json", "bodies.npz", "summary.json"} <= {p.name for p in (tmp_path / "o").iterdir()}
     cols = np.genfromtxt(tmp_path / "o" / "results.csv", delimiter=",", names=True)
     assert actuator in cols.dtype.names and "euler1_rad" in cols.dtype.names
-    assert np.allclose(cols["t_s"], hand_built(name).default_motion().t)
+    assert np.allclose(cols["t_s"], generated(name).default_motion().t)
 
 
 def test_registry_reads_the_machine_folders():
@@ -199,7 +199,7 @@ def test_registry_reads_the_machine_folders():
     from pkmdyn.errors import ParameterError
     from pkmdyn.machines import registry
 
-    hand = registry.hand_built_machines()
+    hand = registry.generated_machines()
     assert set(hand) == {"hip", "pdm"}
     assert set(registry.described_machines()) >= {"stewart", "delta", "rrr3", "bennett"}
     assert registry.builtin_names() == sorted({*hand, *registry.described_machines()})
@@ -209,8 +209,8 @@ def test_registry_reads_the_machine_folders():
         assert isinstance(entry.description(), dict) and len(entry.default_motion().t) > 1
     with pytest.raises(ParameterError, match="unknown machine"):
         registry.resolve("no-such-machine")
-    with pytest.raises(ParameterError, match="not a hand-built machine"):
-        registry.hand_built("stewart")
+    with pytest.raises(ParameterError, match="not a generated machine"):
+        registry.generated("stewart")
 
 
 def test_control_takes_every_machine_of_the_registry(capsys, tmp_path):

@@ -1,4 +1,4 @@
-"""What a hand-built machine provides to its closed-loop control job (the protocol between the
+"""What a generated machine provides to its closed-loop control job (the protocol between the
 control command, :mod:`pkmdyn.cli.control`, and the machines; it sits below both, so that a
 machine never imports the command and the command never names a machine).
 

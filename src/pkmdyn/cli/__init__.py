@@ -13,10 +13,7 @@ import warnings
 import click
 
 from ..errors import PkmdynError
-from . import hip as _hip_commands  # noqa: F401  (registers the commands)
-from . import pdm as _pdm_commands  # noqa: F401
-from . import export as _export_commands  # noqa: F401
-from . import identify as _identify_commands  # noqa: F401
+from . import pdm as _pdm_commands  # noqa: F401  (registers the commands)
 from . import control as _control_commands  # noqa: F401
 from . import mechanism as _mechanism_commands  # noqa: F401
 from . import view as _view_commands  # noqa: F401
@@ -28,6 +25,10 @@ from . import workspace as _workspace_commands  # noqa: F401
 from . import imports as _import_commands  # noqa: F401
 from . import compile as _compile_commands  # noqa: F401
 from ._groups import HELD_NOTES, cli
+from ..machines.registry import command_groups
+
+for _group in command_groups():  # the generated machines' own commands, pkmdyn <machine> ...
+    cli.add_command(_group)
 
 __all__ = ["main", "cli", "run"]
 
@@ -97,7 +98,7 @@ def _main(argv: list[str] | None) -> int:
         return 2
     except click.exceptions.Exit as exc:
         return int(exc.exit_code)
-    except _NO_ARGS_IS_HELP as exc:  # `pkmdyn`, `pkmdyn hip`: the group's help, as --help prints it
+    except _NO_ARGS_IS_HELP as exc:  # `pkmdyn`, `pkmdyn <machine>`: the group's help, as --help prints it
         click.echo(exc.ctx.get_help() if exc.ctx is not None else cli.get_help(click.Context(cli)))
         return 0
     except (KeyboardInterrupt, click.exceptions.Abort):

@@ -11,7 +11,7 @@ import click
 
 from ..errors import PkmdynError
 
-__all__ = ["cli", "hip", "pdm", "PATH_IN", "MACHINE_HELP", "FiniteFloat", "list_files", "echo_lines", "echo"]
+__all__ = ["cli", "pdm", "PATH_IN", "MACHINE_HELP", "FiniteFloat", "list_files", "echo_lines", "echo"]
 
 #: an input file option (existence is checked by the readers, which name the file)
 PATH_IN = click.Path(dir_okay=False, path_type=Path)
@@ -23,11 +23,6 @@ MACHINE_HELP = "A built-in machine (see pkmdyn machines) or a mechanism descript
 @click.version_option(package_name="pkmdyn")
 def cli() -> None:
     """pkmdyn: kinematics, dynamics and control of parallel manipulators."""
-
-
-@cli.group()
-def hip() -> None:
-    """The 2(3PUS+S) dual-platform hip-joint wear simulator."""
 
 
 @cli.group()
@@ -96,9 +91,9 @@ def write_default_file(machine: str, control: bool, out_path: Path) -> None:
 
         text, what = default_settings_text(machine), "control settings"
     else:
-        from ..machines.registry import hand_built
+        from ..machines.registry import generated
 
-        text, what = hand_built(machine).default_params_text(), "parameters"
+        text, what = generated(machine).default_params_text(), "parameters"
     with atomic_file(out_path) as tmp:
         tmp.write_text(text, encoding="utf-8")
         echo(f"{what}: {out_path}")

@@ -41,15 +41,12 @@ __all__ = ["LANES", "compile_kernels"]
 #: (:func:`pkmdyn.simulate._cycles.compile_for_runs`), which no short run takes.
 #: Lane 0 takes the closed loops (the single-sample kernels and the loop's cycles, the longest
 #: compilations), lane 1 the batched kinematics, dynamics and analyses.
-LANES: tuple[tuple[tuple[str, ...], ...], ...] = (
+_GENERIC_LANES: tuple[tuple[tuple[str, ...], ...], ...] = (
     (
         ("@cycles",),  # the closed loop's cycles in one compiled call (a long run's route)
         ("control", "--machine", "stewart", "--controller", "computed-torque", "--duration", "0.02"),
         ("control", "--machine", "delta", "--controller", "pid", "--duration", "0.02"),
         ("control", "--machine", "bennett", "--duration", "0.02"),  # one actuator: other array types
-        ("hip", "control", "--controller", "augmented-pd", "--cycles", "0.01", "--no-plots"),
-        ("hip", "control", "--controller", "feedforward", "--cycles", "0.01", "--no-plots"),
-        ("hip", "control", "--controller", "computed-torque", "--cycles", "0.01", "--no-plots"),
         ("pdm", "control", "--controller", "pid", "--cycles", "0.01", "--no-plots"),
         ("assemble", "--machine", "stewart", "--actuators", "@reference", "--starts", "8"),
         ("assemble", "--machine", "delta", "--actuators", "@reference", "--starts", "8"),
@@ -61,11 +58,25 @@ LANES: tuple[tuple[tuple[str, ...], ...], ...] = (
         ("run", "--machine", "pdm"),
         ("stiffness", "--machine", "delta", "--default-motion"),
         ("workspace", "--machine", "delta", "--grid", "x=-0.6:0.6:5,y=-0.6:0.6:5", "--pose", "z=-1.2"),
-        ("wear", "--machine", "hip", "--joint", "S0_upper", "--radius-m", "0.014"),
-        ("hip", "run", "--samples-per-cycle", "64", "--no-plots"),
         ("pdm", "run", "--no-plots"),
     ),
 )
+
+
+def _lanes() -> tuple[tuple[tuple[str, ...], ...], ...]:
+    """The generic exercises, each generated machine's own (``COMPILE_EXERCISES`` of its registry
+    entry: ``(lane, command line)`` pairs) appended to their lanes."""
+    from ..machines.registry import generated_machines
+
+    lanes = [list(lane) for lane in _GENERIC_LANES]
+    for entry in generated_machines().values():
+        for lane, args in getattr(entry, "COMPILE_EXERCISES", ()):
+            lanes[lane].append(tuple(args))
+    return tuple(tuple(lane) for lane in lanes)
+
+
+#: every lane's exercises (the generic ones and the generated machines' own)
+LANES = _lanes()
 
 
 def _reference_actuators(machine: str) -> str:

@@ -1,14 +1,14 @@
-"""Closed-loop control commands: ``pkmdyn hip control``, ``pkmdyn pdm control`` and the control
-job of ``pkmdyn control``.
+"""The control job of every machine (``pkmdyn control``, a machine's own ``control`` command such
+as ``pkmdyn pdm control``) and the options those commands share.
 
 This module wires a machine to the machine-independent layers :mod:`pkmdyn.control` and
 :mod:`pkmdyn.simulate`, and writes the files: ``control.csv`` (one row per control cycle),
-``summary.json``, the plots and ``report.html``. What is a hand-built machine's own (its
-parameter loader, verbs, motions, column names, figures such as the hip paper's
-Fig. 7 posture errors or the PDM paper's Fig. 26 limb motion, its 3D scene) comes from its
+``summary.json``, the plots and ``report.html``. What is a generated machine's own (its
+parameter loader, verbs, motions, column names, figures such as a paper's posture errors
+or the PDM paper's Fig. 26 limb motion, its 3D scene) comes from its
 control adapter in the registry (:mod:`pkmdyn.control_protocol`); a described mechanism has
 none and gets the generic columns of its description. Everything is computed and checked
-before the output folder is touched. :func:`hip_closed_loop` is the public entry of the
+before the output folder is touched. :func:`builtin_closed_loop` is the public entry of the
 real-time benchmark.
 """
 
@@ -23,13 +23,11 @@ import click
 import numpy as np
 
 from ..errors import MotionError, ParameterError, PkmdynError
-from ..machines.hip_simulator import control_job as _hip_job
 from ..machines.pdm4 import control_job as _pdm_job
-from ._groups import PATH_IN, hip, list_files, pdm
+from ._groups import PATH_IN, list_files, pdm
 from ._groups import FiniteFloat
-from ._hip_options import paper_option
 
-__all__ = ["hip_closed_loop", "run_control", "machine_setup", "effort_label", "hand_built_controllers", "check_loop",
+__all__ = ["builtin_closed_loop", "control_command", "control_options", "run_control", "machine_setup", "effort_label", "machine_controllers", "check_loop",
            "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
 
 #: most cycles of the built-in motion (``--cycles``)
@@ -44,7 +42,7 @@ MAX_STEPS_PER_CYCLE = 1000
 @dataclass(frozen=True)
 class _Setup:
     """A machine ready to run: verbs, controller and plant models, motion, duration, labels;
-    ``job``: a hand-built machine's control adapter (:class:`pkmdyn.control_protocol.ControlJob`),
+    ``job``: a generated machine's control adapter (:class:`pkmdyn.control_protocol.ControlJob`),
     None for a described mechanism."""
 
     machine: str
@@ -69,7 +67,7 @@ class _Setup:
 # ----------------------------------------------------------------------------- machines
 def machine_setup(machine: str, params: Path | None, plant_params: Path | None, motion: Path | None, cycles: float,
                   settings: dict[str, Any]) -> _Setup:
-    """The hand-built machine ``machine`` (a registry name) ready to run: the controller's model
+    """The generated machine ``machine`` (a registry name) ready to run: the controller's model
     from ``params`` (None: built-in), the plant's from ``plant_params`` or else the controller's
     parameters with the ``[mismatch]`` factors of ``settings``, and ``cycles`` of the built-in
     motion or the motion file ``motion``."""
@@ -278,12 +276,12 @@ def _check_encoder(setup: _Setup, ls: Any, settings: dict[str, Any], gains_path:
             f"{MIN_ENCODER_COUNTS} counts, too coarse to measure it (raise encoder_counts_per_turn)")
 
 
-def hand_built_controllers() -> dict[str, tuple[str, ...]]:
-    """The controllers of every hand-built machine with a control job, by machine name."""
-    from ..machines.registry import control_adapter, hand_built_machines
+def machine_controllers() -> dict[str, tuple[str, ...]]:
+    """The controllers of every generated machine with a control job, by machine name."""
+    from ..machines.registry import control_adapter, generated_machines
 
     out = {}
-    for name in sorted(hand_built_machines()):
+    for name in sorted(generated_machines()):
         try:
             out[name] = control_adapter(name).CONTROLLERS
         except ParameterError:  # a machine without a control job
@@ -300,22 +298,23 @@ def _travel_unit(setup: _Setup) -> str:
     return units.pop() if len(units) == 1 else "m or rad"
 
 
-def hip_closed_loop(duration_s: float = 10.0, controller: str = "augmented-pd",
-                    integration_step_s: float | None = None, exact_plant: bool = False) -> Any:
-    """The hip simulator tracking the built-in ISO cycle for ``duration_s`` [s] at the built-in
-    settings (1 kHz control cycle), default parameters, plant with the default mismatch (or the
-    controller's own model with ``exact_plant``). ``integration_step_s`` overrides the plant's
-    step. Returns the :class:`~pkmdyn.simulate.Tracking`; for the real-time benchmark."""
+def builtin_closed_loop(machine: str, duration_s: float = 10.0, controller: str = "augmented-pd",
+                        integration_step_s: float | None = None, exact_plant: bool = False) -> Any:
+    """The built-in machine ``machine`` (one with a control job) tracking its built-in motion for
+    ``duration_s`` [s] at its built-in settings, default parameters, plant with the default
+    mismatch (or the controller's own model with ``exact_plant``). ``integration_step_s``
+    overrides the plant's step. Returns the :class:`~pkmdyn.simulate.Tracking`; for the
+    real-time benchmark."""
     from dataclasses import replace
 
     from ..control import gains, load_settings, loop_settings
     from ..simulate import track
 
-    settings = load_settings(_hip_job.NAME)
+    settings = load_settings(machine)
     ls = loop_settings(settings)
     if integration_step_s is not None:
         ls = replace(ls, step_s=float(integration_step_s))
-    setup = machine_setup(_hip_job.NAME, None, None, None, duration_s, settings)
+    setup = machine_setup(machine, None, None, None, duration_s, settings)
     plant = setup.model if exact_plant else setup.plant_model
     return track(setup.verbs, setup.model, plant, setup.motion, duration_s, controller,
                  gains(settings, controller, 3), ls, True, joint_accelerations=False)
@@ -576,7 +575,7 @@ def _plots(setup: _Setup, curves: _Curves, kind: str, tmp: Path) -> list[Path]:
 
 
 def effort_label(machine: str, a: int) -> tuple[str, str]:
-    """The name and unit of actuator ``a`` (0-based) of the hand-built machine ``machine`` for
+    """The name and unit of actuator ``a`` (0-based) of the generated machine ``machine`` for
     plots: ``("motor 1 torque", "N m")``, ``("limb l11 force", "N")``, not the column names
     ``tau1_Nm``, ``f1_N``."""
     from ..machines.registry import control_adapter
@@ -713,7 +712,7 @@ def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str,
     return files
 
 
-def _command(machine: str, controller: str, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir,
+def control_command(machine: str, controller: str, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir,
              fmt: str = "csv") -> None:
     from ..io import check_output_dir, check_table_format
 
@@ -735,7 +734,8 @@ def _command(machine: str, controller: str, params_path, plant_path, motion_path
             warnings.showwarning(w.message, w.category, w.filename, w.lineno)
 
 
-def _options(f: Any) -> Any:
+def control_options(f: Any) -> Any:
+    """The options of a machine's own ``control`` command (its ``--controller`` apart)."""
     for opt in reversed((
         click.option("--params", "params_path", type=PATH_IN, help="Controller model's parameter file (TOML); default: built-in."),
         click.option("--plant-params", "plant_path", type=PATH_IN,
@@ -756,20 +756,10 @@ def _options(f: Any) -> Any:
     return f
 
 
-@hip.command("control")
-@paper_option
-@click.option("--controller", required=True, help="One of: " + ", ".join(_hip_job.CONTROLLERS) + ".")
-@_options
-def hip_control(controller, params_path, plant_path, motion_path, cycles, gains_path, fmt, no_plots, out_dir) -> None:
-    """Closed-loop tracking of a motion; writes control.csv (or .parquet), summary.json and plots."""
-    _command(_hip_job.NAME, controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir,
-             fmt)
-
-
 @pdm.command("control")
 @click.option("--controller", required=True, help="One of: " + ", ".join(_pdm_job.CONTROLLERS) + ".")
-@_options
+@control_options
 def pdm_control(controller, params_path, plant_path, motion_path, cycles, gains_path, fmt, no_plots, out_dir) -> None:
     """Closed-loop tracking of a motion; writes control.csv (or .parquet), summary.json and plots."""
-    _command(_pdm_job.NAME, controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir,
+    control_command(_pdm_job.NAME, controller, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir,
              fmt)

@@ -12,7 +12,7 @@ from pathlib import Path
 import click
 
 from ._groups import MACHINE_HELP, PATH_IN, FiniteFloat, cli, list_files
-from .control import MAX_CYCLES, hand_built_controllers
+from .control import MAX_CYCLES, machine_controllers
 
 
 @cli.command("machines")
@@ -25,7 +25,7 @@ def machines() -> None:
 
 
 def _load(machine: str, limits: dict | None = None):
-    """The compiled mechanism of ``--machine`` (a hand-built machine through the description its
+    """The compiled mechanism of ``--machine`` (a generated machine through the description its
     folder makes) and its registry entry (``None`` for a described one); ``limits`` (``--limit``)
     over the description's own for the plausibility of its numbers."""
     from ..machines.registry import resolve
@@ -119,8 +119,8 @@ def _shown(v) -> str:
 @click.option("--machine", required=True, help=MACHINE_HELP)
 @click.option("--motion", "motion_path", type=PATH_IN, default=None,
               help="Motion CSV: t_s and one column per task coordinate (<name>_<unit>), optional rates "
-                   "<name>d_<unit>_s and accelerations <name>dd_<unit>_s2 (default: the machine's default motion; "
-                   "hip: the ISO 14242-1 cycle, pdm: the Eq. 84 motion).")
+                   "<name>d_<unit>_s and accelerations <name>dd_<unit>_s2 (default: the machine's default motion, "
+                   "for a paper's machine the paper's motion).")
 @click.option("--actuator-motion", "actuator_path", type=PATH_IN, default=None,
               help="Motion in actuator coordinates (CSV): t_s and one column per actuated joint, <joint>_pos_<m|rad>, "
                    "optional rates <joint>_vel_<u>_s and accelerations <joint>_acc_<u>_s2 and named loads; the pose "
@@ -160,8 +160,8 @@ def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_w
     motion, streamed in chunks: results.csv (or .parquet), model.json, bodies.npz, summary.json,
     report.html.
 
-    The same files for every machine; the hip's and the PDM's own jobs (dynamics, plots) are
-    pkmdyn hip run and pkmdyn pdm run."""
+    The same files for every machine; a paper's machine has its own job too, with the paper's
+    columns and figures (pkmdyn <machine> run; see pkmdyn machines)."""
     from ..io import check_output_dir
     from ..machines.registry import resolve
     from ..multibody import read_task_motion
@@ -283,22 +283,22 @@ def described_control_settings(model) -> dict:
 @cli.command("control")
 @click.option("--machine", required=True, help=MACHINE_HELP)
 @click.option("--controller", default=None,
-              help="; ".join(f"{n}: {', '.join(c)}" for n, c in hand_built_controllers().items()) + "; a described "
+              help="; ".join(f"{n}: {', '.join(c)}" for n, c in machine_controllers().items()) + "; a described "
                    "mechanism: " + ", ".join(DESCRIBED_CONTROLLERS) + " (default computed-torque).")
-@click.option("--params", "params_path", type=PATH_IN, help="Hand-built machines: the controller model's parameter file.")
-@click.option("--plant-params", "plant_path", type=PATH_IN, help="Hand-built machines: the plant's parameter file.")
+@click.option("--params", "params_path", type=PATH_IN, help="Generated machines: the controller model's parameter file.")
+@click.option("--plant-params", "plant_path", type=PATH_IN, help="Generated machines: the plant's parameter file.")
 @click.option("--motion", "motion_path", type=PATH_IN,
               help="A motion file (CSV): the machine's own format; a described mechanism's task motion "
                    "(docs/mechanism_format.md), its named load's column driving the load. Default: the built-in "
                    "motion.")
 @click.option("--cycles", type=FiniteFloat(0.0, MAX_CYCLES, lo_open=True), default=None,
-              help="Hand-built machines: cycles of the built-in motion (default 1).")
+              help="Generated machines: cycles of the built-in motion (default 1).")
 @click.option("--gains", "gains_path", type=PATH_IN,
               help="Control settings (TOML) laid over the machine's defaults (docs/control.md; a described "
                    "mechanism's defaults are tuned from its inertia, docs/multibody_dynamics.md).")
 @click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv", show_default=True,
               help="Table format of the per-cycle results.")
-@click.option("--no-plots", is_flag=True, help="Hand-built machines: write no PNG plots.")
+@click.option("--no-plots", is_flag=True, help="Generated machines: write no PNG plots.")
 @click.option("--duration", "duration_s", type=FiniteFloat(0.0, 1e6, lo_open=True), default=None,
               help="Described mechanisms: seconds of the motion to track (default 1 s or the motion's length).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
@@ -308,8 +308,8 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
             duration_s: float | None, out_dir: Path) -> None:
     """Closed-loop tracking for any machine: control.csv (or .parquet), summary.json.
 
-    A hand-built machine runs its own control job (the same as pkmdyn hip control / pkmdyn pdm
-    control, with every option of those); a described mechanism tracks its default motion in
+    A generated machine runs its own control job (the same as its pkmdyn <machine> control,
+    with every option of that); a described mechanism tracks its default motion in
     task space on its own dynamics (pkmdyn.multibody.machine), the controller the same model."""
     import numpy as np
 
@@ -320,21 +320,21 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     from ..multibody import default_motion, read_task_motion, solve_kinematics
     from ..multibody.kinematics import limit_message, limited_joints
     from ..multibody.machine import machine_verbs
-    from .control import _check_encoder, _command, _Setup, _stream, check_loop
+    from .control import _check_encoder, control_command, _Setup, _stream, check_loop
 
     entry, path = resolve(machine)
     if entry is not None:
         if controller is None:
             raise click.UsageError(f"--controller is required for --machine {machine}")
         if duration_s is not None:
-            raise click.UsageError("--duration applies to a described mechanism; a hand-built machine takes --cycles")
-        _command(entry.NAME, controller, params_path, plant_path, motion_path, 1.0 if cycles is None else cycles,
+            raise click.UsageError("--duration applies to a described mechanism; a generated machine takes --cycles")
+        control_command(entry.NAME, controller, params_path, plant_path, motion_path, 1.0 if cycles is None else cycles,
                  gains_path, no_plots, out_dir, fmt)
         return
     given = [o for o, v in (("--params", params_path), ("--plant-params", plant_path), ("--cycles", cycles))
              if v is not None]
     if given:
-        raise click.UsageError(f"{given[0]} applies to the hand-built machines (hip, pdm), not to a described mechanism")
+        raise click.UsageError(f"{given[0]} applies to the generated machines (see pkmdyn machines), not to a described mechanism")
     controller = controller or "computed-torque"
     if controller not in DESCRIBED_CONTROLLERS:
         raise click.UsageError(f"--controller {controller!r}: a described mechanism takes "
@@ -376,7 +376,7 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     _check_encoder(setup, ls, settings, gains_path)
     n = model.na if controller == "pid" else model.nt
     _stream(setup, controller, gains(settings, controller, n), ls, settings, out_dir,
-            False, gains_path, inputs, fmt, html_report=False)  # its plots and page are the hand-built machines' own
+            False, gains_path, inputs, fmt, html_report=False)  # its plots and page are the generated machines' own
 
 
 def _control_load(model, motion, what: str, efforts: tuple[str, ...]):

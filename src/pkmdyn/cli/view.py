@@ -47,7 +47,7 @@ def _described_page(path: Path | None, out: Path, description: dict | None = Non
 @cli.command("view")
 @click.option("--machine", required=True, help="A built-in machine (see pkmdyn machines) or a description FILE.toml.")
 @click.option("--params", "params_path", type=PATH_IN,
-              help="Parameter file (TOML) of a hand-built machine (hip, pdm); default: the built-in one.")
+              help="Parameter file (TOML) of a generated machine (see pkmdyn machines); default: the built-in one.")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="HTML file to write (atomically; only a page pkmdyn wrote is replaced).")
 def view(machine: str, params_path: Path | None, out_path: Path) -> None:
@@ -64,6 +64,6 @@ def view(machine: str, params_path: Path | None, out_path: Path) -> None:
     elif entry is not None:
         entry.view_page(params_path, out_path, _listing)
     elif params_path is not None:
-        raise click.UsageError("--params applies to the hand-built machines (hip, pdm); a described mechanism is its file")
+        raise click.UsageError("--params applies to the generated machines (see pkmdyn machines); a described mechanism is its file")
     else:
         _described_page(path, out_path)

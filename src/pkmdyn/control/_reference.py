@@ -25,8 +25,8 @@ less ``T/12 u*'(0)`` gives it the velocity error ``-T^2/12 G u*'(0)`` and remove
 The feedforward therefore holds ``u_k = u_m - T^2/24 u''`` (``u''`` by the second difference
 of the middles), the first one less ``T/12 u'(0)`` (:func:`pkmdyn.control.held_efforts`); the
 sampled positions then follow the reference to ``O(T^3)``. ``tests/test_control.py`` checks
-the formula above on the exact sampled double integrator. On the ISO 14242-1 cycle of a
-hip-joint wear simulator (Chen, Cheng & Pang 2022; 1 ms, exact plant) the replay errors are 3.2e-4 deg (the mean, by Simpson's rule over start,
+the formula above on the exact sampled double integrator. On the ISO 14242-1 cycle of the
+2(3PUS+S) wear simulator (Chen, Cheng & Pang 2022; 1 ms, exact plant) the replay errors are 3.2e-4 deg (the mean, by Simpson's rule over start,
 middle and end), 1.7e-4 deg (the middle) and 6e-6 deg (this choice); docs/control.md.
 """
 

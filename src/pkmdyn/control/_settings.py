@@ -1,6 +1,6 @@
 """Control settings files (``--gains G.toml``): timing, actuators, sensors, gains, mismatch.
 
-Each hand-built machine's folder holds its built-in settings file (``control.toml``, named by
+Each generated machine's folder holds its built-in settings file (``control.toml``, named by
 the machine's registry entry, :mod:`pkmdyn.machines.registry`) with every key it accepts and
 its default; a user file overrides any subset of them. Rules (each violation is
 a :class:`~pkmdyn.errors.ParameterError` naming the table and key): no table or key the
@@ -39,10 +39,10 @@ MAXIMUM = {"pose_delay_cycles": 10_000, "seed": 2**63 - 1, "pose_feedback_from_s
 
 
 def default_settings_text(machine: str) -> str:
-    """The built-in settings file of the hand-built machine ``machine`` (a registry name) as text."""
-    from ..machines.registry import hand_built
+    """The built-in settings file of the generated machine ``machine`` (a registry name) as text."""
+    from ..machines.registry import generated
 
-    return hand_built(machine).CONTROL_SETTINGS.read_text(encoding="utf-8")
+    return generated(machine).CONTROL_SETTINGS.read_text(encoding="utf-8")
 
 
 def _check_value(where: str, key: str, value: Any, default: Any) -> Any:

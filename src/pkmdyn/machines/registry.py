@@ -4,17 +4,20 @@ Two kinds of folder make a built-in machine, and nothing else has to change to a
 
 - a *described* machine: ``machines/<name>/<name>.toml``, a mechanism description
   (:mod:`pkmdyn.multibody`);
-- a *hand-built* machine (the two papers' machines, with closed forms of their own and commands
-  ``pkmdyn hip ...``, ``pkmdyn pdm ...``): a package ``machines/<folder>/`` with a module
-  ``machine.py`` that says ``NAME``, ``TITLE``, ``CONTROL_SETTINGS`` (a path) and provides
-  ``default_params_text()``, ``description()`` (its built-in parameters as a mechanism
-  description), ``default_motion()`` (a :class:`pkmdyn.multibody.TaskMotion`) and
-  ``view_page(params, out, listing)`` (its ``pkmdyn view`` page). A module
-  ``described_sweep.py`` beside it (the hooks of :class:`pkmdyn.multibody.sweep.GeneratedSweep`:
-  its parameter file's schema, the description generated from a parameter file, its motion
-  and metrics) makes the machine sweepable on the engine, or a module ``sweep.py`` with a
-  sweep of its own (:mod:`pkmdyn.sweep_protocol`); a module ``control_job.py`` gives it a
-  control job (:mod:`pkmdyn.control_protocol`).
+- a *generated* machine (the two papers' machines): a package ``machines/<folder>/`` whose
+  module ``machine.py`` turns the machine's own parameter file into a mechanism description.
+  It says ``NAME``, ``TITLE``, ``CONTROL_SETTINGS`` (a path) and provides
+  ``default_params_text()``, ``description(params=None)`` (the parameter file ``params``, the
+  built-in one by default, as a mechanism description), ``default_motion()`` (a
+  :class:`pkmdyn.multibody.TaskMotion`) and either ``parameters_text(params)`` (``pkmdyn view``
+  then draws the engine's page of the description) or ``view_page(params, out, listing)`` (a
+  page of its own). Optional modules beside it: ``commands.py`` (a click group ``group``: the
+  machine's own commands, ``pkmdyn <NAME> ...``, mounted by :func:`command_groups`),
+  ``described_sweep.py`` (the hooks of :class:`pkmdyn.multibody.sweep.GeneratedSweep`: its
+  parameter file's schema, the description generated from a parameter file, its motion and
+  metrics; the machine is then swept on the engine) or ``sweep.py`` (a sweep of its own,
+  :mod:`pkmdyn.sweep_protocol`), and ``control_job.py`` (a control job,
+  :mod:`pkmdyn.control_protocol`).
 
 Every command that takes ``--machine`` resolves it here; an unknown name is refused, never
 routed to another machine's code.
@@ -30,11 +33,11 @@ from typing import Any
 
 from ..errors import ParameterError
 
-__all__ = ["described_machines", "hand_built_machines", "hand_built", "builtin_names", "description_path",
+__all__ = ["described_machines", "generated_machines", "generated", "command_groups", "builtin_names", "description_path",
            "resolve", "title", "sweep_adapter", "control_adapter"]
 
 _HERE = Path(__file__).resolve().parent
-#: the module of a hand-built machine's folder that generates its mechanism description from its
+#: the module of a generated machine's folder that generates its mechanism description from its
 #: parameter file, for sweeps on the engine (:class:`pkmdyn.multibody.sweep.GeneratedSweep`)
 GENERATOR = "described_sweep"
 
@@ -50,7 +53,7 @@ def described_machines() -> dict[str, Path]:
 
 
 @functools.cache
-def hand_built_machines() -> dict[str, ModuleType]:
+def generated_machines() -> dict[str, ModuleType]:
     """Every package ``machines/<folder>/`` with a ``machine.py``: its ``NAME`` -> that module."""
     out: dict[str, ModuleType] = {}
     for folder in sorted(_HERE.iterdir()):
@@ -60,23 +63,23 @@ def hand_built_machines() -> dict[str, ModuleType]:
     return out
 
 
-def hand_built(name: str) -> ModuleType:
-    """The registry entry (``machine.py`` module) of hand-built machine ``name``."""
-    machines = hand_built_machines()
+def generated(name: str) -> ModuleType:
+    """The registry entry (``machine.py`` module) of the generated machine ``name``."""
+    machines = generated_machines()
     if name not in machines:
-        raise ParameterError(f"machine {name!r}: not a hand-built machine (those are: {', '.join(sorted(machines))})")
+        raise ParameterError(f"machine {name!r}: not a generated machine (those are: {', '.join(sorted(machines))})")
     return machines[name]
 
 
 def builtin_names() -> list[str]:
     """All built-in machine names, sorted."""
-    return sorted({*described_machines(), *hand_built_machines()})
+    return sorted({*described_machines(), *generated_machines()})
 
 
 def title(name: str) -> str:
     """One line saying what built-in machine ``name`` is."""
-    if name in hand_built_machines():
-        return hand_built_machines()[name].TITLE
+    if name in generated_machines():
+        return generated_machines()[name].TITLE
     return f"described mechanism {description_path(name)}"
 
 
@@ -85,17 +88,17 @@ def description_path(name: str) -> Path:
     described = described_machines()
     if name in described:
         return described[name]
-    if name in hand_built_machines():
-        raise ParameterError(f"--machine {name}: a hand-built machine without a description file ({title(name)})")
+    if name in generated_machines():
+        raise ParameterError(f"--machine {name}: a machine generated from its parameter file, without a description file ({title(name)})")
     raise ParameterError(f"--machine {name}: unknown machine (built-in: {', '.join(builtin_names())}; "
                          "or give a description FILE.toml)")
 
 
 def resolve(machine: str) -> tuple[ModuleType | None, Path | None]:
-    """``(entry, None)`` for a hand-built machine (its ``machine.py`` module), ``(None, path)`` for
+    """``(entry, None)`` for a generated machine (its ``machine.py`` module), ``(None, path)`` for
     a described built-in or a description ``FILE.toml``; anything else is refused."""
-    if machine in hand_built_machines():
-        return hand_built_machines()[machine], None
+    if machine in generated_machines():
+        return generated_machines()[machine], None
     if machine in described_machines():
         return None, described_machines()[machine]
     p = Path(machine)
@@ -105,13 +108,13 @@ def resolve(machine: str) -> tuple[ModuleType | None, Path | None]:
 
 
 def sweep_adapter(name: str) -> Any:
-    """The sweep adapter (:class:`pkmdyn.sweep_protocol.SweepAdapter`) of ``name``: a hand-built
-    machine's own ``sweep.py`` module; for a hand-built machine whose folder holds a description
+    """The sweep adapter (:class:`pkmdyn.sweep_protocol.SweepAdapter`) of ``name``: a generated
+    machine's own ``sweep.py`` module; for a generated machine whose folder holds a description
     generator (``described_sweep.py``: its parameter file turned into a mechanism description)
     the generic adapter of generated descriptions (:class:`pkmdyn.multibody.sweep.GeneratedSweep`);
     for a described machine (a built-in name or a description ``FILE.toml``) the generic adapter
     of its description (:class:`pkmdyn.multibody.sweep.DescribedSweep`)."""
-    machines = hand_built_machines()
+    machines = generated_machines()
     shown = name if len(name) <= 60 else name[:60] + "..."
     if name not in machines:
         from ..multibody.sweep import DescribedSweep
@@ -131,8 +134,18 @@ def sweep_adapter(name: str) -> Any:
 
 def control_adapter(name: str) -> ModuleType:
     """The control adapter (``control_job.py`` of its folder,
-    :class:`pkmdyn.control_protocol.ControlJob`) of the hand-built machine ``name``."""
-    entry = hand_built(name)
+    :class:`pkmdyn.control_protocol.ControlJob`) of the generated machine ``name``."""
+    entry = generated(name)
     if not (Path(entry.__file__).parent / "control_job.py").is_file():
         raise ParameterError(f"machine {name!r}: this machine has no control job")
     return importlib.import_module(f"{entry.__package__}.control_job")
+
+
+def command_groups() -> list[Any]:
+    """The click groups of the machines' own commands (``commands.py`` of a generated machine's
+    folder: its ``group``), for the command line to mount."""
+    out = []
+    for entry in generated_machines().values():
+        if (Path(entry.__file__).parent / "commands.py").is_file():
+            out.append(importlib.import_module(f"{entry.__package__}.commands").group)
+    return out

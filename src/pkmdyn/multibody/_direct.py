@@ -634,7 +634,7 @@ def _task_fail(st, x, x0, q, q0, status):  # pragma: no cover - compiled
 def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     """One sample of the direct kinematics in task space, for a mechanism whose every actuated
     coordinate belongs to a leg placed from the task alone (:mod:`.legs`: the Gough-Stewart
-    platform, the hip's upper legs) and whose task gives the task body's three Euler angles (and
+    platform, a 3-PUS platform's legs) and whose task gives the task body's three Euler angles (and
     its position, or the body sits on a ball fixed to the ground). Unknowns: the task coordinates
     ``x (nt)``; equations: ``q_a(x) = s`` with ``q_a(x)`` the legs' closed forms
     (:func:`._kernels.place_fixed_legs`), by Newton from the previous call's solution plus
@@ -652,7 +652,7 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     phi_dot`` (``E`` the Euler rate map) and ``o`` the task point (its velocity the task's
     positions) or the fixed ball's centre. Where each actuated coordinate is the one its leg's
     closed form gives first (A2's first joint, B2's slide: the Gough-Stewart platform's and the
-    hip's legs), that coordinate and its row come from the task alone (:func:`_actuated`: the
+    a 3-PUS platform's legs), that coordinate and its row come from the task alone (:func:`_actuated`: the
     leg's end ``c = o + R_T c_rel``, ``q_a`` and ``y = dq_a / dc``, the row's ``(J_L^-1)_i``), and
     the legs' other coordinates are placed every :data:`TASK_REFRESH` calls only (they do not
     enter the pose; a later checked route starts from them); the branch is then ``det A`` times

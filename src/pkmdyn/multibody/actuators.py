@@ -13,7 +13,7 @@ effort ``tau_t``. The motor's own balance (rotor inertia ``I_r``, friction
 
     tau = u / k + I_r theta_ddot + tau_f(theta_dot),    theta_ddot = k q_ddot                 (A1)
 
-(the hip paper's Eq. 10 and 14 for its screws: ``tau = (p / 2 pi) F + I_L (2 pi / p) L_ddot +
+(Chen, Cheng & Pang 2022, Eq. 10 and 14, for lead screws: ``tau = (p / 2 pi) F + I_L (2 pi / p) L_ddot +
 screw friction``). Seen from the joint, the rotor adds the inertia ``k^2 I_r`` to the joint
 coordinate (MuJoCo's ``armature``) and the friction ``k tau_f``. A joint without a drive has
 ``k = 1``, no rotor and no motor friction: its motor effort is its joint effort.

@@ -85,7 +85,7 @@ class _ExternalFriction(Section):
     """Friction whose normal force is a named external load (``[[loads]]`` with a ``name``):
     ``coefficient * radius_m * |F + offset_N|`` added to the joint's Coulomb torque (a joint
     that rotates), ``coefficient * |F + offset_N|`` to its Coulomb force (one that only slides,
-    no radius); ``F`` [N] the load's magnitude at the sample (the hip paper's Eq. 16 form)."""
+    no radius); ``F`` [N] the load's magnitude at the sample (the form of Eq. 16 of Chen, Cheng & Pang 2022)."""
 
     load: str = NAME
     coefficient: float = Field(ge=0)

@@ -459,7 +459,7 @@ def direct_kinematics(model: MechanismModel, s: Array, sd: Array | None = None, 
 
     Without ``bodies`` the result holds the task motion alone (``q, qd, qdd`` None): where each
     actuated coordinate is the one its leg's closed form gives first (the task-space route of
-    one sample, ``docs/mechanism_format.md``: the Gough-Stewart platform, the hip, R-U-S,
+    one sample, ``docs/mechanism_format.md``: the Gough-Stewart platform, a 3-PUS platform, R-U-S,
     P-U-S and U-P-S platforms), the samples after the first then come from the actuated
     coordinates' closed forms alone (:func:`._direct.direct_task_batch`; ``det`` is then
     ``det A`` times the legs' actuated factors, of the same sign along a motion, and

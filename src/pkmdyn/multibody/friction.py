@@ -13,8 +13,8 @@ Resisting torque and force (base frame), with ``f`` the reaction force the joint
     tau = (C_t + mu (r_pin |f - (f.a) a| + r_ball |f| + r_mean |f.a|)) u(w) + b_t w      (F1)
     phi = (C_f + mu_s |f - (f.e) e|) u(v) + b_f v                                         (F2)
 
-A named external load adds to the Coulomb parts (``external``, the hip paper's Eq. 16 form: a
-hip joint and a thrust bearing loaded by the test force): ``C_t += sum mu_k r_k |F_k + o_k|``
+A named external load adds to the Coulomb parts (``external``, the form of Eq. 16 of Chen, Cheng & Pang
+2022: a prosthesis joint and a thrust bearing loaded by the test force): ``C_t += sum mu_k r_k |F_k + o_k|``
 for a joint that rotates, ``C_f += sum mu_k |F_k + o_k|`` for one that only slides, with
 ``F_k`` [N] the named load's magnitude at the sample and ``o_k = offset_N``.
 
@@ -25,7 +25,7 @@ radial force on the pin), ``r_ball = ball_radius_m`` (a ball joint: the whole fo
 joint that slides and gives no radius (a prismatic guide: the force normal to its axis ``e``).
 ``u(x) = x / sqrt(|x|^2 + eps^2)`` is the regularised sign of :func:`pkmdyn.friction.regularised_sign`
 (``eps`` = :data:`EPS_ROTATION` rad/s, :data:`EPS_TRANSLATION` m/s), a vector law for a joint
-with several rotations (the hip paper's Eq. 16 form). The generalised resisting forces along
+with several rotations (the form of Chen, Cheng & Pang 2022, Eq. 16). The generalised resisting forces along
 the free twists are ``F_i = T_i . [tau + p x phi; phi]`` (their power ``F . r`` is the
 dissipation, >= 0), mapped to the tree coordinates by ``Q_f = B^T F`` with ``r = B qd``.
 """

@@ -17,7 +17,7 @@ Per joint with friction data, two parameters: its Coulomb and its viscous coeffi
 (``coulomb_torque_Nm``/``viscous_Nm_s_rad`` for rotations, ``coulomb_force_N``/
 ``viscous_N_s_m`` for translations): the friction of law F1-F2 without the load-dependent part,
 ``u(w)`` and ``w`` per unit coefficient; per term of the friction a named load drives
-(``friction.external``, the hip paper's Eq. 16: ``mu_k r_k |F_k + o_k| u(w)``) its
+(``friction.external``, Eq. 16 of Chen, Cheng & Pang 2022: ``mu_k r_k |F_k + o_k| u(w)``) its
 coefficient ``mu_k`` (``<joint>_external<k>_<load>_coefficient``, the magnitudes ``named``).
 The efforts are ``u = Y theta + u_0`` (``u_0`` the description's ``[[loads]]``), every column
 of ``Y`` the projection (Eq. 2-3) of the wrenches or friction of one unit parameter. With
@@ -122,7 +122,7 @@ def regressor(model: MechanismModel, kin: MechanismKinematics, named: dict | Non
     mags = named_magnitudes(model, n, named) if model.named_loads else {}
     for jd in fr.joints:
         d = jd["d"]
-        # the friction a named load drives (friction.external, the hip paper's Eq. 16): one column
+        # the friction a named load drives (friction.external, Chen, Cheng & Pang 2022, Eq. 16): one column
         # per term, its coefficient mu_k the parameter (radius and offset known)
         for k_, term in enumerate(d.get("external", [])):
             mag = (term["radius_m"] or 1.0) * np.abs(mags[term["load"]] + term["offset_N"])

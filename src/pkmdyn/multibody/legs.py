@@ -34,8 +34,8 @@ A block is an **explicit leg** when
         (planar: a turn parallel, a slide    (subproblem 3 or a quadratic), then   planar, P-R-S
         normal to the second turn)           subproblem 1                          planar
   A2    turn or slide, then two turns about  subproblem 3 or a quadratic for the   R-U-S, P-U-S
-        one point ``m0`` (a universal        first joint, subproblem 2 for the     (the hip's
-        joint, or a ball with its spin held) two turns                             PUS legs),
+        one point ``m0`` (a universal        first joint, subproblem 2 for the     (3-PUS
+        joint, or a ball with its spin held) two turns                             legs),
                                                                                    R-S-S, P-S-S
   B1    a turn, then a slide normal to it    quadratic in the plane, then          R-P-R planar
                                              subproblem 1
@@ -57,7 +57,7 @@ the ball's angles are Euler angles of the relative rotation (:func:`._kernels._t
 
 The explicit legs set their coordinates at each evaluation of the positions; Newton then
 solves the remaining blocks (coupled sub-chains such as a Delta robot's parallelograms or the
-hip's lower platform, a Bennett linkage) and checks every row, the explicit legs' included,
+a second platform of a 3-PUS pair, a Bennett linkage) and checks every row, the explicit legs' included,
 so the two routes give the same solution to the solver's tolerance (:func:`newton_only`
 builds a model without explicit legs; the tests compare the two). Where every block is an
 explicit leg, the first evaluation is exact and Newton's simplified step is left out.
@@ -119,7 +119,7 @@ class LegTable:
     ``R_end0 (nL, 3, 3)`` the reference rotation of the body before the ball.
     ``fixed (nL,)``: 1 for a leg placed from the task coordinates alone (it starts from and
     meets the ground or bodies that only such legs move: the task leg, a Stewart platform's or
-    the hip's upper legs), whose closed form the solver evaluates once per sample, and
+    a 3-PUS platform's legs), whose closed form the solver evaluates once per sample, and
     ``fixed_coord (nq,)``: 1 for the coordinates such legs set (both empty without legs).
     ``names``: per leg, its cut joint's name, the chain's joint names and the pattern."""
 

@@ -1,4 +1,4 @@
-"""Slide tracks, cross-shear and Archard wear of a spherical joint (a hip prosthesis's head in its
+"""Slide tracks, cross-shear and Archard wear of a spherical joint (a joint prosthesis's head in its
 cup, or any described mechanism's ball joint), from the two bodies' rotations along a motion
 (``docs/wear.md``).
 
@@ -57,7 +57,7 @@ Array = NDArray[np.float64]
 
 #: the aspect ratio reported for a straight track (its minor extent below 1e-9 of its major)
 ASPECT_CAP = 1e9
-#: the default wear factor [mm^3/(N m)]: UHMWPE against a ceramic head in a hip simulator
+#: the default wear factor [mm^3/(N m)]: UHMWPE against a ceramic head in a joint-wear simulator
 #: (Saikko 1994, 8e-8 mm^3/(N m)); published values span about 1e-8 to 3e-6 (docs/wear.md)
 WEAR_FACTOR_MM3_N_M = 8e-8
 #: Saikko et al. (2004): polyethylene wear is realistic only for tracks below this aspect ratio

@@ -1,4 +1,4 @@
-"""Checks and fits shared by the motion-file readers (hip, PDM, described mechanisms).
+"""Checks and fits shared by the motion-file readers (orientation motions, the PDM's, described mechanisms).
 
 Errors name the file, the 1-based data row and the column.
 """

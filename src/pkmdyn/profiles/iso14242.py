@@ -1,4 +1,4 @@
-"""A smooth periodic model of the ISO 14242-1 hip-simulator cycle (motion and load).
+"""A smooth periodic model of the ISO 14242-1 wear-test cycle (motion and load).
 
 ISO 14242-1 prescribes, for a 1 Hz walking cycle, flexion/extension between +25 and -18
 degrees, abduction/adduction between +7 and -4 degrees, internal/external rotation between

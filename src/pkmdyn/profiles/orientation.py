@@ -1,4 +1,5 @@
-"""Orientation motions with a load: the hip simulator's motion, and its CSV file format.
+"""Orientation motions with a load (a platform's Euler angles and an axial test load) and their CSV
+file format.
 
 CSV columns (spec, "Motion file"): ``t_s, alpha_deg, beta_deg, gamma_deg``; optional
 Euler-angle rates ``alpha_dot_deg_s, beta_dot_deg_s, gamma_dot_deg_s`` and accelerations

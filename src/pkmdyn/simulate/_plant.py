@@ -67,7 +67,7 @@ step's size one way or the other, 5e-6 rad of its angle gamma after 0.25 s).
 
 Accuracy per cost (``tests/test_simulate.py`` against ``solve_ivp`` Radau at tolerances 1e-10;
 docs/control.md). One step per 1 ms cycle on a two-link machine with friction as sharp as a
-hip-joint wear simulator's (Chen, Cheng & Pang 2022), from rest, max position error over 0.15 s: ROS2 alone 4.2e-5 rad (2 evaluations per
+joint-wear simulator's (Chen, Cheng & Pang 2022), from rest, max position error over 0.15 s: ROS2 alone 4.2e-5 rad (2 evaluations per
 step plus its Jacobians, about 3 in all; 9.9e-4 while a start from rest counted as a reversal
 only where a velocity left zero downwards), Nystroem/ROS2 2.9e-5, RK4/ROS2 3.0e-5 rad (ROS2
 alone stops converging near 3e-6 rad at 0.125 ms steps, the explicit steps do not); with

@@ -14,6 +14,15 @@ NAME = "hip"
 TITLE = "2(3PUS+S) dual-platform hip-joint wear simulator (Chen, Cheng & Pang 2022); see pkmdyn hip --help"
 #: the built-in control settings (``--gains``; :mod:`pkmdyn.control`)
 CONTROL_SETTINGS = Path(__file__).with_name("control.toml")
+#: the machine's commands for ``pkmdyn compile`` (:data:`pkmdyn.cli.compile.LANES`): ``(lane, command
+#: line without --out)``; lane 0 the closed loops, lane 1 the batched kinematics and dynamics
+COMPILE_EXERCISES = (
+    (0, ("hip", "control", "--controller", "augmented-pd", "--cycles", "0.01", "--no-plots")),
+    (0, ("hip", "control", "--controller", "feedforward", "--cycles", "0.01", "--no-plots")),
+    (0, ("hip", "control", "--controller", "computed-torque", "--cycles", "0.01", "--no-plots")),
+    (1, ("wear", "--machine", "hip", "--joint", "S0_upper", "--radius-m", "0.014")),
+    (1, ("hip", "run", "--samples-per-cycle", "64", "--no-plots")),
+)
 
 
 def default_params_text() -> str:
