@@ -279,22 +279,23 @@ def test_hip_best_design_file_runs_and_holds_its_values(hip_sweep, tmp_path):
 
 
 def _hip_reference(params: dict, samples_per_cycle: int) -> dict[str, float]:
-    """The hip metrics from the machine's public functions, by a different route: per-sample
-    rotations and np.linalg.cond, the zero pose from the kinematics of a still motion."""
-    from pkmdyn.machines.hip_simulator import inverse_dynamics, inverse_kinematics, model_from_dict
+    """The hip metrics from the closed-form oracle of Eq. 1-16 (``tests/oracles/hip.py``, numpy,
+    nothing of the engine): per-sample np.linalg.cond of its J, the zero pose from its kinematics
+    at zero angles."""
+    from oracles import hip as oracle
+
+    from pkmdyn.machines.hip_simulator.params import model_from_dict
     from pkmdyn.profiles.iso14242 import iso14242_motion
-    from pkmdyn.profiles.orientation import make_motion
 
     model = model_from_dict(params)
     motion = iso14242_motion(1.0, samples_per_cycle)
-    kin = inverse_kinematics(model, motion)
-    tq = inverse_dynamics(model, kin, motion.load)
-    z = np.zeros((1, 3))
-    e0 = inverse_kinematics(model, make_motion(np.zeros(1), z, z, z, np.zeros(1))).e_lever[0]
+    kin = oracle.kinematics(model, motion.angles, motion.rates, motion.accels)
+    tq = oracle.inverse_dynamics(model, kin, motion.load)
+    e0 = oracle.kinematics(model, np.zeros((1, 3))).e_lever[0]
     inv = np.array([1.0 / np.linalg.cond(J) for J in kin.J])
     sph = max(math.degrees(math.acos(min(1.0, float(kin.R[k].T @ kin.e_lever[k, i] @ e0[i]))))
               for k in range(len(motion)) for i in range(3))
-    omega_motor = kin.Ld[:, 1] * 2 * math.pi / model.geometry.p
+    omega_motor = kin.theta_dot
     t = motion.t
     return {
         "min_inverse_condition": inv.min(),
