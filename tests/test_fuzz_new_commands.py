@@ -82,12 +82,13 @@ def _one_error_line(args: list[str], out: Path) -> str:
 @functools.cache
 def _measured_text() -> str:
     """A measured run: a quarter of the ISO 14242-1 cycle with the default machine's torques."""
-    from pkmdyn.machines.hip_simulator import inverse_dynamics, inverse_kinematics, load_params
+    from pkmdyn.machines.hip_simulator import load_params
+    from pkmdyn.machines.hip_simulator.paper import PaperView
     from pkmdyn.profiles.iso14242 import iso14242_motion
 
     model = load_params(None)
     motion = iso14242_motion(0.25, 400)
-    tau = inverse_dynamics(model, inverse_kinematics(model, motion), motion.load).tau
+    tau = PaperView(model).solve(motion).tau
     cols = {"t_s": motion.t}
     for k, a in enumerate(("alpha", "beta", "gamma")):
         cols[f"{a}_deg"] = np.rad2deg(motion.angles[:, k])
@@ -245,7 +246,7 @@ def test_control_hostile_motion_file(machine, data):
 @FAST
 @given(data=st.data())
 def test_identify_hostile_measured_file(data):
-    from pkmdyn.identify.hip import TORQUE_COLUMNS
+    from pkmdyn.machines.hip_simulator.identify_view import TORQUE_COLUMNS
     from pkmdyn.profiles.orientation import MOTION_COLUMNS
 
     text = data.draw(hostile_csv((*MOTION_COLUMNS, *TORQUE_COLUMNS)))
@@ -352,7 +353,7 @@ def test_excite_bad_limits_are_one_error_line(tmp_path, option, value, words):
 
 def test_excite_effort_is_bounded():
     """The optimiser's cost evaluations never exceed the bound the command line states."""
-    from pkmdyn.identify.hip_excite import ExcitationLimits, design_excitation, design_work
+    from pkmdyn.machines.hip_simulator.identify_excite import ExcitationLimits, design_excitation, design_work
     from pkmdyn.machines.hip_simulator import load_params
 
     calls = []
@@ -363,7 +364,7 @@ def test_excite_effort_is_bounded():
 
 def test_excite_library_entry_checks_sizes():
     from pkmdyn.errors import ParameterError
-    from pkmdyn.identify.hip_excite import ExcitationLimits, design_excitation
+    from pkmdyn.machines.hip_simulator.identify_excite import ExcitationLimits, design_excitation
     from pkmdyn.machines.hip_simulator import load_params
 
     model = load_params(None)

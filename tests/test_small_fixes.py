@@ -11,7 +11,7 @@ import pytest
 
 from pkmdyn.cli import main
 from pkmdyn.identify._excite import max_evaluations, minimize_excitation
-from pkmdyn.identify.hip_excite import design_excitation, design_work
+from pkmdyn.machines.hip_simulator.identify_excite import design_excitation, design_work
 from pkmdyn.io import read_csv_columns
 from pkmdyn.machines.hip_simulator import load_params
 

@@ -27,6 +27,7 @@ from .identify_excite import ExcitationLimits, design_excitation, excitation_mot
 from .identify_view import (FRICTION_ATTR, TORQUE_COLUMNS, Which, consistency_transform, identified_description,
                             identify_hip, read_measured_csv)
 from .params import HipModel, default_params_dict, load_params, model_from_dict
+from .paper import parameters_text
 
 __all__ = ["run_identify", "run_excite", "complete_description", "HELD_FIXED", "MAX_EXCITE_ROWS"]
 
@@ -123,10 +124,11 @@ def run_identify(
     description = complete_description(description, model)
     from ...multibody.friction import EPS_ROTATION, EPS_TRANSLATION
 
+    eps_note = None
     if (model.friction.eps_w, model.friction.eps_v) != (EPS_ROTATION, EPS_TRANSLATION):
-        warnings.warn(f"friction_velocity_eps_rad_s = {model.friction.eps_w:g}, friction_velocity_eps_m_s = "
-                      f"{model.friction.eps_v:g}: the identification regularises friction at the engine's "
-                      f"{EPS_ROTATION:g} rad/s and {EPS_TRANSLATION:g} m/s", stacklevel=2)
+        eps_note = (f"note: friction_velocity_eps_rad_s = {model.friction.eps_w:g}, friction_velocity_eps_m_s = "
+                    f"{model.friction.eps_v:g} of the parameter file: the identification regularises friction at "
+                    f"the engine's {EPS_ROTATION:g} rad/s and {EPS_TRANSLATION:g} m/s")
     motion, tau, deriv = read_measured_csv(measured_path, sg_window, sg_order)
     for i, name in enumerate(TORQUE_COLUMNS):
         if not np.any(tau[:, i]):
@@ -198,6 +200,8 @@ def run_identify(
         lines.append("not excited: " + ", ".join(report_doc["not_excited"]))
     rms = ", ".join(f"{1e3 * v:.4g}" for v in result.residual_rms)
     lines.append(f"residual RMS per motor [N mm]: {rms}")
+    if eps_note is not None:
+        lines.append(eps_note)
     out = Path(out_dir)
     with output_dir(out, inputs=inputs) as tmp:
         (tmp / "identified.toml").write_text(text, encoding="utf-8")
@@ -213,23 +217,12 @@ def run_identify(
         if html_report:
             names.append(_report(tmp, model, motion, tau, result.tau_identified, report_doc, params_path,
                                  [tmp / n for n in names if n.endswith(".png")],
-                                 [str(w.message) for w in caught if not issubclass(w.category, RuntimeWarning)]).name)
+                                 [str(w.message) for w in caught if not issubclass(w.category, RuntimeWarning)]
+                                 + ([eps_note] if eps_note is not None else [])).name)
         files = {Path(n).stem.replace(".", "_"): out / n for n in names}
         if report is not None:
             report([*lines, *(f"{name}: {path}" for name, path in files.items())])
     return files, lines
-
-
-def _parameters_text(params_path: str | Path | None) -> str:
-    """The parameter file's text (the built-in file when None), headed by where it came from."""
-    from .params import DEFAULT_PARAMS_TEXT
-
-    if params_path is None:
-        return "# built-in parameters (pkmdyn/machines/hip_simulator/default.toml)\n" + DEFAULT_PARAMS_TEXT
-    try:
-        return f"# {params_path}\n" + Path(params_path).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
-        return f"# {params_path}\n# (the file could not be read again for the report)"
 
 
 def _report(tmp: Path, model: HipModel, motion: Any, tau: np.ndarray, tau_id: np.ndarray, doc: dict[str, Any],
@@ -250,7 +243,7 @@ def _report(tmp: Path, model: HipModel, motion: Any, tau: np.ndarray, tau_id: np
     plots.append(TimePlot("Measured motion", "angle [deg]", t, tuple(
         Curve(n, np.degrees(motion.angles[:, c])) for c, n in enumerate(("alpha (FE)", "beta (AA)", "gamma (IER)")))))
     return write_report(tmp, title="2(3PUS+S) hip simulator: hip identify", scene=scene, plots=plots, summary=doc,
-                        parameters=_parameters_text(params_path), warnings=warns, images=images,
+                        parameters=parameters_text(params_path), warnings=warns, images=images,
                         notes=[f"measured: {doc['measured']}", f"parameters: {doc['parameters']}",
                                f"identify: {doc['identify']}"],
                         scene_note="The measured motion; actuated carriages coloured by the measured motor torques.",
