@@ -75,9 +75,9 @@ def _rel(a: np.ndarray, b: np.ndarray) -> float:
 def _dynamics(out: dict, n: int, repeat: int, m, hip, mh, pm) -> None:
     """Inverse dynamics, reactions and forward dynamics (issue 16), beside the closed forms and
     MuJoCo in this process."""
-    from pkmdyn.machines.hip_simulator import inverse_kinematics, model_from_dict
+    from oracles import hip as hip_oracle  # the closed form of Eq. 1-16 beside the tests
+    from pkmdyn.machines.hip_simulator import model_from_dict
     from pkmdyn.machines.hip_simulator.description import hip_description
-    from pkmdyn.machines.hip_simulator.dynamics import inverse_dynamics as hip_closed_form
     from pkmdyn.machines.hip_simulator.params import default_params_dict
     from pkmdyn.machines.pdm4 import inverse_kinematics as pdm_kinematics
     from pkmdyn.machines.pdm4.description import pdm_description
@@ -101,18 +101,18 @@ def _dynamics(out: dict, n: int, repeat: int, m, hip, mh, pm) -> None:
     d["inertia"]["platform_mass_kg"] = 2.0
     hf = model_from_dict(d, "every friction family")
     motion = iso14242_motion(cycles=n / 1000.0, samples_per_cycle=1000)
-    ref = inverse_kinematics(hf, motion)
+    ref = hip_oracle.kinematics(hf, motion.angles, motion.rates, motion.accels)
     mf = load_mechanism(hip_description(hf))
     kin = solve_kinematics(mf, motion.angles, motion.rates, motion.accels, motion.t)
     named = {"hydraulic_N": motion.load}
-    sec = best_time(lambda: hip_closed_form(hf, ref, motion.load), repeat)
+    sec = best_time(lambda: hip_oracle.inverse_dynamics(hf, ref, motion.load), repeat)
     out["hip_id_closed_form_us_per_sample"] = sec / len(motion.t) * 1e6
     sec = best_time(lambda: inverse_dynamics(mf, kin, named=named), repeat)
     out["hip_id_generic_us_per_sample"] = sec / len(motion.t) * 1e6
     sec = best_time(lambda: inverse_dynamics(mf, kin, named=named, friction=False), repeat)
     out["hip_id_generic_without_friction_us_per_sample"] = sec / len(motion.t) * 1e6
     out["hip_id_generic_over_closed_form"] = out["hip_id_generic_us_per_sample"] / out["hip_id_closed_form_us_per_sample"]
-    tau = hip_closed_form(hf, ref, motion.load).tau
+    tau = hip_oracle.inverse_dynamics(hf, ref, motion.load).tau
     u = inverse_dynamics(mf, kin, named=named).u
     gear = hf.geometry.p / (2 * np.pi)
     sl = [mf.actuator_names.index(f"P_{i + 1}") for i in range(3)]
@@ -120,33 +120,22 @@ def _dynamics(out: dict, n: int, repeat: int, m, hip, mh, pm) -> None:
     motor = (gear * u[:, sl] + hf.inertia.I_L * kin.act_qdd[:, sl] / gear
              + coulomb_viscous(kin.act_qd[:, sl] / gear, f.screw_coulomb, f.screw_viscous, f.eps_w, vector=False))
     out["hip_id_max_rel_diff"] = _rel(motor, tau)
-    # hip single-sample forward dynamics: the generic verbs against the hand-built compiled path
-    from pkmdyn.machines.hip_simulator import minimal as hip_minimal
-
+    # hip single-sample forward dynamics: the engine's verb, and its compiled kernel as the plant
+    # integrator calls it on consecutive ISO samples (1 kHz)
     Vh = machine_verbs(mf)
+    kk = [0]
     k50 = slice(0, 50)
     uh = Vh.inverse_dynamics(mf, motion.angles[k50], motion.rates[k50], motion.accels[k50], motion.load[k50])
-    th = hip_minimal.inverse_dynamics(hf, motion.angles[k50], motion.rates[k50], motion.accels[k50], motion.load[k50])
-    kk = [0]
 
-    def hip_generic() -> None:
+    def hip_verb() -> None:
         i = kk[0] % 50
         kk[0] += 1
         Vh.forward_dynamics_one(mf, motion.angles[i], motion.rates[i], uh[i], float(motion.load[i]))
 
-    def hip_hand() -> None:
-        i = kk[0] % 50
-        kk[0] += 1
-        hip_minimal.forward_dynamics_one(hf, motion.angles[i], motion.rates[i], th[i], float(motion.load[i]))
-
-    out["hip_fd_generic_single_verb_us"] = best_time(lambda: [hip_generic() for _ in range(200)], repeat) / 200 * 1e6
-    out["hip_fd_hand_built_single_verb_us"] = best_time(lambda: [hip_hand() for _ in range(200)], repeat) / 200 * 1e6
-    # the compiled kernels as the plant integrator calls them, consecutive ISO samples (1 kHz)
+    out["hip_fd_generic_single_verb_us"] = best_time(lambda: [hip_verb() for _ in range(200)], repeat) / 200 * 1e6
     pg, _, fg = Vh.one_sample_kernels(mf)
-    ph, _, fh = hip_minimal.one_sample_kernels(hf)
     mo = iso14242_motion(cycles=2.0, samples_per_cycle=1000)
     ug = Vh.inverse_dynamics(mf, mo.angles, mo.rates, mo.accels, mo.load)
-    uh = hip_minimal.inverse_dynamics(hf, mo.angles, mo.rates, mo.accels, mo.load)
     acc = np.empty(3)
     Vh.forward_dynamics_one(mf, mo.angles[0], mo.rates[0], ug[0], float(mo.load[0]))
 
@@ -156,8 +145,6 @@ def _dynamics(out: dict, n: int, repeat: int, m, hip, mh, pm) -> None:
                 Vh.forward_dynamics_one(mf, mo.angles[i], mo.rates[i], u[i], float(mo.load[i]))
 
     out["hip_fd_generic_single_us"] = best_time(lambda: kernel(fg, pg, ug), repeat) / len(mo.t) * 1e6
-    out["hip_fd_hand_built_single_us"] = best_time(lambda: kernel(fh, ph, uh), repeat) / len(mo.t) * 1e6
-    out["hip_fd_generic_over_hand_built"] = out["hip_fd_generic_single_us"] / out["hip_fd_hand_built_single_us"]
 
     # PDM: efforts and all 19 joint wrenches (nine redundants by compliance) through its description,
     # against the hand-derived Newton-Euler oracle beside the tests (tests/oracles)
@@ -576,19 +563,6 @@ def _hip_loops(out: dict, seconds: float = 2.0) -> None:
         return
     out["hip_exact_encoder_loop_over_mujoco"] = (out["hip_exact_encoder_loop_realtime_factor"]
                                                  / out["mujoco_hip_loop_realtime_factor"])
-    # the same loop through the generic engine on the hip's description (the compiled cycles):
-    # what routing the hip's control through the engine would run at
-    from pkmdyn.simulate import _cycles
-
-    _cycles.compile_for_runs()
-    gen = bc.hip_project_loop(bc.load_params(), seconds, ("computed-torque-exact-encoders",), generic=True)
-    gen = gen["computed-torque-exact-encoders"]
-    if "error" in gen:
-        out["hip_generic_exact_encoder_loop_error"] = gen["error"]
-        return
-    out["hip_generic_exact_encoder_loop_realtime_factor"] = gen["realtime_factor"]
-    out["hip_generic_exact_encoder_loop_over_mujoco"] = gen["realtime_factor"] / out["mujoco_hip_loop_realtime_factor"]
-    out["hip_generic_vs_hand_built_loop_max_error_diff_deg"] = abs(gen["max_error_deg"] - ex["max_error_deg"])
 
 
 def _stiffness(out: dict, m, repeat: int, oracle) -> None:
@@ -672,19 +646,19 @@ def main() -> None:
                                         _rel(kin.act_qd[:, legs], ref["thetad"]),
                                         _rel(kin.act_qdd[:, legs], ref["thetadd"]))
 
-    from pkmdyn.machines.hip_simulator import inverse_kinematics, load_params
-    from pkmdyn.profiles.iso14242 import iso14242_motion
-
+    from oracles import hip as hip_oracle  # the closed form of Eq. 1-6 beside the tests
+    from pkmdyn.machines.hip_simulator import load_params
     from pkmdyn.machines.hip_simulator.description import hip_description
+    from pkmdyn.profiles.iso14242 import iso14242_motion
 
     hip = load_params()
     motion = iso14242_motion(cycles=n / 1000.0, samples_per_cycle=1000)
-    sec = best_time(lambda: inverse_kinematics(hip, motion), args.repeat)
+    sec = best_time(lambda: hip_oracle.kinematics(hip, motion.angles, motion.rates, motion.accels), args.repeat)
     out["hip_kinematics_closed_form_us_per_sample"] = sec / len(motion.t) * 1e6
     mh = load_mechanism(hip_description(hip))
     sec = best_time(lambda: solve_kinematics(mh, motion.angles, motion.rates, motion.accels, motion.t), args.repeat)
     out["hip_kinematics_generic_us_per_sample"] = sec / len(motion.t) * 1e6
-    ref = inverse_kinematics(hip, motion)
+    ref = hip_oracle.kinematics(hip, motion.angles, motion.rates, motion.accels)
     kin = solve_kinematics(mh, motion.angles, motion.rates, motion.accels, motion.t)
     sl = [mh.actuator_names.index(f"P_{i + 1}") for i in range(3)]
     diffs = [_rel(kin.act_q[:, sl], ref.L[:, 1]), _rel(kin.act_qd[:, sl], ref.Ld[:, 1]),
@@ -734,7 +708,6 @@ def main() -> None:
                       "hip_id_generic_within_5x_of_closed_form": out["hip_id_generic_over_closed_form"] <= 5.0,
                       "stewart_id_reactions_us_per_sample<=20": out["stewart_id_reactions_us_per_sample"] <= 20.0,
                       "stewart_fd_single_faster_than_mujoco": out["stewart_fd_over_mujoco"] < 1.0,
-                      "hip_fd_generic_within_2x_of_hand_built": out["hip_fd_generic_over_hand_built"] <= 2.0,
                       "stewart_fd_over_mj_forward<=0.5": out["stewart_fd_over_mj_forward"] <= 0.5,
                       "stewart_id_reactions_us_per_sample<=10": out["stewart_id_reactions_us_per_sample"] <= 10.0,
                       "explicit_vs_newton_max_rel_diff<=1e-11": out["explicit_vs_newton_max_rel_diff"] <= 1e-11,

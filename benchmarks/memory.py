@@ -70,7 +70,7 @@ def measure_described(machine: str, samples: int, fmt: str) -> dict:
 
 def baseline() -> float:
     """Peak RSS [MiB] of a process that only imports the command line (the fixed cost)."""
-    code = ("import resource; import pkmdyn.cli, pkmdyn.machines.hip_simulator.run; "
+    code = ("import resource; import pkmdyn.cli, pkmdyn.machines.hip_simulator.job; "
             "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     return round(int(out.stdout.strip()) / 1024.0, 1)
