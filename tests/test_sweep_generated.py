@@ -1,7 +1,8 @@
 """Sweeps of a machine that generates its mechanism description from a parameter file of its
 own (the hip simulator): the registry's adapter, every design evaluated by the engine on the
 generated description (the same numbers as the engine run from scratch on that description),
-the machine's metrics under its own names, the engine's reactions and measures beside them."""
+the machine's metrics under its own names, the engine's reactions (and, when asked for, its
+least singularity measures) beside them."""
 
 from __future__ import annotations
 
@@ -31,11 +32,37 @@ def test_metrics_keep_the_machine_names_then_the_engine_reactions_and_measures()
     names = [m.name for m in ad.metrics({}, None)]
     assert names[:3] == ["gci", "min_inverse_condition", "orientation_workspace_fraction"]
     assert "friction_energy_per_cycle_J" in names and "peak_drive_force_N" in names
-    for extra in ("min_inverse_measure", "min_direct_measure", "min_constraint_measure",
-                  "peak_force_S0_upper_N", "peak_moment_S_lower_3_Nm"):
+    for extra in ("peak_force_S0_upper_N", "peak_moment_S_lower_3_Nm"):
         assert extra in names
     assert "peak_effort_N" not in names and len(names) == len(set(names))
     assert "orientation_workspace_fraction" not in [m.name for m in ad.metrics({"workspace_points": 0}, None)]
+    # the engine's least singularity measures only when asked for (the status is 1/cond(J)'s)
+    measures = ("min_inverse_measure", "min_direct_measure", "min_constraint_measure")
+    assert not set(measures) & set(names)
+    asked = [m.name for m in ad.metrics({"engine_measures": True}, None)]
+    assert set(measures) <= set(asked) and set(asked) - set(measures) == set(names)
+
+
+def test_the_engine_measures_when_asked_for_and_the_same_rows_without_them():
+    from pkmdyn.multibody import load_mechanism, solve_kinematics
+    from pkmdyn.multibody.kinematics import singularity_measures
+    from pkmdyn.machines.hip_simulator.description import hip_description
+    from pkmdyn.machines.hip_simulator.params import model_from_dict
+
+    ad = sweep_adapter("hip")
+    base = ad.base_description(None)
+    options = {"samples_per_cycle": 60, "workspace_points": 16}
+    d = _design(3)
+    plain = ad.evaluate([d], ad.prepare(base, options, Path(".")))[0]
+    asked = ad.evaluate([d], ad.prepare(base, {**options, "engine_measures": True}, Path(".")))[0]
+    assert plain.status == asked.status == "ok"
+    extra = {k: v for k, v in asked.metrics.items() if k not in plain.metrics}
+    assert {k: asked.metrics[k] for k in plain.metrics} == plain.metrics
+    model = load_mechanism(hip_description(model_from_dict(d)))
+    mo = ad.prepare(base, options, Path(".")).engine.motion
+    sm = singularity_measures(model, solve_kinematics(model, mo.x, mo.xd, mo.xdd, mo.t).q)
+    assert extra == {"min_inverse_measure": sm.inverse.min(), "min_direct_measure": sm.direct.min(),
+                     "min_constraint_measure": sm.constraint.min()}
 
 
 def _design(seed: int) -> dict:

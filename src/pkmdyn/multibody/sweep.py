@@ -93,6 +93,13 @@ class DescribedSweepContext:
     #: the conditioning index ``gci`` (the time mean of a singularity measure at every sample);
     #: false: a machine that computes a conditioning index of its own (:class:`GeneratedSweep`)
     gci: bool = True
+    #: the least of each singularity measure over the samples (``min_*_measure``, and the status
+    #: ``singular`` below ``threshold``); false: a machine whose status comes from a measure of its
+    #: own and that does not report the engine's (:attr:`GeneratedMotion.measures`)
+    measures: bool = True
+    #: the efforts' metrics (``peak_effort_*``, ``rms_*``, ``peak_power_W``, the energies, the limit
+    #: margins); false: a machine that computes its own from the efforts (:class:`GeneratedSweep`)
+    efforts: bool = True
 
 
 def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[str], bool, bool, bool]:
@@ -442,8 +449,9 @@ class DesignState:
 def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple[DesignOutcome, DesignState]:
     """The evaluation of one compiled design along ``motion``: kinematics (``unreachable``,
     ``singular``), the plausibility limits (``limit``), the singularity measures (``singular``
-    below ``ctx.threshold``), the efforts with every joint reaction and the friction, the
-    metrics; with what was computed on the way (:class:`DesignState`)."""
+    below ``ctx.threshold``; with ``ctx.measures``), the efforts with every joint reaction and the
+    friction, the metrics (the efforts' with ``ctx.efforts``); with what was computed on the way
+    (:class:`DesignState`)."""
     from .dynamics import effort_unit, inverse_dynamics, joint_reactions
     from .kinematics import least_measures, singularity_measures, solve_kinematics
 
@@ -468,7 +476,6 @@ def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple
         return DesignOutcome("limit", str(exc)), state
     t = motion.t
     direct = model.na == model.nt
-    least = least_measures(model, kin.q)
     m: dict[str, float] = {}
     if ctx.gci:
         # the conditioning index's measure at every sample, the least of each from proven brackets
@@ -476,11 +483,15 @@ def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple
         mu = getattr(singularity_measures(model, kin.q, only="direct" if direct else "inverse"),
                      "direct" if direct else "inverse")
         m["gci"] = _mean(mu, t)
-    m["min_inverse_measure"] = least["inverse"]
-    m["min_constraint_measure"] = least["constraint"]
-    if direct:
-        m["min_direct_measure"] = least["direct"]
-    if not np.minimum(least["inverse"], least["direct"] if direct else np.inf) >= ctx.threshold:  # (NaN: singular)
+    # the least measures: proven brackets, the decompositions only where a sample can hold the least
+    least = least_measures(model, kin.q) if ctx.measures else None
+    if least is not None:
+        m["min_inverse_measure"] = least["inverse"]
+        m["min_constraint_measure"] = least["constraint"]
+        if direct:
+            m["min_direct_measure"] = least["direct"]
+    if least is not None and not np.minimum(least["inverse"], least["direct"] if direct else np.inf) >= ctx.threshold:
+        # (NaN: singular)
         sm = singularity_measures(model, kin.q)  # the first sample where the worst is least, named
         worst = np.minimum(sm.inverse, sm.direct) if direct else sm.inverse
         k = int(np.argmin(worst))
@@ -499,16 +510,17 @@ def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple
     state = DesignState(model, motion, kin, u, reac if ctx.reactions else None)
     sd = kin.act_qd
     power = u * sd
-    units = [effort_unit(model, i) for i in range(model.na)]
-    for unit in set(units):
-        cols = [i for i, x in enumerate(units) if x == unit]
-        m[f"peak_effort_{unit}"] = float(np.abs(u[:, cols]).max())
-    for i, (name, unit) in enumerate(zip(model.actuator_names, units)):
-        sp = _speed_unit(unit)
-        m[f"peak_effort_{name}_{unit}"] = float(np.abs(u[:, i]).max())
-        m[f"rms_effort_{name}_{unit}"] = math.sqrt(_mean(u[:, i] ** 2, t))
-        m[f"peak_speed_{name}_{sp}"] = float(np.abs(sd[:, i]).max())
-        m[f"rms_speed_{name}_{sp}"] = math.sqrt(_mean(sd[:, i] ** 2, t))
+    if ctx.efforts:
+        units = [effort_unit(model, i) for i in range(model.na)]
+        for unit in set(units):
+            cols = [i for i, x in enumerate(units) if x == unit]
+            m[f"peak_effort_{unit}"] = float(np.abs(u[:, cols]).max())
+        for i, (name, unit) in enumerate(zip(model.actuator_names, units)):
+            sp = _speed_unit(unit)
+            m[f"peak_effort_{name}_{unit}"] = float(np.abs(u[:, i]).max())
+            m[f"rms_effort_{name}_{unit}"] = math.sqrt(_mean(u[:, i] ** 2, t))
+            m[f"peak_speed_{name}_{sp}"] = float(np.abs(sd[:, i]).max())
+            m[f"rms_speed_{name}_{sp}"] = math.sqrt(_mean(sd[:, i] ** 2, t))
     wanted = ctx.stiffness
     if wanted:
         from .stiffness import stiffness
@@ -540,11 +552,13 @@ def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple
             m["workspace_min_measure"] = float(ws.least_measure)
     if "required" in grids:
         m["required_region_coverage"] = float(grids["required"].inside.mean())
-    m.update(_limit_metrics(model, kin, u))
-    m["peak_power_W"] = float(power.sum(axis=1).max())
-    m["motor_energy_per_cycle_J"] = float(time_integral(np.abs(power).sum(axis=1), t))
-    if ctx.reactions:
+    if ctx.efforts:
+        m.update(_limit_metrics(model, kin, u))
+        m["peak_power_W"] = float(power.sum(axis=1).max())
+        m["motor_energy_per_cycle_J"] = float(time_integral(np.abs(power).sum(axis=1), t))
+    if ctx.reactions and ctx.efforts:
         m["friction_energy_per_cycle_J"] = float(time_integral(reac.dissipation, t))
+    if ctx.reactions:
         force = np.linalg.norm(reac.joint_force, axis=-1).max(axis=0)
         moment = np.linalg.norm(reac.joint_moment, axis=-1).max(axis=0)
         for j, name in enumerate(model.joint_names):
@@ -559,12 +573,16 @@ class GeneratedMotion:
     """What a machine's description generator says of the motion (its ``motion`` hook): the
     task motion every design performs (``motion``, a :class:`pkmdyn.multibody.TaskMotion` in
     the generated description's task order, its named loads included), the threshold on the
-    engine's singularity measures (``threshold``; 0: only a singular sample) and the machine's
-    own design-independent data (``data``, handed back to its ``design_metrics``; picklable)."""
+    engine's singularity measures (``threshold``; 0: only a singular sample), the machine's
+    own design-independent data (``data``, handed back to its ``design_metrics``; picklable) and
+    whether the engine computes its least singularity measures (``measures``: the metrics
+    ``min_*_measure`` and the status on ``threshold``; false: a machine whose status comes from
+    a measure of its own, the largest stage of a design spared)."""
 
     motion: Any
     threshold: float = 0.0
     data: Any = None
+    measures: bool = True
 
 
 @dataclass(frozen=True)
@@ -653,7 +671,7 @@ class GeneratedSweep:
         except PkmdynError as exc:
             raise ParameterError(f"base parameters: {exc}") from None
         engine = DescribedSweepContext(motion=gm.motion, threshold=gm.threshold, reactions=True, template=template,
-                                       gci=False)
+                                       gci=False, measures=gm.measures, efforts=False)
         return GeneratedSweepContext(engine, gm.data)
 
     def evaluate(self, descriptions: Sequence[Mapping[str, Any]], context: GeneratedSweepContext

@@ -4,8 +4,8 @@ The hooks of :class:`pkmdyn.multibody.sweep.GeneratedSweep`: a design is a hip p
 (``docs/file_formats.md``; its schema is :func:`~.params.model_from_dict`'s), turned into the
 mechanism description of :func:`~.description.hip_description` and evaluated by the engine
 (:func:`pkmdyn.multibody.sweep.evaluate_model`: the description's structure compiled once for
-the sweep, its numbers per design; kinematics along the motion, the singularity measures, the
-motor efforts with every joint reaction and the friction, the hip-joint and thrust-bearing
+the sweep, its numbers per design; kinematics along the motion, the least singularity measures
+with ``[motion] engine_measures = true``, the motor efforts with every joint reaction and the friction, the hip-joint and thrust-bearing
 friction driven by the hydraulic load, the named load ``hydraulic_N``). Every design performs
 the same motion: the built-in ISO 14242-1 cycle (500 samples by default) or a hip motion file.
 
@@ -52,6 +52,10 @@ class _Motion(Section):
     singularity_threshold: Annotated[float, Field(ge=0.0, le=1.0)] = 1e-3
     workspace_max_angle_deg: Annotated[float, Field(gt=0.0, le=90.0)] = 30.0
     workspace_points: Annotated[int, Field(ge=0, le=1_000_000)] = 256
+    #: the engine's least singularity measures (``min_inverse_measure``, ``min_direct_measure``,
+    #: ``min_constraint_measure``): reported only (the status comes from 1/cond(J)), and the
+    #: largest stage of a design, so not computed unless asked for
+    engine_measures: bool = False
 
 
 @dataclass(frozen=True)
@@ -95,8 +99,8 @@ _METRICS = (
     MetricInfo("friction_energy_per_cycle_J", "J",
                "(1/c) int sum_i tau_f,i theta_dot_i dt: the work the motors spend on every joint's friction"),
 )
-#: the engine's metrics kept under their own names: its singularity measures and every joint's
-#: reaction (the engine's conditioning index, efforts, speeds and energies are the hip's
+#: the engine's metrics kept under their own names: its singularity measures (``[motion]
+#: engine_measures = true``) and every joint's reaction (the engine's conditioning index, efforts, speeds and energies are the hip's
 #: above, in the hip's terms: motor torques and speeds, per cycle)
 _ENGINE_KEPT = ("min_inverse_measure", "min_direct_measure", "min_constraint_measure")
 
@@ -193,18 +197,20 @@ def motion(params: Mapping[str, Any], options: Mapping[str, Any], base_dir: Path
                          R_ws=_workspace_rotations(seq, opt.workspace_points, opt.workspace_max_angle_deg))
     task = TaskMotion(mo.t, mo.angles, mo.rates, mo.accels, {"hydraulic_N": mo.load})
     # the hip's singularity threshold is on its own 1/cond(J) (design_metrics): the engine's
-    # measures are reported, never a design's status
-    return GeneratedMotion(task, 0.0, data)
+    # measures, when asked for, are reported, never a design's status
+    return GeneratedMotion(task, 0.0, data, measures=opt.engine_measures)
 
 
 def metrics(options: Mapping[str, Any], engine: tuple[MetricInfo, ...]) -> tuple[MetricInfo, ...]:
     """The hip's metrics (the orientation workspace only when ``workspace_points`` > 0), then
-    the engine's singularity measures and every joint's peak reaction force and moment."""
+    the engine's singularity measures (with ``engine_measures = true``) and every joint's peak
+    reaction force and moment."""
     points = options.get("workspace_points", 256)
     own = _METRICS
     if points == 0 and not isinstance(points, bool):
         own = tuple(m for m in _METRICS if m.name != "orientation_workspace_fraction")
-    return own + tuple(m for m in engine if _kept(m.name))
+    measures = options.get("engine_measures", False) is True
+    return own + tuple(m for m in engine if _kept(m.name) and (measures or m.name not in _ENGINE_KEPT))
 
 
 def _angle(a: Array, b: Array) -> Array:
