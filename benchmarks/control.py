@@ -354,7 +354,8 @@ def pdm_part(seconds: float) -> dict[str, Any]:
 def mujoco_part(seconds: float) -> dict[str, Any]:
     import mujoco
 
-    from pkmdyn.cli.export import PLATFORM_MASS_KG
+    import pkmdyn.cli  # noqa: F401  (the command line first: the hip's commands module is one of its groups)
+    from pkmdyn.machines.hip_simulator.commands import PLATFORM_MASS_KG  # what pkmdyn hip export writes
     from pkmdyn.multibody import solve_kinematics
     from pkmdyn.multibody.mjcf import mechanism_mjcf, mujoco_order, mujoco_qpos
 

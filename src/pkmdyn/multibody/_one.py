@@ -52,8 +52,8 @@ from .friction import EPS_ROTATION as EPS_R
 from .friction import EPS_TRANSLATION as EPS_T
 from .model import MechanismModel
 
-__all__ = ["pack", "supported", "state", "prime", "solution", "forward_one", "inverse_one", "positions_one", "COLD",
-           "ALONE"]
+__all__ = ["pack", "supported", "state", "prime", "solution", "forward_one", "inverse_one", "positions_one",
+           "actuator_maps", "COLD", "ALONE"]
 
 Array = NDArray[np.float64]
 
@@ -66,8 +66,8 @@ BAD_INPUT = 12
 #: status of a work space shorter than the kernel's views (a defect of :func:`_sizes`)
 SHORT_WORK = 13
 #: what a call of the kernel computes: the task accelerations, the efforts, the actuated
-#: coordinates alone
-FORWARD, INVERSE, POSITIONS = 1, 0, 2
+#: coordinates alone, the actuated coordinates' rates per task rate (``J_ax``, :func:`actuator_maps`)
+FORWARD, INVERSE, POSITIONS, MAP = 1, 0, 2, 3
 
 _INT = ("body_parent", "body_joint", "joint_q0", "joint_nq", "coord_motion", "ancestor_list", "row_loop", "row_kind",
         "row_i", "row_j", "loop_joint", "joint_parent", "joint_child", "task_kind", "task_index", "euler_axes",
@@ -443,6 +443,12 @@ def _dynamics(pk, x, xd, v, load, mode, out):  # pragma: no cover - compiled
         for a in range(act_coord.shape[0]):
             out[a] = q[act_coord[a]]
         return OK
+    if mode == MAP:  # J_ax (na, nt), row by row
+        for a in range(act_coord.shape[0]):
+            ca = _nn(act_coord[a])
+            for t in range(nt):
+                out[a * nt + t] = Gp[ca, t]
+        return OK
     # ---- 2. friction that does not depend on the reactions, from the rates (V = [w; v_O])
     for c in range(nq):
         Qf[c] = 0.0
@@ -572,12 +578,31 @@ def positions_one(pk: NDArray[np.int64], x: Array, xd: Array, out: Array) -> int
     return _dynamics(pk, x, xd, xd, 0.0, POSITIONS, out)
 
 
+@njit(cache=True, _nrt=False)
+def _maps(pk, x, xd, mode, out):  # pragma: no cover - compiled
+    """:func:`actuator_maps`' loop (``mode``: :data:`MAP`, as a value)."""
+    for k in range(x.shape[0]):
+        status = _dynamics(pk, x[k], xd[k], xd[k], 0.0, mode, out[k])
+        if status != OK:
+            return k
+    return x.shape[0]
+
+
+def actuator_maps(pk: NDArray[np.int64], x: Array, xd: Array, out: Array) -> int:
+    """``out[k] = J_ax (na nt,)`` (the actuated coordinates' rates per task rate, row by row)
+    at the task poses ``x (n, nt)`` in turn, each call of the kernel starting from the last
+    (``xd (n, nt)``: the poses' rates, for the predictor alone); returns the number of samples
+    solved (``n`` where all were; the state then holds the last). The batched actuator map of
+    a motion without the batched solver's every body and joint point."""
+    return int(_maps(pk, x, xd, MAP, out))
+
+
 def _refresh_cache() -> None:
     """The kernels above inline and link functions of other modules (:mod:`._cache`)."""
     from .. import _dense
     from . import _cache, _dyn_kernels, _kernels, dynamics, friction
 
-    _cache.refresh((_dynamics,), (_kernels, _dyn_kernels, _dense, friction, dynamics))
+    _cache.refresh((_dynamics, _maps), (_kernels, _dyn_kernels, _dense, friction, dynamics))
 
 
 _refresh_cache()

@@ -29,6 +29,7 @@ minimum-norm efforts ``u = B^+ (M xdd + h)``.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -45,8 +46,19 @@ __all__ = ["MechanismVerbs", "machine_verbs", "RenamedVerbs", "motion_scene"]
 
 Array = NDArray[np.float64]
 
+#: poses from which :meth:`MechanismVerbs.actuator_map` takes the single-sample kernel's loop
+MAP_SAMPLES = 16
+
 #: the error of a single-sample direct kinematics call whose actuators crossed a singularity
 _CROSSING = "the actuator coordinates crossed a singularity of the direct kinematics"
+
+
+def _vector(a: object) -> Array:
+    """``a`` as a contiguous float array: itself where it already is one (the common case of a
+    loop's calls), without numpy's conversion call."""
+    if type(a) is np.ndarray and a.dtype == np.float64 and a.flags.c_contiguous:
+        return a
+    return np.ascontiguousarray(a, dtype=float)
 
 
 def _load_dependent(model: MechanismModel) -> bool:
@@ -65,6 +77,14 @@ class _State:
         self.q_last: Array | None = None
         self.inertia_factors = inertia_factors(model)
         self.pk = _one.pack(model) if _one.supported(model) else None
+        # the kernel itself and its inverse and forward modes (:meth:`MechanismVerbs._kernel`)
+        self.dynamics, self.modes = _one._dynamics, (_one.INVERSE, _one.FORWARD)
+        # the named load's default magnitude (the single-sample verbs' load where the call gives
+        # none), None without a named load
+        self.default_load: float | None = (
+            float(model.load_magnitude[list(model.load_name).index(model.named_loads[0])]) if model.named_loads
+            else None)
+        self.map_pk: Any = None  # the batched actuator map's own buffer (:meth:`MechanismVerbs._maps`)
         # the direct kinematics' warm start (:meth:`MechanismVerbs.direct_one`): its buffer, output
         # and kernel
         self.direct: Any = None
@@ -211,9 +231,54 @@ class MechanismVerbs:
         return self._mass(model, kin, coordinate_twists(model, kin.q, kin))
 
     def actuator_map(self, model: MechanismModel, q: Array) -> Array:
-        """``B(x) = J_ax^T k (n, nt, na)`` (``k`` the drives' transmission ratios, 1 without a drive)."""
-        kin = self._kin(model, self._x(q))
-        return np.swapaxes(kin.J_ax, 1, 2) * model.drive_ratio
+        """``B(x) = J_ax^T k (n, nt, na)`` (``k`` the drives' transmission ratios, 1 without a drive).
+        Along a motion of :data:`MAP_SAMPLES` poses or more, the single-sample kernel in one
+        compiled loop (:func:`._one.actuator_maps`: the same solver and tolerances, each pose
+        from the last), the first pose by the checked route."""
+        x = self._x(q)
+        J = self._maps(model, x) if x.shape[0] >= MAP_SAMPLES else None
+        if J is None:
+            J = self._kin(model, x).J_ax
+        return np.swapaxes(J, 1, 2) * model.drive_ratio
+
+    def _maps(self, model: MechanismModel, x: Array) -> Array | None:
+        """``J_ax (n, na, nt)`` along the poses ``x`` by :func:`._one.actuator_maps` where the
+        kernel answers for ``model`` (else None): the first pose by the checked route (from the
+        last solved sample, as :meth:`_kin` starts), every later one by the kernel from the one
+        before, the rest by the checked route from the first it does not solve; the last
+        solved sample remembered, as :meth:`_kin` does."""
+        st = self._state(model)
+        if st.pk is None or not np.all(np.isfinite(x)):
+            return None
+        _one = st.one
+        first = self._kin(model, x[:1])
+        if st.map_pk is None:
+            st.map_pk = _one.pack(model)
+        n, nt, na = x.shape[0], model.nt, model.na
+        out = np.empty((n, na * nt))
+        out[0] = first.J_ax[0].ravel()
+        _one.prime(st.map_pk, first.q[0], first.x[0], first.G[0])
+        # the poses' steps as their rates (per sample): the predictor's second order along the motion
+        xd = np.empty_like(x)
+        xd[0] = 0.0
+        d = np.diff(x, axis=0)
+        ang = model.task_kind == 1
+        d[:, ang] = (d[:, ang] + np.pi) % (2 * np.pi) - np.pi
+        xd[1:] = d
+        done = 1 + _one.actuator_maps(st.map_pk, x[1:], xd[1:], out[1:])
+        if done < n:  # the checked route names what is wrong, or solves the rest
+            q_prev = _one.solution(st.map_pk)
+            rest = solve_kinematics(model, x[done:], q_start=q_prev if q_prev is not None else first.q[0],
+                                    sample_offset=done)
+            out[done:] = rest.J_ax.reshape(n - done, na * nt)
+            st.remember(rest)
+        else:
+            sol = _one.state(st.map_pk)
+            nq = model.nq
+            q_end = sol[1:1 + nq].copy()
+            st.q_last = q_end
+            _one.prime(st.pk, q_end, x[-1], sol[1 + nq + nt:1 + nq + nt + nq * nt].reshape(nq, nt))
+        return out.reshape(n, na, nt)
 
     def actuator_accelerations(self, model: MechanismModel, q: Array, qd: Array, qdd: Array) -> Array:
         """The drives' accelerations ``k qdd_a (n, na)`` (motor side, ``k`` as in :meth:`actuator_map`)
@@ -278,26 +343,24 @@ class MechanismVerbs:
         pk = st.pk
         if pk is None:
             return None
-        _one = st.one
-        if model.named_loads:
-            mag = float(model.load_magnitude[list(model.load_name).index(model.named_loads[0])])
-            lv = np.asarray(mag if load is None else load, dtype=float)
-            if lv.size != 1 or not np.isfinite(lv).all():
-                return None  # the general route names what is wrong
-            magnitude = float(lv.reshape(()))
+        if st.default_load is not None:
+            if type(load) is float and math.isfinite(load):  # a loop's own value: no array to make
+                magnitude = load
+            else:
+                lv = np.asarray(st.default_load if load is None else load, dtype=float)
+                if lv.size != 1 or not np.isfinite(lv).all():
+                    return None  # the general route names what is wrong
+                magnitude = float(lv.reshape(()))
         elif load is not None and np.any(np.asarray(load) != 0.0):
             return None
         else:
             magnitude = 0.0
-
-        x = np.ascontiguousarray(q, dtype=float)
-        xd = np.ascontiguousarray(qd, dtype=float)
-        vv = np.ascontiguousarray(v, dtype=float)
+        x, xd, vv = _vector(q), _vector(qd), _vector(v)
         nt = model.nt
         if x.shape != (nt,) or xd.shape != (nt,) or vv.shape != (nt,):
             return None  # the general route names what is wrong (the kernel refuses non-finite input)
         out = np.empty(nt)
-        status = (_one.forward_one if forward else _one.inverse_one)(pk, x, xd, vv, magnitude, out)
+        status = st.dynamics(pk, x, xd, vv, magnitude, st.modes[forward], out)
         return out if status == 0 else None
 
     def inverse_dynamics_one(self, model: MechanismModel, q: Array, qd: Array, qdd: Array,

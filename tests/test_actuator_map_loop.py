@@ -1,0 +1,72 @@
+"""The batched actuator map along a motion by the single-sample kernel's compiled loop
+(``MechanismVerbs.actuator_map``, :func:`pkmdyn.multibody._one.actuator_maps`) against the
+batched solver's own (the route below ``MAP_SAMPLES`` poses)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import multibody_examples as ex
+from pkmdyn.errors import PkmdynError
+from pkmdyn.multibody import load_mechanism, reference_task
+from pkmdyn.multibody import machine as machine_module
+from pkmdyn.multibody.machine import machine_verbs
+
+CASES = {"stewart": lambda: ex.builtin_dict("stewart"), "delta": lambda: ex.builtin_dict("delta"),
+         "rrr3": lambda: ex.builtin_dict("rrr3"), "stewart_sps": ex.stewart_sps}
+
+
+def _motion(m, n=120, seed=7):
+    t = np.linspace(0.0, 1.0, n)
+    amp = np.where(m.task_kind == 1, 0.05, 0.03 * m.length_scale)
+    return ex.smooth_motion(reference_task(m), amp, t, seed)[0]
+
+
+def _checked(m, x, monkeypatch):
+    with monkeypatch.context() as mp:
+        mp.setattr(machine_module, "MAP_SAMPLES", 10**9)
+        return machine_verbs(m).actuator_map(m, x)
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_the_compiled_loop_equals_the_batched_solver(name, monkeypatch):
+    m = load_mechanism(CASES[name]())
+    x = _motion(m)
+    V = machine_verbs(m)
+    assert V._state(m).pk is not None  # the kernel answers for these mechanisms
+    B = V.actuator_map(m, x)
+    ref = _checked(m, x, monkeypatch)
+    assert B.shape == ref.shape == (len(x), m.nt, m.na)
+    assert np.abs(B - ref).max() <= 1e-10 * np.abs(ref).max()
+    # the last pose is remembered: a single-sample call there starts from it
+    q_last = V._state(m).last_q()
+    kin = machine_verbs(m)._kin(m, x[-1:])
+    assert np.abs(q_last - kin.q[0]).max() <= 1e-9 * max(1.0, np.abs(kin.q[0]).max())
+
+
+def test_the_hip_map_along_its_cycle():
+    from pkmdyn.machines.hip_simulator import control_job
+    from pkmdyn.machines.hip_simulator.params import load_params
+    from pkmdyn.profiles.iso14242 import iso14242_motion
+
+    cm = control_job.control_model(load_params())
+    verbs = control_job.verbs(cm)
+    q = iso14242_motion(cycles=1.0, samples_per_cycle=400).angles
+    B = verbs.actuator_map(cm, q)
+    m = cm.mechanism
+    kin = machine_verbs(m)._kin(m, q)
+    ref = np.swapaxes(kin.J_ax, 1, 2) * m.drive_ratio
+    assert np.abs(B - ref).max() <= 1e-10 * np.abs(ref).max()
+
+
+def test_an_unreachable_pose_gives_the_checked_error(monkeypatch):
+    m = load_mechanism(ex.builtin_dict("delta"))
+    x = _motion(m)
+    x[60:] += 10.0 * m.length_scale  # out of reach from sample 60 on
+    with pytest.raises(PkmdynError) as fast:
+        machine_verbs(m).actuator_map(m, x)
+    with pytest.raises(PkmdynError) as checked:
+        _checked(m, x, monkeypatch)
+    assert type(fast.value) is type(checked.value)
+    assert "60" in str(fast.value) and "60" in str(checked.value)
