@@ -18,7 +18,8 @@ Runs in one process, on one core, on the same inputs:
   its description, :mod:`pkmdyn.multibody.mjcf`; no friction) - one ``mj_inverse``,
   ``mj_forward`` and RK4 ``mj_step`` (1 ms) at consistent states of the same cycle, and a 10 s
   closed loop at 1 kHz (joint-space PD on the motor angles plus pkmdyn's friction-free
-  feedforward, one ``mj_step`` per cycle) with its tracking accuracy.
+  feedforward, one ``mj_step`` per cycle; the best of three runs, as the engine's loops) with its
+  tracking accuracy.
 - ``ratios``: ``hip_engine_loop_over_mujoco``, the real-time factor of the hip's closed loop on
   the engine (``pkmdyn.simulate.track``, computed torque, default settings) over that of
   MuJoCo's loop (target: at least 1).
@@ -431,19 +432,21 @@ def mujoco_part(seconds: float) -> dict[str, Any]:
     thetad_ref = qvel_r[:, slide] * gear
     upper_body = mj.body("upper").id  # its frame is the base frame at the zero pose
     kp, kd = 2.0, 0.02  # [N m/rad, N m s/rad] on the motor angles
-    mujoco.mj_resetData(mj, data)
-    data.qpos[:] = qpos_r[0]
-    data.qvel[:] = qvel_r[0]
-    mujoco.mj_forward(mj, data)
     Rm = np.empty((K, 9))
-    t0 = time.perf_counter()
-    for k in range(K):
-        Rm[k] = data.xmat[upper_body]
-        th = data.qpos[slide] * gear
-        thd = data.qvel[slide] * gear
-        data.ctrl[:] = ff[k] + kp * (theta_ref[k] - th) + kd * (thetad_ref[k] - thd)
-        mujoco.mj_step(mj, data)
-    wall = time.perf_counter() - t0
+    wall = np.inf
+    for _ in range(3):  # the best of three, as the engine's loops
+        mujoco.mj_resetData(mj, data)
+        data.qpos[:] = qpos_r[0]
+        data.qvel[:] = qvel_r[0]
+        mujoco.mj_forward(mj, data)
+        t0 = time.perf_counter()
+        for k in range(K):
+            Rm[k] = data.xmat[upper_body]
+            th = data.qpos[slide] * gear
+            thd = data.qvel[slide] * gear
+            data.ctrl[:] = ff[k] + kp * (theta_ref[k] - th) + kd * (thetad_ref[k] - thd)
+            mujoco.mj_step(mj, data)
+        wall = min(wall, time.perf_counter() - t0)
     err = _angle_error_deg(Rr, Rm.reshape(K, 3, 3))
     out["realtime_factor"] = seconds / wall
     out["loop"] = "motor-angle PD (2 N m/rad, 0.02 N m s/rad) + pkmdyn friction-free feedforward, mj_step RK4 1 ms"
