@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import toy_machine as toy
-from pkmdyn.cli.control import hip_closed_loop, machine_setup
+from pkmdyn.cli.control import builtin_closed_loop, machine_setup
 from pkmdyn.control import Gains, effort, gains, load_settings, loop_settings, make_controller, sample_reference
 from pkmdyn.errors import ParameterError
 from pkmdyn.simulate import DivergenceError, LoopSettings, track
@@ -29,7 +29,7 @@ def test_hip_feedforward_replay_on_exact_plant():
     """Feedforward, plant = controller model, one ISO cycle, at the DEFAULT settings (1 ms
     cycle, one integration step per cycle; the feedforward reads no sensor): within 1e-3 deg,
     at every cycle instant and at the end."""
-    tr = hip_closed_loop(1.0, "feedforward", exact_plant=True)
+    tr = builtin_closed_loop("hip", 1.0, "feedforward", exact_plant=True)
     r = tr.result
     K = r.t.shape[0]
     err = np.rad2deg(np.abs(tr.reference.q[:K] - r.q))
@@ -45,8 +45,8 @@ def test_hip_replay_error_is_the_hold_not_the_integrator():
 
     s = load_settings("hip")
     ls = loop_settings(s)
-    base = hip_closed_loop(1.0, "feedforward", exact_plant=True)
-    fine = hip_closed_loop(1.0, "feedforward", integration_step_s=1e-4, exact_plant=True)
+    base = builtin_closed_loop("hip", 1.0, "feedforward", exact_plant=True)
+    fine = builtin_closed_loop("hip", 1.0, "feedforward", integration_step_s=1e-4, exact_plant=True)
     assert np.rad2deg(np.abs(base.result.q - fine.result.q)).max() < 1e-4
     su = machine_setup("hip", None, None, None, 1.0, s)
     ros2 = track(su.verbs, su.model, su.model, su.motion, 1.0, "feedforward", gains(s, "feedforward", 3),
@@ -117,7 +117,7 @@ def test_augmented_pd_beats_pd_under_default_mismatch():
     smaller than PD's, RMS and maximum, for every angle."""
     res = {}
     for kind in ("pd", "augmented-pd"):
-        tr = hip_closed_loop(0.3, kind)
+        tr = builtin_closed_loop("hip", 0.3, kind)
         K = tr.result.t.shape[0]
         e = tr.reference.q[:K] - tr.result.q
         res[kind] = (np.sqrt(np.mean(e**2, axis=0)), np.max(np.abs(e), axis=0))
