@@ -1,4 +1,7 @@
-"""The hip simulator's single-sample real-time path equals the batched path."""
+"""The hip simulator's single-sample path: the engine's one-sample verbs and compiled kernels of
+the hip's description (what a controller and the plant call once per cycle) against the closed
+form of Eq. 1-16 (``tests/oracles/hip.py``), friction family by friction family, and the
+engine's messages on samples it cannot take."""
 
 from __future__ import annotations
 
@@ -7,11 +10,12 @@ import dataclasses
 import numpy as np
 import pytest
 
-from hip_helpers import random_model
-from pkmdyn.errors import MotionError, SingularityError, UnreachablePoseError
+from hip_helpers import engine, random_model
+from oracles import hip
+from pkmdyn.errors import SingularityError, UnreachablePoseError
 from pkmdyn.machine import MachineDynamics
-from pkmdyn.machines.hip_simulator import minimal
-from pkmdyn.machines.hip_simulator.fast import pack
+from pkmdyn.machines.hip_simulator.params import load_params
+from pkmdyn.multibody.machine import machine_verbs
 
 FAMILIES = {
     "hip": ("mu_h", "mu_t"),
@@ -20,6 +24,7 @@ FAMILIES = {
     "spherical": ("spherical_coulomb", "spherical_viscous"),
     "universal": ("universal_coulomb", "universal_viscous"),
 }
+TOL = 1e-9
 
 
 def _only(model, family: str):
@@ -37,112 +42,76 @@ def _states(rng: np.random.Generator, n: int):
 
 
 def _check(model, rng: np.random.Generator, n: int = 12) -> None:
+    m = engine(model)
+    V = machine_verbs(m)
     q, qd, qdd, load = _states(rng, n)
-    u = minimal.inverse_dynamics(model, q, qd, qdd, load)
-    back = minimal.forward_dynamics(model, q, qd, u, load)
-    u_one = np.array([minimal.inverse_dynamics_one(model, q[k], qd[k], qdd[k], load[k]) for k in range(n)])
-    qdd_one = np.array([minimal.forward_dynamics_one(model, q[k], qd[k], u[k], load[k]) for k in range(n)])
-    np.testing.assert_allclose(u_one, u, rtol=0, atol=1e-12 * np.abs(u).max())
-    np.testing.assert_allclose(qdd_one, back, rtol=0, atol=1e-12 * np.abs(back).max())
+    u = hip.inverse_dynamics_q(model, q, qd, qdd, load)
+    u_one = np.array([V.inverse_dynamics_one(m, q[k], qd[k], qdd[k], load[k]) for k in range(n)])
+    qdd_one = np.array([V.forward_dynamics_one(m, q[k], qd[k], u[k], load[k]) for k in range(n)])
+    np.testing.assert_allclose(u_one, u, rtol=0, atol=TOL * np.abs(u).max())
+    np.testing.assert_allclose(qdd_one, qdd, rtol=0, atol=TOL * np.abs(qdd).max())
 
 
-@pytest.mark.parametrize(("seed", "spin", "sequence"), [(1, "u_joint", "XYZ"), (2, "perpendicular", "XYZ"), (3, "u_joint", "zxy"), (4, "perpendicular", "YZX")])
-def test_fast_equals_batched_every_friction_family(seed: int, spin: str, sequence: str) -> None:
+@pytest.mark.parametrize(("seed", "sequence"), [(1, "XYZ"), (2, "zyx"), (3, "zxy"), (4, "YZX")])
+def test_one_sample_verbs_equal_the_closed_form_every_friction_family(seed: int, sequence: str) -> None:
     rng = np.random.default_rng(seed)
-    model = random_model(rng, friction=True, lever_spin=spin, euler_sequence=sequence)
+    model = random_model(rng, friction=True, euler_sequence=sequence)
     _check(model, rng)
     for family in FAMILIES:
         _check(_only(model, family), rng, n=4)
 
 
-def test_fast_equals_batched_default_machine_and_zero_load() -> None:
-    from pkmdyn.machines.hip_simulator import load_params
-
+def test_one_sample_verbs_default_machine_and_zero_load() -> None:
     rng = np.random.default_rng(7)
     model = load_params()
     _check(model, rng)
+    m = engine(model)
     q, qd, qdd, _ = _states(rng, 1)
-    zero = minimal.inverse_dynamics(model, q, qd, qdd, np.zeros(1))[0]
-    np.testing.assert_allclose(minimal.inverse_dynamics_one(model, q[0], qd[0], qdd[0], 0.0), zero, rtol=1e-13, atol=1e-15)
+    zero = hip.inverse_dynamics_q(model, q, qd, qdd, np.zeros(1))[0]
+    np.testing.assert_allclose(machine_verbs(m).inverse_dynamics_one(m, q[0], qd[0], qdd[0], 0.0), zero, rtol=0,
+                               atol=TOL * np.abs(zero).max())
 
 
-def test_packing_is_cached_per_model_object() -> None:
-    model = random_model(np.random.default_rng(8))
-    assert pack(model) is pack(model)
-    other = dataclasses.replace(model)
-    assert pack(other) is not pack(model)
-    np.testing.assert_array_equal(pack(other), pack(model))
-
-
-def test_minimal_module_offers_every_verb() -> None:
+def test_the_engine_offers_every_verb() -> None:
     names = [n for n in dir(MachineDynamics) if not n.startswith("_")]
     assert {"inverse_dynamics_one", "forward_dynamics_one", "mass_matrix"} <= set(names)
+    V = machine_verbs(engine(load_params()))
     for name in names:
-        assert hasattr(minimal, name), name
+        assert hasattr(V, name), name
 
 
-def test_fast_bad_input() -> None:
+def test_one_sample_bad_input() -> None:
     model = random_model(np.random.default_rng(9))
+    m = engine(model)
+    V = machine_verbs(m)
     z = np.zeros(3)
-    with pytest.raises(MotionError, match=r"qd: expected shape \(3,\)"):
-        minimal.inverse_dynamics_one(model, z, np.zeros(4), z, 0.0)
-    with pytest.raises(MotionError, match="load"):
-        minimal.forward_dynamics_one(model, z, z, z, -1.0)
-    with pytest.raises(MotionError, match="load"):
-        minimal.forward_dynamics_one(model, z, z, z, float("nan"))
-    with pytest.raises(MotionError, match="load"):
-        minimal.inverse_dynamics_one(model, z, z, z, None)
     lock = np.array([0.0, np.pi / 2, 0.0])  # XYZ: beta = 90 deg
     assert model.geometry.euler_sequence == "XYZ"
-    with pytest.raises(SingularityError, match="gimbal lock"):
-        minimal.forward_dynamics(model, lock[None], z[None], z[None], np.zeros(1))
-    with pytest.raises(SingularityError, match="gimbal lock"):
-        minimal.forward_dynamics_one(model, lock, z, z, 0.0)
-    far = np.array([0.0, 0.0, 3.0])  # IER 172 deg: leg 1 cannot reach its S joint
-    with pytest.raises(UnreachablePoseError, match="leg 1"):
-        minimal.inverse_dynamics(model, far[None], z[None], z[None], np.zeros(1))
-    with pytest.raises(UnreachablePoseError, match="leg 1"):
-        minimal.forward_dynamics_one(model, far, z, z, 0.0)
-    with pytest.raises(UnreachablePoseError, match="leg 1"):
-        minimal.inverse_dynamics_one(model, far, z, z, 0.0)
+    with pytest.raises(SingularityError, match=r"Euler angles \(XYZ\) of task body 'upper' are at their singularity"):
+        V.forward_dynamics_one(m, lock, z, z, 0.0)
+    far = np.array([0.0, 0.0, 3.0])  # IER 172 deg: the levers cannot reach their S joints
+    assert np.isnan(hip.kinematics(model, far[None]).L).any()
+    for verb in (V.forward_dynamics_one, V.inverse_dynamics_one):
+        with pytest.raises(UnreachablePoseError, match=r"the task pose is unreachable: loop \d+ \(cut S_"):
+            verb(m, far, z, z, 0.0)
 
 
-def test_compiled_kernels_equal_the_verbs_and_report_status() -> None:
-    from pkmdyn.machines.hip_simulator.fast import kernels
-
+def test_compiled_kernels_equal_the_closed_form_and_report_status() -> None:
     rng = np.random.default_rng(10)
     model = random_model(rng, friction=True)
-    p, inverse, forward = kernels(model)
+    m = engine(model)
+    V = machine_verbs(m)
+    kernels = V.one_sample_kernels(m)
+    assert kernels is not None
+    p, inverse, forward = kernels
     q, qd, qdd, load = _states(rng, 3)
+    V.forward_dynamics_one(m, q[0], qd[0], qdd[0], load[0])  # primes the warm start
+    ref = hip.inverse_dynamics_q(model, q, qd, qdd, load)
     for k in range(3):
         tau, back = np.empty(3), np.empty(3)
         assert inverse(p, q[k], qd[k], qdd[k], load[k], tau) == 0
-        np.testing.assert_array_equal(tau, minimal.inverse_dynamics_one(model, q[k], qd[k], qdd[k], load[k]))
+        np.testing.assert_allclose(tau, ref[k], rtol=0, atol=TOL * np.abs(ref[k]).max())
         assert forward(p, q[k], qd[k], tau, load[k], back) == 0
-        np.testing.assert_allclose(back, qdd[k], rtol=0, atol=1e-11 * np.abs(qdd[k]).max())
+        np.testing.assert_allclose(back, qdd[k], rtol=0, atol=TOL * np.abs(qdd[k]).max())
     out = np.empty(3)
-    assert forward(p, np.array([0.0, 0.0, 3.0]), qd[0], qdd[0], 0.0, out) == 1  # leg 1 unreachable
-
-
-def test_the_plant_and_controllers_use_the_unchecked_kernels_with_the_verbs_as_fallback():
-    """The plant integrator's and the controllers' per-cycle calls go through the compiled kernels
-    without input checks; they equal the checked verbs, and an invalid sample still raises the
-    machine's own error through the checked verb."""
-    from pkmdyn.control._laws import _id_one
-    from pkmdyn.machines.hip_simulator import load_params
-    from pkmdyn.simulate._plant import make_plant
-
-    model = load_params()
-    rng = np.random.default_rng(7)
-    plant = make_plant(minimal, model, True)
-    id_one = _id_one(minimal, model, True)
-    for _ in range(20):
-        q, qd, x = rng.uniform(-0.3, 0.3, 3), rng.uniform(-1, 1, 3), rng.uniform(-1, 1, 3)
-        load = float(rng.uniform(0, 3000))
-        np.testing.assert_array_equal(plant.f(q, qd, x, load), minimal.forward_dynamics_one(model, q, qd, x, load))
-        np.testing.assert_array_equal(id_one(q, qd, x, load), minimal.inverse_dynamics_one(model, q, qd, x, load))
-    far = np.array([1.3, 1.3, 0.0])
-    with pytest.raises(UnreachablePoseError, match="leg 1"):
-        plant.f(far, np.zeros(3), np.zeros(3), 0.0)
-    with pytest.raises(UnreachablePoseError, match="leg 1"):
-        id_one(far, np.zeros(3), np.zeros(3), 0.0)
+    assert forward(p, np.array([0.0, 0.0, 3.0]), qd[0], qdd[0], 0.0, out) != 0  # unreachable
