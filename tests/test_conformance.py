@@ -9,8 +9,11 @@ PDM), each run through the same checks on a smooth random motion about its refer
   (the machine without drives, friction and external loads, whose work this check leaves out);
 * the actuator Jacobian and the tree-rate map by central finite differences of the kinematics;
 * the actuator coordinates against the machine's own closed form (tests/oracles for the four
-  described mechanisms; the hand-derived kinematics of the two papers, Eq. 1-6 of the hip
-  paper and Eq. 2-48 of the PDM paper).
+  described mechanisms and the hip, Eq. 1-6 of the hip paper; the hand-derived kinematics of
+  Eq. 2-48 of the PDM paper);
+* the hip against its closed-form oracle (tests/oracles/hip.py) in full, to 1e-9: every body's
+  kinematics, ``M``, ``h``, ``B``, and the motor torques and their parts with every friction
+  family and the hydraulic load (Eq. 7-16), batched and single-sample.
 
 The thresholds are fixed by the arithmetic of each check (rounding for identities, the
 finite-difference truncation for derivatives), far from what a wrong formula gives.
@@ -189,10 +192,10 @@ def _oracle(name, m, t, x, xd, xdd):
         ref = bennett.input_output(x[:, 0], np.radians(30.0), np.radians(60.0), xd[:, 0], xdd[:, 0])
         return [int(m.joint_q0[m.joint_index("J2")])], ref["theta2"][:, None]
     if name == "hip":
-        from pkmdyn.machines.hip_simulator import inverse_kinematics, load_params
-        from pkmdyn.profiles.orientation import OrientationMotion
+        from oracles import hip
+        from pkmdyn.machines.hip_simulator import load_params
 
-        ref = inverse_kinematics(load_params(), OrientationMotion(t, x, xd, xdd, np.zeros(len(t))))
+        ref = hip.kinematics(load_params(), x, xd, xdd)
         return [acts[m.actuator_names.index(f"P_{i + 1}")] for i in range(3)], ref.L[:, 1]
     from pkmdyn.machines.pdm4 import inverse_kinematics, load_params
 
@@ -210,3 +213,52 @@ def test_actuator_coordinates_against_the_closed_form(name):
     angular = [m.coord_motion[c] < 3 for c in cols]  # rotation coordinates: compare wrapped
     diff = np.where(angular, _wrap(got - ref), got - ref)
     assert np.abs(diff).max() < 1e-9 * max(float(np.abs(ref).max()), 1.0)
+
+
+def _hip_with_every_friction():
+    """The built-in hip with every friction family of Table 2 on and a platform mass (so that
+    the thrust bearing's offset m_m g of Eq. 16 counts)."""
+    from pkmdyn.machines.hip_simulator import model_from_dict
+    from pkmdyn.machines.hip_simulator.params import default_params_dict
+
+    d = default_params_dict()
+    d["friction"].update(slider_coulomb_N=8.0, slider_viscous_Ns_m=30.0, screw_coulomb_Nm=0.02,
+                         screw_viscous_Nms_rad=2e-4, spherical_coulomb_Nm=0.2, spherical_viscous_Nms_rad=0.02,
+                         universal_coulomb_Nm=0.15, universal_viscous_Nms_rad=0.03)
+    d["inertia"]["platform_mass_kg"] = 2.5
+    return model_from_dict(d, "every friction")
+
+
+@pytest.mark.parametrize("variant", ["built-in", "every friction"])
+def test_hip_against_its_closed_form_oracle(variant):
+    """The hip's description through the engine against Eq. 1-16 (tests/oracles/hip.py) on the
+    conformance motion with a varying hydraulic load, 1e-9 of each quantity's largest value:
+    every body's kinematics and J_ax; M, h, B and the inverse and forward dynamics of the verbs;
+    the motor torques from the joint reactions and every part of their split (platform, lever,
+    slider, screw rotor, friction, the Eq. 16 share); the single-sample verbs."""
+    from hip_helpers import engine, engine_torques, kinematics_against_oracle
+    from oracles import hip
+    from pkmdyn.machines.hip_simulator import load_params
+
+    model = load_params() if variant == "built-in" else _hip_with_every_friction()
+    m = engine(model)
+    (t, x, xd, xdd), _ = _motion(m, "hip", n=30)
+    load = 800.0 + 600.0 * np.sin(3.0 * t) ** 2
+    assert kinematics_against_oracle(model, x, xd, xdd, t) < 1e-9
+    ref = hip.inverse_dynamics(model, hip.kinematics(model, x, xd, xdd), load)
+    eng = engine_torques(model, x, xd, xdd, load, t)
+    for part in ("tau", *hip.PARTS, "hip_friction", "power"):
+        assert _rel(getattr(eng, part), getattr(ref, part)) < 1e-9, part
+    assert np.abs(ref.hip_friction).max() > 1e-4 * np.abs(ref.tau).max()
+    if variant == "every friction":
+        assert np.abs(ref.friction - ref.hip_friction).max() > 1e-2 * np.abs(ref.tau).max()
+    V = machine_verbs(m)
+    assert _rel(V.mass_matrix(m, x), hip.mass_matrix(model, x)) < 1e-9
+    assert _rel(V.bias_forces(m, x, xd, load), hip.bias_forces(model, x, xd, load)) < 1e-9
+    assert _rel(V.actuator_map(m, x), hip.actuator_map(model, x)) < 1e-9
+    u = V.inverse_dynamics(m, x, xd, xdd, load)
+    assert _rel(u, ref.tau) < 1e-9
+    assert _rel(V.forward_dynamics(m, x, xd, ref.tau, load), xdd) < 1e-9
+    for k in (0, 7, 29):
+        assert _rel(V.inverse_dynamics_one(m, x[k], xd[k], xdd[k], load[k]), ref.tau[k]) < 1e-9
+        assert _rel(V.forward_dynamics_one(m, x[k], xd[k], ref.tau[k], load[k]), xdd[k]) < 1e-9

@@ -184,12 +184,13 @@ def _check_newton_euler(names, mass, inertia, g, kin, F, Mj, parent, child, load
 
 
 def test_hip_description_reproduces_the_closed_form_efforts():
-    """The hip's description (sliders, levers, platforms) against Eq. 7-14 with its friction
-    off: motor torque = (p / 2 pi) slider force + I_L Ldd (2 pi / p) (the screw's rotor inertia
-    is no body of the description), on the ISO cycle and random variants."""
-    from pkmdyn.machines.hip_simulator import inverse_kinematics, model_from_dict
+    """The hip's description (sliders, levers, platforms) against Eq. 7-14 (the closed-form
+    oracle, tests/oracles/hip.py) with its friction off: motor torque = (p / 2 pi) slider force +
+    I_L Ldd (2 pi / p) (the screw's rotor inertia is no body of the description), on the ISO
+    cycle and random variants."""
+    from oracles import hip as hip_oracle
+    from pkmdyn.machines.hip_simulator import model_from_dict
     from pkmdyn.machines.hip_simulator.description import hip_description
-    from pkmdyn.machines.hip_simulator.dynamics import inverse_dynamics as hip_inverse_dynamics
     from pkmdyn.machines.hip_simulator.params import default_params_dict
     from pkmdyn.profiles.iso14242 import iso14242_motion
 
@@ -209,7 +210,8 @@ def test_hip_description_reproduces_the_closed_form_efforts():
                 if isinstance(v, (int, float)) and "gravity" not in key:
                     d["inertia"][key] = v * rng.uniform(0.8, 1.2)
         hip = model_from_dict(d, f"variant {seed}")
-        ref = hip_inverse_dynamics(hip, inverse_kinematics(hip, motion), np.zeros(len(motion.t)))
+        ref = hip_oracle.inverse_dynamics(hip, hip_oracle.kinematics(hip, motion.angles, motion.rates, motion.accels),
+                                          np.zeros(len(motion.t)))
         m = load_mechanism(hip_description(hip))
         kin = solve_kinematics(m, motion.angles, motion.rates, motion.accels, motion.t)
         r = joint_reactions(m, kin, split=True)
@@ -226,7 +228,7 @@ def test_hip_description_reproduces_the_closed_form_efforts():
 def _check_hip_parts(m, kin, r, ref, sl):
     """The generic motor torques and every part of the split against the hand-built Eq. 7-16
     torques ``ref`` (platform, lever, slider, screw = the rotor, friction = every joint's and
-    the screws' friction), 1e-9 of each part's largest value."""
+    the screws' friction; the oracle's), 1e-9 of each part's largest value."""
     from pkmdyn.multibody.actuators import motor_efforts
 
     mot = motor_efforts(m, kin.act_q, kin.act_qd, kin.act_qdd, r.u)
@@ -552,11 +554,12 @@ def test_hip_description_reproduces_the_closed_form_with_every_friction_family(s
     ``external`` friction of S0 driven by the named load ``hydraulic_N`` (a platform mass makes
     the thrust term's offset m_m g count). The lead screws' friction and rotor inertia are added
     to the slider forces as the motor sees them (no bodies of the description). Without the
-    load the Eq. 16 torques are wrong, which the test also sees."""
+    load the Eq. 16 torques are wrong, which the test also sees. The reference: the closed-form
+    oracle (tests/oracles/hip.py)."""
+    from oracles import hip as hip_oracle
     from pkmdyn.friction import coulomb_viscous
-    from pkmdyn.machines.hip_simulator import inverse_kinematics, model_from_dict
+    from pkmdyn.machines.hip_simulator import model_from_dict
     from pkmdyn.machines.hip_simulator.description import hip_description
-    from pkmdyn.machines.hip_simulator.dynamics import inverse_dynamics as hip_inverse_dynamics
     from pkmdyn.machines.hip_simulator.params import default_params_dict
     from pkmdyn.profiles.iso14242 import iso14242_motion
 
@@ -572,7 +575,8 @@ def test_hip_description_reproduces_the_closed_form_with_every_friction_family(s
     d["inertia"]["platform_mass_kg"] = float(rng.uniform(1.0, 5.0))
     hip = model_from_dict(d, f"friction {seed}")
     motion = iso14242_motion(cycles=1, samples_per_cycle=200)
-    ref = hip_inverse_dynamics(hip, inverse_kinematics(hip, motion), motion.load)
+    ref = hip_oracle.inverse_dynamics(hip, hip_oracle.kinematics(hip, motion.angles, motion.rates, motion.accels),
+                                      motion.load)
     m = load_mechanism(hip_description(hip))
     assert m.named_loads == ("hydraulic_N",)
     kin = solve_kinematics(m, motion.angles, motion.rates, motion.accels, motion.t)
