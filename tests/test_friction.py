@@ -1,7 +1,6 @@
 import numpy as np
 
 from pkmdyn.friction import coulomb_viscous, regularised_sign
-from pkmdyn.machines.hip_simulator.dynamics import hip_bearing_friction
 
 
 def test_regularised_sign_is_bounded_smooth_and_zero_at_rest():
@@ -24,7 +23,22 @@ def test_friction_always_dissipates():
 
 
 def test_hip_friction_magnitude_follows_eq16():
-    omega = np.array([[0.0, 0.0, 2.0], [0.0, 0.0, 0.0]])
-    tau = hip_bearing_friction(omega, np.array([1000.0, 1000.0]), 20.0, 0.015, 0.1, 0.06, 0.02, 1e-9)
-    np.testing.assert_allclose(tau[0], [0, 0, 0.015 * 0.1 * 1000 + 0.06 * 0.02 * 1020], rtol=1e-12)
-    np.testing.assert_array_equal(tau[1], 0.0)
+    """Eq. 16 on the hip's description, by hand: at the zero pose (XYZ: Euler rates = omega) with
+    the platforms turning about Z alone, the generalised force of the S0 joints' load-driven
+    friction, ``(k J_ax)^T tau_hip``, is ``2 u(omega) (r_h mu_h F + r_t mu_t (F + m_m g))``."""
+    from hip_helpers import engine_torques
+    from pkmdyn.machines.hip_simulator import model_from_dict
+    from pkmdyn.machines.hip_simulator.params import default_params_dict
+
+    d = default_params_dict()
+    d["friction"].update(hip_radius_m=0.015, hip_coefficient=0.1, thrust_radius_m=0.06, thrust_coefficient=0.02)
+    d["inertia"].update(platform_mass_kg=20.0 / 9.8)  # m_m g = 20 N
+    model = model_from_dict(d, "Eq. 16")
+    z = np.zeros((2, 3))
+    qd = np.array([[0.0, 0.0, 2.0], [0.0, 0.0, 0.0]])
+    eng = engine_torques(model, z, qd, z, np.array([1000.0, 1000.0]))
+    k = eng.m.drive_ratio[:3]
+    Q = np.einsum("nat,na->nt", eng.kin.J_ax[:, :3] * k[None, :, None], eng.hip_friction)
+    u = 2.0 / np.sqrt(4.0 + 1e-6)  # the regularised sign at 2 rad/s (eps 1e-3 rad/s)
+    np.testing.assert_allclose(Q[0], [0, 0, 2 * u * (0.015 * 0.1 * 1000 + 0.06 * 0.02 * 1020)], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(eng.hip_friction[1], 0.0, atol=1e-15)
