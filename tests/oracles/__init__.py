@@ -5,6 +5,6 @@ See ``README.md`` in this directory for signatures, frames, units,
 conventions and literature sources.
 """
 
-from . import bennett, delta, frame_fe, mobility, rpr3, rrr3, stewart
+from . import bennett, delta, frame_fe, hip, mobility, rpr3, rrr3, stewart
 
-__all__ = ["bennett", "delta", "frame_fe", "mobility", "rpr3", "rrr3", "stewart"]
+__all__ = ["bennett", "delta", "frame_fe", "hip", "mobility", "rpr3", "rrr3", "stewart"]

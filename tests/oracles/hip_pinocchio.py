@@ -1,6 +1,6 @@
 """Independent reference for the hip simulator's motor torques, built on Pinocchio.
 
-The closed-form model (:mod:`pkmdyn.machines.hip_simulator.dynamics`) projects every body's
+The closed-form oracle (:mod:`oracles.hip`, Eq. 7-16) projects every body's
 required wrench onto the platforms' angular velocity by virtual work. This module reaches the
 same torques by a different route that shares no formula with it:
 
