@@ -164,11 +164,6 @@ def scene(model: HipControlModel, t: np.ndarray, q: np.ndarray, u: np.ndarray) -
 
 def parameters_text(params: str | None) -> str:
     """The parameter file's text (the built-in file when None), headed by where it came from."""
-    from .params import DEFAULT_PARAMS_TEXT
+    from .paper import parameters_text as text
 
-    if params is None:
-        return "# built-in parameters (pkmdyn/machines/hip_simulator/default.toml)\n" + DEFAULT_PARAMS_TEXT
-    try:
-        return f"# {params}\n" + Path(params).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
-        return f"# {params}\n# (the file could not be read again for the report)"
+    return text(params)
