@@ -280,7 +280,8 @@ def solve_kinematics(model: MechanismModel, x: Array, xd: Array | None = None, x
     ``x``: task coordinates in the order of ``model.task_names`` ([m], Euler angles [rad]);
     ``xd``, ``xdd``: their time derivatives (zero when omitted); ``t`` (n,) [s]: times, only
     for messages and the result; ``q_start`` (nq,): tree coordinates near the first sample's
-    solution (default: found from the reference configuration). Samples are solved in order,
+    solution (default, and where the first sample is out of its reach: found from the
+    reference configuration). Samples are solved in order,
     each warm-started from the previous one; where one Newton solve does not reach the next
     sample (a coarsely sampled motion), the step is bridged by 8, then 64, small task steps.
 
@@ -305,6 +306,10 @@ def solve_kinematics(model: MechanismModel, x: Array, xd: Array | None = None, x
         raise MotionError("x: the motion has no samples")
     q0 = _start(model, x[0]) if q_start is None else np.ascontiguousarray(as_array(q_start, (model.nq,), "q_start"))
     out = _run(model, x, xd, xdd, q0, t)
+    if q_start is not None and out["status"][0] not in (K.OK, K.EULER_SINGULAR):
+        # the first sample out of the warm start's reach (a start from another part of the
+        # motion): found from the reference configuration instead, as without a start
+        out = _run(model, x, xd, xdd, _start(model, x[0]), t)
     while np.any(out["status"] != K.OK):
         s = int(np.flatnonzero(out["status"] != K.OK)[0])
         q_s = _bridge(model, x, out, s)
