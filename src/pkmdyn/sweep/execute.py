@@ -343,9 +343,32 @@ class Executor:
         shared = self._shared
         token = uuid.uuid4().hex[:12]
 
+        batch_of: dict[str, Array] = {}  # each future's key -> its designs
+        resubmitted: dict[str, int] = {}
+
         def submit(ids: Array, **where: Any) -> Any:
-            return client.submit(run_batch, shared, ids, X[ids], key=f"pkmdyn-sweep-{token}-{int(ids[0])}",
-                                 retries=self.retries, pure=False, **where)
+            fut = client.submit(run_batch, shared, ids, X[ids], key=f"pkmdyn-sweep-{token}-{int(ids[0])}",
+                                retries=self.retries, pure=False, **where)
+            batch_of[fut.key] = ids
+            return fut
+
+        def again(fut: Any) -> Any:
+            """The batch of ``fut`` once more, under a new key: its result was forgotten by the
+            scheduler before it was read (a worker lost just as the batch finished), or the job
+            it reads was lost with the worker (the job is then sent to the workers again)."""
+            n = resubmitted[fut.key] = resubmitted.get(fut.key, 0) + 1
+            if n > self.retries + 1:
+                return None
+            ids = batch_of[fut.key]
+            nonlocal shared
+            if shared.status != "finished":  # the job itself lost with the worker: sent again
+                self._shared = shared = client.scatter(job, broadcast=True, hash=False)
+            new = client.submit(run_batch, shared, ids, X[ids], key=f"{fut.key}-again{n}", retries=self.retries,
+                                pure=False)
+            batch_of[new.key] = ids
+            resubmitted[new.key] = n
+            futures.append(new)
+            return new
 
         futures: list[Any] = []
         try:
@@ -358,10 +381,10 @@ class Executor:
                 head = [b[:1] for b in batches[:len(first)]]
                 batches = [*[b[1:] for b in batches[:len(first)] if b.shape[0] > 1], *batches[len(first):]]
                 futures = [submit(ids, workers=[w], allow_other_workers=True) for ids, w in zip(head, first)]
-                self._collect(futures, parts, bar)
+                self._collect(futures, parts, bar, again)
                 self._warm = True
             futures = [submit(ids) for ids in batches]
-            self._collect(futures, parts, bar)
+            self._collect(futures, parts, bar, again)
         except KilledWorker as exc:
             raise PkmdynError(f"a batch killed its worker repeatedly ({exc}); the finished batches are kept in "
                               f"{parts}, rerun the same command to continue") from None
@@ -374,12 +397,25 @@ class Executor:
                               if set(cpu_after) == set(cpu_before) else None)
 
     @staticmethod
-    def _collect(futures: list[Any], parts: Path, bar: Any) -> None:
-        """Write each batch's part as its future completes."""
+    def _collect(futures: list[Any], parts: Path, bar: Any, again: Any = None) -> None:
+        """Write each batch's part as its future completes. A future cancelled by the scheduler
+        (its result forgotten when a worker was lost as the batch finished) is submitted again
+        (``again(future)``: the new future, or None past the retries), so that a lost worker
+        loses no batch."""
+        from concurrent.futures import CancelledError
+
         from distributed import as_completed
 
-        for fut in as_completed(futures):
-            table = fut.result()
+        pending = as_completed(futures)
+        for fut in pending:
+            try:
+                table = fut.result()
+            except CancelledError:
+                new = None if again is None else again(fut)
+                if new is None:
+                    raise
+                pending.add(new)
+                continue
             _write_part(parts, table)
             bar.update(table.num_rows)
             fut.release()
