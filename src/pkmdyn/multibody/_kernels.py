@@ -398,10 +398,11 @@ def place_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coo
     from the task coordinates ``xs`` (:func:`_task_leg`; ``task`` the model's task arrays), the
     others from the body they meet (:func:`_explicit_leg`), and the bodies it moves placed.
     With ``skip``, the legs placed from the task alone (``fixed``) keep their coordinates, set
-    by an earlier pass at the same ``xs``; their bodies are placed again all the same (their
-    descendants may hang on coordinates that Newton moved). Returns whether every such leg
+    by an earlier pass at the same ``xs``; of their bodies, those that only such coordinates move
+    keep their poses, the others (hanging on coordinates that Newton moved) are placed again.
+    Returns whether every such leg
     reached its point (False: one is left to Newton)."""
-    redo, kind, fixed = legs[11], legs[1], legs[17]
+    redo, kind, fixed, fixed_coord = legs[11], legs[1], legs[17], legs[18]
     reached = True
     for L in range(redo.shape[0]):
         if skip and fixed[L] != 0:
@@ -414,9 +415,26 @@ def place_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coo
         Rf = w33[0]
         o = w3[18]
         for i in range(1, _nn(redo[L, 0] + 1)):
-            _forward_body(redo[L, i], q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
+            b = redo[L, i]
+            if skip and fixed[L] != 0 and _held_body(b, body_parent, body_joint, joint_q0, joint_nq, fixed_coord):
+                continue  # only kept coordinates move it: placed by the earlier pass as it stands
+            _forward_body(b, q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
                           coord_sign, RP, pP, RC, pC, R, p, S, Rf, o, trig, reuse)
     return reached
+
+
+@njit(cache=True, inline="always")
+def _held_body(b, body_parent, body_joint, joint_q0, joint_nq, fixed_coord):  # pragma: no cover - compiled
+    """Whether every coordinate that moves body ``b`` is one the legs placed from the task
+    alone set (``fixed_coord``)."""
+    while b >= 0:
+        b = _nn(b)
+        k = _nn(body_joint[b])
+        for c in range(_nn(joint_q0[k]), _nn(joint_q0[k] + joint_nq[k])):
+            if fixed_coord[c] == 0:
+                return False
+        b = body_parent[b]
+    return True
 
 
 @njit(cache=True, _nrt=False)
@@ -768,10 +786,22 @@ def _jrow(J, i, colpos, wa, wb, S, anc, a, b, coef_a, coef_b):
                                              + wb[0] * S[c, 3] + wb[1] * S[c, 4] + wb[2] * S[c, 5])
 
 
+@njit(cache=True, inline="always")
+def _settled(b, anc, settled):
+    """Whether only coordinates with ``settled[c] != 0`` move body ``b`` (the ground: True)."""
+    if b < 0:
+        return True
+    b = _nn(b)
+    for k in range(1, _nn(anc[b, 0] + 1)):
+        if settled[_nn(anc[b, k])] == 0:
+            return False
+    return True
+
+
 @njit(cache=True, _nrt=False)
 def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
          RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-         val, J, rowpos, colpos, mode, V, A, gamma, w33, w3):
+         val, J, rowpos, colpos, mode, V, A, gamma, w33, w3, settled=None):
     """Values ``val (nr + nt,)`` and, by ``mode``: the Jacobian (``ROWS_JACOBIAN``), row ``rr``
     and column ``c`` at ``J[rowpos[rr], colpos[c]]`` (rows with ``rowpos < 0`` left out: the
     solver writes the rows it solves straight into its permuted matrix); the drift ``gamma
@@ -783,6 +813,10 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
     the terms of ``o_P`` and of the turning ``e`` cancel into this), a rotation row
     ``e . c_j`` by ``(s_a - s_b) (e x c_j) . S_w``, a task position component m of point x by
     ``S_v[m] + (x x e_m) . S_w``, a task Euler angle by ``(E^-1 S_w)[m]``.
+
+    With ``settled (nq,)`` (``ROWS_VALUES`` only): the rows of a joint, or the task rows, whose
+    bodies only coordinates with ``settled[c] != 0`` move (legs placed from the task alone,
+    :mod:`.legs`) are not evaluated: their values are NaN.
 
     Returns False where an Euler task angle is at its sequence's singularity."""
     nr = row_loop.shape[0]
@@ -797,6 +831,9 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
         k = _nn(loop_joint[_nn(row_loop[rr])])
         a = joint_parent[k]
         b = joint_child[k]
+        if settled is not None and _settled(a, anc, settled) and _settled(b, anc, settled):
+            val[rr] = np.nan
+            continue
         if k != last:
             _frame(a, R, p, RP[k], pP[k], eP, oP)
             _frame(b, R, p, RC[k], pC[k], eC, oC)
@@ -837,6 +874,10 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
                 gamma[rr] = _dot(edd, cj) + 2.0 * _dot(ed, cd) + _dot(e, cdd)
     # task rows
     tb = _nn(task_body)
+    if settled is not None and _settled(tb, anc, settled):
+        for t in range(task_kind.shape[0]):
+            val[nr + t] = np.nan
+        return True
     for m in range(3):
         x[m] = p[tb, m] + R[tb, m, 0] * task_point[0] + R[tb, m, 1] * task_point[1] + R[tb, m, 2] * task_point[2]
     ang = w33[2, 0]  # not shared with the row work space
@@ -986,10 +1027,12 @@ def block_lu_factor(M, piv, blocks):
 def block_lu_solve(M, piv, blocks, prow, pcol, b, work):
     """Solve ``Kfull x = b`` in place (``b`` in the rows of ``Kfull``, ``x`` in coordinate
     order) with the factors of :func:`block_lu_factor` of the permuted ``K``: block by block,
-    ``A_kk x_k = b_k - A_k,<k x_<k``."""
+    ``A_kk x_k = b_k - A_k,<k x_<k`` (leading blocks with a zero right-hand side are left at
+    zero, and the others skip their columns)."""
     n = M.shape[0]
     for i in range(n):
         work[i] = b[_nn(prow[i])]
+    lo = 0  # work[:lo] is zero: the leading blocks whose right-hand sides are zero
     for bk in range(blocks.shape[0] - 1):
         s0, s1 = _nn(blocks[bk]), _nn(blocks[bk + 1])
         for k in range(s0, s1):
@@ -998,9 +1041,17 @@ def block_lu_solve(M, piv, blocks, prow, pcol, b, work):
                 tmp = work[k]
                 work[k] = work[pr]
                 work[pr] = tmp
+        if lo == s0:
+            zero = True
+            for i in range(s0, s1):
+                if work[i] != 0.0:
+                    zero = False
+            if zero:  # its solution is zero: nothing to solve
+                lo = s1
+                continue
         for i in range(s0, s1):
             acc = work[i]
-            for j in range(_nn(piv[n + i])):
+            for j in range(lo, _nn(piv[n + i])):
                 acc -= M[i, j] * work[j]
             for j in range(s0, i):
                 acc -= M[i, j] * work[j]
@@ -1237,9 +1288,16 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
             # one's sines and cosines; a Newton step computes them afresh
             again = phase == _CHORD
             mode = ROWS_VALUES if phase == _CHORD else ROWS_JACOBIAN
-        ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-                  RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-                  val, K, rowpos, colpos, mode, V, A, gamma, w33, w3)
+        if phase == _CHORD and fixed:
+            # the rows that only the legs placed from the task alone move are closed (their
+            # closed forms, at this sample's task): not evaluated (NaN), no step for them
+            ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                      RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+                      val, K, rowpos, colpos, mode, V, A, gamma, w33, w3, legs[18])
+        else:
+            ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
+                      RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+                      val, K, rowpos, colpos, mode, V, A, gamma, w33, w3)
         # ---- the right-hand side
         if phase == _RATES:
             for i in range(mk):
@@ -1254,7 +1312,8 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
             _residuals(xs, val, nr, task_kind, res)
             _idle_residuals(q, q_ref, idle, ires)
             for i in range(m):
-                rhs[i] = -res[_nn(sel_rows[i])]
+                ri = res[_nn(sel_rows[i])]
+                rhs[i] = -ri if ri == ri else 0.0  # (NaN: a row left out of the simplified step)
             for i in range(ni):
                 rhs[m + i] = -ires[i]
             if phase == _NEWTON:
