@@ -16,7 +16,7 @@ from pkmdyn.machines.hip_simulator import load_params, model_from_dict
 from pkmdyn.machines.hip_simulator.params import default_params_dict, paper_params_path
 from pkmdyn.params_util import read_toml
 from pkmdyn.profiles.iso14242 import iso14242_motion
-from pkmdyn.machines.hip_simulator.iso_fit import PAPER_SLIDER_MAXIMA, iso_cycle_preset
+from pkmdyn.machines.hip_simulator.paper import PAPER_SLIDER_MAXIMA, iso_cycle_preset
 
 
 def _upper_sliders(model, motion):

@@ -250,7 +250,7 @@ def test_savgol_differentiator_on_a_smooth_signal():
 def test_paper_fit_preset_is_closer_to_the_paper_than_the_default():
     from pkmdyn.machines.hip_simulator import load_params
     from pkmdyn.profiles.iso14242 import IsoCycle
-    from pkmdyn.machines.hip_simulator.iso_fit import PAPER_SLIDER_MAXIMA, iso_cycle_preset
+    from pkmdyn.machines.hip_simulator.paper import PAPER_SLIDER_MAXIMA, iso_cycle_preset
     from pkmdyn.machines.hip_simulator.paper import slider_maxima
 
     model = load_params()
@@ -340,7 +340,7 @@ def test_the_generic_layer_identifies_another_machine():
 
 
 def test_paper_fit_zxy_preset_meets_the_nine_maxima_with_that_sequence():
-    from pkmdyn.machines.hip_simulator.iso_fit import PAPER_SLIDER_MAXIMA, iso_cycle_preset
+    from pkmdyn.machines.hip_simulator.paper import PAPER_SLIDER_MAXIMA, iso_cycle_preset
     from pkmdyn.machines.hip_simulator.paper import slider_maxima
 
     d = default_params_dict()

@@ -88,7 +88,7 @@ def load_params(path: Path) -> Any:
 def builtin_motion(model: Any, cycles: float) -> BuiltinMotion:
     """``cycles`` ISO 14242-1 cycles of the model's cycle model, with the hydraulic load."""
     from ...profiles.iso14242 import angle_wave, iso_load
-    from .iso_fit import iso_cycle_preset
+    from .paper import iso_cycle_preset
 
     cyc = iso_cycle_preset(model.params.motion_model)
 

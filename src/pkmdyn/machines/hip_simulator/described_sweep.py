@@ -32,7 +32,7 @@ from pydantic import Field
 from ...errors import LimitError, MotionError
 from ...params_util import Section, check_limit, validate
 from ...sweep_protocol import DesignOutcome, MetricInfo, time_integral, time_mean
-from .params import HipModel, default_params_dict, model_from_dict
+from .params import HipModel, check_motion_limits, default_params_dict, model_from_dict
 
 __all__ = ["NAME", "HipMotionData", "default_params", "check_params", "description", "motion", "metrics",
            "design_metrics", "WORKSPACE_SEED"]
@@ -127,22 +127,10 @@ def description(params: Mapping[str, Any]) -> dict[str, Any]:
     return hip_description(model_from_dict(dict(params), "design"))
 
 
-def _check_motion_limits(where: Any, motion: Any, model: HipModel) -> None:
-    """The motion's load and angles against the base parameters' ``[limits]`` (as ``hip run``)."""
-    lim = model.limits
-    if motion.load.size:
-        k = int(np.argmax(motion.load))
-        check_limit(float(motion.load[k]), lim.max_load_N, f"{where(k)}: load", "max_load_N", "N")
-        a = np.abs(np.rad2deg(motion.angles))
-        r, c = np.unravel_index(int(np.argmax(a)), a.shape)
-        name = ("alpha", "beta", "gamma")[c]
-        check_limit(float(a[r, c]), lim.max_abs_angle_deg, f"{where(int(r))}: |{name}|", "max_abs_angle_deg", "deg")
-
-
 def _orientation_motion(opt: _Motion, model: HipModel, base_dir: Path) -> tuple[Any, float]:
     from ...profiles.iso14242 import iso14242_block, iso14242_samples, iso14242_times
     from ...profiles.orientation import read_motion_csv
-    from .iso_fit import iso_cycle_preset
+    from .paper import iso_cycle_preset
 
     lim = model.limits
     if opt.file is not None:
@@ -151,12 +139,12 @@ def _orientation_motion(opt: _Motion, model: HipModel, base_dir: Path) -> tuple[
             raise MotionError(f"[motion] {sorted(given)[0]}: applies to the built-in cycle, not to file")
         path = Path(opt.file) if Path(opt.file).is_absolute() else base_dir / opt.file
         mo = read_motion_csv(path, max_rows=lim.max_samples)
-        _check_motion_limits(lambda k: f"{path}: row {k + 1}", mo, model)
+        check_motion_limits(lambda k: f"{path}: row {k + 1}", mo, model.limits)
         return mo, 1.0
     cycle = iso_cycle_preset(opt.motion_model)
     n = iso14242_samples(opt.cycles, opt.samples_per_cycle, lim.max_samples)
     mo = iso14242_block(iso14242_times(n, opt.cycles, cycle), cycle)
-    _check_motion_limits(lambda k: f"built-in motion, sample {k + 1}", mo, model)
+    check_motion_limits(lambda k: f"built-in motion, sample {k + 1}", mo, model.limits)
     return mo, opt.cycles
 
 

@@ -35,7 +35,7 @@ from ...identify._base import base_parameters
 from ...identify._excite import bounded_fourier, max_evaluations, minimize_excitation
 from ...profiles.orientation import OrientationMotion, make_motion
 from ...spatial import euler_kinematics
-from .identify_view import (Which, _parameter_map, engine_kinematics, hip_regressor, parameter_names,
+from .identify_view import (Which, engine_kinematics, hip_regressor, parameter_names,
                             regressor_mechanism)
 from .params import HipModel
 

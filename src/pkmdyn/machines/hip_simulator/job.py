@@ -37,7 +37,7 @@ from ...params_util import check_limit, parse_limit_options
 from ...profiles.iso14242 import IsoCycle, iso14242_block, iso14242_samples, iso14242_times
 from ...profiles.orientation import OrientationMotion, read_motion_csv
 from . import paper
-from .params import LIMIT_KEYS, HipLimits, HipModel, load_params
+from .params import LIMIT_KEYS, HipLimits, HipModel, check_motion_limits, load_params
 
 __all__ = ["run_hip", "RUN_CHUNK", "DEFAULT_SINGULARITY_THRESHOLD", "WEAR_SAMPLES"]
 
@@ -68,17 +68,6 @@ def _motion_blocks(motion: OrientationMotion | None, n: int, cycles: float, cycl
             yield s, lead, iso14242_block(iso14242_times(n, cycles, cycle, s - lead, s + chunk), cycle)
         else:
             yield s, lead, _slice(motion, s - lead, s + chunk)
-
-
-def _check_motion_limits(where: Callable[[int], str], motion: OrientationMotion, limits: HipLimits) -> None:
-    """Load and angles of a motion against the plausibility limits (before anything is computed)."""
-    if motion.load.size:
-        k = int(np.argmax(motion.load))
-        check_limit(float(motion.load[k]), limits.max_load_N, f"{where(k)}: load", "max_load_N", "N")
-        a = np.abs(np.rad2deg(motion.angles))
-        r, c = np.unravel_index(int(np.argmax(a)), a.shape)
-        name = ("alpha", "beta", "gamma")[c]
-        check_limit(float(a[r, c]), limits.max_abs_angle_deg, f"{where(int(r))}: |{name}|", "max_abs_angle_deg", "deg")
 
 
 def _check_slider_limits(t: Array, Ld: Array, Ldd: Array, limits: HipLimits, row0: int) -> None:
@@ -224,7 +213,7 @@ def run_hip(
         n = len(motion)
         check_limit(float(motion.t[-1] - motion.t[0]), lim.max_duration_s, f"{motion_path}: duration",
                     "max_duration_s", "s")
-        _check_motion_limits(lambda k: f"{motion_path}: row {k + 1}", motion, lim)
+        check_motion_limits(lambda k: f"{motion_path}: row {k + 1}", motion, lim)
         window = n
         source = str(motion_path)
         note = ""

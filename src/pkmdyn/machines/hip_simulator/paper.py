@@ -35,9 +35,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ParameterError
-from ...profiles.iso14242 import IsoCycle, iso14242_motion
-from .iso_fit import PAPER_FIT, PAPER_FIT_ZXY, PAPER_SLIDER_MAXIMA, iso_cycle_preset
-from .params import DEFAULT_PARAMS_TEXT, HipModel
+from ...profiles.iso14242 import AxisWave, IsoCycle, iso14242_motion
+from .params import DEFAULT_PARAMS_TEXT, ISO_CYCLES, HipModel
 
 __all__ = ["PARTS", "PaperView", "HipBlock", "block_columns", "SummaryAccumulator", "parameters_text",
            "PAPER_SLIDER_MAXIMA", "PAPER_FIT", "PAPER_FIT_ZXY", "iso_cycle_preset", "IsoFit", "slider_maxima",
@@ -47,6 +46,38 @@ Array = NDArray[np.float64]
 
 #: the parts of Eq. (14) plus friction, in results-file order
 PARTS = ("platform", "lever", "slider", "screw", "friction")
+
+
+#: hip paper §5.1: max position of S11, S12, S13 [m]; max |Ld| [m/s] and max |Ldd| [m/s^2] per screw
+PAPER_SLIDER_MAXIMA = np.array(
+    [0.66558, 0.66047, 0.62442, 0.27515, 0.26780, 0.14397, 2.15240, 2.10080, 1.27090]
+)
+
+#: the phases fitted by :func:`fit_iso_cycle` to :data:`PAPER_SLIDER_MAXIMA` with the built-in
+#: parameters (ranges and load as in the default :class:`IsoCycle`)
+PAPER_FIT = IsoCycle(
+    fe=AxisWave(25.0, 0.5773, -18.0, 0.0853),
+    aa=AxisWave(7.0, 0.6432, -4.0, 0.0312),
+    ier=AxisWave(2.0, 0.0636, -10.0, 0.4759),
+)
+
+#: the same fit with ``euler_sequence = "ZXY"`` in the parameter file (FE about the base Z axis
+#: first, then AA, then IER): a motion for that parameter file only
+PAPER_FIT_ZXY = IsoCycle(
+    fe=AxisWave(25.0, 0.0397, -18.0, 0.5323),
+    aa=AxisWave(7.0, 0.1731, -4.0, 0.6002),
+    ier=AxisWave(2.0, 0.3350, -10.0, 0.9088),
+)
+
+
+def iso_cycle_preset(name: str) -> IsoCycle:
+    """The cycle model by name: ``"default"`` (the documented choices), ``"paper-fit"`` (for the
+    spec's ``XYZ`` sequence) or ``"paper-fit-zxy"`` (for a parameter file with ``euler_sequence =
+    "ZXY"``; see ``docs/identification.md``)."""
+    presets = dict(zip(ISO_CYCLES, (IsoCycle(), PAPER_FIT, PAPER_FIT_ZXY)))
+    if name not in presets:
+        raise ParameterError(f"motion model {name!r}: expected one of {', '.join(presets)}")
+    return presets[name]
 
 
 @dataclass(frozen=True)

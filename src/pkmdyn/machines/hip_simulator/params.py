@@ -17,8 +17,7 @@ from pydantic import Field, field_validator, model_validator
 
 from ...errors import LimitError, ParameterError
 from ...io import DEFAULT_MAX_SAMPLES
-from ...params_util import Section, read_toml, validate
-from .iso_fit import iso_cycle_preset
+from ...params_util import Section, check_limit, read_toml, validate
 from ...spatial import check_sequence
 
 __all__ = [
@@ -125,6 +124,10 @@ class _Limits(Section):
     min_platform_gap_m: Pos = 0.05
 
 
+#: the names of the ISO 14242-1 cycle presets (:func:`pkmdyn.machines.hip_simulator.paper.iso_cycle_preset`)
+ISO_CYCLES = ("default", "paper-fit", "paper-fit-zxy")
+
+
 class _Motion(Section):
     """The built-in motion a run takes when no motion file is given (``[motion]``, optional)."""
 
@@ -133,10 +136,8 @@ class _Motion(Section):
     @field_validator("iso_cycle")
     @classmethod
     def _preset(cls, v: str) -> str:
-        try:
-            iso_cycle_preset(v)
-        except ParameterError as exc:
-            raise ValueError(str(exc)) from None
+        if v not in ISO_CYCLES:
+            raise ValueError(f"motion model {v!r}: expected one of {', '.join(ISO_CYCLES)}")
         return v
 
 
@@ -235,7 +236,7 @@ class HipModel:
     friction: HipFriction
     limits: HipLimits = field(default_factory=HipLimits)
     #: the ISO 14242-1 cycle preset of the built-in motion (``[motion] iso_cycle``;
-    #: :func:`pkmdyn.machines.hip_simulator.iso_fit.iso_cycle_preset`)
+    #: :func:`pkmdyn.machines.hip_simulator.paper.iso_cycle_preset`)
     motion_model: str = "default"
 
 
@@ -337,3 +338,15 @@ def default_params_dict() -> dict[str, Any]:
     import tomllib
 
     return tomllib.loads(DEFAULT_PARAMS_TEXT)
+
+
+def check_motion_limits(where: Any, motion: Any, limits: HipLimits) -> None:
+    """The load and the angles of a motion (``load (n,)`` [N], ``angles (n, 3)`` [rad]) against the
+    plausibility ``limits`` (before anything is computed); ``where(k)`` names row ``k``."""
+    if motion.load.size:
+        k = int(np.argmax(motion.load))
+        check_limit(float(motion.load[k]), limits.max_load_N, f"{where(k)}: load", "max_load_N", "N")
+        a = np.abs(np.rad2deg(motion.angles))
+        r, c = np.unravel_index(int(np.argmax(a)), a.shape)
+        name = ("alpha", "beta", "gamma")[c]
+        check_limit(float(a[r, c]), limits.max_abs_angle_deg, f"{where(int(r))}: |{name}|", "max_abs_angle_deg", "deg")
