@@ -113,15 +113,19 @@ def _plotly_js() -> str:
     return get_plotlyjs()
 
 
-def _page(title: str, subtitle: str, body: str, info: Mapping[str, Any]) -> str:
-    return (
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-        f"<title>{html.escape(title)}</title><meta name=\"generator\" content=\"pkmdyn\">"
-        f"<style>{_CSS}</style><script>{_plotly_js()}</script>"
-        f"<script>window.PKMDYN_REPORT = {json.dumps(info)};</script></head><body>"
-        f"<header><h1>{html.escape(title)}</h1><p>{html.escape(subtitle)}</p></header><main>{body}"
-        f"</main><script>{_HOOK}</script></body></html>\n"
-    )
+def _write_page(path: Path, title: str, subtitle: str, body: Sequence[str], info: Mapping[str, Any]) -> None:
+    """Write the page to ``path`` piece by piece (plotly.js, some 5 MB, and the figures are not
+    joined into one string first: a long run's report then costs its pieces, not three copies)."""
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+                 f"<title>{html.escape(title)}</title><meta name=\"generator\" content=\"pkmdyn\">"
+                 f"<style>{_CSS}</style><script>")
+        fh.write(_plotly_js())
+        fh.write(f"</script><script>window.PKMDYN_REPORT = {json.dumps(info)};</script></head><body>"
+                 f"<header><h1>{html.escape(title)}</h1><p>{html.escape(subtitle)}</p></header><main>")
+        for part in body:
+            fh.write(part)
+        fh.write(f"</main><script>{_HOOK}</script></body></html>\n")
 
 
 def _decimated_plot(plot: TimePlot) -> TimePlot:
@@ -206,9 +210,8 @@ def write_report(out_folder: str | Path, *, title: str, scene: Scene | None, plo
     if parameters:
         body.append(f"<section id=\"parameters\"><h2>Parameters used</h2><pre>{html.escape(parameters)}</pre></section>")
     path = folder / REPORT_NAME
-    text = _page(title, " | ".join(notes) if notes else "pkmdyn report", "".join(body), info)
     try:
-        path.write_text(text, encoding="utf-8")
+        _write_page(path, title, " | ".join(notes) if notes else "pkmdyn report", body, info)
     except OSError as exc:
         raise PkmdynError(f"cannot write {path} ({exc.strerror or type(exc).__name__})") from None
     return path
@@ -251,9 +254,8 @@ def write_view(path: str | Path, *, title: str, scene: Scene, topology: Topology
     ]
     if parameters:
         body.append(f"<section id=\"parameters\"><h2>Parameters used</h2><pre>{html.escape(parameters)}</pre></section>")
-    text = _page(title, " | ".join(notes) if notes else "pkmdyn view", "".join(body), info)
     with atomic_file(target, inputs=dict(inputs or {})) as tmp:
-        tmp.write_text(text, encoding="utf-8")
+        _write_page(tmp, title, " | ".join(notes) if notes else "pkmdyn view", body, info)
         if listing is not None:
             listing(target)
     return target
