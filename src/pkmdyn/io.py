@@ -709,7 +709,9 @@ class TableWriter:
             import pyarrow as pa
 
             self._fh.flush()
-            self._arrow_csv(pa.table(dict(zip(names, arrays))), self._fh.buffer, self._arrow_options)
+            # the system allocator: arrow's own pool keeps its buffers (some 10 MiB) after a block
+            self._arrow_csv(pa.table(dict(zip(names, arrays))), self._fh.buffer, self._arrow_options,
+                            memory_pool=pa.system_memory_pool())
         elif self.fmt == "csv":
             self._fh.write(_csv_lines(arrays, self.precision))
         else:
