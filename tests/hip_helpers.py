@@ -39,6 +39,7 @@ def random_model(
     g["platform_heights_m"] = [h2 + jitter(0.409), h2]
     g["module_angles_deg"] = [a + rng.uniform(-8, 8) for a in g["module_angles_deg"]]
     g["platform_joint_angles_deg"] = [a + rng.uniform(-8, 8) for a in g["platform_joint_angles_deg"]]
+    spin = geometry.pop("lever_spin", g.get("lever_spin", "u_joint"))
     g.update(geometry)
     i = d["inertia"]
     for key in ("slider_mass_kg", "lever_mass_kg", "screw_inertia_kgm2", "gravity_m_s2"):
@@ -72,7 +73,16 @@ def random_model(
             friction_velocity_eps_rad_s=eps[0],
             friction_velocity_eps_m_s=eps[1],
         )
-    return model_from_dict(d, "random model")
+    return with_lever_spin(model_from_dict(d, "random model"), spin)
+
+
+def with_lever_spin(model: HipModel, spin: str) -> HipModel:
+    """``model`` with ``lever_spin = spin``: the paper's ``"perpendicular"`` assumption (Eq. 4)
+    is a variant of the closed form only (the parameter file refuses it, since the engine's
+    levers turn as their U joints let them), so it is set here past the file's validation."""
+    import dataclasses
+
+    return dataclasses.replace(model, geometry=dataclasses.replace(model.geometry, lever_spin=spin))
 
 
 class SmoothMotion:

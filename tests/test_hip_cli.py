@@ -126,7 +126,9 @@ def test_unreachable_motion_exits_2_with_one_line(tmp_path):
              cwd=tmp_path)
     assert r.returncode == 2
     lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and "unreachable" in lines[0] and "t = 0.7 s" in lines[0] and "Traceback" not in r.stderr
+    # the row at t = 0.7 s is the file's eighth: samples are counted from 1, as rows are
+    assert len(lines) == 1 and "unreachable" in lines[0] and "sample 8 (t = 0.7 s)" in lines[0]
+    assert "Traceback" not in r.stderr
     assert not (tmp_path / "o").exists()
 
 
@@ -367,3 +369,16 @@ def test_motion_model_paper_fit_is_the_fitted_cycle(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--motion-model" in err[0]
     assert not (tmp_path / "x").exists()
+
+
+def test_a_run_shorter_than_a_cycle_tracks_a_whole_cycle(tmp_path):
+    """wear.json is one cycle's wear whatever the run's length: a quarter cycle's run gives the
+    tracks and wear of the whole cycle, as a run of one cycle does."""
+    for name, cycles in (("quarter", "0.25"), ("one", "1")):
+        assert main(["hip", "run", "--cycles", cycles, "--samples-per-cycle", "100", "--no-plots",
+                     "--out", str(tmp_path / name)]) == 0
+    q, o = (_read(tmp_path / n / "markers_S0_upper_on_cup.csv") for n in ("quarter", "one"))
+    assert q[0] == o[0]
+    np.testing.assert_allclose(q[1], o[1], rtol=1e-12, atol=1e-15)
+    wear = q[0].index("wear_mm3_per_million_cycles")
+    assert np.all(q[1][:, wear] > 0)

@@ -8,7 +8,6 @@ fail them."""
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 
 import numpy as np
@@ -206,9 +205,10 @@ def test_perpendicular_levers_are_close_to_the_u_joint_model():
     lever part moves by less than 1 %."""
     from pkmdyn.profiles.iso14242 import iso14242_motion
 
-    d = copy.deepcopy(default_params_dict())
-    d["geometry"]["lever_spin"] = "perpendicular"
-    perp, ujoint = model_from_dict(d), load_params()
+    from hip_helpers import with_lever_spin
+
+    ujoint = load_params()
+    perp = with_lever_spin(ujoint, "perpendicular")
     mo = iso14242_motion(1, 250)
     kp, ku = (hip.kinematics(x, mo.angles, mo.rates, mo.accels) for x in (perp, ujoint))
     tp, tu = hip.inverse_dynamics(perp, kp, mo.load), hip.inverse_dynamics(ujoint, ku, mo.load)

@@ -27,7 +27,7 @@ from .identify_excite import ExcitationLimits, design_excitation, excitation_mot
 from .identify_view import (FRICTION_ATTR, TORQUE_COLUMNS, Which, consistency_transform, identified_description,
                             identify_hip, read_measured_csv)
 from .params import HipModel, default_params_dict, load_params, model_from_dict
-from .paper import parameters_text
+from .paper import parameters_text, regularisation_note
 
 __all__ = ["run_identify", "run_excite", "complete_description", "HELD_FIXED", "MAX_EXCITE_ROWS"]
 
@@ -122,13 +122,9 @@ def run_identify(
     model = model_from_dict(copy.deepcopy(description), str(params_path) if params_path is not None else
                             "built-in parameters")
     description = complete_description(description, model)
-    from ...multibody.friction import EPS_ROTATION, EPS_TRANSLATION
-
-    eps_note = None
-    if (model.friction.eps_w, model.friction.eps_v) != (EPS_ROTATION, EPS_TRANSLATION):
-        eps_note = (f"note: friction_velocity_eps_rad_s = {model.friction.eps_w:g}, friction_velocity_eps_m_s = "
-                    f"{model.friction.eps_v:g} of the parameter file: the identification regularises friction at "
-                    f"the engine's {EPS_ROTATION:g} rad/s and {EPS_TRANSLATION:g} m/s")
+    eps_note = regularisation_note(model)
+    if eps_note is not None:
+        eps_note = "note: " + eps_note
     motion, tau, deriv = read_measured_csv(measured_path, sg_window, sg_order)
     for i, name in enumerate(TORQUE_COLUMNS):
         if not np.any(tau[:, i]):

@@ -131,16 +131,15 @@ def _wear_keep(motion: OrientationMotion | None, n: int, samples_per_cycle: int)
     return np.unique(np.linspace(0, last, min(last + 1, WEAR_SAMPLES + 1)).round().astype(int))
 
 
-def _wear(out: Path, mech: Any, model: HipModel, collected: _WearSamples, builtin: bool,
+def _wear(out: Path, mech: Any, model: HipModel, kin: Any, load: Array, builtin: bool,
           params_path: str | Path | None, plots: bool) -> tuple[dict[str, Path], list]:
-    """``wear.json`` and the wear files (docs/wear.md) of both stations' prosthesis pairs, from the
-    run's own kinematics at the samples of :func:`_wear_keep`: the head on the platform, the cup
-    on the frame, the head's radius the parameter file's ``hip_radius_m``, the load the test
-    load. Returns the files and the report's 3D views of the tracks."""
+    """``wear.json`` and the wear files (docs/wear.md) of both stations' prosthesis pairs over one
+    cycle (the engine's kinematics ``kin`` and the loads ``load`` [N] of its samples): the head
+    on the platform, the cup on the frame, the head's radius the parameter file's
+    ``hip_radius_m``, the load the test load. Returns the files and the report's 3D views of the
+    tracks."""
     from ...multibody.wear_run import WearOptions, joint_wear, tracks_figure, write_wear_files
 
-    kin, load = collected.kinematics()
-    collected.kin.clear()  # the blocks' rows are in ``kin`` now
     opts = WearOptions(radius_m=float(model.friction.r_h), load="hydraulic_N")
     results = [(j, *joint_wear(mech, kin, j, opts, {"hydraulic_N": load})) for j in ("S0_upper", "S0_lower")]
     files = write_wear_files(out, mech, results, opts, {
@@ -148,6 +147,21 @@ def _wear(out: Path, mech: Any, model: HipModel, collected: _WearSamples, builti
         "euler_sequence": model.geometry.euler_sequence,
         "parameters": str(params_path) if params_path else "built-in"}, plots=plots)
     return files, [(f"{j}: the head's tracks on the cup", tracks_figure(j, c)) for j, c, _, _ in results]
+
+
+def _wear_cycle(view: Any, collected: _WearSamples, motion: OrientationMotion | None, n: int,
+                samples_per_cycle: int, cycle: IsoCycle) -> tuple[Any, Array]:
+    """The kinematics and loads of the slide tracks' cycle: the samples the run kept as it went,
+    or, for a built-in motion shorter than one cycle, one whole cycle solved apart (at most
+    :data:`WEAR_SAMPLES` samples)."""
+    if motion is None and n - 1 < samples_per_cycle:
+        from ...profiles.iso14242 import iso14242_motion
+
+        m = iso14242_motion(cycles=1, samples_per_cycle=min(samples_per_cycle, WEAR_SAMPLES), cycle=cycle)
+        return view.solve(m).kin, m.load
+    kin, load = collected.kinematics()
+    collected.kin.clear()  # the blocks' rows are in ``kin`` now
+    return kin, load
 
 
 def run_hip(
@@ -242,7 +256,7 @@ def run_hip(
             for s, lead, mb in bar:
                 with warnings.catch_warnings(record=True) as caught:
                     warnings.simplefilter("always")
-                    res = view.solve(mb, s - lead, q_prev)
+                    res = view.solve(mb, s - lead + 1, q_prev)  # samples counted from 1 in messages
                 for w in caught:
                     if not issubclass(w.category, SingularityWarning) and len(other) < 20:
                         other[str(w.message)[:300]] = None
@@ -270,6 +284,9 @@ def run_hip(
                 if frames is not None:
                     frames.add(s, t=mb.t, joint_point=res.kin.joint_point, tau=res.tau)
         messages = list(other)
+        eps_note = paper.regularisation_note(model)
+        if eps_note is not None:
+            messages.append(eps_note)
         if near:
             cond, tw, kw = worst
             messages.insert(0, f"{near} sample(s) near a singularity (1/cond(J) < {singularity_threshold:g}); the "
@@ -283,7 +300,10 @@ def run_hip(
         if html_report:
             files["report"] = tmp / "report.html"
         try:
-            wear_files, wear_views = _wear(tmp, view.mech, model, wear, motion is None, params_path, make_plots)
+            wear_kin, wear_load = _wear_cycle(view, wear, motion, n, samples_per_cycle, cycle)
+            wear_files, wear_views = _wear(tmp, view.mech, model, wear_kin, wear_load, motion is None, params_path,
+                                           make_plots)
+            del wear_kin, wear_load
             files.update(wear_files)
         except PkmdynError as exc:  # the run's own results stand; the slide tracks are left out, said once
             wear_views = []

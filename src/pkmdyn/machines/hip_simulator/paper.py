@@ -39,6 +39,7 @@ from ...profiles.iso14242 import AxisWave, IsoCycle, iso14242_motion
 from .params import DEFAULT_PARAMS_TEXT, ISO_CYCLES, HipModel
 
 __all__ = ["PARTS", "PaperView", "HipBlock", "block_columns", "SummaryAccumulator", "parameters_text",
+           "regularisation_note",
            "PAPER_SLIDER_MAXIMA", "PAPER_FIT", "PAPER_FIT_ZXY", "iso_cycle_preset", "IsoFit", "slider_maxima",
            "fit_iso_cycle"]
 
@@ -130,11 +131,12 @@ class PaperView:
         self.dh = float(g.h[0] - g.h[1])
         self.lever = float(g.l)
 
-    def solve(self, motion: Any, sample_offset: int = 0, q_start: Array | None = None) -> HipBlock:
+    def solve(self, motion: Any, sample_offset: int = 1, q_start: Array | None = None) -> HipBlock:
         """One engine solve of ``motion`` (``t``, ``angles``, ``rates``, ``accels`` [rad, rad/s,
         rad/s^2] in the parameter file's Euler sequence, ``load`` [N] the hydraulic force) and
-        the paper's quantities of it; ``q_start``: the tree coordinates to start from (the last
-        sample of the block before)."""
+        the paper's quantities of it; ``sample_offset``: the number of the motion's first sample
+        in messages (counted from 1, as a motion file's rows); ``q_start``: the tree coordinates
+        to start from (the last sample of the block before)."""
         from ...multibody.actuators import motor_efforts
         from ...multibody.dynamics import joint_reactions
         from ...multibody.kinematics import solve_kinematics
@@ -246,6 +248,20 @@ class SummaryAccumulator:
             "max_condJ": float(e["condJ"][0]),
             "max_abs_power_W": float(e["power"][0]),
         }
+
+
+def regularisation_note(model: HipModel) -> str | None:
+    """What the run says of the parameter file's ``friction_velocity_eps_*`` when they are not the
+    engine's (every friction is regularised at :data:`pkmdyn.multibody.friction.EPS_ROTATION` and
+    ``EPS_TRANSLATION``, the file's defaults), else None."""
+    from ...multibody.friction import EPS_ROTATION, EPS_TRANSLATION
+
+    f = model.friction
+    if (f.eps_w, f.eps_v) == (EPS_ROTATION, EPS_TRANSLATION):
+        return None
+    return (f"friction_velocity_eps_rad_s = {f.eps_w:g}, friction_velocity_eps_m_s = {f.eps_v:g} of the parameter "
+            f"file are not used: the engine regularises friction at {EPS_ROTATION:g} rad/s and "
+            f"{EPS_TRANSLATION:g} m/s")
 
 
 def parameters_text(params_path: str | Path | None) -> str:

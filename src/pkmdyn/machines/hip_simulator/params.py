@@ -65,6 +65,15 @@ class _Geometry(Section):
     euler_sequence: str = "XYZ"
     lever_spin: Literal["u_joint", "perpendicular"] = "u_joint"
 
+    @field_validator("lever_spin")
+    @classmethod
+    def _spin(cls, v: str) -> str:
+        if v != "u_joint":
+            raise ValueError('"perpendicular" (the paper\'s Eq. 4 assumption: the levers without the spin their U '
+                             "joints give them) is not a mechanism the engine computes; the levers turn as their U "
+                             'joints let them (lever_spin = "u_joint", docs/hip_simulator.md)')
+        return v
+
     @model_validator(mode="after")
     def _rules(self) -> "_Geometry":
         h1, h2 = self.platform_heights_m
