@@ -23,10 +23,19 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from pkmdyn.cli import main as cli_main
-from pkmdyn.machines.hip_simulator import inverse_dynamics, inverse_kinematics, load_params, model_from_dict
+from pkmdyn.machines.hip_simulator import PaperView, load_params, model_from_dict
+from pkmdyn.machines.hip_simulator.paper import PAPER_SLIDER_MAXIMA, fit_iso_cycle, iso_cycle_preset
 from pkmdyn.machines.hip_simulator.params import default_params_dict, paper_params_path
 from pkmdyn.profiles.iso14242 import iso14242_motion
-from pkmdyn.machines.hip_simulator.iso_fit import PAPER_SLIDER_MAXIMA, fit_iso_cycle, iso_cycle_preset
+
+
+def _solve(model, motion):
+    """The engine's solve of ``motion`` in the paper's names (:class:`PaperView`): the slider
+    motions ``L, Ld, Ldd`` and a namespace of the torque and its parts."""
+    from types import SimpleNamespace
+
+    b = PaperView(model).solve(motion)
+    return b, SimpleNamespace(tau=b.tau, hip_friction=b.hip_friction, **b.parts)
 
 PAPER_KINEMATICS = {  # §5.1, mm, mm/s, mm/s^2
     "max L, platform 1 [mm]": (665.58, 660.47, 624.42),
@@ -49,11 +58,24 @@ def _row(name: str, ours, paper) -> str:
     return f"| {name} | " + " | ".join(cells) + " |"
 
 
+def _oracle():
+    """The closed form of Eq. 1-16 beside the tests (``tests/oracles/hip.py``), or None outside a
+    source checkout."""
+    import sys
+
+    tests = Path(__file__).resolve().parents[1] / "tests"
+    if not (tests / "oracles" / "hip.py").is_file():
+        return None
+    sys.path.insert(0, str(tests))
+    from oracles import hip
+
+    return hip
+
+
 def _torque_maxima(model, cycle, samples: int = 2000):
     """Kinematics and torques of one ISO cycle; max |part| per motor [N mm] by part name."""
     motion = iso14242_motion(1, samples, cycle)
-    kin = inverse_kinematics(model, motion)
-    tq = inverse_dynamics(model, kin, motion.load)
+    kin, tq = _solve(model, motion)
     parts = {p: 1e3 * np.abs(getattr(tq, p)).max(axis=0) for p in ("platform", "lever", "slider", "screw", "friction")}
     parts["total"] = 1e3 * np.abs(tq.tau).max(axis=0)
     return motion, kin, tq, parts
@@ -84,22 +106,26 @@ def comparison_tables(model, cycle, label: str) -> None:
 def lever_and_platform_notes(model, cycle) -> None:
     """The spec's lever-spin option and the platform mass, on the spec's convention."""
     motion, kin, tq, _ = _torque_maxima(model, cycle)
-    d = copy.deepcopy(default_params_dict())
-    d["geometry"]["lever_spin"] = "perpendicular"
-    perp = model_from_dict(d)
-    tq_p = inverse_dynamics(perp, inverse_kinematics(perp, motion), motion.load)
-    print("#### Lever spin: perpendicular (paper Eq. 4) against U joint (default), ISO cycle\n")
-    print(f"- max lever spin about its own axis: {np.abs(kin.spin).max():.4f} rad/s "
-          f"(max |omega_lever| {np.abs(kin.omega_lever).max():.4f} rad/s)")
-    for part in ("lever", "tau"):
-        diff = np.abs(getattr(tq_p, part) - getattr(tq, part)).max()
-        label = "the total torque" if part == "tau" else f"tau_{part}"
-        print(f"- max |difference| in {label}: {1e3 * diff:.4f} N mm "
-              f"({100 * diff / np.abs(getattr(tq, part)).max():.3f} % of its max)")
+    oracle = _oracle()
+    if oracle is not None:  # the paper's Eq. 4 levers are a variant of the closed form only
+        import dataclasses
+
+        perp = dataclasses.replace(model, geometry=dataclasses.replace(model.geometry, lever_spin="perpendicular"))
+        ku = oracle.kinematics(model, motion.angles, motion.rates, motion.accels)
+        tq_p = oracle.inverse_dynamics(perp, oracle.kinematics(perp, motion.angles, motion.rates, motion.accels),
+                                       motion.load)
+        print("#### Lever spin: perpendicular (paper Eq. 4) against U joint (default), ISO cycle\n")
+        print(f"- max lever spin about its own axis: {np.abs(ku.spin).max():.4f} rad/s "
+              f"(max |omega_lever| {np.abs(ku.omega_lever).max():.4f} rad/s)")
+        for part in ("lever", "tau"):
+            diff = np.abs(getattr(tq_p, part) - getattr(tq, part)).max()
+            label = "the total torque" if part == "tau" else f"tau_{part}"
+            print(f"- max |difference| in {label}: {1e3 * diff:.4f} N mm "
+                  f"({100 * diff / np.abs(getattr(tq, part)).max():.3f} % of its max)")
     d = copy.deepcopy(default_params_dict())
     d["inertia"]["platform_mass_kg"] = 10.0
     heavy = model_from_dict(d)
-    tq_h = inverse_dynamics(heavy, inverse_kinematics(heavy, motion), motion.load)
+    tq_h = _solve(heavy, motion)[1]
     print(f"\nA 10 kg platform (instead of 0) raises the max friction torque by "
           f"{1e3 * (np.abs(tq_h.friction).max() - np.abs(tq.friction).max()):.3f} N mm.")
     rise = 1e3 * (np.abs(tq_h.friction).max(axis=0) - np.abs(tq.friction).max(axis=0))
@@ -200,7 +226,7 @@ def main() -> None:
     comparison_tables(spec, iso_cycle_preset("default"), "Spec convention (XYZ, default ISO cycle)")
     comparison_tables(paper, iso_cycle_preset(paper.motion_model),
                       f"Paper convention ({paper.geometry.euler_sequence}, {paper.motion_model} cycle)")
-    maxima = inverse_kinematics(paper, iso14242_motion(1, 2000, iso_cycle_preset(paper.motion_model)))
+    maxima = _solve(paper, iso14242_motion(1, 2000, iso_cycle_preset(paper.motion_model)))[0]
     fit = np.concatenate([maxima.L[:, 0].max(axis=0), np.abs(maxima.Ld[:, 0]).max(axis=0),
                           np.abs(maxima.Ldd[:, 0]).max(axis=0)]) / PAPER_SLIDER_MAXIMA - 1
     print(f"Paper convention: the nine fitted §5.1 maxima within {100 * np.abs(fit).max():.2f} % "
