@@ -621,20 +621,15 @@ class RenamedVerbs:
 
 def motion_scene(model: MechanismModel, t: Array, x: Array, u: Array,
                  labels: tuple[tuple[str, str], ...] | None = None) -> Any:
-    """The 3D scene (:func:`pkmdyn.report.scene_from_joints`) of the mechanism along task poses
+    """The 3D scene (:func:`.output.mechanism_scene`) of the mechanism along task poses
     ``x (n, nt)`` at times ``t (n,)`` [s]: each body drawn through its joint centres, each
     actuated joint as a chain coloured by its effort ``u (n, na)`` (the verbs' efforts: a
     drive's motor effort). ``labels``: per actuator its ``(name, unit)`` in the legend (default:
     the actuator's name and the effort's unit). Raises where a pose is out of reach."""
-    from ..report import scene_from_joints
-    from .joint_types import JOINT_TYPES
+    from .output import mechanism_scene
 
     x = np.atleast_2d(np.asarray(x, dtype=float))
     kin = solve_kinematics(model, x, t=np.asarray(t, dtype=float))
-    joints = [(nm, JOINT_TYPES[model.joint_type[k]].name,
-               "ground" if model.joint_parent[k] < 0 else model.body_names[model.joint_parent[k]],
-               "ground" if model.joint_child[k] < 0 else model.body_names[model.joint_child[k]])
-              for k, nm in enumerate(model.joint_names)]
     uu = np.asarray(u, dtype=float).reshape(x.shape[0], model.na)
     efforts = {}
     for i, name in enumerate(model.actuator_names):
@@ -645,5 +640,5 @@ def motion_scene(model: MechanismModel, t: Array, x: Array, u: Array,
         else:
             label, unit = f"{name} effort", effort_unit(model, i)
         efforts[name] = (uu[:, i], label, {"Nm": "N m"}.get(unit, unit))
-    return scene_from_joints(np.asarray(t, dtype=float), kin.joint_point, joints, efforts)
+    return mechanism_scene(model, np.asarray(t, dtype=float), kin.joint_point, efforts)
 
