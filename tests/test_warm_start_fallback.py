@@ -32,9 +32,17 @@ def test_a_start_out_of_reach_gives_the_solution_without_one(model):
     np.testing.assert_allclose(got.act_q, plain.act_q, rtol=0, atol=1e-12)
 
 
-def test_a_start_within_reach_is_still_followed(model):
-    """A warm start near a solution is kept (the fallback only acts on a failure)."""
+def test_a_start_within_reach_is_still_followed(model, monkeypatch):
+    """A warm start near a solution is kept: the start from the reference configuration is not
+    even looked for (the fallback only acts on a failure)."""
     x = np.array([[0.1, 0.02, -0.03]])
     plain = solve_kinematics(model, x)
+
+    def no_reference_start(*args, **kwargs):
+        raise AssertionError("the reference start was looked for")
+
+    monkeypatch.setattr(kin_module, "_start", no_reference_start)
     got = solve_kinematics(model, x, q_start=plain.q[0] + 1e-6)
     np.testing.assert_allclose(got.q, plain.q, rtol=0, atol=1e-10)
+    with pytest.raises(AssertionError, match="reference start"):  # the probe does bite
+        solve_kinematics(model, x)
