@@ -332,6 +332,8 @@ class Executor:
 
     def _on_dask(self, job: BatchJob, batches: list[Array], X: Array, parts: Path, bar: Any,
                  stats: ExecutionStats) -> None:
+        from concurrent.futures import CancelledError
+
         from distributed.scheduler import KilledWorker
 
         client = self._client
@@ -388,6 +390,9 @@ class Executor:
         except KilledWorker as exc:
             raise PkmdynError(f"a batch killed its worker repeatedly ({exc}); the finished batches are kept in "
                               f"{parts}, rerun the same command to continue") from None
+        except CancelledError:
+            raise PkmdynError(f"the scheduler lost a batch more often than it is resubmitted; the finished batches are "
+                              f"kept in {parts}, rerun the same command to continue") from None
         finally:
             client.cancel(futures)
         stats.evaluate_s = time.perf_counter() - t1
