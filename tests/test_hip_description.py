@@ -52,3 +52,16 @@ def test_the_comparison_sees_a_wrong_machine():
     m, kin = engine_kinematics(hip, motion.angles, motion.rates, motion.accels)
     other = oracle.kinematics(model_from_dict(d), motion.angles, motion.rates, motion.accels)
     assert rel(kin.act_q[:, sliders(m)], other.L[:, 1]) > 1e-4
+
+
+def test_the_engines_rate_limits_never_bind_before_the_parameter_files():
+    """A parameter file that raises the sliders' limits above the engine's defaults raises the
+    description's too: a fast design is judged by the hip's own [limits] keys."""
+    from pkmdyn.multibody.actuators import effective_limits
+
+    d = default_params_dict()
+    d.setdefault("limits", {}).update(max_slider_speed_m_s=25.0, max_slider_acceleration_m_s2=4000.0)
+    lim = effective_limits(load_mechanism(hip_description(model_from_dict(d, "fast"))))
+    assert lim["max_joint_speed_m_s"] == 25.0 and lim["max_joint_acceleration_m_s2"] == 4000.0
+    lim = effective_limits(load_mechanism(hip_description(load_params())))
+    assert lim["max_joint_speed_m_s"] == 10.0 and lim["max_joint_acceleration_m_s2"] == 1000.0

@@ -114,6 +114,11 @@ def hip_description(model: HipModel) -> dict[str, Any]:
     groups = [{"name": "platform", "bodies": ["upper", "lower"]},
               {"name": "lever", "bodies": [f"lever_{p}_{i + 1}" for p in ("upper", "lower") for i in range(3)]},
               {"name": "slider", "bodies": [f"slider_{i + 1}" for i in range(3)]}]
+    # the engine's own plausibility limits on the sliders' rates never bind before the parameter
+    # file's [limits] (which the hip's jobs check, naming its keys)
+    lim = model.limits
+    limits = {"max_joint_speed_m_s": max(10.0, float(lim.max_slider_speed_m_s)),
+              "max_joint_acceleration_m_s2": max(1000.0, float(lim.max_slider_acceleration_m_s2))}
     return {
         "mechanism": {"name": "hip", "source": "2(3PUS+S) hip simulator, Chen, Cheng & Pang (2022), Tables 1-2"
                       + (f"; parameters {model.source}" if getattr(model, "source", "") else ""),
@@ -123,6 +128,7 @@ def hip_description(model: HipModel) -> dict[str, Any]:
         "loads": loads,
         "actuators": actuators,
         "groups": groups,
+        "limits": limits,
         "task": {"body": "upper", "point_m": _l(g.o[0]), "euler_sequence": g.euler_sequence, "orientation": [1, 2, 3]},
         "default_motion": {"period_s": 1.0, "samples": 201,
                            "amplitude": {"euler1_rad": 0.3, "euler2_rad": 0.12, "euler3_rad": 0.1}},
