@@ -489,15 +489,12 @@ def read_measured_csv(path: str | Path, sg_window: int = 15, sg_order: int = 5) 
 
 def engine_torques(model: HipModel, motion: OrientationMotion) -> Array:
     """The motor torques ``(n, 3)`` [N m] of ``model`` along ``motion`` by the engine's inverse
-    dynamics of its description (joint reactions with friction, then the drives, Eq. A1):
-    independent of the regressor, for synthetic measurements."""
-    from ...multibody import load_mechanism, solve_kinematics
-    from ...multibody.actuators import motor_efforts
-    from ...multibody.dynamics import joint_reactions
-    from .description import hip_description
+    dynamics of its description (:class:`.paper.PaperView`: joint reactions with friction, then
+    the drives, Eq. A1): independent of the regressor, for synthetic measurements."""
+    from types import SimpleNamespace
 
-    mech = load_mechanism(hip_description(model))
-    kin = solve_kinematics(mech, motion.angles, motion.rates, motion.accels, motion.t)
+    from .paper import PaperView
+
     load = np.zeros(len(motion)) if motion.load is None else np.asarray(motion.load, dtype=float)
-    u = joint_reactions(mech, kin, named={_LOAD: load}).u
-    return motor_efforts(mech, kin.act_q, kin.act_qd, kin.act_qdd, u).effort
+    m = SimpleNamespace(t=motion.t, angles=motion.angles, rates=motion.rates, accels=motion.accels, load=load)
+    return PaperView(model).solve(m).tau
