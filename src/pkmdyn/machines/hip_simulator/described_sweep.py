@@ -168,19 +168,13 @@ def motion(params: Mapping[str, Any], options: Mapping[str, Any], base_dir: Path
     to the motion (angles and load are checked against them here, before any design)."""
     from ...multibody import TaskMotion
     from ...multibody.sweep import GeneratedMotion
-    from ...spatial import euler_kinematics
+    from .paper import euler_rate_map
 
     opt = validate(_Motion, dict(options), "[motion]")
     model = model_from_dict(dict(params), "base parameters")
     mo, cycles = _orientation_motion(opt, model, base_dir)
     seq = model.geometry.euler_sequence
-    n = mo.t.shape[0]
-    zero = np.zeros((n, 3))
-    E = np.empty((n, 3, 3))
-    for k in range(3):  # the angular velocity of a unit rate of angle k: column k of E
-        rate = np.zeros((n, 3))
-        rate[:, k] = 1.0
-        E[:, :, k] = euler_kinematics(seq, mo.angles, rate, zero)[1]
+    E = euler_rate_map(seq, mo.angles)  # the angular velocity of a unit rate of angle k: column k
     data = HipMotionData(E_inv=np.linalg.inv(E), cycles=cycles, threshold=opt.singularity_threshold,
                          R_ws=_workspace_rotations(seq, opt.workspace_points, opt.workspace_max_angle_deg))
     task = TaskMotion(mo.t, mo.angles, mo.rates, mo.accels, {"hydraulic_N": mo.load})

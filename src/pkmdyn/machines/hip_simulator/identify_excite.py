@@ -34,7 +34,7 @@ from ...errors import PkmdynError, ParameterError
 from ...identify._base import base_parameters
 from ...identify._excite import bounded_fourier, max_evaluations, minimize_excitation
 from ...profiles.orientation import OrientationMotion, make_motion
-from ...spatial import euler_kinematics
+from .paper import euler_rate_map
 from .identify_view import (Which, engine_kinematics, hip_regressor, parameter_names,
                             regressor_mechanism)
 from .params import HipModel
@@ -118,9 +118,7 @@ def slider_rates(mech: Any, kin: Any, sequence: str) -> tuple[Array, Array, Arra
     kinematics ``kin`` of ``mech`` (module docstring; Euler angles in ``sequence``)."""
     x = kin.x
     n = x.shape[0]
-    zero = np.zeros_like(x)
-    E = np.stack([euler_kinematics(sequence, x, np.broadcast_to(np.eye(3)[k], x.shape), zero)[1]
-                  for k in range(3)], axis=-1)
+    E = euler_rate_map(sequence, x)
     J = np.linalg.solve(np.swapaxes(E, 1, 2), np.swapaxes(kin.J_ax, 1, 2)).swapaxes(1, 2)
     cond = np.linalg.cond(J) if n else np.zeros(0)
     return kin.act_qd, kin.act_qdd, cond

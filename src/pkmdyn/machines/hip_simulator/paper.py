@@ -39,7 +39,7 @@ from ...profiles.iso14242 import AxisWave, IsoCycle, iso14242_motion
 from .params import DEFAULT_PARAMS_TEXT, ISO_CYCLES, HipModel
 
 __all__ = ["PARTS", "PaperView", "HipBlock", "block_columns", "SummaryAccumulator", "parameters_text",
-           "regularisation_note",
+           "regularisation_note", "euler_rate_map",
            "PAPER_SLIDER_MAXIMA", "PAPER_FIT", "PAPER_FIT_ZXY", "iso_cycle_preset", "IsoFit", "slider_maxima",
            "fit_iso_cycle"]
 
@@ -248,6 +248,17 @@ class SummaryAccumulator:
             "max_condJ": float(e["condJ"][0]),
             "max_abs_power_W": float(e["power"][0]),
         }
+
+
+def euler_rate_map(sequence: str, angles: Array) -> Array:
+    """``E (n, 3, 3)``: the platform's angular velocity [rad/s] per unit rate of each Euler angle
+    (column k for angle k) at ``angles (n, 3)`` [rad] in ``sequence``; the slider Jacobian of
+    Eq. 3 in the angles' rates is then ``J E`` (the engine's ``J_ax``)."""
+    from ...spatial import euler_kinematics
+
+    zero = np.zeros_like(angles)
+    return np.stack([euler_kinematics(sequence, angles, np.broadcast_to(np.eye(3)[k], angles.shape), zero)[1]
+                     for k in range(3)], axis=-1)
 
 
 def regularisation_note(model: HipModel) -> str | None:
