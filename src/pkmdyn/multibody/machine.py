@@ -30,6 +30,7 @@ minimum-norm efforts ``u = B^+ (M xdd + h)``.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -42,7 +43,7 @@ from .actuators import motor_effort_unit, motor_efforts
 from .kinematics import MechanismKinematics, solve_kinematics
 from .model import MechanismModel
 
-__all__ = ["MechanismVerbs", "machine_verbs", "RenamedVerbs", "motion_scene"]
+__all__ = ["MechanismVerbs", "machine_verbs", "GeneratedModel", "RenamedVerbs", "motion_scene"]
 
 Array = NDArray[np.float64]
 
@@ -589,6 +590,16 @@ class MechanismVerbs:
 def machine_verbs(model: MechanismModel) -> MechanismVerbs:
     """The :class:`pkmdyn.machine.MachineDynamics` verbs of a described mechanism."""
     return MechanismVerbs(model)
+
+
+@dataclass(frozen=True)
+class GeneratedModel:
+    """A machine generated as a description (a paper's machine): its own parameters ``params``
+    (for its motions and drawings) and the compiled mechanism of their description, the model
+    :class:`RenamedVerbs` run on."""
+
+    params: Any
+    mechanism: MechanismModel
 
 
 class RenamedVerbs:

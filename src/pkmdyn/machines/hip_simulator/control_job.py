@@ -7,7 +7,7 @@ hip's description (:func:`.description.hip_description`), under the paper's name
 ``alpha_rad, beta_rad, gamma_rad`` (the description's ``euler1_rad .. euler3_rad``, the upper
 platform's Euler angles in the parameter file's sequence), efforts ``tau1_Nm .. tau3_Nm`` (the
 motors ``motor_1 .. motor_3``), load the hydraulic force [N] (the named load ``hydraulic_N``). A
-model is a :class:`HipControlModel`: the parameters (for the motion and the report) and their
+model is a :class:`pkmdyn.multibody.machine.GeneratedModel`: the parameters (for the motion and the report) and their
 compiled description. The 3D scene is the engine's drawing of the description (each body
 through its joint centres, the actuated sliders as chains coloured by their motor's torque).
 """
@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -41,24 +40,16 @@ COORDINATES = ("alpha_rad", "beta_rad", "gamma_rad")
 ACTUATORS = ("tau1_Nm", "tau2_Nm", "tau3_Nm")
 
 
-@dataclass(frozen=True)
-class HipControlModel:
-    """The hip's parameters (:class:`.params.HipModel`) and the compiled mechanism of their
-    description, the model the engine's verbs run on."""
-
-    params: Any
-    mechanism: Any
-
-
-def control_model(params: Any) -> HipControlModel:
+def control_model(params: Any) -> Any:
     """The control model of the parameters ``params`` (their description compiled)."""
     from ...multibody import load_mechanism
+    from ...multibody.machine import GeneratedModel
     from .description import hip_description
 
-    return HipControlModel(params, load_mechanism(hip_description(params)))
+    return GeneratedModel(params, load_mechanism(hip_description(params)))
 
 
-def verbs(model: HipControlModel) -> Any:
+def verbs(model: Any) -> Any:
     from ...multibody.machine import RenamedVerbs
 
     return RenamedVerbs(model.mechanism, COORDINATES, ACTUATORS)
@@ -154,7 +145,7 @@ def report_plots(curve: Callable[[str, int, str], Any], t: np.ndarray, note: str
                      tuple(curve("err_deg", c, n) for c, n in enumerate(COORDINATE_NAMES.values())), note)]
 
 
-def scene(model: HipControlModel, t: np.ndarray, q: np.ndarray, u: np.ndarray) -> Any:
+def scene(model: Any, t: np.ndarray, q: np.ndarray, u: np.ndarray) -> Any:
     """The engine's scene of the description along the plant's angles ``q``, each slider's
     chain coloured by its motor's torque ``u``."""
     from ...multibody.machine import motion_scene

@@ -5,7 +5,7 @@ paper's Fig. 26) and the 3D scene of ``pkmdyn pdm control``.
 The dynamics are the generic engine's (:class:`pkmdyn.multibody.machine.MechanismVerbs`) on the
 PDM's description (:func:`.description.pdm_description`), under the paper's names: coordinates
 ``x_m, y_m, alpha_rad, gamma_rad``, efforts ``f1_N .. f4_N`` (the limbs l11, l12, l23, l24; the
-description's ``P11 .. P24`` in the same order). A model is a :class:`PdmControlModel`: the
+description's ``P11 .. P24`` in the same order). A model is a :class:`pkmdyn.multibody.machine.GeneratedModel`: the
 parameters (for the motion and the scene) and their compiled description.
 """
 
@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -38,23 +37,15 @@ COORDINATES = ("x_m", "y_m", "alpha_rad", "gamma_rad")
 ACTUATORS = ("f1_N", "f2_N", "f3_N", "f4_N")
 
 
-@dataclass(frozen=True)
-class PdmControlModel:
-    """The PDM's parameters (:class:`.params.PdmModel`) and the compiled mechanism of their
-    description, the model the engine's verbs run on."""
-
-    params: Any
-    mechanism: Any
-
-
-def control_model(params: Any) -> PdmControlModel:
+def control_model(params: Any) -> Any:
     from ...multibody import load_mechanism
+    from ...multibody.machine import GeneratedModel
     from .description import pdm_description
 
-    return PdmControlModel(params, load_mechanism(pdm_description(params)))
+    return GeneratedModel(params, load_mechanism(pdm_description(params)))
 
 
-def verbs(model: PdmControlModel) -> Any:
+def verbs(model: Any) -> Any:
     from ...multibody.machine import RenamedVerbs
 
     return RenamedVerbs(model.mechanism, COORDINATES, ACTUATORS)
