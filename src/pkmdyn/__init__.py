@@ -1,5 +1,15 @@
-"""pkmdyn: kinematics, dynamics and trajectory-tracking control of parallel manipulators."""
+"""pkmdyn: kinematics, dynamics and trajectory-tracking control of parallel manipulators.
 
+The library's verbs (:mod:`pkmdyn.api`, imported on first use) and its errors::
+
+    import pkmdyn
+    m = pkmdyn.load("stewart")
+    dyn = pkmdyn.dynamics(m, pkmdyn.kinematics(m))
+"""
+
+from typing import TYPE_CHECKING
+
+from ._lazy import attach
 from .errors import (
     MotionError,
     ParameterError,
@@ -9,7 +19,15 @@ from .errors import (
     UnreachablePoseError,
 )
 
+if TYPE_CHECKING:
+    from .api import (Dynamics, assembly_modes, default_motion, direct_kinematics, dynamics, forward_dynamics,
+                      kinematics, load, stiffness, wear)
+
+_VERBS = ("load", "default_motion", "kinematics", "Dynamics", "dynamics", "forward_dynamics", "direct_kinematics",
+          "assembly_modes", "stiffness", "wear")
+
 __all__ = [
+    *_VERBS,
     "PkmdynError",
     "ParameterError",
     "MotionError",
@@ -17,3 +35,6 @@ __all__ = [
     "SingularityError",
     "SingularityWarning",
 ]
+
+#: the verbs live in :mod:`pkmdyn.api`, imported on first use (``import pkmdyn`` stays light)
+__getattr__, __dir__ = attach(__name__, dict.fromkeys(_VERBS, ".api"))

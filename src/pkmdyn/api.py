@@ -1,0 +1,149 @@
+"""The library's public verbs: a machine loaded once, then free functions over it.
+
+``import pkmdyn`` gives them (imported on first use)::
+
+    m = pkmdyn.load("stewart")                 # a built-in name, a description FILE.toml or dict,
+                                               # or a generated machine with params=FILE.toml
+    kin = pkmdyn.kinematics(m)                 # along its default motion, or a TaskMotion
+    dyn = pkmdyn.dynamics(m, kin)              # efforts, every joint's reaction, friction, motors
+    dyn.columns()                              # the dynamics columns of ``pkmdyn run``'s results
+
+Each verb returns the engine's frozen result (shapes and units in its docstring): the
+kinematics of every body and joint (:class:`pkmdyn.multibody.MechanismKinematics`), the
+dynamics (:class:`Dynamics`), the direct kinematics and assembly modes
+(:mod:`pkmdyn.multibody.direct`), the stiffness (:mod:`pkmdyn.multibody.stiffness`) and a
+spherical joint's slide tracks (:mod:`pkmdyn.multibody.wear`). The engine writes no files;
+the commands (``pkmdyn run``, ...) are these verbs plus their files.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["load", "default_motion", "kinematics", "Dynamics", "dynamics", "forward_dynamics", "direct_kinematics",
+           "assembly_modes", "stiffness", "wear"]
+
+Array = NDArray[np.float64]
+
+
+def load(machine: str | Path | Mapping[str, Any], params: str | Path | None = None) -> Any:
+    """The compiled mechanism (:class:`pkmdyn.multibody.MechanismModel`) of ``machine``: a
+    built-in machine's name (``pkmdyn machines``), a description file (``docs/mechanism_format.md``)
+    or a description as a dict; ``params``: the parameter file of a machine that generates its
+    description from one (the papers' machines; default its built-in parameters)."""
+    from .errors import ParameterError
+    from .machines.registry import resolve
+    from .multibody import load_mechanism
+
+    if isinstance(machine, Mapping):
+        if params is not None:
+            raise ParameterError("params: a description given as a dict takes no parameter file")
+        return load_mechanism(dict(machine))
+    entry, path = resolve(str(machine))
+    if entry is not None:
+        return load_mechanism(entry.description(None if params is None else Path(params)))
+    if params is not None:
+        raise ParameterError(f"params: {machine} is a description; only a generated machine takes a parameter file")
+    return load_mechanism(path)
+
+
+def default_motion(model: Any) -> Any:
+    """The description's default task motion (:class:`pkmdyn.multibody.TaskMotion`)."""
+    from .multibody import default_motion as motion
+
+    return motion(model)
+
+
+def kinematics(model: Any, motion: Any = None) -> Any:
+    """Every body's and joint's kinematics (:class:`pkmdyn.multibody.MechanismKinematics`) along
+    ``motion`` (a :class:`pkmdyn.multibody.TaskMotion`; default the description's own)."""
+    from .multibody import solve_kinematics
+
+    m = default_motion(model) if motion is None else motion
+    return solve_kinematics(model, m.x, m.xd, m.xdd, m.t)
+
+
+@dataclass(frozen=True)
+class Dynamics:
+    """The inverse dynamics along a motion: ``reactions`` (:class:`pkmdyn.multibody.dynamics.JointReactions`:
+    actuator efforts ``u (n, na)``, every joint's force ``(n, nj, 3)`` [N] and moment [N m],
+    the friction, the effort split), ``motors`` (:class:`pkmdyn.multibody.actuators.MotorEfforts`:
+    each drive's motor effort and its parts ``(n, na)``), and the kinematics and named loads
+    they were computed on."""
+
+    model: Any
+    kin: Any
+    reactions: Any
+    motors: Any
+    named: Mapping[str, Array]
+
+    def columns(self) -> dict[str, Array]:
+        """The dynamics' columns of ``pkmdyn run``'s results table, by name (unit-suffixed)."""
+        from .multibody.run import effort_columns
+
+        return effort_columns(self.model, self.kin, self.reactions, self.named)
+
+
+def dynamics(model: Any, kin: Any, loads: Mapping[str, Array] | None = None) -> Dynamics:
+    """Actuator and motor efforts with every joint's reaction and the joints' friction (the
+    load-dependent friction iterated on the reactions) along ``kin``; ``loads``: the named
+    loads' magnitudes per sample (``{name: (n,)}`` [N or N m]; the description's
+    ``magnitude_N`` otherwise)."""
+    from .multibody.actuators import motor_efforts
+    from .multibody.dynamics import joint_reactions
+
+    named = dict(loads or {})
+    reac = joint_reactions(model, kin, named=named, split=True)
+    return Dynamics(model, kin, reac, motor_efforts(model, kin.act_q, kin.act_qd, kin.act_qdd, reac.u), named)
+
+
+def forward_dynamics(model: Any, x: Array, xd: Array, u: Array, load: Array | None = None) -> Array:
+    """Task accelerations ``xdd (n, nt)`` under efforts ``u (n, na)`` (a drive's motor effort,
+    as :attr:`Dynamics.motors`) at task poses ``x`` and rates ``xd (n, nt)``; ``load (n,)``: a
+    mechanism's one named load's magnitudes."""
+    from .multibody.machine import machine_verbs
+
+    return machine_verbs(model).forward_dynamics(model, x, xd, u, load)
+
+
+def direct_kinematics(model: Any, s: Array, sd: Array | None = None, sdd: Array | None = None,
+                      t: Array | None = None) -> Any:
+    """The task pose and every body along an actuator motion ``s, sd, sdd (n, na)``
+    (:func:`pkmdyn.multibody.direct.direct_kinematics`)."""
+    from .multibody.direct import direct_kinematics as direct
+
+    return direct(model, s, sd, sdd, t)
+
+
+def assembly_modes(model: Any, s: Array, starts: int = 2000, seed: int = 0) -> Any:
+    """Every assembly mode found at the actuator coordinates ``s (na,)``
+    (:func:`pkmdyn.multibody.direct.assembly_modes`)."""
+    from .multibody.direct import assembly_modes as modes
+
+    return modes(model, s, starts, seed)
+
+
+def stiffness(model: Any, kin: Any) -> Any:
+    """The Cartesian stiffness of the task body with the actuators locked, per sample of ``kin``
+    (:func:`pkmdyn.multibody.stiffness.stiffness`; the description needs a compliance source)."""
+    from .multibody.stiffness import stiffness as k
+
+    return k(model, kin)
+
+
+def wear(model: Any, kin: Any, joint: str, radius_m: float | None = None, load: str | None = None,
+         loads: Mapping[str, Array] | None = None) -> Any:
+    """The slide tracks of the spherical joint ``joint``'s head on its cup and of the cup on the
+    head along ``kin`` (:func:`pkmdyn.multibody.wear_run.joint_wear`: ``(on_cup, on_head,
+    what loads it)``); ``radius_m``: the head's radius (default the joint's friction
+    ``ball_radius_m``); ``load``: a named load's name pressing the head (default the joint's
+    own reaction), its magnitudes in ``loads``."""
+    from .multibody.wear_run import WearOptions, joint_wear
+
+    return joint_wear(model, kin, joint, WearOptions(radius_m=radius_m, load=load), dict(loads or {}))
