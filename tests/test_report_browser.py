@@ -176,3 +176,25 @@ def test_view_page_draws_the_machine_and_its_topology(browser, reports, tmp_path
         assert not page.errors, page.errors
     finally:
         page.page.close()
+
+
+def test_every_time_plot_fits_its_cell_in_a_wide_window(browser, reports):
+    """In a window wide enough for two columns of plots, each time plot is drawn within its cell
+    (the first one was drawn as wide as the whole grid, half of it cut off)."""
+    page = browser.new_page(viewport={"width": 1400, "height": 600})
+    try:
+        page.set_default_timeout(120_000)
+        page.goto(reports["stewart"].as_uri())
+        page.wait_for_function("window.PKMDYN_REPORT && window.PKMDYN_REPORT.ready === true", timeout=120_000)
+        page.wait_for_timeout(1000)
+        sizes = page.evaluate("""window.PKMDYN_REPORT.plots.map(function (id) {
+            var el = document.getElementById(id), cell = el.closest('.timeplot');
+            return [el.querySelector('.main-svg').getBoundingClientRect().width,
+                    cell.getBoundingClientRect().width, cell.parentElement.getBoundingClientRect().width];
+        })""")
+        assert len(sizes) >= 2
+        for drawn, cell, grid in sizes:
+            assert cell < 0.75 * grid, "the grid has one column: the window is not wide enough for the check"
+            assert drawn <= cell + 1, f"a plot {drawn:.0f} px wide in a {cell:.0f} px cell"
+    finally:
+        page.close()

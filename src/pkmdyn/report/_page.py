@@ -33,7 +33,7 @@ header p{margin:4px 0 0;color:#d5dde5;font-size:.9em}
 main{padding:8px 24px 40px;max-width:1500px}
 section{background:#fff;border:1px solid #e1e4e8;border-radius:6px;margin:14px 0;padding:10px 14px}
 h2{font-size:1.1em;margin:4px 0 8px}.note{color:#555;font-size:.9em;margin:2px 0}
-.grid{display:grid;grid-template-columns:repeat(auto-fit,minmax(560px,1fr));gap:10px}
+.grid{display:grid;grid-template-columns:repeat(auto-fill,minmax(560px,1fr));gap:10px}.grid>*{min-width:0}
 .warn{color:#8a4b00;background:#fff4e0;border-left:4px solid #e67e22;padding:4px 8px;margin:4px 0}
 table{border-collapse:collapse;font-size:.88em}td,th{border:1px solid #e1e4e8;padding:2px 8px;vertical-align:top;text-align:left}
 th{background:#f3f5f7;font-weight:600}pre{background:#f6f8fa;padding:8px;overflow:auto;font-size:.85em;max-height:480px}
@@ -70,6 +70,14 @@ window.addEventListener('unhandledrejection', function (e) {
     return true;
   }
   if (!hook()) { window.addEventListener('load', hook); }
+  // a plot drawn while the page was still being read took the width its cell had then: each
+  // fits its cell once the whole grid is laid out
+  window.addEventListener('load', function () {
+    info.plots.forEach(function (id) {
+      var el = document.getElementById(id);
+      if (el && el.layout) { Plotly.Plots.resize(el); }
+    });
+  });
 })();
 """
 
