@@ -273,3 +273,23 @@ def test_folder_commands_refuse_devices_links_and_write_protected_runs(tmp_path,
         assert _tree(tmp_path) == before
     finally:
         run.chmod(0o755)
+
+
+def test_another_commands_results_are_refused_unless_told(tmp_path, capsys):
+    """A command replaces its own earlier run in --out; another command's results there are
+    refused (one line naming both commands and the option), nothing touched; ``pkmdyn --replace``
+    replaces them."""
+    out = tmp_path / "design"
+    assert main(["run", "--machine", "delta", "--out", str(out)]) == 0
+    capsys.readouterr()
+    before = _tree(out)
+    assert main(["stiffness", "--machine", "delta", "--default-motion", "--out", str(out)]) == 2
+    _one_error(capsys, "pkmdyn run", "pkmdyn stiffness", "--replace")
+    assert _tree(out) == before
+    assert main(["run", "--machine", "delta", "--out", str(out)]) == 0  # its own earlier run: replaced
+    assert "replaced an earlier run" in capsys.readouterr().err
+    assert main(["--replace", "stiffness", "--machine", "delta", "--default-motion", "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert (out / "stiffness.json").is_file() and not (out / "bodies.npz").exists()
+    assert main(["hip", "run", "--no-plots", "--samples-per-cycle", "20", "--out", str(out)]) == 2
+    _one_error(capsys, "pkmdyn stiffness", "pkmdyn hip run")

@@ -214,9 +214,10 @@ def _check_parent(target: Path) -> None:
         return
 
 
-def _read_manifest(marker: Path) -> dict[str, list[int]] | None:
-    """The files an earlier run wrote, ``{relative path: [size, mtime_ns]}``; None for a marker of
-    an earlier pkmdyn version (plain text, no list)."""
+def _read_manifest(marker: Path) -> tuple[dict[str, list[int]] | None, str | None]:
+    """The files an earlier run wrote, ``{relative path: [size, mtime_ns]}`` (None for a marker of
+    an earlier pkmdyn version: plain text, no list), and the command that wrote them (None where
+    the marker does not say)."""
     try:
         text = marker.read_text(encoding="utf-8", errors="replace")
     except OSError as exc:
@@ -224,9 +225,26 @@ def _read_manifest(marker: Path) -> dict[str, list[int]] | None:
     try:
         doc = json.loads(text)
     except ValueError:
-        return None
-    files = doc.get("files") if isinstance(doc, dict) else None
-    return files if isinstance(files, dict) else None
+        return None, None
+    if not isinstance(doc, dict):
+        return None, None
+    files, command = doc.get("files"), doc.get("command")
+    return (files if isinstance(files, dict) else None), (command if isinstance(command, str) else None)
+
+
+def current_command() -> tuple[str | None, bool]:
+    """The pkmdyn command running now (``"run"``, ``"hip run"``; None outside the command line)
+    and whether it was told to replace another command's run (``pkmdyn --replace ...``)."""
+    click = sys.modules.get("click")
+    ctx = click.get_current_context(silent=True) if click is not None else None
+    if ctx is None:
+        return None, False
+    names = []
+    root = ctx
+    while root.parent is not None:
+        names.append(root.info_name)
+        root = root.parent
+    return (" ".join(reversed(names)) or None), bool((root.obj or {}).get("replace"))
 
 
 @dataclass(frozen=True)
@@ -270,7 +288,11 @@ def check_output_dir(path: str | Path, inputs: Inputs = ()) -> _Earlier:
     if mst is None or not stat.S_ISREG(mst.st_mode):
         raise PkmdynError(
             f"--out {out}: folder is not empty and holds no earlier pkmdyn run; refusing to overwrite it")
-    manifest = _read_manifest(marker)
+    manifest, written_by = _read_manifest(marker)
+    command, replace = current_command()
+    if written_by is not None and command is not None and written_by != command and not replace:
+        raise PkmdynError(f"--out {out}: holds the results of pkmdyn {written_by}; pkmdyn {command} replaces only its "
+                          f"own earlier run: choose another --out, or replace them with pkmdyn --replace {command} ...")
     idents = {inp.ident: inp for inp in given}
     files = 0
     for rel, est in entries.items():
@@ -369,6 +391,9 @@ def _write_marker(folder: Path) -> None:
     files = {rel: [st.st_size, st.st_mtime_ns] for rel, st in sorted(_walk(folder).items())
              if stat.S_ISREG(st.st_mode)}
     doc = {"pkmdyn_run": "output of one pkmdyn run; a rerun into this folder replaces it whole", "files": files}
+    command, _ = current_command()
+    if command is not None:
+        doc["command"] = command
     (folder / RUN_MARKER).write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
 
 

@@ -21,8 +21,13 @@ MACHINE_HELP = "A built-in machine (see pkmdyn machines) or a mechanism descript
 
 @click.group()
 @click.version_option(package_name="pkmdyn")
-def cli() -> None:
+@click.option("--replace", is_flag=True,
+              help="Let the command replace another pkmdyn command's results in its --out folder (by default "
+                   "a command replaces only its own earlier run there).")
+@click.pass_context
+def cli(ctx: click.Context, replace: bool) -> None:
     """pkmdyn: kinematics, dynamics and control of parallel manipulators."""
+    ctx.obj = {"replace": replace}
 
 
 @cli.group()

@@ -750,7 +750,7 @@ def control_options(f: Any) -> Any:
                           "needs pyarrow)."),
         click.option("--no-plots", is_flag=True, help="Write no PNG plots."),
         click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-                     help="Output directory; an earlier run there is replaced whole, nothing else is."),
+                     help="Output directory; an earlier run of this command there is replaced whole, nothing else is."),
     )):
         f = opt(f)
     return f

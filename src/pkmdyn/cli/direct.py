@@ -77,7 +77,7 @@ def _report(out: Path, model: Any, modes: Any, doc: dict[str, Any], text: str) -
 @click.option("--seed", type=click.IntRange(0, 2**32 - 1), default=0, show_default=True,
               help="Seed of the random starts.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
-              help="Output folder for assemblies.json and report.html (an earlier run there is replaced whole).")
+              help="Output folder for assemblies.json and report.html (an earlier run of this command there is replaced whole).")
 def assemble(machine: str, actuators: str, starts: int, seed: int, out_dir: Path | None) -> None:
     """Every assembly mode found at one actuator configuration (the direct kinematics' distinct
     solutions), each verified by the inverse kinematics, with its singularity measures; the

@@ -152,7 +152,7 @@ def _shown(v) -> str:
 @click.option("--unique-reactions", is_flag=True, hidden=True,
               help="The default: refuse reactions that are not unique.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
+              help="Output folder; an earlier run of this command there is replaced whole, any other non-empty folder is refused.")
 def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_window: int, sg_order: int,
         cycles: float | None, samples_per_cycle: int | None, fmt: str, limit_items: tuple[str, ...],
         minimum_norm_reactions: bool, deflection: bool, unique_reactions: bool, out_dir: Path) -> None:
@@ -302,7 +302,7 @@ def described_control_settings(model) -> dict:
 @click.option("--duration", "duration_s", type=FiniteFloat(0.0, 1e6, lo_open=True), default=None,
               help="Described mechanisms: seconds of the motion to track (default 1 s or the motion's length).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
+              help="Output folder; an earlier run of this command there is replaced whole, any other non-empty folder is refused.")
 def control(machine: str, controller: str | None, params_path: Path | None, plant_path: Path | None,
             motion_path: Path | None, cycles: float | None, gains_path: Path | None, fmt: str, no_plots: bool,
             duration_s: float | None, out_dir: Path) -> None:
@@ -416,7 +416,7 @@ def _control_load(model, motion, what: str, efforts: tuple[str, ...]):
 @click.option("--sg-order", type=click.IntRange(2, 20), default=5, show_default=True,
               help="Degree of the Savitzky-Golay polynomial (less than --sg-window).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output folder; an earlier run there is replaced whole, any other non-empty folder is refused.")
+              help="Output folder; an earlier run of this command there is replaced whole, any other non-empty folder is refused.")
 def identify(machine: str, measured_path: Path, rank_tol: float, sg_window: int, sg_order: int,
              out_dir: Path) -> None:
     """Identify a mechanism's inertial parameters and joint friction coefficients from measured

@@ -29,7 +29,7 @@ from ._groups import PATH_IN, list_files, params_command, pdm
                    "max_duration_s.")
 @click.option("--no-plots", is_flag=True, help="Skip the PNG plots and the schematic.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output folder (created if missing; an earlier pkmdyn run there is replaced whole).")
+              help="Output folder (created if missing; an earlier run of this command there is replaced whole).")
 def pdm_run(params_path: Path | None, motion_path: Path | None, stroke_x_m: float | None,
             stroke_y_m: float | None, stroke_alpha_deg: float | None, stroke_gamma_deg: float | None,
             period_s: float | None, peak_y_accel: float | None, limits: tuple[str, ...], no_plots: bool,

@@ -25,7 +25,7 @@ from ._groups import MACHINE_HELP, PATH_IN, cli, list_files
 @click.option("--limit", "limit_items", multiple=True, metavar="KEY=VALUE",
               help="Raise a plausibility limit of the description's numbers ([limits]).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output folder (an earlier run there is replaced whole).")
+              help="Output folder (an earlier run of this command there is replaced whole).")
 def stiffness_command(machine: str, poses: tuple[str, ...], motion_path: Path | None, default_motion: bool,
                       grid: str | None,
                       limit_items: tuple[str, ...], out_dir: Path) -> None:

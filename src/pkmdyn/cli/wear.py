@@ -50,7 +50,7 @@ def _pole(text: str | None) -> tuple[float, float, float] | None:
 @click.option("--cross-shear-law", default=None, metavar="EXPR",
               help="Factor on each track's wear as an expression of cs, e.g. \"0.2 + 1.6 * cs\".")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output folder (an earlier run there is replaced whole).")
+              help="Output folder (an earlier run of this command there is replaced whole).")
 def wear(machine: str, joints: tuple[str, ...], motion_path: Path | None, cycles: float, head: str,
          radius_m: float | None, load: str | None, spacing_deg: float, cap_deg: float, pole: str | None,
          wear_factor: float | None, cross_shear_law: str | None, out_dir: Path) -> None:

@@ -28,7 +28,7 @@ from ._groups import MACHINE_HELP, FiniteFloat, cli, list_files
               help="Steps along each grid edge the workspace's boundary crosses, for a size that varies smoothly with "
                    "the design (0: inside poses times the cell; docs/workspace.md).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output folder (an earlier run there is replaced whole).")
+              help="Output folder (an earlier run of this command there is replaced whole).")
 def workspace_command(machine: str, grid: str, pose: str, orientation_range: str | None, threshold: float,
                       centre: str | None, refine: int, out_dir: Path) -> None:
     """The reachable workspace within the joint limits and away from every singularity, on a grid

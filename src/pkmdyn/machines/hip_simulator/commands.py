@@ -75,7 +75,7 @@ _LIMIT_HELP = ("Raise or lower a plausibility limit, KEY=VALUE (repeatable; over
 @click.option("--limit", "limits", multiple=True, metavar="KEY=VALUE", help=_LIMIT_HELP)
 @click.option("--no-plots", is_flag=True, help="Write no PNG plots.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output folder; an earlier run there is replaced whole, nothing else is (docs/file_formats.md, "
+              help="Output folder; an earlier run of this command there is replaced whole, nothing else is (docs/file_formats.md, "
                    "\"The output rule\").")
 def hip_run(params_path, motion_path, cycles, samples_per_cycle, motion_model, singularity_threshold, fmt, limits,
             no_plots, out_dir) -> None:
@@ -143,7 +143,7 @@ def hip_control(controller, params_path, plant_path, motion_path, cycles, gains_
                    "(0 < rank-tol < 1).")
 @click.option("--no-plots", is_flag=True, help="Write no PNG plots.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output directory; an earlier run there is replaced whole, nothing else is.")
+              help="Output directory; an earlier run of this command there is replaced whole, nothing else is.")
 def hip_identify(measured_path, params_path, which, sg_window, sg_order, rank_tol, no_plots, out_dir) -> None:
     """Identify friction and/or inertia from measured motor torques; writes identified.toml,
     identification.json, torques.csv and plots."""
