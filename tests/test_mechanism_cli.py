@@ -127,6 +127,8 @@ def test_run_with_a_motion_file(capsys, tmp_path):
     (["run", "--machine", "nosuch"], "unknown machine"),
     (["describe", "--machine", "nosuch"], "unknown machine"),
     (["run", "--machine", "MISSING.toml"], "cannot read file"),
+    (["run", "--machine", "designs/missing"], "no such file"),  # a path, not a name
+    (["describe", "--machine", "stewrt"], "did you mean stewart?"),
 ])
 def test_user_errors_are_one_line_and_write_nothing(capsys, tmp_path, args, pattern):
     out_dir = tmp_path / "out"

@@ -90,8 +90,11 @@ def description_path(name: str) -> Path:
         return described[name]
     if name in generated_machines():
         raise ParameterError(f"--machine {name}: a machine generated from its parameter file, without a description file ({title(name)})")
-    raise ParameterError(f"--machine {name}: unknown machine (built-in: {', '.join(builtin_names())}; "
-                         "or give a description FILE.toml)")
+    import difflib
+
+    close = difflib.get_close_matches(name, builtin_names(), n=1)
+    raise ParameterError(f"--machine {name}: unknown machine ({f'did you mean {close[0]}? ' if close else ''}"
+                         f"built-in: {', '.join(builtin_names())}; or give a description FILE.toml)")
 
 
 def resolve(machine: str) -> tuple[ModuleType | None, Path | None]:
@@ -104,6 +107,8 @@ def resolve(machine: str) -> tuple[ModuleType | None, Path | None]:
     p = Path(machine)
     if p.suffix.lower() == ".toml" or p.exists():
         return None, p
+    if p.suffix or len(p.parts) > 1:  # a path, not a name: say that the file is missing
+        raise ParameterError(f"--machine {machine}: no such file (and no built-in machine of that name)")
     return None, description_path(machine)
 
 
