@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from pkmdyn.cli import main
+from pkmdyn.errors import ParameterError
 from pkmdyn.multibody import load_mechanism, solve_kinematics
 from pkmdyn.multibody.wear import (ASPECT_CAP, joint_slide_tracks, marker_grid, motion_axis, slide_tracks)
 from pkmdyn.spatial import euler_to_matrix
@@ -155,6 +156,7 @@ def test_wear_command_on_a_described_mechanism_uses_the_joint_reaction(tmp_path)
     (["--joint", "S0_upper", "--radius-m", "0"], "--radius-m"),
     (["--joint", "S0_upper", "--radius-m", "0.014", "--wear-factor", "-1e-7"], "--wear-factor"),
     (["--joint", "S0_upper", "--radius-m", "0.014", "--cap-deg", "-5"], "--cap-deg"),
+    (["--joint", "S0_upper", "--radius-m", "0.014", "--cap-deg", "0"], "--cap-deg"),  # docs/wear.md: refused
     (["--joint", "S0_upper", "--radius-m", "0.014", "--load", "push_N"], "push_N"),
     (["--joint", "S0_upper", "--radius-m", "0.014", "--cross-shear-law", "cs - 1"], "cross-shear-law"),
 ])
@@ -167,11 +169,15 @@ def test_bad_wear_input_exit_2_nothing_written(tmp_path, capsys, args, words):
     assert not out.exists()
 
 
-@pytest.mark.parametrize("spacing, cap", [(10.0, 60.0), (10.0, 58.0), (7.0, 45.0), (15.0, 10.0), (10.0, 0.0)])
+@pytest.mark.parametrize("spacing, cap", [(10.0, 60.0), (10.0, 58.0), (7.0, 45.0), (15.0, 10.0), (10.0, 0.5)])
 def test_marker_grid_areas(spacing, cap):
     g = marker_grid(spacing, cap)
-    if cap > 0:
-        assert g.w.sum() == pytest.approx(2 * np.pi * (1 - np.cos(np.radians(cap))), rel=1e-12)
+    assert g.w.sum() == pytest.approx(2 * np.pi * (1 - np.cos(np.radians(cap))), rel=1e-12)
     assert np.allclose(np.linalg.norm(g.u, axis=1), 1.0)
     assert g.u[0] == pytest.approx([0.0, 0.0, 1.0])
     assert ASPECT_CAP >= 1e9
+
+
+def test_a_cap_that_is_not_positive_is_refused():
+    with pytest.raises(ParameterError, match=r"marker cap: 0\.0 deg is not in \(0, 180\]"):
+        marker_grid(10.0, 0.0)

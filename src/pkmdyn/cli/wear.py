@@ -41,7 +41,7 @@ def _pole(text: str | None) -> tuple[float, float, float] | None:
               help="A named load of the motion as the load through the joint (default: the joint's own reaction force).")
 @click.option("--spacing-deg", type=FiniteFloat(0.0, 90.0, lo_open=True), default=10.0, show_default=True,
               help="Marker grid: angle between rings and between markers of a ring.")
-@click.option("--cap-deg", type=FiniteFloat(0.0, 180.0), default=60.0, show_default=True,
+@click.option("--cap-deg", type=FiniteFloat(0.0, 180.0, lo_open=True), default=60.0, show_default=True,
               help="Marker grid: polar angle of the last ring from the pole.")
 @click.option("--pole", default=None, metavar="X,Y,Z",
               help="Marker grid axis, base frame at the reference configuration (default: the joint frame's z).")

@@ -78,8 +78,9 @@ def marker_grid(spacing_deg: float = 10.0, cap_deg: float = 60.0) -> MarkerGrid:
     """The marker grid (module docstring) about the +z pole."""
     if not (math.isfinite(spacing_deg) and 0.0 < spacing_deg <= 90.0):
         raise ParameterError(f"marker spacing: {spacing_deg!r} deg is not in (0, 90]")
-    if not (math.isfinite(cap_deg) and 0.0 <= cap_deg <= 180.0):
-        raise ParameterError(f"marker cap: {cap_deg!r} deg is not in [0, 180]")
+    if not (math.isfinite(cap_deg) and 0.0 < cap_deg <= 180.0):
+        raise ParameterError(f"marker cap: {cap_deg!r} deg is not in (0, 180] (a cap of 0 holds the pole's "
+                             "marker alone)")
     s, cap = math.radians(spacing_deg), math.radians(cap_deg)
     u, th, w = [], [], []
     k = 0
