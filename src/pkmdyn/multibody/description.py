@@ -108,7 +108,7 @@ class _Friction(Section):
 
 
 class _Stiffness(Section):
-    """Joint and drive stiffness (``docs/mechanism_format.md``, "Stiffness"): ``drive_N_m`` /
+    """Joint and drive stiffness (``docs/stiffness.md``, "Compliance sources"): ``drive_N_m`` /
     ``drive_Nm_rad`` the drive's stiffness along an actuated joint's coordinate (joint side: a
     ball screw, its nut and bearings, a belt, a gearbox's torsion); ``force_N_m`` and
     ``moment_Nm_rad`` the joint's stiffness against its reaction force and moment (one number,

@@ -1,6 +1,6 @@
 """Stiffness and vibration of any described mechanism with its actuators locked.
 
-**Compliance sources** (``docs/mechanism_format.md``, "Stiffness"): the elastic bodies'
+**Compliance sources** (``docs/stiffness.md``, "Compliance sources"): the elastic bodies'
 beam segments (a body's ``section`` and ``material``, the beam model of :mod:`.reactions`:
 tension, torsion and bending, Eq. 63-64 of the PDM paper), the drives
 (``[joints.stiffness] drive_N_m`` or ``drive_Nm_rad`` of an actuated joint, joint side) and the
@@ -216,7 +216,7 @@ def _check_sources(model: MechanismModel) -> dict[str, list[str]]:
         raise StiffnessDataMissing(
             f"mechanism {model.name!r} has no compliance source: give its drives a stiffness ([[joints]] "
             "stiffness.drive_N_m or drive_Nm_rad), its links a section and a material, or its joints springs "
-            "(docs/mechanism_format.md, \"Stiffness\")")
+            "(docs/stiffness.md, \"Compliance sources\")")
     return src
 
 
