@@ -62,7 +62,7 @@ def _report(out: Path, model: Any, modes: Any, doc: dict[str, Any], text: str) -
     scene = scene_from_joints(np.arange(len(modes.modes), dtype=float), jp, joints, actuated)
     return write_report(out, title=f"{model.name}: assembly modes", scene=scene, summary=doc, parameters=text,
                         notes=[f"{len(modes.modes)} assembly mode(s) at " + ", ".join(
-                            f"{a} = {v:.6g}" for a, v in zip(model.actuator_names, modes.s))],
+                            f"{a} = {v + 0.0:.6g}" for a, v in zip(model.actuator_names, modes.s))],
                         scene_note="One frame per assembly mode, in the order of the table (the slider's "
                                    "'time' is the mode number minus one).")
 
@@ -97,11 +97,11 @@ def assemble(machine: str, actuators: str, starts: int, seed: int, out_dir: Path
     modes = assembly_modes(model, s, starts=starts, seed=seed)
     doc = _document(model, modes)
     click.echo(f"mechanism: {model.name}")
-    click.echo("actuators: " + ", ".join(f"{a} = {v['value']:.9g} {v['unit']}" for a, v in doc["actuators"].items()))
+    click.echo("actuators: " + ", ".join(f"{a} = {v['value'] + 0.0:.9g} {v['unit']}" for a, v in doc["actuators"].items()))
     click.echo(f"method: {modes.method}")
     click.echo(f"starts: {modes.starts}; converged: {modes.converged}; assembly modes found: {len(modes.modes)}")
     for m in doc["modes"]:
-        task = ", ".join(f"{k} = {v:.9g}" for k, v in m["task"].items())
+        task = ", ".join(f"{k} = {v + 0.0:.9g}" for k, v in m["task"].items())
         sm = m["singularity_measures"]
         click.echo(f"mode {m['mode']}: {task}; residual {m['residual']:.2g}; round trip {m['round_trip']:.2g}; "
                    f"det sign {m['det_sign']:+d}; singularity measures inverse {sm['inverse']:.4g}, direct "

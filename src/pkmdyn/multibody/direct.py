@@ -335,7 +335,7 @@ def _straight(a: Array, b: Array, steps: int) -> Array:
 
 
 def _values(model: MechanismModel, s: Array) -> str:
-    return ", ".join(f"{a} = {v:.6g} {'m' if model.coord_motion[c] >= 3 else 'rad'}"
+    return ", ".join(f"{a} = {v + 0.0:.6g} {'m' if model.coord_motion[c] >= 3 else 'rad'}"
                      for a, c, v in zip(model.actuator_names, model.act_coord, s))
 
 

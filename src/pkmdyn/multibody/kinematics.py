@@ -243,7 +243,7 @@ def _fail(model: MechanismModel, out: dict, t: Array | None, x: Array, offset: i
     bad = int(np.flatnonzero(out["status"] != K.OK)[0])
     st = int(out["status"][bad])
     when = f"sample {bad + offset}" + (f" (t = {t[bad]:.6g} s)" if t is not None else "")
-    pose = ", ".join(f"{nm} = {v:.6g} {u}" for nm, u, v in zip(model.task_names, model.task_units, x[bad]))
+    pose = ", ".join(f"{nm} = {v + 0.0:.6g} {u}" for nm, u, v in zip(model.task_names, model.task_units, x[bad]))
     labels = row_labels(model)
     where = labels[int(out["worst"][bad])]
     if st == K.EULER_SINGULAR:
@@ -443,7 +443,7 @@ def limit_line(model: MechanismModel, kin: MechanismKinematics, s: int, j: int, 
     unit = JOINT_TYPES[model.joint_type[j]].units[0]
     lo, hi = model.joint_limits[j]
     when = f"sample {s + sample_offset}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
-    pose = ", ".join(f"{nm} = {x:.6g} {u}" for nm, u, x in zip(model.task_names, model.task_units, kin.x[s]))
+    pose = ", ".join(f"{nm} = {x + 0.0:.6g} {u}" for nm, u, x in zip(model.task_names, model.task_units, kin.x[s]))
     return (f"{when}: joint {model.joint_names[j]!r} is at {v:.6g} {unit}, beyond its limits [{lo:g}, {hi:g}] {unit} "
             f"(task pose {pose})")
 
