@@ -35,7 +35,8 @@ def _mujoco():
     try:
         import mujoco
     except ImportError as exc:  # pragma: no cover - the extra is in the test dependencies
-        raise ParameterError("reading MJCF needs MuJoCo: pip install 'pkmdyn[import]'") from exc
+        raise ParameterError("reading MJCF needs MuJoCo, in the import extra: pip install 'pkmdyn[import]' (from a "
+                             "source checkout: pip install '.[import]')") from exc
     return mujoco
 
 

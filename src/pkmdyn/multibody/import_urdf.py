@@ -44,7 +44,8 @@ def _pinocchio():
     try:
         import pinocchio
     except ImportError as exc:  # pragma: no cover - the extra is in the test dependencies
-        raise ParameterError("reading URDF needs Pinocchio: pip install 'pkmdyn[import]'") from exc
+        raise ParameterError("reading URDF needs Pinocchio, in the import extra: pip install 'pkmdyn[import]' (from a "
+                             "source checkout: pip install '.[import]')") from exc
     return pinocchio
 
 
