@@ -147,6 +147,13 @@ def test_closed_loop_computed_torque_from_the_command_line(tmp_path, machine):
     for c, v in s["coordinates"].items():
         key = next(k for k in v if k.startswith("max_abs_err"))
         assert v[key] < (0.05 if key.endswith("deg") else 1.0), (c, v)
+    # a described mechanism's control run reports like every other command
+    assert {p.name for p in out.iterdir()} >= {"control.csv", "summary.json", "report.html", "tracking_errors.png",
+                                               "efforts.png"}
+    page = (out / "report.html").read_text()
+    assert "Tracking errors (reference - measured)" in page and "Actuator efforts" in page
+    assert main(["control", "--machine", machine, "--duration", "0.02", "--no-plots", "--out", str(tmp_path / "np")]) == 0
+    assert not list((tmp_path / "np").glob("*.png")) and (tmp_path / "np" / "report.html").is_file()
 
 
 def _max_err(s, coordinate):

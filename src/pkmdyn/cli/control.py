@@ -526,7 +526,15 @@ def _plot_curves(setup: _Setup, tr: Any) -> dict[str, np.ndarray]:
     out = {"u": tr.result.u}
     if setup.job is not None:
         out.update(setup.job.plot_curves(tr.reference.q, tr.result, tr.joint))
+    else:  # a described mechanism: the task coordinates' tracking errors, in their own units
+        out["err"] = tr.reference.q[:tr.result.t.shape[0]] - tr.result.q
     return out
+
+
+def _coordinate_label(name: str) -> tuple[str, str]:
+    """A task coordinate's column name ``x_m``, ``euler1_rad`` as ``(name, unit)``."""
+    base, _, unit = name.rpartition("_")
+    return (base, unit) if base else (name, "")
 
 
 def _draw(ax: Any, mode: str, t: np.ndarray, first: np.ndarray, lo: np.ndarray, hi: np.ndarray, label: str | None,
@@ -557,6 +565,24 @@ def _plots(setup: _Setup, curves: _Curves, kind: str, tmp: Path) -> list[Path]:
             _draw(ax, mode, *args, **kw)
 
         paths += setup.job.figures(draw, t, first, lo, hi, f"{kind}{suffix}", tmp)
+    else:  # a described mechanism: each task coordinate's tracking error
+        names = setup.verbs.COORDINATES
+        ncol = min(3, len(names))
+        nrow = -(-len(names) // ncol)
+        fig, axes = plt.subplots(nrow, ncol, figsize=(4.4 * ncol, 3.4 * nrow), squeeze=False)
+        for ax in axes.ravel()[len(names):]:
+            ax.set_visible(False)
+        for c, (ax, name) in enumerate(zip(axes.ravel(), names)):
+            label, unit = _coordinate_label(name)
+            _draw(ax, mode, t, first["err"][:, c], lo["err"][:, c], hi["err"][:, c], None, lw=0.8)
+            ax.set(xlabel="t [s]", ylabel=f"error [{unit}]", title=label)
+            ax.grid(alpha=0.3)
+        fig.suptitle(f"Tracking errors (reference - measured), {kind}{suffix}")
+        fig.tight_layout()
+        p = tmp / "tracking_errors.png"
+        fig.savefig(p, dpi=110)
+        plt.close(fig)
+        paths.append(p)
     fig, ax = plt.subplots(figsize=(7, 4.2))
     for a in range(len(setup.verbs.ACTUATORS)):
         label, unit = _effort_label(setup, a)
@@ -607,7 +633,12 @@ def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dic
     job = setup.job
     scene = None
     try:
-        scene = job.scene(setup.plant_model, f["t"], f["q"], f["u"])
+        if job is not None:
+            scene = job.scene(setup.plant_model, f["t"], f["q"], f["u"])
+        else:  # a described mechanism: the engine's drawing of its description
+            from ..multibody.machine import motion_scene
+
+            scene = motion_scene(setup.plant_model, f["t"], f["q"], f["u"])
     except PkmdynError as exc:  # the plant left the machine's reach: the page says so, the run stands
         warns.append(f"report: the 3D view could not be built ({exc})")
     t, first, lo, hi, note = curves.data()
@@ -617,16 +648,28 @@ def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dic
             return Curve(name, lo=lo[key][:, c], hi=hi[key][:, c])
         return Curve(name, first[key][:, c])
 
-    plots = job.report_plots(curve, t, note)
+    if job is not None:
+        plots = job.report_plots(curve, t, note)
+        params = job.parameters_text(None if setup.params_source == "built-in parameters" else setup.params_source)
+        title = f"{job.REPORT_NAME}: {setup.machine} control, {kind}"
+    else:
+        names = setup.verbs.COORDINATES
+        units = sorted({_coordinate_label(n)[1] for n in names})
+        plots = [TimePlot("Tracking errors (reference - measured)", f"error [{' or '.join(units)}]", t,
+                          tuple(curve("err", c, n) for c, n in enumerate(names)), note)]
+        try:
+            params = f"# {setup.params_source}\n" + Path(setup.params_source).read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError):
+            params = f"# {setup.params_source}"
+        title = f"{setup.machine}: pkmdyn control, {kind}"
     plots.append(TimePlot("Actuator efforts", f"[{_effort_label(setup, 0)[1]}]", t, tuple(
         curve("u", a, _effort_label(setup, a)[0]) for a in range(len(setup.verbs.ACTUATORS))), note))
-    params = job.parameters_text(None if setup.params_source == "built-in parameters" else setup.params_source)
     if gains_path is not None:
         try:
             params += f"\n\n# control settings: {gains_path}\n" + Path(gains_path).read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError):
             pass
-    return write_report(tmp, title=f"{job.REPORT_NAME}: {setup.machine} control, {kind}", scene=scene, plots=plots,
+    return write_report(tmp, title=title, scene=scene, plots=plots,
                         summary=summary, parameters=params, warnings=warns, images=images,
                         notes=[f"parameters: {setup.params_source}", f"plant: {setup.plant_source}",
                                f"motion: {setup.motion_source}"],

@@ -298,7 +298,7 @@ def described_control_settings(model) -> dict:
                    "mechanism's defaults are tuned from its inertia, docs/multibody_dynamics.md).")
 @click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv", show_default=True,
               help="Table format of the per-cycle results.")
-@click.option("--no-plots", is_flag=True, help="Generated machines: write no PNG plots.")
+@click.option("--no-plots", is_flag=True, help="Write no PNG plots.")
 @click.option("--duration", "duration_s", type=FiniteFloat(0.0, 1e6, lo_open=True), default=None,
               help="Described mechanisms: seconds of the motion to track (default 1 s or the motion's length).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
@@ -376,7 +376,7 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     _check_encoder(setup, ls, settings, gains_path)
     n = model.na if controller == "pid" else model.nt
     _stream(setup, controller, gains(settings, controller, n), ls, settings, out_dir,
-            False, gains_path, inputs, fmt, html_report=False)  # its plots and page are the generated machines' own
+            not no_plots, gains_path, inputs, fmt)
 
 
 def _control_load(model, motion, what: str, efforts: tuple[str, ...]):
