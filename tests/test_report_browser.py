@@ -64,8 +64,10 @@ def reports(tmp_path_factory):
     assert main(["hip", "control", "--controller", "augmented-pd", "--cycles", "0.4", "--out", str(d / "ctl")]) == 0
     assert main(["view", "--machine", "pdm", "--out", str(d / "view_pdm.html")]) == 0
     assert main(["run", "--machine", "stewart", "--out", str(d / "stewart")]) == 0
+    assert main(["control", "--machine", "stewart", "--duration", "0.3", "--out", str(d / "stewart_ctl")]) == 0
     return {"hip": d / "hip" / "report.html", "pdm": d / "pdm" / "report.html", "hip_control": d / "ctl" / "report.html",
-            "view": d / "view_pdm.html", "stewart": d / "stewart" / "report.html"}
+            "view": d / "view_pdm.html", "stewart": d / "stewart" / "report.html",
+            "stewart_control": d / "stewart_ctl" / "report.html"}
 
 
 class _Page:
@@ -114,7 +116,7 @@ def _distinct(img: np.ndarray) -> int:
 
 @pytest.mark.parametrize("which, n_plots, n_images, parameters", [
     ("hip", 11, 7, "[geometry]"), ("pdm", 9, 5, "[geometry]"), ("hip_control", 2, 2, "[geometry]"),
-    ("stewart", 4, 0, "[[legs.joints]]")])
+    ("stewart", 4, 0, "[[legs.joints]]"), ("stewart_control", 2, 2, "[[legs.joints]]")])
 def test_report_draws_moves_and_shows_every_plot(browser, reports, tmp_path, which, n_plots, n_images, parameters):
     page = _Page(browser, reports[which])
     try:
