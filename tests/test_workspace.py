@@ -532,3 +532,23 @@ def test_the_refined_size_moves_with_the_boundary():
     jumps, moves = np.abs(np.diff(counts)), np.abs(np.diff(sizes))
     assert jumps.max() >= cell * (1 - 1e-9)  # the count moves in whole cells
     assert moves.max() < 0.25 * cell
+
+
+def test_a_workspace_that_reaches_the_grids_edge_is_a_lower_bound(tmp_path, capsys):
+    """Inside poses on the grid's edge: the size is said to be a lower bound (workspace.json and
+    one warning line naming the coordinates); a grid wide enough says nothing of the kind."""
+    import json
+
+    from pkmdyn.cli import main
+
+    assert main(["workspace", "--machine", "delta", "--grid", "x=-0.1:0.1:5,y=-0.1:0.1:5", "--pose", "z=-1.0",
+                 "--out", str(tmp_path / "small")]) == 0
+    err = capsys.readouterr().err
+    doc = json.loads((tmp_path / "small" / "workspace.json").read_text())
+    assert doc["size_is_lower_bound"] and doc["inside_at_grid_edge"] == ["x_m", "y_m"]
+    assert "lower bound" in err and "x_m, y_m" in err
+    assert main(["workspace", "--machine", "delta", "--grid", "x=-2:2:9,y=-2:2:9", "--pose", "z=-1.0",
+                 "--out", str(tmp_path / "wide")]) == 0
+    doc = json.loads((tmp_path / "wide" / "workspace.json").read_text())
+    assert not doc["size_is_lower_bound"] and doc["inside_at_grid_edge"] == []
+    assert "lower bound" not in capsys.readouterr().err

@@ -76,3 +76,6 @@ def workspace_command(machine: str, grid: str, pose: str, orientation_range: str
               f"; inscribed cube half-width {ws.cube_half_width:.4g}, cylinder radius {ws.cylinder_radius:.4g}")
     click.echo(f"{doc['inside']} of {doc['poses']} poses inside (reached: {doc['reached']}); size "
                f"{ws.size:.6g} +- {ws.size_error:.2g} {ws.unit}{shapes}")
+    if doc["size_is_lower_bound"]:
+        click.echo(f"pkmdyn: warning: the workspace reaches the grid's edge along {', '.join(doc['inside_at_grid_edge'])}: "
+                   "its size is a lower bound (widen --grid there)", err=True)

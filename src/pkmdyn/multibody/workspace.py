@@ -467,10 +467,23 @@ def size_unit(units: list[str]) -> str:
     return "_".join(u + (str(k) if k > 1 else "") for u, k in sorted(counts.items()))
 
 
+def edges_reached(model: MechanismModel, ws: Workspace) -> list[str]:
+    """The grid coordinates (``<name>_<unit>``) at whose first or last value an inside pose lies:
+    there the workspace may go on beyond the grid, and its size is a lower bound."""
+    shape = tuple(len(v) for _, v in ws.axes)
+    inside = np.asarray(ws.inside, dtype=bool).reshape(shape)
+    out = []
+    for k, (i, v) in enumerate(ws.axes):
+        if len(v) > 1 and (np.take(inside, 0, axis=k).any() or np.take(inside, -1, axis=k).any()):
+            out.append(f"{model.task_names[i]}_{model.task_units[i]}")
+    return out
+
+
 def workspace_document(model: MechanismModel, ws: Workspace) -> dict:
     """``workspace.json`` (``docs/workspace.md``)."""
     names = [f"{model.task_names[i]}_{model.task_units[i]}" for i, _ in ws.axes]
     ins = ws.measure[ws.inside]
+    edges = edges_reached(model, ws)
     return {
         "mechanism": model.name,
         "method": "grid of task poses solved by continuation from the reference configuration; inside: reached "
@@ -485,6 +498,8 @@ def workspace_document(model: MechanismModel, ws: Workspace) -> dict:
         "singularity_threshold": ws.threshold,
         "poses": int(len(ws.x)), "reached": int(ws.reached.sum()), "inside": int(ws.inside.sum()),
         f"size_{ws.unit}": ws.size, f"size_error_{ws.unit}": ws.size_error, f"cell_{ws.unit}": ws.cell,
+        # inside poses on the grid's edge: the workspace may go on beyond it
+        "size_is_lower_bound": bool(edges), "inside_at_grid_edge": edges,
         "size_method": (f"boundary crossings of the grid's edges, {ws.refine} steps an edge" if ws.refine
                         else "inside poses times the cell"),
         "centre": dict(zip(names, (float(v) for v in ws.centre))),
