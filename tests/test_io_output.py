@@ -202,3 +202,18 @@ def test_refused_folder_creation_is_one_error_and_leaves_nothing(tmp_path, monke
         with output_dir(tmp_path / "a" / "o", notify=None):
             pass
     assert not (tmp_path / "a").exists()
+
+
+def test_a_large_results_table_is_announced():
+    """Above 500 MB a run says how large its table will be (rows, columns, size, the format), before
+    it starts; below, nothing."""
+    from pkmdyn.io import note_table_size
+
+    said = []
+    note_table_size(800_000, 40, "csv", said.append)
+    assert len(said) == 1 and "800,000 rows of 40 columns" in said[0] and "0.6 GB as csv" in said[0]
+    assert "parquet" in said[0]
+    note_table_size(800_000, 40, "parquet", said.append)
+    assert len(said) == 1  # 0.26 GB: nothing said
+    note_table_size(10_000, 40, "csv", said.append)
+    assert len(said) == 1

@@ -37,6 +37,7 @@ from numpy.typing import NDArray
 from .errors import LimitError, MotionError, PkmdynError
 
 __all__ = [
+    "note_table_size",
     "output_dir",
     "atomic_file",
     "check_output_dir",
@@ -74,6 +75,20 @@ def _note(message: str) -> None:
         print(f"pkmdyn: note: {message}", file=sys.stderr, flush=True)
     except (OSError, ValueError):
         pass  # the run has succeeded; a standard error that cannot be written does not undo it
+
+
+#: a results table expected above this many bytes is announced before the run (a note on stderr)
+LARGE_TABLE_BYTES = 500_000_000
+
+
+def note_table_size(rows: int, columns: int, fmt: str, notify: Callable[[str], None] | None = None) -> None:
+    """Say before a run how large its results table will be, where that is above
+    :data:`LARGE_TABLE_BYTES`: about 20 bytes a value in CSV (shortest round-trip decimals), 8
+    in Parquet (before compression)."""
+    size = rows * columns * (20 if fmt == "csv" else 8)
+    if size > LARGE_TABLE_BYTES:
+        (notify or _note)(f"the results table will hold {rows:,} rows of {columns} columns, about {size / 1e9:.1f} GB "
+                          f"as {fmt}" + (" (--format parquet writes about a third of it)" if fmt == "csv" else ""))
 
 
 def _os_reason(exc: OSError) -> str:

@@ -217,6 +217,9 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
     from ..params_util import check_limit
 
     check_limit(n, int(lim["max_samples"]), "motion: samples", "max_samples", file="the description")
+    from ..io import note_table_size
+
+    note_table_size(n, len(results_column_names(model, deflection)), fmt)
     body_rows = min(n, int(lim["max_body_samples"]))
     window = min(body_rows, n if plot_window is None else int(plot_window))
     summ = _Summary(model)

@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from ...errors import ParameterError, PkmdynError, SingularityWarning
-from ...io import TABLE_FORMATS, check_table_format, open_table_writer, output_dir, write_json
+from ...io import TABLE_FORMATS, check_table_format, note_table_size, open_table_writer, output_dir, write_json
 from ...params_util import check_limit, parse_limit_options
 from ...profiles.iso14242 import IsoCycle, iso14242_block, iso14242_samples, iso14242_times
 from ...profiles.orientation import OrientationMotion, read_motion_csv
@@ -232,6 +232,7 @@ def run_hip(
         source = str(motion_path)
         note = ""
     check_table_format(fmt)  # pyarrow present? (checked before any work)
+    note_table_size(n, len(paper.RESULTS_COLUMNS), fmt)
     view = paper.PaperView(model)  # the engine's model of the description, and the paper's names of it
     from . import figures
 

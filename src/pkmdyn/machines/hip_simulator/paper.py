@@ -170,6 +170,13 @@ class PaperView:
                         np.einsum("ni,ni->n", tau, mot.theta_dot[:, a]))
 
 
+#: the results file's columns, in order (:func:`block_columns`)
+RESULTS_COLUMNS = ("t_s", *(f"{q}{j}{i}_{u}" for j in (1, 2) for i in (1, 2, 3)
+                             for q, u in (("L", "m"), ("Ld", "m_s"), ("Ldd", "m_s2"))),
+                   "detJa", "detJb_m3", *(f"tau{i}{p}_Nm" for i in (1, 2, 3)
+                                         for p in ("", *(f"_{part}" for part in PARTS))), "condJ")
+
+
 def block_columns(t: Array, b: HipBlock) -> dict[str, Array]:
     """The results-file columns (``docs/file_formats.md``), in order, for one block of samples."""
     cols: dict[str, Array] = {"t_s": t}
