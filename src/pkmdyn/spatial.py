@@ -15,8 +15,6 @@ __all__ = [
     "skew",
     "cross",
     "dot",
-    "cross0",
-    "dot0",
     "axis_rotation",
     "check_sequence",
     "euler_to_matrix",
@@ -56,28 +54,6 @@ def cross(a: Array, b: Array) -> Array:
 def dot(a: Array, b: Array) -> Array:
     """Dot product over the last axis: ``(..., 3), (..., 3) -> (...)``."""
     return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
-
-
-def cross0(a: Array, b: Array) -> Array:
-    """Cross product over the *first* axis: ``(3, ...) x (3, ...) -> (3, ...)``.
-
-    The component-first layout keeps each component contiguous, which is what the batched
-    hot paths use internally.
-    """
-    x = a[1] * b[2]
-    x -= a[2] * b[1]
-    out = np.empty((3,) + x.shape)
-    out[0] = x
-    np.multiply(a[2], b[0], out=out[1])
-    out[1] -= a[0] * b[2]
-    np.multiply(a[0], b[1], out=out[2])
-    out[2] -= a[1] * b[0]
-    return out
-
-
-def dot0(a: Array, b: Array) -> Array:
-    """Dot product over the first axis: ``(3, ...), (3, ...) -> (...)``."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
 def axis_rotation(axis: int, angle: Array) -> Array:
