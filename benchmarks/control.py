@@ -15,7 +15,7 @@ Runs in one process, on one core, on the same inputs:
 - ``pdm``: the PDM's single-sample verbs and its closed loop through ``pkmdyn.simulate.track``
   (PID at the PDM's 2 ms cycle) on a raised-cosine swing of all four coordinates.
 - ``mujoco``: the hip machine exported to MJCF (``pkmdyn hip export``: the engine's writer on
-  its description, :mod:`pkmdyn.multibody.mjcf`; no friction) - one ``mj_inverse``,
+  its description, :mod:`pkmdyn.multibody.formats.mjcf_out`; no friction) - one ``mj_inverse``,
   ``mj_forward`` and RK4 ``mj_step`` (1 ms) at consistent states of the same cycle, and a 10 s
   closed loop at 1 kHz (joint-space PD on the motor angles plus pkmdyn's friction-free
   feedforward, one ``mj_step`` per cycle; the best of three runs, as the engine's loops) with its
@@ -46,7 +46,7 @@ import numpy as np
 
 from pkmdyn.machines.hip_simulator import control_job
 from pkmdyn.machines.hip_simulator.params import load_params
-from pkmdyn.multibody._one import FORWARD, INVERSE, _dynamics
+from pkmdyn.multibody.dynamics._sample_kernels import FORWARD, INVERSE, _dynamics
 from pkmdyn.profiles.iso14242 import iso14242_motion
 from pkmdyn.spatial import euler_kinematics
 
@@ -281,7 +281,7 @@ def _project_loop_run(model: Any, motion: Any, st: dict, settings: dict, kind: s
     if generic:
         from pkmdyn.machines.hip_simulator.description import hip_description
         from pkmdyn.multibody import load_mechanism
-        from pkmdyn.multibody.machine import machine_verbs
+        from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
         plant = load_mechanism(hip_description(model))
         verbs = machine_verbs(plant)
@@ -358,7 +358,7 @@ def mujoco_part(seconds: float) -> dict[str, Any]:
     import pkmdyn.cli  # noqa: F401  (the command line first: the hip's commands module is one of its groups)
     from pkmdyn.machines.hip_simulator.commands import PLATFORM_MASS_KG  # what pkmdyn hip export writes
     from pkmdyn.multibody import solve_kinematics
-    from pkmdyn.multibody.mjcf import mechanism_mjcf, mujoco_order, mujoco_qpos
+    from pkmdyn.multibody.formats.mjcf_out import mechanism_mjcf, mujoco_order, mujoco_qpos
 
     base = load_params()
     model = dataclasses.replace(base, friction=dataclasses.replace(base.friction, mu_h=0.0, mu_t=0.0))

@@ -102,7 +102,7 @@ def main() -> None:
             pinocchio.rnea(pm, pd, q, v, a)
         rnea = min(rnea, (time.perf_counter() - t0) / reps * 1e6)
 
-    from pkmdyn.multibody.machine import machine_verbs
+    from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
     verbs = machine_verbs(view.mech)
     q0, qd0, qdd0, f0 = motion.angles[0], motion.rates[0], motion.accels[0], float(load[0])

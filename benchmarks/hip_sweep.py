@@ -70,11 +70,11 @@ def _stages(ad, designs: list[dict], ctx) -> dict[str, float]:
     """Each stage of each design timed alone (the same calls as the adapter's evaluation)."""
     import numpy as np
 
-    from pkmdyn.multibody.dynamics import joint_reactions
-    from pkmdyn.multibody.kinematics import least_measures, solve_kinematics
-    from pkmdyn.multibody.description import load_description
-    from pkmdyn.multibody.model import compile_with
-    from pkmdyn.multibody.sweep import evaluate_model
+    from pkmdyn.multibody.dynamics.inverse import joint_reactions
+    from pkmdyn.multibody.kinematics.inverse import least_measures, solve_kinematics
+    from pkmdyn.multibody.description.schema import load_description
+    from pkmdyn.multibody.model.compiler import compile_with
+    from pkmdyn.multibody.analyses.designs import evaluate_model
 
     hooks = ad.hooks
     eng = ctx.engine

@@ -14,7 +14,7 @@ with ``--json`` nothing else is printed.
 The PDM likewise (``pdm4/description.py``; every one of its 14 bodies' pose, velocity and
 acceleration on the Eq. 84 motion).
 
-Direct kinematics (``pkmdyn.multibody.direct``) of the Stewart platform, the hip, the Delta and
+Direct kinematics (``pkmdyn.multibody.kinematics.direct``) of the Stewart platform, the hip, the Delta and
 the PDM: batched along a motion, the task motion alone (``bodies=False``, what ``pkmdyn run
 --actuator-motion`` and identification from a measured log take: ``<machine>_dk_batched_us_per_sample``)
 and with every body's coordinates (``<machine>_dk_batched_with_bodies_us_per_sample``), and one
@@ -83,14 +83,14 @@ def _dynamics(out: dict, n: int, repeat: int, m, hip, mh, pm) -> None:
     from pkmdyn.machines.pdm4.description import pdm_description
     from pkmdyn.machines.pdm4.paper import JOINTS
     from pkmdyn.multibody import load_mechanism
-    from pkmdyn.multibody.dynamics import inverse_dynamics, joint_reactions
-    from pkmdyn.multibody.machine import machine_verbs
+    from pkmdyn.multibody.dynamics.inverse import inverse_dynamics, joint_reactions
+    from pkmdyn.multibody.dynamics.verbs import machine_verbs
     from pkmdyn.profiles.iso14242 import iso14242_motion
     from pkmdyn.profiles.pdm_motion import cycloidal_motion
 
     # hip, every friction family on (Table 2's S, U, slider and screw friction, Eq. 16 under the
     # ISO load): the generic efforts with friction (inverse_dynamics) against the closed form
-    from pkmdyn.friction import coulomb_viscous
+    from pkmdyn.multibody.dynamics.friction import coulomb_viscous
 
     d = default_params_dict()
     for key, v in (("slider_coulomb_N", 5.0), ("slider_viscous_Ns_m", 20.0), ("screw_coulomb_Nm", 0.02),
@@ -202,7 +202,7 @@ PIN_PROXIMAL = (1e-12, 1e-12, 1e-8, 100)
 
 def pinocchio_closed_loop(m):
     """Pinocchio model of the described mechanism ``m`` from its URDF export and loop sidecar
-    (``pkmdyn.multibody.urdf_export.mechanism_urdf``, what ``pkmdyn export --format urdf``
+    (``pkmdyn.multibody.formats.urdf_out.mechanism_urdf``, what ``pkmdyn export --format urdf``
     writes): Pinocchio's URDF parser builds the spanning tree (gravity from the sidecar), and
     each of the sidecar's frame pairs becomes a ``RigidConstraintModel`` (``3d``: CONTACT_3D,
     ``6d``: CONTACT_6D) between the two frames' joints at the frames' placements. Returns
@@ -213,7 +213,7 @@ def pinocchio_closed_loop(m):
     description's actuators)."""
     import pinocchio as pin
 
-    from pkmdyn.multibody.urdf_export import mechanism_urdf
+    from pkmdyn.multibody.formats.urdf_out import mechanism_urdf
 
     text, side, _ = mechanism_urdf(m)
     model = pin.buildModelFromXML(text)
@@ -268,8 +268,8 @@ def _forward_peers(out: dict, repeat: int, machines: dict) -> None:
     spin freely: for the Delta the held case is also solved by Pinocchio
     (``pinocchio.forwardDynamics``: its mass matrix, bias forces and the loops' frame
     Jacobians and drifts, with the holding rows added), not timed."""
-    from pkmdyn.multibody.dynamics import fr_any
-    from pkmdyn.multibody.machine import machine_verbs
+    from pkmdyn.multibody.dynamics.inverse import fr_any
+    from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
     try:
         import pinocchio as pin
@@ -278,7 +278,7 @@ def _forward_peers(out: dict, repeat: int, machines: dict) -> None:
     try:
         import mujoco
 
-        from pkmdyn.multibody.mjcf import mechanism_mjcf, mujoco_order, mujoco_qpos
+        from pkmdyn.multibody.formats.mjcf_out import mechanism_mjcf, mujoco_order, mujoco_qpos
     except ImportError:  # pragma: no cover - MuJoCo is optional
         mujoco = None
     for name, m in machines.items():
@@ -416,8 +416,8 @@ def _forward_peers(out: dict, repeat: int, machines: dict) -> None:
 
 def _direct(out: dict, n: int, repeat: int, machines: dict) -> None:
     """Direct kinematics: batched and single-sample timings, round trips (module docstring)."""
-    from pkmdyn.multibody.direct import direct_kinematics
-    from pkmdyn.multibody.machine import machine_verbs
+    from pkmdyn.multibody.kinematics.direct import direct_kinematics
+    from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
     for name, mech in machines.items():
         amp = np.where(mech.task_kind == 1, 0.05, 0.03 * mech.length_scale)
@@ -455,12 +455,13 @@ def _stewart_loops(out: dict, m, seconds: float = 2.0) -> None:
     from pkmdyn.cli.mechanism import described_control_settings
     from pkmdyn.control import gains, hermite_motion, loop_settings
     from pkmdyn.multibody import default_motion
-    from pkmdyn.multibody.machine import machine_verbs
+    from pkmdyn.multibody.dynamics.verbs import machine_verbs
     from pkmdyn.simulate import track
 
     from dataclasses import replace
 
-    from pkmdyn.simulate import _cycles, _run
+    from pkmdyn.simulate import _cycles
+    from pkmdyn.simulate import _run
 
     settings = described_control_settings(m)
     settings["sensors"]["pose_feedback_from_sensor"] = 0  # the pose from the encoders, by the direct kinematics
@@ -501,7 +502,7 @@ def _stewart_loops(out: dict, m, seconds: float = 2.0) -> None:
     try:
         import mujoco
 
-        from pkmdyn.multibody.mjcf import mechanism_mjcf, mujoco_order, mujoco_qpos
+        from pkmdyn.multibody.formats.mjcf_out import mechanism_mjcf, mujoco_order, mujoco_qpos
     except ImportError:  # pragma: no cover - MuJoCo is optional
         out["mujoco_stewart_loop_realtime_factor"] = None
         return
@@ -569,7 +570,7 @@ def _stiffness(out: dict, m, repeat: int, oracle) -> None:
     """The stiffness of the Stewart platform with its drives locked at 1,000 poses, batched
     (kinematics solved first, not timed), and its agreement with Gosselin's J^T diag(k) J from
     the closed-form oracle's Jacobian."""
-    from pkmdyn.multibody.stiffness import stiffness
+    from pkmdyn.multibody.analyses.stiffness import stiffness
 
     rng = np.random.default_rng(7)
     x = reference_task(m) + rng.uniform(-1, 1, (1000, 6)) * np.array([0.08, 0.08, 0.08, 0.1, 0.1, 0.15])
@@ -626,7 +627,7 @@ def main() -> None:
         out["stewart_max_rel_diff"] = max(_rel(kin.act_q[:, legs], ref["L"]), _rel(kin.act_qd[:, legs], ref["Ld"]),
                                           _rel(kin.act_qdd[:, legs], ref["Ldd"]))
 
-    # the explicit legs (multibody/legs.py) against Newton on every block, same motion
+    # the explicit legs (multibody/model/legs.py) against Newton on every block, same motion
     mn = newton_only(m)
     sec = best_time(lambda: solve_kinematics(mn, x, xd, xdd, t), args.repeat)
     out["stewart_kinematics_newton_us_per_sample"] = sec / n * 1e6

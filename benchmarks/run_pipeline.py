@@ -1,6 +1,6 @@
 """What each stage of ``pkmdyn run`` costs a sample, on the Gough-Stewart platform.
 
-The stages as the run takes them, chunk by chunk (``pkmdyn.multibody.run.CHUNK`` samples), on
+The stages as the run takes them, chunk by chunk (``pkmdyn.jobs.run.CHUNK`` samples), on
 the default motion at ``--samples`` samples (every sample in the bodies' window, so every
 sample's singularity measures count): the kinematics, the efforts with every joint reaction
 and the effort split, the least singularity measures (and, for comparison, the three singular
@@ -26,10 +26,10 @@ from pathlib import Path
 from _timing import best_times
 from pkmdyn.machines.registry import resolve
 from pkmdyn.multibody import default_motion, load_mechanism, solve_kinematics
-from pkmdyn.multibody.dynamics import joint_reactions
-from pkmdyn.multibody.kinematics import least_measures, singularity_measures
-from pkmdyn.multibody.output import results_columns
-from pkmdyn.multibody.run import CHUNK, effort_columns, run_mechanism
+from pkmdyn.multibody.dynamics.inverse import joint_reactions
+from pkmdyn.multibody.kinematics.inverse import least_measures, singularity_measures
+from pkmdyn.jobs.run import CHUNK, run_mechanism
+from pkmdyn.multibody.columns import effort_columns, results_columns
 
 
 def _best(fn, repeat: int) -> float:

@@ -68,7 +68,7 @@ def builtin_dict(name, parametric=False):
     evaluated, its [parameters] left out), or with ``parametric`` the file as written."""
     import tomllib
 
-    from pkmdyn.multibody.expressions import resolve_parameters
+    from pkmdyn.multibody.description.expressions import resolve_parameters
 
     with open(MACHINES / name / f"{name}.toml", "rb") as fh:
         raw = tomllib.load(fh)

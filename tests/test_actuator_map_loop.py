@@ -1,5 +1,5 @@
 """The batched actuator map along a motion by the single-sample kernel's compiled loop
-(``MechanismVerbs.actuator_map``, :func:`pkmdyn.multibody._one.actuator_maps`) against the
+(``MechanismVerbs.actuator_map``, :func:`pkmdyn.multibody.dynamics._sample_kernels.actuator_maps`) against the
 batched solver's own (the route below ``MAP_SAMPLES`` poses)."""
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ import pytest
 import multibody_examples as ex
 from pkmdyn.errors import PkmdynError
 from pkmdyn.multibody import load_mechanism, reference_task
-from pkmdyn.multibody import machine as machine_module
-from pkmdyn.multibody.machine import machine_verbs
+from pkmdyn.multibody.dynamics import verbs as machine_module
+from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
 CASES = {"stewart": lambda: ex.builtin_dict("stewart"), "delta": lambda: ex.builtin_dict("delta"),
          "rrr3": lambda: ex.builtin_dict("rrr3"), "stewart_sps": ex.stewart_sps}

@@ -15,8 +15,9 @@ import multibody_examples as ex
 from pkmdyn.cli.mechanism import described_control_settings
 from pkmdyn.control import gains, hermite_motion, loop_settings
 from pkmdyn.multibody import default_motion, load_mechanism
-from pkmdyn.multibody.machine import machine_verbs
-from pkmdyn.simulate import DivergenceError, _cycles, track
+from pkmdyn.multibody.dynamics.verbs import machine_verbs
+from pkmdyn.simulate import DivergenceError, track
+from pkmdyn.simulate import _cycles
 
 FIELDS = ("q", "qd", "u", "q_s", "qd_s", "q_att", "s", "s_enc", "sd_enc", "sdd_enc", "q_end", "qd_end")
 
@@ -219,7 +220,7 @@ def test_a_cycle_handed_back_runs_in_python_from_the_state_it_started_from(where
             d[3] = -99  # no status the kernel returns
             tail[3] = tuple(d)
         else:
-            from pkmdyn.multibody import _one
+            from pkmdyn.multibody.dynamics import _sample_kernels as _one
 
             c = list(tail[4])
             c[0] = c[0].copy()

@@ -30,8 +30,8 @@ import pytest
 import multibody_examples as ex
 from oracles import bennett, delta, rrr3, stewart
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.dynamics import energies
-from pkmdyn.multibody.machine import machine_verbs
+from pkmdyn.multibody.dynamics.inverse import energies
+from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
 
 def _hip():

@@ -14,7 +14,8 @@ import pytest
 from pkmdyn.cli import main
 from pkmdyn.cli.control import PLOT_RAW_MAX, _Curves, machine_setup
 from pkmdyn.control import gains, load_settings, loop_settings
-from pkmdyn.simulate import _run, track, track_spans
+from pkmdyn.simulate import track, track_spans
+from pkmdyn.simulate import _run
 
 
 @pytest.mark.parametrize("machine, kind, n", [("hip", "augmented-pd", 3), ("hip", "computed-torque", 3),

@@ -1,4 +1,4 @@
-"""Direct kinematics of described mechanisms (pkmdyn.multibody.direct): the pose from the
+"""Direct kinematics of described mechanisms (pkmdyn.multibody.kinematics.direct): the pose from the
 actuator coordinates against independent closed forms (tests/oracles: the Delta's three-sphere
 intersection, the Gough-Stewart leg lengths), round trips with the inverse kinematics on every
 built-in machine, the assembly-mode search, and the commands (``pkmdyn assemble``, ``pkmdyn run
@@ -18,8 +18,8 @@ from pkmdyn.cli import main
 from pkmdyn.errors import MotionError, ParameterError, SingularityError, UnreachablePoseError
 from pkmdyn.machines.registry import described_machines, generated_machines
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.direct import actuator_reference, assembly_modes, direct_kinematics, parse_actuators
-from pkmdyn.multibody.poses import body_poses
+from pkmdyn.multibody.kinematics.direct import actuator_reference, assembly_modes, direct_kinematics, parse_actuators
+from pkmdyn.multibody.model.poses import body_poses
 
 MACHINES = Path(__file__).resolve().parents[1] / "src" / "pkmdyn" / "machines"
 
@@ -172,9 +172,9 @@ def test_one_sample_at_a_time_gives_the_motion_back(name):
     sample's solution, the checked route where that call cannot answer) gives the motion's
     poses and rates back from its actuator coordinates, also after a jump from the last sample
     back to the first; the compiled call answered the motion's samples."""
-    from pkmdyn.multibody import _direct as D
-    from pkmdyn.multibody.direct import one_state, task_state
-    from pkmdyn.multibody.machine import machine_verbs
+    from pkmdyn.multibody.kinematics import _direct_kernels as D
+    from pkmdyn.multibody.kinematics.direct import one_state, task_state
+    from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
     m = _model(name)
     t, x, xd, xdd = _smooth(m, seed=5)
@@ -214,7 +214,7 @@ def test_task_motion_by_the_actuated_coordinates_alone_matches_the_tree_route(na
     coordinates."""
     from test_explicit_legs import _rot, platform
 
-    from pkmdyn.multibody.direct import _by_the_actuated_coordinates
+    from pkmdyn.multibody.kinematics.direct import _by_the_actuated_coordinates
 
     m = _model(name) if name in ("stewart", "hip") else load_mechanism(platform(name, _rot([0.3, -0.8, 0.5], 2.1)))
     t, x, xd, xdd = _smooth(m, n=300, seed=7, size=0.7)
@@ -298,9 +298,9 @@ def test_a_motion_through_a_singularity_is_refused():
         assert np.abs(dk.x - P[:45]).max() <= 1e-10
         # one sample at a time (the controller's route, on the tree coordinates here): the
         # same, not the pose turning back with the actuators onto the other assembly mode
-        from pkmdyn.multibody.machine import machine_verbs
+        from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
-        from pkmdyn.multibody.direct import prime_one
+        from pkmdyn.multibody.kinematics.direct import prime_one
 
         V = machine_verbs(m)
         V.direct_one(m, s[0], sd[0])  # (from the reference pose: another mode) then from the motion's start
@@ -608,7 +608,7 @@ def test_one_sample_at_a_time_refuses_a_crossing_instead_of_turning_back():
     pose turning back on the other assembly mode: the controller's route (``direct_one``, in
     task space for this platform) follows the motion up to the crossing and then refuses with
     a singularity error, instead of returning the turned-back pose."""
-    from pkmdyn.multibody.machine import machine_verbs
+    from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
     m = _model("stewart")
     n = 801
@@ -640,7 +640,7 @@ def test_one_sample_at_a_time_after_large_jumps(leg):
     from test_explicit_legs import _rot, platform
 
     from pkmdyn.errors import UnreachablePoseError
-    from pkmdyn.multibody.machine import machine_verbs
+    from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
     m = load_mechanism(platform(leg, _rot([0.3, -0.8, 0.5], 2.1)))
     x0 = reference_task(m)
@@ -682,9 +682,9 @@ def test_one_sample_at_a_time_through_a_legs_own_singularity(leg, axis):
     actuators changes sign through infinity there, the branch measure must not)."""
     from test_explicit_legs import _rot, platform
 
-    from pkmdyn.multibody.kinematics import loop_residuals
-    from pkmdyn.multibody.legs import place
-    from pkmdyn.multibody.machine import machine_verbs
+    from pkmdyn.multibody.kinematics.inverse import loop_residuals
+    from pkmdyn.multibody.model.legs import place
+    from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
     m = load_mechanism(platform(leg, _rot([0.3, -0.8, 0.5], 2.1)))
     x0 = reference_task(m)
@@ -741,9 +741,9 @@ def test_task_route_by_the_actuated_coordinates_alone_matches_every_leg_placed(n
     coordinate of those legs as the inverse kinematics gives it."""
     from test_explicit_legs import _rot, platform
 
-    from pkmdyn.multibody import _direct as D
-    from pkmdyn.multibody import _one
-    from pkmdyn.multibody.direct import pack_task, prime_task, task_state
+    from pkmdyn.multibody.kinematics import _direct_kernels as D
+    from pkmdyn.multibody.dynamics import _sample_kernels as _one
+    from pkmdyn.multibody.kinematics.direct import pack_task, prime_task, task_state
 
     turn = _rot([0.3, -0.8, 0.5], 2.1)
     if name in ("stewart", "hip"):
@@ -795,7 +795,7 @@ def test_task_route_by_the_actuated_coordinates_alone_only_where_the_joint_reach
     coordinates alone."""
     from test_explicit_legs import _unit, platform
 
-    from pkmdyn.multibody.direct import pack_task
+    from pkmdyn.multibody.kinematics.direct import pack_task
 
     def flag(desc):
         d = pack_task(load_mechanism(desc))
@@ -817,7 +817,7 @@ def test_direct_one_primed_at_a_known_pose_starts_from_it(name, monkeypatch):
     by the single-sample kernel alone (the checked route, which solves from the reference
     configuration, is never taken) and follow a motion from there: the poses of the motion the
     actuator values came from, and its rates."""
-    from pkmdyn.multibody.machine import MechanismVerbs, machine_verbs
+    from pkmdyn.multibody.dynamics.verbs import MechanismVerbs, machine_verbs
 
     m = _model(name)
     t, x, xd, xdd = _smooth(m, n=60, seed=5)

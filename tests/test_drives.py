@@ -15,9 +15,9 @@ import multibody_examples as ex
 from pkmdyn.cli import main
 from pkmdyn.errors import LimitError, ParameterError
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.kinematics import TOLERANCE
-from pkmdyn.multibody.actuators import motor_efforts, rotor_energy
-from pkmdyn.multibody.dynamics import joint_reactions
+from pkmdyn.multibody.kinematics.inverse import TOLERANCE
+from pkmdyn.multibody.dynamics.actuators import motor_efforts, rotor_energy
+from pkmdyn.multibody.dynamics.inverse import joint_reactions
 
 DRIVE = {"joint": "P", "name": "M", "screw_lead_m": 0.005, "gear_ratio": 2.0, "rotor_inertia_kgm2": 3e-5,
          "coulomb_torque_Nm": 0.04, "viscous_Nm_s_rad": 2e-4}
@@ -57,7 +57,7 @@ def _rel(a, b):
 # --------------------------------------------------------------------------- drives
 def test_motor_efforts_follow_the_transmission():
     """Eq. A1 term by term: tau = u / k + I_r k qdd + C u(k qd) + b k qd, k = gear 2 pi / lead."""
-    from pkmdyn.friction import regularised_sign
+    from pkmdyn.multibody.dynamics.friction import regularised_sign
 
     m = load_mechanism(_stewart_with_drives())
     k = DRIVE["gear_ratio"] * 2 * np.pi / DRIVE["screw_lead_m"]
@@ -118,8 +118,8 @@ def test_verbs_with_drives_are_the_motor_side_equations():
     """The machine verbs take motor efforts: forward(inverse) = identity; x_dot^T M x_dot / 2 is
     the bodies' and the rotors' kinetic energy; B = J_ax^T k; the single-sample path agrees
     with the batched verbs; the inverse verb equals the motor efforts of joint_reactions."""
-    from pkmdyn.multibody.dynamics import energies
-    from pkmdyn.multibody.machine import machine_verbs
+    from pkmdyn.multibody.dynamics.inverse import energies
+    from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
     m = load_mechanism(_stewart_with_drives())
     v = machine_verbs(m)
@@ -204,7 +204,7 @@ def test_split_parts_add_up_to_the_total_in_the_run_files(tmp_path, name):
     assert checked == len(summary["actuators"])  # every actuator's split: its motor's for a drive, else the joint's
     # the columns identify --machine accepts from a run are the ones a run writes
     from pkmdyn.cli.mechanism import _load
-    from pkmdyn.multibody.run import results_column_names
+    from pkmdyn.multibody.columns import results_column_names
 
     assert head == results_column_names(_load(name)[0])
 
@@ -259,7 +259,7 @@ def test_idle_freedoms_are_held_and_their_holding_force_balances_the_rods():
     its rule, its acceleration the exact derivative of its rate (the same as solving the held
     motion), the reactions balance every body with the holding force in the rods' own joints,
     which is small (the rods' spin inertia) and reported."""
-    from pkmdyn.multibody.dynamics import idle_holding
+    from pkmdyn.multibody.dynamics.inverse import idle_holding
 
     m = load_mechanism(ex.builtin_dict("delta"))
     assert m.topology.idle == 6
@@ -293,8 +293,8 @@ def test_a_chunked_run_equals_one_solved_whole(tmp_path):
     """The same motion through run_mechanism in chunks of 7 and of 10,000 samples: the same
     results to 1e-12 of each column's size, every bodies.npz array alike, the summary's
     extremes equal."""
-    from pkmdyn.multibody.motion import periodic_motion
-    from pkmdyn.multibody.run import run_mechanism
+    from pkmdyn.multibody.kinematics.motion import periodic_motion
+    from pkmdyn.jobs.run import run_mechanism
 
     m = load_mechanism(_stewart_with_drives())
     mo = periodic_motion(m, 1.0, 120)
@@ -399,7 +399,7 @@ def test_a_motion_beyond_a_rate_limit_is_refused_naming_joint_sample_and_value(t
 
 
 def test_limits_guard_the_task_motion_before_kinematics():
-    from pkmdyn.multibody.actuators import check_task_rates, effective_limits
+    from pkmdyn.multibody.dynamics.actuators import check_task_rates, effective_limits
 
     m = load_mechanism(ex.builtin_dict("rrr3"))
     t = np.linspace(0, 1, 5)
@@ -532,8 +532,8 @@ def test_a_chunked_run_beyond_the_bodies_window_keeps_its_extremes(tmp_path):
     """Chunks of 50 against one chunk, the bodies' window 130 of 301 samples: the same results,
     the same bodies.npz, and the smallest singularity measures of the stride within those of
     every sample."""
-    from pkmdyn.multibody.motion import periodic_motion
-    from pkmdyn.multibody.run import run_mechanism
+    from pkmdyn.multibody.kinematics.motion import periodic_motion
+    from pkmdyn.jobs.run import run_mechanism
 
     m = load_mechanism(ex.builtin_dict("delta"))
     mo = periodic_motion(m, 1.0, 300)
@@ -558,7 +558,7 @@ def test_an_actuator_singularity_names_its_sample_of_the_whole_run(monkeypatch):
     """The actuator map's singularity message gives the sample's number in the whole run (here
     every sample made singular by raising the threshold)."""
     from pkmdyn.errors import SingularityError
-    from pkmdyn.multibody import dynamics
+    from pkmdyn.multibody.dynamics import inverse as dynamics
 
     m = load_mechanism(ex.builtin_dict("rrr3"))
     t, x, xd, xdd = _motion(m, n=5)

@@ -1,4 +1,4 @@
-"""Explicit leg closure (multibody/legs.py): recognition from the description, and the
+"""Explicit leg closure (multibody/model/legs.py): recognition from the description, and the
 explicit and the Newton routes giving the same kinematics, branches included.
 
 The mechanisms beside the built-ins are made here: six-legged platforms whose legs are
@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.kinematics import TOLERANCE, loop_residuals
-from pkmdyn.multibody.legs import newton_only, place
-from pkmdyn.multibody.topology import constraint_jacobian
+from pkmdyn.multibody.kinematics.inverse import TOLERANCE, loop_residuals
+from pkmdyn.multibody.model.legs import newton_only, place
+from pkmdyn.multibody.model.topology import constraint_jacobian
 
 from multibody_examples import MACHINES
 
@@ -278,7 +278,7 @@ def test_rods_between_two_balls_are_explicit_with_their_spin_held(first, turned)
     assert _compare(model, amp) <= AGREE
     # the single-sample dynamics through the held spins: the efforts of the Newton route's
     # inverse dynamics give its accelerations back
-    from pkmdyn.multibody.machine import machine_verbs
+    from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
     t, x, xd, xdd = _motion(model, amp, n=20)
     u = machine_verbs(newton_only(model)).inverse_dynamics(newton_only(model), x, xd, xdd)

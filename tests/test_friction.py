@@ -1,6 +1,6 @@
 import numpy as np
 
-from pkmdyn.friction import coulomb_viscous, regularised_sign
+from pkmdyn.multibody.dynamics.friction import coulomb_viscous, regularised_sign
 
 
 def test_regularised_sign_is_bounded_smooth_and_zero_at_rest():

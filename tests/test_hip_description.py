@@ -57,7 +57,7 @@ def test_the_comparison_sees_a_wrong_machine():
 def test_the_engines_rate_limits_never_bind_before_the_parameter_files():
     """A parameter file that raises the sliders' limits above the engine's defaults raises the
     description's too: a fast design is judged by the hip's own [limits] keys."""
-    from pkmdyn.multibody.actuators import effective_limits
+    from pkmdyn.multibody.dynamics.actuators import effective_limits
 
     d = default_params_dict()
     d.setdefault("limits", {}).update(max_slider_speed_m_s=25.0, max_slider_acceleration_m_s2=4000.0)

@@ -10,7 +10,7 @@ from hip_helpers import SmoothMotion, engine, engine_torques, random_model, rel
 from oracles import hip
 from pkmdyn.errors import MotionError, ParameterError
 from pkmdyn.machines.hip_simulator.params import load_params
-from pkmdyn.multibody.machine import machine_verbs
+from pkmdyn.multibody.dynamics.verbs import machine_verbs
 from pkmdyn.profiles.orientation import make_motion
 
 PARTS = ("tau", *hip.PARTS, "hip_friction", "power")

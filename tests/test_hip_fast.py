@@ -13,9 +13,9 @@ import pytest
 from hip_helpers import engine, random_model
 from oracles import hip
 from pkmdyn.errors import SingularityError, UnreachablePoseError
-from pkmdyn.machine import MachineDynamics
+from pkmdyn.machine_protocol import MachineDynamics
 from pkmdyn.machines.hip_simulator.params import load_params
-from pkmdyn.multibody.machine import machine_verbs
+from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
 FAMILIES = {
     "hip": ("mu_h", "mu_t"),

@@ -1,5 +1,5 @@
 """Forward dynamics of the hip simulator through the generic engine's machine verbs
-(:func:`pkmdyn.multibody.machine.machine_verbs` of the hip's description, in the upper platform's
+(:func:`pkmdyn.multibody.dynamics.verbs.machine_verbs` of the hip's description, in the upper platform's
 Euler angles).
 
 Checks: the verbs' ``M``, ``h``, ``B`` and inverse dynamics against the closed form
@@ -21,7 +21,7 @@ from scipy.integrate import solve_ivp
 from hip_helpers import engine, random_model, rel
 from oracles import hip
 from pkmdyn.errors import MotionError, SingularityError
-from pkmdyn.multibody.machine import machine_verbs
+from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
 TOL = 1e-9
 

@@ -82,8 +82,8 @@ def test_the_hip_parameters_map_onto_the_engines_of_the_real_description():
     from pkmdyn.machines.hip_simulator.description import hip_description
     from pkmdyn.machines.hip_simulator.identify_view import F_REF
     from pkmdyn.multibody import load_mechanism
-    from pkmdyn.multibody.identify import regressor
-    from pkmdyn.multibody.kinematics import solve_kinematics
+    from pkmdyn.multibody.analyses.regressor import regressor
+    from pkmdyn.multibody.kinematics.inverse import solve_kinematics
 
     rng = np.random.default_rng(8)
     model = random_model(rng, friction=True)

@@ -21,11 +21,11 @@ from pkmdyn.cli import main
 from pkmdyn.errors import ParameterError
 from pkmdyn.io import dumps_yaml
 from pkmdyn.multibody import default_motion, load_mechanism, solve_kinematics
-from pkmdyn.multibody.direct import direct_kinematics
-from pkmdyn.multibody.dynamics import joint_reactions
-from pkmdyn.multibody.importer import import_description
-from pkmdyn.multibody.mjcf import mechanism_mjcf, mujoco_order, mujoco_qpos
-from pkmdyn.multibody.urdf_export import mechanism_urdf
+from pkmdyn.multibody.kinematics.direct import direct_kinematics
+from pkmdyn.multibody.dynamics.inverse import joint_reactions
+from pkmdyn.multibody.formats.importer import import_description
+from pkmdyn.multibody.formats.mjcf_out import mechanism_mjcf, mujoco_order, mujoco_qpos
+from pkmdyn.multibody.formats.urdf_out import mechanism_urdf
 
 mujoco = pytest.importorskip("mujoco")
 pin = pytest.importorskip("pinocchio")
@@ -245,7 +245,7 @@ def test_mjcf_with_geared_motors_matches_mujoco(tmp_path, site_connect):
     assert free1["friction"] == {"viscous_Nm_s_rad": 0.01}
     model = load_mechanism(out)
     mo, kin = _moving(model)
-    from pkmdyn.multibody.actuators import motor_efforts
+    from pkmdyn.multibody.dynamics.actuators import motor_efforts
 
     tau = motor_efforts(model, kin.act_q, kin.act_qd, kin.act_qdd, _efforts(model, kin)).effort
     names = [model.joint_names[k] for k in range(len(model.joint_names)) if model.joint_nq[k] == 1

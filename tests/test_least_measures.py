@@ -1,4 +1,4 @@
-"""The least singularity measures of a run (pkmdyn.multibody.kinematics.least_measures): equal,
+"""The least singularity measures of a run (pkmdyn.multibody.kinematics.inverse.least_measures): equal,
 bit for bit, to the least of every sample's singular value decompositions
 (``singularity_measures``), whatever the order of the samples (a smooth motion, shuffled poses,
 one pose repeated, a pose near a singularity), on every built-in mechanism and on mechanisms
@@ -13,9 +13,9 @@ import pytest
 import multibody_examples as ex
 from pkmdyn.machines.registry import resolve
 from pkmdyn.multibody import default_motion, load_mechanism, solve_kinematics
-from pkmdyn.multibody.kinematics import _measure_bounds, least_measures, singularity_measures
-from pkmdyn.multibody.model import compile_model
-from pkmdyn.multibody.description import load_description
+from pkmdyn.multibody.kinematics.inverse import _measure_bounds, least_measures, singularity_measures
+from pkmdyn.multibody.model.compiler import compile_model
+from pkmdyn.multibody.description.schema import load_description
 
 
 def _reference(model, q):
@@ -114,7 +114,7 @@ def test_a_sweeps_measure_metrics_are_every_samples_decompositions(name, tmp_pat
     a design, against every sample's three decompositions; a threshold above the least names the
     sample where the worst measure is least, as before."""
     from pkmdyn.machines.registry import sweep_adapter
-    from pkmdyn.multibody.sweep import evaluate_one
+    from pkmdyn.multibody.analyses.designs import evaluate_one
     from pkmdyn.sweep_protocol import time_mean
 
     ad = sweep_adapter(name)

@@ -13,8 +13,8 @@ import tomlkit
 import multibody_examples as ex
 from pkmdyn.cli import main
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.dynamics import joint_reactions
-from pkmdyn.multibody.identify import regressor
+from pkmdyn.multibody.dynamics.inverse import joint_reactions
+from pkmdyn.multibody.analyses.regressor import regressor
 
 AMP = np.array([0.04, 0.04, 0.04, 0.12, 0.12, 0.12])
 

@@ -1,4 +1,4 @@
-"""The hip's MJCF export (the engine's writer, :mod:`pkmdyn.multibody.mjcf`, on the hip's
+"""The hip's MJCF export (the engine's writer, :mod:`pkmdyn.multibody.formats.mjcf_out`, on the hip's
 description) against MuJoCo: inverse dynamics, forward dynamics, loop closure, command line."""
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ from pkmdyn.errors import ParameterError
 from pkmdyn.machines.hip_simulator.description import hip_description
 from pkmdyn.machines.hip_simulator.params import DEFAULT_PARAMS_TEXT, load_params
 from pkmdyn.multibody import load_mechanism, solve_kinematics
-from pkmdyn.multibody.machine import machine_verbs
-from pkmdyn.multibody.mjcf import mechanism_mjcf, mujoco_order, mujoco_qpos
+from pkmdyn.multibody.dynamics.verbs import machine_verbs
+from pkmdyn.multibody.formats.mjcf_out import mechanism_mjcf, mujoco_order, mujoco_qpos
 
 mujoco = pytest.importorskip("mujoco")
 

@@ -188,15 +188,15 @@ def test_task_point_defaults_to_the_centre_of_mass():
 def test_adding_a_joint_type_is_adding_a_table_entry(monkeypatch):
     """A new type (here a 'slot' joint: translation along x and rotation about z, cut with
     the rows force_y, force_z, couple_x, couple_y) works end to end from one table entry."""
-    from pkmdyn.multibody import joint_types
+    from pkmdyn.multibody.description import joint_types
 
     slot = joint_types.JointType("slot", "L", ("TX", "RZ"), (("T", 1), ("T", 2), ("R", 1, 2), ("R", 0, 2)), 1)
     table = joint_types.JOINT_TYPES + (slot,)
     monkeypatch.setattr(joint_types, "JOINT_TYPES", table)
     monkeypatch.setattr(joint_types, "_BY_NAME", {t.name: k for k, t in enumerate(table)})
-    import pkmdyn.multibody.description as description
-    import pkmdyn.multibody.records as records
-    import pkmdyn.multibody.topology as topology
+    import pkmdyn.multibody.description.schema as description
+    import pkmdyn.multibody.model.records as records
+    import pkmdyn.multibody.model.topology as topology
 
     monkeypatch.setattr(description, "_TYPES", tuple(t.name for t in table))
     monkeypatch.setattr(records, "JOINT_TYPES", table)

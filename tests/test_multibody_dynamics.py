@@ -12,7 +12,7 @@ import pytest
 import multibody_examples as ex
 from pkmdyn.errors import ParameterError, SingularityError
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.dynamics import energies, inverse_dynamics, joint_reactions
+from pkmdyn.multibody.dynamics.inverse import energies, inverse_dynamics, joint_reactions
 
 RIGID = {
     "delta": lambda: ex.builtin_dict("delta"),
@@ -229,7 +229,7 @@ def _check_hip_parts(m, kin, r, ref, sl):
     """The generic motor torques and every part of the split against the hand-built Eq. 7-16
     torques ``ref`` (platform, lever, slider, screw = the rotor, friction = every joint's and
     the screws' friction; the oracle's), 1e-9 of each part's largest value."""
-    from pkmdyn.multibody.actuators import motor_efforts
+    from pkmdyn.multibody.dynamics.actuators import motor_efforts
 
     mot = motor_efforts(m, kin.act_q, kin.act_qd, kin.act_qdd, r.u)
     assert _rel(mot.effort[:, sl], ref.tau) < 1e-9
@@ -480,9 +480,9 @@ def test_friction_power_balance_and_reactions():
 
 def test_load_dependent_friction_uses_the_joints_own_reaction():
     """Recompute the pin and ball friction torques from the converged reactions (law F1)."""
-    from pkmdyn.friction import regularised_sign
-    from pkmdyn.multibody.dynamics import coordinate_twists, free_twists
-    from pkmdyn.multibody.friction import EPS_ROTATION
+    from pkmdyn.multibody.dynamics.friction import regularised_sign
+    from pkmdyn.multibody.dynamics.inverse import coordinate_twists, free_twists
+    from pkmdyn.multibody.dynamics.friction import EPS_ROTATION
 
     m, kin = _kin(_stewart_with_friction(0.3))
     r = joint_reactions(m, kin)
@@ -557,7 +557,7 @@ def test_hip_description_reproduces_the_closed_form_with_every_friction_family(s
     load the Eq. 16 torques are wrong, which the test also sees. The reference: the closed-form
     oracle (tests/oracles/hip.py)."""
     from oracles import hip as hip_oracle
-    from pkmdyn.friction import coulomb_viscous
+    from pkmdyn.multibody.dynamics.friction import coulomb_viscous
     from pkmdyn.machines.hip_simulator import model_from_dict
     from pkmdyn.machines.hip_simulator.description import hip_description
     from pkmdyn.machines.hip_simulator.params import default_params_dict
@@ -613,7 +613,7 @@ def test_compliance_in_cut_unknowns_equals_the_dense_equations(name):
 
 @pytest.mark.parametrize("name", sorted(ALL))
 def test_twists_from_the_solved_poses_equal_those_from_q(name):
-    from pkmdyn.multibody.dynamics import coordinate_twists
+    from pkmdyn.multibody.dynamics.inverse import coordinate_twists
 
     m, kin = _kin(ALL[name](), n=10)
     assert np.abs(coordinate_twists(m, kin.q, kin) - coordinate_twists(m, kin.q)).max() < 1e-13
@@ -653,7 +653,7 @@ def test_normal_equation_kernel_equals_least_squares_and_flags_dependent_columns
     """The cut route's compiled least squares (normal equations, Cholesky) equals numpy's
     least squares on consistent and inconsistent systems, and flags a sample whose columns
     are dependent instead of returning a number for it."""
-    from pkmdyn.multibody._reaction_kernels import normal_solve
+    from pkmdyn.multibody.dynamics._reaction_kernels import normal_solve
 
     rng = np.random.default_rng(3)
     n, m, k = 6, 21, 15
@@ -673,7 +673,7 @@ def test_cut_route_solves_a_sample_with_dependent_columns_by_least_squares():
     """Where the cut joints' columns become dependent at one sample, the cut route still returns
     wrenches that satisfy that sample's equations (least squares, not a failed factorisation),
     and the other samples are untouched."""
-    from pkmdyn.multibody.dynamics import _cut_solve, _CutRoute, coordinate_twists, cut_table
+    from pkmdyn.multibody.dynamics.inverse import _cut_solve, _CutRoute, coordinate_twists, cut_table
 
     m, kin = _kin(ex.builtin_dict("stewart"), n=5)
     S = coordinate_twists(m, kin.q, kin)

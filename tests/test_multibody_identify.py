@@ -8,14 +8,14 @@ import pytest
 
 import multibody_examples as ex
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.dynamics import fr_any, joint_reactions
-from pkmdyn.multibody.dynamics import inverse_dynamics as _inverse_dynamics
+from pkmdyn.multibody.dynamics.inverse import fr_any, joint_reactions
+from pkmdyn.multibody.dynamics.inverse import inverse_dynamics as _inverse_dynamics
 
 
 def inverse_dynamics(m, kin):
     """Efforts with the joints' friction (the reactions route) or without any (Eq. 3)."""
     return joint_reactions(m, kin) if fr_any(m) else _inverse_dynamics(m, kin)
-from pkmdyn.multibody.identify import regressor
+from pkmdyn.multibody.analyses.regressor import regressor
 
 
 def _stewart_friction():

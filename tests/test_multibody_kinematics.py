@@ -203,7 +203,7 @@ def test_bad_motion_arrays_are_refused():
 def test_a_coarsely_sampled_motion_is_bridged_and_matches_a_fine_one(monkeypatch):
     """A Bennett crank stepped by 1.8 rad in one sample: one Newton solve does not get there,
     the step is bridged, and the result is the fine path's (same assembly branch)."""
-    import pkmdyn.multibody.kinematics as kinematics
+    import pkmdyn.multibody.kinematics.inverse as kinematics
 
     used = []
     bridge = kinematics._bridge
@@ -227,7 +227,7 @@ def test_joint_coordinates_of_cut_and_tree_joints_follow_the_links_angles(cut):
     """Each revolute joint's coordinate, whether the joint is in the tree or cut, equals the
     relative angle of its two links computed from the joint centres alone (child link's
     angle less the parent link's, the ground's being zero)."""
-    from pkmdyn.multibody.kinematics import joint_coordinates
+    from pkmdyn.multibody.kinematics.inverse import joint_coordinates
 
     d = ex.four_bar()
     d["mechanism"]["cut_joints"] = [cut]
@@ -250,7 +250,7 @@ def test_joint_coordinates_of_cut_and_tree_joints_follow_the_links_angles(cut):
 
 @pytest.mark.parametrize("cut", ["C", "D"])
 def test_a_sliding_joints_coordinate_is_its_displacement_whether_cut_or_not(cut):
-    from pkmdyn.multibody.kinematics import joint_coordinates
+    from pkmdyn.multibody.kinematics.inverse import joint_coordinates
 
     d = ex.slider_crank()
     d["mechanism"]["cut_joints"] = [cut]
@@ -273,7 +273,7 @@ def _stewart_motion(m, n=30):
 
 
 def test_a_motion_beyond_a_joint_limit_is_refused_naming_the_joint_and_the_sample():
-    from pkmdyn.multibody.kinematics import joint_coordinates
+    from pkmdyn.multibody.kinematics.inverse import joint_coordinates
 
     d = ex.builtin_dict("stewart")
     m = load_mechanism(d)
@@ -299,7 +299,7 @@ def test_a_motion_beyond_a_joint_limit_is_refused_naming_the_joint_and_the_sampl
         solve_kinematics(beyond, x, t=t, limits=True)
     msg = str(e.value)
     assert f"sample {first} " in msg and f"joint {worst!r}" in msg and "limits" in msg
-    from pkmdyn.multibody.kinematics import limit_violation
+    from pkmdyn.multibody.kinematics.inverse import limit_violation
 
     kin = solve_kinematics(beyond, x, t=t)  # without limits=True: solved, the violation told apart
     assert np.array_equal(kin.q, free.q)
@@ -348,7 +348,7 @@ def test_cli_warns_where_the_motion_leaves_the_limits(tmp_path, capsys, command)
 def test_a_cut_joints_coordinate_carries_its_reference_value_as_the_same_joint_in_the_tree(ref):
     """The same joint with the same reference angle gives the same absolute coordinate whether
     the tree holds it or it is cut (its reference value included, not only its changes)."""
-    from pkmdyn.multibody.kinematics import joint_coordinates
+    from pkmdyn.multibody.kinematics.inverse import joint_coordinates
 
     values = []
     for cut in ("B", "C"):

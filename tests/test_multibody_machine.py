@@ -1,4 +1,4 @@
-"""Described mechanisms as machines: the verbs of pkmdyn.machine in task coordinates, and
+"""Described mechanisms as machines: the verbs of pkmdyn.machine_protocol in task coordinates, and
 closed-loop control from the command line."""
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ import pytest
 import multibody_examples as ex
 from pkmdyn.errors import ParameterError
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.dynamics import energies, joint_reactions
-from pkmdyn.multibody.machine import machine_verbs
+from pkmdyn.multibody.dynamics.inverse import energies, joint_reactions
+from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
 
 def _friction(d):
@@ -330,7 +330,7 @@ def test_encoder_readings_one_at_a_time_are_the_inverse_kinematics(name):
     the batched inverse kinematics' actuated coordinates along a motion; the compiled call
     answered; a non-finite pose is refused by the checked route."""
     from pkmdyn.errors import MotionError
-    from pkmdyn.multibody import _one
+    from pkmdyn.multibody.dynamics import _sample_kernels as _one
 
     m = load_mechanism(ex.builtin_dict(name))
     t = np.linspace(0.0, 0.8, 200)
@@ -360,7 +360,7 @@ def test_hip_encoder_readings_by_the_upper_legs_alone():
     the batched inverse kinematics' sliders."""
     from pkmdyn.machines.hip_simulator import load_params
     from pkmdyn.machines.hip_simulator.description import hip_description
-    from pkmdyn.multibody import _one
+    from pkmdyn.multibody.dynamics import _sample_kernels as _one
 
     m = load_mechanism(hip_description(load_params()))
     t = np.linspace(0.0, 0.8, 200)

@@ -1,4 +1,4 @@
-"""The compiled single-sample dynamics of described mechanisms (``pkmdyn.multibody._one``):
+"""The compiled single-sample dynamics of described mechanisms (``pkmdyn.multibody.dynamics._sample_kernels``):
 one call per sample, equal to the batched verbs, falling back where it cannot answer."""
 
 from __future__ import annotations
@@ -8,8 +8,8 @@ import pytest
 
 import multibody_examples as ex
 from pkmdyn.multibody import load_mechanism, reference_task
-from pkmdyn.multibody import _one
-from pkmdyn.multibody.machine import machine_verbs
+from pkmdyn.multibody.dynamics import _sample_kernels as _one
+from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
 CASES = {"stewart": lambda: ex.builtin_dict("stewart"), "delta": lambda: ex.builtin_dict("delta"),
          "bennett": lambda: ex.builtin_dict("bennett"), "rrr3": lambda: ex.builtin_dict("rrr3"),
@@ -169,8 +169,8 @@ def test_compiled_friction_equals_the_joint_by_joint_route(name):
     of inverse_dynamics equal those of the reaction solver (which balances each joint's
     friction along its free twists)."""
     from pkmdyn.multibody import solve_kinematics
-    from pkmdyn.multibody.dynamics import coordinate_twists, free_blocks, inverse_dynamics, joint_reactions
-    from pkmdyn.multibody.friction import JointFriction, known_friction
+    from pkmdyn.multibody.dynamics.inverse import coordinate_twists, free_blocks, inverse_dynamics, joint_reactions
+    from pkmdyn.multibody.dynamics.friction import JointFriction, known_friction
 
     m = load_mechanism(_every_joint_with_friction(FRICTION_CASES[name]()))
     x, xd, xdd = _motion(m, n=25)
@@ -198,7 +198,7 @@ def test_the_general_route_starts_where_the_kernel_left_off():
     V = machine_verbs(m)
     for xi in x:
         V.forward_dynamics_one(m, xi, zero, zero)
-    from pkmdyn.multibody import _one
+    from pkmdyn.multibody.dynamics import _sample_kernels as _one
 
     assert _one.solution(V._state(m).pk) is not None
     ref = machine_verbs(m)
@@ -272,7 +272,7 @@ def test_sines_and_cosines_from_a_nearby_angle_are_exact_to_rounding():
     from the previous pass by angle addition (``_kernels._cos_sin``): within 1e-3 rad of the
     kept angle they equal the library's to a few units of rounding; farther, or without
     ``reuse``, they are the library's own, and the kept angle moves on."""
-    from pkmdyn.multibody._kernels import _cos_sin
+    from pkmdyn.multibody.model._tree_kernels import (_cos_sin)
 
     rng = np.random.default_rng(3)
     trig = np.zeros((1, 3))

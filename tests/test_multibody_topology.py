@@ -101,7 +101,7 @@ def test_a_rigid_loop_is_refused():
 def test_sparse_basis_spans_the_same_space_with_fewest_entries():
     """The idle rows' basis: the same row space as the given basis, unit rows, and a
     coordinate direction that the space holds comes out as a unit vector on it."""
-    from pkmdyn.multibody.topology import sparse_basis
+    from pkmdyn.multibody.model.topology import sparse_basis
 
     rng = np.random.default_rng(7)
     # a space holding e_2 and e_5 and one mixed direction over coordinates 0, 1, 3

@@ -1,4 +1,4 @@
-"""Parametric descriptions (pkmdyn.multibody.expressions): named design parameters, expressions
+"""Parametric descriptions (pkmdyn.multibody.description.expressions): named design parameters, expressions
 in numeric fields, the safe grammar, the built-in Stewart platform written in its designer's
 parameters (the same model as its earlier all-numbers file), and a sweep of its base radius."""
 
@@ -15,7 +15,7 @@ import multibody_examples as ex
 from pkmdyn.cli import main
 from pkmdyn.errors import ParameterError
 from pkmdyn.multibody import load_mechanism
-from pkmdyn.multibody.expressions import evaluate, parameter_values
+from pkmdyn.multibody.description.expressions import evaluate, parameter_values
 
 DATA = Path(__file__).parent / "data"
 

@@ -65,7 +65,7 @@ def _hip_model():
 
 
 def _hip_topology():
-    from pkmdyn.multibody.output import model_summary
+    from pkmdyn.multibody.columns import model_summary
     from pkmdyn.report import topology_from_model
 
     return topology_from_model(model_summary(_hip_model()))
@@ -76,7 +76,7 @@ def test_hip_scene_closes_every_leg_on_the_lever_length():
     join each slider to its platform joint at the lever length, sliders sit on their screws and
     platform joints at the platform radius, whatever the pose: the scene is the machine's geometry."""
     from pkmdyn.multibody import solve_kinematics
-    from pkmdyn.multibody.output import mechanism_scene
+    from pkmdyn.multibody.scene import mechanism_scene
 
     model = hip_params()
     g = model.geometry

@@ -1,5 +1,5 @@
 """Stiffness, deflection and natural frequencies with the actuators locked
-(pkmdyn.multibody.stiffness), against closed forms (Gosselin's J^T diag(k) J with the Stewart
+(pkmdyn.multibody.analyses.stiffness), against closed forms (Gosselin's J^T diag(k) J with the Stewart
 oracle's Jacobian, cantilever and bar formulas), an independent frame finite-element model
 (tests/oracles/frame_fe.py) and the eigenvalues of M^-1 K; and the command."""
 
@@ -17,12 +17,12 @@ import multibody_examples as ex
 from oracles import stewart
 from oracles.frame_fe import Frame
 from pkmdyn.multibody import load_mechanism, solve_kinematics
-from pkmdyn.multibody.machine import machine_verbs
-from pkmdyn.multibody.dynamics import joint_reactions
-from pkmdyn.multibody.description import load_description
-from pkmdyn.multibody.kinematics import reference_task
-from pkmdyn.multibody.model import compile_model
-from pkmdyn.multibody.stiffness import StiffnessDataMissing, deflection, stiffness
+from pkmdyn.multibody.dynamics.verbs import machine_verbs
+from pkmdyn.multibody.dynamics.inverse import joint_reactions
+from pkmdyn.multibody.description.schema import load_description
+from pkmdyn.multibody.kinematics.inverse import reference_task
+from pkmdyn.multibody.model.compiler import compile_model
+from pkmdyn.multibody.analyses.stiffness import StiffnessDataMissing, deflection, stiffness
 
 E_STEEL, NU = 2.1e11, 0.3
 G_STEEL = E_STEEL / (2 * (1 + NU))
@@ -463,7 +463,7 @@ def test_a_long_motion_in_chunks_equals_one_chunk(tmp_path, monkeypatch):
     same worst sample with a chunk of 37 samples as with one chunk."""
     import csv
 
-    import pkmdyn.multibody.stiffness_run as job
+    import pkmdyn.jobs.stiffness as job
     from pkmdyn.multibody import default_motion
 
     m = load_mechanism(ex.MACHINES / "stewart" / "stewart.toml")

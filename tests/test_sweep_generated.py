@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from pkmdyn.machines.registry import sweep_adapter
-from pkmdyn.multibody.sweep import DescribedSweep, GeneratedSweep
+from pkmdyn.multibody.analyses.designs import DescribedSweep, GeneratedSweep
 
 
 def test_registry_gives_the_generic_adapter_of_generated_descriptions():
@@ -45,7 +45,7 @@ def test_metrics_keep_the_machine_names_then_the_engine_reactions_and_measures()
 
 def test_the_engine_measures_when_asked_for_and_the_same_rows_without_them():
     from pkmdyn.multibody import load_mechanism, solve_kinematics
-    from pkmdyn.multibody.kinematics import singularity_measures
+    from pkmdyn.multibody.kinematics.inverse import singularity_measures
     from pkmdyn.machines.hip_simulator.description import hip_description
     from pkmdyn.machines.hip_simulator.params import model_from_dict
 
@@ -83,8 +83,8 @@ def test_a_design_is_the_engine_on_its_generated_description(seed):
     from pkmdyn.machines.hip_simulator.description import hip_description
     from pkmdyn.machines.hip_simulator.params import model_from_dict
     from pkmdyn.multibody import load_mechanism, solve_kinematics
-    from pkmdyn.multibody.actuators import motor_efforts
-    from pkmdyn.multibody.dynamics import joint_reactions
+    from pkmdyn.multibody.dynamics.actuators import motor_efforts
+    from pkmdyn.multibody.dynamics.inverse import joint_reactions
     from pkmdyn.sweep_protocol import time_integral
 
     ad = sweep_adapter("hip")

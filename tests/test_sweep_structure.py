@@ -1,5 +1,5 @@
 """A sweep over a described mechanism compiles its structure once and each design's numbers
-(:func:`pkmdyn.multibody.model.compile_with`): every design's model is the one compiled from
+(:func:`pkmdyn.multibody.model.compiler.compile_with`): every design's model is the one compiled from
 scratch, field by field to the last bit (the Stewart platform, the Delta robot with its idle rod
 spins, the planar 3-RRR with explicit legs and over-constraints, the over-constrained Bennett
 linkage); numbers that change the rank-based topology, the idle rows, the block order or which
@@ -21,9 +21,9 @@ from pkmdyn.errors import PkmdynError
 from pkmdyn.io import dumps_toml
 from pkmdyn.machines.registry import sweep_adapter
 from pkmdyn.multibody import load_mechanism
-from pkmdyn.multibody.description import load_description
-from pkmdyn.multibody.model import compile_model, compile_with, model_structure, structure_key
-from pkmdyn.multibody.sweep import DescribedSweep
+from pkmdyn.multibody.description.schema import load_description
+from pkmdyn.multibody.model.compiler import compile_model, compile_with, model_structure, structure_key
+from pkmdyn.multibody.analyses.designs import DescribedSweep
 from pkmdyn.sweep import run_sweep
 
 pa = pytest.importorskip("pyarrow")

@@ -10,7 +10,7 @@ import pytest
 from pkmdyn.machines.hip_simulator.description import hip_description
 from pkmdyn.machines.hip_simulator.params import default_params_dict, model_from_dict
 from pkmdyn.multibody import load_mechanism, solve_kinematics
-from pkmdyn.multibody import kinematics as kin_module
+from pkmdyn.multibody.kinematics import inverse as kin_module
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""Slide tracks, cross-shear and wear of spherical joints (pkmdyn.multibody.wear), against
+"""Slide tracks, cross-shear and wear of spherical joints (pkmdyn.multibody.analyses.wear), against
 analytic results: straight tracks of a single rotation, circles of two rotations in quadrature,
 the sliding distance of a great-circle marker, the inverse motion, Archard's law; and the
 commands (pkmdyn wear, pkmdyn hip run's wear.json)."""
@@ -13,7 +13,7 @@ import pytest
 from pkmdyn.cli import main
 from pkmdyn.errors import ParameterError
 from pkmdyn.multibody import load_mechanism, solve_kinematics
-from pkmdyn.multibody.wear import (ASPECT_CAP, joint_slide_tracks, marker_grid, motion_axis, slide_tracks)
+from pkmdyn.multibody.analyses.wear import (ASPECT_CAP, joint_slide_tracks, marker_grid, motion_axis, slide_tracks)
 from pkmdyn.spatial import euler_to_matrix
 
 

@@ -1,4 +1,4 @@
-"""The workspace of any described mechanism on a grid (pkmdyn.multibody.workspace), against the
+"""The workspace of any described mechanism on a grid (pkmdyn.multibody.analyses.workspace), against the
 closed-form inverse kinematics of the Stewart platform and the Delta robot (tests/oracles) with
 the descriptions' joint limits; the size's error estimate against a finer grid; the command."""
 
@@ -13,8 +13,8 @@ from scipy import ndimage
 from oracles import delta, stewart
 from pkmdyn.cli import main
 from pkmdyn.multibody import load_mechanism
-from pkmdyn.multibody.kinematics import reference_task, solve_kinematics
-from pkmdyn.multibody.workspace import workspace
+from pkmdyn.multibody.kinematics.inverse import reference_task, solve_kinematics
+from pkmdyn.multibody.analyses.workspace import workspace
 
 from multibody_examples import MACHINES
 
@@ -82,9 +82,9 @@ def test_giving_up_on_stalled_poses_leaves_the_grid_as_it_was(name, grid):
     instead of ``MAX_ITER``: the same poses are reached, with the same coordinates, as
     without giving up; wide grids, so that many poses lie out of reach (a Stewart platform's
     unlimited legs reach every pose)."""
-    from pkmdyn.multibody.kinematics import GRID_STALL, solve_grid
-    from pkmdyn.multibody.task_grid import parse_grid
-    from pkmdyn.multibody.workspace import _roots, grid_poses
+    from pkmdyn.multibody.kinematics.inverse import GRID_STALL, solve_grid
+    from pkmdyn.multibody.analyses.task_grid import parse_grid
+    from pkmdyn.multibody.analyses.workspace import _roots, grid_poses
 
     m = load_mechanism(MACHINES / name / f"{name}.toml")
     axes = parse_grid(m, grid, max_axes=4, max_points=10**5)
@@ -237,7 +237,7 @@ def test_sweep_reports_the_workspace_of_every_design(tmp_path):
                                     '[parameters]\n"parameters.base_radius_m" = { values = [0.8, 1.1] }\n'
                                     '[objectives]\nworkspace_size_m3 = "max"\n')
     assert [r["status"] for r in rows] == ["ok", "ok"]
-    from pkmdyn.multibody.task_grid import parse_grid
+    from pkmdyn.multibody.analyses.task_grid import parse_grid
 
     for r, radius in zip(rows, (0.8, 1.1)):
         import multibody_examples as ex
@@ -270,7 +270,7 @@ def test_a_sweep_with_the_refined_size(tmp_path):
     rows = _stewart_sweep(tmp_path, f'workspace_grid = "{grid}"\nworkspace_refine = 4\n'
                                     '[parameters]\n"parameters.base_radius_m" = { values = [0.8, 1.1] }\n'
                                     '[objectives]\nworkspace_size_m3 = "max"\n')
-    from pkmdyn.multibody.task_grid import parse_grid
+    from pkmdyn.multibody.analyses.task_grid import parse_grid
 
     import multibody_examples as ex
 
@@ -312,7 +312,7 @@ def test_sweep_reports_the_total_orientation_workspace(tmp_path):
     rows = _stewart_sweep(tmp_path, f'workspace_grid = "{grid}"\nworkspace_orientation_range = "{turn}"\n'
                                     '[parameters]\n"parameters.base_radius_m" = { values = [1.0] }\n'
                                     '[objectives]\nworkspace_size_m3 = "max"\n')
-    from pkmdyn.multibody.task_grid import parse_grid
+    from pkmdyn.multibody.analyses.task_grid import parse_grid
 
     m = load_mechanism(MACHINES / "stewart" / "stewart.toml")
     ws = workspace(m, parse_grid(m, grid, max_axes=3), threshold=1e-3, ranges=parse_grid(m, turn))
@@ -329,7 +329,7 @@ def test_a_required_region_constrains_a_sweep(tmp_path):
                                     '[parameters]\n"parameters.base_radius_m" = { values = [1.0, 1.3] }\n'
                                     '[constraints]\nrequired_region_coverage = { min = 1.0 }\n'
                                     '[objectives]\npeak_effort_N = "min"\n')
-    from pkmdyn.multibody.task_grid import parse_grid
+    from pkmdyn.multibody.analyses.task_grid import parse_grid
 
     m = load_mechanism(MACHINES / "stewart" / "stewart.toml")  # base radius 1.0: the oracle's geometry
     ws = workspace(m, parse_grid(m, grid, max_axes=3), threshold=1e-3)
@@ -340,7 +340,7 @@ def test_a_required_region_constrains_a_sweep(tmp_path):
 
 
 def _least(m, q):
-    from pkmdyn.multibody.kinematics import singularity_measures
+    from pkmdyn.multibody.kinematics.inverse import singularity_measures
 
     sm = singularity_measures(m, q)
     least = np.minimum(sm.inverse, sm.constraint)
@@ -354,7 +354,7 @@ def test_the_cheap_measure_bounds_hold_and_decide(name):
     measure by the factor its proof may lose (the square root of the coordinates, twice over)
     it proves every pose; with ``tight``, at 0.9 of each pose's own measure."""
     from pkmdyn.multibody import default_motion
-    from pkmdyn.multibody.kinematics import least_measure_bounds
+    from pkmdyn.multibody.kinematics.inverse import least_measure_bounds
 
     m = load_mechanism(MACHINES / name / f"{name}.toml")
     mo = default_motion(m)
@@ -488,7 +488,7 @@ def test_the_refined_size_of_a_segment_and_a_box():
     is (2 + t1 + t2) steps long; a box of 3 x 2 x 1 inside poses whose faces along axis d cross
     at fraction t_d is, along each axis's lines, its length (the poses' extent plus 2 t_d steps)
     times the lines' cross-section (the other axes' inside cells), and the size their mean."""
-    from pkmdyn.multibody.workspace import _edges, refined_size
+    from pkmdyn.multibody.analyses.workspace import _edges, refined_size
 
     inside = np.array([False, True, True, True, False])
     a, _, axis = _edges(inside, (5,))

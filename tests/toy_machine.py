@@ -1,4 +1,4 @@
-"""A small machine answering the verbs of ``pkmdyn.machine``, for the simulation and control tests.
+"""A small machine answering the verbs of ``pkmdyn.machine_protocol``, for the simulation and control tests.
 
 A planar two-link arm in a vertical plane (minimal coordinates: the joint angles [rad]),
 driven through a constant, non-diagonal actuator map, with Coulomb friction that grows with a

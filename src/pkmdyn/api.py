@@ -11,8 +11,8 @@
 Each verb returns the engine's frozen result (shapes and units in its docstring): the
 kinematics of every body and joint (:class:`pkmdyn.multibody.MechanismKinematics`), the
 dynamics (:class:`Dynamics`), the direct kinematics and assembly modes
-(:mod:`pkmdyn.multibody.direct`), the stiffness (:mod:`pkmdyn.multibody.stiffness`) and a
-spherical joint's slide tracks (:mod:`pkmdyn.multibody.wear`). The engine writes no files;
+(:mod:`pkmdyn.multibody.kinematics.direct`), the stiffness (:mod:`pkmdyn.multibody.analyses.stiffness`) and a
+spherical joint's slide tracks (:mod:`pkmdyn.multibody.analyses.wear`). The engine writes no files;
 the commands (``pkmdyn run``, ...) are these verbs plus their files.
 """
 
@@ -71,9 +71,9 @@ def kinematics(model: Any, motion: Any = None) -> Any:
 
 @dataclass(frozen=True)
 class Dynamics:
-    """The inverse dynamics along a motion: ``reactions`` (:class:`pkmdyn.multibody.dynamics.JointReactions`:
+    """The inverse dynamics along a motion: ``reactions`` (:class:`pkmdyn.multibody.dynamics.inverse.JointReactions`:
     actuator efforts ``u (n, na)``, every joint's force ``(n, nj, 3)`` [N] and moment [N m],
-    the friction, the effort split), ``motors`` (:class:`pkmdyn.multibody.actuators.MotorEfforts`:
+    the friction, the effort split), ``motors`` (:class:`pkmdyn.multibody.dynamics.actuators.MotorEfforts`:
     each drive's motor effort and its parts ``(n, na)``), and the kinematics and named loads
     they were computed on."""
 
@@ -85,7 +85,7 @@ class Dynamics:
 
     def columns(self) -> dict[str, Array]:
         """The dynamics' columns of ``pkmdyn run``'s results table, by name (unit-suffixed)."""
-        from .multibody.run import effort_columns
+        from .multibody.columns import effort_columns
 
         return effort_columns(self.model, self.kin, self.reactions, self.named)
 
@@ -95,8 +95,8 @@ def dynamics(model: Any, kin: Any, loads: Mapping[str, Array] | None = None) -> 
     load-dependent friction iterated on the reactions) along ``kin``; ``loads``: the named
     loads' magnitudes per sample (``{name: (n,)}`` [N or N m]; the description's
     ``magnitude_N`` otherwise)."""
-    from .multibody.actuators import motor_efforts
-    from .multibody.dynamics import joint_reactions
+    from .multibody.dynamics.actuators import motor_efforts
+    from .multibody.dynamics.inverse import joint_reactions
 
     named = dict(loads or {})
     reac = joint_reactions(model, kin, named=named, split=True)
@@ -107,7 +107,7 @@ def forward_dynamics(model: Any, x: Array, xd: Array, u: Array, load: Array | No
     """Task accelerations ``xdd (n, nt)`` under efforts ``u (n, na)`` (a drive's motor effort,
     as :attr:`Dynamics.motors`) at task poses ``x`` and rates ``xd (n, nt)``; ``load (n,)``: a
     mechanism's one named load's magnitudes."""
-    from .multibody.machine import machine_verbs
+    from .multibody.dynamics.verbs import machine_verbs
 
     return machine_verbs(model).forward_dynamics(model, x, xd, u, load)
 
@@ -115,24 +115,24 @@ def forward_dynamics(model: Any, x: Array, xd: Array, u: Array, load: Array | No
 def direct_kinematics(model: Any, s: Array, sd: Array | None = None, sdd: Array | None = None,
                       t: Array | None = None) -> Any:
     """The task pose and every body along an actuator motion ``s, sd, sdd (n, na)``
-    (:func:`pkmdyn.multibody.direct.direct_kinematics`)."""
-    from .multibody.direct import direct_kinematics as direct
+    (:func:`pkmdyn.multibody.kinematics.direct.direct_kinematics`)."""
+    from .multibody.kinematics.direct import direct_kinematics as direct
 
     return direct(model, s, sd, sdd, t)
 
 
 def assembly_modes(model: Any, s: Array, starts: int = 2000, seed: int = 0) -> Any:
     """Every assembly mode found at the actuator coordinates ``s (na,)``
-    (:func:`pkmdyn.multibody.direct.assembly_modes`)."""
-    from .multibody.direct import assembly_modes as modes
+    (:func:`pkmdyn.multibody.kinematics.direct.assembly_modes`)."""
+    from .multibody.kinematics.direct import assembly_modes as modes
 
     return modes(model, s, starts, seed)
 
 
 def stiffness(model: Any, kin: Any) -> Any:
     """The Cartesian stiffness of the task body with the actuators locked, per sample of ``kin``
-    (:func:`pkmdyn.multibody.stiffness.stiffness`; the description needs a compliance source)."""
-    from .multibody.stiffness import stiffness as k
+    (:func:`pkmdyn.multibody.analyses.stiffness.stiffness`; the description needs a compliance source)."""
+    from .multibody.analyses.stiffness import stiffness as k
 
     return k(model, kin)
 
@@ -140,10 +140,10 @@ def stiffness(model: Any, kin: Any) -> Any:
 def wear(model: Any, kin: Any, joint: str, radius_m: float | None = None, load: str | None = None,
          loads: Mapping[str, Array] | None = None) -> Any:
     """The slide tracks of the spherical joint ``joint``'s head on its cup and of the cup on the
-    head along ``kin`` (:func:`pkmdyn.multibody.wear_run.joint_wear`: ``(on_cup, on_head,
+    head along ``kin`` (:func:`pkmdyn.multibody.analyses.wear.joint_wear`: ``(on_cup, on_head,
     what loads it)``); ``radius_m``: the head's radius (default the joint's friction
     ``ball_radius_m``); ``load``: a named load's name pressing the head (default the joint's
     own reaction), its magnitudes in ``loads``."""
-    from .multibody.wear_run import WearOptions, joint_wear
+    from .multibody.analyses.wear import WearOptions, joint_wear
 
     return joint_wear(model, kin, joint, WearOptions(radius_m=radius_m, load=load), dict(loads or {}))

@@ -83,7 +83,7 @@ def _reference_actuators(machine: str) -> str:
     """``NAME=VALUE,...`` of ``machine``'s actuators a little off their reference: an
     ``assemble`` input that every built-in machine reaches."""
     from ..multibody import load_mechanism
-    from ..multibody.direct import actuator_reference
+    from ..multibody.kinematics.direct import actuator_reference
     from ..machines.registry import resolve
 
     _, path = resolve(machine)

@@ -636,7 +636,7 @@ def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dic
         if job is not None:
             scene = job.scene(setup.plant_model, f["t"], f["q"], f["u"])
         else:  # a described mechanism: the engine's drawing of its description
-            from ..multibody.machine import motion_scene
+            from ..multibody.scene import motion_scene
 
             scene = motion_scene(setup.plant_model, f["t"], f["q"], f["u"])
     except PkmdynError as exc:  # the plant left the machine's reach: the page says so, the run stands

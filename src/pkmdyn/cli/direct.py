@@ -47,7 +47,7 @@ def _report(out: Path, model: Any, modes: Any, doc: dict[str, Any], text: str) -
     import numpy as np
 
     from ..multibody import solve_kinematics
-    from ..multibody.output import model_summary
+    from ..multibody.columns import model_summary
     from ..report import scene_from_joints, write_report
 
     points = []
@@ -85,7 +85,7 @@ def assemble(machine: str, actuators: str, starts: int, seed: int, out_dir: Path
     is missing."""
     from ..io import check_output_dir, output_dir, write_json
     from ..machines.registry import resolve
-    from ..multibody.direct import assembly_modes, parse_actuators
+    from ..multibody.kinematics.direct import assembly_modes, parse_actuators
     from .mechanism import _load
 
     entry, path = resolve(machine)

@@ -42,8 +42,8 @@ def import_(src, fmt, sidecar, actuated, assemble, keyframe, task_body, task_poi
     equivalent (one line naming it)."""
     from ..errors import ParameterError
     from ..io import atomic_file, check_output_file
-    from ..multibody.import_graph import TaskChoice
-    from ..multibody.importer import import_description
+    from ..multibody.formats.graph import TaskChoice
+    from ..multibody.formats.importer import import_description
 
     fmt = fmt or FORMATS.get(Path(src).suffix.lower())
     if fmt is None:

@@ -48,7 +48,7 @@ def _check_differentiator(sg_window: int, sg_order: int) -> None:
 @click.option("--machine", required=True, help=MACHINE_HELP)
 def describe(machine: str) -> None:
     """Print the topology, mobility and over-constraints of a machine."""
-    from ..multibody.legs import LEG_PATTERNS
+    from ..multibody.model.legs import LEG_PATTERNS
 
     model, _ = _load(machine)
     rep = model.topology
@@ -73,7 +73,7 @@ def describe(machine: str) -> None:
                      for cut, chain, kind in model.legs.names) or "none; Newton solves every loop")
         + (" (every block: Newton only checks)" if model.legs.count == model.solver_blocks.shape[0] - 1 else ""),
     ]
-    from ..multibody.stiffness import compliance_sources
+    from ..multibody.analyses.stiffness import compliance_sources
 
     src = compliance_sources(model)
     lines.append("compliance (pkmdyn stiffness): " + ("; ".join(f"{k} {', '.join(v)}" for k, v in src.items() if v)
@@ -89,7 +89,7 @@ def describe(machine: str) -> None:
 def _held(model, chain) -> str:
     """``, J spin held`` for the joints of an explicit leg's chain with a coordinate that an idle
     row of its own holds (an S-S rod's spin; docs/mechanism_format.md, "Explicit legs")."""
-    from ..multibody.legs import held_coordinates
+    from ..multibody.model.legs import held_coordinates
 
     held = held_coordinates(model)
     out = ""
@@ -165,10 +165,10 @@ def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_w
     from ..io import check_output_dir
     from ..machines.registry import resolve
     from ..multibody import read_task_motion
-    from ..multibody.actuators import effective_limits
-    from ..multibody.description import LIMIT_KEYS
-    from ..multibody.motion import periodic_motion, repeated_motion
-    from ..multibody.run import run_mechanism
+    from ..multibody.dynamics.actuators import effective_limits
+    from ..multibody.description.schema import LIMIT_KEYS
+    from ..multibody.kinematics.motion import periodic_motion, repeated_motion
+    from ..jobs.run import run_mechanism
     from ..params_util import parse_limit_options
 
     entry, path = resolve(machine)
@@ -190,8 +190,8 @@ def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_w
         if motion_path is not None:
             motion = read_task_motion(model, Path(motion_path).absolute())
         else:
-            from ..multibody.direct import task_motion
-            from ..multibody.motion import read_actuator_motion
+            from ..multibody.kinematics.direct import task_motion
+            from ..multibody.kinematics.motion import read_actuator_motion
 
             _check_differentiator(sg_window, sg_order)
             am = read_actuator_motion(model, Path(actuator_path).absolute(), sg_window, sg_order)
@@ -209,7 +209,7 @@ def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_w
                                  max_samples=int(lim["max_samples"]))
         window = len(cycle)
     text = path.read_text(encoding="utf-8", errors="replace") if path is not None else ""
-    from ..multibody.reactions import ComplianceDataMissing
+    from ..multibody.dynamics.reactions import ComplianceDataMissing
 
     try:
         summary = run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files, description_text=text,
@@ -250,7 +250,7 @@ def described_control_settings(model) -> dict:
     import numpy as np
 
     from ..multibody import reference_task
-    from ..multibody.machine import machine_verbs
+    from ..multibody.dynamics.verbs import machine_verbs
 
     nt, na = model.nt, model.na
     wn, zeta = 2 * np.pi * 5.0, 0.7
@@ -310,7 +310,7 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
 
     A generated machine runs its own control job (the same as its pkmdyn <machine> control,
     with every option of that); a described mechanism tracks its default motion in
-    task space on its own dynamics (pkmdyn.multibody.machine), the controller the same model."""
+    task space on its own dynamics (pkmdyn.multibody.dynamics.verbs), the controller the same model."""
     import numpy as np
 
     from ..control import gains, hermite_motion, loop_settings, overlay_settings
@@ -318,8 +318,8 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     from ..io import check_output_dir
     from ..machines.registry import resolve
     from ..multibody import default_motion, read_task_motion, solve_kinematics
-    from ..multibody.kinematics import limit_message, limited_joints
-    from ..multibody.machine import machine_verbs
+    from ..multibody.kinematics.inverse import limit_message, limited_joints
+    from ..multibody.dynamics.verbs import machine_verbs
     from .control import _check_encoder, control_command, _Setup, _stream, check_loop
 
     entry, path = resolve(machine)
@@ -477,8 +477,8 @@ def export(machine: str, fmt: str, solref: str | None, solimp: str | None, times
     from ..errors import ParameterError
     from ..io import atomic_file, check_output_file, dumps_yaml
     from ..machines.registry import resolve
-    from ..multibody.mjcf import SOLIMP, SOLREF, massless_bodies, mechanism_mjcf
-    from ..multibody.urdf_export import mechanism_urdf
+    from ..multibody.formats.mjcf_out import SOLIMP, SOLREF, massless_bodies, mechanism_mjcf
+    from ..multibody.formats.urdf_out import mechanism_urdf
 
     entry, path = resolve(machine)
     inputs = {"--machine": path}

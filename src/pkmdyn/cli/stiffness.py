@@ -35,9 +35,9 @@ def stiffness_command(machine: str, poses: tuple[str, ...], motion_path: Path | 
     from ..io import check_output_dir, output_dir
     from ..machines.registry import resolve
     from ..multibody import read_task_motion
-    from ..multibody.description import LIMIT_KEYS
-    from ..multibody.stiffness_run import MAX_GRID_POINTS, run_stiffness
-    from ..multibody.task_grid import parse_grid, parse_pose
+    from ..multibody.description.schema import LIMIT_KEYS
+    from ..jobs.stiffness import MAX_GRID_POINTS, run_stiffness
+    from ..multibody.analyses.task_grid import parse_grid, parse_pose
     from ..params_util import parse_limit_options
     from .mechanism import _load
 
@@ -58,7 +58,7 @@ def stiffness_command(machine: str, poses: tuple[str, ...], motion_path: Path | 
     elif motion_path is not None:
         kw["motion"] = read_task_motion(model, Path(motion_path).absolute())
     elif default_motion:
-        from ..multibody.motion import default_motion as one_cycle
+        from ..multibody.kinematics.motion import default_motion as one_cycle
 
         kw["motion"] = one_cycle(model)
     elif grid is not None:

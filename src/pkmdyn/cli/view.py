@@ -21,7 +21,7 @@ def _described_page(path: Path | None, out: Path, description: dict | None = Non
     import numpy as np
 
     from ..multibody import load_mechanism, reference_task, solve_kinematics
-    from ..multibody.output import model_summary
+    from ..multibody.columns import model_summary
     from ..report import scene_from_joints, topology_from_model, write_view
 
     model = load_mechanism(path if description is None else description)

@@ -60,9 +60,10 @@ def wear(machine: str, joints: tuple[str, ...], motion_path: Path | None, cycles
     from ..io import check_output_dir, output_dir
     from ..machines.registry import resolve
     from ..multibody import read_task_motion, solve_kinematics
-    from ..multibody.motion import default_motion
-    from ..multibody.wear import WEAR_FACTOR_MM3_N_M, marker_grid
-    from ..multibody.wear_run import WearOptions, head_radius, joint_wear, tracks_figure, write_wear_files
+    from ..multibody.kinematics.motion import default_motion
+    from ..multibody.analyses.wear import WEAR_FACTOR_MM3_N_M, marker_grid
+    from ..jobs.wear import tracks_figure, write_wear_files
+    from ..multibody.analyses.wear import WearOptions, head_radius, joint_wear
     from .mechanism import _load
 
     entry, path = resolve(machine)

@@ -39,8 +39,8 @@ def workspace_command(machine: str, grid: str, pose: str, orientation_range: str
     from ..errors import ParameterError
     from ..io import check_output_dir, output_dir, write_csv, write_json
     from ..machines.registry import resolve
-    from ..multibody.task_grid import parse_grid, parse_pose, parse_ranges
-    from ..multibody.workspace import check_centre, workspace, workspace_document, workspace_png
+    from ..multibody.analyses.task_grid import parse_grid, parse_pose, parse_ranges
+    from ..multibody.analyses.workspace import check_centre, workspace, workspace_document, workspace_png
     from ..report import write_report
     from .mechanism import _load
 

@@ -4,7 +4,7 @@ A controller is a frozen :class:`Controller` (its kind, gains and whatever it pr
 from its own model along the reference) and one free function, :func:`effort`, called once
 per control cycle ``k``. The controller's model may differ from the plant's.
 
-Equations of motion in minimal coordinates (``pkmdyn.machine``): ``M(q) qdd + h = B(q) u``.
+Equations of motion in minimal coordinates (``pkmdyn.machine_protocol``): ``M(q) qdd + h = B(q) u``.
 Errors ``e = q_ref - q_s``, ``e_dot = qd_ref - qd_s`` with ``q_s, qd_s`` the sensed pose and
 its rate; ``u_ff(k)`` the effort held over interval ``k``: the model's inverse dynamics along
 the reference at the middle of the interval, corrected by ``- T^2/24`` times its second

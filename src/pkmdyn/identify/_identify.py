@@ -1,6 +1,6 @@
 """Identification of any machine from measured actuator efforts, through the machine verbs.
 
-Given a machine (an object with the verbs of :class:`pkmdyn.machine.MachineDynamics`), a map
+Given a machine (an object with the verbs of :class:`pkmdyn.machine_protocol.MachineDynamics`), a map
 ``model_with(theta)`` from the parameter vector to a model whose inverse dynamics is affine in
 ``theta``, and samples ``q, qd, qdd, load`` with measured efforts ``u (n, nu)``:
 
@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MotionError
-from ..machine import MachineDynamics
+from ..machine_protocol import MachineDynamics
 from ._base import DEFAULT_RANK_TOL, BaseParameters, base_parameters
 from ._regressor import Regressor, affine_regressor
 from ._solve import Estimate, constrained_least_squares
@@ -94,7 +94,7 @@ def fit_regressor(reg: Regressor, u_measured: Array, prior: Array, consistency: 
                   rank_tol: float = DEFAULT_RANK_TOL, source: str = "measured",
                   what: str = "parameters") -> Identification:
     """Steps 2-3 of the module docstring for a regressor ``u = Y theta + u_0`` given directly
-    (e.g. the analytic one of a described mechanism, :func:`pkmdyn.multibody.identify.regressor`)."""
+    (e.g. the analytic one of a described mechanism, :func:`pkmdyn.multibody.analyses.regressor.regressor`)."""
     u = np.asarray(u_measured, dtype=float)
     n, nu = u.shape
     names = reg.names

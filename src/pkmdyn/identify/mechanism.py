@@ -2,7 +2,7 @@
 actuator efforts.
 
 The efforts are linear in every body's ten barycentric parameters and every joint's Coulomb
-and viscous coefficients (:func:`pkmdyn.multibody.identify.regressor`); the known part (the
+and viscous coefficients (:func:`pkmdyn.multibody.analyses.regressor.regressor`); the known part (the
 description's loads and the friction its named loads drive) is the offset. The fit is the
 generic one of :func:`._identify.fit_regressor`: base parameters by a rank-revealing
 decomposition, then least squares with the description's values as a vanishing prior (they
@@ -13,7 +13,7 @@ run`` writes them; rates and accelerations optional, else from a quintic spline)
 of a real machine, its actuated joints' positions instead (``<joint>_pos_<m|rad>``; rates
 ``<joint>_vel_<u>_s`` and accelerations ``<joint>_acc_<u>_s2`` optional, else by the
 Savitzky-Golay differentiator of ``sg_window`` samples and degree ``sg_order``), the pose then
-by the direct kinematics (:mod:`pkmdyn.multibody.direct`); one effort column per actuator,
+by the direct kinematics (:mod:`pkmdyn.multibody.kinematics.direct`); one effort column per actuator,
 its motor effort ``<actuator>_torque_Nm`` for a drive (``[[actuators]]``: what a real
 machine's motor currents give) or the joint's ``<joint>_effort_<N|Nm>`` for an
 actuated joint without one, and, optional, a column per named load and every other column a
@@ -33,12 +33,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..io import output_dir, read_csv_columns, write_csv, write_json
-from ..multibody.output import actuator_effort_column
-from ..multibody.identify import regressor
-from ..multibody.kinematics import solve_kinematics
-from ..multibody.model import MechanismModel
-from ..multibody.motion import MAX_MOTION_ROWS, actuator_columns, actuator_rates, task_columns
-from ..multibody.run import results_column_names
+from ..multibody.analyses.regressor import regressor
+from ..multibody.kinematics.inverse import solve_kinematics
+from ..multibody.model.compiler import MechanismModel
+from ..multibody.kinematics.motion import MAX_MOTION_ROWS, actuator_columns, actuator_rates, task_columns
+from ..multibody.columns import actuator_effort_column, results_column_names
 from ..profiles._columns import column_group, derivatives, require_increasing
 from ._base import DEFAULT_RANK_TOL
 from ._identify import fit_regressor
@@ -76,7 +75,7 @@ def read_measured(model: MechanismModel, path: Path, sg_window: int = 15, sg_ord
         xd, xdd = derivatives(path, t, x, column_group(path, cols, vel), column_group(path, cols, acc), vel)
     else:  # a log in actuator coordinates: the pose by the direct kinematics
         from ..errors import MotionError
-        from ..multibody.direct import direct_kinematics
+        from ..multibody.kinematics.direct import direct_kinematics
 
         s = column_group(path, cols, apos)
         if s is None:

@@ -5,7 +5,7 @@ Two kinds of folder make a built-in machine, and nothing else has to change to a
 - a *described* machine: ``machines/<name>/<name>.toml``, a mechanism description
   (:mod:`pkmdyn.multibody`);
 - a *generated* machine (the two papers' machines): a package ``machines/<folder>/`` whose
-  module ``machine.py`` turns the machine's own parameter file into a mechanism description.
+  module ``machine_protocol.py`` turns the machine's own parameter file into a mechanism description.
   It says ``NAME``, ``TITLE``, ``CONTROL_SETTINGS`` (a path) and provides
   ``default_params_text()``, ``description(params=None)`` (the parameter file ``params``, the
   built-in one by default, as a mechanism description), ``default_motion()`` (a
@@ -13,7 +13,7 @@ Two kinds of folder make a built-in machine, and nothing else has to change to a
   then draws the engine's page of the description) or ``view_page(params, out, listing)`` (a
   page of its own). Optional modules beside it: ``commands.py`` (a click group ``group``: the
   machine's own commands, ``pkmdyn <NAME> ...``, mounted by :func:`command_groups`),
-  ``described_sweep.py`` (the hooks of :class:`pkmdyn.multibody.sweep.GeneratedSweep`: its
+  ``described_sweep.py`` (the hooks of :class:`pkmdyn.multibody.analyses.designs.GeneratedSweep`: its
   parameter file's schema, the description generated from a parameter file, its motion and
   metrics; the machine is then swept on the engine) or ``sweep.py`` (a sweep of its own,
   :mod:`pkmdyn.sweep_protocol`), and ``control_job.py`` (a control job,
@@ -38,7 +38,7 @@ __all__ = ["described_machines", "generated_machines", "generated", "command_gro
 
 _HERE = Path(__file__).resolve().parent
 #: the module of a generated machine's folder that generates its mechanism description from its
-#: parameter file, for sweeps on the engine (:class:`pkmdyn.multibody.sweep.GeneratedSweep`)
+#: parameter file, for sweeps on the engine (:class:`pkmdyn.multibody.analyses.designs.GeneratedSweep`)
 GENERATOR = "described_sweep"
 
 
@@ -54,17 +54,17 @@ def described_machines() -> dict[str, Path]:
 
 @functools.cache
 def generated_machines() -> dict[str, ModuleType]:
-    """Every package ``machines/<folder>/`` with a ``machine.py``: its ``NAME`` -> that module."""
+    """Every package ``machines/<folder>/`` with a ``machine_protocol.py``: its ``NAME`` -> that module."""
     out: dict[str, ModuleType] = {}
     for folder in sorted(_HERE.iterdir()):
-        if folder.is_dir() and (folder / "machine.py").is_file() and (folder / "__init__.py").is_file():
+        if folder.is_dir() and (folder / "machine_protocol.py").is_file() and (folder / "__init__.py").is_file():
             module = importlib.import_module(f"{__package__}.{folder.name}.machine")
             out[module.NAME] = module
     return out
 
 
 def generated(name: str) -> ModuleType:
-    """The registry entry (``machine.py`` module) of the generated machine ``name``."""
+    """The registry entry (``machine_protocol.py`` module) of the generated machine ``name``."""
     machines = generated_machines()
     if name not in machines:
         raise ParameterError(f"machine {name!r}: not a generated machine (those are: {', '.join(sorted(machines))})")
@@ -98,7 +98,7 @@ def description_path(name: str) -> Path:
 
 
 def resolve(machine: str) -> tuple[ModuleType | None, Path | None]:
-    """``(entry, None)`` for a generated machine (its ``machine.py`` module), ``(None, path)`` for
+    """``(entry, None)`` for a generated machine (its ``machine_protocol.py`` module), ``(None, path)`` for
     a described built-in or a description ``FILE.toml``; anything else is refused."""
     if machine in generated_machines():
         return generated_machines()[machine], None
@@ -116,13 +116,13 @@ def sweep_adapter(name: str) -> Any:
     """The sweep adapter (:class:`pkmdyn.sweep_protocol.SweepAdapter`) of ``name``: a generated
     machine's own ``sweep.py`` module; for a generated machine whose folder holds a description
     generator (``described_sweep.py``: its parameter file turned into a mechanism description)
-    the generic adapter of generated descriptions (:class:`pkmdyn.multibody.sweep.GeneratedSweep`);
+    the generic adapter of generated descriptions (:class:`pkmdyn.multibody.analyses.designs.GeneratedSweep`);
     for a described machine (a built-in name or a description ``FILE.toml``) the generic adapter
-    of its description (:class:`pkmdyn.multibody.sweep.DescribedSweep`)."""
+    of its description (:class:`pkmdyn.multibody.analyses.designs.DescribedSweep`)."""
     machines = generated_machines()
     shown = name if len(name) <= 60 else name[:60] + "..."
     if name not in machines:
-        from ..multibody.sweep import DescribedSweep
+        from ..multibody.analyses.designs import DescribedSweep
 
         entry, path = resolve(name)
         assert entry is None and path is not None
@@ -131,7 +131,7 @@ def sweep_adapter(name: str) -> Any:
     if (folder / "sweep.py").is_file():
         return importlib.import_module(f"{machines[name].__package__}.sweep")
     if (folder / f"{GENERATOR}.py").is_file():
-        from ..multibody.sweep import GeneratedSweep
+        from ..multibody.analyses.designs import GeneratedSweep
 
         return GeneratedSweep.from_module(f"{machines[name].__package__}.{GENERATOR}")
     raise ParameterError(f"--machine {shown!r}: this machine has no sweep adapter")

@@ -1,8 +1,13 @@
-"""Any closed-chain mechanism from a description file: format, topology, kinematics.
+"""The engine: any closed-chain mechanism from a description, in layers that import one way.
 
-Description (TOML) -> :func:`load_description` -> :func:`compile_model` (spanning tree, cut
-joints, loop records, flat arrays) -> :func:`solve_kinematics` (batched, compiled kernels)
--> :class:`MechanismKinematics`. :func:`load_mechanism` does the first two steps.
+Description (TOML) -> :func:`load_description` (:mod:`.description`) -> :func:`compile_model`
+(spanning tree, cut joints, loop records, flat arrays: :mod:`.model`) -> :func:`solve_kinematics`
+(batched, compiled kernels: :mod:`.kinematics`) -> :class:`MechanismKinematics` -> inverse and
+forward dynamics, reactions, friction, drives (:mod:`.dynamics`) -> stiffness, workspace, wear,
+identification's regressor, design metrics (:mod:`.analyses`); other file formats at the edge
+(:mod:`.formats`); the results as the files' columns (:mod:`.columns`) and as a 3D scene
+(:mod:`.scene`). :func:`load_mechanism` does the first two steps. The engine writes no files and
+starts no processes.
 """
 
 from __future__ import annotations
@@ -12,9 +17,9 @@ from typing import TYPE_CHECKING
 from .._lazy import attach
 
 if TYPE_CHECKING:
-    from .description import Description, load_description
-    from .joint_types import JOINT_TYPES, JointType, joint_type
-    from .kinematics import (
+    from .description.schema import Description, load_description
+    from .description.joint_types import JOINT_TYPES, JointType, joint_type
+    from .kinematics.inverse import (
         MechanismKinematics,
         SingularityMeasures,
         loop_residuals,
@@ -23,10 +28,10 @@ if TYPE_CHECKING:
         singularity_measures,
         solve_kinematics,
     )
-    from .legs import LegTable, newton_only
-    from .model import LoopRecord, MechanismModel, compile_model, load_mechanism
-    from .motion import TaskMotion, default_motion, read_task_motion, task_columns
-    from .topology import TopologyReport, analyse_topology, constraint_jacobian
+    from .model.legs import LegTable, newton_only
+    from .model.compiler import LoopRecord, MechanismModel, compile_model, load_mechanism
+    from .kinematics.motion import TaskMotion, default_motion, read_task_motion, task_columns
+    from .model.topology import TopologyReport, analyse_topology, constraint_jacobian
 
 __all__ = [
     "Description", "load_description", "JOINT_TYPES", "JointType", "joint_type",
@@ -40,12 +45,12 @@ __all__ = [
 #: where each public name lives, imported on first use: ``import pkmdyn.multibody`` loads
 #: neither Numba's kernels nor SciPy until a function is looked up
 __getattr__, __dir__ = attach(__name__, {
-    **dict.fromkeys(("Description", "load_description"), ".description"),
-    **dict.fromkeys(("JOINT_TYPES", "JointType", "joint_type"), ".joint_types"),
+    **dict.fromkeys(("Description", "load_description"), ".description.schema"),
+    **dict.fromkeys(("JOINT_TYPES", "JointType", "joint_type"), ".description.joint_types"),
     **dict.fromkeys(("MechanismKinematics", "SingularityMeasures", "loop_residuals", "reachable", "reference_task",
-                     "singularity_measures", "solve_kinematics"), ".kinematics"),
-    **dict.fromkeys(("LegTable", "newton_only"), ".legs"),
-    **dict.fromkeys(("LoopRecord", "MechanismModel", "compile_model", "load_mechanism"), ".model"),
-    **dict.fromkeys(("TaskMotion", "default_motion", "read_task_motion", "task_columns"), ".motion"),
-    **dict.fromkeys(("TopologyReport", "analyse_topology", "constraint_jacobian"), ".topology"),
+                     "singularity_measures", "solve_kinematics"), ".kinematics.inverse"),
+    **dict.fromkeys(("LegTable", "newton_only"), ".model.legs"),
+    **dict.fromkeys(("LoopRecord", "MechanismModel", "compile_model", "load_mechanism"), ".model.compiler"),
+    **dict.fromkeys(("TaskMotion", "default_motion", "read_task_motion", "task_columns"), ".kinematics.motion"),
+    **dict.fromkeys(("TopologyReport", "analyse_topology", "constraint_jacobian"), ".model.topology"),
 })

@@ -1,4 +1,4 @@
-"""Closed-loop simulation of any machine through its verbs (:mod:`pkmdyn.machine`).
+"""Closed-loop simulation of any machine through its verbs (:mod:`pkmdyn.machine_protocol`).
 
 ``_plant``: the integrator of the forward dynamics with efforts held over each control cycle
 (a third-order explicit step where the motion is smooth, the linearly implicit ROS2 in the

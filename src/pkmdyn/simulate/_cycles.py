@@ -4,7 +4,7 @@
 cycle calls some ten compiled kernels (encoders, sensors, direct kinematics, the law, about six
 single-sample forward dynamics of the integrator), and the calls between them cost about as much
 as the kernels themselves. Where every one of those kernels is the described mechanism's own
-(:mod:`pkmdyn.multibody._one`, :func:`pkmdyn.multibody._direct.direct_task_one`),
+(:mod:`pkmdyn.multibody.dynamics._sample_kernels`, :func:`pkmdyn.multibody.kinematics._direct_kernels.direct_task_one`),
 :func:`run_cycles` takes the same cycles with the same arithmetic in one call: the encoders
 (module docstring of :mod:`._loop`, item 1), the sensors, the pose by the direct kinematics
 (item 2), the law (:mod:`pkmdyn.control._laws`), the limits (item 3), the plant's steps
@@ -35,7 +35,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..control._laws import _ct_acc, _pd, _pid
-from ..multibody import _direct, _one
+from ..multibody.kinematics import _direct_kernels as _direct
+from ..multibody.dynamics import _sample_kernels as _one
 from ._sensors import _actuate, _sense
 from ._plant import (EXPLICIT_LIMIT, FD_STEP, JACOBIAN_REUSE, REFINE, _piecewise, _rk3_finish, _rk_finish, _rk_stage,
                      _stage1, _stage2, _stale, _stiffness)
@@ -440,11 +441,17 @@ def _refresh_cache() -> None:
     the sensors' and the laws' kernels of other modules (:mod:`pkmdyn.multibody._cache`)."""
     from .. import _dense
     from ..control import _laws
-    from ..multibody import _cache, _dyn_kernels, _kernels, dynamics, friction
-    from . import _plant, _sensors
+    from ..multibody import _cache
+    from ..multibody.dynamics import _dyn_kernels
+    from ..multibody.kinematics import _solve_kernels as _kernels
+    from ..multibody.model import _tree_kernels
+    from ..multibody.dynamics import inverse as dynamics
+    from ..multibody.dynamics import friction
+    from . import _plant
+    from . import _sensors
 
     _cache.refresh((_f, _jacobian, _ros2, _hold, run_cycles),
-                   (_one, _direct, _kernels, _dyn_kernels, _dense, friction, dynamics, _sensors, _plant, _laws))
+                   (_one, _direct, _kernels, _tree_kernels, _dyn_kernels, _dense, friction, dynamics, _sensors, _plant, _laws))
 
 
 _refresh_cache()

@@ -20,7 +20,7 @@ Per cycle ``k`` (instant ``t_k = k T``):
    ``delay`` cycles ago plus Gaussian noise of the given standard deviation per coordinate
    (seeded generator); it is recorded, and fed back only with ``pose_from_sensor``. By
    default the controller's pose comes from the encoders through the controller's model: with
-   ``exact_encoders`` by its direct kinematics (:mod:`pkmdyn.multibody.direct`, warm-started
+   ``exact_encoders`` by its direct kinematics (:mod:`pkmdyn.multibody.kinematics.direct`, warm-started
    from the previous cycle), ``q_s = DK(a_0 + s_enc / k)`` with the rate ``qd_s = (dq/da)
    sd_enc / k``; else to first order about the reference,
    ``q_s = q_ref + (B(q_ref)^T)^-1 (s_enc - s_ref)``, ``qd_s = (B(q_ref)^T)^-1 sd_enc``.

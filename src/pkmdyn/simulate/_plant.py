@@ -5,7 +5,7 @@ Problem. With the efforts ``u`` held (zero-order hold) over a control cycle, int
     qd' = f(t, q, qd) = M(q)^-1 (B(q) u - h(q, qd, load(t))),     q' = qd
 
 from the cycle's start to its end in ``substeps`` equal steps ``dt``, the load known at every
-step boundary and middle. The only access to the machine is its verbs (:mod:`pkmdyn.machine`):
+step boundary and middle. The only access to the machine is its verbs (:mod:`pkmdyn.machine_protocol`):
 the compiled kernel behind ``forward_dynamics_one`` (``one_sample_kernels``, no input checks)
 where the machine offers it, else ``forward_dynamics_one`` itself (the fast path), else the
 batched ``forward_dynamics`` at ``n = 1``.
@@ -129,7 +129,7 @@ class Plant:
 
 
 def make_plant(verbs: Any, model: Any, has_load: bool) -> Plant:
-    """Wrap a machine (``verbs`` = its verbs, :class:`pkmdyn.machine.MachineDynamics`; ``model`` = its plant model).
+    """Wrap a machine (``verbs`` = its verbs, :class:`pkmdyn.machine_protocol.MachineDynamics`; ``model`` = its plant model).
 
     ``has_load``: whether the machine takes a load (a force along the motion, as a test rig's hydraulic
     load) or ``None``.

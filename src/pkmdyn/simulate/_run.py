@@ -76,7 +76,7 @@ def track(verbs: Any, model: Any, plant_model: Any, motion: Any, duration: float
     """Track ``motion`` (``t -> q, qd, qdd, load``) for ``duration`` [s] with controller ``kind``.
 
     ``model`` is the controller's model, ``plant_model`` the simulated machine's (they may
-    differ); ``verbs`` the machine's verbs (:class:`pkmdyn.machine.MachineDynamics`). Everything the controller needs from
+    differ); ``verbs`` the machine's verbs (:class:`pkmdyn.machine_protocol.MachineDynamics`). Everything the controller needs from
     its model along the reference is computed first, in batched calls; the loop then calls the
     plant's single-sample forward dynamics (fast path) where the machine offers it. Where the
     loop reads no more than the first instant of the joint references

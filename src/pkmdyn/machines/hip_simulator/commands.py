@@ -234,7 +234,7 @@ def hip_export(fmt, params_path, timestep_s, out_path) -> None:
     from .description import hip_description
     from .params import load_params
     from ...multibody import load_mechanism
-    from ...multibody.mjcf import massless_bodies, mechanism_mjcf
+    from ...multibody.formats.mjcf_out import massless_bodies, mechanism_mjcf
 
     inputs = {"--params": params_path}
     check_output_file(out_path, inputs)

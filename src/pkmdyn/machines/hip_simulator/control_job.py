@@ -2,12 +2,12 @@
 and motions, the columns and labels of ``control.csv`` and its plots, the posture-error figure
 (the paper's Fig. 7) and the 3D scene of ``pkmdyn hip control``.
 
-The dynamics are the generic engine's (:class:`pkmdyn.multibody.machine.MechanismVerbs`) on the
+The dynamics are the generic engine's (:class:`pkmdyn.multibody.dynamics.verbs.MechanismVerbs`) on the
 hip's description (:func:`.description.hip_description`), under the paper's names: coordinates
 ``alpha_rad, beta_rad, gamma_rad`` (the description's ``euler1_rad .. euler3_rad``, the upper
 platform's Euler angles in the parameter file's sequence), efforts ``tau1_Nm .. tau3_Nm`` (the
 motors ``motor_1 .. motor_3``), load the hydraulic force [N] (the named load ``hydraulic_N``). A
-model is a :class:`pkmdyn.multibody.machine.GeneratedModel`: the parameters (for the motion and the report) and their
+model is a :class:`pkmdyn.multibody.dynamics.verbs.GeneratedModel`: the parameters (for the motion and the report) and their
 compiled description. The 3D scene is the engine's drawing of the description (each body
 through its joint centres, the actuated sliders as chains coloured by their motor's torque).
 """
@@ -43,14 +43,14 @@ ACTUATORS = ("tau1_Nm", "tau2_Nm", "tau3_Nm")
 def control_model(params: Any) -> Any:
     """The control model of the parameters ``params`` (their description compiled)."""
     from ...multibody import load_mechanism
-    from ...multibody.machine import GeneratedModel
+    from ...multibody.dynamics.verbs import GeneratedModel
     from .description import hip_description
 
     return GeneratedModel(params, load_mechanism(hip_description(params)))
 
 
 def verbs(model: Any) -> Any:
-    from ...multibody.machine import RenamedVerbs
+    from ...multibody.dynamics.verbs import RenamedVerbs
 
     return RenamedVerbs(model.mechanism, COORDINATES, ACTUATORS)
 
@@ -148,7 +148,7 @@ def report_plots(curve: Callable[[str, int, str], Any], t: np.ndarray, note: str
 def scene(model: Any, t: np.ndarray, q: np.ndarray, u: np.ndarray) -> Any:
     """The engine's scene of the description along the plant's angles ``q``, each slider's
     chain coloured by its motor's torque ``u``."""
-    from ...multibody.machine import motion_scene
+    from ...multibody.scene import motion_scene
 
     return motion_scene(model.mechanism, t, q, u, tuple(effort_label(a) for a in range(3)))
 

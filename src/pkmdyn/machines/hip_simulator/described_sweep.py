@@ -1,9 +1,9 @@
 """The hip simulator swept on the engine: what ``pkmdyn sweep --machine hip`` evaluates per design.
 
-The hooks of :class:`pkmdyn.multibody.sweep.GeneratedSweep`: a design is a hip parameter file
+The hooks of :class:`pkmdyn.multibody.analyses.designs.GeneratedSweep`: a design is a hip parameter file
 (``docs/file_formats.md``; its schema is :func:`~.params.model_from_dict`'s), turned into the
 mechanism description of :func:`~.description.hip_description` and evaluated by the engine
-(:func:`pkmdyn.multibody.sweep.evaluate_model`: the description's structure compiled once for
+(:func:`pkmdyn.multibody.analyses.designs.evaluate_model`: the description's structure compiled once for
 the sweep, its numbers per design; kinematics along the motion, the least singularity measures
 with ``[motion] engine_measures = true``, the motor efforts with every joint reaction and the friction, the hip-joint and thrust-bearing
 friction driven by the hydraulic load, the named load ``hydraulic_N``). Every design performs
@@ -167,7 +167,7 @@ def motion(params: Mapping[str, Any], options: Mapping[str, Any], base_dir: Path
     The base parameters must themselves be valid: their Euler sequence and ``[limits]`` apply
     to the motion (angles and load are checked against them here, before any design)."""
     from ...multibody import TaskMotion
-    from ...multibody.sweep import GeneratedMotion
+    from ...multibody.analyses.designs import GeneratedMotion
     from .paper import euler_rate_map
 
     opt = validate(_Motion, dict(options), "[motion]")
@@ -276,9 +276,9 @@ def _kinematic_metrics(state: Any, data: HipMotionData) -> tuple[dict[str, float
 
 
 def _effort_metrics(state: Any, data: HipMotionData) -> dict[str, float]:
-    """The motor torques' metrics (Eq. A1 of :mod:`pkmdyn.multibody.actuators`: the joint
+    """The motor torques' metrics (Eq. A1 of :mod:`pkmdyn.multibody.dynamics.actuators`: the joint
     effort through the lead screw, the rotor's inertia, the screw's friction)."""
-    from ...multibody.actuators import motor_efforts
+    from ...multibody.dynamics.actuators import motor_efforts
 
     model, kin, t = state.model, state.kin, state.motion.t
     me = motor_efforts(model, kin.act_q, kin.act_qd, kin.act_qdd, state.u)

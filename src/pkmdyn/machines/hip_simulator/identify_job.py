@@ -224,7 +224,7 @@ def run_identify(
 def _report(tmp: Path, model: HipModel, motion: Any, tau: np.ndarray, tau_id: np.ndarray, doc: dict[str, Any],
             params_path: str | Path | None, images: list[Path], warns: list[str]) -> Path:
     from ...multibody import load_mechanism
-    from ...multibody.machine import motion_scene
+    from ...multibody.scene import motion_scene
     from ...report import MAX_FRAMES, Curve, TimePlot, frame_indices, write_report
     from .description import hip_description
 

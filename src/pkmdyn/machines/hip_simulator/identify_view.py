@@ -1,7 +1,7 @@
 """The hip simulator's identification: the engine's identification of its description, named
 and written in the hip's parameters.
 
-The fit is the engine's (:func:`pkmdyn.multibody.identify.regressor` of the description of
+The fit is the engine's (:func:`pkmdyn.multibody.analyses.regressor.regressor` of the description of
 :func:`.description.hip_description`, through :func:`pkmdyn.identify._identify.fit_regressor`);
 this module names its result in the parameters of the hip's parameter file and writes it
 back there.
@@ -262,7 +262,7 @@ def engine_values(model: HipModel, mech: Any, names_e: tuple[str, ...], values: 
     """The engine's parameters ``names_e`` (the regressor's) of the hip with the parameters
     ``values`` (every name of :data:`ALL_NAMES`; the rest of ``model`` as it is), linear in
     ``values``; ``mech`` the compiled :func:`regressor_mechanism`."""
-    from ...multibody.identify import BODY_PARAMETERS, inertial_parameters
+    from ...multibody.analyses.regressor import BODY_PARAMETERS, inertial_parameters
     from .description import hip_description
 
     desc = hip_description(_set_values(replace(model, friction=replace(model.friction, mu_h=0.0, mu_t=0.0)), values))
@@ -317,7 +317,7 @@ def hip_regressor(model: HipModel, motion: OrientationMotion, names: tuple[str, 
     :func:`regressor_mechanism` of ``model``) and ``kin`` (its kinematics along ``motion``), when
     given, are used as they are; ``memo``, a list, keeps the parameter map (the same for every
     motion of one model and ``names``) for the next call."""
-    from ...multibody.identify import regressor
+    from ...multibody.analyses.regressor import regressor
 
     mech = regressor_mechanism(model) if mech is None else mech
     kin = engine_kinematics(mech, motion) if kin is None else kin

@@ -6,9 +6,9 @@ into its mechanism description (:func:`.description.hip_description`) and compil
 engine (:func:`pkmdyn.multibody.load_mechanism`). The motion (the built-in ISO 14242-1 cycle
 produced block by block, or a motion file) is solved once, block by block, by the engine
 (:func:`pkmdyn.multibody.solve_kinematics`, each block warm-started from the one before,
-exactly as :func:`pkmdyn.multibody.run.run_mechanism` does), and the same solution feeds the
-efforts with load-dependent friction and their split (:func:`pkmdyn.multibody.dynamics.joint_reactions`,
-:func:`pkmdyn.multibody.actuators.motor_efforts`), the slide tracks of ``wear.json`` (the
+exactly as :func:`pkmdyn.jobs.run.run_mechanism` does), and the same solution feeds the
+efforts with load-dependent friction and their split (:func:`pkmdyn.multibody.dynamics.inverse.joint_reactions`,
+:func:`pkmdyn.multibody.dynamics.actuators.motor_efforts`), the slide tracks of ``wear.json`` (the
 samples of the first cycle kept as they pass) and the report. :mod:`.paper` names the results
 as the paper does (its columns, Eq. 2-6 Jacobian measures, the parts of Eq. 14); :mod:`.figures`
 draws them. The results stream to the file and the summary's extremes and the plots' data are
@@ -138,7 +138,8 @@ def _wear(out: Path, mech: Any, model: HipModel, kin: Any, load: Array, builtin:
     on the platform, the cup on the frame, the head's radius the parameter file's
     ``hip_radius_m``, the load the test load. Returns the files and the report's 3D views of the
     tracks."""
-    from ...multibody.wear_run import WearOptions, joint_wear, tracks_figure, write_wear_files
+    from ...jobs.wear import tracks_figure, write_wear_files
+    from ...multibody.analyses.wear import WearOptions, joint_wear
 
     opts = WearOptions(radius_m=float(model.friction.r_h), load="hydraulic_N")
     results = [(j, *joint_wear(mech, kin, j, opts, {"hydraulic_N": load})) for j in ("S0_upper", "S0_lower")]
@@ -316,7 +317,7 @@ def run_hip(
         if make_plots:
             files.update(figures.write_figures(data, tmp))
         if frames is not None:
-            from ...multibody.output import mechanism_scene
+            from ...multibody.scene import mechanism_scene
             from ...report import write_report
 
             f = frames.arrays()

@@ -137,9 +137,9 @@ class PaperView:
         the paper's quantities of it; ``sample_offset``: the number of the motion's first sample
         in messages (counted from 1, as a motion file's rows); ``q_start``: the tree coordinates
         to start from (the last sample of the block before)."""
-        from ...multibody.actuators import motor_efforts
-        from ...multibody.dynamics import joint_reactions
-        from ...multibody.kinematics import solve_kinematics
+        from ...multibody.dynamics.actuators import motor_efforts
+        from ...multibody.dynamics.inverse import joint_reactions
+        from ...multibody.kinematics.inverse import solve_kinematics
 
         mech, a = self.mech, self.act
         kin = solve_kinematics(mech, motion.angles, motion.rates, motion.accels, motion.t, q_start=q_start,
@@ -270,9 +270,9 @@ def euler_rate_map(sequence: str, angles: Array) -> Array:
 
 def regularisation_note(model: HipModel) -> str | None:
     """What the run says of the parameter file's ``friction_velocity_eps_*`` when they are not the
-    engine's (every friction is regularised at :data:`pkmdyn.multibody.friction.EPS_ROTATION` and
+    engine's (every friction is regularised at :data:`pkmdyn.multibody.dynamics.friction.EPS_ROTATION` and
     ``EPS_TRANSLATION``, the file's defaults), else None."""
-    from ...multibody.friction import EPS_ROTATION, EPS_TRANSLATION
+    from ...multibody.dynamics.friction import EPS_ROTATION, EPS_TRANSLATION
 
     f = model.friction
     if (f.eps_w, f.eps_v) == (EPS_ROTATION, EPS_TRANSLATION):

@@ -2,10 +2,10 @@
 motions, the columns and labels of ``control.csv`` and its plots, the limb-tracking figure (the
 paper's Fig. 26) and the 3D scene of ``pkmdyn pdm control``.
 
-The dynamics are the generic engine's (:class:`pkmdyn.multibody.machine.MechanismVerbs`) on the
+The dynamics are the generic engine's (:class:`pkmdyn.multibody.dynamics.verbs.MechanismVerbs`) on the
 PDM's description (:func:`.description.pdm_description`), under the paper's names: coordinates
 ``x_m, y_m, alpha_rad, gamma_rad``, efforts ``f1_N .. f4_N`` (the limbs l11, l12, l23, l24; the
-description's ``P11 .. P24`` in the same order). A model is a :class:`pkmdyn.multibody.machine.GeneratedModel`: the
+description's ``P11 .. P24`` in the same order). A model is a :class:`pkmdyn.multibody.dynamics.verbs.GeneratedModel`: the
 parameters (for the motion and the scene) and their compiled description.
 """
 
@@ -39,14 +39,14 @@ ACTUATORS = ("f1_N", "f2_N", "f3_N", "f4_N")
 
 def control_model(params: Any) -> Any:
     from ...multibody import load_mechanism
-    from ...multibody.machine import GeneratedModel
+    from ...multibody.dynamics.verbs import GeneratedModel
     from .description import pdm_description
 
     return GeneratedModel(params, load_mechanism(pdm_description(params)))
 
 
 def verbs(model: Any) -> Any:
-    from ...multibody.machine import RenamedVerbs
+    from ...multibody.dynamics.verbs import RenamedVerbs
 
     return RenamedVerbs(model.mechanism, COORDINATES, ACTUATORS)
 

@@ -155,11 +155,11 @@ def compute(model: PdmModel, motion: PdmMotion, progress: bool | None = None) ->
     one block), through the generic engine: the kinematics of the PDM's description
     (:func:`pkmdyn.multibody.solve_kinematics`, each block warm-started from the last one) and
     its joint reactions, unique by the links' compliance
-    (:func:`pkmdyn.multibody.dynamics.joint_reactions`), in the paper's names (:mod:`.paper`).
+    (:func:`pkmdyn.multibody.dynamics.inverse.joint_reactions`), in the paper's names (:mod:`.paper`).
     The paper's geometry checks each block first (Eq. 2-9: a six-bar loop that cannot close, a
     limb beyond its stroke), so that a message names the limb."""
     from ...multibody import load_mechanism, solve_kinematics
-    from ...multibody.dynamics import joint_reactions
+    from ...multibody.dynamics.inverse import joint_reactions
     from .description import pdm_description
 
     m = load_mechanism(pdm_description(model))

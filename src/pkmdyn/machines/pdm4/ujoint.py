@@ -50,7 +50,7 @@ def u_joint_study(model: PdmModel, peaks_m_s2: tuple[float, ...] = PAPER_PEAKS_M
     (U23, U24), ``max_abs_force_N`` (four limbs) and ``max_force_error_percent``: the largest
     ``|f_neglected - f|`` over the motion, in percent of that limb's largest ``|f|``."""
     from ...multibody import solve_kinematics
-    from ...multibody.dynamics import joint_reactions
+    from ...multibody.dynamics.inverse import joint_reactions
 
     free = _without_u_joint_torque(model)
     limbs = [free.actuator_names.index(n) for n in LIMBS]

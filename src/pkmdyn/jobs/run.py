@@ -1,0 +1,320 @@
+"""The run of a described mechanism: a task motion -> kinematics, efforts, every joint reaction,
+the drives and the effort split -> files, streamed chunk by chunk.
+
+``run_mechanism`` takes the motion in chunks (:data:`CHUNK` samples; a :class:`~.motion.TaskMotion`
+or a :class:`~.motion.PeriodicMotion` made as it goes), so that memory does not grow with
+the run: each chunk is solved (warm-started from the chunk before: its last sample is solved
+again as the chunk's first row, so that a chunked run follows the same solution as one
+solved whole), its rates checked against the plausibility limits
+(:mod:`.actuators`), its efforts and reactions computed (:func:`.dynamics.joint_reactions`,
+load-dependent friction iterated per chunk, messages naming the sample of the whole run), its
+rows appended to ``results.csv`` (or ``.parquet``), and the summary's extremes kept on the fly.
+``bodies.npz`` holds the first ``max_body_samples`` samples (every sample of a run up to that
+length), the report's plots and animation a window of them (the first cycle of a repeated
+default motion). The files are written into a temporary
+folder beside ``--out`` and moved into place only when the whole run succeeded
+(:func:`pkmdyn.io.output_dir`); formats: ``docs/mechanism_format.md``, "Outputs".
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import PkmdynError
+from ..io import NpzWriter, check_table_format, open_table_writer, output_dir, write_json
+from ..multibody.dynamics.actuators import check_actuator_rates, check_task_rates, effective_limits, motor_effort_column
+from ..multibody.dynamics.inverse import joint_reactions, load_forces
+from ..multibody.kinematics.inverse import MechanismKinematics, joint_coordinates, least_measures, limit_hit, limit_line, \
+    limited_joints, solve_kinematics
+from ..multibody.model.compiler import MechanismModel
+from ..multibody.columns import actuator_effort_column, bodies_arrays, deflection_columns, effort_columns, \
+    joint_effort_column, model_summary, results_column_names, results_columns
+from ..multibody.dynamics.inverse import effort_unit
+from ..multibody.kinematics.motion import motion_columns, task_columns
+from ..multibody.scene import frame_indices_of, mechanism_scene
+from ..report import Curve, FramePicker, TimePlot, write_report
+
+__all__ = ["run_mechanism", "write_run_report", "report_columns", "CHUNK"]
+
+Array = NDArray[np.float64]
+
+#: samples per chunk of a run (some 40 MiB of working set for a Stewart platform)
+CHUNK = 1024
+#: beyond the bodies' window, the singularity measures of every this many samples
+SINGULARITY_STRIDE = 10
+
+
+def _motor_arrays(model: MechanismModel, reac: Any) -> dict[str, Array]:
+    """``bodies.npz`` arrays of the split's friction: ``friction_share (n, na, nj)`` each joint's
+    friction share of every actuator's effort (motor side for a drive, as the columns)."""
+    if reac.shares is None:
+        return {}
+    return {"friction_share": reac.shares.friction / model.drive_ratio[None, :, None]}
+
+
+def _report_groups(model: MechanismModel) -> list[tuple[str, str, list[str]]]:
+    """The report's plots of the actuators: ``(title, y label, columns)``."""
+    joints = [motion_columns(a, u) for a, u in zip(model.actuator_names, model.actuator_units)]
+    groups = [("Actuator coordinates", "actuator coordinates [SI]", [c[0] for c in joints]),
+              ("Actuator rates", "actuator rates [SI]", [c[1] for c in joints]),
+              ("Actuator efforts", "actuator efforts [SI]", [joint_effort_column(model, i) for i in range(model.na)])]
+    motors = [motor_effort_column(model, i) for i, d in enumerate(model.drive_name) if d is not None]
+    if motors:
+        groups.append(("Motor efforts", "motor effort [N m or N]", motors))
+    return groups
+
+
+def report_columns(model: MechanismModel) -> list[str]:
+    """The results columns a run's report plots (:func:`write_run_report`)."""
+    pos, _, _ = task_columns(model)
+    return ["t_s", *pos, *(c for _, _, cols in _report_groups(model) for c in cols)]
+
+
+def write_run_report(out: Path, model: MechanismModel, cols: dict[str, Array], frames: dict[str, Array],
+                     summary: dict[str, Any], description_text: str, samples: int | None = None) -> Path:
+    """``report.html`` of a run (:mod:`pkmdyn.report`): the mechanism drawn at the animation's
+    samples ``frames`` (``t``, ``joint_point``: each body through its joint centres, actuated
+    joints as chains coloured by effort), the task and actuator coordinates, rates and efforts
+    against time from the results columns ``cols`` (the plots' window of the run; ``samples``:
+    the run's length when the window is shorter)."""
+    t = cols["t_s"]
+    pos, _, _ = task_columns(model)
+    plots = [TimePlot("Task coordinates", "task coordinate [m or rad]", t, tuple(Curve(c, cols[c]) for c in pos))]
+    for title, label, group in _report_groups(model):
+        plots.append(TimePlot(title, label, t, tuple(Curve(c, cols[c]) for c in group)))
+    idx = frame_indices_of(t, frames["t"])
+    efforts = {}
+    for i, name in enumerate(model.actuator_names):
+        efforts[name] = (cols[joint_effort_column(model, i)][idx], f"{name} effort", effort_unit(model, i))
+    scene = mechanism_scene(model, frames["t"], frames["joint_point"], efforts)
+    notes = [f"mechanism: {model.name}" + (f" ({model.source})" if model.source else "")]
+    if samples is not None and samples > t.shape[0]:
+        notes.append(f"plots and animation: the first {t.shape[0]} of {samples} samples (results hold every sample)")
+    return write_report(out, title=f"{model.name}: pkmdyn run", scene=scene,
+                        plots=plots, summary=summary, parameters=description_text, notes=notes,
+                        scene_note="Joint centres as in bodies.npz (joint_point); actuated joints drawn as chains.",
+                        samples=t.shape[0])
+
+
+
+class _Summary:
+    """The summary's extremes, kept chunk by chunk."""
+
+    def __init__(self, model: MechanismModel) -> None:
+        self.model = model
+        self.residual = 0.0
+        self.sing = {"inverse": np.inf, "direct": np.inf, "constraint": np.inf}
+        self.direct_nan = True
+        self.eq_residual = 0.0
+        self.iterations = 0
+        self.holding = 0.0
+        na = model.na
+        self.joint_effort = np.zeros(na)
+        self.motor_effort = np.zeros(na)
+        self.motor_speed = np.zeros(na)
+        self.beyond_effort: str | None = None
+        self.limit_first: str | None = None
+        self.reactions: dict[str, Any] = {}
+
+    def add(self, start: int, kin: MechanismKinematics, sm: dict[str, float] | None, reac: Any,
+            cols: dict[str, Array]) -> None:
+        model = self.model
+        self.residual = max(self.residual, float(kin.residual.max()))
+        if sm is not None:  # (None: a chunk beyond the bodies' window without a sample of the stride)
+            for key in ("inverse", "constraint"):
+                self.sing[key] = min(self.sing[key], sm[key])
+            if not np.isnan(sm["direct"]):
+                self.direct_nan = False
+                self.sing["direct"] = min(self.sing["direct"], sm["direct"])
+        self.eq_residual = max(self.eq_residual, float(reac.residual.max()))
+        self.iterations = max(self.iterations, int(reac.iterations))
+        if reac.holding is not None and reac.holding.size:
+            self.holding = max(self.holding, float(np.abs(reac.holding).max()))
+        self.joint_effort = np.maximum(self.joint_effort, np.abs(reac.u).max(axis=0))
+        for i, name in enumerate(model.drive_name):
+            tau = cols[actuator_effort_column(model, i)]
+            self.motor_effort[i] = max(self.motor_effort[i], float(np.abs(tau).max()))
+            self.motor_speed[i] = max(self.motor_speed[i], float(np.abs(kin.act_qd[:, i] * model.drive_ratio[i]).max()))
+            lim = model.drive_max_effort[i]
+            if self.beyond_effort is None and np.isfinite(lim):
+                bad = np.flatnonzero(~(np.abs(tau) <= lim))
+                if bad.size:
+                    s = int(bad[0])
+                    u = "N m" if model.motor_units[i] == "rad" else "N"
+                    when = f"sample {start + s}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
+                    self.beyond_effort = (f"{when}: actuator {name!r} needs {tau[s]:.4g} {u}, beyond its rated "
+                                          f"{lim:g} {u}")
+
+    def actuators(self) -> list[dict[str, Any]]:
+        model = self.model
+        out = []
+        for i, joint in enumerate(model.actuator_names):
+            spec = model.drive_specs[i] if model.drive_specs else None
+            entry: dict[str, Any] = {"joint": joint, "max_abs_joint_effort_SI": float(self.joint_effort[i])}
+            if spec is not None:
+                entry.update(name=spec.name, kind=spec.kind, ratio=float(spec.ratio),
+                             max_abs_motor_effort_SI=float(self.motor_effort[i]),
+                             max_abs_motor_speed_SI=float(self.motor_speed[i]),
+                             rated_effort_SI=None if not np.isfinite(spec.max_effort) else float(spec.max_effort))
+            out.append(entry)
+        return out
+
+
+def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, inputs: Any = (),
+                  report: Callable[[dict[str, Path]], None] | None = None, description_text: str = "",
+                  unique_reactions: bool = False, fmt: str = "csv", limits: dict | None = None,
+                  progress: bool = False, chunk: int = CHUNK, plot_window: int | None = None,
+                  deflection: bool = False) -> dict[str, Any]:
+    """Kinematics, efforts and every joint reaction of ``model`` along ``motion`` (a
+    :class:`~.motion.TaskMotion` or :class:`~.motion.PeriodicMotion`), written into ``out_dir``
+    under the output rule (``inputs`` the files the run read: nothing is written when anything
+    fails), streamed chunk by chunk (module docstring).
+
+    ``fmt``: ``"csv"`` or ``"parquet"`` for the results table; ``limits``: overrides of the
+    description's ``[limits]`` (``--limit``); ``progress``: a progress bar on a terminal;
+    ``plot_window``: the samples the report's plots and animation cover (default: the first
+    ``max_body_samples``). An over-constrained mechanism needs the section and material that
+    make its reactions unique: without them its run writes the minimum-norm reactions flagged
+    ``"unique": false`` (kinematics and efforts are unique all the same), or, with
+    ``unique_reactions``, is refused. ``deflection``: the task coordinates' elastic deflection
+    under the run's loads in the results table (:func:`deflection_columns`; the description
+    needs a compliance source, docs/stiffness.md). ``report`` is called with the files' final paths before
+    they move into place. Returns the summary with ``files`` as ``{label: path}``."""
+    from tqdm import tqdm
+
+    from ..multibody.dynamics.reactions import ComplianceDataMissing
+
+    if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
+        raise PkmdynError(f"chunk: must be an integer >= 1, got {chunk!r}")
+    check_table_format(fmt)
+    lim = effective_limits(model, limits)
+    n = len(motion)
+    if n < 1:
+        raise PkmdynError("the motion has no samples")
+    from ..params_util import check_limit
+
+    check_limit(n, int(lim["max_samples"]), "motion: samples", "max_samples", file="the description")
+    from ..io import note_table_size
+
+    note_table_size(n, len(results_column_names(model, deflection)), fmt)
+    body_rows = min(n, int(lim["max_body_samples"]))
+    window = min(body_rows, n if plot_window is None else int(plot_window))
+    summ = _Summary(model)
+    limited = limited_joints(model)
+    prev_coords: Array | None = None
+    overconstrained = "compliance"
+    reason = ""
+
+    frames = FramePicker(window)
+    plot_parts: list[dict[str, Array]] = []
+    plotted = report_columns(model)
+    final = Path(out_dir)
+    with output_dir(out_dir, inputs=inputs) as out:
+        files = {"results": out / ("results.csv" if fmt == "csv" else "results.parquet"), "model": out / "model.json",
+                 "bodies": out / "bodies.npz", "summary": out / "summary.json"}
+        write_json(files["model"], model_summary(model))
+        npz = NpzWriter(files["bodies"], body_rows)
+        try:
+            npz.put("body_names", np.array(model.body_names))
+            npz.put("joint_names", np.array(model.joint_names))
+            npz.put("coordinate_joints", np.array([model.joint_names[j] for j in model.coord_joint]))
+            q_prev: Array | None = None
+            bar = tqdm(total=n, desc=f"{model.name}: kinematics, efforts, reactions", unit="sample",
+                       disable=not progress or None, leave=False, unit_scale=True)
+            with open_table_writer(files["results"], fmt) as writer, bar:
+                for start in range(0, n, chunk):
+                    stop = min(n, start + chunk)
+                    # the chunk with the sample before it: solved again as its first row, from which
+                    # the chunk's first sample is predicted as within a run solved whole
+                    lead = 1 if start > 0 else 0
+                    m = motion.chunk(start - lead, stop)
+                    check_task_rates(model, m.t, m.xd, m.xdd, lim, start - lead)
+                    kin = solve_kinematics(model, m.x, m.xd, m.xdd, m.t, q_start=q_prev, sample_offset=start - lead)
+                    q_prev = kin.q[-1].copy()
+                    if lead:
+                        kin = kin.rows(1)
+                        m = m.chunk(1, len(m))
+                    check_actuator_rates(model, kin.t, kin.act_qd, kin.act_qdd, lim, start)
+                    if limited:
+                        c = joint_coordinates(model, kin, limited, previous=prev_coords)
+                        prev_coords = c[-1]
+                        hit = limit_hit(model, c, limited) if summ.limit_first is None else None
+                        if hit is not None:
+                            s, k = hit
+                            summ.limit_first = limit_line(model, kin, s, limited[k], float(c[s, k]), start)
+                    # every sample of the bodies' window, then every SINGULARITY_STRIDE-th: the least of
+                    # each measure, the singular value decompositions only where bounds leave it open
+                    idx = np.arange(start, stop)
+                    pick = np.flatnonzero((idx < body_rows) | (idx % SINGULARITY_STRIDE == 0))
+                    sm = least_measures(model, kin.q[pick]) if pick.size else None
+                    try:
+                        reac = joint_reactions(model, kin, named=m.loads, split=True, sample_offset=start,
+                                               overconstrained=overconstrained)
+                    except ComplianceDataMissing as exc:
+                        if unique_reactions:
+                            raise ComplianceDataMissing(str(exc)) from None
+                        overconstrained, reason = "minimum-norm", str(exc)
+                        reac = joint_reactions(model, kin, named=m.loads, split=True, sample_offset=start,
+                                               overconstrained=overconstrained)
+                    cols = results_columns(model, kin)
+                    cols.update(effort_columns(model, kin, reac, m.loads))
+                    if deflection:
+                        cols.update(deflection_columns(model, kin, reac, m.loads, start))
+                    writer.write(cols)
+                    summ.add(start, kin, sm, reac, cols)
+                    summ.reactions = {"method": reac.method, "self_stress_states": reac.self_stress}
+                    if start < body_rows:
+                        k = min(stop, body_rows) - start
+                        arrays = bodies_arrays(model, kin)
+                        arrays.update(joint_force=reac.joint_force, joint_moment=reac.joint_moment,
+                                      **_motor_arrays(model, reac))
+                        if len(model.load_body):
+                            LF, LM = load_forces(model, len(kin), m.loads)
+                            arrays.update(load_force=LF, load_moment=LM,
+                                          load_point=kin.origin[:, model.load_body] + np.einsum(
+                                              "nlij,lj->nli", kin.R[:, model.load_body], model.load_point))
+                        npz.write({key: v[:k] for key, v in arrays.items()})
+                    if start < window:
+                        k = min(stop, window) - start
+                        plot_parts.append({key: cols[key][:k].copy() for key in plotted})
+                        frames.add(start, t=kin.t[:k] if kin.t is not None else np.arange(start, start + k, dtype=float),
+                                   joint_point=kin.joint_point[:k])
+                    bar.update(stop - start)
+            npz.close()
+        except BaseException:
+            npz.discard()
+            raise
+        summary = {
+            "mechanism": model.name, "samples": n, "max_residual": summ.residual,
+            "min_inverse_singularity_measure": summ.sing["inverse"],
+            "min_direct_singularity_measure": None if summ.direct_nan else summ.sing["direct"],
+            "min_constraint_singularity_measure": summ.sing["constraint"],
+            # the motion against the joints' limits (stored in the description; the run goes on beyond them)
+            "joint_limits": {"kept": summ.limit_first is None, "first_beyond": summ.limit_first},
+            "topology": model.topology.as_dict() if model.topology is not None else None,
+            "reactions": {**summ.reactions, "max_equilibrium_residual": summ.eq_residual,
+                          "unique": overconstrained == "compliance",
+                          **({"reason": reason} if reason else {}),
+                          "friction_iterations": summ.iterations,
+                          "idle_freedoms": int(model.solver_idle.shape[0]),
+                          "max_idle_holding_effort_SI": summ.holding},
+            "actuators": summ.actuators(),
+            "actuator_effort_limits": {"kept": summ.beyond_effort is None, "first_beyond": summ.beyond_effort},
+            "effort_split": {"groups": {g: [model.body_names[b] for b in np.flatnonzero(model.body_group == k)]
+                                        for k, g in enumerate(model.group_names)},
+                             "parts": [*model.group_names, *(["rotor"] if model.has_drives else []), "friction"]},
+            "results_format": fmt, "limits": lim, "bodies_samples": body_rows,
+        }
+        plot_cols = {k: np.concatenate([p[k] for p in plot_parts]) for k in plot_parts[0]}
+        files["report"] = write_run_report(out, model, plot_cols, frames.arrays(), summary, description_text,
+                                           samples=n)
+        summary["files"] = sorted(p.name for p in files.values())
+        write_json(files["summary"], summary)
+        if report is not None:
+            report({k: final / v.name for k, v in files.items()})
+    return {**summary, "files": {k: final / v.name for k, v in files.items()}}

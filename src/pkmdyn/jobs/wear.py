@@ -1,0 +1,144 @@
+"""The wear job: a described mechanism, a motion and spherical joints in; ``wear.json``,
+``markers_<joint>_on_cup.csv``, ``markers_<joint>_on_head.csv``, ``tracks.npz`` and one
+``wear_<joint>.png`` per joint out (``docs/wear.md``).
+The numbers come from :mod:`pkmdyn.multibody.analyses.wear`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..multibody.analyses.wear import ASPECT_LIMIT, SlideTracks, WearOptions, joint_index, pole_rotation
+
+__all__ = ["wear_document", "write_wear_files", "tracks_figure"]
+
+Array = NDArray[np.float64]
+
+
+def wear_document(model: Any, joint: str, on_cup: SlideTracks, on_head: SlideTracks, what: str,
+                  opts: WearOptions) -> dict[str, Any]:
+    """One joint's entry of ``wear.json`` (``docs/wear.md``)."""
+    j = joint_index(model, joint)
+    bodies = ("ground" if model.joint_child[j] < 0 else model.body_names[model.joint_child[j]],
+              "ground" if model.joint_parent[j] < 0 else model.body_names[model.joint_parent[j]])
+    head, cup = bodies if opts.head == "child" else bodies[::-1]
+    return {
+        "joint": joint, "head_body": head, "cup_body": cup,
+        "head_radius_m": float(np.linalg.norm(on_cup.points[0, 0])),
+        "load": what, "cycles": opts.cycles,
+        "marker_grid": {"spacing_deg": opts.spacing_deg, "cap_deg": opts.cap_deg,
+                        "pole": None if opts.pole is None else [float(v) for v in opts.pole],
+                        "markers": int(len(on_cup.weights))},
+        "wear_factor_mm3_N_m": opts.wear_factor_mm3_N_m,
+        "cross_shear_law": opts.cross_shear_law,
+        "aspect_ratio_limit": ASPECT_LIMIT,
+        "tracks_on_cup": on_cup.summary(),
+        "tracks_on_head": on_head.summary(),
+        # the cup wears: each cup point's wear from what slides over it (the cup's markers)
+        "wear_volume_mm3_per_million_cycles": float(on_head.wear_per_million_cycles),
+    }
+
+
+def _projection(points: Array, pole: Array) -> tuple[Array, Array]:
+    """Orthographic coordinates (.., 2) of unit points viewed along ``pole``."""
+    B = pole_rotation(pole)
+    return points @ B[:, 0], points @ B[:, 1]
+
+
+def _png(path: Path, joint: str, on_cup: SlideTracks, on_head: SlideTracks) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    fig, axes = plt.subplots(1, 3, figsize=(15, 5))
+    pole = on_cup.pole
+    r = float(np.linalg.norm(on_cup.points[0, 0]))
+    for ax, tr, title in ((axes[0], on_cup, "head markers' tracks on the cup"),
+                          (axes[1], on_head, "cup markers' tracks on the head")):
+        x, y = _projection(tr.points / r, pole)
+        segs = [np.stack([x[:, k], y[:, k]], axis=1) for k in range(x.shape[1])]
+        lc = LineCollection(segs, array=tr.cross_shear, cmap="viridis", linewidths=1.2)
+        lc.set_clim(0.0, 0.5)
+        ax.add_collection(lc)
+        ax.add_patch(plt.Circle((0, 0), 1.0, fill=False, color="0.6", lw=0.8))
+        ax.set_xlim(-1.05, 1.05)
+        ax.set_ylim(-1.05, 1.05)
+        ax.set_aspect("equal")
+        ax.set_title(title)
+        ax.set_xlabel("viewed along the pole (unit sphere)")
+        fig.colorbar(lc, ax=ax, label="cross-shear")
+    x, y = _projection(on_head.markers, pole)
+    sc = axes[2].scatter(x, y, c=on_head.wear * 1e6 / on_head.cycles, cmap="magma", s=40)
+    axes[2].add_patch(plt.Circle((0, 0), 1.0, fill=False, color="0.6", lw=0.8))
+    axes[2].set_xlim(-1.05, 1.05)
+    axes[2].set_ylim(-1.05, 1.05)
+    axes[2].set_aspect("equal")
+    axes[2].set_title("wear over the cup (per point, Archard)")
+    fig.colorbar(sc, ax=axes[2], label="mm^3 per million cycles (whole load on that track)")
+    fig.suptitle(f"joint {joint}: slide tracks and wear (aspect ratio > {ASPECT_LIMIT:g}: "
+                 f"{100 * np.mean(on_cup.aspect_ratio > ASPECT_LIMIT):.0f} % of the tracks on the cup)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def write_wear_files(out: Path, model: Any, results: list[tuple[str, SlideTracks, SlideTracks, str]],
+                     opts: WearOptions, extra: dict[str, Any] | None = None, plots: bool = True) -> dict[str, Path]:
+    """``wear.json``, the markers' tables, ``tracks.npz`` and (``plots``) the PNGs into the folder ``out``."""
+    from ..io import write_csv, write_json
+
+    files: dict[str, Path] = {}
+    doc: dict[str, Any] = {"mechanism": model.name, "definitions": "docs/wear.md", **(extra or {}),
+                           "joints": [wear_document(model, j, c, h, w, opts) for j, c, h, w in results]}
+    files["wear"] = out / "wear.json"
+    write_json(files["wear"], doc)
+    arrays: dict[str, Array] = {}
+    for j, on_cup, on_head, _ in results:
+        for surface, tr in (("cup", on_cup), ("head", on_head)):
+            files[f"markers_{j}_on_{surface}"] = out / f"markers_{j}_on_{surface}.csv"
+            write_csv(files[f"markers_{j}_on_{surface}"], {
+                "marker": np.arange(len(tr.weights), dtype=float),
+                **{f"direction_{c}": tr.markers[:, k] for k, c in enumerate("xyz")},
+                "weight": tr.weights, "sliding_distance_per_cycle_m": tr.sliding_distance / tr.cycles,
+                "aspect_ratio": tr.aspect_ratio, "cross_shear": tr.cross_shear,
+                "track_load_integral_per_cycle_N_m": tr.load_integral / tr.cycles,
+                "wear_mm3_per_million_cycles": tr.wear * 1e6 / tr.cycles})
+            arrays[f"{j}__on_{surface}_points_m"] = tr.points
+        if plots:
+            files[f"png_{j}"] = _png(out / f"wear_{j}.png", j, on_cup, on_head)
+    files["tracks"] = out / "tracks.npz"
+    np.savez_compressed(files["tracks"], **arrays)
+    return files
+
+
+def tracks_figure(joint: str, tracks: SlideTracks, max_points: int = 60) -> dict:
+    """A 3D view of the head's markers' tracks on the cup (each track at most ``max_points``
+    points, evenly spaced), coloured by cross-shear, on the sphere [mm]: a plotly figure
+    dictionary (plotly's figure format, written as built)."""
+    n = tracks.points.shape[0]
+    idx = np.unique(np.linspace(0, n - 1, min(n, max_points)).round().astype(int))
+    P = np.round(tracks.points[idx] * 1e3, 3)  # [mm], to a micrometre: a light page
+    xs, ys, zs, cs = [], [], [], []
+    for k in range(P.shape[1]):
+        xs += list(P[:, k, 0]) + [None]
+        ys += list(P[:, k, 1]) + [None]
+        zs += list(P[:, k, 2]) + [None]
+        cs += [float(tracks.cross_shear[k])] * len(idx) + [float(tracks.cross_shear[k])]
+    r = float(np.linalg.norm(tracks.points[0, 0])) * 1e3
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 36), np.linspace(0, np.pi, 18))
+    sphere = {"type": "surface", "x": (r * np.cos(u) * np.sin(v)).tolist(), "y": (r * np.sin(u) * np.sin(v)).tolist(),
+              "z": (r * np.cos(v)).tolist(),
+              "opacity": 0.15, "showscale": False, "colorscale": [[0, "#999"], [1, "#999"]], "hoverinfo": "skip"}
+    lines = {"type": "scatter3d", "x": xs, "y": ys, "z": zs, "mode": "lines", "name": "tracks",
+             "line": {"color": cs, "colorscale": "Viridis", "cmin": 0.0, "cmax": 0.5, "width": 3,
+                      "colorbar": {"title": {"text": "cross-shear"}}}}
+    return {"data": [sphere, lines],
+            "layout": {"title": {"text": f"{joint}: the head's markers' tracks on the cup [mm]"}, "height": 560,
+                       "scene": {"aspectmode": "data", "xaxis": {"title": {"text": "x [mm]"}},
+                                 "yaxis": {"title": {"text": "y [mm]"}}, "zaxis": {"title": {"text": "z [mm]"}}}}}

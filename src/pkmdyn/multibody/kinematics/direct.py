@@ -1,0 +1,661 @@
+"""Direct kinematics of any described mechanism: the pose from the actuator coordinates.
+
+A parallel robot is driven and measured at its actuators. For actuator coordinates ``s``
+(``model.actuator_names`` order; [m] for a prismatic joint, [rad] for a revolute one) the tree
+coordinates ``q`` solve the loop closure with the actuated coordinates held at ``s`` and the
+idle freedoms held as the inverse kinematics holds them (:mod:`._direct`, the equations); the
+task coordinates are then the task body's pose. Two routes:
+
+- :func:`direct_kinematics`: along an actuator motion, each sample by Newton from the
+  previous one (continuation), the first from the reference configuration by continuation
+  along the straight actuator path (or from ``q_start``): the assembly mode connected to the
+  description's reference pose. Each sample reports its residual, Newton steps, the
+  determinant of the direct kinematics Jacobian (its sign is the assembly branch; a change of
+  sign between two samples is a crossed singularity, refused) and its smallest-to-largest
+  pivot ratio (near zero next to a singularity).
+- :func:`assembly_modes`: every assembly mode found at one actuator configuration, by damped
+  Newton from many random configurations (multi-start), each solution verified by the inverse
+  kinematics (its actuator coordinates back to ``s`` within ``1e-10``) and duplicates merged by
+  the task body's pose. What it guarantees: every mode listed is a real, verified solution, and
+  modes are distinct poses of the task body. What it does not: that none is missing (a mode
+  whose basin of attraction no start falls into stays unfound; ``hits`` counts the starts
+  that reached each mode, and a mode found once suggests more starts). A general
+  Gough-Stewart platform has up to 40 assembly modes (Husty 1996; Dietmaier 1998).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ...errors import MotionError, ParameterError, SingularityError, UnreachablePoseError, as_array
+from . import _direct_kernels as D
+from . import _solve_kernels as K
+from .inverse import CHECK_TOLERANCE, MAX_ITER, TOLERANCE, reference_task, solve_kinematics
+from ..model.compiler import MechanismModel
+from .motion import ActuatorMotion, TaskMotion
+from ..model.poses import body_poses
+from ..model.topology import column_scale, constraint_jacobian, row_labels, row_scale
+
+__all__ = ["DirectKinematics", "Assembly", "AssemblyModes", "direct_kinematics", "assembly_modes", "task_motion",
+           "actuator_reference", "parse_actuators", "ROUND_TRIP_TOLERANCE"]
+
+Array = NDArray[np.float64]
+
+#: largest scaled difference (lengths over the mechanism's size) between the actuator
+#: coordinates and those the inverse kinematics gives back at a verified assembly mode
+ROUND_TRIP_TOLERANCE = 1e-10
+#: Newton steps of a search from a random configuration (each may be halved; :mod:`._direct`)
+SEARCH_ITER = 60
+#: two solutions whose task body poses differ by less than this (rotation matrix entries, and
+#: positions over the mechanism's size) are one assembly mode
+SAME_POSE = 1e-6
+
+
+@dataclass(frozen=True)
+class DirectKinematics:
+    """The direct kinematics along an actuator motion, per sample.
+
+    ``t (n,)`` [s] or None; ``s, sd, sdd (n, na)``: actuator coordinates and their rates (SI);
+    ``x, xd, xdd (n, nt)``: task coordinates ([m], Euler angles [rad], continuous along the
+    motion) and their rates; ``q, qd, qdd (n, nq)``: tree coordinates (None where the call
+    asked for the task motion alone, :func:`direct_kinematics`); ``residual (n,)``: the
+    largest scaled loop residual; ``iterations (n,)``: Newton steps; ``det (n,)``: determinant
+    of the direct kinematics Jacobian ``K`` (its sign: the assembly branch); ``pivot_ratio
+    (n,)``: the smallest over the largest pivot of ``K``'s factorisation (near 0 close to a
+    singularity). Where the task motion alone came by the actuated coordinates' closed forms,
+    ``residual`` is the largest scaled difference of the actuated coordinates, ``det`` is ``det A``
+    (``A = ds/dx``) times the legs' actuated factors, of the sign ``det K`` has at the first
+    sample, and ``pivot_ratio`` is that of ``A``."""
+
+    t: Array | None
+    s: Array
+    sd: Array
+    sdd: Array
+    x: Array
+    xd: Array
+    xdd: Array
+    q: Array | None
+    qd: Array | None
+    qdd: Array | None
+    residual: Array
+    iterations: NDArray[np.int64]
+    det: Array
+    pivot_ratio: Array
+
+    def __len__(self) -> int:
+        return int(self.s.shape[0])
+
+
+@dataclass(frozen=True)
+class Assembly:
+    """One assembly mode: task coordinates ``x (nt,)`` (angles the branch nearest the reference
+    pose's), tree coordinates ``q (nq,)``, the scaled loop ``residual``, the scaled actuator
+    difference of the inverse kinematics round trip, the sign of the direct kinematics
+    Jacobian's determinant, the singularity measures (:func:`.kinematics.singularity_measures`:
+    ``inverse``, ``direct``, ``constraint``) and the starts that reached it (``hits``)."""
+
+    x: Array
+    q: Array
+    residual: float
+    round_trip: float
+    det_sign: int
+    inverse: float
+    direct: float
+    constraint: float
+    hits: int
+
+
+@dataclass(frozen=True)
+class AssemblyModes:
+    """The assembly modes found at actuator coordinates ``s``: ``modes`` nearest the reference
+    pose first; ``starts`` the random starts tried, ``converged`` those whose Newton search
+    converged to a verified solution."""
+
+    s: Array
+    modes: tuple[Assembly, ...]
+    starts: int
+    converged: int
+    method: str = ("damped Newton from random configurations (multi-start), each solution verified by the inverse "
+                   "kinematics and duplicates merged by the task body's pose; every mode listed is real, none is "
+                   "guaranteed to be the last")
+
+
+def _check(model: MechanismModel) -> None:
+    if not isinstance(model, MechanismModel):
+        raise ParameterError(f"model: expected a MechanismModel, got {type(model).__name__}")
+    if model.na != model.nt:
+        raise ParameterError(f"{model.name}: direct kinematics needs as many actuated joints as degrees of freedom "
+                             f"({model.na} actuated, {model.nt} degrees of freedom)")
+
+
+def _arrays(model: MechanismModel, damped: bool = False, max_iter: int = MAX_ITER) -> tuple:
+    """The kernels' model tuples (:mod:`._direct`)."""
+    nr = model.row_loop.shape[0]
+    act = np.ascontiguousarray(model.act_coord, dtype=np.int64)
+    unk = np.ascontiguousarray(np.setdiff1d(np.arange(model.nq), act), dtype=np.int64)
+    rows = model.solver_rows
+    cut = np.ascontiguousarray(rows[rows < nr], dtype=np.int64)
+    tree = (model.body_parent, model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion,
+            model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,
+            model.tree_p_child)
+    loops = (model.joint_R_parent, model.joint_p_parent, model.joint_R_child, model.joint_p_child,
+             model.ancestor_list, model.row_loop, model.row_kind, model.row_i, model.row_j, model.loop_joint,
+             model.joint_parent, model.joint_child)
+    task = (model.task_body, model.task_point, model.task_kind, model.task_index, model.euler_axes)
+    sol = (act, unk, cut, np.ascontiguousarray(model.solver_idle), model.coord_offset, row_scale(model),
+           float(TOLERANCE), float(CHECK_TOLERANCE), int(max_iter), bool(damped))
+    return tree, loops, task, sol
+
+
+def pack_one(model: MechanismModel) -> NDArray[np.int64]:
+    """The packed buffer of :func:`._direct.direct_one` (its ``ONE_ARRAYS``): a header of
+    ``(offset, d0, d1, d2)`` per array, then each array's bits; the state cold."""
+    tree, loops, task, sol = _arrays(model)
+    act, unk, cut, idle, q_ref, rs, tol, check_tol, max_iter, _ = sol
+    nq, nb, na, nt = model.nq, model.body_parent.shape[0], model.na, model.nt
+    nrow, nu = model.row_loop.shape[0] + nt, unk.shape[0]
+    scalars = np.array([tol, check_tol, task[0], max_iter], dtype=float)
+    work = D._work(nq, nb, nrow, nu, na)  # the batched route's own work space
+    arrays = [*tree, *loops, *task[1:], act, unk, cut, idle, q_ref, rs, scalars, *work,
+              np.zeros(2 + nq + nt + 2 * na + 2 + nq), np.zeros(5), np.zeros(na), np.zeros(nq)]
+    if len(arrays) != len(D.ONE_ARRAYS):
+        raise RuntimeError(f"internal error: {len(arrays)} arrays packed, the kernel takes {len(D.ONE_ARRAYS)}")
+    head = np.zeros(4 * len(arrays), dtype=np.int64)
+    parts, at = [], head.size
+    for i, (a, (name, kind, ndim)) in enumerate(zip(arrays, D.ONE_ARRAYS)):
+        a = np.ascontiguousarray(a, dtype=np.int64 if kind == "i" else float)
+        if a.ndim != ndim:
+            raise RuntimeError(f"internal error: {name} has {a.ndim} dimensions, the kernel takes {ndim}")
+        head[4 * i:4 * i + 4] = [at, *a.shape, *[1] * (3 - a.ndim)]
+        parts.append(a.ravel().view(np.int64))
+        at += a.size
+    return np.concatenate([head, *parts])
+
+
+def one_state(pk: NDArray[np.int64]) -> Array:
+    """The state of a packed buffer (:func:`pack_one`; a view): ``[flag, det K, q (nq), x (nt),
+    s (na), sd (na), step known, pivot ratio, step of q (nq)]`` of the last solved sample."""
+    k = len(D.ONE_ARRAYS) - 4
+    o, n = int(pk[4 * k]), int(pk[4 * k + 1])
+    return pk[o:o + n].view(np.float64)
+
+
+def prime_one(pk: NDArray[np.int64], q: Array, x: Array, s: Array, det: float) -> None:
+    """Set the solution a packed buffer's next call starts from (Newton alone, no predictor)."""
+    st = one_state(pk)
+    nq, nt = q.shape[0], x.shape[0]
+    st[0], st[1] = D.ONE_PRIMED, det
+    na = s.shape[0]
+    st[2:2 + nq], st[2 + nq:2 + nq + nt], st[2 + nq + nt:2 + nq + nt + na] = q, x, s
+    st[2 + nq + nt + na:] = 0.0  # no rate: the next call's predictor is of the first order
+
+
+def task_route_map(model: MechanismModel) -> NDArray[np.int64] | None:
+    """``(na, 2)``: for each actuated coordinate, the explicit leg that sets it and its place in
+    that leg's chain, where :func:`._direct.direct_task_one` answers for ``model``: as many
+    actuators as task coordinates; a task of three Euler angles with three positions, or none
+    (a task body on a ball fixed to the ground); every actuated coordinate in the chain of a leg
+    placed from the task alone (:mod:`.legs`) with three coordinates (patterns A2, B2), from
+    the ground, either the leg that carries the task body (T+A2, T+B2) or one that meets it.
+    None otherwise (the tree-space route answers)."""
+    lg = model.legs
+    n_ang, n_pos = int(np.sum(model.task_kind == 1)), int(np.sum(model.task_kind == 0))
+    if lg.count == 0 or model.na != model.nt or n_ang != 3 or n_pos not in (0, 3):
+        return None
+    if not any(lg.kind[L] >= 10 and lg.fixed[L] for L in range(lg.count)):
+        return None  # the task body is not placed by a leg from the task alone
+    out = np.zeros((model.na, 2), dtype=np.int64)
+    for a, c in enumerate(model.act_coord):
+        hit = None
+        for L in range(lg.count):
+            if not lg.fixed[L] or lg.kind[L] % 10 not in (2, 4) or lg.base[L] != -1:
+                continue
+            if lg.kind[L] < 10 and lg.placed[L] != model.task_body:
+                continue
+            where = np.flatnonzero(lg.coord[L] == c)
+            if where.size:
+                hit = (L, int(where[0]))
+                break
+        if hit is None:
+            return None
+        out[a] = hit
+    return out
+
+
+def _actuated_points(model: MechanismModel, lmap: NDArray[np.int64], npos: int) -> tuple[Array, bool]:
+    """For :func:`pack_task`: each actuator's leg end on the task body (the cut joint's point, or
+    the centre of the ball that carries the task body) less the task point (or, without task
+    positions, the centre of the task body's ball on the ground), in the task body's frame
+    ``(na, 3)``; and whether each actuated coordinate is one that its leg's closed form gives
+    before the others (A2's first joint, B2's slide: :func:`._direct._actuated`), so that the
+    route needs the other coordinates of no leg."""
+    lg = model.legs
+    origin = model.task_point if npos == 3 else model.tree_p_child[model.body_joint[model.task_body]]
+    crel = np.zeros((model.na, 3))
+    alone = True
+    for a, (L, i) in enumerate(lmap):
+        end = model.tree_p_child[lg.ball[L, 0]] if lg.kind[L] >= 10 else lg.cpt[L]
+        crel[a] = end - origin
+        alone = alone and (lg.kind[L] % 10, int(i)) in ((2, 0), (4, 2)) and _reaches_around(lg, L)
+    return crel, alone
+
+
+def _reaches_around(lg, L: int) -> bool:
+    """Whether leg ``L``'s two turns about ``m0`` (its universal joint, or its ball with the spin
+    held) point its rod in every direction, so that the actuated coordinate alone tells whether
+    the leg reaches its point: the two axes normal to each other and the rod normal to the
+    second (A2: axes 1, 2; B2: axes 0, 1, the slide normal to the second too). Elsewhere a rod
+    length in reach may still be a direction out of reach (the route placing every leg says
+    so)."""
+    ax, rod = lg.axis[L], lg.e0[L] - lg.m0[L]
+    size = max(float(np.linalg.norm(rod)), 1e-300)
+    tol = 1e-9
+    if lg.kind[L] % 10 == 2:
+        return abs(ax[1] @ ax[2]) < tol and abs(rod @ ax[2]) < tol * size
+    return abs(ax[0] @ ax[1]) < tol and abs(ax[2] @ ax[1]) < tol and abs(rod @ ax[1]) < tol * size
+
+
+def pack_task(model: MechanismModel) -> NDArray[np.int64] | None:
+    """The state and work of :func:`._direct.direct_task_one` (a header of offsets, then the
+    parts; the state cold), or None where that route does not answer (:func:`task_route_map`)."""
+    lmap = task_route_map(model)
+    if lmap is None:
+        return None
+    nq, nt, na, nb = model.nq, model.nt, model.na, model.nb
+    npos = int(np.sum(model.task_kind == 0))
+    o = np.zeros(3)
+    if npos == 0:  # the centre of the ball on the ground that carries the task body
+        R, p, _ = body_poses(model, model.coord_offset)
+        k = int(model.body_joint[model.task_body])
+        o = p[model.task_body] + R[model.task_body] @ model.tree_p_child[k]
+    scale = np.where(model.coord_motion[model.act_coord] >= 3, 1.0 / model.length_scale, 1.0)
+    crel, alone = _actuated_points(model, lmap, npos)
+    parts = [np.zeros(2), np.zeros(nt), np.zeros(na), np.zeros(nt * nt), scale, o, lmap.ravel(),
+             np.zeros(nq), np.zeros(nb * 9), np.zeros(nb * 3), np.zeros(nq * 6), np.zeros(45), np.zeros(60),
+             np.zeros(nq * 3), np.zeros(nt * nt), np.zeros(nt * nt), np.zeros(nt), np.zeros(9), np.zeros(18),
+             np.zeros(nt, dtype=np.int64),
+             np.concatenate([np.zeros(nt + 1), [1.0 / model.length_scale, 1.0, 0.0, 0.0]]),
+             np.zeros(nt), np.zeros(nq), crel.ravel(), np.array([1.0 if alone else 0.0, 0.0]), np.zeros(4 * na)]
+    head = np.zeros(D.TASK_HEAD, dtype=np.int64)
+    head[D.TASK_HEAD - 2], head[D.TASK_HEAD - 1] = npos, nb
+    at, bits = D.TASK_HEAD, []
+    for i, a in enumerate(parts):
+        head[i] = at
+        bits.append(np.ascontiguousarray(a).view(np.int64))
+        at += a.size
+    return np.concatenate([head, *bits])
+
+
+def prime_task(d: NDArray[np.int64], q: Array, x: Array, s: Array) -> None:
+    """Set the solution the task-space route's next call starts from (no predictor)."""
+    f = d.view(np.float64)
+    f[d[0]] = D.ONE_PRIMED
+    f[d[1]:d[1] + x.shape[0]] = x
+    f[d[2]:d[2] + s.shape[0]] = s
+    f[d[7]:d[7] + q.shape[0]] = q
+    f[d[20]:d[20] + x.shape[0] + 1] = 0.0  # no step known: the next call's predictor uses the Jacobian
+
+
+def task_state(d: NDArray[np.int64]) -> Array:
+    """The task-space route's ``[flag, det A]`` (a view)."""
+    return d.view(np.float64)[d[0]:d[0] + 2]
+
+
+def actuator_reference(model: MechanismModel) -> Array:
+    """The actuator coordinates (na,) at the reference configuration."""
+    return model.coord_offset[model.act_coord].copy()
+
+
+def _outputs(model: MechanismModel, n: int) -> dict:
+    """The kernel's output arrays for ``n`` samples (:func:`._direct.direct_batch`, in its order)."""
+    nq, nt = model.nq, model.nt
+    return {"q": np.zeros((n, nq)), "qd": np.zeros((n, nq)), "qdd": np.zeros((n, nq)), "x": np.zeros((n, nt)),
+            "xd": np.zeros((n, nt)), "xdd": np.zeros((n, nt)), "res": np.zeros(n), "it": np.zeros(n, dtype=np.int64),
+            "det": np.zeros(n), "ratio": np.zeros(n), "status": np.full(n, -1, dtype=np.int64),
+            "worst": np.zeros(n, dtype=np.int64)}
+
+
+def _batch(model: MechanismModel, s: Array, sd: Array, sdd: Array, q_start: Array, x_start: Array,
+           t: Array | None, out: dict | None = None, args: tuple | None = None) -> dict:
+    """The kernel along ``s, sd, sdd`` into ``out`` (new arrays unless given, as a caller that
+    solves one sample at a time keeps them) with the model's tuples ``args`` (:func:`_arrays`)."""
+    out = _outputs(model, s.shape[0]) if out is None else out
+    tm = np.zeros(0) if t is None else np.ascontiguousarray(t, dtype=float)
+    D.direct_batch(tm, s, sd, sdd, np.ascontiguousarray(q_start, dtype=float), np.ascontiguousarray(x_start),
+                   *(_arrays(model) if args is None else args), *out.values())
+    return out
+
+
+def _straight(a: Array, b: Array, steps: int) -> Array:
+    """``steps`` points from ``a`` (left out) to ``b`` along the straight line."""
+    return np.ascontiguousarray(a + np.linspace(0.0, 1.0, steps + 1)[1:, None] * (b - a))
+
+
+def _values(model: MechanismModel, s: Array) -> str:
+    return ", ".join(f"{a} = {v + 0.0:.6g} {'m' if model.coord_motion[c] >= 3 else 'rad'}"
+                     for a, c, v in zip(model.actuator_names, model.act_coord, s))
+
+
+def _acting(model: MechanismModel, q: Array, row: int) -> str:
+    """The actuator whose coordinate moves row ``row`` the most at ``q`` (scaled)."""
+    _, J = constraint_jacobian(model, q[None])
+    if not np.all(np.isfinite(J)):
+        return model.actuator_names[0]
+    w = np.abs(J[0, row, model.act_coord]) * column_scale(model)[model.act_coord]
+    return model.actuator_names[int(np.argmax(w))]
+
+
+def _fail(model: MechanismModel, out: dict, k: int, s: Array, t: Array | None, offset: int) -> None:
+    """Raise the error of sample ``k`` of ``out`` (a :func:`_batch` result)."""
+    when = f"sample {k + offset}" + (f" (t = {t[k]:.6g} s)" if t is not None else "")
+    _raise(model, int(out["status"][k]), int(out["worst"][k]), float(out["res"][k]), out["q"][k], s[k], when)
+
+
+def _raise(model: MechanismModel, st: int, worst: int, res: float, q: Array, s: Array, when: str) -> None:
+    if st == D.CROSSED:
+        raise SingularityError(f"{when}: the actuator motion crosses a singularity of the direct kinematics (the "
+                               f"determinant of its Jacobian changes sign since the sample before; actuators "
+                               f"{_values(model, s)}): the pose would jump between assembly modes")
+    if st == K.SINGULAR:
+        raise SingularityError(f"{when}: singular direct kinematics at actuators {_values(model, s)} (the "
+                               f"actuators do not determine the pose: a type II singularity)")
+    if st == D.EULER_SINGULAR_RATES:
+        raise SingularityError(f"{when}: the Euler angles ({model.euler_sequence}) of task body "
+                               f"{model.body_names[model.task_body]!r} are at their singularity (actuators "
+                               f"{_values(model, s)})")
+    actuator = _acting(model, q, worst)
+    raise UnreachablePoseError(f"{when}: actuator {actuator!r}: the actuator coordinates {_values(model, s)} reach "
+                               f"no pose: {row_labels(model)[worst]} does not close (residual {res:.3g} of the "
+                               "length scale)")
+
+
+def _start(model: MechanismModel, s0: Array, t: Array | None, offset: int) -> Array:
+    """Tree coordinates at actuator coordinates ``s0`` connected to the reference configuration:
+    continuation from the reference actuator coordinates in 1, then 8, then 64 steps."""
+    s_ref = actuator_reference(model)
+    x_ref = reference_task(model)
+    last = None
+    for steps in (1, 8, 64):
+        path = _straight(s_ref, s0, steps)
+        zero = np.zeros_like(path)
+        out = _batch(model, path, zero, zero, model.coord_offset, x_ref, None)
+        if out["status"][-1] == K.OK:
+            return out["q"][-1].copy()
+        last = out
+    assert last is not None
+    k = int(np.flatnonzero(last["status"] != K.OK)[0])
+    when = f"sample {offset}" + (f" (t = {t[0]:.6g} s)" if t is not None else "")
+    _raise(model, int(last["status"][k]), int(last["worst"][k]), float(last["res"][k]), last["q"][k], s0, when)
+    raise AssertionError  # pragma: no cover - _raise raises
+
+
+def _bridge(model: MechanismModel, s: Array, out: dict, k: int) -> Array | None:
+    """Tree coordinates at sample ``k`` followed from the solved sample ``k - 1`` in 8, then 64
+    small actuator steps, on the same branch (a coarsely sampled motion, or a sample whose
+    Newton solve took many steps and may have jumped to another assembly mode); None where
+    that fails too. A step in which the Jacobian's determinant changes sign is a singularity
+    crossed: status :data:`._direct.CROSSED` at ``k``."""
+    if k == 0:
+        return None
+    for steps in (8, 64):
+        path = _straight(s[k - 1], s[k], steps)
+        zero = np.zeros_like(path)
+        b = _batch(model, path, zero, zero, out["q"][k - 1], out["x"][k - 1], None)
+        if np.all(b["status"] == K.OK):
+            if np.any(b["det"] * out["det"][k - 1] < 0):
+                out["status"][k] = D.CROSSED
+                return None
+            return b["q"][-1].copy()
+    return None
+
+
+#: Newton steps beyond the simplified one after which a sample is followed again in small
+#: steps (:func:`_bridge`): from a close predictor one step suffices, many suggest a jump
+JUMP_STEPS = 3
+#: a sample whose Jacobian's smallest-to-largest pivot ratio is below this sits on a
+#: singularity; where the next sample then needs many Newton steps, the branch that follows
+#: cannot be told from the actuators, and the motion is refused there as a crossing
+NEAR_SINGULAR = 1e-4
+
+
+def _by_the_actuated_coordinates(model: MechanismModel, s: Array, sd: Array, sdd: Array, q0: Array,
+                                 x0: Array) -> dict | None:
+    """The task motion along ``s, sd, sdd`` by the task-space route of one sample
+    (:func:`._direct.direct_task_batch`), each actuated coordinate from its leg's closed form
+    alone, from the first sample's solution ``q0, x0``; None where that route does not apply
+    (:func:`pack_task`, its flag) or any sample is not a plain continuation step (a call it does
+    not answer, more than :data:`JUMP_STEPS` Newton steps, a Jacobian whose pivot ratio is below
+    :data:`._direct.TASK_NEAR`): the tree-space route then answers, with its checks."""
+    d = pack_task(model)
+    if d is None or d.view(np.float64)[d[24]] != 1.0:
+        return None
+    from ..dynamics import _sample_kernels as _one
+
+    d.view(np.float64)[d[24] + 1] = -1e18  # no placement of the legs' other coordinates on the way
+    prime_task(d, q0, x0, s[0])
+    n, nt = s.shape[0], model.nt
+    out = {"x": np.zeros((n, nt)), "xd": np.zeros((n, nt)), "xdd": np.zeros((n, nt)), "res": np.zeros(n),
+           "it": np.zeros(n, dtype=np.int64), "det": np.zeros(n), "ratio": np.zeros(n),
+           "status": np.full(n, -1, dtype=np.int64)}
+    D.direct_task_batch(_one.pack(model), d, s, sd, sdd, np.zeros(2 * nt), *out.values())
+    if np.any(out["status"] != K.OK) or out["it"].max() > JUMP_STEPS or out["ratio"].min() < D.TASK_NEAR:
+        return None
+    return out
+
+
+def direct_kinematics(model: MechanismModel, s: Array, sd: Array | None = None, sdd: Array | None = None,
+                      t: Array | None = None, q_start: Array | None = None,
+                      sample_offset: int = 0, bodies: bool = True) -> DirectKinematics:
+    """The direct kinematics along the actuator motion ``s, sd, sdd (n, na)`` (SI; module
+    docstring): each sample warm-started from the one before (``t`` (n,) [s] gives the
+    third-order predictor and the messages' times), the first from ``q_start`` (nq,) or else
+    by continuation from the reference configuration. Refused, naming the sample (counted from
+    ``sample_offset``) and an actuator, where the actuator coordinates reach no pose
+    (:class:`~pkmdyn.errors.UnreachablePoseError`) or the motion crosses a singularity or meets
+    one (:class:`~pkmdyn.errors.SingularityError`).
+
+    Without ``bodies`` the result holds the task motion alone (``q, qd, qdd`` None): where each
+    actuated coordinate is the one its leg's closed form gives first (the task-space route of
+    one sample, ``docs/mechanism_format.md``: the Gough-Stewart platform, a 3-PUS platform, R-U-S,
+    P-U-S and U-P-S platforms), the samples after the first then come from the actuated
+    coordinates' closed forms alone (:func:`._direct.direct_task_batch`; ``det`` is then
+    ``det A`` times the legs' actuated factors, of the same sign along a motion, and
+    ``pivot_ratio`` that of ``A = ds/dx``), and from the tree-space route wherever that route
+    meets anything but a plain continuation step. That route does not see the legs' passive
+    joints: a universal joint at its own singularity (its two axes in line), which the
+    tree-space route refuses, passes there."""
+    _check(model)
+    na = model.na
+    s = np.ascontiguousarray(as_array(s, (None, na), "s", MotionError))
+    n = s.shape[0]
+    sd = np.zeros_like(s) if sd is None else np.ascontiguousarray(as_array(sd, (n, na), "sd", MotionError))
+    sdd = np.zeros_like(s) if sdd is None else np.ascontiguousarray(as_array(sdd, (n, na), "sdd", MotionError))
+    if t is not None:
+        t = np.ascontiguousarray(as_array(t, (n,), "t", MotionError))
+    for name, arr in (("s", s), ("sd", sd), ("sdd", sdd)):
+        bad = np.flatnonzero(~np.all(np.isfinite(arr), axis=1))
+        if bad.size:
+            raise MotionError(f"{name}: sample {int(bad[0]) + sample_offset} is not finite")
+    if n == 0:
+        raise MotionError("s: the actuator motion has no samples")
+    q0 = _start(model, s[0], t, sample_offset) if q_start is None else \
+        np.ascontiguousarray(as_array(q_start, (model.nq,), "q_start"))
+    if not bodies and n > 1:
+        first = _batch(model, s[:1], sd[:1], sdd[:1], q0, reference_task(model), None if t is None else t[:1])
+        fast = None if first["status"][0] != K.OK else \
+            _by_the_actuated_coordinates(model, s, sd, sdd, first["q"][0], first["x"][0])
+        if fast is not None:
+            # the branch's sign as the tree-space route gives it (its det K at the first sample)
+            fast["det"] *= np.sign(first["det"][0] * fast["det"][0])
+            return DirectKinematics(t=t, s=s, sd=sd, sdd=sdd, x=fast["x"], xd=fast["xd"], xdd=fast["xdd"], q=None,
+                                    qd=None, qdd=None, residual=fast["res"], iterations=fast["it"], det=fast["det"],
+                                    pivot_ratio=fast["ratio"])
+    out = _batch(model, s, sd, sdd, q0, reference_task(model), t)
+    if out["status"][0] != K.OK:
+        _fail(model, out, 0, s, t, sample_offset)
+    settled = 1  # samples before this one are final
+    while True:
+        failed = out["status"][settled:] != K.OK
+        slow = (out["it"][settled:] > JUMP_STEPS) & ~failed
+        pending = np.flatnonzero(failed | slow)
+        if pending.size == 0:
+            break
+        k = settled + int(pending[0])
+        if out["status"][k] == K.OK and out["ratio"][k - 1] < NEAR_SINGULAR:
+            out["status"][k] = D.CROSSED  # the sample before sat on a singularity: which branch follows is unknown
+        if out["status"][k] == D.CROSSED:  # the predictor carried the solution through a singularity
+            _fail(model, out, k, s, t, sample_offset)
+        q_k = _bridge(model, s, out, k)
+        if q_k is None:
+            if out["status"][k] == K.OK:  # solved in many steps, but not reached by following the branch
+                out["status"][k] = K.NOT_CONVERGED
+            _fail(model, out, k, s, t, sample_offset)
+        if not failed[k - settled] and np.abs(q_k - out["q"][k]).max() <= 1e-8:
+            settled = k + 1  # the many steps did land on the same branch
+            continue
+        rest = _batch(model, s[k:], sd[k:], sdd[k:], q_k, out["x"][k - 1], None if t is None else t[k:])
+        for key, arr in rest.items():
+            out[key][k:] = arr
+        if out["status"][k] != K.OK:
+            _fail(model, out, k, s, t, sample_offset)
+        settled = k + 1
+    if n > 1:
+        flip = np.flatnonzero(out["det"][1:] * out["det"][:-1] < 0)
+        if flip.size:
+            out["status"][flip[0] + 1] = D.CROSSED
+            _fail(model, out, int(flip[0]) + 1, s, t, sample_offset)
+    keep = (out["q"], out["qd"], out["qdd"]) if bodies else (None, None, None)
+    return DirectKinematics(t=t, s=s, sd=sd, sdd=sdd, x=out["x"], xd=out["xd"], xdd=out["xdd"], q=keep[0],
+                            qd=keep[1], qdd=keep[2], residual=out["res"], iterations=out["it"], det=out["det"],
+                            pivot_ratio=out["ratio"])
+
+
+def task_motion(model: MechanismModel, motion: ActuatorMotion,
+                q_start: Array | None = None) -> tuple[TaskMotion, DirectKinematics]:
+    """The task motion of an actuator motion (:func:`.motion.read_actuator_motion`) by the
+    direct kinematics along it (:func:`direct_kinematics`, the task motion alone), with its named
+    loads; and the direct kinematics itself (residuals, iterations, branch; no tree coordinates)."""
+    dk = direct_kinematics(model, motion.s, motion.sd, motion.sdd, motion.t, q_start=q_start, bodies=False)
+    return TaskMotion(motion.t, dk.x, dk.xd, dk.xdd, dict(motion.loads)), dk
+
+
+def _random_starts(model: MechanismModel, m: int, rng: np.random.Generator) -> Array:
+    """``m`` tree configurations: turning coordinates uniform over a turn, sliding ones within
+    two length scales of their reference (the actuated ones are set by the solve)."""
+    turn = model.coord_motion < 3
+    q = np.empty((m, model.nq))
+    q[:, turn] = rng.uniform(-np.pi, np.pi, (m, int(turn.sum())))
+    q[:, ~turn] = model.coord_offset[~turn] + rng.uniform(-2.0, 2.0, (m, int((~turn).sum()))) * model.length_scale
+    return q
+
+
+def assembly_modes(model: MechanismModel, s: Array, starts: int = 2000, seed: int = 0) -> AssemblyModes:
+    """The assembly modes found at actuator coordinates ``s (na,)`` (module docstring): the
+    reference configuration, the continuation from it and ``starts`` random configurations
+    (``seed``) are each taken to a solution by damped Newton; the converged ones verified by the
+    inverse kinematics round trip to :data:`ROUND_TRIP_TOLERANCE` and merged by the task body's
+    pose. Refused where no start reaches a solution (the actuators reach no pose)."""
+    from .inverse import singularity_measures
+
+    _check(model)
+    s = np.ascontiguousarray(as_array(s, (model.na,), "s", MotionError))
+    if not np.all(np.isfinite(s)):
+        raise MotionError("s: not finite")
+    if isinstance(starts, bool) or not isinstance(starts, (int, np.integer)) or not 0 <= starts <= 1_000_000:
+        raise ParameterError(f"starts: expected an integer from 0 to 1,000,000, got {starts!r}")
+    rng = np.random.default_rng(seed)
+    cand = [model.coord_offset[None]]
+    try:
+        cand.append(_start(model, s, None, 0)[None])
+    except (UnreachablePoseError, SingularityError):
+        pass
+    cand.append(_random_starts(model, int(starts), rng))
+    Q0 = np.ascontiguousarray(np.concatenate(cand))
+    m = Q0.shape[0]
+    q_out = np.zeros_like(Q0)
+    res, det, ratio = np.zeros(m), np.zeros(m), np.zeros(m)
+    status = np.full(m, -1, dtype=np.int64)
+    D.direct_starts(s, Q0, *_arrays(model, damped=True, max_iter=SEARCH_ITER), q_out, res, det, ratio, status)
+    good = np.flatnonzero((status == K.OK) | (status == D.EULER_SINGULAR_RATES))
+    if good.size == 0:
+        raise UnreachablePoseError(f"actuator {model.actuator_names[0]!r}: the actuator coordinates {_values(model, s)} "
+                                   f"reach no pose ({m} starts, none converged)")
+    L = model.length_scale
+    tb = model.task_body
+    x_ref = reference_task(model)
+    nr = model.row_loop.shape[0]
+    groups: list[dict] = []
+    for i in good:
+        R, p, _ = body_poses(model, q_out[i])
+        key = np.concatenate([R[tb].ravel(), p[tb] / L])
+        if not np.all(np.isfinite(key)):
+            continue
+        for g in groups:
+            if np.abs(g["key"] - key).max() < SAME_POSE:
+                g["hits"] += 1
+                if res[i] < res[g["i"]]:
+                    g["i"] = i
+                break
+        else:
+            groups.append({"key": key, "i": i, "hits": 1})
+    modes = []
+    for g in groups:
+        i = g["i"]
+        q = q_out[i]
+        val, _ = constraint_jacobian(model, q[None])
+        x = val[0, nr:].copy()
+        ang = model.task_kind == 1
+        x[ang] = x_ref[ang] + (x[ang] - x_ref[ang] + np.pi) % (2 * np.pi) - np.pi
+        try:
+            kin = solve_kinematics(model, x[None], q_start=q)
+            back = kin.act_q[0]
+        except (UnreachablePoseError, SingularityError):
+            continue
+        scale = np.where(model.coord_motion[model.act_coord] >= 3, 1.0 / L, 1.0)
+        trip = float(np.abs((back - s) * scale).max())
+        if not trip <= ROUND_TRIP_TOLERANCE:
+            continue
+        sm = singularity_measures(model, q[None])
+        modes.append(Assembly(x=x, q=q.copy(), residual=float(res[i]), round_trip=trip, det_sign=int(np.sign(det[i])),
+                              inverse=float(sm.inverse[0]), direct=float(sm.direct[0]),
+                              constraint=float(sm.constraint[0]), hits=int(g["hits"])))
+    if not modes:
+        raise UnreachablePoseError(f"actuator {model.actuator_names[0]!r}: no solution at {_values(model, s)} passed "
+                                   "the inverse kinematics check")
+    scale_x = np.where(model.task_kind == 0, 1.0 / L, 1.0)
+    modes.sort(key=lambda a: float(np.abs((a.x - x_ref) * scale_x).max()))
+    return AssemblyModes(s=s, modes=tuple(modes), starts=m, converged=int(good.size))
+
+
+def parse_actuators(model: MechanismModel, text: str) -> Array:
+    """Actuator coordinates from ``"P_1=0.41,P_2=0.40,..."`` (every actuated joint once, SI
+    units of its coordinate: m or rad); errors name the key."""
+    vals: dict[str, float] = {}
+    for item in str(text).split(","):
+        item = item.strip()
+        if not item:
+            continue
+        name, eq, v = item.partition("=")
+        name = name.strip()
+        if not eq:
+            raise ParameterError(f"--actuators: {item!r}: expected NAME=VALUE")
+        if name not in model.actuator_names:
+            raise ParameterError(f"--actuators: {name!r}: not an actuated joint of {model.name!r} (those are: "
+                                 f"{', '.join(model.actuator_names)})")
+        if name in vals:
+            raise ParameterError(f"--actuators: {name!r}: given twice")
+        try:
+            f = float(v)
+        except ValueError:
+            raise ParameterError(f"--actuators: {name}: {v.strip()!r} is not a number") from None
+        if not np.isfinite(f) or abs(f) > 1e6 * max(model.length_scale, 1.0):
+            raise ParameterError(f"--actuators: {name}: {v.strip()!r} is not a finite value of a plausible size")
+        vals[name] = f
+    missing = [a for a in model.actuator_names if a not in vals]
+    if missing:
+        raise ParameterError(f"--actuators: {missing[0]!r}: missing (give every actuated joint: "
+                             f"{', '.join(model.actuator_names)})")
+    return np.array([vals[a] for a in model.actuator_names])
