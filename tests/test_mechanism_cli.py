@@ -196,7 +196,7 @@ def test_run_a_hand_built_machine_writes_the_common_files(capsys, tmp_path, name
 
 
 def test_registry_reads_the_machine_folders():
-    """Every folder with ``<name>.toml`` or a ``machine_protocol.py`` is a built-in machine; a hand-built
+    """Every folder with ``<name>.toml`` or a ``machine.py`` is a built-in machine; a hand-built
     entry provides what the machine-independent commands use, and an unknown name is refused."""
     from pkmdyn.errors import ParameterError
     from pkmdyn.machines import registry

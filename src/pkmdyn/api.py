@@ -26,6 +26,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .errors import ParameterError
+from .machines.registry import resolve
+from .multibody import default_motion as motion
+from .multibody import load_mechanism, solve_kinematics
+from .multibody.analyses.stiffness import stiffness as k
+from .multibody.analyses.wear import WearOptions, joint_wear
+from .multibody.columns import effort_columns
+from .multibody.dynamics.actuators import motor_efforts
+from .multibody.dynamics.inverse import joint_reactions
+from .multibody.dynamics.verbs import machine_verbs
+from .multibody.kinematics.direct import assembly_modes as modes
+from .multibody.kinematics.direct import direct_kinematics as direct
+
 __all__ = ["load", "default_motion", "kinematics", "Dynamics", "dynamics", "forward_dynamics", "direct_kinematics",
            "assembly_modes", "stiffness", "wear"]
 
@@ -37,9 +50,6 @@ def load(machine: str | Path | Mapping[str, Any], params: str | Path | None = No
     built-in machine's name (``pkmdyn machines``), a description file (``docs/mechanism_format.md``)
     or a description as a dict; ``params``: the parameter file of a machine that generates its
     description from one (the papers' machines; default its built-in parameters)."""
-    from .errors import ParameterError
-    from .machines.registry import resolve
-    from .multibody import load_mechanism
 
     if isinstance(machine, Mapping):
         if params is not None:
@@ -55,16 +65,12 @@ def load(machine: str | Path | Mapping[str, Any], params: str | Path | None = No
 
 def default_motion(model: Any) -> Any:
     """The description's default task motion (:class:`pkmdyn.multibody.TaskMotion`)."""
-    from .multibody import default_motion as motion
-
     return motion(model)
 
 
 def kinematics(model: Any, motion: Any = None) -> Any:
     """Every body's and joint's kinematics (:class:`pkmdyn.multibody.MechanismKinematics`) along
     ``motion`` (a :class:`pkmdyn.multibody.TaskMotion`; default the description's own)."""
-    from .multibody import solve_kinematics
-
     m = default_motion(model) if motion is None else motion
     return solve_kinematics(model, m.x, m.xd, m.xdd, m.t)
 
@@ -85,8 +91,6 @@ class Dynamics:
 
     def columns(self) -> dict[str, Array]:
         """The dynamics' columns of ``pkmdyn run``'s results table, by name (unit-suffixed)."""
-        from .multibody.columns import effort_columns
-
         return effort_columns(self.model, self.kin, self.reactions, self.named)
 
 
@@ -95,8 +99,6 @@ def dynamics(model: Any, kin: Any, loads: Mapping[str, Array] | None = None) -> 
     load-dependent friction iterated on the reactions) along ``kin``; ``loads``: the named
     loads' magnitudes per sample (``{name: (n,)}`` [N or N m]; the description's
     ``magnitude_N`` otherwise)."""
-    from .multibody.dynamics.actuators import motor_efforts
-    from .multibody.dynamics.inverse import joint_reactions
 
     named = dict(loads or {})
     reac = joint_reactions(model, kin, named=named, split=True)
@@ -107,8 +109,6 @@ def forward_dynamics(model: Any, x: Array, xd: Array, u: Array, load: Array | No
     """Task accelerations ``xdd (n, nt)`` under efforts ``u (n, na)`` (a drive's motor effort,
     as :attr:`Dynamics.motors`) at task poses ``x`` and rates ``xd (n, nt)``; ``load (n,)``: a
     mechanism's one named load's magnitudes."""
-    from .multibody.dynamics.verbs import machine_verbs
-
     return machine_verbs(model).forward_dynamics(model, x, xd, u, load)
 
 
@@ -116,24 +116,18 @@ def direct_kinematics(model: Any, s: Array, sd: Array | None = None, sdd: Array 
                       t: Array | None = None) -> Any:
     """The task pose and every body along an actuator motion ``s, sd, sdd (n, na)``
     (:func:`pkmdyn.multibody.kinematics.direct.direct_kinematics`)."""
-    from .multibody.kinematics.direct import direct_kinematics as direct
-
     return direct(model, s, sd, sdd, t)
 
 
 def assembly_modes(model: Any, s: Array, starts: int = 2000, seed: int = 0) -> Any:
     """Every assembly mode found at the actuator coordinates ``s (na,)``
     (:func:`pkmdyn.multibody.kinematics.direct.assembly_modes`)."""
-    from .multibody.kinematics.direct import assembly_modes as modes
-
     return modes(model, s, starts, seed)
 
 
 def stiffness(model: Any, kin: Any) -> Any:
     """The Cartesian stiffness of the task body with the actuators locked, per sample of ``kin``
     (:func:`pkmdyn.multibody.analyses.stiffness.stiffness`; the description needs a compliance source)."""
-    from .multibody.analyses.stiffness import stiffness as k
-
     return k(model, kin)
 
 
@@ -144,6 +138,4 @@ def wear(model: Any, kin: Any, joint: str, radius_m: float | None = None, load: 
     what loads it)``); ``radius_m``: the head's radius (default the joint's friction
     ``ball_radius_m``); ``load``: a named load's name pressing the head (default the joint's
     own reaction), its magnitudes in ``loads``."""
-    from .multibody.analyses.wear import WearOptions, joint_wear
-
     return joint_wear(model, kin, joint, WearOptions(radius_m=radius_m, load=load), dict(loads or {}))

@@ -21,6 +21,7 @@ from typing import Any, TypeVar
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from .errors import LimitError, ParameterError
+from .io import check_text_encoding
 
 __all__ = ["Section", "read_toml", "validate", "describe_errors", "check_limit", "parse_limit_options", "MAX_TOML_BYTES"]
 
@@ -38,8 +39,6 @@ class Section(BaseModel):
 
 def read_toml(path: str | Path) -> dict[str, Any]:
     """Read a TOML file; a missing, over-large, non-UTF-8 or malformed file is a :class:`ParameterError`."""
-    from .io import check_text_encoding
-
     if not isinstance(path, (str, os.PathLike)):
         raise ParameterError(f"expected a parameter file path, got {type(path).__name__}")
     path = Path(path)

@@ -22,7 +22,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ParameterError
+from ..machines.registry import generated
 from ..params_util import read_toml
+from ._laws import Gains
 
 __all__ = ["default_settings_text", "load_settings", "loop_settings", "LoopSettings", "gains", "si",
            "scale_description", "POSITIVE", "INTEGER", "MAXIMUM"]
@@ -40,8 +42,6 @@ MAXIMUM = {"pose_delay_cycles": 10_000, "seed": 2**63 - 1, "pose_feedback_from_s
 
 def default_settings_text(machine: str) -> str:
     """The built-in settings file of the generated machine ``machine`` (a registry name) as text."""
-    from ..machines.registry import generated
-
     return generated(machine).CONTROL_SETTINGS.read_text(encoding="utf-8")
 
 
@@ -198,8 +198,6 @@ def loop_settings(settings: dict[str, dict[str, Any]]) -> LoopSettings:
 
 def gains(settings: dict[str, dict[str, Any]], kind: str, n: int) -> "Gains":
     """The gains of controller ``kind`` (``n`` values each; absent gains are zero)."""
-    from ._laws import Gains
-
     table = settings.get(kind, {})
     vals = {}
     for g in ("kp", "kd", "ki"):

@@ -24,6 +24,8 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
+from ..errors import ParameterError
+
 __all__ = ["BaseParameters", "base_parameters", "DEFAULT_RANK_TOL"]
 
 Array = NDArray[np.float64]
@@ -98,8 +100,6 @@ class BaseParameters:
 def base_parameters(W: Array, names: tuple[str, ...], tol: float = DEFAULT_RANK_TOL) -> BaseParameters:
     """Rank-revealing decomposition of a stacked regressor ``W (m, p)`` (module docstring).
     ``tol`` must lie in (0, 1): at 1 no singular value counts, and the rank would be 0."""
-    from ..errors import ParameterError
-
     if not (np.isfinite(tol) and 0.0 < tol < 1.0):
         raise ParameterError(f"rank tolerance: {tol:g} must be a finite number in (0, 1)")
     W = np.asarray(W, dtype=float)

@@ -32,12 +32,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import MotionError
 from ..io import output_dir, read_csv_columns, write_csv, write_json
 from ..multibody.analyses.regressor import regressor
-from ..multibody.kinematics.inverse import solve_kinematics
-from ..multibody.model.compiler import MechanismModel
-from ..multibody.kinematics.motion import MAX_MOTION_ROWS, actuator_columns, actuator_rates, task_columns
 from ..multibody.columns import actuator_effort_column, results_column_names
+from ..multibody.kinematics.direct import direct_kinematics
+from ..multibody.kinematics.inverse import solve_kinematics
+from ..multibody.kinematics.motion import MAX_MOTION_ROWS, actuator_columns, actuator_rates, task_columns
+from ..multibody.model.compiler import MechanismModel
 from ..profiles._columns import column_group, derivatives, require_increasing
 from ._base import DEFAULT_RANK_TOL
 from ._identify import fit_regressor
@@ -74,8 +76,6 @@ def read_measured(model: MechanismModel, path: Path, sg_window: int = 15, sg_ord
     if x is not None:
         xd, xdd = derivatives(path, t, x, column_group(path, cols, vel), column_group(path, cols, acc), vel)
     else:  # a log in actuator coordinates: the pose by the direct kinematics
-        from ..errors import MotionError
-        from ..multibody.kinematics.direct import direct_kinematics
 
         s = column_group(path, cols, apos)
         if s is None:
@@ -96,8 +96,6 @@ def _check_efforts(model: MechanismModel, path: Path, names: list[str], u: Array
     """The measured efforts within the description's plausibility limits (``max_force_N``,
     ``max_torque_Nm``) and not all zero (nothing to identify from); errors name the row and
     column."""
-    from ..errors import MotionError
-
     for k, c in enumerate(names):
         key = "max_torque_Nm" if c.endswith("_Nm") else "max_force_N"
         lim = float(model.limits.get(key, np.inf))

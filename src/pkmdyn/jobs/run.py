@@ -26,17 +26,33 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import PkmdynError
-from ..io import NpzWriter, check_table_format, open_table_writer, output_dir, write_json
+from ..io import NpzWriter, check_table_format, note_table_size, open_table_writer, output_dir, write_json
+from ..multibody.columns import (
+    actuator_effort_column,
+    bodies_arrays,
+    deflection_columns,
+    effort_columns,
+    joint_effort_column,
+    model_summary,
+    results_column_names,
+    results_columns,
+)
 from ..multibody.dynamics.actuators import check_actuator_rates, check_task_rates, effective_limits, motor_effort_column
-from ..multibody.dynamics.inverse import joint_reactions, load_forces
-from ..multibody.kinematics.inverse import MechanismKinematics, joint_coordinates, least_measures, limit_hit, limit_line, \
-    limited_joints, solve_kinematics
-from ..multibody.model.compiler import MechanismModel
-from ..multibody.columns import actuator_effort_column, bodies_arrays, deflection_columns, effort_columns, \
-    joint_effort_column, model_summary, results_column_names, results_columns
-from ..multibody.dynamics.inverse import effort_unit
+from ..multibody.dynamics.inverse import effort_unit, joint_reactions, load_forces
+from ..multibody.dynamics.reactions import ComplianceDataMissing
+from ..multibody.kinematics.inverse import (
+    MechanismKinematics,
+    joint_coordinates,
+    least_measures,
+    limit_hit,
+    limit_line,
+    limited_joints,
+    solve_kinematics,
+)
 from ..multibody.kinematics.motion import motion_columns, task_columns
+from ..multibody.model.compiler import MechanismModel
 from ..multibody.scene import frame_indices_of, mechanism_scene
+from ..params_util import check_limit
 from ..report import Curve, FramePicker, TimePlot, write_report
 
 __all__ = ["run_mechanism", "write_run_report", "report_columns", "CHUNK"]
@@ -187,8 +203,6 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
     they move into place. Returns the summary with ``files`` as ``{label: path}``."""
     from tqdm import tqdm
 
-    from ..multibody.dynamics.reactions import ComplianceDataMissing
-
     if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
         raise PkmdynError(f"chunk: must be an integer >= 1, got {chunk!r}")
     check_table_format(fmt)
@@ -196,11 +210,7 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
     n = len(motion)
     if n < 1:
         raise PkmdynError("the motion has no samples")
-    from ..params_util import check_limit
-
     check_limit(n, int(lim["max_samples"]), "motion: samples", "max_samples", file="the description")
-    from ..io import note_table_size
-
     note_table_size(n, len(results_column_names(model, deflection)), fmt)
     body_rows = min(n, int(lim["max_body_samples"]))
     window = min(body_rows, n if plot_window is None else int(plot_window))

@@ -14,10 +14,21 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ParameterError, PkmdynError
-from ..multibody.kinematics.inverse import MechanismKinematics, reference_task, solve_kinematics
-from ..multibody.model.compiler import MechanismModel
-from ..multibody.analyses.stiffness import Stiffness, StiffnessDataMissing, compliance_sources, deflection, reaction_route, stiffness
+from ..io import write_csv, write_json
+from ..multibody.analyses.stiffness import (
+    Stiffness,
+    StiffnessDataMissing,
+    compliance_sources,
+    deflection,
+    reaction_route,
+    stiffness,
+)
 from ..multibody.analyses.task_grid import grid_poses
+from ..multibody.columns import model_summary
+from ..multibody.dynamics.inverse import joint_reactions
+from ..multibody.kinematics.inverse import MechanismKinematics, reachable, reference_task, solve_kinematics
+from ..multibody.model.compiler import MechanismModel
+from ..report import scene_from_joints, write_report
 
 __all__ = ["pose_document", "run_stiffness", "MAX_GRID_POINTS"]
 
@@ -107,8 +118,6 @@ def _mode_scene(model: MechanismModel, kin: MechanismKinematics, st: Stiffness, 
 
 def _report(out: Path, model: MechanismModel, kin: MechanismKinematics, st: Stiffness, s: int, summary: dict,
             text: str, images: list[Path]) -> Path:
-    from ..report import scene_from_joints, write_report
-    from ..multibody.columns import model_summary
 
     t, jp, notes = _mode_scene(model, kin, st, s)
     scene = None
@@ -156,14 +165,10 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
     """Write the stiffness job's files into the (temporary) folder ``out``; exactly one of
     ``poses (n, nt)``, ``motion`` (a task motion, its loads included) or ``grid`` (axes of
     :func:`parse_grid`). Returns the document written to ``stiffness.json``."""
-    from ..io import write_csv, write_json
-
     files: dict[str, Path] = {}
     images: list[Path] = []
     if grid is not None:
         x = grid_poses(model, grid)
-        from ..multibody.kinematics.inverse import reachable
-
         ok = reachable(model, x)
         keep = np.flatnonzero(ok)
         results: dict[int, tuple[MechanismKinematics, Stiffness]] = {}
@@ -202,8 +207,6 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
         doc["worst"] = dict(pose_document(model, results[worst][1], 0), index=int(worst))
         kin, st, s0 = results[worst][0], results[worst][1], 0
     elif motion is not None:
-        from ..multibody.dynamics.inverse import joint_reactions
-
         kin_all = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
         over = reaction_route(model)
         n_all = len(kin_all)

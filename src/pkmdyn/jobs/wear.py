@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..io import write_csv, write_json
 from ..multibody.analyses.wear import ASPECT_LIMIT, SlideTracks, WearOptions, joint_index, pole_rotation
 
 __all__ = ["wear_document", "write_wear_files", "tracks_figure"]
@@ -91,8 +92,6 @@ def _png(path: Path, joint: str, on_cup: SlideTracks, on_head: SlideTracks) -> P
 def write_wear_files(out: Path, model: Any, results: list[tuple[str, SlideTracks, SlideTracks, str]],
                      opts: WearOptions, extra: dict[str, Any] | None = None, plots: bool = True) -> dict[str, Path]:
     """``wear.json``, the markers' tables, ``tracks.npz`` and (``plots``) the PNGs into the folder ``out``."""
-    from ..io import write_csv, write_json
-
     files: dict[str, Path] = {}
     doc: dict[str, Any] = {"mechanism": model.name, "definitions": "docs/wear.md", **(extra or {}),
                            "joints": [wear_document(model, j, c, h, w, opts) for j, c, h, w in results]}

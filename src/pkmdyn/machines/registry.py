@@ -5,7 +5,7 @@ Two kinds of folder make a built-in machine, and nothing else has to change to a
 - a *described* machine: ``machines/<name>/<name>.toml``, a mechanism description
   (:mod:`pkmdyn.multibody`);
 - a *generated* machine (the two papers' machines): a package ``machines/<folder>/`` whose
-  module ``machine_protocol.py`` turns the machine's own parameter file into a mechanism description.
+  module ``machine.py`` turns the machine's own parameter file into a mechanism description.
   It says ``NAME``, ``TITLE``, ``CONTROL_SETTINGS`` (a path) and provides
   ``default_params_text()``, ``description(params=None)`` (the parameter file ``params``, the
   built-in one by default, as a mechanism description), ``default_motion()`` (a
@@ -54,17 +54,17 @@ def described_machines() -> dict[str, Path]:
 
 @functools.cache
 def generated_machines() -> dict[str, ModuleType]:
-    """Every package ``machines/<folder>/`` with a ``machine_protocol.py``: its ``NAME`` -> that module."""
+    """Every package ``machines/<folder>/`` with a ``machine.py``: its ``NAME`` -> that module."""
     out: dict[str, ModuleType] = {}
     for folder in sorted(_HERE.iterdir()):
-        if folder.is_dir() and (folder / "machine_protocol.py").is_file() and (folder / "__init__.py").is_file():
+        if folder.is_dir() and (folder / "machine.py").is_file() and (folder / "__init__.py").is_file():
             module = importlib.import_module(f"{__package__}.{folder.name}.machine")
             out[module.NAME] = module
     return out
 
 
 def generated(name: str) -> ModuleType:
-    """The registry entry (``machine_protocol.py`` module) of the generated machine ``name``."""
+    """The registry entry (``machine.py`` module) of the generated machine ``name``."""
     machines = generated_machines()
     if name not in machines:
         raise ParameterError(f"machine {name!r}: not a generated machine (those are: {', '.join(sorted(machines))})")
@@ -98,7 +98,7 @@ def description_path(name: str) -> Path:
 
 
 def resolve(machine: str) -> tuple[ModuleType | None, Path | None]:
-    """``(entry, None)`` for a generated machine (its ``machine_protocol.py`` module), ``(None, path)`` for
+    """``(entry, None)`` for a generated machine (its ``machine.py`` module), ``(None, path)`` for
     a described built-in or a description ``FILE.toml``; anything else is refused."""
     if machine in generated_machines():
         return generated_machines()[machine], None

@@ -16,13 +16,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import PkmdynError
-from .dynamics.actuators import motor_effort_column, motor_efforts
-from .description.schema import MOTOR_KEYS
-from .dynamics.inverse import effort_unit, named_magnitudes
+from .analyses.stiffness import deflection
 from .description.joint_types import JOINT_TYPES
+from .description.schema import MOTOR_KEYS
+from .dynamics.actuators import motor_effort_column, motor_efforts
+from .dynamics.inverse import effort_unit, named_magnitudes
 from .kinematics.inverse import MechanismKinematics
-from .model.compiler import MechanismModel
 from .kinematics.motion import motion_columns, task_columns
+from .model.compiler import MechanismModel
 
 __all__ = ["results_columns", "motion_columns", "joint_effort_column", "actuator_effort_column", "model_summary",
            "bodies_arrays", "effort_columns", "results_column_names", "deflection_columns"]
@@ -246,7 +247,5 @@ def deflection_columns(model: MechanismModel, kin: MechanismKinematics, reac: An
                        sample_offset: int = 0) -> dict[str, Array]:
     """``<coordinate>_deflection_<unit>``: the task coordinates' elastic deflection with the
     actuators locked under the motion's own loads (:func:`.stiffness.deflection`)."""
-    from .analyses.stiffness import deflection
-
     dx = deflection(model, kin, reac, named=named, sample_offset=sample_offset)
     return {f"{n}_deflection_{u}": dx[:, i] for i, (n, u) in enumerate(zip(model.task_names, model.task_units))}

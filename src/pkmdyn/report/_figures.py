@@ -6,6 +6,7 @@ floats (0.1 um at a metre), which halves the page's data.
 
 from __future__ import annotations
 
+import base64
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -249,8 +250,6 @@ def typed_array(values: Any, dtype: str = "f4") -> dict:
     """``values`` as plotly.js's typed-array form (``{"dtype", "bdata"}``: the little-endian bytes
     in base64), some three times smaller in a page than a list of decimals; ``dtype`` ``"f4"``
     (single precision, ample for a drawn curve) or ``"f8"``."""
-    import base64
-
     a = np.ascontiguousarray(np.asarray(values, dtype="<" + dtype))
     return {"dtype": dtype, "bdata": base64.b64encode(a.tobytes()).decode("ascii")}
 

@@ -17,7 +17,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import PkmdynError
-from ._figures import TimePlot, decimate_minmax, scene_figure, time_figure, topology_figure, Curve
+from ..io import atomic_file
+from ._figures import Curve, TimePlot, decimate_minmax, scene_figure, time_figure, topology_figure
 from ._scene import MAX_FRAMES, Scene, frame_indices
 from ._topology import Topology, fundamental_loops
 
@@ -233,8 +234,6 @@ def write_view(path: str | Path, *, title: str, scene: Scene, topology: Topology
     the mechanism at one pose in 3D, the topology graph with its loops, and the mobility and
     over-constraint counts (``mobility``). ``listing``, when given, is called with the path before
     the file moves into place (the command line prints it there)."""
-    from ..io import atomic_file
-
     target = Path(path)
     loops = fundamental_loops(topology)
     info: dict[str, Any] = {"scene": "pkmdyn-scene", "plots": [], "times": [float(scene.t[0])], "frames": 1,

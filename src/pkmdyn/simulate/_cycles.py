@@ -34,12 +34,35 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from .. import _dense
+from ..control import _laws
 from ..control._laws import _ct_acc, _pd, _pid
-from ..multibody.kinematics import _direct_kernels as _direct
+from ..multibody import _cache
+from ..multibody._cache import cached
+from ..multibody.dynamics import _dyn_kernels, friction
 from ..multibody.dynamics import _sample_kernels as _one
+from ..multibody.dynamics import inverse as dynamics
+from ..multibody.kinematics import _direct_kernels as _direct
+from ..multibody.kinematics import _solve_kernels as _kernels
+from ..multibody.model import _tree_kernels
+from . import _plant, _sensors
+from ._plant import (
+    EXPLICIT_LIMIT,
+    FD_STEP,
+    JACOBIAN_REUSE,
+    REFINE,
+    _piecewise,
+    _rk3_finish,
+    _rk3_step,
+    _rk4_step,
+    _rk_finish,
+    _rk_stage,
+    _stage1,
+    _stage2,
+    _stale,
+    _stiffness,
+)
 from ._sensors import _actuate, _sense
-from ._plant import (EXPLICIT_LIMIT, FD_STEP, JACOBIAN_REUSE, REFINE, _piecewise, _rk3_finish, _rk_finish, _rk_stage,
-                     _stage1, _stage2, _stale, _stiffness)
 
 __all__ = ["LAWS", "CompiledCycles", "compiled_cycles", "run_cycles", "example_arguments", "example_signature", "available"]
 
@@ -322,8 +345,6 @@ def compiled_cycles(plant: Any, controller: Any, ref: Any, exact: Any, work: Any
     the kernel is not compiled yet (:func:`available`)."""
     if plant.kernel is None or plant.kernel[1] is not _one.forward_one:
         return None
-    from ._plant import _rk3_step, _rk4_step
-
     if not work.explicit:  # the integrator's own method (:func:`._plant.make_work`)
         method = 2
     elif work.step is _rk3_step:
@@ -426,8 +447,6 @@ def available(cycles: int = 0) -> bool:
     """Whether :func:`run_cycles` is compiled for :func:`example_signature` in this process or
     in numba's cache; a run of ``cycles`` at least :data:`WORTH_COMPILING_CYCLES` compiles it
     here where it is neither (said on stderr by a command, :mod:`pkmdyn.compile_notice`)."""
-    from ..multibody._cache import cached
-
     if run_cycles.signatures or cached(run_cycles):
         return True
     if cycles >= WORTH_COMPILING_CYCLES:
@@ -439,16 +458,6 @@ def available(cycles: int = 0) -> bool:
 def _refresh_cache() -> None:
     """The kernels above link the single-sample dynamics and direct kinematics, the integrator's,
     the sensors' and the laws' kernels of other modules (:mod:`pkmdyn.multibody._cache`)."""
-    from .. import _dense
-    from ..control import _laws
-    from ..multibody import _cache
-    from ..multibody.dynamics import _dyn_kernels
-    from ..multibody.kinematics import _solve_kernels as _kernels
-    from ..multibody.model import _tree_kernels
-    from ..multibody.dynamics import inverse as dynamics
-    from ..multibody.dynamics import friction
-    from . import _plant
-    from . import _sensors
 
     _cache.refresh((_f, _jacobian, _ros2, _hold, run_cycles),
                    (_one, _direct, _kernels, _tree_kernels, _dyn_kernels, _dense, friction, dynamics, _sensors, _plant, _laws))

@@ -41,9 +41,23 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import PkmdynError
+from ..control._laws import Sensed, _ct_acc, _pd, _pid, effort, new_memory
 from ..control._settings import LoopSettings
-from ._plant import Plant, accelerations, hold_interval, make_work
+from ..errors import ParameterError, PkmdynError
+from . import _cycles
+from ._plant import (
+    Plant,
+    _piecewise,
+    _rk3_finish,
+    _rk_stage,
+    _stage1,
+    _stage2,
+    _stale,
+    _stiffness,
+    accelerations,
+    hold_interval,
+    make_work,
+)
 from ._sensors import _actuate, _sense
 
 __all__ = ["LoopSettings", "LoopResult", "LoopState", "DivergenceError", "ExactEncoders", "closed_loop", "run_span",
@@ -95,8 +109,6 @@ CHUNK = 1000
 
 def check_timing(cycle_s: float, step_s: float) -> int:
     """Integration steps per cycle; the cycle must be a positive whole multiple of the step."""
-    from ..errors import ParameterError
-
     for name, v in (("control_cycle_s", cycle_s), ("integration_step_s", step_s)):
         if not (np.isfinite(v) and v > 0):
             raise ParameterError(f"[timing] {name}: {v:g} must be finite and > 0")
@@ -140,8 +152,6 @@ def compile_cycle_kernels() -> None:
     """Compile (or load) the cycle's own small kernels - the sensors', the limits', the laws' and
     the default integrator's - by calling each once on small arrays of the types the loop passes, so
     that they are compiled (or loaded from the cache) before the loop's first cycle."""
-    from ..control._laws import _ct_acc, _pd, _pid
-    from ._plant import _piecewise, _rk3_finish, _rk_stage, _stage1, _stage2, _stale, _stiffness
 
     v, m2, m3 = np.zeros(2), np.zeros((1, 2)), np.zeros((1, 2, 2))
     one = np.ones(2)
@@ -170,8 +180,6 @@ class ExactEncoders:
     (nu,)`` the drives' ratios (1 for a joint without one)."""
 
     def __init__(self, plant: Plant, ctrl_model: Any, q0: Array) -> None:
-        from ..errors import ParameterError
-
         verbs = plant.verbs
         if not (hasattr(verbs, "actuator_coordinates_one") and hasattr(verbs, "direct_one")):
             raise ParameterError("[sensors] exact_encoders: this machine's verbs have no single-sample inverse and "
@@ -201,8 +209,6 @@ def new_loop_state(plant: Plant, controller: Any, ref: Any, ctrl_joint: Any, set
     on the reference's rate and acceleration (the loop starts in steady state on it); with
     ``settings.exact_encoders`` the encoders through the kinematics of the plant and of the
     controller's model ``ctrl_model`` (:class:`ExactEncoders`)."""
-    from ..control._laws import Sensed, new_memory
-
     nq, nu = plant.nq, plant.nu
     y = Sensed(np.empty(nq), np.empty(nq), np.empty(nu), ctrl_joint.sd[0].astype(float).copy(),
                ctrl_joint.sdd[0].astype(float).copy())
@@ -294,8 +300,6 @@ def run_span(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_joi
     out_qs = np.empty((rows, nq))
     sat = np.zeros((rows, nu), dtype=bool)
     out_q[:pre] = state.history
-    from ..control._laws import effort
-
     q, qd, y, memory, work = state.q, state.qd, state.y, state.memory, state.work
     exact = state.exact
     s_exact = np.zeros(nu)
@@ -337,8 +341,6 @@ def run_span(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_joi
             hold_interval(plant, q, qd, u, loads[2 * kr * steps:2 * (kr + 1) * steps + 1], dt, work)
         except PkmdynError as exc:
             raise DivergenceError(f"run diverged at t = {ref.t[kr]:.4f} s: {exc}") from None
-
-    from . import _cycles
 
     fast = None
     next_try = 0

@@ -2,17 +2,18 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Iterator
+from dataclasses import dataclass, replace
 from functools import cached_property, partial
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from collections.abc import Iterator
-from dataclasses import replace
-
-from ._loop import LoopResult, LoopSettings, closed_loop, new_loop_state, run_span
+from ..control._laws import make_controller
+from ..control._reference import JointReference, Reference, joint_reference, reference_window, sample_reference
+from ..errors import MotionError
+from ._loop import LoopResult, LoopSettings, check_timing, closed_loop, new_loop_state, run_span
 from ._plant import make_plant
 
 __all__ = ["Tracking", "track", "track_spans", "SPAN_CYCLES"]
@@ -53,8 +54,6 @@ def loop_reads_joint(kind: str, settings: LoopSettings) -> bool:
 
 def _part(r: Any, o: int, n: int) -> Any:
     """Cycles ``o .. o + n`` of the reference ``r`` (its instants ``o .. o + n``)."""
-    from ..control._reference import Reference
-
     mid = slice(o, o + n)
     full = slice(o, o + n + 1)
     return Reference(r.T, r.t[full], r.q[full], r.qd[full], r.qdd[full], None if r.load is None else r.load[full],
@@ -64,8 +63,6 @@ def _part(r: Any, o: int, n: int) -> Any:
 def _first_instant(joint: Any, nq: int) -> tuple[Any, Array]:
     """A joint reference and a rate map of the first instant alone, for a loop that reads no more
     of them (:func:`loop_reads_joint`)."""
-    from ..control._reference import JointReference
-
     one = JointReference(joint.Bt[:1], joint.s[:1], joint.sd[:1], joint.sdd[:1])
     return one, np.zeros((1, nq, joint.Bt.shape[1]))
 
@@ -87,9 +84,6 @@ def track(verbs: Any, model: Any, plant_model: Any, motion: Any, duration: float
     where the loop gets there (a :class:`DivergenceError` naming the time; feedforward's
     batched inverse dynamics still refuses it before).
     """
-    from ..control._laws import make_controller
-    from ..control._reference import joint_reference, sample_reference
-    from ._loop import check_timing
 
     check_timing(settings.cycle_s, settings.step_s)
     ref = sample_reference(motion, duration, settings.cycle_s)
@@ -137,10 +131,6 @@ def track_spans(verbs: Any, model: Any, plant_model: Any, motion: Any, duration:
     run; the loop's state (plant, filters, controller memory, noise, the delayed pose) carries
     over. The spans' records joined equal :func:`track`'s up to rounding.
     """
-    from ..control._laws import make_controller
-    from ..control._reference import JointReference, joint_reference, reference_window
-    from ..errors import MotionError
-    from ._loop import check_timing
 
     steps = check_timing(settings.cycle_s, settings.step_s)
     T = settings.cycle_s

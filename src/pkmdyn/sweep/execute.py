@@ -15,8 +15,10 @@ from __future__ import annotations
 
 import importlib
 import logging
-import os
 import math
+import os
+import signal
+import threading
 import time
 import uuid
 from collections.abc import Callable, Mapping, Sequence
@@ -28,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import PkmdynError
+from ..io import atomic_file
 from ..sweep_protocol import STATUSES, DesignOutcome, MetricInfo
 from .space import Bound, Parameter, design_description
 
@@ -166,8 +169,6 @@ def finished_ids(parts: Path) -> Array:
 def _write_part(parts: Path, table: Any) -> None:
     import pyarrow.parquet as pq
 
-    from ..io import atomic_file
-
     ids = table.column("design_id").to_numpy()
     with atomic_file(parts / _part_name(ids), notify=None) as tmp:
         pq.write_table(table, str(tmp), compression="zstd")
@@ -231,8 +232,6 @@ def _client(workers: int, scheduler: str | None) -> tuple[Any, Any]:
     # the worker processes start with SIGINT ignored (inherited; Python then installs no
     # KeyboardInterrupt handler in them): a Ctrl-C at the terminal reaches the whole process
     # group, and this process alone stops the sweep, with one line, and closes the cluster
-    import signal
-    import threading
 
     main = threading.current_thread() is threading.main_thread()
     old = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None

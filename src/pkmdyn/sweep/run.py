@@ -17,6 +17,8 @@ result files are each written atomically at the end.
 from __future__ import annotations
 
 import json
+import os
+import stat as st_
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -26,10 +28,12 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError, PkmdynError
-from ..io import atomic_file, check_inputs_outside, dumps_toml, write_json
+from ..io import atomic_file, check_inputs_outside, check_table_format, dumps_toml, write_json
 from ..sweep_protocol import STATUSES, SweepAdapter
+from . import plots as _plots
 from .execute import PARTS_DIR, BatchJob, ExecutionStats, Executor, finished_ids, part_schema
 from .pareto import minimised, pareto_mask
+from .search import Nsga2Search, generation_values, hypervolumes, normalise
 from .space import SweepSpace, design_description, from_unit, load_space, refine_designs, sample_designs
 
 __all__ = ["run_sweep", "SweepReport", "prepare_sweep", "PreparedSweep", "RECORD", "PREFLIGHT_DESIGNS"]
@@ -133,8 +137,6 @@ def _open_out(out: Path, record: dict[str, Any], inputs: Mapping[str, Any] = ())
     output rule (``docs/file_formats.md``): not a link or anything but a folder, no input of
     the run inside it, and no file where the sweep writes its results that an earlier run did
     not write or that was changed since (it would be replaced)."""
-    import os
-    import stat as st_
 
     if out.is_symlink():
         raise PkmdynError(f"--out {out}: is a symbolic link, not a folder pkmdyn wrote; refusing to write through it")
@@ -269,14 +271,10 @@ def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: in
     instead. Every check (space file, parameters, motion, the designs' validity, ``out``) comes
     before any design is evaluated; every user error is a :class:`~pkmdyn.errors.PkmdynError`.
     """
-    import os
-
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 0):
         raise ParameterError(f"--workers: must be an integer >= 0, got {workers!r}")
     if workers is not None and scheduler is not None:
         raise ParameterError("--workers and --scheduler: give one of them (a scheduler has its own workers)")
-    from ..io import check_table_format
-
     check_table_format("parquet")
     prep = prepare_sweep(adapter, space_path, params, max_designs, search)
     out = Path(out)
@@ -303,8 +301,6 @@ def run_sweep(adapter: Any, space_path: str | Path, out: str | Path, workers: in
         for r in range(1, prep.space.refine_rounds + 1):
             table = _collect(parts, schema, X.shape[0], later=True, read=read)
             if prep.space.method == "nsga2":  # the next generation from the last one's rows (search.py)
-                from .search import Nsga2Search, generation_values
-
                 if search is None:
                     search = Nsga2Search(prep.space)
                     if not np.array_equal(from_unit(prep.space, search.ask()), prep.X):
@@ -410,8 +406,6 @@ def _results(prep: PreparedSweep, X: Any, rounds: int, out: Path, plots: bool, s
                             "cluster_start_s": stats.cluster_start_s, "evaluate_s": stats.evaluate_s,
                             "driver_cpu_s": stats.driver_cpu_s, "worker_cpu_s": stats.worker_cpu_s}
     if plots:
-        from . import plots as _plots
-
         files.update(_plots.sweep_plots(out, table, prep.space, on_front))
         if "generations" in summary:
             files["convergence"] = _plots.convergence_plot(out / "convergence.png", summary["generations"])
@@ -429,8 +423,6 @@ def _convergence(table: Any, space: Any, n: int) -> list[dict[str, Any]]:
     """Per NSGA-II generation: the designs so far, the feasible ones, the size of their Pareto
     set and its hypervolume (objectives minimised and scaled to [0, 1] over every feasible design
     of the run, reference point 1.1 in each: the same scale for every generation)."""
-    from .search import hypervolumes, normalise
-
     feasible, _ = _front(table, space.objectives)
     ids = np.asarray(table.column("design_id").to_numpy(zero_copy_only=False))[feasible]
     F = minimised(np.column_stack([table.column(m).to_numpy(zero_copy_only=False)[feasible].astype(float)

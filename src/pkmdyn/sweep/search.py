@@ -23,6 +23,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import PkmdynError
+from .pareto import minimised
+
 __all__ = ["Nsga2Search", "violation", "hypervolumes", "normalise", "generation_values", "FAILED_VIOLATION"]
 
 Array = NDArray[np.float64]
@@ -62,8 +65,6 @@ class Nsga2Search:
         self._pending = pop
         n = int(self.space.designs)
         if U.shape[0] == 0:
-            from ..errors import PkmdynError
-
             raise PkmdynError("NSGA-II: no new design in this generation (the population has collapsed onto "
                               "duplicates); fewer generations or a larger population")
         if U.shape[0] < n:
@@ -122,8 +123,6 @@ def normalise(F: Array) -> tuple[Array, Array, Array]:
 def generation_values(table: Any, lo: int, hi: int, space: Any) -> tuple[Array, Array]:
     """The minimised objectives ``(hi - lo, k)`` and violations of designs ``lo .. hi - 1`` from
     the sweep's table (sorted by design id, each design once)."""
-    from .pareto import minimised
-
     ids = np.asarray(table.column("design_id").to_numpy(zero_copy_only=False))
     rows = np.flatnonzero((ids >= lo) & (ids < hi))
     if rows.size != hi - lo:

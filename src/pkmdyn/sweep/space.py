@@ -49,6 +49,7 @@ from pydantic import Field, model_validator
 from ..errors import LimitError, ParameterError
 from ..params_util import Section, read_toml, validate
 from ..sweep_protocol import MetricInfo
+from .search import Nsga2Search
 
 __all__ = [
     "Parameter",
@@ -518,8 +519,6 @@ def sample_designs(space: SweepSpace) -> Array:
         mesh = np.meshgrid(*axes, indexing="ij")
         return np.stack([m.reshape(-1) for m in mesh], axis=-1)
     if space.method == "nsga2":
-        from .search import Nsga2Search
-
         return from_unit(space, Nsga2Search(space).ask())
     u = _unit_sample(space)
     return np.stack([_from_unit(p, u[:, j]) for j, p in enumerate(space.parameters)], axis=-1)

@@ -30,8 +30,16 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from ...errors import LimitError, MotionError
+from ...multibody import TaskMotion
+from ...multibody.analyses.designs import GeneratedMotion
+from ...multibody.dynamics.actuators import motor_efforts
 from ...params_util import Section, check_limit, validate
+from ...profiles.iso14242 import iso14242_block, iso14242_samples, iso14242_times
+from ...profiles.orientation import read_motion_csv
+from ...spatial import euler_to_matrix
 from ...sweep_protocol import DesignOutcome, MetricInfo, time_integral, time_mean
+from .description import hip_description
+from .paper import euler_rate_map, iso_cycle_preset
 from .params import HipModel, check_motion_limits, default_params_dict, model_from_dict
 
 __all__ = ["NAME", "HipMotionData", "default_params", "check_params", "description", "motion", "metrics",
@@ -122,15 +130,10 @@ def check_params(params: Mapping[str, Any], source: str) -> None:
 
 def description(params: Mapping[str, Any]) -> dict[str, Any]:
     """The mechanism description of a parameter file (:func:`~.description.hip_description`)."""
-    from .description import hip_description
-
     return hip_description(model_from_dict(dict(params), "design"))
 
 
 def _orientation_motion(opt: _Motion, model: HipModel, base_dir: Path) -> tuple[Any, float]:
-    from ...profiles.iso14242 import iso14242_block, iso14242_samples, iso14242_times
-    from ...profiles.orientation import read_motion_csv
-    from .paper import iso_cycle_preset
 
     lim = model.limits
     if opt.file is not None:
@@ -151,8 +154,6 @@ def _orientation_motion(opt: _Motion, model: HipModel, base_dir: Path) -> tuple[
 def _workspace_rotations(sequence: str, points: int, max_angle_deg: float) -> Array:
     from scipy.stats import qmc
 
-    from ...spatial import euler_to_matrix
-
     if points == 0:
         return np.zeros((0, 3, 3))
     u = qmc.Sobol(3, scramble=True, rng=np.random.default_rng(WORKSPACE_SEED)).random_base2(
@@ -166,9 +167,6 @@ def motion(params: Mapping[str, Any], options: Mapping[str, Any], base_dir: Path
 
     The base parameters must themselves be valid: their Euler sequence and ``[limits]`` apply
     to the motion (angles and load are checked against them here, before any design)."""
-    from ...multibody import TaskMotion
-    from ...multibody.analyses.designs import GeneratedMotion
-    from .paper import euler_rate_map
 
     opt = validate(_Motion, dict(options), "[motion]")
     model = model_from_dict(dict(params), "base parameters")
@@ -278,8 +276,6 @@ def _kinematic_metrics(state: Any, data: HipMotionData) -> tuple[dict[str, float
 def _effort_metrics(state: Any, data: HipMotionData) -> dict[str, float]:
     """The motor torques' metrics (Eq. A1 of :mod:`pkmdyn.multibody.dynamics.actuators`: the joint
     effort through the lead screw, the rotor's inertia, the screw's friction)."""
-    from ...multibody.dynamics.actuators import motor_efforts
-
     model, kin, t = state.model, state.kin, state.motion.t
     me = motor_efforts(model, kin.act_q, kin.act_qd, kin.act_qdd, state.u)
     tau, theta_dot = me.effort, me.theta_dot

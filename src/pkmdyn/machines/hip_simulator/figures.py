@@ -11,11 +11,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from ...report import Curve, TimePlot
+from .paper import PARTS
 
 __all__ = ["PlotData", "PlotCollector", "write_figures", "report_plots", "plot_motion_and_load", "plot_slider_motion",
            "plot_torque_parts", "plot_torques", "plot_friction_vs_load"]
@@ -223,8 +225,6 @@ def write_figures(data: PlotData, folder: Path) -> dict[str, Path]:
 def report_plots(data: PlotData) -> list:
     """The report's time plots (:class:`pkmdyn.report.TimePlot`) of the run's plot data: samples,
     or min-max envelopes of bins for long runs."""
-    from ...report import Curve, TimePlot
-    from .paper import PARTS
 
     def curves(key: str, names: list[str] | tuple[str, ...], scale: float = 1.0) -> tuple:
         lo, hi = data.lo[key] * scale, data.hi[key] * scale

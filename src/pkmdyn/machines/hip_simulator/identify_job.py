@@ -24,14 +24,29 @@ from ...io import atomic_file, check_output_dir, check_output_file, dumps_toml, 
 from ...params_util import read_toml
 from ...profiles.orientation import write_motion_csv
 from .identify_excite import ExcitationLimits, design_excitation, excitation_motion
-from .identify_view import (FRICTION_ATTR, TORQUE_COLUMNS, Which, consistency_transform, identified_description,
-                            identify_hip, read_measured_csv)
-from .params import HipModel, default_params_dict, load_params, model_from_dict
+from .identify_view import (
+    FRICTION_ATTR,
+    TORQUE_COLUMNS,
+    Which,
+    consistency_transform,
+    identified_description,
+    identify_hip,
+    read_measured_csv,
+)
 from .paper import parameters_text, regularisation_note
+from .params import HipModel, default_params_dict, load_params, model_from_dict
 
 __all__ = ["run_identify", "run_excite", "complete_description", "HELD_FIXED", "MAX_EXCITE_ROWS"]
 
+import warnings
+
+from ...identify.plots import plot_residuals, plot_torque_fit
+from ...multibody import load_mechanism
+from ...multibody.scene import motion_scene
+from ...report import MAX_FRAMES, Curve, TimePlot, frame_indices, write_report
+from .description import hip_description
 from .identify_bounds import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW  # noqa: E402  (the bounds, stated by the CLI)
+from .identify_excite import design_work
 
 #: what every identification holds at the parameter file's values
 HELD_FIXED = (
@@ -112,8 +127,6 @@ def run_identify(
     refused, never written. ``out_dir`` must pass the output rule
     (:func:`pkmdyn.io.check_output_dir`), checked first; ``report`` is called with the summary
     lines and the files' final paths before they move into place."""
-    import warnings
-
     _check_identify_options(which, sg_window, sg_order, rank_tol)
     inputs = {"--measured": measured_path, "--params": params_path}
     check_output_dir(out_dir, inputs)
@@ -205,8 +218,6 @@ def run_identify(
         write_csv(tmp / "torques.csv", columns)
         names = ["identified.toml", "identification.json", "torques.csv"]
         if make_plots:
-            from ...identify.plots import plot_residuals, plot_torque_fit
-
             plot_torque_fit(motion.t, tau, result.tau_identified, tmp / "torque_fit.png")
             plot_residuals(motion.t, tau - result.tau_identified, tmp / "residuals.png")
             names += ["torque_fit.png", "residuals.png"]
@@ -223,10 +234,6 @@ def run_identify(
 
 def _report(tmp: Path, model: HipModel, motion: Any, tau: np.ndarray, tau_id: np.ndarray, doc: dict[str, Any],
             params_path: str | Path | None, images: list[Path], warns: list[str]) -> Path:
-    from ...multibody import load_mechanism
-    from ...multibody.scene import motion_scene
-    from ...report import MAX_FRAMES, Curve, TimePlot, frame_indices, write_report
-    from .description import hip_description
 
     idx = frame_indices(len(motion), MAX_FRAMES)
     scene = motion_scene(load_mechanism(hip_description(model)), motion.t[idx], motion.angles[idx], tau[idx],
@@ -270,8 +277,6 @@ def run_excite(
     output rule (:func:`pkmdyn.io.check_output_file`), checked first; ``report`` is called with
     the summary lines before the file moves into place."""
     from tqdm import tqdm
-
-    from .identify_excite import design_work
 
     inputs = {"--params": params_path}
     out = Path(out_path)

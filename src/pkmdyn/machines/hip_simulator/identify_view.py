@@ -49,6 +49,7 @@ from __future__ import annotations
 import copy
 from dataclasses import dataclass, replace
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any, Literal
 
 import numpy as np
@@ -60,8 +61,12 @@ from ...identify._identify import check_efforts, fit_regressor
 from ...identify._regressor import Regressor
 from ...identify._solve import Estimate
 from ...io import read_csv_columns
+from ...multibody import load_mechanism, solve_kinematics
+from ...multibody.analyses.regressor import BODY_PARAMETERS, inertial_parameters, regressor
 from ...profiles._columns import savgol_derivatives
 from ...profiles.orientation import MOTION_COLUMNS, OrientationMotion, make_motion
+from .description import hip_description
+from .paper import PaperView
 from .params import HipModel, model_from_dict
 
 __all__ = [
@@ -231,8 +236,6 @@ def _regressor_description(model: HipModel) -> dict[str, Any]:
     """The hip's description with every friction family present (unit coefficients) and the
     centre joints' load-driven friction as the two unit-radius terms of the module docstring:
     the regressor's columns do not depend on the values, only on which terms exist."""
-    from .description import hip_description
-
     ones = {a: 1.0 for a in FRICTION_ATTR.values()}
     probe = replace(model, friction=replace(model.friction, **ones, r_h=1.0, mu_h=1.0, r_t=1.0, mu_t=1.0))
     desc = hip_description(probe)
@@ -247,8 +250,6 @@ def _regressor_description(model: HipModel) -> dict[str, Any]:
 
 def regressor_mechanism(model: HipModel) -> Any:
     """The compiled description whose regressor the identification uses (:func:`_regressor_description`)."""
-    from ...multibody import load_mechanism
-
     return load_mechanism(_regressor_description(model))
 
 
@@ -262,8 +263,6 @@ def engine_values(model: HipModel, mech: Any, names_e: tuple[str, ...], values: 
     """The engine's parameters ``names_e`` (the regressor's) of the hip with the parameters
     ``values`` (every name of :data:`ALL_NAMES`; the rest of ``model`` as it is), linear in
     ``values``; ``mech`` the compiled :func:`regressor_mechanism`."""
-    from ...multibody.analyses.regressor import BODY_PARAMETERS, inertial_parameters
-    from .description import hip_description
 
     desc = hip_description(_set_values(replace(model, friction=replace(model.friction, mu_h=0.0, mu_t=0.0)), values))
     bodies = {b["name"]: b for b in desc["bodies"]}
@@ -305,8 +304,6 @@ def _parameter_map(model: HipModel, mech: Any, names_e: tuple[str, ...], names: 
 
 def engine_kinematics(mech: Any, motion: OrientationMotion) -> Any:
     """The engine's kinematics of ``mech`` along the motion (task: the Euler angles)."""
-    from ...multibody import solve_kinematics
-
     return solve_kinematics(mech, motion.angles, motion.rates, motion.accels, motion.t)
 
 
@@ -317,8 +314,6 @@ def hip_regressor(model: HipModel, motion: OrientationMotion, names: tuple[str, 
     :func:`regressor_mechanism` of ``model``) and ``kin`` (its kinematics along ``motion``), when
     given, are used as they are; ``memo``, a list, keeps the parameter map (the same for every
     motion of one model and ``names``) for the next call."""
-    from ...multibody.analyses.regressor import regressor
-
     mech = regressor_mechanism(model) if mech is None else mech
     kin = engine_kinematics(mech, motion) if kin is None else kin
     load = np.zeros(len(motion)) if motion.load is None else np.asarray(motion.load, dtype=float)
@@ -491,10 +486,6 @@ def engine_torques(model: HipModel, motion: OrientationMotion) -> Array:
     """The motor torques ``(n, 3)`` [N m] of ``model`` along ``motion`` by the engine's inverse
     dynamics of its description (:class:`.paper.PaperView`: joint reactions with friction, then
     the drives, Eq. A1): independent of the regressor, for synthetic measurements."""
-    from types import SimpleNamespace
-
-    from .paper import PaperView
-
     load = np.zeros(len(motion)) if motion.load is None else np.asarray(motion.load, dtype=float)
     m = SimpleNamespace(t=motion.t, angles=motion.angles, rates=motion.rates, accels=motion.accels, load=load)
     return PaperView(model).solve(m).tau

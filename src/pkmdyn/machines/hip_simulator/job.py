@@ -33,10 +33,14 @@ from tqdm import tqdm
 
 from ...errors import ParameterError, PkmdynError, SingularityWarning
 from ...io import TABLE_FORMATS, check_table_format, note_table_size, open_table_writer, output_dir, write_json
+from ...jobs.wear import tracks_figure, write_wear_files
+from ...multibody.analyses.wear import WearOptions, joint_wear
+from ...multibody.scene import mechanism_scene
 from ...params_util import check_limit, parse_limit_options
-from ...profiles.iso14242 import IsoCycle, iso14242_block, iso14242_samples, iso14242_times
+from ...profiles.iso14242 import IsoCycle, iso14242_block, iso14242_motion, iso14242_samples, iso14242_times
 from ...profiles.orientation import OrientationMotion, read_motion_csv
-from . import paper
+from ...report import MAX_FRAMES, FramePicker, write_report
+from . import figures, paper
 from .params import LIMIT_KEYS, HipLimits, HipModel, check_motion_limits, load_params
 
 __all__ = ["run_hip", "RUN_CHUNK", "DEFAULT_SINGULARITY_THRESHOLD", "WEAR_SAMPLES"]
@@ -138,8 +142,6 @@ def _wear(out: Path, mech: Any, model: HipModel, kin: Any, load: Array, builtin:
     on the platform, the cup on the frame, the head's radius the parameter file's
     ``hip_radius_m``, the load the test load. Returns the files and the report's 3D views of the
     tracks."""
-    from ...jobs.wear import tracks_figure, write_wear_files
-    from ...multibody.analyses.wear import WearOptions, joint_wear
 
     opts = WearOptions(radius_m=float(model.friction.r_h), load="hydraulic_N")
     results = [(j, *joint_wear(mech, kin, j, opts, {"hydraulic_N": load})) for j in ("S0_upper", "S0_lower")]
@@ -156,8 +158,6 @@ def _wear_cycle(view: Any, collected: _WearSamples, motion: OrientationMotion | 
     or, for a built-in motion shorter than one cycle, one whole cycle solved apart (at most
     :data:`WEAR_SAMPLES` samples)."""
     if motion is None and n - 1 < samples_per_cycle:
-        from ...profiles.iso14242 import iso14242_motion
-
         m = iso14242_motion(cycles=1, samples_per_cycle=min(samples_per_cycle, WEAR_SAMPLES), cycle=cycle)
         return view.solve(m).kin, m.load
     kin, load = collected.kinematics()
@@ -235,14 +235,10 @@ def run_hip(
     check_table_format(fmt)  # pyarrow present? (checked before any work)
     note_table_size(n, len(paper.RESULTS_COLUMNS), fmt)
     view = paper.PaperView(model)  # the engine's model of the description, and the paper's names of it
-    from . import figures
-
     summ = paper.SummaryAccumulator()
     collect = figures.PlotCollector(window) if make_plots or html_report else None
     frames = None
     if html_report:
-        from ...report import MAX_FRAMES, FramePicker
-
         frames = FramePicker(window, MAX_FRAMES)  # the animation's samples of the plots' window
     wear = _WearSamples(_wear_keep(motion, n, samples_per_cycle))
     near = 0
@@ -317,8 +313,6 @@ def run_hip(
         if make_plots:
             files.update(figures.write_figures(data, tmp))
         if frames is not None:
-            from ...multibody.scene import mechanism_scene
-            from ...report import write_report
 
             f = frames.arrays()
             efforts = {f"P_{i + 1}": (f["tau"][:, i], f"motor {i + 1} torque", "N m") for i in range(3)}

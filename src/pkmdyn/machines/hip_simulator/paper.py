@@ -35,7 +35,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ParameterError
+from ...multibody import load_mechanism
+from ...multibody.dynamics.actuators import motor_efforts
+from ...multibody.dynamics.friction import EPS_ROTATION, EPS_TRANSLATION
+from ...multibody.dynamics.inverse import joint_reactions
+from ...multibody.kinematics.inverse import solve_kinematics
 from ...profiles.iso14242 import AxisWave, IsoCycle, iso14242_motion
+from ...spatial import euler_kinematics
+from .description import hip_description
 from .params import DEFAULT_PARAMS_TEXT, ISO_CYCLES, HipModel
 
 __all__ = ["PARTS", "PaperView", "HipBlock", "block_columns", "SummaryAccumulator", "parameters_text",
@@ -116,8 +123,6 @@ class PaperView:
     :func:`pkmdyn.multibody.load_mechanism`) and the paper's names of its results."""
 
     def __init__(self, model: HipModel) -> None:
-        from ...multibody import load_mechanism
-        from .description import hip_description
 
         self.model = model
         self.mech = mech = load_mechanism(hip_description(model))
@@ -137,9 +142,6 @@ class PaperView:
         the paper's quantities of it; ``sample_offset``: the number of the motion's first sample
         in messages (counted from 1, as a motion file's rows); ``q_start``: the tree coordinates
         to start from (the last sample of the block before)."""
-        from ...multibody.dynamics.actuators import motor_efforts
-        from ...multibody.dynamics.inverse import joint_reactions
-        from ...multibody.kinematics.inverse import solve_kinematics
 
         mech, a = self.mech, self.act
         kin = solve_kinematics(mech, motion.angles, motion.rates, motion.accels, motion.t, q_start=q_start,
@@ -261,8 +263,6 @@ def euler_rate_map(sequence: str, angles: Array) -> Array:
     """``E (n, 3, 3)``: the platform's angular velocity [rad/s] per unit rate of each Euler angle
     (column k for angle k) at ``angles (n, 3)`` [rad] in ``sequence``; the slider Jacobian of
     Eq. 3 in the angles' rates is then ``J E`` (the engine's ``J_ax``)."""
-    from ...spatial import euler_kinematics
-
     zero = np.zeros_like(angles)
     return np.stack([euler_kinematics(sequence, angles, np.broadcast_to(np.eye(3)[k], angles.shape), zero)[1]
                      for k in range(3)], axis=-1)
@@ -272,8 +272,6 @@ def regularisation_note(model: HipModel) -> str | None:
     """What the run says of the parameter file's ``friction_velocity_eps_*`` when they are not the
     engine's (every friction is regularised at :data:`pkmdyn.multibody.dynamics.friction.EPS_ROTATION` and
     ``EPS_TRANSLATION``, the file's defaults), else None."""
-    from ...multibody.dynamics.friction import EPS_ROTATION, EPS_TRANSLATION
-
     f = model.friction
     if (f.eps_w, f.eps_v) == (EPS_ROTATION, EPS_TRANSLATION):
         return None

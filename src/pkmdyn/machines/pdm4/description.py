@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from ...profiles.pdm_motion import PdmMotion
 from .inertia import ELASTIC_BODIES
 from .kinematics import BODY_NAMES, inverse_kinematics, joint_points, mechanism_joints
 from .paper import JOINTS
@@ -51,8 +52,6 @@ def _xyz_deg(R: np.ndarray) -> list[float]:
 def pdm_description(model: PdmModel, q_ref: np.ndarray | None = None) -> dict[str, Any]:
     """The description (a dict in the format of ``docs/mechanism_format.md``) of ``model`` at
     the reference pose ``q_ref`` (4,) = (x [m], y [m], alpha [rad], gamma [rad])."""
-    from ...profiles.pdm_motion import PdmMotion
-
     q = np.zeros(4) if q_ref is None else np.asarray(q_ref, dtype=float)
     kin = inverse_kinematics(model, PdmMotion(np.zeros(1), q[None], np.zeros((1, 4)), np.zeros((1, 4))),
                              check_strokes=False)

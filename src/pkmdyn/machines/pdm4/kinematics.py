@@ -18,13 +18,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from ...analysis.mobility import Joint
 from ...errors import SingularityError, UnreachablePoseError
 from ...spatial import axis_rotation, cross, dot
 from .paper import BODY_NAMES, JOINTS, LIMB_LABELS
 from .params import PdmModel, crank_angle
 
 if TYPE_CHECKING:
-    from ...analysis.mobility import Joint
     from ...profiles.pdm_motion import PdmMotion
 
 __all__ = [
@@ -487,8 +487,6 @@ def mechanism_joints(model: PdmModel, q: Array | None = None) -> list[Joint]:
     U2 (limb). R2i is a compound joint of three bodies and counts as two revolutes
     (crank-coupler and crank-piston), which gives R = 11.
     """
-    from ...analysis.mobility import Joint
-
     pose = np.zeros((1, 4)) if q is None else np.asarray(q, dtype=float).reshape(1, 4)
     pos = inverse_position(model, pose, check_strokes=False)
     z = (0.0, 0.0, 1.0)

@@ -25,6 +25,7 @@ from pydantic import Field, field_validator
 from ...errors import ParameterError
 from ...params_util import Section as _Section
 from ...params_util import check_limit, read_toml, validate
+from .inertia import body_inertia  # the inertia and material model, docs/pdm4.md section 10
 
 __all__ = ["PdmModel", "TrajectorySettings", "WorkspaceSettings", "load_params", "default_params_path", "LIMIT_KEYS",
            "crank_angle"]
@@ -291,8 +292,6 @@ def _build(d: _Description, name: str) -> PdmModel:
                 f"{name}: [workspace] gamma_layers x directions x (max_radius_m / radial_step_m + 1)",
                 "max_workspace_points", option=False)
     gammas = np.radians(np.linspace(w.gamma_min_deg, w.gamma_max_deg, w.gamma_layers))
-    from .inertia import body_inertia  # the inertia and material model, docs/pdm4.md section 10
-
     props = body_inertia(d, name, r2=r2, r3=r3, r4=r4)
     return PdmModel(
         r0=g.platform_offset_m, r1=r1, r2=r2, r3=r3, r4=r4, n1=g.crank_pivot_y_m,

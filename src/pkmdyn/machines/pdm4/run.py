@@ -26,12 +26,18 @@ from tqdm import tqdm
 from ...analysis.mobility import analyse
 from ...errors import PkmdynError
 from ...io import check_output_dir, open_table_writer, output_dir, write_json
+from ...multibody import load_mechanism, solve_kinematics
+from ...multibody.dynamics.inverse import joint_reactions
+from ...params_util import check_limit, parse_limit_options
 from ...profiles.pdm_motion import PdmMotion, cycloidal_motion, read_pdm_motion
 from . import paper
+from .description import pdm_description
 from .kinematics import inverse_position, mechanism_joints
 from .paper import BODY_NAMES, JOINTS, LIMB_LABELS, REDUNDANT_LABELS
-from ...params_util import check_limit, parse_limit_options
 from .params import LIMIT_KEYS, PdmModel, TrajectorySettings, load_params
+from .plots import plot_forces, plot_limbs, plot_overconstraints, plot_workspace
+from .report import write_run_report
+from .schematic import draw_schematic
 from .workspace import reachable_workspace, write_projection_csv, write_workspace_csv
 
 __all__ = ["run_pdm", "compute", "EngineResults", "mobility_summary", "geometry_summary", "model_summary", "trajectory_with",
@@ -158,9 +164,6 @@ def compute(model: PdmModel, motion: PdmMotion, progress: bool | None = None) ->
     (:func:`pkmdyn.multibody.dynamics.inverse.joint_reactions`), in the paper's names (:mod:`.paper`).
     The paper's geometry checks each block first (Eq. 2-9: a six-bar loop that cannot close, a
     limb beyond its stroke), so that a message names the limb."""
-    from ...multibody import load_mechanism, solve_kinematics
-    from ...multibody.dynamics.inverse import joint_reactions
-    from .description import pdm_description
 
     m = load_mechanism(pdm_description(model))
     limbs = [m.actuator_names.index(n) for n in paper.LIMBS]
@@ -269,8 +272,6 @@ def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_
         summ["files"] = sorted(p.name for p in files.values())
         write_json(files["summary"], summ)
         if html_report:
-            from .report import write_run_report
-
             write_run_report(out, model, params_path, motion_source, cols, npz, summ, images)
         final = {k: Path(out_dir) / v.name for k, v in files.items()}
         if report is not None:
@@ -301,8 +302,6 @@ def _write(model: PdmModel, out: Path, cols: dict[str, Array], npz: dict[str, Ar
     except OSError as exc:
         raise PkmdynError(f"{files['bodies']}: cannot write file ({exc.strerror or type(exc).__name__})") from None
     if plots:
-        from .plots import plot_forces, plot_limbs, plot_overconstraints, plot_workspace
-        from .schematic import draw_schematic
 
         ext = np.stack([cols[f"s{k}_m"] for k in range(1, 5)], axis=-1)
         ld = np.stack([cols[f"ld{k}_m_s"] for k in range(1, 5)], axis=-1)

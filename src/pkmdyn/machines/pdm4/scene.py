@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ...analysis.mobility import analyse
+from ...profiles.pdm_motion import PdmMotion
 from ...report import Scene, Topology, scene_from_joints
 from .description import CUT_JOINTS
 from .kinematics import inverse_kinematics, joint_points, mechanism_joints
@@ -39,8 +41,6 @@ def pdm_scene(t: Array, joint_point: Array, force: Array, P: Array | None = None
 def pdm_scene_from_pose(model: PdmModel, t: Array, q: Array, force: Array) -> Scene:
     """The scene from poses ``q (n, 4)`` = (x [m], y [m], alpha [rad], gamma [rad]) and actuator
     forces ``force (n, 4)`` [N]; the joint centres from the inverse kinematics."""
-    from ...profiles.pdm_motion import PdmMotion
-
     t = np.asarray(t, dtype=float)
     q = np.asarray(q, dtype=float)
     zero = np.zeros_like(q)
@@ -55,8 +55,6 @@ def pdm_topology() -> Topology:
 
 def pdm_mobility(model: PdmModel) -> dict[str, object]:
     """Mobility and over-constraint counts at the home pose (screw theory and Eq. 1)."""
-    from ...analysis.mobility import analyse
-
     rep = analyse(mechanism_joints(model), "ground", "platform")
     return {"joint counts": rep.joint_counts, "moving links": rep.moving_links,
             "mobility (screw theory, home pose)": rep.mobility, "degrees of freedom of the platform": rep.output_dof,

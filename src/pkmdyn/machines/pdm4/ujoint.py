@@ -20,6 +20,8 @@ from typing import Any
 
 import numpy as np
 
+from ...multibody import load_mechanism, solve_kinematics
+from ...multibody.dynamics.inverse import joint_reactions
 from ...profiles.pdm_motion import cycloidal_motion
 from .description import pdm_description
 from .paper import LIMBS
@@ -34,8 +36,6 @@ PAPER_PEAKS_M_S2 = (0.05, 0.5, 1.0)
 
 def _without_u_joint_torque(model: PdmModel) -> Any:
     """The PDM's compiled description with U23 and U24 spherical."""
-    from ...multibody import load_mechanism
-
     d = pdm_description(model)
     for joint in d["joints"]:
         if joint["name"] in ("U23", "U24"):
@@ -49,8 +49,6 @@ def u_joint_study(model: PdmModel, peaks_m_s2: tuple[float, ...] = PAPER_PEAKS_M
     """One row per peak acceleration [m/s^2]: ``period_s``, ``max_abs_u_joint_torque_Nm``
     (U23, U24), ``max_abs_force_N`` (four limbs) and ``max_force_error_percent``: the largest
     ``|f_neglected - f|`` over the motion, in percent of that limb's largest ``|f|``."""
-    from ...multibody import solve_kinematics
-    from ...multibody.dynamics.inverse import joint_reactions
 
     free = _without_u_joint_torque(model)
     limbs = [free.actuator_names.index(n) for n in LIMBS]

@@ -28,9 +28,28 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
 
-from ...errors import ParameterError, PkmdynError, SingularityError, UnreachablePoseError
+from ...errors import LimitError, ParameterError, PkmdynError, SingularityError, UnreachablePoseError
 from ...params_util import Section, read_toml, validate
 from ...sweep_protocol import DesignOutcome, MetricInfo, time_integral, time_mean
+from ..description.schema import load_description
+from ..dynamics.actuators import check_actuator_rates, check_task_rates, effective_limits, motor_efforts
+from ..dynamics.inverse import effort_unit, inverse_dynamics, joint_reactions
+from ..dynamics.reactions import ComplianceDataMissing
+from ..kinematics.inverse import (
+    beyond_limits,
+    joint_coordinates,
+    least_measures,
+    limit_bounds,
+    limited_joints,
+    reference_task,
+    singularity_measures,
+    solve_kinematics,
+)
+from ..kinematics.motion import default_motion, read_task_motion
+from ..model.compiler import compile_with, load_mechanism, model_structure, structure_key
+from .stiffness import compliance_sources, stiffness
+from .task_grid import parse_grid, parse_pose, parse_ranges
+from .workspace import size_unit, workspace
 
 __all__ = ["DescribedSweep", "DescribedSweepContext", "DesignState", "evaluate_model", "GeneratedMotion",
            "GeneratedSweep", "GeneratedSweepContext"]
@@ -107,9 +126,6 @@ def _names(description: Mapping[str, Any]) -> tuple[list[tuple[str, str]], list[
     the compiled model names them, whether it has as many actuators as task coordinates
     (the direct singularity measure is defined), whether a joint has limits and whether a
     drive has a rated effort."""
-    from .. import load_mechanism
-    from ..dynamics.inverse import effort_unit
-    from ..kinematics.inverse import limited_joints
 
     model = load_mechanism(copy.deepcopy(dict(description)))
     acts = [(name, effort_unit(model, i)) for i, name in enumerate(model.actuator_names)]
@@ -124,8 +140,6 @@ def _limit_metrics(model: Any, kin: Any, u: Array) -> dict[str, float]:
     ``peak_effort_over_rated`` where a drive has a rated effort: the largest motor effort (Eq.
     A1 of :mod:`.actuators`: transmitted, rotor and motor friction) over its rating, over the
     samples and the rated drives (above 1: beyond it)."""
-    from ..dynamics.actuators import motor_efforts
-    from ..kinematics.inverse import beyond_limits, joint_coordinates, limit_bounds, limited_joints
 
     out: dict[str, float] = {}
     joints = limited_joints(model)
@@ -192,8 +206,6 @@ class DescribedSweep:
 
     def check_description(self, description: Mapping[str, Any], source: str) -> None:
         """The validation of :func:`pkmdyn.multibody.load_mechanism` (and the model's compilation)."""
-        from .. import load_mechanism
-
         try:
             load_mechanism(copy.deepcopy(dict(description)))
         except PkmdynError as exc:
@@ -271,10 +283,6 @@ class DescribedSweep:
         """Check the ``[motion]`` options; read the motion file, if any, against the base
         description's task; with reactions, an over-constrained base needs its bodies' sections
         and materials (one line naming what is missing, or ``reactions = false``)."""
-        from ..description.schema import load_description
-        from ..model.compiler import compile_with, model_structure, structure_key
-        from ..kinematics.motion import read_task_motion
-        from ..dynamics.reactions import ComplianceDataMissing
 
         opt = validate(_Motion, dict(options), "[motion]")
         if opt.workspace_refine and (opt.workspace_grid is None or opt.workspace_orientation_range is not None):
@@ -291,9 +299,6 @@ class DescribedSweep:
             path = Path(opt.file) if Path(opt.file).is_absolute() else base_dir / opt.file
             motion = read_task_motion(model, path)
         if opt.reactions:
-            from .. import solve_kinematics
-            from ..dynamics.inverse import joint_reactions
-            from ..kinematics.motion import default_motion
 
             mo = motion if motion is not None else default_motion(model)
             try:
@@ -305,8 +310,6 @@ class DescribedSweep:
                 pass  # the base design's own trouble is its row's, not the sweep's
         ws = None
         if opt.workspace_grid is not None:
-            from .task_grid import parse_grid, parse_pose, parse_ranges
-
             try:  # refused here, once, when it names no task coordinate
                 parse_grid(model, opt.workspace_grid, max_axes=3)
                 parse_pose(model, opt.workspace_pose)
@@ -318,8 +321,6 @@ class DescribedSweep:
             ws = (opt.workspace_grid, opt.workspace_pose, opt.workspace_orientation_range)
         req = None
         if opt.requirements is not None:
-            from .task_grid import parse_grid, parse_pose
-
             try:
                 parse_grid(model, opt.requirements.grid, max_axes=3)
                 parse_pose(model, opt.requirements.pose)
@@ -351,9 +352,6 @@ _STIFFNESS_METRICS = (
 def _stiffness_metrics(description: Mapping[str, Any]) -> list[str]:
     """The stiffness metrics of a description: none without a compliance source; those finite
     at its reference pose (a Delta's platform with rigid rods does not turn: no rotational one)."""
-    from .. import load_mechanism, solve_kinematics
-    from ..kinematics.inverse import reference_task
-    from .stiffness import compliance_sources, stiffness
 
     try:
         model = load_mechanism(copy.deepcopy(dict(description)))
@@ -373,9 +371,6 @@ def _stiffness_metrics(description: Mapping[str, Any]) -> list[str]:
 def _workspace_size_name(source: Any, grid: str) -> tuple[str, str]:
     """The workspace-size metric's name and unit for a grid of task coordinates
     (:func:`.workspace.size_unit`: ``workspace_size_m3`` ...); ``source`` a model or a description."""
-    from .. import load_mechanism
-    from .task_grid import parse_grid
-    from .workspace import size_unit
 
     model = source if hasattr(source, "task_units") else None
     if model is None:
@@ -396,8 +391,6 @@ def _on_grid(model: Any, spec: tuple[str, str, str | None], threshold: float, le
     (``--grid``, ``--pose``, ``--orientation-range`` syntax), with its size (from the boundary's
     crossings of the grid's edges where ``refine``) and least measure (``least``; else only its
     size: :func:`.workspace.workspace`, ``measures``, ``refine``)."""
-    from .task_grid import parse_grid, parse_pose, parse_ranges
-    from .workspace import workspace
 
     ranges = None if spec[2] is None else parse_ranges(model, spec[2])
     return workspace(model, parse_grid(model, spec[0], max_axes=3), parse_pose(model, spec[1]), threshold,
@@ -412,8 +405,6 @@ def design_model(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
     and only the numbers, the solver's rows and the explicit legs are computed, else (a swept
     value that changes the structure, e.g. a leg count) it is compiled in full
     (:func:`pkmdyn.multibody.model.compiler.compile_with`)."""
-    from ..description.schema import load_description
-    from ..model.compiler import compile_with
 
     return compile_with(ctx.template, load_description(copy.deepcopy(dict(description))))
 
@@ -421,8 +412,6 @@ def design_model(description: Mapping[str, Any], ctx: DescribedSweepContext) -> 
 def evaluate_one(description: Mapping[str, Any], ctx: DescribedSweepContext) -> DesignOutcome:
     """One design: model (:func:`design_model`) -> motion -> kinematics and singularity measures
     -> efforts (and every joint reaction with the friction) -> metrics."""
-    from ..kinematics.motion import default_motion
-
     try:
         model = design_model(description, ctx)
         motion = ctx.motion if ctx.motion is not None else default_motion(model)
@@ -452,8 +441,6 @@ def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple
     below ``ctx.threshold``; with ``ctx.measures``), the efforts with every joint reaction and the
     friction, the metrics (the efforts' with ``ctx.efforts``); with what was computed on the way
     (:class:`DesignState`)."""
-    from ..dynamics.inverse import effort_unit, inverse_dynamics, joint_reactions
-    from ..kinematics.inverse import least_measures, singularity_measures, solve_kinematics
 
     state = DesignState(model, motion)
     try:
@@ -465,8 +452,6 @@ def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple
     except PkmdynError as exc:
         return DesignOutcome("invalid", str(exc)), state
     state = DesignState(model, motion, kin)
-    from ...errors import LimitError
-    from ..dynamics.actuators import check_actuator_rates, check_task_rates, effective_limits
 
     try:  # the plausibility limits that pkmdyn run holds a motion to (its [limits], the drives' motors)
         lim = effective_limits(model)
@@ -523,8 +508,6 @@ def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple
             m[f"rms_speed_{name}_{sp}"] = math.sqrt(_mean(sd[:, i] ** 2, t))
     wanted = ctx.stiffness
     if wanted:
-        from .stiffness import stiffness
-
         try:
             st = stiffness(model, kin)
         except SingularityError as exc:
@@ -660,8 +643,6 @@ class GeneratedSweep:
                 ) -> GeneratedSweepContext:
         """The machine's motion (``motion`` hook, its ``[motion]`` options checked), and the
         structure of the base design's description compiled once."""
-        from ..description.schema import load_description
-        from ..model.compiler import model_structure, structure_key
 
         params = dict(description)
         gm = self.hooks.motion(params, options, base_dir)
@@ -685,8 +666,6 @@ class GeneratedSweep:
 def _evaluate_generated(hooks: Any, params: dict[str, Any], ctx: GeneratedSweepContext) -> DesignOutcome:
     """One design of a generated description: parameters -> description -> model (the base's
     structure reused) -> the engine's evaluation -> the machine's outcome."""
-    from ..description.schema import load_description
-    from ..model.compiler import compile_with
 
     try:
         model = compile_with(ctx.engine.template, load_description(hooks.description(params)))

@@ -31,14 +31,22 @@ is not linear in the parameters: such a description is refused, naming the joint
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ParameterError
 from ..dynamics.actuators import motor_coordinates, motor_eps
-from ..dynamics.inverse import actuator_efforts, coordinate_twists, free_blocks, generalised_forces, named_magnitudes
+from ..dynamics.friction import EPS_ROTATION, EPS_TRANSLATION, JointFriction, regularised_sign
+from ..dynamics.inverse import (
+    actuator_efforts,
+    body_wrenches,
+    coordinate_twists,
+    free_blocks,
+    generalised_forces,
+    named_magnitudes,
+)
 from ..kinematics.inverse import MechanismKinematics
 from ..model.compiler import MechanismModel
 
@@ -99,8 +107,6 @@ def _unit_wrenches(model: MechanismModel, kin: MechanismKinematics, b: int) -> A
 
 def regressor(model: MechanismModel, kin: MechanismKinematics, named: dict | None = None) -> Regressor:
     """The regressor of the efforts along a solved motion (module docstring)."""
-    from ..dynamics.friction import EPS_ROTATION, EPS_TRANSLATION, JointFriction
-    from ..dynamics.friction import regularised_sign
 
     n = len(kin)
     S = coordinate_twists(model, kin.q)
@@ -157,10 +163,6 @@ def regressor(model: MechanismModel, kin: MechanismKinematics, named: dict | Non
                                  "the regressor takes one coefficient per law and joint")
             theta.append(rot if jd["has_rot"] else tr)
     Y = np.stack(cols, axis=2)
-    from dataclasses import replace
-
-    from ..dynamics.inverse import body_wrenches
-
     unloaded = replace(model, load_body=model.load_body[:0], load_force=model.load_force[:0],
                        load_moment=model.load_moment[:0], load_point=model.load_point[:0], load_name=(),
                        load_direction=model.load_direction[:0], load_magnitude=model.load_magnitude[:0],

@@ -60,9 +60,10 @@ from numpy.typing import NDArray
 from ...errors import ParameterError, SingularityError
 from ...spatial import skew
 from ..dynamics.inverse import _CutRoute, body_wrenches, coordinate_twists, generalised_forces, task_mass_matrix
-from ..kinematics.inverse import MechanismKinematics
-from ..model.compiler import MechanismModel
 from ..dynamics.reactions import compliance_terms
+from ..kinematics.inverse import MechanismKinematics
+from ..model._tree_kernels import euler_angles, euler_rate_map
+from ..model.compiler import MechanismModel
 
 __all__ = ["Stiffness", "stiffness", "deflection", "compliance_sources", "reaction_route", "StiffnessDataMissing"]
 
@@ -177,8 +178,6 @@ class _Members:
 def _task_map(model: MechanismModel, kin: MechanismKinematics) -> Array:
     """``D (n, nt, 6)``: the task coordinates' small change per small twist ``[dtheta; dp_O]``
     of the task body (module docstring)."""
-    from ..model._tree_kernels import (euler_angles, euler_rate_map)
-
     n, nt, tb = len(kin), model.nt, model.task_body
     R = kin.R[:, tb]
     p = kin.origin[:, tb] + np.einsum("nij,j->ni", R, model.task_point)

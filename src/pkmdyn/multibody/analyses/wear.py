@@ -49,6 +49,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ParameterError
+from ..description.expressions import evaluate
+from ..description.joint_types import JOINT_TYPES
 from ..dynamics.inverse import joint_reactions
 from .stiffness import reaction_route
 
@@ -279,8 +281,6 @@ def _law(text: str | None, cs: Array) -> Array:
     """The cross-shear law ``f(cs)`` per marker (1 without one); positive and finite."""
     if text is None:
         return np.ones_like(cs)
-    from ..description.expressions import evaluate
-
     out = np.array([float(evaluate(text, {"cs": float(c)}, "--cross-shear-law")) for c in cs])
     if not np.all(np.isfinite(out)) or np.any(out < 0):
         raise ParameterError(f"--cross-shear-law {text!r}: gives a negative or non-finite factor")
@@ -302,8 +302,6 @@ def joint_slide_tracks(model, kin, joint: str, load: Array, radius_m: float, hea
     kinematics ``kin``: the head is the joint's ``child`` (or ``parent``) body, the cup the other;
     ``on = "cup"`` the head's markers on the cup, ``"head"`` the cup's markers on the head. The
     pole defaults to the joint frame's z axis (base frame at the reference configuration)."""
-    from ..description.joint_types import JOINT_TYPES
-
     j = joint_index(model, joint)
 
     jt = JOINT_TYPES[model.joint_type[j]]

@@ -60,6 +60,7 @@ measures (1 isotropic, 0 singular; the inverse of a condition number of the scal
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
@@ -67,8 +68,18 @@ from numpy.typing import NDArray
 from scipy import ndimage
 
 from ...errors import ParameterError
-from ..kinematics.inverse import (beyond_limits, joint_coordinates, least_measure_bounds, limit_bounds, limited_joints,
-                         neighbour_pairs, reference_task, singularity_measures, solve_graph, solve_grid)
+from ..kinematics.inverse import (
+    beyond_limits,
+    joint_coordinates,
+    least_measure_bounds,
+    limit_bounds,
+    limited_joints,
+    neighbour_pairs,
+    reference_task,
+    singularity_measures,
+    solve_graph,
+    solve_grid,
+)
 from ..model.compiler import MechanismModel
 from .task_grid import grid_poses
 
@@ -461,8 +472,6 @@ def refined_size(inside: NDArray[np.bool_], shape: tuple[int, ...], a: NDArray[n
 
 def size_unit(units: list[str]) -> str:
     """The unit of a grid cell's size from its coordinates' units: ``m3``, ``m2``, ``m2_rad``, ``rad``."""
-    from collections import Counter
-
     counts = Counter(units)
     return "_".join(u + (str(k) if k > 1 else "") for u, k in sorted(counts.items()))
 

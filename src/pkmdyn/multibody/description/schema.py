@@ -26,7 +26,7 @@ from pydantic import Field, ValidationError, field_validator
 
 from ...errors import ParameterError
 from ...params_util import Section, _rule, read_toml
-from ...spatial import cross
+from ...spatial import check_sequence, cross
 from .expressions import parameter_bounds, resolve_parameters
 from .joint_types import JOINT_TYPES, joint_type
 
@@ -772,8 +772,6 @@ _POS_NAMES = {"x": 0, "y": 1, "z": 2}
 
 
 def _task(t: _Task, where: str, bodies: dict[str, BodySpec]) -> TaskSpec:
-    from ...spatial import check_sequence
-
     if t.body not in bodies:
         raise ParameterError(f"{where} body: {t.body!r} is not a body of the mechanism")
     if not t.position and not t.orientation:

@@ -7,6 +7,9 @@ import math
 import numpy as np
 from numba import njit
 
+from .. import _cache
+from ..kinematics import _solve_kernels as _kernels
+from ..model import _tree_kernels
 from ..model._tree_kernels import _advance, _frame, _matmul3, _nn, _unit_twist, forward_positions
 
 
@@ -372,9 +375,6 @@ def _refresh_cache() -> None:
     """The twist kernels link or inline the kinematics kernels' ``forward_positions``,
     ``_frame``, ``_unit_twist`` and ``_advance``, the mass matrix kernels ``_matmul3``
     (:mod:`._cache`)."""
-    from .. import _cache
-    from ..kinematics import _solve_kernels as _kernels
-    from ..model import _tree_kernels
 
     _cache.refresh((twists_batch, twists_from_poses, _twists_from_poses_loop, task_mass_batch, _task_mass_loop),
                    (_kernels, _tree_kernels,))

@@ -20,6 +20,9 @@ import math
 import numpy as np
 from numba import njit
 
+from .. import _cache
+from ..kinematics import _solve_kernels as _kernels
+from ..model import _tree_kernels
 from ..model._tree_kernels import _cross, _frame
 
 
@@ -338,9 +341,6 @@ def cut_reactions_batch(R, origin, S, W, rhs, eff, F, given, lam, cut_j, cut_f, 
 
 def _refresh_cache() -> None:
     """The kernels inline the kinematics kernels' ``_frame`` and ``_cross`` (:mod:`._cache`)."""
-    from .. import _cache
-    from ..kinematics import _solve_kernels as _kernels
-    from ..model import _tree_kernels
 
     _cache.refresh((cut_bases, cut_reactions_batch), (_kernels, _tree_kernels,))
 

@@ -43,14 +43,23 @@ from numba.extending import intrinsic
 from numba.np.arrayobj import make_array, populate_array
 from numpy.typing import NDArray
 
+from ... import _dense
 from ..._dense import solve_in_place
-from ._dyn_kernels import body_wrench, generalised, joint_friction, load_wrench, task_mass
+from .. import _cache
+from ..kinematics import _solve_kernels as _kernels
 from ..kinematics._solve_kernels import _wrap, chord_pause, solve_sample, solver_positions, task_unit_rhs
+from ..kinematics.inverse import CHECK_TOLERANCE, MAX_ITER, TOLERANCE, row_scale
+from ..model import _tree_kernels
 from ..model._tree_kernels import OK, _nn, _point_motion, place_fixed_legs
-from .inverse import SINGULAR_ACTUATION, inertia_factors
+from ..model.compiler import MechanismModel
+from . import _dyn_kernels, friction
+from . import inverse as dynamics
+from ._dyn_kernels import body_wrench, generalised, joint_friction, load_wrench, task_mass
+from .actuators import motor_eps
 from .friction import EPS_ROTATION as EPS_R
 from .friction import EPS_TRANSLATION as EPS_T
-from ..model.compiler import MechanismModel
+from .friction import friction_arrays
+from .inverse import SINGULAR_ACTUATION, inertia_factors
 
 __all__ = ["pack", "supported", "state", "prime", "solution", "forward_one", "inverse_one", "positions_one",
            "actuator_maps", "COLD", "ALONE"]
@@ -109,10 +118,6 @@ def pack(model: MechanismModel) -> NDArray[np.int64]:
     and shapes, the model's integer arrays, its float arrays (their bits), the kernel's state
     (:func:`state`) and its work space. One buffer makes a call pass few arguments, and the
     kernel takes its views by pointer arithmetic (:func:`_fview`), with no allocation."""
-    from ..kinematics.inverse import CHECK_TOLERANCE, MAX_ITER, TOLERANCE, row_scale
-
-    from .actuators import motor_eps
-    from .friction import friction_arrays
 
     arrays = {k: getattr(model, k) for k in _INT + _FLOAT if hasattr(model, k)}
     arrays["row_scale"] = row_scale(model)
@@ -599,13 +604,6 @@ def actuator_maps(pk: NDArray[np.int64], x: Array, xd: Array, out: Array) -> int
 
 def _refresh_cache() -> None:
     """The kernels above inline and link functions of other modules (:mod:`._cache`)."""
-    from ... import _dense
-    from .. import _cache
-    from . import _dyn_kernels
-    from ..kinematics import _solve_kernels as _kernels
-    from ..model import _tree_kernels
-    from . import inverse as dynamics
-    from . import friction
 
     _cache.refresh((_dynamics, _maps), (_kernels, _tree_kernels, _dyn_kernels, _dense, friction, dynamics))
 

@@ -37,8 +37,10 @@ from collections.abc import Mapping
 import numpy as np
 from numpy.typing import NDArray
 
-from .loads import named_magnitudes
+from ..description.joint_types import JOINT_TYPES
 from ..model.compiler import MechanismModel
+from ._dyn_kernels import friction_batch
+from .loads import named_magnitudes
 
 __all__ = ["JointFriction", "known_friction", "friction_diverges", "regularised_sign", "coulomb_viscous", "EPS_ROTATION",
            "EPS_TRANSLATION"]
@@ -204,8 +206,6 @@ def friction_arrays(model: MechanismModel) -> dict[str, np.ndarray]:
     (+1) or the reverse (-1), and per named-load term ``ecoef (k, E) = mu r``
     (``mu`` for a sliding joint), ``eoff`` the offset [N], ``eload`` the named load's index
     (-1 unused). A ``coefficient`` (reaction-dependent) is a ``ValueError``."""
-    from ..description.joint_types import JOINT_TYPES
-
     rows = []
     for j, d in enumerate(model.joint_friction):
         if not d or not any(v for v in d.values()):
@@ -248,8 +248,6 @@ def known_friction(model: MechanismModel, kin, S: Array, named: Mapping[str, obj
     in its relative twist). Equal to ``JointFriction(...).generalised(initial())`` for tree
     joints; for cut joints up to constraint forces, so that the efforts (``G^T Q``) are the
     same. A ``coefficient`` (reaction-dependent) is a ``ValueError``."""
-    from ._dyn_kernels import friction_batch
-
     n = S.shape[0]
     fa = friction_arrays(model)
     Q = np.zeros((n, model.nq))

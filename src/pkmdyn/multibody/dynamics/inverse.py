@@ -51,11 +51,22 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ParameterError, SingularityError
-from .friction import JointFriction, friction_diverges, known_friction
 from ..description.joint_types import JOINT_TYPES, MOTION_CODES, type_code
 from ..kinematics.inverse import MechanismKinematics, joint_frame
-from .loads import load_forces, named_magnitudes
 from ..model.compiler import MechanismModel
+from ._dyn_kernels import (
+    apply_loads,
+    body_wrench_batch,
+    generalised_batch,
+    square_efforts_batch,
+    task_mass_batch,
+    twists_batch,
+    twists_from_poses,
+)
+from ._reaction_kernels import cut_reactions_batch
+from .friction import JointFriction, friction_diverges, known_friction
+from .loads import load_forces, named_magnitudes
+from .reactions import compliant_reactions
 
 __all__ = ["body_wrenches", "named_magnitudes", "load_forces", "coordinate_twists", "generalised_forces", "actuator_efforts",
            "InverseDynamics", "inverse_dynamics", "idle_holding", "EffortShares", "effort_shares", "effort_unit", "free_twists", "equilibrium_system",
@@ -94,8 +105,6 @@ def task_mass_matrix(model: MechanismModel, kin: MechanismKinematics, S: Array, 
     """``M(x) (n, nt, nt)``: every body's inertia in task coordinates (``S`` the coordinate
     twists, ``factors`` :func:`inertia_factors`, computed when not given) and, with ``rotors``,
     the drives' rotor inertia ``k^2 I_r`` along each actuator's row of ``J_ax``."""
-    from ._dyn_kernels import task_mass_batch
-
     M = np.empty((len(kin), model.nt, model.nt))
     task_mass_batch(np.ascontiguousarray(S), np.ascontiguousarray(kin.G), model.body_parent, model.body_joint,
                     model.joint_q0, model.joint_nq, np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.p),
@@ -108,7 +117,6 @@ def task_mass_matrix(model: MechanismModel, kin: MechanismKinematics, S: Array, 
 def coordinate_twists(model: MechanismModel, q: Array, kin: MechanismKinematics | None = None) -> Array:
     """World unit twists ``S (n, nq, 6)`` ``[w; v_O]`` of every tree coordinate at ``q (n, nq)``;
     from the solved body poses of ``kin`` when given (fewer angles to turn; same values)."""
-    from ._dyn_kernels import twists_batch, twists_from_poses
 
     q = np.ascontiguousarray(np.atleast_2d(np.asarray(q, dtype=float)))
     S = np.empty((q.shape[0], model.nq, 6))
@@ -132,16 +140,12 @@ def body_wrenches(model: MechanismModel, kin: MechanismKinematics, loads: dict |
     M (n, 3) [N m] about the centre of mass)}``, base frame, on top of the description's
     ``[[loads]]`` (base frame, at their point; a named load's magnitude per sample from
     ``named``, :func:`named_magnitudes`)."""
-    from ._dyn_kernels import body_wrench_batch
-
     Wr = np.empty(kin.p.shape[:2] + (6,))
     body_wrench_batch(np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.w), np.ascontiguousarray(kin.wd),
                       np.ascontiguousarray(kin.p), np.ascontiguousarray(kin.a), model.mass, model.inertia,
                       model.gravity, Wr)
     n_O, f = Wr[..., :3], Wr[..., 3:]
     if len(model.load_body):
-        from ._dyn_kernels import apply_loads
-
         LF, LM = load_forces(model, len(kin), named)
         apply_loads(np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.origin), model.load_body,
                     np.ascontiguousarray(model.load_point), LF, LM, Wr)
@@ -156,8 +160,6 @@ def body_wrenches(model: MechanismModel, kin: MechanismKinematics, loads: dict |
 
 def generalised_forces(model: MechanismModel, S: Array, W: Array) -> Array:
     """``Q (n, nq)``, Eq. (2): ``Q_c = S_c . sum of W_b over the bodies that coordinate c moves``."""
-    from ._dyn_kernels import generalised_batch
-
     Q = np.empty(S.shape[:2])
     generalised_batch(np.ascontiguousarray(S), np.ascontiguousarray(W), model.ancestor_list, Q)
     return Q
@@ -177,8 +179,6 @@ def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, 
     if model.na == model.nt and model.na and rhs_task is None:
         # compiled: G^T Q, LU solve and the Hadamard ratio |det A| / prod |a_k| (<= 1, zero when
         # singular) as a cheap screen; the SVD ratio decides on the samples it flags
-        from ._dyn_kernels import square_efforts_batch
-
         had = np.empty(JT.shape[0])
         u_fast = np.empty((JT.shape[0], model.na))
         square_efforts_batch(np.ascontiguousarray(kin.G), np.ascontiguousarray(Q), np.ascontiguousarray(JT),
@@ -473,8 +473,6 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
         b = None if fast else equilibrium_rhs(model, blocks, W, eff, F)
         mu = None  # the idle freedoms' holding forces where the solve gives them
         if over:
-            from .reactions import compliant_reactions
-
             z0, Z = cuts.affine(model, W, F)
             z, t = compliant_reactions(model, kin, cuts.A, (Q if Qf is None else Q + Qf) - eff, -1, W,
                                        affine=(z0, Z))
@@ -488,8 +486,6 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
             z, mu = z[:, :k], z[:, k:]
             method, t = "minimum-norm", A.shape[2] - r
         elif r < A.shape[2]:
-            from .reactions import compliant_reactions
-
             z, t = compliant_reactions(model, kin, A, b, r, W)
             method = "compliance"
         else:
@@ -772,8 +768,6 @@ def _cut_kernel(model: MechanismModel, tab: _CutTable, R: Array, origin: Array, 
     """One call of :func:`._reaction_kernels.cut_reactions_batch` (contiguous arrays): the
     solve into ``out = (z, res, ok)``, or with ``setup = (T, C, A)`` the cut joints' twists,
     wrench bases and the tree equations' matrix alone (the solve's arrays left out)."""
-    from ._reaction_kernels import cut_reactions_batch
-
     n = R.shape[0]
     if setup is not None:
         e1, e2 = np.empty((n, 0)), np.empty((n, 0, 0))

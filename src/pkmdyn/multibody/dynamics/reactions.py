@@ -27,13 +27,19 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ...analysis.compliance import (beam_flexibility, circular_section, segment_wrenches, unique_reactions,
-                                   unique_reactions_energy)
+from ...analysis.compliance import (
+    beam_flexibility,
+    circular_section,
+    segment_wrenches,
+    unique_reactions,
+    unique_reactions_energy,
+)
 from ...errors import ParameterError, SingularityError
 from ...spatial import skew
 from ..description.joint_types import JOINT_TYPES
-from ..kinematics.inverse import MechanismKinematics
+from ..kinematics.inverse import MechanismKinematics, joint_frame
 from ..model.compiler import MechanismModel
+from ._compliance_kernels import beam_energy_batch
 
 __all__ = ["elastic_bodies", "compliant_reactions", "ComplianceDataMissing", "beam_terms", "joint_spring_terms",
            "compliance_terms"]
@@ -108,8 +114,6 @@ def _compiled_energy(model: MechanismModel, kin: MechanismKinematics, W: Array, 
     terms: :func:`compliance_terms`)."""
     if any(st and ("force_N_m" in st or "moment_Nm_rad" in st) for st in model.joint_stiffness):
         return None
-    from ._compliance_kernels import beam_energy_batch
-
     beams = _beam_bodies(model, kin, elastic)
     z0, Z = affine
     n, K = Z.shape[0], Z.shape[2]
@@ -262,8 +266,6 @@ def joint_spring_terms(model: MechanismModel, kin: MechanismKinematics) -> tuple
     point, along the axes of its frame on the parent) from the joint wrenches ``z``, and the
     flexibility ``C (n, s, 6, 6)`` (diagonal, ``1/k``; zero along a rigid direction and along an
     actuated joint's driven axis, whose load its drive carries: ``drive_N_m``/``drive_Nm_rad``)."""
-    from ..kinematics.inverse import joint_frame
-
     n, nj = len(kin), len(model.joint_names)
     P_list, C_list = [], []
     for j, st in enumerate(model.joint_stiffness):

@@ -36,12 +36,27 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import MotionError, ParameterError, as_array
-from .inverse import actuator_efforts, body_wrenches, inertia_factors, coordinate_twists, effort_unit, fr_any, \
-    generalised_forces, joint_reactions, task_mass_matrix
-from .actuators import motor_effort_unit, motor_efforts
-from ..kinematics.inverse import MechanismKinematics, solve_kinematics
+from ...errors import MotionError, ParameterError, SingularityError, as_array
+from ..kinematics import _direct_kernels as D
+from ..kinematics import _solve_kernels as K
+from ..kinematics.direct import direct_kinematics, one_state, pack_one, pack_task, prime_one, prime_task, task_state
+from ..kinematics.inverse import MechanismKinematics, _assemble, _run, solve_kinematics
 from ..model.compiler import MechanismModel
+from ..model.legs import place
+from . import _sample_kernels as _one
+from .actuators import motor_effort_unit, motor_efforts
+from .friction import known_friction
+from .inverse import (
+    actuator_efforts,
+    body_wrenches,
+    coordinate_twists,
+    effort_unit,
+    fr_any,
+    generalised_forces,
+    inertia_factors,
+    joint_reactions,
+    task_mass_matrix,
+)
 
 __all__ = ["MechanismVerbs", "machine_verbs", "GeneratedModel", "RenamedVerbs"]
 
@@ -72,8 +87,6 @@ class _State:
     path's buffer (:mod:`._one`; None where that path does not answer for the model)."""
 
     def __init__(self, model: MechanismModel) -> None:
-        from . import _sample_kernels as _one
-
         self.one = _one  # the single-sample kernels, bound once (an import in a call costs a microsecond)
         self.q_last: Array | None = None
         self.inertia_factors = inertia_factors(model)
@@ -103,8 +116,6 @@ class _State:
     def last_q(self) -> Array | None:
         """The last solved tree coordinates: the compiled path's when it holds a solution (it
         advances without this object), else the general route's."""
-        from . import _sample_kernels as _one
-
         q = _one.solution(self.pk) if self.pk is not None else None
         return q if q is not None else self.q_last
 
@@ -112,8 +123,6 @@ class _State:
         """The last solved sample: the next solve's start, and the compiled path's state."""
         self.q_last = kin.q[-1].copy()
         if self.pk is not None:
-            from . import _sample_kernels as _one
-
             _one.prime(self.pk, kin.q[-1], kin.x[-1], kin.G[-1])
 
 
@@ -187,8 +196,6 @@ class MechanismVerbs:
     def _state_one(self, model: MechanismModel, x: Array, xd: Array) -> MechanismKinematics:
         """One sample's kinematics straight from the compiled solver, warm-started (the checked,
         bridging route when that solve does not converge or nothing is known yet)."""
-        from ..kinematics import _solve_kernels as K
-        from ..kinematics.inverse import _assemble, _run
 
         st = self._state(model)
         q_last = st.last_q()
@@ -215,8 +222,6 @@ class MechanismVerbs:
             W = body_wrenches(model, kin, named=named)
             Q = generalised_forces(model, S, W)
             if fr_any(model):
-                from .friction import known_friction
-
                 Q = Q + known_friction(model, kin, S, named)
             h = np.einsum("nct,nc->nt", kin.G, Q)
         if model.has_drives:  # the motors' bias (rotor at the bias acceleration, friction), Eq. A1
@@ -330,8 +335,6 @@ class MechanismVerbs:
         where they do not answer for this mechanism (friction that depends on the reactions,
         several named loads, redundant actuation, a named load with a nonzero default
         magnitude): the ``*_one`` verbs then take the general route."""
-        from . import _sample_kernels as _one
-
         pk = self._state(model).pk
         if pk is None or np.any(model.load_magnitude != 0.0):
             return None  # (a caller without a load passes 0.0: right only for a zero default magnitude)
@@ -409,8 +412,6 @@ class MechanismVerbs:
                 if _one.positions_one(st.encoder_pk, xa, xda, st.encoder_out) == _one.OK:
                     return st.encoder_out.copy()
                 st.encoder_q = st.encoder_prev.copy()  # the last reading's solution
-        from ..kinematics import _solve_kernels as K
-        from ..kinematics.inverse import _run
 
         x1 = np.ascontiguousarray(self._x(q))
         q_sol = G_sol = None
@@ -436,7 +437,6 @@ class MechanismVerbs:
         configuration by the checked route (whose batched kernels a fresh install would compile
         for some seconds). The branch is that of ``q``; the sign of its determinant is taken
         from that next call. Nothing where no such solution is kept."""
-        from ..kinematics.direct import prime_one, prime_task, task_state
 
         st = self._state(model)
         x = np.asarray(q, dtype=float).reshape(-1)
@@ -509,9 +509,6 @@ class MechanismVerbs:
     def _pack_direct(model: MechanismModel, st: _State) -> None:
         """Pack both single-sample routes of :meth:`direct_one` into ``st`` (the task-space one
         where the mechanism takes it, else ``False``), neither primed."""
-        from ..kinematics import _direct_kernels as D
-        from . import _sample_kernels as _one
-        from ..kinematics.direct import pack_one, pack_task
 
         st.direct = (pack_one(model), np.zeros(2 * model.nt), D.direct_one, D.OK)
         d = pack_task(model)
@@ -526,9 +523,6 @@ class MechanismVerbs:
         call (or one it cannot solve) along the straight actuator path in 8, then 64 steps, else
         the checked route from the last solution; the branch checked by the sign of ``det A``
         against the last solution's. Raises on a crossing."""
-        from ...errors import SingularityError
-        from ..kinematics.direct import direct_kinematics, prime_task, task_state
-        from ..model.legs import place
 
         pk1, d, out, kernel, ok, crossed = st.direct_task
         nt = model.nt
@@ -566,9 +560,6 @@ class MechanismVerbs:
         """:meth:`direct_one` by the checked route: where the tree-space call did not answer
         (from its last solution; raises on a crossing), or on the first call (from the reference
         configuration), which packs both single-sample routes and primes them."""
-        from ...errors import SingularityError
-        from ..kinematics import _direct_kernels as D
-        from ..kinematics.direct import direct_kinematics, one_state, prime_one, prime_task
 
         if st.direct is not None:
             if status == D.CROSSED:

@@ -7,10 +7,13 @@ from pathlib import Path
 
 from ...errors import ParameterError, PkmdynError
 from ...io import dumps_toml
-from .graph import Graph, TaskChoice, description_from_graph
 from ..kinematics.inverse import solve_kinematics
-from ..model.compiler import load_mechanism
 from ..kinematics.motion import default_motion
+from ..model.compiler import load_mechanism
+from .graph import Graph, TaskChoice, description_from_graph
+from .mjcf_in import mjcf_graph
+from .sdf_in import sdf_graph
+from .urdf_in import read_sidecar, sidecar_task, urdf_graph
 
 
 def read_graph(path: Path, fmt: str, sidecar: Path | None = None, actuated: tuple[str, ...] = (),
@@ -18,8 +21,6 @@ def read_graph(path: Path, fmt: str, sidecar: Path | None = None, actuated: tupl
     """The file's :class:`~.import_graph.Graph` and the task its sidecar asks for."""
     choice = TaskChoice()
     if fmt == "mjcf":
-        from .mjcf_in import mjcf_graph
-
         for flag, given in (("--sidecar", sidecar), ("--actuated", actuated), ("--assemble", assemble)):
             if given:
                 raise ParameterError(f"{flag}: not for MJCF (its equalities close the loops, its actuators drive)")
@@ -27,15 +28,11 @@ def read_graph(path: Path, fmt: str, sidecar: Path | None = None, actuated: tupl
     if keyframe is not None:
         raise ParameterError("--keyframe: only for MJCF")
     if fmt == "urdf":
-        from .urdf_in import read_sidecar, sidecar_task, urdf_graph
-
         side = read_sidecar(sidecar) if sidecar is not None else None
         if side is not None:
             choice = sidecar_task(side)
         return urdf_graph(path, side, actuated, assemble), choice
     if fmt == "sdf":
-        from .sdf_in import sdf_graph
-
         if sidecar is not None:
             raise ParameterError("--sidecar: not for SDFormat (a link with several parent joints closes a loop)")
         return sdf_graph(path, actuated, assemble), choice

@@ -26,6 +26,7 @@ import contextlib
 import os
 import re
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +35,6 @@ import numpy as np
 from ...errors import ParameterError
 from ..description.schema import GROUND
 from .graph import CLOSE_TOL, Actuator, Closure, Frame, Graph, Joint, Link, TaskChoice, safe_name
-
 
 #: URDF holds no gravity: Pinocchio's and MuJoCo's default, unless the sidecar gives gravity_m_s2
 URDF_GRAVITY = (0.0, 0.0, -9.81)
@@ -52,8 +52,6 @@ def _pinocchio():
 @contextlib.contextmanager
 def _stderr_captured():
     """What the C++ parser writes on the process's stderr meanwhile (``said()``: its lines)."""
-    import tempfile
-
     sys.stderr.flush()
     saved = os.dup(2)
     with tempfile.TemporaryFile(mode="w+b") as tmp:

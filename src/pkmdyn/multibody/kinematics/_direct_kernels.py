@@ -29,9 +29,34 @@ import math
 import numpy as np
 from numba import njit
 
-from ._solve_kernels import (_wrap, along_h2, bias_motion, jerk_factor, largest_scaled, second_order_applies)
-from ..model._tree_kernels import (LEG_A2, LEG_TASK, LOOP_OPEN, NOT_CONVERGED, OK, ROWS_DRIFT, ROWS_JACOBIAN, ROWS_VALUES, SINGULAR, _dot, _inv3, _nn, _quadratic_nearest, _rotate_about, euler_matrix, euler_rate_map, first_joint, forward_positions, place_fixed_legs, rows)
+from .. import _cache
+from ..dynamics import _sample_kernels as _one
 from ..dynamics._sample_kernels import _f, _f33, _fn3, _fview, _i, _i2, _iview
+from ..model import _tree_kernels
+from ..model._tree_kernels import (
+    LEG_A2,
+    LEG_TASK,
+    LOOP_OPEN,
+    NOT_CONVERGED,
+    OK,
+    ROWS_DRIFT,
+    ROWS_JACOBIAN,
+    ROWS_VALUES,
+    SINGULAR,
+    _dot,
+    _inv3,
+    _nn,
+    _quadratic_nearest,
+    _rotate_about,
+    euler_matrix,
+    euler_rate_map,
+    first_joint,
+    forward_positions,
+    place_fixed_legs,
+    rows,
+)
+from . import _solve_kernels as _kernels
+from ._solve_kernels import _wrap, along_h2, bias_motion, jerk_factor, largest_scaled, second_order_applies
 
 __all__ = ["CROSSED", "EULER_SINGULAR_RATES", "COLD", "BAD_INPUT", "direct_batch", "direct_starts", "direct_one",
            "ONE_ARRAYS"]
@@ -1025,10 +1050,6 @@ def direct_task_batch(pk, d, s, sd, sdd, work, x_out, xd_out, xdd_out, res_out, 
 def _refresh_cache() -> None:
     """The kernels of this module link and inline functions of :mod:`._kernels` and
     :mod:`._one`'s views (:mod:`._cache`)."""
-    from .. import _cache
-    from . import _solve_kernels as _kernels
-    from ..model import _tree_kernels
-    from ..dynamics import _sample_kernels as _one
 
     _cache.refresh((direct_sample, direct_batch, direct_starts), (_kernels, _tree_kernels,))
     _cache.refresh((direct_one, _actuated, _task_fail, direct_task_one, _actuated_bias, _task_accelerations,

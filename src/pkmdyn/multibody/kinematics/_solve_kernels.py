@@ -9,13 +9,30 @@ nothing and are compiled without reference counting (``_nrt=False``).
 
 from __future__ import annotations
 
-
 import numpy as np
 from numba import njit
 
-from ..model._tree_kernels import (EULER_SINGULAR, LOOP_OPEN, NOT_CONVERGED, OK, ROWS_DRIFT, ROWS_JACOBIAN,  # noqa: F401
-                                   ROWS_VALUES, SINGULAR, _nn, _point_motion, add_joint_accelerations,
-                                   forward_accelerations, forward_positions, forward_velocities, place_legs, rows, _wrap)
+from .. import _cache
+from ..model import _tree_kernels
+from ..model._tree_kernels import (  # noqa: F401
+    EULER_SINGULAR,
+    LOOP_OPEN,
+    NOT_CONVERGED,
+    OK,
+    ROWS_DRIFT,
+    ROWS_JACOBIAN,
+    ROWS_VALUES,
+    SINGULAR,
+    _nn,
+    _point_motion,
+    _wrap,
+    add_joint_accelerations,
+    forward_accelerations,
+    forward_positions,
+    forward_velocities,
+    place_legs,
+    rows,
+)
 
 
 @njit(cache=True, _nrt=False)
@@ -659,8 +676,6 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
 
 def _refresh_cache() -> None:
     """The loop solver's kernels link and inline the tree's kernels (:mod:`.._cache`)."""
-    from .. import _cache
-    from ..model import _tree_kernels
 
     _cache.refresh((_fill_idle, solver_positions, block_lu_factor, block_lu_solve, block_lu_solve_columns, bias_motion, largest_scaled, _residuals, _idle_residuals, task_unit_rhs, jerk_factor, along_h2, second_order_applies, chord_pause, solve_sample, solve_batch), (_tree_kernels,))
 

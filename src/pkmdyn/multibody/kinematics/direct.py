@@ -31,13 +31,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import MotionError, ParameterError, SingularityError, UnreachablePoseError, as_array
-from . import _direct_kernels as D
-from . import _solve_kernels as K
-from .inverse import CHECK_TOLERANCE, MAX_ITER, TOLERANCE, reference_task, solve_kinematics
+from ..dynamics import _sample_kernels as _one
 from ..model.compiler import MechanismModel
-from .motion import ActuatorMotion, TaskMotion
 from ..model.poses import body_poses
 from ..model.topology import column_scale, constraint_jacobian, row_labels, row_scale
+from . import _direct_kernels as D
+from . import _solve_kernels as K
+from .inverse import CHECK_TOLERANCE, MAX_ITER, TOLERANCE, reference_task, singularity_measures, solve_kinematics
+from .motion import ActuatorMotion, TaskMotion
 
 __all__ = ["DirectKinematics", "Assembly", "AssemblyModes", "direct_kinematics", "assembly_modes", "task_motion",
            "actuator_reference", "parse_actuators", "ROUND_TRIP_TOLERANCE"]
@@ -432,8 +433,6 @@ def _by_the_actuated_coordinates(model: MechanismModel, s: Array, sd: Array, sdd
     d = pack_task(model)
     if d is None or d.view(np.float64)[d[24]] != 1.0:
         return None
-    from ..dynamics import _sample_kernels as _one
-
     d.view(np.float64)[d[24] + 1] = -1e18  # no placement of the legs' other coordinates on the way
     prime_task(d, q0, x0, s[0])
     n, nt = s.shape[0], model.nt
@@ -558,8 +557,6 @@ def assembly_modes(model: MechanismModel, s: Array, starts: int = 2000, seed: in
     (``seed``) are each taken to a solution by damped Newton; the converged ones verified by the
     inverse kinematics round trip to :data:`ROUND_TRIP_TOLERANCE` and merged by the task body's
     pose. Refused where no start reaches a solution (the actuators reach no pose)."""
-    from .inverse import singularity_measures
-
     _check(model)
     s = np.ascontiguousarray(as_array(s, (model.na,), "s", MotionError))
     if not np.all(np.isfinite(s)):

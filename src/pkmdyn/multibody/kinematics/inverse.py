@@ -31,16 +31,17 @@ limit; :func:`reachable` counts such a pose as out of the workspace, and
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import MotionError, SingularityError, UnreachablePoseError, as_array
-from . import _solve_kernels as K
 from ..description.joint_types import JOINT_TYPES
 from ..model.compiler import MechanismModel
 from ..model.topology import column_scale, constraint_jacobian, row_labels, row_scale
+from . import _solve_kernels as K
+from ._measure_kernels import measure_bounds
 
 __all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals", "least_measure_bounds", "least_measures",
            "singularity_measures", "SingularityMeasures", "reachable", "TOLERANCE", "joint_coordinates",
@@ -112,8 +113,6 @@ class MechanismKinematics:
 
     def rows(self, start: int, stop: int | None = None) -> "MechanismKinematics":
         """Samples ``start .. stop - 1`` (views of the arrays)."""
-        from dataclasses import fields, replace
-
         sl = slice(start, stop)
         return replace(self, **{f.name: getattr(self, f.name)[sl] for f in fields(self)
                                 if getattr(self, f.name) is not None})
@@ -566,8 +565,6 @@ def _measure_bounds(model: MechanismModel, q: Array, levels: Array, tight: bool,
     inverse, direct) is proven above ``levels[k]`` (True for the direct one where it does not
     apply) and ``upper (n, 3)`` an upper bound of each; with ``brackets``, ``upper (n, 3, 2)``
     a proven bracket of each instead (:func:`._measure_kernels.measure_bounds`)."""
-    from ._measure_kernels import measure_bounds
-
     n = q.shape[0]
     passed = np.ones((n, 3), dtype=np.bool_)
     upper = np.ones((n, 3, 2))

@@ -27,8 +27,10 @@ from numpy.typing import NDArray
 
 from ...errors import MotionError
 from ...io import read_csv_columns
+from ...params_util import check_limit
 from ...profiles._columns import column_group, derivatives, require_increasing, require_rows, savgol_derivatives
 from ..model.compiler import MechanismModel
+from .inverse import reference_task
 
 __all__ = ["TaskMotion", "PeriodicMotion", "RepeatedMotion", "ActuatorMotion", "task_columns", "motion_columns",
            "actuator_columns", "default_motion", "periodic_motion", "repeated_motion", "read_task_motion",
@@ -178,8 +180,6 @@ def repeated_motion(cycle: TaskMotion, cycles: float, what: str = "the default m
             raise MotionError(f"--cycles: {what} is not periodic (its last sample's {name} differs from its first); "
                               "only a periodic motion repeats")
     if max_samples is not None and not n <= max_samples:
-        from ...params_util import check_limit
-
         check_limit(n, max_samples, "motion: samples (cycles x samples per cycle + 1)", "max_samples",
                     file="the description")
     return RepeatedMotion(cycle, n)
@@ -201,8 +201,6 @@ def periodic_motion(model: MechanismModel, cycles: float = 1.0, samples_per_cycl
     ``samples_per_cycle`` samples per period (default the description's ``samples - 1``, so that
     one cycle has ``samples`` samples, both ends included). More than ``max_samples`` samples is
     a :class:`~pkmdyn.errors.LimitError` naming the limit."""
-    from .inverse import reference_task
-
     spec = model.motion
     if not (np.isfinite(cycles) and cycles > 0):
         raise MotionError(f"--cycles: must be a finite number > 0, got {cycles!r}")
@@ -212,8 +210,6 @@ def periodic_motion(model: MechanismModel, cycles: float = 1.0, samples_per_cycl
     total = float(cycles) * spc
     n = int(round(total)) + 1
     if max_samples is not None and not n <= max_samples:
-        from ...params_util import check_limit
-
         check_limit(n, max_samples, "default motion: samples (cycles x samples per cycle + 1)", "max_samples",
                     file="the description")
     pos, _, _ = task_columns(model)

@@ -66,7 +66,7 @@ Recognition is documented in ``docs/mechanism_format.md`` and printed by ``pkmdy
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -163,8 +163,6 @@ def no_legs(nb: int) -> LegTable:
 def newton_only(model):
     """``model`` with every block solved by Newton (no explicit legs): the second route the
     tests compare the explicit legs with."""
-    from dataclasses import replace
-
     return replace(model, legs=no_legs(model.nb))
 
 
