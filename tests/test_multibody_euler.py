@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import multibody_examples as ex
-from pkmdyn.multibody.kinematics import _solve_kernels as K
+from pkmdyn.multibody.model import _tree_kernels as K
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
 from pkmdyn.spatial import euler_kinematics, euler_to_matrix
 

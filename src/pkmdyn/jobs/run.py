@@ -1,12 +1,12 @@
 """The run of a described mechanism: a task motion -> kinematics, efforts, every joint reaction,
 the drives and the effort split -> files, streamed chunk by chunk.
 
-``run_mechanism`` takes the motion in chunks (:data:`CHUNK` samples; a :class:`~.motion.TaskMotion`
-or a :class:`~.motion.PeriodicMotion` made as it goes), so that memory does not grow with
+``run_mechanism`` takes the motion in chunks (:data:`CHUNK` samples; a :class:`~pkmdyn.multibody.kinematics.motion.TaskMotion`
+or a :class:`~pkmdyn.multibody.kinematics.motion.PeriodicMotion` made as it goes), so that memory does not grow with
 the run: each chunk is solved (warm-started from the chunk before: its last sample is solved
 again as the chunk's first row, so that a chunked run follows the same solution as one
 solved whole), its rates checked against the plausibility limits
-(:mod:`.actuators`), its efforts and reactions computed (:func:`.dynamics.joint_reactions`,
+(:mod:`pkmdyn.multibody.dynamics.actuators`), its efforts and reactions computed (:func:`pkmdyn.multibody.dynamics.inverse.joint_reactions`,
 load-dependent friction iterated per chunk, messages naming the sample of the whole run), its
 rows appended to ``results.csv`` (or ``.parquet``), and the summary's extremes kept on the fly.
 ``bodies.npz`` holds the first ``max_body_samples`` samples (every sample of a run up to that
@@ -187,7 +187,7 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
                   progress: bool = False, chunk: int = CHUNK, plot_window: int | None = None,
                   deflection: bool = False) -> dict[str, Any]:
     """Kinematics, efforts and every joint reaction of ``model`` along ``motion`` (a
-    :class:`~.motion.TaskMotion` or :class:`~.motion.PeriodicMotion`), written into ``out_dir``
+    :class:`~pkmdyn.multibody.kinematics.motion.TaskMotion` or :class:`~pkmdyn.multibody.kinematics.motion.PeriodicMotion`), written into ``out_dir``
     under the output rule (``inputs`` the files the run read: nothing is written when anything
     fails), streamed chunk by chunk (module docstring).
 

@@ -1,7 +1,7 @@
 """The stiffness job: poses, a motion or a grid of poses in; ``stiffness.json``, ``results.csv``
 (a motion), ``grid.csv`` and ``stiffness_map.png`` (a grid) and ``report.html`` out
-(``docs/stiffness.md``). The numbers come from :func:`.stiffness.stiffness` and
-:func:`.stiffness.deflection`."""
+(``docs/stiffness.md``). The numbers come from :func:`pkmdyn.multibody.analyses.stiffness.stiffness` and
+:func:`pkmdyn.multibody.analyses.stiffness.deflection`."""
 
 from __future__ import annotations
 

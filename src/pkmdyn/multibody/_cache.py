@@ -1,7 +1,7 @@
 """Keep numba's on-disk cache of cross-module kernels in step with the code they compile in.
 
 Numba keys a cached compiled function on its own source file only (its time stamp and size).
-A kernel that inlines or links functions of other modules (:mod:`._one` uses the kinematics,
+A kernel that inlines or links functions of other modules (:mod:`pkmdyn.multibody.dynamics._sample_kernels` uses the kinematics,
 dynamics and friction kernels) would then keep serving the code it was compiled against after
 those modules change, e.g. in a development checkout. :func:`refresh` writes a marker with a
 hash of the modules' sources beside each kernel's cache and flushes the cache when the hash

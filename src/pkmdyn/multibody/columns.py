@@ -41,7 +41,7 @@ def joint_effort_column(model: MechanismModel, i: int, part: str | None = None) 
 
 def actuator_effort_column(model: MechanismModel, i: int, part: str | None = None) -> str:
     """Actuator i's effort column as its machine is driven, or one part of its split: at the
-    motor for a drive (:func:`.actuators.motor_effort_column`), else at the joint."""
+    motor for a drive (:func:`pkmdyn.multibody.dynamics.actuators.motor_effort_column`), else at the joint."""
     return motor_effort_column(model, i, part) if model.drive_name[i] is not None else \
         joint_effort_column(model, i, part)
 
@@ -190,7 +190,7 @@ def effort_columns(model: MechanismModel, kin: MechanismKinematics, reac: Any, n
     """The dynamics' columns of ``results.csv``: per actuated joint ``<joint>_effort_<N|Nm>``;
     per drive its motor ``<actuator>_pos_rad``, ``_vel_rad_s``, ``_acc_rad_s2`` (``m`` for a
     linear motor) and ``<actuator>_torque_Nm`` (``_force_N``); then the effort split
-    (:class:`~.dynamics.EffortShares`): per actuator and part (each body group, ``rotor`` for a
+    (:class:`~pkmdyn.multibody.dynamics.inverse.EffortShares`): per actuator and part (each body group, ``rotor`` for a
     drive, ``friction``: every joint's and the motor's) ``<actuator>_torque_<part>_Nm`` (a
     drive, motor side) or ``<joint>_effort_<part>_<N|Nm>`` (a joint without one); the named
     loads' magnitudes."""
@@ -246,6 +246,6 @@ def results_column_names(model: MechanismModel, deflection: bool = False) -> lis
 def deflection_columns(model: MechanismModel, kin: MechanismKinematics, reac: Any, named: Mapping | None,
                        sample_offset: int = 0) -> dict[str, Array]:
     """``<coordinate>_deflection_<unit>``: the task coordinates' elastic deflection with the
-    actuators locked under the motion's own loads (:func:`.stiffness.deflection`)."""
+    actuators locked under the motion's own loads (:func:`pkmdyn.multibody.analyses.stiffness.deflection`)."""
     dx = deflection(model, kin, reac, named=named, sample_offset=sample_offset)
     return {f"{n}_deflection_{u}": dx[:, i] for i, (n, u) in enumerate(zip(model.task_names, model.task_units))}

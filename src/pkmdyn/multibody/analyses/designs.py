@@ -138,7 +138,7 @@ def _limit_metrics(model: Any, kin: Any, u: Array) -> dict[str, float]:
     limited joints, of the distance to the nearer limit over the joint's range (0 at a limit or
     within ``pkmdyn run``'s tolerance beyond it, 0.5 mid-range, negative beyond it);
     ``peak_effort_over_rated`` where a drive has a rated effort: the largest motor effort (Eq.
-    A1 of :mod:`.actuators`: transmitted, rotor and motor friction) over its rating, over the
+    A1 of :mod:`pkmdyn.multibody.dynamics.actuators`: transmitted, rotor and motor friction) over its rating, over the
     samples and the rated drives (above 1: beyond it)."""
 
     out: dict[str, float] = {}
@@ -370,7 +370,7 @@ def _stiffness_metrics(description: Mapping[str, Any]) -> list[str]:
 
 def _workspace_size_name(source: Any, grid: str) -> tuple[str, str]:
     """The workspace-size metric's name and unit for a grid of task coordinates
-    (:func:`.workspace.size_unit`: ``workspace_size_m3`` ...); ``source`` a model or a description."""
+    (:func:`pkmdyn.multibody.analyses.workspace.size_unit`: ``workspace_size_m3`` ...); ``source`` a model or a description."""
 
     model = source if hasattr(source, "task_units") else None
     if model is None:
@@ -390,7 +390,7 @@ def _on_grid(model: Any, spec: tuple[str, str, str | None], threshold: float, le
     """The workspace of ``model`` on the grid, held pose and orientation range ``spec``
     (``--grid``, ``--pose``, ``--orientation-range`` syntax), with its size (from the boundary's
     crossings of the grid's edges where ``refine``) and least measure (``least``; else only its
-    size: :func:`.workspace.workspace`, ``measures``, ``refine``)."""
+    size: :func:`pkmdyn.multibody.analyses.workspace.workspace`, ``measures``, ``refine``)."""
 
     ranges = None if spec[2] is None else parse_ranges(model, spec[2])
     return workspace(model, parse_grid(model, spec[0], max_axes=3), parse_pose(model, spec[1]), threshold,

@@ -7,7 +7,7 @@ Per body b, the ten barycentric parameters in its own frame (about its frame ori
 
 with ``h = m c`` the first moment and ``J = I_c + m (|c|^2 1 - c c^T)`` the inertia about
 O_b (tensor entries, ``J_xy = -∫ x y dm``). The required body wrench (Eq. 1 of
-:mod:`.dynamics`) is linear in them: with ``R`` the body's rotation, ``o`` its origin, ``a_o``
+:mod:`pkmdyn.multibody.dynamics.inverse`) is linear in them: with ``R`` the body's rotation, ``o`` its origin, ``a_o``
 its origin's acceleration and ``g`` gravity, ``h_w = R h``, ``J_w = R J R^T``,
 
     f   = m (a_o - g) + wd x h_w + w x (w x h_w)
@@ -21,7 +21,7 @@ Per joint with friction data, two parameters: its Coulomb and its viscous coeffi
 coefficient ``mu_k`` (``<joint>_external<k>_<load>_coefficient``, the magnitudes ``named``).
 The efforts are ``u = Y theta + u_0`` (``u_0`` the description's ``[[loads]]``), every column
 of ``Y`` the projection (Eq. 2-3) of the wrenches or friction of one unit parameter. With
-drives (``[[actuators]]``) the efforts are the motor efforts of :mod:`.actuators` (Eq. A1):
+drives (``[[actuators]]``) the efforts are the motor efforts of :mod:`pkmdyn.multibody.dynamics.actuators` (Eq. A1):
 every column divided by the transmission ratio ``k``, and per drive three more parameters,
 its rotor inertia (column ``theta_ddot``), its motor's Coulomb (``u(theta_dot)``) and viscous
 (``theta_dot``) coefficients. Idle freedoms are held (the kinematics' accelerations).

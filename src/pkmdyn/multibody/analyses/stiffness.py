@@ -1,7 +1,7 @@
 """Stiffness and vibration of any described mechanism with its actuators locked.
 
 **Compliance sources** (``docs/stiffness.md``, "Compliance sources"): the elastic bodies'
-beam segments (a body's ``section`` and ``material``, the beam model of :mod:`.reactions`:
+beam segments (a body's ``section`` and ``material``, the beam model of :mod:`pkmdyn.multibody.dynamics.reactions`:
 tension, torsion and bending, Eq. 63-64 of the PDM paper), the drives
 (``[joints.stiffness] drive_N_m`` or ``drive_Nm_rad`` of an actuated joint, joint side) and the
 joints' own springs (``force_N_m``, ``moment_Nm_rad`` against the joint's reaction, along the
@@ -9,13 +9,13 @@ axes of its frame on the parent). Everything else is rigid.
 
 **Method: the force method (matrix structural analysis in forces).** With the actuators
 locked, the mechanism is a structure. A wrench ``w`` applied to the task body is carried by
-joint wrenches ``z`` in equilibrium with it (the equations of :mod:`.dynamics` without the
+joint wrenches ``z`` in equilibrium with it (the equations of :mod:`pkmdyn.multibody.dynamics.inverse` without the
 actuated coordinates' rows, which leave each drive's effort free); each compliant member's
 internal force is linear in ``z``: ``e = E z + e_w`` (a beam segment's wrench, a drive's
 effort ``u_a = T_a . W_j``, a joint spring's reaction), and the complementary energy is
 ``U* = 1/2 e^T F e`` with ``F`` the members' flexibilities (``L/EA`` ..., ``1/k``). Of all the
 admissible ``z`` (the cut joints' constraint wrenches ``lambda`` parameterise them,
-``z = z_w + Z lambda``, :class:`.dynamics._CutRoute`), the real one minimises ``U*``
+``z = z_w + Z lambda``, :class:`pkmdyn.multibody.dynamics.inverse._CutRoute`), the real one minimises ``U*``
 (Menabrea); the displacement conjugate to ``w`` is ``dU*/dw`` (Castigliano), so the task
 body's small twist ``[dtheta; dp_O]`` (Plücker at the base origin) under ``w = [n_O; f]`` is
 ``C_O w`` with the compliance matrix ``C_O = E_w^T F E_w`` (``E_w`` the members' forces per unit
@@ -368,8 +368,8 @@ def deflection(model: MechanismModel, kin: MechanismKinematics, reactions: objec
                named: dict | None = None, sample_offset: int = 0) -> Array:
     """The task coordinates' elastic deflection ``dx (n, nt)`` [m, rad] under the motion's own
     loads (unit-load method, module docstring): ``reactions`` the motion's
-    :class:`~.dynamics.JointReactions` (every joint's wrench), ``loads``/``named`` as for
-    :func:`.dynamics.body_wrenches` (the same as the reactions were computed with)."""
+    :class:`~pkmdyn.multibody.dynamics.inverse.JointReactions` (every joint's wrench), ``loads``/``named`` as for
+    :func:`pkmdyn.multibody.dynamics.inverse.body_wrenches` (the same as the reactions were computed with)."""
     _check_sources(model)
     st = _Structure(model, kin, sample_offset)
     n = len(kin)

@@ -2,14 +2,14 @@
 
 **Method.** A regular grid over one to three task coordinates (the others held at a given
 pose, e.g. a constant orientation), solved by continuation over the grid
-(:func:`.kinematics.solve_grid`): the grid pose nearest the held pose is reached from the
+(:func:`pkmdyn.multibody.kinematics.inverse.solve_grid`): the grid pose nearest the held pose is reached from the
 reference configuration along the straight task path (as the first sample of a motion; where
 it is not, the next nearest, up to 16), and every other pose from a solved neighbour along a
 grid axis, breadth first, so every pose on the description's assembly branch. A grid pose
 is *reached* where it is solved with every joint within its limits (``limits_rad``/``limits_m``,
 actuated joints included). It is *in the workspace* where
 
-1. it is reached and every singularity measure (:func:`.kinematics.singularity_measures`:
+1. it is reached and every singularity measure (:func:`pkmdyn.multibody.kinematics.inverse.singularity_measures`:
    inverse, direct, constraint) at it is at least ``threshold``, and
 2. it is connected to the start through such poses (neighbours along the grid's axes): the
    part of the grid the mechanism moves through from its reference without crossing a
@@ -190,7 +190,7 @@ def _screen(model: MechanismModel, kin, reached: NDArray[np.bool_], threshold: f
 
 
 def _limited_coordinates(model: MechanismModel, kin) -> Array | None:
-    """The coordinates of the limited joints (:func:`.kinematics.limited_joints`) at every pose
+    """The coordinates of the limited joints (:func:`pkmdyn.multibody.kinematics.inverse.limited_joints`) at every pose
     of ``kin``; None without such joints."""
     joints = limited_joints(model)
     return joint_coordinates(model, kin, joints, along=False) if joints else None
@@ -215,7 +215,7 @@ def _crossings(model: MechanismModel, x: Array, shape: tuple[int, ...], inside: 
     """Where the workspace's boundary crosses each boundary edge (:func:`_edges`): the edge from
     inside pose ``a`` to outside pose ``b`` stepped in ``steps`` equal steps, each step's pose
     solved from the one before (continuation from ``a``'s solution ``q[a]``; every inside
-    pose solved again from ``root`` over the inside poses, :func:`.kinematics.solve_graph`)
+    pose solved again from ``root`` over the inside poses, :func:`pkmdyn.multibody.kinematics.inverse.solve_graph`)
     and screened as a grid pose (:func:`_screen`). After ``k`` good steps the crossing lies in
     step ``k + 1``: where its end is solved, where the margin of the condition it fails
     (:func:`_between`) falls to zero, linear between the step's two ends; where it is not
@@ -299,7 +299,7 @@ def _held(model: MechanismModel, axes: list[tuple[int, Array]], base: Array, thr
     """The workspace on the grid at one held pose ``base`` (module docstring): reached, inside,
     the smallest singularity measure (0 where not reached), the tree coordinates, and an upper
     bound of the measure (the measure itself where computed). Without ``all_measures`` the
-    measure is computed only where its bounds (:func:`.kinematics.least_measure_bounds`) do not
+    measure is computed only where its bounds (:func:`pkmdyn.multibody.kinematics.inverse.least_measure_bounds`) do not
     prove it at least ``threshold``, and is NaN elsewhere."""
     x = grid_poses(model, axes, base)
     shape = tuple(len(v) for _, v in axes)
@@ -320,7 +320,7 @@ def _least_inside(model: MechanismModel, q: Array, inside: NDArray[np.bool_], me
     (``measure`` NaN elsewhere, ``upper`` their upper bounds): the measures of the
     ``candidates`` unknown poses of least upper bound are computed, ``U`` the least known
     measure; every other inside pose is proven above ``U``
-    (:func:`.kinematics.least_measure_bounds`, ``tight``: where its measure exceeds ``U`` by
+    (:func:`pkmdyn.multibody.kinematics.inverse.least_measure_bounds`, ``tight``: where its measure exceeds ``U`` by
     more than a few per cent) or its measure is computed. ``U`` is a pose's measure, so the
     least is among the computed ones."""
     ins = np.flatnonzero(inside)
@@ -343,7 +343,7 @@ def _least_inside(model: MechanismModel, q: Array, inside: NDArray[np.bool_], me
 def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array | None = None,
               threshold: float = 1e-3, centre: Array | None = None,
               ranges: list[tuple[int, Array]] | None = None, measures: str = "all", refine: int = 0) -> Workspace:
-    """The workspace on the grid ``axes`` (:func:`.task_grid.parse_grid`) about the pose
+    """The workspace on the grid ``axes`` (:func:`pkmdyn.multibody.analyses.task_grid.parse_grid`) about the pose
     ``base`` (default: the reference pose), with the singularity ``threshold`` and the inscribed
     shapes about ``centre`` (the grid coordinates' values; default: ``base``'s).
 
@@ -356,7 +356,7 @@ def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array 
     ``measures``: ``"all"`` every reached pose's singularity measures (``measure``);
     ``"least"`` (a sweep's workspace, where the size and the least measure count) a pose's
     measures only where their cheap bounds do not prove them at least ``threshold``
-    (:func:`.kinematics.least_measure_bounds`, some ten times cheaper than the singular
+    (:func:`pkmdyn.multibody.kinematics.inverse.least_measure_bounds`, some ten times cheaper than the singular
     values), and the least over the inside poses as :func:`_least_inside` finds it: the same
     ``reached``, ``inside``, size and ``least_measure`` as ``"all"`` (to rounding), no
     ``measure`` per pose; ``"none"`` as ``"least"`` without ``least_measure`` (None). Over

@@ -430,7 +430,7 @@ class Description:
     groups: tuple[tuple[str, tuple[str, ...]], ...] = ()
     #: the plausibility limits of motions (``[limits]``, keys of :data:`LIMIT_KEYS`)
     limits: dict[str, float] = field(default_factory=dict)
-    #: the named design parameters and their values (``[parameters]``, :mod:`.expressions`)
+    #: the named design parameters and their values (``[parameters]``, :mod:`pkmdyn.multibody.description.expressions`)
     parameters: dict[str, Any] = field(default_factory=dict)
     #: the bounded parameters' ``(min, max)`` (either None where absent)
     parameter_bounds: dict[str, tuple[float | None, float | None]] = field(default_factory=dict)

@@ -24,7 +24,7 @@ def twists_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, c
     w3 = np.empty((20, 3))
     trig = np.empty((q.shape[1], 3))
     late = np.full(nb, -1, dtype=np.int64)
-    off = nb < 0  # False as a run-time value: forward_positions compiles once (_kernels.jacobians_batch)
+    off = nb < 0  # False as a run-time value: forward_positions compiles once (_tree_kernels.jacobians_batch)
     for s in range(q.shape[0]):
         forward_positions(q[s], body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
                           RP, pP, RC, pC, R, p, S_out[s], w33, w3, trig, off, late, off)
@@ -234,7 +234,7 @@ def task_mass(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, fac
     per unit task rate t (``v_c = v_O + w x p`` the centre-of-mass velocity); the bodies' blocks
     side by side make ``Z (nt, 6 nb)`` and ``M = Z Z^T``. ``S (nq, 6)``, ``G (nq, nt)``, ``R
     (nb, 3, 3)``, ``p (nb, 3)`` the centres of mass, ``factor (nb, 3, 3)``
-    (:func:`.dynamics.inertia_factors`); ``T (nb, nt, 6)`` (row t of body b: its twist per unit
+    (:func:`pkmdyn.multibody.dynamics.inverse.inertia_factors`); ``T (nb, nt, 6)`` (row t of body b: its twist per unit
     task rate t), ``Z (nt, 6 nb)``, ``RL (3, 3)`` work space."""
     nt = G.shape[1]
     for b in range(R.shape[0]):
@@ -310,7 +310,7 @@ def joint_friction(w0, w1, w2, u0, u1, u2, p0, p1, p2, rot, slide, coef, ext, ep
 def friction_batch(w, ov, org, jpt, S, fsc, fidx, fcnt, fj, fch, fpa, frot, fslide, coef, ext, eps_r, eps_t,
                    Q_out):  # pragma: no cover - compiled
     """Generalised forces ``Q_out (n, nq)`` of the friction that does not depend on the
-    reactions (laws F1-F2 of :mod:`.friction` with ``mu = 0``): per joint ``fj[k]`` with
+    reactions (laws F1-F2 of :mod:`pkmdyn.multibody.dynamics.friction` with ``mu = 0``): per joint ``fj[k]`` with
     ``coef[k] = (C_t, b_t, C_f, b_f)`` and the named loads' Coulomb part ``ext[:, k]``
     (:func:`joint_friction`).
 

@@ -1,11 +1,11 @@
 """One sample of a described mechanism's dynamics in one compiled call: the real-time path
-behind :meth:`.machine.MechanismVerbs.forward_dynamics_one` and ``inverse_dynamics_one``.
+behind :meth:`pkmdyn.multibody.dynamics.verbs.MechanismVerbs.forward_dynamics_one` and ``inverse_dynamics_one``.
 
 The model's arrays, the kernel's state and its work space are packed once into one buffer
 (:func:`pack`), so that a call passes a handful of arguments whatever the mechanism; the
 kernel takes them as views and runs, for task pose ``x`` and rate ``xd``:
 
-1. the tree coordinates and rates at ``xdd = 0`` (:func:`._kernels.solve_sample`, the batched
+1. the tree coordinates and rates at ``xdd = 0`` (:func:`pkmdyn.multibody.kinematics._solve_kernels.solve_sample`, the batched
    solver's own sample): from the previous call's solution, the predictor
    ``q_prev + G_prev dx + s^2 qdd_prev / 2`` (``dx = x - x_prev``; ``qdd_prev`` the previous
    call's bias accelerations at ``xd_prev``, ``s = dx . xd_prev / |xd_prev|^2``: the second
@@ -15,15 +15,15 @@ kernel takes them as views and runs, for task pose ``x`` and rate ``xd``:
    ``qd = G xd`` and the bias accelerations;
 2. the joints' friction of known magnitude from the relative twists;
 3. the bodies' required wrenches at the bias motion with gravity and loads (Eq. 1 of
-   :mod:`.dynamics`), the tree forces (Eq. 2) and ``h = G^T Q``;
+   :mod:`pkmdyn.multibody.dynamics.inverse`), the tree forces (Eq. 2) and ``h = G^T Q``;
 4. the task mass matrix ``M = sum_b T_b^T I_b T_b``;
-5. the drives' rotor inertia, bias and motor friction (:mod:`.actuators`, Eq. A1) added to
+5. the drives' rotor inertia, bias and motor friction (:mod:`pkmdyn.multibody.dynamics.actuators`, Eq. A1) added to
    ``M`` and ``h``;
 6. forward: ``M xdd = J_ax^T k tau - h``; inverse: ``J_ax^T k tau = M xdd + h`` (``tau`` the
    motor efforts, ``k`` the transmission ratios: 1 for a joint without a drive).
 
 These are the verbs' definitions (idle freedoms held, as the kinematics hold them), with the
-joints' Coulomb, viscous and named-load friction (:func:`._dyn_kernels.joint_friction`) and
+joints' Coulomb, viscous and named-load friction (:func:`pkmdyn.multibody.dynamics._dyn_kernels.joint_friction`) and
 at most one named load, whose magnitude is the call's ``load``. A mechanism with friction
 that depends on the joints' reactions, several named loads or more actuators than task
 coordinates takes the verbs' own route (:func:`supported`). A call returns a
@@ -176,7 +176,7 @@ def state(pk: NDArray[np.int64]) -> Array:
     """The kernel's state in ``pk`` (a view): ``[flag, q (nq), x (nt), G (nq nt), qdd (nq),
     xd (nt), pause]`` of the last solved sample (``flag`` :data:`COLD_STATE`, :data:`PRIMED` or
     :data:`FACTORED`; ``qdd`` its bias accelerations at ``xd``; ``pause`` the calls left
-    without the simplified Newton step, :func:`._kernels.chord_pause`)."""
+    without the simplified Newton step, :func:`pkmdyn.multibody.kinematics._solve_kernels.chord_pause`)."""
     nq, nt = int(pk[4]), int(pk[5])
     o = int(pk[7])
     return pk[o:o + 1 + nq + nt + nq * nt + nq + nt + 1].view(np.float64)
@@ -577,7 +577,7 @@ def positions_one(pk: NDArray[np.int64], x: Array, xd: Array, out: Array) -> int
     """``out = q_a (na,)``, the actuated joints' coordinates at task pose ``x`` (one sample of
     the inverse kinematics from the previous call's solution, ``xd`` the pose's rate for the
     predictor: a plant's encoders); returns the status (0 OK) (:func:`forward_one`). Where
-    every actuated coordinate is set by a leg placed from the task alone (:mod:`.legs`: the
+    every actuated coordinate is set by a leg placed from the task alone (:mod:`pkmdyn.multibody.model.legs`: the
     Stewart platform's legs, the PUS legs of a 3PUS+S platform), those legs' closed forms alone answer, the
     values the full solve keeps (no Newton, no rates; the state then :data:`ALONE`)."""
     return _dynamics(pk, x, xd, xd, 0.0, POSITIONS, out)

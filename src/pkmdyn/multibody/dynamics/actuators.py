@@ -1,7 +1,7 @@
 """Drives of the actuated joints: transmission, rotor inertia, motor friction, motor-side
 efforts and rates, and the plausibility limits of a motion's rates.
 
-A drive (``[[actuators]]`` of the description, :class:`~.description.ActuatorSpec`) turns a
+A drive (``[[actuators]]`` of the description, :class:`~pkmdyn.multibody.description.schema.ActuatorSpec`) turns a
 motor whose coordinate is ``theta = k q`` (``q`` the joint coordinate, reference value
 included; ``k`` the transmission ratio: a gear ratio [rad/rad] for a revolute joint,
 ``gear_ratio 2 pi / lead`` [rad/m] for a prismatic joint driven by a screw, 1 for a linear
@@ -45,7 +45,7 @@ Array = NDArray[np.float64]
 
 def motor_eps(model: MechanismModel) -> Array:
     """The regularisation velocity of each motor's friction (rotary [rad/s], linear [m/s]): the
-    joints' (:data:`.friction.EPS_ROTATION`, :data:`.friction.EPS_TRANSLATION`)."""
+    joints' (:data:`pkmdyn.multibody.dynamics.friction.EPS_ROTATION`, :data:`pkmdyn.multibody.dynamics.friction.EPS_TRANSLATION`)."""
     return np.array([EPS_ROTATION if u == "rad" else EPS_TRANSLATION for u in model.motor_units])
 
 

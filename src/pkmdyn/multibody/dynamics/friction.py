@@ -2,8 +2,8 @@
 joint's own reaction), in the free directions of every joint, tree or cut.
 
 Relative motion of joint j (child relative to parent): the twist ``V_rel = V_c - V_p``
-(Plücker at the base origin, :mod:`.dynamics`), with ``V_rel = T r`` in the joint's free
-twists ``T (f, 6)`` (:func:`.dynamics.free_twists`), ``r = T^+ V_rel`` its free rates (for a
+(Plücker at the base origin, :mod:`pkmdyn.multibody.dynamics.inverse`), with ``V_rel = T r`` in the joint's free
+twists ``T (f, 6)`` (:func:`pkmdyn.multibody.dynamics.inverse.free_twists`), ``r = T^+ V_rel`` its free rates (for a
 tree joint, its coordinate rates). The relative angular velocity is ``w = V_rel[:3]``, the
 relative velocity of the child's point at the joint centre ``p`` is ``v = V_rel[3:] + w x p``.
 
@@ -244,7 +244,7 @@ def friction_arrays(model: MechanismModel) -> dict[str, np.ndarray]:
 def known_friction(model: MechanismModel, kin, S: Array, named: Mapping[str, object] | None = None) -> Array:
     """Generalised forces ``Q_f (n, nq)`` of the friction that does not depend on the joints'
     reactions (Coulomb, viscous and the named loads' part of laws F1-F2), compiled
-    (:func:`._dyn_kernels.friction_batch`, the virtual power of each joint's resisting wrench
+    (:func:`pkmdyn.multibody.dynamics._dyn_kernels.friction_batch`, the virtual power of each joint's resisting wrench
     in its relative twist). Equal to ``JointFriction(...).generalised(initial())`` for tree
     joints; for cut joints up to constraint forces, so that the efforts (``G^T Q``) are the
     same. A ``coefficient`` (reaction-dependent) is a ``ValueError``."""

@@ -37,7 +37,7 @@ child). For a tree joint ``T_i = S_c``; for a cut joint the free twists are thos
 type at its frames (rotation axes through the child frame's origin; the last elementary
 motion about the child frame's axis, the others about the parent frame's). The solution is
 unique when the mechanism is not over-constrained; otherwise ``t`` self-stress states remain
-(the null space of the matrix), which :mod:`.reactions` fixes by link compliance.
+(the null space of the matrix), which :mod:`pkmdyn.multibody.dynamics.reactions` fixes by link compliance.
 Reported as ``joint_force`` (n, nj, 3) [N] and ``joint_moment`` (n, nj, 3) [N m] about the
 joint point (``kin.joint_point``), the PDM's schema.
 """
@@ -403,7 +403,7 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
                     named: Mapping[str, object] | None = None, split: bool = False,
                     sample_offset: int = 0) -> JointReactions:
     """Actuator efforts (Eq. 3) and every joint reaction (module docstring), with the joints'
-    friction (:mod:`.friction`) when the description gives any and ``friction`` is true.
+    friction (:mod:`pkmdyn.multibody.dynamics.friction`) when the description gives any and ``friction`` is true.
 
     An over-constrained mechanism's reactions are made unique by link compliance
     (:func:`pkmdyn.multibody.dynamics.reactions.compliant_reactions`, from the bodies' ``section`` and
@@ -542,7 +542,7 @@ class EffortShares:
 def effort_shares(model: MechanismModel, kin: MechanismKinematics, S: Array, W: Array, fr,
                   F: dict | None) -> EffortShares:
     """:class:`EffortShares` from the required body wrenches ``W (n, nb, 6)`` and the joints'
-    friction ``F`` (``fr``: the :class:`~.friction.JointFriction` that made it, or None):
+    friction ``F`` (``fr``: the :class:`~pkmdyn.multibody.dynamics.friction.JointFriction` that made it, or None):
     ``u_part = (J_ax^T)^-1 G^T Q_part`` for ``Q_part`` the generalised forces (Eq. 2) of one
     group's wrenches or of one joint's friction."""
     n, nq = S.shape[0], model.nq
@@ -602,12 +602,12 @@ def _residual(model: MechanismModel, blocks: list, z: Array, b: Array, mu: Array
 
 @dataclass(frozen=True)
 class _CutTable:
-    """The cut joints of a model as the compiled route takes them (:mod:`._reaction_kernels`):
+    """The cut joints of a model as the compiled route takes them (:mod:`pkmdyn.multibody.dynamics._reaction_kernels`):
     ``cut_j`` each cut joint (those with freedoms, then the fixed ones), ``cut_f`` its freedoms,
     ``cut_pos`` its first multiplier (``6 - f`` each), ``cut_sign (nc, nq)`` +1 on the tree
     coordinates that move its child and not its parent, -1 on the reverse; ``joint_cut_index``
     (nj,) each joint's place in ``cut_j`` (-1 for a tree joint); ``type_motion`` (types, 3) the
-    elementary motions of each joint type (:data:`.joint_types.MOTION_CODES`); ``H`` the idle
+    elementary motions of each joint type (:data:`pkmdyn.multibody.description.joint_types.MOTION_CODES`); ``H`` the idle
     freedoms' holding directions (:func:`idle_holding`), whose forces follow the multipliers."""
 
     cut_j: NDArray[np.int64]
@@ -677,7 +677,7 @@ class _CutRoute:
     system is consistent where the efforts come from Eq. 3; its full column rank is checked by
     QR on three samples); every tree joint's wrench then follows leaves first,
     ``W_tree(b) = W_b + sum_children W_tree(child) - (cut wrenches on b)``
-    (:func:`._reaction_kernels.cut_reactions_batch`, :func:`_cut_solve`). When the columns are
+    (:func:`pkmdyn.multibody.dynamics._reaction_kernels.cut_reactions_batch`, :func:`_cut_solve`). When the columns are
     rank deficient (an over-constrained mechanism) ``full_rank`` is false and the dense
     equations or the compliance decide. This class holds the matrix ``A`` (n, nq, K) of the
     samples ``samples`` (default all) and assembles the wrenches in numpy for the compliance
@@ -765,7 +765,7 @@ def _cut_kernel(model: MechanismModel, tab: _CutTable, R: Array, origin: Array, 
                 rhs: Array | None = None, eff: Array | None = None, F: Array | None = None,
                 given: Array | None = None, lam: Array | None = None, out: tuple | None = None,
                 setup: tuple | None = None) -> None:
-    """One call of :func:`._reaction_kernels.cut_reactions_batch` (contiguous arrays): the
+    """One call of :func:`pkmdyn.multibody.dynamics._reaction_kernels.cut_reactions_batch` (contiguous arrays): the
     solve into ``out = (z, res, ok)``, or with ``setup = (T, C, A)`` the cut joints' twists,
     wrench bases and the tree equations' matrix alone (the solve's arrays left out)."""
     n = R.shape[0]
@@ -787,7 +787,7 @@ def _cut_solve(model: MechanismModel, tab: _CutTable, kin: MechanismKinematics, 
                eff: Array, F: dict | None) -> tuple[Array, Array, Array]:
     """Every joint wrench ``z (n, 6 nj)`` by the cut-wrench route (:class:`_CutRoute`, full
     column rank), the idle freedoms' holding forces ``mu (n, k)`` and the largest equilibrium
-    residual (n,), in one compiled pass (:func:`._reaction_kernels.cut_reactions_batch`):
+    residual (n,), in one compiled pass (:func:`pkmdyn.multibody.dynamics._reaction_kernels.cut_reactions_batch`):
     ``rhs = Q + Q_f - E_a u`` (n, nq), ``eff`` (n, nq) the efforts along the tree coordinates,
     ``F`` each joint's friction along its free twists. Where the columns are dependent at a
     sample (a constraint singularity) the multipliers are the minimum-norm least-squares ones,

@@ -8,7 +8,7 @@ joint efforts of actuated joints without one (forces [N] or torques [N m]), orde
 ``model.actuator_names``. With ``G = dq_tree/dx`` and ``J_ax = dq_a/dx`` from the kinematics,
 the body twists per task rate ``T_b = sum_{c in anc(b)} S_c G_c`` (6, nt) and the drives'
 ratios ``k`` (``K = diag k``, 1 without a drive), rotor inertias ``I_r`` and motor friction
-``tau_f`` (:mod:`.actuators`, Eq. A1):
+``tau_f`` (:mod:`pkmdyn.multibody.dynamics.actuators`, Eq. A1):
 
     M(x) = sum_b T_b^T I_b T_b + J_ax^T K I_r K J_ax      (kinetic energy of bodies and rotors)
     h(x, xd) = G^T (Q + Q_f) + J_ax^T K (I_r K qdd_a,bias + tau_f)   at xdd = 0 (Eq. 2-3 of .dynamics)
@@ -17,7 +17,7 @@ ratios ``k`` (``K = diag k``, 1 without a drive), rotor inertias ``I_r`` and mot
 so that ``M xdd + h = B u`` is the equation of motion projected on the task coordinates (the
 idle freedoms held, as the kinematics hold them). The friction in ``h`` is Coulomb and
 viscous; load-dependent friction is evaluated with the reactions of the state at ``xdd = 0``
-(its exact coupled value along a motion is :func:`.dynamics.joint_reactions`). The
+(its exact coupled value along a motion is :func:`pkmdyn.multibody.dynamics.inverse.joint_reactions`). The
 description's constant ``[[loads]]`` are always applied; ``load`` gives the magnitudes [N] of
 its named loads (``model.named_loads``): ``(n,)`` (or one value per call of a ``*_one`` verb)
 for a mechanism with one named load, ``(n, k)`` (``(k,)``) for k; None takes the
@@ -84,7 +84,7 @@ def _load_dependent(model: MechanismModel) -> bool:
 class _State:
     """What the verbs keep of one model between calls: its last solved tree coordinates (the
     next solve's start), the mass matrix's constant factors and the compiled single-sample
-    path's buffer (:mod:`._one`; None where that path does not answer for the model)."""
+    path's buffer (:mod:`pkmdyn.multibody.dynamics._sample_kernels`; None where that path does not answer for the model)."""
 
     def __init__(self, model: MechanismModel) -> None:
         self.one = _one  # the single-sample kernels, bound once (an import in a call costs a microsecond)
@@ -239,7 +239,7 @@ class MechanismVerbs:
     def actuator_map(self, model: MechanismModel, q: Array) -> Array:
         """``B(x) = J_ax^T k (n, nt, na)`` (``k`` the drives' transmission ratios, 1 without a drive).
         Along a motion of :data:`MAP_SAMPLES` poses or more, the single-sample kernel in one
-        compiled loop (:func:`._one.actuator_maps`: the same solver and tolerances, each pose
+        compiled loop (:func:`pkmdyn.multibody.dynamics._sample_kernels.actuator_maps`: the same solver and tolerances, each pose
         from the last), the first pose by the checked route."""
         x = self._x(q)
         J = self._maps(model, x) if x.shape[0] >= MAP_SAMPLES else None
@@ -248,7 +248,7 @@ class MechanismVerbs:
         return np.swapaxes(J, 1, 2) * model.drive_ratio
 
     def _maps(self, model: MechanismModel, x: Array) -> Array | None:
-        """``J_ax (n, na, nt)`` along the poses ``x`` by :func:`._one.actuator_maps` where the
+        """``J_ax (n, na, nt)`` along the poses ``x`` by :func:`pkmdyn.multibody.dynamics._sample_kernels.actuator_maps` where the
         kernel answers for ``model`` (else None): the first pose by the checked route (from the
         last solved sample, as :meth:`_kin` starts), every later one by the kernel from the one
         before, the rest by the checked route from the first it does not solve; the last
@@ -330,7 +330,7 @@ class MechanismVerbs:
         return np.linalg.solve(M, (np.einsum("nta,na->nt", B, uu) - h)[..., None])[..., 0]
 
     def one_sample_kernels(self, model: MechanismModel) -> tuple[NDArray[np.int64], object, object] | None:
-        """``(p, inverse, forward)``: the compiled single-sample kernels (:mod:`._one`) for
+        """``(p, inverse, forward)``: the compiled single-sample kernels (:mod:`pkmdyn.multibody.dynamics._sample_kernels`) for
         callers in a loop (``pkmdyn.machine_protocol``; ``load`` the named load's magnitude), or None
         where they do not answer for this mechanism (friction that depends on the reactions,
         several named loads, redundant actuation, a named load with a nonzero default
@@ -370,7 +370,7 @@ class MechanismVerbs:
     def inverse_dynamics_one(self, model: MechanismModel, q: Array, qd: Array, qdd: Array,
                              load: float | None = None) -> Array:
         """One sample of :meth:`inverse_dynamics` (the single-sample path: one compiled call
-        where :mod:`._one` answers, else the compiled solver warm-started from the previous
+        where :mod:`pkmdyn.multibody.dynamics._sample_kernels` answers, else the compiled solver warm-started from the previous
         call, no batch checks)."""
         u = self._kernel(model, False, q, qd, qdd, load)
         if u is not None:
@@ -401,7 +401,7 @@ class MechanismVerbs:
         inverse kinematics, warm-started from the last solved sample: the plant's encoders; with
         ``fresh``, reached from the reference configuration instead, the assembly of a run's
         first pose). ``qd``, the pose's rate, makes the start closer. One compiled call
-        (:func:`._one.positions_one`) where it answers, else the checked route."""
+        (:func:`pkmdyn.multibody.dynamics._sample_kernels.positions_one`) where it answers, else the checked route."""
         st = self._state(model)
         nt = model.nt
         _one = st.one
@@ -463,7 +463,7 @@ class MechanismVerbs:
 
     def direct_task_buffers(self, model: MechanismModel) -> tuple[NDArray[np.int64], NDArray[np.int64], Array,
                                                                     int] | None:
-        """``(pk, d, out, ok)``: what :meth:`direct_one` hands :func:`._direct.direct_task_one`
+        """``(pk, d, out, ok)``: what :meth:`direct_one` hands :func:`pkmdyn.multibody.kinematics._direct_kernels.direct_task_one`
         once primed, where the mechanism takes the task-space route (``out (2 nt,)`` the pose
         and its rate, ``ok`` the status of an answer); None otherwise."""
         st = self._state(model)
@@ -474,11 +474,11 @@ class MechanismVerbs:
 
     def direct_one(self, model: MechanismModel, a: Array, ad: Array) -> tuple[Array, Array]:
         """The task pose and rate ``(nt,), (nt,)`` at actuated joint coordinates ``a`` and rates
-        ``ad`` by the direct kinematics (:mod:`.direct`), warm-started from the previous call
+        ``ad`` by the direct kinematics (:mod:`pkmdyn.multibody.kinematics.direct`), warm-started from the previous call
         (the first from the reference configuration): the controller's pose from its encoders.
         One compiled call: in task space where every actuator belongs to a leg placed from the
-        task alone (:func:`._direct.direct_task_one`: the Gough-Stewart platform, a 3PUS+S platform), else
-        on the tree coordinates with a packed buffer (:func:`._direct.direct_one`); where it
+        task alone (:func:`pkmdyn.multibody.kinematics._direct_kernels.direct_task_one`: the Gough-Stewart platform, a 3PUS+S platform), else
+        on the tree coordinates with a packed buffer (:func:`pkmdyn.multibody.kinematics._direct_kernels.direct_one`); where it
         cannot answer, the checked route. Raises where the actuators reach no pose or sit on a
         singularity."""
         st = self._state(model)

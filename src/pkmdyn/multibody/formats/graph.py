@@ -1,6 +1,6 @@
 """A mechanism read from another format, as a description (``pkmdyn import``).
 
-The readers (:mod:`.import_mjcf`, :mod:`.import_urdf`, :mod:`.import_sdf`) turn a file into a
+The readers (:mod:`pkmdyn.multibody.formats.mjcf_in`, :mod:`pkmdyn.multibody.formats.urdf_in`, :mod:`pkmdyn.multibody.formats.sdf_in`) turn a file into a
 :class:`Graph`: every link's mass, centre of mass and inertia, every elementary joint (hinge,
 slide, ball, fixed) and every loop closure, all in the base frame at the file's reference
 configuration (MJCF: ``qpos0`` or a keyframe; URDF, SDFormat: zero joint positions).

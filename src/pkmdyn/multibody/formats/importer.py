@@ -18,7 +18,7 @@ from .urdf_in import read_sidecar, sidecar_task, urdf_graph
 
 def read_graph(path: Path, fmt: str, sidecar: Path | None = None, actuated: tuple[str, ...] = (),
                assemble: bool = False, keyframe: str | None = None) -> tuple[Graph, TaskChoice]:
-    """The file's :class:`~.import_graph.Graph` and the task its sidecar asks for."""
+    """The file's :class:`~pkmdyn.multibody.formats.graph.Graph` and the task its sidecar asks for."""
     choice = TaskChoice()
     if fmt == "mjcf":
         for flag, given in (("--sidecar", sidecar), ("--actuated", actuated), ("--assemble", assemble)):

@@ -1,4 +1,4 @@
-"""MJCF (MuJoCo) files read by MuJoCo's own compiler, as a :class:`~.import_graph.Graph`.
+"""MJCF (MuJoCo) files read by MuJoCo's own compiler, as a :class:`~pkmdyn.multibody.formats.graph.Graph`.
 
 The reference configuration is the model's ``qpos0`` (or a keyframe's ``qpos``); every
 quantity is read from the compiled model after ``mj_kinematics`` there, so that MuJoCo's

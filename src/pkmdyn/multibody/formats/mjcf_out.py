@@ -17,7 +17,7 @@ Each tree coordinate is a ``hinge`` or ``slide`` joint (named ``<joint>`` for on
 joints, ``<joint>_<k>`` otherwise) at the joint centre along its elementary-motion axis in the
 body frame (a joint traversed from its child: reversed order, negated axes); MuJoCo applies a
 body's joints in order, each axis turned by the previous ones, which is the product of
-elementary motions of :mod:`.joint_types`. ``qpos`` is therefore the tree coordinate vector
+elementary motions of :mod:`pkmdyn.multibody.description.joint_types`. ``qpos`` is therefore the tree coordinate vector
 ``q`` less its reference offsets (``q - coord_offset``), ``qvel = qd``, ``qacc = qdd``, each in
 MuJoCo's joint order (:func:`mujoco_order`).
 Actuated joints get a ``motor`` (control = effort [N or N m]); a joint with a drive

@@ -1,4 +1,4 @@
-"""SDFormat models, read with Python's XML parser, as a :class:`~.import_graph.Graph`.
+"""SDFormat models, read with Python's XML parser, as a :class:`~pkmdyn.multibody.formats.graph.Graph`.
 
 No maintained SDFormat parser installs from PyPI with current numpy (libsdformat's bindings
 come with Gazebo; python-sdformat pins numpy < 2), so the few elements a mechanism needs are

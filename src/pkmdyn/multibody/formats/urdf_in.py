@@ -1,5 +1,5 @@
 """URDF files with loop closures, read by Pinocchio's URDF parser, as a
-:class:`~.import_graph.Graph`.
+:class:`~pkmdyn.multibody.formats.graph.Graph`.
 
 A URDF file holds a tree; its loops are closed by pairs of frames that must coincide:
 

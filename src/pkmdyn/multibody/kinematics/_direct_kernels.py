@@ -1,4 +1,4 @@
-"""Compiled kernels of the direct kinematics (:mod:`.direct`), driven by the model's arrays only.
+"""Compiled kernels of the direct kinematics (:mod:`pkmdyn.multibody.kinematics.direct`), driven by the model's arrays only.
 
 For actuator coordinates ``s (na,)`` the tree coordinates ``q (nq,)`` solve the square system
 
@@ -14,12 +14,12 @@ derivatives of the same rows:
     K G_u = -[Phi_sel,a; N_a]           (G = dq/ds; G_a = I),      qd = G sd,
     K qdd_u = -[Phi_sel,a; N_a] sdd - [gamma_sel; 0],              qdd_a = sdd,
 
-with ``gamma`` the rows' drift at ``qdd = 0`` (:func:`._kernels.rows`), and the task
+with ``gamma`` the rows' drift at ``qdd = 0`` (:func:`pkmdyn.multibody.kinematics._solve_kernels.rows`), and the task
 coordinates are the task rows' values, ``xd = J_x qd``, ``xdd = J_x qdd + gamma_x``. The
 determinant of ``K`` changes sign where the direct kinematics is singular (a type II or
 parallel singularity of Gosselin and Angeles 1990): its sign tells the assembly branch along a
 motion. Nothing here knows a mechanism; the row and pose kernels are those of the inverse
-kinematics (:mod:`._kernels`).
+kinematics (:mod:`pkmdyn.multibody.kinematics._solve_kernels`).
 """
 
 from __future__ import annotations
@@ -390,7 +390,7 @@ def direct_starts(s, starts, tree, loops, task, sol, q_out, res_out, det_out, ra
 
 
 # ---- one sample in one call: the model's arrays, the state and the work space packed into one
-# buffer (:func:`.direct.pack_one`), so that a call passes four arguments whatever the mechanism
+# buffer (:func:`pkmdyn.multibody.kinematics.direct.pack_one`), so that a call passes four arguments whatever the mechanism
 
 #: the arrays of the packed buffer in order, each (name, kind, ndim): kind "i" int64, "f" float64
 ONE_ARRAYS = (
@@ -553,7 +553,7 @@ def direct_one(b, s, sd, out):  # pragma: no cover - compiled
 
 #: status of :func:`direct_task_one` where a leg's closed form does not reach its point
 NOT_REACHED = 21
-#: the header of the task-space route's buffer (:func:`.direct.pack_task`): the offsets of its
+#: the header of the task-space route's buffer (:func:`pkmdyn.multibody.kinematics.direct.pack_task`): the offsets of its
 #: parts (26), then ``npos`` (task positions given: 3, or 0 for a task body on a ball fixed to the
 #: ground) and ``nb``
 TASK_HEAD = 28
@@ -582,8 +582,8 @@ TASK_REFRESH = 8
 @njit(cache=True, _nrt=False)
 def _actuated(kind, c, axis, point, m0, e0, q0, cur, y, w3):  # pragma: no cover - compiled
     """The actuated coordinate of a leg from the ground whose end reaches the point ``c`` (base
-    frame), for pattern ``kind`` (:mod:`.legs`): A2's first joint (a slide or a turn), B2's slide,
-    by the first step of :func:`._kernels._reach` alone (the leg's other coordinates are not
+    frame), for pattern ``kind`` (:mod:`pkmdyn.multibody.model.legs`): A2's first joint (a slide or a turn), B2's slide,
+    by the first step of :func:`..model._tree_kernels._reach` alone (the leg's other coordinates are not
     needed), on the branch nearest ``cur`` (the coordinate's present value less its reference);
     ``y (3,)`` its gradient ``d th / d c`` from the closure ``f(th, c) = 0`` (``y = -f_c / f_th``).
     Returns ``(th, D)``, ``D`` the closure's derivative along the coordinate, which changes sign
@@ -656,11 +656,11 @@ def _task_fail(st, x, x0, q, q0, status):  # pragma: no cover - compiled
 @njit(cache=True, _nrt=False)
 def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     """One sample of the direct kinematics in task space, for a mechanism whose every actuated
-    coordinate belongs to a leg placed from the task alone (:mod:`.legs`: the Gough-Stewart
+    coordinate belongs to a leg placed from the task alone (:mod:`pkmdyn.multibody.model.legs`: the Gough-Stewart
     platform, a 3-PUS platform's legs) and whose task gives the task body's three Euler angles (and
     its position, or the body sits on a ball fixed to the ground). Unknowns: the task coordinates
     ``x (nt)``; equations: ``q_a(x) = s`` with ``q_a(x)`` the legs' closed forms
-    (:func:`._kernels.place_fixed_legs`), by Newton from the previous call's solution plus
+    (:func:`..model._tree_kernels.place_fixed_legs`), by Newton from the previous call's solution plus
     ``A^-1 (s - s_prev)``, or, near a singularity (the previous ``A``'s pivot ratio below
     :data:`TASK_NEAR`), plus the previous call's step where ``A^-1 (s - s_prev)`` turns the
     pose back against it: the pose keeps moving through a singularity, where the actuators
@@ -683,8 +683,8 @@ def direct_task_one(pk, d, s, sd, out):  # pragma: no cover - compiled
     brings (the other, the universal joint's, vanishes only where the leg's passive angles are
     singular, which the pose does not see). Then
     ``xd = A^-1 sd``. ``pk``: the single-sample
-    kinematics' packed model (:func:`._one.pack`, read only); ``d``: this route's state and
-    work (:func:`.direct.pack_task`). Writes ``x, xd`` into ``out (2 nt)``; returns OK,
+    kinematics' packed model (:func:`pkmdyn.multibody.dynamics._sample_kernels.pack`, read only); ``d``: this route's state and
+    work (:func:`pkmdyn.multibody.kinematics.direct.pack_task`). Writes ``x, xd`` into ``out (2 nt)``; returns OK,
     :data:`COLD`, :data:`BAD_INPUT`, :data:`NOT_REACHED`, NOT_CONVERGED, SINGULAR or
     :data:`CROSSED` (``det A`` changed sign since the previous call), each for the caller's
     checked route. The branch is the sign of ``det A`` times the legs' ``det J_L`` (``det A``
@@ -1048,8 +1048,8 @@ def direct_task_batch(pk, d, s, sd, sdd, work, x_out, xd_out, xdd_out, res_out, 
 
 
 def _refresh_cache() -> None:
-    """The kernels of this module link and inline functions of :mod:`._kernels` and
-    :mod:`._one`'s views (:mod:`._cache`)."""
+    """The kernels of this module link and inline functions of :mod:`pkmdyn.multibody.kinematics._solve_kernels` and
+    :mod:`pkmdyn.multibody.dynamics._sample_kernels`'s views (:mod:`._cache`)."""
 
     _cache.refresh((direct_sample, direct_batch, direct_starts), (_kernels, _tree_kernels,))
     _cache.refresh((direct_one, _actuated, _task_fail, direct_task_one, _actuated_bias, _task_accelerations,

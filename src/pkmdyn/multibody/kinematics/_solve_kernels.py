@@ -318,7 +318,7 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
 
     The model's arrays and the work space come as five tuples (``tree``, ``loops``, ``task``,
     ``solver``, ``work``, unpacked below in :func:`solve_batch`'s names; ``tree`` ends with the
-    explicit legs' table, :mod:`.legs`), so that the call stays short. ``Gw (mk, nt)``: the constant right-hand sides
+    explicit legs' table, :mod:`pkmdyn.multibody.model.legs`), so that the call stays short. ``Gw (mk, nt)``: the constant right-hand sides
     ``(0; I; 0)`` (:func:`task_unit_rhs`); ``Gw2 (mk, nt)`` work space; ``trig (nq, 3)`` the
     turning coordinates' cosines and sines (:func:`_cos_sin`). Returns the status (OK,
     NOT_CONVERGED, SINGULAR, EULER_SINGULAR, LOOP_OPEN); ``info[0]`` the worst row, ``info[1]``
@@ -454,7 +454,7 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
 
 
 #: :func:`solve_sample` compiled once, called as a function by the batched loop
-#: (:func:`solve_batch`) and by the single-sample kernel (:mod:`._one`) alike: inlining it
+#: (:func:`solve_batch`) and by the single-sample kernel (:mod:`pkmdyn.multibody.dynamics._sample_kernels`) alike: inlining it
 #: there as well cost a second typing of the whole solver (some 90 s of cold compilation on
 #: two cores) for a few tenths of a microsecond per call
 solve_sample = njit(cache=True, _nrt=False)(solve_sample)
@@ -485,7 +485,7 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
     least a quarter of this one, else to the second order; it leaves ``q`` close
     enough for the simplified step to close the loops where the second order did not at a
     thousand samples a second) (the explicit legs' coordinates then set in
-    closed form at every evaluation, ``legs``: :mod:`.legs`) (``dt = tm_s - tm_{s-1}``; the first-order
+    closed form at every evaluation, ``legs``: :mod:`pkmdyn.multibody.model.legs`) (``dt = tm_s - tm_{s-1}``; the first-order
     ``q_{s-1} + G_{s-1} (x_s - x_{s-1}) + b_{s-1} h^2 / 2`` when ``tm`` is empty (``b = qdd - G
     xdd`` the bias part of the tree accelerations, ``h = dx . xd_{s-1} / |xd_{s-1}|^2`` the step
     along the previous rate); ``q_start`` for the first

@@ -3,7 +3,7 @@
 A parallel robot is driven and measured at its actuators. For actuator coordinates ``s``
 (``model.actuator_names`` order; [m] for a prismatic joint, [rad] for a revolute one) the tree
 coordinates ``q`` solve the loop closure with the actuated coordinates held at ``s`` and the
-idle freedoms held as the inverse kinematics holds them (:mod:`._direct`, the equations); the
+idle freedoms held as the inverse kinematics holds them (:mod:`pkmdyn.multibody.kinematics._direct_kernels`, the equations); the
 task coordinates are then the task body's pose. Two routes:
 
 - :func:`direct_kinematics`: along an actuator motion, each sample by Newton from the
@@ -48,7 +48,7 @@ Array = NDArray[np.float64]
 #: largest scaled difference (lengths over the mechanism's size) between the actuator
 #: coordinates and those the inverse kinematics gives back at a verified assembly mode
 ROUND_TRIP_TOLERANCE = 1e-10
-#: Newton steps of a search from a random configuration (each may be halved; :mod:`._direct`)
+#: Newton steps of a search from a random configuration (each may be halved; :mod:`pkmdyn.multibody.kinematics._direct_kernels`)
 SEARCH_ITER = 60
 #: two solutions whose task body poses differ by less than this (rotation matrix entries, and
 #: positions over the mechanism's size) are one assembly mode
@@ -95,7 +95,7 @@ class Assembly:
     """One assembly mode: task coordinates ``x (nt,)`` (angles the branch nearest the reference
     pose's), tree coordinates ``q (nq,)``, the scaled loop ``residual``, the scaled actuator
     difference of the inverse kinematics round trip, the sign of the direct kinematics
-    Jacobian's determinant, the singularity measures (:func:`.kinematics.singularity_measures`:
+    Jacobian's determinant, the singularity measures (:func:`pkmdyn.multibody.kinematics.inverse.singularity_measures`:
     ``inverse``, ``direct``, ``constraint``) and the starts that reached it (``hits``)."""
 
     x: Array
@@ -133,7 +133,7 @@ def _check(model: MechanismModel) -> None:
 
 
 def _arrays(model: MechanismModel, damped: bool = False, max_iter: int = MAX_ITER) -> tuple:
-    """The kernels' model tuples (:mod:`._direct`)."""
+    """The kernels' model tuples (:mod:`pkmdyn.multibody.kinematics._direct_kernels`)."""
     nr = model.row_loop.shape[0]
     act = np.ascontiguousarray(model.act_coord, dtype=np.int64)
     unk = np.ascontiguousarray(np.setdiff1d(np.arange(model.nq), act), dtype=np.int64)
@@ -152,7 +152,7 @@ def _arrays(model: MechanismModel, damped: bool = False, max_iter: int = MAX_ITE
 
 
 def pack_one(model: MechanismModel) -> NDArray[np.int64]:
-    """The packed buffer of :func:`._direct.direct_one` (its ``ONE_ARRAYS``): a header of
+    """The packed buffer of :func:`pkmdyn.multibody.kinematics._direct_kernels.direct_one` (its ``ONE_ARRAYS``): a header of
     ``(offset, d0, d1, d2)`` per array, then each array's bits; the state cold."""
     tree, loops, task, sol = _arrays(model)
     act, unk, cut, idle, q_ref, rs, tol, check_tol, max_iter, _ = sol
@@ -196,10 +196,10 @@ def prime_one(pk: NDArray[np.int64], q: Array, x: Array, s: Array, det: float) -
 
 def task_route_map(model: MechanismModel) -> NDArray[np.int64] | None:
     """``(na, 2)``: for each actuated coordinate, the explicit leg that sets it and its place in
-    that leg's chain, where :func:`._direct.direct_task_one` answers for ``model``: as many
+    that leg's chain, where :func:`pkmdyn.multibody.kinematics._direct_kernels.direct_task_one` answers for ``model``: as many
     actuators as task coordinates; a task of three Euler angles with three positions, or none
     (a task body on a ball fixed to the ground); every actuated coordinate in the chain of a leg
-    placed from the task alone (:mod:`.legs`) with three coordinates (patterns A2, B2), from
+    placed from the task alone (:mod:`pkmdyn.multibody.model.legs`) with three coordinates (patterns A2, B2), from
     the ground, either the leg that carries the task body (T+A2, T+B2) or one that meets it.
     None otherwise (the tree-space route answers)."""
     lg = model.legs
@@ -231,7 +231,7 @@ def _actuated_points(model: MechanismModel, lmap: NDArray[np.int64], npos: int) 
     the centre of the ball that carries the task body) less the task point (or, without task
     positions, the centre of the task body's ball on the ground), in the task body's frame
     ``(na, 3)``; and whether each actuated coordinate is one that its leg's closed form gives
-    before the others (A2's first joint, B2's slide: :func:`._direct._actuated`), so that the
+    before the others (A2's first joint, B2's slide: :func:`pkmdyn.multibody.kinematics._direct_kernels._actuated`), so that the
     route needs the other coordinates of no leg."""
     lg = model.legs
     origin = model.task_point if npos == 3 else model.tree_p_child[model.body_joint[model.task_body]]
@@ -260,7 +260,7 @@ def _reaches_around(lg, L: int) -> bool:
 
 
 def pack_task(model: MechanismModel) -> NDArray[np.int64] | None:
-    """The state and work of :func:`._direct.direct_task_one` (a header of offsets, then the
+    """The state and work of :func:`pkmdyn.multibody.kinematics._direct_kernels.direct_task_one` (a header of offsets, then the
     parts; the state cold), or None where that route does not answer (:func:`task_route_map`)."""
     lmap = task_route_map(model)
     if lmap is None:
@@ -311,7 +311,7 @@ def actuator_reference(model: MechanismModel) -> Array:
 
 
 def _outputs(model: MechanismModel, n: int) -> dict:
-    """The kernel's output arrays for ``n`` samples (:func:`._direct.direct_batch`, in its order)."""
+    """The kernel's output arrays for ``n`` samples (:func:`pkmdyn.multibody.kinematics._direct_kernels.direct_batch`, in its order)."""
     nq, nt = model.nq, model.nt
     return {"q": np.zeros((n, nq)), "qd": np.zeros((n, nq)), "qdd": np.zeros((n, nq)), "x": np.zeros((n, nt)),
             "xd": np.zeros((n, nt)), "xdd": np.zeros((n, nt)), "res": np.zeros(n), "it": np.zeros(n, dtype=np.int64),
@@ -398,7 +398,7 @@ def _bridge(model: MechanismModel, s: Array, out: dict, k: int) -> Array | None:
     small actuator steps, on the same branch (a coarsely sampled motion, or a sample whose
     Newton solve took many steps and may have jumped to another assembly mode); None where
     that fails too. A step in which the Jacobian's determinant changes sign is a singularity
-    crossed: status :data:`._direct.CROSSED` at ``k``."""
+    crossed: status :data:`pkmdyn.multibody.kinematics._direct_kernels.CROSSED` at ``k``."""
     if k == 0:
         return None
     for steps in (8, 64):
@@ -425,11 +425,11 @@ NEAR_SINGULAR = 1e-4
 def _by_the_actuated_coordinates(model: MechanismModel, s: Array, sd: Array, sdd: Array, q0: Array,
                                  x0: Array) -> dict | None:
     """The task motion along ``s, sd, sdd`` by the task-space route of one sample
-    (:func:`._direct.direct_task_batch`), each actuated coordinate from its leg's closed form
+    (:func:`pkmdyn.multibody.kinematics._direct_kernels.direct_task_batch`), each actuated coordinate from its leg's closed form
     alone, from the first sample's solution ``q0, x0``; None where that route does not apply
     (:func:`pack_task`, its flag) or any sample is not a plain continuation step (a call it does
     not answer, more than :data:`JUMP_STEPS` Newton steps, a Jacobian whose pivot ratio is below
-    :data:`._direct.TASK_NEAR`): the tree-space route then answers, with its checks."""
+    :data:`pkmdyn.multibody.kinematics._direct_kernels.TASK_NEAR`): the tree-space route then answers, with its checks."""
     d = pack_task(model)
     if d is None or d.view(np.float64)[d[24]] != 1.0:
         return None
@@ -460,7 +460,7 @@ def direct_kinematics(model: MechanismModel, s: Array, sd: Array | None = None, 
     actuated coordinate is the one its leg's closed form gives first (the task-space route of
     one sample, ``docs/mechanism_format.md``: the Gough-Stewart platform, a 3-PUS platform, R-U-S,
     P-U-S and U-P-S platforms), the samples after the first then come from the actuated
-    coordinates' closed forms alone (:func:`._direct.direct_task_batch`; ``det`` is then
+    coordinates' closed forms alone (:func:`pkmdyn.multibody.kinematics._direct_kernels.direct_task_batch`; ``det`` is then
     ``det A`` times the legs' actuated factors, of the same sign along a motion, and
     ``pivot_ratio`` that of ``A = ds/dx``), and from the tree-space route wherever that route
     meets anything but a plain continuation step. That route does not see the legs' passive
@@ -534,7 +534,7 @@ def direct_kinematics(model: MechanismModel, s: Array, sd: Array | None = None, 
 
 def task_motion(model: MechanismModel, motion: ActuatorMotion,
                 q_start: Array | None = None) -> tuple[TaskMotion, DirectKinematics]:
-    """The task motion of an actuator motion (:func:`.motion.read_actuator_motion`) by the
+    """The task motion of an actuator motion (:func:`pkmdyn.multibody.kinematics.motion.read_actuator_motion`) by the
     direct kinematics along it (:func:`direct_kinematics`, the task motion alone), with its named
     loads; and the direct kinematics itself (residuals, iterations, branch; no tree coordinates)."""
     dk = direct_kinematics(model, motion.s, motion.sd, motion.sdd, motion.t, q_start=q_start, bodies=False)

@@ -564,7 +564,7 @@ def _measure_bounds(model: MechanismModel, q: Array, levels: Array, tight: bool,
     """Per-measure bounds at ``q (n, nq)``: ``passed (n, 3)`` where measure ``k`` (constraint,
     inverse, direct) is proven above ``levels[k]`` (True for the direct one where it does not
     apply) and ``upper (n, 3)`` an upper bound of each; with ``brackets``, ``upper (n, 3, 2)``
-    a proven bracket of each instead (:func:`._measure_kernels.measure_bounds`)."""
+    a proven bracket of each instead (:func:`pkmdyn.multibody.kinematics._measure_kernels.measure_bounds`)."""
     n = q.shape[0]
     passed = np.ones((n, 3), dtype=np.bool_)
     upper = np.ones((n, 3, 2))
@@ -585,7 +585,7 @@ def least_measure_bounds(model: MechanismModel, q: Array, level: float, tight: b
                          ) -> tuple[NDArray[np.bool_], Array]:
     """Cheap bounds on the least of the :class:`SingularityMeasures` at ``q (n, nq)`` (the
     direct one only for as many actuators as degrees of freedom), from a Cholesky factorisation
-    of each matrix's Gram matrix (:mod:`._measure_kernels`): ``passed (n,)`` where every measure
+    of each matrix's Gram matrix (:mod:`pkmdyn.multibody.kinematics._measure_kernels`): ``passed (n,)`` where every measure
     is proven above ``level`` (by more than the rounding of its singular value decomposition),
     and ``upper (n,)`` an upper bound of the least measure (to rounding). Where ``passed`` is
     False, nothing is proven either way. ``tight``: each largest singular value bounded within
@@ -597,7 +597,7 @@ def least_measure_bounds(model: MechanismModel, q: Array, level: float, tight: b
     return passed.all(axis=1), upper.min(axis=1)
 
 
-#: the :class:`SingularityMeasures` fields in the order of :func:`._measure_kernels.measure_bounds`
+#: the :class:`SingularityMeasures` fields in the order of :func:`pkmdyn.multibody.kinematics._measure_kernels.measure_bounds`
 _MEASURES = ("constraint", "inverse", "direct")
 
 
@@ -608,7 +608,7 @@ def least_measures(model: MechanismModel, q: Array) -> dict[str, float]:
     deciding, at a fraction of the cost.
 
     Each measure of every sample is first bracketed, ``lo <= measure <= hi``, by proven bounds
-    on its matrix's largest and least singular values (:func:`._measure_kernels._bracket`:
+    on its matrix's largest and least singular values (:func:`pkmdyn.multibody.kinematics._measure_kernels._bracket`:
     iterations warm-started from the sample before, certified by Cholesky factorisations), the
     bracket widened by the rounding of a decomposition (relative 1e-8, absolute 1e-12). Only
     where ``lo`` is at most the least ``hi`` of all samples can a sample hold the least

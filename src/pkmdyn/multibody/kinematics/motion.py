@@ -8,7 +8,7 @@ optional: one column per named load of the description (``[[loads]]`` with a ``n
 column is absent).
 
 Actuator motion CSV (:func:`read_actuator_motion`; the pose then follows by the direct
-kinematics, :mod:`.direct`): ``t_s`` and one column per actuated joint,
+kinematics, :mod:`pkmdyn.multibody.kinematics.direct`): ``t_s`` and one column per actuated joint,
 ``<joint>_pos_<unit>`` (``m`` or ``rad``, the columns of a run's ``results.csv``); optional rates
 ``<joint>_vel_<unit>_s`` and accelerations ``<joint>_acc_<unit>_s2`` (each group all or
 none) and the named loads' columns. Missing derivatives come from a Savitzky-Golay smoothing

@@ -3,11 +3,11 @@ body placement, velocities and accelerations along the tree, the explicit legs' 
 Euler angles and their rate maps, and the constraint rows of the cut joints and the task.
 
 Below the loop solver (:mod:`..kinematics._solve_kernels`): the compiler's rank tests and leg
-recognition (:mod:`.topology`, :mod:`.legs`) and the body poses (:mod:`.poses`) use these
+recognition (:mod:`pkmdyn.multibody.model.topology`, :mod:`pkmdyn.multibody.model.legs`) and the body poses (:mod:`pkmdyn.multibody.model.poses`) use these
 without the solver.
 
 Nothing here knows a mechanism: every function takes the flat arrays of
-:class:`~.model.MechanismModel` and is compiled once (numba, ``cache=True``) for all of them.
+:class:`~pkmdyn.multibody.model.compiler.MechanismModel` and is compiled once (numba, ``cache=True``) for all of them.
 The per-sample kernels allocate nothing (their work space comes in as arguments) and are
 compiled without reference counting (``_nrt=False``): passing an array or taking a view of
 one then costs nothing, where a counted view costs some 15 ns, more than a row of the loop
@@ -24,7 +24,7 @@ the velocity of the frame in which ``S[c]`` is fixed. A point x fixed in body b 
 ``v = v_O + omega x x`` and ``a = a_O + omega_dot x x + omega x v``.
 
 Rows: the constraint rows of the cut joints (``row_*`` arrays, residuals of
-:mod:`.joint_types`) followed by the task rows (``task_*``). ``_rows`` gives each row's
+:mod:`pkmdyn.multibody.description.joint_types`) followed by the task rows (``task_*``). ``_rows`` gives each row's
 value, its Jacobian row over the tree coordinates and, on request, its drift
 ``gamma = d2/dt2 (row) at qdd = 0``, so that the acceleration equations are
 ``J qdd = -gamma`` (loops) and ``J qdd = x_dd - gamma`` (task).
@@ -160,11 +160,11 @@ def _cos_sin(trig, c, qc, reuse):
     return cq, sq
 
 
-# ---- explicit leg closure (:mod:`.legs`): Paden-Kahan subproblems on a leg's product of exponentials
-#: leg patterns (:mod:`.legs`): a first joint then a ball of one or two turns about a point ``m0``;
+# ---- explicit leg closure (:mod:`pkmdyn.multibody.model.legs`): Paden-Kahan subproblems on a leg's product of exponentials
+#: leg patterns (:mod:`pkmdyn.multibody.model.legs`): a first joint then a ball of one or two turns about a point ``m0``;
 #: one or two turns about ``m0`` then a slide
 LEG_A1, LEG_A2, LEG_B1, LEG_B2 = 1, 2, 3, 4
-#: a leg that carries the task body (:mod:`.legs`): ``LEG_TASK + pattern`` of the chain that places
+#: a leg that carries the task body (:mod:`pkmdyn.multibody.model.legs`): ``LEG_TASK + pattern`` of the chain that places
 #: its ball joint's centre (0: the ball sits on the ground)
 LEG_TASK = 10
 
@@ -250,7 +250,7 @@ def _sp2(w1, w2, u, v, cur1, cur2, z, t3):  # pragma: no cover - compiled
 @njit(cache=True, _nrt=False)
 def _explicit_leg(L, q, R, p, legs, w3):  # pragma: no cover - compiled
     """Set leg ``L``'s coordinates in ``q`` in closed form from the pose of the body it meets
-    (:mod:`.legs`): the cut joint's point on that body, ``c``, taken into the leg's base frame,
+    (:mod:`pkmdyn.multibody.model.legs`): the cut joint's point on that body, ``c``, taken into the leg's base frame,
     is reached by the leg's end point (:func:`_reach`). Returns False (``q`` left as it is, for
     Newton) where ``c`` is out of the leg's reach."""
     leg_base, leg_placed, leg_cpt = legs[3], legs[4], legs[5]
@@ -312,7 +312,7 @@ def first_joint(a0, r, m0, c, d2, cur, scale, u, v):  # pragma: no cover - compi
 @njit(cache=True, _nrt=False)
 def _reach(kind, q, coord, axis, point, m0, e0, q0, w3):  # pragma: no cover - compiled
     """A leg's coordinates in ``q`` such that its end point reaches ``c = w3[0]`` (base frame),
-    by pattern ``kind`` (:mod:`.legs`; the leg's rows of the table: ``coord (3,)``, ``axis,
+    by pattern ``kind`` (:mod:`pkmdyn.multibody.model.legs`; the leg's rows of the table: ``coord (3,)``, ``axis,
     point (3, 3)``, ``m0, e0, q0 (3,)``): along the product of exponentials about the
     reference configuration, ``e(th) = exp(xi_1 th_1) ... exp(xi_k th_k) e0`` (``th = q -
     q_ref``; Paden & Kahan's subproblems, Murray, Li & Sastry 1994, ch. 3). Of two
@@ -391,7 +391,7 @@ def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_moti
     ``w33 (5, 3, 3)``, ``w3 (20, 3)``: work space). ``trig (nq, 3)`` keeps each turning
     coordinate's cosine and sine (:func:`_cos_sin`); with ``reuse`` they are taken from the last
     pass where ``q`` moved little since (a Newton step). With ``explicit``, the bodies that an
-    explicit leg moves (``late[b] >= 0``, :mod:`.legs`) are left for :func:`place_legs`."""
+    explicit leg moves (``late[b] >= 0``, :mod:`pkmdyn.multibody.model.legs`) are left for :func:`place_legs`."""
     Rf = w33[0]
     o = w3[18]
     for b in range(body_parent.shape[0]):
@@ -404,7 +404,7 @@ def forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_moti
 @njit(cache=True, _nrt=False)
 def place_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
                RP, pP, RC, pC, R, p, S, w33, w3, trig, reuse, legs, xs, task, skip):  # pragma: no cover - compiled
-    """After :func:`forward_positions` with ``explicit``: each leg of ``legs`` (:mod:`.legs`) in
+    """After :func:`forward_positions` with ``explicit``: each leg of ``legs`` (:mod:`pkmdyn.multibody.model.legs`) in
     turn has its coordinates in ``q`` set in closed form, the leg that carries the task body
     from the task coordinates ``xs`` (:func:`_task_leg`; ``task`` the model's task arrays), the
     others from the body they meet (:func:`_explicit_leg`), and the bodies it moves placed.
@@ -451,7 +451,7 @@ def _held_body(b, body_parent, body_joint, joint_q0, joint_nq, fixed_coord):  # 
 @njit(cache=True, _nrt=False)
 def place_fixed_legs(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
                      RP, pP, RC, pC, R, p, S, w33, w3, trig, legs, xs, task):  # pragma: no cover - compiled
-    """The legs placed from the task alone (``fixed``, :mod:`.legs`) and nothing else: each in
+    """The legs placed from the task alone (``fixed``, :mod:`pkmdyn.multibody.model.legs`) and nothing else: each in
     turn has its coordinates in ``q`` set in closed form from the task coordinates ``xs`` (the
     task leg) or from the body it meets (placed by an earlier such leg), and its bodies placed;
     the branch nearest the coordinates ``q`` holds. The coordinates such a leg sets are the
@@ -488,7 +488,7 @@ def euler_matrix(axes, ang, out, t1, t2):  # pragma: no cover - compiled
 @njit(cache=True, _nrt=False)
 def _task_leg(L, xs, q, legs, task, RP, RC, pC, w3, w33):  # pragma: no cover - compiled
     """The leg ``L`` that carries the task body, in closed form from the task coordinates ``xs``
-    (:mod:`.legs`): the task body's rotation ``R_T = Rot_a1(phi_1) Rot_a2(phi_2) Rot_a3(phi_3)``
+    (:mod:`pkmdyn.multibody.model.legs`): the task body's rotation ``R_T = Rot_a1(phi_1) Rot_a2(phi_2) Rot_a3(phi_3)``
     from its Euler angles; where the task gives the position too, the centre of the ball (the
     spherical joint that carries the task body) ``x - R_T t + R_T c`` (``t`` the task point,
     ``c`` the centre, task body frame) reached by the chain before the ball (:func:`_reach`),
@@ -827,7 +827,7 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
 
     With ``settled (nq,)`` (``ROWS_VALUES`` only): the rows of a joint, or the task rows, whose
     bodies only coordinates with ``settled[c] != 0`` move (legs placed from the task alone,
-    :mod:`.legs`) are not evaluated: their values are NaN.
+    :mod:`pkmdyn.multibody.model.legs`) are not evaluated: their values are NaN.
 
     Returns False where an Euler task angle is at its sequence's singularity."""
     nr = row_loop.shape[0]

@@ -1,6 +1,6 @@
 """The compiled mechanism model: flat arrays of a spanning tree plus loop records.
 
-``compile_model(description)`` turns a validated :class:`~.description.Description` into a
+``compile_model(description)`` turns a validated :class:`~pkmdyn.multibody.description.schema.Description` into a
 :class:`MechanismModel`, a frozen record of plain arrays in the spirit of Featherstone's
 ``model`` (``parent``, ``jtype``, ``Xtree``, ``I``) and MuJoCo's ``mjModel``: the kernels
 loop over these arrays and know nothing else, so they are compiled once for every mechanism.
@@ -27,9 +27,9 @@ from that key alone, and nothing else, everything of the model that it decides
 actuators). The numbers (frames, masses, inertias, offsets, the length scale, loads, drives)
 are computed from the description for every model, and so is everything the numbers may change:
 the solver's rows and idle freedoms and the topology report (ranks at the reference
-configuration, :func:`~.topology.solver_selection`) and the explicit legs (recognised from the
-reference geometry, :func:`~.legs.explicit_legs`); the block order of the Newton system
-(:func:`~.topology.block_structure`) is a function of the rows' structural pattern alone and is
+configuration, :func:`~pkmdyn.multibody.model.topology.solver_selection`) and the explicit legs (recognised from the
+reference geometry, :func:`~pkmdyn.multibody.model.legs.explicit_legs`); the block order of the Newton system
+(:func:`~pkmdyn.multibody.model.topology.block_structure`) is a function of the rows' structural pattern alone and is
 remembered by that pattern.
 """
 
@@ -169,9 +169,9 @@ class ModelStructure:
     order); ``order``: the body names in tree order; ``flipped``: the tree joints traversed from
     their child's side; ``coord_joint_one`` (nq,): per tree coordinate, its joint where that
     joint has one coordinate (whose ``offset`` is the coordinate's), else -1; ``act``: the
-    actuated joints (sorted); ``loops``: per cut joint, its :class:`~.records.LoopRecord` but the
+    actuated joints (sorted); ``loops``: per cut joint, its :class:`~pkmdyn.multibody.model.records.LoopRecord` but the
     frames (name, joint, type, body_a, body_b, constraints, directions, path); ``fields``: the
-    :class:`~.records.MechanismModel` fields it decides (names, index arrays, coordinates,
+    :class:`~pkmdyn.multibody.model.records.MechanismModel` fields it decides (names, index arrays, coordinates,
     ancestors, loop and task rows, actuators; arrays copied into every model compiled)."""
 
     key: StructureKey
@@ -315,7 +315,7 @@ def _length_scale(desc: Description) -> float:
 
 
 def _number_fields(desc: Description, st: ModelStructure) -> dict[str, Any]:
-    """The :class:`~.records.MechanismModel` fields that the description's numbers decide, in
+    """The :class:`~pkmdyn.multibody.model.records.MechanismModel` fields that the description's numbers decide, in
     the body order and frames of the structure ``st``: mass properties, reference frames, joint
     frames and offsets, loop frames, the task point, the length scale, loads, the default
     motion (the module docstring)."""
@@ -367,7 +367,7 @@ def _number_fields(desc: Description, st: ModelStructure) -> dict[str, Any]:
 def compile_model(desc: Description, *, topology_only: bool = False) -> MechanismModel:
     """Compile a description into the arrays of :class:`MechanismModel` (see there).
     ``topology_only``: the tree, loops and task rows alone, before the solver's equations are
-    chosen (for :func:`~.topology.analyse_topology` of a task that does not match yet).
+    chosen (for :func:`~pkmdyn.multibody.model.topology.analyse_topology` of a task that does not match yet).
 
     Raises :class:`~pkmdyn.errors.ParameterError` when the cut joints named in the file
     disconnect a body or an actuated joint would have to be cut.
@@ -408,7 +408,7 @@ def _compile(desc: Description, st: ModelStructure, topology_only: bool = False)
 
 def load_mechanism(source: str | Path | dict[str, Any], limits: dict[str, Any] | None = None) -> MechanismModel:
     """Read, validate and compile a description (a TOML path or a dict); ``limits`` lay over its
-    ``[limits]`` for the plausibility of its numbers (:func:`~.description.load_description`)."""
+    ``[limits]`` for the plausibility of its numbers (:func:`~pkmdyn.multibody.description.schema.load_description`)."""
     return compile_model(load_description(source, limits))
 
 

@@ -3,12 +3,12 @@ closed form from the pose of the body they meet.
 
 A parallel robot's leg is solved by its own inverse kinematics once the platform is placed
 (ParRob's leg-wise inverse kinematics; Merlet, *Parallel Robots*, 2006, ch. 4). The
-kinematics solver (:mod:`.kinematics`) orders the Newton system block lower-triangular
-(:func:`~.topology.block_structure`): for a Stewart platform, the task rows with the leg that
+kinematics solver (:mod:`pkmdyn.multibody.kinematics.inverse`) orders the Newton system block lower-triangular
+(:func:`~pkmdyn.multibody.model.topology.block_structure`): for a Stewart platform, the task rows with the leg that
 carries the platform, then each other leg's closure rows with that leg's coordinates. This
 module recognises, from the compiled model's topology and geometry alone, the diagonal blocks
 that are such a leg and can be solved in closed form, and records each as a row of a table
-(:class:`LegTable`) that the kernels read (:func:`._kernels._explicit_leg`).
+(:class:`LegTable`) that the kernels read (:func:`pkmdyn.multibody.model._tree_kernels._explicit_leg`).
 
 A block is an **explicit leg** when
 
@@ -19,7 +19,7 @@ A block is an **explicit leg** when
   ground or a body placed by earlier blocks) to the body that carries the cut joint's point
   ``e`` on the leg's side, but for coordinates that an idle row of their own holds at their
   reference values (an S-S rod's spin about the rod where the first ball's frame has an axis
-  along it; :func:`.topology.sparse_basis`): an R-S-S leg is then A2 with the spin held;
+  along it; :func:`pkmdyn.multibody.model.topology.sparse_basis`): an R-S-S leg is then A2 with the spin held;
   the cut joint's other body (the one the leg meets, holding the point ``c``) is placed by
   earlier blocks (or by an explicit leg solved before this one);
 * the chain, written as the product of exponentials about the reference configuration
@@ -53,7 +53,7 @@ The leg that carries the task body (the block of the task rows) is explicit wher
 fixes that body's pose (three Euler angles, and three positions unless the body sits on a
 spherical joint on the ground): its chain ends with a spherical joint into the task body
 (pattern T), placed by one of the four patterns above (T+A1 ... T+B2) or fixed to the ground;
-the ball's angles are Euler angles of the relative rotation (:func:`._kernels._task_leg`).
+the ball's angles are Euler angles of the relative rotation (:func:`pkmdyn.multibody.model._tree_kernels._task_leg`).
 
 The explicit legs set their coordinates at each evaluation of the positions; Newton then
 solves the remaining blocks (coupled sub-chains such as a Delta robot's parallelograms or the
@@ -80,7 +80,7 @@ __all__ = ["LegTable", "explicit_legs", "newton_only", "place", "held_coordinate
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-#: pattern code -> name (:mod:`._kernels`: LEG_A1, LEG_A2, LEG_B1, LEG_B2)
+#: pattern code -> name (:mod:`pkmdyn.multibody.model._tree_kernels`: LEG_A1, LEG_A2, LEG_B1, LEG_B2)
 LEG_PATTERNS = {1: "A1 (first joint, then one turn; planar)", 2: "A2 (first joint, then a universal joint)",
                 3: "B1 (turn, then a slide; planar)", 4: "B2 (universal joint, then a slide)",
                 10: "T (the task body on a ball joint)"}
@@ -91,7 +91,7 @@ LEG_PATTERNS.update({10 + k: f"T+{v.split(' ')[0]} (the task body on a ball join
 def held_coordinates(model) -> set[int]:
     """The tree coordinates held at their reference values by an idle row of their own (a rod's
     spin about its axis, where a ball's frame has an axis along the rod:
-    :func:`.topology.sparse_basis`)."""
+    :func:`pkmdyn.multibody.model.topology.sparse_basis`)."""
     return {int(np.flatnonzero(r)[0]) for r in np.asarray(model.solver_idle) if np.count_nonzero(r) == 1}
 
 
@@ -149,7 +149,7 @@ class LegTable:
         return int(self.kind.shape[0])
 
     def arrays(self) -> tuple:
-        """The tuple the kernels take (:func:`._kernels.forward_positions`)."""
+        """The tuple the kernels take (:func:`pkmdyn.multibody.model._tree_kernels.forward_positions`)."""
         return (self.late, self.kind, self.coord, self.base, self.placed, self.cpt, self.axis, self.point,
                 self.m0, self.e0, self.q0, self.redo, self.ball, self.ball_axes, self.ball_offset, self.ball_sign,
                 self.R_end0, self.fixed, self.fixed_coord)

@@ -17,7 +17,7 @@ Array = NDArray[np.float64]
 
 
 def positions_args(model, R: Array, p: Array, S: Array) -> tuple:
-    """The model's arguments of :func:`._kernels.forward_positions` (and ``place_legs``) after
+    """The model's arguments of :func:`pkmdyn.multibody.model._tree_kernels.forward_positions` (and ``place_legs``) after
     ``q``, up to ``reuse``, with the outputs ``R, p, S`` and fresh work space."""
     return (model.body_parent, model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion,
             model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,

@@ -1,7 +1,7 @@
 """The compiled mechanism's record: :class:`MechanismModel`, the flat arrays of a spanning tree
 plus loop records that the kernels read, and :class:`LoopRecord`, one closed loop. Built by
-:func:`.model.compile_model`; kept apart from it so that the modules the compilation uses
-(:mod:`.topology`) can name the record without importing the compiler."""
+:func:`pkmdyn.multibody.model.compiler.compile_model`; kept apart from it so that the modules the compilation uses
+(:mod:`pkmdyn.multibody.model.topology`) can name the record without importing the compiler."""
 
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ class LoopRecord:
 
     ``body_a`` (the cut joint's parent) carries frame ``(R_a, p_a)``, ``body_b`` (its child)
     carries ``(R_b, p_b)``: rotation (3, 3) and origin (3,) [m] in that body's frame.
-    ``constraints``: the residual rows of :mod:`.joint_types` (``("T", i)`` or
+    ``constraints``: the residual rows of :mod:`pkmdyn.multibody.description.joint_types` (``("T", i)`` or
     ``("R", i, j)``); ``directions``: their names (``force_x`` ... ``couple_z`` in the joint
     frame of ``body_a``); ``path``: the tree joints of the loop."""
 
@@ -56,7 +56,7 @@ class MechanismModel:
     (nb, 3) [m]: body frame in the base frame at the reference configuration.
 
     Joints: ``joint_names``, ``joint_type`` (nj,) codes into
-    :data:`~.joint_types.JOINT_TYPES`; ``joint_parent``/``joint_child`` (nj,) body indices;
+    :data:`~pkmdyn.multibody.description.joint_types.JOINT_TYPES`; ``joint_parent``/``joint_child`` (nj,) body indices;
     ``joint_R_parent``/``joint_p_parent`` (nj, 3, 3)/(nj, 3) [m] the joint frame in the
     parent's frame, ``joint_R_child``/``joint_p_child`` in the child's; ``joint_cut`` (nj,)
     bool; ``joint_actuated`` (nj,) bool; ``joint_q0`` (nj,) first tree coordinate (-1 for a
@@ -64,7 +64,7 @@ class MechanismModel:
     coordinate at the reference configuration (1-coordinate joints, [m] or [rad]).
 
     Tree coordinates: ``coord_joint`` (nq,), ``coord_motion`` (nq,) elementary-motion codes
-    (:data:`~.joint_types.MOTION_CODES`), ``coord_offset`` (nq,), ``coord_sign`` (nq,);
+    (:data:`~pkmdyn.multibody.description.joint_types.MOTION_CODES`), ``coord_offset`` (nq,), ``coord_sign`` (nq,);
     ``ancestors`` (nb, nq) bool: coordinate k moves body b; ``ancestor_list`` (nb, 1 + max)
     the same as a count followed by the coordinates (what the kernels read). A tree joint reached from its
     child's side (``joint_flipped``) moves its description parent by the inverse motion
@@ -89,10 +89,10 @@ class MechanismModel:
     freedoms, held (``solver_idle (q - q_ref) = 0``), chosen at the reference configuration;
     ``solver_prow``, ``solver_pcol`` (nq,) the row and column order that makes the Newton
     matrix block lower-triangular, ``solver_blocks`` the first row of each diagonal block
-    (then nq) (:func:`~.topology.block_structure`)
-    (:func:`~.topology.solver_selection`); ``topology``: the
-    :class:`~.topology.TopologyReport` there; ``legs``: the blocks solved in closed form
-    (:mod:`.legs`).
+    (then nq) (:func:`~pkmdyn.multibody.model.topology.block_structure`)
+    (:func:`~pkmdyn.multibody.model.topology.solver_selection`); ``topology``: the
+    :class:`~pkmdyn.multibody.model.topology.TopologyReport` there; ``legs``: the blocks solved in closed form
+    (:mod:`pkmdyn.multibody.model.legs`).
     """
 
     name: str
@@ -171,7 +171,7 @@ class MechanismModel:
     solver_pcol: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     solver_blocks: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     topology: object = None
-    #: the explicit legs (:class:`~.legs.LegTable`): blocks of the Newton system solved in closed
+    #: the explicit legs (:class:`~pkmdyn.multibody.model.legs.LegTable`): blocks of the Newton system solved in closed
     #: form; None only while the model is being compiled
     legs: object = None
     #: per actuator (order of ``act_joint``): its drive's name (``[[actuators]]``; None for a

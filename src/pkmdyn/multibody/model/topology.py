@@ -293,7 +293,7 @@ def block_pattern(model: MechanismModel, rows: Array, idle: Array) -> NDArray[np
 def blocks_of_pattern(P: NDArray[np.bool_]) -> tuple[Array, Array, Array]:
     """:func:`block_structure`'s ``(prow, pcol, blocks)`` of the pattern ``P (n, nq)``
     (:func:`block_pattern`), remembered by the pattern (:func:`_blocks_of`): the designs of a
-    sweep (:func:`.model.compile_with`) have one pattern, or a few (the idle rows of a
+    sweep (:func:`pkmdyn.multibody.model.compiler.compile_with`) have one pattern, or a few (the idle rows of a
     symmetric mechanism come in another order where rounding picks another pivot), and the
     order is a function of the pattern alone, so it is found once for each."""
     P = np.ascontiguousarray(P, dtype=bool)
@@ -346,7 +346,7 @@ def solver_selection(model: MechanismModel, q: Array | None = None) -> tuple[Arr
     basis is the sparse one of :func:`sparse_basis` (the same equations as any other basis of
     that space): a rod's spin about the line through its two spherical joints is its own row,
     the rod's own coordinate where one of its joint's axes lies along that line, which leaves
-    the leg to its closed form (:mod:`.legs`). Raises :class:`~pkmdyn.errors.ParameterError`
+    the leg to its closed form (:mod:`pkmdyn.multibody.model.legs`). Raises :class:`~pkmdyn.errors.ParameterError`
     when the task coordinates do not determine the mechanism (fewer or more than its degrees
     of freedom, or dependent) or when there are more actuators than degrees of freedom.
     """

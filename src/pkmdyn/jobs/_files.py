@@ -1,0 +1,88 @@
+"""What every job shares: the machine it is given, the one writer of ``--out``, and its result.
+
+A job runs in three steps, and this module holds the first and the last:
+
+1. :func:`prepare`: the machine resolved (a built-in name or a description file), the output
+   folder checked against the output rule before anything is computed (:func:`pkmdyn.io.check_output_dir`:
+   no input, link, device or foreign folder is ever replaced) and the mechanism compiled;
+2. the job's own computation (the engine's free functions);
+3. :func:`write`: the files written into a temporary folder beside ``--out``, announced, and
+   moved into place only once all of them are written (:func:`pkmdyn.io.output_dir`).
+
+A job returns a :class:`JobResult`; the command prints it and writes nothing itself.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..io import check_output_dir, output_dir
+from ..machines.registry import resolve
+from ..multibody.model.compiler import MechanismModel, load_mechanism
+
+__all__ = ["JobResult", "Prepared", "prepare", "load_machine", "write"]
+
+
+@dataclass(frozen=True)
+class JobResult:
+    """A job's outcome: ``files`` (label -> the written file's final path; empty where the job
+    wrote none), ``summary`` (the document its summary or main JSON file holds), ``lines`` (what
+    the command prints on stdout after the files) and ``warnings`` (one line each, for stderr)."""
+
+    files: Mapping[str, Path] = field(default_factory=dict)
+    summary: Mapping[str, Any] = field(default_factory=dict)
+    lines: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """A job's machine: the compiled ``model``, its registry ``entry`` (a generated machine's
+    module; None for a described one), its description file ``path`` (None for a generated
+    machine), that file's ``text`` for the report, and the run's ``inputs`` (option -> path), which
+    no output may replace."""
+
+    model: MechanismModel
+    entry: Any
+    path: Path | None
+    text: str
+    inputs: Mapping[str, Path | None]
+
+
+def load_machine(machine: str, limits: Mapping[str, float] | None = None) -> tuple[MechanismModel, Any]:
+    """The compiled mechanism of ``machine`` (a generated machine through the description its
+    folder makes) and its registry entry (None for a described one); ``limits`` (``--limit``) over
+    the description's own for the plausibility of its numbers."""
+    entry, path = resolve(machine)
+    return load_mechanism(path if entry is None else entry.description(), limits), entry
+
+
+def prepare(machine: str, out_dir: Path | None, inputs: Mapping[str, Path | None] | None = None,
+            limits: Mapping[str, float] | None = None) -> Prepared:
+    """Resolve ``machine``, check ``out_dir`` (when given) against the output rule with the run's
+    ``inputs`` (the machine's file added), then compile the mechanism: a bad folder is refused
+    before any computation and nothing is written."""
+    entry, path = resolve(machine)
+    given = {"--machine": path, **(inputs or {})}
+    if out_dir is not None:
+        check_output_dir(out_dir, given)
+    model, entry = load_machine(machine, limits)
+    text = path.read_text(encoding="utf-8", errors="replace") if path is not None else ""
+    return Prepared(model, entry, path, text, given)
+
+
+def write(out_dir: Path, inputs: Mapping[str, Path | None], make: Callable[[Path], dict[str, Path]],
+          announce: Callable[[Mapping[str, Path]], None] | None = None) -> dict[str, Path]:
+    """Write a job's files: ``make(folder)`` writes them into a temporary folder beside ``out_dir``
+    and returns label -> path; ``announce`` is given their final paths before they move into place
+    (a listing that fails leaves ``out_dir`` as it was). Returns the final paths."""
+    final = Path(out_dir)
+    with output_dir(out_dir, inputs=inputs) as out:
+        files = make(out)
+        placed = {k: final / v.relative_to(out) for k, v in files.items()}
+        if announce is not None:
+            announce(placed)
+    return placed
