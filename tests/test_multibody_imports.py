@@ -1,5 +1,6 @@
-"""Import direction: the multibody layer sits below machines, simulation, control,
-identification and the command line, and imports none of them."""
+"""Import direction: the multibody layer (the engine) sits below the jobs, machines, simulation,
+control, identification, sweeps and the command line, and imports none of them; and it writes no
+files and starts no processes (the jobs write)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import ast
 from pathlib import Path
 
 PKG = Path(__file__).resolve().parents[1] / "src" / "pkmdyn"
-FORBIDDEN = ("machines", "cli", "simulate", "control", "identify", "validation")
+FORBIDDEN = ("machines", "cli", "jobs", "simulate", "control", "identify", "sweep", "validation")
 
 
 def _imports(path: Path) -> set[str]:
@@ -17,7 +18,10 @@ def _imports(path: Path) -> set[str]:
         if isinstance(node, ast.ImportFrom):
             mod = node.module or ""
             if node.level >= 2:
-                out.add(mod.split(".")[0])
+                # relative to the file's own package: up to pkmdyn, then the first name
+                depth = len(path.relative_to(PKG).parts) - 1
+                if node.level > depth:
+                    out.add(mod.split(".")[0])
             elif node.level == 0 and mod.startswith("pkmdyn."):
                 out.add(mod.split(".")[1])
         elif isinstance(node, ast.Import):
@@ -26,8 +30,37 @@ def _imports(path: Path) -> set[str]:
 
 
 def test_multibody_imports_no_higher_layer():
-    files = sorted((PKG / "multibody").glob("*.py"))
-    assert len(files) >= 8
+    files = sorted((PKG / "multibody").rglob("*.py"))
+    assert len(files) >= 40
     for f in files:
         bad = _imports(f) & set(FORBIDDEN)
         assert not bad, f"{f.name} imports {sorted(bad)}"
+
+
+#: calls that write a file or start a process
+WRITES = ("subprocess", "multiprocessing", "concurrent.futures", "os.system", "Popen", ".write_text(",
+          ".write_bytes(", "savez", "savefig", "write_json(", "write_csv(", "output_dir(", "atomic_file(",
+          "to_csv(", "to_parquet(")
+
+
+def test_the_engine_writes_no_files_and_starts_no_processes():
+    """No engine module calls a writer or starts a process; numba's cache markers (``_cache.py``,
+    beside the compiled kernels, never among the user's files) are the one exception."""
+    for f in sorted((PKG / "multibody").rglob("*.py")):
+        if f.name == "_cache.py":
+            continue
+        text = f.read_text(encoding="utf-8")
+        code = "\n".join(line.split("#")[0] for line in text.splitlines())
+        found = [w for w in WRITES if w in code]
+        assert not found, f"{f.relative_to(PKG)} calls {found}"
+        assert not any(m in ("w", "a", "x") for m in _open_modes(text)), f"{f.relative_to(PKG)} opens a file to write"
+
+
+def _open_modes(text: str) -> list[str]:
+    """The mode arguments of every ``open(...)`` call in ``text``."""
+    modes = []
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", None)) == "open":
+            args = [*node.args[1:2], *(k.value for k in node.keywords if k.arg == "mode")]
+            modes += [a.value[0] for a in args if isinstance(a, ast.Constant) and isinstance(a.value, str) and a.value]
+    return modes

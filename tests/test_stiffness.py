@@ -473,7 +473,7 @@ def test_a_long_motion_in_chunks_equals_one_chunk(tmp_path, monkeypatch):
         monkeypatch.setattr(job, "MOTION_CHUNK", size)
         folder = tmp_path / f"c{size}"
         folder.mkdir()
-        doc = job.run_stiffness(m, folder, motion=mo)
+        doc, _ = job.run_stiffness(m, folder, motion=mo)
         rows = list(csv.DictReader((folder / "results.csv").open()))
         out.append((doc["worst"]["index"], np.array([[float(v) for v in r.values()] for r in rows])))
     assert out[0][0] == out[1][0]

@@ -6,12 +6,13 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import click
 
 from ..errors import PkmdynError
 
-__all__ = ["cli", "pdm", "PATH_IN", "MACHINE_HELP", "FiniteFloat", "list_files", "echo_lines", "echo"]
+__all__ = ["cli", "pdm", "PATH_IN", "MACHINE_HELP", "FiniteFloat", "list_files", "echo_lines", "echo", "show"]
 
 #: an input file option (existence is checked by the readers, which name the file)
 PATH_IN = click.Path(dir_okay=False, path_type=Path)
@@ -73,6 +74,15 @@ def list_files(files: Mapping[str, Path]) -> None:
     listing is written before the files move into place (:func:`pkmdyn.io.output_dir`)."""
     for name, path in files.items():
         echo(f"{name}: {path}")
+
+
+def show(result: Any) -> None:
+    """Print a job's result (:class:`pkmdyn.jobs._files.JobResult`, its files announced as they were
+    written): its lines on standard output, each warning as one ``pkmdyn: warning:`` line on stderr."""
+    for line in result.lines:
+        echo(line)
+    for warning in result.warnings:
+        click.echo(f"pkmdyn: warning: {warning}", err=True)
 
 
 def echo_lines(lines: list[str]) -> None:

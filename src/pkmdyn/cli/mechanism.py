@@ -8,11 +8,18 @@ unknown name is refused, never routed to another machine's code.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
-from ._groups import MACHINE_HELP, PATH_IN, FiniteFloat, cli, list_files
+from .._lazy import lazy_module
+from ._groups import MACHINE_HELP, PATH_IN, FiniteFloat, cli, list_files, show
 from .control import MAX_CYCLES, machine_controllers
+
+if TYPE_CHECKING:
+    from ..jobs import run as run_job
+else:  # the engine and its kernels load when the command runs, not for --help
+    run_job = lazy_module("pkmdyn.jobs.run")
 
 
 @cli.command("machines")
@@ -162,74 +169,12 @@ def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_w
 
     The same files for every machine; a paper's machine has its own job too, with the paper's
     columns and figures (pkmdyn <machine> run; see pkmdyn machines)."""
-    from ..io import check_output_dir
-    from ..machines.registry import resolve
-    from ..multibody import read_task_motion
-    from ..multibody.dynamics.actuators import effective_limits
-    from ..multibody.description.schema import LIMIT_KEYS
-    from ..multibody.kinematics.motion import periodic_motion, repeated_motion
-    from ..jobs.run import run_mechanism
-    from ..params_util import parse_limit_options
-
-    entry, path = resolve(machine)
-    inputs = {"--machine": path, "--motion": motion_path, "--actuator-motion": actuator_path}
-    if motion_path is not None and actuator_path is not None:
-        raise click.UsageError("--motion and --actuator-motion exclude each other: give the motion one way")
-    check_output_dir(out_dir, inputs)
-    limits = parse_limit_options(limit_items, LIMIT_KEYS)
     if minimum_norm_reactions and unique_reactions:
         raise click.UsageError("--minimum-norm-reactions and --unique-reactions contradict each other")
-    model, entry = _load(machine, limits)
-    lim = effective_limits(model, limits)
-    window = None
-    if motion_path is not None or actuator_path is not None:
-        given = "--motion" if motion_path is not None else "--actuator-motion"
-        for opt, v in (("--cycles", cycles), ("--samples-per-cycle", samples_per_cycle)):
-            if v is not None:
-                raise click.UsageError(f"{opt} applies to the default motion, not to {given}")
-        if motion_path is not None:
-            motion = read_task_motion(model, Path(motion_path).absolute())
-        else:
-            from ..multibody.kinematics.direct import task_motion
-            from ..multibody.kinematics.motion import read_actuator_motion
-
-            _check_differentiator(sg_window, sg_order)
-            am = read_actuator_motion(model, Path(actuator_path).absolute(), sg_window, sg_order)
-            motion, _ = task_motion(model, am)
-    elif entry is None:
-        motion = periodic_motion(model, 1.0 if cycles is None else cycles, samples_per_cycle,
-                                 max_samples=int(lim["max_samples"]))
-        window = motion.samples_per_cycle + 1  # the plots and the animation show the first cycle
-    else:
-        if samples_per_cycle is not None:
-            raise click.UsageError(f"--samples-per-cycle applies to a described mechanism's default motion; "
-                                   f"{machine}'s is fixed")
-        cycle = entry.default_motion()
-        motion = repeated_motion(cycle, 1.0 if cycles is None else cycles, f"{machine}'s default motion",
-                                 max_samples=int(lim["max_samples"]))
-        window = len(cycle)
-    text = path.read_text(encoding="utf-8", errors="replace") if path is not None else ""
-    from ..multibody.dynamics.reactions import ComplianceDataMissing
-
-    try:
-        summary = run_mechanism(model, motion, out_dir, inputs=inputs, report=list_files, description_text=text,
-                                unique_reactions=not (minimum_norm_reactions or model.reactions == "minimum-norm"),
-                                fmt=fmt, limits=limits, progress=True,
-                                deflection=deflection,
-                                plot_window=window)
-    except ComplianceDataMissing as exc:
-        raise ComplianceDataMissing(f"{exc}; or --minimum-norm-reactions ([mechanism] reactions = \"minimum-norm\") "
-                                    "for reactions that balance every body but are not unique") from None
-    beyond = summary["joint_limits"]["first_beyond"]
-    if beyond is not None:
-        click.echo(f"pkmdyn: warning: the motion leaves the joint limits: {beyond}", err=True)
-    over = summary["actuator_effort_limits"]["first_beyond"]
-    if over is not None:
-        click.echo(f"pkmdyn: warning: the motion needs more than an actuator's rated effort: {over}", err=True)
-    reactions = summary.get("reactions", {})
-    if reactions.get("unique") is False:
-        click.echo(f"pkmdyn: warning: joint reactions are the minimum-norm ones, not unique: {reactions.get('reason')}",
-                   err=True)
+    show(run_job.job(machine, out_dir, motion_path=motion_path, actuator_path=actuator_path, sg_window=sg_window,
+                     sg_order=sg_order, cycles=cycles, samples_per_cycle=samples_per_cycle, fmt=fmt,
+                     limit_items=limit_items, minimum_norm_reactions=minimum_norm_reactions, deflection=deflection,
+                     announce=list_files))
 
 
 #: controllers a described mechanism takes (from its dynamics verbs; pkmdyn.control)

@@ -4,10 +4,18 @@ mechanism with its actuators locked (``docs/stiffness.md``)."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
-from ._groups import MACHINE_HELP, PATH_IN, cli, list_files
+from .._lazy import lazy_module
+from ._groups import MACHINE_HELP, PATH_IN, cli, list_files, show
+
+if TYPE_CHECKING:
+    from ..jobs import stiffness as job
+else:  # the engine and its kernels load when the command runs, not for --help
+    job = lazy_module("pkmdyn.jobs.stiffness")
+
 
 
 @cli.command("stiffness")
@@ -32,47 +40,5 @@ def stiffness_command(machine: str, poses: tuple[str, ...], motion_path: Path | 
     """Cartesian stiffness of the task body with the actuators locked (from the drives', links' and
     joints' compliance), its eigen-stiffnesses and worst directions, natural frequencies and modes;
     along a motion the task body's elastic deflection under its loads; over a grid, maps."""
-    from ..io import check_output_dir, output_dir
-    from ..machines.registry import resolve
-    from ..multibody import read_task_motion
-    from ..multibody.description.schema import LIMIT_KEYS
-    from ..jobs.stiffness import MAX_GRID_POINTS, run_stiffness
-    from ..multibody.analyses.task_grid import parse_grid, parse_pose
-    from ..params_util import parse_limit_options
-    from .mechanism import _load
-
-    given = [o for o, v in (("--pose", poses), ("--motion", motion_path), ("--default-motion", default_motion),
-                            ("--grid", grid)) if v]
-    if len(given) > 1:
-        raise click.UsageError(f"{' and '.join(given)} exclude each other: give poses, a motion or a grid")
-    entry, path = resolve(machine)
-    inputs = {"--machine": path, "--motion": motion_path}
-    check_output_dir(out_dir, inputs)
-    limits = parse_limit_options(limit_items, LIMIT_KEYS)
-    model, _ = _load(machine, limits)
-    import numpy as np
-
-    kw: dict = {}
-    if poses:
-        kw["poses"] = np.stack([parse_pose(model, p) for p in poses])
-    elif motion_path is not None:
-        kw["motion"] = read_task_motion(model, Path(motion_path).absolute())
-    elif default_motion:
-        from ..multibody.kinematics.motion import default_motion as one_cycle
-
-        kw["motion"] = one_cycle(model)
-    elif grid is not None:
-        kw["grid"] = parse_grid(model, grid, max_axes=2, max_points=MAX_GRID_POINTS)
-    text = path.read_text(encoding="utf-8", errors="replace") if path is not None else ""
-    final = Path(out_dir)
-    with output_dir(out_dir, inputs=inputs) as out:
-        doc = run_stiffness(model, out, description_text=text,
-                            report=lambda files: list_files({k: final / v.name for k, v in files.items()}), **kw)
-    pose = doc.get("worst") or doc["poses"][0]
-    k = pose["min_stiffness_N_m"]
-    kr = pose["min_rot_stiffness_Nm_rad"]
-    click.echo(f"{'worst pose' if 'worst' in doc else 'pose'}: "
-               + ", ".join(f"{n} = {v:.6g}" for n, v in pose.get("task", {}).items()))
-    click.echo(f"  translational stiffness, worst direction: {'rigid' if k is None else f'{k:.6g} N/m'}; "
-               f"rotational: {'rigid' if kr is None else f'{kr:.6g} N m/rad'}")
-    click.echo("  natural frequencies: " + ", ".join(f"{f:.6g}" for f in pose.get("frequencies_Hz", [])) + " Hz")
+    show(job.job(machine, out_dir, poses=poses, motion_path=motion_path, default_motion=default_motion, grid=grid,
+                 limit_items=limit_items, announce=list_files))

@@ -3,17 +3,24 @@ along a motion (``docs/wear.md``)."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
-from ._groups import MACHINE_HELP, PATH_IN, FiniteFloat, cli, list_files
+from .._lazy import lazy_module
+from ..errors import ParameterError
+from ._groups import MACHINE_HELP, PATH_IN, FiniteFloat, cli, list_files, show
+
+if TYPE_CHECKING:
+    from ..jobs import wear as job
+else:  # the engine and its kernels load when the command runs, not for --help
+    job = lazy_module("pkmdyn.jobs.wear")
+
 
 
 def _pole(text: str | None) -> tuple[float, float, float] | None:
-    from ..errors import ParameterError
-
+    """``--pole X,Y,Z`` as three numbers (None: not given)."""
     if text is None:
         return None
     try:
@@ -57,51 +64,8 @@ def wear(machine: str, joints: tuple[str, ...], motion_path: Path | None, cycles
     """Slide tracks of points of the head on the cup (and of the cup on the head), their sliding
     distance, aspect ratio (the share above 5.5), cross-shear, track integral of load and the
     Archard wear per million cycles, for spherical joints of any mechanism."""
-    from ..io import check_output_dir, output_dir
-    from ..machines.registry import resolve
-    from ..multibody import read_task_motion, solve_kinematics
-    from ..multibody.kinematics.motion import default_motion
-    from ..multibody.analyses.wear import WEAR_FACTOR_MM3_N_M, marker_grid
-    from ..jobs.wear import tracks_figure, write_wear_files
-    from ..multibody.analyses.wear import WearOptions, head_radius, joint_wear
-    from .mechanism import _load
-
-    entry, path = resolve(machine)
-    inputs = {"--machine": path, "--motion": motion_path}
-    check_output_dir(out_dir, inputs)
-    opts = WearOptions(radius_m=radius_m, head=head, load=load, spacing_deg=spacing_deg, cap_deg=cap_deg,
-                       pole=_pole(pole), wear_factor_mm3_N_m=WEAR_FACTOR_MM3_N_M if wear_factor is None else wear_factor,
-                       cross_shear_law=cross_shear_law, cycles=cycles)
-    marker_grid(spacing_deg, cap_deg)
-    model, entry = _load(machine)
-    for j in joints:
-        head_radius(model, j, radius_m)
-    if motion_path is not None:
-        motion = read_task_motion(model, Path(motion_path).absolute())
-    elif entry is not None:
-        motion = entry.default_motion()
-    else:
-        motion = default_motion(model)
-    kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
-    results = [(j, *joint_wear(model, kin, j, opts, motion.loads)) for j in dict.fromkeys(joints)]
-    final = Path(out_dir)
-    with output_dir(out_dir, inputs=inputs) as out:
-        files = write_wear_files(out, model, results, opts, {"motion": str(motion_path) if motion_path
-                                                             else "the machine's default motion"})
-        from ..report import write_report
-
-        doc = json.loads(files["wear"].read_text(encoding="utf-8"))
-        files["report"] = write_report(out, title=f"{model.name}: slide tracks and wear", scene=None,
-                                       summary={j["joint"]: j for j in doc["joints"]},
-                                       parameters=path.read_text(encoding="utf-8", errors="replace") if path else "",
-                                       images=[p for p in files.values() if p.suffix == ".png"],
-                                       notes=["definitions: docs/wear.md"],
-                                       figures=[(f"{j}: tracks on the cup", tracks_figure(j, c)) for j, c, _, _ in results])
-        list_files({k: final / v.name for k, v in files.items()})
-    for j, on_cup, on_head, what in results:
-        s = on_cup.summary()
-        click.echo(f"{j}: {s['markers']} markers; load: {what}; sliding distance per cycle "
-                   f"{1e3 * s['sliding_distance_per_cycle_m']['mean']:.4g} mm (mean); aspect ratio median "
-                   f"{s['aspect_ratio']['median']:.4g}, share above 5.5: {100 * s['share_aspect_ratio_above_5_5']:.0f} %; "
-                   f"cross-shear mean {s['cross_shear']['mean']:.3g}; wear "
-                   f"{on_head.wear_per_million_cycles:.4g} mm^3 per million cycles")
+    opts = {"radius_m": radius_m, "head": head, "load": load, "spacing_deg": spacing_deg, "cap_deg": cap_deg,
+            "pole": _pole(pole), "cross_shear_law": cross_shear_law, "cycles": cycles}
+    if wear_factor is not None:
+        opts["wear_factor_mm3_N_m"] = wear_factor
+    show(job.job(machine, joints, out_dir, motion_path=motion_path, opts=job.WearOptions(**opts), announce=list_files))

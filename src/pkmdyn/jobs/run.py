@@ -18,14 +18,14 @@ folder beside ``--out`` and moved into place only when the whole run succeeded
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import PkmdynError
+from ..errors import ParameterError, PkmdynError
 from ..io import NpzWriter, check_table_format, note_table_size, open_table_writer, output_dir, write_json
 from ..multibody.columns import (
     actuator_effort_column,
@@ -37,9 +37,11 @@ from ..multibody.columns import (
     results_column_names,
     results_columns,
 )
+from ..multibody.description.schema import LIMIT_KEYS
 from ..multibody.dynamics.actuators import check_actuator_rates, check_task_rates, effective_limits, motor_effort_column
 from ..multibody.dynamics.inverse import effort_unit, joint_reactions, load_forces
 from ..multibody.dynamics.reactions import ComplianceDataMissing
+from ..multibody.kinematics.direct import task_motion
 from ..multibody.kinematics.inverse import (
     MechanismKinematics,
     joint_coordinates,
@@ -49,13 +51,22 @@ from ..multibody.kinematics.inverse import (
     limited_joints,
     solve_kinematics,
 )
-from ..multibody.kinematics.motion import motion_columns, task_columns
+from ..multibody.kinematics.motion import (
+    motion_columns,
+    periodic_motion,
+    read_actuator_motion,
+    read_task_motion,
+    repeated_motion,
+    task_columns,
+)
 from ..multibody.model.compiler import MechanismModel
 from ..multibody.scene import frame_indices_of, mechanism_scene
-from ..params_util import check_limit
+from ..params_util import check_limit, parse_limit_options
+from ..profiles._columns import check_smoothing
 from ..report import Curve, FramePicker, TimePlot, write_report
+from ._files import JobResult, prepare
 
-__all__ = ["run_mechanism", "write_run_report", "report_columns", "CHUNK"]
+__all__ = ["job", "run_mechanism", "write_run_report", "report_columns", "CHUNK"]
 
 Array = NDArray[np.float64]
 
@@ -328,3 +339,65 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
         if report is not None:
             report({k: final / v.name for k, v in files.items()})
     return {**summary, "files": {k: final / v.name for k, v in files.items()}}
+
+
+def job(machine: str, out_dir: Path, *, motion_path: Path | None = None, actuator_path: Path | None = None,
+        sg_window: int = 15, sg_order: int = 5, cycles: float | None = None, samples_per_cycle: int | None = None,
+        fmt: str = "csv", limit_items: tuple[str, ...] = (), minimum_norm_reactions: bool = False, deflection: bool = False,
+        announce: Callable[[Mapping[str, Path]], None] | None = None) -> JobResult:
+    """``pkmdyn run``: ``machine`` along its motion (``motion_path``, a task motion file;
+    ``actuator_path``, a motion in actuator coordinates through the direct kinematics, rates by a
+    Savitzky-Golay differentiator of ``sg_window`` samples and order ``sg_order`` or, with 0, a
+    quintic spline; neither: the machine's default motion, ``cycles`` of it at ``samples_per_cycle``)
+    into ``out_dir`` (:func:`run_mechanism`). ``minimum_norm_reactions``: an over-constrained
+    mechanism without the data that make its reactions unique gets the minimum-norm ones."""
+    limits = parse_limit_options(limit_items, LIMIT_KEYS)
+    if motion_path is not None and actuator_path is not None:
+        raise ParameterError("--motion and --actuator-motion exclude each other: give the motion one way")
+    p = prepare(machine, out_dir, {"--motion": motion_path, "--actuator-motion": actuator_path}, limits)
+    model, entry = p.model, p.entry
+    lim = effective_limits(model, limits)
+    window = None
+    if motion_path is not None or actuator_path is not None:
+        given = "--motion" if motion_path is not None else "--actuator-motion"
+        for opt, v in (("--cycles", cycles), ("--samples-per-cycle", samples_per_cycle)):
+            if v is not None:
+                raise ParameterError(f"{opt} applies to the default motion, not to {given}")
+        if motion_path is not None:
+            motion = read_task_motion(model, Path(motion_path).absolute())
+        else:
+            if sg_window != 0:
+                check_smoothing(sg_window, sg_order)
+            am = read_actuator_motion(model, Path(actuator_path).absolute(), sg_window, sg_order)
+            motion, _ = task_motion(model, am)
+    elif entry is None:
+        motion = periodic_motion(model, 1.0 if cycles is None else cycles, samples_per_cycle,
+                                 max_samples=int(lim["max_samples"]))
+        window = motion.samples_per_cycle + 1  # the plots and the animation show the first cycle
+    else:
+        if samples_per_cycle is not None:
+            raise ParameterError(f"--samples-per-cycle applies to a described mechanism's default motion; "
+                                 f"{machine}'s is fixed")
+        cycle = entry.default_motion()
+        motion = repeated_motion(cycle, 1.0 if cycles is None else cycles, f"{machine}'s default motion",
+                                 max_samples=int(lim["max_samples"]))
+        window = len(cycle)
+    try:
+        summary = run_mechanism(model, motion, out_dir, inputs=p.inputs, report=announce, description_text=p.text,
+                                unique_reactions=not (minimum_norm_reactions or model.reactions == "minimum-norm"),
+                                fmt=fmt, limits=limits, progress=True, deflection=deflection, plot_window=window)
+    except ComplianceDataMissing as exc:
+        raise ComplianceDataMissing(f"{exc}; or --minimum-norm-reactions ([mechanism] reactions = \"minimum-norm\") "
+                                    "for reactions that balance every body but are not unique") from None
+    warnings = []
+    beyond = summary["joint_limits"]["first_beyond"]
+    if beyond is not None:
+        warnings.append(f"the motion leaves the joint limits: {beyond}")
+    over = summary["actuator_effort_limits"]["first_beyond"]
+    if over is not None:
+        warnings.append(f"the motion needs more than an actuator's rated effort: {over}")
+    reactions = summary.get("reactions", {})
+    if reactions.get("unique") is False:
+        warnings.append(f"joint reactions are the minimum-norm ones, not unique: {reactions.get('reason')}")
+    files = summary.pop("files")
+    return JobResult(files, summary, (), tuple(warnings))

@@ -23,14 +23,19 @@ from ..multibody.analyses.stiffness import (
     reaction_route,
     stiffness,
 )
-from ..multibody.analyses.task_grid import grid_poses
+from ..multibody.analyses.task_grid import grid_poses, parse_grid, parse_pose
 from ..multibody.columns import model_summary
+from ..multibody.description.schema import LIMIT_KEYS
 from ..multibody.dynamics.inverse import joint_reactions
 from ..multibody.kinematics.inverse import MechanismKinematics, reachable, reference_task, solve_kinematics
+from ..multibody.kinematics.motion import default_motion as one_cycle
+from ..multibody.kinematics.motion import read_task_motion
 from ..multibody.model.compiler import MechanismModel
+from ..params_util import parse_limit_options
 from ..report import scene_from_joints, write_report
+from ._files import JobResult, prepare, write
 
-__all__ = ["pose_document", "run_stiffness", "MAX_GRID_POINTS"]
+__all__ = ["job", "pose_document", "run_stiffness", "MAX_GRID_POINTS"]
 
 Array = NDArray[np.float64]
 
@@ -160,11 +165,12 @@ def _map_png(path: Path, model: MechanismModel, axes: list[tuple[int, Array]], o
 
 
 def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = None, motion: Any = None,
-                  grid: list[tuple[int, Array]] | None = None, description_text: str = "",
-                  report: Callable[[Mapping[str, Path]], None] | None = None) -> dict[str, Any]:
+                  grid: list[tuple[int, Array]] | None = None, description_text: str = ""
+                  ) -> tuple[dict[str, Any], dict[str, Path]]:
     """Write the stiffness job's files into the (temporary) folder ``out``; exactly one of
     ``poses (n, nt)``, ``motion`` (a task motion, its loads included) or ``grid`` (axes of
-    :func:`parse_grid`). Returns the document written to ``stiffness.json``."""
+    :func:`parse_grid`). Returns the document written to ``stiffness.json`` and the files written
+    (label -> path)."""
     files: dict[str, Path] = {}
     images: list[Path] = []
     if grid is not None:
@@ -257,6 +263,45 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
     if "worst" not in summary:
         summary["pose"] = doc["poses"][0]
     files["report"] = _report(out, model, kin, st, s0, summary, description_text, images)
-    if report is not None:
-        report(files)
-    return doc
+    return doc, files
+
+
+def job(machine: str, out_dir: Path, *, poses: tuple[str, ...] = (), motion_path: Path | None = None,
+        default_motion: bool = False, grid: str | None = None, limit_items: tuple[str, ...] = (),
+        announce: Callable[[Mapping[str, Path]], None] | None = None) -> JobResult:
+    """``pkmdyn stiffness``: ``machine`` at the task poses ``poses`` (``NAME=VALUE,...`` each; none:
+    the reference pose), along the motion file ``motion_path`` or its ``default_motion``, or over
+    ``grid`` (``NAME=LOW:HIGH:COUNT`` on one or two task coordinates), into ``out_dir``."""
+    limits = parse_limit_options(limit_items, LIMIT_KEYS)
+    given = [o for o, v in (("--pose", poses), ("--motion", motion_path), ("--default-motion", default_motion),
+                            ("--grid", grid)) if v]
+    if len(given) > 1:
+        raise ParameterError(f"{' and '.join(given)} exclude each other: give poses, a motion or a grid")
+    p = prepare(machine, out_dir, {"--motion": motion_path}, limits)
+    model = p.model
+    kw: dict[str, Any] = {}
+    if poses:
+        kw["poses"] = np.stack([parse_pose(model, s) for s in poses])
+    elif motion_path is not None:
+        kw["motion"] = read_task_motion(model, Path(motion_path).absolute())
+    elif default_motion:
+        kw["motion"] = one_cycle(model)
+    elif grid is not None:
+        kw["grid"] = parse_grid(model, grid, max_axes=2, max_points=MAX_GRID_POINTS)
+    held: dict[str, Any] = {}
+
+    def make(out: Path) -> dict[str, Path]:
+        held["doc"], files = run_stiffness(model, out, description_text=p.text, **kw)
+        return files
+
+    files = write(out_dir, p.inputs, make, announce)
+    doc = held["doc"]
+    pose = doc.get("worst") or doc["poses"][0]
+    k = pose["min_stiffness_N_m"]
+    kr = pose["min_rot_stiffness_Nm_rad"]
+    lines = (f"{'worst pose' if 'worst' in doc else 'pose'}: "
+             + ", ".join(f"{n} = {v:.6g}" for n, v in pose.get("task", {}).items()),
+             f"  translational stiffness, worst direction: {'rigid' if k is None else f'{k:.6g} N/m'}; "
+             f"rotational: {'rigid' if kr is None else f'{kr:.6g} N m/rad'}",
+             "  natural frequencies: " + ", ".join(f"{f:.6g}" for f in pose.get("frequencies_Hz", [])) + " Hz")
+    return JobResult(files, doc, lines)

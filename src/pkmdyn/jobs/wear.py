@@ -5,6 +5,7 @@ The numbers come from :mod:`pkmdyn.multibody.analyses.wear`."""
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -12,9 +13,22 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..io import write_csv, write_json
-from ..multibody.analyses.wear import ASPECT_LIMIT, SlideTracks, WearOptions, joint_index, pole_rotation
+from ..multibody.analyses.wear import (
+    ASPECT_LIMIT,
+    SlideTracks,
+    WearOptions,
+    head_radius,
+    joint_index,
+    joint_wear,
+    marker_grid,
+    pole_rotation,
+)
+from ..multibody.kinematics.inverse import solve_kinematics
+from ..multibody.kinematics.motion import default_motion, read_task_motion
+from ..report import write_report
+from ._files import JobResult, prepare, write
 
-__all__ = ["wear_document", "write_wear_files", "tracks_figure"]
+__all__ = ["job", "wear_file", "wear_document", "write_wear_files", "tracks_figure"]
 
 Array = NDArray[np.float64]
 
@@ -89,14 +103,20 @@ def _png(path: Path, joint: str, on_cup: SlideTracks, on_head: SlideTracks) -> P
     return path
 
 
+def wear_file(model: Any, results: list[tuple[str, SlideTracks, SlideTracks, str]], opts: WearOptions,
+              extra: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The document ``wear.json`` holds: the mechanism, ``extra`` and each joint's entry."""
+    return {"mechanism": model.name, "definitions": "docs/wear.md", **(extra or {}),
+            "joints": [wear_document(model, j, c, h, w, opts) for j, c, h, w in results]}
+
+
 def write_wear_files(out: Path, model: Any, results: list[tuple[str, SlideTracks, SlideTracks, str]],
                      opts: WearOptions, extra: dict[str, Any] | None = None, plots: bool = True) -> dict[str, Path]:
-    """``wear.json``, the markers' tables, ``tracks.npz`` and (``plots``) the PNGs into the folder ``out``."""
+    """``wear.json`` (:func:`wear_file`), the markers' tables, ``tracks.npz`` and (``plots``) the PNGs
+    into the folder ``out``."""
     files: dict[str, Path] = {}
-    doc: dict[str, Any] = {"mechanism": model.name, "definitions": "docs/wear.md", **(extra or {}),
-                           "joints": [wear_document(model, j, c, h, w, opts) for j, c, h, w in results]}
     files["wear"] = out / "wear.json"
-    write_json(files["wear"], doc)
+    write_json(files["wear"], wear_file(model, results, opts, extra))
     arrays: dict[str, Array] = {}
     for j, on_cup, on_head, _ in results:
         for surface, tr in (("cup", on_cup), ("head", on_head)):
@@ -141,3 +161,46 @@ def tracks_figure(joint: str, tracks: SlideTracks, max_points: int = 60) -> dict
             "layout": {"title": {"text": f"{joint}: the head's markers' tracks on the cup [mm]"}, "height": 560,
                        "scene": {"aspectmode": "data", "xaxis": {"title": {"text": "x [mm]"}},
                                  "yaxis": {"title": {"text": "y [mm]"}}, "zaxis": {"title": {"text": "z [mm]"}}}}}
+
+
+def job(machine: str, joints: tuple[str, ...], out_dir: Path, *, motion_path: Path | None = None,
+        opts: WearOptions = WearOptions(), announce: Callable[[Mapping[str, Path]], None] | None = None
+        ) -> JobResult:
+    """``pkmdyn wear``: the slide tracks and wear of ``machine``'s spherical ``joints`` along the
+    motion file ``motion_path`` (default: the machine's default motion) with the settings ``opts``,
+    into ``out_dir`` (``docs/wear.md``)."""
+    p = prepare(machine, out_dir, {"--motion": motion_path})
+    model = p.model
+    marker_grid(opts.spacing_deg, opts.cap_deg)
+    for j in joints:
+        head_radius(model, j, opts.radius_m)
+    if motion_path is not None:
+        motion = read_task_motion(model, Path(motion_path).absolute())
+    elif p.entry is not None:
+        motion = p.entry.default_motion()
+    else:
+        motion = default_motion(model)
+    kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
+    results = [(j, *joint_wear(model, kin, j, opts, motion.loads)) for j in dict.fromkeys(joints)]
+    extra = {"motion": str(motion_path) if motion_path else "the machine's default motion"}
+    doc = wear_file(model, results, opts, extra)
+
+    def make(out: Path) -> dict[str, Path]:
+        files = write_wear_files(out, model, results, opts, extra)
+        files["report"] = write_report(out, title=f"{model.name}: slide tracks and wear", scene=None,
+                                       summary={j["joint"]: j for j in doc["joints"]}, parameters=p.text,
+                                       images=[f for f in files.values() if f.suffix == ".png"],
+                                       notes=["definitions: docs/wear.md"],
+                                       figures=[(f"{j}: tracks on the cup", tracks_figure(j, c)) for j, c, _, _ in results])
+        return files
+
+    files = write(out_dir, p.inputs, make, announce)
+    lines = []
+    for j, on_cup, on_head, what in results:
+        s = on_cup.summary()
+        lines.append(f"{j}: {s['markers']} markers; load: {what}; sliding distance per cycle "
+                     f"{1e3 * s['sliding_distance_per_cycle_m']['mean']:.4g} mm (mean); aspect ratio median "
+                     f"{s['aspect_ratio']['median']:.4g}, share above 5.5: "
+                     f"{100 * s['share_aspect_ratio_above_5_5']:.0f} %; cross-shear mean {s['cross_shear']['mean']:.3g}; "
+                     f"wear {on_head.wear_per_million_cycles:.4g} mm^3 per million cycles")
+    return JobResult(files, doc, tuple(lines))
