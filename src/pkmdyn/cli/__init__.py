@@ -26,6 +26,7 @@ from . import imports as _import_commands  # noqa: F401
 from . import compile as _compile_commands  # noqa: F401
 from ._groups import HELD_NOTES, cli
 from ..machines.registry import command_groups
+from ..compile_notice import reset, summary
 
 for _group in command_groups():  # the generated machines' own commands, pkmdyn <machine> ...
     cli.add_command(_group)
@@ -47,8 +48,6 @@ def main(argv: list[str] | None = None) -> int:
     Ctrl-C and SIGTERM end a run cleanly (its temporary output removed) with one line; a run
     that failed says nothing but its error line (notes held back are dropped).
     """
-    from ..compile_notice import reset, summary
-
     reset()
     status = _main(argv)
     done = summary()

@@ -11,6 +11,8 @@ from typing import Any
 import click
 
 from ..errors import PkmdynError
+from ..io import atomic_file
+from ..machines.registry import generated
 
 __all__ = ["cli", "pdm", "PATH_IN", "MACHINE_HELP", "FiniteFloat", "list_files", "echo_lines", "echo", "show"]
 
@@ -99,15 +101,11 @@ HELD_NOTES: list[str] = []
 def write_default_file(machine: str, control: bool, out_path: Path) -> None:
     """Write a machine's built-in parameter file (or, with ``control``, its control settings) to
     ``out_path`` for a user to edit, under the output rule (:func:`pkmdyn.io.atomic_file`)."""
-    from ..io import atomic_file
-
     if control:
         from ..control import default_settings_text
 
         text, what = default_settings_text(machine), "control settings"
     else:
-        from ..machines.registry import generated
-
         text, what = generated(machine).default_params_text(), "parameters"
     with atomic_file(out_path) as tmp:
         tmp.write_text(text, encoding="utf-8")

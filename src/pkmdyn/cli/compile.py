@@ -30,7 +30,9 @@ from pathlib import Path
 
 import click
 
+from ..compile_notice import silence
 from ..errors import PkmdynError
+from ..machines.registry import generated_machines, resolve
 from ._groups import cli, echo
 
 __all__ = ["LANES", "compile_kernels"]
@@ -66,8 +68,6 @@ _GENERIC_LANES: tuple[tuple[tuple[str, ...], ...], ...] = (
 def _lanes() -> tuple[tuple[tuple[str, ...], ...], ...]:
     """The generic exercises, each generated machine's own (``COMPILE_EXERCISES`` of its registry
     entry: ``(lane, command line)`` pairs) appended to their lanes."""
-    from ..machines.registry import generated_machines
-
     lanes = [list(lane) for lane in _GENERIC_LANES]
     for entry in generated_machines().values():
         for lane, args in getattr(entry, "COMPILE_EXERCISES", ()):
@@ -84,7 +84,6 @@ def _reference_actuators(machine: str) -> str:
     ``assemble`` input that every built-in machine reaches."""
     from ..multibody import load_mechanism
     from ..multibody.kinematics.direct import actuator_reference
-    from ..machines.registry import resolve
 
     _, path = resolve(machine)
     model = load_mechanism(path)
@@ -164,8 +163,6 @@ def compile_kernels(jobs: int | None = None, log=print) -> int:
 def compile_command(jobs: int | None, lane: int | None) -> None:
     """Compile every numerical kernel into numba's cache now (done by the install; again after
     numba was upgraded or on another CPU). Writes nothing but the cache."""
-    from ..compile_notice import silence
-
     silence()  # compiling is this command's work: no notice of it
     if lane is not None:
         click.get_current_context().exit(_lane(lane))

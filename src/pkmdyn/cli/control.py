@@ -15,7 +15,7 @@ real-time benchmark.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -23,9 +23,11 @@ import click
 import numpy as np
 
 from ..errors import MotionError, ParameterError, PkmdynError
+from ..io import check_output_dir, check_table_format, open_table_writer, output_dir, write_json
 from ..machines.pdm4 import control_job as _pdm_job
-from ._groups import PATH_IN, list_files, pdm
-from ._groups import FiniteFloat
+from ..machines.registry import control_adapter, generated_machines
+from ..report import MAX_FRAMES, Curve, FramePicker, TimePlot, write_report
+from ._groups import PATH_IN, FiniteFloat, list_files, pdm
 
 __all__ = ["builtin_closed_loop", "control_command", "control_options", "run_control", "machine_setup", "effort_label", "machine_controllers", "check_loop",
            "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
@@ -72,7 +74,6 @@ def machine_setup(machine: str, params: Path | None, plant_params: Path | None, 
     parameters with the ``[mismatch]`` factors of ``settings``, and ``cycles`` of the built-in
     motion or the motion file ``motion``."""
     from ..control import hermite_motion, scale_description
-    from ..machines.registry import control_adapter
 
     job = control_adapter(machine)
     description, source = job.read_description(params)  # each file is read once (it may be a pipe)
@@ -125,7 +126,6 @@ def _prepare(machine: str, controller: str, params: Path | None, plant_params: P
              cycles: float, gains_path: Path | None) -> tuple[_Setup, dict[str, Any], Any, Any]:
     """Every check of a run, then its setup, settings, loop settings and gains."""
     from ..control import gains, load_settings, loop_settings
-    from ..machines.registry import control_adapter
 
     allowed = control_adapter(machine).CONTROLLERS
     if controller not in allowed:
@@ -278,8 +278,6 @@ def _check_encoder(setup: _Setup, ls: Any, settings: dict[str, Any], gains_path:
 
 def machine_controllers() -> dict[str, tuple[str, ...]]:
     """The controllers of every generated machine with a control job, by machine name."""
-    from ..machines.registry import control_adapter, generated_machines
-
     out = {}
     for name in sorted(generated_machines()):
         try:
@@ -305,8 +303,6 @@ def builtin_closed_loop(machine: str, duration_s: float = 10.0, controller: str 
     mismatch (or the controller's own model with ``exact_plant``). ``integration_step_s``
     overrides the plant's step. Returns the :class:`~pkmdyn.simulate.Tracking`; for the
     real-time benchmark."""
-    from dataclasses import replace
-
     from ..control import gains, load_settings, loop_settings
     from ..simulate import track
 
@@ -604,8 +600,6 @@ def effort_label(machine: str, a: int) -> tuple[str, str]:
     """The name and unit of actuator ``a`` (0-based) of the generated machine ``machine`` for
     plots: ``("motor 1 torque", "N m")``, ``("limb l11 force", "N")``, not the column names
     ``tau1_Nm``, ``f1_N``."""
-    from ..machines.registry import control_adapter
-
     return control_adapter(machine).effort_label(a)
 
 
@@ -624,8 +618,6 @@ def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dic
     the machine's own curves (:meth:`~pkmdyn.control_protocol.ControlJob.report_plots`) and efforts
     against time, the PNG figures, summary,
     parameters and warnings."""
-    from ..errors import PkmdynError
-    from ..report import Curve, TimePlot, write_report
 
     warns = [f"{_effort_label(setup, a)[0]} hit its limit in {v['saturated_cycles']} control cycle(s)"
              for a, v in enumerate(summary["actuators"].values()) if v["saturated_cycles"]]
@@ -690,9 +682,6 @@ def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str,
     memory does not grow with the run; the folder moves into place only when the whole run
     succeeded (:func:`pkmdyn.io.output_dir`). ``html_report``: also ``report.html``, its
     animation's frames picked span by span (:class:`pkmdyn.report.FramePicker`)."""
-    from ..report import MAX_FRAMES, FramePicker
-
-    from ..io import check_table_format, open_table_writer, output_dir, write_json
     from ..simulate import DivergenceError, track_spans
 
     check_table_format(fmt)
@@ -757,8 +746,6 @@ def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str,
 
 def control_command(machine: str, controller: str, params_path, plant_path, motion_path, cycles, gains_path, no_plots, out_dir,
              fmt: str = "csv") -> None:
-    from ..io import check_output_dir, check_table_format
-
     if motion_path is not None and cycles != 1.0:
         raise click.UsageError("--cycles applies to the built-in motion, not to --motion")
     check_table_format(fmt)

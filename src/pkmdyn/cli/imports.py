@@ -6,6 +6,8 @@ from pathlib import Path
 
 import click
 
+from ..errors import ParameterError
+from ..io import atomic_file, check_output_file
 from ._groups import PATH_IN, cli
 
 FORMATS = {".xml": "mjcf", ".mjcf": "mjcf", ".urdf": "urdf", ".sdf": "sdf"}
@@ -40,8 +42,6 @@ def import_(src, fmt, sidecar, actuated, assemble, keyframe, task_body, task_poi
     """Read a closed-chain mechanism from another format and write its description, checked by
     loading it as `pkmdyn describe` and `run` do. Nothing is written when an element has no
     equivalent (one line naming it)."""
-    from ..errors import ParameterError
-    from ..io import atomic_file, check_output_file
     from ..multibody.formats.graph import TaskChoice
     from ..multibody.formats.importer import import_description
 

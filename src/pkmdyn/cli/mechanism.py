@@ -7,12 +7,17 @@ unknown name is refused, never routed to another machine's code.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import click
 
 from .._lazy import lazy_module
+from ..errors import MotionError, ParameterError
+from ..io import atomic_file, check_output_dir, check_output_file, dumps_yaml
+from ..machines.registry import builtin_names, resolve
+from ..profiles._columns import check_smoothing
 from ._groups import MACHINE_HELP, PATH_IN, FiniteFloat, cli, list_files, show
 from .control import MAX_CYCLES, machine_controllers
 
@@ -25,8 +30,6 @@ else:  # the engine and its kernels load when the command runs, not for --help
 @cli.command("machines")
 def machines() -> None:
     """List the built-in machines, one name a line."""
-    from ..machines.registry import builtin_names
-
     for name in builtin_names():
         click.echo(name)
 
@@ -35,7 +38,6 @@ def _load(machine: str, limits: dict | None = None):
     """The compiled mechanism of ``--machine`` (a generated machine through the description its
     folder makes) and its registry entry (``None`` for a described one); ``limits`` (``--limit``)
     over the description's own for the plausibility of its numbers."""
-    from ..machines.registry import resolve
     from ..multibody import load_mechanism
 
     entry, path = resolve(machine)
@@ -45,8 +47,6 @@ def _load(machine: str, limits: dict | None = None):
 def _check_differentiator(sg_window: int, sg_order: int) -> None:
     """``--sg-window`` and ``--sg-order`` of the Savitzky-Golay differentiator, before any file
     is read (0: the spline, no differentiator)."""
-    from ..profiles._columns import check_smoothing
-
     if sg_window != 0:
         check_smoothing(sg_window, sg_order)
 
@@ -259,13 +259,10 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     import numpy as np
 
     from ..control import gains, hermite_motion, loop_settings, overlay_settings
-    from ..errors import MotionError
-    from ..io import check_output_dir
-    from ..machines.registry import resolve
     from ..multibody import default_motion, read_task_motion, solve_kinematics
-    from ..multibody.kinematics.inverse import limit_message, limited_joints
     from ..multibody.dynamics.verbs import machine_verbs
-    from .control import _check_encoder, control_command, _Setup, _stream, check_loop
+    from ..multibody.kinematics.inverse import limit_message, limited_joints
+    from .control import _check_encoder, _Setup, _stream, check_loop, control_command
 
     entry, path = resolve(machine)
     if entry is not None:
@@ -306,8 +303,6 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     settings = overlay_settings(described_control_settings(model), gains_path)
     ls = loop_settings(settings)
     if np.any(model.drive_encoder > 0):  # a drive's own encoder, counts per motor turn, in motor radians
-        from dataclasses import replace
-
         ls = replace(ls, encoder_resolution=np.where(model.drive_encoder > 0, model.drive_encoder,
                                                      float(ls.encoder_resolution)))
     check_loop(ls, duration_s, gains_path)
@@ -331,8 +326,6 @@ def _control_load(model, motion, what: str, efforts: tuple[str, ...]):
     alike). The loop carries one load: a motion with named-load columns for a mechanism with
     several is refused rather than run without them; so is a load whose name is that of an
     actuator's effort column of ``control.csv`` (``efforts``), which it would replace."""
-    from ..errors import MotionError
-
     given = [nm for nm in model.named_loads if nm in motion.loads]
     if not given:
         return None, ""
@@ -367,8 +360,6 @@ def identify(machine: str, measured_path: Path, rank_tol: float, sg_window: int,
     """Identify a mechanism's inertial parameters and joint friction coefficients from measured
     actuator efforts: identification.json, efforts.csv (docs/identification.md)."""
     from ..identify.mechanism import identify_mechanism
-    from ..io import check_output_dir
-    from ..machines.registry import resolve
 
     entry, path = resolve(machine)
     inputs = {"--machine": path, "--measured": measured_path}
@@ -384,8 +375,6 @@ def identify(machine: str, measured_path: Path, rank_tol: float, sg_window: int,
 
 
 def _numbers(text: str | None, n: int, flag: str) -> tuple[float, ...] | None:
-    from ..errors import ParameterError
-
     if text is None:
         return None
     try:
@@ -419,9 +408,6 @@ def export(machine: str, fmt: str, solref: str | None, solimp: str | None, times
     """Write a described mechanism in another engine's format; the files are written only when
     the whole model can be written (a cut joint the format cannot express, a body without
     mass for MuJoCo: an error naming it)."""
-    from ..errors import ParameterError
-    from ..io import atomic_file, check_output_file, dumps_yaml
-    from ..machines.registry import resolve
     from ..multibody.formats.mjcf_out import SOLIMP, SOLREF, massless_bodies, mechanism_mjcf
     from ..multibody.formats.urdf_out import mechanism_urdf
 

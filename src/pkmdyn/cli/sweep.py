@@ -12,6 +12,7 @@ from pathlib import Path
 
 import click
 
+from ..machines.registry import sweep_adapter
 from ._groups import PATH_IN, cli
 
 #: a Dask scheduler address: an optional scheme of Dask's comms, a host, a port
@@ -60,7 +61,6 @@ _MACHINE_HELP = ("Machine to sweep: a built-in machine (see pkmdyn machines) or 
 def sweep(machine: str, space_path: Path, params_path: Path | None, workers: int | None, scheduler: str | None,
           batch_size: int | None, limits: tuple[str, ...], search: str | None, no_plots: bool, out_dir: Path) -> None:
     """Evaluate many designs of a machine; write designs.parquet, the Pareto set, the best design, plots."""
-    from ..machines.registry import sweep_adapter
     from ..params_util import parse_limit_options
     from ..sweep import run_sweep
 

@@ -6,6 +6,9 @@ from pathlib import Path
 
 import click
 
+from ..io import check_output_file
+from ..machines.registry import resolve
+from ..report import scene_from_joints, topology_from_model, write_view
 from ._groups import PATH_IN, cli, echo
 
 
@@ -22,7 +25,6 @@ def _described_page(path: Path | None, out: Path, description: dict | None = Non
 
     from ..multibody import load_mechanism, reference_task, solve_kinematics
     from ..multibody.columns import model_summary
-    from ..report import scene_from_joints, topology_from_model, write_view
 
     model = load_mechanism(path if description is None else description)
     x = reference_task(model)[None]
@@ -53,8 +55,6 @@ def _described_page(path: Path | None, out: Path, description: dict | None = Non
 def view(machine: str, params_path: Path | None, out_path: Path) -> None:
     """A self-contained HTML page of a machine: home pose in 3D, topology graph, mobility and
     over-constraint counts."""
-    from ..io import check_output_file
-    from ..machines.registry import resolve
 
     entry, path = resolve(machine)
     check_output_file(out_path, {"--params": params_path, "--machine": path})  # the output rule, before any work

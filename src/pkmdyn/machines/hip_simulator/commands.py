@@ -20,9 +20,12 @@ import click
 
 from ...cli._groups import PATH_IN, FiniteFloat, echo, echo_lines, list_files, params_command
 from ...cli.control import control_command, control_options
+from ...io import DEFAULT_MAX_SAMPLES, atomic_file, check_output_file
+from ...profiles.iso14242 import iso14242_motion
+from ...profiles.orientation import write_motion_csv
+from . import identify_bounds as _ex
 from .control_job import CONTROLLERS
 from .identify_bounds import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW
-from . import identify_bounds as _ex
 
 __all__ = ["group"]
 
@@ -106,10 +109,7 @@ params_command(group, "hip", "pkmdyn hip")
               help="Motion CSV to write (atomically; a missing parent folder is created).")
 def hip_profile(cycles, samples_per_cycle, limits, out_path) -> None:
     """Write the built-in ISO 14242-1 motion and load model as a motion CSV (all derivative columns)."""
-    from ...io import DEFAULT_MAX_SAMPLES, atomic_file
     from ...params_util import parse_limit_options
-    from ...profiles.iso14242 import iso14242_motion
-    from ...profiles.orientation import write_motion_csv
 
     max_samples = parse_limit_options(limits, {"max_samples": int}).get("max_samples", DEFAULT_MAX_SAMPLES)
     motion = iso14242_motion(cycles, samples_per_cycle, max_samples=max_samples)
@@ -230,11 +230,10 @@ PLATFORM_MASS_KG = 1e-3
 def hip_export(fmt, params_path, timestep_s, out_path) -> None:
     """Write the machine in another engine's format (MuJoCo's MJCF, the same writer as pkmdyn
     export --machine hip); the file is written only when the whole model is valid."""
-    from ...io import atomic_file, check_output_file
-    from .description import hip_description
-    from .params import load_params
     from ...multibody import load_mechanism
     from ...multibody.formats.mjcf_out import massless_bodies, mechanism_mjcf
+    from .description import hip_description
+    from .params import load_params
 
     inputs = {"--params": params_path}
     check_output_file(out_path, inputs)

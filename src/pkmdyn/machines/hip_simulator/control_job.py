@@ -23,6 +23,9 @@ import numpy as np
 
 from ...control_protocol import BuiltinMotion, JointColumn, MotionTable
 from ...errors import MotionError
+from ...profiles.iso14242 import angle_wave, iso_load
+from ...profiles.orientation import read_motion_csv
+from ...report import TimePlot
 
 NAME = "hip"
 CONTROLLERS = ("pd", "augmented-pd", "feedforward", "computed-torque")
@@ -78,7 +81,6 @@ def load_params(path: Path) -> Any:
 
 def builtin_motion(model: Any, cycles: float) -> BuiltinMotion:
     """``cycles`` ISO 14242-1 cycles of the model's cycle model, with the hydraulic load."""
-    from ...profiles.iso14242 import angle_wave, iso_load
     from .paper import iso_cycle_preset
 
     cyc = iso_cycle_preset(model.params.motion_model)
@@ -96,8 +98,6 @@ def builtin_motion(model: Any, cycles: float) -> BuiltinMotion:
 def read_motion(model: Any, path: Path) -> MotionTable:
     """A posture-angle motion file (:func:`pkmdyn.profiles.orientation.read_motion_csv`); its
     load may not exceed the model's ``max_load_N``."""
-    from ...profiles.orientation import read_motion_csv
-
     mo = read_motion_csv(path)
     if mo.load is not None:
         lim = float(model.params.limits.max_load_N)
@@ -139,8 +139,6 @@ def figures(draw: Callable[..., None], t: np.ndarray, first: dict[str, np.ndarra
 
 
 def report_plots(curve: Callable[[str, int, str], Any], t: np.ndarray, note: str) -> list[Any]:
-    from ...report import TimePlot
-
     return [TimePlot("Posture-angle errors", "error [deg]", t,
                      tuple(curve("err_deg", c, n) for c, n in enumerate(COORDINATE_NAMES.values())), note)]
 

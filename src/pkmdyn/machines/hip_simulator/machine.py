@@ -10,6 +10,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from ...profiles.iso14242 import iso14242_motion
+
 NAME = "hip"
 TITLE = "2(3PUS+S) dual-platform hip-joint wear simulator (Chen, Cheng & Pang 2022); see pkmdyn hip --help"
 #: the built-in control settings (``--gains``; :mod:`pkmdyn.control`)
@@ -46,7 +48,6 @@ def default_motion() -> Any:
     :class:`pkmdyn.multibody.TaskMotion` in the description's task order, with its hydraulic
     load as the description's named load ``hydraulic_N``."""
     from ...multibody import TaskMotion
-    from ...profiles.iso14242 import iso14242_motion
     from .paper import iso_cycle_preset
     from .params import load_params
 

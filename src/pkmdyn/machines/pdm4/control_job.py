@@ -19,6 +19,9 @@ from typing import Any
 import numpy as np
 
 from ...control_protocol import BuiltinMotion, JointColumn, MotionTable
+from ...profiles.cycloidal import cycloidal
+from ...profiles.pdm_motion import read_pdm_motion
+from ...report import TimePlot
 
 NAME = "pdm"
 CONTROLLERS = ("pid", "feedforward", "computed-torque")
@@ -74,8 +77,6 @@ def load_params(path: Path) -> Any:
 def builtin_motion(model: Any, cycles: float) -> BuiltinMotion:
     """``cycles`` strokes of the Eq. 84 cycloidal motion of the model's ``[trajectory]``,
     alternately out and back."""
-    from ...profiles.cycloidal import cycloidal
-
     tr = model.params.trajectory
     S, P = np.asarray(tr.strokes, dtype=float), float(tr.period_s)
     n_cyc = max(1, int(np.ceil(cycles - 1e-9)))
@@ -95,8 +96,6 @@ def builtin_motion(model: Any, cycles: float) -> BuiltinMotion:
 
 def read_motion(model: Any, path: Path) -> MotionTable:
     """A PDM motion file (:func:`pkmdyn.profiles.pdm_motion.read_pdm_motion`)."""
-    from ...profiles.pdm_motion import read_pdm_motion
-
     mo = read_pdm_motion(path)
     return MotionTable(mo.t, mo.q, mo.qd, mo.qdd, None)
 
@@ -149,8 +148,6 @@ def figures(draw: Callable[..., None], t: np.ndarray, first: dict[str, np.ndarra
 
 
 def report_plots(curve: Callable[[str, int, str], Any], t: np.ndarray, note: str) -> list[Any]:
-    from ...report import TimePlot
-
     return [TimePlot(f"Limb {lab}: theoretical and measured", f"{lab} [{unit}]", t, tuple(
         c for a, nm in enumerate(LIMBS) for c in (curve(f"{key}_th", a, f"{nm} theoretical"),
                                                   curve(f"{key}_me", a, f"{nm} measured"))), note)

@@ -6,6 +6,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from ...profiles.pdm_motion import cycloidal_motion
+from ...report import write_view
+
 NAME = "pdm"
 TITLE = "4-DOF over-constrained parallel driving mechanism (Huang et al. 2023); see pkmdyn pdm --help"
 #: the built-in control settings (``--gains``; :mod:`pkmdyn.control`)
@@ -31,7 +34,6 @@ def default_motion() -> Any:
     """The Eq. 84 cycloidal motion of the built-in parameters' ``[trajectory]``, as a
     :class:`pkmdyn.multibody.TaskMotion`."""
     from ...multibody import TaskMotion
-    from ...profiles.pdm_motion import cycloidal_motion
     from .params import load_params
 
     tr = load_params().trajectory
@@ -43,7 +45,6 @@ def view_page(params: Path | None, out: Path, listing: Any) -> Path:
     """The ``pkmdyn view`` page of this machine (:func:`pkmdyn.report.write_view`) at its home pose."""
     import numpy as np
 
-    from ...report import write_view
     from .params import load_params
     from .report import parameters_text
     from .scene import pdm_mobility, pdm_scene_from_pose, pdm_topology
