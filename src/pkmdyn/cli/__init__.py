@@ -12,21 +12,21 @@ import warnings
 
 import click
 
+from ..compile_notice import reset, summary
 from ..errors import PkmdynError
-from . import pdm as _pdm_commands  # noqa: F401  (registers the commands)
+from ..machines.registry import command_groups
+from . import compile as _compile_commands  # noqa: F401
 from . import control as _control_commands  # noqa: F401
-from . import mechanism as _mechanism_commands  # noqa: F401
-from . import view as _view_commands  # noqa: F401
-from . import sweep as _sweep_commands  # noqa: F401
 from . import direct as _direct_commands  # noqa: F401
+from . import imports as _import_commands  # noqa: F401
+from . import mechanism as _mechanism_commands  # noqa: F401
+from . import pdm as _pdm_commands  # noqa: F401  (registers the commands)
 from . import stiffness as _stiffness_commands  # noqa: F401
+from . import sweep as _sweep_commands  # noqa: F401
+from . import view as _view_commands  # noqa: F401
 from . import wear as _wear_commands  # noqa: F401
 from . import workspace as _workspace_commands  # noqa: F401
-from . import imports as _import_commands  # noqa: F401
-from . import compile as _compile_commands  # noqa: F401
 from ._groups import HELD_NOTES, cli
-from ..machines.registry import command_groups
-from ..compile_notice import reset, summary
 
 for _group in command_groups():  # the generated machines' own commands, pkmdyn <machine> ...
     cli.add_command(_group)

@@ -27,13 +27,22 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
+from .._lazy import lazy_module
 from ..compile_notice import silence
 from ..errors import PkmdynError
 from ..machines.registry import generated_machines, resolve
 from ._groups import cli, echo
+
+if TYPE_CHECKING:
+    from .. import multibody as _multibody
+    from ..multibody.kinematics import direct as _direct
+else:  # loaded when a command runs, not on import (nor for --help)
+    _multibody = lazy_module("pkmdyn.multibody")
+    _direct = lazy_module("pkmdyn.multibody.kinematics.direct")
 
 __all__ = ["LANES", "compile_kernels"]
 
@@ -82,12 +91,10 @@ LANES = _lanes()
 def _reference_actuators(machine: str) -> str:
     """``NAME=VALUE,...`` of ``machine``'s actuators a little off their reference: an
     ``assemble`` input that every built-in machine reaches."""
-    from ..multibody import load_mechanism
-    from ..multibody.kinematics.direct import actuator_reference
 
     _, path = resolve(machine)
-    model = load_mechanism(path)
-    ref = actuator_reference(model)
+    model = _multibody.load_mechanism(path)
+    ref = _direct.actuator_reference(model)
     return ",".join(f"{a}={v + 0.01:.12g}" for a, v in zip(model.actuator_names, ref))
 
 

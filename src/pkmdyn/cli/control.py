@@ -17,17 +17,31 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 import numpy as np
 
+from .._lazy import lazy_module
 from ..errors import MotionError, ParameterError, PkmdynError
-from ..io import check_output_dir, check_table_format, open_table_writer, output_dir, write_json
+from ..io import (
+    check_output_dir,
+    check_table_format,
+    open_table_writer,
+    output_dir,
+    write_json,
+)
 from ..machines.pdm4 import control_job as _pdm_job
 from ..machines.registry import control_adapter, generated_machines
 from ..report import MAX_FRAMES, Curve, FramePicker, TimePlot, write_report
 from ._groups import PATH_IN, FiniteFloat, list_files, pdm
+
+if TYPE_CHECKING:
+    from .. import control as _control
+    from .. import simulate as _simulate
+else:  # loaded when a command runs, not on import (nor for --help)
+    _control = lazy_module("pkmdyn.control")
+    _simulate = lazy_module("pkmdyn.simulate")
 
 __all__ = ["builtin_closed_loop", "control_command", "control_options", "run_control", "machine_setup", "effort_label", "machine_controllers", "check_loop",
            "MAX_CYCLES", "MAX_CONTROL_CYCLES"]
@@ -73,8 +87,6 @@ def machine_setup(machine: str, params: Path | None, plant_params: Path | None, 
     from ``params`` (None: built-in), the plant's from ``plant_params`` or else the controller's
     parameters with the ``[mismatch]`` factors of ``settings``, and ``cycles`` of the built-in
     motion or the motion file ``motion``."""
-    from ..control import hermite_motion, scale_description
-
     job = control_adapter(machine)
     description, source = job.read_description(params)  # each file is read once (it may be a pipe)
     model = job.model_from_dict(description, source)
@@ -82,7 +94,7 @@ def machine_setup(machine: str, params: Path | None, plant_params: Path | None, 
         plant, plant_source = job.load_params(plant_params), str(plant_params)
     else:
         mm = settings["mismatch"]
-        plant = job.model_from_dict(scale_description(description, mm["mass_factor"], mm["friction_factor"]),
+        plant = job.model_from_dict(_control.scale_description(description, mm["mass_factor"], mm["friction_factor"]),
                                     "plant (parameters with the [mismatch] factors)")
         plant_source = (f"{params or 'built-in parameters'} with masses x {mm['mass_factor']:g}, "
                         f"friction x {mm['friction_factor']:g}")
@@ -91,7 +103,7 @@ def machine_setup(machine: str, params: Path | None, plant_params: Path | None, 
         fn, duration, motion_source, span, fold = bm.fn, bm.duration_s, bm.source, bm.span_s, bm.fold_s
     else:
         mo = job.read_motion(model, motion)
-        fn = hermite_motion(mo.t, mo.q, mo.qd, mo.qdd, mo.load)
+        fn = _control.hermite_motion(mo.t, mo.q, mo.qd, mo.qdd, mo.load)
         duration = float(mo.t[-1] - mo.t[0])
         motion_source, span, fold = str(motion), duration, 0.0
     return _Setup(job.NAME, job.verbs(model), model, plant, fn, duration, job.HAS_LOAD, str(params or "built-in parameters"),
@@ -105,18 +117,16 @@ def run_control(machine: str, controller: str, params: Path | None = None, plant
     """Set up and run one closed loop; returns the setup, the :class:`~pkmdyn.simulate.Tracking`
     and the settings. Raises a :class:`~pkmdyn.errors.PkmdynError` on any bad input. (The
     commands stream the same run span by span: :func:`pkmdyn.simulate.track_spans`.)"""
-    from ..simulate import DivergenceError, track
-
     with warnings.catch_warnings():
         # a model whose values overflow ends as a PkmdynError (unreachable pose, divergence), not as
         # numpy's warning lines on stderr
         warnings.simplefilter("ignore", RuntimeWarning)
         setup, settings, ls, g = _prepare(machine, controller, params, plant_params, motion, cycles, gains_path)
         try:
-            tracking = track(setup.verbs, setup.model, setup.plant_model, setup.motion, setup.duration, controller,
+            tracking = _simulate.track(setup.verbs, setup.model, setup.plant_model, setup.motion, setup.duration, controller,
                              g, ls, setup.has_load, progress=progress, joint_accelerations=True)
-        except DivergenceError as exc:
-            raise DivergenceError(_divergence_message(setup, controller, exc), exc.coordinate, exc.error, exc.limit,
+        except _simulate.DivergenceError as exc:
+            raise _simulate.DivergenceError(_divergence_message(setup, controller, exc), exc.coordinate, exc.error, exc.limit,
                                   exc.t) from None
     _warn_unstable(setup, controller)
     return setup, tracking, settings
@@ -125,21 +135,19 @@ def run_control(machine: str, controller: str, params: Path | None = None, plant
 def _prepare(machine: str, controller: str, params: Path | None, plant_params: Path | None, motion: Path | None,
              cycles: float, gains_path: Path | None) -> tuple[_Setup, dict[str, Any], Any, Any]:
     """Every check of a run, then its setup, settings, loop settings and gains."""
-    from ..control import gains, load_settings, loop_settings
-
     allowed = control_adapter(machine).CONTROLLERS
     if controller not in allowed:
         raise ParameterError(f"--controller {controller!r}: unknown for the {machine} (choose from {', '.join(allowed)})")
     if not (np.isfinite(cycles) and 0 < cycles <= MAX_CYCLES):
         raise MotionError(f"--cycles: {cycles:g} must be > 0 and at most {MAX_CYCLES:g}")
-    settings = load_settings(machine, gains_path)
-    ls = loop_settings(settings)
+    settings = _control.load_settings(machine, gains_path)
+    ls = _control.loop_settings(settings)
     check_loop(ls, None, gains_path)
     setup = machine_setup(machine, params, plant_params, motion, cycles, settings)
     check_loop(ls, setup.duration, gains_path)
     _check_encoder(setup, ls, settings, gains_path)
     n = len(setup.verbs.ACTUATORS) if controller == "pid" else len(setup.verbs.COORDINATES)
-    return setup, settings, ls, gains(settings, controller, n)
+    return setup, settings, ls, _control.gains(settings, controller, n)
 
 
 def check_loop(ls: Any, duration: float | None, gains_path: Path | None) -> None:
@@ -147,9 +155,7 @@ def check_loop(ls: Any, duration: float | None, gains_path: Path | None) -> None
     the step, at most :data:`MAX_STEPS_PER_CYCLE` steps per cycle, the encoder filters below
     the cycle's Nyquist frequency and (with ``duration`` [s]) at most
     :data:`MAX_CONTROL_CYCLES` cycles and 50 times as many steps."""
-    from ..simulate import check_timing
-
-    steps = check_timing(ls.cycle_s, ls.step_s)
+    steps = _simulate.check_timing(ls.cycle_s, ls.step_s)
     _check_filters(ls, gains_path)
     if steps > MAX_STEPS_PER_CYCLE:
         raise ParameterError(f"[timing] integration_step_s = {ls.step_s:g} s: {steps:g} steps per control cycle, above "
@@ -303,17 +309,15 @@ def builtin_closed_loop(machine: str, duration_s: float = 10.0, controller: str 
     mismatch (or the controller's own model with ``exact_plant``). ``integration_step_s``
     overrides the plant's step. Returns the :class:`~pkmdyn.simulate.Tracking`; for the
     real-time benchmark."""
-    from ..control import gains, load_settings, loop_settings
-    from ..simulate import track
 
-    settings = load_settings(machine)
-    ls = loop_settings(settings)
+    settings = _control.load_settings(machine)
+    ls = _control.loop_settings(settings)
     if integration_step_s is not None:
         ls = replace(ls, step_s=float(integration_step_s))
     setup = machine_setup(machine, None, None, None, duration_s, settings)
     plant = setup.model if exact_plant else setup.plant_model
-    return track(setup.verbs, setup.model, plant, setup.motion, duration_s, controller,
-                 gains(settings, controller, 3), ls, True, joint_accelerations=False)
+    return _simulate.track(setup.verbs, setup.model, plant, setup.motion, duration_s, controller,
+                 _control.gains(settings, controller, 3), ls, True, joint_accelerations=False)
 
 
 # ----------------------------------------------------------------------------- outputs
@@ -670,9 +674,7 @@ def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dic
 
 def _loop_method(settings: dict[str, Any]) -> str:
     """The plant's integration method of a run with these settings."""
-    from ..control import loop_settings
-
-    return str(loop_settings(settings).method)
+    return str(_control.loop_settings(settings).method)
 
 
 def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str, Any], out: Path, plots: bool,
@@ -682,8 +684,6 @@ def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str,
     memory does not grow with the run; the folder moves into place only when the whole run
     succeeded (:func:`pkmdyn.io.output_dir`). ``html_report``: also ``report.html``, its
     animation's frames picked span by span (:class:`pkmdyn.report.FramePicker`)."""
-    from ..simulate import DivergenceError, track_spans
-
     check_table_format(fmt)
     K = int(round(setup.duration / ls.cycle_s))
     summ = _Summary(setup)
@@ -695,7 +695,7 @@ def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str,
         with open_table_writer(tmp / table, fmt) as writer:
             start = 0
             try:
-                for tr in track_spans(setup.verbs, setup.model, setup.plant_model, setup.motion, setup.duration,
+                for tr in _simulate.track_spans(setup.verbs, setup.model, setup.plant_model, setup.motion, setup.duration,
                                       controller, g, ls, setup.has_load, progress=True, joint_accelerations=True):
                     kind, fast = tr.controller.kind, bool(tr.fast_path)
                     with warnings.catch_warnings():
@@ -713,8 +713,8 @@ def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str,
                     if frames is not None:
                         frames.add(start, t=tr.result.t, q=tr.result.q, u=tr.result.u)
                     start += tr.result.t.shape[0]
-            except DivergenceError as exc:
-                raise DivergenceError(_divergence_message(setup, controller, exc), exc.coordinate, exc.error,
+            except _simulate.DivergenceError as exc:
+                raise _simulate.DivergenceError(_divergence_message(setup, controller, exc), exc.coordinate, exc.error,
                                       exc.limit, exc.t) from None
         summary = {
             "machine": setup.machine,

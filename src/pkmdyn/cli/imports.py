@@ -3,12 +3,21 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
+from .._lazy import lazy_module
 from ..errors import ParameterError
 from ..io import atomic_file, check_output_file
 from ._groups import PATH_IN, cli
+
+if TYPE_CHECKING:
+    from ..multibody.formats import graph as _graph
+    from ..multibody.formats import importer as _importer
+else:  # loaded when a command runs, not on import (nor for --help)
+    _graph = lazy_module("pkmdyn.multibody.formats.graph")
+    _importer = lazy_module("pkmdyn.multibody.formats.importer")
 
 FORMATS = {".xml": "mjcf", ".mjcf": "mjcf", ".urdf": "urdf", ".sdf": "sdf"}
 
@@ -42,8 +51,6 @@ def import_(src, fmt, sidecar, actuated, assemble, keyframe, task_body, task_poi
     """Read a closed-chain mechanism from another format and write its description, checked by
     loading it as `pkmdyn describe` and `run` do. Nothing is written when an element has no
     equivalent (one line naming it)."""
-    from ..multibody.formats.graph import TaskChoice
-    from ..multibody.formats.importer import import_description
 
     fmt = fmt or FORMATS.get(Path(src).suffix.lower())
     if fmt is None:
@@ -67,9 +74,9 @@ def import_(src, fmt, sidecar, actuated, assemble, keyframe, task_body, task_poi
         raise ParameterError("--task-position: letters x, y, z, comma-separated")
     if orient is not None and any(k not in (1, 2, 3) for k in orient):
         raise ParameterError("--task-orientation: angle numbers 1, 2 or 3, comma-separated")
-    choice = TaskChoice(body=task_body, point=point, position=pos if pos is not None or orient is None else (),
+    choice = _graph.TaskChoice(body=task_body, point=point, position=pos if pos is not None or orient is None else (),
                         orientation=orient if orient is not None or pos is None else ())
-    text, notes = import_description(Path(src), fmt, sidecar=sidecar, actuated=_csv(actuated) or (),
+    text, notes = _importer.import_description(Path(src), fmt, sidecar=sidecar, actuated=_csv(actuated) or (),
                                      assemble=assemble, keyframe=keyframe, choice=choice)
     with atomic_file(out_path, inputs=inputs) as tmp:
         tmp.write_text(text, encoding="utf-8")

@@ -22,8 +22,26 @@ from ._groups import MACHINE_HELP, PATH_IN, FiniteFloat, cli, list_files, show
 from .control import MAX_CYCLES, machine_controllers
 
 if TYPE_CHECKING:
+    from .. import control as _control
+    from .. import multibody as _multibody
+    from ..identify import mechanism as _mechanism
     from ..jobs import run as run_job
-else:  # the engine and its kernels load when the command runs, not for --help
+    from ..multibody.analyses import stiffness as _stiffness
+    from ..multibody.dynamics import verbs as _verbs
+    from ..multibody.formats import mjcf_out as _mjcf_out
+    from ..multibody.formats import urdf_out as _urdf_out
+    from ..multibody.kinematics import inverse as _inverse
+    from ..multibody.model import legs as _legs
+else:  # loaded when a command runs, not on import (nor for --help)
+    _control = lazy_module("pkmdyn.control")
+    _mechanism = lazy_module("pkmdyn.identify.mechanism")
+    _multibody = lazy_module("pkmdyn.multibody")
+    _stiffness = lazy_module("pkmdyn.multibody.analyses.stiffness")
+    _verbs = lazy_module("pkmdyn.multibody.dynamics.verbs")
+    _mjcf_out = lazy_module("pkmdyn.multibody.formats.mjcf_out")
+    _urdf_out = lazy_module("pkmdyn.multibody.formats.urdf_out")
+    _inverse = lazy_module("pkmdyn.multibody.kinematics.inverse")
+    _legs = lazy_module("pkmdyn.multibody.model.legs")
     run_job = lazy_module("pkmdyn.jobs.run")
 
 
@@ -38,10 +56,8 @@ def _load(machine: str, limits: dict | None = None):
     """The compiled mechanism of ``--machine`` (a generated machine through the description its
     folder makes) and its registry entry (``None`` for a described one); ``limits`` (``--limit``)
     over the description's own for the plausibility of its numbers."""
-    from ..multibody import load_mechanism
-
     entry, path = resolve(machine)
-    return load_mechanism(path if entry is None else entry.description(), limits), entry
+    return _multibody.load_mechanism(path if entry is None else entry.description(), limits), entry
 
 
 def _check_differentiator(sg_window: int, sg_order: int) -> None:
@@ -55,8 +71,6 @@ def _check_differentiator(sg_window: int, sg_order: int) -> None:
 @click.option("--machine", required=True, help=MACHINE_HELP)
 def describe(machine: str) -> None:
     """Print the topology, mobility and over-constraints of a machine."""
-    from ..multibody.model.legs import LEG_PATTERNS
-
     model, _ = _load(machine)
     rep = model.topology
     counts = ", ".join(f"{c} {k}" for k, c in rep.joint_counts.items())
@@ -76,13 +90,11 @@ def describe(machine: str) -> None:
         f"task coordinates: {', '.join(f'{n} [{u}]' for n, u in zip(model.task_names, model.task_units))} "
         f"of body {model.body_names[model.task_body]}",
         f"explicit legs (closed form, {model.legs.count}): "
-        + (", ".join(f"{'-'.join(chain)} to {cut} ({LEG_PATTERNS[kind].split(' ')[0]}{_held(model, chain)})"
+        + (", ".join(f"{'-'.join(chain)} to {cut} ({_legs.LEG_PATTERNS[kind].split(' ')[0]}{_held(model, chain)})"
                      for cut, chain, kind in model.legs.names) or "none; Newton solves every loop")
         + (" (every block: Newton only checks)" if model.legs.count == model.solver_blocks.shape[0] - 1 else ""),
     ]
-    from ..multibody.analyses.stiffness import compliance_sources
-
-    src = compliance_sources(model)
+    src = _stiffness.compliance_sources(model)
     lines.append("compliance (pkmdyn stiffness): " + ("; ".join(f"{k} {', '.join(v)}" for k, v in src.items() if v)
                                                       or "none (every body, joint and drive rigid)"))
     if model.parameters:
@@ -96,9 +108,7 @@ def describe(machine: str) -> None:
 def _held(model, chain) -> str:
     """``, J spin held`` for the joints of an explicit leg's chain with a coordinate that an idle
     row of its own holds (an S-S rod's spin; docs/mechanism_format.md, "Explicit legs")."""
-    from ..multibody.model.legs import held_coordinates
-
-    held = held_coordinates(model)
+    held = _legs.held_coordinates(model)
     out = ""
     for j in chain:
         k = model.joint_index(j)
@@ -194,13 +204,10 @@ def described_control_settings(model) -> dict:
     seen by each actuator. Keys ending ``_si`` are in SI units of their coordinate."""
     import numpy as np
 
-    from ..multibody import reference_task
-    from ..multibody.dynamics.verbs import machine_verbs
-
     nt, na = model.nt, model.na
     wn, zeta = 2 * np.pi * 5.0, 0.7
-    verbs = machine_verbs(model)
-    x0 = reference_task(model)[None]
+    verbs = _verbs.machine_verbs(model)
+    x0 = _multibody.reference_task(model)[None]
     M = verbs.mass_matrix(model, x0)[0]
     B = verbs.actuator_map(model, x0)[0]  # J_ax^T K (nt, na): the motors' map, K the drives' ratios
     Ma = np.linalg.pinv(B) @ M @ np.linalg.pinv(B.T) if na else np.zeros((0, 0))
@@ -258,10 +265,6 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     task space on its own dynamics (pkmdyn.multibody.dynamics.verbs), the controller the same model."""
     import numpy as np
 
-    from ..control import gains, hermite_motion, loop_settings, overlay_settings
-    from ..multibody import default_motion, read_task_motion, solve_kinematics
-    from ..multibody.dynamics.verbs import machine_verbs
-    from ..multibody.kinematics.inverse import limit_message, limited_joints
     from .control import _check_encoder, _Setup, _stream, check_loop, control_command
 
     entry, path = resolve(machine)
@@ -285,37 +288,37 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
     check_output_dir(out_dir, inputs)
     model, _ = _load(machine)
     if motion_path is not None:
-        motion = read_task_motion(model, Path(motion_path).absolute())
+        motion = _multibody.read_task_motion(model, Path(motion_path).absolute())
         what = str(motion_path)
     else:
-        motion = default_motion(model)
+        motion = _multibody.default_motion(model)
         what = "the default motion"
     span = float(motion.t[-1] - motion.t[0])
     duration_s = min(1.0, span) if duration_s is None else duration_s
     if not duration_s <= span:
         raise MotionError(f"--duration: {duration_s:g} s must be at most the motion's {span:g} s")
-    if limited_joints(model):  # the plant has no end stops: say where the reference leaves the joint limits
+    if _inverse.limited_joints(model):  # the plant has no end stops: say where the reference leaves the joint limits
         span_mask = motion.t <= motion.t[0] + duration_s
-        beyond = limit_message(model, solve_kinematics(model, motion.x[span_mask], motion.xd[span_mask],
+        beyond = _inverse.limit_message(model, _multibody.solve_kinematics(model, motion.x[span_mask], motion.xd[span_mask],
                                                        motion.xdd[span_mask], motion.t[span_mask]))
         if beyond is not None:
             click.echo(f"pkmdyn: warning: the reference motion leaves the joint limits: {beyond}", err=True)
-    settings = overlay_settings(described_control_settings(model), gains_path)
-    ls = loop_settings(settings)
+    settings = _control.overlay_settings(described_control_settings(model), gains_path)
+    ls = _control.loop_settings(settings)
     if np.any(model.drive_encoder > 0):  # a drive's own encoder, counts per motor turn, in motor radians
         ls = replace(ls, encoder_resolution=np.where(model.drive_encoder > 0, model.drive_encoder,
                                                      float(ls.encoder_resolution)))
     check_loop(ls, duration_s, gains_path)
-    verbs = machine_verbs(model)
+    verbs = _verbs.machine_verbs(model)
     load, column = _control_load(model, motion, what, verbs.ACTUATORS)
-    fn = hermite_motion(motion.t, motion.x, motion.xd, motion.xdd, load)
+    fn = _control.hermite_motion(motion.t, motion.x, motion.xd, motion.xdd, load)
     encoders = tuple((d, "encoder_counts_per_turn" if u == "rad" else "encoder_counts_per_m", u) if r > 0 else None
                      for d, r, u in zip(model.drive_name, model.drive_encoder, model.motor_units))
     setup = _Setup(model.name, verbs, model, model, fn, duration_s, load is not None, str(path),
                    "the controller's model", what, span_s=span, load_column=column, drive_encoders=encoders)
     _check_encoder(setup, ls, settings, gains_path)
     n = model.na if controller == "pid" else model.nt
-    _stream(setup, controller, gains(settings, controller, n), ls, settings, out_dir,
+    _stream(setup, controller, _control.gains(settings, controller, n), ls, settings, out_dir,
             not no_plots, gains_path, inputs, fmt)
 
 
@@ -359,14 +362,12 @@ def identify(machine: str, measured_path: Path, rank_tol: float, sg_window: int,
              out_dir: Path) -> None:
     """Identify a mechanism's inertial parameters and joint friction coefficients from measured
     actuator efforts: identification.json, efforts.csv (docs/identification.md)."""
-    from ..identify.mechanism import identify_mechanism
-
     entry, path = resolve(machine)
     inputs = {"--machine": path, "--measured": measured_path}
     check_output_dir(out_dir, inputs)
     model, _ = _load(machine)
     _check_differentiator(sg_window, sg_order)
-    rep = identify_mechanism(model, Path(measured_path).absolute(), out_dir, rank_tol, inputs=inputs,
+    rep = _mechanism.identify_mechanism(model, Path(measured_path).absolute(), out_dir, rank_tol, inputs=inputs,
                              sg_window=sg_window, sg_order=sg_order)
     list_files(rep["files"])
     worst = min((v for v in rep["explained_percent"].values() if v is not None), default=None)
@@ -408,8 +409,6 @@ def export(machine: str, fmt: str, solref: str | None, solimp: str | None, times
     """Write a described mechanism in another engine's format; the files are written only when
     the whole model can be written (a cut joint the format cannot express, a body without
     mass for MuJoCo: an error naming it)."""
-    from ..multibody.formats.mjcf_out import SOLIMP, SOLREF, massless_bodies, mechanism_mjcf
-    from ..multibody.formats.urdf_out import mechanism_urdf
 
     entry, path = resolve(machine)
     inputs = {"--machine": path}
@@ -419,9 +418,9 @@ def export(machine: str, fmt: str, solref: str | None, solimp: str | None, times
     model, _ = _load(machine)
     files = {out_path: ""}
     if fmt == "mjcf":
-        files[out_path] = mechanism_mjcf(model, 1e-3 if timestep_s is None else timestep_s, solref=_numbers(solref, 2, "--solref") or SOLREF,
-                                         solimp=_numbers(solimp, 5, "--solimp") or SOLIMP, massless_kg=massless_kg)
-        light = massless_bodies(model)
+        files[out_path] = _mjcf_out.mechanism_mjcf(model, 1e-3 if timestep_s is None else timestep_s, solref=_numbers(solref, 2, "--solref") or _mjcf_out.SOLREF,
+                                         solimp=_numbers(solimp, 5, "--solimp") or _mjcf_out.SOLIMP, massless_kg=massless_kg)
+        light = _mjcf_out.massless_bodies(model)
         if light:
             click.echo(f"note: bodies without mass given {massless_kg:g} kg: {', '.join(light)}", err=True)
     else:
@@ -429,7 +428,7 @@ def export(machine: str, fmt: str, solref: str | None, solimp: str | None, times
         if side_path == out_path:
             raise ParameterError("--out: a URDF file name not ending in .yaml (its sidecar is FILE.yaml)")
         check_output_file(side_path, inputs)
-        text, sidecar, notes = mechanism_urdf(model)
+        text, sidecar, notes = _urdf_out.mechanism_urdf(model)
         files = {out_path: text, side_path: dumps_yaml(sidecar)}
         for line in notes:
             click.echo(f"note: {line}", err=True)

@@ -3,10 +3,17 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
+from .._lazy import lazy_module
 from ._groups import PATH_IN, list_files, params_command, pdm
+
+if TYPE_CHECKING:
+    from ..machines.pdm4 import run as _run
+else:  # loaded when a command runs, not on import (nor for --help)
+    _run = lazy_module("pkmdyn.machines.pdm4.run")
 
 
 @pdm.command("run")
@@ -35,11 +42,9 @@ def pdm_run(params_path: Path | None, motion_path: Path | None, stroke_x_m: floa
             period_s: float | None, peak_y_accel: float | None, limits: tuple[str, ...], no_plots: bool,
             out_dir: Path) -> None:
     """Kinematics, Newton-Euler dynamics and unique joint reactions, mobility, workspace and plots of the PDM."""
-    from ..machines.pdm4.run import run_pdm
-
     trajectory = {"stroke_x_m": stroke_x_m, "stroke_y_m": stroke_y_m, "stroke_alpha_deg": stroke_alpha_deg,
                   "stroke_gamma_deg": stroke_gamma_deg, "period_s": period_s, "peak_y_accel_m_s2": peak_y_accel}
-    run_pdm(params_path, motion_path, out_dir, plots=not no_plots, trajectory=trajectory, report=list_files,
+    _run.run_pdm(params_path, motion_path, out_dir, plots=not no_plots, trajectory=trajectory, report=list_files,
             limits=tuple(limits))
 
 

@@ -9,11 +9,20 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
+from .._lazy import lazy_module
 from ..machines.registry import sweep_adapter
 from ._groups import PATH_IN, cli
+
+if TYPE_CHECKING:
+    from .. import params_util as _params_util
+    from .. import sweep as _sweep
+else:  # loaded when a command runs, not on import (nor for --help)
+    _params_util = lazy_module("pkmdyn.params_util")
+    _sweep = lazy_module("pkmdyn.sweep")
 
 #: a Dask scheduler address: an optional scheme of Dask's comms, a host, a port
 _ADDRESS = re.compile(r"^(?:(?P<scheme>[A-Za-z][A-Za-z0-9+.-]*)://)?"
@@ -61,17 +70,15 @@ _MACHINE_HELP = ("Machine to sweep: a built-in machine (see pkmdyn machines) or 
 def sweep(machine: str, space_path: Path, params_path: Path | None, workers: int | None, scheduler: str | None,
           batch_size: int | None, limits: tuple[str, ...], search: str | None, no_plots: bool, out_dir: Path) -> None:
     """Evaluate many designs of a machine; write designs.parquet, the Pareto set, the best design, plots."""
-    from ..params_util import parse_limit_options
-    from ..sweep import run_sweep
 
     if workers is not None and scheduler is not None:
         raise click.UsageError("--workers and --scheduler: give one of them (a scheduler has its own workers)")
     if scheduler is not None:
         check_scheduler(scheduler)
-    max_designs = parse_limit_options(limits, {"max_designs": int}).get("max_designs")
+    max_designs = _params_util.parse_limit_options(limits, {"max_designs": int}).get("max_designs")
     adapter = sweep_adapter(machine)
     try:
-        report = run_sweep(adapter, space_path, out_dir, workers=workers, scheduler=scheduler, params=params_path,
+        report = _sweep.run_sweep(adapter, space_path, out_dir, workers=workers, scheduler=scheduler, params=params_path,
                            batch_size=batch_size, max_designs=max_designs, plots=not no_plots, search=search)
     except KeyboardInterrupt:
         # not the generic line of a single run: a sweep's folder keeps what it finished

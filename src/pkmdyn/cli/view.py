@@ -3,13 +3,22 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
+from .._lazy import lazy_module
 from ..io import check_output_file
 from ..machines.registry import resolve
 from ..report import scene_from_joints, topology_from_model, write_view
 from ._groups import PATH_IN, cli, echo
+
+if TYPE_CHECKING:
+    from .. import multibody as _multibody
+    from ..multibody import columns as _columns
+else:  # loaded when a command runs, not on import (nor for --help)
+    _multibody = lazy_module("pkmdyn.multibody")
+    _columns = lazy_module("pkmdyn.multibody.columns")
 
 
 def _listing(path: Path) -> None:
@@ -23,13 +32,10 @@ def _described_page(path: Path | None, out: Path, description: dict | None = Non
     joint points, the topology from its model document, mobility and over-constraints by rank."""
     import numpy as np
 
-    from ..multibody import load_mechanism, reference_task, solve_kinematics
-    from ..multibody.columns import model_summary
-
-    model = load_mechanism(path if description is None else description)
-    x = reference_task(model)[None]
-    kin = solve_kinematics(model, x, np.zeros_like(x), np.zeros_like(x), np.zeros(1))
-    doc = model_summary(model)
+    model = _multibody.load_mechanism(path if description is None else description)
+    x = _multibody.reference_task(model)[None]
+    kin = _multibody.solve_kinematics(model, x, np.zeros_like(x), np.zeros_like(x), np.zeros(1))
+    doc = _columns.model_summary(model)
     joints = [(j["name"], j["type"], j["body_a"], j["body_b"]) for j in doc["joints"]]
     zero = np.zeros(1)
     actuated = {j["name"]: (zero, f"{j['name']} (actuated)", "-") for j in doc["joints"] if j.get("actuated")}

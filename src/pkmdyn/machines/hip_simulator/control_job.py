@@ -17,15 +17,33 @@ from __future__ import annotations
 import copy
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..._lazy import lazy_module
 from ...control_protocol import BuiltinMotion, JointColumn, MotionTable
 from ...errors import MotionError
 from ...profiles.iso14242 import angle_wave, iso_load
 from ...profiles.orientation import read_motion_csv
 from ...report import TimePlot
+
+if TYPE_CHECKING:
+    from ... import multibody as _multibody
+    from ... import params_util as _params_util
+    from ...multibody import scene as _scene
+    from ...multibody.dynamics import verbs as _verbs
+    from . import description as _description
+    from . import paper as _paper
+    from . import params as _params
+else:  # loaded when a command runs, not on import (nor for --help)
+    _description = lazy_module("pkmdyn.machines.hip_simulator.description")
+    _paper = lazy_module("pkmdyn.machines.hip_simulator.paper")
+    _params = lazy_module("pkmdyn.machines.hip_simulator.params")
+    _multibody = lazy_module("pkmdyn.multibody")
+    _verbs = lazy_module("pkmdyn.multibody.dynamics.verbs")
+    _scene = lazy_module("pkmdyn.multibody.scene")
+    _params_util = lazy_module("pkmdyn.params_util")
 
 NAME = "hip"
 CONTROLLERS = ("pd", "augmented-pd", "feedforward", "computed-torque")
@@ -45,45 +63,32 @@ ACTUATORS = ("tau1_Nm", "tau2_Nm", "tau3_Nm")
 
 def control_model(params: Any) -> Any:
     """The control model of the parameters ``params`` (their description compiled)."""
-    from ...multibody import load_mechanism
-    from ...multibody.dynamics.verbs import GeneratedModel
-    from .description import hip_description
 
-    return GeneratedModel(params, load_mechanism(hip_description(params)))
+    return _verbs.GeneratedModel(params, _multibody.load_mechanism(_description.hip_description(params)))
 
 
 def verbs(model: Any) -> Any:
-    from ...multibody.dynamics.verbs import RenamedVerbs
-
-    return RenamedVerbs(model.mechanism, COORDINATES, ACTUATORS)
+    return _verbs.RenamedVerbs(model.mechanism, COORDINATES, ACTUATORS)
 
 
 def read_description(params: Path | None) -> tuple[dict[str, Any], str]:
-    from ...params_util import read_toml
-    from .params import default_params_dict
 
     if params is None:
-        return default_params_dict(), "built-in parameters"
-    return read_toml(params), str(params)
+        return _params.default_params_dict(), "built-in parameters"
+    return _params_util.read_toml(params), str(params)
 
 
 def model_from_dict(description: dict[str, Any], source: str) -> Any:
-    from .params import model_from_dict as from_dict
-
-    return control_model(from_dict(copy.deepcopy(description), source))
+    return control_model(_params.model_from_dict(copy.deepcopy(description), source))
 
 
 def load_params(path: Path) -> Any:
-    from .params import load_params as load
-
-    return control_model(load(path))
+    return control_model(_params.load_params(path))
 
 
 def builtin_motion(model: Any, cycles: float) -> BuiltinMotion:
     """``cycles`` ISO 14242-1 cycles of the model's cycle model, with the hydraulic load."""
-    from .paper import iso_cycle_preset
-
-    cyc = iso_cycle_preset(model.params.motion_model)
+    cyc = _paper.iso_cycle_preset(model.params.motion_model)
 
     def fn(t: np.ndarray) -> tuple:
         w = [angle_wave(t, cyc.period_s, x) for x in (cyc.fe, cyc.aa, cyc.ier)]
@@ -146,13 +151,9 @@ def report_plots(curve: Callable[[str, int, str], Any], t: np.ndarray, note: str
 def scene(model: Any, t: np.ndarray, q: np.ndarray, u: np.ndarray) -> Any:
     """The engine's scene of the description along the plant's angles ``q``, each slider's
     chain coloured by its motor's torque ``u``."""
-    from ...multibody.scene import motion_scene
-
-    return motion_scene(model.mechanism, t, q, u, tuple(effort_label(a) for a in range(3)))
+    return _scene.motion_scene(model.mechanism, t, q, u, tuple(effort_label(a) for a in range(3)))
 
 
 def parameters_text(params: str | None) -> str:
     """The parameter file's text (the built-in file when None), headed by where it came from."""
-    from .paper import parameters_text as text
-
-    return text(params)
+    return _paper.parameters_text(params)

@@ -14,14 +14,32 @@ from __future__ import annotations
 import copy
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..._lazy import lazy_module
 from ...control_protocol import BuiltinMotion, JointColumn, MotionTable
 from ...profiles.cycloidal import cycloidal
 from ...profiles.pdm_motion import read_pdm_motion
 from ...report import TimePlot
+
+if TYPE_CHECKING:
+    from ... import multibody as _multibody
+    from ... import params_util as _params_util
+    from ...multibody.dynamics import verbs as _verbs
+    from . import description as _description
+    from . import params as _params
+    from . import report as _report
+    from . import scene as _scene
+else:  # loaded when a command runs, not on import (nor for --help)
+    _description = lazy_module("pkmdyn.machines.pdm4.description")
+    _params = lazy_module("pkmdyn.machines.pdm4.params")
+    _report = lazy_module("pkmdyn.machines.pdm4.report")
+    _scene = lazy_module("pkmdyn.machines.pdm4.scene")
+    _multibody = lazy_module("pkmdyn.multibody")
+    _verbs = lazy_module("pkmdyn.multibody.dynamics.verbs")
+    _params_util = lazy_module("pkmdyn.params_util")
 
 NAME = "pdm"
 CONTROLLERS = ("pid", "feedforward", "computed-torque")
@@ -41,37 +59,26 @@ ACTUATORS = ("f1_N", "f2_N", "f3_N", "f4_N")
 
 
 def control_model(params: Any) -> Any:
-    from ...multibody import load_mechanism
-    from ...multibody.dynamics.verbs import GeneratedModel
-    from .description import pdm_description
 
-    return GeneratedModel(params, load_mechanism(pdm_description(params)))
+    return _verbs.GeneratedModel(params, _multibody.load_mechanism(_description.pdm_description(params)))
 
 
 def verbs(model: Any) -> Any:
-    from ...multibody.dynamics.verbs import RenamedVerbs
-
-    return RenamedVerbs(model.mechanism, COORDINATES, ACTUATORS)
+    return _verbs.RenamedVerbs(model.mechanism, COORDINATES, ACTUATORS)
 
 
 def read_description(params: Path | None) -> tuple[dict[str, Any], str]:
-    from ...params_util import read_toml
-    from .params import default_params_path
 
-    source = (default_params_path() if params is None else Path(params)).absolute()
-    return read_toml(source), str(source)
+    source = (_params.default_params_path() if params is None else Path(params)).absolute()
+    return _params_util.read_toml(source), str(source)
 
 
 def model_from_dict(description: dict[str, Any], source: str) -> Any:
-    from .params import params_from_dict
-
-    return control_model(params_from_dict(copy.deepcopy(description), source))
+    return control_model(_params.params_from_dict(copy.deepcopy(description), source))
 
 
 def load_params(path: Path) -> Any:
-    from .params import load_params as load
-
-    return control_model(load(path))
+    return control_model(_params.load_params(path))
 
 
 def builtin_motion(model: Any, cycles: float) -> BuiltinMotion:
@@ -156,12 +163,8 @@ def report_plots(curve: Callable[[str, int, str], Any], t: np.ndarray, note: str
 
 
 def scene(model: Any, t: np.ndarray, q: np.ndarray, u: np.ndarray) -> Any:
-    from .scene import pdm_scene_from_pose
-
-    return pdm_scene_from_pose(model.params, t, q, u)
+    return _scene.pdm_scene_from_pose(model.params, t, q, u)
 
 
 def parameters_text(params: str | None) -> str:
-    from .report import parameters_text as text
-
-    return text(params)
+    return _report.parameters_text(params)
