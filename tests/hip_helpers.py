@@ -148,10 +148,10 @@ def engine_torques(model: HipModel, q, qd, qdd, load, t=None, friction: bool = T
     """The engine's motor torques and their parts along a motion, with the oracle's names
     (``tau, platform, lever, slider, screw, friction, hip_friction, power``, ``(n, 3)`` per
     module i, ``power (n,)``), from the joint reactions with the effort split
-    (:func:`pkmdyn.multibody.dynamics.inverse.joint_reactions`) and the drives' motor efforts
+    (:func:`pkmdyn.multibody.dynamics.newton_euler.joint_reactions`) and the drives' motor efforts
     (:func:`pkmdyn.multibody.dynamics.actuators.motor_efforts`); ``kin`` and the reactions ``r`` too."""
     from pkmdyn.multibody.dynamics.actuators import motor_efforts
-    from pkmdyn.multibody.dynamics.inverse import joint_reactions
+    from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
 
     m, kin = engine_kinematics(model, q, qd, qdd, t)
     r = joint_reactions(m, kin, named={"hydraulic_N": np.asarray(load, dtype=float)}, split=True, friction=friction)

@@ -30,7 +30,7 @@ import pytest
 import multibody_examples as ex
 from oracles import bennett, delta, rrr3, stewart
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.dynamics.inverse import energies
+from pkmdyn.multibody.dynamics.newton_euler import energies
 from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
 

@@ -17,7 +17,7 @@ from pkmdyn.errors import LimitError, ParameterError
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
 from pkmdyn.multibody.kinematics.inverse import TOLERANCE
 from pkmdyn.multibody.dynamics.actuators import motor_efforts, rotor_energy
-from pkmdyn.multibody.dynamics.inverse import joint_reactions
+from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
 
 DRIVE = {"joint": "P", "name": "M", "screw_lead_m": 0.005, "gear_ratio": 2.0, "rotor_inertia_kgm2": 3e-5,
          "coulomb_torque_Nm": 0.04, "viscous_Nm_s_rad": 2e-4}
@@ -118,7 +118,7 @@ def test_verbs_with_drives_are_the_motor_side_equations():
     """The machine verbs take motor efforts: forward(inverse) = identity; x_dot^T M x_dot / 2 is
     the bodies' and the rotors' kinetic energy; B = J_ax^T k; the single-sample path agrees
     with the batched verbs; the inverse verb equals the motor efforts of joint_reactions."""
-    from pkmdyn.multibody.dynamics.inverse import energies
+    from pkmdyn.multibody.dynamics.newton_euler import energies
     from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
     m = load_mechanism(_stewart_with_drives())
@@ -259,7 +259,7 @@ def test_idle_freedoms_are_held_and_their_holding_force_balances_the_rods():
     its rule, its acceleration the exact derivative of its rate (the same as solving the held
     motion), the reactions balance every body with the holding force in the rods' own joints,
     which is small (the rods' spin inertia) and reported."""
-    from pkmdyn.multibody.dynamics.inverse import idle_holding
+    from pkmdyn.multibody.dynamics.newton_euler import idle_holding
 
     m = load_mechanism(ex.builtin_dict("delta"))
     assert m.topology.idle == 6
@@ -558,7 +558,7 @@ def test_an_actuator_singularity_names_its_sample_of_the_whole_run(monkeypatch):
     """The actuator map's singularity message gives the sample's number in the whole run (here
     every sample made singular by raising the threshold)."""
     from pkmdyn.errors import SingularityError
-    from pkmdyn.multibody.dynamics import inverse as dynamics
+    from pkmdyn.multibody.dynamics import newton_euler as dynamics
 
     m = load_mechanism(ex.builtin_dict("rrr3"))
     t, x, xd, xdd = _motion(m, n=5)

@@ -15,7 +15,7 @@ import multibody_examples as ex
 from pkmdyn.cli import main
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
 from pkmdyn.multibody.dynamics.actuators import motor_efforts
-from pkmdyn.multibody.dynamics.inverse import joint_reactions
+from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
 from pkmdyn.multibody.analyses.regressor import regressor
 
 TRUE = {"rotor_inertia_kgm2": 3e-5, "coulomb_torque_Nm": 0.04, "viscous_Nm_s_rad": 2e-4}

@@ -46,7 +46,7 @@ def test_run_default_writes_everything(tmp_path, capsys):
     from pkmdyn.machines.hip_simulator.description import hip_description
     from pkmdyn.multibody import load_mechanism, solve_kinematics
     from pkmdyn.multibody.dynamics.actuators import motor_efforts
-    from pkmdyn.multibody.dynamics.inverse import joint_reactions
+    from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
     from pkmdyn.profiles.iso14242 import iso14242_motion
 
     motion = iso14242_motion(cycles=1, samples_per_cycle=200)

@@ -22,7 +22,7 @@ from pkmdyn.errors import ParameterError
 from pkmdyn.io import dumps_yaml
 from pkmdyn.multibody import default_motion, load_mechanism, solve_kinematics
 from pkmdyn.multibody.kinematics.direct import direct_kinematics
-from pkmdyn.multibody.dynamics.inverse import joint_reactions
+from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
 from pkmdyn.multibody.formats.importer import import_description
 from pkmdyn.multibody.formats.mjcf_out import mechanism_mjcf, mujoco_order, mujoco_qpos
 from pkmdyn.multibody.formats.urdf_out import mechanism_urdf

@@ -1,5 +1,5 @@
 """``pkmdyn identify --machine``: a mechanism's inertial parameters and joint friction from
-measured efforts (``pkmdyn.identify.mechanism``)."""
+measured efforts (``pkmdyn.identify.described``, ``pkmdyn.jobs.identify``)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import tomlkit
 import multibody_examples as ex
 from pkmdyn.cli import main
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.dynamics.inverse import joint_reactions
+from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
 from pkmdyn.multibody.analyses.regressor import regressor
 
 AMP = np.array([0.04, 0.04, 0.04, 0.12, 0.12, 0.12])

@@ -12,7 +12,7 @@ import pytest
 import multibody_examples as ex
 from pkmdyn.errors import ParameterError, SingularityError
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.dynamics.inverse import energies, inverse_dynamics, joint_reactions
+from pkmdyn.multibody.dynamics.newton_euler import energies, inverse_dynamics, joint_reactions
 
 RIGID = {
     "delta": lambda: ex.builtin_dict("delta"),
@@ -481,7 +481,7 @@ def test_friction_power_balance_and_reactions():
 def test_load_dependent_friction_uses_the_joints_own_reaction():
     """Recompute the pin and ball friction torques from the converged reactions (law F1)."""
     from pkmdyn.multibody.dynamics.friction import regularised_sign
-    from pkmdyn.multibody.dynamics.inverse import coordinate_twists, free_twists
+    from pkmdyn.multibody.dynamics.newton_euler import coordinate_twists, free_twists
     from pkmdyn.multibody.dynamics.friction import EPS_ROTATION
 
     m, kin = _kin(_stewart_with_friction(0.3))
@@ -613,7 +613,7 @@ def test_compliance_in_cut_unknowns_equals_the_dense_equations(name):
 
 @pytest.mark.parametrize("name", sorted(ALL))
 def test_twists_from_the_solved_poses_equal_those_from_q(name):
-    from pkmdyn.multibody.dynamics.inverse import coordinate_twists
+    from pkmdyn.multibody.dynamics.newton_euler import coordinate_twists
 
     m, kin = _kin(ALL[name](), n=10)
     assert np.abs(coordinate_twists(m, kin.q, kin) - coordinate_twists(m, kin.q)).max() < 1e-13
@@ -673,7 +673,7 @@ def test_cut_route_solves_a_sample_with_dependent_columns_by_least_squares():
     """Where the cut joints' columns become dependent at one sample, the cut route still returns
     wrenches that satisfy that sample's equations (least squares, not a failed factorisation),
     and the other samples are untouched."""
-    from pkmdyn.multibody.dynamics.inverse import _cut_solve, _CutRoute, coordinate_twists, cut_table
+    from pkmdyn.multibody.dynamics.newton_euler import _cut_solve, _CutRoute, coordinate_twists, cut_table
 
     m, kin = _kin(ex.builtin_dict("stewart"), n=5)
     S = coordinate_twists(m, kin.q, kin)

@@ -8,8 +8,8 @@ import pytest
 
 import multibody_examples as ex
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.dynamics.inverse import fr_any, joint_reactions
-from pkmdyn.multibody.dynamics.inverse import inverse_dynamics as _inverse_dynamics
+from pkmdyn.multibody.dynamics.newton_euler import fr_any, joint_reactions
+from pkmdyn.multibody.dynamics.newton_euler import inverse_dynamics as _inverse_dynamics
 
 
 def inverse_dynamics(m, kin):

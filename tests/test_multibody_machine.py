@@ -11,7 +11,7 @@ import pytest
 import multibody_examples as ex
 from pkmdyn.errors import ParameterError
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.dynamics.inverse import energies, joint_reactions
+from pkmdyn.multibody.dynamics.newton_euler import energies, joint_reactions
 from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
 

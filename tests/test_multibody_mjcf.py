@@ -9,7 +9,7 @@ import pytest
 import multibody_examples as ex
 from pkmdyn.errors import ParameterError
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.dynamics.inverse import inverse_dynamics
+from pkmdyn.multibody.dynamics.newton_euler import inverse_dynamics
 from pkmdyn.multibody.formats.mjcf_out import mechanism_mjcf, mujoco_order, mujoco_qpos
 
 mujoco = pytest.importorskip("mujoco")
@@ -93,7 +93,7 @@ def test_drives_export_as_gear_armature_and_damping_and_give_the_motor_torques()
     k^2 b; MuJoCo's tree forces (M qacc + bias - passive, its armature and damping included)
     projected through the loop closure give the motor torques pkmdyn computes (Eq. A1)."""
     from pkmdyn.multibody.dynamics.actuators import motor_efforts
-    from pkmdyn.multibody.dynamics.inverse import joint_reactions
+    from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
 
     d = ex.builtin_dict("stewart")
     for leg in d["legs"]:

@@ -14,7 +14,7 @@ import multibody_examples as ex
 from pkmdyn.cli import main
 from pkmdyn.errors import ParameterError
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.dynamics.inverse import joint_reactions, load_forces
+from pkmdyn.multibody.dynamics.newton_euler import joint_reactions, load_forces
 from pkmdyn.multibody.dynamics.friction import EPS_ROTATION, EPS_TRANSLATION
 from pkmdyn.multibody.description.joint_types import type_code
 from pkmdyn.multibody.dynamics.verbs import machine_verbs
@@ -244,7 +244,7 @@ def test_inverse_dynamics_includes_the_friction():
     """Efforts from inverse_dynamics (friction of known magnitude added to the tree forces)
     equal those of the reaction solver, which balances every joint with its friction; without
     friction they differ."""
-    from pkmdyn.multibody.dynamics.inverse import inverse_dynamics
+    from pkmdyn.multibody.dynamics.newton_euler import inverse_dynamics
 
     d = _stewart(0.08, 0.05, 20.0)
     for leg in d["legs"]:
@@ -293,7 +293,7 @@ def test_friction_of_a_joint_that_turns_and_slides():
     """A cylindrical joint's Coulomb torque and force (laws F1 and F2 together): its dissipation
     is 0.3 |w|^2 / sqrt(|w|^2 + eps^2) + 2 |v|^2 / sqrt(|v|^2 + eps_t^2) from its relative
     rates, and the efforts of inverse_dynamics carry it (power balance)."""
-    from pkmdyn.multibody.dynamics.inverse import coordinate_twists, free_blocks, inverse_dynamics
+    from pkmdyn.multibody.dynamics.newton_euler import coordinate_twists, free_blocks, inverse_dynamics
     from pkmdyn.multibody.dynamics.friction import JointFriction
 
     d = ex.slider_crank("cylindrical")

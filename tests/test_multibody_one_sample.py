@@ -169,7 +169,7 @@ def test_compiled_friction_equals_the_joint_by_joint_route(name):
     of inverse_dynamics equal those of the reaction solver (which balances each joint's
     friction along its free twists)."""
     from pkmdyn.multibody import solve_kinematics
-    from pkmdyn.multibody.dynamics.inverse import coordinate_twists, free_blocks, inverse_dynamics, joint_reactions
+    from pkmdyn.multibody.dynamics.newton_euler import coordinate_twists, free_blocks, inverse_dynamics, joint_reactions
     from pkmdyn.multibody.dynamics.friction import JointFriction, known_friction
 
     m = load_mechanism(_every_joint_with_friction(FRICTION_CASES[name]()))

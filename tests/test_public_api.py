@@ -71,3 +71,55 @@ def test_importing_pkmdyn_loads_no_engine():
     code = "import sys, pkmdyn; print(int('numba' in sys.modules), int('scipy' in sys.modules), len(pkmdyn.__all__))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     assert out[:2] == ["0", "0"] and int(out[2]) > 10
+
+
+def test_the_workspace_verb_is_the_commands(example, tmp_path, capsys):
+    """``pkmdyn.workspace`` on a grid gives what ``pkmdyn workspace`` writes for the same grid, and
+    every inside pose is reached with its singularity measure at least the threshold."""
+    ws = example["workspace"]
+    grid = "x_m=-0.2:0.2:9,y_m=-0.2:0.2:9"
+    assert main(["workspace", "--machine", "stewart", "--grid", grid, "--out", str(tmp_path / "ws")]) == 0
+    capsys.readouterr()
+    with open(tmp_path / "ws" / "workspace.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == len(ws.x)
+    np.testing.assert_array_equal([float(r["inside"]) for r in rows], ws.inside.astype(float))
+    np.testing.assert_allclose([float(r["x_m"]) for r in rows], ws.x[:, 0], rtol=0, atol=1e-15)
+    assert np.all(ws.reached[ws.inside]) and np.all(ws.measure[ws.inside] >= ws.threshold)
+    far = pkmdyn.workspace(example["model"], "x_m=-3:3:5", pose="z_m=0.6")
+    assert not far.inside.all() and far.inside[2] == far.inside.any()  # the grid's middle, if any pose
+
+
+def test_identification_recovers_a_changed_machine(tmp_path):
+    """Efforts of a machine whose platform is 30 % heavier, fitted from the original description:
+    the identified efforts are the changed machine's (the efforts are linear in the parameters),
+    and the platform's mass moves from the description's value towards the changed one."""
+    from pkmdyn.machines.registry import description_path
+    from pkmdyn.params_util import read_toml
+
+    d = read_toml(description_path("stewart"))
+    m0 = pkmdyn.load(d)
+    body = m0.body_names[m0.task_body]
+    heavy = dict(d, bodies=[dict(b, mass_kg=b["mass_kg"] * 1.3) if b["name"] == body else b for b in d["bodies"]])
+    m1 = pkmdyn.load(heavy)
+    kin0, kin1 = pkmdyn.kinematics(m0), pkmdyn.kinematics(m1)
+    u = pkmdyn.dynamics(m1, kin1).motors.effort
+    fit = pkmdyn.identification(m0, kin0, u)
+    assert np.abs(fit.u_identified - u).max() < 1e-8 * np.abs(u).max()
+    assert np.abs(pkmdyn.dynamics(m0, kin0).motors.effort - u).max() > 1e-3 * np.abs(u).max()  # a change that shows
+    k = fit.names.index(f"{body}_m_kg")
+    assert fit.estimate.theta[k] != pytest.approx(fit.prior[k], rel=1e-6)
+    with pytest.raises(pkmdyn.ParameterError, match="u: expected efforts of shape"):
+        pkmdyn.identification(m0, kin0, u[:, :-1])
+
+
+def test_the_readmes_library_section_runs_as_written():
+    """Every ``python`` block of the README's "Library" section, run as it stands."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = text.split("\n## Library\n", 1)[1].split("\n## ", 1)[0]
+    blocks = section.split("```python\n")[1:]
+    assert blocks, "the README's Library section has no python block"
+    for block in blocks:
+        scope: dict = {}
+        exec(compile(block.split("```", 1)[0], "README.md", "exec"), scope)  # noqa: S102
+        assert scope["m"].name == "stewart" and np.abs(scope["xdd"] - scope["kin"].xdd).max() < 1e-8

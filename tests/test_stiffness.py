@@ -18,7 +18,7 @@ from oracles import stewart
 from oracles.frame_fe import Frame
 from pkmdyn.multibody import load_mechanism, solve_kinematics
 from pkmdyn.multibody.dynamics.verbs import machine_verbs
-from pkmdyn.multibody.dynamics.inverse import joint_reactions
+from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
 from pkmdyn.multibody.description.schema import load_description
 from pkmdyn.multibody.kinematics.inverse import reference_task
 from pkmdyn.multibody.model.compiler import compile_model

@@ -84,7 +84,7 @@ def test_a_design_is_the_engine_on_its_generated_description(seed):
     from pkmdyn.machines.hip_simulator.params import model_from_dict
     from pkmdyn.multibody import load_mechanism, solve_kinematics
     from pkmdyn.multibody.dynamics.actuators import motor_efforts
-    from pkmdyn.multibody.dynamics.inverse import joint_reactions
+    from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
     from pkmdyn.sweep_protocol import time_integral
 
     ad = sweep_adapter("hip")

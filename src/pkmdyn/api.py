@@ -11,8 +11,10 @@
 Each verb returns the engine's frozen result (shapes and units in its docstring): the
 kinematics of every body and joint (:class:`pkmdyn.multibody.MechanismKinematics`), the
 dynamics (:class:`Dynamics`), the direct kinematics and assembly modes
-(:mod:`pkmdyn.multibody.kinematics.direct`), the stiffness (:mod:`pkmdyn.multibody.analyses.stiffness`) and a
-spherical joint's slide tracks (:mod:`pkmdyn.multibody.analyses.wear`). The engine writes no files;
+(:mod:`pkmdyn.multibody.kinematics.direct`), the stiffness (:mod:`pkmdyn.multibody.analyses.stiffness`), a
+spherical joint's slide tracks (:mod:`pkmdyn.multibody.analyses.wear`), the workspace on a grid
+(:mod:`pkmdyn.multibody.analyses.workspace`) and the identification of the inertial and friction
+parameters from efforts (:mod:`pkmdyn.identify.described`). The engine writes no files;
 the commands (``pkmdyn run``, ...) are these verbs plus their files.
 """
 
@@ -27,20 +29,25 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import ParameterError
+from .identify._base import DEFAULT_RANK_TOL
+from .identify.described import effort_columns as measured_columns
+from .identify.described import fit_described
 from .machines.registry import resolve
 from .multibody import default_motion as motion
 from .multibody import load_mechanism, solve_kinematics
 from .multibody.analyses.stiffness import stiffness as k
+from .multibody.analyses.task_grid import parse_grid, parse_pose, parse_ranges
+from .multibody.analyses.workspace import workspace as reach
 from .multibody.analyses.wear import WearOptions, joint_wear
 from .multibody.columns import effort_columns
 from .multibody.dynamics.actuators import motor_efforts
-from .multibody.dynamics.inverse import joint_reactions
+from .multibody.dynamics.newton_euler import joint_reactions
 from .multibody.dynamics.verbs import machine_verbs
 from .multibody.kinematics.direct import assembly_modes as modes
 from .multibody.kinematics.direct import direct_kinematics as direct
 
 __all__ = ["load", "default_motion", "kinematics", "Dynamics", "dynamics", "forward_dynamics", "direct_kinematics",
-           "assembly_modes", "stiffness", "wear"]
+           "assembly_modes", "stiffness", "wear", "workspace", "identification"]
 
 Array = NDArray[np.float64]
 
@@ -77,7 +84,7 @@ def kinematics(model: Any, motion: Any = None) -> Any:
 
 @dataclass(frozen=True)
 class Dynamics:
-    """The inverse dynamics along a motion: ``reactions`` (:class:`pkmdyn.multibody.dynamics.inverse.JointReactions`:
+    """The inverse dynamics along a motion: ``reactions`` (:class:`pkmdyn.multibody.dynamics.newton_euler.JointReactions`:
     actuator efforts ``u (n, na)``, every joint's force ``(n, nj, 3)`` [N] and moment [N m],
     the friction, the effort split), ``motors`` (:class:`pkmdyn.multibody.dynamics.actuators.MotorEfforts`:
     each drive's motor effort and its parts ``(n, na)``), and the kinematics and named loads
@@ -139,3 +146,35 @@ def wear(model: Any, kin: Any, joint: str, radius_m: float | None = None, load: 
     ``ball_radius_m``); ``load``: a named load's name pressing the head (default the joint's
     own reaction), its magnitudes in ``loads``."""
     return joint_wear(model, kin, joint, WearOptions(radius_m=radius_m, load=load), dict(loads or {}))
+
+
+def workspace(model: Any, grid: str, pose: str = "", threshold: float = 1e-3, orientation_range: str | None = None,
+              refine: int = 0) -> Any:
+    """The reachable workspace (:class:`pkmdyn.multibody.analyses.workspace.Workspace`: every grid
+    pose ``x (N, nt)``, ``reached``, ``inside (N,)``, the least singularity measure, the size
+    with its error in ``unit``, the inscribed cube and cylinder) on ``grid``, written as
+    ``pkmdyn workspace --grid`` takes it (``"x_m=-0.1:0.1:21,y_m=-0.1:0.1:21"``, up to three task
+    coordinates), the others held at ``pose`` (``"z_m=0.5,..."``; default the reference pose)
+    or over ``orientation_range`` (the same syntax); inside where every singularity measure is
+    at least ``threshold``; ``refine``: steps along each boundary edge for the size
+    (``docs/workspace.md``)."""
+    axes = parse_grid(model, grid, max_axes=3)
+    ranges = None if orientation_range is None else parse_ranges(model, orientation_range)
+    return reach(model, axes, parse_pose(model, pose), threshold, None, ranges, refine=refine)
+
+
+def identification(model: Any, kin: Any, u: Array, loads: Mapping[str, Array] | None = None,
+             rank_tol: float = DEFAULT_RANK_TOL) -> Any:
+    """Every body's inertial parameters and every joint's friction coefficients fitted to the
+    efforts ``u (n, na)`` measured along ``kin``, one column per actuator in the order and unit
+    :func:`pkmdyn.identify.described.effort_columns` names (a drive's motor effort, else the
+    actuated joint's effort: what ``Dynamics.motors.effort`` holds); ``loads``: the
+    named loads' magnitudes ``{name: (n,)}``. Returns the
+    :class:`pkmdyn.identify._identify.Identification` (``names``, ``prior`` the description's
+    values, ``base`` what the motion determines, ``estimate.theta``, ``u_identified``,
+    ``residual_rms``; ``docs/identification.md``)."""
+    u = np.asarray(u, dtype=float)
+    if u.ndim != 2 or u.shape != (len(kin), model.na):
+        cols = ", ".join(measured_columns(model))
+        raise ParameterError(f"u: expected efforts of shape ({len(kin)}, {model.na}) ({cols}), got {u.shape}")
+    return fit_described(model, kin, u, dict(loads or {}) or None, rank_tol, source="u")

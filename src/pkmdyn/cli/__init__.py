@@ -17,7 +17,7 @@ from ..errors import PkmdynError
 from ..machines.registry import command_groups
 from . import compile as _compile_commands  # noqa: F401
 from . import control as _control_commands  # noqa: F401
-from . import direct as _direct_commands  # noqa: F401
+from . import assemble as _assemble_commands  # noqa: F401
 from . import imports as _import_commands  # noqa: F401
 from . import mechanism as _mechanism_commands  # noqa: F401
 from . import pdm as _pdm_commands  # noqa: F401  (registers the commands)

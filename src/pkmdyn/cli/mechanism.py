@@ -24,7 +24,7 @@ from .control import MAX_CYCLES, machine_controllers
 if TYPE_CHECKING:
     from .. import control as _control
     from .. import multibody as _multibody
-    from ..identify import mechanism as _mechanism
+    from ..jobs import identify as identify_job
     from ..jobs import run as run_job
     from ..multibody.analyses import stiffness as _stiffness
     from ..multibody.dynamics import verbs as _verbs
@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     from ..multibody.model import legs as _legs
 else:  # loaded when a command runs, not on import (nor for --help)
     _control = lazy_module("pkmdyn.control")
-    _mechanism = lazy_module("pkmdyn.identify.mechanism")
+    identify_job = lazy_module("pkmdyn.jobs.identify")
     _multibody = lazy_module("pkmdyn.multibody")
     _stiffness = lazy_module("pkmdyn.multibody.analyses.stiffness")
     _verbs = lazy_module("pkmdyn.multibody.dynamics.verbs")
@@ -362,17 +362,9 @@ def identify(machine: str, measured_path: Path, rank_tol: float, sg_window: int,
              out_dir: Path) -> None:
     """Identify a mechanism's inertial parameters and joint friction coefficients from measured
     actuator efforts: identification.json, efforts.csv (docs/identification.md)."""
-    entry, path = resolve(machine)
-    inputs = {"--machine": path, "--measured": measured_path}
-    check_output_dir(out_dir, inputs)
-    model, _ = _load(machine)
     _check_differentiator(sg_window, sg_order)
-    rep = _mechanism.identify_mechanism(model, Path(measured_path).absolute(), out_dir, rank_tol, inputs=inputs,
-                             sg_window=sg_window, sg_order=sg_order)
-    list_files(rep["files"])
-    worst = min((v for v in rep["explained_percent"].values() if v is not None), default=None)
-    click.echo(f"rank {rep['rank']} of {len(rep['parameters_asked'])} parameters; "
-               + (f"least explained actuator {worst:.4g} %" if worst is not None else "no effort explained"))
+    show(identify_job.job(machine, measured_path, out_dir, rank_tol=rank_tol, sg_window=sg_window, sg_order=sg_order,
+                          announce=list_files))
 
 
 def _numbers(text: str | None, n: int, flag: str) -> tuple[float, ...] | None:

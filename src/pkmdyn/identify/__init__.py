@@ -4,7 +4,7 @@ Machine-independent parts: the regressor of an affine effort map (:mod:`._regres
 parameters by a rank-revealing decomposition (:mod:`._base`), physically consistent
 constrained least squares with standard errors (:mod:`._solve`), bounded Fourier excitation
 (:mod:`._excite`) and the report (:mod:`._report`); described mechanisms are identified by
-:mod:`.mechanism` (their regressor is :func:`pkmdyn.multibody.analyses.regressor.regressor`), and a machine
+:mod:`.described` (their regressor is :func:`pkmdyn.multibody.analyses.regressor.regressor`), and a machine
 may name the result in its own parameters (its folder under :mod:`pkmdyn.machines`). See
 ``docs/identification.md``.
 """

@@ -3,7 +3,7 @@
 Each module's ``job(...)`` resolves the machine, checks ``--out`` against the output rule before
 anything is computed, calls the engine's free functions, writes its files through the one writer
 (:func:`._files.write`) and returns a :class:`JobResult`: ``run`` (``pkmdyn run``), ``stiffness``,
-``wear``, ``workspace``, ``assemble``. The commands print the result; the engine writes nothing."""
+``wear``, ``workspace``, ``assemble``, ``identify``. The commands print the result; the engine writes nothing."""
 
 from __future__ import annotations
 

@@ -6,7 +6,7 @@ or a :class:`~pkmdyn.multibody.kinematics.motion.PeriodicMotion` made as it goes
 the run: each chunk is solved (warm-started from the chunk before: its last sample is solved
 again as the chunk's first row, so that a chunked run follows the same solution as one
 solved whole), its rates checked against the plausibility limits
-(:mod:`pkmdyn.multibody.dynamics.actuators`), its efforts and reactions computed (:func:`pkmdyn.multibody.dynamics.inverse.joint_reactions`,
+(:mod:`pkmdyn.multibody.dynamics.actuators`), its efforts and reactions computed (:func:`pkmdyn.multibody.dynamics.newton_euler.joint_reactions`,
 load-dependent friction iterated per chunk, messages naming the sample of the whole run), its
 rows appended to ``results.csv`` (or ``.parquet``), and the summary's extremes kept on the fly.
 ``bodies.npz`` holds the first ``max_body_samples`` samples (every sample of a run up to that
@@ -39,7 +39,7 @@ from ..multibody.columns import (
 )
 from ..multibody.description.schema import LIMIT_KEYS
 from ..multibody.dynamics.actuators import check_actuator_rates, check_task_rates, effective_limits, motor_effort_column
-from ..multibody.dynamics.inverse import effort_unit, joint_reactions, load_forces
+from ..multibody.dynamics.newton_euler import effort_unit, joint_reactions, load_forces
 from ..multibody.dynamics.reactions import ComplianceDataMissing
 from ..multibody.kinematics.direct import task_motion
 from ..multibody.kinematics.inverse import (

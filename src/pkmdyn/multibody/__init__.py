@@ -3,7 +3,7 @@
 Description (TOML) -> :func:`load_description` (:mod:`pkmdyn.multibody.description.schema`) -> :func:`compile_model`
 (spanning tree, cut joints, loop records, flat arrays: :mod:`pkmdyn.multibody.model.compiler`) -> :func:`solve_kinematics`
 (batched, compiled kernels: :mod:`pkmdyn.multibody.kinematics.inverse`) -> :class:`MechanismKinematics` -> inverse and
-forward dynamics, reactions, friction, drives (:mod:`pkmdyn.multibody.dynamics.inverse`) -> stiffness, workspace, wear,
+forward dynamics, reactions, friction, drives (:mod:`pkmdyn.multibody.dynamics.newton_euler`) -> stiffness, workspace, wear,
 identification's regressor, design metrics (:mod:`.analyses`); other file formats at the edge
 (:mod:`.formats`); the results as the files' columns (:mod:`.columns`) and as a 3D scene
 (:mod:`.scene`). :func:`load_mechanism` does the first two steps. The engine writes no files and

@@ -20,7 +20,7 @@ from .analyses.stiffness import deflection
 from .description.joint_types import JOINT_TYPES
 from .description.schema import MOTOR_KEYS
 from .dynamics.actuators import motor_effort_column, motor_efforts
-from .dynamics.inverse import effort_unit, named_magnitudes
+from .dynamics.newton_euler import effort_unit, named_magnitudes
 from .kinematics.inverse import MechanismKinematics
 from .kinematics.motion import motion_columns, task_columns
 from .model.compiler import MechanismModel
@@ -190,7 +190,7 @@ def effort_columns(model: MechanismModel, kin: MechanismKinematics, reac: Any, n
     """The dynamics' columns of ``results.csv``: per actuated joint ``<joint>_effort_<N|Nm>``;
     per drive its motor ``<actuator>_pos_rad``, ``_vel_rad_s``, ``_acc_rad_s2`` (``m`` for a
     linear motor) and ``<actuator>_torque_Nm`` (``_force_N``); then the effort split
-    (:class:`~pkmdyn.multibody.dynamics.inverse.EffortShares`): per actuator and part (each body group, ``rotor`` for a
+    (:class:`~pkmdyn.multibody.dynamics.newton_euler.EffortShares`): per actuator and part (each body group, ``rotor`` for a
     drive, ``friction``: every joint's and the motor's) ``<actuator>_torque_<part>_Nm`` (a
     drive, motor side) or ``<joint>_effort_<part>_<N|Nm>`` (a joint without one); the named
     loads' magnitudes."""

@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from ..report import scene_from_joints
 from .description.joint_types import JOINT_TYPES
 from .dynamics.actuators import motor_effort_unit
-from .dynamics.inverse import effort_unit
+from .dynamics.newton_euler import effort_unit
 from .kinematics.inverse import solve_kinematics
 from .model.compiler import MechanismModel
 

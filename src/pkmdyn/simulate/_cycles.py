@@ -41,7 +41,7 @@ from ..multibody import _cache
 from ..multibody._cache import cached
 from ..multibody.dynamics import _dyn_kernels, friction
 from ..multibody.dynamics import _sample_kernels as _one
-from ..multibody.dynamics import inverse as dynamics
+from ..multibody.dynamics import newton_euler as dynamics
 from ..multibody.kinematics import _direct_kernels as _direct
 from ..multibody.kinematics import _solve_kernels as _kernels
 from ..multibody.model import _tree_kernels

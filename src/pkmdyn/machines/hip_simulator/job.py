@@ -7,7 +7,7 @@ engine (:func:`pkmdyn.multibody.load_mechanism`). The motion (the built-in ISO 1
 produced block by block, or a motion file) is solved once, block by block, by the engine
 (:func:`pkmdyn.multibody.solve_kinematics`, each block warm-started from the one before,
 exactly as :func:`pkmdyn.jobs.run.run_mechanism` does), and the same solution feeds the
-efforts with load-dependent friction and their split (:func:`pkmdyn.multibody.dynamics.inverse.joint_reactions`,
+efforts with load-dependent friction and their split (:func:`pkmdyn.multibody.dynamics.newton_euler.joint_reactions`,
 :func:`pkmdyn.multibody.dynamics.actuators.motor_efforts`), the slide tracks of ``wear.json`` (the
 samples of the first cycle kept as they pass) and the report. :mod:`.paper` names the results
 as the paper does (its columns, Eq. 2-6 Jacobian measures, the parts of Eq. 14); :mod:`.figures`

@@ -38,7 +38,7 @@ from ...errors import ParameterError
 from ...multibody import load_mechanism
 from ...multibody.dynamics.actuators import motor_efforts
 from ...multibody.dynamics.friction import EPS_ROTATION, EPS_TRANSLATION
-from ...multibody.dynamics.inverse import joint_reactions
+from ...multibody.dynamics.newton_euler import joint_reactions
 from ...multibody.kinematics.inverse import solve_kinematics
 from ...profiles.iso14242 import AxisWave, IsoCycle, iso14242_motion
 from ...spatial import euler_kinematics

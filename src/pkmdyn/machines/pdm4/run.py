@@ -27,7 +27,7 @@ from ...analysis.mobility import analyse
 from ...errors import PkmdynError
 from ...io import check_output_dir, open_table_writer, output_dir, write_json
 from ...multibody import load_mechanism, solve_kinematics
-from ...multibody.dynamics.inverse import joint_reactions
+from ...multibody.dynamics.newton_euler import joint_reactions
 from ...params_util import check_limit, parse_limit_options
 from ...profiles.pdm_motion import PdmMotion, cycloidal_motion, read_pdm_motion
 from . import paper
@@ -161,7 +161,7 @@ def compute(model: PdmModel, motion: PdmMotion, progress: bool | None = None) ->
     one block), through the generic engine: the kinematics of the PDM's description
     (:func:`pkmdyn.multibody.solve_kinematics`, each block warm-started from the last one) and
     its joint reactions, unique by the links' compliance
-    (:func:`pkmdyn.multibody.dynamics.inverse.joint_reactions`), in the paper's names (:mod:`.paper`).
+    (:func:`pkmdyn.multibody.dynamics.newton_euler.joint_reactions`), in the paper's names (:mod:`.paper`).
     The paper's geometry checks each block first (Eq. 2-9: a six-bar loop that cannot close, a
     limb beyond its stroke), so that a message names the limb."""
 

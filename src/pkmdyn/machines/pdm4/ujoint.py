@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from ...multibody import load_mechanism, solve_kinematics
-from ...multibody.dynamics.inverse import joint_reactions
+from ...multibody.dynamics.newton_euler import joint_reactions
 from ...profiles.pdm_motion import cycloidal_motion
 from .description import pdm_description
 from .paper import LIMBS

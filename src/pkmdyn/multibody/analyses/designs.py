@@ -10,8 +10,8 @@ and its numbers per design, :func:`pkmdyn.multibody.model.compiler.compile_with`
 the kinematics along the motion (:func:`~pkmdyn.multibody.solve_kinematics`, which refuses a loop
 that does not close), the singularity measures (:func:`~pkmdyn.multibody.singularity_measures`),
 and the actuator efforts with every joint reaction and the joints' friction
-(:func:`pkmdyn.multibody.dynamics.inverse.joint_reactions`; with ``reactions = false`` the efforts
-alone, :func:`pkmdyn.multibody.dynamics.inverse.inverse_dynamics`). The metrics are named after the
+(:func:`pkmdyn.multibody.dynamics.newton_euler.joint_reactions`; with ``reactions = false`` the efforts
+alone, :func:`pkmdyn.multibody.dynamics.newton_euler.inverse_dynamics`). The metrics are named after the
 description's actuators and joints; formulas and units: ``docs/sweep.md``.
 """
 
@@ -33,7 +33,7 @@ from ...params_util import Section, read_toml, validate
 from ...sweep_protocol import DesignOutcome, MetricInfo, time_integral, time_mean
 from ..description.schema import load_description
 from ..dynamics.actuators import check_actuator_rates, check_task_rates, effective_limits, motor_efforts
-from ..dynamics.inverse import effort_unit, inverse_dynamics, joint_reactions
+from ..dynamics.newton_euler import effort_unit, inverse_dynamics, joint_reactions
 from ..dynamics.reactions import ComplianceDataMissing
 from ..kinematics.inverse import (
     beyond_limits,
@@ -425,7 +425,7 @@ class DesignState:
     """What :func:`evaluate_model` computed for one design, for metrics of a machine's own
     (:class:`GeneratedSweep`): the compiled ``model``, the ``motion`` it performed, its
     kinematics ``kin`` (None: not solved), the actuated joints' efforts ``u (n, na)`` and the
-    joint reactions ``reactions`` (:class:`pkmdyn.multibody.dynamics.inverse.JointReactions`; None
+    joint reactions ``reactions`` (:class:`pkmdyn.multibody.dynamics.newton_euler.JointReactions`; None
     where not computed)."""
 
     model: Any

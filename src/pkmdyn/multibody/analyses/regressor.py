@@ -7,7 +7,7 @@ Per body b, the ten barycentric parameters in its own frame (about its frame ori
 
 with ``h = m c`` the first moment and ``J = I_c + m (|c|^2 1 - c c^T)`` the inertia about
 O_b (tensor entries, ``J_xy = -∫ x y dm``). The required body wrench (Eq. 1 of
-:mod:`pkmdyn.multibody.dynamics.inverse`) is linear in them: with ``R`` the body's rotation, ``o`` its origin, ``a_o``
+:mod:`pkmdyn.multibody.dynamics.newton_euler`) is linear in them: with ``R`` the body's rotation, ``o`` its origin, ``a_o``
 its origin's acceleration and ``g`` gravity, ``h_w = R h``, ``J_w = R J R^T``,
 
     f   = m (a_o - g) + wd x h_w + w x (w x h_w)
@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 from ...errors import ParameterError
 from ..dynamics.actuators import motor_coordinates, motor_eps
 from ..dynamics.friction import EPS_ROTATION, EPS_TRANSLATION, JointFriction, regularised_sign
-from ..dynamics.inverse import (
+from ..dynamics.newton_euler import (
     actuator_efforts,
     body_wrenches,
     coordinate_twists,

@@ -9,13 +9,13 @@ axes of its frame on the parent). Everything else is rigid.
 
 **Method: the force method (matrix structural analysis in forces).** With the actuators
 locked, the mechanism is a structure. A wrench ``w`` applied to the task body is carried by
-joint wrenches ``z`` in equilibrium with it (the equations of :mod:`pkmdyn.multibody.dynamics.inverse` without the
+joint wrenches ``z`` in equilibrium with it (the equations of :mod:`pkmdyn.multibody.dynamics.newton_euler` without the
 actuated coordinates' rows, which leave each drive's effort free); each compliant member's
 internal force is linear in ``z``: ``e = E z + e_w`` (a beam segment's wrench, a drive's
 effort ``u_a = T_a . W_j``, a joint spring's reaction), and the complementary energy is
 ``U* = 1/2 e^T F e`` with ``F`` the members' flexibilities (``L/EA`` ..., ``1/k``). Of all the
 admissible ``z`` (the cut joints' constraint wrenches ``lambda`` parameterise them,
-``z = z_w + Z lambda``, :class:`pkmdyn.multibody.dynamics.inverse._CutRoute`), the real one minimises ``U*``
+``z = z_w + Z lambda``, :class:`pkmdyn.multibody.dynamics.newton_euler._CutRoute`), the real one minimises ``U*``
 (Menabrea); the displacement conjugate to ``w`` is ``dU*/dw`` (Castigliano), so the task
 body's small twist ``[dtheta; dp_O]`` (Plücker at the base origin) under ``w = [n_O; f]`` is
 ``C_O w`` with the compliance matrix ``C_O = E_w^T F E_w`` (``E_w`` the members' forces per unit
@@ -59,7 +59,7 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError, SingularityError
 from ...spatial import skew
-from ..dynamics.inverse import _CutRoute, body_wrenches, coordinate_twists, generalised_forces, task_mass_matrix
+from ..dynamics.newton_euler import _CutRoute, body_wrenches, coordinate_twists, generalised_forces, task_mass_matrix
 from ..dynamics.reactions import compliance_terms
 from ..kinematics.inverse import MechanismKinematics
 from ..model._tree_kernels import euler_angles, euler_rate_map
@@ -368,8 +368,8 @@ def deflection(model: MechanismModel, kin: MechanismKinematics, reactions: objec
                named: dict | None = None, sample_offset: int = 0) -> Array:
     """The task coordinates' elastic deflection ``dx (n, nt)`` [m, rad] under the motion's own
     loads (unit-load method, module docstring): ``reactions`` the motion's
-    :class:`~pkmdyn.multibody.dynamics.inverse.JointReactions` (every joint's wrench), ``loads``/``named`` as for
-    :func:`pkmdyn.multibody.dynamics.inverse.body_wrenches` (the same as the reactions were computed with)."""
+    :class:`~pkmdyn.multibody.dynamics.newton_euler.JointReactions` (every joint's wrench), ``loads``/``named`` as for
+    :func:`pkmdyn.multibody.dynamics.newton_euler.body_wrenches` (the same as the reactions were computed with)."""
     _check_sources(model)
     st = _Structure(model, kin, sample_offset)
     n = len(kin)

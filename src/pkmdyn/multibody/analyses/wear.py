@@ -51,7 +51,7 @@ from numpy.typing import NDArray
 from ...errors import ParameterError
 from ..description.expressions import evaluate
 from ..description.joint_types import JOINT_TYPES
-from ..dynamics.inverse import joint_reactions
+from ..dynamics.newton_euler import joint_reactions
 from .stiffness import reaction_route
 
 __all__ = ["WearOptions", "joint_wear", "head_radius", "MarkerGrid", "marker_grid", "SlideTracks", "slide_tracks", "joint_slide_tracks", "motion_axis",

@@ -1,4 +1,4 @@
-"""Dynamics on a solved motion: inverse dynamics and efforts (:mod:`.inverse`), every joint
+"""Dynamics on a solved motion: inverse dynamics and efforts (:mod:`.newton_euler`), every joint
 reaction, unique by link compliance where over-constrained (:mod:`.reactions`), joint friction
 (:mod:`.friction`), external loads (:mod:`.loads`), drives and motor efforts (:mod:`.actuators`),
 and the single-sample verbs of the closed loop (:mod:`.verbs`); their compiled kernels beside them.
@@ -20,7 +20,7 @@ __getattr__, __dir__ = attach(__name__, {
                      "body_wrenches", "coordinate_twists", "effort_shares", "effort_unit", "energies",
                      "equilibrium_system", "free_twists", "generalised_forces", "idle_holding", "inertia_factors",
                      "inverse_dynamics", "joint_reactions", "load_forces", "named_magnitudes", "task_mass_matrix"),
-                     ".inverse"),
+                     ".newton_euler"),
     **dict.fromkeys(("ComplianceDataMissing", "beam_terms", "compliance_terms", "compliant_reactions",
                      "elastic_bodies", "joint_spring_terms"), ".reactions"),
     **dict.fromkeys(("GeneratedModel", "MechanismVerbs", "RenamedVerbs", "machine_verbs", "motion_scene"),

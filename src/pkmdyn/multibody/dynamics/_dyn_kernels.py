@@ -234,7 +234,7 @@ def task_mass(S, G, body_parent, body_joint, joint_q0, joint_nq, R, p, mass, fac
     per unit task rate t (``v_c = v_O + w x p`` the centre-of-mass velocity); the bodies' blocks
     side by side make ``Z (nt, 6 nb)`` and ``M = Z Z^T``. ``S (nq, 6)``, ``G (nq, nt)``, ``R
     (nb, 3, 3)``, ``p (nb, 3)`` the centres of mass, ``factor (nb, 3, 3)``
-    (:func:`pkmdyn.multibody.dynamics.inverse.inertia_factors`); ``T (nb, nt, 6)`` (row t of body b: its twist per unit
+    (:func:`pkmdyn.multibody.dynamics.newton_euler.inertia_factors`); ``T (nb, nt, 6)`` (row t of body b: its twist per unit
     task rate t), ``Z (nt, 6 nb)``, ``RL (3, 3)`` work space."""
     nt = G.shape[1]
     for b in range(R.shape[0]):

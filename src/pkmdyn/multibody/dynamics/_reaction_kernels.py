@@ -1,5 +1,5 @@
-"""Compiled kernels of the joint reactions' cut-wrench route (:class:`pkmdyn.multibody.dynamics.inverse._CutRoute`),
-driven by the model's arrays and the cut-joint table of :func:`pkmdyn.multibody.dynamics.inverse.cut_table`.
+"""Compiled kernels of the joint reactions' cut-wrench route (:class:`pkmdyn.multibody.dynamics.newton_euler._CutRoute`),
+driven by the model's arrays and the cut-joint table of :func:`pkmdyn.multibody.dynamics.newton_euler.cut_table`.
 
 Per sample and cut joint ``i`` (joint ``cut_j[i]`` with ``cut_f[i]`` freedoms): its free twists
 ``T_i (f, 6)`` (the joint type's elementary motions at its frames: rotation axes through the

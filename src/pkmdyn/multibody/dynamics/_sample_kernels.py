@@ -15,7 +15,7 @@ kernel takes them as views and runs, for task pose ``x`` and rate ``xd``:
    ``qd = G xd`` and the bias accelerations;
 2. the joints' friction of known magnitude from the relative twists;
 3. the bodies' required wrenches at the bias motion with gravity and loads (Eq. 1 of
-   :mod:`pkmdyn.multibody.dynamics.inverse`), the tree forces (Eq. 2) and ``h = G^T Q``;
+   :mod:`pkmdyn.multibody.dynamics.newton_euler`), the tree forces (Eq. 2) and ``h = G^T Q``;
 4. the task mass matrix ``M = sum_b T_b^T I_b T_b``;
 5. the drives' rotor inertia, bias and motor friction (:mod:`pkmdyn.multibody.dynamics.actuators`, Eq. A1) added to
    ``M`` and ``h``;
@@ -53,13 +53,13 @@ from ..model import _tree_kernels
 from ..model._tree_kernels import OK, _nn, _point_motion, place_fixed_legs
 from ..model.compiler import MechanismModel
 from . import _dyn_kernels, friction
-from . import inverse as dynamics
+from . import newton_euler as dynamics
 from ._dyn_kernels import body_wrench, generalised, joint_friction, load_wrench, task_mass
 from .actuators import motor_eps
 from .friction import EPS_ROTATION as EPS_R
 from .friction import EPS_TRANSLATION as EPS_T
 from .friction import friction_arrays
-from .inverse import SINGULAR_ACTUATION, inertia_factors
+from .newton_euler import SINGULAR_ACTUATION, inertia_factors
 
 __all__ = ["pack", "supported", "state", "prime", "solution", "forward_one", "inverse_one", "positions_one",
            "actuator_maps", "COLD", "ALONE"]

@@ -2,8 +2,8 @@
 joint's own reaction), in the free directions of every joint, tree or cut.
 
 Relative motion of joint j (child relative to parent): the twist ``V_rel = V_c - V_p``
-(Plücker at the base origin, :mod:`pkmdyn.multibody.dynamics.inverse`), with ``V_rel = T r`` in the joint's free
-twists ``T (f, 6)`` (:func:`pkmdyn.multibody.dynamics.inverse.free_twists`), ``r = T^+ V_rel`` its free rates (for a
+(Plücker at the base origin, :mod:`pkmdyn.multibody.dynamics.newton_euler`), with ``V_rel = T r`` in the joint's free
+twists ``T (f, 6)`` (:func:`pkmdyn.multibody.dynamics.newton_euler.free_twists`), ``r = T^+ V_rel`` its free rates (for a
 tree joint, its coordinate rates). The relative angular velocity is ``w = V_rel[:3]``, the
 relative velocity of the child's point at the joint centre ``p`` is ``v = V_rel[3:] + w x p``.
 

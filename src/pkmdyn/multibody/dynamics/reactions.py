@@ -1,6 +1,6 @@
 """Unique joint reactions of an over-constrained described mechanism from link compliance.
 
-The rigid equilibrium equations ``A z = b`` of :func:`pkmdyn.multibody.dynamics.inverse.equilibrium_system` leave
+The rigid equilibrium equations ``A z = b`` of :func:`pkmdyn.multibody.dynamics.newton_euler.equilibrium_system` leave
 ``t = k - rank A`` self-stress states of the joint wrenches ``z`` undetermined. Every body
 that carries a ``section`` and a ``material`` in the description is an elastic straight beam;
 the reactions are the admissible ones of least complementary energy (Menabrea), solved by the
@@ -13,7 +13,7 @@ mass (the PDM's choice); the nodes are every joint centre on the body and its ce
 that axis (a joint's centre is its frame's origin on the joint's parent body: for a prismatic
 joint the point fixed in the guiding body, e.g. a cylinder's mouth, on both of its bodies) (a body whose joints all lie at one point stays rigid); the loads at the nodes are the joint wrenches acting on the body (``+W_j`` as the
 child, ``-W_j`` as the parent) and, at the centre of mass, the gravity and d'Alembert load
-``-W_b`` (Eq. 1 of :mod:`pkmdyn.multibody.dynamics.inverse`), each reduced to its node (moment transported along the
+``-W_b`` (Eq. 1 of :mod:`pkmdyn.multibody.dynamics.newton_euler`), each reduced to its node (moment transported along the
 offset from the axis). Each segment between consecutive nodes is a cantilever of uniform
 circular section (tension, torsion, bending; shear neglected, Eq. 64) carrying the resultant
 of the loads beyond it. Bending, torsion and tension of the links strain, and the joints that
@@ -137,7 +137,7 @@ def _compiled_energy(model: MechanismModel, kin: MechanismKinematics, W: Array, 
 
 def compliant_reactions(model: MechanismModel, kin: MechanismKinematics, A: Array, b: Array, rank: int,
                         W: Array | None = None, affine: tuple[Array, Array] | None = None) -> tuple[Array, int]:
-    """Joint wrenches ``z (n, 6 nj)`` (Plücker at the origin, see :mod:`pkmdyn.multibody.dynamics.inverse`) solving
+    """Joint wrenches ``z (n, 6 nj)`` (Plücker at the origin, see :mod:`pkmdyn.multibody.dynamics.newton_euler`) solving
     ``A z = b`` with least complementary energy of the elastic bodies (module docstring).
 
     ``W`` (n, nb, 6): the required body wrenches (``b``'s first ``6 nb`` entries when omitted).

@@ -17,7 +17,7 @@ ratios ``k`` (``K = diag k``, 1 without a drive), rotor inertias ``I_r`` and mot
 so that ``M xdd + h = B u`` is the equation of motion projected on the task coordinates (the
 idle freedoms held, as the kinematics hold them). The friction in ``h`` is Coulomb and
 viscous; load-dependent friction is evaluated with the reactions of the state at ``xdd = 0``
-(its exact coupled value along a motion is :func:`pkmdyn.multibody.dynamics.inverse.joint_reactions`). The
+(its exact coupled value along a motion is :func:`pkmdyn.multibody.dynamics.newton_euler.joint_reactions`). The
 description's constant ``[[loads]]`` are always applied; ``load`` gives the magnitudes [N] of
 its named loads (``model.named_loads``): ``(n,)`` (or one value per call of a ``*_one`` verb)
 for a mechanism with one named load, ``(n, k)`` (``(k,)``) for k; None takes the
@@ -46,7 +46,7 @@ from ..model.legs import place
 from . import _sample_kernels as _one
 from .actuators import motor_effort_unit, motor_efforts
 from .friction import known_friction
-from .inverse import (
+from .newton_euler import (
     actuator_efforts,
     body_wrenches,
     coordinate_twists,

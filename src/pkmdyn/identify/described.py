@@ -19,9 +19,8 @@ machine's motor currents give) or the joint's ``<joint>_effort_<N|Nm>`` for an
 actuated joint without one, and, optional, a column per named load and every other column a
 ``pkmdyn run`` results file carries (not used); any other column is refused by name, as a
 misspelt one would be. With drives, the rotor inertias and motor friction coefficients are
-parameters too; the friction named loads drive (``friction.external``) has its coefficients. Writes
-``identification.json`` (the report of ``docs/identification.md`` with every parameter's
-description value) and ``efforts.csv`` (measured and identified efforts).
+parameters too; the friction named loads drive (``friction.external``) has its coefficients. The
+job that writes ``identification.json`` and ``efforts.csv`` is :mod:`pkmdyn.jobs.identify`.
 """
 
 from __future__ import annotations
@@ -33,20 +32,20 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MotionError
-from ..io import output_dir, read_csv_columns, write_csv, write_json
+from ..io import read_csv_columns
 from ..multibody.analyses.regressor import regressor
 from ..multibody.columns import actuator_effort_column, results_column_names
 from ..multibody.kinematics.direct import direct_kinematics
-from ..multibody.kinematics.inverse import solve_kinematics
+from ..multibody.kinematics.inverse import MechanismKinematics
 from ..multibody.kinematics.motion import MAX_MOTION_ROWS, actuator_columns, actuator_rates, task_columns
 from ..multibody.model.compiler import MechanismModel
 from ..profiles._columns import column_group, derivatives, require_increasing
 from ._base import DEFAULT_RANK_TOL
-from ._identify import fit_regressor
+from ._identify import Identification, fit_regressor
 from ._regressor import Regressor
 from ._report import explained_percent, identification_report
 
-__all__ = ["identify_mechanism", "effort_columns"]
+__all__ = ["fit_described", "identification_document", "read_measured", "effort_columns"]
 
 Array = NDArray[np.float64]
 
@@ -117,20 +116,23 @@ def _consistency(reg: Regressor) -> tuple[Array, Array, Array]:
     return np.eye(p), lower, np.full(p, np.inf)
 
 
-def identify_mechanism(model: MechanismModel, measured: str | Path, out_dir: str | Path,
-                       rank_tol: float = DEFAULT_RANK_TOL, inputs: Any = (), sg_window: int = 15,
-                       sg_order: int = 5) -> dict[str, Any]:
-    """Identify ``model``'s parameters from the measured file; write ``out_dir`` (module
-    docstring; ``sg_window``, ``sg_order`` the differentiator of a log in actuator coordinates
-    without rate columns). Returns the report with ``files``."""
-    path = Path(measured)
-    t, x, xd, xdd, u, named = read_measured(model, path, sg_window, sg_order)
-    kin = solve_kinematics(model, x, xd, xdd, t)
+def fit_described(model: MechanismModel, kin: MechanismKinematics, u: Array, named: dict[str, Array] | None = None,
+                  rank_tol: float = DEFAULT_RANK_TOL, source: str = "measured") -> Identification:
+    """The fit of ``model``'s parameters to the efforts ``u (n, na)`` measured along ``kin`` (each
+    actuator's column as :func:`effort_columns` names it), ``named`` the named loads' magnitudes
+    ``{name: (n,)}``: the :class:`._identify.Identification` (the parameters' names, the
+    description's values as the prior, base parameters, estimate, identified efforts, residuals)."""
     reg0 = regressor(model, kin, named or None)
     reg = Regressor(reg0.Y, reg0.u0, reg0.names)
-    fit = fit_regressor(reg, u, reg0.theta, _consistency(reg), rank_tol, source=str(path))
+    return fit_regressor(reg, u, reg0.theta, _consistency(reg), rank_tol, source=source)
+
+
+def identification_document(model: MechanismModel, fit: Identification) -> dict[str, Any]:
+    """``identification.json``'s document (``docs/identification.md``) of the fit ``fit`` of
+    :func:`fit_described`, with every parameter's description value."""
+    u, prior = fit.u_measured, fit.prior
     actuators = tuple(effort_columns(model))
-    report = identification_report(fit.base, fit.estimate, reg0.theta, actuators,
+    report = identification_report(fit.base, fit.estimate, prior, actuators,
                                    np.sqrt(np.mean(u ** 2, axis=0)), fit.residual_rms, fit.T)
     # the effort unit of each actuator (the shared report names its keys in N m)
     for key in ("residual_rms_Nm", "measured_rms_Nm"):
@@ -138,18 +140,9 @@ def identify_mechanism(model: MechanismModel, measured: str | Path, out_dir: str
     report["explained_percent"] = {a: (float(v) if np.isfinite(v) else None)
                                    for a, v in zip(actuators, explained_percent(u, u - fit.u_identified))}
     report["mechanism"] = model.name
-    report["samples"] = int(len(t))
+    report["samples"] = int(len(u))
     report["parameters"] = {nm: {"description_value": float(p0), "estimate": float(th)}
-                            for nm, p0, th in zip(reg0.names, reg0.theta, fit.estimate.theta)}
+                            for nm, p0, th in zip(fit.names, prior, fit.estimate.theta)}
     report["note"] = ("estimate: the fit, with the description's values along directions the motion does not "
                       "show (see separable and combinations for what the data determine)")
-    cols: dict[str, Array] = {"t_s": t}
-    for k, a in enumerate(actuators):
-        cols[f"measured_{a}"] = u[:, k]
-        cols[f"identified_{a}"] = fit.u_identified[:, k]
-    with output_dir(out_dir, inputs=inputs) as out:
-        files = {"identification": out / "identification.json", "efforts": out / "efforts.csv"}
-        write_csv(files["efforts"], cols)
-        write_json(files["identification"], report)
-    final = Path(out_dir)
-    return {**report, "files": {k: final / v.name for k, v in files.items()}}
+    return report
