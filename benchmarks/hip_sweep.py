@@ -70,7 +70,7 @@ def _stages(ad, designs: list[dict], ctx) -> dict[str, float]:
     """Each stage of each design timed alone (the same calls as the adapter's evaluation)."""
     import numpy as np
 
-    from pkmdyn.multibody.dynamics.inverse import joint_reactions
+    from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
     from pkmdyn.multibody.kinematics.inverse import least_measures, solve_kinematics
     from pkmdyn.multibody.description.schema import load_description
     from pkmdyn.multibody.model.compiler import compile_with

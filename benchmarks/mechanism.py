@@ -83,7 +83,7 @@ def _dynamics(out: dict, n: int, repeat: int, m, hip, mh, pm) -> None:
     from pkmdyn.machines.pdm4.description import pdm_description
     from pkmdyn.machines.pdm4.paper import JOINTS
     from pkmdyn.multibody import load_mechanism
-    from pkmdyn.multibody.dynamics.inverse import inverse_dynamics, joint_reactions
+    from pkmdyn.multibody.dynamics.newton_euler import inverse_dynamics, joint_reactions
     from pkmdyn.multibody.dynamics.verbs import machine_verbs
     from pkmdyn.profiles.iso14242 import iso14242_motion
     from pkmdyn.profiles.pdm_motion import cycloidal_motion
@@ -268,7 +268,7 @@ def _forward_peers(out: dict, repeat: int, machines: dict) -> None:
     spin freely: for the Delta the held case is also solved by Pinocchio
     (``pinocchio.forwardDynamics``: its mass matrix, bias forces and the loops' frame
     Jacobians and drifts, with the holding rows added), not timed."""
-    from pkmdyn.multibody.dynamics.inverse import fr_any
+    from pkmdyn.multibody.dynamics.newton_euler import fr_any
     from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
     try:
@@ -452,7 +452,7 @@ def _stewart_loops(out: dict, m, seconds: float = 2.0) -> None:
     """The Stewart platform's closed loop with exact encoders beside MuJoCo's simulation of it."""
     import time
 
-    from pkmdyn.cli.mechanism import described_control_settings
+    from pkmdyn.jobs.control import described_control_settings
     from pkmdyn.control import gains, hermite_motion, loop_settings
     from pkmdyn.multibody import default_motion
     from pkmdyn.multibody.dynamics.verbs import machine_verbs

@@ -84,8 +84,8 @@ def main() -> None:
     # every joint reaction by the compiled complementary energy in the cut unknowns
     from pkmdyn.machines.pdm4.description import pdm_description
     from pkmdyn.multibody import load_mechanism, solve_kinematics
-    from pkmdyn.multibody.dynamics.inverse import inverse_dynamics as engine_inverse_dynamics
-    from pkmdyn.multibody.dynamics.inverse import joint_reactions
+    from pkmdyn.multibody.dynamics.newton_euler import inverse_dynamics as engine_inverse_dynamics
+    from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
 
     mech = load_mechanism(pdm_description(model))
     gkin = solve_kinematics(mech, motion.q, motion.qd, motion.qdd, motion.t)

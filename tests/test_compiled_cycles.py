@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import multibody_examples as ex
-from pkmdyn.cli.mechanism import described_control_settings
+from pkmdyn.jobs.control import described_control_settings
 from pkmdyn.control import gains, hermite_motion, loop_settings
 from pkmdyn.multibody import default_motion, load_mechanism
 from pkmdyn.multibody.dynamics.verbs import machine_verbs

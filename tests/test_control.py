@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import toy_machine as toy
-from pkmdyn.cli.control import builtin_closed_loop, machine_setup
+from pkmdyn.jobs.control import builtin_closed_loop, machine_setup
 from pkmdyn.control import Gains, effort, gains, load_settings, loop_settings, make_controller, sample_reference
 from pkmdyn.errors import ParameterError
 from pkmdyn.simulate import DivergenceError, LoopSettings, track

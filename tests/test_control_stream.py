@@ -12,7 +12,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from pkmdyn.cli import main
-from pkmdyn.cli.control import PLOT_RAW_MAX, _Curves, machine_setup
+from pkmdyn.jobs.control import PLOT_RAW_MAX, _Curves, machine_setup
 from pkmdyn.control import gains, load_settings, loop_settings
 from pkmdyn.simulate import track, track_spans
 from pkmdyn.simulate import _run

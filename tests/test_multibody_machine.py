@@ -181,7 +181,7 @@ def test_every_controller_tracks_a_described_mechanism(tmp_path):
     assert 0.5 * sag < _max_err(res["pd"], "z") < 1.5 * sag
     assert max(_max_err(res["pid"], k) for k in ("x", "y", "z")) < 2 * sag
     gains = tmp_path / "stiff.toml"
-    from pkmdyn.cli.mechanism import described_control_settings
+    from pkmdyn.jobs.control import described_control_settings
 
     m = load_mechanism(ex.builtin_dict("stewart"))
     pd = described_control_settings(m)["pd"]
@@ -264,7 +264,7 @@ def test_exact_encoders_read_the_plants_kinematics_and_the_pose_comes_from_the_d
     error, here made large by a heavier plant and a soft PD."""
     from dataclasses import replace
 
-    from pkmdyn.cli.mechanism import described_control_settings
+    from pkmdyn.jobs.control import described_control_settings
     from pkmdyn.control import gains, hermite_motion, loop_settings
     from pkmdyn.multibody import default_motion
     from pkmdyn.simulate import track

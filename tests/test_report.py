@@ -305,7 +305,7 @@ def test_workspace_layers_have_distinct_colours():
 
 
 def test_effort_labels_name_the_actuator_not_the_column():
-    from pkmdyn.cli.control import effort_label
+    from pkmdyn.jobs.control import effort_label
 
     assert effort_label("hip", 0) == ("motor 1 torque", "N m")
     assert effort_label("pdm", 3) == ("limb l24 force", "N")

@@ -1,5 +1,5 @@
 """What a generated machine provides to its closed-loop control job (the protocol between the
-control command, :mod:`pkmdyn.cli.control`, and the machines; it sits below both, so that a
+control job, :mod:`pkmdyn.jobs.control`, and the machines; it sits below both, so that a
 machine never imports the command and the command never names a machine).
 
 A machine's control adapter is a module (``machines/<machine>/control_job.py``, found by

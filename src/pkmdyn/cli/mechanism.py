@@ -7,19 +7,17 @@ unknown name is refused, never routed to another machine's code.
 
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import click
 
 from .._lazy import lazy_module
-from ..errors import MotionError, ParameterError
-from ..io import atomic_file, check_output_dir, check_output_file, dumps_yaml
+from ..errors import ParameterError
+from ..io import atomic_file, check_output_file, dumps_yaml
 from ..machines.registry import builtin_names, resolve
 from ..profiles._columns import check_smoothing
 from ._groups import MACHINE_HELP, PATH_IN, FiniteFloat, cli, list_files, show
-from .control import MAX_CYCLES, machine_controllers
 
 if TYPE_CHECKING:
     from .. import control as _control
@@ -185,161 +183,6 @@ def run(machine: str, motion_path: Path | None, actuator_path: Path | None, sg_w
                      sg_order=sg_order, cycles=cycles, samples_per_cycle=samples_per_cycle, fmt=fmt,
                      limit_items=limit_items, minimum_norm_reactions=minimum_norm_reactions, deflection=deflection,
                      announce=list_files))
-
-
-#: controllers a described mechanism takes (from its dynamics verbs; pkmdyn.control)
-DESCRIBED_CONTROLLERS = ("computed-torque", "augmented-pd", "pd", "pid", "feedforward")
-
-
-def described_control_settings(model) -> dict:
-    """Control settings of a described mechanism, laid under ``--gains`` (no ``[mismatch]``: the
-    plant is the controller's own model): 2 ms cycle, 1 ms plant step, exact pose feedback, effort
-    limits the drives' rated efforts (``[[actuators]]`` ``max_torque_Nm`` or ``max_force_N``;
-    far away without one), the efforts being the drives' motor efforts, divergence at 0.05 m or 0.2 rad of
-    tracking error; every controller tuned for 5 Hz at damping 0.7 on the mechanism's inertia
-    at its reference pose: computed torque ``kp = wn^2``, ``kd = 2 zeta wn`` [1/s^2, 1/s]; the
-    task-space PD (and augmented PD) ``kp = wn^2 M_ii``, ``kd = 2 zeta wn M_ii`` with ``M`` the
-    task mass matrix [N/m or N m/rad, ...]; the actuators' PID ``kp = wn^2 Ma_ii``,
-    ``kd = 2 zeta wn Ma_ii``, ``ki = wn kp / 10`` with ``Ma = B^+ M B^+T`` (``B = J_ax^T K``) the inertia
-    seen by each actuator. Keys ending ``_si`` are in SI units of their coordinate."""
-    import numpy as np
-
-    nt, na = model.nt, model.na
-    wn, zeta = 2 * np.pi * 5.0, 0.7
-    verbs = _verbs.machine_verbs(model)
-    x0 = _multibody.reference_task(model)[None]
-    M = verbs.mass_matrix(model, x0)[0]
-    B = verbs.actuator_map(model, x0)[0]  # J_ax^T K (nt, na): the motors' map, K the drives' ratios
-    Ma = np.linalg.pinv(B) @ M @ np.linalg.pinv(B.T) if na else np.zeros((0, 0))
-    dm, da = np.abs(np.diag(M)), np.abs(np.diag(Ma))
-
-    def lst(v) -> list[float]:
-        return [float(f"{x:.6g}") for x in v]
-
-    pd = {"kp_si": lst(wn * wn * dm), "kd_si": lst(2 * zeta * wn * dm)}
-    limits = [float(v) if np.isfinite(v) else 1e9 for v in model.drive_max_effort]
-    return {
-        "timing": {"control_cycle_s": 0.002, "integration_step_s": 0.001},
-        "actuators": {"effort_limit_si": limits},
-        "sensors": {"encoder_counts_per_turn": 1000000, "encoder_travel_per_turn_m": 0.001,
-                    "velocity_cutoff_Hz": 200.0, "acceleration_cutoff_Hz": 50.0, "pose_noise_si": [0.0] * nt,
-                    "pose_delay_cycles": 0, "pose_feedback_from_sensor": 1, "seed": 1, "exact_encoders": 1},
-        "run": {"divergence_limit_si": [0.2 if k == 1 else 0.05 for k in model.task_kind]},
-        "computed-torque": {"kp_1_s2": [wn * wn] * nt, "kd_1_s": [2 * zeta * wn] * nt},
-        "pd": dict(pd),
-        "augmented-pd": dict(pd),
-        "pid": {"kp_si": lst(wn * wn * da), "ki_si": lst(wn * wn * wn * da / 10.0), "kd_si": lst(2 * zeta * wn * da)},
-    }
-
-
-@cli.command("control")
-@click.option("--machine", required=True, help=MACHINE_HELP)
-@click.option("--controller", default=None,
-              help="; ".join(f"{n}: {', '.join(c)}" for n, c in machine_controllers().items()) + "; a described "
-                   "mechanism: " + ", ".join(DESCRIBED_CONTROLLERS) + " (default computed-torque).")
-@click.option("--params", "params_path", type=PATH_IN, help="Generated machines: the controller model's parameter file.")
-@click.option("--plant-params", "plant_path", type=PATH_IN, help="Generated machines: the plant's parameter file.")
-@click.option("--motion", "motion_path", type=PATH_IN,
-              help="A motion file (CSV): the machine's own format; a described mechanism's task motion "
-                   "(docs/mechanism_format.md), its named load's column driving the load. Default: the built-in "
-                   "motion.")
-@click.option("--cycles", type=FiniteFloat(0.0, MAX_CYCLES, lo_open=True), default=None,
-              help="Generated machines: cycles of the built-in motion (default 1).")
-@click.option("--gains", "gains_path", type=PATH_IN,
-              help="Control settings (TOML) laid over the machine's defaults (docs/control.md; a described "
-                   "mechanism's defaults are tuned from its inertia, docs/multibody_dynamics.md).")
-@click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv", show_default=True,
-              help="Table format of the per-cycle results.")
-@click.option("--no-plots", is_flag=True, help="Write no PNG plots.")
-@click.option("--duration", "duration_s", type=FiniteFloat(0.0, 1e6, lo_open=True), default=None,
-              help="Described mechanisms: seconds of the motion to track (default 1 s or the motion's length).")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output folder; an earlier run of this command there is replaced whole, any other non-empty folder is refused.")
-def control(machine: str, controller: str | None, params_path: Path | None, plant_path: Path | None,
-            motion_path: Path | None, cycles: float | None, gains_path: Path | None, fmt: str, no_plots: bool,
-            duration_s: float | None, out_dir: Path) -> None:
-    """Closed-loop tracking for any machine: control.csv (or .parquet), summary.json.
-
-    A generated machine runs its own control job (the same as its pkmdyn <machine> control,
-    with every option of that); a described mechanism tracks its default motion in
-    task space on its own dynamics (pkmdyn.multibody.dynamics.verbs), the controller the same model."""
-    import numpy as np
-
-    from .control import _check_encoder, _Setup, _stream, check_loop, control_command
-
-    entry, path = resolve(machine)
-    if entry is not None:
-        if controller is None:
-            raise click.UsageError(f"--controller is required for --machine {machine}")
-        if duration_s is not None:
-            raise click.UsageError("--duration applies to a described mechanism; a generated machine takes --cycles")
-        control_command(entry.NAME, controller, params_path, plant_path, motion_path, 1.0 if cycles is None else cycles,
-                 gains_path, no_plots, out_dir, fmt)
-        return
-    given = [o for o, v in (("--params", params_path), ("--plant-params", plant_path), ("--cycles", cycles))
-             if v is not None]
-    if given:
-        raise click.UsageError(f"{given[0]} applies to the generated machines (see pkmdyn machines), not to a described mechanism")
-    controller = controller or "computed-torque"
-    if controller not in DESCRIBED_CONTROLLERS:
-        raise click.UsageError(f"--controller {controller!r}: a described mechanism takes "
-                               + ", ".join(DESCRIBED_CONTROLLERS))
-    inputs = {"--machine": path, "--motion": motion_path, "--gains": gains_path}
-    check_output_dir(out_dir, inputs)
-    model, _ = _load(machine)
-    if motion_path is not None:
-        motion = _multibody.read_task_motion(model, Path(motion_path).absolute())
-        what = str(motion_path)
-    else:
-        motion = _multibody.default_motion(model)
-        what = "the default motion"
-    span = float(motion.t[-1] - motion.t[0])
-    duration_s = min(1.0, span) if duration_s is None else duration_s
-    if not duration_s <= span:
-        raise MotionError(f"--duration: {duration_s:g} s must be at most the motion's {span:g} s")
-    if _inverse.limited_joints(model):  # the plant has no end stops: say where the reference leaves the joint limits
-        span_mask = motion.t <= motion.t[0] + duration_s
-        beyond = _inverse.limit_message(model, _multibody.solve_kinematics(model, motion.x[span_mask], motion.xd[span_mask],
-                                                       motion.xdd[span_mask], motion.t[span_mask]))
-        if beyond is not None:
-            click.echo(f"pkmdyn: warning: the reference motion leaves the joint limits: {beyond}", err=True)
-    settings = _control.overlay_settings(described_control_settings(model), gains_path)
-    ls = _control.loop_settings(settings)
-    if np.any(model.drive_encoder > 0):  # a drive's own encoder, counts per motor turn, in motor radians
-        ls = replace(ls, encoder_resolution=np.where(model.drive_encoder > 0, model.drive_encoder,
-                                                     float(ls.encoder_resolution)))
-    check_loop(ls, duration_s, gains_path)
-    verbs = _verbs.machine_verbs(model)
-    load, column = _control_load(model, motion, what, verbs.ACTUATORS)
-    fn = _control.hermite_motion(motion.t, motion.x, motion.xd, motion.xdd, load)
-    encoders = tuple((d, "encoder_counts_per_turn" if u == "rad" else "encoder_counts_per_m", u) if r > 0 else None
-                     for d, r, u in zip(model.drive_name, model.drive_encoder, model.motor_units))
-    setup = _Setup(model.name, verbs, model, model, fn, duration_s, load is not None, str(path),
-                   "the controller's model", what, span_s=span, load_column=column, drive_encoders=encoders)
-    _check_encoder(setup, ls, settings, gains_path)
-    n = model.na if controller == "pid" else model.nt
-    _stream(setup, controller, _control.gains(settings, controller, n), ls, settings, out_dir,
-            not no_plots, gains_path, inputs, fmt)
-
-
-def _control_load(model, motion, what: str, efforts: tuple[str, ...]):
-    """The named load that a control run drives from its motion: ``(magnitudes [N] per sample,
-    column)`` where the motion has the column of the mechanism's one named load, else ``(None,
-    "")`` (the description's ``magnitude_N`` then holds, on the plant and in the controller
-    alike). The loop carries one load: a motion with named-load columns for a mechanism with
-    several is refused rather than run without them; so is a load whose name is that of an
-    actuator's effort column of ``control.csv`` (``efforts``), which it would replace."""
-    given = [nm for nm in model.named_loads if nm in motion.loads]
-    if not given:
-        return None, ""
-    if len(model.named_loads) > 1:
-        raise MotionError(f"{what}: column {given[0]!r}: control drives one named load from the motion, and "
-                          f"{model.name!r} has {len(model.named_loads)} ({', '.join(model.named_loads)}); "
-                          "remove the named-load columns to run on the description's magnitude_N")
-    if given[0] in efforts:
-        raise MotionError(f"{what}: column {given[0]!r}: the named load has the name of an actuator's effort column "
-                          "of control.csv; rename the load (its [[loads]] name and the motion's column)")
-    return motion.loads[given[0]], given[0]
 
 
 @cli.command("identify")

@@ -17,11 +17,17 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from .._lazy import lazy_module
 from ..io import check_output_dir, output_dir
 from ..machines.registry import resolve
-from ..multibody.model.compiler import MechanismModel, load_mechanism
+
+if TYPE_CHECKING:
+    from ..multibody.model import compiler as _compiler
+    from ..multibody.model.compiler import MechanismModel
+else:  # the compiler and its kernels load when a job runs: a command module may import its job for --help
+    _compiler = lazy_module("pkmdyn.multibody.model.compiler")
 
 __all__ = ["JobResult", "Prepared", "prepare", "load_machine", "write"]
 
@@ -57,7 +63,7 @@ def load_machine(machine: str, limits: Mapping[str, float] | None = None) -> tup
     folder makes) and its registry entry (None for a described one); ``limits`` (``--limit``) over
     the description's own for the plausibility of its numbers."""
     entry, path = resolve(machine)
-    return load_mechanism(path if entry is None else entry.description(), limits), entry
+    return _compiler.load_mechanism(path if entry is None else entry.description(), limits), entry
 
 
 def prepare(machine: str, out_dir: Path | None, inputs: Mapping[str, Path | None] | None = None,

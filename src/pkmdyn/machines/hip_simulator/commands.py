@@ -1,7 +1,7 @@
 """The hip simulator's commands, ``pkmdyn hip ...`` (mounted by the command line through the
 machine registry, :func:`pkmdyn.machines.registry.command_groups`): each parses its options
 and calls one job of the machine (``run``: :mod:`.job`; ``control``: the control job of
-:mod:`pkmdyn.cli.control` with :mod:`.control_job`; ``identify``, ``excite``:
+:mod:`pkmdyn.jobs.control` with :mod:`.control_job`; ``identify``, ``excite``:
 :mod:`.identify_job`; ``export``: the engine's MJCF writer of the hip's description;
 ``profile``: the ISO 14242-1 motion file; ``params``: the built-in parameter file).
 
