@@ -203,10 +203,10 @@ def test_split_parts_add_up_to_the_total_in_the_run_files(tmp_path, name):
             checked += 1
     assert checked == len(summary["actuators"])  # every actuator's split: its motor's for a drive, else the joint's
     # the columns identify --machine accepts from a run are the ones a run writes
-    from pkmdyn.cli.mechanism import _load
+    from pkmdyn.jobs import load_machine
     from pkmdyn.multibody.columns import results_column_names
 
-    assert head == results_column_names(_load(name)[0])
+    assert head == results_column_names(load_machine(name)[0])
 
 
 # --------------------------------------------------------------------------- idle freedoms

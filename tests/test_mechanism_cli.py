@@ -262,12 +262,12 @@ def test_run_machine_hip_carries_the_iso_load_and_matches_the_hip_job(tmp_path, 
 def test_a_floating_point_warning_inside_a_command_is_one_line(capsys, monkeypatch):
     """numpy's overflow warning anywhere in a command ends it with one line and exit 2 (not the
     warning's lines on stderr and a run written with infinities)."""
-    import pkmdyn.cli.mechanism as mech
+    import pkmdyn.jobs.describe as describe_job
 
     def overflowing(*args, **kwargs):
         np.exp(np.array([1000.0]))
         raise AssertionError("the overflow should have stopped the command")
 
-    monkeypatch.setattr(mech, "_load", overflowing)
+    monkeypatch.setattr(describe_job, "load_machine", overflowing)
     code, _, err = _run(capsys, "describe", "--machine", "stewart")
     assert code == 2 and "overflow" in err and err.count("\n") == 1, err

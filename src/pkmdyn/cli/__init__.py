@@ -15,12 +15,15 @@ import click
 from ..compile_notice import reset, summary
 from ..errors import PkmdynError
 from ..machines.registry import command_groups
+from . import assemble as _assemble_commands  # noqa: F401
 from . import compile as _compile_commands  # noqa: F401
 from . import control as _control_commands  # noqa: F401
-from . import assemble as _assemble_commands  # noqa: F401
+from . import describe as _describe_commands  # noqa: F401
+from . import export as _export_commands  # noqa: F401
+from . import identify as _identify_commands  # noqa: F401
 from . import imports as _import_commands  # noqa: F401
-from . import mechanism as _mechanism_commands  # noqa: F401
 from . import pdm as _pdm_commands  # noqa: F401  (registers the commands)
+from . import run as _run_commands  # noqa: F401
 from . import stiffness as _stiffness_commands  # noqa: F401
 from . import sweep as _sweep_commands  # noqa: F401
 from . import view as _view_commands  # noqa: F401

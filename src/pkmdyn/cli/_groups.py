@@ -13,6 +13,7 @@ import click
 from ..errors import PkmdynError
 from ..io import atomic_file
 from ..machines.registry import generated
+from ..profiles._columns import check_smoothing
 
 __all__ = ["cli", "pdm", "PATH_IN", "MACHINE_HELP", "FiniteFloat", "list_files", "echo_lines", "echo", "show"]
 
@@ -62,6 +63,13 @@ class FiniteFloat(click.ParamType):
         return x
 
 
+def check_differentiator(sg_window: int, sg_order: int) -> None:
+    """``--sg-window`` and ``--sg-order`` of the Savitzky-Golay differentiator, before any file
+    is read (0: the spline, no differentiator)."""
+    if sg_window != 0:
+        check_smoothing(sg_window, sg_order)
+
+
 def echo(line: str) -> None:
     """One line on standard output; a standard output that cannot be written (a full device) is a
     :class:`~pkmdyn.errors.PkmdynError` that says so."""
@@ -80,11 +88,14 @@ def list_files(files: Mapping[str, Path]) -> None:
 
 def show(result: Any) -> None:
     """Print a job's result (:class:`pkmdyn.jobs._files.JobResult`, its files announced as they were
-    written): its lines on standard output, each warning as one ``pkmdyn: warning:`` line on stderr."""
+    written): its lines on standard output, each warning as one ``pkmdyn: warning:`` line and each
+    note as one ``note:`` line on stderr."""
     for line in result.lines:
         echo(line)
     for warning in result.warnings:
         click.echo(f"pkmdyn: warning: {warning}", err=True)
+    for note in result.notes:
+        click.echo(f"note: {note}", err=True)
 
 
 def echo_lines(lines: list[str]) -> None:

@@ -10,7 +10,12 @@ from typing import Any
 import click
 
 from ..jobs import control as control_job
-from ..jobs.control import DESCRIBED_CONTROLLERS, MAX_CONTROL_CYCLES, MAX_CYCLES, machine_controllers
+from ..jobs.control import (
+    DESCRIBED_CONTROLLERS,
+    MAX_CONTROL_CYCLES,
+    MAX_CYCLES,
+    machine_controllers,
+)
 from ..machines.pdm4 import control_job as _pdm_job
 from ..machines.registry import resolve
 from ._groups import MACHINE_HELP, PATH_IN, FiniteFloat, cli, list_files, pdm, show

@@ -8,24 +8,12 @@ from typing import TYPE_CHECKING
 import click
 
 from .._lazy import lazy_module
-from ..errors import ParameterError
-from ..io import atomic_file, check_output_file
-from ._groups import PATH_IN, cli
+from ._groups import PATH_IN, cli, list_files, show
 
 if TYPE_CHECKING:
-    from ..multibody.formats import graph as _graph
-    from ..multibody.formats import importer as _importer
-else:  # loaded when a command runs, not on import (nor for --help)
-    _graph = lazy_module("pkmdyn.multibody.formats.graph")
-    _importer = lazy_module("pkmdyn.multibody.formats.importer")
-
-FORMATS = {".xml": "mjcf", ".mjcf": "mjcf", ".urdf": "urdf", ".sdf": "sdf"}
-
-
-def _csv(text: str | None, kind=str) -> tuple | None:
-    if text is None:
-        return None
-    return tuple(kind(x.strip()) for x in text.split(",") if x.strip())
+    from ..jobs import imports as import_job
+else:  # the readers and the engine load when the command runs, not for --help
+    import_job = lazy_module("pkmdyn.jobs.imports")
 
 
 @cli.command("import")
@@ -51,35 +39,6 @@ def import_(src, fmt, sidecar, actuated, assemble, keyframe, task_body, task_poi
     """Read a closed-chain mechanism from another format and write its description, checked by
     loading it as `pkmdyn describe` and `run` do. Nothing is written when an element has no
     equivalent (one line naming it)."""
-
-    fmt = fmt or FORMATS.get(Path(src).suffix.lower())
-    if fmt is None:
-        raise ParameterError(f"--from {Path(src).name}: unknown extension; give --format mjcf, urdf or sdf")
-    inputs = {"--from": src, "--sidecar": sidecar}
-    check_output_file(out_path, inputs)
-    point = task_point
-    if point is not None and "," in point:
-        vals = _csv(point, float)
-        if len(vals) != 3:
-            raise ParameterError("--task-point: a site or frame name, or three numbers x,y,z")
-        point = vals
-    orient = None
-    if task_orientation is not None:
-        try:
-            orient = _csv(task_orientation, int)
-        except ValueError:
-            raise ParameterError("--task-orientation: angle numbers 1, 2 or 3, comma-separated") from None
-    pos = _csv(task_position)
-    if pos is not None and any(c not in ("x", "y", "z") for c in pos):
-        raise ParameterError("--task-position: letters x, y, z, comma-separated")
-    if orient is not None and any(k not in (1, 2, 3) for k in orient):
-        raise ParameterError("--task-orientation: angle numbers 1, 2 or 3, comma-separated")
-    choice = _graph.TaskChoice(body=task_body, point=point, position=pos if pos is not None or orient is None else (),
-                        orientation=orient if orient is not None or pos is None else ())
-    text, notes = _importer.import_description(Path(src), fmt, sidecar=sidecar, actuated=_csv(actuated) or (),
-                                     assemble=assemble, keyframe=keyframe, choice=choice)
-    with atomic_file(out_path, inputs=inputs) as tmp:
-        tmp.write_text(text, encoding="utf-8")
-    for line in notes:
-        click.echo(f"note: {line}", err=True)
-    click.echo(f"description: {out_path}")
+    show(import_job.job(src, out_path, fmt=fmt, sidecar=sidecar, actuated=actuated, assemble=assemble, keyframe=keyframe,
+                        task_body=task_body, task_point=task_point, task_position=task_position,
+                        task_orientation=task_orientation, announce=list_files))

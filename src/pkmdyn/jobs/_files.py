@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .._lazy import lazy_module
-from ..io import check_output_dir, output_dir
+from ..io import atomic_file, check_output_dir, check_output_file, output_dir
 from ..machines.registry import resolve
 
 if TYPE_CHECKING:
@@ -29,19 +29,22 @@ if TYPE_CHECKING:
 else:  # the compiler and its kernels load when a job runs: a command module may import its job for --help
     _compiler = lazy_module("pkmdyn.multibody.model.compiler")
 
-__all__ = ["JobResult", "Prepared", "prepare", "load_machine", "write"]
+__all__ = ["JobResult", "Prepared", "prepare", "load_machine", "write", "write_texts"]
 
 
 @dataclass(frozen=True)
 class JobResult:
     """A job's outcome: ``files`` (label -> the written file's final path; empty where the job
     wrote none), ``summary`` (the document its summary or main JSON file holds), ``lines`` (what
-    the command prints on stdout after the files) and ``warnings`` (one line each, for stderr)."""
+    the command prints on stdout after the files), ``warnings`` (one line each, for stderr) and
+    ``notes`` (what the user should know that is not wrong: a default filled in, an element
+    approximated; one line each, for stderr)."""
 
     files: Mapping[str, Path] = field(default_factory=dict)
     summary: Mapping[str, Any] = field(default_factory=dict)
     lines: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -91,4 +94,21 @@ def write(out_dir: Path, inputs: Mapping[str, Path | None], make: Callable[[Path
         placed = {k: final / v.relative_to(out) for k, v in files.items()}
         if announce is not None:
             announce(placed)
+    return placed
+
+
+def write_texts(texts: Mapping[str, tuple[Path, str]], inputs: Mapping[str, Path | None],
+                announce: Callable[[Mapping[str, Path]], None] | None = None) -> dict[str, Path]:
+    """Write the text files of a job whose ``--out`` is a file (an export, an import): label ->
+    ``(path, text)``, each path checked (:func:`pkmdyn.io.check_output_file`, before anything is
+    written) and written whole or not at all (:func:`pkmdyn.io.atomic_file`); ``announce`` is given
+    the paths once all are written. Returns label -> path."""
+    for path, _ in texts.values():
+        check_output_file(path, inputs)
+    for path, text in texts.values():
+        with atomic_file(path, inputs=inputs) as tmp:
+            tmp.write_text(text, encoding="utf-8")
+    placed = {k: p for k, (p, _) in texts.items()}
+    if announce is not None:
+        announce(placed)
     return placed

@@ -10,7 +10,12 @@ from pathlib import Path
 import numpy as np
 
 from ..identify._base import DEFAULT_RANK_TOL
-from ..identify.described import effort_columns, fit_described, identification_document, read_measured
+from ..identify.described import (
+    effort_columns,
+    fit_described,
+    identification_document,
+    read_measured,
+)
 from ..io import write_csv, write_json
 from ..multibody.kinematics.inverse import solve_kinematics
 from ._files import JobResult, prepare, write

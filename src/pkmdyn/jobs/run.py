@@ -26,7 +26,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ParameterError, PkmdynError
-from ..io import NpzWriter, check_table_format, note_table_size, open_table_writer, output_dir, write_json
+from ..io import (
+    NpzWriter,
+    check_table_format,
+    note_table_size,
+    open_table_writer,
+    output_dir,
+    write_json,
+)
 from ..multibody.columns import (
     actuator_effort_column,
     bodies_arrays,
@@ -38,7 +45,12 @@ from ..multibody.columns import (
     results_columns,
 )
 from ..multibody.description.schema import LIMIT_KEYS
-from ..multibody.dynamics.actuators import check_actuator_rates, check_task_rates, effective_limits, motor_effort_column
+from ..multibody.dynamics.actuators import (
+    check_actuator_rates,
+    check_task_rates,
+    effective_limits,
+    motor_effort_column,
+)
 from ..multibody.dynamics.newton_euler import effort_unit, joint_reactions, load_forces
 from ..multibody.dynamics.reactions import ComplianceDataMissing
 from ..multibody.kinematics.direct import task_motion

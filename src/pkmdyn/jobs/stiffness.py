@@ -27,7 +27,12 @@ from ..multibody.analyses.task_grid import grid_poses, parse_grid, parse_pose
 from ..multibody.columns import model_summary
 from ..multibody.description.schema import LIMIT_KEYS
 from ..multibody.dynamics.newton_euler import joint_reactions
-from ..multibody.kinematics.inverse import MechanismKinematics, reachable, reference_task, solve_kinematics
+from ..multibody.kinematics.inverse import (
+    MechanismKinematics,
+    reachable,
+    reference_task,
+    solve_kinematics,
+)
 from ..multibody.kinematics.motion import default_motion as one_cycle
 from ..multibody.kinematics.motion import read_task_motion
 from ..multibody.model.compiler import MechanismModel

@@ -12,7 +12,12 @@ import numpy as np
 from ..errors import ParameterError
 from ..io import write_csv, write_json
 from ..multibody.analyses.task_grid import parse_grid, parse_pose, parse_ranges
-from ..multibody.analyses.workspace import Workspace, check_centre, workspace, workspace_document
+from ..multibody.analyses.workspace import (
+    Workspace,
+    check_centre,
+    workspace,
+    workspace_document,
+)
 from ..multibody.model.compiler import MechanismModel
 from ..report import write_report
 from ._files import JobResult, prepare, write
