@@ -161,8 +161,8 @@ def _pick_and_place(path: Path) -> None:
 
 
 def _stewart(designs: int, result: dict, quiet: bool) -> None:
+    from pkmdyn.jobs.sweep import run_sweep
     from pkmdyn.machines.registry import sweep_adapter
-    from pkmdyn.sweep import run_sweep
     from pkmdyn.sweep.execute import default_batch_size
 
     adapter = sweep_adapter("stewart")
@@ -214,8 +214,8 @@ def _delta(population: int, generations: int, result: dict, quiet: bool, fronts_
            seed: int = 3, refine: int = 4) -> None:
     import numpy as np
 
+    from pkmdyn.jobs.sweep import run_sweep
     from pkmdyn.machines.registry import sweep_adapter
-    from pkmdyn.sweep import run_sweep
     from pkmdyn.sweep.search import hypervolumes
 
     adapter = sweep_adapter("delta")
@@ -280,8 +280,8 @@ def main() -> None:
 
 
 def _hip(designs: int, result: dict, quiet: bool) -> None:
+    from pkmdyn.jobs.sweep import run_sweep
     from pkmdyn.machines.registry import sweep_adapter
-    from pkmdyn.sweep import run_sweep
     from pkmdyn.sweep.execute import default_batch_size
 
     adapter = sweep_adapter("hip")

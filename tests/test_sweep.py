@@ -16,13 +16,17 @@ pa = pytest.importorskip("pyarrow")
 pq = pytest.importorskip("pyarrow.parquet")
 
 from pkmdyn.cli import main  # noqa: E402
-from pkmdyn.errors import LimitError, ParameterError  # noqa: E402
+from pkmdyn.errors import (  # noqa: E402
+    LimitError,
+    ParameterError,
+    PkmdynError,  # noqa: E402
+)
+from pkmdyn.io import dumps_toml  # noqa: E402
+from pkmdyn.jobs.sweep import run_sweep
 from pkmdyn.machines.registry import sweep_adapter  # noqa: E402
-from pkmdyn.sweep import pareto_mask, run_sweep  # noqa: E402
+from pkmdyn.sweep import pareto_mask  # noqa: E402
 from pkmdyn.sweep.pareto import best_index, minimised  # noqa: E402
 from pkmdyn.sweep.space import get_value, parse_path, sample_designs  # noqa: E402
-from pkmdyn.io import dumps_toml  # noqa: E402
-from pkmdyn.errors import PkmdynError  # noqa: E402
 
 HIP_SPACE = """
 [sampling]
@@ -337,7 +341,10 @@ def test_hip_metrics_recomputed_independently(hip_sweep):
 def test_orientation_workspace_against_a_plain_reach_check():
     """The workspace fraction against a per-orientation loop over the loop-closure equation."""
     from pkmdyn.machines.hip_simulator import load_params
-    from pkmdyn.machines.hip_simulator.described_sweep import _workspace_fraction, _workspace_rotations
+    from pkmdyn.machines.hip_simulator.described_sweep import (
+        _workspace_fraction,
+        _workspace_rotations,
+    )
 
     model = load_params()
     g = model.geometry
@@ -420,11 +427,11 @@ peak_force_N = "min"
 def test_pdm_metrics_recomputed_independently(tmp_path):
     """The sweep's metrics (the generic engine on the PDM's description) against the hand-derived
     oracles (Eq. 2-83), to 1e-9 relative (observed about 1e-13)."""
-    from pkmdyn.machines.pdm4 import inverse_kinematics, load_params
-    from pkmdyn.profiles.pdm_motion import cycloidal_motion
-
     from oracles import pdm_minimal as minimal
     from oracles.pdm_newton_euler import JOINTS, inverse_dynamics
+
+    from pkmdyn.machines.pdm4 import inverse_kinematics, load_params
+    from pkmdyn.profiles.pdm_motion import cycloidal_motion
 
     space = _write(tmp_path, PDM_SPACE)
     report = run_sweep(sweep_adapter("pdm"), space, tmp_path / "out", workers=0, plots=False)
@@ -526,7 +533,7 @@ def test_refinement_resumes_after_an_interruption(tmp_path):
 
 def test_docs_worked_example_figures_of_the_paper_design():
     """docs/sweep.md quotes these for the paper's design under examples/hip_table1_space.toml."""
-    from pkmdyn.sweep.run import prepare_sweep
+    from pkmdyn.jobs.sweep import prepare_sweep
 
     example = Path(__file__).resolve().parents[1] / "examples" / "hip_table1_space.toml"
     prep = prepare_sweep(sweep_adapter("hip"), example)

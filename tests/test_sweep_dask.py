@@ -20,12 +20,11 @@ import pytest
 pq = pytest.importorskip("pyarrow.parquet")
 distributed = pytest.importorskip("distributed")
 
-from pkmdyn.machines.registry import sweep_adapter  # noqa: E402
-from pkmdyn.sweep import run_sweep  # noqa: E402
-
 import sweep_flaky  # noqa: E402  (a test adapter whose first batch fails once)
 
 import pkmdyn  # noqa: E402
+from pkmdyn.jobs.sweep import run_sweep  # noqa: E402
+from pkmdyn.machines.registry import sweep_adapter  # noqa: E402
 
 #: the folder holding the pkmdyn under test (the installed one, or the checkout's src/), for a
 #: command run in a child process: the same package and so the same compiled kernels' cache

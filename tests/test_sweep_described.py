@@ -10,14 +10,14 @@ import copy
 import json
 import tomllib
 
+import multibody_examples as ex
 import numpy as np
 import pytest
 
-import multibody_examples as ex
 from pkmdyn.cli import main
 from pkmdyn.io import dumps_toml
+from pkmdyn.jobs.sweep import run_sweep
 from pkmdyn.machines.registry import sweep_adapter
-from pkmdyn.sweep import run_sweep
 
 pq = pytest.importorskip("pyarrow.parquet")
 

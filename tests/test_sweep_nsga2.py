@@ -167,8 +167,8 @@ def test_convergence_fronts_equal_the_pareto_sets_of_the_designs_so_far():
 
     import pyarrow as pa
 
+    from pkmdyn.jobs.sweep import _convergence
     from pkmdyn.sweep.pareto import minimised, pareto_mask
-    from pkmdyn.sweep.run import _convergence
     from pkmdyn.sweep.search import hypervolumes, normalise
 
     rng = np.random.default_rng(4)

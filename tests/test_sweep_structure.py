@@ -13,18 +13,23 @@ import copy
 import dataclasses
 import pickle
 
+import multibody_examples as ex
 import numpy as np
 import pytest
 
-import multibody_examples as ex
 from pkmdyn.errors import PkmdynError
 from pkmdyn.io import dumps_toml
+from pkmdyn.jobs.sweep import run_sweep
 from pkmdyn.machines.registry import sweep_adapter
 from pkmdyn.multibody import load_mechanism
-from pkmdyn.multibody.description.schema import load_description
-from pkmdyn.multibody.model.compiler import compile_model, compile_with, model_structure, structure_key
 from pkmdyn.multibody.analyses.designs import DescribedSweep
-from pkmdyn.sweep import run_sweep
+from pkmdyn.multibody.description.schema import load_description
+from pkmdyn.multibody.model.compiler import (
+    compile_model,
+    compile_with,
+    model_structure,
+    structure_key,
+)
 
 pa = pytest.importorskip("pyarrow")
 pq = pytest.importorskip("pyarrow.parquet")

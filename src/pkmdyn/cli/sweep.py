@@ -14,15 +14,12 @@ from typing import TYPE_CHECKING
 import click
 
 from .._lazy import lazy_module
-from ..machines.registry import sweep_adapter
-from ._groups import PATH_IN, cli
+from ._groups import PATH_IN, cli, show
 
 if TYPE_CHECKING:
-    from .. import params_util as _params_util
-    from .. import sweep as _sweep
-else:  # loaded when a command runs, not on import (nor for --help)
-    _params_util = lazy_module("pkmdyn.params_util")
-    _sweep = lazy_module("pkmdyn.sweep")
+    from ..jobs import sweep as sweep_job
+else:  # the sweep, pydantic and Dask load when the command runs, not for --help
+    sweep_job = lazy_module("pkmdyn.jobs.sweep")
 
 #: a Dask scheduler address: an optional scheme of Dask's comms, a host, a port
 _ADDRESS = re.compile(r"^(?:(?P<scheme>[A-Za-z][A-Za-z0-9+.-]*)://)?"
@@ -75,18 +72,13 @@ def sweep(machine: str, space_path: Path, params_path: Path | None, workers: int
         raise click.UsageError("--workers and --scheduler: give one of them (a scheduler has its own workers)")
     if scheduler is not None:
         check_scheduler(scheduler)
-    max_designs = _params_util.parse_limit_options(limits, {"max_designs": int}).get("max_designs")
-    adapter = sweep_adapter(machine)
     try:
-        report = _sweep.run_sweep(adapter, space_path, out_dir, workers=workers, scheduler=scheduler, params=params_path,
-                           batch_size=batch_size, max_designs=max_designs, plots=not no_plots, search=search)
+        result = sweep_job.job(machine, space_path, out_dir, params_path=params_path, workers=workers,
+                               scheduler=scheduler, batch_size=batch_size, limit_items=limits, search=search,
+                               no_plots=no_plots)
     except KeyboardInterrupt:
         # not the generic line of a single run: a sweep's folder keeps what it finished
         click.echo(f"pkmdyn: interrupted; the finished batches are kept in {out_dir / 'parts'}; rerun the same "
                    "command to resume", err=True)
         raise click.exceptions.Exit(130) from None
-    counts = ", ".join(f"{k} {v}" for k, v in report.counts.items() if v)
-    click.echo(f"designs: {report.designs} ({counts}); evaluated now: {report.evaluated}; "
-               f"Pareto set: {report.pareto}; best: {report.best_design_id}")
-    for name, path in report.files.items():
-        click.echo(f"{name}: {path}")
+    show(result)

@@ -5,7 +5,8 @@ of :class:`~pkmdyn.sweep_protocol.SweepAdapter`). Flow: space file -> validated
 :class:`SweepSpace` -> designs (grid, random, Latin hypercube or Sobol) -> batches evaluated in
 this process or on Dask -> Parquet part files -> ``designs.parquet``, Pareto set, best design as
 a parameter file, plots (``docs/sweep.md``). A machine's adapter comes from the machines'
-side (``pkmdyn.machines.registry.sweep_adapter(name)``); then
+side (``pkmdyn.machines.registry.sweep_adapter(name)``); the whole sweep into an output folder
+is the job :func:`pkmdyn.jobs.sweep.run_sweep`::
 
     report = run_sweep(adapter, "space.toml", "out", workers=2)
 """
@@ -19,7 +20,6 @@ from .._lazy import attach
 if TYPE_CHECKING:
     from ..sweep_protocol import STATUSES, DesignOutcome, MetricInfo, SweepAdapter
     from .pareto import best_index, minimised, pareto_mask
-    from .run import PreparedSweep, SweepReport, prepare_sweep, run_sweep
     from .space import SweepSpace, load_space, parse_path, sample_designs, space_from_dict
 
 __all__ = [
@@ -35,10 +35,6 @@ __all__ = [
     "pareto_mask",
     "minimised",
     "best_index",
-    "prepare_sweep",
-    "PreparedSweep",
-    "run_sweep",
-    "SweepReport",
 ]
 
 #: where each public name lives, imported on first use: ``import pkmdyn.sweep`` loads
@@ -46,6 +42,5 @@ __all__ = [
 __getattr__, __dir__ = attach(__name__, {
     **dict.fromkeys(("STATUSES", "DesignOutcome", "MetricInfo", "SweepAdapter"), "..sweep_protocol"),
     **dict.fromkeys(("best_index", "minimised", "pareto_mask"), ".pareto"),
-    **dict.fromkeys(("PreparedSweep", "SweepReport", "prepare_sweep", "run_sweep"), ".run"),
     **dict.fromkeys(("SweepSpace", "load_space", "parse_path", "sample_designs", "space_from_dict"), ".space"),
 })

@@ -1,4 +1,5 @@
-"""A whole sweep: space file -> designs -> evaluation (serial or Dask) -> results folder.
+"""``pkmdyn sweep``, a whole sweep: space file -> designs -> evaluation (serial or Dask) -> results
+folder (the sweep's parts: :mod:`pkmdyn.sweep`).
 
 The output folder of a sweep (``docs/sweep.md``)::
 
@@ -28,13 +29,36 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError, PkmdynError
-from ..io import atomic_file, check_inputs_outside, check_table_format, dumps_toml, write_json
+from ..io import (
+    atomic_file,
+    check_inputs_outside,
+    check_table_format,
+    dumps_toml,
+    write_json,
+)
+from ..machines.registry import sweep_adapter
+from ..params_util import parse_limit_options
+from ..sweep import plots as _plots
+from ..sweep.execute import (
+    PARTS_DIR,
+    BatchJob,
+    ExecutionStats,
+    Executor,
+    finished_ids,
+    part_schema,
+)
+from ..sweep.pareto import minimised, pareto_mask
+from ..sweep.search import Nsga2Search, generation_values, hypervolumes, normalise
+from ..sweep.space import (
+    SweepSpace,
+    design_description,
+    from_unit,
+    load_space,
+    refine_designs,
+    sample_designs,
+)
 from ..sweep_protocol import STATUSES, SweepAdapter
-from . import plots as _plots
-from .execute import PARTS_DIR, BatchJob, ExecutionStats, Executor, finished_ids, part_schema
-from .pareto import minimised, pareto_mask
-from .search import Nsga2Search, generation_values, hypervolumes, normalise
-from .space import SweepSpace, design_description, from_unit, load_space, refine_designs, sample_designs
+from ._files import JobResult
 
 __all__ = ["run_sweep", "SweepReport", "prepare_sweep", "PreparedSweep", "RECORD", "PREFLIGHT_DESIGNS"]
 
@@ -478,3 +502,21 @@ def _write_best(path: Path, description: dict[str, Any], header: str) -> Path:
     with atomic_file(path, notify=None) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return path
+
+
+def job(machine: str, space_path: Path, out_dir: Path, *, params_path: Path | None = None, workers: int | None = None,
+        scheduler: str | None = None, batch_size: int | None = None, limit_items: tuple[str, ...] = (),
+        search: str | None = None, no_plots: bool = False) -> JobResult:
+    """``pkmdyn sweep``: the designs of ``machine`` the space file ``space_path`` spans (over the
+    base parameters ``params_path``), evaluated in this process (``workers`` 0), on a local Dask
+    cluster or on ``scheduler``, into ``out_dir`` (:func:`run_sweep`); ``limit_items``:
+    ``max_designs=N``; ``search`` in place of the space file's sampling method."""
+    max_designs = parse_limit_options(limit_items, {"max_designs": int}).get("max_designs")
+    report = run_sweep(sweep_adapter(machine), space_path, out_dir, workers=workers, scheduler=scheduler,
+                       params=params_path, batch_size=batch_size, max_designs=max_designs, plots=not no_plots,
+                       search=search)
+    counts = ", ".join(f"{k} {v}" for k, v in report.counts.items() if v)
+    lines = (f"designs: {report.designs} ({counts}); evaluated now: {report.evaluated}; "
+             f"Pareto set: {report.pareto}; best: {report.best_design_id}",
+             *(f"{name}: {path}" for name, path in report.files.items()))
+    return JobResult(report.files, lines=lines)
