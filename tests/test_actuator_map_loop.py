@@ -1,5 +1,5 @@
 """The batched actuator map along a motion by the single-sample kernel's compiled loop
-(``MechanismVerbs.actuator_map``, :func:`pkmdyn.multibody.dynamics._sample_kernels.actuator_maps`) against the
+(``verbs.actuator_map``, :func:`pkmdyn.multibody.dynamics._sample_kernels.actuator_maps`) against the
 batched solver's own (the route below ``MAP_SAMPLES`` poses)."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import multibody_examples as ex
 from pkmdyn.errors import PkmdynError
 from pkmdyn.multibody import load_mechanism, reference_task
 from pkmdyn.multibody.dynamics import verbs as machine_module
-from pkmdyn.multibody.dynamics.verbs import machine_verbs
+from pkmdyn.multibody.dynamics.verbs import MechanismData, machine_verbs
 
 CASES = {"stewart": lambda: ex.builtin_dict("stewart"), "delta": lambda: ex.builtin_dict("delta"),
          "rrr3": lambda: ex.builtin_dict("rrr3"), "stewart_sps": ex.stewart_sps}
@@ -41,7 +41,7 @@ def test_the_compiled_loop_equals_the_batched_solver(name, monkeypatch):
     assert np.abs(B - ref).max() <= 1e-10 * np.abs(ref).max()
     # the last pose is remembered: a single-sample call there starts from it
     q_last = V._state(m).last_q()
-    kin = machine_verbs(m)._kin(m, x[-1:])
+    kin = machine_module._kin(m, MechanismData(m), x[-1:])
     assert np.abs(q_last - kin.q[0]).max() <= 1e-9 * max(1.0, np.abs(kin.q[0]).max())
 
 
@@ -55,7 +55,7 @@ def test_the_hip_map_along_its_cycle():
     q = iso14242_motion(cycles=1.0, samples_per_cycle=400).angles
     B = verbs.actuator_map(cm, q)
     m = cm.mechanism
-    kin = machine_verbs(m)._kin(m, q)
+    kin = machine_module._kin(m, MechanismData(m), q)
     ref = np.swapaxes(kin.J_ax, 1, 2) * m.drive_ratio
     assert np.abs(B - ref).max() <= 1e-10 * np.abs(ref).max()
 

@@ -817,7 +817,8 @@ def test_direct_one_primed_at_a_known_pose_starts_from_it(name, monkeypatch):
     by the single-sample kernel alone (the checked route, which solves from the reference
     configuration, is never taken) and follow a motion from there: the poses of the motion the
     actuator values came from, and its rates."""
-    from pkmdyn.multibody.dynamics.verbs import MechanismVerbs, machine_verbs
+    from pkmdyn.multibody.dynamics import verbs as verbs_module
+    from pkmdyn.multibody.dynamics.verbs import machine_verbs
 
     m = _model(name)
     t, x, xd, xdd = _smooth(m, n=60, seed=5)
@@ -828,7 +829,7 @@ def test_direct_one_primed_at_a_known_pose_starts_from_it(name, monkeypatch):
     def refused(*args, **kwargs):
         raise AssertionError("the checked route was taken")
 
-    monkeypatch.setattr(MechanismVerbs, "_direct_checked", refused)
+    monkeypatch.setattr(verbs_module, "_direct_checked", refused)
     V.prime_direct(m, x[10])
     sc = _scaled(m)
     for k in range(10, 60):
