@@ -123,3 +123,30 @@ def test_the_readmes_library_section_runs_as_written():
         scope: dict = {}
         exec(compile(block.split("```", 1)[0], "README.md", "exec"), scope)  # noqa: S102
         assert scope["m"].name == "stewart" and np.abs(scope["xdd"] - scope["kin"].xdd).max() < 1e-8
+
+
+def test_designs_are_the_sweeps_and_each_is_its_own_machine(tmp_path):
+    """``pkmdyn.designs`` returns the rows ``pkmdyn sweep`` writes; the best design, loaded from
+    its parameter file and run through ``pkmdyn.dynamics``, has the sweep's peak effort, and the
+    Pareto set of one minimised objective is the best design."""
+    space = tmp_path / "space.toml"
+    space.write_text('[sampling]\nmethod = "random"\ndesigns = 4\nseed = 2\n\n[parameters]\n'
+                     '"bodies[platform].mass_kg" = { min = 5.0, max = 25.0 }\n\n[objectives]\npeak_effort_N = "min"\n',
+                     encoding="utf-8")
+    d = pkmdyn.designs("stewart", space, tmp_path / "out")
+    cols = d.columns
+    np.testing.assert_array_equal(cols["design_id"], np.arange(4))
+    assert list(cols["status"]) == ["ok"] * 4 and len(set(cols["bodies[platform].mass_kg"])) == 4
+    best = int(np.argmin(cols["peak_effort_N"]))
+    assert d.best_design_id == best and list(d.pareto_ids) == [best]
+    m = pkmdyn.load(d.files["best_params"])
+    u = pkmdyn.dynamics(m, pkmdyn.kinematics(m)).reactions.u
+    assert np.abs(u).max() == pytest.approx(cols["peak_effort_N"][best], rel=1e-9)
+    assert main(["sweep", "--machine", "stewart", "--space", str(space), "--workers", "0", "--no-plots",
+                 "--out", str(tmp_path / "cli")]) == 0
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(tmp_path / "cli" / "designs.parquet").to_pydict()
+    for name, v in cols.items():
+        if v.dtype.kind == "f":
+            np.testing.assert_array_equal(np.array(table[name], dtype=float), v, err_msg=name)

@@ -32,7 +32,7 @@ from .errors import ParameterError
 from .identify._base import DEFAULT_RANK_TOL
 from .identify.described import effort_columns as measured_columns
 from .identify.described import fit_described
-from .machines.registry import resolve
+from .machines.registry import resolve, sweep_adapter
 from .multibody import default_motion as motion
 from .multibody import load_mechanism, solve_kinematics
 from .multibody.analyses.stiffness import stiffness as k
@@ -47,7 +47,7 @@ from .multibody.kinematics.direct import assembly_modes as modes
 from .multibody.kinematics.direct import direct_kinematics as direct
 
 __all__ = ["load", "default_motion", "kinematics", "Dynamics", "dynamics", "forward_dynamics", "direct_kinematics",
-           "assembly_modes", "stiffness", "wear", "workspace", "identification"]
+           "assembly_modes", "stiffness", "wear", "workspace", "identification", "Designs", "designs"]
 
 Array = NDArray[np.float64]
 
@@ -178,3 +178,36 @@ def identification(model: Any, kin: Any, u: Array, loads: Mapping[str, Array] | 
         cols = ", ".join(measured_columns(model))
         raise ParameterError(f"u: expected efforts of shape ({len(kin)}, {model.na}) ({cols}), got {u.shape}")
     return fit_described(model, kin, u, dict(loads or {}) or None, rank_tol, source="u")
+
+
+@dataclass(frozen=True)
+class Designs:
+    """A sweep's designs (``docs/sweep.md``): ``columns`` every design's row of
+    ``designs.parquet`` by column name (``design_id``, the swept keys, ``status``, ``reason``,
+    ``feasible``, every metric with its unit in its name; ``(n,)`` each, NaN where the file has
+    no value), ``pareto_ids`` the design ids of the Pareto set, ``best_design_id`` (None
+    where no design is feasible) and the ``files`` of the sweep's folder."""
+
+    columns: Mapping[str, Array]
+    pareto_ids: Array
+    best_design_id: int | None
+    files: Mapping[str, Path]
+
+
+def designs(machine: str | Path, space: str | Path, out_dir: str | Path, params: str | Path | None = None,
+            workers: int = 0, max_designs: int | None = None, plots: bool = False) -> Designs:
+    """The designs of ``machine`` (a built-in name or a description file) that the space file
+    ``space`` spans, evaluated in this process (``workers`` 0; more: a local Dask cluster) into the
+    folder ``out_dir`` as ``pkmdyn sweep`` writes it (a rerun there resumes; ``plots`` the PNGs);
+    ``params``: a generated machine's base parameter file."""
+    import pyarrow.parquet as pq
+
+    from .jobs.sweep import run_sweep
+
+    report = run_sweep(sweep_adapter(str(machine)), space, out_dir, workers=workers, params=params,
+                       max_designs=max_designs, plots=plots, progress=False)
+    table = pq.read_table(report.files["designs"])
+    cols = {name: np.asarray(table.column(name).to_numpy(zero_copy_only=False)) for name in table.column_names}
+    front = pq.read_table(report.files["pareto"]).column("design_id").to_numpy() if "pareto" in report.files \
+        else np.zeros(0, dtype=np.int64)
+    return Designs(cols, np.asarray(front), report.best_design_id, dict(report.files))
