@@ -34,10 +34,11 @@ def default_params_text() -> str:
     return _params.default_params_path().read_text(encoding="utf-8")
 
 
-def description() -> dict[str, Any]:
-    """The built-in machine as a mechanism description (:mod:`pkmdyn.multibody`)."""
+def description(params: Path | None = None) -> dict[str, Any]:
+    """The machine of the parameter file ``params`` (default: the built-in one) as a mechanism
+    description (:mod:`pkmdyn.multibody`)."""
 
-    return _description.pdm_description(_params.load_params())
+    return _description.pdm_description(_params.load_params(params))
 
 
 def default_motion() -> Any:
