@@ -461,16 +461,17 @@ solve_sample = njit(cache=True, _nrt=False)(solve_sample)
 
 
 @njit(cache=True)
-def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
-                body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
-                tRP, tpP, tRC, tpC, RP, pP, RC, pC, anc,
-                row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-                task_body, task_point, task_kind, task_index, euler_axes,
-                sel_rows, idle, prow, pcol, blocks, q_ref, row_scale, tol, check_tol, max_iter, stall,
-                com, pC_all,
-                q_out, qd_out, qdd_out, R_out, p_out, V_out, A_out, G_out, res_out, status, worst,
-                ov_out, oa_out, cp_out, cv_out, ca_out, jp_out, jv_out, ja_out):
+def solve_batch(tm, x, xd, xdd, q_start, nbr, root, tree, loops, task, settings, points, out):
     """Kinematics of every sample, warm-started along the motion.
+
+    The model comes in the groups :func:`solve_sample` takes: ``tree`` (``body_parent,
+    body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC,
+    legs``), ``loops`` (``RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint,
+    joint_parent, joint_child``), ``task`` (``task_body, task_point, task_kind, task_index,
+    euler_axes``), with ``settings`` (``sel_rows, idle, prow, pcol, blocks, q_ref, row_scale,
+    tol, check_tol, max_iter, stall``), ``points`` (``com, pC_all``) and the per-sample outputs
+    ``out`` (``q_out, qd_out, qdd_out, R_out, p_out, V_out, A_out, G_out, res_out, status,
+    worst, ov_out, oa_out, cp_out, cv_out, ca_out, jp_out, jv_out, ja_out``); the names below.
 
     For sample s: Newton on the square system of the selected rows and the idle rows
 
@@ -510,6 +511,13 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
     :func:`solve_sample`, ``info[3]``): most of a grid's time goes to the poses just out of
     reach, each of which would otherwise take ``max_iter`` steps.
     """
+    body_parent = tree[0]
+    row_loop, joint_child = loops[5], loops[11]
+    task_kind = task[2]
+    sel_rows, idle, prow, pcol, blocks, q_ref, row_scale, tol, check_tol, max_iter, stall = settings
+    com, pC_all = points
+    (q_out, qd_out, qdd_out, R_out, p_out, V_out, A_out, G_out, res_out, status, worst,
+     ov_out, oa_out, cp_out, cv_out, ca_out, jp_out, jv_out, ja_out) = out
     n = x.shape[0]
     nq = q_start.shape[0]
     nb = body_parent.shape[0]
@@ -547,10 +555,6 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, legs,
     Gw = np.empty((mk, nt))
     task_unit_rhs(sel_rows, nr, Gw)
     Gw2 = np.empty((mk, nt))
-    tree = (body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign, tRP, tpP, tRC, tpC,
-            legs)
-    loops = (RP, pP, RC, pC, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child)
-    task = (task_body, task_point, task_kind, task_index, euler_axes)
     rowpos = np.empty(nrow, dtype=np.int64)
     colpos = np.empty(nq, dtype=np.int64)
     idlepos = np.empty(idle.shape[0], dtype=np.int64)

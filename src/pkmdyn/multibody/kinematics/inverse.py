@@ -151,20 +151,20 @@ def _run(model: MechanismModel, x: Array, xd: Array, xdd: Array, q_start: Array,
     out["worst"] = np.zeros(n, dtype=np.int64)
     tt = np.zeros(0) if t is None else np.ascontiguousarray(t, dtype=float)
     grid_nbr = np.zeros((0, 0), dtype=np.int64) if nbr is None else np.ascontiguousarray(nbr, dtype=np.int64)
-    K.solve_batch(tt, x, xd, xdd, q_start, grid_nbr, root, model.legs.arrays(), model.body_parent, model.body_joint,
-                  model.joint_q0, model.joint_nq,
-                  model.coord_motion, model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent,
-                  model.tree_R_child, model.tree_p_child, model.joint_R_parent, model.joint_p_parent,
-                  model.joint_R_child, model.joint_p_child, model.ancestor_list, model.row_loop, model.row_kind,
-                  model.row_i, model.row_j, model.loop_joint, model.joint_parent, model.joint_child,
-                  model.task_body, model.task_point, model.task_kind, model.task_index, model.euler_axes,
-                  model.solver_rows, model.solver_idle, model.solver_prow, model.solver_pcol,
-                  model.solver_blocks, model.coord_offset, row_scale(model), TOLERANCE, CHECK_TOLERANCE, MAX_ITER,
-                  float(stall),
-                  model.com, model.joint_p_child,
-                  out["q"], out["qd"], out["qdd"], out["R"], out["p"], out["V"], out["A"], out["G"], out["res"],
-                  out["status"], out["worst"], out["ov"], out["oa"], out["cp"], out["cv"], out["ca"],
-                  out["jp"], out["jv"], out["ja"])
+    tree = (model.body_parent, model.body_joint, model.joint_q0, model.joint_nq, model.coord_motion,
+            model.coord_offset, model.coord_sign, model.tree_R_parent, model.tree_p_parent, model.tree_R_child,
+            model.tree_p_child, model.legs.arrays())
+    loops = (model.joint_R_parent, model.joint_p_parent, model.joint_R_child, model.joint_p_child,
+             model.ancestor_list, model.row_loop, model.row_kind, model.row_i, model.row_j, model.loop_joint,
+             model.joint_parent, model.joint_child)
+    task = (model.task_body, model.task_point, model.task_kind, model.task_index, model.euler_axes)
+    settings = (model.solver_rows, model.solver_idle, model.solver_prow, model.solver_pcol, model.solver_blocks,
+                model.coord_offset, row_scale(model), TOLERANCE, CHECK_TOLERANCE, MAX_ITER, float(stall))
+    outputs = (out["q"], out["qd"], out["qdd"], out["R"], out["p"], out["V"], out["A"], out["G"], out["res"],
+               out["status"], out["worst"], out["ov"], out["oa"], out["cp"], out["cv"], out["ca"],
+               out["jp"], out["jv"], out["ja"])
+    K.solve_batch(tt, x, xd, xdd, q_start, grid_nbr, root, tree, loops, task, settings,
+                  (model.com, model.joint_p_child), outputs)
     return out
 
 
