@@ -233,12 +233,15 @@ def _friction_wrench(T, f, F, G, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def cut_reactions_batch(R, origin, S, W, rhs, eff, F, given, lam, cut_j, cut_f, cut_pos, cut_sign, joint_cut_index,
-                        joint_type, joint_child, joint_parent, joint_q0, joint_nq, joint_flipped, jRc, jpc, jRp, jpp,
-                        type_motion, spherical, H, body_parent, body_joint, z_out, res_out, ok_out, setup, T_out,
-                        C_out, A_out):  # pragma: no cover - compiled
+def cut_reactions_batch(motion, loads, cuts, joints, out, setup, bases):  # pragma: no cover - compiled
     """Every joint wrench ``z_out (n, nj, 6)`` ``[n_O; f]`` by the cut-wrench route and the
     largest equilibrium residual ``res_out (n,)`` (bodies' balances and joints' power rows).
+
+    The arguments come in groups: ``motion`` ``(R, origin, S)``, ``loads`` ``(W, rhs, eff, F,
+    given, lam)``, ``cuts`` ``(cut_j, cut_f, cut_pos, cut_sign, joint_cut_index, type_motion,
+    spherical, H)``, ``joints`` ``(joint_type, joint_child, joint_parent, joint_q0, joint_nq,
+    joint_flipped, jRc, jpc, jRp, jpp, body_parent, body_joint)``, ``out`` ``(z_out, res_out,
+    ok_out)`` and, with ``setup``, ``bases`` ``(T_out, C_out, A_out)``; the names below.
 
     ``W (n, nb, 6)`` the required body wrenches; ``rhs (n, nq)`` the tree equations' right side
     ``Q + Q_f - E_a u``; ``eff (n, nq)`` the effort along each tree coordinate; ``F (n, nj, 3)``
@@ -250,6 +253,13 @@ def cut_reactions_batch(R, origin, S, W, rhs, eff, F, given, lam, cut_j, cut_f, 
     ``setup``: instead, only every sample's cut-joint free twists ``T_out (n, nc, 3, 6)``,
     wrench bases ``C_out (n, nc, 6, 6)`` (:func:`cut_bases`) and the tree equations' matrix
     ``A_out (n, nq, K)`` (the other arguments unread: one kernel to compile for both uses)."""
+    R, origin, S = motion
+    W, rhs, eff, F, given, lam = loads
+    cut_j, cut_f, cut_pos, cut_sign, joint_cut_index, type_motion, spherical, H = cuts
+    (joint_type, joint_child, joint_parent, joint_q0, joint_nq, joint_flipped, jRc, jpc, jRp, jpp, body_parent,
+     body_joint) = joints
+    z_out, res_out, ok_out = out
+    T_out, C_out, A_out = bases
     n, nq = S.shape[0], S.shape[1]
     nc, nj, nb = cut_j.shape[0], joint_type.shape[0], W.shape[1]
     K = A_out.shape[2] if setup else lam.shape[1]

@@ -776,11 +776,13 @@ def _cut_kernel(model: MechanismModel, tab: _CutTable, R: Array, origin: Array, 
         T, C, A = setup
     else:
         T, C, A = np.empty((0, 0, 0, 0)), np.empty((0, 0, 0, 0)), np.empty((0, 0, 0))
-    cut_reactions_batch(R, origin, S, W, rhs, eff, F, given, lam, tab.cut_j, tab.cut_f, tab.cut_pos, tab.cut_sign,
-                        tab.joint_cut_index, model.joint_type, model.joint_child, model.joint_parent, model.joint_q0,
-                        model.joint_nq, model.joint_flipped, model.joint_R_child, model.joint_p_child,
-                        model.joint_R_parent, model.joint_p_parent, tab.type_motion, tab.spherical, tab.H,
-                        model.body_parent, model.body_joint, *out, setup is not None, T, C, A)
+    cuts = (tab.cut_j, tab.cut_f, tab.cut_pos, tab.cut_sign, tab.joint_cut_index, tab.type_motion, tab.spherical,
+            tab.H)
+    joints = (model.joint_type, model.joint_child, model.joint_parent, model.joint_q0, model.joint_nq,
+              model.joint_flipped, model.joint_R_child, model.joint_p_child, model.joint_R_parent, model.joint_p_parent,
+              model.body_parent, model.body_joint)
+    cut_reactions_batch((R, origin, S), (W, rhs, eff, F, given, lam), cuts, joints, tuple(out), setup is not None,
+                        (T, C, A))
 
 
 def _cut_solve(model: MechanismModel, tab: _CutTable, kin: MechanismKinematics, S: Array, W: Array, rhs: Array,
