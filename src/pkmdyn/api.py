@@ -200,6 +200,7 @@ def designs(machine: str | Path, space: str | Path, out_dir: str | Path, params:
     ``space`` spans, evaluated in this process (``workers`` 0; more: a local Dask cluster) into the
     folder ``out_dir`` as ``pkmdyn sweep`` writes it (a rerun there resumes; ``plots`` the PNGs);
     ``params``: a generated machine's base parameter file."""
+    # deferred: the sweep loads pydantic, PyArrow and Dask, which no other verb needs
     import pyarrow.parquet as pq
 
     from .jobs.sweep import run_sweep
