@@ -56,7 +56,7 @@ def as_array(value: object, shape: tuple[int | None, ...], name: str, error: typ
     array, or a wrong number of dimensions is reported with the expected shape, e.g.
     ``"angles: expected shape (n, 3), got (3, 100)"``, instead of a numpy error deep inside.
     """
-    import numpy as np
+    import numpy as np  # deferred: `import pkmdyn` (its errors) loads no numpy
 
     want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + (",)" if len(shape) == 1 else ")")
     if isinstance(value, (str, bytes)) or value is None:

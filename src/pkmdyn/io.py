@@ -25,6 +25,7 @@ import stat
 import sys
 import tempfile
 import threading
+import zipfile
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -849,8 +850,6 @@ class NpzWriter:
 
     def close(self) -> None:
         """Pack the archive (every per-sample array must have its ``rows``) and remove the parts."""
-        import zipfile
-
         for _, fh in self._files.values():
             fh.close()
         short = [n for n, k in self._done.items() if k != self.rows]

@@ -7,12 +7,14 @@ exit status 2, with no traceback. Each concern registers its commands on the gro
 
 from __future__ import annotations
 
+import signal
 import sys
+import threading
 import warnings
 
 import click
 
-from ..compile_notice import reset, summary
+from ..compile_notice import install, reset, summary
 from ..errors import PkmdynError
 from ..machines.registry import command_groups
 from . import assemble as _assemble_commands  # noqa: F401
@@ -74,9 +76,6 @@ _NUMERIC = r"(?i).*(overflow|invalid value|divide by zero|underflow)"
 
 
 def _main(argv: list[str] | None) -> int:
-    import signal
-    import threading
-
     old = None
     if threading.current_thread() is threading.main_thread():
         old = signal.signal(signal.SIGTERM, _sigterm)
@@ -90,8 +89,6 @@ def _main(argv: list[str] | None) -> int:
             with cli.make_context("pkmdyn", args) as ctx:
                 # once the arguments are read (a --help or a usage error compiles nothing and
                 # imports no numba): say where a command compiles kernels the cache lacks
-                from ..compile_notice import install
-
                 install()
                 cli.invoke(ctx)
     except RuntimeWarning as exc:

@@ -6,14 +6,20 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
+from .._lazy import lazy_module
 from ..errors import PkmdynError
 from ..io import atomic_file
 from ..machines.registry import generated
 from ..profiles._columns import check_smoothing
+
+if TYPE_CHECKING:
+    from .. import control as _control
+else:  # the control settings' reader loads when a file is asked for, not for --help
+    _control = lazy_module("pkmdyn.control")
 
 __all__ = ["cli", "pdm", "PATH_IN", "MACHINE_HELP", "FiniteFloat", "list_files", "echo_lines", "echo", "show"]
 
@@ -113,9 +119,7 @@ def write_default_file(machine: str, control: bool, out_path: Path) -> None:
     """Write a machine's built-in parameter file (or, with ``control``, its control settings) to
     ``out_path`` for a user to edit, under the output rule (:func:`pkmdyn.io.atomic_file`)."""
     if control:
-        from ..control import default_settings_text
-
-        text, what = default_settings_text(machine), "control settings"
+        text, what = _control.default_settings_text(machine), "control settings"
     else:
         text, what = generated(machine).default_params_text(), "parameters"
     with atomic_file(out_path) as tmp:

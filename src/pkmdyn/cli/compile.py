@@ -40,9 +40,11 @@ from ._groups import cli, echo
 if TYPE_CHECKING:
     from .. import multibody as _multibody
     from ..multibody.kinematics import direct as _direct
+    from ..simulate import _cycles
 else:  # loaded when a command runs, not on import (nor for --help)
     _multibody = lazy_module("pkmdyn.multibody")
     _direct = lazy_module("pkmdyn.multibody.kinematics.direct")
+    _cycles = lazy_module("pkmdyn.simulate._cycles")
 
 __all__ = ["LANES", "compile_kernels"]
 
@@ -102,9 +104,7 @@ def _exercise(args: tuple[str, ...], outs: list[Path], root: Path) -> tuple[int,
     """Run one exercise in this process (the command tree of :mod:`._groups`, every command
     registered by then); its exit status and what it said last."""
     if args == ("@cycles",):
-        from ..simulate._cycles import compile_for_runs
-
-        compile_for_runs()
+        _cycles.compile_for_runs()
         return 0, ""
     line = [a.format(*outs) if "{" in a else a for a in args]
     if "@reference" in line:

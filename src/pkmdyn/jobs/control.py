@@ -40,6 +40,7 @@ if TYPE_CHECKING:
     from .. import control as _control
     from .. import multibody as _multibody
     from .. import simulate as _simulate
+    from ..multibody import scene as _scene
     from ..multibody.dynamics import verbs as _verbs
     from ..multibody.kinematics import inverse as _inverse
 else:  # loaded when a run starts: the command line imports this module for its constants and help
@@ -48,6 +49,7 @@ else:  # loaded when a run starts: the command line imports this module for its 
     _simulate = lazy_module("pkmdyn.simulate")
     _verbs = lazy_module("pkmdyn.multibody.dynamics.verbs")
     _inverse = lazy_module("pkmdyn.multibody.kinematics.inverse")
+    _scene = lazy_module("pkmdyn.multibody.scene")
 
 __all__ = ["job", "described_job", "described_control_settings", "DESCRIBED_CONTROLLERS", "builtin_closed_loop",
            "run_control", "machine_setup", "effort_label", "machine_controllers", "check_loop",
@@ -639,9 +641,7 @@ def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dic
         if job is not None:
             scene = job.scene(setup.plant_model, f["t"], f["q"], f["u"])
         else:  # a described mechanism: the engine's drawing of its description
-            from ..multibody.scene import motion_scene
-
-            scene = motion_scene(setup.plant_model, f["t"], f["q"], f["u"])
+            scene = _scene.motion_scene(setup.plant_model, f["t"], f["q"], f["u"])
     except PkmdynError as exc:  # the plant left the machine's reach: the page says so, the run stands
         warns.append(f"report: the 3D view could not be built ({exc})")
     t, first, lo, hi, note = curves.data()
@@ -805,8 +805,6 @@ def described_control_settings(model) -> dict:
     task mass matrix [N/m or N m/rad, ...]; the actuators' PID ``kp = wn^2 Ma_ii``,
     ``kd = 2 zeta wn Ma_ii``, ``ki = wn kp / 10`` with ``Ma = B^+ M B^+T`` (``B = J_ax^T K``) the inertia
     seen by each actuator. Keys ending ``_si`` are in SI units of their coordinate."""
-    import numpy as np
-
     nt, na = model.nt, model.na
     wn, zeta = 2 * np.pi * 5.0, 0.7
     verbs = _verbs.machine_verbs(model)

@@ -21,6 +21,7 @@ import json
 import os
 import stat as st_
 import time
+import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -494,8 +495,6 @@ def _pareto_designs(out: Path, prep: PreparedSweep, X: Any, table: Any, on_front
 
 
 def _write_best(path: Path, description: dict[str, Any], header: str) -> Path:
-    import tomllib
-
     text = dumps_toml(description, header)
     if tomllib.loads(text) != description:  # the file must read back to the very same description
         raise PkmdynError("internal error: the best design's parameter file does not read back identically")

@@ -25,13 +25,20 @@ routed to another machine's code.
 
 from __future__ import annotations
 
+import difflib
 import functools
 import importlib
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from .._lazy import lazy_module
 from ..errors import ParameterError
+
+if TYPE_CHECKING:
+    from ..multibody.analyses import designs as _designs
+else:  # the sweep adapters (and the engine) load when a sweep asks for one, not for the machine list
+    _designs = lazy_module("pkmdyn.multibody.analyses.designs")
 
 __all__ = ["described_machines", "generated_machines", "generated", "command_groups", "builtin_names", "description_path",
            "resolve", "title", "sweep_adapter", "control_adapter"]
@@ -90,8 +97,6 @@ def description_path(name: str) -> Path:
         return described[name]
     if name in generated_machines():
         raise ParameterError(f"--machine {name}: a machine generated from its parameter file, without a description file ({title(name)})")
-    import difflib
-
     close = difflib.get_close_matches(name, builtin_names(), n=1)
     raise ParameterError(f"--machine {name}: unknown machine ({f'did you mean {close[0]}? ' if close else ''}"
                          f"built-in: {', '.join(builtin_names())}; or give a description FILE.toml)")
@@ -122,18 +127,14 @@ def sweep_adapter(name: str) -> Any:
     machines = generated_machines()
     shown = name if len(name) <= 60 else name[:60] + "..."
     if name not in machines:
-        from ..multibody.analyses.designs import DescribedSweep
-
         entry, path = resolve(name)
         assert entry is None and path is not None
-        return DescribedSweep.from_file(path)
+        return _designs.DescribedSweep.from_file(path)
     folder = Path(machines[name].__file__).parent
     if (folder / "sweep.py").is_file():
         return importlib.import_module(f"{machines[name].__package__}.sweep")
     if (folder / f"{GENERATOR}.py").is_file():
-        from ..multibody.analyses.designs import GeneratedSweep
-
-        return GeneratedSweep.from_module(f"{machines[name].__package__}.{GENERATOR}")
+        return _designs.GeneratedSweep.from_module(f"{machines[name].__package__}.{GENERATOR}")
     raise ParameterError(f"--machine {shown!r}: this machine has no sweep adapter")
 
 

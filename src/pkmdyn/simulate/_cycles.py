@@ -359,7 +359,7 @@ def compiled_cycles(plant: Any, controller: Any, ref: Any, exact: Any, work: Any
         return None
     if kind == "pid" and controller.joint is None:
         return None
-    nu, nq = plant.nu, plant.nq
+    nu = plant.nu
     if exact is not None:
         enc_of = getattr(exact.verbs, "encoder_buffers", None)
         dk_of = getattr(exact.verbs, "direct_task_buffers", None)

@@ -22,6 +22,7 @@ import threading
 import time
 import uuid
 from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import CancelledError
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -331,8 +332,6 @@ class Executor:
 
     def _on_dask(self, job: BatchJob, batches: list[Array], X: Array, parts: Path, bar: Any,
                  stats: ExecutionStats) -> None:
-        from concurrent.futures import CancelledError
-
         from distributed.scheduler import KilledWorker
 
         client = self._client
@@ -406,8 +405,6 @@ class Executor:
         (its result forgotten when a worker was lost as the batch finished) is submitted again
         (``again(future)``: the new future, or None past the retries), so that a lost worker
         loses no batch."""
-        from concurrent.futures import CancelledError
-
         from distributed import as_completed
 
         pending = as_completed(futures)

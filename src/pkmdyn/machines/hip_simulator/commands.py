@@ -73,9 +73,7 @@ def paper_option(f: Callable[..., Any]) -> Callable[..., Any]:
         if paper:
             if kwargs.get("params_path") is not None:
                 raise click.UsageError("--paper and --params exclude each other: --paper is a built-in parameter file")
-            from .params import paper_params_path
-
-            kwargs["params_path"] = paper_params_path()
+            kwargs["params_path"] = _params.paper_params_path()
         return f(*args, **kwargs)
 
     return wrapped

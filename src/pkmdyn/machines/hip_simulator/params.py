@@ -6,6 +6,7 @@ built-in default (``default.toml`` beside this module) holds the paper's Tables 
 
 from __future__ import annotations
 
+import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -344,8 +345,6 @@ DEFAULT_PARAMS_TEXT: str = _default_resource().read_text(encoding="utf-8")
 
 def default_params_dict() -> dict[str, Any]:
     """A fresh copy of the built-in description, as a nested dict (safe to modify)."""
-    import tomllib
-
     return tomllib.loads(DEFAULT_PARAMS_TEXT)
 
 

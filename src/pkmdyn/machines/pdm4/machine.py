@@ -52,7 +52,7 @@ def default_motion() -> Any:
 
 def view_page(params: Path | None, out: Path, listing: Any) -> Path:
     """The ``pkmdyn view`` page of this machine (:func:`pkmdyn.report.write_view`) at its home pose."""
-    import numpy as np
+    import numpy as np  # deferred: the registry reads this module, and `pkmdyn machines` loads no numpy
 
     model = _params.load_params(params)
     scene = _scene.pdm_scene_from_pose(model, np.zeros(1), np.zeros((1, 4)), np.zeros((1, 4)))

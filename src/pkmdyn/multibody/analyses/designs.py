@@ -18,6 +18,7 @@ description's actuators and joints; formulas and units: ``docs/sweep.md``.
 from __future__ import annotations
 
 import copy
+import importlib
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -28,11 +29,22 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
 
-from ...errors import LimitError, ParameterError, PkmdynError, SingularityError, UnreachablePoseError
+from ...errors import (
+    LimitError,
+    ParameterError,
+    PkmdynError,
+    SingularityError,
+    UnreachablePoseError,
+)
 from ...params_util import Section, read_toml, validate
 from ...sweep_protocol import DesignOutcome, MetricInfo, time_integral, time_mean
 from ..description.schema import load_description
-from ..dynamics.actuators import check_actuator_rates, check_task_rates, effective_limits, motor_efforts
+from ..dynamics.actuators import (
+    check_actuator_rates,
+    check_task_rates,
+    effective_limits,
+    motor_efforts,
+)
 from ..dynamics.newton_euler import effort_unit, inverse_dynamics, joint_reactions
 from ..dynamics.reactions import ComplianceDataMissing
 from ..kinematics.inverse import (
@@ -46,7 +58,12 @@ from ..kinematics.inverse import (
     solve_kinematics,
 )
 from ..kinematics.motion import default_motion, read_task_motion
-from ..model.compiler import compile_with, load_mechanism, model_structure, structure_key
+from ..model.compiler import (
+    compile_with,
+    load_mechanism,
+    model_structure,
+    structure_key,
+)
 from .stiffness import compliance_sources, stiffness
 from .task_grid import parse_grid, parse_pose, parse_ranges
 from .workspace import size_unit, workspace
@@ -606,14 +623,10 @@ class GeneratedSweep:
 
     @classmethod
     def from_module(cls, module: str) -> GeneratedSweep:
-        import importlib
-
         return cls(module, importlib.import_module(module).NAME)
 
     @property
     def hooks(self) -> Any:
-        import importlib
-
         return importlib.import_module(self.module)
 
     def base_description(self, params_path: Path | None) -> dict[str, Any]:

@@ -306,7 +306,7 @@ def stiffness(model: MechanismModel, kin: MechanismKinematics, sample_offset: in
     cannot carry a load on the task body or its mass matrix is singular."""
     _check_sources(model)
     st = _Structure(model, kin, sample_offset)
-    n, nt = len(kin), model.nt
+    nt = model.nt
     C_task = st.D @ st.C_O @ np.swapaxes(st.D, 1, 2)
     C_task = 0.5 * (C_task + np.swapaxes(C_task, 1, 2))
     # a task direction no member strains: its stiffness is infinite (the diagonal compared per

@@ -27,6 +27,7 @@ import os
 import re
 import sys
 import tempfile
+import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +35,17 @@ import numpy as np
 
 from ...errors import ParameterError
 from ..description.schema import GROUND
-from .graph import CLOSE_TOL, Actuator, Closure, Frame, Graph, Joint, Link, TaskChoice, safe_name
+from .graph import (
+    CLOSE_TOL,
+    Actuator,
+    Closure,
+    Frame,
+    Graph,
+    Joint,
+    Link,
+    TaskChoice,
+    safe_name,
+)
 
 #: URDF holds no gravity: Pinocchio's and MuJoCo's default, unless the sidecar gives gravity_m_s2
 URDF_GRAVITY = (0.0, 0.0, -9.81)
@@ -68,8 +79,6 @@ def _stderr_captured():
 
 def _refuse_mimic(path: Path, src: str) -> None:
     """A ``<mimic>`` joint (Pinocchio's parser reads it as an independent joint by default)."""
-    import xml.etree.ElementTree as ET
-
     try:
         root = ET.parse(str(path)).getroot()
     except (ET.ParseError, OSError) as exc:
