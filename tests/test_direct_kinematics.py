@@ -6,6 +6,8 @@ built-in machine, the assembly-mode search, and the commands (``pkmdyn assemble`
 
 from __future__ import annotations
 
+import re
+
 import json
 from pathlib import Path
 
@@ -389,6 +391,12 @@ def test_assemble_lists_verified_modes_and_writes_them(capsys, tmp_path):
         assert np.abs(s - [doc["actuators"][a]["value"] for a in m.actuator_names]).max() <= 1e-10
     poses = np.array([[v for v in mode["task"].values()] for mode in doc["modes"]])
     assert len({tuple(np.round(p, 6)) for p in poses}) == len(poses)  # distinct
+    # the report's slider counts modes as the table numbers them, not seconds from 0
+    page = (out / "report.html").read_text(encoding="utf-8")
+    slider = re.search(r'"currentvalue": ?\{"prefix": ?"([^"]*)", ?"suffix": ?"([^"]*)"', page)
+    assert slider is not None and slider.groups() == ("mode = ", ""), slider
+    labels = re.findall(r'"label": ?"([^"]*)", ?"value": ?"\d+", ?"method": ?"animate"', page)
+    assert labels == [str(k) for k in range(1, len(doc["modes"]) + 1)]
 
 
 @pytest.mark.parametrize("actuators, pattern", [

@@ -5,6 +5,7 @@ numbers come from :func:`pkmdyn.multibody.kinematics.direct.assembly_modes`."""
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -63,12 +64,12 @@ def _report(out: Path, model: Any, modes: Any, doc: dict[str, Any], text: str) -
     joints = [(j["name"], j["type"], j["body_a"], j["body_b"]) for j in summ["joints"]]
     zero = np.zeros(len(modes.modes))
     actuated = {j["name"]: (zero, f"{j['name']} (actuated)", "-") for j in summ["joints"] if j.get("actuated")}
-    scene = scene_from_joints(np.arange(len(modes.modes), dtype=float), jp, joints, actuated)
+    scene = replace(scene_from_joints(np.arange(1, len(modes.modes) + 1, dtype=float), jp, joints, actuated),
+                    frame_label="mode", frame_unit="")
     return write_report(out, title=f"{model.name}: assembly modes", scene=scene, summary=doc, parameters=text,
                         notes=[f"{len(modes.modes)} assembly mode(s) at " + ", ".join(
                             f"{a} = {v + 0.0:.6g}" for a, v in zip(model.actuator_names, modes.s))],
-                        scene_note="One frame per assembly mode, in the order of the table (the slider's "
-                                   "'time' is the mode number minus one).")
+                        scene_note="One frame per assembly mode, numbered as in the table.")
 
 
 def job(machine: str, actuators: str, starts: int, seed: int, out_dir: Path | None,

@@ -172,7 +172,8 @@ def write_report(out_folder: str | Path, *, title: str, scene: Scene | None, plo
         idx = frame_indices(scene.t.shape[0], max_frames)
         frames = scene.at(idx)
         t0 = float(frames.t[0])
-        fig = scene_figure(frames, "Mechanism along the motion")
+        fig = scene_figure(frames, "Mechanism along the motion" if scene.frame_label == "t"
+                           else f"Mechanism, one frame per {scene.frame_label}")
         total = max(int(samples or 0), int(scene.t.shape[0]))
         info.update(scene="pkmdyn-scene", times=[float(v) for v in frames.t], frames=int(idx.size), samples=total)
         lines = [scene_note] if scene_note else []

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -60,7 +60,10 @@ class SceneActuator:
 class Scene:
     """A mechanism along a motion: ``t (n,)`` [s]; ``points (n, p, 3)`` [m], base frame, named by
     ``point_names (p,)``; the bodies and actuators that join them; ``path_point``: the index of a
-    point whose path is drawn (the tool or platform point), or None."""
+    point whose path is drawn (the tool or platform point), or None. ``frame_label`` and
+    ``frame_unit`` name what ``t`` counts on the page's slider (``"t"``, ``"s"``; a scene of
+    configurations that are not a motion, such as assembly modes, names its own: ``"mode"``,
+    ``""``)."""
 
     t: Array
     points: Array
@@ -69,6 +72,8 @@ class Scene:
     actuators: tuple[SceneActuator, ...] = ()
     path_point: int | None = None
     joint_points: tuple[int, ...] = field(default=())  #: points drawn as joint markers (all when empty)
+    frame_label: str = "t"
+    frame_unit: str = "s"
 
     def __post_init__(self) -> None:
         t = np.asarray(self.t, dtype=float)
@@ -97,8 +102,7 @@ class Scene:
         """The scene at samples ``idx`` (an index array), e.g. the frames of an animation."""
         idx = np.asarray(idx, dtype=int)
         acts = tuple(SceneActuator(a.name, a.points, np.asarray(a.effort)[idx], a.label, a.unit) for a in self.actuators)
-        return Scene(self.t[idx], self.points[idx], self.point_names, self.bodies, acts, self.path_point,
-                     self.joint_points)
+        return replace(self, t=self.t[idx], points=self.points[idx], actuators=acts)
 
 
 def frame_indices(n: int, max_frames: int = MAX_FRAMES) -> Array:
