@@ -552,3 +552,31 @@ def test_a_workspace_that_reaches_the_grids_edge_is_a_lower_bound(tmp_path, caps
     doc = json.loads((tmp_path / "wide" / "workspace.json").read_text())
     assert not doc["size_is_lower_bound"] and doc["inside_at_grid_edge"] == []
     assert "lower bound" not in capsys.readouterr().err
+
+
+def test_the_grids_pose_cap_is_a_limit_like_the_others(tmp_path, capsys):
+    """``max_workspace_poses`` (``[limits]``, ``--limit``): a grid over it is refused naming the
+    limit and how to raise it, nothing written; raised by ``--limit`` or by the description, the
+    same grid runs."""
+    import tomllib
+
+    from pkmdyn.io import dumps_toml
+    from pkmdyn.machines.registry import description_path
+
+    grid = ["--grid", "x=-0.1:0.1:6,y=-0.1:0.1:5", "--pose", "z=-1.0"]  # 30 poses
+    out = tmp_path / "ws"
+    d = tomllib.loads(description_path("delta").read_text(encoding="utf-8"))
+    d.setdefault("limits", {})["max_workspace_poses"] = 29
+    capped = tmp_path / "capped.toml"
+    capped.write_text(dumps_toml(d), encoding="utf-8")
+    assert main(["workspace", "--machine", str(capped), *grid, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "more than 29 poses" in err and "--limit max_workspace_poses=N" in err and err.count("\n") == 1
+    assert not out.exists()
+    assert main(["workspace", "--machine", str(capped), *grid, "--limit", "max_workspace_poses=30",
+                 "--out", str(out)]) == 0
+    assert json.loads((out / "workspace.json").read_text())["poses"] == 30
+    capsys.readouterr()
+    assert main(["workspace", "--machine", "delta", *grid, "--limit", "max_workspace_poses=29",
+                 "--out", str(tmp_path / "b")]) == 2
+    assert "more than 29 poses" in capsys.readouterr().err

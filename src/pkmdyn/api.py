@@ -158,7 +158,8 @@ def workspace(model: Any, grid: str, pose: str = "", threshold: float = 1e-3, or
     or over ``orientation_range`` (the same syntax); inside where every singularity measure is
     at least ``threshold``; ``refine``: steps along each boundary edge for the size
     (``docs/workspace.md``)."""
-    axes = parse_grid(model, grid, max_axes=3)
+    axes = parse_grid(model, grid, max_axes=3, max_points=int(model.limits["max_workspace_poses"]),
+                      limit_key="max_workspace_poses")
     ranges = None if orientation_range is None else parse_ranges(model, orientation_range)
     return reach(model, axes, parse_pose(model, pose), threshold, None, ranges, refine=refine)
 

@@ -34,11 +34,15 @@ else:  # the engine and its kernels load when the command runs, not for --help
 @click.option("--refine", type=click.IntRange(0, 64), default=0, show_default=True,
               help="Steps along each grid edge the workspace's boundary crosses, for a size that varies smoothly with "
                    "the design (0: inside poses times the cell; docs/workspace.md).")
+@click.option("--limit", "limit_items", multiple=True, metavar="KEY=VALUE",
+              help="Raise a limit of the description's [limits], e.g. max_workspace_poses=400000 (the grid's poses, "
+                   "default 100,000; docs/mechanism_format.md). Repeatable.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder (an earlier run of this command there is replaced whole).")
 def workspace_command(machine: str, grid: str, pose: str, orientation_range: str | None, threshold: float,
-                      centre: str | None, refine: int, out_dir: Path) -> None:
+                      centre: str | None, refine: int, limit_items: tuple[str, ...], out_dir: Path) -> None:
     """The reachable workspace within the joint limits and away from every singularity, on a grid
     of task poses: its size with an error estimate, the largest inscribed cube and cylinder about a
     centre, dexterity statistics, a map."""
-    show(job.job(machine, grid, pose, orientation_range, threshold, centre, refine, out_dir, announce=list_files))
+    show(job.job(machine, grid, pose, orientation_range, threshold, centre, refine, out_dir, announce=list_files,
+                 limit_items=limit_items))

@@ -18,7 +18,10 @@ from ..multibody.analyses.workspace import (
     workspace,
     workspace_document,
 )
+from ..multibody.description.schema import LIMIT_KEYS
+from ..multibody.dynamics.actuators import effective_limits
 from ..multibody.model.compiler import MechanismModel
+from ..params_util import parse_limit_options
 from ..report import write_report
 from ._files import JobResult, prepare, write
 
@@ -26,14 +29,19 @@ __all__ = ["job"]
 
 
 def job(machine: str, grid: str, pose: str, orientation_range: str | None, threshold: float, centre: str | None,
-        refine: int, out_dir: Path, announce: Callable[[Mapping[str, Path]], None] | None = None) -> JobResult:
+        refine: int, out_dir: Path, announce: Callable[[Mapping[str, Path]], None] | None = None,
+        limit_items: tuple[str, ...] = ()) -> JobResult:
     """The reachable workspace of ``machine`` on the grid ``grid`` (``NAME=LOW:HIGH:COUNT,...``) with
     the other task coordinates held at ``pose`` (over ``orientation_range`` where given), inside
     where every singularity measure is at least ``threshold``; the inscribed cube and cylinder
-    about ``centre`` (``V1,V2,...``; default the pose's); ``refine`` steps along each boundary edge."""
-    p = prepare(machine, out_dir)
+    about ``centre`` (``V1,V2,...``; default the pose's); ``refine`` steps along each boundary edge;
+    ``limit_items``: ``--limit KEY=VALUE`` over the description's ``[limits]`` (the grid's poses:
+    ``max_workspace_poses``)."""
+    limits = parse_limit_options(limit_items, LIMIT_KEYS)
+    p = prepare(machine, out_dir, limits=limits)
     model = p.model
-    axes = parse_grid(model, grid, max_axes=3)
+    axes = parse_grid(model, grid, max_axes=3, max_points=int(effective_limits(model, limits)["max_workspace_poses"]),
+                      limit_key="max_workspace_poses")
     base = parse_pose(model, pose)
     ranges = None if orientation_range is None else parse_ranges(model, orientation_range)
     c = None

@@ -58,10 +58,11 @@ def parse_pose(model: MechanismModel, text: str) -> Array:
 
 
 def parse_grid(model: MechanismModel, text: str, max_axes: int = 2, max_points: int = MAX_GRID_POINTS,
-               what: str = "--grid") -> list[tuple[int, Array]]:
+               what: str = "--grid", limit_key: str | None = None) -> list[tuple[int, Array]]:
     """``"x=-0.1:0.1:21,y=-0.1:0.1:21"`` -> up to ``max_axes`` (task coordinate, values) axes,
     each ``lo:hi:count`` (count 2 to 1,000), about the reference pose; at most ``max_points``
-    poses in all; ``what``: the option named in messages."""
+    poses in all (``limit_key``: the ``[limits]`` key that sets it, named in the refusal);
+    ``what``: the option named in messages."""
     axes: list[tuple[int, Array]] = []
     for item in filter(None, (s.strip() for s in text.split(","))):
         key, sep, val = item.partition("=")
@@ -82,7 +83,8 @@ def parse_grid(model: MechanismModel, text: str, max_axes: int = 2, max_points: 
     if not 1 <= len(axes) <= max_axes:
         raise ParameterError(f"{what}: give one to {max_axes} task coordinates")
     if math.prod(len(v) for _, v in axes) > max_points:
-        raise ParameterError(f"{what}: more than {max_points:,} poses")
+        raise ParameterError(f"{what}: more than {max_points:,} poses"
+                             + (f" (the limit {limit_key}; raise it with --limit {limit_key}=N)" if limit_key else ""))
     return axes
 
 
