@@ -122,3 +122,29 @@ def test_drives_export_as_gear_armature_and_damping_and_give_the_motor_torques()
         # J_ax^T k tau = G^T Q (the virtual work of the motors through the loop closure)
         tau_mj = np.linalg.solve(kin.J_ax[s].T * k, kin.G[s].T @ Q)
         assert np.abs(tau_mj - tau[s]).max() <= 1e-9 * np.abs(tau[s]).max()
+
+
+@pytest.mark.parametrize("name", ["stewart", "delta"])
+def test_joint_limits_export_as_ranges_of_mujocos_coordinate(name):
+    """A limited tree joint is ``limited`` in MuJoCo with its range in MuJoCo's coordinate (the
+    displacement from the reference): a pose inside the description's limits is inside the
+    range, the limits themselves land on the range's ends; unlimited joints stay unlimited."""
+    m = load_mechanism(CASES[name]())
+    mm = mujoco.MjModel.from_xml_string(mechanism_mjcf(m))
+    cut = set(m.loop_joint.tolist())
+    limited = 0
+    for j, lim in enumerate(m.joint_limits):
+        if m.joint_nq[j] != 1 or j in cut:  # (a cut joint is an equality constraint in MuJoCo)
+            continue
+        jid = mm.joint(m.joint_names[j]).id
+        if lim is None:
+            assert not mm.jnt_limited[jid]
+            continue
+        limited += 1
+        assert mm.jnt_limited[jid]
+        c = int(m.joint_q0[j])
+        for q_value, end in ((lim[0], 0), (lim[1], 1)):
+            q = m.coord_offset.copy()
+            q[c] = q_value
+            assert mujoco_qpos(m, q, mm)[mm.jnt_qposadr[jid]] == pytest.approx(mm.jnt_range[jid, end], abs=1e-12)
+    assert limited == sum(lim is not None for j, lim in enumerate(m.joint_limits) if j not in cut) > 0

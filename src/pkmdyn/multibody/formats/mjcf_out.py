@@ -93,6 +93,18 @@ def mujoco_qpos(model: MechanismModel, q: Array, mj_model) -> Array:
     return out
 
 
+def _limits(model: MechanismModel, j: int, c: int) -> str:
+    """A tree joint coordinate's MJCF ``limited`` and ``range``: the description's limits of a
+    one-coordinate joint (``limits_m``, ``limits_rad``) in MuJoCo's coordinate, the displacement
+    from the reference (:func:`mujoco_qpos`); unlimited otherwise. (A cut joint is an equality
+    constraint in MuJoCo, with no place for its limits.)"""
+    lim = model.joint_limits[j]
+    if lim is None or int(model.joint_nq[j]) != 1:
+        return 'limited="false"'
+    off = float(model.coord_offset[c])
+    return f'limited="true" range="{lim[0] - off:.17g} {lim[1] - off:.17g}"'
+
+
 def massless_bodies(model: MechanismModel) -> list[str]:
     """The moving bodies without mass (MuJoCo needs one)."""
     return [model.body_names[b] for b in range(model.nb) if float(model.mass[b]) <= 0.0]
@@ -163,7 +175,7 @@ def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3, solref: tuple[
             axis = model.coord_sign[c] * Rc[:, mcode % 3]
             kind = "hinge" if mcode < 3 else "slide"
             lines.append(f'{ind}  <joint name="{names[c]}" type="{kind}" pos="{_v(pc)}" axis="{_v(axis)}" '
-                         f'limited="false"{drive_attrs.get(c, "")}/>')
+                         f'{_limits(model, k, c)}{drive_attrs.get(c, "")}/>')
         for ch in children.get(b, []):
             body(ch, depth + 1)
         lines.append(f"{ind}</body>")
