@@ -424,8 +424,8 @@ def mujoco_part(seconds: float) -> dict[str, Any]:
     Rr = euler_kinematics(seq, long.angles[:K], long.rates[:K], long.accels[:K])[0]
     ff = verbs.inverse_dynamics(cm, long.angles[:K], long.rates[:K], long.accels[:K], np.zeros(K))
     qpos_r, qvel_r, _, kin = mujoco_state(long.angles[:K], long.rates[:K], long.accels[:K])
-    # the motors' angles: the slide joints' qpos (from the reference configuration, the zero pose)
-    # times their gear, the drives' ratio 2 pi / p
+    # the motors' angles: the slide joints' qpos (the sliders' positions, each joint's ref its
+    # reference value) times their gear, the drives' ratio 2 pi / p
     gear = np.asarray(mech.drive_ratio, dtype=float)
     slide = order[np.asarray(mech.act_coord)]
     theta_ref = qpos_r[:, slide] * gear

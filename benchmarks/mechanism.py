@@ -518,7 +518,7 @@ def _stewart_loops(out: dict, m, seconds: float = 2.0) -> None:
     prep = time.perf_counter() - t0
     o = mujoco_order(m, mm)
     act = o[m.act_coord]
-    s_ref = kin.act_q - m.coord_offset[m.act_coord]
+    s_ref = kin.act_q  # (the exported joints carry their reference values as ref: qpos = q)
     kp, kd = 2e4, 4e2  # [N/m, N s/m] on the legs
     walls = []
     for _ in range(3):  # the best of three, as pkmdyn's

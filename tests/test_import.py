@@ -46,12 +46,13 @@ def _moving(model, seed=0):
     return mo, solve_kinematics(model, mo.x, mo.xd, mo.xdd, mo.t)
 
 
-def _same_motion(m0, kin0, t, m1):
+def _same_motion(m0, kin0, t, m1, keeps_origin=False):
     """Kinematics of ``m1`` (an export of ``m0`` read back) along ``m0``'s actuator motion: the
-    export's joint coordinates are ``m0``'s less their reference values."""
+    export's joint coordinates are ``m0``'s themselves where the format keeps their origin (MJCF,
+    each joint's ``ref``), else ``m0``'s less their reference values (URDF has no place for them)."""
     idx = [m1.actuator_names.index(n) for n in m0.actuator_names]
     s, sd, sdd = (np.empty_like(kin0.act_q) for _ in range(3))
-    s[:, idx] = kin0.act_q - m0.coord_offset[m0.act_coord]
+    s[:, idx] = kin0.act_q if keeps_origin else kin0.act_q - m0.coord_offset[m0.act_coord]
     sd[:, idx], sdd[:, idx] = kin0.act_qd, kin0.act_qdd
     dk = direct_kinematics(m1, s, sd, sdd, t)
     return solve_kinematics(m1, dk.x, dk.xd, dk.xdd, t), idx
@@ -75,9 +76,13 @@ def test_builtin_export_import_round_trip(name, fmt, tmp_path):
     assert m1.nq == m0.nq and m1.nb == m0.nb
     assert np.isclose(m1.mass.sum(), m0.mass.sum(), rtol=1e-14)
     mo, k0 = _moving(m0)
-    k1, idx = _same_motion(m0, k0, mo.t, m1)
+    k1, idx = _same_motion(m0, k0, mo.t, m1, keeps_origin=fmt == "mjcf")
     u0, u1 = _efforts(m0, k0), _efforts(m1, k1)[:, idx]
     assert np.abs(u1 - u0).max() <= REL * np.abs(u0).max()
+    if fmt == "mjcf":  # the limits come back in the same coordinate
+        for j, lim in enumerate(m0.joint_limits):
+            if lim is not None and j not in set(m0.loop_joint.tolist()):
+                assert m1.joint_limits[m1.joint_names.index(m0.joint_names[j])] == pytest.approx(lim, abs=1e-12)
 
 
 # -- a planar five-bar written in other formats ------------------------------------------------

@@ -126,9 +126,9 @@ def test_drives_export_as_gear_armature_and_damping_and_give_the_motor_torques()
 
 @pytest.mark.parametrize("name", ["stewart", "delta"])
 def test_joint_limits_export_as_ranges_of_mujocos_coordinate(name):
-    """A limited tree joint is ``limited`` in MuJoCo with its range in MuJoCo's coordinate (the
-    displacement from the reference): a pose inside the description's limits is inside the
-    range, the limits themselves land on the range's ends; unlimited joints stay unlimited."""
+    """A limited tree joint is ``limited`` in MuJoCo with its range in MuJoCo's coordinate
+    (:func:`mujoco_qpos`): the limits themselves land on the range's ends; unlimited joints
+    stay unlimited; every joint's ``qpos0`` (its ``ref``) is the tree coordinate's reference value."""
     m = load_mechanism(CASES[name]())
     mm = mujoco.MjModel.from_xml_string(mechanism_mjcf(m))
     cut = set(m.loop_joint.tolist())
@@ -148,3 +148,4 @@ def test_joint_limits_export_as_ranges_of_mujocos_coordinate(name):
             q[c] = q_value
             assert mujoco_qpos(m, q, mm)[mm.jnt_qposadr[jid]] == pytest.approx(mm.jnt_range[jid, end], abs=1e-12)
     assert limited == sum(lim is not None for j, lim in enumerate(m.joint_limits) if j not in cut) > 0
+    np.testing.assert_allclose(mm.qpos0, mujoco_qpos(m, m.coord_offset, mm), rtol=0, atol=1e-15)

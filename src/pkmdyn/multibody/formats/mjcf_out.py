@@ -17,9 +17,12 @@ Each tree coordinate is a ``hinge`` or ``slide`` joint (named ``<joint>`` for on
 joints, ``<joint>_<k>`` otherwise) at the joint centre along its elementary-motion axis in the
 body frame (a joint traversed from its child: reversed order, negated axes); MuJoCo applies a
 body's joints in order, each axis turned by the previous ones, which is the product of
-elementary motions of :mod:`pkmdyn.multibody.description.joint_types`. ``qpos`` is therefore the tree coordinate vector
-``q`` less its reference offsets (``q - coord_offset``), ``qvel = qd``, ``qacc = qdd``, each in
-MuJoCo's joint order (:func:`mujoco_order`).
+elementary motions of :mod:`pkmdyn.multibody.description.joint_types`, with its reference value
+as the joint's ``ref`` (the value at which the body sits where the file places it). ``qpos`` is
+therefore the tree coordinate vector ``q`` itself (a leg length stays a leg length through an
+export and an import), ``qvel = qd``, ``qacc = qdd``, each in MuJoCo's joint order
+(:func:`mujoco_order`); a limited revolute or prismatic joint is ``limited`` with its limits as
+``range``.
 Actuated joints get a ``motor`` (control = effort [N or N m]); a joint with a drive
 (``[[actuators]]``) a motor named after the drive with ``gear`` = its transmission ratio k
 (control = motor effort [N m]), its rotor as the joint's ``armature`` (``k^2 I_r``) and its
@@ -86,23 +89,23 @@ def mujoco_order(model: MechanismModel, mj_model) -> Array:
 
 
 def mujoco_qpos(model: MechanismModel, q: Array, mj_model) -> Array:
-    """MuJoCo ``qpos (nq,)`` of tree coordinates ``q (nq,)``: ``q - coord_offset``, in MuJoCo's order
-    (rates and accelerations: the same permutation without the offset, :func:`mujoco_order`)."""
+    """MuJoCo ``qpos (nq,)`` of tree coordinates ``q (nq,)``: ``q`` itself (each joint's ``ref`` is
+    its reference value) in MuJoCo's order (rates and accelerations: the same permutation,
+    :func:`mujoco_order`)."""
     out = np.empty(model.nq)
-    out[mujoco_order(model, mj_model)] = np.asarray(q, dtype=float) - model.coord_offset
+    out[mujoco_order(model, mj_model)] = np.asarray(q, dtype=float)
     return out
 
 
-def _limits(model: MechanismModel, j: int, c: int) -> str:
-    """A tree joint coordinate's MJCF ``limited`` and ``range``: the description's limits of a
-    one-coordinate joint (``limits_m``, ``limits_rad``) in MuJoCo's coordinate, the displacement
-    from the reference (:func:`mujoco_qpos`); unlimited otherwise. (A cut joint is an equality
-    constraint in MuJoCo, with no place for its limits.)"""
+def _coordinate_attrs(model: MechanismModel, j: int, c: int) -> str:
+    """A tree joint coordinate's MJCF ``ref`` (its reference value) with ``limited`` and ``range``:
+    the description's limits of a one-coordinate joint (``limits_m``, ``limits_rad``), unlimited
+    otherwise. (A cut joint is an equality constraint in MuJoCo, with no place for its limits.)"""
+    ref = f'ref="{float(model.coord_offset[c]):.17g}" '
     lim = model.joint_limits[j]
     if lim is None or int(model.joint_nq[j]) != 1:
-        return 'limited="false"'
-    off = float(model.coord_offset[c])
-    return f'limited="true" range="{lim[0] - off:.17g} {lim[1] - off:.17g}"'
+        return ref + 'limited="false"'
+    return ref + f'limited="true" range="{lim[0]:.17g} {lim[1]:.17g}"'
 
 
 def massless_bodies(model: MechanismModel) -> list[str]:
@@ -175,7 +178,7 @@ def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3, solref: tuple[
             axis = model.coord_sign[c] * Rc[:, mcode % 3]
             kind = "hinge" if mcode < 3 else "slide"
             lines.append(f'{ind}  <joint name="{names[c]}" type="{kind}" pos="{_v(pc)}" axis="{_v(axis)}" '
-                         f'{_limits(model, k, c)}{drive_attrs.get(c, "")}/>')
+                         f'{_coordinate_attrs(model, k, c)}{drive_attrs.get(c, "")}/>')
         for ch in children.get(b, []):
             body(ch, depth + 1)
         lines.append(f"{ind}</body>")
