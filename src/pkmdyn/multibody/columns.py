@@ -126,7 +126,7 @@ def model_summary(model: MechanismModel) -> dict[str, Any]:
 
 
 def _drive_entry(model: MechanismModel, i: int) -> dict[str, Any]:
-    """One drive of model.json (multibody.actuators, Eq. A1), its keys in the motor's units:
+    """One drive of model.json (multibody.dynamics.actuators, Eq. A1), its keys in the motor's units:
     ``name``, ``joint``, ``kind`` (``rotary`` or ``linear``), ``ratio`` (motor coordinate per
     joint coordinate, ``theta = ratio q``), ``screw_lead_m`` and ``gear_ratio`` as given, the
     rotor, friction and limits (null when not given), ``encoder_resolution`` (motor travel per

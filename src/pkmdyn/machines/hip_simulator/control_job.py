@@ -7,7 +7,7 @@ hip's description (:func:`.description.hip_description`), under the paper's name
 ``alpha_rad, beta_rad, gamma_rad`` (the description's ``euler1_rad .. euler3_rad``, the upper
 platform's Euler angles in the parameter file's sequence), efforts ``tau1_Nm .. tau3_Nm`` (the
 motors ``motor_1 .. motor_3``), load the hydraulic force [N] (the named load ``hydraulic_N``). A
-model is a :class:`pkmdyn.multibody.dynamics.verbs.GeneratedModel`: the parameters (for the motion and the report) and their
+model is a :class:`pkmdyn.machines.generated.GeneratedModel`: the parameters (for the motion and the report) and their
 compiled description. The 3D scene is the engine's drawing of the description (each body
 through its joint centres, the actuated sliders as chains coloured by their motor's torque).
 """
@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from ... import multibody as _multibody
     from ... import params_util as _params_util
     from ...multibody import scene as _scene
-    from ...multibody.dynamics import verbs as _verbs
+    from .. import generated as _generated
     from . import description as _description
     from . import paper as _paper
     from . import params as _params
@@ -41,7 +41,7 @@ else:  # loaded when a command runs, not on import (nor for --help)
     _paper = lazy_module("pkmdyn.machines.hip_simulator.paper")
     _params = lazy_module("pkmdyn.machines.hip_simulator.params")
     _multibody = lazy_module("pkmdyn.multibody")
-    _verbs = lazy_module("pkmdyn.multibody.dynamics.verbs")
+    _generated = lazy_module("pkmdyn.machines.generated")
     _scene = lazy_module("pkmdyn.multibody.scene")
     _params_util = lazy_module("pkmdyn.params_util")
 
@@ -64,11 +64,11 @@ ACTUATORS = ("tau1_Nm", "tau2_Nm", "tau3_Nm")
 def control_model(params: Any) -> Any:
     """The control model of the parameters ``params`` (their description compiled)."""
 
-    return _verbs.GeneratedModel(params, _multibody.load_mechanism(_description.hip_description(params)))
+    return _generated.GeneratedModel(params, _multibody.load_mechanism(_description.hip_description(params)))
 
 
 def verbs(model: Any) -> Any:
-    return _verbs.RenamedVerbs(model.mechanism, COORDINATES, ACTUATORS)
+    return _generated.RenamedVerbs(model.mechanism, COORDINATES, ACTUATORS)
 
 
 def read_description(params: Path | None) -> tuple[dict[str, Any], str]:

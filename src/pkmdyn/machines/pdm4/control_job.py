@@ -5,7 +5,7 @@ paper's Fig. 26) and the 3D scene of ``pkmdyn pdm control``.
 The dynamics are the generic engine's (:class:`pkmdyn.multibody.dynamics.verbs.MechanismVerbs`) on the
 PDM's description (:func:`.description.pdm_description`), under the paper's names: coordinates
 ``x_m, y_m, alpha_rad, gamma_rad``, efforts ``f1_N .. f4_N`` (the limbs l11, l12, l23, l24; the
-description's ``P11 .. P24`` in the same order). A model is a :class:`pkmdyn.multibody.dynamics.verbs.GeneratedModel`: the
+description's ``P11 .. P24`` in the same order). A model is a :class:`pkmdyn.machines.generated.GeneratedModel`: the
 parameters (for the motion and the scene) and their compiled description.
 """
 
@@ -27,7 +27,7 @@ from ...report import TimePlot
 if TYPE_CHECKING:
     from ... import multibody as _multibody
     from ... import params_util as _params_util
-    from ...multibody.dynamics import verbs as _verbs
+    from .. import generated as _generated
     from . import description as _description
     from . import params as _params
     from . import report as _report
@@ -38,7 +38,7 @@ else:  # loaded when a command runs, not on import (nor for --help)
     _report = lazy_module("pkmdyn.machines.pdm4.report")
     _scene = lazy_module("pkmdyn.machines.pdm4.scene")
     _multibody = lazy_module("pkmdyn.multibody")
-    _verbs = lazy_module("pkmdyn.multibody.dynamics.verbs")
+    _generated = lazy_module("pkmdyn.machines.generated")
     _params_util = lazy_module("pkmdyn.params_util")
 
 NAME = "pdm"
@@ -60,11 +60,11 @@ ACTUATORS = ("f1_N", "f2_N", "f3_N", "f4_N")
 
 def control_model(params: Any) -> Any:
 
-    return _verbs.GeneratedModel(params, _multibody.load_mechanism(_description.pdm_description(params)))
+    return _generated.GeneratedModel(params, _multibody.load_mechanism(_description.pdm_description(params)))
 
 
 def verbs(model: Any) -> Any:
-    return _verbs.RenamedVerbs(model.mechanism, COORDINATES, ACTUATORS)
+    return _generated.RenamedVerbs(model.mechanism, COORDINATES, ACTUATORS)
 
 
 def read_description(params: Path | None) -> tuple[dict[str, Any], str]:

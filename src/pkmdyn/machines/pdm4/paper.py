@@ -3,7 +3,7 @@
 reactions of the PDM's description (:func:`.description.pdm_description`).
 
 Nothing here solves the mechanism: :func:`pkmdyn.multibody.solve_kinematics` and
-:func:`pkmdyn.multibody.joint_reactions` do, for the PDM as for any described mechanism. This
+:func:`pkmdyn.multibody.dynamics.joint_reactions` do, for the PDM as for any described mechanism. This
 module renames and re-expresses what they give:
 
 - the crank and coupler angles ``theta_1i, theta_2i`` (Eq. 7, 12) and the RPR limb angles

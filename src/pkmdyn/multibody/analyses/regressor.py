@@ -171,7 +171,7 @@ def regressor(model: MechanismModel, kin: MechanismKinematics, named: dict | Non
     u0 = actuator_efforts(model, kin, generalised_forces(model, S, W0))
     if not model.has_drives:
         return Regressor(Y=Y, u0=u0, names=tuple(names), theta=np.array(theta))
-    # the motor efforts (multibody.actuators, Eq. A1): the joint's columns through the transmission,
+    # the motor efforts (multibody.dynamics.actuators, Eq. A1): the joint's columns through the transmission,
     # then per drive its rotor inertia and its motor's Coulomb and viscous coefficients
     k = model.drive_ratio
     Y = Y / k[None, :, None]

@@ -23,6 +23,5 @@ __getattr__, __dir__ = attach(__name__, {
                      ".newton_euler"),
     **dict.fromkeys(("ComplianceDataMissing", "beam_terms", "compliance_terms", "compliant_reactions",
                      "elastic_bodies", "joint_spring_terms"), ".reactions"),
-    **dict.fromkeys(("GeneratedModel", "MechanismData", "MechanismVerbs", "RenamedVerbs", "machine_verbs",
-                     "motion_scene"), ".verbs"),
+    **dict.fromkeys(("MechanismData", "MechanismVerbs", "machine_verbs"), ".verbs"),
 })

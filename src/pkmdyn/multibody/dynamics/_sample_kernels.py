@@ -501,7 +501,7 @@ def _dynamics(pk, x, xd, v, load, mode, out):  # pragma: no cover - compiled
         h[t] = acc
     # ---- 4. the task mass matrix
     task_mass(S, Gp, body_parent, body_joint, joint_q0, joint_nq, R, pc, mass, inertia_factor, M, T, Z, tmp)
-    # ---- 4b. the drives (multibody.actuators, Eq. A1): rotor inertia k^2 I_r along each actuator's
+    # ---- 4b. the drives (multibody.dynamics.actuators, Eq. A1): rotor inertia k^2 I_r along each actuator's
     # row of J_ax, its bias acceleration and the motor friction, in the motor's effort
     nd = ratio.shape[0]  # 0 without drives (pack), else one per actuator
     for a in range(nd):

@@ -44,7 +44,6 @@ controller's and the plant's apart.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -72,7 +71,7 @@ from .newton_euler import (
     task_mass_matrix,
 )
 
-__all__ = ["MechanismData", "MechanismVerbs", "machine_verbs", "GeneratedModel", "RenamedVerbs", "mass_matrix",
+__all__ = ["MechanismData", "MechanismVerbs", "machine_verbs", "mass_matrix",
            "actuator_map", "actuator_accelerations", "bias_forces", "inverse_dynamics", "forward_dynamics",
            "one_sample_kernels", "inverse_dynamics_one", "forward_dynamics_one", "drive_ratios",
            "actuator_coordinates_one", "prime_direct", "encoder_buffers", "direct_task_buffers", "direct_one"]
@@ -683,41 +682,3 @@ class MechanismVerbs:
 def machine_verbs(model: MechanismModel) -> MechanismVerbs:
     """The :class:`pkmdyn.machine_protocol.MachineDynamics` verbs of a described mechanism."""
     return MechanismVerbs(model)
-
-
-@dataclass(frozen=True)
-class GeneratedModel:
-    """A machine generated as a description (a paper's machine): its own parameters ``params``
-    (for its motions and drawings) and the compiled mechanism of their description, the model
-    :class:`RenamedVerbs` run on."""
-
-    params: Any
-    mechanism: MechanismModel
-
-
-class RenamedVerbs:
-    """The verbs of a machine generated as a description (a paper's machine), under its own
-    names: ``COORDINATES`` and ``ACTUATORS`` renamed (same order and units as the
-    description's), every verb the :class:`MechanismVerbs` one of the compiled mechanism that
-    its models carry as ``.mechanism`` (a model object that also carries the paper's
-    parameters, for its motions and drawings)."""
-
-    def __init__(self, mechanism: MechanismModel, coordinates: tuple[str, ...], actuators: tuple[str, ...]) -> None:
-        if len(coordinates) != mechanism.nt or len(actuators) != mechanism.na:
-            raise ParameterError(f"mechanism {mechanism.name!r}: {mechanism.nt} task coordinates and {mechanism.na} "
-                                 f"actuators, renamed as {len(coordinates)} and {len(actuators)}")
-        self._verbs = MechanismVerbs(mechanism)
-        self.COORDINATES = tuple(coordinates)
-        self.ACTUATORS = tuple(actuators)
-
-    def __getattr__(self, name: str) -> Any:
-        verb = None if name.startswith("_") else getattr(self._verbs, name, None)
-        if not callable(verb):
-            raise AttributeError(name)
-
-        def on_mechanism(model: Any, *args: Any, **kwargs: Any) -> Any:
-            return verb(model.mechanism, *args, **kwargs)
-
-        on_mechanism.__doc__ = verb.__doc__
-        setattr(self, name, on_mechanism)  # made once: a loop's calls then find it as an attribute
-        return on_mechanism

@@ -149,7 +149,7 @@ def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3, solref: tuple[
              "  <default>", f'    <equality solref="{_v(solref)}" solimp="{_v(solimp)}"/>', "  </default>",
              "  <worldbody>"]
 
-    # a drive on the joint (multibody.actuators): its rotor reflected as armature k^2 I_r, its
+    # a drive on the joint (multibody.dynamics.actuators): its rotor reflected as armature k^2 I_r, its
     # motor's viscous friction as damping k^2 b and Coulomb friction as frictionloss k C
     drive_attrs: dict[int, str] = {}
     for i, j in enumerate(model.act_joint):
