@@ -165,7 +165,7 @@ def workspace(model: Any, grid: str, pose: str = "", threshold: float = 1e-3, or
 
 
 def identification(model: Any, kin: Any, u: Array, loads: Mapping[str, Array] | None = None,
-             rank_tol: float = DEFAULT_RANK_TOL) -> Any:
+                   rank_tol: float = DEFAULT_RANK_TOL) -> Any:
     """Every body's inertial parameters and every joint's friction coefficients fitted to the
     efforts ``u (n, na)`` measured along ``kin``, one column per actuator in the order and unit
     :func:`pkmdyn.identify.described.effort_columns` names (a drive's motor effort, else the
