@@ -249,6 +249,10 @@ def test_sweep_reports_the_workspace_of_every_design(tmp_path):
         assert r["workspace_size_m3"] == pytest.approx(ws.size, rel=1e-12)
         assert r["workspace_inside_share"] == pytest.approx(ws.inside.mean())
         assert r["workspace_min_measure"] == pytest.approx(ws.measure[ws.inside].min(), rel=1e-12)
+        assert r["workspace_size_error_m3"] == pytest.approx(ws.size_error, rel=1e-12)
+        cube = ws.inside.reshape(5, 5, 3)  # an inside pose on a face of the grid: the size is a lower bound
+        on_edge = any(np.take(cube, e, axis=a).any() for a in range(3) for e in (0, -1))
+        assert r["workspace_at_grid_edge"] == (1.0 if on_edge else 0.0)
     assert rows[0]["workspace_size_m3"] != rows[1]["workspace_size_m3"]
 
 

@@ -66,7 +66,7 @@ from ..model.compiler import (
 )
 from .stiffness import compliance_sources, stiffness
 from .task_grid import parse_grid, parse_pose, parse_ranges
-from .workspace import size_unit, workspace
+from .workspace import edges_reached, size_unit, workspace
 
 __all__ = ["DescribedSweep", "DescribedSweepContext", "DesignState", "evaluate_model", "GeneratedMotion",
            "GeneratedSweep", "GeneratedSweepContext"]
@@ -278,7 +278,13 @@ class DescribedSweep:
             out += [MetricInfo(name, unit, "the size of the workspace on [motion] workspace_grid (inside poses times "
                                            "the grid cell, or from the boundary's crossings of the grid's edges with "
                                            "workspace_refine; docs/workspace.md)"),
-                    MetricInfo("workspace_inside_share", "-", "the share of the grid's poses inside the workspace")]
+                    MetricInfo(f"workspace_size_error_{unit.replace(' ', '_')}", unit,
+                               "the size's error estimate (docs/workspace.md, half the cells the boundary "
+                               "crosses, or the refined size's)"),
+                    MetricInfo("workspace_inside_share", "-", "the share of the grid's poses inside the workspace"),
+                    MetricInfo("workspace_at_grid_edge", "-",
+                               "1 where an inside pose lies on the grid's edge (the workspace may go on beyond "
+                               "the grid: its size is a lower bound), else 0")]
             if options.get("workspace_measure", True) is True:
                 out.append(MetricInfo("workspace_min_measure", "-",
                                       "the least singularity measure over the inside poses"))
@@ -544,8 +550,11 @@ def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple
                 return DesignOutcome("invalid", str(exc), m), state
     if "workspace" in grids:
         ws = grids["workspace"]
-        m[_workspace_size_name(model, ctx.workspace[0])[0]] = ws.size  # type: ignore[index]
+        size_name, size_unit_name = _workspace_size_name(model, ctx.workspace[0])  # type: ignore[index]
+        m[size_name] = ws.size
+        m[f"workspace_size_error_{size_unit_name.replace(' ', '_')}"] = float(ws.size_error)
         m["workspace_inside_share"] = float(ws.inside.mean())
+        m["workspace_at_grid_edge"] = 1.0 if edges_reached(model, ws) else 0.0
         if not ws.inside.any():
             return DesignOutcome("unreachable", "no pose of [motion] workspace_grid is inside the workspace", m), state
         if ctx.workspace_measure:
