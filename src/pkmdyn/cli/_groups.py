@@ -12,14 +12,12 @@ import click
 
 from .._lazy import lazy_module
 from ..errors import PkmdynError
-from ..io import atomic_file
-from ..machines.registry import generated
 from ..profiles._columns import check_smoothing
 
 if TYPE_CHECKING:
-    from .. import control as _control
-else:  # the control settings' reader loads when a file is asked for, not for --help
-    _control = lazy_module("pkmdyn.control")
+    from ..jobs import params as _params_job
+else:  # the parameter files' writers load when a file is asked for, not for --help
+    _params_job = lazy_module("pkmdyn.jobs.params")
 
 __all__ = ["cli", "pdm", "PATH_IN", "MACHINE_HELP", "FiniteFloat", "list_files", "echo_lines", "echo", "show"]
 
@@ -115,18 +113,6 @@ def echo_lines(lines: list[str]) -> None:
 HELD_NOTES: list[str] = []
 
 
-def write_default_file(machine: str, control: bool, out_path: Path) -> None:
-    """Write a machine's built-in parameter file (or, with ``control``, its control settings) to
-    ``out_path`` for a user to edit, under the output rule (:func:`pkmdyn.io.atomic_file`)."""
-    if control:
-        text, what = _control.default_settings_text(machine), "control settings"
-    else:
-        text, what = generated(machine).default_params_text(), "parameters"
-    with atomic_file(out_path) as tmp:
-        tmp.write_text(text, encoding="utf-8")
-        echo(f"{what}: {out_path}")
-
-
 def params_command(group: click.Group, machine: str, option: str) -> None:
     """Register ``pkmdyn MACHINE params`` on ``group``."""
 
@@ -139,4 +125,4 @@ def params_command(group: click.Group, machine: str, option: str) -> None:
     def params(control: bool, out_path: Path) -> None:
         """Write the built-in parameter file (TOML), every key with its unit and a comment, to edit and pass
         as --params (or, with --control, the control settings to pass as --gains)."""
-        write_default_file(machine, control, out_path)
+        show(_params_job.job(machine, out_path, control=control, announce=list_files))
