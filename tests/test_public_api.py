@@ -83,8 +83,10 @@ def test_the_workspace_verb_is_the_commands(example, tmp_path, capsys):
     with open(tmp_path / "ws" / "workspace.csv") as fh:
         rows = list(csv.DictReader(fh))
     assert len(rows) == len(ws.x)
-    np.testing.assert_array_equal([float(r["inside"]) for r in rows], ws.inside.astype(float))
-    np.testing.assert_allclose([float(r["x_m"]) for r in rows], ws.x[:, 0], rtol=0, atol=1e-15)
+    cols = ws.columns()  # the file's columns, each
+    assert list(cols) == list(rows[0])
+    for name, v in cols.items():
+        np.testing.assert_allclose([float(r[name]) for r in rows], v, rtol=1e-15, atol=0, err_msg=name)
     assert np.all(ws.reached[ws.inside]) and np.all(ws.measure[ws.inside] >= ws.threshold)
     far = pkmdyn.workspace(example["model"], "x_m=-3:3:5", pose="z_m=0.6")
     assert not far.inside.all() and far.inside[2] == far.inside.any()  # the grid's middle, if any pose

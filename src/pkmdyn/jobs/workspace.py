@@ -57,9 +57,7 @@ def job(machine: str, grid: str, pose: str, orientation_range: str | None, thres
     def make(out: Path) -> dict[str, Path]:
         files = {"workspace": out / "workspace.json", "poses": out / "workspace.csv", "map": out / "workspace.png"}
         write_json(files["workspace"], doc)
-        cols = {f"{n}_{u}": ws.x[:, i] for i, (n, u) in enumerate(zip(model.task_names, model.task_units))}
-        cols.update(reached=ws.reached.astype(float), inside=ws.inside.astype(float), singularity_measure=ws.measure)
-        write_csv(files["poses"], cols)
+        write_csv(files["poses"], ws.columns())
         workspace_png(files["map"], model, ws)
         files["report"] = write_report(out, title=f"{model.name}: workspace", scene=None, summary=doc,
                                        parameters=p.text, images=[files["map"]],

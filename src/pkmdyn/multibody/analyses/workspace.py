@@ -124,6 +124,18 @@ class Workspace:
     threshold: float
     #: steps of each boundary edge behind ``size`` (0: inside poses times the cell; :func:`refined_size`)
     refine: int = 0
+    #: the names of ``x``'s columns, each task coordinate with its unit (``x_m``, ``euler1_rad``, ...)
+    x_columns: tuple[str, ...] = ()
+
+    def columns(self) -> dict[str, Array]:
+        """``workspace.csv``'s columns by name (``docs/workspace.md``): every grid pose's task
+        coordinates (:attr:`x_columns`), ``reached`` and ``inside`` (1 or 0) and, where every
+        measure was asked for, ``singularity_measure`` (0 where not reached)."""
+        cols = {name: self.x[:, i] for i, name in enumerate(self.x_columns)}
+        cols.update(reached=self.reached.astype(float), inside=self.inside.astype(float))
+        if self.measure is not None:
+            cols["singularity_measure"] = self.measure
+        return cols
 
 
 def check_centre(centre: object, n: int) -> Array:
@@ -431,7 +443,8 @@ def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array 
                      size=size, size_error=size_error, unit=unit,
                      centre=c, cube_half_width=None if cube is None else max(cube, 0.0),
                      cylinder_radius=None if cylinder is None else max(cylinder, 0.0), threshold=float(threshold),
-                     refine=int(refine))
+                     refine=int(refine),
+                     x_columns=tuple(f"{n}_{u}" for n, u in zip(model.task_names, model.task_units)))
 
 
 def refined_size(inside: NDArray[np.bool_], shape: tuple[int, ...], a: NDArray[np.int64], axis: NDArray[np.int64],
