@@ -278,7 +278,7 @@ class DescribedSweep:
             out += [MetricInfo(name, unit, "the size of the workspace on [motion] workspace_grid (inside poses times "
                                            "the grid cell, or from the boundary's crossings of the grid's edges with "
                                            "workspace_refine; docs/workspace.md)"),
-                    MetricInfo(f"workspace_size_error_{unit.replace(' ', '_')}", unit,
+                    MetricInfo(name.replace("workspace_size_", "workspace_size_error_", 1), unit,
                                "the size's error estimate (docs/workspace.md, half the cells the boundary "
                                "crosses, or the refined size's)"),
                     MetricInfo("workspace_inside_share", "-", "the share of the grid's poses inside the workspace"),
@@ -550,9 +550,9 @@ def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple
                 return DesignOutcome("invalid", str(exc), m), state
     if "workspace" in grids:
         ws = grids["workspace"]
-        size_name, size_unit_name = _workspace_size_name(model, ctx.workspace[0])  # type: ignore[index]
+        size_name = _workspace_size_name(model, ctx.workspace[0])[0]  # type: ignore[index]
         m[size_name] = ws.size
-        m[f"workspace_size_error_{size_unit_name.replace(' ', '_')}"] = float(ws.size_error)
+        m[size_name.replace("workspace_size_", "workspace_size_error_", 1)] = float(ws.size_error)
         m["workspace_inside_share"] = float(ws.inside.mean())
         m["workspace_at_grid_edge"] = 1.0 if edges_reached(model, ws) else 0.0
         if not ws.inside.any():
