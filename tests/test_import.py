@@ -462,3 +462,15 @@ def test_more_bad_input(tmp_path, capsys):
     side = tmp_path / "arm.yaml"
     side.write_text("name_mot: [j1, j2]\ntask: {point: [1, a, 2]}\n")
     _refused(tmp_path, capsys, ["--from", str(urdf), "--sidecar", str(side)], r"arm\.yaml: task point: expected")
+
+
+def test_a_generic_robot_name_gives_way_to_the_files_name(tmp_path):
+    """A URDF that calls itself ``robot`` (as Gepetto's published loops do) is named after its
+    file; a URDF with a name of its own keeps it."""
+    generic = tmp_path / "five_bar_gepetto.urdf"
+    generic.write_text(five_bar_urdf("onshape").replace('<robot name="five_bar">', '<robot name="robot">'))
+    named = tmp_path / "other_file.urdf"
+    named.write_text(five_bar_urdf("onshape"))
+    for src, want in ((generic, "five_bar_gepetto"), (named, "five_bar")):
+        text, _ = import_description(src, "urdf", actuated=("mot1", "mot2"))
+        assert load_mechanism(tomllib.loads(text)).name == want

@@ -341,6 +341,7 @@ def urdf_graph(path: str | Path, sidecar: dict[str, Any] | None = None,
             raise ParameterError(f"{src}: actuated joint {nm!r}: no joint of that name")
     actuators = [Actuator(safe_name(nm, "motor"), safe_name(nm, "motor")) for nm in dict.fromkeys(mot)]
     g = np.array(side.get("gravity_m_s2", URDF_GRAVITY), dtype=float)
-    return Graph(name=Path(path).stem if model.name in ("", "onshape") else model.name, source=src, gravity=g,
-                 links=links, joints=joints, closures=closures, actuators=actuators, frames=frames, notes=notes,
-                 drives=list(side.get("actuators", [])))
+    # a generic robot name (Gepetto's files say "robot", onshape-to-robot's "onshape"): the file's own name
+    name = Path(path).stem if model.name in ("", "onshape", "robot") else model.name
+    return Graph(name=name, source=src, gravity=g, links=links, joints=joints, closures=closures, actuators=actuators,
+                 frames=frames, notes=notes, drives=list(side.get("actuators", [])))
