@@ -23,11 +23,12 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ._lazy import lazy_module
 from .errors import ParameterError
 from .identify._base import DEFAULT_RANK_TOL
 from .identify.described import effort_columns as measured_columns
@@ -37,14 +38,19 @@ from .multibody import default_motion as motion
 from .multibody import load_mechanism, solve_kinematics
 from .multibody.analyses.stiffness import stiffness as k
 from .multibody.analyses.task_grid import parse_grid, parse_pose, parse_ranges
-from .multibody.analyses.workspace import workspace as reach
 from .multibody.analyses.wear import WearOptions, joint_wear
+from .multibody.analyses.workspace import workspace as reach
 from .multibody.columns import effort_columns
 from .multibody.dynamics.actuators import motor_efforts
 from .multibody.dynamics.newton_euler import joint_reactions
 from .multibody.dynamics.verbs import machine_verbs
 from .multibody.kinematics.direct import assembly_modes as modes
 from .multibody.kinematics.direct import direct_kinematics as direct
+
+if TYPE_CHECKING:
+    from .jobs import sweep as _sweep_job
+else:  # the sweep (pydantic, PyArrow, Dask) loads when a sweep is asked for, not with the other verbs
+    _sweep_job = lazy_module("pkmdyn.jobs.sweep")
 
 __all__ = ["load", "default_motion", "kinematics", "Dynamics", "dynamics", "forward_dynamics", "direct_kinematics",
            "assembly_modes", "stiffness", "wear", "workspace", "identification", "Designs", "designs"]
@@ -201,12 +207,9 @@ def designs(machine: str | Path, space: str | Path, out_dir: str | Path, params:
     ``space`` spans, evaluated in this process (``workers`` 0; more: a local Dask cluster) into the
     folder ``out_dir`` as ``pkmdyn sweep`` writes it (a rerun there resumes; ``plots`` the PNGs);
     ``params``: a generated machine's base parameter file."""
-    # deferred: the sweep loads pydantic, PyArrow and Dask, which no other verb needs
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # deferred: no other verb needs PyArrow
 
-    from .jobs.sweep import run_sweep
-
-    report = run_sweep(sweep_adapter(str(machine)), space, out_dir, workers=workers, params=params,
+    report = _sweep_job.run_sweep(sweep_adapter(str(machine)), space, out_dir, workers=workers, params=params,
                        max_designs=max_designs, plots=plots, progress=False)
     table = pq.read_table(report.files["designs"])
     cols = {name: np.asarray(table.column(name).to_numpy(zero_copy_only=False)) for name in table.column_names}

@@ -106,9 +106,6 @@ def control(machine: str, controller: str | None, params_path: Path | None, plan
              if v is not None]
     if given:
         raise click.UsageError(f"{given[0]} applies to the generated machines (see pkmdyn machines), not to a described mechanism")
-    controller = controller or "computed-torque"
-    if controller not in DESCRIBED_CONTROLLERS:
-        raise click.UsageError(f"--controller {controller!r}: a described mechanism takes "
-                               + ", ".join(DESCRIBED_CONTROLLERS))
+    controller = controller or "computed-torque"  # (the job checks it against DESCRIBED_CONTROLLERS)
     show(control_job.described_job(machine, controller, out_dir, motion_path=motion_path, gains_path=gains_path,
                                    duration_s=duration_s, no_plots=no_plots, fmt=fmt, announce=list_files))
