@@ -584,3 +584,35 @@ def test_the_grids_pose_cap_is_a_limit_like_the_others(tmp_path, capsys):
     assert main(["workspace", "--machine", "delta", *grid, "--limit", "max_workspace_poses=29",
                  "--out", str(tmp_path / "b")]) == 2
     assert "more than 29 poses" in capsys.readouterr().err
+
+
+def test_the_slices_titles_clear_the_labels_of_the_row_above():
+    """A three-axis grid drawn as six slices in two rows: no slice's title box meets an axis
+    label box of the row above, and every box lies inside the figure."""
+    import matplotlib.pyplot as plt
+
+    from pkmdyn.jobs.workspace import workspace_figure
+
+    model = load_mechanism(MACHINES / "stewart" / "stewart.toml")
+    z = reference_task(model)[2]
+    axes = [(0, np.linspace(-0.2, 0.2, 4)), (3, np.linspace(-0.3, 0.3, 4)), (2, z + np.linspace(-0.1, 0.1, 6))]
+    fig = workspace_figure(model, workspace(model, axes))
+    try:
+        fig.canvas.draw()
+        r = fig.canvas.get_renderer()
+        axs = [a for a in fig.axes if a.get_title()]
+        assert len(axs) == 6
+        whole = fig.bbox
+        for upper in axs[:3]:
+            label = upper.xaxis.label.get_window_extent(r)
+            ticks = upper.xaxis.get_tightbbox(r)
+            for lower in axs[3:]:
+                title = lower.title.get_window_extent(r)
+                assert not title.overlaps(label) and not title.overlaps(ticks)
+        for a in axs:
+            for box in (a.title.get_window_extent(r), a.xaxis.label.get_window_extent(r),
+                        a.yaxis.label.get_window_extent(r)):
+                assert whole.x0 - 1 <= box.x0 and box.x1 <= whole.x1 + 1
+                assert whole.y0 - 1 <= box.y0 and box.y1 <= whole.y1 + 1
+    finally:
+        plt.close(fig)

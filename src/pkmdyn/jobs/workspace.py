@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -77,8 +78,18 @@ def job(machine: str, grid: str, pose: str, orientation_range: str | None, thres
 
 
 def workspace_png(path, model: MechanismModel, ws: Workspace) -> None:
+    """Write :func:`workspace_figure` to ``path``."""
+    import matplotlib.pyplot as plt
+
+    fig = workspace_figure(model, ws)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def workspace_figure(model: MechanismModel, ws: Workspace) -> Any:
     """The workspace's map: the smallest singularity measure over the inside poses (blank
-    outside); a three-axis grid as up to six slices along its last axis."""
+    outside); a three-axis grid as up to six slices along its last axis. The layout is
+    constrained, so no slice's title reaches the axis labels of the row above."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -88,7 +99,7 @@ def workspace_png(path, model: MechanismModel, ws: Workspace) -> None:
     vals = np.where(ws.inside, ws.measure, np.nan)
     shape = tuple(len(v) for _, v in ws.axes)
     if len(ws.axes) == 1:
-        fig, ax = plt.subplots(figsize=(7, 4))
+        fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
         ax.plot(ws.axes[0][1], vals, "o-", ms=3)
         ax.set_xlabel(names[0])
         ax.set_ylabel("smallest singularity measure")
@@ -102,7 +113,7 @@ def workspace_png(path, model: MechanismModel, ws: Workspace) -> None:
             titles = [f"{names[2]} = {ws.axes[2][1][k]:.4g}" for k in ks]
         cols = min(3, len(slices))
         rows = -(-len(slices) // cols)
-        fig, axs = plt.subplots(rows, cols, figsize=(4.6 * cols, 4.0 * rows), squeeze=False)
+        fig, axs = plt.subplots(rows, cols, figsize=(4.6 * cols, 4.0 * rows), squeeze=False, layout="constrained")
         for a, g, title in zip(axs.flat, slices, titles):
             mesh = a.pcolormesh(ws.axes[0][1], ws.axes[1][1], np.ma.masked_invalid(g).T, shading="auto",
                                 vmin=0.0, vmax=float(np.nanmax(vals)) if np.isfinite(vals).any() else 1.0)
@@ -115,5 +126,4 @@ def workspace_png(path, model: MechanismModel, ws: Workspace) -> None:
         fig.colorbar(mesh, ax=axs, label="smallest singularity measure")
     fig.suptitle(f"{model.name}: workspace ({int(ws.inside.sum())} of {len(ws.x)} poses inside; "
                  f"size {ws.size:.4g} +- {ws.size_error:.2g} {ws.unit})")
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    return fig
