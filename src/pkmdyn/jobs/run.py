@@ -41,6 +41,8 @@ from ..multibody.columns import (
     effort_columns,
     joint_effort_column,
     model_summary,
+    pose_column_names,
+    pose_columns,
     results_column_names,
     results_columns,
 )
@@ -108,10 +110,19 @@ def _report_groups(model: MechanismModel) -> list[tuple[str, str, list[str]]]:
     return groups
 
 
+def _pose_groups(model: MechanismModel) -> list[tuple[str, str, list[str]]]:
+    """The report's plots of the task body's and the outputs' poses (:func:`pose_columns`)."""
+    names = pose_column_names(model)
+    return [("Poses: positions (task body and outputs)", "position [m]", [c for c in names if c.endswith("_m")]),
+            ("Poses: Euler angles (task body and outputs)", f"angle ({model.euler_sequence}) [rad]",
+             [c for c in names if c.endswith("_rad")])]
+
+
 def report_columns(model: MechanismModel) -> list[str]:
     """The results columns a run's report plots (:func:`write_run_report`)."""
     pos, _, _ = task_columns(model)
-    return ["t_s", *pos, *(c for _, _, cols in _report_groups(model) for c in cols)]
+    groups = _report_groups(model) + _pose_groups(model)
+    return ["t_s", *pos, *(c for _, _, cols in groups for c in cols)]
 
 
 def write_run_report(out: Path, model: MechanismModel, cols: dict[str, Array], frames: dict[str, Array],
@@ -124,7 +135,7 @@ def write_run_report(out: Path, model: MechanismModel, cols: dict[str, Array], f
     t = cols["t_s"]
     pos, _, _ = task_columns(model)
     plots = [TimePlot("Task coordinates", "task coordinate [m or rad]", t, tuple(Curve(c, cols[c]) for c in pos))]
-    for title, label, group in _report_groups(model):
+    for title, label, group in _report_groups(model) + _pose_groups(model):
         plots.append(TimePlot(title, label, t, tuple(Curve(c, cols[c]) for c in group)))
     idx = frame_indices_of(t, frames["t"])
     efforts = {}
@@ -298,6 +309,7 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
                     cols.update(effort_columns(model, kin, reac, m.loads))
                     if deflection:
                         cols.update(deflection_columns(model, kin, reac, m.loads, start))
+                    cols.update(pose_columns(model, kin))
                     writer.write(cols)
                     summ.add(start, kin, sm, reac, cols)
                     summ.reactions = {"method": reac.method, "self_stress_states": reac.self_stress}

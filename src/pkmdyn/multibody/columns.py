@@ -9,6 +9,7 @@ flags), the loops, the task coordinates and gravity.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from typing import Any
 
@@ -25,8 +26,8 @@ from .kinematics.inverse import MechanismKinematics
 from .kinematics.motion import motion_columns, task_columns
 from .model.compiler import MechanismModel
 
-__all__ = ["results_columns", "motion_columns", "joint_effort_column", "actuator_effort_column", "model_summary",
-           "bodies_arrays", "effort_columns", "results_column_names", "deflection_columns"]
+__all__ = ["results_columns", "pose_columns", "pose_column_names", "motion_columns", "joint_effort_column",
+           "actuator_effort_column", "model_summary", "bodies_arrays", "effort_columns", "results_column_names", "deflection_columns"]
 
 Array = NDArray[np.float64]
 _MOTION_NAMES = ("RX", "RY", "RZ", "TX", "TY", "TZ")
@@ -57,6 +58,55 @@ def results_columns(model: MechanismModel, kin: MechanismKinematics) -> dict[str
     for i, (name, unit) in enumerate(zip(model.actuator_names, model.actuator_units)):
         for c, v in zip(motion_columns(name, unit), (kin.act_q, kin.act_qd, kin.act_qdd)):
             cols[c] = v[:, i]
+    return cols
+
+
+def pose_column_names(model: MechanismModel) -> list[str]:
+    """The pose columns of :func:`pose_columns`: ``task_body_x_m`` ... ``task_body_euler3_rad``,
+    then the same six for every ``[[outputs]]`` entry under its name."""
+    out: list[str] = []
+    for prefix in ("task_body", *model.output_names):
+        out += [f"{prefix}_{c}_m" for c in "xyz"] + [f"{prefix}_euler{k}_rad" for k in (1, 2, 3)]
+    return out
+
+
+def _euler_angles(model: MechanismModel, R: Array) -> Array:
+    """The three Euler angles (n, 3) [rad] of the rotations ``R`` (n, 3, 3) in the task's sequence,
+    as written (``XYZ`` intrinsic, ``xyz`` extrinsic: scipy's convention), each in its principal
+    range; a proper sequence at its singular pose gives one of its equivalent triples."""
+    from scipy.spatial.transform import Rotation  # scipy: loaded by the first run, not by the import
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # gimbal lock: still a valid triple
+        return Rotation.from_matrix(R).as_euler(model.euler_sequence)
+
+
+def pose_columns(model: MechanismModel, kin: MechanismKinematics) -> dict[str, Array]:
+    """The whole pose of the task body, whatever the task coordinates are, and of every
+    ``[[outputs]]`` body (a lower-mobility mechanism's parasitic motions among them): the point's
+    base-frame position ``o_b + R_b r`` (``r`` the point in the body frame: the task point, the
+    output's point) and the Euler angles of ``R_b`` in the task's sequence (the body frame's
+    rotation to the base frame, as the task's angles). A task angle keeps the motion's own value
+    (not wrapped) where it is the same angle up to whole turns."""
+    cols: dict[str, Array] = {}
+    bodies = [(int(model.task_body), model.task_point, "task_body")]
+    bodies += [(int(b), pt, name) for b, pt, name in zip(model.output_body, model.output_point, model.output_names)]
+    inv = {int(v): k for k, v in enumerate(model.euler_perm)}
+    for b, pt, prefix in bodies:
+        R = kin.R[:, b]
+        p = kin.origin[:, b] + R @ pt
+        ang = _euler_angles(model, R)
+        if b == model.task_body:
+            for j, (kind, i) in enumerate(zip(model.task_kind, model.task_index)):
+                k = inv[int(i)]
+                if kind == 1:
+                    turns = (kin.x[:, j] - ang[:, k]) / (2.0 * np.pi)
+                    same = np.abs(turns - np.round(turns)) < 1e-9
+                    ang[same, k] = kin.x[same, j]
+        for c, v in zip("xyz", p.T):
+            cols[f"{prefix}_{c}_m"] = v
+        for k in range(3):
+            cols[f"{prefix}_euler{k + 1}_rad"] = ang[:, k]
     return cols
 
 
@@ -116,6 +166,8 @@ def model_summary(model: MechanismModel) -> dict[str, Any]:
         "task": {"body": model.body_names[model.task_body], "point_m": model.task_point,
                  "euler_sequence": model.euler_sequence,
                  "coordinates": _task_coordinates(model, pos)},
+        "outputs": [{"name": n, "body": model.body_names[b], "point_m": pt}
+                    for n, b, pt in zip(model.output_names, model.output_body, model.output_point)],
         "actuators": list(model.actuator_names),
         "drives": [_drive_entry(model, i) for i, d in enumerate(model.drive_name) if d is not None],
         "groups": {g: [model.body_names[b] for b in np.flatnonzero(model.body_group == k)]
@@ -240,7 +292,7 @@ def results_column_names(model: MechanismModel, deflection: bool = False) -> lis
     out += list(model.named_loads)
     if deflection:
         out += [f"{n}_deflection_{u}" for n, u in zip(model.task_names, model.task_units)]
-    return out
+    return out + pose_column_names(model)
 
 
 def deflection_columns(model: MechanismModel, kin: MechanismKinematics, reac: Any, named: Mapping | None,

@@ -171,6 +171,12 @@ class _Task(Section):
     orientation: list[Literal[1, 2, 3]] = Field(default_factory=list, max_length=3)
 
 
+class _Output(Section):
+    name: str = Field(min_length=1, max_length=40, pattern=r"^[A-Za-z][A-Za-z0-9_]*$")
+    body: str = NAME
+    point_m: Vec3 | None = None
+
+
 class _Motion(Section):
     period_s: float = Field(default=2.0, gt=0)
     samples: int = Field(default=201, ge=2, le=200_000)  # one cycle, held whole as a motion file is
@@ -297,6 +303,7 @@ class _File(Section):
     legs: list[_Leg] = Field(default_factory=list, max_length=32)
     task: _Task
     loads: list[_Load] = Field(default_factory=list, max_length=2000)
+    outputs: list[_Output] = Field(default_factory=list, max_length=64)
     default_motion: _Motion = _Motion()
     actuators: list[_Actuator] = Field(default_factory=list, max_length=MAX_JOINTS)
     groups: list[_Group] = Field(default_factory=list, max_length=MAX_BODIES)
@@ -355,6 +362,17 @@ class TaskSpec:
     orientation: tuple[int, ...]
     names: tuple[str, ...]
     units: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    """A body whose pose a run writes (``[[outputs]]``): the base-frame position of ``point``
+    (base frame, reference configuration, fixed in the body; default: the body's centre of mass)
+    and the Euler angles of the body's frame, as columns ``<name>_x_m`` ... ``<name>_euler3_rad``."""
+
+    name: str
+    body: str
+    point: Array
 
 
 @dataclass(frozen=True)
@@ -438,6 +456,8 @@ class Description:
     #: ``[mechanism] reactions``: ``"unique"`` or ``"minimum-norm"`` (an over-constrained
     #: mechanism's run without compliance data)
     reactions: str = "unique"
+    #: the bodies and points whose pose a run writes beside the task body's (``[[outputs]]``)
+    outputs: tuple[OutputSpec, ...] = ()
 
 
 def _rot(axis: Array, angle: float) -> Array:
@@ -923,7 +943,28 @@ def load_description(source: str | Path | dict[str, Any], limits: dict[str, Any]
                        bodies=tuple(body_specs.values()), joints=tuple(joints), task=task, loads=tuple(loads),
                        cut_joints=cuts, motion=motion, path=path, actuators=actuators, groups=groups,
                        limits=data.limits.model_dump(), parameters=parameters, parameter_bounds=bounds,
-                       reactions=data.mechanism.reactions)
+                       reactions=data.mechanism.reactions,
+                       outputs=_outputs(label, data.outputs, body_specs))
+
+
+def _outputs(label: str, outputs: list[_Output], body_specs: dict[str, BodySpec]) -> tuple[OutputSpec, ...]:
+    """The validated ``[[outputs]]``: a known body, a name used once, not ``task_body`` (the
+    task body's own pose columns) and not reading as a joint's column."""
+    out: list[OutputSpec] = []
+    for k, o in enumerate(outputs):
+        where = f"{label}: [outputs][{k}]"
+        if o.body not in body_specs:
+            raise ParameterError(f"{where} body: {o.body!r} is not a body of the mechanism")
+        if o.name == "task_body" or any(o.name == p.name for p in out):
+            raise ParameterError(f"{where} name: {o.name!r} is taken (the task body's columns, or an earlier output); "
+                                 "name the output otherwise")
+        if any(w in f"_{o.name}_" for w in ("_pos_", "_vel_", "_acc_", "_effort_", "_deflection_")):
+            raise ParameterError(f"{where} name: {o.name!r} reads as a joint's column of the results; "
+                                 "name the output otherwise")
+        b = body_specs[o.body]
+        pt = np.array(o.point_m if o.point_m is not None else b.p0 + b.R0 @ b.com, dtype=float)
+        out.append(OutputSpec(o.name, o.body, pt))
+    return tuple(out)
 
 
 #: the keys of an actuator entry for each kind of motor (rotary, linear), by role

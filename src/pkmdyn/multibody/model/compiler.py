@@ -361,6 +361,9 @@ def _number_fields(desc: Description, st: ModelStructure) -> dict[str, Any]:
         load_direction=np.array([ld.direction if ld.direction is not None else np.zeros(3)
                                  for ld in desc.loads]).reshape(-1, 3),
         load_magnitude=np.array([ld.magnitude for ld in desc.loads], dtype=float),
+        output_names=tuple(o.name for o in desc.outputs),
+        output_body=np.array([order.index(o.body) for o in desc.outputs], dtype=np.int64),
+        output_point=np.array([bspec[o.body].R0.T @ (o.point - bspec[o.body].p0) for o in desc.outputs]).reshape(-1, 3),
     )
 
 

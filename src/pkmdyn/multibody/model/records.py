@@ -204,6 +204,10 @@ class MechanismModel:
     #: ``[mechanism] reactions``: ``"unique"`` (an over-constrained run without compliance data
     #: is refused) or ``"minimum-norm"``
     reactions: str = "unique"
+    #: ``[[outputs]]``: the names, bodies and points (body frame) whose pose a run writes
+    output_names: tuple[str, ...] = ()
+    output_body: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    output_point: Array = field(default_factory=lambda: np.zeros((0, 3)))
 
     @property
     def nb(self) -> int:
