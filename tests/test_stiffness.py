@@ -78,6 +78,9 @@ def test_stewart_beam_pistons_add_EA_over_L_in_series():
             if b["name"] == "piston":
                 b["section"] = {"outer_diameter_m": outer, "inner_diameter_m": inner}
                 b["material"] = {"youngs_modulus_Pa": E_STEEL, "poisson_ratio": NU}
+        for j in leg["joints"]:
+            if j["name"] == "P":  # its node on both bodies the cylinder's point, at the U centre
+                j["bearing"] = "cylinder"
     m = _with_drives(d, k)
     x = _poses(m, 6, seed=8)
     st = stiffness(m, solve_kinematics(m, x))
@@ -88,6 +91,73 @@ def test_stewart_beam_pistons_add_EA_over_L_in_series():
     assert _rel(st.K_task, K_ref) < 1e-10
     # and it is softer than the drives alone by a visible amount
     assert _rel(st.K_task, np.einsum("nat,a,nas->nts", J, k, J)) > 1e-3
+
+
+def _tube_stewart(piston_parent=False, bearing=None, k=2.0e7):
+    """The Stewart platform with cylinders and pistons both tubes (different sections) and each
+    prismatic joint at the cylinder's mouth, half-way along the leg at the reference pose; with
+    ``piston_parent`` the joint names the piston as its parent (its axis reversed, so the
+    coordinate is still the leg length); ``bearing``: "cylinder" or "piston" (the joint's key)."""
+    d = ex.builtin_dict("stewart")
+    mat = {"youngs_modulus_Pa": E_STEEL, "poisson_ratio": NU}
+    for leg in d["legs"]:
+        for b in leg["bodies"]:
+            outer = 0.05 if b["name"] == "cylinder" else 0.03
+            b.update(section={"outer_diameter_m": outer, "inner_diameter_m": outer - 0.01}, material=mat)
+        joints = {j["name"]: j for j in leg["joints"]}
+        P, S = joints["P"], joints["S"]
+        base, top = np.array(P["point_m"], float), np.array(S["point_m"], float)
+        P["point_m"] = (base + 0.5 * (top - base)).tolist()
+        P["stiffness"] = {"drive_N_m": k}
+        if piston_parent:
+            P["parent"], P["child"] = P["child"], P["parent"]
+            P["axis"] = (-np.array(P["axis"], float)).tolist()
+        if bearing is not None:
+            P["bearing"] = bearing
+    return d
+
+
+def _tube_EA(outer):
+    return E_STEEL * np.pi * (outer**2 - (outer - 0.01) ** 2) / 4
+
+
+@pytest.mark.parametrize("bearing", [None, "cylinder", "piston"])
+def test_tube_legs_do_not_depend_on_which_body_is_the_parent(bearing):
+    """Cylinder and piston both tubes: the Cartesian stiffness and the frequencies are the same
+    whichever body the prismatic joint names its parent (1e-12), and the legs' axial stiffness is
+    the closed form of three springs in series, each tube of the length the bearing decides:
+    without one each tube keeps its own length (half the reference leg each); with the cylinder
+    (or piston) as the bearing the other tube's free length takes the stroke."""
+    m1 = load_mechanism(_tube_stewart(False, bearing))
+    m2 = load_mechanism(_tube_stewart(True, bearing))
+    x = _poses(m1, 6, seed=11)
+    s1, s2 = stiffness(m1, solve_kinematics(m1, x)), stiffness(m2, solve_kinematics(m2, x))
+    assert _rel(s2.K_task, s1.K_task) < 1e-12
+    assert _rel(s2.frequencies, s1.frequencies) < 1e-12
+    J, L = _oracle_J(x)
+    L0 = stewart.inverse_kinematics(*stewart.default_geometry()[:2], reference_task(m1)[None, :3],
+                                    reference_task(m1)[None, 3:], "XYZ")["L"]
+    half = 0.5 * L0
+    cyl = {None: half, "cylinder": half, "piston": L - half}[bearing]
+    pis = {None: half, "cylinder": L - half, "piston": half}[bearing]
+    k_leg = 1.0 / (1.0 / 2.0e7 + cyl / _tube_EA(0.05) + pis / _tube_EA(0.03))
+    assert _rel(s1.K_task, np.einsum("nat,na,nas->nts", J, k_leg, J)) < 1e-10
+    # the three models differ visibly at these poses, so the check can tell them apart
+    other = 1.0 / (1.0 / 2.0e7 + (L - half) / _tube_EA(0.05) + half / _tube_EA(0.03))
+    if bearing != "piston":
+        assert _rel(s1.K_task, np.einsum("nat,na,nas->nts", J, other, J)) > 1e-5
+
+
+def test_a_bearing_must_be_a_body_of_a_sliding_joint(tmp_path, capsys):
+    from pkmdyn.errors import ParameterError
+
+    d = _tube_stewart(False, "platform")
+    with pytest.raises(ParameterError, match=r"bearing: 'platform_?\w*' is neither the joint's parent"):
+        load_mechanism(d)
+    d = _tube_stewart(False)
+    d["legs"][0]["joints"][0]["bearing"] = "cylinder"  # the universal joint: it does not slide
+    with pytest.raises(ParameterError, match="bearing: only for a joint that slides, not a universal joint"):
+        load_mechanism(d)
 
 
 def _four_bar(a=0.5, b=0.8, c=0.6, D=0.02, kd=2.0e4, elastic=("crank", "rocker"), crank_x=0.0):

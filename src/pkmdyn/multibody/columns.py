@@ -145,6 +145,8 @@ def model_summary(model: MechanismModel) -> dict[str, Any]:
             entry["limits"] = list(model.joint_limits[k])
         if model.joint_friction[k] is not None:
             entry["friction"] = model.joint_friction[k]
+        if len(model.joint_bearing) and model.joint_bearing[k] >= 0:
+            entry["bearing"] = parent if model.joint_bearing[k] == 0 else child
         if model.joint_stiffness[k] is not None:  # drive_N_m|drive_Nm_rad, force_N_m, moment_Nm_rad
             st = model.joint_stiffness[k]
             unit = ("drive_N_m" if jt.units[0] == "m" else "drive_Nm_rad") if "drive" in st else ""

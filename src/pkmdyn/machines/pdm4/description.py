@@ -68,7 +68,8 @@ def pdm_description(model: PdmModel, q_ref: np.ndarray | None = None) -> dict[st
             bodies[-1]["material"] = {"youngs_modulus_Pa": float(model.youngs_modulus_Pa),
                                       "poisson_ratio": float(model.poisson_ratio)}
     # the prismatic joints' centres at the cylinder's mouth, 2 c1 from its fixed joint (as the
-    # reactions of .kinematics.joint_points): the node of the cylinder and piston beams
+    # reactions of .kinematics.joint_points): the node of the cylinder and piston beams, on both
+    # at the mouth (bearing: the cylinder), so the stroke changes the piston's free length (Eq. 63)
     centres = joint_points(model, kin)[0]
     lengths = {"P11": kin.pos.l[0, 0], "P12": kin.pos.l[0, 1], "P23": kin.pos.l[0, 2], "P24": kin.pos.l[0, 3]}
     joints = []
@@ -83,6 +84,7 @@ def pdm_description(model: PdmModel, q_ref: np.ndarray | None = None) -> dict[st
         if j.kind == "P":
             entry["actuated"] = True
             entry["position_at_reference_m"] = float(lengths[j.name])
+            entry["bearing"] = j.body_a
         joints.append(entry)
     return {
         "mechanism": {"name": "pdm", "source": "4-DOF parallel driving mechanism, Huang et al. (2023); docs/pdm4.md",

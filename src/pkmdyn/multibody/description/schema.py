@@ -144,6 +144,7 @@ class _Joint(Section):
     limits_rad: Pair | None = None
     friction: _Friction | None = None
     stiffness: _Stiffness | None = None
+    bearing: str | None = Field(default=None, min_length=1, max_length=64)
 
     @field_validator("type")
     @classmethod
@@ -346,6 +347,9 @@ class JointSpec:
     #: joint and drive stiffness (:class:`_Stiffness`; ``force_N_m``/``moment_Nm_rad`` as three
     #: numbers), None when rigid
     stiffness: dict[str, Any] | None = None
+    #: a sliding joint's ``bearing``: the body (its parent or child) whose point is the joint's
+    #: node on both bodies' beams (a cylinder's mouth); None: each body its own point
+    bearing: str | None = None
 
 
 @dataclass(frozen=True)
@@ -626,10 +630,16 @@ def _joint(j: _Joint, where: str) -> JointSpec:
     if j.actuated and jt.freedoms != 1:
         raise ParameterError(f"{where} actuated: only a joint with one coordinate (revolute, prismatic) can be "
                              f"actuated, not a {j.type} joint")
+    if j.bearing is not None:
+        if j.bearing not in (j.parent, j.child):
+            raise ParameterError(f"{where} bearing: {j.bearing!r} is neither the joint's parent ({j.parent!r}) nor its "
+                                 f"child ({j.child!r})")
+        if not any(m.startswith("T") for m in jt.motions):
+            raise ParameterError(f"{where} bearing: only for a joint that slides, not a {j.type} joint")
     return JointSpec(name=j.name, type=j.type, parent=j.parent, child=j.child,
                      point=np.array(j.point_m, dtype=float), frame=frame, actuated=bool(j.actuated),
                      offset=offset, limits=limits, friction=j.friction.model_dump() if j.friction else None,
-                     stiffness=_stiffness(j, jt, where))
+                     stiffness=_stiffness(j, jt, where), bearing=j.bearing)
 
 
 def _stiffness(j: _Joint, jt: Any, where: str) -> dict[str, Any] | None:
@@ -764,7 +774,8 @@ def _expand_legs(data: _File, source: str) -> _Expanded:
             for j in leg.joints:
                 upd: dict[str, Any] = {"name": j.name + suf, "point_m": move(j.point_m),
                                        "parent": j.parent + suf if j.parent in own else j.parent,
-                                       "child": j.child + suf if j.child in own else j.child}
+                                       "child": j.child + suf if j.child in own else j.child,
+                                       "bearing": j.bearing + suf if j.bearing in own else j.bearing}
                 if j.axis is not None:
                     upd["axis"] = turn(j.axis)
                 if j.axes is not None:

@@ -21,7 +21,7 @@ from numba import njit
 
 @njit(cache=True)
 def beam_energy_batch(R, origin, com, W, z0, Z, bodies, mode, ends, start, joints, signs,
-                      joint_parent, joint_p_parent, EA, EIy, EIz, GIp, H, h):  # pragma: no cover - compiled
+                      nodes, EA, EIy, EIz, GIp, H, h):  # pragma: no cover - compiled
     """``H (n, K, K)``, ``h (n, K)`` of every sample (module docstring).
 
     ``R (n, nb, 3, 3)``, ``origin (n, nb, 3)`` the bodies' frames, ``com (n, nb, 3)`` their
@@ -29,7 +29,8 @@ def beam_energy_batch(R, origin, com, W, z0, Z, bodies, mode, ends, start, joint
     ``Z (n, 6 nj, K)``. Per elastic body e (index ``bodies[e]``): ``mode[e]`` 0 for the body's
     x axis through its centre of mass, 1 for the line from node ``ends[e, 0]`` to ``ends[e, 1]``;
     its joints ``joints[start[e]:start[e + 1]]`` with the sign ``signs`` (+1 as the child, -1 as
-    the parent); its section ``EA, EIy, EIz, GIp``."""
+    the parent) and each one's node ``nodes (n, J, 3)`` (base frame, entry ``start[e] + m``);
+    its section ``EA, EIy, EIz, GIp``."""
     n, K = Z.shape[0], Z.shape[2]
     nE = bodies.shape[0]
     maxN = 0
@@ -58,15 +59,9 @@ def beam_energy_batch(R, origin, com, W, z0, Z, bodies, mode, ends, start, joint
             nj = start[e + 1] - start[e]
             N = nj + 1
             for m in range(nj):
-                j = joints[start[e] + m]
-                par = joint_parent[j]
+                q = start[e] + m
                 for i in range(3):
-                    if par < 0:
-                        pts[m, i] = joint_p_parent[j, i]
-                    else:
-                        pts[m, i] = origin[t, par, i] + (R[t, par, i, 0] * joint_p_parent[j, 0]
-                                                         + R[t, par, i, 1] * joint_p_parent[j, 1]
-                                                         + R[t, par, i, 2] * joint_p_parent[j, 2])
+                    pts[m, i] = nodes[t, q, i]
             for i in range(3):
                 pts[nj, i] = com[t, b, i]
             # the beam frame Rb (columns x, y, z) and its origin o

@@ -10,8 +10,11 @@ Beam model of body b (the PDM's, section 4.2 and Eq. 63-64, generalised): the be
 the line through the two joint centres of the body that lie farthest apart (at the sample's
 pose), or with ``section.beam_axis = "body_x"`` the body frame's x axis through the centre of
 mass (the PDM's choice); the nodes are every joint centre on the body and its centre of mass, projected onto
-that axis (a joint's centre is its frame's origin on the joint's parent body: for a prismatic
-joint the point fixed in the guiding body, e.g. a cylinder's mouth, on both of its bodies) (a body whose joints all lie at one point stays rigid); the loads at the nodes are the joint wrenches acting on the body (``+W_j`` as the
+that axis (a joint's node on a body is the joint frame's origin fixed in that body: one point
+but for a joint that slides, whose node on the cylinder is the cylinder's point and on the
+piston the piston's point that was there at the reference configuration, so each tube keeps
+its own length whichever body the description names the joint's parent; a joint's
+``bearing`` puts both nodes at the point fixed in the body it names, e.g. a cylinder's mouth) (a body whose joints all lie at one point stays rigid); the loads at the nodes are the joint wrenches acting on the body (``+W_j`` as the
 child, ``-W_j`` as the parent) and, at the centre of mass, the gravity and d'Alembert load
 ``-W_b`` (Eq. 1 of :mod:`pkmdyn.multibody.dynamics.newton_euler`), each reduced to its node (moment transported along the
 offset from the axis). Each segment between consecutive nodes is a cantilever of uniform
@@ -75,12 +78,21 @@ def _beam_frame(axis: Array) -> Array:
     return np.stack([x, y, z], axis=2)
 
 
-def _parent_point(model: MechanismModel, kin: MechanismKinematics, j: int) -> Array:
-    """Joint j's frame origin on its (description) parent body, base frame (n, 3)."""
-    b = model.joint_parent[j]
+def _node_point(model: MechanismModel, kin: MechanismKinematics, j: int, sign: float) -> Array:
+    """Joint j's node on the body it joins as the child (``sign`` +1) or the parent (-1), base
+    frame (n, 3): the joint frame's origin fixed in that body, or in the joint's ``bearing`` body
+    where the description names one. The frame's origins on the two bodies coincide but for a
+    joint that slides: by default each tube keeps its own length (a prismatic joint's node on
+    the cylinder is the cylinder's point, on the piston the piston's); with ``bearing`` the
+    cylinder, both nodes are at its mouth and the stroke changes the piston's free length.
+    Either way a body's nodes do not depend on which body the description names the parent."""
+    side = int(model.joint_bearing[j]) if len(model.joint_bearing) else -1
+    child = sign > 0 if side < 0 else side == 1
+    b, p = (model.joint_child[j], model.joint_p_child[j]) if child else (model.joint_parent[j],
+                                                                         model.joint_p_parent[j])
     if b < 0:
-        return np.broadcast_to(model.joint_p_parent[j], (len(kin), 3))
-    return kin.origin[:, b] + np.einsum("nij,j->ni", kin.R[:, b], model.joint_p_parent[j])
+        return np.broadcast_to(p, (len(kin), 3))
+    return kin.origin[:, b] + np.einsum("nij,j->ni", kin.R[:, b], p)
 
 
 def _beam_bodies(model: MechanismModel, kin: MechanismKinematics, elastic: list[int]) -> list[tuple]:
@@ -98,7 +110,7 @@ def _beam_bodies(model: MechanismModel, kin: MechanismKinematics, elastic: list[
         if model.body_extra[bi]["section"].get("beam_axis", "joints") == "body_x":
             out.append((bi, joints, 0, (0, 0)))
             continue
-        pts = np.stack([_parent_point(model, kin, j)[0] for j, _ in joints])
+        pts = np.stack([_node_point(model, kin, j, sg)[0] for j, sg in joints])
         d = np.linalg.norm(pts[:, None] - pts[None], axis=-1)
         i0, i1 = np.unravel_index(int(np.argmax(d)), d.shape)
         if d[i0, i1] <= 1e-9 * model.length_scale:
@@ -129,7 +141,8 @@ def _compiled_energy(model: MechanismModel, kin: MechanismKinematics, W: Array, 
                       np.array([ends for *_, ends in beams], dtype=np.int64).reshape(-1, 2), start,
                       np.array([j for _, js, _, _ in beams for j, _ in js], dtype=np.int64),
                       np.array([sg for _, js, _, _ in beams for _, sg in js]),
-                      model.joint_parent.astype(np.int64), np.ascontiguousarray(model.joint_p_parent, dtype=float),
+                      np.ascontiguousarray(np.stack([_node_point(model, kin, j, sg) for _, js, _, _ in beams
+                                                     for j, sg in js], axis=1)),
                       np.array([sc.E * sc.A for sc in secs]), np.array([sc.E * sc.Iy for sc in secs]),
                       np.array([sc.E * sc.Iz for sc in secs]), np.array([sc.G * sc.Ip for sc in secs]), H, h)
     return H, h, int(sum(len(js) for _, js, _, _ in beams))
@@ -214,7 +227,7 @@ def beam_terms(model: MechanismModel, kin: MechanismKinematics, W: Array, elasti
         elastic = elastic_bodies(model)
     G_list, w0_list, C_list = [], [], []
     for bi, joints, mode, (i0, i1) in _beam_bodies(model, kin, elastic):
-        pts = np.stack([_parent_point(model, kin, j) for j, _ in joints], axis=1)  # (n, N, 3)
+        pts = np.stack([_node_point(model, kin, j, sg) for j, sg in joints], axis=1)  # (n, N, 3)
         if mode == 0:
             Rb = kin.R[:, bi]
             origin = kin.p[:, bi]

@@ -351,6 +351,8 @@ def _number_fields(desc: Description, st: ModelStructure) -> dict[str, Any]:
         joint_offset=np.array([j.offset for j in desc.joints]),
         joint_limits=tuple(j.limits for j in desc.joints), joint_friction=tuple(j.friction for j in desc.joints),
         joint_stiffness=tuple(j.stiffness for j in desc.joints),
+        joint_bearing=np.array([-1 if j.bearing is None else int(j.bearing == j.child) for j in desc.joints],
+                               dtype=np.int64),
         coord_offset=np.array([desc.joints[k].offset if k >= 0 else 0.0 for k in st.coord_joint_one], dtype=float),
         tree_R_parent=tRP, tree_p_parent=tpP, tree_R_child=tRC, tree_p_child=tpC, loops=loops,
         task_point=bspec[task.body].R0.T @ (task.point - bspec[task.body].p0),

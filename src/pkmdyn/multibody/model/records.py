@@ -204,6 +204,9 @@ class MechanismModel:
     #: ``[mechanism] reactions``: ``"unique"`` (an over-constrained run without compliance data
     #: is refused) or ``"minimum-norm"``
     reactions: str = "unique"
+    #: per joint: its ``bearing`` as 0 (the parent) or 1 (the child), -1 where none is named
+    #: (:func:`pkmdyn.multibody.dynamics.reactions.beam_terms`)
+    joint_bearing: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     #: ``[[outputs]]``: the names, bodies and points (body frame) whose pose a run writes
     output_names: tuple[str, ...] = ()
     output_body: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
