@@ -327,6 +327,70 @@ def test_stewart_frequencies_are_the_eigenvalues_of_M_inv_K():
         assert np.abs(phi).max(axis=0) == pytest.approx(np.ones(6), rel=1e-12)
 
 
+def _stewart_with_rotors(lead=0.005, gear=2.0, rotor=3e-5):
+    d = ex.builtin_dict("stewart")
+    for leg in d["legs"]:
+        leg["actuators"] = [{"joint": "P", "name": "M", "screw_lead_m": lead, "gear_ratio": gear,
+                             "rotor_inertia_kgm2": rotor}]
+    return d, gear * 2 * np.pi / lead
+
+
+def test_the_rotors_held_or_moving():
+    """Screw drives of large reflected inertia: the same stiffness either way; with the rotors
+    moving the frequencies are those of the dynamics' own mass matrix (which carries the rotors),
+    held those of that matrix less J^T diag(k^2 I_r) J, J from the closed-form oracle."""
+    d, k = _stewart_with_rotors()
+    m = load_mechanism(d)
+    x = _poses(m, 4, seed=21)
+    kin = solve_kinematics(m, x)
+    held, moving = stiffness(m, kin), stiffness(m, kin, rotors="moving")
+    assert held.rotors == "held" and moving.rotors == "moving"
+    assert _rel(moving.K_task, held.K_task) < 1e-14
+    M = machine_verbs(m).mass_matrix(m, x)
+    J, _ = _oracle_J(x)
+    M_held = M - np.einsum("nat,nas->nts", J, J) * (k * k * 3e-5)
+    for st, MM in ((moving, M), (held, M_held)):
+        lam = np.sort(np.linalg.eigvals(np.linalg.solve(MM, st.K_task)).real, axis=1)
+        assert _rel((2 * np.pi * st.frequencies) ** 2, lam) < 1e-8
+    for st in (held, moving):
+        assert _rel(st.frequencies_rotors_held, held.frequencies) < 1e-14
+        assert _rel(st.frequencies_rotors_moving, moving.frequencies) < 1e-14
+    assert np.all(moving.frequencies[:, 0] < 0.8 * held.frequencies[:, 0])  # 190 kg reflected per leg
+    # without rotors the two conventions are one
+    plain = load_mechanism(ex.MACHINES / "stewart" / "stewart.toml")
+    st = stiffness(plain, solve_kinematics(plain, x), rotors="moving")
+    assert np.array_equal(st.frequencies_rotors_held, st.frequencies_rotors_moving)
+    with pytest.raises(Exception, match="rotors: 'free' is not one of held, moving"):
+        stiffness(m, kin, rotors="free")
+
+
+def test_the_command_writes_both_rotor_conventions(tmp_path, capsys):
+    import tomlkit
+
+    d, _ = _stewart_with_rotors()
+    path = tmp_path / "stewart_screws.toml"
+    path.write_text(tomlkit.dumps(d))
+    from pkmdyn.cli import main
+
+    out = {}
+    for rotors in ("held", "moving"):
+        out[rotors] = tmp_path / rotors
+        assert main(["stiffness", "--machine", str(path), "--rotors", rotors, "--out", str(out[rotors])]) == 0
+        assert f"natural frequencies (rotors {rotors})" in capsys.readouterr().out
+    docs = {r: json.loads((out[r] / "stiffness.json").read_text()) for r in out}
+    for r, doc in docs.items():
+        pose = doc["poses"][0]
+        assert doc["rotors"] == pose["rotors"] == r
+        assert pose["frequencies_Hz"] == pose[f"frequencies_rotors_{r}_Hz"]
+        assert pose["modes"][0]["frequency_Hz"] == pose["frequencies_Hz"][0]
+    a, b = docs["held"]["poses"][0], docs["moving"]["poses"][0]
+    assert a["frequencies_rotors_moving_Hz"] == b["frequencies_rotors_moving_Hz"]
+    assert b["frequencies_Hz"][0] < 0.8 * a["frequencies_Hz"][0]
+    bad = tmp_path / "bad"
+    assert main(["stiffness", "--machine", str(path), "--rotors", "free", "--out", str(bad)]) == 2
+    assert not bad.exists()
+
+
 def test_worst_directions_of_a_stewart():
     m = load_mechanism(ex.MACHINES / "stewart" / "stewart.toml")
     x = _poses(m, 3, seed=2)

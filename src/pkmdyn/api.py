@@ -138,10 +138,11 @@ def assembly_modes(model: Any, s: Array, starts: int = 2000, seed: int = 0) -> A
     return modes(model, s, starts, seed)
 
 
-def stiffness(model: Any, kin: Any) -> Any:
+def stiffness(model: Any, kin: Any, rotors: str = "held") -> Any:
     """The Cartesian stiffness of the task body with the actuators locked, per sample of ``kin``
-    (:func:`pkmdyn.multibody.analyses.stiffness.stiffness`; the description needs a compliance source)."""
-    return k(model, kin)
+    (:func:`pkmdyn.multibody.analyses.stiffness.stiffness`; the description needs a compliance source);
+    the modes with the drives' rotors ``"held"`` or ``"moving"`` (both frequency sets are kept)."""
+    return k(model, kin, rotors=rotors)
 
 
 def wear(model: Any, kin: Any, joint: str, radius_m: float | None = None, load: str | None = None,

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 from ..errors import ParameterError, PkmdynError
 from ..io import write_csv, write_json
 from ..multibody.analyses.stiffness import (
+    ROTORS,
     Stiffness,
     StiffnessDataMissing,
     compliance_sources,
@@ -84,6 +85,9 @@ def pose_document(model: MechanismModel, st: Stiffness, s: int) -> dict[str, Any
         "min_rot_stiffness_direction": [float(v) for v in st.min_rot_stiffness_direction[s]],
         "M_task": [[float(st.M_task[s, i, j]) for j in range(nt)] for i in range(nt)],
         "frequencies_Hz": [float(f) for f in st.frequencies[s]],
+        "rotors": st.rotors,
+        "frequencies_rotors_held_Hz": [float(f) for f in st.frequencies_rotors_held[s]],
+        "frequencies_rotors_moving_Hz": [float(f) for f in st.frequencies_rotors_moving[s]],
         "modes": [{"frequency_Hz": float(st.frequencies[s, k]),
                    "shape": {n: float(v) for n, v in zip(names, st.modes[s, :, k])},
                    "modal_mass": float(st.modal_mass[s, k]),
@@ -91,7 +95,7 @@ def pose_document(model: MechanismModel, st: Stiffness, s: int) -> dict[str, Any
     }
 
 
-def _head(model: MechanismModel, what: str) -> dict[str, Any]:
+def _head(model: MechanismModel, what: str, rotors: str) -> dict[str, Any]:
     return {
         "mechanism": model.name,
         "what": what,
@@ -99,7 +103,11 @@ def _head(model: MechanismModel, what: str) -> dict[str, Any]:
                   "(Menabrea), displacements by Castigliano (docs/stiffness.md)",
         "sources": compliance_sources(model),
         "task_coordinates": [f"{n}_{u}" for n, u in zip(model.task_names, model.task_units)],
-        "mass_matrix": "rigid bodies, drives' rotors held, elastic members massless",
+        "rotors": rotors,
+        "mass_matrix": (f"rigid bodies, drives' rotors {rotors}"
+                        + (" (their reflected inertia included)" if rotors == "moving" else "")
+                        + ", elastic members massless; frequencies_rotors_held_Hz and "
+                          "frequencies_rotors_moving_Hz give both conventions (docs/stiffness.md)"),
     }
 
 
@@ -170,11 +178,11 @@ def _map_png(path: Path, model: MechanismModel, axes: list[tuple[int, Array]], o
 
 
 def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = None, motion: Any = None,
-                  grid: list[tuple[int, Array]] | None = None, description_text: str = ""
+                  grid: list[tuple[int, Array]] | None = None, description_text: str = "", rotors: str = "held"
                   ) -> tuple[dict[str, Any], dict[str, Path]]:
     """Write the stiffness job's files into the (temporary) folder ``out``; exactly one of
     ``poses (n, nt)``, ``motion`` (a task motion, its loads included) or ``grid`` (axes of
-    :func:`parse_grid`). Returns the document written to ``stiffness.json`` and the files written
+    :func:`parse_grid`); the modes with the drives' rotors ``rotors`` (``"held"``, ``"moving"``). Returns the document written to ``stiffness.json`` and the files written
     (label -> path)."""
     files: dict[str, Path] = {}
     images: list[Path] = []
@@ -186,7 +194,7 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
         for s in keep:
             try:
                 kin1 = solve_kinematics(model, x[s:s + 1])
-                results[int(s)] = (kin1, stiffness(model, kin1, sample_offset=int(s)))
+                results[int(s)] = (kin1, stiffness(model, kin1, sample_offset=int(s), rotors=rotors))
             except StiffnessDataMissing:
                 raise
             except PkmdynError:  # singular, or not reached alone from the reference pose
@@ -210,7 +218,7 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
         _map_png(files["map"], model, grid, ok, kt, f1)
         images.append(files["map"])
         worst = min(results, key=lambda s: (kt[s], f1[s]))
-        doc = _head(model, "grid")
+        doc = _head(model, "grid", rotors)
         doc["grid"] = {"axes": {f"{model.task_names[i]}_{model.task_units[i]}": [float(v) for v in vals]
                                 for i, vals in grid},
                        "poses": int(len(x)), "evaluated": int(ok.sum()), "left_out": int((~ok).sum())}
@@ -228,7 +236,7 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
             b = min(a + MOTION_CHUNK, n_all)
             kin_c = kin_all.rows(a, b)
             named = {k: np.asarray(v)[a:b] for k, v in motion.loads.items()}
-            st_c = stiffness(model, kin_c, sample_offset=a)
+            st_c = stiffness(model, kin_c, sample_offset=a, rotors=rotors)
             reac = joint_reactions(model, kin_c, named=named, overconstrained=over, sample_offset=a)
             dx[a:b] = deflection(model, kin_c, reac, named=named, sample_offset=a)
             kt[a:b], kr[a:b], f1[a:b] = st_c.min_stiffness, st_c.min_rot_stiffness, st_c.frequencies[:, 0]
@@ -249,7 +257,7 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
         write_csv(files["results"], cols)
         assert worst is not None
         _, i0, s0, kin, st = worst
-        doc = _head(model, "motion")
+        doc = _head(model, "motion", rotors)
         doc["samples"] = int(n_all)
         doc["max_deflection"] = {f"{n}_{u}": float(np.abs(dx[:, i]).max())
                                  for i, (n, u) in enumerate(zip(model.task_names, model.task_units))}
@@ -258,8 +266,8 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
     else:
         x = np.atleast_2d(reference_task(model) if poses is None else poses)
         kin = solve_kinematics(model, x)
-        st = stiffness(model, kin)
-        doc = _head(model, "poses")
+        st = stiffness(model, kin, rotors=rotors)
+        doc = _head(model, "poses", rotors)
         doc["poses"] = [pose_document(model, st, s) for s in range(len(kin))]
         s0 = 0
     files["stiffness"] = out / "stiffness.json"
@@ -273,10 +281,13 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
 
 def job(machine: str, out_dir: Path, *, poses: tuple[str, ...] = (), motion_path: Path | None = None,
         default_motion: bool = False, grid: str | None = None, limit_items: tuple[str, ...] = (),
-        announce: Callable[[Mapping[str, Path]], None] | None = None) -> JobResult:
+        announce: Callable[[Mapping[str, Path]], None] | None = None, rotors: str = "held") -> JobResult:
     """``pkmdyn stiffness``: ``machine`` at the task poses ``poses`` (``NAME=VALUE,...`` each; none:
     the reference pose), along the motion file ``motion_path`` or its ``default_motion``, or over
-    ``grid`` (``NAME=LOW:HIGH:COUNT`` on one or two task coordinates), into ``out_dir``."""
+    ``grid`` (``NAME=LOW:HIGH:COUNT`` on one or two task coordinates), into ``out_dir``; the modes
+    with the drives' rotors ``rotors`` (``"held"`` or ``"moving"``; both frequency sets in the file)."""
+    if rotors not in ROTORS:
+        raise ParameterError(f"--rotors {rotors!r}: one of {', '.join(ROTORS)}")
     limits = parse_limit_options(limit_items, LIMIT_KEYS)
     given = [o for o, v in (("--pose", poses), ("--motion", motion_path), ("--default-motion", default_motion),
                             ("--grid", grid)) if v]
@@ -296,7 +307,7 @@ def job(machine: str, out_dir: Path, *, poses: tuple[str, ...] = (), motion_path
     held: dict[str, Any] = {}
 
     def make(out: Path) -> dict[str, Path]:
-        held["doc"], files = run_stiffness(model, out, description_text=p.text, **kw)
+        held["doc"], files = run_stiffness(model, out, description_text=p.text, rotors=rotors, **kw)
         return files
 
     files = write(out_dir, p.inputs, make, announce)
@@ -308,5 +319,6 @@ def job(machine: str, out_dir: Path, *, poses: tuple[str, ...] = (), motion_path
              + ", ".join(f"{n} = {v:.6g}" for n, v in pose.get("task", {}).items()),
              f"  translational stiffness, worst direction: {'rigid' if k is None else f'{k:.6g} N/m'}; "
              f"rotational: {'rigid' if kr is None else f'{kr:.6g} N m/rad'}",
-             "  natural frequencies: " + ", ".join(f"{f:.6g}" for f in pose.get("frequencies_Hz", [])) + " Hz")
+             f"  natural frequencies (rotors {rotors}): "
+             + ", ".join(f"{f:.6g}" for f in pose.get("frequencies_Hz", [])) + " Hz")
     return JobResult(files, doc, lines)

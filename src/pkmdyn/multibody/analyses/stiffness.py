@@ -38,7 +38,16 @@ direction ``1 / lambda_max(C_ff)`` [N/m] and its direction; ``C_mm`` the rotatio
 
 **Natural frequencies** with the actuators locked: ``K_task phi = omega^2 M_task phi`` with
 ``M_task = G^T M G`` the rigid mechanism's mass matrix in task coordinates (every body's
-rigid-body inertia; the drives' rotors held, so not included; the elastic members massless).
+rigid-body inertia; the elastic members massless), in one of two conventions for the drives'
+rotors (``rotors``): **held** (default), the rotor does not move, so its inertia is left out:
+the compliance lies between a locked rotor and the joint (a brake, or a position loop much
+stiffer than the screw, belt or gearbox that the drive stiffness describes); **moving**, the
+rotor moves with its joint through a rigid transmission and the compliance is at the motor (the
+servo's holding stiffness), so its reflected inertia ``k^2 I_r`` joins the actuator's row:
+``M_task + J_ax^T diag(k^2 I_r) J_ax``. The stiffness ``K_task`` is the same in both; both
+frequency sets are kept (``frequencies_rotors_held``, ``frequencies_rotors_moving``). A drive
+whose transmission and servo compliances are comparable has a two-mass mode that neither
+convention holds.
 This is the task coordinates' modes: a compliance that moves the task body outside its task
 coordinates (a Delta's platform tilting on elastic rods) adds modes this model leaves out.
 A mode ``phi`` (largest component 1) has modal mass ``phi^T M phi`` and modal stiffness
@@ -92,7 +101,9 @@ class Stiffness:
     ``min_stiffness_direction`` (n, 3); ``min_rot_stiffness`` (n,) [N m/rad] and its
     direction; ``inf`` where the task point cannot translate (turn) at all;
     ``M_task`` (n, nt, nt); ``frequencies`` (n, nt) [Hz] ascending; ``modes`` (n, nt, nt)
-    (columns, largest component 1); ``modal_mass``, ``modal_stiffness`` (n, nt)."""
+    (columns, largest component 1); ``modal_mass``, ``modal_stiffness`` (n, nt), all in the
+    rotor convention ``rotors`` (``"held"`` or ``"moving"``); ``frequencies_rotors_held`` and
+    ``frequencies_rotors_moving`` (n, nt) [Hz] both conventions' frequencies."""
 
     x: Array
     K_task: Array
@@ -109,6 +120,12 @@ class Stiffness:
     modes: Array
     modal_mass: Array
     modal_stiffness: Array
+    rotors: str
+    frequencies_rotors_held: Array
+    frequencies_rotors_moving: Array
+
+#: the rotor conventions of the natural frequencies (module docstring)
+ROTORS = ("held", "moving")
 
 
 def compliance_sources(model: MechanismModel) -> dict[str, list[str]]:
@@ -296,14 +313,18 @@ def _worst(C: Array, scale: Array) -> tuple[Array, Array]:
     return k, d
 
 
-def stiffness(model: MechanismModel, kin: MechanismKinematics, sample_offset: int = 0) -> Stiffness:
+def stiffness(model: MechanismModel, kin: MechanismKinematics, sample_offset: int = 0,
+              rotors: str = "held") -> Stiffness:
     """The stiffness, worst directions and natural frequencies of the mechanism with its
-    actuators locked at the poses of ``kin`` (module docstring).
+    actuators locked at the poses of ``kin`` (module docstring), the modes with the drives'
+    rotors ``"held"`` or ``"moving"``.
 
     Raises :class:`StiffnessDataMissing` when no compliance source exists or one task
     coordinate is strained by none (its stiffness would be infinite), and
     :class:`~pkmdyn.errors.SingularityError` naming the sample where the locked mechanism
     cannot carry a load on the task body or its mass matrix is singular."""
+    if rotors not in ROTORS:
+        raise ParameterError(f"rotors: {rotors!r} is not one of {', '.join(ROTORS)}")
     _check_sources(model)
     st = _Structure(model, kin, sample_offset)
     nt = model.nt
@@ -335,12 +356,16 @@ def stiffness(model: MechanismModel, kin: MechanismKinematics, sample_offset: in
     k_t, d_t = _worst(C_point[:, 3:, 3:], scale)
     k_r, d_r = _worst(C_point[:, :3, :3], scale / L2)
     S = coordinate_twists(model, kin.q, kin)
-    M = task_mass_matrix(model, kin, S, rotors=False)  # the drives' rotors held
-    freq, modes, mm, mk = _modes(model, M, K_task, sample_offset)
+    M_held = task_mass_matrix(model, kin, S, rotors=False)
+    M_moving = task_mass_matrix(model, kin, S, rotors=True) if np.any(model.drive_rotor) else M_held
+    both = {"held": _modes(model, M_held, K_task, sample_offset)}
+    both["moving"] = _modes(model, M_moving, K_task, sample_offset) if M_moving is not M_held else both["held"]
+    freq, modes, mm, mk = both[rotors]
     return Stiffness(x=kin.x.copy(), K_task=K_task, C_task=C_task, C_point=C_point, eigenvalues=ev,
                      eigenvectors=evec, min_stiffness=k_t, min_stiffness_direction=d_t, min_rot_stiffness=k_r,
-                     min_rot_stiffness_direction=d_r, M_task=M, frequencies=freq, modes=modes, modal_mass=mm,
-                     modal_stiffness=mk)
+                     min_rot_stiffness_direction=d_r, M_task=M_held if rotors == "held" else M_moving,
+                     frequencies=freq, modes=modes, modal_mass=mm, modal_stiffness=mk, rotors=rotors,
+                     frequencies_rotors_held=both["held"][0], frequencies_rotors_moving=both["moving"][0])
 
 
 def _modes(model: MechanismModel, M: Array, K: Array, sample_offset: int) -> tuple[Array, Array, Array, Array]:
