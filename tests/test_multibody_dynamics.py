@@ -45,11 +45,17 @@ def _kin(d, n=60, seed=0):
 
 
 def _with_sections(d, E=2.1e11, diameters=None):
+    """Every body a beam of circular section but those that are none (joints at one point, e.g.
+    a slider pinned where it slides: a section there is refused)."""
     d = ex.deep(d)
     bodies = list(d.get("bodies", []))
     for leg in d.get("legs", []):
         bodies += leg.get("bodies", [])
+    joints = list(d.get("joints", [])) + [j for leg in d.get("legs", []) for j in leg.get("joints", [])]
     for b in bodies:
+        pts = [np.asarray(j["point_m"], float) for j in joints if b["name"] in (j["parent"], j["child"])]
+        if not d.get("legs") and max((np.linalg.norm(p - q) for p in pts for q in pts), default=0.0) < 1e-9:
+            continue
         od = (diameters or {}).get(b["name"], 0.02)
         b["section"] = {"outer_diameter_m": od, "inner_diameter_m": 0.0}
         b["material"] = {"youngs_modulus_Pa": E, "poisson_ratio": 0.3}

@@ -668,3 +668,33 @@ def test_a_fixed_joint_with_a_spring_runs(tmp_path):
     doc = json.loads((out / "model.json").read_text())
     bolt = next(j for j in doc["joints"] if j["name"] == "bolt")
     assert bolt["stiffness"] == {"force_N_m": [1.0e6] * 3, "moment_Nm_rad": [1.0e4] * 3}
+
+
+@pytest.mark.parametrize("case, words", [
+    ("coincident", "[bodies] cylinder_1 section: its joints meet at one point"),
+    ("one_joint", "[bodies] lump section: the body has 1 joint, and a beam needs two"),
+])
+def test_a_section_with_no_beam_is_refused(tmp_path, capsys, case, words):
+    """A section on a body whose joints meet at one point (the built-in Stewart's cylinders: U and
+    P both at the base joint), or on a body with one joint, would stay rigid without a word."""
+    import tomlkit
+
+    from pkmdyn.cli import main
+
+    d = ex.builtin_dict("stewart")
+    mat = {"youngs_modulus_Pa": E_STEEL, "poisson_ratio": NU}
+    if case == "coincident":
+        for leg in d["legs"]:
+            for b in leg["bodies"]:
+                if b["name"] == "cylinder":
+                    b.update(section={"outer_diameter_m": 0.05}, material=mat)
+    else:
+        d["bodies"].append(dict(ex.body("lump", (0.0, 0.0, 1.2)), section={"outer_diameter_m": 0.05}, material=mat))
+        d["joints"] = [ex.joint("lump_weld", "fixed", "platform", "lump", (0.0, 0.0, 1.1))]
+    path = tmp_path / "stewart.toml"
+    path.write_text(tomlkit.dumps(d))
+    out = tmp_path / "out"
+    assert main(["stiffness", "--machine", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0], err
+    assert not out.exists()

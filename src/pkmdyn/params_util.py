@@ -75,7 +75,9 @@ def _rule(err: Any) -> str:
     bounds = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<", "less_than_equal": "<="}
     if kind in bounds:
         limit = next(iter(ctx.values()))
-        return f"must be {bounds[kind]} {limit:g}"
+        got = err.get("input")
+        shown = f", got {got:g}" if isinstance(got, (int, float)) and not isinstance(got, bool) else ""
+        return f"must be {bounds[kind]} {limit:g}{shown}"
     if kind == "too_short":
         return f"has {ctx.get('actual_length', '?')} entries, needs at least {ctx.get('min_length')}"
     if kind == "too_long":

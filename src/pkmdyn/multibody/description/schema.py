@@ -698,6 +698,26 @@ def _load(ld: _Load, where: str, body_specs: dict[str, BodySpec], task: TaskSpec
     return LoadSpec(ld.body, d * mag, np.zeros(3), pt, name=ld.name, direction=d, magnitude=mag)
 
 
+def _check_beams(label: str, body_specs: dict[str, BodySpec], joints: list[JointSpec]) -> None:
+    """A body given a ``section`` and a ``material`` must be a beam: two joints at least, and
+    (its axis through its joints) two of them apart at the reference configuration; else the
+    section would be left rigid without a word."""
+    span = max([float(np.linalg.norm(j.point)) for j in joints] + [1e-3])
+    for name, b in body_specs.items():
+        if not (b.section and b.material):
+            continue
+        pts = [j.point for j in joints if name in (j.parent, j.child)]
+        where = f"{label}: [bodies] {name} section"
+        if len(pts) < 2:
+            raise ParameterError(f"{where}: the body has {len(pts)} joint{'' if len(pts) == 1 else 's'}, and a beam needs "
+                                 "two; remove its section "
+                                 "and material, or give it no compliance (docs/stiffness.md)")
+        if (b.section.get("beam_axis", "joints") == "joints"
+                and max(float(np.linalg.norm(p - q)) for p in pts for q in pts) <= 1e-9 * span):
+            raise ParameterError(f"{where}: its joints meet at one point, so there is no beam between them to "
+                                 "strain; remove its section and material, or move a joint to the beam's other end")
+
+
 def _check_external_friction(label: str, joints: list[JointSpec], names: set[str]) -> None:
     """Each joint's ``friction.external`` names a named load; a radius exactly where the joint
     rotates."""
@@ -919,6 +939,7 @@ def load_description(source: str | Path | dict[str, Any], limits: dict[str, Any]
                 raise ParameterError(f"{where} {key}: body {nm!r} is not defined")
         joints.append(_joint(j, where))
     _check_connected(label, body_specs, joints)
+    _check_beams(label, body_specs, joints)
     if not any(j.actuated for j in joints):
         raise ParameterError(f"{label}: [joints]: no joint is actuated (set actuated = true on the driven joints)")
     task = _task(data.task, f"{label}: [task]", body_specs)

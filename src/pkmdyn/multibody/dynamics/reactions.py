@@ -14,7 +14,7 @@ that axis (a joint's node on a body is the joint frame's origin fixed in that bo
 but for a joint that slides, whose node on the cylinder is the cylinder's point and on the
 piston the piston's point that was there at the reference configuration, so each tube keeps
 its own length whichever body the description names the joint's parent; a joint's
-``bearing`` puts both nodes at the point fixed in the body it names, e.g. a cylinder's mouth) (a body whose joints all lie at one point stays rigid); the loads at the nodes are the joint wrenches acting on the body (``+W_j`` as the
+``bearing`` puts both nodes at the point fixed in the body it names, e.g. a cylinder's mouth) (a body that is no beam, with one joint or all its joints at one point, is refused when the description is read); the loads at the nodes are the joint wrenches acting on the body (``+W_j`` as the
 child, ``-W_j`` as the parent) and, at the centre of mass, the gravity and d'Alembert load
 ``-W_b`` (Eq. 1 of :mod:`pkmdyn.multibody.dynamics.newton_euler`), each reduced to its node (moment transported along the
 offset from the axis). Each segment between consecutive nodes is a cantilever of uniform
