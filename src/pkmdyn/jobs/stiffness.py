@@ -316,7 +316,7 @@ def job(machine: str, out_dir: Path, *, poses: tuple[str, ...] = (), motion_path
     k = pose["min_stiffness_N_m"]
     kr = pose["min_rot_stiffness_Nm_rad"]
     lines = (f"{'worst pose' if 'worst' in doc else 'pose'}: "
-             + ", ".join(f"{n} = {v:.6g}" for n, v in pose.get("task", {}).items()),
+             + ", ".join(f"{n} = {v + 0.0:.6g}" for n, v in pose.get("task", {}).items()),
              f"  translational stiffness, worst direction: {'rigid' if k is None else f'{k:.6g} N/m'}; "
              f"rotational: {'rigid' if kr is None else f'{kr:.6g} N m/rad'}",
              f"  natural frequencies (rotors {rotors}): "

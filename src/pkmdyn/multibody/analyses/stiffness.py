@@ -287,7 +287,7 @@ class _Structure:
         bad = np.flatnonzero(res > UNBALANCED * size * max(1.0, model.length_scale))
         if bad.size:
             s = int(bad[0])
-            pose = ", ".join(f"{nm} = {v:.6g} {u}" for nm, u, v in zip(model.task_names, model.task_units, kin.x[s]))
+            pose = ", ".join(f"{nm} = {v + 0.0:.6g} {u}" for nm, u, v in zip(model.task_names, model.task_units, kin.x[s]))
             raise SingularityError(f"sample {s + sample_offset}: with its actuators locked the mechanism cannot carry "
                                    f"a load on task body {model.body_names[tb]!r} (a singularity of the actuated "
                                    f"mechanism, infinite compliance; task pose {pose})")
