@@ -412,6 +412,21 @@ def test_assemble_refusals_are_one_line(capsys, tmp_path, actuators, pattern):
     assert not out.exists()
 
 
+def test_assemble_reports_its_stopping_rule(capsys, tmp_path):
+    _, text = _stewart_lengths()
+    out = tmp_path / "modes"
+    code, stdout, err = _run(capsys, "assemble", "--machine", "stewart", "--actuators", text, "--patience", 300,
+                             "--out", out)
+    assert code == 0, err
+    doc = json.loads((out / "assemblies.json").read_text())
+    assert doc["stopping_rule"] == {"kind": "no new mode in consecutive starts", "patience": 300}
+    assert doc["starts"] - doc["last_new_mode_at_start"] >= 300
+    assert f"starts: {doc['starts']:,} (until 300 starts in a row found no new mode" in stdout
+    code, _, err = _run(capsys, "assemble", "--machine", "stewart", "--actuators", text, "--starts", 100,
+                        "--patience", 300)
+    assert code == 2 and "--starts and --patience exclude each other" in err
+
+
 def _write_actuator_motion(path, model, kin, rates=True):
     cols = {"t_s": kin.t}
     for i, (a, u) in enumerate(zip(model.actuator_names, model.actuator_units)):
@@ -607,6 +622,31 @@ def test_rpr3_with_six_real_assembly_modes():
         d = [max(np.abs(a.x[:2] - w_[:2]).max(), abs((a.x[2] + want[0][2] - w_[2] + np.pi) % (2 * np.pi) - np.pi))
              for a in got.modes]
         assert min(d) <= 1e-9, (w_, d)
+
+
+def test_the_default_search_stops_when_no_new_mode_comes():
+    """Without a count the search starts until ``patience`` consecutive starts found no new mode:
+    all six modes of the six-mode 3-RPR, the rule and where it stopped reported; a fixed count is
+    exactly the starts tried (the reference configuration and the continuation among them)."""
+    from oracles import rpr3
+
+    par = rpr3.RPR3(A=[[0.0, 0.0], [0.7, 0.05], [0.2, 0.55]], b=[[-0.25, -0.12], [0.2, -0.1], [0.05, 0.25]])
+    rho = np.array([0.55, 0.288, 0.611])
+    want = rpr3.forward_kinematics(par, rho)
+    m = load_mechanism(_rpr3_description(par, want[0]))
+    s = np.empty(3)
+    s[[m.actuator_names.index(f"P_{i + 1}") for i in range(3)]] = rho
+    got = assembly_modes(m, s, seed=4)
+    assert len(got.modes) == 6 and got.patience == 5000
+    assert 1 <= got.last_new_mode_at and got.starts - got.last_new_mode_at >= 5000
+    assert sum(a.hits for a in got.modes) <= got.converged <= got.starts
+    short = assembly_modes(m, s, seed=4, patience=20)
+    assert short.starts - short.last_new_mode_at >= 20 and short.starts < got.starts
+    for n in (1, 2, 3, 1234):
+        fixed = assembly_modes(m, s, starts=n, seed=4)
+        assert fixed.starts == n and fixed.patience is None
+    with pytest.raises(ParameterError, match="patience: expected an integer from 1"):
+        assembly_modes(m, s, patience=0)
 
 
 def test_one_sample_at_a_time_refuses_a_crossing_instead_of_turning_back():

@@ -132,10 +132,11 @@ def direct_kinematics(model: Any, s: Array, sd: Array | None = None, sdd: Array 
     return direct(model, s, sd, sdd, t)
 
 
-def assembly_modes(model: Any, s: Array, starts: int = 2000, seed: int = 0) -> Any:
+def assembly_modes(model: Any, s: Array, starts: int | None = None, seed: int = 0, patience: int = 5000) -> Any:
     """Every assembly mode found at the actuator coordinates ``s (na,)``
-    (:func:`pkmdyn.multibody.kinematics.direct.assembly_modes`)."""
-    return modes(model, s, starts, seed)
+    (:func:`pkmdyn.multibody.kinematics.direct.assembly_modes`): ``starts`` starts, or by default
+    until ``patience`` consecutive starts found no new mode."""
+    return modes(model, s, starts, seed, patience)
 
 
 def stiffness(model: Any, kin: Any, rotors: str = "held") -> Any:

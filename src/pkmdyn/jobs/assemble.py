@@ -13,7 +13,7 @@ import numpy as np
 
 from ..io import write_json
 from ..multibody.columns import model_summary
-from ..multibody.kinematics.direct import assembly_modes, parse_actuators
+from ..multibody.kinematics.direct import PATIENCE, assembly_modes, parse_actuators
 from ..multibody.kinematics.inverse import solve_kinematics
 from ..report import scene_from_joints, write_report
 from ._files import JobResult, prepare, write
@@ -31,6 +31,9 @@ def _document(model: Any, modes: Any) -> dict[str, Any]:
         "method": modes.method,
         "starts": modes.starts,
         "converged_starts": modes.converged,
+        "stopping_rule": ({"kind": "fixed", "starts": modes.starts} if modes.patience is None else
+                          {"kind": "no new mode in consecutive starts", "patience": modes.patience}),
+        "last_new_mode_at_start": modes.last_new_mode_at,
         "modes": [{
             "mode": k + 1,
             "task": {f"{n}_{u}": float(v) for n, u, v in zip(model.task_names, units, a.x)},
@@ -72,20 +75,24 @@ def _report(out: Path, model: Any, modes: Any, doc: dict[str, Any], text: str) -
                         scene_note="One frame per assembly mode, numbered as in the table.")
 
 
-def job(machine: str, actuators: str, starts: int, seed: int, out_dir: Path | None,
-        announce: Callable[[Mapping[str, Path]], None] | None = None) -> JobResult:
+def job(machine: str, actuators: str, starts: int | None, seed: int, out_dir: Path | None,
+        announce: Callable[[Mapping[str, Path]], None] | None = None, patience: int = PATIENCE) -> JobResult:
     """Every assembly mode of ``machine`` found at the actuator configuration ``actuators``
-    (``NAME=VALUE,...``) from ``starts`` random configurations (``seed``), each verified by the
-    inverse kinematics; ``assemblies.json`` and ``report.html`` in ``out_dir`` where given."""
+    (``NAME=VALUE,...``) from ``starts`` starts (``seed``; None: until ``patience`` consecutive
+    starts found no new mode), each verified by the inverse kinematics; ``assemblies.json`` and
+    ``report.html`` in ``out_dir`` where given."""
     p = prepare(machine, out_dir)
     model = p.model
     s = parse_actuators(model, actuators)
-    modes = assembly_modes(model, s, starts=starts, seed=seed)
+    modes = assembly_modes(model, s, starts=starts, seed=seed, patience=patience)
+    rule = ("a fixed count" if modes.patience is None else
+            f"until {modes.patience:,} starts in a row found no new mode")
     doc = _document(model, modes)
     lines = [f"mechanism: {model.name}",
              "actuators: " + ", ".join(f"{a} = {v['value'] + 0.0:.9g} {v['unit']}" for a, v in doc["actuators"].items()),
              f"method: {modes.method}",
-             f"starts: {modes.starts}; converged: {modes.converged}; assembly modes found: {len(modes.modes)}"]
+             f"starts: {modes.starts:,} ({rule}; the last new mode at start {modes.last_new_mode_at:,}); "
+             f"converged: {modes.converged:,}; assembly modes found: {len(modes.modes)}"]
     for m in doc["modes"]:
         task = ", ".join(f"{k} = {v + 0.0:.9g}" for k, v in m["task"].items())
         sm = m["singularity_measures"]

@@ -25,6 +25,7 @@ task coordinates are then the task body's pose. Two routes:
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -112,13 +113,18 @@ class Assembly:
 @dataclass(frozen=True)
 class AssemblyModes:
     """The assembly modes found at actuator coordinates ``s``: ``modes`` nearest the reference
-    pose first; ``starts`` the random starts tried, ``converged`` those whose Newton search
-    converged to a verified solution."""
+    pose first; ``starts`` the starts tried in all (the reference configuration and the
+    continuation from it among them), ``converged`` those whose Newton search converged."""
 
     s: Array
     modes: tuple[Assembly, ...]
     starts: int
     converged: int
+    #: the adaptive search's stopping rule (consecutive starts without a new mode), None for a
+    #: fixed count of starts
+    patience: int | None = None
+    #: the start (1-based, in the order tried) that found the last new mode
+    last_new_mode_at: int = 0
     method: str = ("damped Newton from random configurations (multi-start), each solution verified by the inverse "
                    "kinematics and duplicates merged by the task body's pose; every mode listed is real, none is "
                    "guaranteed to be the last")
@@ -551,57 +557,85 @@ def _random_starts(model: MechanismModel, m: int, rng: np.random.Generator) -> A
     return q
 
 
-def assembly_modes(model: MechanismModel, s: Array, starts: int = 2000, seed: int = 0) -> AssemblyModes:
-    """The assembly modes found at actuator coordinates ``s (na,)`` (module docstring): the
-    reference configuration, the continuation from it and ``starts`` random configurations
-    (``seed``) are each taken to a solution by damped Newton; the converged ones verified by the
-    inverse kinematics round trip to :data:`ROUND_TRIP_TOLERANCE` and merged by the task body's
-    pose. Refused where no start reaches a solution (the actuators reach no pose)."""
+#: the adaptive search's default: stop once this many consecutive starts found no new mode
+PATIENCE = 5000
+#: at most this many starts in one search (fixed or adaptive)
+MAX_STARTS = 1_000_000
+#: the first call's starts; later calls are sized to last about :data:`_CALL_S` seconds, so that
+#: Ctrl-C (answered between calls) is answered within a second
+_BATCH = 200
+_CALL_S = 0.25
+
+
+def assembly_modes(model: MechanismModel, s: Array, starts: int | None = None, seed: int = 0,
+                   patience: int = PATIENCE) -> AssemblyModes:
+    """The assembly modes found at actuator coordinates ``s (na,)`` (module docstring): damped
+    Newton from the reference configuration, the continuation from it and random configurations
+    (``seed``), the converged ones verified by the inverse kinematics round trip to
+    :data:`ROUND_TRIP_TOLERANCE` and merged by the task body's pose. ``starts``: that many starts
+    in all (the reference configuration and the continuation count among them); None (the
+    default): starts until ``patience`` consecutive ones found no new mode (at most
+    :data:`MAX_STARTS`), so the search lasts as long as the mechanism needs. Refused where no
+    start reaches a solution (the actuators reach no pose)."""
     _check(model)
     s = np.ascontiguousarray(as_array(s, (model.na,), "s", MotionError))
     if not np.all(np.isfinite(s)):
         raise MotionError("s: not finite")
-    if isinstance(starts, bool) or not isinstance(starts, (int, np.integer)) or not 0 <= starts <= 1_000_000:
-        raise ParameterError(f"starts: expected an integer from 0 to 1,000,000, got {starts!r}")
+    for name, v, lo in (("starts", starts, 1), ("patience", patience, 1)):
+        if v is None and name == "starts":
+            continue
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= MAX_STARTS:
+            raise ParameterError(f"{name}: expected an integer from {lo} to {MAX_STARTS:,}, got {v!r}")
     rng = np.random.default_rng(seed)
-    cand = [model.coord_offset[None]]
+    seeds = [model.coord_offset[None]]
     try:
-        cand.append(_start(model, s, None, 0)[None])
+        seeds.append(_start(model, s, None, 0)[None])
     except (UnreachablePoseError, SingularityError):
         pass
-    cand.append(_random_starts(model, int(starts), rng))
-    Q0 = np.ascontiguousarray(np.concatenate(cand))
-    m = Q0.shape[0]
-    q_out = np.zeros_like(Q0)
-    res, det, ratio = np.zeros(m), np.zeros(m), np.zeros(m)
-    status = np.full(m, -1, dtype=np.int64)
-    D.direct_starts(s, Q0, *_arrays(model, damped=True, max_iter=SEARCH_ITER), q_out, res, det, ratio, status)
-    good = np.flatnonzero((status == K.OK) | (status == D.EULER_SINGULAR_RATES))
-    if good.size == 0:
-        raise UnreachablePoseError(f"actuator {model.actuator_names[0]!r}: the actuator coordinates {_values(model, s)} "
-                                   f"reach no pose ({m} starts, none converged)")
+    total = MAX_STARTS if starts is None else int(starts)
     L = model.length_scale
     tb = model.task_body
+    groups: list[dict] = []
+    outs: list[tuple[Array, Array, Array]] = []  # (q, res, det) of each group's best start
+    m = converged = last_new = 0
+    size = _BATCH
+    while m < total and (starts is not None or m - last_new < patience or m == 0):
+        batch = np.concatenate(seeds) if m == 0 else np.empty((0, model.nq))
+        batch = np.ascontiguousarray(np.concatenate(
+            [batch, _random_starts(model, max(0, min(size, total - m) - len(batch)), rng)])[: total - m])
+        k = batch.shape[0]
+        t0 = time.perf_counter()
+        q_out = np.zeros_like(batch)
+        res, det, ratio = np.zeros(k), np.zeros(k), np.zeros(k)
+        status = np.full(k, -1, dtype=np.int64)
+        D.direct_starts(s, batch, *_arrays(model, damped=True, max_iter=SEARCH_ITER), q_out, res, det, ratio, status)
+        size = int(np.clip(k * _CALL_S / max(time.perf_counter() - t0, 1e-6), 50, 20_000))
+        good = np.flatnonzero((status == K.OK) | (status == D.EULER_SINGULAR_RATES))
+        converged += int(good.size)
+        for i in good:
+            R, p, _ = body_poses(model, q_out[i])
+            key = np.concatenate([R[tb].ravel(), p[tb] / L])
+            if not np.all(np.isfinite(key)):
+                continue
+            for g in groups:
+                if np.abs(g["key"] - key).max() < SAME_POSE:
+                    g["hits"] += 1
+                    if res[i] < g["res"]:
+                        g["res"], g["q"], g["det"] = float(res[i]), q_out[i].copy(), float(det[i])
+                    break
+            else:
+                groups.append({"key": key, "hits": 1, "res": float(res[i]), "q": q_out[i].copy(),
+                               "det": float(det[i])})
+                last_new = m + int(i) + 1
+        m += k
+    if converged == 0:
+        raise UnreachablePoseError(f"actuator {model.actuator_names[0]!r}: the actuator coordinates {_values(model, s)} "
+                                   f"reach no pose ({m} starts, none converged)")
     x_ref = reference_task(model)
     nr = model.row_loop.shape[0]
-    groups: list[dict] = []
-    for i in good:
-        R, p, _ = body_poses(model, q_out[i])
-        key = np.concatenate([R[tb].ravel(), p[tb] / L])
-        if not np.all(np.isfinite(key)):
-            continue
-        for g in groups:
-            if np.abs(g["key"] - key).max() < SAME_POSE:
-                g["hits"] += 1
-                if res[i] < res[g["i"]]:
-                    g["i"] = i
-                break
-        else:
-            groups.append({"key": key, "i": i, "hits": 1})
     modes = []
     for g in groups:
-        i = g["i"]
-        q = q_out[i]
+        q = g["q"]
         val, _ = constraint_jacobian(model, q[None])
         x = val[0, nr:].copy()
         ang = model.task_kind == 1
@@ -616,7 +650,7 @@ def assembly_modes(model: MechanismModel, s: Array, starts: int = 2000, seed: in
         if not trip <= ROUND_TRIP_TOLERANCE:
             continue
         sm = singularity_measures(model, q[None])
-        modes.append(Assembly(x=x, q=q.copy(), residual=float(res[i]), round_trip=trip, det_sign=int(np.sign(det[i])),
+        modes.append(Assembly(x=x, q=q.copy(), residual=g["res"], round_trip=trip, det_sign=int(np.sign(g["det"])),
                               inverse=float(sm.inverse[0]), direct=float(sm.direct[0]),
                               constraint=float(sm.constraint[0]), hits=int(g["hits"])))
     if not modes:
@@ -624,7 +658,8 @@ def assembly_modes(model: MechanismModel, s: Array, starts: int = 2000, seed: in
                                    "the inverse kinematics check")
     scale_x = np.where(model.task_kind == 0, 1.0 / L, 1.0)
     modes.sort(key=lambda a: float(np.abs((a.x - x_ref) * scale_x).max()))
-    return AssemblyModes(s=s, modes=tuple(modes), starts=m, converged=int(good.size))
+    return AssemblyModes(s=s, modes=tuple(modes), starts=m, converged=converged,
+                         patience=None if starts is not None else int(patience), last_new_mode_at=last_new)
 
 
 def parse_actuators(model: MechanismModel, text: str) -> Array:
