@@ -98,7 +98,7 @@ def test_bad_parameter_file_is_one_line_and_status_2(tmp_path, capsys):
     (tmp_path / "p.toml").write_text(text)
     assert main(["pdm", "run", "--params", str(tmp_path / "p.toml"), "--no-plots", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip()
-    assert err == f"pkmdyn: error: {tmp_path / 'p.toml'}: [geometry] crank_length_m: must be > 0"
+    assert err == f"pkmdyn: error: {tmp_path / 'p.toml'}: [geometry] crank_length_m: must be > 0, got -0.24"
 
 
 def test_unreachable_motion_names_time_and_limb(tmp_path, capsys):
