@@ -28,17 +28,20 @@ else:  # the readers and the engine load when the command runs, not for --help
               help="URDF, SDFormat: close the loops from the zero configuration (least change of the joint "
                    "positions) where the file is not assembled there.")
 @click.option("--keyframe", default=None, help="MJCF: the reference configuration from this keyframe (default qpos0).")
+@click.option("--weld-free", is_flag=True,
+              help="MJCF: weld a free joint's body that no loop closure holds (a floating base) to the ground at its "
+                   "reference pose (default: refused). A free body the loops hold hangs from one of them.")
 @click.option("--task-body", default=None, help="The task body (default: an end-effector frame's body, docs/import.md).")
 @click.option("--task-point", default=None, help="The task point: a site or frame name, or x,y,z [m] in the base frame.")
 @click.option("--task-position", default=None, help="Task position components, e.g. x,y,z (default: chosen).")
 @click.option("--task-orientation", default=None, help="Task Euler angles of XYZ, e.g. 1,2,3 (default: chosen).")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="The description to write (e.g. mechanism.toml).")
-def import_(src, fmt, sidecar, actuated, assemble, keyframe, task_body, task_point, task_position,
+def import_(src, fmt, sidecar, actuated, assemble, keyframe, weld_free, task_body, task_point, task_position,
             task_orientation, out_path) -> None:
     """Read a closed-chain mechanism from another format and write its description, checked by
     loading it as `pkmdyn describe` and `run` do. Nothing is written when an element has no
     equivalent (one line naming it)."""
     show(import_job.job(src, out_path, fmt=fmt, sidecar=sidecar, actuated=actuated, assemble=assemble, keyframe=keyframe,
                         task_body=task_body, task_point=task_point, task_position=task_position,
-                        task_orientation=task_orientation, announce=list_files))
+                        task_orientation=task_orientation, announce=list_files, weld_free=weld_free))

@@ -26,7 +26,7 @@ def _csv(text: str | None, kind=str) -> tuple | None:
 def job(src: Path, out_path: Path, *, fmt: str | None = None, sidecar: Path | None = None, actuated: str | None = None,
         assemble: bool = False, keyframe: str | None = None, task_body: str | None = None, task_point: str | None = None,
         task_position: str | None = None, task_orientation: str | None = None,
-        announce: Callable[[Mapping[str, Path]], None] | None = None) -> JobResult:
+        announce: Callable[[Mapping[str, Path]], None] | None = None, weld_free: bool = False) -> JobResult:
     """The model file ``src`` (``fmt`` from its extension by default) as a description written to
     ``out_path``, checked by loading it as ``pkmdyn describe`` and ``run`` do; the options are those
     of ``pkmdyn import`` as text (``actuated``: joint names, comma-separated; ``task_point``: a
@@ -57,6 +57,6 @@ def job(src: Path, out_path: Path, *, fmt: str | None = None, sidecar: Path | No
     choice = TaskChoice(body=task_body, point=point, position=pos if pos is not None or orient is None else (),
                         orientation=orient if orient is not None or pos is None else ())
     text, notes = import_description(Path(src), fmt, sidecar=sidecar, actuated=_csv(actuated) or (),
-                                     assemble=assemble, keyframe=keyframe, choice=choice)
+                                     assemble=assemble, keyframe=keyframe, choice=choice, weld_free=weld_free)
     files = write_texts({"description": (Path(out_path), text)}, inputs, announce)
     return JobResult(files, notes=tuple(notes))

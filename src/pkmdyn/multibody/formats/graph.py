@@ -307,6 +307,13 @@ class _Builder:
             return entry
         if kinds == ["ball"]:
             entry["type"] = "spherical"
+            fr = {}
+            if j0.damping:  # the same viscous coefficient about every axis, as MuJoCo's ball damping
+                fr["viscous_Nm_s_rad"] = float(j0.damping)
+            if j0.frictionloss:
+                fr["coulomb_torque_Nm"] = float(j0.frictionloss)
+            if fr:
+                entry["friction"] = fr
             return entry
         for k in chain:
             if k.damping or k.frictionloss or k.armature:

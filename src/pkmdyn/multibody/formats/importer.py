@@ -17,16 +17,19 @@ from .urdf_in import read_sidecar, sidecar_task, urdf_graph
 
 
 def read_graph(path: Path, fmt: str, sidecar: Path | None = None, actuated: tuple[str, ...] = (),
-               assemble: bool = False, keyframe: str | None = None) -> tuple[Graph, TaskChoice]:
+               assemble: bool = False, keyframe: str | None = None, weld_free: bool = False
+               ) -> tuple[Graph, TaskChoice]:
     """The file's :class:`~pkmdyn.multibody.formats.graph.Graph` and the task its sidecar asks for."""
     choice = TaskChoice()
     if fmt == "mjcf":
         for flag, given in (("--sidecar", sidecar), ("--actuated", actuated), ("--assemble", assemble)):
             if given:
                 raise ParameterError(f"{flag}: not for MJCF (its equalities close the loops, its actuators drive)")
-        return mjcf_graph(path, keyframe), choice
+        return mjcf_graph(path, keyframe, weld_free), choice
     if keyframe is not None:
         raise ParameterError("--keyframe: only for MJCF")
+    if weld_free:
+        raise ParameterError("--weld-free: only for MJCF (its free joints)")
     if fmt == "urdf":
         side = read_sidecar(sidecar) if sidecar is not None else None
         if side is not None:
@@ -73,10 +76,10 @@ def _fit_default_motion(model, desc: dict, notes: list[str]) -> None:
 
 def import_description(path: Path, fmt: str, *, sidecar: Path | None = None, actuated: tuple[str, ...] = (),
                        assemble: bool = False, keyframe: str | None = None,
-                       choice: TaskChoice = TaskChoice()) -> tuple[str, list[str]]:
+                       choice: TaskChoice = TaskChoice(), weld_free: bool = False) -> tuple[str, list[str]]:
     """TOML text of the description of ``path`` (loaded and checked as ``run`` loads it) and
     the import's notes."""
-    graph, side = read_graph(path, fmt, sidecar, actuated, assemble, keyframe)
+    graph, side = read_graph(path, fmt, sidecar, actuated, assemble, keyframe, weld_free)
     desc, notes = description_from_graph(graph, _merge(choice, side))
     model = load_mechanism(desc)  # what describe and run will do with the file
     if model.topology.overconstraints:

@@ -10,7 +10,10 @@ defaults, classes, frames and inertia from geoms are resolved as MuJoCo resolves
   ``qpos`` (the description's reference value, so that its coordinates are MuJoCo's
   ``qpos``), ``range`` where limited, ``damping``, ``frictionloss`` and ``armature``; ``ball``
   (its ``range`` not kept, said);
-  several joints of one body are a chain through massless links; a ``free`` joint is refused;
+  several joints of one body are a chain through massless links; a ``ball`` joint's damping
+  and dry friction are its viscous and Coulomb friction; a ``free`` joint whose body an
+  active equality joins to a body outside its subtree hangs the body from that equality (a
+  spherical or fixed tree joint), a floating one is refused or, with ``weld_free``, welded;
 * equality constraints: ``connect`` (3D closure) and ``weld`` (6D closure), between bodies
   or sites; ``joint``, ``tendon``, ``flex`` and ``distance`` equalities are refused by name,
   an inactive one (``active="false"``) is left out and said so in the notes;
@@ -40,15 +43,65 @@ def _mujoco():
     return mujoco
 
 
+def _held_free_bodies(mujoco, m) -> dict[int, int]:
+    """Each body with a free joint that an active connect or weld joins to a body outside its
+    own subtree (a platform closed by the loops): the first such equality."""
+    parent = [int(v) for v in m.body_parentid]
+
+    def inside(b: int, root: int) -> bool:
+        while b > 0:
+            if b == root:
+                return True
+            b = parent[b]
+        return False
+
+    def body_of(e: int, k: int) -> int:
+        i = int(m.eq_obj1id[e] if k == 0 else m.eq_obj2id[e])
+        return int(m.site_bodyid[i]) if int(m.eq_objtype[e]) == int(mujoco.mjtObj.mjOBJ_SITE) else i
+
+    kinds = (int(mujoco.mjtEq.mjEQ_CONNECT), int(mujoco.mjtEq.mjEQ_WELD))
+    out: dict[int, int] = {}
+    for j in range(m.njnt):
+        if int(m.jnt_type[j]) != int(mujoco.mjtJoint.mjJNT_FREE):
+            continue
+        b = int(m.jnt_bodyid[j])
+        for e in range(m.neq):
+            if int(m.eq_type[e]) not in kinds or not m.eq_active0[e]:
+                continue
+            a, c = body_of(e, 0), body_of(e, 1)
+            if (a == b and not inside(c, b)) or (c == b and not inside(a, b)):
+                out[b] = e
+                break
+    return out
+
+
 def name_of(mujoco, m, obj, i: int, kind: str) -> str:
     """A MuJoCo element's name as a description name (``<kind>_<i>`` for an unnamed one)."""
     return safe_name(mujoco.mj_id2name(m, obj, i) or "", f"{kind}_{i}")
 
 
-def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
-    """The mechanism of an MJCF file (module docstring)."""
+#: at most this many refusals of one file are listed (the rest counted)
+MAX_LISTED = 12
+
+
+def mjcf_graph(path: str | Path, keyframe: str | None = None, weld_free: bool = False) -> Graph:
+    """The mechanism of an MJCF file (module docstring). MuJoCo's warnings are taken as notes
+    (its default handler would append them to ``MUJOCO_LOG.TXT`` in the working folder); every
+    element without an equivalent is named in one refusal. ``weld_free``: a free joint whose
+    body no loop closure holds is welded to the ground at its reference pose."""
     mujoco = _mujoco()
-    src = Path(path).name
+    heard: list[str] = []
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda msg: heard.append(" ".join(str(msg).split())[:200]))
+    try:
+        return _graph(mujoco, Path(path), keyframe, weld_free, heard)
+    finally:
+        mujoco.set_mju_user_warning(previous)
+
+
+def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: list[str]) -> Graph:
+    src = path.name
+    problems: list[str] = []
     try:
         m = mujoco.MjModel.from_xml_path(str(path))
     except Exception as exc:  # MuJoCo's own message names the element and line
@@ -57,8 +110,8 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
     m.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_EQUALITY)
     for t in range(m.ntendon):
         if m.tendon_stiffness[t] or m.tendon_damping[t] or m.tendon_limited[t]:
-            raise ParameterError(f"{src}: tendon {name_of(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, 'tendon')}: "
-                                 "a tendon's spring, damping or limit has no equivalent in a description")
+            problems.append(f"tendon {name_of(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, 'tendon')}: a tendon's spring, "
+                            "damping or limit has no equivalent in a description")
     d = mujoco.MjData(m)
     if keyframe is None:
         d.qpos[:] = m.qpos0
@@ -78,12 +131,14 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
     links = []
     for b in range(1, m.nbody):
         if hasattr(m, "body_gravcomp") and m.body_gravcomp[b]:
-            raise ParameterError(f"{src}: body {bname[b]}: gravity compensation (gravcomp) has no equivalent")
+            problems.append(f"body {bname[b]}: gravity compensation (gravcomp) has no equivalent")
         R = d.ximat[b].reshape(3, 3)
         links.append(Link(bname[b], float(m.body_mass[b]), d.xipos[b].copy(), R @ np.diag(m.body_inertia[b]) @ R.T))
     joints: list[Joint] = []
-    notes: list[str] = []
+    notes: list[str] = [f"MuJoCo: {w}" for w in dict.fromkeys(heard)]
     jname = [name(mujoco.mjtObj.mjOBJ_JOINT, j, "joint") for j in range(m.njnt)]
+    held = _held_free_bodies(mujoco, m)
+    free_by: dict[int, int] = {}  # a free body held by a loop -> the equality that becomes its tree joint
     for b in range(1, m.nbody):
         ids = [j for j in range(m.njnt) if m.jnt_bodyid[j] == b]
         parent = bname[int(m.body_parentid[b])]
@@ -93,8 +148,20 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
         for n, j in enumerate(ids):
             t = int(m.jnt_type[j])
             if t == mujoco.mjtJoint.mjJNT_FREE:
-                raise ParameterError(f"{src}: joint {jname[j]}: a free joint; pkmdyn describes mechanisms whose "
-                                     "base is the ground (remove it, or weld the body)")
+                if b in held:  # a platform closed by the loops: one of them becomes its tree joint
+                    free_by[b] = held[b]
+                    notes.append(f"joint {jname[j]}: a free joint whose body the loops hold; body {bname[b]} hangs from "
+                                 f"equality {name(mujoco.mjtObj.mjOBJ_EQUALITY, held[b], 'equality')} instead")
+                elif weld_free:
+                    joints.append(Joint(f"{bname[b]}_weld", "fixed", GROUND, bname[b], d.xpos[b].copy(),
+                                        np.array([0, 0, 1.0])))
+                    notes.append(f"joint {jname[j]}: a free joint, welded to the ground at its reference pose "
+                                 "(--weld-free)")
+                else:
+                    problems.append(f"joint {jname[j]}: a free joint whose body no loop closure holds (a floating "
+                                    "base); pkmdyn describes mechanisms on the ground: weld it at its reference pose "
+                                    "with --weld-free")
+                break
             kind = {int(mujoco.mjtJoint.mjJNT_HINGE): "hinge", int(mujoco.mjtJoint.mjJNT_SLIDE): "slide",
                     int(mujoco.mjtJoint.mjJNT_BALL): "ball"}[t]
             child = bname[b] if n == len(ids) - 1 else f"{bname[b]}__{n + 1}"
@@ -102,8 +169,8 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
                 links.append(Link(child, 0.0, d.xpos[b].copy(), np.zeros((3, 3))))
             dof = int(m.jnt_dofadr[j])
             if m.jnt_stiffness[j]:
-                raise ParameterError(f"{src}: joint {jname[j]}: a joint spring (stiffness {m.jnt_stiffness[j]:g}) has no "
-                                     "equivalent in a description's dynamics")
+                problems.append(f"joint {jname[j]}: a joint spring (stiffness {m.jnt_stiffness[j]:g}) has no "
+                                "equivalent in a description's dynamics")
             lim = (float(m.jnt_range[j, 0]), float(m.jnt_range[j, 1])) if m.jnt_limited[j] and kind != "ball" else None
             joints.append(Joint(
                 jname[j], kind, parent, child, d.xanchor[j].copy(), d.xaxis[j].copy(),
@@ -112,9 +179,8 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
                 armature=float(m.dof_armature[dof])))
             if kind == "ball" and m.jnt_limited[j]:
                 notes.append(f"joint {jname[j]}: a ball joint's range is not kept (a spherical joint has no limits)")
-            if kind == "ball" and (m.dof_damping[dof] or m.dof_frictionloss[dof] or m.dof_armature[dof]):
-                raise ParameterError(f"{src}: joint {jname[j]}: damping, frictionloss or armature on a ball joint has "
-                                     "no equivalent in a description")
+            if kind == "ball" and m.dof_armature[dof]:
+                problems.append(f"joint {jname[j]}: armature on a ball joint has no equivalent in a description")
             parent = child
     closures = []
     for e in range(m.neq):
@@ -123,8 +189,9 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
         kinds = {int(mujoco.mjtEq.mjEQ_CONNECT): "3d", int(mujoco.mjtEq.mjEQ_WELD): "6d"}
         if t not in kinds:
             tn = mujoco.mjtEq(t).name.removeprefix("mjEQ_").lower()
-            raise ParameterError(f"{src}: equality {ename}: a {tn} equality has no equivalent in a description "
-                                 "(only connect and weld close loops)")
+            problems.append(f"equality {ename}: a {tn} equality has no equivalent in a description "
+                            "(only connect and weld close loops)")
+            continue
         if not m.eq_active0[e]:
             notes.append(f"equality {ename} is inactive in the file and left out")
             continue
@@ -141,16 +208,30 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
             R2 = d.xmat[b2].reshape(3, 3).copy()
             # connect: body2's anchor (data[3:6]); weld: its anchor in body2 (data[0:3])
             p2 = d.xpos[b2] + R2 @ (data[3:6] if t == int(mujoco.mjtEq.mjEQ_CONNECT) else data[0:3])
+        free = next((f for f, q in free_by.items() if q == e), None)
+        if free is not None:  # the tree joint of a held free body: a ball (connect) or a weld
+            other = l1 if l2 == bname[free] else l2
+            if gap[0] > 1e-9 * max(1.0, float(np.linalg.norm(p2))) or gap[1] > 1e-9:
+                problems.append(f"equality {ename}: holds the free body {bname[free]} but is {gap[0]:.3g} m "
+                                "apart at the reference configuration")
+            joints.append(Joint(ename, "ball" if kinds[t] == "3d" else "fixed", other, bname[free], np.asarray(p2, float),
+                                R2[:, 2].copy()))
+            continue
         closures.append(Closure(ename, kinds[t], l1, l2, np.asarray(p2, float), np.asarray(p2, float), R2, R2, gap=gap))
     actuators = []
     for i in range(m.nu):
         aname = name(mujoco.mjtObj.mjOBJ_ACTUATOR, i, "actuator")
         if int(m.actuator_trntype[i]) != int(mujoco.mjtTrn.mjTRN_JOINT):
-            raise ParameterError(f"{src}: actuator {aname}: only actuators on a joint have an equivalent "
-                                 "(not tendons, sites or bodies)")
+            problems.append(f"actuator {aname}: only actuators on a joint have an equivalent "
+                            "(not tendons, sites or bodies)")
+            continue
         g = m.actuator_gear[i]
         if np.any(g[1:] != 0):
-            raise ParameterError(f"{src}: actuator {aname}: a gear with more than one entry")
+            problems.append(f"actuator {aname}: a gear with more than one entry")
+            continue
+        if not (np.isfinite(g[0]) and abs(g[0]) >= 1e-12):
+            problems.append(f"actuator {aname}: gear {g[0]:g} (a gear must be a finite number, not near 0)")
+            continue
         plain = (int(m.actuator_dyntype[i]) == int(mujoco.mjtDyn.mjDYN_NONE)
                  and int(m.actuator_gaintype[i]) == int(mujoco.mjtGain.mjGAIN_FIXED) and m.actuator_gainprm[i, 0] == 1.0
                  and int(m.actuator_biastype[i]) == int(mujoco.mjtBias.mjBIAS_NONE))
@@ -163,6 +244,10 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None) -> Graph:
     frames = [Frame(name(mujoco.mjtObj.mjOBJ_SITE, s, "site"), bname[int(m.site_bodyid[s])], d.site_xpos[s].copy())
               for s in range(m.nsite)]
     frames += [Frame(bname[b], bname[b], d.xpos[b].copy()) for b in range(1, m.nbody)]
+    if problems:
+        more = f"; and {len(problems) - MAX_LISTED} more" if len(problems) > MAX_LISTED else ""
+        raise ParameterError(f"{src}: {len(problems)} element{'s' if len(problems) > 1 else ''} without an equivalent: "
+                             + "; ".join(problems[:MAX_LISTED]) + more)
     model_name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_MODEL, 0) if hasattr(mujoco.mjtObj, "mjOBJ_MODEL") else None
     return Graph(name=model_name or Path(path).stem, source=src, gravity=np.array(m.opt.gravity, dtype=float),
                  links=links, joints=joints, closures=closures, actuators=actuators, frames=frames, notes=notes)
