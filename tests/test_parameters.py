@@ -56,6 +56,8 @@ def test_the_grammar_computes_what_it_says(text, want):
     ("10.0 ** 400", "overflows"),
     ("exp(1000)", "overflows"),
     ("sqrt(-1)", "sqrt"),
+    ("(-2.0e14) ** 0.5", "not a real number"),
+    ("(-r_m) ** 1.5", "not a real number"),
     ("unit([0, 0, 0])", "unit: of a zero vector"),
     ("rotz(1) @ 2", "@ multiplies a matrix and a vector"),
     ("r_m +", "is not an expression"),

@@ -132,9 +132,12 @@ def _eval(node: ast.AST, names: Mapping[str, Any]) -> Any:
             raise ValueError("division by zero")
         with np.errstate(all="raise"):
             try:
-                return _BINARY[type(node.op)](a, b)
+                out = _BINARY[type(node.op)](a, b)
             except (FloatingPointError, OverflowError, ZeroDivisionError):
                 raise ValueError("the value overflows") from None
+        if np.iscomplexobj(out):  # a negative number to a fractional power
+            raise ValueError("the value is not a real number (a negative number to a fractional power)")
+        return out
     if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant) \
             and isinstance(node.slice.value, int) and not isinstance(node.slice.value, bool):
         v = _eval(node.value, names)
@@ -153,7 +156,10 @@ def _eval(node: ast.AST, names: Mapping[str, Any]) -> Any:
             raise ValueError(f"unknown function {node.func.id!r} (known: {', '.join(sorted(FUNCTIONS))})")
         args = [_eval(a, names) for a in node.args]
         try:
-            return f(*args)
+            out = f(*args)
+            if np.iscomplexobj(out):
+                raise ValueError(f"{node.func.id}: the value is not a real number")
+            return out
         except TypeError:
             raise ValueError(f"{node.func.id}: wrong number of arguments") from None
         except (OverflowError, ZeroDivisionError):
