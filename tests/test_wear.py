@@ -13,7 +13,8 @@ import pytest
 from pkmdyn.cli import main
 from pkmdyn.errors import ParameterError
 from pkmdyn.multibody import load_mechanism, solve_kinematics
-from pkmdyn.multibody.analyses.wear import (ASPECT_CAP, joint_slide_tracks, marker_grid, motion_axis, slide_tracks)
+from pkmdyn.multibody.analyses.wear import (ASPECT_CAP, joint_slide_tracks, marker_count, marker_grid, motion_axis,
+                                             slide_tracks)
 from pkmdyn.spatial import euler_to_matrix
 
 
@@ -159,6 +160,9 @@ def test_wear_command_on_a_described_mechanism_uses_the_joint_reaction(tmp_path)
     (["--joint", "S0_upper", "--radius-m", "0.014", "--cap-deg", "0"], "--cap-deg"),  # docs/wear.md: refused
     (["--joint", "S0_upper", "--radius-m", "0.014", "--load", "push_N"], "push_N"),
     (["--joint", "S0_upper", "--radius-m", "0.014", "--cross-shear-law", "cs - 1"], "cross-shear-law"),
+    (["--joint", "S0_upper", "--radius-m", "0.014", "--cross-shear-law", "(-cs - 1) ** 0.5"], "not a real number"),
+    (["--joint", "S0_upper", "--radius-m", "0.014", "--spacing-deg", "1e-4"], "exceeds the limit max_wear_track_points"),
+    (["--joint", "S0_upper", "--radius-m", "0.014", "--spacing-deg", "1e-300"], "exceeds the limit max_wear_track_points"),
 ])
 def test_bad_wear_input_exit_2_nothing_written(tmp_path, capsys, args, words):
     out = tmp_path / "out"
@@ -167,6 +171,23 @@ def test_bad_wear_input_exit_2_nothing_written(tmp_path, capsys, args, words):
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert lines and words in err, err
     assert not out.exists()
+
+
+@pytest.mark.parametrize("spacing, cap", [(10.0, 60.0), (0.7, 180.0), (3.3, 91.0), (90.0, 180.0), (10.0, 0.5),
+                                          (25.0, 50.0), (1.0, 60.0)])
+def test_the_markers_are_counted_before_the_grid_is_built(spacing, cap):
+    assert marker_count(spacing, cap) == len(marker_grid(spacing, cap).u)
+
+
+def test_a_raised_limit_lets_a_fine_grid_run(tmp_path, capsys):
+    out = tmp_path / "fine"
+    args = ["wear", "--machine", "hip", "--joint", "S0_upper", "--radius-m", "0.014", "--spacing-deg", "2",
+            "--cap-deg", "30", "--out", str(out)]
+    n = marker_count(2.0, 30.0)  # the hip's default motion: 1,001 samples
+    assert main([*args[:-2], "--limit", f"max_wear_track_points={n * 1001 - 1}", *args[-2:]]) == 2
+    assert "max_wear_track_points" in capsys.readouterr().err and not out.exists()
+    assert main([*args[:-2], "--limit", f"max_wear_track_points={n * 1001}", *args[-2:]]) == 0
+    assert json.loads((out / "wear.json").read_text())["joints"][0]["marker_grid"]["markers"] == n
 
 
 @pytest.mark.parametrize("spacing, cap", [(10.0, 60.0), (10.0, 58.0), (7.0, 45.0), (15.0, 10.0), (10.0, 0.5)])

@@ -56,11 +56,14 @@ def _pole(text: str | None) -> tuple[float, float, float] | None:
               help="Archard wear factor k [mm^3/(N m)] (default 8e-8, UHMWPE on a ceramic head, Saikko 1994).")
 @click.option("--cross-shear-law", default=None, metavar="EXPR",
               help="Factor on each track's wear as an expression of cs, e.g. \"0.2 + 1.6 * cs\".")
+@click.option("--limit", "limit_items", multiple=True, metavar="KEY=VALUE",
+              help="Raise a plausibility limit of the description's numbers ([limits]; the tracks' size: "
+                   "max_wear_track_points, markers x samples).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder (an earlier run of this command there is replaced whole).")
 def wear(machine: str, joints: tuple[str, ...], motion_path: Path | None, cycles: float, head: str,
          radius_m: float | None, load: str | None, spacing_deg: float, cap_deg: float, pole: str | None,
-         wear_factor: float | None, cross_shear_law: str | None, out_dir: Path) -> None:
+         wear_factor: float | None, cross_shear_law: str | None, limit_items: tuple[str, ...], out_dir: Path) -> None:
     """Slide tracks of points of the head on the cup (and of the cup on the head), their sliding
     distance, aspect ratio (the share above 5.5), cross-shear, track integral of load and the
     Archard wear per million cycles, for spherical joints of any mechanism."""
@@ -68,4 +71,5 @@ def wear(machine: str, joints: tuple[str, ...], motion_path: Path | None, cycles
             "pole": _pole(pole), "cross_shear_law": cross_shear_law, "cycles": cycles}
     if wear_factor is not None:
         opts["wear_factor_mm3_N_m"] = wear_factor
-    show(job.job(machine, joints, out_dir, motion_path=motion_path, opts=job.WearOptions(**opts), announce=list_files))
+    show(job.job(machine, joints, out_dir, motion_path=motion_path, opts=job.WearOptions(**opts), announce=list_files,
+                 limit_items=limit_items))

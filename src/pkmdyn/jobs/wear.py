@@ -6,6 +6,7 @@ The numbers come from :mod:`pkmdyn.multibody.analyses.wear`."""
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -20,12 +21,16 @@ from ..multibody.analyses.wear import (
     head_radius,
     joint_index,
     joint_wear,
+    marker_count,
     marker_grid,
     pole_rotation,
 )
+from ..multibody.description.schema import LIMIT_KEYS
+from ..multibody.dynamics.actuators import effective_limits
 from ..multibody.kinematics.inverse import solve_kinematics
 from ..multibody.kinematics.motion import default_motion, read_task_motion
 from ..report import write_report
+from ..params_util import check_limit, parse_limit_options
 from ._files import JobResult, prepare, write
 
 __all__ = ["job", "wear_file", "wear_document", "write_wear_files", "tracks_figure"]
@@ -164,14 +169,20 @@ def tracks_figure(joint: str, tracks: SlideTracks, max_points: int = 60) -> dict
 
 
 def job(machine: str, joints: tuple[str, ...], out_dir: Path, *, motion_path: Path | None = None,
-        opts: WearOptions = WearOptions(), announce: Callable[[Mapping[str, Path]], None] | None = None
-        ) -> JobResult:
+        opts: WearOptions = WearOptions(), announce: Callable[[Mapping[str, Path]], None] | None = None,
+        limit_items: tuple[str, ...] = ()) -> JobResult:
     """``pkmdyn wear``: the slide tracks and wear of ``machine``'s spherical ``joints`` along the
     motion file ``motion_path`` (default: the machine's default motion) with the settings ``opts``,
-    into ``out_dir`` (``docs/wear.md``)."""
-    p = prepare(machine, out_dir, {"--motion": motion_path})
+    into ``out_dir`` (``docs/wear.md``); ``limit_items``: ``--limit KEY=VALUE`` over the
+    description's ``[limits]`` (the tracks' size: ``max_wear_track_points``, markers x samples)."""
+    limits = parse_limit_options(limit_items, LIMIT_KEYS)
+    p = prepare(machine, out_dir, {"--motion": motion_path}, limits)
     model = p.model
-    marker_grid(opts.spacing_deg, opts.cap_deg)
+    cap = int(effective_limits(model, limits)["max_wear_track_points"])
+    markers = marker_count(opts.spacing_deg, opts.cap_deg)  # counted, not built: bounded before anything grows
+    what = f"wear: the markers (--spacing-deg {opts.spacing_deg:g}, --cap-deg {opts.cap_deg:g})"
+    check_limit(markers, cap, what, "max_wear_track_points", file="the description")
+    opts = replace(opts, max_markers=cap)
     for j in joints:
         head_radius(model, j, opts.radius_m)
     if motion_path is not None:
@@ -180,6 +191,9 @@ def job(machine: str, joints: tuple[str, ...], out_dir: Path, *, motion_path: Pa
         motion = p.entry.default_motion()
     else:
         motion = default_motion(model)
+    check_limit(markers * len(motion.t), cap, f"{what} ({markers:,}) x the samples ({len(motion.t):,})",
+                "max_wear_track_points",
+                file="the description")
     kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
     results = [(j, *joint_wear(model, kin, j, opts, motion.loads)) for j in dict.fromkeys(joints)]
     extra = {"motion": str(motion_path) if motion_path else "the machine's default motion"}

@@ -54,7 +54,7 @@ from ..description.joint_types import JOINT_TYPES
 from ..dynamics.newton_euler import joint_reactions
 from .stiffness import reaction_route
 
-__all__ = ["WearOptions", "joint_wear", "head_radius", "MarkerGrid", "marker_grid", "SlideTracks", "slide_tracks", "joint_slide_tracks", "motion_axis",
+__all__ = ["WearOptions", "joint_wear", "head_radius", "MarkerGrid", "marker_grid", "marker_count", "SlideTracks", "slide_tracks", "joint_slide_tracks", "motion_axis",
            "geographic", "pole_rotation", "joint_index", "ASPECT_CAP",
            "WEAR_FACTOR_MM3_N_M", "ASPECT_LIMIT"]
 
@@ -79,13 +79,36 @@ class MarkerGrid:
     w: Array
 
 
-def marker_grid(spacing_deg: float = 10.0, cap_deg: float = 60.0) -> MarkerGrid:
-    """The marker grid (module docstring) about the +z pole."""
+def _check_grid(spacing_deg: float, cap_deg: float) -> None:
     if not (math.isfinite(spacing_deg) and 0.0 < spacing_deg <= 90.0):
         raise ParameterError(f"marker spacing: {spacing_deg!r} deg is not in (0, 90]")
     if not (math.isfinite(cap_deg) and 0.0 < cap_deg <= 180.0):
         raise ParameterError(f"marker cap: {cap_deg!r} deg is not in (0, 180] (a cap of 0 holds the pole's "
                              "marker alone)")
+
+
+def marker_count(spacing_deg: float = 10.0, cap_deg: float = 60.0) -> int:
+    """The markers of :func:`marker_grid` counted without building it: exact up to 10^8 markers,
+    above that the cap's area over the spacing squared (a lower estimate; too many either way)."""
+    _check_grid(spacing_deg, cap_deg)
+    s, cap = math.radians(spacing_deg), math.radians(cap_deg)
+    estimate = 2.0 * math.pi * (1.0 - math.cos(cap)) / (s * s) if s * s > 0 else math.inf
+    if estimate > 1e8:
+        return int(min(estimate, 1e18))
+    k = np.arange(1, int(math.floor((cap + 1e-12) / s)) + 1)
+    k = k[k * s <= cap + 1e-12]
+    return 1 + int(np.maximum(1, np.round(2 * np.pi * np.sin(k * s) / s)).sum())
+
+
+def marker_grid(spacing_deg: float = 10.0, cap_deg: float = 60.0, max_markers: int | None = 1_000_000) -> MarkerGrid:
+    """The marker grid (module docstring) about the +z pole; refused (before anything is built)
+    where it would hold more than ``max_markers`` markers."""
+    _check_grid(spacing_deg, cap_deg)
+    if max_markers is not None:
+        n = marker_count(spacing_deg, cap_deg)
+        if n > max_markers:
+            raise LimitError(f"marker grid: {n:,} markers at a spacing of {spacing_deg:g} deg over a cap of "
+                             f"{cap_deg:g} deg exceed the {max_markers:,} allowed (widen --spacing-deg)")
     s, cap = math.radians(spacing_deg), math.radians(cap_deg)
     u, th, w = [], [], []
     k = 0
@@ -336,7 +359,8 @@ class WearOptions:
     friction ``ball_radius_m``), ``head`` the body carrying the head (``child`` or ``parent``),
     ``load`` a named load's name (None: the joint's own reaction force), the marker grid's
     ``spacing_deg`` and ``cap_deg``, ``pole`` (None: the joint frame's z axis), the wear factor
-    [mm^3/(N m)], an optional cross-shear law of ``cs`` and the ``cycles`` the motion spans."""
+    [mm^3/(N m)], an optional cross-shear law of ``cs``, the ``cycles`` the motion spans and the
+    most markers the grid may hold (``max_markers``, None: no bound)."""
 
     radius_m: float | None = None
     head: str = "child"
@@ -347,6 +371,7 @@ class WearOptions:
     wear_factor_mm3_N_m: float = WEAR_FACTOR_MM3_N_M
     cross_shear_law: str | None = None
     cycles: float = 1.0
+    max_markers: int | None = 1_000_000
 
 
 def head_radius(model: Any, joint: str, given: float | None) -> float:
@@ -381,7 +406,7 @@ def joint_wear(model: Any, kin: Any, joint: str, opts: WearOptions, named: dict 
     spherical joint ``joint`` along ``kin`` (its loads ``named``), and the load's description."""
     named = dict(named or {})
     r = head_radius(model, joint, opts.radius_m)
-    grid = marker_grid(opts.spacing_deg, opts.cap_deg)
+    grid = marker_grid(opts.spacing_deg, opts.cap_deg, opts.max_markers)
     load, what = _load(model, kin, joint, opts, named)
     kw = dict(grid=grid, pole=opts.pole, cycles=opts.cycles, wear_factor_mm3_N_m=opts.wear_factor_mm3_N_m,
               cross_shear_law=opts.cross_shear_law)

@@ -225,6 +225,7 @@ class _Limits(Section):
     max_samples: int = Field(default=20_000_000, gt=0)
     max_body_samples: int = Field(default=200_000, gt=0)
     max_workspace_poses: int = Field(default=100_000, gt=0)
+    max_wear_track_points: int = Field(default=5_000_000, gt=0)
     max_task_speed_m_s: float = Field(default=10.0, gt=0)
     max_task_acceleration_m_s2: float = Field(default=1000.0, gt=0)
     max_task_speed_rad_s: float = Field(default=100.0, gt=0)
@@ -271,7 +272,8 @@ MAGNITUDES: tuple[tuple[str, tuple[str, ...], float], ...] = (
 
 
 #: the plausibility limits of motions and their types (``[limits]``, ``--limit KEY=VALUE``)
-LIMIT_KEYS: dict[str, type] = {k: (int if k in ("max_samples", "max_body_samples", "max_workspace_poses") else float)
+LIMIT_KEYS: dict[str, type] = {k: (int if k in ("max_samples", "max_body_samples", "max_workspace_poses",
+                                                  "max_wear_track_points") else float)
                                for k in _Limits.model_fields}
 
 
