@@ -30,13 +30,21 @@ def _coordinate(model: MechanismModel, key: str, what: str) -> int:
     raise ParameterError(f"{what}: {key!r} is not a task coordinate of {model.name} ({names})")
 
 
-def _number(text: str, what: str) -> float:
+def _number(text: str, what: str, model: MechanismModel | None = None, i: int = 0) -> float:
+    """The number ``text``; with ``model``, task coordinate ``i``'s value, within the description's
+    magnitude limit of its unit (``[limits] max_length_m`` or ``max_angle_rad``)."""
     try:
         v = float(text)
     except ValueError:
         raise ParameterError(f"{what}: {text!r} is not a number") from None
     if not math.isfinite(v):
         raise ParameterError(f"{what}: {text!r} is not finite")
+    if model is not None:
+        key = "max_length_m" if model.task_units[i] == "m" else "max_angle_rad"
+        bound = float(model.limits.get(key, math.inf))
+        if abs(v) > bound:
+            raise ParameterError(f"{what}: {v:g} {model.task_units[i]} is beyond the description's limit {key} = "
+                                 f"{bound:g} (raise it with [limits] {key} in the description)")
     return v
 
 
@@ -53,7 +61,7 @@ def parse_pose(model: MechanismModel, text: str) -> Array:
         if i in seen:
             raise ParameterError(f"--pose: {key.strip()!r} given twice")
         seen.add(i)
-        x[i] = _number(val.strip(), f"--pose {key.strip()}")
+        x[i] = _number(val.strip(), f"--pose {key.strip()}", model, i)
     return x
 
 
@@ -72,7 +80,7 @@ def parse_grid(model: MechanismModel, text: str, max_axes: int = 2, max_points: 
         i = _coordinate(model, key.strip(), what)
         if any(i == a for a, _ in axes):
             raise ParameterError(f"{what}: {key.strip()!r} given twice")
-        lo, hi = (_number(p.strip(), f"{what} {key.strip()}") for p in parts[:2])
+        lo, hi = (_number(p.strip(), f"{what} {key.strip()}", model, i) for p in parts[:2])
         try:
             count = int(parts[2])
         except ValueError:
