@@ -461,7 +461,7 @@ def test_more_bad_input(tmp_path, capsys):
     urdf.write_text(SERIAL)
     side = tmp_path / "arm.yaml"
     side.write_text("name_mot: [j1, j2]\ntask: {point: [1, a, 2]}\n")
-    _refused(tmp_path, capsys, ["--from", str(urdf), "--sidecar", str(side)], r"arm\.yaml: task point: expected")
+    _refused(tmp_path, capsys, ["--from", str(urdf), "--sidecar", str(side)], r"arm\.yaml: \[task\] point: expected")
 
 
 def test_a_generic_robot_name_gives_way_to_the_files_name(tmp_path):
@@ -474,3 +474,42 @@ def test_a_generic_robot_name_gives_way_to_the_files_name(tmp_path):
     for src, want in ((generic, "five_bar_gepetto"), (named, "five_bar")):
         text, _ = import_description(src, "urdf", actuated=("mot1", "mot2"))
         assert load_mechanism(tomllib.loads(text)).name == want
+
+
+@pytest.mark.parametrize("text, words", [
+    ("a: &a [1, 2]\nb: [*a, *a]\n", "anchors and aliases"),
+    ("closed_loop: " + "[" * 12 + "]" * 12 + "\n", "nested more than 8 deep"),
+    ("name_mot: [" + "1" * 5000 + "]\n", "cannot read it as YAML"),
+    ("name_mot: [[j1], j2]\n", "[name_mot] 0: has the wrong type"),
+    ("gravity_m_s2: [true, false, true]\n", "[gravity_m_s2] 0: has the wrong type"),
+    ("gravity_m_s2: [" + "9" * 401 + ", 0, 0]\n", "[gravity_m_s2] 0"),
+    ("gravity_m_s2: [.nan, 0, 0]\n", "[gravity_m_s2] 0"),
+    ("closed_loop: [[a, b]]\ntype: [6d, 3d]\n", "type: one of '3d' or '6d' per closed_loop pair"),
+    ("task: {point: [1, 2]}\n", "[task] point: expected a frame name or three finite numbers"),
+    ("task: {orientation: [4]}\n", "[task] orientation"),
+    ("tasks: {}\n", "[tasks]"),
+])
+def test_a_hostile_sidecar_is_one_line(tmp_path, capsys, text, words):
+    """The sidecar has a schema as the descriptions have; anchors, deep nesting and numbers too
+    long to read are refused before anything is built."""
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(SERIAL)
+    side = tmp_path / "arm.yaml"
+    side.write_text(text)
+    out = tmp_path / "arm.toml"
+    assert main(["import", "--from", str(urdf), "--sidecar", str(side), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0], err
+    assert not out.exists()
+
+
+def test_a_billion_laughs_sidecar_is_refused_at_once(tmp_path, capsys):
+    lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x, x]"]
+    lines += [f"a{k}: &a{k} [*a{k - 1}, *a{k - 1}, *a{k - 1}, *a{k - 1}, *a{k - 1}, *a{k - 1}, *a{k - 1}, *a{k - 1}]"
+              for k in range(1, 10)]
+    side = tmp_path / "laughs.yaml"
+    side.write_text("\n".join(lines) + "\nname_mot: *a9\n")
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(SERIAL)
+    assert main(["import", "--from", str(urdf), "--sidecar", str(side), "--out", str(tmp_path / "o.toml")]) == 2
+    assert "anchors and aliases" in capsys.readouterr().err

@@ -23,17 +23,21 @@ refused by name; a continuous joint is a revolute joint without limits.
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import re
 import sys
 import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any, Literal
 
 import numpy as np
 
+from pydantic import Field, field_validator
+
 from ...errors import ParameterError
+from ...params_util import Section, validate
 from ..description.schema import GROUND
 from .graph import (
     CLOSE_TOL,
@@ -88,62 +92,99 @@ def _refuse_mimic(path: Path, src: str) -> None:
             raise ParameterError(f"{src}: joint {j.get('name')}: a mimic joint has no equivalent in a description")
 
 
-def read_sidecar(path: str | Path) -> dict[str, Any]:
-    """The sidecar YAML (module docstring), checked."""
+#: a sidecar's most bytes, and the deepest nesting of its lists and mappings
+MAX_SIDECAR_BYTES = 1_000_000
+MAX_SIDECAR_DEPTH = 8
+
+_Frame = Annotated[str, Field(min_length=1, max_length=256)]
+
+
+class _SidecarTask(Section):
+    body: _Frame | None = None
+    point: Any = None
+
+    @field_validator("point")
+    @classmethod
+    def _frame_or_point(cls, v: Any) -> Any:
+        if v is None or (isinstance(v, str) and 0 < len(v) <= 256):
+            return v
+        if isinstance(v, list) and len(v) == 3 and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                                       and math.isfinite(x) for x in v):
+            return [float(x) for x in v]
+        raise ValueError("expected a frame name or three finite numbers [x, y, z] in metres")
+
+    position: list[Literal["x", "y", "z"]] = Field(default_factory=list, max_length=3)
+    orientation: list[Literal[1, 2, 3]] = Field(default_factory=list, max_length=3)
+    euler_sequence: str = Field(default="XYZ", pattern=r"^[XYZxyz]{3}$")
+
+
+class _Sidecar(Section):
+    """The sidecar's schema (module docstring): names are text, numbers finite, lists bounded."""
+
+    closed_loop: list[Annotated[list[_Frame], Field(min_length=2, max_length=2)]] = Field(default_factory=list,
+                                                                                         max_length=1000)
+    type: list[Literal["3d", "6d", "3D", "6D"]] | None = Field(default=None, max_length=1000)
+    name_mot: list[_Frame] = Field(default_factory=list, max_length=1000)
+    joint_name: list[_Frame] = Field(default_factory=list, max_length=1000)
+    joint_type: list[Annotated[str, Field(min_length=1, max_length=32)]] = Field(default_factory=list,
+                                                                                  max_length=1000)
+    task: _SidecarTask | None = None
+    actuators: list[dict[str, Any]] = Field(default_factory=list, max_length=1000)
+    gravity_m_s2: Annotated[list[float], Field(min_length=3, max_length=3)] = list(URDF_GRAVITY)
+
+
+def _plain_yaml(text: str, src: str) -> Any:
+    """The YAML document ``text`` without anchors or aliases (which expand without bound) and
+    nested at most :data:`MAX_SIDECAR_DEPTH` deep, checked on its events before anything is built."""
     import yaml
 
+    depth = 0
+    try:
+        for ev in yaml.parse(text, Loader=yaml.SafeLoader):
+            if isinstance(ev, yaml.AliasEvent) or getattr(ev, "anchor", None):
+                raise ParameterError(f"{src}: YAML anchors and aliases (&, *) are not taken in a sidecar; write the "
+                                     "values out")
+            if isinstance(ev, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+                depth += 1
+                if depth > MAX_SIDECAR_DEPTH:
+                    raise ParameterError(f"{src}: nested more than {MAX_SIDECAR_DEPTH} deep")
+            elif isinstance(ev, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+                depth -= 1
+        return yaml.safe_load(text)
+    except (yaml.YAMLError, ValueError, RecursionError) as exc:  # ValueError: an integer of thousands of digits
+        raise ParameterError(f"{src}: cannot read it as YAML: {' '.join(str(exc).split())[:200]}") from None
+
+
+def read_sidecar(path: str | Path) -> dict[str, Any]:
+    """The sidecar YAML (module docstring), checked: a regular file of at most
+    :data:`MAX_SIDECAR_BYTES`, plain YAML (:func:`_plain_yaml`), then the schema."""
     src = Path(path).name
     try:
-        data = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        if not Path(path).is_file():
+            raise ParameterError(f"{src}: not a regular file")
+        with open(path, "rb") as fh:
+            raw = fh.read(MAX_SIDECAR_BYTES + 1)
+        if len(raw) > MAX_SIDECAR_BYTES:
+            raise ParameterError(f"{src}: larger than {MAX_SIDECAR_BYTES:,} bytes; a sidecar names loops and joints")
+        text = raw.decode("utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
         raise ParameterError(f"{src}: cannot read it as YAML: {' '.join(str(exc).split())[:200]}") from None
+    data = _plain_yaml(text, src)
     if not isinstance(data, dict):
         raise ParameterError(f"{src}: a YAML mapping is expected (closed_loop, type, name_mot)")
-    known = {"closed_loop", "type", "name_mot", "joint_name", "joint_type", "task", "actuators", "gravity_m_s2"}
-    for k in data:
-        if k not in known:
-            raise ParameterError(f"{src}: {k}: unknown key (known: {', '.join(sorted(known))})")
-    loops = data.get("closed_loop") or []
-    if not isinstance(loops, list) or not all(isinstance(p, list) and len(p) == 2 and all(isinstance(x, str) for x in p)
-                                              for p in loops):
-        raise ParameterError(f"{src}: closed_loop: a list of frame-name pairs [[A, B], ...] is expected")
-    types = data.get("type") or ["6d"] * len(loops)
-    if not isinstance(types, list) or len(types) != len(loops) or any(str(t).lower() not in ("3d", "6d") for t in types):
-        raise ParameterError(f"{src}: type: one of '3d' or '6d' per closed_loop pair is expected")
-    mot = data.get("name_mot") or []
-    if not isinstance(mot, list) or not all(isinstance(x, str) for x in mot):
-        raise ParameterError(f"{src}: name_mot: a list of joint names is expected")
-    jn, jt = data.get("joint_name") or [], data.get("joint_type") or []
-    if not isinstance(jn, list) or not isinstance(jt, list) or len(jn) != len(jt):
+    side = validate(_Sidecar, data, src)
+    loops = [list(p) for p in side.closed_loop]
+    types = [t.lower() for t in side.type] if side.type is not None else ["6d"] * len(loops)
+    if len(types) != len(loops):
+        raise ParameterError(f"{src}: type: one of '3d' or '6d' per closed_loop pair is expected "
+                             f"({len(types)} for {len(loops)} pairs)")
+    if len(side.joint_name) != len(side.joint_type):
         raise ParameterError(f"{src}: joint_name and joint_type: two lists of one length are expected")
-    task = data.get("task") or {}
-    if not isinstance(task, dict) or set(task) - {"body", "point", "position", "orientation", "euler_sequence"}:
-        raise ParameterError(f"{src}: task: a mapping of body, point, position, orientation, euler_sequence "
-                             "is expected")
-    point = task.get("point")
-    checks = {"body": isinstance(task.get("body", ""), str),
-              "point": point is None or isinstance(point, str) or (
-                  isinstance(point, list) and len(point) == 3
-                  and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in point)),
-              "position": isinstance(task.get("position", []), list) and all(
-                  x in ("x", "y", "z") for x in task.get("position", [])),
-              "orientation": isinstance(task.get("orientation", []), list) and all(
-                  x in (1, 2, 3) and not isinstance(x, bool) for x in task.get("orientation", [])),
-              "euler_sequence": isinstance(task.get("euler_sequence", "XYZ"), str)}
-    for key, ok in checks.items():
-        if not ok:
-            raise ParameterError(f"{src}: task {key}: expected "
-                                 + {"body": "a link name", "point": "a frame name or three numbers",
-                                    "position": "a list of x, y, z", "orientation": "a list of 1, 2, 3",
-                                    "euler_sequence": "a sequence such as XYZ"}[key])
-    drives = data.get("actuators") or []
-    if not isinstance(drives, list) or not all(isinstance(d, dict) for d in drives):
-        raise ParameterError(f"{src}: actuators: a list of drive tables ([[actuators]] of a description) is expected")
-    grav = data.get("gravity_m_s2", list(URDF_GRAVITY))
-    if not (isinstance(grav, list) and len(grav) == 3 and all(isinstance(x, (int, float)) for x in grav)):
-        raise ParameterError(f"{src}: gravity_m_s2: three numbers [gx, gy, gz] are expected")
-    return {"gravity_m_s2": [float(x) for x in grav], "closed_loop": loops, "type": [str(t).lower() for t in types], "name_mot": mot,
-            "joint_name": jn, "joint_type": [str(t).upper() for t in jt], "task": task, "actuators": drives}
+    task = side.task.model_dump(exclude_unset=True) if side.task is not None else {}
+    return {"gravity_m_s2": [float(x) for x in side.gravity_m_s2], "closed_loop": loops, "type": types,
+            "name_mot": list(side.name_mot), "joint_name": list(side.joint_name),
+            "joint_type": [t.upper() for t in side.joint_type], "task": task,
+            "actuators": [dict(d) for d in side.actuators]}
 
 
 def sidecar_task(side: dict[str, Any]) -> TaskChoice:
