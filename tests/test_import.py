@@ -323,7 +323,7 @@ def _refused(tmp_path, capsys, args, pattern):
 def test_bad_input_is_refused_by_name(tmp_path, capsys):
     broken = tmp_path / "broken.xml"
     broken.write_text("<mujoco><worldbody><body name='a'>")
-    _refused(tmp_path, capsys, ["--from", str(broken)], r"broken\.xml: MuJoCo cannot read it")
+    _refused(tmp_path, capsys, ["--from", str(broken)], r"broken\.xml: cannot read it as XML")
     free = tmp_path / "free.xml"
     free.write_text("<mujoco><worldbody><body name='b'><freejoint name='fly'/>"
                     "<inertial pos='0 0 0' mass='1' diaginertia='1 1 1'/></body></worldbody></mujoco>")

@@ -32,6 +32,7 @@ import numpy as np
 from ...errors import ParameterError
 from ..description.schema import GROUND
 from .graph import Actuator, Closure, Frame, Graph, Joint, Link, safe_name
+from .prescan import prescan_mjcf
 
 
 def _mujoco():
@@ -102,6 +103,7 @@ def mjcf_graph(path: str | Path, keyframe: str | None = None, weld_free: bool = 
 def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: list[str]) -> Graph:
     src = path.name
     problems: list[str] = []
+    prescan_mjcf(path, src)  # bounded before MuJoCo reads it: FIFOs, replicates, includes
     try:
         m = mujoco.MjModel.from_xml_path(str(path))
     except Exception as exc:  # MuJoCo's own message names the element and line

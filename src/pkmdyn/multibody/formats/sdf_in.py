@@ -36,6 +36,7 @@ import numpy as np
 from ...errors import ParameterError
 from ..description.schema import GROUND
 from .graph import Closure, Frame, Graph, Joint, Link, Actuator, safe_name
+from .prescan import prescan_sdf
 
 SDF_GRAVITY = (0.0, 0.0, -9.8)
 
@@ -72,7 +73,6 @@ class _Frames:
                 self.elem[nm] = (kind, e)
         self.cache: dict[str, tuple[np.ndarray, np.ndarray]] = {"__model__": (np.eye(3), np.zeros(3)),
                                                                   "world": (np.eye(3), np.zeros(3))}
-        self.busy: set[str] = set()
 
     def local(self, e: ET.Element, where: str) -> tuple[str | None, np.ndarray, np.ndarray]:
         pe = e.find("pose")
@@ -85,24 +85,35 @@ class _Frames:
             v[3:] = np.radians(v[3:])
         return pe.get("relative_to") or None, _rpy(*v[3:]), v[:3]
 
-    def pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
-        if name in self.cache:
-            return self.cache[name]
+    def _step(self, name: str) -> tuple[str, np.ndarray, np.ndarray]:
+        """The frame ``name``'s pose relative to the frame it names (``relative_to`` or its default)."""
         if name not in self.elem:
             raise ParameterError(f"{self.src}: frame {name!r}: no link, joint or frame of that name")
-        if name in self.busy:
-            raise ParameterError(f"{self.src}: frame {name}: its pose refers to itself (a cycle of relative_to)")
-        self.busy.add(name)
         kind, e = self.elem[name]
         rel, R, p = self.local(e, f"{self.src}: {kind} {name}")
         if rel is None:
             rel = {"link": "__model__", "joint": (e.findtext("child") or "").strip(),
                    "frame": e.get("attached_to") or "__model__"}[kind]
-        Rr, pr = self.pose(rel)
-        out = (Rr @ R, pr + Rr @ p)
-        self.cache[name] = out
-        self.busy.discard(name)
-        return out
+        return rel, R, p
+
+    def pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """The frame's pose in the model frame, its chain of ``relative_to`` walked by a loop (a
+        chain as long as the file's is no recursion), a cycle refused."""
+        chain: list[tuple[str, np.ndarray, np.ndarray]] = []
+        busy: set[str] = set()
+        cur = name
+        while cur not in self.cache:
+            if cur in busy:
+                raise ParameterError(f"{self.src}: frame {cur}: its pose refers to itself (a cycle of relative_to)")
+            busy.add(cur)
+            rel, R, p = self._step(cur)
+            chain.append((cur, R, p))
+            cur = rel
+        Rr, pr = self.cache[cur]
+        for nm, R, p in reversed(chain):
+            Rr, pr = Rr @ R, pr + Rr @ p
+            self.cache[nm] = (Rr, pr)
+        return self.cache[name]
 
 
 def sdf_graph(path: str | Path, actuated: tuple[str, ...] = (), assemble: bool = False) -> Graph:
@@ -110,10 +121,7 @@ def sdf_graph(path: str | Path, actuated: tuple[str, ...] = (), assemble: bool =
     src = Path(path).name
     if assemble:
         raise ParameterError("--assemble: an SDFormat model is assembled at its links' poses by construction")
-    try:
-        root = ET.parse(str(path)).getroot()
-    except (ET.ParseError, OSError) as exc:
-        raise ParameterError(f"{src}: cannot read it as XML: {exc}") from None
+    root = prescan_sdf(Path(path), src)
     if root.tag != "sdf":
         raise ParameterError(f"{src}: the root element is <{root.tag}>, not <sdf>")
     world = root.find("world")

@@ -28,7 +28,6 @@ import os
 import re
 import sys
 import tempfile
-import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -39,6 +38,7 @@ from pydantic import Field, field_validator
 from ...errors import ParameterError
 from ...params_util import Section, validate
 from ..description.schema import GROUND
+from .prescan import prescan_urdf
 from .graph import (
     CLOSE_TOL,
     Actuator,
@@ -82,11 +82,9 @@ def _stderr_captured():
 
 
 def _refuse_mimic(path: Path, src: str) -> None:
-    """A ``<mimic>`` joint (Pinocchio's parser reads it as an independent joint by default)."""
-    try:
-        root = ET.parse(str(path)).getroot()
-    except (ET.ParseError, OSError) as exc:
-        raise ParameterError(f"{src}: cannot read it as URDF: {exc}") from None
+    """A ``<mimic>`` joint (Pinocchio's parser reads it as an independent joint by default); the
+    file bounded first (:func:`~pkmdyn.multibody.formats.prescan.prescan_urdf`)."""
+    root = prescan_urdf(path, src)
     for j in root.iter("joint"):
         if j.find("mimic") is not None:
             raise ParameterError(f"{src}: joint {j.get('name')}: a mimic joint has no equivalent in a description")
