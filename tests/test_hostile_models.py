@@ -86,3 +86,31 @@ def test_long_sdformat_chains(tmp_path, capsys, links, frames, words):
     src = tmp_path / "chain.sdf"
     src.write_text('<sdf version="1.9"><model name="m">' + "".join(body) + "</model></sdf>")
     _refused(tmp_path, capsys, src, words, "--actuated", "j1")
+
+
+@pytest.mark.parametrize("args, made", [
+    (["export", "--machine", "stewart", "--format", "urdf"], ("e.urdf", "e.yaml")),
+    (["export", "--machine", "stewart", "--format", "mjcf"], ("e.urdf",)),
+])
+def test_a_full_standard_output_leaves_no_file(tmp_path, capsys, monkeypatch, args, made):
+    """The listing is printed before the files move into place: when it cannot be written (a
+    full device), nothing is left, the URDF's sidecar included."""
+    import errno
+
+    import click
+
+    echo = click.echo
+
+    def full(*a, err=False, **k):
+        if err:
+            return echo(*a, err=True, **k)
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(click, "echo", full)
+    out = tmp_path / "e.urdf"
+    assert main([*args, "--out", str(out)]) == 2
+    assert "standard output: cannot write" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+    monkeypatch.undo()
+    assert main([*args, "--out", str(out)]) == 0
+    assert all((tmp_path / m).is_file() for m in made)

@@ -14,6 +14,7 @@ A job returns a :class:`JobResult`; the command prints it and writes nothing its
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -101,14 +102,16 @@ def write_texts(texts: Mapping[str, tuple[Path, str]], inputs: Mapping[str, Path
                 announce: Callable[[Mapping[str, Path]], None] | None = None) -> dict[str, Path]:
     """Write the text files of a job whose ``--out`` is a file (an export, an import): label ->
     ``(path, text)``, each path checked (:func:`pkmdyn.io.check_output_file`, before anything is
-    written) and written whole or not at all (:func:`pkmdyn.io.atomic_file`); ``announce`` is given
-    the paths once all are written. Returns label -> path."""
+    written) and written whole or not at all (:func:`pkmdyn.io.atomic_file`): all are written under
+    temporary names, ``announce`` is given their paths (so the listing is out, as for a folder,
+    before anything moves), and only then do they move into place; a failure anywhere (a full
+    standard output included) leaves none of them. Returns label -> path."""
     for path, _ in texts.values():
         check_output_file(path, inputs)
-    for path, text in texts.values():
-        with atomic_file(path, inputs=inputs) as tmp:
-            tmp.write_text(text, encoding="utf-8")
     placed = {k: p for k, (p, _) in texts.items()}
-    if announce is not None:
-        announce(placed)
+    with contextlib.ExitStack() as stack:
+        for path, text in texts.values():
+            stack.enter_context(atomic_file(path, inputs=inputs)).write_text(text, encoding="utf-8")
+        if announce is not None:
+            announce(placed)
     return placed
