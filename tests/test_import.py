@@ -83,6 +83,16 @@ def test_builtin_export_import_round_trip(name, fmt, tmp_path):
         for j, lim in enumerate(m0.joint_limits):
             if lim is not None and j not in set(m0.loop_joint.tolist()):
                 assert m1.joint_limits[m1.joint_names.index(m0.joint_names[j])] == pytest.approx(lim, abs=1e-12)
+    # key by key: the name, the task (body, coordinates, point in the base frame) and the drives' stiffness
+    assert m1.name == m0.name
+    assert m1.body_names[m1.task_body] == m0.body_names[m0.task_body]
+    assert m1.task_names == m0.task_names and m1.euler_sequence == m0.euler_sequence
+    world = [m.p0[m.task_body] + m.R0[m.task_body] @ m.task_point for m in (m0, m1)]
+    np.testing.assert_allclose(world[1], world[0], rtol=0, atol=1e-12 * m0.length_scale)
+    for j in m0.act_joint:
+        k0 = (m0.joint_stiffness[j] or {}).get("drive")
+        k1 = (m1.joint_stiffness[m1.joint_names.index(m0.joint_names[j])] or {}).get("drive")
+        assert k0 is not None and k1 == pytest.approx(k0, rel=1e-15)
 
 
 # -- a planar five-bar written in other formats ------------------------------------------------

@@ -90,6 +90,8 @@ class Joint:
     damping: float = 0.0
     frictionloss: float = 0.0
     armature: float = 0.0
+    #: the joint's ``stiffness`` table where the file gives one (pkmdyn's own exports: a drive's)
+    stiffness: dict | None = None
 
 
 @dataclass
@@ -147,6 +149,8 @@ class Graph:
     notes: list[str] = field(default_factory=list)
     #: drives given whole (``[[actuators]]`` entries, e.g. from a URDF sidecar written by pkmdyn)
     drives: list[dict] = field(default_factory=list)
+    #: the task the file names (pkmdyn's own MJCF exports carry it), None where it names none
+    task: TaskChoice | None = None
 
 
 @dataclass(frozen=True)
@@ -304,6 +308,8 @@ class _Builder:
                 fr["coulomb_torque_Nm" if kinds[0] == "hinge" else "coulomb_force_N"] = float(j0.frictionloss)
             if fr:
                 entry["friction"] = fr
+            if j0.stiffness:
+                entry["stiffness"] = dict(j0.stiffness)
             return entry
         if kinds == ["ball"]:
             entry["type"] = "spherical"

@@ -25,7 +25,8 @@ def read_graph(path: Path, fmt: str, sidecar: Path | None = None, actuated: tupl
         for flag, given in (("--sidecar", sidecar), ("--actuated", actuated), ("--assemble", assemble)):
             if given:
                 raise ParameterError(f"{flag}: not for MJCF (its equalities close the loops, its actuators drive)")
-        return mjcf_graph(path, keyframe, weld_free), choice
+        g = mjcf_graph(path, keyframe, weld_free)
+        return g, g.task or choice
     if keyframe is not None:
         raise ParameterError("--keyframe: only for MJCF")
     if weld_free:

@@ -31,7 +31,8 @@ import numpy as np
 
 from ...errors import ParameterError
 from ..description.schema import GROUND
-from .graph import Actuator, Closure, Frame, Graph, Joint, Link, safe_name
+from .graph import Actuator, Closure, Frame, Graph, Joint, Link, TaskChoice, safe_name
+from .mjcf_out import DRIVE_STIFFNESS, TASK_TEXT
 from .prescan import prescan_mjcf
 
 
@@ -42,6 +43,37 @@ def _mujoco():
         raise ParameterError("reading MJCF needs MuJoCo, in the import extra: pip install 'pkmdyn[import]' (from a "
                              "source checkout: pip install '.[import]')") from exc
     return mujoco
+
+
+def _custom(mujoco, m, problems: list[str]) -> tuple[TaskChoice | None, dict[str, float]]:
+    """What pkmdyn's own export keeps in ``<custom>`` (:mod:`pkmdyn.multibody.formats.mjcf_out`): the
+    task (a ``text``) and each drive's stiffness by joint name (``numeric`` entries)."""
+    task = None
+    stiff: dict[str, float] = {}
+    for i in range(m.ntext):
+        if mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_TEXT, i) != TASK_TEXT:
+            continue
+        adr, size = int(m.text_adr[i]), int(m.text_size[i])
+        text = bytes(m.text_data[adr:adr + size]).split(b"\0", 1)[0].decode("utf-8", "replace")
+        fields = dict(part.partition("=")[::2] for part in text.split(";") if "=" in part)
+        try:
+            task = TaskChoice(body=safe_name(fields["body"], "body"), point=fields.get("point") or None,
+                              position=tuple(c for c in fields.get("position", "").split(",") if c),
+                              orientation=tuple(int(c) for c in fields.get("orientation", "").split(",") if c),
+                              sequence=fields.get("sequence") or None)
+        except (KeyError, ValueError):
+            problems.append(f"custom text {TASK_TEXT}: {text[:80]!r} is not body=...;position=...;orientation=...")
+    for i in range(m.nnumeric):
+        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_NUMERIC, i) or ""
+        if not name.startswith(DRIVE_STIFFNESS):
+            continue
+        adr, size = int(m.numeric_adr[i]), int(m.numeric_size[i])
+        v = float(m.numeric_data[adr]) if size >= 1 else float("nan")
+        if not (np.isfinite(v) and v > 0):
+            problems.append(f"custom numeric {name}: a drive stiffness must be a finite number > 0")
+            continue
+        stiff[safe_name(name[len(DRIVE_STIFFNESS):], "joint")] = v
+    return task, stiff
 
 
 def _held_free_bodies(mujoco, m) -> dict[int, int]:
@@ -140,6 +172,7 @@ def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: lis
     notes: list[str] = [f"MuJoCo: {w}" for w in dict.fromkeys(heard)]
     jname = [name(mujoco.mjtObj.mjOBJ_JOINT, j, "joint") for j in range(m.njnt)]
     held = _held_free_bodies(mujoco, m)
+    task, drive_k = _custom(mujoco, m, problems)
     free_by: dict[int, int] = {}  # a free body held by a loop -> the equality that becomes its tree joint
     for b in range(1, m.nbody):
         ids = [j for j in range(m.njnt) if m.jnt_bodyid[j] == b]
@@ -174,11 +207,13 @@ def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: lis
                 problems.append(f"joint {jname[j]}: a joint spring (stiffness {m.jnt_stiffness[j]:g}) has no "
                                 "equivalent in a description's dynamics")
             lim = (float(m.jnt_range[j, 0]), float(m.jnt_range[j, 1])) if m.jnt_limited[j] and kind != "ball" else None
+            st = drive_k.pop(jname[j], None)
             joints.append(Joint(
                 jname[j], kind, parent, child, d.xanchor[j].copy(), d.xaxis[j].copy(),
                 value=float(d.qpos[m.jnt_qposadr[j]]) if kind != "ball" else 0.0, limits=lim,
                 damping=float(m.dof_damping[dof]), frictionloss=float(m.dof_frictionloss[dof]),
-                armature=float(m.dof_armature[dof])))
+                armature=float(m.dof_armature[dof]),
+                stiffness=None if st is None else {("drive_Nm_rad" if kind == "hinge" else "drive_N_m"): st}))
             if kind == "ball" and m.jnt_limited[j]:
                 notes.append(f"joint {jname[j]}: a ball joint's range is not kept (a spherical joint has no limits)")
             if kind == "ball" and m.dof_armature[dof]:
@@ -246,10 +281,16 @@ def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: lis
     frames = [Frame(name(mujoco.mjtObj.mjOBJ_SITE, s, "site"), bname[int(m.site_bodyid[s])], d.site_xpos[s].copy())
               for s in range(m.nsite)]
     frames += [Frame(bname[b], bname[b], d.xpos[b].copy()) for b in range(1, m.nbody)]
+    for jn in drive_k:
+        problems.append(f"custom numeric {DRIVE_STIFFNESS}{jn}: no joint {jn!r}")
     if problems:
         more = f"; and {len(problems) - MAX_LISTED} more" if len(problems) > MAX_LISTED else ""
         raise ParameterError(f"{src}: {len(problems)} element{'s' if len(problems) > 1 else ''} without an equivalent: "
                              + "; ".join(problems[:MAX_LISTED]) + more)
     model_name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_MODEL, 0) if hasattr(mujoco.mjtObj, "mjOBJ_MODEL") else None
-    return Graph(name=model_name or Path(path).stem, source=src, gravity=np.array(m.opt.gravity, dtype=float),
-                 links=links, joints=joints, closures=closures, actuators=actuators, frames=frames, notes=notes)
+    if not model_name:  # the model's name heads MuJoCo's name buffer
+        model_name = bytes(m.names).split(b"\0", 1)[0].decode("utf-8", "replace")
+    model_name = safe_name(model_name, "") if model_name and model_name != "MuJoCo Model" else ""
+    return Graph(name=model_name or path.stem, source=src, gravity=np.array(m.opt.gravity, dtype=float),
+                 links=links, joints=joints, closures=closures, actuators=actuators, frames=frames, notes=notes,
+                 task=task)

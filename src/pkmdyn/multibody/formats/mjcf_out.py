@@ -27,8 +27,10 @@ Actuated joints get a ``motor`` (control = effort [N or N m]); a joint with a dr
 (``[[actuators]]``) a motor named after the drive with ``gear`` = its transmission ratio k
 (control = motor effort [N m]), its rotor as the joint's ``armature`` (``k^2 I_r``) and its
 motor friction as ``damping`` (``k^2 b``) and ``frictionloss`` (``k C``, MuJoCo's dry friction,
-not the regularised law). Not exported: joint friction, loads, sections (MuJoCo has no
-load-dependent joint friction).
+not the regularised law). The task point is a site (:data:`TASK_SITE`) on the task body, and
+what MJCF has no element for is a ``<custom>`` entry that ``pkmdyn import`` reads back: the task
+coordinates (a ``text``) and each drive's stiffness (a ``numeric``). Not exported: joint
+friction, loads, sections (MuJoCo has no load-dependent joint friction).
 
 **Loop constraints.** MuJoCo closes loops softly; its defaults (``solref`` 0.02 s, ``solimp``
 0.9 to 0.95) let a Stewart platform's accelerations under pkmdyn's efforts differ by several
@@ -51,7 +53,8 @@ from ...errors import ParameterError
 from ..description.joint_types import JOINT_TYPES
 from ..model.compiler import MechanismModel
 
-__all__ = ["mechanism_mjcf", "mujoco_qpos", "mujoco_order", "coordinate_names", "SOLREF", "SOLIMP"]
+__all__ = ["mechanism_mjcf", "mujoco_qpos", "mujoco_order", "coordinate_names", "SOLREF", "SOLIMP", "TASK_SITE",
+           "TASK_TEXT", "DRIVE_STIFFNESS"]
 
 #: the equality constraints' ``solref`` (time constant [s], damping ratio): stiff (module docstring)
 SOLREF = (0.0005, 1.0)
@@ -113,6 +116,29 @@ def massless_bodies(model: MechanismModel) -> list[str]:
     return [model.body_names[b] for b in range(model.nb) if float(model.mass[b]) <= 0.0]
 
 
+#: the site of the task point in an export, and the custom entries that carry what MJCF has no
+#: element for (the task coordinates, the drives' stiffness): read back by ``pkmdyn import``
+TASK_SITE = "pkmdyn_task_point"
+TASK_TEXT = "pkmdyn_task"
+DRIVE_STIFFNESS = "pkmdyn_drive_stiffness_"
+
+
+def _custom(model: MechanismModel) -> list[str]:
+    """``<custom>``: the task (``body=...;point=<site>;position=x,y;orientation=1,3;sequence=XYZ``)
+    and each actuated joint's drive stiffness (joint side, N/m or N m/rad)."""
+    inv = {int(v): k for k, v in enumerate(model.euler_perm)}
+    pos = ",".join("xyz"[int(i)] for kind, i in zip(model.task_kind, model.task_index) if kind == 0)
+    ori = ",".join(str(inv[int(i)] + 1) for kind, i in zip(model.task_kind, model.task_index) if kind == 1)
+    task = (f"body={model.body_names[model.task_body]};point={TASK_SITE};position={pos};orientation={ori};"
+            f"sequence={model.euler_sequence}")
+    out = ["  <custom>", f'    <text name="{TASK_TEXT}" data="{task}"/>']
+    for j in model.act_joint:
+        st = model.joint_stiffness[j] or {}
+        if st.get("drive"):
+            out.append(f'    <numeric name="{DRIVE_STIFFNESS}{model.joint_names[j]}" data="{float(st["drive"]):.17g}"/>')
+    return out + ["  </custom>"]
+
+
 def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3, solref: tuple[float, float] = SOLREF,
                    solimp: tuple[float, ...] = SOLIMP, massless_kg: float | None = None) -> str:
     """The MJCF document of ``model`` (module docstring): the equality constraints with
@@ -171,6 +197,8 @@ def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3, solref: tuple[
         mass = float(model.mass[b]) if float(model.mass[b]) > 0.0 else float(massless_kg)
         full = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]
         lines.append(f'{ind}  <inertial pos="{_v(model.com[b])}" mass="{mass:.17g}" fullinertia="{_v(full)}"/>')
+        if b == model.task_body:  # the task point, read back by pkmdyn import (TASK_SITE)
+            lines.append(f'{ind}  <site name="{TASK_SITE}" pos="{_v(model.task_point)}"/>')
         k = int(model.body_joint[b])
         Rc, pc = model.tree_R_child[k], model.tree_p_child[k]
         for c in range(int(model.joint_q0[k]), int(model.joint_q0[k] + model.joint_nq[k])):
@@ -212,5 +240,5 @@ def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3, solref: tuple[
         name = model.drive_name[i] if model.drive_name and model.drive_name[i] is not None else model.joint_names[j]
         gear = float(model.drive_ratio[i]) if len(model.drive_ratio) else 1.0
         acts.append(f'    <motor name="{name}" joint="{names[int(model.joint_q0[j])]}" gear="{gear:.17g}"/>')
-    lines += ["  <actuator>", *acts, "  </actuator>", "</mujoco>"]
+    lines += ["  <actuator>", *acts, "  </actuator>", *_custom(model), "</mujoco>"]
     return "\n".join(lines) + "\n"

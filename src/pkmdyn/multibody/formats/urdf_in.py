@@ -129,6 +129,7 @@ class _Sidecar(Section):
     task: _SidecarTask | None = None
     actuators: list[dict[str, Any]] = Field(default_factory=list, max_length=1000)
     gravity_m_s2: Annotated[list[float], Field(min_length=3, max_length=3)] = list(URDF_GRAVITY)
+    drive_stiffness: dict[_Frame, Annotated[float, Field(gt=0)]] = Field(default_factory=dict, max_length=1000)
 
 
 def _plain_yaml(text: str, src: str) -> Any:
@@ -182,7 +183,7 @@ def read_sidecar(path: str | Path) -> dict[str, Any]:
     return {"gravity_m_s2": [float(x) for x in side.gravity_m_s2], "closed_loop": loops, "type": types,
             "name_mot": list(side.name_mot), "joint_name": list(side.joint_name),
             "joint_type": [t.upper() for t in side.joint_type], "task": task,
-            "actuators": [dict(d) for d in side.actuators]}
+            "actuators": [dict(d) for d in side.actuators], "drive_stiffness": dict(side.drive_stiffness)}
 
 
 def sidecar_task(side: dict[str, Any]) -> TaskChoice:
@@ -310,6 +311,7 @@ def urdf_graph(path: str | Path, sidecar: dict[str, Any] | None = None,
             nm = safe_name(f.name, f"link_{f.parentJoint}")
             link_of[int(f.parentJoint)] = nm if nm != GROUND else "ground_body"  # a moving link called ground
     links, joints = [], []
+    stiff = dict(side.get("drive_stiffness", {}))
     for j in range(1, model.njoints):
         jm, name = model.joints[j], safe_name(model.names[j], f"joint_{j}")
         short = jm.shortname()
@@ -338,6 +340,9 @@ def urdf_graph(path: str | Path, sidecar: dict[str, Any] | None = None,
         v = model.idx_vs[j]
         kw = dict(value=value, limits=lim, damping=float(model.damping[v]),
                   frictionloss=float(model.friction[v]))
+        k_drive = stiff.pop(model.names[j], None)
+        if k_drive is not None:
+            kw["stiffness"] = {("drive_Nm_rad" if kind == "hinge" else "drive_N_m"): k_drive}
         sp = special.get(model.names[j])
         if sp is not None and (kw["damping"] or kw["frictionloss"]):
             raise ParameterError(f"{src}: joint {name}: friction on a joint the sidecar makes {sp} has no equivalent")
@@ -379,6 +384,9 @@ def urdf_graph(path: str | Path, sidecar: dict[str, Any] | None = None,
         if nm not in names:
             raise ParameterError(f"{src}: actuated joint {nm!r}: no joint of that name")
     actuators = [Actuator(safe_name(nm, "motor"), safe_name(nm, "motor")) for nm in dict.fromkeys(mot)]
+    if stiff:
+        raise ParameterError(f"{src}: sidecar drive_stiffness {next(iter(stiff))!r}: no hinge or slide joint of that "
+                             "name")
     g = np.array(side.get("gravity_m_s2", URDF_GRAVITY), dtype=float)
     # a generic robot name (Gepetto's files say "robot", onshape-to-robot's "onshape"): the file's own name
     name = Path(path).stem if model.name in ("", "onshape", "robot") else model.name

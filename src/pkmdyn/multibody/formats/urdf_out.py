@@ -181,6 +181,10 @@ def mechanism_urdf(model: MechanismModel) -> tuple[str, dict, list[str]]:
     drives = _drives(model)
     if drives:
         sidecar["actuators"] = drives
+    stiff = {model.joint_names[j]: float(model.joint_stiffness[j]["drive"]) for j in model.act_joint
+             if (model.joint_stiffness[j] or {}).get("drive")}
+    if stiff:  # URDF has no place for it: the sidecar keeps it (joint side, N/m or N m/rad)
+        sidecar["drive_stiffness"] = stiff
     for k, f in enumerate(model.joint_friction):
         if f and any(f.get(x) for x in ("coefficient", "external")):
             notes.append(f"joint {model.joint_names[k]}: load-dependent friction not written")
