@@ -25,8 +25,8 @@ else:  # the readers and the engine load when the command runs, not for --help
               help="URDF: the loop closures and actuated joints (YAML: closed_loop, type, name_mot; docs/import.md).")
 @click.option("--actuated", default=None, help="URDF, SDFormat: the actuated joints, comma-separated.")
 @click.option("--assemble", is_flag=True,
-              help="URDF, SDFormat: close the loops from the zero configuration (least change of the joint "
-                   "positions) where the file is not assembled there.")
+              help="Close the loops where the file is not assembled: URDF from the zero configuration, MJCF from "
+                   "qpos0 or the keyframe (least change of the joint positions); not for SDFormat.")
 @click.option("--keyframe", default=None, help="MJCF: the reference configuration from this keyframe (default qpos0).")
 @click.option("--weld-free", is_flag=True,
               help="MJCF: weld a free joint's body that no loop closure holds (a floating base) to the ground at its "

@@ -368,7 +368,7 @@ class _Builder:
             gap, ang = c.gap if c.gap is not None else (float(np.linalg.norm(c.point1 - c.point2)), None)
             if gap > CLOSE_TOL * self.size:
                 raise ParameterError(f"{where}: its frames are {gap:.6g} m apart at the reference configuration "
-                                     "(the loop does not close there; for URDF and SDFormat, --assemble closes it)")
+                                     "(the loop does not close there; --assemble closes it for MJCF and URDF)")
             if c.kind == "6d":
                 if ang is None:
                     ang = float(np.linalg.norm(_rotvec(c.R1.T @ c.R2)))

@@ -22,10 +22,10 @@ def read_graph(path: Path, fmt: str, sidecar: Path | None = None, actuated: tupl
     """The file's :class:`~pkmdyn.multibody.formats.graph.Graph` and the task its sidecar asks for."""
     choice = TaskChoice()
     if fmt == "mjcf":
-        for flag, given in (("--sidecar", sidecar), ("--actuated", actuated), ("--assemble", assemble)):
+        for flag, given in (("--sidecar", sidecar), ("--actuated", actuated)):
             if given:
                 raise ParameterError(f"{flag}: not for MJCF (its equalities close the loops, its actuators drive)")
-        g = mjcf_graph(path, keyframe, weld_free)
+        g = mjcf_graph(path, keyframe, weld_free, assemble)
         return g, g.task or choice
     if keyframe is not None:
         raise ParameterError("--keyframe: only for MJCF")

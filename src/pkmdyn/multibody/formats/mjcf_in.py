@@ -45,6 +45,37 @@ def _mujoco():
     return mujoco
 
 
+#: the loop closure's residual at which --assemble stops [m, rad], and its most Newton steps
+ASSEMBLE_TOL = 1e-12
+ASSEMBLE_STEPS = 100
+
+
+def _assemble(mujoco, m, d, src: str) -> list[str]:
+    """Close the active equality constraints from ``d.qpos`` by Gauss-Newton steps of least
+    change (the minimum-norm step ``dq = -J^+ r`` on MuJoCo's own equality rows and Jacobian,
+    integrated on the configuration manifold), to :data:`ASSEMBLE_TOL`; refused where they do not
+    close. Returns the note saying how far the file's configuration was from closing."""
+    m.opt.jacobian = mujoco.mjtJacobian.mjJAC_DENSE
+    eq = int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+    first = None
+    for _ in range(ASSEMBLE_STEPS + 1):
+        mujoco.mj_forward(m, d)
+        rows = np.flatnonzero(d.efc_type[:d.nefc] == eq)
+        if rows.size == 0:
+            return []
+        r = d.efc_pos[:d.nefc][rows]
+        gap = float(np.abs(r).max())
+        first = gap if first is None else first
+        if gap <= ASSEMBLE_TOL:
+            return [f"reference configuration: the loops closed from the file's configuration (--assemble; they "
+                    f"were {first:.3g} m or rad open)"] if first > ASSEMBLE_TOL else []
+        J = np.asarray(d.efc_J[:d.nefc * m.nv]).reshape(d.nefc, m.nv)[rows]
+        dq = -np.linalg.lstsq(J, r, rcond=None)[0]
+        mujoco.mj_integratePos(m, d.qpos, dq, 1.0)
+    raise ParameterError(f"{src}: --assemble: the loops do not close from the file's configuration (still "
+                         f"{gap:.3g} m or rad open after {ASSEMBLE_STEPS} steps)")
+
+
 def _custom(mujoco, m, problems: list[str]) -> tuple[TaskChoice | None, dict[str, float]]:
     """What pkmdyn's own export keeps in ``<custom>`` (:mod:`pkmdyn.multibody.formats.mjcf_out`): the
     task (a ``text``) and each drive's stiffness by joint name (``numeric`` entries)."""
@@ -117,24 +148,28 @@ def name_of(mujoco, m, obj, i: int, kind: str) -> str:
 MAX_LISTED = 12
 
 
-def mjcf_graph(path: str | Path, keyframe: str | None = None, weld_free: bool = False) -> Graph:
+def mjcf_graph(path: str | Path, keyframe: str | None = None, weld_free: bool = False,
+               assemble: bool = False) -> Graph:
     """The mechanism of an MJCF file (module docstring). MuJoCo's warnings are taken as notes
     (its default handler would append them to ``MUJOCO_LOG.TXT`` in the working folder); every
     element without an equivalent is named in one refusal. ``weld_free``: a free joint whose
-    body no loop closure holds is welded to the ground at its reference pose."""
+    body no loop closure holds is welded to the ground at its reference pose; ``assemble``: the
+    loops closed from the file's configuration (``qpos0`` or the keyframe) first (:func:`_assemble`)."""
     mujoco = _mujoco()
     heard: list[str] = []
     previous = mujoco.get_mju_user_warning()
     mujoco.set_mju_user_warning(lambda msg: heard.append(" ".join(str(msg).split())[:200]))
     try:
-        return _graph(mujoco, Path(path), keyframe, weld_free, heard)
+        return _graph(mujoco, Path(path), keyframe, weld_free, heard, assemble)
     finally:
         mujoco.set_mju_user_warning(previous)
 
 
-def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: list[str]) -> Graph:
+def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: list[str],
+           assemble: bool = False) -> Graph:
     src = path.name
     problems: list[str] = []
+    notes: list[str] = []
     prescan_mjcf(path, src)  # bounded before MuJoCo reads it: FIFOs, replicates, includes
     try:
         m = mujoco.MjModel.from_xml_path(str(path))
@@ -155,6 +190,8 @@ def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: lis
             raise ParameterError(f"{src}: keyframe {keyframe!r}: no keyframe of that name")
         d.qpos[:] = m.key_qpos[k]
     mujoco.mj_forward(m, d)  # the poses, and the equality constraints' residuals (efc_pos)
+    if assemble:
+        notes.extend(_assemble(mujoco, m, d, src))
 
     def name(obj, i: int, kind: str) -> str:
         return name_of(mujoco, m, obj, i, kind)
@@ -169,7 +206,7 @@ def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: lis
         R = d.ximat[b].reshape(3, 3)
         links.append(Link(bname[b], float(m.body_mass[b]), d.xipos[b].copy(), R @ np.diag(m.body_inertia[b]) @ R.T))
     joints: list[Joint] = []
-    notes: list[str] = [f"MuJoCo: {w}" for w in dict.fromkeys(heard)]
+    notes += [f"MuJoCo: {w}" for w in dict.fromkeys(heard)]
     jname = [name(mujoco.mjtObj.mjOBJ_JOINT, j, "joint") for j in range(m.njnt)]
     held = _held_free_bodies(mujoco, m)
     task, drive_k = _custom(mujoco, m, problems)
@@ -250,7 +287,7 @@ def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: lis
             other = l1 if l2 == bname[free] else l2
             if gap[0] > 1e-9 * max(1.0, float(np.linalg.norm(p2))) or gap[1] > 1e-9:
                 problems.append(f"equality {ename}: holds the free body {bname[free]} but is {gap[0]:.3g} m "
-                                "apart at the reference configuration")
+                                "apart at the reference configuration (--assemble closes it)")
             joints.append(Joint(ename, "ball" if kinds[t] == "3d" else "fixed", other, bname[free], np.asarray(p2, float),
                                 R2[:, 2].copy()))
             continue
@@ -285,7 +322,7 @@ def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: lis
         problems.append(f"custom numeric {DRIVE_STIFFNESS}{jn}: no joint {jn!r}")
     if problems:
         more = f"; and {len(problems) - MAX_LISTED} more" if len(problems) > MAX_LISTED else ""
-        raise ParameterError(f"{src}: {len(problems)} element{'s' if len(problems) > 1 else ''} without an equivalent: "
+        raise ParameterError(f"{src}: {len(problems)} refusal{'s' if len(problems) > 1 else ''}: "
                              + "; ".join(problems[:MAX_LISTED]) + more)
     model_name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_MODEL, 0) if hasattr(mujoco.mjtObj, "mjOBJ_MODEL") else None
     if not model_name:  # the model's name heads MuJoCo's name buffer
