@@ -202,3 +202,18 @@ def test_marker_grid_areas(spacing, cap):
 def test_a_cap_that_is_not_positive_is_refused():
     with pytest.raises(ParameterError, match=r"marker cap: 0\.0 deg is not in \(0, 180\]"):
         marker_grid(10.0, 0.0)
+
+
+def test_the_share_above_5_5_by_markers_and_by_area():
+    """Both shares from the markers' own aspect ratios and weights, computed here."""
+    from pkmdyn.multibody.analyses.wear import ASPECT_LIMIT, WearOptions, joint_wear
+
+    m, mo, _ = _hip()
+    kin = solve_kinematics(m, mo.x, mo.xd, mo.xdd, mo.t)
+    on_cup, _, _ = joint_wear(m, kin, "S0_upper", WearOptions(radius_m=0.014), mo.loads)
+    s = on_cup.summary()
+    thin = on_cup.aspect_ratio > ASPECT_LIMIT
+    assert 0 < thin.sum() < len(thin)
+    assert s["share_aspect_ratio_above_5_5"] == pytest.approx(thin.mean(), abs=1e-15)
+    assert s["area_share_aspect_ratio_above_5_5"] == pytest.approx(on_cup.weights[thin].sum() / on_cup.weights.sum(),
+                                                                   abs=1e-15)

@@ -171,7 +171,8 @@ class SlideTracks:
             "sliding_distance_per_cycle_m": stats(sd / self.cycles),
             "mean_sliding_speed_m_s": stats(self.mean_speed),
             "aspect_ratio": stats(ar),
-            "share_aspect_ratio_above_5_5": float(np.mean(ar > ASPECT_LIMIT)),
+            "share_aspect_ratio_above_5_5": float(np.mean(ar > ASPECT_LIMIT)),  # of the markers
+            "area_share_aspect_ratio_above_5_5": float(self.weights[ar > ASPECT_LIMIT].sum() / self.weights.sum()),
             "cross_shear": stats(cs),
             "track_load_integral_per_cycle_N_m": stats(self.load_integral / self.cycles),
             "wear_volume_mm3_per_million_cycles": float(self.wear_per_million_cycles),
