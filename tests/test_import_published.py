@@ -189,3 +189,26 @@ def test_a_loop_left_open_in_the_file_is_closed_by_assemble(tmp_path, capsys):
     order = [m.actuator_names.index(f"p{i + 1}") for i in range(6)]
     ref = stewart.inverse_kinematics(a, b, x[:, :3], x[:, 3:], "XYZ")
     np.testing.assert_allclose(solve_kinematics(m, x).act_q[:, order], ref["L"], rtol=0, atol=1e-11)
+
+
+def test_missing_mesh_files_where_the_inertia_is_given(tmp_path, capsys):
+    """A model published without its mesh files: where each body gives its <inertial>, the mesh
+    geoms are left out (said) and the mechanism is the one without them; a body whose inertia
+    the missing mesh would give is refused by name."""
+    xml = stewart_free_xml()
+    meshed = xml.replace("<worldbody>", '<asset><mesh name="plate" file="meshes/plate.stl"/></asset>\n  <worldbody>', 1)
+    meshed = meshed.replace('<freejoint name="float"/>', '<freejoint name="float"/><geom type="mesh" mesh="plate"/>')
+    code, out = _import(tmp_path, meshed, name="meshed")
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert "mesh files missing (meshes/plate.stl): their geoms left out of bodies platform" in err
+    code, plain = _import(tmp_path, xml, name="plain")
+    assert code == 0
+    capsys.readouterr()
+    a, b = (tomllib.loads(p.read_text()) for p in (out, plain))
+    assert [bd["mass_kg"] for bd in a["bodies"]] == [bd["mass_kg"] for bd in b["bodies"]]
+    no_inertial = meshed.replace('<inertial pos="0 0 0" mass="10.0" diaginertia="0.625 0.625 1.25"/>', "")
+    assert no_inertial != meshed
+    code, out = _import(tmp_path, no_inertial, name="guessed")
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "body platform: its inertia would come from mesh plate" in err[0]

@@ -45,6 +45,49 @@ def _mujoco():
     return mujoco
 
 
+def _compiled(mujoco, path: Path, src: str, notes: list[str], problems: list[str]):
+    """MuJoCo's model of the file. Where mesh files are missing (a model published without its
+    assets), the geoms that use them are left out of MuJoCo's specification and it compiles
+    without them, said in a note, where each such body gives its inertia explicitly
+    (``<inertial>``: the geoms decide nothing then); a body whose inertia those meshes would
+    give is refused by name."""
+    try:
+        return mujoco.MjModel.from_xml_path(str(path))
+    except Exception as exc:  # MuJoCo's own message names the element and line
+        why = f"{src}: MuJoCo cannot read it: {' '.join(str(exc).split())[:300]}"
+    try:
+        spec = mujoco.MjSpec.from_file(str(path))
+    except Exception:
+        raise ParameterError(why) from None
+    folder = path.parent / (spec.meshdir or "")
+    missing = {mesh.name: mesh for mesh in spec.meshes if mesh.file and not (folder / mesh.file).is_file()}
+    if not missing:
+        raise ParameterError(why)
+    left = []
+    for body in spec.bodies:
+        for g in list(body.geoms):
+            if int(g.type) == int(mujoco.mjtGeom.mjGEOM_MESH) and g.meshname in missing:
+                if not body.explicitinertial:
+                    problems.append(f"body {body.name}: its inertia would come from mesh {g.meshname}, whose file "
+                                    f"{missing[g.meshname].file} is missing (give the body an <inertial>, or the file)")
+                    continue
+                spec.delete(g)
+                left.append(body.name)
+    if problems:
+        raise ParameterError(f"{src}: {len(problems)} refusal{'s' if len(problems) > 1 else ''}: "
+                             + "; ".join(problems[:MAX_LISTED]))
+    for mesh in missing.values():
+        spec.delete(mesh)
+    try:
+        m = spec.compile()
+    except Exception:
+        raise ParameterError(why) from None
+    files = sorted({mesh.file for mesh in missing.values()})
+    notes.append(f"mesh files missing ({', '.join(files[:5])}{' ...' if len(files) > 5 else ''}): their geoms "
+                 f"left out of bodies {', '.join(sorted(set(left))[:8])}, whose inertia the file gives explicitly")
+    return m
+
+
 #: the loop closure's residual at which --assemble stops [m, rad], and its most Newton steps
 ASSEMBLE_TOL = 1e-12
 ASSEMBLE_STEPS = 100
@@ -171,10 +214,7 @@ def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: lis
     problems: list[str] = []
     notes: list[str] = []
     prescan_mjcf(path, src)  # bounded before MuJoCo reads it: FIFOs, replicates, includes
-    try:
-        m = mujoco.MjModel.from_xml_path(str(path))
-    except Exception as exc:  # MuJoCo's own message names the element and line
-        raise ParameterError(f"{src}: MuJoCo cannot read it: {' '.join(str(exc).split())[:300]}") from None
+    m = _compiled(mujoco, path, src, notes, problems)
     # the equalities' residuals are read from MuJoCo's constraint rows: computed even where disabled
     m.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_EQUALITY)
     for t in range(m.ntendon):
