@@ -29,6 +29,9 @@ def job(machine: str) -> JobResult:
         f"over-constraints: {rep.overconstraints}"
         + (f" ({', '.join(f'{j} {d}' for j, d in rep.overconstrained)})" if rep.overconstrained else ""),
         f"actuated joints: {', '.join(model.actuator_names)}",
+        (f"under-actuated: {model.na} actuators for {rep.dof} degrees of freedom (a task motion's efforts exist only "
+         "where the motion is dynamically consistent; pkmdyn run refuses it elsewhere, naming the sample)")
+        if model.na < rep.dof else None,
         f"task coordinates: {', '.join(f'{n} [{u}]' for n, u in zip(model.task_names, model.task_units))} "
         f"of body {model.body_names[model.task_body]}",
         f"explicit legs (closed form, {model.legs.count}): "

@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import ParameterError, SingularityError
+from ...errors import MotionError, ParameterError, SingularityError
 from ..description.joint_types import JOINT_TYPES, MOTION_CODES, type_code
 from ..kinematics.inverse import MechanismKinematics, joint_frame
 from ..model.compiler import MechanismModel
@@ -166,9 +166,11 @@ def generalised_forces(model: MechanismModel, S: Array, W: Array) -> Array:
 
 
 def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, rhs_task: Array | None = None,
-                     sample_offset: int = 0) -> Array:
+                     sample_offset: int = 0, consistent: bool = False) -> Array:
     """Efforts ``u (n, na)`` [N or N m] from the generalised tree forces ``Q (n, nq)``, Eq. (3)
-    (or from the task-space forces ``rhs_task = G^T Q (n, nt)`` when given).
+    (or from the task-space forces ``rhs_task = G^T Q (n, nt)`` when given). With
+    ``consistent``, an under-actuated mechanism's motion must be dynamically consistent
+    (:func:`check_consistent`; the least-squares efforts otherwise).
 
     Raises :class:`~pkmdyn.errors.SingularityError` naming the first sample where the
     actuator map ``J_ax`` is singular (the actuators cannot move the mechanism there; its
@@ -214,7 +216,42 @@ def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, 
         return u_fast
     if model.na == model.nt:
         return np.linalg.solve(JT, rhs[..., None])[..., 0]
-    return np.einsum("nat,nt->na", np.linalg.pinv(JT), rhs)
+    u = np.einsum("nat,nt->na", np.linalg.pinv(JT), rhs)
+    if consistent and model.na < model.nt:
+        check_consistent(model, kin, JT, u, rhs, sample_offset)
+    return u
+
+
+#: an under-actuated mechanism's motion is dynamically consistent where the generalised force
+#: the actuators cannot give is at most this share of the largest generalised force
+UNDERACTUATED_TOLERANCE = 1e-8
+
+
+def unactuated_residual(JT: Array, u: Array, rhs: Array) -> Array:
+    """Per sample, ``|J_ax^T u - G^T Q|`` over ``max(|G^T Q|, |J_ax^T| |u|)`` (Eq. 3 in the least-squares
+    sense): zero where the actuators alone balance the motion (an under-actuated mechanism's
+    passive freedoms then need no force), else the share of the generalised force along the
+    freedoms no actuator moves. Task coordinates of mixed units are compared as written."""
+    r = np.linalg.norm(np.einsum("nta,na->nt", JT, u) - rhs, axis=1)
+    size = np.maximum(np.linalg.norm(rhs, axis=1), np.linalg.norm(JT, axis=(1, 2)) * np.linalg.norm(u, axis=1))
+    return r / np.maximum(size, 1e-300)
+
+
+def check_consistent(model: MechanismModel, kin: MechanismKinematics, JT: Array, u: Array, rhs: Array,
+                     sample_offset: int = 0) -> None:
+    """Refuse an under-actuated mechanism's motion (fewer actuators than degrees of freedom)
+    where it is not dynamically consistent (:func:`unactuated_residual` above
+    :data:`UNDERACTUATED_TOLERANCE`), naming the first such sample: there no efforts of its
+    actuators produce it, the passive freedoms would move otherwise."""
+    res = unactuated_residual(JT, u, rhs)
+    bad = np.flatnonzero(res > UNDERACTUATED_TOLERANCE)
+    if bad.size:
+        s = int(bad[0])
+        when = f"sample {s + sample_offset}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
+        raise MotionError(f"{when}: mechanism {model.name!r} is under-actuated ({model.na} actuators for {model.nt} "
+                          f"degrees of freedom) and the motion is not dynamically consistent there: "
+                          f"{res[s]:.3g} of the generalised force lies along freedoms no actuator moves, so no efforts "
+                          "of its actuators make this motion")
 
 
 @dataclass(frozen=True)
@@ -254,7 +291,7 @@ def inverse_dynamics(model: MechanismModel, kin: MechanismKinematics, loads: dic
     Q = generalised_forces(model, S, W)
     if Qf is not None:
         Q = Q + Qf
-    u = actuator_efforts(model, kin, Q)
+    u = actuator_efforts(model, kin, Q, consistent=True)
     return InverseDynamics(u=u, Q=Q, W=W, S=S, kin=kin)
 
 
@@ -467,7 +504,7 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     Q = generalised_forces(model, S, W)
     while True:
         F_u = F  # the friction these efforts and reactions hold with (the split's, below)
-        u = actuator_efforts(model, kin, Q if Qf is None else Q + Qf, sample_offset=sample_offset)
+        u = actuator_efforts(model, kin, Q if Qf is None else Q + Qf, sample_offset=sample_offset, consistent=True)
         eff = np.zeros((n, model.nq))
         eff[:, model.act_coord] = u
         b = None if fast else equilibrium_rhs(model, blocks, W, eff, F)

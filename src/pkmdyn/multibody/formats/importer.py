@@ -88,6 +88,9 @@ def import_description(path: Path, fmt: str, *, sidecar: Path | None = None, act
         notes.append(f"over-constrained ({model.topology.overconstraints} self-stress states): the efforts are unique; "
                      "the file holds no link compliance, so [mechanism] reactions = \"minimum-norm\" (runs write "
                      "the minimum-norm joint reactions, flagged); [[bodies]] section and material make them unique")
+    if model.na < model.topology.dof:
+        notes.append(f"under-actuated: {model.na} actuators for {model.topology.dof} degrees of freedom; a task motion's "
+                     "efforts exist only where it is dynamically consistent (pkmdyn run refuses it elsewhere)")
     _fit_default_motion(model, desc, notes)
     header = "\n".join([f"Imported by pkmdyn import from {graph.source} ({fmt.upper()}).",
                         "Base frame, reference configuration: the file's (docs/import.md).", *notes])
