@@ -314,10 +314,12 @@ def test_params_of_another_mechanism_are_refused(tmp_path, capsys):
 def test_an_under_actuated_mechanism_sweeps_without_a_direct_measure(tmp_path):
     """A planar 2R arm with one of its two joints driven (one actuator, two task coordinates):
     the direct singularity measure is not defined, so it is no metric of the sweep, and every
-    design is evaluated (a declared metric that a design cannot give makes it nonfinite)."""
+    design is evaluated (a declared metric that a design cannot give makes it nonfinite). Held
+    still its motion is dynamically consistent (the free joint needs no torque); a motion that
+    swings the free joint is no design's (no torque of the one drive makes it)."""
     d = ex.serial_arm()
     d["joints"][1]["actuated"] = False
-    d["default_motion"] = {"period_s": 1.0, "samples": 51, "amplitude": {"x_m": 0.05, "y_m": 0.05}}
+    d["default_motion"] = {"period_s": 1.0, "samples": 51, "amplitude": {"x_m": 0.0, "y_m": 0.0}}
     machine = tmp_path / "arm_one_drive.toml"
     machine.write_text(dumps_toml(d))
     space = tmp_path / "space.toml"
@@ -330,3 +332,9 @@ def test_an_under_actuated_mechanism_sweeps_without_a_direct_measure(tmp_path):
     table = pq.read_table(out / "designs.parquet")
     assert "min_direct_measure" not in table.column_names and "min_inverse_measure" in table.column_names
     assert table.column("status").to_pylist() == ["ok"] * 3
+    d["default_motion"]["amplitude"] = {"x_m": 0.05, "y_m": 0.05}
+    machine.write_text(dumps_toml(d))
+    moved = tmp_path / "moved"
+    assert main(["sweep", "--machine", str(machine), "--space", str(space), "--workers", "0", "--no-plots",
+                 "--out", str(moved)]) == 0
+    assert "ok" not in pq.read_table(moved / "designs.parquet").column("status").to_pylist()
