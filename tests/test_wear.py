@@ -179,6 +179,16 @@ def test_the_markers_are_counted_before_the_grid_is_built(spacing, cap):
     assert marker_count(spacing, cap) == len(marker_grid(spacing, cap).u)
 
 
+def test_the_library_grid_is_bounded_before_it_is_built():
+    from pkmdyn.errors import LimitError
+
+    with pytest.raises(LimitError, match=r"103,132,403 markers .* exceed the 1,000 allowed"):
+        marker_grid(0.01, 60.0, max_markers=1000)
+    with pytest.raises(LimitError, match="exceed the 1,000,000 allowed"):
+        marker_grid(1e-300, 60.0)
+    assert len(marker_grid(10.0, 60.0, max_markers=119).u) == 119
+
+
 def test_a_raised_limit_lets_a_fine_grid_run(tmp_path, capsys):
     out = tmp_path / "fine"
     args = ["wear", "--machine", "hip", "--joint", "S0_upper", "--radius-m", "0.014", "--spacing-deg", "2",

@@ -22,7 +22,6 @@ from ..multibody.analyses.wear import (
     joint_index,
     joint_wear,
     marker_count,
-    marker_grid,
     pole_rotation,
 )
 from ..multibody.description.schema import LIMIT_KEYS

@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import ParameterError
+from ...errors import LimitError, ParameterError
 from ..description.expressions import evaluate
 from ..description.joint_types import JOINT_TYPES
 from ..dynamics.newton_euler import joint_reactions

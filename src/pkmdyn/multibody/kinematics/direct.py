@@ -596,7 +596,6 @@ def assembly_modes(model: MechanismModel, s: Array, starts: int | None = None, s
     L = model.length_scale
     tb = model.task_body
     groups: list[dict] = []
-    outs: list[tuple[Array, Array, Array]] = []  # (q, res, det) of each group's best start
     m = converged = last_new = 0
     size = _BATCH
     while m < total and (starts is not None or m - last_new < patience or m == 0):
