@@ -374,13 +374,20 @@ def _stewart_lengths():
     return m, ",".join(f"{a}={v:.12g}" for a, v in zip(m.actuator_names, actuator_reference(m) + 0.05))
 
 
-def test_assemble_lists_verified_modes_and_writes_them(capsys, tmp_path):
+@pytest.mark.parametrize("how", ["--starts", "--patience"])
+def test_assemble_lists_verified_modes_and_writes_them(capsys, tmp_path, how):
     m, text = _stewart_lengths()
     out = tmp_path / "modes"
-    code, stdout, err = _run(capsys, "assemble", "--machine", "stewart", "--actuators", text, "--starts", 300,
+    code, stdout, err = _run(capsys, "assemble", "--machine", "stewart", "--actuators", text, how, 300,
                              "--out", out)
     assert code == 0, err
     doc = json.loads((out / "assemblies.json").read_text())
+    if how == "--starts":  # exactly the starts asked, the reference configuration's among them
+        assert doc["stopping_rule"] == {"kind": "fixed", "starts": 300} and doc["starts"] == 300
+    else:  # until 300 starts in a row found no new mode
+        assert doc["stopping_rule"] == {"kind": "no new mode in consecutive starts", "patience": 300}
+        assert doc["starts"] - doc["last_new_mode_at_start"] >= 300
+        assert f"starts: {doc['starts']:,} (until 300 starts in a row found no new mode" in stdout
     assert (out / "report.html").is_file()
     assert doc["mechanism"] == "stewart" and len(doc["modes"]) >= 2
     assert f"assembly modes found: {len(doc['modes'])}" in stdout
@@ -412,16 +419,8 @@ def test_assemble_refusals_are_one_line(capsys, tmp_path, actuators, pattern):
     assert not out.exists()
 
 
-def test_assemble_reports_its_stopping_rule(capsys, tmp_path):
+def test_assemble_takes_a_count_or_a_stopping_rule_not_both(capsys):
     _, text = _stewart_lengths()
-    out = tmp_path / "modes"
-    code, stdout, err = _run(capsys, "assemble", "--machine", "stewart", "--actuators", text, "--patience", 300,
-                             "--out", out)
-    assert code == 0, err
-    doc = json.loads((out / "assemblies.json").read_text())
-    assert doc["stopping_rule"] == {"kind": "no new mode in consecutive starts", "patience": 300}
-    assert doc["starts"] - doc["last_new_mode_at_start"] >= 300
-    assert f"starts: {doc['starts']:,} (until 300 starts in a row found no new mode" in stdout
     code, _, err = _run(capsys, "assemble", "--machine", "stewart", "--actuators", text, "--starts", 100,
                         "--patience", 300)
     assert code == 2 and "--starts and --patience exclude each other" in err
