@@ -639,13 +639,32 @@ def test_the_default_search_stops_when_no_new_mode_comes():
     assert len(got.modes) == 6 and got.patience == 5000
     assert 1 <= got.last_new_mode_at and got.starts - got.last_new_mode_at >= 5000
     assert sum(a.hits for a in got.modes) <= got.converged <= got.starts
+    assert got.starts == got.last_new_mode_at + 5000  # stops at the start the rule names
     short = assembly_modes(m, s, seed=4, patience=20)
-    assert short.starts - short.last_new_mode_at >= 20 and short.starts < got.starts
+    assert short.starts == short.last_new_mode_at + 20 and short.starts < got.starts
     for n in (1, 2, 3, 1234):
         fixed = assembly_modes(m, s, starts=n, seed=4)
         assert fixed.starts == n and fixed.patience is None
     with pytest.raises(ParameterError, match="patience: expected an integer from 1"):
         assembly_modes(m, s, patience=0)
+
+
+def test_a_seed_gives_the_same_search_whatever_the_calls_sizes(monkeypatch):
+    """The compiled calls are sized by the clock (a quarter second each); the starts are drawn in
+    one order regardless, so a seed gives the same modes, hits and stopping start on a fast or a
+    loaded machine."""
+    import pkmdyn.multibody.kinematics.direct as direct
+
+    m = _model("stewart")
+    s = actuator_reference(m) + 0.03
+
+    def search(call_s, **kw):
+        monkeypatch.setattr(direct, "_CALL_S", call_s)
+        a = assembly_modes(m, s, seed=7, **kw)
+        return a.starts, a.converged, a.last_new_mode_at, [(x.hits, tuple(np.round(x.x, 9))) for x in a.modes]
+
+    assert search(0.25, patience=600) == search(1e-4, patience=600)
+    assert search(0.25, starts=900) == search(1e-4, starts=900)
 
 
 def test_one_sample_at_a_time_refuses_a_crossing_instead_of_turning_back():

@@ -523,3 +523,15 @@ def test_a_billion_laughs_sidecar_is_refused_at_once(tmp_path, capsys):
     urdf.write_text(SERIAL)
     assert main(["import", "--from", str(urdf), "--sidecar", str(side), "--out", str(tmp_path / "o.toml")]) == 2
     assert "anchors and aliases" in capsys.readouterr().err
+
+
+def test_the_sidecars_sequence_and_an_empty_type_list(tmp_path, capsys):
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(SERIAL)
+    side = tmp_path / "arm.yaml"
+    side.write_text("task: {euler_sequence: XXY}\n")
+    out = tmp_path / "arm.toml"
+    assert main(["import", "--from", str(urdf), "--sidecar", str(side), "--out", str(out)]) == 2
+    assert "[task] euler_sequence: 'XXY': no axis twice in a row" in capsys.readouterr().err
+    side.write_text("name_mot: [j1, j2]\ntype: []\n")  # no loops and no types: nothing to say
+    assert main(["import", "--from", str(urdf), "--sidecar", str(side), "--out", str(out)]) == 0

@@ -212,3 +212,36 @@ def test_missing_mesh_files_where_the_inertia_is_given(tmp_path, capsys):
     code, out = _import(tmp_path, no_inertial, name="guessed")
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "body platform: its inertia would come from mesh plate" in err[0]
+
+
+def test_a_floor_mesh_and_inertia_from_geoms(tmp_path, capsys):
+    """A missing mesh on the world (a floor) decides no inertia and is left out; with
+    inertiafromgeom="true" every body's inertia comes from its geoms, so a missing mesh on a
+    moving body is refused even beside an <inertial>."""
+    xml = stewart_free_xml().replace("<worldbody>", '<asset><mesh name="floor" file="floor.stl"/>'
+                                                    '<mesh name="plate" file="plate.stl"/></asset>\n  <worldbody>'
+                                                    '\n    <geom type="mesh" mesh="floor"/>', 1)
+    code, _ = _import(tmp_path, xml, name="floor")
+    assert code == 0 and "mesh files missing (floor.stl, plate.stl): their geoms left out of bodies world" in \
+        capsys.readouterr().err
+    both = xml.replace('<freejoint name="float"/>', '<freejoint name="float"/><geom type="mesh" mesh="plate"/>')
+    both = both.replace('<compiler angle="radian"/>', '<compiler angle="radian" inertiafromgeom="true"/>')
+    code, _ = _import(tmp_path, both, name="fromgeoms")
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "body platform: its inertia would come from mesh plate" in err[0]
+    assert 'drop inertiafromgeom="true"' in err[0]
+
+
+def test_two_free_bodies_held_only_by_each_other_float(tmp_path, capsys):
+    xml = """<mujoco model="pair">
+  <worldbody>
+    <body name="a" pos="0 0 1"><freejoint name="fa"/><inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/></body>
+    <body name="b" pos="0.5 0 1"><freejoint name="fb"/><inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/></body>
+  </worldbody>
+  <equality><connect body1="a" body2="b" anchor="0.25 0 0"/></equality>
+</mujoco>"""
+    code, out = _import(tmp_path, xml, name="pair")
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "2 refusals" in err[0]
+    assert "joint fa: a free joint whose body no loop closure holds" in err[0] and "joint fb" in err[0]
+    assert "--weld-free" in err[0] and not out.exists()

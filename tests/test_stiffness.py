@@ -360,7 +360,9 @@ def test_the_rotors_held_or_moving():
     plain = load_mechanism(ex.MACHINES / "stewart" / "stewart.toml")
     st = stiffness(plain, solve_kinematics(plain, x), rotors="moving")
     assert np.array_equal(st.frequencies_rotors_held, st.frequencies_rotors_moving)
-    with pytest.raises(Exception, match="rotors: 'free' is not one of held, moving"):
+    from pkmdyn.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="rotors: 'free' is not one of held, moving"):
         stiffness(m, kin, rotors="free")
 
 

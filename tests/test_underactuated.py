@@ -49,8 +49,10 @@ def test_held_still_with_the_free_link_hanging_the_shoulder_torque_is_the_closed
     tip = elbow + [0.0, -L]
     u = inverse_dynamics(m, _still(m, tip)).u[:, 0]
     # gravity's moment about the shoulder of both links (the lower one's weight acts at the elbow's x)
-    moment = G * (M1 * elbow[:, 0] / 2 + M2 * elbow[:, 0])
-    np.testing.assert_allclose(np.abs(u), np.abs(moment), rtol=1e-10, atol=1e-10)
+    moment = G * (M1 * elbow[:, 0] / 2 + M2 * elbow[:, 0])  # about +y: (r x (0, 0, -m g))_y = m g x
+    # the torque the shoulder applies to the upper link about +y balances gravity's moment about +y
+    # (m g x of each weight at x): u = -moment
+    np.testing.assert_allclose(u, -moment, rtol=1e-10, atol=1e-10)
     assert np.abs(u[1:]).min() > 1.0
 
 

@@ -209,8 +209,10 @@ def test_workspace_command(tmp_path):
     (["--grid", "x=0:1:3", "--orientation-range", "z=-1:1"], "--orientation-range"),
     (["--grid", "x=0:1:3", "--orientation-range", "z=-1:1:3", "--refine", "4"], "--refine"),
     (["--grid", "x=0:1:3", "--refine", "65"], "--refine"),
-    (["--grid", "x=0:1:3", "--pose", "z=1e308"], "--pose z: 1e+308 m is beyond the description's limit max_length_m"),
-    (["--grid", "x=-1e300:0:3"], "--grid x: -1e+300 m is beyond the description's limit max_length_m"),
+    (["--grid", "x=0:1:3", "--pose", "z=1e308"], "--pose z: 1e+308 m is beyond the limit max_length_m = 1000"),
+    (["--grid", "x=-1e300:0:3"], "--grid x: -1e+300 m is beyond the limit max_length_m"),
+    (["--grid", "x=-2000:0:3", "--limit", "max_length_m=1500"], "--grid x: -2000 m is beyond the limit max_length_m = "
+                                                                 "1500"),
 ])
 def test_bad_workspace_input(tmp_path, capsys, args, words):
     out = tmp_path / "ws"

@@ -104,8 +104,9 @@ def write_texts(texts: Mapping[str, tuple[Path, str]], inputs: Mapping[str, Path
     ``(path, text)``, each path checked (:func:`pkmdyn.io.check_output_file`, before anything is
     written) and written whole or not at all (:func:`pkmdyn.io.atomic_file`): all are written under
     temporary names, ``announce`` is given their paths (so the listing is out, as for a folder,
-    before anything moves), and only then do they move into place; a failure anywhere (a full
-    standard output included) leaves none of them. Returns label -> path."""
+    before anything moves), and only then do they move into place, one rename each; a failure
+    while writing or listing them (a full standard output included) leaves none of them. Returns
+    label -> path."""
     for path, _ in texts.values():
         check_output_file(path, inputs)
     placed = {k: p for k, (p, _) in texts.items()}

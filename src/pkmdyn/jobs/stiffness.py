@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 from ..errors import ParameterError, PkmdynError
 from ..io import write_csv, write_json
+from ..multibody.dynamics.actuators import effective_limits
 from ..multibody.analyses.stiffness import (
     ROTORS,
     Stiffness,
@@ -296,14 +297,15 @@ def job(machine: str, out_dir: Path, *, poses: tuple[str, ...] = (), motion_path
     p = prepare(machine, out_dir, {"--motion": motion_path}, limits)
     model = p.model
     kw: dict[str, Any] = {}
+    eff = effective_limits(model, limits)
     if poses:
-        kw["poses"] = np.stack([parse_pose(model, s) for s in poses])
+        kw["poses"] = np.stack([parse_pose(model, s, eff) for s in poses])
     elif motion_path is not None:
         kw["motion"] = read_task_motion(model, Path(motion_path).absolute())
     elif default_motion:
         kw["motion"] = one_cycle(model)
     elif grid is not None:
-        kw["grid"] = parse_grid(model, grid, max_axes=2, max_points=MAX_GRID_POINTS)
+        kw["grid"] = parse_grid(model, grid, max_axes=2, max_points=MAX_GRID_POINTS, limits=eff)
     held: dict[str, Any] = {}
 
     def make(out: Path) -> dict[str, Path]:

@@ -41,10 +41,11 @@ def job(machine: str, grid: str, pose: str, orientation_range: str | None, thres
     limits = parse_limit_options(limit_items, LIMIT_KEYS)
     p = prepare(machine, out_dir, limits=limits)
     model = p.model
-    axes = parse_grid(model, grid, max_axes=3, max_points=int(effective_limits(model, limits)["max_workspace_poses"]),
-                      limit_key="max_workspace_poses")
-    base = parse_pose(model, pose)
-    ranges = None if orientation_range is None else parse_ranges(model, orientation_range)
+    eff = effective_limits(model, limits)
+    axes = parse_grid(model, grid, max_axes=3, max_points=int(eff["max_workspace_poses"]),
+                      limit_key="max_workspace_poses", limits=eff)
+    base = parse_pose(model, pose, eff)
+    ranges = None if orientation_range is None else parse_ranges(model, orientation_range, eff)
     c = None
     if centre is not None:
         try:

@@ -87,7 +87,8 @@ def pose_columns(model: MechanismModel, kin: MechanismKinematics) -> dict[str, A
     base-frame position ``o_b + R_b r`` (``r`` the point in the body frame: the task point, the
     output's point) and the Euler angles of ``R_b`` in the task's sequence (the body frame's
     rotation to the base frame, as the task's angles). A task angle keeps the motion's own value
-    (not wrapped) where it is the same angle up to whole turns."""
+    (not wrapped) where it is the same angle up to whole turns; where the task's middle angle
+    leaves scipy's principal range the columns are scipy's equivalent triple."""
     cols: dict[str, Array] = {}
     bodies = [(int(model.task_body), model.task_point, "task_body")]
     bodies += [(int(b), pt, name) for b, pt, name in zip(model.output_body, model.output_point, model.output_names)]

@@ -5,6 +5,7 @@ reference pose's value for every coordinate not named)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,9 +31,11 @@ def _coordinate(model: MechanismModel, key: str, what: str) -> int:
     raise ParameterError(f"{what}: {key!r} is not a task coordinate of {model.name} ({names})")
 
 
-def _number(text: str, what: str, model: MechanismModel | None = None, i: int = 0) -> float:
-    """The number ``text``; with ``model``, task coordinate ``i``'s value, within the description's
-    magnitude limit of its unit (``[limits] max_length_m`` or ``max_angle_rad``)."""
+def _number(text: str, what: str, model: MechanismModel | None = None, i: int = 0,
+            limits: Mapping[str, float] | None = None) -> float:
+    """The number ``text``; with ``model``, task coordinate ``i``'s value, within the magnitude
+    limit of its unit (``[limits] max_length_m`` or ``max_angle_rad``: ``limits``, the
+    description's with ``--limit`` laid over them, else the description's own)."""
     try:
         v = float(text)
     except ValueError:
@@ -41,16 +44,16 @@ def _number(text: str, what: str, model: MechanismModel | None = None, i: int = 
         raise ParameterError(f"{what}: {text!r} is not finite")
     if model is not None:
         key = "max_length_m" if model.task_units[i] == "m" else "max_angle_rad"
-        bound = float(model.limits.get(key, math.inf))
+        bound = float((limits if limits is not None else model.limits).get(key, math.inf))
         if abs(v) > bound:
-            raise ParameterError(f"{what}: {v:g} {model.task_units[i]} is beyond the description's limit {key} = "
-                                 f"{bound:g} (raise it with [limits] {key} in the description)")
+            raise ParameterError(f"{what}: {v:g} {model.task_units[i]} is beyond the limit {key} = {bound:g} (raise "
+                                 f"it with [limits] {key} in the description or --limit {key}=VALUE)")
     return v
 
 
-def parse_pose(model: MechanismModel, text: str) -> Array:
+def parse_pose(model: MechanismModel, text: str, limits: Mapping[str, float] | None = None) -> Array:
     """``"x=0.01,euler1_rad=0.02"`` -> the task pose (nt,), the reference pose's value for every
-    coordinate not named."""
+    coordinate not named; each value within ``limits``' magnitudes (:func:`_number`)."""
     x = reference_task(model).copy()
     seen: set[int] = set()
     for item in filter(None, (s.strip() for s in text.split(","))):
@@ -61,12 +64,13 @@ def parse_pose(model: MechanismModel, text: str) -> Array:
         if i in seen:
             raise ParameterError(f"--pose: {key.strip()!r} given twice")
         seen.add(i)
-        x[i] = _number(val.strip(), f"--pose {key.strip()}", model, i)
+        x[i] = _number(val.strip(), f"--pose {key.strip()}", model, i, limits)
     return x
 
 
 def parse_grid(model: MechanismModel, text: str, max_axes: int = 2, max_points: int = MAX_GRID_POINTS,
-               what: str = "--grid", limit_key: str | None = None) -> list[tuple[int, Array]]:
+               what: str = "--grid", limit_key: str | None = None,
+               limits: Mapping[str, float] | None = None) -> list[tuple[int, Array]]:
     """``"x=-0.1:0.1:21,y=-0.1:0.1:21"`` -> up to ``max_axes`` (task coordinate, values) axes,
     each ``lo:hi:count`` (count 2 to 1,000), about the reference pose; at most ``max_points``
     poses in all (``limit_key``: the ``[limits]`` key that sets it, named in the refusal);
@@ -80,7 +84,7 @@ def parse_grid(model: MechanismModel, text: str, max_axes: int = 2, max_points: 
         i = _coordinate(model, key.strip(), what)
         if any(i == a for a, _ in axes):
             raise ParameterError(f"{what}: {key.strip()!r} given twice")
-        lo, hi = (_number(p.strip(), f"{what} {key.strip()}", model, i) for p in parts[:2])
+        lo, hi = (_number(p.strip(), f"{what} {key.strip()}", model, i, limits) for p in parts[:2])
         try:
             count = int(parts[2])
         except ValueError:
@@ -96,10 +100,11 @@ def parse_grid(model: MechanismModel, text: str, max_axes: int = 2, max_points: 
     return axes
 
 
-def parse_ranges(model: MechanismModel, text: str) -> list[tuple[int, Array]]:
+def parse_ranges(model: MechanismModel, text: str, limits: Mapping[str, float] | None = None
+                 ) -> list[tuple[int, Array]]:
     """``--orientation-range "euler1=-0.1:0.1:3,..."``: held task coordinates over ranges (the
     grid syntax, at most three coordinates and 1,000 combinations)."""
-    return parse_grid(model, text, max_axes=3, max_points=1000, what="--orientation-range")
+    return parse_grid(model, text, max_axes=3, max_points=1000, what="--orientation-range", limits=limits)
 
 
 def grid_poses(model: MechanismModel, axes: list[tuple[int, Array]], base: Array | None = None) -> Array:

@@ -45,6 +45,12 @@ def _mujoco():
     return mujoco
 
 
+def _refusals(src: str, problems: list[str]) -> str:
+    """One line naming every refusal of the file (at most :data:`MAX_LISTED`, the rest counted)."""
+    more = f"; and {len(problems) - MAX_LISTED} more" if len(problems) > MAX_LISTED else ""
+    return f"{src}: {len(problems)} refusal{'s' if len(problems) > 1 else ''}: " + "; ".join(problems[:MAX_LISTED]) + more
+
+
 def _compiled(mujoco, path: Path, src: str, notes: list[str], problems: list[str]):
     """MuJoCo's model of the file. Where mesh files are missing (a model published without its
     assets), the geoms that use them are left out of MuJoCo's specification and it compiles
@@ -63,32 +69,36 @@ def _compiled(mujoco, path: Path, src: str, notes: list[str], problems: list[str
     missing = {mesh.name: mesh for mesh in spec.meshes if mesh.file and not (folder / mesh.file).is_file()}
     if not missing:
         raise ParameterError(why)
+    # with inertiafromgeom="true" MuJoCo takes every body's inertia from its geoms, <inertial> or not
+    from_geoms = int(spec.compiler.inertiafromgeom) == int(mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_TRUE)
+    hint = ' and drop inertiafromgeom="true"' if from_geoms else ""
     left = []
     for body in spec.bodies:
         for g in list(body.geoms):
             if int(g.type) == int(mujoco.mjtGeom.mjGEOM_MESH) and g.meshname in missing:
-                if not body.explicitinertial:
+                if body.name != "world" and (from_geoms or not body.explicitinertial):
                     problems.append(f"body {body.name}: its inertia would come from mesh {g.meshname}, whose file "
-                                    f"{missing[g.meshname].file} is missing (give the body an <inertial>, or the file)")
-                    continue
-                spec.delete(g)
+                                    f"{missing[g.meshname].file} is missing (give the body an <inertial>{hint}, "
+                                    "or the file)")
+                spec.delete(g)  # (a refused body's too: the file's other refusals are still listed)
                 left.append(body.name)
-    if problems:
-        raise ParameterError(f"{src}: {len(problems)} refusal{'s' if len(problems) > 1 else ''}: "
-                             + "; ".join(problems[:MAX_LISTED]))
     for mesh in missing.values():
         spec.delete(mesh)
     try:
         m = spec.compile()
-    except Exception:
+    except Exception:  # a refused body left without mass: the refusals say why
+        if problems:
+            raise ParameterError(_refusals(src, problems)) from None
         raise ParameterError(why) from None
     files = sorted({mesh.file for mesh in missing.values()})
     notes.append(f"mesh files missing ({', '.join(files[:5])}{' ...' if len(files) > 5 else ''}): their geoms "
-                 f"left out of bodies {', '.join(sorted(set(left))[:8])}, whose inertia the file gives explicitly")
+                 f"left out of bodies {', '.join(sorted(set(left))[:8])}, whose inertia the file gives explicitly"
+                 " (the world's geoms carry none)")
     return m
 
 
-#: the loop closure's residual at which --assemble stops [m, rad], and its most Newton steps
+#: the loop closure's residual at which --assemble stops, relative to the model's size, and its
+#: most Newton steps
 ASSEMBLE_TOL = 1e-12
 ASSEMBLE_STEPS = 100
 
@@ -100,6 +110,7 @@ def _assemble(mujoco, m, d, src: str) -> list[str]:
     close. Returns the note saying how far the file's configuration was from closing."""
     m.opt.jacobian = mujoco.mjtJacobian.mjJAC_DENSE
     eq = int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+    tol = ASSEMBLE_TOL * max(1.0, float(m.stat.extent))  # the model's size: metres or millimetres alike
     first = None
     for _ in range(ASSEMBLE_STEPS + 1):
         mujoco.mj_forward(m, d)
@@ -109,9 +120,9 @@ def _assemble(mujoco, m, d, src: str) -> list[str]:
         r = d.efc_pos[:d.nefc][rows]
         gap = float(np.abs(r).max())
         first = gap if first is None else first
-        if gap <= ASSEMBLE_TOL:
+        if gap <= tol:
             return [f"reference configuration: the loops closed from the file's configuration (--assemble; they "
-                    f"were {first:.3g} m or rad open)"] if first > ASSEMBLE_TOL else []
+                    f"were {first:.3g} m or rad open)"] if first > tol else []
         J = np.asarray(d.efc_J[:d.nefc * m.nv]).reshape(d.nefc, m.nv)[rows]
         dq = -np.linalg.lstsq(J, r, rcond=None)[0]
         mujoco.mj_integratePos(m, d.qpos, dq, 1.0)
@@ -151,8 +162,9 @@ def _custom(mujoco, m, problems: list[str]) -> tuple[TaskChoice | None, dict[str
 
 
 def _held_free_bodies(mujoco, m) -> dict[int, int]:
-    """Each body with a free joint that an active connect or weld joins to a body outside its
-    own subtree (a platform closed by the loops): the first such equality."""
+    """Each body with a free joint that an active connect or weld joins directly to a body on the
+    world's own tree (inside no free body's subtree; a platform closed by the loops): the first
+    such equality. Free bodies held only by one another are floating."""
     parent = [int(v) for v in m.body_parentid]
 
     def inside(b: int, root: int) -> bool:
@@ -167,16 +179,18 @@ def _held_free_bodies(mujoco, m) -> dict[int, int]:
         return int(m.site_bodyid[i]) if int(m.eq_objtype[e]) == int(mujoco.mjtObj.mjOBJ_SITE) else i
 
     kinds = (int(mujoco.mjtEq.mjEQ_CONNECT), int(mujoco.mjtEq.mjEQ_WELD))
+    free = [int(m.jnt_bodyid[j]) for j in range(m.njnt) if int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_FREE)]
+
+    def grounded(b: int) -> bool:  # on the world's tree, inside no free body's subtree
+        return not any(inside(b, f) for f in free)
+
     out: dict[int, int] = {}
-    for j in range(m.njnt):
-        if int(m.jnt_type[j]) != int(mujoco.mjtJoint.mjJNT_FREE):
-            continue
-        b = int(m.jnt_bodyid[j])
+    for b in free:
         for e in range(m.neq):
             if int(m.eq_type[e]) not in kinds or not m.eq_active0[e]:
                 continue
             a, c = body_of(e, 0), body_of(e, 1)
-            if (a == b and not inside(c, b)) or (c == b and not inside(a, b)):
+            if (a == b and grounded(c)) or (c == b and grounded(a)):
                 out[b] = e
                 break
     return out
@@ -326,8 +340,9 @@ def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: lis
         if free is not None:  # the tree joint of a held free body: a ball (connect) or a weld
             other = l1 if l2 == bname[free] else l2
             if gap[0] > 1e-9 * max(1.0, float(np.linalg.norm(p2))) or gap[1] > 1e-9:
-                problems.append(f"equality {ename}: holds the free body {bname[free]} but is {gap[0]:.3g} m "
-                                "apart at the reference configuration (--assemble closes it)")
+                apart = f"{gap[0]:.3g} m" + (f" and {gap[1]:.3g} rad" if kinds[t] == "6d" else "")
+                problems.append(f"equality {ename}: holds the free body {bname[free]} but is {apart} apart at the "
+                                "reference configuration (--assemble closes it)")
             joints.append(Joint(ename, "ball" if kinds[t] == "3d" else "fixed", other, bname[free], np.asarray(p2, float),
                                 R2[:, 2].copy()))
             continue
@@ -361,9 +376,7 @@ def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: lis
     for jn in drive_k:
         problems.append(f"custom numeric {DRIVE_STIFFNESS}{jn}: no joint {jn!r}")
     if problems:
-        more = f"; and {len(problems) - MAX_LISTED} more" if len(problems) > MAX_LISTED else ""
-        raise ParameterError(f"{src}: {len(problems)} refusal{'s' if len(problems) > 1 else ''}: "
-                             + "; ".join(problems[:MAX_LISTED]) + more)
+        raise ParameterError(_refusals(src, problems))
     model_name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_MODEL, 0) if hasattr(mujoco.mjtObj, "mjOBJ_MODEL") else None
     if not model_name:  # the model's name heads MuJoCo's name buffer
         model_name = bytes(m.names).split(b"\0", 1)[0].decode("utf-8", "replace")

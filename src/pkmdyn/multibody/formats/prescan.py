@@ -136,5 +136,5 @@ def prescan_sdf(path: Path, src: str) -> ET.Element:
         if links > MAX_BODIES + 1 or joints > MAX_JOINTS or frames > MAX_JOINTS:
             raise ParameterError(f"{src}: model {model.get('name')}: {links:,} links, {joints:,} joints and "
                                  f"{frames:,} frames; a description holds at most {MAX_BODIES} bodies and "
-                                 f"{MAX_JOINTS} joints")
+                                 f"{MAX_JOINTS} joints (and a model file at most {MAX_JOINTS} frames)")
     return root

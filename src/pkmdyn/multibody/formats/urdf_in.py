@@ -113,7 +113,14 @@ class _SidecarTask(Section):
 
     position: list[Literal["x", "y", "z"]] = Field(default_factory=list, max_length=3)
     orientation: list[Literal[1, 2, 3]] = Field(default_factory=list, max_length=3)
-    euler_sequence: str = Field(default="XYZ", pattern=r"^[XYZxyz]{3}$")
+    euler_sequence: str = Field(default="XYZ", pattern=r"^([XYZ]{3}|[xyz]{3})$")
+
+    @field_validator("euler_sequence")
+    @classmethod
+    def _sequence(cls, v: str) -> str:
+        if v[0] == v[1] or v[1] == v[2]:
+            raise ValueError(f"{v!r}: no axis twice in a row (e.g. XYZ, ZYX, ZXZ; upper case intrinsic)")
+        return v
 
 
 class _Sidecar(Section):
@@ -173,7 +180,7 @@ def read_sidecar(path: str | Path) -> dict[str, Any]:
         raise ParameterError(f"{src}: a YAML mapping is expected (closed_loop, type, name_mot)")
     side = validate(_Sidecar, data, src)
     loops = [list(p) for p in side.closed_loop]
-    types = [t.lower() for t in side.type] if side.type is not None else ["6d"] * len(loops)
+    types = [t.lower() for t in side.type] if side.type else ["6d"] * len(loops)  # none given: 6d each
     if len(types) != len(loops):
         raise ParameterError(f"{src}: type: one of '3d' or '6d' per closed_loop pair is expected "
                              f"({len(types)} for {len(loops)} pairs)")

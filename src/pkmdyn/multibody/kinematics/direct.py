@@ -565,6 +565,7 @@ MAX_STARTS = 1_000_000
 #: Ctrl-C (answered between calls) is answered within a second
 _BATCH = 200
 _CALL_S = 0.25
+_BLOCK = 64
 
 
 def assembly_modes(model: MechanismModel, s: Array, starts: int | None = None, seed: int = 0,
@@ -593,15 +594,25 @@ def assembly_modes(model: MechanismModel, s: Array, starts: int | None = None, s
     except (UnreachablePoseError, SingularityError):
         pass
     total = MAX_STARTS if starts is None else int(starts)
+    # the starts in one fixed order whatever the calls' sizes (drawn in blocks of _BLOCK): a seed
+    # gives the same starts, and the search stops at the same one, on any machine and under any load
+    pool = np.concatenate(seeds)
+
+    def take(k: int) -> Array:
+        nonlocal pool
+        while pool.shape[0] < k:
+            pool = np.concatenate([pool, _random_starts(model, _BLOCK, rng)])
+        out, pool = pool[:k], pool[k:]
+        return np.ascontiguousarray(out)
+
     L = model.length_scale
     tb = model.task_body
     groups: list[dict] = []
     m = converged = last_new = 0
     size = _BATCH
     while m < total and (starts is not None or m - last_new < patience or m == 0):
-        batch = np.concatenate(seeds) if m == 0 else np.empty((0, model.nq))
-        batch = np.ascontiguousarray(np.concatenate(
-            [batch, _random_starts(model, max(0, min(size, total - m) - len(batch)), rng)])[: total - m])
+        k = min(size, total - m) if starts is not None else min(size, total - m, patience - (m - last_new))
+        batch = take(max(k, 1))
         k = batch.shape[0]
         t0 = time.perf_counter()
         q_out = np.zeros_like(batch)
