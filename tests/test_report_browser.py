@@ -116,7 +116,7 @@ def _distinct(img: np.ndarray) -> int:
 
 @pytest.mark.parametrize("which, n_plots, n_images, parameters", [
     ("hip", 11, 7, "[geometry]"), ("pdm", 9, 5, "[geometry]"), ("hip_control", 2, 2, "[geometry]"),
-    ("stewart", 4, 0, "[[legs.joints]]"), ("stewart_control", 2, 2, "[[legs.joints]]")])
+    ("stewart", 6, 0, "[[legs.joints]]"), ("stewart_control", 2, 2, "[[legs.joints]]")])
 def test_report_draws_moves_and_shows_every_plot(browser, reports, tmp_path, which, n_plots, n_images, parameters):
     page = _Page(browser, reports[which])
     try:
