@@ -246,13 +246,29 @@ def five_bar_mjcf(site_connect: bool = False) -> str:
 """
 
 
-@pytest.mark.parametrize("site_connect", [False, True])
-def test_mjcf_with_geared_motors_matches_mujoco(tmp_path, site_connect):
+@pytest.mark.parametrize("site_connect, springs", [(False, False), (True, False), (False, True)])
+def test_mjcf_with_geared_motors_matches_mujoco(tmp_path, site_connect, springs):
+    """With ``springs`` the passive joints carry MuJoCo joint springs (``stiffness``, ``springref``):
+    the description's springs, whose forces MuJoCo's passive forces hold too."""
     xml = tmp_path / "five_bar.xml"
-    xml.write_text(five_bar_mjcf(site_connect))
+    text = five_bar_mjcf(site_connect)
+    if springs:
+        text = text.replace('joint="free1"', "").replace('name="free1" type="hinge" axis="0 1 0"',
+                                                         'name="free1" type="hinge" axis="0 1 0" stiffness="3.5" '
+                                                         'springref="0.2"')
+        text = text.replace('name="free2" type="hinge" axis="0 1 0"', 'name="free2" type="hinge" axis="0 1 0" '
+                                                                       'stiffness="1.2"')
+        assert text.count("stiffness=") == 2
+    xml.write_text(text)
     out = tmp_path / "five_bar.toml"
     assert main(["import", "--from", str(xml), "--task-point", "tool", "--out", str(out)]) == 0
     d = tomllib.loads(out.read_text())
+    if springs:
+        sp = {j["name"]: j.get("spring") for j in d["joints"]}
+        # MuJoCo's angles are degrees unless the compiler says otherwise: springref 0.2 deg
+        assert sp["free1"]["stiffness_Nm_rad"] == 3.5
+        assert sp["free1"]["reference_rad"] == pytest.approx(np.radians(0.2), rel=1e-15)
+        assert sp["free2"] == {"stiffness_Nm_rad": 1.2, "reference_rad": 0.0}
     drives = {a["joint"]: a for a in d["actuators"]}
     assert drives["mot1"]["gear_ratio"] == 12.0 and np.isclose(drives["mot1"]["rotor_inertia_kgm2"], 0.02 / 144)
     assert np.isclose(drives["mot1"]["viscous_Nm_s_rad"], 0.05 / 144)

@@ -146,6 +146,10 @@ def model_summary(model: MechanismModel) -> dict[str, Any]:
             entry["limits"] = list(model.joint_limits[k])
         if model.joint_friction[k] is not None:
             entry["friction"] = model.joint_friction[k]
+        if model.joint_spring and model.joint_spring[k] is not None:
+            u = jt.units[0]
+            entry["spring"] = {f"stiffness_{'Nm_rad' if u == 'rad' else 'N_m'}": model.joint_spring[k][0],
+                               f"reference_{u}": model.joint_spring[k][1]}
         if len(model.joint_bearing) and model.joint_bearing[k] >= 0:
             entry["bearing"] = parent if model.joint_bearing[k] == 0 else child
         if model.joint_stiffness[k] is not None:  # drive_N_m|drive_Nm_rad, force_N_m, moment_Nm_rad

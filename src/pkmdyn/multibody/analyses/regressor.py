@@ -166,8 +166,8 @@ def regressor(model: MechanismModel, kin: MechanismKinematics, named: dict | Non
     unloaded = replace(model, load_body=model.load_body[:0], load_force=model.load_force[:0],
                        load_moment=model.load_moment[:0], load_point=model.load_point[:0], load_name=(),
                        load_direction=model.load_direction[:0], load_magnitude=model.load_magnitude[:0],
-                       named_loads=())
-    W0 = body_wrenches(model, kin, named=named) - body_wrenches(unloaded, kin)  # the [[loads]] alone
+                       named_loads=(), joint_spring=())
+    W0 = body_wrenches(model, kin, named=named) - body_wrenches(unloaded, kin)  # the [[loads]] and springs alone
     u0 = actuator_efforts(model, kin, generalised_forces(model, S, W0))
     if not model.has_drives:
         return Regressor(Y=Y, u0=u0, names=tuple(names), theta=np.array(theta))

@@ -128,6 +128,17 @@ class _Stiffness(Section):
         return v
 
 
+class _Spring(Section):
+    """A joint spring along the joint's one coordinate (``docs/mechanism_format.md``): the
+    generalised force ``-k (q - q_s)``; ``reference_*`` the coordinate where it is slack (default:
+    the joint's position at the reference configuration)."""
+
+    stiffness_Nm_rad: float | None = Field(default=None, gt=0)
+    stiffness_N_m: float | None = Field(default=None, gt=0)
+    reference_rad: float | None = None
+    reference_m: float | None = None
+
+
 class _Joint(Section):
     name: str = NAME
     type: str
@@ -144,6 +155,7 @@ class _Joint(Section):
     limits_rad: Pair | None = None
     friction: _Friction | None = None
     stiffness: _Stiffness | None = None
+    spring: _Spring | None = None
     bearing: str | None = Field(default=None, min_length=1, max_length=64)
 
     @field_validator("type")
@@ -349,6 +361,9 @@ class JointSpec:
     #: joint and drive stiffness (:class:`_Stiffness`; ``force_N_m``/``moment_Nm_rad`` as three
     #: numbers), None when rigid
     stiffness: dict[str, Any] | None = None
+    #: a joint spring ``(k, q_s)`` along the joint's one coordinate (N m/rad and rad, or N/m and m),
+    #: its generalised force ``-k (q - q_s)``; None without one
+    spring: tuple[float, float] | None = None
     #: a sliding joint's ``bearing``: the body (its parent or child) whose point is the joint's
     #: node on both bodies' beams (a cylinder's mouth); None: each body its own point
     bearing: str | None = None
@@ -638,10 +653,23 @@ def _joint(j: _Joint, where: str) -> JointSpec:
                                  f"child ({j.child!r})")
         if not any(m.startswith("T") for m in jt.motions):
             raise ParameterError(f"{where} bearing: only for a joint that slides, not a {j.type} joint")
+    spring = None
+    if j.spring is not None:
+        sp = j.spring
+        if unit is None:
+            raise ParameterError(f"{where} spring: only for a joint with one coordinate (revolute, prismatic), not a "
+                                 f"{j.type} joint")
+        k, ref = (sp.stiffness_Nm_rad, sp.reference_rad) if unit == "rad" else (sp.stiffness_N_m, sp.reference_m)
+        wrong = [key for key in ("stiffness_Nm_rad", "reference_rad", "stiffness_N_m", "reference_m")
+                 if getattr(sp, key) is not None and not key.endswith("_rad" if unit == "rad" else "_m")]
+        if wrong or k is None:
+            want = "stiffness_Nm_rad (and reference_rad)" if unit == "rad" else "stiffness_N_m (and reference_m)"
+            raise ParameterError(f"{where} spring: a {j.type} joint's spring takes {want}")
+        spring = (float(k), float(offset if ref is None else ref))
     return JointSpec(name=j.name, type=j.type, parent=j.parent, child=j.child,
                      point=np.array(j.point_m, dtype=float), frame=frame, actuated=bool(j.actuated),
                      offset=offset, limits=limits, friction=j.friction.model_dump() if j.friction else None,
-                     stiffness=_stiffness(j, jt, where), bearing=j.bearing)
+                     stiffness=_stiffness(j, jt, where), bearing=j.bearing, spring=spring)
 
 
 def _stiffness(j: _Joint, jt: Any, where: str) -> dict[str, Any] | None:

@@ -25,8 +25,8 @@ kernel takes them as views and runs, for task pose ``x`` and rate ``xd``:
 These are the verbs' definitions (idle freedoms held, as the kinematics hold them), with the
 joints' Coulomb, viscous and named-load friction (:func:`pkmdyn.multibody.dynamics._dyn_kernels.joint_friction`) and
 at most one named load, whose magnitude is the call's ``load``. A mechanism with friction
-that depends on the joints' reactions, several named loads or more actuators than task
-coordinates takes the verbs' own route (:func:`supported`). A call returns a
+that depends on the joints' reactions, several named loads, joint springs or more actuators
+than task coordinates takes the verbs' own route (:func:`supported`). A call returns a
 nonzero status where it cannot answer (no previous solution yet, Newton failed, a singular
 matrix); the caller then repeats the sample through the checked verb, which raises the error
 or primes the kernel's state (:func:`prime`).
@@ -98,7 +98,8 @@ _HEAD = 10
 def supported(model: MechanismModel) -> bool:
     """Whether the kernel answers for ``model`` (module docstring)."""
     known = all(not f or not f.get("coefficient", 0.0) for f in model.joint_friction)
-    return known and model.na == model.nt and len(model.named_loads) <= 1
+    springs = any(sp is not None for sp in model.joint_spring)  # the generic route carries them
+    return known and not springs and model.na == model.nt and len(model.named_loads) <= 1
 
 
 def _sizes(model: MechanismModel) -> tuple[int, int, int]:

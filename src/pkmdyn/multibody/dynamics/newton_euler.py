@@ -68,7 +68,7 @@ from .friction import JointFriction, friction_diverges, known_friction
 from .loads import load_forces, named_magnitudes
 from .reactions import compliant_reactions
 
-__all__ = ["body_wrenches", "named_magnitudes", "load_forces", "coordinate_twists", "generalised_forces", "actuator_efforts",
+__all__ = ["body_wrenches", "spring_wrenches", "named_magnitudes", "load_forces", "coordinate_twists", "generalised_forces", "actuator_efforts",
            "InverseDynamics", "inverse_dynamics", "idle_holding", "EffortShares", "effort_shares", "effort_unit", "free_twists", "equilibrium_system",
            "JointReactions", "joint_reactions", "energies", "SINGULAR_ACTUATION", "inertia_factors",
            "task_mass_matrix"]
@@ -149,6 +149,8 @@ def body_wrenches(model: MechanismModel, kin: MechanismKinematics, loads: dict |
         LF, LM = load_forces(model, len(kin), named)
         apply_loads(np.ascontiguousarray(kin.R), np.ascontiguousarray(kin.origin), model.load_body,
                     np.ascontiguousarray(model.load_point), LF, LM, Wr)
+    if any(sp is not None for sp in model.joint_spring):
+        spring_wrenches(model, kin, Wr)
     for name, (F, M) in (loads or {}).items():
         b = model.body_index(name)
         F = np.broadcast_to(np.asarray(F, dtype=float), f[:, b].shape)
@@ -156,6 +158,34 @@ def body_wrenches(model: MechanismModel, kin: MechanismKinematics, loads: dict |
         f[:, b] -= F
         n_O[:, b] -= M + _cross(kin.p[:, b], F)
     return Wr
+
+
+def spring_wrenches(model: MechanismModel, kin: MechanismKinematics, W: Array) -> None:
+    """Take the joint springs' loads out of the required wrenches ``W (n, nb, 6)`` in place: a
+    spring ``(k, q_s)`` on joint j (a tree joint of one coordinate ``q``, the description's) pulls
+    with ``tau = -k (q - q_s)`` along the joint frame's z axis ``a`` (base frame, on the parent):
+    for a revolute joint the couple ``tau a`` on the child and ``-tau a`` on the parent, for a
+    prismatic one the force ``tau a`` at the joint centre on the child and its opposite on the
+    parent, so that the generalised force on ``q`` is ``tau`` (virtual work) whichever way the
+    tree traverses the joint. The joint's own reaction then carries no part of it."""
+    n_O, f = W[..., :3], W[..., 3:]
+    for j, sp in enumerate(model.joint_spring):
+        if sp is None:
+            continue
+        k, q_s = sp
+        tau = -k * (kin.q[:, int(model.joint_q0[j])] - q_s)
+        par, ch = int(model.joint_parent[j]), int(model.joint_child[j])
+        Ra = np.eye(3) if par < 0 else kin.R[:, par]
+        a = (Ra @ model.joint_R_parent[j][:, 2]).reshape(-1, 3)
+        if JOINT_TYPES[model.joint_type[j]].units[0] == "rad":
+            load_f, load_n = np.zeros_like(a), tau[:, None] * a
+        else:
+            load_f = tau[:, None] * a
+            load_n = _cross(kin.joint_point[:, j], load_f)
+        for b, sign in ((ch, 1.0), (par, -1.0)):
+            if b >= 0:  # the required wrench less the external load (Eq. 1)
+                f[:, b] -= sign * load_f
+                n_O[:, b] -= sign * load_n
 
 
 def generalised_forces(model: MechanismModel, S: Array, W: Array) -> Array:
@@ -869,13 +899,16 @@ def _column_scale(model: MechanismModel) -> Array:
 
 
 def energies(model: MechanismModel, kin: MechanismKinematics) -> tuple[Array, Array]:
-    """Kinetic energy ``T (n,)`` and gravitational potential energy ``V (n,)`` [J] of all bodies,
-    from their poses and velocities alone: ``T = sum 1/2 m v.v + 1/2 w.(R I' R^T) w``,
-    ``V = -sum m g . p``."""
+    """Kinetic energy ``T (n,)`` and potential energy ``V (n,)`` [J] of all bodies, from their
+    poses and velocities alone: ``T = sum 1/2 m v.v + 1/2 w.(R I' R^T) w``, ``V = -sum m g . p``
+    plus every joint spring's ``1/2 k (q - q_s)^2``."""
     Iw = np.einsum("nbij,bjk,nblk->nbil", kin.R, model.inertia, kin.R)
     T = 0.5 * np.einsum("b,nbi,nbi->n", model.mass, kin.v, kin.v) + 0.5 * np.einsum(
         "nbi,nbij,nbj->n", kin.w, Iw, kin.w)
     V = -np.einsum("b,i,nbi->n", model.mass, model.gravity, kin.p)
+    for j, sp in enumerate(model.joint_spring):  # and the joint springs' 1/2 k (q - q_s)^2
+        if sp is not None:
+            V = V + 0.5 * sp[0] * (kin.q[:, int(model.joint_q0[j])] - sp[1]) ** 2
     return T, V
 
 

@@ -92,6 +92,8 @@ class Joint:
     armature: float = 0.0
     #: the joint's ``stiffness`` table where the file gives one (pkmdyn's own exports: a drive's)
     stiffness: dict | None = None
+    #: a joint spring ``(k, q_s)`` along the joint's coordinate (MJCF's ``stiffness`` and ``springref``)
+    spring: tuple[float, float] | None = None
 
 
 @dataclass
@@ -310,6 +312,9 @@ class _Builder:
                 entry["friction"] = fr
             if j0.stiffness:
                 entry["stiffness"] = dict(j0.stiffness)
+            if j0.spring is not None:
+                entry["spring"] = ({"stiffness_Nm_rad": j0.spring[0], "reference_rad": j0.spring[1]} if kinds[0] == "hinge"
+                                   else {"stiffness_N_m": j0.spring[0], "reference_m": j0.spring[1]})
             return entry
         if kinds == ["ball"]:
             entry["type"] = "spherical"

@@ -8,7 +8,8 @@ defaults, classes, frames and inertia from geoms are resolved as MuJoCo resolves
   ``ximat diag(body_inertia) ximat^T``; a body without joints is fixed to its parent;
 * joints: ``hinge`` and ``slide`` at ``xanchor`` along ``xaxis`` with their coordinate
   ``qpos`` (the description's reference value, so that its coordinates are MuJoCo's
-  ``qpos``), ``range`` where limited, ``damping``, ``frictionloss`` and ``armature``; ``ball``
+  ``qpos``), ``range`` where limited, ``damping``, ``frictionloss``, ``armature``, and
+  ``stiffness`` with ``springref`` as the joint's spring; ``ball``
   (its ``range`` not kept, said);
   several joints of one body are a chain through massless links; a ``ball`` joint's damping
   and dry friction are its viscous and Coulomb friction; a ``free`` joint whose body an
@@ -294,9 +295,13 @@ def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: lis
             if n < len(ids) - 1:  # an intermediate massless link between two joints of one body
                 links.append(Link(child, 0.0, d.xpos[b].copy(), np.zeros((3, 3))))
             dof = int(m.jnt_dofadr[j])
+            spring = None
             if m.jnt_stiffness[j]:
-                problems.append(f"joint {jname[j]}: a joint spring (stiffness {m.jnt_stiffness[j]:g}) has no "
-                                "equivalent in a description's dynamics")
+                if kind == "ball":
+                    problems.append(f"joint {jname[j]}: a ball joint's spring (stiffness {m.jnt_stiffness[j]:g}) has "
+                                    "no equivalent in a description (a spring takes one coordinate)")
+                else:  # MuJoCo's passive force -k (qpos - qpos_spring): the description's spring
+                    spring = (float(m.jnt_stiffness[j]), float(m.qpos_spring[m.jnt_qposadr[j]]))
             lim = (float(m.jnt_range[j, 0]), float(m.jnt_range[j, 1])) if m.jnt_limited[j] and kind != "ball" else None
             st = drive_k.pop(jname[j], None)
             joints.append(Joint(
@@ -304,7 +309,8 @@ def _graph(mujoco, path: Path, keyframe: str | None, weld_free: bool, heard: lis
                 value=float(d.qpos[m.jnt_qposadr[j]]) if kind != "ball" else 0.0, limits=lim,
                 damping=float(m.dof_damping[dof]), frictionloss=float(m.dof_frictionloss[dof]),
                 armature=float(m.dof_armature[dof]),
-                stiffness=None if st is None else {("drive_Nm_rad" if kind == "hinge" else "drive_N_m"): st}))
+                stiffness=None if st is None else {("drive_Nm_rad" if kind == "hinge" else "drive_N_m"): st},
+                spring=spring))
             if kind == "ball" and m.jnt_limited[j]:
                 notes.append(f"joint {jname[j]}: a ball joint's range is not kept (a spherical joint has no limits)")
             if kind == "ball" and m.dof_armature[dof]:

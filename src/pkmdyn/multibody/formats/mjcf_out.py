@@ -205,8 +205,10 @@ def mechanism_mjcf(model: MechanismModel, timestep: float = 1e-3, solref: tuple[
             mcode = int(model.coord_motion[c])
             axis = model.coord_sign[c] * Rc[:, mcode % 3]
             kind = "hinge" if mcode < 3 else "slide"
+            sp = model.joint_spring[k] if model.joint_spring and model.joint_nq[k] == 1 else None
+            spring = f' stiffness="{sp[0]:.17g}" springref="{sp[1]:.17g}"' if sp is not None else ""
             lines.append(f'{ind}  <joint name="{names[c]}" type="{kind}" pos="{_v(pc)}" axis="{_v(axis)}" '
-                         f'{_coordinate_attrs(model, k, c)}{drive_attrs.get(c, "")}/>')
+                         f'{_coordinate_attrs(model, k, c)}{drive_attrs.get(c, "")}{spring}/>')
         for ch in children.get(b, []):
             body(ch, depth + 1)
         lines.append(f"{ind}</body>")

@@ -190,4 +190,7 @@ def mechanism_urdf(model: MechanismModel) -> tuple[str, dict, list[str]]:
             notes.append(f"joint {model.joint_names[k]}: load-dependent friction not written")
     if len(model.load_body):
         notes.append("loads ([[loads]]) not written (URDF has none)")
+    springs = [model.joint_names[k] for k, sp in enumerate(model.joint_spring) if sp is not None]
+    if springs:
+        notes.append(f"joint springs not written (URDF has none): {', '.join(springs)}")
     return "\n".join(lines) + "\n", sidecar, notes

@@ -353,6 +353,7 @@ def _number_fields(desc: Description, st: ModelStructure) -> dict[str, Any]:
         joint_stiffness=tuple(j.stiffness for j in desc.joints),
         joint_bearing=np.array([-1 if j.bearing is None else int(j.bearing == j.child) for j in desc.joints],
                                dtype=np.int64),
+        joint_spring=tuple(j.spring for j in desc.joints),
         coord_offset=np.array([desc.joints[k].offset if k >= 0 else 0.0 for k in st.coord_joint_one], dtype=float),
         tree_R_parent=tRP, tree_p_parent=tpP, tree_R_child=tRC, tree_p_child=tpC, loops=loops,
         task_point=bspec[task.body].R0.T @ (task.point - bspec[task.body].p0),
@@ -400,6 +401,11 @@ def _compile(desc: Description, st: ModelStructure, topology_only: bool = False)
     # numbers from ``desc``, then everything the numbers may change computed for ``desc``
     fields = {k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in st.fields.items()}
     model = MechanismModel(**fields, **_number_fields(desc, st))
+    for k, sp in enumerate(model.joint_spring):
+        if sp is not None and model.joint_cut[k]:
+            raise ParameterError(f"{model.path or model.name}: [joints] {model.joint_names[k]} spring: the joint is cut to "
+                                 "close a loop and has no coordinate of its own; cut another joint of the loop "
+                                 "([mechanism] cut_joints)")
     if topology_only:
         return model
     rows, idle, rep = solver_selection(model)  # ranks at the reference: numbers

@@ -204,6 +204,8 @@ class MechanismModel:
     #: ``[mechanism] reactions``: ``"unique"`` (an over-constrained run without compliance data
     #: is refused) or ``"minimum-norm"``
     reactions: str = "unique"
+    #: per joint: its spring ``(k, q_s)`` or None (:func:`pkmdyn.multibody.dynamics.newton_euler.spring_wrenches`)
+    joint_spring: tuple = ()
     #: per joint: its ``bearing`` as 0 (the parent) or 1 (the child), -1 where none is named
     #: (:func:`pkmdyn.multibody.dynamics.reactions.beam_terms`)
     joint_bearing: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
