@@ -127,14 +127,15 @@ def test_a_floating_base_is_refused_naming_the_option_or_welded_with_it(tmp_path
 
 def test_every_refusal_of_a_file_in_one_line(tmp_path, capsys):
     xml = stewart_free_xml()
-    xml = xml.replace('<joint name="u1a" type="hinge"', '<joint name="u1a" type="hinge" stiffness="30"')
+    xml = xml.replace("<equality>", '<tendon><fixed name="band" stiffness="30"><joint joint="p1" coef="1"/>'
+                                     '</fixed></tendon>\n  <equality>')
     xml = xml.replace('<body name="cyl2" pos=', '<body name="cyl2" gravcomp="1" pos=')
     xml = xml.replace('<motor name="m3" joint="p3"/>', '<motor name="m3" joint="p3" gear="1e-300"/>')
     xml = xml.replace("</equality>", '  <joint joint1="p4" joint2="p5"/>\n  </equality>')
     code, out = _import(tmp_path, xml)
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and not out.exists()
-    for words in ("4 refusals:", "joint u1a: a joint spring", "body cyl2: gravity compensation",
+    for words in ("4 refusals:", "tendon band: a tendon's spring", "body cyl2: gravity compensation",
                   "actuator m3: gear 1e-300", "a joint equality has no equivalent"):
         assert words in err[0], err[0]
 
