@@ -112,3 +112,30 @@ def test_springs_survive_an_mjcf_round_trip(tmp_path):
     for j, sp in enumerate(m0.joint_spring):
         got = m1.joint_spring[m1.joint_names.index(m0.joint_names[j])]
         assert (got is None) == (sp is None) and (sp is None or np.allclose(got, sp, rtol=1e-15, atol=1e-15))
+
+
+def test_a_spring_on_a_joint_described_child_first():
+    """A sprung joint whose description names the body nearer the ground as its child (the tree
+    traverses it backwards): the power balance still holds with its energy in the description's
+    own coordinate."""
+    d = _springs(ex.four_bar())
+    sprung = [j for j in d["joints"] if "spring" in j and j["parent"] != "ground" and j["child"] != "ground"]
+    assert sprung
+    j = sprung[0]
+    j["parent"], j["child"] = j["child"], j["parent"]
+    m = load_mechanism(d)
+    k = m.joint_index(j["name"])
+    assert m.joint_flipped[k]
+    bare = dataclasses.replace(m, joint_spring=())
+    h = 2e-4
+    tt = (np.linspace(0.0, 0.4, 5)[:, None] + h * np.array([-2, -1, 0, 1, 2])[None]).reshape(-1)
+    x, xd, xdd = ex.smooth_motion(reference_task(m), np.where(m.task_kind == 1, 0.3, 0.02), tt, 5)
+    kin = solve_kinematics(m, x, xd, xdd, tt)
+    T, Vg = energies(bare, kin)
+    springs = [(i, sp) for i, sp in enumerate(m.joint_spring) if sp is not None]
+    Vs = sum(0.5 * kk * (kin.q[:, m.joint_q0[i]] - qs) ** 2 for i, (kk, qs) in springs)
+    E = (T + Vg + Vs).reshape(-1, 5)
+    dE = (E[:, 0] - 8 * E[:, 1] + 8 * E[:, 3] - E[:, 4]) / (12 * h)
+    u = inverse_dynamics(m, kin).u
+    P = np.einsum("na,na->n", u, kin.act_qd).reshape(-1, 5)[:, 2]
+    assert np.abs(P - dE).max() <= 1e-7 * max(np.abs(P).max(), 1e-3)
