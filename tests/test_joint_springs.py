@@ -139,3 +139,14 @@ def test_a_spring_on_a_joint_described_child_first():
     u = inverse_dynamics(m, kin).u
     P = np.einsum("na,na->n", u, kin.act_qd).reshape(-1, 5)[:, 2]
     assert np.abs(P - dE).max() <= 1e-7 * max(np.abs(P).max(), 1e-3)
+
+
+@pytest.mark.parametrize("make", [ex.four_bar, ex.slider_crank])
+def test_the_automatic_cut_keeps_the_sprung_joints_in_the_tree(make):
+    """Without [mechanism] cut_joints the spanning tree takes the sprung joints as it takes the
+    actuated ones, so the loop is cut at a joint without a spring."""
+    d = _springs(make())
+    plain = d["mechanism"].pop("cut_joints")[0]
+    m = load_mechanism(d)
+    assert [m.joint_names[k] for k in np.flatnonzero(m.joint_cut)] == [plain]
+    assert all(not m.joint_cut[k] for k, sp in enumerate(m.joint_spring) if sp is not None)

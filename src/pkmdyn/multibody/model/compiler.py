@@ -7,7 +7,7 @@ loop over these arrays and know nothing else, so they are compiled once for ever
 
 Spanning tree and cut joints (automatic unless ``[mechanism] cut_joints`` names them): the
 tree is grown from the ground one joint at a time (Prim's order), always taking the frontier
-joint that is actuated first, then one reached from its parent's side (a joint described
+joint that is actuated or carries a spring first, then one reached from its parent's side (a joint described
 child-to-parent is traversed backwards only when needed), then the one with the fewest
 freedoms, then the first in the file. Every joint left over closes a loop and is *cut*: it becomes a :class:`LoopRecord` (the
 two bodies, a frame on each, the constrained relative directions of its type). Preferring
@@ -66,6 +66,8 @@ class JointKey(NamedTuple):
     parent: str
     child: str
     actuated: bool
+    #: a joint spring: kept in the tree like an actuated joint (a cut joint has no coordinate)
+    sprung: bool = False
 
 
 class TaskKey(NamedTuple):
@@ -99,7 +101,8 @@ def structure_key(desc: Description) -> StructureKey:
     t = desc.task
     return StructureKey(
         bodies=tuple(b.name for b in desc.bodies),
-        joints=tuple(JointKey(j.name, j.type, j.parent, j.child, bool(j.actuated)) for j in desc.joints),
+        joints=tuple(JointKey(j.name, j.type, j.parent, j.child, bool(j.actuated), j.spring is not None)
+                     for j in desc.joints),
         cut_joints=None if desc.cut_joints is None else tuple(desc.cut_joints),
         task=TaskKey(t.body, tuple(t.position), t.sequence, tuple(t.orientation), tuple(t.names), tuple(t.units)),
         loads=tuple((ld.body, ld.name) for ld in desc.loads))
@@ -129,7 +132,7 @@ def _spanning_tree(bodies: Sequence[str], joints: Sequence[JointKey], cut_joints
             j = joints[k]
             if j.name not in forced_cut:
                 backwards = 1 if j.child == body else 0  # reaching the parent through the child
-                heapq.heappush(heap, (0 if j.actuated else 1, backwards, joint_type(j.type).freedoms, k))
+                heapq.heappush(heap, (0 if j.actuated or j.sprung else 1, backwards, joint_type(j.type).freedoms, k))
 
     push(GROUND)
     while heap:
