@@ -9,6 +9,7 @@ wrong shape or type becomes one of these errors with the expected shape.
 from __future__ import annotations
 
 __all__ = [
+    "at_sample",
     "PkmdynError",
     "ParameterError",
     "MotionError",
@@ -47,6 +48,12 @@ class LimitError(PkmdynError):
 
 class SingularityWarning(UserWarning):
     """A sample closer to a singularity than the configured threshold."""
+
+
+def at_sample(i: int, t: object = None, offset: int = 0) -> str:
+    """How messages name sample ``i`` of a run's window that starts at sample ``offset``:
+    ``sample N`` and, where the times ``t`` are known, ``(t = ... s)``."""
+    return f"sample {i + offset}" + (f" (t = {t[i]:.6g} s)" if t is not None else "")  # type: ignore[index]
 
 
 def as_array(value: object, shape: tuple[int | None, ...], name: str, error: type[PkmdynError] = PkmdynError):

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import ParameterError, PkmdynError
+from ..errors import ParameterError, PkmdynError, at_sample
 from ..io import (
     NpzWriter,
     check_table_format,
@@ -196,9 +196,8 @@ class _Summary:
                 if bad.size:
                     s = int(bad[0])
                     u = "N m" if model.motor_units[i] == "rad" else "N"
-                    when = f"sample {start + s}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
-                    self.beyond_effort = (f"{when}: actuator {name!r} needs {tau[s]:.4g} {u}, beyond its rated "
-                                          f"{lim:g} {u}")
+                    self.beyond_effort = (f"{at_sample(s, kin.t, start)}: actuator {name!r} needs {tau[s]:.4g} {u}, "
+                                          f"beyond its rated {lim:g} {u}")
 
     def actuators(self) -> list[dict[str, Any]]:
         model = self.model

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import LimitError
+from ...errors import LimitError, at_sample
 from .friction import regularised_sign
 from .friction import EPS_ROTATION, EPS_TRANSLATION
 from ..model.compiler import MechanismModel
@@ -117,10 +117,6 @@ def effective_limits(model: MechanismModel, overrides: dict | None = None) -> di
     return out
 
 
-def _when(sample: int, t: Array | None, i: int) -> str:
-    return f"sample {sample}" + (f" (t = {t[i]:.6g} s)" if t is not None else "")
-
-
 def _how(key: str) -> str:
     return f"raise it with [limits] {key} in the description or --limit {key}=VALUE"
 
@@ -138,7 +134,7 @@ def check_task_rates(model: MechanismModel, t: Array | None, xd: Array, xdd: Arr
             bad = np.flatnonzero(~(big <= lim))
             if bad.size:
                 i = int(bad[0])
-                raise LimitError(f"{_when(i + sample_offset, t, i)}: task coordinate {name}_{unit} {what} "
+                raise LimitError(f"{at_sample(i, t, sample_offset)}: task coordinate {name}_{unit} {what} "
                                  f"{arr[i, k]:.4g} {u} exceeds the limit {key} = {lim:g} {u} ({_how(key)})")
 
 
@@ -155,7 +151,7 @@ def check_actuator_rates(model: MechanismModel, t: Array | None, act_qd: Array, 
             bad = np.flatnonzero(~(np.abs(arr[:, i]) <= lim))
             if bad.size:
                 s = int(bad[0])
-                raise LimitError(f"{_when(s + sample_offset, t, s)}: actuated joint {joint!r} {what} "
+                raise LimitError(f"{at_sample(s, t, sample_offset)}: actuated joint {joint!r} {what} "
                                  f"{arr[s, i]:.4g} {u} exceeds the limit {key} = {lim:g} {u} ({_how(key)})")
         name = model.drive_name[i]
         if name is None:
@@ -171,6 +167,6 @@ def check_actuator_rates(model: MechanismModel, t: Array | None, act_qd: Array, 
             bad = np.flatnonzero(~(np.abs(m) <= lim))
             if bad.size:
                 s = int(bad[0])
-                raise LimitError(f"{_when(s + sample_offset, t, s)}: actuator {name!r} (joint {joint!r}) motor {what} "
+                raise LimitError(f"{at_sample(s, t, sample_offset)}: actuator {name!r} (joint {joint!r}) motor {what} "
                                  f"{m[s]:.4g} {u} exceeds its {key} = {lim:g} {u} ([[actuators]] {name}: raise it "
                                  "there or slow the motion)")

@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import MotionError, ParameterError, SingularityError
+from ...errors import MotionError, ParameterError, SingularityError, at_sample
 from ..description.joint_types import JOINT_TYPES, MOTION_CODES, type_code
 from ..kinematics.inverse import MechanismKinematics, joint_frame
 from ..model.compiler import MechanismModel
@@ -238,8 +238,7 @@ def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, 
     bad = np.flatnonzero(~(ratio > SINGULAR_ACTUATION))
     if bad.size:
         s = int(bad[0])
-        when = f"sample {s + sample_offset}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
-        raise SingularityError(f"{when}: the actuator map is singular (smallest/largest singular value "
+        raise SingularityError(f"{at_sample(s, kin.t, sample_offset)}: the actuator map is singular (smallest/largest singular value "
                                f"{ratio[s]:.3g}): the actuators {', '.join(model.actuator_names)} cannot move "
                                f"mechanism {model.name!r} there")
     if u_fast is not None:
@@ -257,28 +256,20 @@ def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, 
 UNDERACTUATED_TOLERANCE = 1e-8
 
 
-def unactuated_residual(JT: Array, u: Array, rhs: Array) -> Array:
-    """Per sample, ``|J_ax^T u - G^T Q|`` over ``max(|G^T Q|, |J_ax^T| |u|)`` (Eq. 3 in the least-squares
-    sense): zero where the actuators alone balance the motion (an under-actuated mechanism's
-    passive freedoms then need no force), else the share of the generalised force along the
-    freedoms no actuator moves. Task coordinates of mixed units are compared as written."""
-    r = np.linalg.norm(np.einsum("nta,na->nt", JT, u) - rhs, axis=1)
-    size = np.maximum(np.linalg.norm(rhs, axis=1), np.linalg.norm(JT, axis=(1, 2)) * np.linalg.norm(u, axis=1))
-    return r / np.maximum(size, 1e-300)
-
-
 def check_consistent(model: MechanismModel, kin: MechanismKinematics, JT: Array, u: Array, rhs: Array,
                      sample_offset: int = 0) -> None:
     """Refuse an under-actuated mechanism's motion (fewer actuators than degrees of freedom)
-    where it is not dynamically consistent (:func:`unactuated_residual` above
-    :data:`UNDERACTUATED_TOLERANCE`), naming the first such sample: there no efforts of its
-    actuators produce it, the passive freedoms would move otherwise."""
-    res = unactuated_residual(JT, u, rhs)
+    where it is not dynamically consistent, naming the first such sample: the residual of Eq. 3
+    in the least-squares sense, ``|J_ax^T u - G^T Q|`` over ``max(|G^T Q|, |J_ax^T| |u|)`` (task
+    coordinates of mixed units compared as written), above :data:`UNDERACTUATED_TOLERANCE`, is
+    generalised force along freedoms no actuator moves: no efforts of its actuators make it."""
+    r = np.linalg.norm(np.einsum("nta,na->nt", JT, u) - rhs, axis=1)
+    res = r / np.maximum(np.maximum(np.linalg.norm(rhs, axis=1),
+                                    np.linalg.norm(JT, axis=(1, 2)) * np.linalg.norm(u, axis=1)), 1e-300)
     bad = np.flatnonzero(res > UNDERACTUATED_TOLERANCE)
     if bad.size:
         s = int(bad[0])
-        when = f"sample {s + sample_offset}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
-        raise MotionError(f"{when}: mechanism {model.name!r} is under-actuated ({model.na} actuators for {model.nt} "
+        raise MotionError(f"{at_sample(s, kin.t, sample_offset)}: mechanism {model.name!r} is under-actuated ({model.na} actuators for {model.nt} "
                           f"degrees of freedom) and the motion is not dynamically consistent there: "
                           f"{res[s]:.3g} of the generalised force lies along freedoms no actuator moves, so no efforts "
                           "of its actuators make this motion")
@@ -572,10 +563,8 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
         if history[-1] <= tol:
             break
         if it >= max_iter or friction_diverges(history):
-            when = f"sample {worst_sample + sample_offset}" + (f" (t = {kin.t[worst_sample]:.6g} s)"
-                                                                if kin.t is not None else "")
             raise ParameterError(f"joint {model.joint_names[worst_joint]}: the load-dependent friction does not "
-                                 f"converge at {when} (relative change {history[-1]:.3g} after {it} iterations): "
+                                 f"converge at {at_sample(worst_sample, kin.t, sample_offset)} (relative change {history[-1]:.3g} after {it} iterations): "
                                  "the friction coefficients lock the mechanism")
     if fast:
         hold = mu @ probe.tab.H.T

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import MotionError, ParameterError, SingularityError, UnreachablePoseError, as_array
+from ...errors import MotionError, ParameterError, SingularityError, UnreachablePoseError, as_array, at_sample
 from ..dynamics import _sample_kernels as _one
 from ..model.compiler import MechanismModel
 from ..model.poses import body_poses
@@ -357,7 +357,7 @@ def _acting(model: MechanismModel, q: Array, row: int) -> str:
 
 def _fail(model: MechanismModel, out: dict, k: int, s: Array, t: Array | None, offset: int) -> None:
     """Raise the error of sample ``k`` of ``out`` (a :func:`_batch` result)."""
-    when = f"sample {k + offset}" + (f" (t = {t[k]:.6g} s)" if t is not None else "")
+    when = at_sample(k, t, offset)
     _raise(model, int(out["status"][k]), int(out["worst"][k]), float(out["res"][k]), out["q"][k], s[k], when)
 
 
@@ -394,7 +394,7 @@ def _start(model: MechanismModel, s0: Array, t: Array | None, offset: int) -> Ar
         last = out
     assert last is not None
     k = int(np.flatnonzero(last["status"] != K.OK)[0])
-    when = f"sample {offset}" + (f" (t = {t[0]:.6g} s)" if t is not None else "")
+    when = at_sample(0, t, offset)
     _raise(model, int(last["status"][k]), int(last["worst"][k]), float(last["res"][k]), last["q"][k], s0, when)
     raise AssertionError  # pragma: no cover - _raise raises
 

@@ -36,7 +36,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import MotionError, SingularityError, UnreachablePoseError, as_array
+from ...errors import MotionError, SingularityError, UnreachablePoseError, as_array, at_sample
 from ..description.joint_types import JOINT_TYPES
 from ..model.compiler import MechanismModel
 from ..model.topology import column_scale, constraint_jacobian, row_labels, row_scale
@@ -241,7 +241,7 @@ def _fail(model: MechanismModel, out: dict, t: Array | None, x: Array, offset: i
     """Raise the error of the first failed sample, naming the sample, its time and the loop."""
     bad = int(np.flatnonzero(out["status"] != K.OK)[0])
     st = int(out["status"][bad])
-    when = f"sample {bad + offset}" + (f" (t = {t[bad]:.6g} s)" if t is not None else "")
+    when = at_sample(bad, t, offset)
     pose = ", ".join(f"{nm} = {v + 0.0:.6g} {u}" for nm, u, v in zip(model.task_names, model.task_units, x[bad]))
     labels = row_labels(model)
     where = labels[int(out["worst"][bad])]
@@ -441,7 +441,7 @@ def limit_line(model: MechanismModel, kin: MechanismKinematics, s: int, j: int, 
     ``v`` beyond its limits, the task pose."""
     unit = JOINT_TYPES[model.joint_type[j]].units[0]
     lo, hi = model.joint_limits[j]
-    when = f"sample {s + sample_offset}" + (f" (t = {kin.t[s]:.6g} s)" if kin.t is not None else "")
+    when = at_sample(s, kin.t, sample_offset)
     pose = ", ".join(f"{nm} = {x + 0.0:.6g} {u}" for nm, u, x in zip(model.task_names, model.task_units, kin.x[s]))
     return (f"{when}: joint {model.joint_names[j]!r} is at {v:.6g} {unit}, beyond its limits [{lo:g}, {hi:g}] {unit} "
             f"(task pose {pose})")
