@@ -4,7 +4,7 @@ the option types they share."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -65,6 +65,18 @@ class FiniteFloat(click.ParamType):
             bracket = "(" if self.lo_open else "["
             self.fail(f"{x:g} is not in {bracket}{self.lo:g}, {self.hi:g}]", param, ctx)
         return x
+
+
+def differentiator_options(when: str) -> Callable[[Any], Any]:
+    """``--sg-window`` and ``--sg-order``: the Savitzky-Golay differentiator of positions logged
+    without rates (``when`` says which input), checked by :func:`check_differentiator`."""
+    window = click.option(
+        "--sg-window", type=click.IntRange(0, 100_001), default=15, show_default=True,
+        help=f"{when}: samples of the Savitzky-Golay smoothing differentiator (odd, >= 3; uniform sampling), or 0 "
+             "for the interpolating quintic spline (exact positions).")
+    order = click.option("--sg-order", type=click.IntRange(2, 20), default=5, show_default=True,
+                         help="Degree of the Savitzky-Golay polynomial (less than --sg-window).")
+    return lambda f: window(order(f))
 
 
 def check_differentiator(sg_window: int, sg_order: int) -> None:

@@ -15,6 +15,7 @@ from ._groups import (
     FiniteFloat,
     check_differentiator,
     cli,
+    differentiator_options,
     list_files,
     show,
 )
@@ -34,11 +35,7 @@ else:  # the engine and the solvers load when the command runs, not for --help
                    "accelerations, named loads.")
 @click.option("--rank-tol", type=FiniteFloat(0.0, 1.0, lo_open=True), default=1e-6, show_default=True,
               help="Singular values of the column-scaled regressor below this fraction of the largest count as zero.")
-@click.option("--sg-window", type=click.IntRange(0, 100_001), default=15, show_default=True,
-              help="A log in actuator coordinates without rate columns: samples of the Savitzky-Golay smoothing "
-                   "differentiator (odd, >= 3; uniform sampling), or 0 for the interpolating quintic spline.")
-@click.option("--sg-order", type=click.IntRange(2, 20), default=5, show_default=True,
-              help="Degree of the Savitzky-Golay polynomial (less than --sg-window).")
+@differentiator_options("A log in actuator coordinates without rate columns")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output folder; an earlier run of this command there is replaced whole, any other non-empty folder is refused.")
 def identify(machine: str, measured_path: Path, rank_tol: float, sg_window: int, sg_order: int,

@@ -8,7 +8,15 @@ from typing import TYPE_CHECKING
 import click
 
 from .._lazy import lazy_module
-from ._groups import MACHINE_HELP, PATH_IN, FiniteFloat, cli, list_files, show
+from ._groups import (
+    MACHINE_HELP,
+    PATH_IN,
+    FiniteFloat,
+    cli,
+    differentiator_options,
+    list_files,
+    show,
+)
 
 if TYPE_CHECKING:
     from ..jobs import run as run_job
@@ -26,11 +34,7 @@ else:  # the engine and its kernels load when the command runs, not for --help
               help="Motion in actuator coordinates (CSV): t_s and one column per actuated joint, <joint>_pos_<m|rad>, "
                    "optional rates <joint>_vel_<u>_s and accelerations <joint>_acc_<u>_s2 and named loads; the pose "
                    "by the direct kinematics (docs/mechanism_format.md, \"Direct kinematics\").")
-@click.option("--sg-window", type=click.IntRange(0, 100_001), default=15, show_default=True,
-              help="--actuator-motion without rate columns: samples of the Savitzky-Golay smoothing differentiator "
-                   "(odd, >= 3; uniform sampling), or 0 for the interpolating quintic spline (exact positions).")
-@click.option("--sg-order", type=click.IntRange(2, 20), default=5, show_default=True,
-              help="Degree of the Savitzky-Golay polynomial (less than --sg-window).")
+@differentiator_options("--actuator-motion without rate columns")
 @click.option("--cycles", type=FiniteFloat(0.0, 1e9, lo_open=True), default=None,
               help="Cycles of the default motion (default 1; a periodic default motion repeats).")
 @click.option("--samples-per-cycle", type=click.IntRange(1, 100_000_000), default=None,
