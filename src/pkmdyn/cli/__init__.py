@@ -25,6 +25,7 @@ from . import export as _export_commands  # noqa: F401
 from . import identify as _identify_commands  # noqa: F401
 from . import imports as _import_commands  # noqa: F401
 from . import pdm as _pdm_commands  # noqa: F401  (registers the commands)
+from . import retime as _retime_commands  # noqa: F401
 from . import run as _run_commands  # noqa: F401
 from . import stiffness as _stiffness_commands  # noqa: F401
 from . import sweep as _sweep_commands  # noqa: F401

@@ -1,0 +1,217 @@
+"""The retime job: a described mechanism, a geometric path of its task coordinates and the limits
+in; the fastest timing of the path as a motion file every command takes, ``retime.json``,
+``retime.csv``, plots and ``report.html`` out (``docs/retime.md``). The numbers come from
+:mod:`pkmdyn.multibody.analyses.retime`; every bound's use is checked again on the timed motion
+through the same kinematics and inverse dynamics as ``pkmdyn run``."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import ParameterError
+from ..io import read_csv_columns, write_csv, write_json
+from ..multibody.analyses.retime import (
+    SETTLED,
+    LimitUse,
+    RetimeLimits,
+    Retiming,
+    limit_use,
+    retime,
+    task_path,
+)
+from ..multibody.description.schema import LIMIT_KEYS
+from ..multibody.dynamics.actuators import motor_efforts
+from ..multibody.dynamics.newton_euler import joint_reactions
+from ..multibody.kinematics.inverse import solve_kinematics
+from ..multibody.kinematics.motion import MAX_MOTION_ROWS, default_motion, task_columns
+from ..multibody.scene import mechanism_scene
+from ..params_util import parse_limit_options
+from ..report import Curve, TimePlot, write_report
+from ._files import JobResult, prepare, write
+
+__all__ = ["job", "parse_bounds"]
+
+Array = NDArray[np.float64]
+
+#: a bound counts as active at a grid point where its use is at least this
+ACTIVE = 0.99
+
+
+def parse_bounds(option: str, items: tuple[str, ...], names: tuple[str, ...], unit: str) -> dict[int, float]:
+    """``("NAME=VALUE", ...)`` of ``option`` over ``names`` (``all`` for every one) -> {index:
+    bound}; a value must be a finite number > 0 [``unit``]."""
+    out: dict[int, float] = {}
+    for item in items:
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        if not sep or (key != "all" and key not in names):
+            raise ParameterError(f"{option} {item!r}: expected NAME=VALUE [{unit}] with NAME 'all' or one of "
+                                 f"{', '.join(names)}")
+        try:
+            value = float(text)
+        except ValueError:
+            raise ParameterError(f"{option} {item!r}: {text!r} is not a number") from None
+        if not (np.isfinite(value) and value > 0):
+            raise ParameterError(f"{option} {item!r}: the bound must be a finite number > 0 [{unit}], got {text}")
+        for i, nm in enumerate(names):
+            if key in ("all", nm):
+                out[i] = value
+    return out
+
+
+def _path_rows(model: Any, entry: Any, path_file: Path | None) -> tuple[Array, str]:
+    """The path's rows: a motion file's task columns (``t_s`` and rates, when present, are not
+    used), or the default motion's."""
+    if path_file is None:
+        m = entry.default_motion() if entry is not None else default_motion(model)
+        return m.x, "the default motion's path"
+    pos, vel, acc = task_columns(model)
+    cols = read_csv_columns(path_file, pos, ("t_s", *vel, *acc), max_rows=MAX_MOTION_ROWS,
+                            beyond="the path's row limit (200,000 rows)")
+    return np.column_stack([cols[c] for c in pos]), str(path_file)
+
+
+def _key(name: str) -> str:
+    """A bound's column stem: its name up to the unit, in letters, digits and ``_``."""
+    return re.sub(r"[^A-Za-z0-9]+", "_", name.split(" [")[0]).strip("_")
+
+
+def _document(model: Any, ret: Retiming, use: LimitUse, limits: RetimeLimits, source: str, energy: dict,
+              friction: bool) -> dict[str, Any]:
+    most = use.use.max(axis=1) if use.use.size else np.zeros(len(ret.t))
+    bounds = []
+    for k, name in enumerate(use.names):
+        col = use.use[:, k]
+        bounds.append({"bound": name, "largest_use_ratio": float(col.max()),
+                       "at_t_s": float(ret.t[int(np.argmax(col))]),
+                       "share_of_points_active": float(np.mean(col >= ACTIVE))})
+    return {
+        "mechanism": model.name, "path": source, "definitions": "docs/retime.md",
+        "algorithm": "reachability analysis (TOPP-RA), a linear program per grid point (HiGHS)",
+        "grid_points": len(ret.s), "cycle_time_s": ret.cycle_time, "passes": ret.iterations,
+        "friction": friction,
+        "stopping_rule": f"largest change of sd at most {SETTLED:g} of its largest value",
+        "largest_use_ratio": float(most.max()) if most.size else 0.0,
+        "share_of_points_with_a_bound_at_99_percent": float(np.mean(most >= ACTIVE)) if most.size else 0.0,
+        "bounds": bounds, **energy,
+    }
+
+
+def _energy(model: Any, kin: Any, reac: Any) -> dict[str, float]:
+    """The timed motion's friction dissipation [J] and the integrals of the squared joint and
+    motor efforts over time (copper losses up to each motor's R / k_t^2)."""
+    t = kin.t
+    motors = motor_efforts(model, kin.act_q, kin.act_qd, kin.act_qdd, reac.u)
+    return {"friction_dissipation_J": float(np.trapezoid(np.abs(reac.dissipation), t)),
+            "effort_squared_integral_SI": float(np.trapezoid((reac.u ** 2).sum(axis=1), t)),
+            "motor_effort_squared_integral_SI": float(np.trapezoid((motors.effort ** 2).sum(axis=1), t))}
+
+
+def _pngs(out: Path, ret: Retiming, use: LimitUse) -> dict[str, Path]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    files = {}
+    fig, ax = plt.subplots(figsize=(10, 5))
+    ax.plot(ret.s, ret.sd, label="timing sd", lw=2)
+    top = max(float(np.max(ret.sd)), 1e-12) * 3
+    ax.plot(ret.s, np.minimum(ret.sd_reach, top), "--", label="controllable sets' upper bound")
+    ax.plot(ret.s, np.minimum(ret.sd_limit, top), ":", label="speed limits alone")
+    ax.set_ylim(0, top)
+    ax.set_xlabel("path parameter s")
+    ax.set_ylabel("path speed sd [1/s]")
+    ax.set_title(f"path speed against its limits: cycle {ret.cycle_time:.6g} s")
+    ax.legend()
+    fig.tight_layout()
+    files["png_speed"] = out / "retime_speed.png"
+    fig.savefig(files["png_speed"], dpi=100)
+    plt.close(fig)
+    fig, ax = plt.subplots(figsize=(10, 5))
+    order = np.argsort(-use.largest)[:8]
+    for k in order:
+        ax.plot(ret.t, use.use[:, k], label=use.names[k])
+    ax.axhline(1.0, color="0.3", lw=0.8)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("use of the bound (|value| / bound)")
+    ax.set_title("the most used bounds along the timed motion (pkmdyn run's inverse dynamics)")
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    files["png_use"] = out / "limit_use.png"
+    fig.savefig(files["png_use"], dpi=100)
+    plt.close(fig)
+    return files
+
+
+def job(machine: str, out_dir: Path, *, path_file: Path | None = None, points: int = 1000,
+        efforts: tuple[str, ...] = (), reaction_forces: tuple[str, ...] = (), reaction_moments: tuple[str, ...] = (),
+        friction: bool = True, plots: bool = True, limit_items: tuple[str, ...] = (),
+        announce: Callable[[Mapping[str, Path]], None] | None = None) -> JobResult:
+    """``pkmdyn retime``: the fastest timing of ``machine``'s path (``path_file``'s task columns,
+    default its default motion's path) on ``points`` grid points, within the drives' limits of
+    the description, the bounds ``efforts`` (``JOINT=VALUE`` or ``all=VALUE`` [N or N m]),
+    ``reaction_forces`` [N] and ``reaction_moments`` [N m] (``JOINT=VALUE``) and ``limit_items``
+    (``--limit KEY=VALUE`` over the description's ``[limits]``: the task's and joints' speeds and
+    accelerations), into ``out_dir``."""
+    overrides = parse_limit_options(limit_items, LIMIT_KEYS)
+    p = prepare(machine, out_dir, {"--path": path_file}, overrides)
+    model = p.model
+    nj = len(model.joint_names)
+    eff = np.full(model.na, np.inf)
+    for i, v in parse_bounds("--max-effort", efforts, model.actuator_names, "N or N m").items():
+        eff[i] = v
+    rf, rm = np.full(nj, np.inf), np.full(nj, np.inf)
+    for i, v in parse_bounds("--max-reaction-force", reaction_forces, model.joint_names, "N").items():
+        rf[i] = v
+    for i, v in parse_bounds("--max-reaction-moment", reaction_moments, model.joint_names, "N m").items():
+        rm[i] = v
+    limits = RetimeLimits(eff, rf, rm, overrides)
+    rows, source = _path_rows(model, p.entry, None if path_file is None else Path(path_file).absolute())
+    ret = retime(model, task_path(model, rows, source), points, limits, friction=friction)
+    kin = solve_kinematics(model, ret.x, ret.xd, ret.xdd, ret.t)
+    reac = joint_reactions(model, kin, friction=friction)
+    use = limit_use(model, kin, reac, limits)
+    doc = _document(model, ret, use, limits, source, _energy(model, kin, reac), friction)
+    pos, vel, acc = task_columns(model)
+    motion_cols = {"t_s": ret.t, **{c: ret.x[:, k] for k, c in enumerate(pos)},
+                   **{c: ret.xd[:, k] for k, c in enumerate(vel)}, **{c: ret.xdd[:, k] for k, c in enumerate(acc)}}
+    table = {"s": ret.s, "t_s": ret.t, "sd_1_s": ret.sd, "sdd_1_s2": ret.sdd,
+             "sd_limit_1_s": np.where(np.isfinite(ret.sd_limit), ret.sd_limit, -1.0),
+             "sd_reach_1_s": np.where(np.isfinite(ret.sd_reach), ret.sd_reach, -1.0),
+             **{f"{_key(n)}_use_ratio": use.use[:, k] for k, n in enumerate(use.names)}}
+
+    def make(out: Path) -> dict[str, Path]:
+        files = {"motion": out / "timed_motion.csv", "table": out / "retime.csv", "summary": out / "retime.json"}
+        write_csv(files["motion"], motion_cols)
+        write_csv(files["table"], table)
+        write_json(files["summary"], doc)
+        images = _pngs(out, ret, use) if plots else {}
+        files.update(images)
+        scene = mechanism_scene(model, ret.t, kin.joint_point, {
+            nm: (reac.u[:, i], f"{nm} effort", "N" if model.actuator_units[i] == "m" else "N m")
+            for i, nm in enumerate(model.actuator_names)})
+        order = np.argsort(-use.largest)[:8]
+        figs = [TimePlot("Use of the most used bounds", "|value| / bound", ret.t,
+                         tuple(Curve(use.names[k], use.use[:, k]) for k in order)),
+                TimePlot("Path speed", "sd [1/s]", ret.t, (Curve("sd", ret.sd),))]
+        files["report"] = write_report(out, title=f"{model.name}: the fastest timing of its path", scene=scene,
+                                       plots=figs, summary={k: v for k, v in doc.items() if k != "bounds"},
+                                       parameters=p.text, images=list(images.values()),
+                                       notes=[f"path: {source}", "definitions: docs/retime.md"])
+        return files
+
+    files = write(out_dir, p.inputs, make, announce)
+    over = [b for b in doc["bounds"] if b["largest_use_ratio"] > 1.0 + 1e-6]
+    line = (f"cycle time {ret.cycle_time:.6g} s over {len(ret.s)} grid points ({ret.iterations} passes); largest use "
+            f"of a bound {doc['largest_use_ratio']:.9g}; a bound at 99 % or more at "
+            f"{100 * doc['share_of_points_with_a_bound_at_99_percent']:.1f} % of the points")
+    warnings = tuple(f"{b['bound']}: used {b['largest_use_ratio']:.9g} of its bound on the timed motion"
+                     for b in over)
+    return JobResult(files, doc, (line,), warnings)
