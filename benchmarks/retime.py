@@ -25,7 +25,13 @@ import time
 import numpy as np
 
 import pkmdyn
-from pkmdyn.multibody.analyses.retime import RetimeLimits, limit_use, retime, task_path
+from pkmdyn.multibody.analyses.retime import (
+    RetimeLimits,
+    limit_use,
+    retime,
+    task_path,
+    timing_energy,
+)
 
 
 def _pick_and_place() -> tuple[np.ndarray, np.ndarray]:
@@ -41,9 +47,7 @@ def _checked(model, ret, limits) -> dict:
     use = limit_use(model, kin, dyn.reactions, limits)
     most = use.use.max(axis=1)
     return {"cycle_time_s": ret.cycle_time, "passes": ret.iterations, "largest_use_ratio": float(most.max()),
-            "share_at_99_percent": float(np.mean(most >= 0.99)),
-            "friction_dissipation_J": float(np.trapezoid(np.abs(dyn.reactions.dissipation), kin.t)),
-            "effort_squared_integral_SI": float(np.trapezoid((dyn.reactions.u ** 2).sum(axis=1), kin.t))}
+            "share_at_99_percent": float(np.mean(most >= 0.99)), **timing_energy(model, kin, dyn.reactions)}
 
 
 def main() -> None:

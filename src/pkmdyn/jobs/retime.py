@@ -24,9 +24,9 @@ from ..multibody.analyses.retime import (
     limit_use,
     retime,
     task_path,
+    timing_energy,
 )
 from ..multibody.description.schema import LIMIT_KEYS
-from ..multibody.dynamics.actuators import motor_efforts
 from ..multibody.dynamics.newton_euler import joint_reactions
 from ..multibody.kinematics.inverse import solve_kinematics
 from ..multibody.kinematics.motion import MAX_MOTION_ROWS, default_motion, task_columns
@@ -103,16 +103,6 @@ def _document(model: Any, ret: Retiming, use: LimitUse, limits: RetimeLimits, so
     }
 
 
-def _energy(model: Any, kin: Any, reac: Any) -> dict[str, float]:
-    """The timed motion's friction dissipation [J] and the integrals of the squared joint and
-    motor efforts over time (copper losses up to each motor's R / k_t^2)."""
-    t = kin.t
-    motors = motor_efforts(model, kin.act_q, kin.act_qd, kin.act_qdd, reac.u)
-    return {"friction_dissipation_J": float(np.trapezoid(np.abs(reac.dissipation), t)),
-            "effort_squared_integral_SI": float(np.trapezoid((reac.u ** 2).sum(axis=1), t)),
-            "motor_effort_squared_integral_SI": float(np.trapezoid((motors.effort ** 2).sum(axis=1), t))}
-
-
 def _pngs(out: Path, ret: Retiming, use: LimitUse) -> dict[str, Path]:
     import matplotlib
 
@@ -178,7 +168,7 @@ def job(machine: str, out_dir: Path, *, path_file: Path | None = None, points: i
     kin = solve_kinematics(model, ret.x, ret.xd, ret.xdd, ret.t)
     reac = joint_reactions(model, kin, friction=friction)
     use = limit_use(model, kin, reac, limits)
-    doc = _document(model, ret, use, limits, source, _energy(model, kin, reac), friction)
+    doc = _document(model, ret, use, limits, source, timing_energy(model, kin, reac), friction)
     pos, vel, acc = task_columns(model)
     motion_cols = {"t_s": ret.t, **{c: ret.x[:, k] for k, c in enumerate(pos)},
                    **{c: ret.xd[:, k] for k, c in enumerate(vel)}, **{c: ret.xdd[:, k] for k, c in enumerate(acc)}}

@@ -50,13 +50,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import LimitError, MotionError, ParameterError, PkmdynError
-from ..dynamics.actuators import effective_limits, motor_friction
+from ..dynamics.actuators import effective_limits, motor_efforts, motor_friction
 from ..dynamics.newton_euler import fr_any, joint_reactions
 from ..kinematics.inverse import solve_kinematics
 from ..kinematics.motion import TaskMotion
 from ..model.compiler import MechanismModel
 
-__all__ = ["LimitUse", "RetimeLimits", "Retiming", "TaskPath", "limit_use", "retime", "task_path"]
+__all__ = ["LimitUse", "RetimeLimits", "Retiming", "TaskPath", "limit_use", "retime", "task_path", "timing_energy"]
 
 Array = NDArray[np.float64]
 
@@ -484,3 +484,14 @@ def limit_use(model: MechanismModel, kin: Any, reac: Any, limits: RetimeLimits) 
     rows = _values(model, kin, reac, limits, lim, True) + _speeds(model, kin, lim)
     use = [np.abs(v) / b if v.ndim == 1 else np.linalg.norm(v, axis=-1) / b for _, v, b in rows]
     return LimitUse(tuple(n for n, _, _ in rows), np.stack(use, axis=1) if use else np.zeros((len(kin.x), 0)))
+
+
+def timing_energy(model: MechanismModel, kin: Any, reac: Any) -> dict[str, float]:
+    """A timed motion's friction dissipation [J] and the integrals over time of the squared joint
+    efforts and of the squared motor efforts (copper losses up to each motor's ``R / k_t^2``),
+    from its kinematics ``kin`` and its efforts and reactions ``reac``."""
+    t = kin.t
+    motors = motor_efforts(model, kin.act_q, kin.act_qd, kin.act_qdd, reac.u)
+    return {"friction_dissipation_J": float(np.trapezoid(np.abs(reac.dissipation), t)),
+            "effort_squared_integral_SI": float(np.trapezoid((reac.u ** 2).sum(axis=1), t)),
+            "motor_effort_squared_integral_SI": float(np.trapezoid((motors.effort ** 2).sum(axis=1), t))}
