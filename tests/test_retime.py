@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from slider_machine import MASS
+from slider_machine import slider as _slider
 
 import pkmdyn
 from pkmdyn.cli import main
@@ -20,21 +22,6 @@ from pkmdyn.multibody.analyses.retime import RetimeLimits, limit_use, retime, ta
 
 DATA = Path(__file__).parent / "data"
 G = 9.80665
-MASS = 2.0  # the slider's carriage [kg]
-
-
-def _slider(tmp_path: Path, vertical: bool, coulomb_N: float = 0.0) -> Path:
-    """The test slider along x (horizontal) or z (vertical, against gravity), with Coulomb
-    friction in its joint."""
-    text = (DATA / "slider_x.toml").read_text()
-    if vertical:
-        text = (text.replace("axis = [1.0, 0.0, 0.0]", "axis = [0.0, 0.0, 1.0]")
-                .replace('position = ["x"]', 'position = ["z"]').replace("x_m = 0.1", "z_m = 0.1"))
-    if coulomb_N:
-        text = text.replace("actuated = true", f"actuated = true\nfriction = {{ coulomb_force_N = {coulomb_N} }}")
-    f = tmp_path / ("vslider.toml" if vertical else "slider.toml")
-    f.write_text(text)
-    return f
 
 
 def _bang_bang(d: float, m: float, up: float, down: float, vmax: float = math.inf) -> float:

@@ -21,10 +21,10 @@ from .errors import (
 
 if TYPE_CHECKING:
     from .api import (Dynamics, assembly_modes, default_motion, direct_kinematics, dynamics, forward_dynamics,
-                      Designs, designs, identification, kinematics, load, stiffness, wear, workspace)
+                      Designs, designs, identification, kinematics, load, retime, stiffness, wear, workspace)
 
 _VERBS = ("load", "default_motion", "kinematics", "Dynamics", "dynamics", "forward_dynamics", "direct_kinematics",
-          "assembly_modes", "stiffness", "wear", "workspace", "identification", "Designs", "designs")
+          "assembly_modes", "stiffness", "wear", "workspace", "retime", "identification", "Designs", "designs")
 
 __all__ = [
     *_VERBS,

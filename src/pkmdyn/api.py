@@ -13,7 +13,8 @@ kinematics of every body and joint (:class:`pkmdyn.multibody.MechanismKinematics
 dynamics (:class:`Dynamics`), the direct kinematics and assembly modes
 (:mod:`pkmdyn.multibody.kinematics.direct`), the stiffness (:mod:`pkmdyn.multibody.analyses.stiffness`), a
 spherical joint's slide tracks (:mod:`pkmdyn.multibody.analyses.wear`), the workspace on a grid
-(:mod:`pkmdyn.multibody.analyses.workspace`) and the identification of the inertial and friction
+(:mod:`pkmdyn.multibody.analyses.workspace`), the fastest or least-energy timing of a path
+(:mod:`pkmdyn.multibody.analyses.retime`) and the identification of the inertial and friction
 parameters from efforts (:mod:`pkmdyn.identify.described`). The engine writes no files;
 the commands (``pkmdyn run``, ...) are these verbs plus their files.
 """
@@ -36,6 +37,9 @@ from .identify.described import fit_described
 from .machines.registry import resolve, sweep_adapter
 from .multibody import default_motion as motion
 from .multibody import load_mechanism, solve_kinematics
+from .multibody.analyses.retime import RetimeLimits, task_path
+from .multibody.analyses.retime import retime as fastest_timing
+from .multibody.analyses.retime_energy import retime_energy
 from .multibody.analyses.stiffness import stiffness as k
 from .multibody.analyses.task_grid import parse_grid, parse_pose, parse_ranges
 from .multibody.analyses.wear import WearOptions, joint_wear
@@ -53,7 +57,7 @@ else:  # the sweep (pydantic, PyArrow, Dask) loads when a sweep is asked for, no
     _sweep_job = lazy_module("pkmdyn.jobs.sweep")
 
 __all__ = ["load", "default_motion", "kinematics", "Dynamics", "dynamics", "forward_dynamics", "direct_kinematics",
-           "assembly_modes", "stiffness", "wear", "workspace", "identification", "Designs", "designs"]
+           "assembly_modes", "stiffness", "wear", "workspace", "retime", "identification", "Designs", "designs"]
 
 Array = NDArray[np.float64]
 
@@ -170,6 +174,38 @@ def workspace(model: Any, grid: str, pose: str = "", threshold: float = 1e-3, or
                       limit_key="max_workspace_poses")
     ranges = None if orientation_range is None else parse_ranges(model, orientation_range)
     return reach(model, axes, parse_pose(model, pose), threshold, None, ranges, refine=refine)
+
+
+def retime(model: Any, path: Array | None = None, points: int = 1000,
+           max_effort: float | Mapping[str, float] | None = None, cycle_time: float | None = None,
+           friction: bool = True) -> Any:
+    """The fastest timing of a path of the task coordinates (rows ``(m, nt)`` in the order of
+    ``model.task_names``, a spline through them; default the default motion's path) from rest to
+    rest on ``points`` grid points, within the description's drive and ``[limits]`` bounds and
+    ``max_effort`` on every actuated joint's effort (one value for all, or ``{joint: value}``) [N
+    or N m]; with ``cycle_time`` [s] the least-energy timing within it instead (copper losses
+    and friction dissipation, Eq. E1; its ``cycle_time`` is shorter where the least energy is
+    reached sooner). Returns the :class:`pkmdyn.multibody.analyses.retime.Retiming` (``t``,
+    ``sd``, ``x, xd, xdd``; ``.motion()`` a motion for :func:`kinematics`; ``docs/retime.md``)."""
+    rows = motion(model).x if path is None else np.asarray(path, dtype=float)
+    nj = len(model.joint_names)
+    eff = np.full(model.na, np.inf)
+    if isinstance(max_effort, Mapping):
+        for joint, v in max_effort.items():
+            if joint not in model.actuator_names:
+                raise ParameterError(f"max_effort: {joint!r} is not an actuated joint (one of "
+                                     f"{', '.join(model.actuator_names)})")
+            eff[model.actuator_names.index(joint)] = float(v)
+    elif max_effort is not None:
+        eff[:] = float(max_effort)
+    if not np.all(eff > 0):
+        raise ParameterError("max_effort: every bound must be a number > 0")
+    limits = RetimeLimits(eff, np.full(nj, np.inf), np.full(nj, np.inf), {})
+    p = task_path(model, rows)
+    fastest = fastest_timing(model, p, points, limits, friction)
+    if cycle_time is None:
+        return fastest
+    return retime_energy(model, p, float(cycle_time), points, limits, friction, fastest=fastest).timing
 
 
 def identification(model: Any, kin: Any, u: Array, loads: Mapping[str, Array] | None = None,

@@ -203,7 +203,9 @@ def _drive_entry(model: MechanismModel, i: int) -> dict[str, Any]:
             keys["viscous"]: float(model.drive_viscous[i]), keys["max_effort"]: val(model.drive_max_effort[i]),
             keys["max_speed"]: val(model.drive_max_speed[i]),
             keys["max_acceleration"]: val(model.drive_max_acceleration[i]),
-            ("encoder_resolution_rad" if rot else "encoder_resolution_m"): float(model.drive_encoder[i]) or None}
+            ("encoder_resolution_rad" if rot else "encoder_resolution_m"): float(model.drive_encoder[i]) or None,
+            "winding_resistance_ohm": spec.resistance if spec.constant else None,
+            keys["constant"]: spec.constant or None}
 
 
 def _load_entry(model: MechanismModel, k: int) -> dict[str, Any]:

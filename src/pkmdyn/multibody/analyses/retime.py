@@ -37,7 +37,8 @@ within point ``i``'s limits that keeps ``v_{i+1}`` in ``K_{i+1}`` (an interval i
 time is ``t_{i+1} - t_i = 2 D / (sd_i + sd_{i+1})``.
 
 Every result is checked by the caller independently: the timed motion through the same
-inverse dynamics as ``pkmdyn run`` (:func:`limit_use`)."""
+inverse dynamics as ``pkmdyn run`` (:func:`limit_use`). The least-energy timing within a cycle
+time, on the same grid and limits, is :mod:`pkmdyn.multibody.analyses.retime_energy`."""
 
 from __future__ import annotations
 
@@ -56,7 +57,8 @@ from ..kinematics.inverse import solve_kinematics
 from ..kinematics.motion import TaskMotion
 from ..model.compiler import MechanismModel
 
-__all__ = ["LimitUse", "RetimeLimits", "Retiming", "TaskPath", "limit_use", "retime", "task_path", "timing_energy"]
+__all__ = ["LimitUse", "RetimeLimits", "Retiming", "TaskPath", "copper_coefficients", "limit_use", "retime", "task_path",
+           "timing_energy"]
 
 Array = NDArray[np.float64]
 
@@ -367,12 +369,103 @@ def _topp(names: list[str], A: Array, B: Array, C: Array, L: Array, vmax: Array,
     return v, u, khi
 
 
-def retime(model: MechanismModel, path: TaskPath, points: int = 1000, limits: RetimeLimits | None = None,
-           friction: bool = True, max_iter: int = 50) -> Retiming:
-    """The time-optimal timing of ``path`` on a grid of ``points`` (module docstring): rest at
-    both ends, every limit met at every grid point. Raises :class:`~pkmdyn.errors.LimitError`
-    naming the path point and the limit where no timing meets them, and the engine's errors (an
-    unreachable pose, a singularity) naming the grid point."""
+@dataclass(frozen=True)
+class _Grid:
+    """The path on its grid and the limits' linear parts (module docstring): ``s, x, x1, x2``
+    (the poses and the path's first two derivatives), ``q0`` the first pose's joint coordinates
+    (every solve starts from it), the bounds' ``names``, values ``Lb``, parts ``Av, Bv, Cv``
+    (each (n,) or a reaction's (n, 3)), ``vmax`` the speed limits' bound on ``v``."""
+
+    model: MechanismModel
+    limits: RetimeLimits
+    lim: dict
+    friction: bool
+    s: Array
+    x: Array
+    x1: Array
+    x2: Array
+    q0: Array
+    names: tuple[str, ...]
+    Lb: Array
+    Av: list
+    Bv: list
+    Cv: list
+    vmax: Array
+    has_fric: bool
+    vector: bool
+    #: the motor efforts' parts (Eq. A1 without the motors' and joints' friction): ``M[0] u +
+    #: M[1] v + M[2]``, each (n, na)
+    M: tuple[Array, Array, Array]
+
+    @property
+    def D(self) -> float:
+        return float(self.s[1] - self.s[0])
+
+    def start(self) -> tuple[list, list]:
+        """The friction (none) and reaction directions (the weight's) of the first pass."""
+        F = [np.zeros_like(c) for c in self.Cv]
+        d = []
+        for c in self.Cv:
+            if c.ndim == 1:
+                d.append(None)
+                continue
+            mag = np.linalg.norm(c, axis=-1, keepdims=True)
+            d.append(np.where(mag > 0, c / np.maximum(mag, 1e-300), [1.0, 0.0, 0.0]))
+        return F, d
+
+    def rows(self, F: list, d: list, rest: Array | None) -> tuple[Array, Array, Array, Array]:
+        """``A, B, C`` (n, r) of the rows ``|A u + B v + C| <= Lb`` with the friction ``F`` and
+        reaction directions ``d``, and ``C2``: ``C`` where the path moves, without friction at
+        the points ``rest`` (at rest the regularised friction is zero)."""
+        r = len(self.names)
+        if not r:
+            z = np.zeros((len(self.s), 0))
+            return z, z, z, z
+        A = np.stack([_project(self.Av[j], d[j]) for j in range(r)], axis=1)
+        B = np.stack([_project(self.Bv[j], d[j]) for j in range(r)], axis=1)
+        C = np.stack([_project(self.Cv[j] + F[j], d[j]) for j in range(r)], axis=1)
+        C2 = C.copy()
+        if rest is not None and np.any(rest):
+            C0 = np.stack([_project(self.Cv[j], d[j]) for j in range(r)], axis=1)
+            C2[rest] = C0[rest]
+        return A, B, C, C2
+
+    def motion(self, u: Array, v: Array) -> tuple[Array, Array]:
+        """``xd, xdd`` of the timing ``(u, v)`` (``v >= 0``)."""
+        return self.x1 * np.sqrt(v)[:, None], self.x1 * u[:, None] + self.x2 * v[:, None]
+
+    def solve(self, u: Array, v: Array) -> tuple[Any, Any]:
+        """The kinematics and the efforts and reactions (the friction included) of ``(u, v)``."""
+        xd, xdd = self.motion(u, v)
+        kt = _kin(self.model, self.x, xd, xdd, self.q0)
+        return kt, joint_reactions(self.model, kt, friction=self.friction)
+
+    def friction_at(self, u: Array, v: Array, d: list) -> tuple[list, list, float]:
+        """The friction and reaction directions of the timing ``(u, v)``, and the largest use of a
+        bound there with its own friction. Where the path is at rest, the friction is that of
+        the motion leaving or reaching it (the neighbouring point's speed): the friction a grid
+        step starting from rest meets at once."""
+        ve = _moving(v)
+        kt, reac = self.solve(u, ve)
+        full = _values(self.model, kt, reac, self.limits, self.lim, self.friction)
+        F, dn = [], []
+        worst = 0.0
+        for j in range(len(self.names)):
+            Av, Bv, Cv = self.Av[j], self.Bv[j], self.Cv[j]
+            uu, vv, vn = (u, ve, v) if Av.ndim == 1 else (u[:, None], ve[:, None], v[:, None])
+            Fj = full[j][1] - (Av * uu + Bv * vv + Cv)
+            val = Av * uu + Bv * vn + Cv + Fj
+            F.append(Fj)
+            worst = max(worst, float(np.max(np.abs(val) if val.ndim == 1 else np.linalg.norm(val, axis=-1))) / self.Lb[j])
+            if d[j] is None:
+                dn.append(None)
+            else:  # the direction at the timing itself (at rest: the weight's)
+                mag = np.linalg.norm(val, axis=-1, keepdims=True)
+                dn.append(np.where(mag > 0, val / np.maximum(mag, 1e-300), d[j]))
+        return F, dn, worst
+
+
+def _grid(model: MechanismModel, path: TaskPath, points: int, limits: RetimeLimits | None, friction: bool) -> _Grid:
     if not 3 <= points <= 1_000_000:
         raise ParameterError(f"points: {points} is not between 3 and 1,000,000")
     limits = RetimeLimits.none(model) if limits is None else limits
@@ -383,62 +476,56 @@ def retime(model: MechanismModel, path: TaskPath, points: int = 1000, limits: Re
     kc = _kin(model, x, z, z)
     q0 = kc.q[0]
     ka, kb = _kin(model, x, z, x1, q0), _kin(model, x, x1, x2, q0)
-    parts = [_values(model, k, joint_reactions(model, k, friction=False), limits, lim, False) for k in (kc, ka, kb)]
-    names = [p[0] for p in parts[0]]
-    Lb = np.array([p[2] for p in parts[0]])
+    reacs = [joint_reactions(model, k, friction=False) for k in (kc, ka, kb)]
+    parts = [_values(model, k, r, limits, lim, False) for k, r in zip((kc, ka, kb), reacs)]
+    mot = [r.u / model.drive_ratio + model.drive_rotor * model.drive_ratio * k.act_qdd for k, r in zip((kc, ka, kb), reacs)]
     Cv = [p[1] for p in parts[0]]
-    Av = [pa[1] - pc[1] for pa, pc in zip(parts[1], parts[0])]
-    Bv = [pb[1] - pc[1] for pb, pc in zip(parts[2], parts[0])]
-    sp = _speeds(model, kb, lim)
     vmax = np.full(points, np.inf)
-    for _, kval, bound in sp:
+    for _, kval, bound in _speeds(model, kb, lim):
         with np.errstate(divide="ignore"):
             vmax = np.minimum(vmax, np.where(np.abs(kval) > 0, (bound / np.abs(kval)) ** 2, np.inf))
     has_fric = friction and (fr_any(model) or bool(np.any(model.drive_coulomb > 0))
                              or bool(np.any(model.drive_viscous > 0)))
-    vector = any(c.ndim == 2 for c in Cv)
-    F = [np.zeros_like(c) for c in Cv]
-    d = [c / np.maximum(np.linalg.norm(c, axis=-1, keepdims=True), 1e-300) if c.ndim == 2 else None for c in Cv]
-    d = [None if di is None else np.where(np.linalg.norm(Cv[j], axis=-1, keepdims=True) > 0, di, [1.0, 0.0, 0.0])
-         for j, di in enumerate(d)]
+    return _Grid(model, limits, lim, friction, s, x, x1, x2, q0, tuple(p[0] for p in parts[0]),
+                 np.array([p[2] for p in parts[0]]), [pa[1] - pc[1] for pa, pc in zip(parts[1], parts[0])],
+                 [pb[1] - pc[1] for pb, pc in zip(parts[2], parts[0])], Cv, vmax, has_fric,
+                 any(c.ndim == 2 for c in Cv), (mot[1] - mot[0], mot[2] - mot[0], mot[0]))
+
+
+def _change(sd: Array, sd_prev: Array) -> float:
+    return float(np.max(np.abs(sd - sd_prev))) / max(float(np.max(sd)), 1e-300)
+
+
+def _times(g: _Grid, sd: Array) -> Array:
+    gaps = sd[:-1] + sd[1:]
+    stuck = np.flatnonzero(gaps <= 0)
+    if stuck.size:
+        i = int(stuck[0])
+        raise LimitError(f"path point {i} (s = {g.s[i]:.6g}): the limits leave the path no speed to move on "
+                         "(sd = 0 on both sides of a grid step)")
+    return np.concatenate([[0.0], np.cumsum(2 * g.D / gaps)])
+
+
+def retime(model: MechanismModel, path: TaskPath, points: int = 1000, limits: RetimeLimits | None = None,
+           friction: bool = True, max_iter: int = 50) -> Retiming:
+    """The time-optimal timing of ``path`` on a grid of ``points`` (module docstring): rest at
+    both ends, every limit met at every grid point. Raises :class:`~pkmdyn.errors.LimitError`
+    naming the path point and the limit where no timing meets them, and the engine's errors (an
+    unreachable pose, a singularity) naming the grid point."""
+    g = _grid(model, path, points, limits, friction)
+    F, d = g.start()
     sd_prev = None
     it = 0
     while True:
         it += 1
-        r = len(names)
-        A = np.stack([_project(Av[j], d[j]) for j in range(r)], axis=1) if r else np.zeros((points, 0))
-        B = np.stack([_project(Bv[j], d[j]) for j in range(r)], axis=1) if r else np.zeros((points, 0))
-        C = np.stack([_project(Cv[j] + F[j], d[j]) for j in range(r)], axis=1) if r else np.zeros((points, 0))
-        # at rest the friction is zero (regularised): a point at rest meets its limits both with
-        # the friction of the motion leaving or reaching it and without
-        C0 = np.stack([_project(Cv[j], d[j]) for j in range(r)], axis=1) if r else np.zeros((points, 0))
-        C2 = C.copy()
-        if sd_prev is not None:
-            rest = sd_prev <= 0.0
-            C2[rest] = C0[rest]
-        v, u, khi = _topp(names, A, B, C, Lb, vmax, s, C2)
+        A, B, C, C2 = g.rows(F, d, None if sd_prev is None else sd_prev <= 0.0)
+        v, u, khi = _topp(list(g.names), A, B, C, g.Lb, g.vmax, g.s, C2)
         sd = np.sqrt(v)
-        if not (has_fric or vector):
+        if not (g.has_fric or g.vector):
             break
-        # the friction and reaction directions at this timing; where the path is at rest, the
-        # friction of the motion that leaves or reaches it (the neighbouring point's speed): the
-        # friction a grid step starting from rest meets at once
-        ve = _moving(v)
-        xd, xdd = x1 * np.sqrt(ve)[:, None], x1 * u[:, None] + x2 * ve[:, None]
-        kt = _kin(model, x, xd, xdd, q0)
-        full = _values(model, kt, joint_reactions(model, kt, friction=friction), limits, lim, friction)
-        worst = 0.0  # the largest use of a bound at this timing, its own friction included
-        for j in range(r):
-            lin = Av[j] * (u[:, None] if Av[j].ndim == 2 else u) + Bv[j] * (ve[:, None] if Bv[j].ndim == 2 else ve) + Cv[j]
-            F[j] = full[j][1] - lin
-            now = Av[j] * (u[:, None] if Av[j].ndim == 2 else u) + Bv[j] * (v[:, None] if Bv[j].ndim == 2 else v) + Cv[j]
-            val = now + F[j]
-            worst = max(worst, float(np.max(np.abs(val) if val.ndim == 1 else np.linalg.norm(val, axis=-1))) / Lb[j])
-            if d[j] is not None:  # the direction at the timing itself (at rest: the weight's)
-                mag = np.linalg.norm(now + F[j], axis=-1, keepdims=True)
-                d[j] = np.where(mag > 0, (now + F[j]) / np.maximum(mag, 1e-300), d[j])
+        F, d, worst = g.friction_at(u, v, d)
         if sd_prev is not None:
-            change = float(np.max(np.abs(sd - sd_prev))) / max(float(np.max(sd)), 1e-300)
+            change = _change(sd, sd_prev)
             if change <= SETTLED or (change <= CLOSE and worst <= 1.0 + MET):
                 break
             if it >= max_iter:
@@ -446,16 +533,9 @@ def retime(model: MechanismModel, path: TaskPath, points: int = 1000, limits: Re
                                  f"reaction directions (the largest change of sd was {change:.3g} of its largest "
                                  "value): friction or reaction bounds too strong for this path")
         sd_prev = sd
-    D = float(s[1] - s[0])
-    gaps = sd[:-1] + sd[1:]
-    stuck = np.flatnonzero(gaps <= 0)
-    if stuck.size:
-        i = int(stuck[0])
-        raise LimitError(f"path point {i} (s = {s[i]:.6g}): the limits leave the path no speed to move on "
-                         "(sd = 0 on both sides of a grid step)")
-    t = np.concatenate([[0.0], np.cumsum(2 * D / gaps)])
-    xd, xdd = x1 * sd[:, None], x1 * u[:, None] + x2 * v[:, None]
-    return Retiming(s, t, sd, u, x, xd, xdd, np.sqrt(vmax), np.sqrt(khi), it, tuple(names))
+    t = _times(g, sd)
+    xd, xdd = g.motion(u, v)
+    return Retiming(g.s, t, sd, u, g.x, xd, xdd, np.sqrt(g.vmax), np.sqrt(khi), it, g.names)
 
 
 @dataclass(frozen=True)
@@ -486,12 +566,29 @@ def limit_use(model: MechanismModel, kin: Any, reac: Any, limits: RetimeLimits) 
     return LimitUse(tuple(n for n, _, _ in rows), np.stack(use, axis=1) if use else np.zeros((len(kin.x), 0)))
 
 
+def copper_coefficients(model: MechanismModel) -> tuple[Array, Array]:
+    """``(w, given)`` (na,): the copper losses per squared motor effort ``R / k_t^2`` [W/(N m)^2 or
+    W/N^2] of each actuated joint's drive (``winding_resistance_ohm`` and its motor constant), 1
+    where the drive does not give them (``given`` False)."""
+    c = np.asarray(model.drive_copper, dtype=float) if len(model.drive_copper) else np.full(model.na, np.nan)
+    given = np.isfinite(c)
+    return np.where(given, c, 1.0), given
+
+
 def timing_energy(model: MechanismModel, kin: Any, reac: Any) -> dict[str, float]:
-    """A timed motion's friction dissipation [J] and the integrals over time of the squared joint
-    efforts and of the squared motor efforts (copper losses up to each motor's ``R / k_t^2``),
-    from its kinematics ``kin`` and its efforts and reactions ``reac``."""
+    """A timed motion's energy of Eq. (E1) of :mod:`pkmdyn.multibody.analyses.retime_energy`
+    [J] and its parts, from its kinematics ``kin`` and its efforts and reactions ``reac``
+    (trapezoidal rule over the samples' times): ``copper_loss_J`` (``sum_k w_k int tau_k^2 dt``,
+    :func:`copper_coefficients`), ``friction_dissipation_J`` (the joints' and the motors'), and
+    the integrals over time of the squared joint efforts and squared motor efforts."""
     t = kin.t
     motors = motor_efforts(model, kin.act_q, kin.act_qd, kin.act_qdd, reac.u)
-    return {"friction_dissipation_J": float(np.trapezoid(np.abs(reac.dissipation), t)),
+    w, _ = copper_coefficients(model)
+    copper = float(np.trapezoid((w * motors.effort ** 2).sum(axis=1), t))
+    joints = float(np.trapezoid(np.abs(reac.dissipation), t))
+    drives = float(np.trapezoid(np.abs(motors.friction * motors.theta_dot).sum(axis=1), t))
+    return {"energy_J": copper + joints + drives, "copper_loss_J": copper,
+            "friction_dissipation_J": joints + drives, "joint_friction_dissipation_J": joints,
+            "motor_friction_dissipation_J": drives,
             "effort_squared_integral_SI": float(np.trapezoid((reac.u ** 2).sum(axis=1), t)),
             "motor_effort_squared_integral_SI": float(np.trapezoid((motors.effort ** 2).sum(axis=1), t))}

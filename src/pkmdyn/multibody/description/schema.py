@@ -221,6 +221,9 @@ class _Actuator(Section):
     max_acceleration_m_s2: float | None = None
     encoder_counts_per_turn: int | None = Field(default=None, ge=1, le=10**12)
     encoder_counts_per_m: float | None = None
+    winding_resistance_ohm: float | None = None
+    torque_constant_Nm_A: float | None = None
+    force_constant_N_A: float | None = None
 
 
 class _Group(Section):
@@ -422,7 +425,10 @@ class ActuatorSpec:
     motor's net effort; ``rotor`` [kg m^2, or kg for a linear motor] the motor's moving
     inertia; ``coulomb``, ``viscous`` its friction [N m, N m s/rad or N, N s/m]; limits
     ``max_effort``, ``max_speed``, ``max_acceleration`` (motor side, ``inf`` when not given);
-    ``encoder_resolution`` the motor displacement per encoder count (0: not given)."""
+    ``encoder_resolution`` the motor displacement per encoder count (0: not given);
+    ``resistance`` [ohm] the winding's resistance and ``constant`` [N m/A or N/A] the motor's
+    torque or force constant (0: not given), whose copper losses are ``resistance / constant^2``
+    times the squared motor effort [W]."""
 
     name: str
     joint: str
@@ -437,6 +443,8 @@ class ActuatorSpec:
     encoder_resolution: float
     lead: float | None = None
     gear_ratio: float = 1.0
+    resistance: float = 0.0
+    constant: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -1033,10 +1041,11 @@ def _outputs(label: str, outputs: list[_Output], body_specs: dict[str, BodySpec]
 MOTOR_KEYS = {
     "rotary": {"rotor": "rotor_inertia_kgm2", "coulomb": "coulomb_torque_Nm", "viscous": "viscous_Nm_s_rad",
                "max_effort": "max_torque_Nm", "max_speed": "max_speed_rad_s",
-               "max_acceleration": "max_acceleration_rad_s2", "encoder": "encoder_counts_per_turn"},
+               "max_acceleration": "max_acceleration_rad_s2", "encoder": "encoder_counts_per_turn",
+               "constant": "torque_constant_Nm_A"},
     "linear": {"rotor": "moving_mass_kg", "coulomb": "coulomb_force_N", "viscous": "viscous_N_s_m",
                "max_effort": "max_force_N", "max_speed": "max_speed_m_s", "max_acceleration": "max_acceleration_m_s2",
-               "encoder": "encoder_counts_per_m"},
+               "encoder": "encoder_counts_per_m", "constant": "force_constant_N_A"},
 }
 #: plausible ranges of a drive's transmission keys: a gear ratio (motor turns per joint or screw
 #: turn) and a screw's lead [m per turn]; the largest transmission ratio (motor coordinate per
@@ -1106,20 +1115,27 @@ def _actuators(label: str, entries: list[tuple[_Actuator, str]], joints: list[Jo
         for role, key in keys.items():
             v = getattr(a, key)
             if v is None:
-                vals[role] = 0.0 if role in ("rotor", "coulomb", "viscous", "encoder") else math.inf
+                vals[role] = 0.0 if role in ("rotor", "coulomb", "viscous", "encoder", "constant") else math.inf
                 continue
             v = float(v)
             if not math.isfinite(v):
                 raise ParameterError(f"{where} {key}: must be finite, got {v!r}")
             if role in ("rotor", "coulomb", "viscous") and v < 0:
                 raise ParameterError(f"{where} {key}: must be >= 0, got {v:g}")
-            if role.startswith("max_") or role == "encoder":
+            if role.startswith("max_") or role in ("encoder", "constant"):
                 if not v > 0:
                     raise ParameterError(f"{where} {key}: must be > 0, got {v:g}")
             bound = _MAX_ROTOR if role == "rotor" else _MAX_MOTOR_VALUE
             if v > bound:
                 raise ParameterError(f"{where} {key}: {v:g} exceeds the plausibility bound {bound:g}")
             vals[role] = v
+        ohm = 0.0 if a.winding_resistance_ohm is None else float(a.winding_resistance_ohm)
+        if not (math.isfinite(ohm) and 0.0 <= ohm <= _MAX_MOTOR_VALUE):
+            raise ParameterError(f"{where} winding_resistance_ohm: must be a finite number >= 0, got {ohm!r}")
+        if (a.winding_resistance_ohm is None) != (not vals["constant"]):
+            raise ParameterError(f"{where} {'winding_resistance_ohm' if a.winding_resistance_ohm is None else keys['constant']}: "
+                                 f"give the winding's resistance and the motor's {keys['constant']} together (its "
+                                 "copper losses need both)")
         res = 0.0
         if vals["encoder"]:
             res = (2.0 * math.pi if kind == "rotary" else 1.0) / vals["encoder"]
@@ -1127,7 +1143,8 @@ def _actuators(label: str, entries: list[tuple[_Actuator, str]], joints: list[Jo
                                 coulomb=vals["coulomb"], viscous=vals["viscous"], max_effort=vals["max_effort"],
                                 max_speed=vals["max_speed"], max_acceleration=vals["max_acceleration"],
                                 encoder_resolution=res,
-                                lead=None if a.screw_lead_m is None else float(a.screw_lead_m), gear_ratio=gear))
+                                lead=None if a.screw_lead_m is None else float(a.screw_lead_m), gear_ratio=gear,
+                                resistance=ohm, constant=vals["constant"]))
     return tuple(out)
 
 

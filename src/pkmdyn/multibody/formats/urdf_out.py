@@ -73,6 +73,9 @@ def _drives(model: MechanismModel) -> list[dict]:
         for role, v in (("rotor", spec.rotor), ("coulomb", spec.coulomb), ("viscous", spec.viscous)):
             if v:
                 d[MOTOR_KEYS[spec.kind][role]] = float(v)
+        if spec.constant:
+            d["winding_resistance_ohm"] = float(spec.resistance)
+            d[MOTOR_KEYS[spec.kind]["constant"]] = float(spec.constant)
         out.append(d)
     return out
 

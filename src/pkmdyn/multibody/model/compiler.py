@@ -36,6 +36,7 @@ remembered by that pattern.
 from __future__ import annotations
 
 import heapq
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -45,8 +46,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ParameterError
-from ..description.schema import GROUND, Description, load_description
 from ..description.joint_types import MOTION_CODES, joint_type, type_code
+from ..description.schema import GROUND, Description, load_description
 from .legs import explicit_legs
 from .records import LoopRecord, MechanismModel
 from .topology import block_structure, solver_selection
@@ -440,7 +441,9 @@ def _drives(desc: Description, act: list[int]) -> dict:
             "drive_ratio": arr("ratio", 1.0), "drive_rotor": arr("rotor", 0.0), "drive_coulomb": arr("coulomb", 0.0),
             "drive_viscous": arr("viscous", 0.0), "drive_max_effort": arr("max_effort", inf),
             "drive_max_speed": arr("max_speed", inf), "drive_max_acceleration": arr("max_acceleration", inf),
-            "drive_encoder": arr("encoder_resolution", 0.0), "drive_specs": tuple(specs)}
+            "drive_encoder": arr("encoder_resolution", 0.0), "drive_specs": tuple(specs),
+            "drive_copper": np.array([math.nan if a is None or not a.constant else a.resistance / a.constant ** 2
+                                      for a in specs], dtype=float)}
 
 
 def _body_groups(desc: Description, order: list[str]) -> dict:

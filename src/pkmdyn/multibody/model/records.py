@@ -180,7 +180,9 @@ class MechanismModel:
     #: drive), the rotor inertia ``drive_rotor`` [kg m^2 or kg], the motor's friction
     #: ``drive_coulomb``, ``drive_viscous``, its limits ``drive_max_effort``,
     #: ``drive_max_speed``, ``drive_max_acceleration`` (motor side, inf when not given) and the
-    #: encoder's resolution ``drive_encoder`` (motor displacement per count; 0 when not given)
+    #: encoder's resolution ``drive_encoder`` (motor displacement per count; 0 when not given);
+    #: ``drive_copper`` the copper losses per squared motor effort, ``R / k_t^2`` [W/(N m)^2 or
+    #: W/N^2] (NaN where the drive gives no winding resistance and motor constant)
     drive_name: tuple[str | None, ...] = ()
     drive_kind: tuple[str, ...] = ()
     drive_ratio: Array = field(default_factory=lambda: np.zeros(0))
@@ -192,6 +194,7 @@ class MechanismModel:
     drive_max_acceleration: Array = field(default_factory=lambda: np.zeros(0))
     drive_encoder: Array = field(default_factory=lambda: np.zeros(0))
     drive_specs: tuple = ()
+    drive_copper: Array = field(default_factory=lambda: np.zeros(0))
     #: the effort split's body groups: names, and each body's group index (nb,)
     group_names: tuple[str, ...] = ()
     body_group: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
