@@ -21,7 +21,7 @@ def _run(capsys, *args):
 def test_machines_lists_every_builtin_one_per_line(capsys):
     code, out, _ = _run(capsys, "machines")
     assert code == 0
-    assert out.split() == sorted(["bennett", "delta", "hip", "pdm", "rrr3", "stewart"])
+    assert out.split() == sorted(["bennett", "delta", "hip", "pdm", "rrr3", "rrr4", "stewart", "stewart7"])
 
 
 def test_describe_prints_topology(capsys):

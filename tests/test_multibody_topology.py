@@ -3,13 +3,19 @@ and cut joints, against the textbook answers and the independent count of tests/
 
 from __future__ import annotations
 
+import multibody_examples as ex
 import numpy as np
 import pytest
-
-import multibody_examples as ex
 from oracles import mobility as oracle_mobility
+
 from pkmdyn.errors import ParameterError
-from pkmdyn.multibody import analyse_topology, load_mechanism
+from pkmdyn.multibody import (
+    analyse_topology,
+    load_mechanism,
+    reference_task,
+    solve_kinematics,
+)
+from pkmdyn.multibody.dynamics.newton_euler import inverse_dynamics
 
 # name: (kutzbach, mobility, overconstraints, idle, dof, loops)
 KNOWN = {
@@ -83,11 +89,18 @@ def test_task_must_match_the_degrees_of_freedom():
         load_mechanism(d)
 
 
-def test_more_actuators_than_freedoms_is_refused():
+def test_more_actuators_than_freedoms_is_redundant_actuation():
+    """A four-bar with two actuated joints: its least-norm efforts lie along J_ax (one freedom,
+    u = A^+ w with A = J_ax^T a row), and the internal force along the other direction."""
     d = ex.four_bar()
     d["joints"][1]["actuated"] = True
-    with pytest.raises(ParameterError, match="2 actuated joints but only 1 degree"):
-        load_mechanism(d)
+    m = load_mechanism(d)
+    assert (m.na, m.nt) == (2, 1)
+    kin = solve_kinematics(m, *[np.atleast_2d(v) for v in (reference_task(m), [0.3], [1.0])])
+    u = inverse_dynamics(m, kin).u[0]
+    J = kin.J_ax[0, :, 0]
+    assert abs(u[0] * J[1] - u[1] * J[0]) <= 1e-12 * np.abs(u).max() * np.abs(J).max()
+    assert np.abs(u).max() > 0
 
 
 def test_a_rigid_loop_is_refused():

@@ -3,7 +3,11 @@ sources and design parameters, as lines to print (no files)."""
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..multibody.analyses.stiffness import compliance_sources
+from ..multibody.dynamics.distribution import internal_directions
+from ..multibody.kinematics.inverse import reference_task, solve_kinematics
 from ..multibody.model.legs import LEG_PATTERNS, held_coordinates
 from ._files import JobResult, load_machine
 
@@ -32,6 +36,7 @@ def job(machine: str) -> JobResult:
         (f"under-actuated: {model.na} actuators for {rep.dof} degrees of freedom (a task motion's efforts exist only "
          "where the motion is dynamically consistent; pkmdyn run refuses it elsewhere, naming the sample)")
         if model.na < rep.dof else None,
+        _redundancy(model) if model.na > rep.dof else None,
         f"task coordinates: {', '.join(f'{n} [{u}]' for n, u in zip(model.task_names, model.task_units))} "
         f"of body {model.body_names[model.task_body]}",
         f"explicit legs (closed form, {model.legs.count}): "
@@ -46,6 +51,22 @@ def job(machine: str) -> JobResult:
         lines.append("parameters: " + "; ".join(f"{k} = {_shown(v)}{_range(model.parameter_bounds.get(k))}"
                                                 for k, v in model.parameters.items()))
     return JobResult(lines=tuple(line for line in lines if line is not None))
+
+
+def _redundancy(model) -> str:
+    """The line of a redundantly actuated mechanism: the degree of redundancy, the distribution
+    and the internal-force directions at the reference configuration (unit vectors over the
+    actuated joints, :func:`~pkmdyn.multibody.dynamics.distribution.internal_directions`)."""
+    x = reference_task(model)[None, :]
+    z = np.zeros_like(x)
+    kin = solve_kinematics(model, x, z, z)
+    N = internal_directions(np.swapaxes(kin.J_ax, 1, 2))[0]
+    dirs = "; ".join("(" + ", ".join(f"{a} {v:+.4f}" for a, v in zip(model.actuator_names, N[:, k])) + ")"
+                     for k in range(N.shape[1]))
+    pre = f", preload {model.act_preload:g} (N or N m)" if model.act_preload else ""
+    return (f"redundantly actuated: {model.na} actuators for {model.nt} degrees of freedom, degree of redundancy "
+            f"{model.na - model.nt}; efforts by the {model.act_distribution.replace('_', ' ')} distribution{pre} "
+            f"([actuation]); internal-force directions at the reference configuration: {dirs}")
 
 
 def _held(model, chain) -> str:

@@ -276,6 +276,8 @@ def effort_columns(model: MechanismModel, kin: MechanismKinematics, reac: Any, n
             if model.drive_name[i] is not None:
                 cols[actuator_effort_column(model, i, "rotor")] = mot.rotor[:, i]
             cols[actuator_effort_column(model, i, "friction")] = fr_joint[:, i] / k[i] + mot.friction[:, i]
+            if model.na > model.nt:  # redundant actuation: the distribution's internal force
+                cols[actuator_effort_column(model, i, "internal")] = sh.internal[:, i] / k[i]
     if model.named_loads:
         cols.update(named_magnitudes(model, len(kin), named))
     return cols
@@ -296,7 +298,8 @@ def results_column_names(model: MechanismModel, deflection: bool = False) -> lis
         if name is not None:
             out += [*motion_columns(name, model.motor_units[i]), motor_effort_column(model, i)]
     for i in range(model.na):
-        parts = [*model.group_names, *(["rotor"] if model.drive_name[i] is not None else []), "friction"]
+        parts = [*model.group_names, *(["rotor"] if model.drive_name[i] is not None else []), "friction",
+                 *(["internal"] if model.na > model.nt else [])]
         out += [actuator_effort_column(model, i, p) for p in parts]
     out += list(model.named_loads)
     if deflection:

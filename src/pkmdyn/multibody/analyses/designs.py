@@ -493,6 +493,9 @@ def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple
         m["gci"] = _mean(mu, t)
     # the least measures: proven brackets, the decompositions only where a sample can hold the least
     least = least_measures(model, kin.q) if ctx.measures else None
+    if least is not None and model.na > model.nt:  # redundant actuation: the tall map's measure, by its SVD
+        least = {**least, "direct": float(np.min(singularity_measures(model, kin.q, only="direct").direct))}
+        direct = True
     if least is not None:
         m["min_inverse_measure"] = least["inverse"]
         m["min_constraint_measure"] = least["constraint"]

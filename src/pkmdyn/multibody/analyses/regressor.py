@@ -38,7 +38,12 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError
 from ..dynamics.actuators import motor_coordinates, motor_eps
-from ..dynamics.friction import EPS_ROTATION, EPS_TRANSLATION, JointFriction, regularised_sign
+from ..dynamics.friction import (
+    EPS_ROTATION,
+    EPS_TRANSLATION,
+    JointFriction,
+    regularised_sign,
+)
 from ..dynamics.newton_euler import (
     actuator_efforts,
     body_wrenches,
@@ -109,6 +114,12 @@ def regressor(model: MechanismModel, kin: MechanismKinematics, named: dict | Non
     """The regressor of the efforts along a solved motion (module docstring)."""
 
     n = len(kin)
+    if model.na > model.nt:
+        if model.act_distribution == "minimax" or model.act_preload or np.isfinite(model.act_bound).any():
+            raise ParameterError(f"{model.name}: [actuation]: a {model.act_distribution.replace('_', ' ')} distribution "
+                                 "with bounds or a preload is not linear in the parameters; identify with the minimum "
+                                 "norm or weighted distribution and no bounds or preload (a task-space fit of "
+                                 "efforts that carry internal forces is not there yet)")
     S = coordinate_twists(model, kin.q)
     cols, names, theta = [], [], []
     theta_b = inertial_parameters(model)

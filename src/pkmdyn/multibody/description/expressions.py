@@ -318,7 +318,7 @@ def _value(spec: Any, names: Mapping[str, Any], where: str) -> Any:
 
 #: keys whose values are text (names, types, sequences), never expressions
 _TEXT_KEYS = {"name", "type", "parent", "child", "body", "joint", "kind", "euler_sequence", "source", "cut_joints",
-              "bodies", "position", "suffixes", "load", "beam_axis"}
+              "bodies", "position", "suffixes", "load", "beam_axis", "distribution", "reactions"}
 
 
 def resolve_parameters(raw: dict[str, Any], label: str) -> tuple[dict[str, Any], dict[str, Any]]:

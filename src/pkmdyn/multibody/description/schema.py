@@ -226,6 +226,18 @@ class _Actuator(Section):
     force_constant_N_A: float | None = None
 
 
+class _Actuation(Section):
+    """How a redundantly actuated mechanism's efforts are shared among its actuated joints
+    (``[actuation]``, ``docs/mechanism_format.md``, "Redundant actuation"); the joints' values
+    in their own unit (SI: N for a prismatic joint, N m for a revolute one)."""
+
+    distribution: Literal["minimum_norm", "weighted", "minimax"] = "minimum_norm"
+    weights: dict[str, float] = Field(default_factory=dict)
+    max_effort_SI: dict[str, float] = Field(default_factory=dict)
+    preload_min_effort_SI: float = 0.0
+    preload_sign: dict[str, int] = Field(default_factory=dict)
+
+
 class _Group(Section):
     """A named group of bodies whose share of the efforts is reported (``[[groups]]``)."""
 
@@ -326,6 +338,7 @@ class _File(Section):
     actuators: list[_Actuator] = Field(default_factory=list, max_length=MAX_JOINTS)
     groups: list[_Group] = Field(default_factory=list, max_length=MAX_BODIES)
     limits: _Limits = _Limits()
+    actuation: _Actuation = _Actuation()
 
 
 @dataclass(frozen=True)
@@ -448,6 +461,21 @@ class ActuatorSpec:
 
 
 @dataclass(frozen=True)
+class ActuationSpec:
+    """The validated ``[actuation]``: ``distribution`` (``"minimum_norm"``, ``"weighted"``,
+    ``"minimax"``), per actuated joint name its ``weights`` (> 0; 1 where not given) and
+    ``max_effort`` bound (> 0; joint side, N or N m), ``preload_min_effort`` (>= 0, joint side)
+    and ``preload_sign`` (+1 or -1 per joint given). ``given``: the section is in the file."""
+
+    distribution: str = "minimum_norm"
+    weights: tuple[tuple[str, float], ...] = ()
+    max_effort: tuple[tuple[str, float], ...] = ()
+    preload_min_effort: float = 0.0
+    preload_sign: tuple[tuple[str, int], ...] = ()
+    given: bool = False
+
+
+@dataclass(frozen=True)
 class MotionSpec:
     """The default motion: ``x(t) = x_ref + offset + amplitude sin(2 pi t / period)``,
     ``samples`` points over one period; offsets and amplitudes keyed by task column name."""
@@ -487,6 +515,8 @@ class Description:
     reactions: str = "unique"
     #: the bodies and points whose pose a run writes beside the task body's (``[[outputs]]``)
     outputs: tuple[OutputSpec, ...] = ()
+    #: how a redundantly actuated mechanism's efforts are shared (``[actuation]``)
+    actuation: ActuationSpec = ActuationSpec()
 
 
 def _rot(axis: Array, angle: float) -> Array:
@@ -1014,7 +1044,42 @@ def load_description(source: str | Path | dict[str, Any], limits: dict[str, Any]
                        cut_joints=cuts, motion=motion, path=path, actuators=actuators, groups=groups,
                        limits=data.limits.model_dump(), parameters=parameters, parameter_bounds=bounds,
                        reactions=data.mechanism.reactions,
-                       outputs=_outputs(label, data.outputs, body_specs))
+                       outputs=_outputs(label, data.outputs, body_specs),
+                       actuation=_actuation(label, data, joints))
+
+
+def _actuation(label: str, data: _File, joints: list[JointSpec]) -> ActuationSpec:
+    """The validated ``[actuation]`` (:class:`ActuationSpec`): every name an actuated joint,
+    every number finite and in its range."""
+    a = data.actuation
+    acts = [j.name for j in joints if j.actuated]
+    where = f"{label}: [actuation]"
+
+    def named(key: str, items: dict, check: Any, what: str) -> tuple:
+        out = []
+        for name, v in items.items():
+            if name not in acts:
+                raise ParameterError(f"{where} {key}: {name!r} is not an actuated joint (one of {', '.join(acts)})")
+            if not check(v):
+                raise ParameterError(f"{where} {key}: {name} = {v!r}: {what}")
+            out.append((name, v))
+        return tuple(out)
+
+    def positive(v: Any) -> bool:
+        return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and 0 < v <= 1e12
+
+    weights = named("weights", a.weights, positive, "must be a finite number > 0")
+    bounds = named("max_effort_SI", a.max_effort_SI, positive, "must be a finite number > 0 [N or N m]")
+    signs = named("preload_sign", a.preload_sign, lambda v: v in (1, -1), "must be 1 or -1")
+    pre = a.preload_min_effort_SI
+    if not (math.isfinite(pre) and 0.0 <= pre <= 1e12):
+        raise ParameterError(f"{where} preload_min_effort_SI: must be a finite number >= 0 [N or N m], got {pre!r}")
+    if weights and a.distribution != "weighted":
+        raise ParameterError(f"{where} weights: they weigh the \"weighted\" distribution only (distribution = "
+                             f"{a.distribution!r})")
+    if signs and not pre:
+        raise ParameterError(f"{where} preload_sign: it orients a preload; give preload_min_effort_SI too")
+    return ActuationSpec(a.distribution, weights, bounds, float(pre), signs, "actuation" in data.model_fields_set)
 
 
 def _outputs(label: str, outputs: list[_Output], body_specs: dict[str, BodySpec]) -> tuple[OutputSpec, ...]:
@@ -1149,7 +1214,7 @@ def _actuators(label: str, entries: list[tuple[_Actuator, str]], joints: list[Jo
 
 
 #: part names of the effort split that a body group may not take
-RESERVED_PARTS = ("rotor", "friction", "total")
+RESERVED_PARTS = ("rotor", "friction", "total", "internal")
 
 
 def _groups(label: str, data: _File, expanded: _Expanded, bodies: dict[str, BodySpec],

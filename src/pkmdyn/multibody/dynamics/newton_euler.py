@@ -22,8 +22,9 @@ virtual work the actuator efforts ``u`` satisfy
     J_ax^T u = G^T (Q + Q_f)                                                                 (3)
 
 (``J_ax = dq_a/dx``, ``Q_f`` the friction's generalised forces, zero here). With as many
-actuators as task coordinates (3) is square; a redundantly actuated mechanism takes the
-minimum-norm solution ``u = pinv(J_ax^T) G^T Q``.
+actuators as task coordinates (3) is square; a redundantly actuated mechanism shares the
+efforts by its ``[actuation]`` distribution (:mod:`pkmdyn.multibody.dynamics.distribution`; by
+default the minimum-norm ``u = pinv(J_ax^T) G^T Q``).
 
 **Joint reactions.** Unknown: the wrench ``W_j = [n_O; f]`` (6,) that joint j's parent
 exerts on its child, every joint (tree and cut). Equations, per sample:
@@ -64,6 +65,7 @@ from ._dyn_kernels import (
     twists_from_poses,
 )
 from ._reaction_kernels import cut_reactions_batch
+from .distribution import distribute
 from .friction import JointFriction, friction_diverges, known_friction
 from .loads import load_forces, named_magnitudes
 from .reactions import compliant_reactions
@@ -245,6 +247,8 @@ def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, 
         return u_fast
     if model.na == model.nt:
         return np.linalg.solve(JT, rhs[..., None])[..., 0]
+    if model.na > model.nt:  # redundant actuation: the description's distribution
+        return distribute(model, JT, rhs, kin.t, sample_offset)
     u = np.einsum("nat,nt->na", np.linalg.pinv(JT), rhs)
     if consistent and model.na < model.nt:
         check_consistent(model, kin, JT, u, rhs, sample_offset)
@@ -575,6 +579,9 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     force = Wj[..., 3:]
     moment = Wj[..., :3] - _cross(pts, force)
     shares = effort_shares(model, kin, S, W, fr, F_u) if split else None
+    if shares is not None:
+        shares = EffortShares(shares.groups, shares.friction,
+                              u - shares.groups.sum(axis=2) - shares.friction.sum(axis=2))
     # the friction the efforts and reactions hold with (within the iteration's tolerance of the
     # law at these reactions), so that the efforts, dissipation and split agree to rounding
     return JointReactions(u=u, joint_point=pts, joint_force=force, joint_moment=moment, residual=res,
@@ -589,10 +596,14 @@ class EffortShares:
     wrenches and in the joints' friction, Eq. 1-3, so every share is exact): ``groups`` (n, na,
     ng) the share of each body group (``model.group_names``: its bodies' inertia, gravity and
     loads), ``friction`` (n, na, nj) each joint's friction share (zero for a joint without
-    friction); ``sum(groups) + sum(friction) = u`` to rounding. Joint-side units [N or N m]."""
+    friction); ``internal`` (n, na) a redundantly actuated mechanism's internal force (what its
+    distribution's bounds, least peak or preload add to the (weighted) least-norm efforts: it
+    moves nothing; zero otherwise); ``sum(groups) + sum(friction) + internal = u`` to
+    rounding. Joint-side units [N or N m]."""
 
     groups: Array
     friction: Array
+    internal: Array | None = None
 
 
 def effort_shares(model: MechanismModel, kin: MechanismKinematics, S: Array, W: Array, fr,
@@ -616,6 +627,9 @@ def effort_shares(model: MechanismModel, kin: MechanismKinematics, S: Array, W: 
     JT = np.swapaxes(kin.J_ax, 1, 2)
     if model.na == model.nt:
         parts = np.linalg.solve(JT, task)
+    elif model.na > model.nt and model.act_distribution == "weighted":
+        s = 1.0 / np.sqrt(model.act_weight)
+        parts = s[None, :, None] * (np.linalg.pinv(JT * s[None, None, :]) @ task)
     else:
         parts = np.linalg.pinv(JT) @ task
     friction = np.zeros((n, model.na, nj))

@@ -91,6 +91,10 @@ def import_description(path: Path, fmt: str, *, sidecar: Path | None = None, act
     if model.na < model.topology.dof:
         notes.append(f"under-actuated: {model.na} actuators for {model.topology.dof} degrees of freedom; a task motion's "
                      "efforts exist only where it is dynamically consistent (pkmdyn run refuses it elsewhere)")
+    if model.na > model.topology.dof:
+        notes.append(f"redundantly actuated: {model.na} actuators for {model.topology.dof} degrees of freedom; the "
+                     "efforts are the minimum-norm ones unless an [actuation] section says otherwise "
+                     "(docs/mechanism_format.md, \"Redundant actuation\")")
     _fit_default_motion(model, desc, notes)
     header = "\n".join([f"Imported by pkmdyn import from {graph.source} ({fmt.upper()}).",
                         "Base frame, reference configuration: the file's (docs/import.md).", *notes])

@@ -31,14 +31,28 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import MotionError, ParameterError, SingularityError, UnreachablePoseError, as_array, at_sample
+from ...errors import (
+    MotionError,
+    ParameterError,
+    SingularityError,
+    UnreachablePoseError,
+    as_array,
+    at_sample,
+)
 from ..dynamics import _sample_kernels as _one
 from ..model.compiler import MechanismModel
 from ..model.poses import body_poses
 from ..model.topology import column_scale, constraint_jacobian, row_labels, row_scale
 from . import _direct_kernels as D
 from . import _solve_kernels as K
-from .inverse import CHECK_TOLERANCE, MAX_ITER, TOLERANCE, reference_task, singularity_measures, solve_kinematics
+from .inverse import (
+    CHECK_TOLERANCE,
+    MAX_ITER,
+    TOLERANCE,
+    reference_task,
+    singularity_measures,
+    solve_kinematics,
+)
 from .motion import ActuatorMotion, TaskMotion
 
 __all__ = ["DirectKinematics", "Assembly", "AssemblyModes", "direct_kinematics", "assembly_modes", "task_motion",
@@ -133,9 +147,71 @@ class AssemblyModes:
 def _check(model: MechanismModel) -> None:
     if not isinstance(model, MechanismModel):
         raise ParameterError(f"model: expected a MechanismModel, got {type(model).__name__}")
-    if model.na != model.nt:
-        raise ParameterError(f"{model.name}: direct kinematics needs as many actuated joints as degrees of freedom "
-                             f"({model.na} actuated, {model.nt} degrees of freedom)")
+    if model.na < model.nt:
+        raise ParameterError(f"{model.name}: direct kinematics needs at least as many actuated joints as degrees of "
+                             f"freedom ({model.na} actuated, {model.nt} degrees of freedom)")
+
+
+#: a redundantly actuated mechanism's other actuated coordinates must agree with the pose its
+#: square subset gives to this [rad, or times the model's length scale in m]
+REDUNDANT_TOLERANCE = 1e-7
+_SQUARE: dict[int, tuple] = {}
+
+
+def square_subset(model: MechanismModel) -> tuple[MechanismModel, Array]:
+    """A redundantly actuated mechanism (``na > nt``) seen through ``nt`` of its actuated joints:
+    the model with the others passive, and the kept actuators' indices. The kept ones are the
+    best-conditioned at the reference configuration (pivoted QR of ``J_ax``); the direct
+    kinematics solves with them and checks the others (:data:`REDUNDANT_TOLERANCE`)."""
+    import weakref
+    from dataclasses import fields, replace
+
+    from scipy.linalg import qr
+
+    from ..model.legs import explicit_legs
+
+    hit = _SQUARE.get(id(model))
+    if hit is not None and hit[0]() is model:
+        return hit[1], hit[2]
+    x = reference_task(model)[None]
+    z = np.zeros_like(x)
+    J = solve_kinematics(model, x, z, z).J_ax[0]  # (na, nt)
+    _, _, piv = qr(J.T / np.maximum(np.abs(J).max(axis=1), 1e-300)[None, :], pivoting=True)
+    keep = np.sort(piv[:model.nt])
+    cut = {}
+    for f in fields(model):
+        v = getattr(model, f.name)
+        if f.name.startswith(("drive_", "act_")) and isinstance(v, (np.ndarray, tuple)) and len(v) == model.na:
+            cut[f.name] = v[keep] if isinstance(v, np.ndarray) else tuple(v[k] for k in keep)
+    sub = replace(model, **cut)
+    sub = replace(sub, legs=explicit_legs(sub))
+    _SQUARE.clear()  # one model at a time (a sweep's designs replace each other)
+    _SQUARE[id(model)] = (weakref.ref(model), sub, keep)
+    return sub, keep
+
+
+def _redundant(model: MechanismModel, s: Array, sd: Array, sdd: Array, t: Array | None, q_start: Array | None,
+               sample_offset: int) -> DirectKinematics:
+    """:func:`direct_kinematics` of a redundantly actuated mechanism: its square subset's
+    (:func:`square_subset`), every other actuated coordinate checked against the pose."""
+    sub, keep = square_subset(model)
+    dk = direct_kinematics(sub, s[:, keep], sd[:, keep], sdd[:, keep], t, q_start=q_start,
+                           sample_offset=sample_offset, bodies=True)
+    other = np.setdiff1d(np.arange(model.na), keep)
+    got = dk.q[:, model.act_coord[other]]
+    scale = np.where(np.array([model.actuator_units[k] for k in other]) == "m", model.length_scale, 1.0)
+    off = np.abs(got - s[:, other]) / scale
+    bad = np.argwhere(off > REDUNDANT_TOLERANCE)
+    if bad.size:
+        i, k = (int(v) for v in bad[0])
+        a = int(other[k])
+        raise UnreachablePoseError(
+            f"{at_sample(i, t, sample_offset)}: actuated joint {model.actuator_names[a]} is at {s[i, a]:.9g} but the "
+            f"pose the others ({', '.join(model.actuator_names[j] for j in keep)}) give puts it at {got[i, k]:.9g} "
+            "[m or rad]: a redundantly actuated mechanism's actuator coordinates must agree")
+    from dataclasses import replace
+
+    return replace(dk, s=s, sd=sd, sdd=sdd)
 
 
 def _arrays(model: MechanismModel, damped: bool = False, max_iter: int = MAX_ITER) -> tuple:
@@ -475,6 +551,11 @@ def direct_kinematics(model: MechanismModel, s: Array, sd: Array | None = None, 
     _check(model)
     na = model.na
     s = np.ascontiguousarray(as_array(s, (None, na), "s", MotionError))
+    if na > model.nt:
+        n = s.shape[0]
+        sd = np.zeros_like(s) if sd is None else np.ascontiguousarray(as_array(sd, (n, na), "sd", MotionError))
+        sdd = np.zeros_like(s) if sdd is None else np.ascontiguousarray(as_array(sdd, (n, na), "sdd", MotionError))
+        return _redundant(model, s, sd, sdd, t, q_start, sample_offset)
     n = s.shape[0]
     sd = np.zeros_like(s) if sd is None else np.ascontiguousarray(as_array(sd, (n, na), "sd", MotionError))
     sdd = np.zeros_like(s) if sdd is None else np.ascontiguousarray(as_array(sdd, (n, na), "sdd", MotionError))
@@ -582,6 +663,22 @@ def assembly_modes(model: MechanismModel, s: Array, starts: int | None = None, s
     s = np.ascontiguousarray(as_array(s, (model.na,), "s", MotionError))
     if not np.all(np.isfinite(s)):
         raise MotionError("s: not finite")
+    if model.na > model.nt:  # the square subset's modes that the other actuated coordinates agree with
+        from dataclasses import replace
+
+        sub, keep = square_subset(model)
+        found = assembly_modes(sub, s[keep], starts, seed, patience)
+        other = np.setdiff1d(np.arange(model.na), keep)
+        scale = np.where(np.array([model.actuator_units[k] for k in other]) == "m", model.length_scale, 1.0)
+        modes = tuple(a for a in found.modes
+                      if np.all(np.abs(a.q[model.act_coord[other]] - s[other]) / scale <= REDUNDANT_TOLERANCE))
+        if not modes:
+            raise UnreachablePoseError(
+                f"actuator coordinates {', '.join(f'{n}={v:.9g}' for n, v in zip(model.actuator_names, s))}: none of "
+                f"the {len(found.modes)} assembly mode(s) of {', '.join(model.actuator_names[j] for j in keep)} puts "
+                f"{', '.join(model.actuator_names[j] for j in other)} there (a redundantly actuated mechanism's "
+                "actuator coordinates must agree)")
+        return replace(found, s=s, modes=modes)
     for name, v, lo in (("starts", starts, 1), ("patience", patience, 1)):
         if v is None and name == "starts":
             continue

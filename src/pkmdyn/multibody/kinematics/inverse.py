@@ -516,8 +516,9 @@ class SingularityMeasures:
     coordinates no longer determine the joint coordinates (a leg stretched or folded, the
     Gosselin-Angeles type I / serial singularity); ``direct`` (n,): of ``[Phi_q; E_a]``
     (``E_a`` selecting the actuator coordinates): zero where the mechanism moves with its
-    actuators locked (type II / parallel singularity; only for as many actuators as
-    degrees of freedom, otherwise NaN); ``constraint`` (n,): of ``Phi_q`` (with the idle
+    actuators locked (type II / parallel singularity; for at least as many actuators as
+    degrees of freedom, the ``nq`` singular values of the tall matrix of a redundantly
+    actuated mechanism; NaN for fewer); ``constraint`` (n,): of ``Phi_q`` (with the idle
     rows) alone, the smallest of its ``nq - dof`` singular values: zero where the loops gain a
     freedom (constraint singularity)."""
 
@@ -549,7 +550,7 @@ def singularity_measures(model: MechanismModel, q: Array, only: str | None = Non
     cut = rows[rows < nr]
     Phi = np.concatenate([Js[:, cut], idle], axis=1)
     constraint = (_ratio(Phi) if Phi.shape[1] else np.ones(n)) if only in (None, "constraint") else none
-    if model.na == model.nt and only in (None, "direct"):
+    if model.na >= model.nt and only in (None, "direct"):  # (redundant actuation: the tall matrix's nq values)
         Ea = np.zeros((n, model.na, model.nq))
         for i, c in enumerate(model.act_coord):
             Ea[:, i, c] = 1.0

@@ -418,7 +418,30 @@ def _compile(desc: Description, st: ModelStructure, topology_only: bool = False)
                     solver_blocks=blocks, topology=rep, **_drives(desc, list(st.act)), **_body_groups(desc, list(st.order)),
                     limits=dict(desc.limits), parameters=dict(desc.parameters),
                     parameter_bounds=dict(desc.parameter_bounds), reactions=desc.reactions)
+    model = replace(model, **_actuation(desc, model, rep.dof))
     return replace(model, legs=explicit_legs(model))  # recognised from the reference geometry: numbers
+
+
+def _actuation(desc: Description, model: MechanismModel, dof: int) -> dict:
+    """The model's ``act_*`` fields of ``[actuation]`` (:class:`MechanismModel`); the section is
+    refused, naming it, on a mechanism with no more actuators than degrees of freedom."""
+    a = desc.actuation
+    if a.given and model.na <= dof:
+        raise ParameterError(f"{model.path or model.name}: [actuation]: {model.na} actuated joint(s) for {dof} degree(s) "
+                             "of freedom: the efforts are determined, there is nothing to distribute (the section "
+                             "is for a redundantly actuated mechanism, more actuated joints than freedoms)")
+    names = list(model.actuator_names)
+
+    def per(items: tuple, default: float) -> Array:
+        out = np.full(len(names), default, dtype=float)
+        for name, v in items:
+            out[names.index(name)] = float(v)
+        return out
+
+    rated = np.where(np.isfinite(model.drive_max_effort), model.drive_max_effort * model.drive_ratio, np.inf)
+    return {"act_distribution": a.distribution, "act_weight": per(a.weights, 1.0),
+            "act_bound": np.minimum(per(a.max_effort, math.inf), rated), "act_preload": float(a.preload_min_effort),
+            "act_preload_sign": per(a.preload_sign, 0.0)}
 
 
 def load_mechanism(source: str | Path | dict[str, Any], limits: dict[str, Any] | None = None) -> MechanismModel:

@@ -195,6 +195,16 @@ class MechanismModel:
     drive_encoder: Array = field(default_factory=lambda: np.zeros(0))
     drive_specs: tuple = ()
     drive_copper: Array = field(default_factory=lambda: np.zeros(0))
+    #: a redundantly actuated mechanism's distribution of its efforts (``[actuation]``):
+    #: ``"minimum_norm"``, ``"weighted"`` or ``"minimax"``; per actuator its weight, its effort
+    #: bound (joint side [N or N m]: ``max_effort_SI``, or the drive's rated effort times its
+    #: ratio, the smaller; inf where none) and its preload sign (0 where not given); the least
+    #: preloaded effort ``act_preload`` (0: no preload)
+    act_distribution: str = "minimum_norm"
+    act_weight: Array = field(default_factory=lambda: np.zeros(0))
+    act_bound: Array = field(default_factory=lambda: np.zeros(0))
+    act_preload_sign: Array = field(default_factory=lambda: np.zeros(0))
+    act_preload: float = 0.0
     #: the effort split's body groups: names, and each body's group index (nb,)
     group_names: tuple[str, ...] = ()
     body_group: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))

@@ -348,7 +348,7 @@ def solver_selection(model: MechanismModel, q: Array | None = None) -> tuple[Arr
     the rod's own coordinate where one of its joint's axes lies along that line, which leaves
     the leg to its closed form (:mod:`pkmdyn.multibody.model.legs`). Raises :class:`~pkmdyn.errors.ParameterError`
     when the task coordinates do not determine the mechanism (fewer or more than its degrees
-    of freedom, or dependent) or when there are more actuators than degrees of freedom.
+    of freedom, or dependent).
     """
     q = model.coord_offset.copy() if q is None else np.asarray(q, dtype=float)
     Js = _scaled_jacobian(model, q)  # (one Jacobian and one pivoted QR for the report and the rows)
@@ -359,9 +359,6 @@ def solver_selection(model: MechanismModel, q: Array | None = None) -> tuple[Arr
         raise ParameterError(
             f"{src}: [task] gives {model.nt} coordinate(s) but the mechanism has {rep.dof} degree(s) of freedom "
             f"(mobility {rep.mobility}, {rep.idle} idle); the task coordinates must determine its pose")
-    if model.na > rep.dof:
-        raise ParameterError(f"{src}: [joints]: {model.na} actuated joints but only {rep.dof} degree(s) of freedom "
-                             f"(redundant actuation is not supported): {', '.join(model.actuator_names)}")
     rank_c = model.nq - rep.mobility
     if nr and rank_c:
         if piv is None:
@@ -383,7 +380,10 @@ def solver_selection(model: MechanismModel, q: Array | None = None) -> tuple[Arr
     Phi = np.concatenate([Js[:nr][cut_rows], N.T])
     Ea = np.zeros((model.na, model.nq))
     Ea[np.arange(model.na), model.act_coord] = 1.0
-    if _rank(np.concatenate([Phi, Ea])) < Phi.shape[0] + model.na:
-        raise ParameterError(f"{src}: [joints]: the actuated joints {', '.join(model.actuator_names)} cannot move "
-                             "independently at the reference configuration")
+    # the actuated joints move independently (at most as many as the freedoms) or, redundantly
+    # actuated, together determine the pose
+    if _rank(np.concatenate([Phi, Ea])) < min(Phi.shape[0] + model.na, model.nq):
+        raise ParameterError(f"{src}: [joints]: the actuated joints {', '.join(model.actuator_names)} cannot "
+                             f"{'move independently' if model.na <= rep.dof else 'determine the pose'} at the "
+                             "reference configuration")
     return sel, np.ascontiguousarray(idle), rep

@@ -1,0 +1,186 @@
+"""Redundant actuation (more actuated joints than freedoms, ``[actuation]``): the built-in 4-RRR's
+efforts by each distribution against routes written apart from the engine's.
+
+- **Minimum norm**: the same mechanism with its fourth drive passive is square; its three
+  efforts give the generalised force ``w = A_3 u_3`` through LU, and the redundant efforts must
+  be ``pinv(A) w`` (``A = J_ax^T``).
+- **Minimax**: the least peak ``max |u_i|`` with ``A u = w`` by scipy's linear program (HiGHS),
+  against the engine's second-order-cone solver.
+- **Weighted**: the least ``sum c_i u_i^2`` satisfies ``N^T C u = 0`` (``N`` the null space of
+  ``A``).
+- **Preload**: the task motion and the platform's net wrench (the legs' reactions summed) do
+  not change; every drive keeps the preload's sign and margin.
+- Every distribution keeps the power balance ``sum u qd_a = d(T + V)/dt`` and every body's
+  equations (the reactions' residual)."""
+
+from __future__ import annotations
+
+import copy
+
+import multibody_examples as ex
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+
+from pkmdyn.cli import main
+from pkmdyn.errors import LimitError, ParameterError
+from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
+from pkmdyn.multibody.dynamics.distribution import internal_directions
+from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
+
+
+def _rrr4(**actuation):
+    d = copy.deepcopy(ex.builtin_dict("rrr4"))
+    d["actuation"] = {"distribution": "minimum_norm", **actuation}
+    return d
+
+
+def _square():
+    """The 4-RRR with its fourth leg's drive passive: three actuated joints for three freedoms."""
+    d = _rrr4()
+    del d["actuation"]
+    (leg,) = d["legs"]
+    three, fourth = copy.deepcopy(leg), copy.deepcopy(leg)
+    three["angles_deg"] = leg["angles_deg"][:3]
+    fourth["angles_deg"] = leg["angles_deg"][3:]
+    fourth["suffixes"] = ["_4"]
+    for j in fourth["joints"]:
+        if j.get("actuated"):
+            j["actuated"] = False
+            j.pop("stiffness", None)
+    d["legs"] = [three, fourth]
+    return d
+
+
+def _motion(m, n=25, seed=1):
+    amp = np.where(m.task_kind == 1, 0.15, 0.03)
+    t = np.linspace(0.0, 1.0, n)
+    return (t, *ex.smooth_motion(reference_task(m), amp, t, seed))
+
+
+def _solve(d, motion):
+    m = load_mechanism(d)
+    t, x, xd, xdd = motion
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    return m, kin, joint_reactions(m, kin, split=True)
+
+
+MOTION = _motion(load_mechanism(_rrr4()))
+
+
+def test_minimum_norm_efforts_are_the_pseudo_inverse_of_the_square_mechanisms_force():
+    m4, kin4, r4 = _solve(_rrr4(), MOTION)
+    m3, kin3, r3 = _solve(_square(), MOTION)
+    assert m4.na == 4 and m3.na == 3 and m4.nt == m3.nt == 3
+    A = np.swapaxes(kin4.J_ax, 1, 2)  # (n, 3, 4)
+    A3 = np.swapaxes(kin3.J_ax, 1, 2)
+    assert np.abs(A[:, :, :3] - A3).max() <= 1e-12 * np.abs(A3).max()
+    w = np.einsum("nta,na->nt", A3, r3.u)
+    expected = np.einsum("nat,nt->na", np.linalg.pinv(A), w)
+    assert np.abs(r4.u - expected).max() <= 1e-10 * np.abs(expected).max()
+    # the minimum norm has no internal part
+    assert np.abs(r4.shares.internal).max() <= 1e-10 * np.abs(r4.u).max()
+
+
+def _power_balance(m, kin, u):
+    Iw = np.einsum("nbij,bjk,nblk->nbil", kin.R, m.inertia, kin.R)
+    dT = np.einsum("b,nbi,nbi->n", m.mass, kin.v, kin.a) + np.einsum("nbi,nbij,nbj->n", kin.w, Iw, kin.wd)
+    dV = -np.einsum("b,i,nbi->n", m.mass, m.gravity, kin.v)
+    P = np.einsum("na,na->n", u, kin.act_qd)
+    return np.abs(P - dT - dV).max() / max(np.abs(P).max(), 1e-3)
+
+
+@pytest.mark.parametrize("actuation", [{}, {"distribution": "minimax"},
+                                       {"distribution": "weighted", "weights": {"RA_1": 4.0, "RA_3": 0.25}},
+                                       {"preload_min_effort_SI": 2.0}])
+def test_every_distribution_keeps_the_balances(actuation):
+    m, kin, r = _solve(_rrr4(**actuation), MOTION)
+    A = np.swapaxes(kin.J_ax, 1, 2)
+    _, _, base = _solve(_rrr4(), MOTION)
+    w = np.einsum("nta,na->nt", A, base.u)
+    assert np.abs(np.einsum("nta,na->nt", A, r.u) - w).max() <= 1e-9 * np.abs(w).max()
+    assert _power_balance(m, kin, r.u) <= 1e-9
+    assert np.abs(r.residual).max() <= 1e-9 * max(np.abs(r.joint_force).max(), 1.0)
+    parts = r.shares.groups.sum(axis=2) + r.shares.friction.sum(axis=2) + r.shares.internal
+    assert np.abs(parts - r.u).max() <= 1e-9 * np.abs(r.u).max()
+
+
+def test_minimax_efforts_reach_the_least_peak_of_an_independent_linear_program():
+    _, kin, r = _solve(_rrr4(distribution="minimax"), MOTION)
+    _, _, base = _solve(_rrr4(), MOTION)
+    A = np.swapaxes(kin.J_ax, 1, 2)
+    for i in range(len(kin.t)):
+        w = A[i] @ base.u[i]
+        na = A.shape[2]
+        # variables (u, t): least t with A u = w and -t <= u_j <= t
+        G = np.block([[np.eye(na), -np.ones((na, 1))], [-np.eye(na), -np.ones((na, 1))]])
+        lp = linprog(np.r_[np.zeros(na), 1.0], A_ub=G, b_ub=np.zeros(2 * na), A_eq=np.hstack([A[i], np.zeros((3, 1))]),
+                     b_eq=w, bounds=[(None, None)] * na + [(0, None)], method="highs")
+        assert lp.status == 0
+        peak = float(np.abs(r.u[i]).max())
+        assert peak == pytest.approx(lp.x[-1], rel=1e-8)
+        assert peak <= np.abs(base.u[i]).max() * (1 + 1e-12)
+
+
+def test_weighted_efforts_are_the_least_weighted_norm():
+    c = {"RA_1": 4.0, "RA_2": 1.0, "RA_3": 0.25, "RA_4": 2.0}
+    _, kin, r = _solve(_rrr4(distribution="weighted", weights=c), MOTION)
+    N = internal_directions(np.swapaxes(kin.J_ax, 1, 2))
+    Cu = r.u * np.array(list(c.values()))
+    assert np.abs(np.einsum("nar,na->nr", N, Cu)).max() <= 1e-10 * np.abs(Cu).max()
+
+
+def test_a_preload_keeps_the_motion_and_the_platforms_net_wrench_and_every_drive_from_zero():
+    margin = 2.0
+    m, kin, r = _solve(_rrr4(preload_min_effort_SI=margin), MOTION)
+    _, kin0, r0 = _solve(_rrr4(), MOTION)
+    assert np.array_equal(kin.q, kin0.q)
+    N = internal_directions(np.swapaxes(kin.J_ax, 1, 2))[:, :, 0]
+    assert np.all(np.sign(N) * r.u >= margin * (1 - 1e-9))
+    assert np.abs(r.u - r0.u).max() > margin  # the preload acted
+    plat = [j for j, nm in enumerate(m.joint_names) if nm.startswith("RC_")]
+    c = kin.x[:, None, :2]
+
+    def net(reac):
+        f = reac.joint_force[:, plat]
+        arm = reac.joint_point[:, plat] - np.concatenate([c, np.zeros_like(c[..., :1])], axis=2)
+        return f.sum(axis=1), (reac.joint_moment[:, plat] + np.cross(arm, f)).sum(axis=1)
+
+    (f1, n1), (f0, n0) = net(r), net(r0)
+    scale = np.abs(r.joint_force[:, plat]).max()
+    assert np.abs(f1 - f0).max() <= 1e-10 * scale and np.abs(n1 - n0).max() <= 1e-10 * scale
+
+
+def test_bounds_that_no_distribution_meets_are_refused_naming_the_sample_and_drive():
+    _, _, base = _solve(_rrr4(), MOTION)
+    low = 0.3 * float(np.abs(base.u).max())
+    with pytest.raises(LimitError, match=r"sample \d+.*RA_\d"):
+        _solve(_rrr4(distribution="minimax", max_effort_SI={k: low for k in ("RA_1", "RA_2", "RA_3", "RA_4")}),
+               MOTION)
+    with pytest.raises(LimitError, match=r"sample \d+.*preload"):
+        _solve(_rrr4(preload_min_effort_SI=50.0, max_effort_SI={"RA_2": 1.0}), MOTION)
+
+
+@pytest.mark.parametrize("section, key", [({"weights": {"RA_1": 2.0}}, "weights"),
+                                          ({"weights": {"RB_1": 2.0}, "distribution": "weighted"}, "weights"),
+                                          ({"max_effort_SI": {"RA_1": -1.0}}, "max_effort_SI"),
+                                          ({"preload_sign": {"RA_1": 1}}, "preload_sign")])
+def test_bad_actuation_sections_are_refused_naming_the_key(section, key):
+    with pytest.raises(ParameterError, match=rf"\[actuation\] {key}"):
+        load_mechanism(_rrr4(**section))
+
+
+def test_an_actuation_section_on_a_mechanism_without_redundancy_is_refused():
+    d = copy.deepcopy(ex.builtin_dict("rrr3"))
+    d["actuation"] = {"distribution": "minimax"}
+    with pytest.raises(ParameterError, match=r"\[actuation\].*nothing to distribute"):
+        load_mechanism(d)
+
+
+def test_describe_and_run_say_the_redundancy(tmp_path, capsys):
+    assert main(["describe", "--machine", "rrr4"]) == 0
+    out = capsys.readouterr().out
+    assert "degree of redundancy 1" in out and "internal-force directions" in out
+    assert main(["run", "--machine", "rrr4", "--out", str(tmp_path / "r")]) == 0
+    header = (tmp_path / "r" / "results.csv").read_text().splitlines()[0].split(",")
+    assert sum(c.endswith("_internal_Nm") for c in header) == 4
