@@ -156,9 +156,10 @@ def make_controller(kind: str, gains: Gains, verbs: Any, model: Any, ref: Refere
             B = np.swapaxes(joint.Bt, -1, -2)  # the same model's actuator map along ref.q
         else:
             B = np.asarray(verbs.actuator_map(model, ref.q), dtype=float)
-        if nq != nu:
-            raise ParameterError(f"controller {kind!r}: needs as many actuators as coordinates ({nu} != {nq})")
-        B_inv = np.linalg.inv(B)
+        if nq > nu:
+            raise ParameterError(f"controller {kind!r}: needs at least as many actuators as coordinates ({nu} < {nq})")
+        # a redundantly actuated machine: the task effort's minimum-norm efforts (B^+)
+        B_inv = np.linalg.inv(B) if nq == nu else np.linalg.pinv(B)
     if kind == "pid" and joint is None:
         raise ParameterError("controller 'pid': needs the joint-space reference")
     id_one = _id_one(verbs, model, has_load) if kind == "computed-torque" else None

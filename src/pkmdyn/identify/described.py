@@ -33,11 +33,16 @@ from numpy.typing import NDArray
 
 from ..errors import MotionError
 from ..io import read_csv_columns
-from ..multibody.analyses.regressor import regressor
+from ..multibody.analyses.regressor import least_norm_projector, regressor
 from ..multibody.columns import actuator_effort_column, results_column_names
 from ..multibody.kinematics.direct import direct_kinematics
 from ..multibody.kinematics.inverse import MechanismKinematics
-from ..multibody.kinematics.motion import MAX_MOTION_ROWS, actuator_columns, actuator_rates, task_columns
+from ..multibody.kinematics.motion import (
+    MAX_MOTION_ROWS,
+    actuator_columns,
+    actuator_rates,
+    task_columns,
+)
 from ..multibody.model.compiler import MechanismModel
 from ..profiles._columns import column_group, derivatives, require_increasing
 from ._base import DEFAULT_RANK_TOL
@@ -124,6 +129,12 @@ def fit_described(model: MechanismModel, kin: MechanismKinematics, u: Array, nam
     description's values as the prior, base parameters, estimate, identified efforts, residuals)."""
     reg0 = regressor(model, kin, named or None)
     reg = Regressor(reg0.Y, reg0.u0, reg0.names)
+    u = np.asarray(u, dtype=float)
+    P = least_norm_projector(model, kin)
+    if P is not None:  # redundant actuation: measured efforts and regressor without the internal
+        # force, which no parameter determines (the fit is the task-space one, A K u = A K Y theta)
+        reg = Regressor(P @ reg.Y, np.einsum("nij,nj->ni", P, reg.offset), reg.names)
+        u = np.einsum("nij,nj->ni", P, u)
     return fit_regressor(reg, u, reg0.theta, _consistency(reg), rank_tol, source=source)
 
 

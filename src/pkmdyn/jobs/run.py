@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import ParameterError, PkmdynError, at_sample
+from ..errors import MotionError, ParameterError, PkmdynError, at_sample
 from ..io import (
     NpzWriter,
     check_table_format,
@@ -54,6 +54,7 @@ from ..multibody.dynamics.actuators import (
     motor_effort_column,
 )
 from ..multibody.dynamics.newton_euler import effort_unit, joint_reactions, load_forces
+from ..multibody.dynamics.passive import passive_motion
 from ..multibody.dynamics.reactions import ComplianceDataMissing
 from ..multibody.kinematics.direct import task_motion
 from ..multibody.kinematics.inverse import (
@@ -392,7 +393,14 @@ def job(machine: str, out_dir: Path, *, motion_path: Path | None = None, actuato
             if sg_window != 0:
                 check_smoothing(sg_window, sg_order)
             am = read_actuator_motion(model, Path(actuator_path).absolute(), sg_window, sg_order)
-            motion, _ = task_motion(model, am)
+            if model.na < model.nt:  # under-actuated: the passive freedoms simulated
+                if am.loads:
+                    raise MotionError(f"{actuator_path}: named loads ({', '.join(am.loads)}) along the actuator motion "
+                                      "of an under-actuated mechanism are not simulated yet; give them by the "
+                                      "description's magnitude_N")
+                motion = passive_motion(model, am.t, am.s, am.sd, am.sdd)
+            else:
+                motion, _ = task_motion(model, am)
     elif entry is None:
         motion = periodic_motion(model, 1.0 if cycles is None else cycles, samples_per_cycle,
                                  max_samples=int(lim["max_samples"]))

@@ -15,19 +15,20 @@ from numpy.typing import NDArray
 
 from ..errors import ParameterError, PkmdynError
 from ..io import write_csv, write_json
-from ..multibody.dynamics.actuators import effective_limits
 from ..multibody.analyses.stiffness import (
     ROTORS,
     Stiffness,
     StiffnessDataMissing,
     compliance_sources,
     deflection,
+    internal_force_stiffness,
     reaction_route,
     stiffness,
 )
 from ..multibody.analyses.task_grid import grid_poses, parse_grid, parse_pose
 from ..multibody.columns import model_summary
 from ..multibody.description.schema import LIMIT_KEYS
+from ..multibody.dynamics.actuators import effective_limits
 from ..multibody.dynamics.newton_euler import joint_reactions
 from ..multibody.kinematics.inverse import (
     MechanismKinematics,
@@ -94,6 +95,25 @@ def pose_document(model: MechanismModel, st: Stiffness, s: int) -> dict[str, Any
                    "modal_mass": float(st.modal_mass[s, k]),
                    "modal_stiffness": float(st.modal_stiffness[s, k])} for k in range(nt)],
     }
+
+
+def _internal_force(model: MechanismModel, doc: dict[str, Any]) -> None:
+    """A redundantly actuated mechanism's pose entries gain ``internal_force``: its internal
+    force holding still at the pose by its ``[actuation]`` (a preload, a least peak), and
+    ``K_internal``, the task stiffness that force adds with the drives holding their efforts
+    (:func:`~pkmdyn.multibody.analyses.stiffness.internal_force_stiffness`; docs/stiffness.md)."""
+    entries = [e for e in (*doc.get("poses", []), doc.get("worst")) if e is not None]
+    if not entries:
+        return
+    x = np.array([[e["task"][f"{n}_{u}"] for n, u in zip(model.task_names, model.task_units)] for e in entries])
+    z = np.zeros_like(x)
+    kin = solve_kinematics(model, x, z, z)
+    internal = joint_reactions(model, kin, overconstrained=reaction_route(model), split=True).shares.internal
+    K = internal_force_stiffness(model, x, internal)
+    nt = model.nt
+    for e, ui, Ki in zip(entries, internal, K):
+        e["internal_force"] = {nm: float(v) for nm, v in zip(model.actuator_names, ui)}
+        e["K_internal"] = [[float(Ki[i, j]) for j in range(nt)] for i in range(nt)]
 
 
 def _head(model: MechanismModel, what: str, rotors: str) -> dict[str, Any]:
@@ -271,6 +291,8 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
         doc = _head(model, "poses", rotors)
         doc["poses"] = [pose_document(model, st, s) for s in range(len(kin))]
         s0 = 0
+    if model.na > model.nt:
+        _internal_force(model, doc)
     files["stiffness"] = out / "stiffness.json"
     write_json(files["stiffness"], doc)
     summary = {k: v for k, v in doc.items() if k not in ("poses",)}

@@ -60,6 +60,13 @@ def _part(r: Any, o: int, n: int) -> Any:
                      r.mid_q[mid], r.mid_qd[mid], r.mid_qdd[mid], None if r.mid_load is None else r.mid_load[mid])
 
 
+def _rate_map(Bt: Array) -> Array:
+    """The controller's ``(B^T)^-1 (K + 1, nq, nu)`` along the reference: the task rates of the
+    actuators' rates (a redundantly actuated machine's, more actuators than coordinates: the
+    least-squares ``(B^T)^+``)."""
+    return np.linalg.inv(Bt) if Bt.shape[-1] == Bt.shape[-2] else np.linalg.pinv(Bt)
+
+
 def _first_instant(joint: Any, nq: int) -> tuple[Any, Array]:
     """A joint reference and a rate map of the first instant alone, for a loop that reads no more
     of them (:func:`loop_reads_joint`)."""
@@ -91,7 +98,7 @@ def track(verbs: Any, model: Any, plant_model: Any, motion: Any, duration: float
     if loop_reads_joint(kind, settings):
         joint = joint_reference(verbs, model, ref, motion, joint_accelerations)
         plant_joint = joint if plant_model is model else joint_reference(verbs, plant_model, ref, motion, False)
-        rate_map = np.linalg.inv(joint.Bt)
+        rate_map = _rate_map(joint.Bt)
         joint_source: Any = joint
     else:
         # the loop reads the first instant alone: the whole joint reference when the result's
@@ -163,7 +170,7 @@ def track_spans(verbs: Any, model: Any, plant_model: Any, motion: Any, duration:
             if reads:
                 plant_joint = joint if plant_model is model else anchored(
                     joint_reference(verbs, plant_model, ref, motion, False), o, s_plant)
-                rate_map = np.linalg.inv(joint.Bt)
+                rate_map = _rate_map(joint.Bt)
             else:  # the span's records carry the controller's joint reference; the loop reads neither
                 plant_joint, rate_map = _first_instant(joint, plant.nq)
             ctrl = make_controller(kind, gains, verbs, model, ref, joint)

@@ -110,16 +110,38 @@ def _unit_wrenches(model: MechanismModel, kin: MechanismKinematics, b: int) -> A
     return out
 
 
+def linear_distribution(model: MechanismModel) -> MechanismModel:
+    """``model``, a redundantly actuated one with its (weighted) least-norm distribution alone
+    (no least peak, bounds or preload): the efforts' map that is linear in the parameters.
+    Efforts of another distribution differ from it by an internal force alone, which no
+    parameter determines (:func:`least_norm_projector`)."""
+    if model.na <= model.nt:
+        return model
+    return replace(model, act_distribution="weighted" if model.act_distribution == "weighted" else "minimum_norm",
+                   act_preload=0.0, act_bound=np.full(model.na, np.inf))
+
+
+def least_norm_projector(model: MechanismModel, kin: MechanismKinematics) -> Array | None:
+    """``P (n, na, na)`` that takes an actuator's efforts as :func:`regressor` counts them (a
+    drive's motor effort, else the joint's) to their (weighted) least-norm part: ``K^-1 C^-1
+    A^T (A C^-1 A^T)^-1 A K`` (``A = J_ax^T``, ``K`` the transmission ratios, ``C`` the
+    weights). It removes an internal force ``K^-1 N lambda``, which no parameter determines,
+    and keeps ``A K u`` (the task-space balance); None for a mechanism without redundancy."""
+    if model.na <= model.nt:
+        return None
+    c = model.act_weight if model.act_distribution == "weighted" else np.ones(model.na)
+    k = model.drive_ratio
+    A = np.swapaxes(kin.J_ax, 1, 2)
+    AC = A / c[None, None, :]
+    P = np.swapaxes(AC, 1, 2) @ np.linalg.solve(AC @ np.swapaxes(A, 1, 2), A)  # (n, na, na)
+    return P * k[None, None, :] / k[None, :, None]
+
+
 def regressor(model: MechanismModel, kin: MechanismKinematics, named: dict | None = None) -> Regressor:
     """The regressor of the efforts along a solved motion (module docstring)."""
 
     n = len(kin)
-    if model.na > model.nt:
-        if model.act_distribution == "minimax" or model.act_preload or np.isfinite(model.act_bound).any():
-            raise ParameterError(f"{model.name}: [actuation]: a {model.act_distribution.replace('_', ' ')} distribution "
-                                 "with bounds or a preload is not linear in the parameters; identify with the minimum "
-                                 "norm or weighted distribution and no bounds or preload (a task-space fit of "
-                                 "efforts that carry internal forces is not there yet)")
+    model = linear_distribution(model)
     S = coordinate_twists(model, kin.q)
     cols, names, theta = [], [], []
     theta_b = inertial_parameters(model)

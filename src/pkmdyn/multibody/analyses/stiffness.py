@@ -68,13 +68,20 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError, SingularityError
 from ...spatial import skew
-from ..dynamics.newton_euler import _CutRoute, body_wrenches, coordinate_twists, generalised_forces, task_mass_matrix
+from ..dynamics.newton_euler import (
+    _CutRoute,
+    body_wrenches,
+    coordinate_twists,
+    generalised_forces,
+    task_mass_matrix,
+)
 from ..dynamics.reactions import compliance_terms
 from ..kinematics.inverse import MechanismKinematics
 from ..model._tree_kernels import euler_angles, euler_rate_map
 from ..model.compiler import MechanismModel
 
-__all__ = ["Stiffness", "stiffness", "deflection", "compliance_sources", "reaction_route", "StiffnessDataMissing"]
+__all__ = ["Stiffness", "stiffness", "deflection", "compliance_sources", "reaction_route", "StiffnessDataMissing",
+           "internal_force_stiffness"]
 
 Array = NDArray[np.float64]
 
@@ -406,3 +413,29 @@ def deflection(model: MechanismModel, kin: MechanismKinematics, reactions: objec
     e_real = np.einsum("nmk,nk->nm", st.members.E, z) + st.members.offset(W)
     t = np.einsum("nmi,nmp,np->ni", st.e, st.members.F, e_real)  # the task body's twist [dtheta; dp_O]
     return np.einsum("nti,ni->nt", st.D, t)
+
+
+def internal_force_stiffness(model: MechanismModel, x: Array, u: Array, step: float = 1e-5) -> Array:
+    """The task stiffness ``K_u (n, nt, nt)`` that actuator efforts ``u (n, na)`` held fixed add
+    at task poses ``x (n, nt)``: ``K_u = -d(J_ax^T u)/dx``, Eq. (S-U) of ``docs/stiffness.md``
+    (symmetric: ``-sum_a u_a d^2 q_a / dx^2``, the Hessians of the actuated coordinates), by
+    central differences of the actuator map over the inverse kinematics (step ``step`` rad, or
+    times the length scale in m). For a redundantly actuated mechanism's internal force (a
+    preload) it is the antagonistic stiffness the preload adds with the drives holding their
+    efforts; the actuators locked, as :func:`stiffness` takes them, it adds nothing.
+    Units: N/m, N/rad, N m/m, N m/rad as ``K_task``."""
+    from ..kinematics.inverse import solve_kinematics
+
+    x = np.atleast_2d(np.asarray(x, dtype=float))
+    u = np.atleast_2d(np.asarray(u, dtype=float))
+    n, nt = x.shape
+    h = step * np.where(model.task_kind == 1, 1.0, model.length_scale)
+    K = np.empty((n, nt, nt))
+    z = np.zeros_like(x)
+    for j in range(nt):
+        e = np.zeros(nt)
+        e[j] = h[j]
+        plus = solve_kinematics(model, x + e, z, z).J_ax  # (n, na, nt)
+        minus = solve_kinematics(model, x - e, z, z).J_ax
+        K[:, :, j] = -np.einsum("nat,na->nt", plus - minus, u) / (2 * h[j])
+    return K

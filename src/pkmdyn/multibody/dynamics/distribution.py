@@ -135,7 +135,7 @@ def distribute(model: MechanismModel, JT: Array, rhs: Array, t: Any = None, samp
         ui = u[i]
         A, w = JT[i], rhs[i]
         where = at_sample(i, t, sample_offset)
-        scale = max(float(np.abs(ui).max()), 1e-300)
+        scale = max(float(np.abs(ui).max()), pre, 1e-300)  # (a mechanism at rest with no load: the preload's)
         if minimax:
             G, h = _box(na, b / scale, 1)
             Gt = np.zeros((2 * na, na + 1))

@@ -258,6 +258,8 @@ def actuator_efforts(model: MechanismModel, kin: MechanismKinematics, Q: Array, 
 #: an under-actuated mechanism's motion is dynamically consistent where the generalised force
 #: the actuators cannot give is at most this share of the largest generalised force
 UNDERACTUATED_TOLERANCE = 1e-8
+#: ... each sample's generalised force, or this share of the motion's largest where larger
+FLOOR = 1e-6
 
 
 def check_consistent(model: MechanismModel, kin: MechanismKinematics, JT: Array, u: Array, rhs: Array,
@@ -265,11 +267,14 @@ def check_consistent(model: MechanismModel, kin: MechanismKinematics, JT: Array,
     """Refuse an under-actuated mechanism's motion (fewer actuators than degrees of freedom)
     where it is not dynamically consistent, naming the first such sample: the residual of Eq. 3
     in the least-squares sense, ``|J_ax^T u - G^T Q|`` over ``max(|G^T Q|, |J_ax^T| |u|)`` (task
-    coordinates of mixed units compared as written), above :data:`UNDERACTUATED_TOLERANCE`, is
+    coordinates of mixed units compared as written; at least :data:`FLOOR` of its largest over
+    the samples), above :data:`UNDERACTUATED_TOLERANCE`, is
     generalised force along freedoms no actuator moves: no efforts of its actuators make it."""
     r = np.linalg.norm(np.einsum("nta,na->nt", JT, u) - rhs, axis=1)
-    res = r / np.maximum(np.maximum(np.linalg.norm(rhs, axis=1),
-                                    np.linalg.norm(JT, axis=(1, 2)) * np.linalg.norm(u, axis=1)), 1e-300)
+    scale = np.maximum(np.linalg.norm(rhs, axis=1), np.linalg.norm(JT, axis=(1, 2)) * np.linalg.norm(u, axis=1))
+    # a sample whose generalised force is round-off (a pendulum hanging still under a cart moving
+    # at constant speed) is measured against the motion's largest one, not its own
+    res = r / np.maximum(np.maximum(scale, FLOOR * float(scale.max(initial=0.0))), 1e-300)
     bad = np.flatnonzero(res > UNDERACTUATED_TOLERANCE)
     if bad.size:
         s = int(bad[0])

@@ -23,8 +23,10 @@ its named loads (``model.named_loads``): ``(n,)`` (or one value per call of a ``
 for a mechanism with one named load, ``(n, k)`` (``(k,)``) for k; None takes the
 description's ``magnitude_N``. A mechanism without named loads takes None (or zeros).
 
-Redundantly actuated mechanisms (``na > nt``, where the description allows it) take the
-minimum-norm efforts ``u = B^+ (M xdd + h)``.
+Redundantly actuated mechanisms (``na > nt``) share ``M xdd + h`` among their actuators by
+their ``[actuation]`` distribution (:mod:`pkmdyn.multibody.dynamics.distribution`; by default
+the minimum-norm ``u = B^+ (M xdd + h)``); their direct kinematics (:func:`direct_one`) reads
+the square subset of their actuators (:func:`pkmdyn.multibody.kinematics.direct.square_subset`).
 
 The verbs are free functions over ``(model, data)``: ``model`` the compiled mechanism (never
 changed), ``data`` a :class:`MechanismData` made from it, which holds everything a call leaves
@@ -52,7 +54,16 @@ from numpy.typing import NDArray
 from ...errors import MotionError, ParameterError, SingularityError, as_array
 from ..kinematics import _direct_kernels as D
 from ..kinematics import _solve_kernels as K
-from ..kinematics.direct import direct_kinematics, one_state, pack_one, pack_task, prime_one, prime_task, task_state
+from ..kinematics.direct import (
+    direct_kinematics,
+    one_state,
+    pack_one,
+    pack_task,
+    prime_one,
+    prime_task,
+    square_subset,
+    task_state,
+)
 from ..kinematics.inverse import MechanismKinematics, _assemble, _run, solve_kinematics
 from ..model.compiler import MechanismModel
 from ..model.legs import place
@@ -435,6 +446,8 @@ def prime_direct(model: MechanismModel, data: MechanismData, q: Array) -> None:
     x = np.asarray(q, dtype=float).reshape(-1)
     if data.encoder_q is None or x.shape != (model.nt,) or not np.all(np.isfinite(x)):
         return
+    if model.na > model.nt:  # redundant actuation: the square subset's direct kinematics
+        model = square_subset(model)[0]
     qt = data.encoder_q.copy()
     a = qt[model.act_coord].copy()
     if data.direct is None:
@@ -479,6 +492,11 @@ def direct_one(model: MechanismModel, data: MechanismData, a: Array, ad: Array) 
     ad = np.ascontiguousarray(ad, dtype=float)
     if a.ndim != 1 or ad.ndim != 1:
         a, ad = a.reshape(-1), ad.reshape(-1)
+    if model.na > model.nt and a.shape == ad.shape == (model.na,):
+        # redundant actuation: the readings of the square subset's actuated joints (those best
+        # conditioned at the reference; the plant's readings agree with them)
+        model, keep = square_subset(model)
+        a, ad = np.ascontiguousarray(a[keep]), np.ascontiguousarray(ad[keep])
     nt = model.nt
     fit = a.shape == ad.shape == (model.na,)
     status = -1

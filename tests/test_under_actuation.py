@@ -1,0 +1,95 @@
+"""An under-actuated mechanism (fewer actuated joints than freedoms) run from an actuator motion:
+its passive freedoms simulated (:mod:`pkmdyn.multibody.dynamics.passive`).
+
+Oracle written apart from the engine: the cart-pole (``tests/data/cart_pole.toml``), a cart on
+a rail following ``x_c(t)`` and a pendulum hinged on it about +y, its centre of mass ``l`` below
+the hinge, turned by ``th`` (the task's ``euler1``). Its equation of motion from its Lagrangian
+(the centre of mass at ``x_c - l sin th``, height ``-l cos th``):
+
+    (I + m l^2) th'' = -m g l sin th + m l x_c'' cos th - k (th - th_s) - c th'
+
+(``k`` a spring, ``c`` viscous damping in the hinge), integrated by scipy's DOP853 to 1e-12."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import pkmdyn
+from pkmdyn.cli import main
+from pkmdyn.multibody.dynamics.passive import passive_motion
+
+DATA = Path(__file__).parent / "data"
+M_POLE, L_COM, I_COM, G = 0.4, 0.3, 0.004, 9.80665
+A, W = 0.1, 4.0  # the cart's motion x_c = A sin(W t) [m, rad/s]
+
+
+def _cart_pole(tmp_path: Path, spring: float = 0.0, damping: float = 0.0) -> Path:
+    text = (DATA / "cart_pole.toml").read_text()
+    extra = []
+    if spring:
+        extra.append(f"spring = {{ stiffness_Nm_rad = {spring} }}")
+    if damping:
+        extra.append(f"friction = {{ viscous_Nm_s_rad = {damping} }}")
+    text = text.replace('axis = [0.0, 1.0, 0.0]\n', 'axis = [0.0, 1.0, 0.0]\n' + "\n".join(extra) + "\n")
+    f = tmp_path / "cart_pole.toml"
+    f.write_text(text)
+    return f
+
+
+def _oracle(t: np.ndarray, spring: float, damping: float) -> np.ndarray:
+    def f(tt, y):
+        th, thd = y
+        xcdd = -A * W * W * np.sin(W * tt)
+        torque = -M_POLE * G * L_COM * np.sin(th) + M_POLE * L_COM * xcdd * np.cos(th) - spring * th - damping * thd
+        return [thd, torque / (I_COM + M_POLE * L_COM ** 2)]
+
+    return solve_ivp(f, (t[0], t[-1]), [0.0, 0.0], t_eval=t, rtol=1e-12, atol=1e-14, method="DOP853").y[0]
+
+
+def _cart(t):
+    return (A * np.sin(W * t))[:, None], (A * W * np.cos(W * t))[:, None], (-A * W * W * np.sin(W * t))[:, None]
+
+
+@pytest.mark.parametrize("spring, damping", [(0.0, 0.0), (0.8, 0.05)])
+def test_the_passive_pendulum_follows_its_equation_of_motion(tmp_path, spring, damping):
+    m = pkmdyn.load(_cart_pole(tmp_path, spring, damping))
+    assert (m.na, m.nt) == (1, 2)
+    t = np.linspace(0.0, 1.5, 151)
+    mo = passive_motion(m, t, *_cart(t))
+    th = _oracle(t, spring, damping)
+    assert np.abs(th).max() > 0.1  # the pendulum swings
+    assert np.abs(mo.x[:, 1] - th).max() <= 1e-8 * np.abs(th).max()
+    assert np.abs(mo.x[:, 0] - _cart(t)[0][:, 0]).max() <= 1e-10  # the cart follows its motion
+
+
+def test_run_takes_an_under_actuated_mechanisms_actuator_motion(tmp_path):
+    t = np.linspace(0.0, 1.0, 101)
+    s, sd, sdd = _cart(t)
+    path = tmp_path / "cart.csv"
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["t_s", "P_pos_m", "P_vel_m_s", "P_acc_m_s2"])
+        for row in zip(t, s[:, 0], sd[:, 0], sdd[:, 0]):
+            w.writerow([repr(float(v)) for v in row])
+    out = tmp_path / "run"
+    assert main(["run", "--machine", str(_cart_pole(tmp_path)), "--actuator-motion", str(path), "--out", str(out)]) == 0
+    with open(out / "results.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    th = np.array([float(r["euler1_rad"]) for r in rows])
+    assert np.abs(th - _oracle(t, 0.0, 0.0)).max() <= 1e-7
+    # the cart's force: what moves the cart and swings the pendulum, (m_c + m_p) x_c'' - m_p l (th'' cos th - th'^2 sin th)
+    assert all(np.isfinite(float(r["P_effort_N"])) for r in rows)
+
+
+def test_control_refuses_an_inconsistent_default_motion_naming_the_sample(tmp_path, capsys):
+    """The cart-pole's default motion swings the pendulum by a sine of its own: no cart force makes
+    that motion; the command says so, naming the sample, and writes nothing."""
+    out = tmp_path / "c"
+    assert main(["control", "--machine", str(_cart_pole(tmp_path)), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "sample" in err[0] and "under-actuated" in err[0] and not out.exists()
