@@ -253,4 +253,17 @@ def test_the_internal_forces_stiffness_is_the_actuated_coordinates_hessians_weig
 
     pose = json.loads((tmp_path / "s" / "stiffness.json").read_text())["poses"][0]
     assert min(abs(v) for v in pose["internal_force"].values()) >= 0.5 * (1 - 1e-9)
-    assert np.abs(np.array(pose["K_internal"])).max() > 0
+    mp = load_mechanism(d)
+    xp = np.array([pose["task"][f"{n}_{u}"] for n, u in zip(mp.task_names, mp.task_units)])
+    up = np.array([pose["internal_force"][a] for a in mp.actuator_names])
+    Kp = internal_force_stiffness(mp, xp[None], up[None])[0]
+    assert np.abs(Kp).max() > 1.0  # a 0.5 N m preload on 0.3 m links: about 10 N m/m
+    assert np.abs(np.array(pose["K_internal"]) - Kp).max() <= 1e-9 * np.abs(Kp).max()
+
+
+def test_retiming_refuses_a_distribution_that_is_not_linear():
+    from pkmdyn.multibody.analyses.retime import retime, task_path
+
+    m = load_mechanism(_rrr4(preload_min_effort_SI=2.0))
+    with pytest.raises(ParameterError, match=r"\[actuation\]: retiming"):
+        retime(m, task_path(m, MOTION[1][::5]), 50)

@@ -485,7 +485,9 @@ def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple
     t = motion.t
     direct = model.na == model.nt
     m: dict[str, float] = {}
-    if ctx.gci:
+    if ctx.gci and model.na > model.nt:  # redundant actuation: the tall direct measure (by its SVD)
+        m["gci"] = _mean(singularity_measures(model, kin.q, only="direct").direct, t)
+    if ctx.gci and model.na <= model.nt:
         # the conditioning index's measure at every sample, the least of each from proven brackets
         # (the decompositions only where a sample can hold the least: the same values to the bit)
         mu = getattr(singularity_measures(model, kin.q, only="direct" if direct else "inverse"),

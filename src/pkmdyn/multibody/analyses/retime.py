@@ -468,6 +468,11 @@ class _Grid:
 def _grid(model: MechanismModel, path: TaskPath, points: int, limits: RetimeLimits | None, friction: bool) -> _Grid:
     if not 3 <= points <= 1_000_000:
         raise ParameterError(f"points: {points} is not between 3 and 1,000,000")
+    if model.na > model.nt and (model.act_distribution == "minimax" or model.act_preload):
+        raise ParameterError(f"{model.name}: [actuation]: retiming takes the efforts as linear in the path's "
+                             f"acceleration and squared speed; the {model.act_distribution.replace('_', ' ')} "
+                             f"distribution{' with a preload' if model.act_preload else ''} is not (retime with "
+                             "distribution = \"minimum_norm\" or \"weighted\" and no preload)")
     limits = RetimeLimits.none(model) if limits is None else limits
     lim = effective_limits(model, limits.overrides)
     s = np.linspace(0.0, 1.0, points)

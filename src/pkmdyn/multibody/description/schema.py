@@ -1195,8 +1195,8 @@ def _actuators(label: str, entries: list[tuple[_Actuator, str]], joints: list[Jo
                 raise ParameterError(f"{where} {key}: {v:g} exceeds the plausibility bound {bound:g}")
             vals[role] = v
         ohm = 0.0 if a.winding_resistance_ohm is None else float(a.winding_resistance_ohm)
-        if not (math.isfinite(ohm) and 0.0 <= ohm <= _MAX_MOTOR_VALUE):
-            raise ParameterError(f"{where} winding_resistance_ohm: must be a finite number >= 0, got {ohm!r}")
+        if a.winding_resistance_ohm is not None and not (math.isfinite(ohm) and 0.0 < ohm <= _MAX_MOTOR_VALUE):
+            raise ParameterError(f"{where} winding_resistance_ohm: must be a finite number > 0, got {ohm!r}")
         if (a.winding_resistance_ohm is None) != (not vals["constant"]):
             raise ParameterError(f"{where} {'winding_resistance_ohm' if a.winding_resistance_ohm is None else keys['constant']}: "
                                  f"give the winding's resistance and the motor's {keys['constant']} together (its "

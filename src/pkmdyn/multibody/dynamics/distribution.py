@@ -147,7 +147,7 @@ def distribute(model: MechanismModel, JT: Array, rhs: Array, t: Any = None, samp
                            np.concatenate([np.zeros(2 * na), h]))
             if st not in _OK:
                 raise LimitError(f"{where}: no distribution of the efforts within the actuated joints' bounds "
-                                 f"exists (at the least peak: {_beyond(model, ui, b)})")
+                                 f"exists (at the least-norm distribution: {_beyond(model, ui, b)})")
             peak = float(x[na]) * (1.0 + 1e-9) + 1e-12
             G, h = _box(na, np.minimum(np.full(na, peak), b / scale))
             st, x = _solve(np.eye(na), np.zeros(na), A, w / scale, G, h)
@@ -173,9 +173,10 @@ def distribute(model: MechanismModel, JT: Array, rhs: Array, t: Any = None, samp
                                np.concatenate([np.full(on.size, -m), h]))
                 if st not in _OK:
                     j = on[int(np.argmin(sig[on] * ui[on]))]
-                    raise LimitError(f"{where}: no preload of {pre:.6g} keeps every preloaded drive within its bound "
-                                     f"({model.actuator_names[j]} is the hardest to preload: {ui[j]:.6g} before the "
-                                     "preload)")
+                    raise LimitError(f"{where}: no preload of {pre:.6g} with these signs keeps every preloaded drive "
+                                     f"within its bound ({model.actuator_names[j]} is the hardest to preload: "
+                                     f"{ui[j]:.6g} before the preload; the internal forces may not reach the sign "
+                                     "pattern, or a bound stops them)")
                 ui = x * scale
         u[i] = ui
     return u

@@ -603,7 +603,7 @@ class EffortShares:
     loads), ``friction`` (n, na, nj) each joint's friction share (zero for a joint without
     friction); ``internal`` (n, na) a redundantly actuated mechanism's internal force (what its
     distribution's bounds, least peak or preload add to the (weighted) least-norm efforts: it
-    moves nothing; zero otherwise); ``sum(groups) + sum(friction) + internal = u`` to
+    moves nothing; round-off otherwise); ``sum(groups) + sum(friction) + internal = u`` to
     rounding. Joint-side units [N or N m]."""
 
     groups: Array

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import MotionError, SingularityError
+from ...errors import MotionError, PkmdynError
 from ..kinematics.inverse import reference_task, solve_kinematics
 from ..kinematics.motion import TaskMotion
 from ..model.compiler import MechanismModel
@@ -78,6 +78,8 @@ def passive_motion(model: MechanismModel, t: Array, s: Array, sd: Array, sdd: Ar
 
     nt, na = model.nt, model.na
     t = np.asarray(t, dtype=float)
+    if t.ndim != 1 or t.size < 2:
+        raise MotionError(f"actuator motion: the passive freedoms' simulation needs at least 2 samples, got {t.size}")
     s, sd, sdd = (np.asarray(a, dtype=float).reshape(len(t), na) for a in (s, sd, sdd))
     verbs = machine_verbs(model)
     k = model.drive_ratio
@@ -103,13 +105,14 @@ def passive_motion(model: MechanismModel, t: Array, s: Array, sd: Array, sdd: Ar
         return sol[:nt], sol[nt:]
 
     def rhs(tau: float, y: Array) -> Array:
-        return np.concatenate([y[nt:], accel(y[:nt], y[nt:], tau)[0]])
+        try:
+            return np.concatenate([y[nt:], accel(y[:nt], y[nt:], tau)[0]])
+        except (np.linalg.LinAlgError, PkmdynError) as exc:
+            raise MotionError(f"actuator motion: t = {tau:.6g} s: the passive freedoms' simulation stopped "
+                              f"({str(exc).split(': ', 1)[-1]})") from None
 
-    try:
-        res = solve_ivp(rhs, (t[0], t[-1]), np.concatenate([x0, xd0]), method="DOP853", t_eval=t, rtol=rtol,
-                        atol=rtol * 1e-2)
-    except (np.linalg.LinAlgError, SingularityError) as exc:
-        raise MotionError(f"actuator motion: the passive freedoms' simulation stopped: {exc}") from None
+    res = solve_ivp(rhs, (t[0], t[-1]), np.concatenate([x0, xd0]), method="DOP853", t_eval=t, rtol=rtol,
+                    atol=rtol * 1e-2)
     if res.status != 0 or res.y.shape[1] != len(t):
         at = float(res.t[-1]) if res.t.size else float(t[0])
         raise MotionError(f"actuator motion: t = {at:.6g} s: the passive freedoms' simulation stopped "

@@ -153,7 +153,8 @@ def _check(model: MechanismModel) -> None:
 
 
 #: a redundantly actuated mechanism's other actuated coordinates must agree with the pose its
-#: square subset gives to this [rad, or times the model's length scale in m]
+#: square subset gives to this [rad, or times the model's length scale in m], or to two counts
+#: of their encoders (:func:`_agreement`)
 REDUNDANT_TOLERANCE = 1e-7
 _SQUARE: dict[int, tuple] = {}
 
@@ -190,6 +191,15 @@ def square_subset(model: MechanismModel) -> tuple[MechanismModel, Array]:
     return sub, keep
 
 
+def _agreement(model: MechanismModel, idx: Array) -> Array:
+    """How far the actuated joints ``idx`` may sit from the pose the square subset gives [m or
+    rad]: :data:`REDUNDANT_TOLERANCE` (times the length scale in m), or two counts of the
+    drive's encoder where it has one (a measured reading agrees to its resolution)."""
+    scale = np.where(np.array([model.actuator_units[k] for k in idx]) == "m", model.length_scale, 1.0)
+    counts = 2.0 * model.drive_encoder[idx] / model.drive_ratio[idx]
+    return np.maximum(REDUNDANT_TOLERANCE * scale, counts)
+
+
 def _redundant(model: MechanismModel, s: Array, sd: Array, sdd: Array, t: Array | None, q_start: Array | None,
                sample_offset: int) -> DirectKinematics:
     """:func:`direct_kinematics` of a redundantly actuated mechanism: its square subset's
@@ -199,9 +209,7 @@ def _redundant(model: MechanismModel, s: Array, sd: Array, sdd: Array, t: Array 
                            sample_offset=sample_offset, bodies=True)
     other = np.setdiff1d(np.arange(model.na), keep)
     got = dk.q[:, model.act_coord[other]]
-    scale = np.where(np.array([model.actuator_units[k] for k in other]) == "m", model.length_scale, 1.0)
-    off = np.abs(got - s[:, other]) / scale
-    bad = np.argwhere(off > REDUNDANT_TOLERANCE)
+    bad = np.argwhere(np.abs(got - s[:, other]) > _agreement(model, other))
     if bad.size:
         i, k = (int(v) for v in bad[0])
         a = int(other[k])
@@ -669,9 +677,8 @@ def assembly_modes(model: MechanismModel, s: Array, starts: int | None = None, s
         sub, keep = square_subset(model)
         found = assembly_modes(sub, s[keep], starts, seed, patience)
         other = np.setdiff1d(np.arange(model.na), keep)
-        scale = np.where(np.array([model.actuator_units[k] for k in other]) == "m", model.length_scale, 1.0)
         modes = tuple(a for a in found.modes
-                      if np.all(np.abs(a.q[model.act_coord[other]] - s[other]) / scale <= REDUNDANT_TOLERANCE))
+                      if np.all(np.abs(a.q[model.act_coord[other]] - s[other]) <= _agreement(model, other)))
         if not modes:
             raise UnreachablePoseError(
                 f"actuator coordinates {', '.join(f'{n}={v:.9g}' for n, v in zip(model.actuator_names, s))}: none of "

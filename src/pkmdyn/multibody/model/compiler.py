@@ -430,6 +430,10 @@ def _actuation(desc: Description, model: MechanismModel, dof: int) -> dict:
         raise ParameterError(f"{model.path or model.name}: [actuation]: {model.na} actuated joint(s) for {dof} degree(s) "
                              "of freedom: the efforts are determined, there is nothing to distribute (the section "
                              "is for a redundantly actuated mechanism, more actuated joints than freedoms)")
+    if a.preload_min_effort and model.na - dof > 1 and not a.preload_sign:
+        raise ParameterError(f"{model.path or model.name}: [actuation] preload_sign: {model.na - dof} internal-force "
+                             "directions; give each preloaded joint's sign (the preload's pattern is not one "
+                             "direction's)")
     names = list(model.actuator_names)
 
     def per(items: tuple, default: float) -> Array:
