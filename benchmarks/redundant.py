@@ -15,47 +15,19 @@ from __future__ import annotations
 import argparse
 import copy
 import json
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 import pkmdyn
 from pkmdyn.machines.registry import builtin_names
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
-from pkmdyn.multibody.description.expressions import resolve_parameters
 from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
 
-
-def _raw(name: str) -> dict:
-    import tomllib
-    from pathlib import Path
-
-    import pkmdyn.machines as machines
-
-    with open(Path(machines.__file__).parent / name / f"{name}.toml", "rb") as fh:
-        return resolve_parameters(tomllib.load(fh), name)[0]
-
-
-def _square(d: dict) -> dict:
-    """The mechanism with its last leg copy's drive passive (one drive fewer: square)."""
-    d = copy.deepcopy(d)
-    d.pop("actuation", None)
-    leg = d["legs"][-1]
-    if len(leg["angles_deg"]) > 1:
-        last = copy.deepcopy(leg)
-        n = len(leg["angles_deg"])
-        last["angles_deg"] = leg["angles_deg"][-1:]
-        last["suffixes"] = [(leg.get("suffixes") or [f"_{k + 1}" for k in range(n)])[-1]]
-        leg["angles_deg"] = leg["angles_deg"][:-1]
-        if leg.get("suffixes"):
-            leg["suffixes"] = leg["suffixes"][:-1]
-        d["legs"].append(last)
-        leg = last
-    for j in leg["joints"]:
-        if j.get("actuated"):
-            j["actuated"] = False
-            j.pop("stiffness", None)
-    return d
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+import multibody_examples as ex  # noqa: E402  (the built-ins as dicts, their square variants)
 
 
 def _per_sample(model, kin, repeats: int = 3) -> float:
@@ -82,12 +54,12 @@ def main() -> None:
         xd = amp * 2 * np.pi / 2.0 * np.cos(2 * np.pi * t[:, None] / 2.0)
         xdd = -amp * (2 * np.pi / 2.0) ** 2 * np.sin(2 * np.pi * t[:, None] / 2.0)
         row = {}
-        sq = load_mechanism(_square(_raw(red)))
+        sq = load_mechanism(ex.passive_last_drive(ex.builtin_dict(red)))
         assert sq.na == sq.nt
         row["square_us"] = 1e6 * _per_sample(sq, solve_kinematics(sq, x, xd, xdd, t))
         for label, act in (("minimum_norm", {}), ("weighted", {"distribution": "weighted"}),
                            ("minimax", {"distribution": "minimax"}), ("preload", {"preload_min_effort_SI": 1.0})):
-            d = copy.deepcopy(_raw(red))
+            d = copy.deepcopy(ex.builtin_dict(red))
             d["actuation"] = {**d.get("actuation", {}), **act}
             mm = load_mechanism(d)
             row[f"{red}_{label}_us"] = 1e6 * _per_sample(mm, solve_kinematics(mm, x, xd, xdd, t), 1)

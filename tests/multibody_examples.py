@@ -164,3 +164,29 @@ def serial_arm():
                    joint("J2", "revolute", "l1", "l2", (0.5, 0.1, 0), axis=Z, actuated=True)],
         "task": {"body": "l2", "point_m": [0.7, 0.6, 0.0], "position": ["x", "y"]},
     }
+
+
+def passive_last_drive(d):
+    """A redundantly actuated description (a dict, its ``[actuation]`` left out) with its last
+    leg copy's drive passive: as many actuated joints as freedoms (the square mechanism whose
+    efforts a redundant one's are compared with)."""
+    import copy
+
+    d = copy.deepcopy(d)
+    d.pop("actuation", None)
+    leg = d["legs"][-1]
+    if len(leg["angles_deg"]) > 1:  # the last copy split off its leg table
+        last = copy.deepcopy(leg)
+        n = len(leg["angles_deg"])
+        last["angles_deg"] = leg["angles_deg"][-1:]
+        last["suffixes"] = [(leg.get("suffixes") or [f"_{k + 1}" for k in range(n)])[-1]]
+        leg["angles_deg"] = leg["angles_deg"][:-1]
+        if leg.get("suffixes"):
+            leg["suffixes"] = leg["suffixes"][:-1]
+        d["legs"].append(last)
+        leg = last
+    for j in leg["joints"]:
+        if j.get("actuated"):
+            j["actuated"] = False
+            j.pop("stiffness", None)
+    return d

@@ -30,26 +30,18 @@ from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
 
 
 def _rrr4(**actuation):
-    d = copy.deepcopy(ex.builtin_dict("rrr4"))
+    return _builtin("rrr4", **actuation)
+
+
+def _builtin(name, **actuation):
+    d = copy.deepcopy(ex.builtin_dict(name))
     d["actuation"] = {"distribution": "minimum_norm", **actuation}
     return d
 
 
-def _square():
-    """The 4-RRR with its fourth leg's drive passive: three actuated joints for three freedoms."""
-    d = _rrr4()
-    del d["actuation"]
-    (leg,) = d["legs"]
-    three, fourth = copy.deepcopy(leg), copy.deepcopy(leg)
-    three["angles_deg"] = leg["angles_deg"][:3]
-    fourth["angles_deg"] = leg["angles_deg"][3:]
-    fourth["suffixes"] = ["_4"]
-    for j in fourth["joints"]:
-        if j.get("actuated"):
-            j["actuated"] = False
-            j.pop("stiffness", None)
-    d["legs"] = [three, fourth]
-    return d
+def _square(name="rrr4"):
+    """The built-in with its last leg's drive passive: as many actuated joints as freedoms."""
+    return ex.passive_last_drive(_builtin(name))
 
 
 def _motion(m, n=25, seed=1):
@@ -68,13 +60,16 @@ def _solve(d, motion):
 MOTION = _motion(load_mechanism(_rrr4()))
 
 
-def test_minimum_norm_efforts_are_the_pseudo_inverse_of_the_square_mechanisms_force():
-    m4, kin4, r4 = _solve(_rrr4(), MOTION)
-    m3, kin3, r3 = _solve(_square(), MOTION)
-    assert m4.na == 4 and m3.na == 3 and m4.nt == m3.nt == 3
-    A = np.swapaxes(kin4.J_ax, 1, 2)  # (n, 3, 4)
+@pytest.mark.parametrize("name", ["rrr4", "stewart7"])
+def test_minimum_norm_efforts_are_the_pseudo_inverse_of_the_square_mechanisms_force(name):
+    motion = MOTION if name == "rrr4" else _motion(load_mechanism(_builtin(name)), seed=2)
+    m4, kin4, r4 = _solve(_builtin(name), motion)
+    m3, kin3, r3 = _solve(_square(name), motion)
+    assert m4.na == m4.nt + 1 and m3.na == m3.nt == m4.nt
+    assert m3.actuator_names == m4.actuator_names[:-1]
+    A = np.swapaxes(kin4.J_ax, 1, 2)  # (n, nt, nt + 1)
     A3 = np.swapaxes(kin3.J_ax, 1, 2)
-    assert np.abs(A[:, :, :3] - A3).max() <= 1e-12 * np.abs(A3).max()
+    assert np.abs(A[:, :, :-1] - A3).max() <= 1e-12 * np.abs(A3).max()
     w = np.einsum("nta,na->nt", A3, r3.u)
     expected = np.einsum("nat,nt->na", np.linalg.pinv(A), w)
     assert np.abs(r4.u - expected).max() <= 1e-10 * np.abs(expected).max()
