@@ -38,6 +38,7 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError
 from ..dynamics.actuators import motor_coordinates, motor_eps
+from ..dynamics.distribution import least_norm_map
 from ..dynamics.friction import (
     EPS_ROTATION,
     EPS_TRANSLATION,
@@ -129,11 +130,9 @@ def least_norm_projector(model: MechanismModel, kin: MechanismKinematics) -> Arr
     and keeps ``A K u`` (the task-space balance); None for a mechanism without redundancy."""
     if model.na <= model.nt:
         return None
-    c = model.act_weight if model.act_distribution == "weighted" else np.ones(model.na)
     k = model.drive_ratio
     A = np.swapaxes(kin.J_ax, 1, 2)
-    AC = A / c[None, None, :]
-    P = np.swapaxes(AC, 1, 2) @ np.linalg.solve(AC @ np.swapaxes(A, 1, 2), A)  # (n, na, na)
+    P = least_norm_map(model, A) @ A  # (n, na, na)
     return P * k[None, None, :] / k[None, :, None]
 
 

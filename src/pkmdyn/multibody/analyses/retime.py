@@ -440,11 +440,12 @@ class _Grid:
         kt = _kin(self.model, self.x, xd, xdd, self.q0)
         return kt, joint_reactions(self.model, kt, friction=self.friction)
 
-    def friction_at(self, u: Array, v: Array, d: list) -> tuple[list, list, float]:
-        """The friction and reaction directions of the timing ``(u, v)``, and the largest use of a
-        bound there with its own friction. Where the path is at rest, the friction is that of
-        the motion leaving or reaching it (the neighbouring point's speed): the friction a grid
-        step starting from rest meets at once."""
+    def friction_at(self, u: Array, v: Array, d: list) -> tuple[list, list, float, Any, Any]:
+        """The friction and reaction directions of the timing ``(u, v)``, the largest use of a
+        bound there with its own friction, and the solve they come from (kinematics, efforts and
+        reactions). Where the path is at rest, the friction is that of the motion leaving or
+        reaching it (the neighbouring point's speed): the friction a grid step starting from
+        rest meets at once."""
         ve = _moving(v)
         kt, reac = self.solve(u, ve)
         full = _values(self.model, kt, reac, self.limits, self.lim, self.friction)
@@ -462,7 +463,7 @@ class _Grid:
             else:  # the direction at the timing itself (at rest: the weight's)
                 mag = np.linalg.norm(val, axis=-1, keepdims=True)
                 dn.append(np.where(mag > 0, val / np.maximum(mag, 1e-300), d[j]))
-        return F, dn, worst
+        return F, dn, worst, kt, reac
 
 
 def _grid(model: MechanismModel, path: TaskPath, points: int, limits: RetimeLimits | None, friction: bool) -> _Grid:
@@ -528,7 +529,7 @@ def retime(model: MechanismModel, path: TaskPath, points: int = 1000, limits: Re
         sd = np.sqrt(v)
         if not (g.has_fric or g.vector):
             break
-        F, d, worst = g.friction_at(u, v, d)
+        F, d, worst, _, _ = g.friction_at(u, v, d)
         if sd_prev is not None:
             change = _change(sd, sd_prev)
             if change <= SETTLED or (change <= CLOSE and worst <= 1.0 + MET):

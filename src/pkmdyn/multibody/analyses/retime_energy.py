@@ -107,16 +107,16 @@ def _state(g: _Grid, u: Array, v: Array, d: list) -> tuple[list, list, Array, Ar
     """At the timing ``(u, v)``: the friction and reaction directions of the limit rows, the
     motor efforts' friction part ``Fm (n, na)`` (their value less ``M[0] u + M[1] v + M[2]``) and
     the dissipation per unit of path ``phi (n,)`` [J]."""
-    F, dn, _ = g.friction_at(u, v, d)
+    F, dn, _, kt, reac = g.friction_at(u, v, d)  # (solved at the speeds of _moving(v))
     ve = _moving(v)
-    kt, reac = g.solve(u, ve)
     me = motor_efforts(g.model, kt.act_q, kt.act_qd, kt.act_qdd, reac.u)
     Fm = me.effort - (g.M[0] * u[:, None] + g.M[1] * ve[:, None] + g.M[2])
-    return F, dn, Fm, _phi(g, kt, reac, me, ve)
+    return F, dn, Fm, _phi(g, reac, me, ve)
 
 
-def _phi(g: _Grid, kt: Any, reac: Any, me: Any, v: Array) -> Array:
-    """The dissipation per unit of path ``|P| / sd`` [J] of a solve at the speeds ``sqrt(v) > 0``."""
+def _phi(g: _Grid, reac: Any, me: Any, v: Array) -> Array:
+    """The dissipation per unit of path ``|P| / sd`` [J] of a solve at the speeds ``sqrt(v) > 0``
+    (its reactions and motor efforts)."""
     if not g.friction:
         return np.zeros(len(v))
     p = np.abs(reac.dissipation) + np.abs(me.friction * me.theta_dot).sum(axis=1)
@@ -136,7 +136,7 @@ def _phi_slopes(g: _Grid, u: Array, v: Array, phi0: Array) -> tuple[Array, Array
     for uu, vv, h in ((u + du, ve, du), (u, ve + dv, dv)):
         kt, reac = g.solve(uu, vv)
         me = motor_efforts(g.model, kt.act_q, kt.act_qd, kt.act_qdd, reac.u)
-        out.append((_phi(g, kt, reac, me, vv) - phi0) / h)
+        out.append((_phi(g, reac, me, vv) - phi0) / h)
     return out[0], out[1]
 
 

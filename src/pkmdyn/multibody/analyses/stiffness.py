@@ -76,7 +76,7 @@ from ..dynamics.newton_euler import (
     task_mass_matrix,
 )
 from ..dynamics.reactions import compliance_terms
-from ..kinematics.inverse import MechanismKinematics
+from ..kinematics.inverse import MechanismKinematics, solve_kinematics
 from ..model._tree_kernels import euler_angles, euler_rate_map
 from ..model.compiler import MechanismModel
 
@@ -424,8 +424,6 @@ def internal_force_stiffness(model: MechanismModel, x: Array, u: Array, step: fl
     preload) it is the antagonistic stiffness the preload adds with the drives holding their
     efforts; the actuators locked, as :func:`stiffness` takes them, it adds nothing.
     Units: N/m, N/rad, N m/m, N m/rad as ``K_task``."""
-    from ..kinematics.inverse import solve_kinematics
-
     x = np.atleast_2d(np.asarray(x, dtype=float))
     u = np.atleast_2d(np.asarray(u, dtype=float))
     n, nt = x.shape

@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 from ...errors import LimitError, ParameterError, at_sample
 from ..model.compiler import MechanismModel
 
-__all__ = ["distribute", "internal_directions"]
+__all__ = ["distribute", "internal_directions", "least_norm_map", "weights"]
 
 Array = NDArray[np.float64]
 
@@ -54,12 +54,18 @@ def internal_directions(JT: Array) -> Array:
     return N * np.where(first < 0.0, -1.0, 1.0)
 
 
-def _weighted(JT: Array, rhs: Array, c: Array) -> Array:
-    """(R2) (and R1 for ``c = 1``): ``u = C^-1 A^T (A C^-1 A^T)^-1 w``, ``A`` of full row rank
-    (the caller has checked its singular values)."""
-    AC = JT / c[None, None, :]
-    lam = np.linalg.solve(AC @ np.swapaxes(JT, 1, 2), rhs[..., None])
-    return (np.swapaxes(AC, 1, 2) @ lam)[..., 0]
+def weights(model: MechanismModel) -> Array:
+    """The weights ``c (na,)`` of the model's least (weighted) norm: ``[actuation] weights`` for
+    the ``weighted`` distribution, else ones."""
+    return model.act_weight if model.act_distribution == "weighted" else np.ones(model.na)
+
+
+def least_norm_map(model: MechanismModel, JT: Array) -> Array:
+    """``L = C^-1 A^T (A C^-1 A^T)^-1 (n, na, nt)`` of ``A = J_ax^T (n, nt, na)`` of full row rank
+    (the caller has checked its singular values): the (weighted) least-norm efforts ``u = L w``
+    of (R1) and (R2), linear in ``w``; ``C`` the model's :func:`weights`."""
+    AC = JT / weights(model)[None, None, :]
+    return np.swapaxes(np.linalg.solve(AC @ np.swapaxes(JT, 1, 2), AC), 1, 2)
 
 
 def _solve(P: Array | None, q: Array, A: Array, w: Array, G: Array, h: Array) -> tuple[str, Array]:
@@ -122,8 +128,8 @@ def distribute(model: MechanismModel, JT: Array, rhs: Array, t: Any = None, samp
     :class:`~pkmdyn.errors.LimitError` naming the first sample and drive where no distribution
     meets the bounds or the preload."""
     n, nt, na = JT.shape
-    c = model.act_weight if model.act_distribution == "weighted" else np.ones(na)
-    u = _weighted(JT, rhs, c)
+    c = weights(model)
+    u = np.einsum("nat,nt->na", least_norm_map(model, JT), rhs)
     b = model.act_bound
     pre = model.act_preload
     minimax = model.act_distribution == "minimax"

@@ -65,7 +65,7 @@ from ._dyn_kernels import (
     twists_from_poses,
 )
 from ._reaction_kernels import cut_reactions_batch
-from .distribution import distribute
+from .distribution import distribute, least_norm_map
 from .friction import JointFriction, friction_diverges, known_friction
 from .loads import load_forces, named_magnitudes
 from .reactions import compliant_reactions
@@ -632,9 +632,8 @@ def effort_shares(model: MechanismModel, kin: MechanismKinematics, S: Array, W: 
     JT = np.swapaxes(kin.J_ax, 1, 2)
     if model.na == model.nt:
         parts = np.linalg.solve(JT, task)
-    elif model.na > model.nt and model.act_distribution == "weighted":
-        s = 1.0 / np.sqrt(model.act_weight)
-        parts = s[None, :, None] * (np.linalg.pinv(JT * s[None, None, :]) @ task)
+    elif model.na > model.nt:  # the distribution's linear part; the rest is its internal force
+        parts = least_norm_map(model, JT) @ task
     else:
         parts = np.linalg.pinv(JT) @ task
     friction = np.zeros((n, model.na, nj))

@@ -31,6 +31,7 @@ from ...errors import MotionError, PkmdynError
 from ..kinematics.inverse import reference_task, solve_kinematics
 from ..kinematics.motion import TaskMotion
 from ..model.compiler import MechanismModel
+from .verbs import machine_verbs
 
 __all__ = ["passive_motion"]
 
@@ -73,8 +74,6 @@ def passive_motion(model: MechanismModel, t: Array, s: Array, sd: Array, sdd: Ar
     ``x0, xd0`` (nt,) the start (default: nearest the reference pose, least-norm rate).
     Raises :class:`~pkmdyn.errors.MotionError` naming the time where the integration fails."""
     from scipy.integrate import solve_ivp
-
-    from .verbs import machine_verbs
 
     nt, na = model.nt, model.na
     t = np.asarray(t, dtype=float)

@@ -26,11 +26,14 @@ task coordinates are then the task body's pose. Two routes:
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+import weakref
+from dataclasses import dataclass, fields, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..._lazy import lazy_module
 from ...errors import (
     MotionError,
     ParameterError,
@@ -41,6 +44,7 @@ from ...errors import (
 )
 from ..dynamics import _sample_kernels as _one
 from ..model.compiler import MechanismModel
+from ..model.legs import explicit_legs
 from ..model.poses import body_poses
 from ..model.topology import column_scale, constraint_jacobian, row_labels, row_scale
 from . import _direct_kernels as D
@@ -54,6 +58,11 @@ from .inverse import (
     solve_kinematics,
 )
 from .motion import ActuatorMotion, TaskMotion
+
+if TYPE_CHECKING:
+    import scipy.linalg as linalg
+else:  # loaded by the first redundantly actuated mechanism's square subset
+    linalg = lazy_module("scipy.linalg")
 
 __all__ = ["DirectKinematics", "Assembly", "AssemblyModes", "direct_kinematics", "assembly_modes", "task_motion",
            "actuator_reference", "parse_actuators", "ROUND_TRIP_TOLERANCE"]
@@ -164,20 +173,13 @@ def square_subset(model: MechanismModel) -> tuple[MechanismModel, Array]:
     the model with the others passive, and the kept actuators' indices. The kept ones are the
     best-conditioned at the reference configuration (pivoted QR of ``J_ax``); the direct
     kinematics solves with them and checks the others (:data:`REDUNDANT_TOLERANCE`)."""
-    import weakref
-    from dataclasses import fields, replace
-
-    from scipy.linalg import qr
-
-    from ..model.legs import explicit_legs
-
     hit = _SQUARE.get(id(model))
     if hit is not None and hit[0]() is model:
         return hit[1], hit[2]
     x = reference_task(model)[None]
     z = np.zeros_like(x)
     J = solve_kinematics(model, x, z, z).J_ax[0]  # (na, nt)
-    _, _, piv = qr(J.T / np.maximum(np.abs(J).max(axis=1), 1e-300)[None, :], pivoting=True)
+    _, _, piv = linalg.qr(J.T / np.maximum(np.abs(J).max(axis=1), 1e-300)[None, :], pivoting=True)
     keep = np.sort(piv[:model.nt])
     cut = {}
     for f in fields(model):
@@ -217,8 +219,6 @@ def _redundant(model: MechanismModel, s: Array, sd: Array, sdd: Array, t: Array 
             f"{at_sample(i, t, sample_offset)}: actuated joint {model.actuator_names[a]} is at {s[i, a]:.9g} but the "
             f"pose the others ({', '.join(model.actuator_names[j] for j in keep)}) give puts it at {got[i, k]:.9g} "
             "[m or rad]: a redundantly actuated mechanism's actuator coordinates must agree")
-    from dataclasses import replace
-
     return replace(dk, s=s, sd=sd, sdd=sdd)
 
 
@@ -559,11 +559,6 @@ def direct_kinematics(model: MechanismModel, s: Array, sd: Array | None = None, 
     _check(model)
     na = model.na
     s = np.ascontiguousarray(as_array(s, (None, na), "s", MotionError))
-    if na > model.nt:
-        n = s.shape[0]
-        sd = np.zeros_like(s) if sd is None else np.ascontiguousarray(as_array(sd, (n, na), "sd", MotionError))
-        sdd = np.zeros_like(s) if sdd is None else np.ascontiguousarray(as_array(sdd, (n, na), "sdd", MotionError))
-        return _redundant(model, s, sd, sdd, t, q_start, sample_offset)
     n = s.shape[0]
     sd = np.zeros_like(s) if sd is None else np.ascontiguousarray(as_array(sd, (n, na), "sd", MotionError))
     sdd = np.zeros_like(s) if sdd is None else np.ascontiguousarray(as_array(sdd, (n, na), "sdd", MotionError))
@@ -575,6 +570,8 @@ def direct_kinematics(model: MechanismModel, s: Array, sd: Array | None = None, 
             raise MotionError(f"{name}: sample {int(bad[0]) + sample_offset} is not finite")
     if n == 0:
         raise MotionError("s: the actuator motion has no samples")
+    if na > model.nt:
+        return _redundant(model, s, sd, sdd, t, q_start, sample_offset)
     q0 = _start(model, s[0], t, sample_offset) if q_start is None else \
         np.ascontiguousarray(as_array(q_start, (model.nq,), "q_start"))
     if not bodies and n > 1:
@@ -672,8 +669,6 @@ def assembly_modes(model: MechanismModel, s: Array, starts: int | None = None, s
     if not np.all(np.isfinite(s)):
         raise MotionError("s: not finite")
     if model.na > model.nt:  # the square subset's modes that the other actuated coordinates agree with
-        from dataclasses import replace
-
         sub, keep = square_subset(model)
         found = assembly_modes(sub, s[keep], starts, seed, patience)
         other = np.setdiff1d(np.arange(model.na), keep)
