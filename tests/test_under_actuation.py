@@ -13,6 +13,7 @@ the hinge, turned by ``th`` (the task's ``euler1``). Its equation of motion from
 from __future__ import annotations
 
 import csv
+import json
 from pathlib import Path
 
 import numpy as np
@@ -92,6 +93,11 @@ def test_run_takes_an_under_actuated_mechanisms_actuator_motion(tmp_path):
     force = 1.5 * sdd[:, 0] + M_POLE * (sdd[:, 0] - L_COM * (thdd_o * np.cos(th_o) - thd_o ** 2 * np.sin(th_o)))
     got = np.array([float(r["P_effort_N"]) for r in rows])
     assert np.abs(got - force).max() <= 1e-6 * np.abs(force).max()
+    # the simulated motion is dynamically consistent: the cart alone makes it
+    ratio = np.array([float(r["unactuated_force_ratio"]) for r in rows])
+    assert np.all(ratio <= 1e-8)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["max_unactuated_force_ratio"] == ratio.max()
 
 
 def test_control_refuses_an_inconsistent_default_motion_naming_the_sample(tmp_path, capsys):
@@ -101,3 +107,41 @@ def test_control_refuses_an_inconsistent_default_motion_naming_the_sample(tmp_pa
     assert main(["control", "--machine", str(_cart_pole(tmp_path)), "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "sample" in err[0] and "under-actuated" in err[0] and not out.exists()
+
+
+def test_the_unactuated_force_ratio_is_the_hinge_torque_no_actuator_gives(tmp_path):
+    """A motion off the pendulum's equation by a hinge torque ``tau = eps F`` (``F`` the cart
+    force it needs): the reactions give, per sample, ``|tau| / max(|(F, tau)|, 1e-6 max |(F, tau)|)``
+    (the cart's actuator gives ``F``, nothing gives ``tau``), computed here from the cart-pole's
+    own equations; ``eps`` a thousand times the tolerance is refused, naming the sample."""
+    from pkmdyn.errors import MotionError
+    from pkmdyn.multibody import solve_kinematics
+    from pkmdyn.multibody.dynamics.newton_euler import UNDERACTUATED_TOLERANCE, joint_reactions
+
+    m = pkmdyn.load(_cart_pole(tmp_path))
+    t = np.linspace(0.0, 1.5, 301)
+    th, thd = _oracle(t, 0.0, 0.0, rates=True)
+    xc, xcd, xcdd = (v[:, 0] for v in _cart(t))
+    thdd0 = np.array([_f(tt, (a, b))[1] for tt, a, b in zip(t, th, thd)])
+    inertia = I_COM + M_POLE * L_COM ** 2
+
+    def cart_force(thdd):
+        return 1.5 * xcdd + M_POLE * (xcdd - L_COM * (thdd * np.cos(th) - thd ** 2 * np.sin(th)))
+
+    for eps, refused in ((3.0 * UNDERACTUATED_TOLERANCE / 10.0, False), (1e3 * UNDERACTUATED_TOLERANCE, True)):
+        thdd = thdd0 + eps * cart_force(thdd0) / inertia
+        # the hinge torque the motion needs: zero on the equation of motion
+        tau = inertia * thdd + M_POLE * G * L_COM * np.sin(th) - M_POLE * L_COM * xcdd * np.cos(th)
+        force = cart_force(thdd)
+        size = np.hypot(force, tau)
+        want = np.abs(tau) / np.maximum(size, 1e-6 * size.max())
+        kin = solve_kinematics(m, np.c_[xc, th], np.c_[xcd, thd], np.c_[xcdd, thdd], t)
+        if refused:
+            with pytest.raises(MotionError, match=r"sample \d+.*under-actuated"):
+                joint_reactions(m, kin)
+            continue
+        r = joint_reactions(m, kin)
+        assert r.unactuated is not None and r.unactuated.shape == t.shape
+        assert want.max() > 0.5 * eps  # the motion is off its equation at most samples
+        assert np.abs(r.unactuated - want).max() <= 1e-3 * eps
+        assert np.abs(r.u[:, 0] - force).max() <= 1e-9 * np.abs(force).max()

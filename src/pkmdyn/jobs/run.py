@@ -164,6 +164,7 @@ class _Summary:
         self.eq_residual = 0.0
         self.iterations = 0
         self.holding = 0.0
+        self.unactuated = 0.0
         na = model.na
         self.joint_effort = np.zeros(na)
         self.motor_effort = np.zeros(na)
@@ -186,6 +187,8 @@ class _Summary:
         self.iterations = max(self.iterations, int(reac.iterations))
         if reac.holding is not None and reac.holding.size:
             self.holding = max(self.holding, float(np.abs(reac.holding).max()))
+        if reac.unactuated is not None:
+            self.unactuated = max(self.unactuated, float(reac.unactuated.max(initial=0.0)))
         self.joint_effort = np.maximum(self.joint_effort, np.abs(reac.u).max(axis=0))
         for i, name in enumerate(model.drive_name):
             tau = cols[actuator_effort_column(model, i)]
@@ -355,6 +358,8 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
                              "parts": [*model.group_names, *(["rotor"] if model.has_drives else []), "friction"]},
             "results_format": fmt, "limits": lim, "bodies_samples": body_rows,
         }
+        if model.na < model.nt:  # under-actuated: the motion's least dynamic consistency
+            summary["max_unactuated_force_ratio"] = summ.unactuated
         plot_cols = {k: np.concatenate([p[k] for p in plot_parts]) for k in plot_parts[0]}
         files["report"] = write_run_report(out, model, plot_cols, frames.arrays(), summary, description_text,
                                            samples=n)

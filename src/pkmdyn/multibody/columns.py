@@ -247,6 +247,12 @@ def bodies_arrays(model: MechanismModel, kin: MechanismKinematics) -> dict[str, 
     return out
 
 
+#: an under-actuated mechanism's column of ``results.csv``: the share of each sample's
+#: generalised force along freedoms no actuator moves (dimensionless,
+#: :func:`pkmdyn.multibody.dynamics.newton_euler.unactuated_share`)
+UNACTUATED_COLUMN = "unactuated_force_ratio"
+
+
 def effort_columns(model: MechanismModel, kin: MechanismKinematics, reac: Any, named: Mapping | None) -> dict[str, Array]:
     """The dynamics' columns of ``results.csv``: per actuated joint ``<joint>_effort_<N|Nm>``;
     per drive its motor ``<actuator>_pos_rad``, ``_vel_rad_s``, ``_acc_rad_s2`` (``m`` for a
@@ -254,7 +260,7 @@ def effort_columns(model: MechanismModel, kin: MechanismKinematics, reac: Any, n
     (:class:`~pkmdyn.multibody.dynamics.newton_euler.EffortShares`): per actuator and part (each body group, ``rotor`` for a
     drive, ``friction``: every joint's and the motor's) ``<actuator>_torque_<part>_Nm`` (a
     drive, motor side) or ``<joint>_effort_<part>_<N|Nm>`` (a joint without one); the named
-    loads' magnitudes."""
+    loads' magnitudes; an under-actuated mechanism's :data:`UNACTUATED_COLUMN`."""
     cols: dict[str, Array] = {}
     u = reac.u
     for i in range(model.na):
@@ -280,6 +286,8 @@ def effort_columns(model: MechanismModel, kin: MechanismKinematics, reac: Any, n
                 cols[actuator_effort_column(model, i, "internal")] = sh.internal[:, i] / k[i]
     if model.named_loads:
         cols.update(named_magnitudes(model, len(kin), named))
+    if model.na < model.nt:  # under-actuated: how far from dynamically inconsistent each sample is
+        cols[UNACTUATED_COLUMN] = reac.unactuated
     return cols
 
 
@@ -302,6 +310,8 @@ def results_column_names(model: MechanismModel, deflection: bool = False) -> lis
                  *(["internal"] if model.na > model.nt else [])]
         out += [actuator_effort_column(model, i, p) for p in parts]
     out += list(model.named_loads)
+    if model.na < model.nt:
+        out.append(UNACTUATED_COLUMN)
     if deflection:
         out += [f"{n}_deflection_{u}" for n, u in zip(model.task_names, model.task_units)]
     return out + pose_column_names(model)

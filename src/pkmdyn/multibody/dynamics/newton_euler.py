@@ -262,20 +262,27 @@ UNDERACTUATED_TOLERANCE = 1e-8
 FLOOR = 1e-6
 
 
-def check_consistent(model: MechanismModel, kin: MechanismKinematics, JT: Array, u: Array, rhs: Array,
-                     sample_offset: int = 0) -> None:
-    """Refuse an under-actuated mechanism's motion (fewer actuators than degrees of freedom)
-    where it is not dynamically consistent, naming the first such sample: the residual of Eq. 3
-    in the least-squares sense, ``|J_ax^T u - G^T Q|`` over ``max(|G^T Q|, |J_ax^T| |u|)`` (task
-    coordinates of mixed units compared as written; at least :data:`FLOOR` of its largest over
-    the samples), above :data:`UNDERACTUATED_TOLERANCE`, is
-    generalised force along freedoms no actuator moves: no efforts of its actuators make it."""
+def unactuated_share(JT: Array, u: Array, rhs: Array) -> Array:
+    """``(n,)`` the share of each sample's generalised force along freedoms no actuator moves
+    (an under-actuated mechanism, :func:`check_consistent`): the residual of Eq. 3 in the
+    least-squares sense, ``|J_ax^T u - G^T Q|`` over ``max(|G^T Q|, |J_ax^T| |u|)`` (task
+    coordinates of mixed units compared as written), that scale at least :data:`FLOOR` of its
+    largest over the samples given. Zero where the motion is dynamically consistent."""
     r = np.linalg.norm(np.einsum("nta,na->nt", JT, u) - rhs, axis=1)
     scale = np.maximum(np.linalg.norm(rhs, axis=1), np.linalg.norm(JT, axis=(1, 2)) * np.linalg.norm(u, axis=1))
     # a sample whose generalised force is round-off (a pendulum hanging still under a cart moving
     # at constant speed) is measured against the motion's largest one, not its own
-    res = r / np.maximum(np.maximum(scale, FLOOR * float(scale.max(initial=0.0))), 1e-300)
-    bad = np.flatnonzero(res > UNDERACTUATED_TOLERANCE)
+    return r / np.maximum(np.maximum(scale, FLOOR * float(scale.max(initial=0.0))), 1e-300)
+
+
+def check_consistent(model: MechanismModel, kin: MechanismKinematics, JT: Array, u: Array, rhs: Array,
+                     sample_offset: int = 0) -> None:
+    """Refuse an under-actuated mechanism's motion (fewer actuators than degrees of freedom)
+    where it is not dynamically consistent, naming the first such sample: where
+    :func:`unactuated_share` is above :data:`UNDERACTUATED_TOLERANCE`, generalised force lies
+    along freedoms no actuator moves and no efforts of its actuators make the motion."""
+    res = unactuated_share(JT, u, rhs)
+    bad = np.flatnonzero(~(res <= UNDERACTUATED_TOLERANCE))
     if bad.size:
         s = int(bad[0])
         raise MotionError(f"{at_sample(s, kin.t, sample_offset)}: mechanism {model.name!r} is under-actuated ({model.na} actuators for {model.nt} "
@@ -462,6 +469,9 @@ class JointReactions:
     holding: Array | None = None
     #: with ``split``: the efforts' shares (:func:`effort_shares`), else None
     shares: "EffortShares | None" = None
+    #: (n,) an under-actuated mechanism's :func:`unactuated_share` per sample (at most
+    #: :data:`UNDERACTUATED_TOLERANCE`: larger is refused); None with as many actuators as freedoms or more
+    unactuated: Array | None = None
 
 
 def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict | None = None,
@@ -534,7 +544,8 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     Q = generalised_forces(model, S, W)
     while True:
         F_u = F  # the friction these efforts and reactions hold with (the split's, below)
-        u = actuator_efforts(model, kin, Q if Qf is None else Q + Qf, sample_offset=sample_offset, consistent=True)
+        Q_u = Q if Qf is None else Q + Qf  # the generalised force these efforts hold
+        u = actuator_efforts(model, kin, Q_u, sample_offset=sample_offset, consistent=True)
         eff = np.zeros((n, model.nq))
         eff[:, model.act_coord] = u
         b = None if fast else equilibrium_rhs(model, blocks, W, eff, F)
@@ -587,12 +598,16 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     if shares is not None:
         shares = EffortShares(shares.groups, shares.friction,
                               u - shares.groups.sum(axis=2) - shares.friction.sum(axis=2))
+    unactuated = None
+    if model.na < model.nt:
+        unactuated = unactuated_share(np.swapaxes(kin.J_ax, 1, 2), u,
+                                      (np.swapaxes(kin.G, 1, 2) @ Q_u[..., None])[..., 0])
     # the friction the efforts and reactions hold with (within the iteration's tolerance of the
     # law at these reactions), so that the efforts, dissipation and split agree to rounding
     return JointReactions(u=u, joint_point=pts, joint_force=force, joint_moment=moment, residual=res,
                           self_stress=t, method=method, kin=kin, friction=F_u or {}, iterations=it,
                           dissipation=fr.dissipation(F_u) if fr is not None else np.zeros(n), holding=hold,
-                          shares=shares)
+                          shares=shares, unactuated=unactuated)
 
 
 @dataclass(frozen=True)
