@@ -6,7 +6,9 @@ sample's singularity measures count): the kinematics, the efforts with every joi
 and the effort split, the least singularity measures (and, for comparison, the three singular
 value decompositions of every sample they replace), the results' columns; then the whole run
 with its files (``run_mechanism``: results.csv, bodies.npz, model.json, summary.json,
-report.html), and its files' share as the whole less the stages. The reference is the batched
+report.html), and its files' share as the whole less the stages. The whole run's first call
+in the process (``whole_first_us``: it imports what the files need, the report's plotting and
+scipy's rotations, once a process) is given beside the best of the later ones (``whole_us``). The reference is the batched
 kinematics plus the inverse dynamics with every joint reaction, as ``mechanism.py`` times them
 (``stewart_kinematics_us_per_sample + stewart_id_reactions_us_per_sample``). CPU time, best of
 ``--repeat``. Prints one JSON object; with ``--json`` nothing else.
@@ -18,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import sys
 import tempfile
 import time
@@ -67,18 +70,23 @@ def main() -> None:
         k = [0]
 
         def whole() -> None:
+            shutil.rmtree(Path(tmp) / f"r{k[0]}", ignore_errors=True)  # (some 180 MB a run)
             k[0] += 1
             run_mechanism(m, mo, Path(tmp) / f"r{k[0]}")
 
+        # the first call imports what the files need (the report's plotting, scipy's rotations):
+        # once a process, not per sample; the per-sample figure is the best of the later calls
         t0, c0 = time.perf_counter(), time.process_time()
         whole()
-        out["whole_wall_us"] = per(time.perf_counter() - t0)
-        out["whole_us"] = per(time.process_time() - c0)
+        out["whole_first_wall_us"] = per(time.perf_counter() - t0)
+        out["whole_first_us"] = per(time.process_time() - c0)
+        out["whole_us"] = per(best_times({"whole": whole}, max(args.repeat - 1, 1))["whole"])
     out["reference_kinematics_plus_reactions_us"] = reference
     out["computed_us"] = computed
     out["files_us"] = out["whole_us"] - computed
     out["computed_over_reference"] = computed / reference
     out["whole_over_reference"] = out["whole_us"] / reference
+    out["whole_first_over_reference"] = out["whole_first_us"] / reference
     out["targets"] = {"computed_over_reference<=2": out["computed_over_reference"] <= 2.0,
                       "whole_over_reference<=4": out["whole_over_reference"] <= 4.0}
     print(json.dumps(out))
