@@ -262,3 +262,34 @@ def test_retiming_refuses_a_distribution_that_is_not_linear():
     m = load_mechanism(_rrr4(preload_min_effort_SI=2.0))
     with pytest.raises(ParameterError, match=r"\[actuation\]: retiming"):
         retime(m, task_path(m, MOTION[1][::5]), 50)
+
+
+def test_the_pd_laws_share_the_task_effort_by_the_machines_weighted_rule():
+    """The PD laws' map from a task effort to the motor efforts of a redundantly actuated machine
+    is its distribution's (weighted) least norm over the joint efforts (Eq. R2), divided by the
+    drives' ratio: against the weighted least norm solved here as the minimum-norm solution of
+    ``(A C^-1/2) v = F``, ``u = C^-1/2 v`` (numpy's lstsq), ``A = J_ax^T``."""
+    from pkmdyn.control._laws import Gains, make_controller
+    from pkmdyn.control._reference import Reference
+    from pkmdyn.multibody.dynamics.verbs import machine_verbs
+
+    c = {"RA_1": 1.0, "RA_2": 4.0, "RA_3": 0.5, "RA_4": 2.0}
+    d = _rrr4(distribution="weighted", weights=c)
+    for leg in d["legs"]:
+        leg["actuators"] = [{"joint": "RA", "name": "M", "gear_ratio": 8.0}]
+    m = load_mechanism(d)
+    t, x, xd, xdd = _motion(m, n=7, seed=5)
+    ref = Reference(float(t[1] - t[0]), t, x, xd, xdd, None, x[:-1], xd[:-1], xdd[:-1], None)
+    ctrl = make_controller("pd", Gains(*(np.ones(m.nt),) * 3), machine_verbs(m), m, ref)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    w = np.array([c[n] for n in m.actuator_names])
+    rng = np.random.default_rng(3)
+    for s in range(len(t)):
+        F = rng.normal(size=m.nt)
+        A = kin.J_ax[s].T  # (nt, na): J_ax^T u = F, u the joint efforts
+        v = np.linalg.lstsq(A / np.sqrt(w), F, rcond=None)[0]
+        tau = v / np.sqrt(w) / 8.0  # the motor torques
+        assert np.abs(ctrl.B_inv[s] @ F - tau).max() <= 1e-10 * np.abs(tau).max()
+    # (the unweighted pseudo-inverse of B differs: the weights are what the map holds)
+    B = np.swapaxes(kin.J_ax, 1, 2) * 8.0
+    assert np.abs(np.linalg.pinv(B[0]) - ctrl.B_inv[0]).max() > 1e-3 * np.abs(ctrl.B_inv[0]).max()

@@ -41,6 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ParameterError
+from ..multibody.dynamics.distribution import least_norm_map
 from ._reference import JointReference, Reference
 
 __all__ = ["CONTROLLERS", "Gains", "Sensed", "Controller", "make_controller", "effort", "new_memory", "held_efforts"]
@@ -158,14 +159,26 @@ def make_controller(kind: str, gains: Gains, verbs: Any, model: Any, ref: Refere
             B = np.asarray(verbs.actuator_map(model, ref.q), dtype=float)
         if nq > nu:
             raise ParameterError(f"controller {kind!r}: needs at least as many actuators as coordinates ({nu} < {nq})")
-        # a redundantly actuated machine: the task effort's minimum-norm efforts (B^+)
-        B_inv = np.linalg.inv(B) if nq == nu else np.linalg.pinv(B)
+        B_inv = np.linalg.inv(B) if nq == nu else _task_effort_map(model, B)
     if kind == "pid" and joint is None:
         raise ParameterError("controller 'pid': needs the joint-space reference")
     id_one = _id_one(verbs, model, has_load) if kind == "computed-torque" else None
     g = Gains(*(np.ascontiguousarray(getattr(gains, n), dtype=float) for n in ("kp", "kd", "ki")))
     return Controller(kind, g, u_ff, B_inv, joint if kind == "pid" else None, id_one, np.zeros(nu),
                       np.zeros(nq), getattr(id_one, "kernel", None))
+
+
+def _task_effort_map(model: Any, B: Array) -> Array:
+    """A redundantly actuated machine's efforts per task effort ``(K + 1, nu, nq)`` along the
+    reference, from its actuator map ``B = J_ax^T k``: a described mechanism's (weighted)
+    least-norm joint efforts (:func:`pkmdyn.multibody.dynamics.distribution.least_norm_map`, Eq.
+    R1-R2: its distribution's rule, or that rule's linear part for a minimax, bounded or
+    preloaded one, whose internal force the feedforward holds), each divided by its drive's
+    ratio ``k``; ``B^+`` for another machine."""
+    k = getattr(model, "drive_ratio", None)
+    if k is None or not hasattr(model, "act_distribution"):
+        return np.linalg.pinv(B)
+    return least_norm_map(model, B / k[None, None, :]) / k[None, :, None]
 
 
 def held_efforts(u_mid: Array) -> Array:
