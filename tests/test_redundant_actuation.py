@@ -293,3 +293,49 @@ def test_the_pd_laws_share_the_task_effort_by_the_machines_weighted_rule():
     # (the unweighted pseudo-inverse of B differs: the weights are what the map holds)
     B = np.swapaxes(kin.J_ax, 1, 2) * 8.0
     assert np.abs(np.linalg.pinv(B[0]) - ctrl.B_inv[0]).max() > 1e-3 * np.abs(ctrl.B_inv[0]).max()
+
+
+@pytest.mark.parametrize("name", ["rrr4", "stewart7"])
+def test_the_direct_kinematics_is_the_least_squares_pose_of_every_actuated_joint(name):
+    """Exact readings give back the task motion; readings off it by a third of the agreement give
+    the pose where the weighted residual's gradient vanishes (central differences of the inverse
+    kinematics' actuated coordinates, no actuator map), with a smaller residual than the pose of
+    the square subset alone; a reading off by ten times the agreement is refused, naming the
+    sample and a joint."""
+    from pkmdyn.errors import UnreachablePoseError
+    from pkmdyn.multibody.kinematics.direct import REDUNDANT_TOLERANCE, direct_kinematics, square_subset
+
+    m = load_mechanism(_builtin(name))
+    t, x, xd, xdd = _motion(m, n=9, seed=6)
+    kin = solve_kinematics(m, x, xd, xdd, t)
+    dk = direct_kinematics(m, kin.act_q, kin.act_qd, kin.act_qdd, t)
+    for got, want in ((dk.x, x), (dk.xd, xd), (dk.xdd, xdd)):
+        assert np.abs(got - want).max() <= 1e-9 * max(np.abs(want).max(), 1.0)
+    a = np.where(np.array(m.actuator_units) == "m", m.length_scale, 1.0) * REDUNDANT_TOLERANCE
+    rng = np.random.default_rng(7)
+    s = kin.act_q + a / 3.0 * rng.choice([-1.0, 1.0], size=kin.act_q.shape)
+    dk = direct_kinematics(m, s, kin.act_qd, kin.act_qdd, t)
+
+    def f(xx):  # the actuated coordinates at the poses xx
+        return solve_kinematics(m, xx, np.zeros_like(xx), np.zeros_like(xx), t).act_q
+
+    noise = np.linalg.norm((s - kin.act_q) / a, axis=1)
+
+    def stationarity(xx):  # |J^T W r| / (|J^T W| |noise|) with W = diag(1/a^2), r = s - q_a(x)
+        h = 1e-4  # truncation about h^2 (1e-8), the inverse kinematics' rounding about 1e-12 / h
+        J = np.stack([(f(xx + h * e) - f(xx - h * e)) / (2 * h) for e in np.eye(m.nt)], axis=2) / a[None, :, None]
+        r = (s - f(xx)) / a
+        return r, np.linalg.norm(np.einsum("nat,na->nt", J, r), axis=1) / (np.linalg.norm(J, axis=(1, 2)) * noise)
+
+    r, g = stationarity(dk.x)
+    assert np.all(g <= 1e-5)
+    sub, keep = square_subset(m)
+    x_sub = direct_kinematics(sub, s[:, keep], kin.act_qd[:, keep], kin.act_qdd[:, keep], t).x
+    r_sub, g_sub = stationarity(x_sub)
+    assert g_sub.max() > 1e-2  # (the square subset's pose is not the least-squares one)
+    assert np.all(np.linalg.norm(r, axis=1) <= np.linalg.norm(r_sub, axis=1) * (1 + 1e-9))
+    assert np.any(np.linalg.norm(r, axis=1) < 0.9 * np.linalg.norm(r_sub, axis=1))
+    s[4, 2] += 10.0 * a[2]
+    # (the least squares may move the disagreement onto another joint: the message names the one it sees)
+    with pytest.raises(UnreachablePoseError, match=r"sample 4\b.*actuated joint \w+ is at"):
+        direct_kinematics(m, s, kin.act_qd, kin.act_qdd, t)

@@ -161,9 +161,9 @@ def _check(model: MechanismModel) -> None:
                              f"freedom ({model.na} actuated, {model.nt} degrees of freedom)")
 
 
-#: a redundantly actuated mechanism's other actuated coordinates must agree with the pose its
-#: square subset gives to this [rad, or times the model's length scale in m], or to two counts
-#: of their encoders (:func:`_agreement`)
+#: a redundantly actuated mechanism's actuated coordinates must agree with its direct
+#: kinematics' pose to this [rad, or times the model's length scale in m], or to two counts of
+#: their encoders (:func:`_agreement`)
 REDUNDANT_TOLERANCE = 1e-7
 _SQUARE: dict[int, tuple] = {}
 
@@ -171,8 +171,9 @@ _SQUARE: dict[int, tuple] = {}
 def square_subset(model: MechanismModel) -> tuple[MechanismModel, Array]:
     """A redundantly actuated mechanism (``na > nt``) seen through ``nt`` of its actuated joints:
     the model with the others passive, and the kept actuators' indices. The kept ones are the
-    best-conditioned at the reference configuration (pivoted QR of ``J_ax``); the direct
-    kinematics solves with them and checks the others (:data:`REDUNDANT_TOLERANCE`)."""
+    best-conditioned at the reference configuration (pivoted QR of ``J_ax``): the direct
+    kinematics' first guess and assembly branch (:func:`_redundant`), the assembly modes' and
+    the single-sample readings' solve, the others checked (:data:`REDUNDANT_TOLERANCE`)."""
     hit = _SQUARE.get(id(model))
     if hit is not None and hit[0]() is model:
         return hit[1], hit[2]
@@ -194,32 +195,60 @@ def square_subset(model: MechanismModel) -> tuple[MechanismModel, Array]:
 
 
 def _agreement(model: MechanismModel, idx: Array) -> Array:
-    """How far the actuated joints ``idx`` may sit from the pose the square subset gives [m or
-    rad]: :data:`REDUNDANT_TOLERANCE` (times the length scale in m), or two counts of the
+    """How far the actuated joints ``idx`` may sit from the direct kinematics' pose [m or
+    rad] (the weight of each in its least squares): :data:`REDUNDANT_TOLERANCE` (times the length scale in m), or two counts of the
     drive's encoder where it has one (a measured reading agrees to its resolution)."""
     scale = np.where(np.array([model.actuator_units[k] for k in idx]) == "m", model.length_scale, 1.0)
     counts = 2.0 * model.drive_encoder[idx] / model.drive_ratio[idx]
     return np.maximum(REDUNDANT_TOLERANCE * scale, counts)
 
 
+#: Gauss-Newton steps of a redundantly actuated mechanism's least-squares pose (:func:`_redundant`)
+REDUNDANT_STEPS = 8
+
+
+def _least_squares(J: Array, r: Array) -> Array:
+    """``dx (n, nt)``: the least-squares solution of ``J dx = r`` per sample (``J (n, na, nt)`` of
+    full column rank)."""
+    return np.einsum("nta,na->nt", np.linalg.pinv(J), r)
+
+
 def _redundant(model: MechanismModel, s: Array, sd: Array, sdd: Array, t: Array | None, q_start: Array | None,
                sample_offset: int) -> DirectKinematics:
-    """:func:`direct_kinematics` of a redundantly actuated mechanism: its square subset's
-    (:func:`square_subset`), every other actuated coordinate checked against the pose."""
+    """:func:`direct_kinematics` of a redundantly actuated mechanism: the pose its square subset
+    gives (:func:`square_subset`: the assembly branch, the first guess), then the weighted
+    least-squares pose over every actuated joint by Gauss-Newton, ``min sum_k ((s_k - q_k(x)) /
+    a_k)^2`` (``a_k`` each joint's :func:`_agreement`), and the rates and accelerations by the
+    same weighted least squares, ``J_ax xd = sd`` and ``J_ax xdd = sdd - (J_ax xd)'``. Every
+    actuated coordinate must then agree with the pose to its ``a_k`` (a measured reading to two
+    counts of its encoder); a disagreement is refused, naming the sample and the joint."""
     sub, keep = square_subset(model)
     dk = direct_kinematics(sub, s[:, keep], sd[:, keep], sdd[:, keep], t, q_start=q_start,
                            sample_offset=sample_offset, bodies=True)
-    other = np.setdiff1d(np.arange(model.na), keep)
-    got = dk.q[:, model.act_coord[other]]
-    bad = np.argwhere(np.abs(got - s[:, other]) > _agreement(model, other))
+    a = _agreement(model, np.arange(model.na))
+    n, nt = s.shape[0], model.nt
+    z = np.zeros((n, nt))
+    x, q0 = dk.x, dk.q[0]
+    for _ in range(REDUNDANT_STEPS):
+        kin = solve_kinematics(model, x, z, z, t, q_start=q0, sample_offset=sample_offset)
+        dx = _least_squares(kin.J_ax / a[None, :, None], (s - kin.act_q) / a)
+        x = x + dx
+        if not np.abs(dx).max() > 1e-13 * max(float(np.abs(x).max()), 1.0):
+            break
+    kin = solve_kinematics(model, x, z, z, t, q_start=q0, sample_offset=sample_offset)
+    Jw = kin.J_ax / a[None, :, None]
+    xd = _least_squares(Jw, sd / a)
+    bias = solve_kinematics(model, x, xd, z, t, q_start=q0, sample_offset=sample_offset).act_qdd
+    xdd = _least_squares(Jw, (sdd - bias) / a)
+    kin = solve_kinematics(model, x, xd, xdd, t, q_start=q0, sample_offset=sample_offset)
+    bad = np.argwhere(~(np.abs(kin.act_q - s) <= a))
     if bad.size:
         i, k = (int(v) for v in bad[0])
-        a = int(other[k])
         raise UnreachablePoseError(
-            f"{at_sample(i, t, sample_offset)}: actuated joint {model.actuator_names[a]} is at {s[i, a]:.9g} but the "
-            f"pose the others ({', '.join(model.actuator_names[j] for j in keep)}) give puts it at {got[i, k]:.9g} "
-            "[m or rad]: a redundantly actuated mechanism's actuator coordinates must agree")
-    return replace(dk, s=s, sd=sd, sdd=sdd)
+            f"{at_sample(i, t, sample_offset)}: actuated joint {model.actuator_names[k]} is at {s[i, k]:.9g} but the "
+            f"least-squares pose of every actuated joint puts it at {kin.act_q[i, k]:.9g} [m or rad], beyond "
+            f"{a[k]:.3g}: a redundantly actuated mechanism's actuator coordinates must agree")
+    return replace(dk, s=s, sd=sd, sdd=sdd, x=kin.x, xd=kin.xd, xdd=kin.xdd, q=kin.q, qd=kin.qd, qdd=kin.qdd)
 
 
 def _arrays(model: MechanismModel, damped: bool = False, max_iter: int = MAX_ITER) -> tuple:
