@@ -248,7 +248,8 @@ def _redundant(model: MechanismModel, s: Array, sd: Array, sdd: Array, t: Array 
             f"{at_sample(i, t, sample_offset)}: actuated joint {model.actuator_names[k]} is at {s[i, k]:.9g} but the "
             f"least-squares pose of every actuated joint puts it at {kin.act_q[i, k]:.9g} [m or rad], beyond "
             f"{a[k]:.3g}: a redundantly actuated mechanism's actuator coordinates must agree")
-    return replace(dk, s=s, sd=sd, sdd=sdd, x=kin.x, xd=kin.xd, xdd=kin.xdd, q=kin.q, qd=kin.qd, qdd=kin.qdd)
+    return replace(dk, s=s, sd=sd, sdd=sdd, x=kin.x, xd=kin.xd, xdd=kin.xdd, q=kin.q, qd=kin.qd, qdd=kin.qdd,
+                   residual=kin.residual)
 
 
 def _arrays(model: MechanismModel, damped: bool = False, max_iter: int = MAX_ITER) -> tuple:
