@@ -339,3 +339,7 @@ def test_the_direct_kinematics_is_the_least_squares_pose_of_every_actuated_joint
     # (the least squares may move the disagreement onto another joint: the message names the one it sees)
     with pytest.raises(UnreachablePoseError, match=r"sample 4\b.*actuated joint \w+ is at"):
         direct_kinematics(m, s, kin.act_qd, kin.act_qdd, t)
+    s[4, 2] -= 10.0 * a[2]
+    s[6, 1] += 0.05  # far off (rad or m): refused by name, whether or not the least squares leaves the workspace
+    with pytest.raises(UnreachablePoseError, match=r"sample 6\b.*actuated joint \w+ is at"):
+        direct_kinematics(m, s, kin.act_qd, kin.act_qdd, t)

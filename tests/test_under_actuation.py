@@ -93,9 +93,10 @@ def test_run_takes_an_under_actuated_mechanisms_actuator_motion(tmp_path):
     force = 1.5 * sdd[:, 0] + M_POLE * (sdd[:, 0] - L_COM * (thdd_o * np.cos(th_o) - thd_o ** 2 * np.sin(th_o)))
     got = np.array([float(r["P_effort_N"]) for r in rows])
     assert np.abs(got - force).max() <= 1e-6 * np.abs(force).max()
-    # the simulated motion is dynamically consistent: the cart alone makes it
+    # the simulated motion is dynamically consistent: the cart alone makes it, to rounding (its
+    # accelerations are the equations' at each state; the run refuses a ratio above 1e-8)
     ratio = np.array([float(r["unactuated_force_ratio"]) for r in rows])
-    assert np.all(ratio <= 1e-8)
+    assert np.all(ratio <= 1e-11)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["max_unactuated_force_ratio"] == ratio.max()
 

@@ -213,22 +213,66 @@ def _least_squares(J: Array, r: Array) -> Array:
     return np.einsum("nta,na->nt", np.linalg.pinv(J), r)
 
 
+#: samples a redundantly actuated mechanism's least squares takes at a time (:func:`_redundant`:
+#: its passes hold every body's kinematics of that many samples, not of the whole motion)
+REDUNDANT_CHUNK = 2048
+
+
 def _redundant(model: MechanismModel, s: Array, sd: Array, sdd: Array, t: Array | None, q_start: Array | None,
                sample_offset: int) -> DirectKinematics:
     """:func:`direct_kinematics` of a redundantly actuated mechanism: the pose its square subset
     gives (:func:`square_subset`: the assembly branch, the first guess), then the weighted
     least-squares pose over every actuated joint by Gauss-Newton, ``min sum_k ((s_k - q_k(x)) /
     a_k)^2`` (``a_k`` each joint's :func:`_agreement`), and the rates and accelerations by the
-    same weighted least squares, ``J_ax xd = sd`` and ``J_ax xdd = sdd - (J_ax xd)'``. Every
-    actuated coordinate must then agree with the pose to its ``a_k`` (a measured reading to two
-    counts of its encoder); a disagreement is refused, naming the sample and the joint."""
+    same weighted least squares, ``J_ax xd = sd`` and ``J_ax xdd = sdd - (J_ax xd)'``, in
+    chunks of :data:`REDUNDANT_CHUNK` samples. Every actuated coordinate must then agree with
+    the pose to its ``a_k`` (a measured reading to two counts of its encoder); a disagreement is
+    refused, naming the sample and a joint (the one the square subset's pose disagrees with where
+    the least squares leaves the workspace). ``iterations``, ``det`` and ``pivot_ratio`` are
+    the square subset's solve's."""
     sub, keep = square_subset(model)
     dk = direct_kinematics(sub, s[:, keep], sd[:, keep], sdd[:, keep], t, q_start=q_start,
                            sample_offset=sample_offset, bodies=True)
     a = _agreement(model, np.arange(model.na))
-    n, nt = s.shape[0], model.nt
-    z = np.zeros((n, nt))
-    x, q0 = dk.x, dk.q[0]
+    n = s.shape[0]
+    parts = []
+    for lo in range(0, n, REDUNDANT_CHUNK):
+        hi = min(n, lo + REDUNDANT_CHUNK)
+        tc = None if t is None else t[lo:hi]
+        try:
+            parts.append(_least_squares_pose(model, a, dk.x[lo:hi], dk.q[lo], s[lo:hi], sd[lo:hi], sdd[lo:hi], tc,
+                                             sample_offset + lo))
+        except (UnreachablePoseError, SingularityError):
+            # (a reading far off pushes the least squares out of the workspace: the square subset's
+            # pose names the joint that disagrees)
+            _check_agreement(model, a, s, dk.q[lo:hi][:, model.act_coord], lo, t, sample_offset,
+                             f"the pose of {', '.join(model.actuator_names[j] for j in keep)} (the least squares of every "
+                             "actuated joint found none there)")
+            raise
+        _check_agreement(model, a, s, parts[-1][7], lo, t, sample_offset, "the least-squares pose of every actuated joint")
+    x, xd, xdd, q, qd, qdd, res = (np.concatenate([p[j] for p in parts]) for j in range(7))
+    return replace(dk, s=s, sd=sd, sdd=sdd, x=x, xd=xd, xdd=xdd, q=q, qd=qd, qdd=qdd, residual=res)
+
+
+def _check_agreement(model: MechanismModel, a: Array, s: Array, got: Array, lo: int, t: Array | None,
+                     sample_offset: int, pose: str) -> None:
+    """Refuse the first sample of ``got (k, na)`` (the actuated coordinates of ``pose`` from sample
+    ``lo`` on) whose actuated joint sits beyond its agreement ``a`` from its reading in ``s``."""
+    bad = np.argwhere(~(np.abs(got - s[lo:lo + got.shape[0]]) <= a))
+    if bad.size:
+        i, k = (int(v) for v in bad[0])
+        raise UnreachablePoseError(
+            f"{at_sample(lo + i, t, sample_offset)}: actuated joint {model.actuator_names[k]} is at {s[lo + i, k]:.9g} "
+            f"but {pose} puts it at {got[i, k]:.9g} [m or rad], beyond {a[k]:.3g}: a redundantly actuated "
+            "mechanism's actuator coordinates must agree")
+
+
+def _least_squares_pose(model: MechanismModel, a: Array, x: Array, q0: Array, s: Array, sd: Array, sdd: Array,
+                        t: Array | None, sample_offset: int) -> tuple[Array, ...]:
+    """One chunk of :func:`_redundant`'s least squares from the poses ``x`` (the first sample's
+    tree coordinates ``q0``, the branch): ``x, xd, xdd, q, qd, qdd, residual`` and the actuated
+    coordinates of the chunk's least-squares motion."""
+    z = np.zeros_like(x)
     for _ in range(REDUNDANT_STEPS):
         kin = solve_kinematics(model, x, z, z, t, q_start=q0, sample_offset=sample_offset)
         dx = _least_squares(kin.J_ax / a[None, :, None], (s - kin.act_q) / a)
@@ -241,15 +285,7 @@ def _redundant(model: MechanismModel, s: Array, sd: Array, sdd: Array, t: Array 
     bias = solve_kinematics(model, x, xd, z, t, q_start=q0, sample_offset=sample_offset).act_qdd
     xdd = _least_squares(Jw, (sdd - bias) / a)
     kin = solve_kinematics(model, x, xd, xdd, t, q_start=q0, sample_offset=sample_offset)
-    bad = np.argwhere(~(np.abs(kin.act_q - s) <= a))
-    if bad.size:
-        i, k = (int(v) for v in bad[0])
-        raise UnreachablePoseError(
-            f"{at_sample(i, t, sample_offset)}: actuated joint {model.actuator_names[k]} is at {s[i, k]:.9g} but the "
-            f"least-squares pose of every actuated joint puts it at {kin.act_q[i, k]:.9g} [m or rad], beyond "
-            f"{a[k]:.3g}: a redundantly actuated mechanism's actuator coordinates must agree")
-    return replace(dk, s=s, sd=sd, sdd=sdd, x=kin.x, xd=kin.xd, xdd=kin.xdd, q=kin.q, qd=kin.qd, qdd=kin.qdd,
-                   residual=kin.residual)
+    return kin.x, kin.xd, kin.xdd, kin.q, kin.qd, kin.qdd, kin.residual, kin.act_q
 
 
 def _arrays(model: MechanismModel, damped: bool = False, max_iter: int = MAX_ITER) -> tuple:
