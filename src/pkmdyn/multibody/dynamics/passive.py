@@ -31,7 +31,7 @@ from ...errors import MotionError, PkmdynError
 from ..kinematics.inverse import reference_task, solve_kinematics
 from ..kinematics.motion import TaskMotion
 from ..model.compiler import MechanismModel
-from .verbs import machine_verbs
+from .verbs import MechanismData, _all
 
 __all__ = ["passive_motion"]
 
@@ -80,8 +80,7 @@ def passive_motion(model: MechanismModel, t: Array, s: Array, sd: Array, sdd: Ar
     if t.ndim != 1 or t.size < 2:
         raise MotionError(f"actuator motion: the passive freedoms' simulation needs at least 2 samples, got {t.size}")
     s, sd, sdd = (np.asarray(a, dtype=float).reshape(len(t), na) for a in (s, sd, sdd))
-    verbs = machine_verbs(model)
-    k = model.drive_ratio
+    data = MechanismData(model)
     path = _hermite(t, s, sd, sdd)
     z = np.zeros((1, nt))
     if x0 is None:
@@ -92,11 +91,11 @@ def passive_motion(model: MechanismModel, t: Array, s: Array, sd: Array, sdd: Ar
     a = BAUMGARTE
 
     def accel(x: Array, xd: Array, tau: float) -> tuple[Array, Array]:
-        kin = solve_kinematics(model, x[None], xd[None], z)
+        # one kinematics solve gives M, h, B and the actuated joints' motion (the rates' bias:
+        # act_qdd at xdd = 0)
+        M, h, B, kin = _all(model, data, x[None], xd[None], None if load is None else np.atleast_1d(load))
+        M, h, B = M[0], h[0], B[0]
         J, bias, qa, qad = kin.J_ax[0], kin.act_qdd[0], kin.act_q[0], kin.act_qd[0]
-        M = verbs.mass_matrix(model, x[None])[0]
-        h = verbs.bias_forces(model, x[None], xd[None], None if load is None else np.atleast_1d(load))[0]
-        B = J.T * k[None, :]
         sp, sdp, sddp = path(tau)
         ref = sddp + 2 * a * (sdp - qad) + a * a * (sp - qa)
         A = np.block([[M, -B], [J, np.zeros((na, na))]])

@@ -622,19 +622,14 @@ def least_measures(model: MechanismModel, q: Array) -> dict[str, float]:
     direct = model.na == model.nt
     applies = [not np.all(lohi[:, k] == 1.0) for k in range(3)]  # (1, 1): no rows, or the direct one not applying
     least = np.ones(3)
-    cand = np.zeros(q.shape[0], dtype=bool)
-    pick = []
-    for k in range(3):
+    for k, key in enumerate(_MEASURES):
+        if not applies[k]:
+            continue
         # a sample whose bracket is not a number (a pose of non-finite coordinates) is decided by
         # its decomposition too: the least is then NaN, as the least of every decomposition is
         bad = ~(np.isfinite(lo[:, k]) & np.isfinite(hi[:, k]))
         top = np.min(hi[~bad, k]) if np.any(~bad) else np.inf
-        pick.append((lo[:, k] <= top) | bad if applies[k] else np.zeros(q.shape[0], dtype=bool))
-        cand |= pick[k]
-    rows = np.flatnonzero(cand)
-    if rows.size:
-        sm = singularity_measures(model, q[rows])
-        for k, key in enumerate(_MEASURES):
-            if applies[k]:
-                least[k] = float(np.min(getattr(sm, key)[pick[k][rows]]))
+        rows = np.flatnonzero((lo[:, k] <= top) | bad)
+        if rows.size:  # (each measure's own decompositions, on its own candidates)
+            least[k] = float(np.min(getattr(singularity_measures(model, q[rows], only=key), key)))
     return {key: (float(least[k]) if (k < 2 or direct) else float("nan")) for k, key in enumerate(_MEASURES)}
