@@ -14,7 +14,9 @@ with ``B = J_ax^T K`` (the motors' map), ``Jd_ax xd`` the actuated joints' accel
 stabilisation, ``a`` = :data:`BAUMGARTE` per second: the drift of the integration kept off the
 actuated joints). The state ``(x, xd)`` is integrated by scipy's DOP853 (an explicit
 Runge-Kutta method of order 8) to ``rtol``; ``s``, ``sd`` and ``sdd`` between samples by a
-quintic Hermite interpolation of the given samples.
+quintic Hermite interpolation of the given samples. Where the steps shrink without end (near
+a singularity of the task coordinates, whose rates then grow) the integration stops
+(:data:`STALL_WINDOW`), naming the time and the inverse singularity measure there.
 
 The start: the pose nearest the reference task pose with the actuated joints at ``s(0)``
 (least squares on the passive directions, Gauss-Newton) at the least-norm rate ``J_ax^+
@@ -28,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import MotionError, PkmdynError
-from ..kinematics.inverse import reference_task, solve_kinematics
+from ..kinematics.inverse import reference_task, singularity_measures, solve_kinematics
 from ..kinematics.motion import TaskMotion
 from ..model.compiler import MechanismModel
 from .verbs import MechanismData, _all
@@ -39,6 +41,16 @@ Array = NDArray[np.float64]
 
 #: Baumgarte's rate [1/s]: how fast a drift of the actuated joints from their motion decays
 BAUMGARTE = 50.0
+#: the integration's check of its progress: every this many right-hand-side evaluations it must
+#: have advanced by :data:`STALL_PROGRESS` of the motion's span, or it stops, naming where (a
+#: step that shrinks without end, near a singularity of the task coordinates, would run on;
+#: the cart-pole of the tests takes some 6,000 evaluations for its whole 1.5 s)
+STALL_WINDOW = 20_000
+STALL_PROGRESS = 1e-3
+
+
+class _Stalled(Exception):
+    """The integration stopped advancing (:data:`STALL_WINDOW`)."""
 
 
 def _hermite(t: Array, s: Array, sd: Array, sdd: Array) -> Any:
@@ -102,15 +114,35 @@ def passive_motion(model: MechanismModel, t: Array, s: Array, sd: Array, sdd: Ar
         sol = np.linalg.solve(A, np.concatenate([-h, ref - bias]))
         return sol[:nt], sol[nt:]
 
+    calls, mark = [0], [float(t[0])]  # evaluations so far; the time at the last check
+
     def rhs(tau: float, y: Array) -> Array:
+        calls[0] += 1
+        if calls[0] % STALL_WINDOW == 0:
+            if tau - mark[0] < STALL_PROGRESS * (t[-1] - t[0]):
+                raise _Stalled(tau, y)
+            mark[0] = tau
         try:
             return np.concatenate([y[nt:], accel(y[:nt], y[nt:], tau)[0]])
         except (np.linalg.LinAlgError, PkmdynError) as exc:
             raise MotionError(f"actuator motion: t = {tau:.6g} s: the passive freedoms' simulation stopped "
                               f"({str(exc).split(': ', 1)[-1]})") from None
 
-    res = solve_ivp(rhs, (t[0], t[-1]), np.concatenate([x0, xd0]), method="DOP853", t_eval=t, rtol=rtol,
-                    atol=rtol * 1e-2)
+    try:
+        res = solve_ivp(rhs, (t[0], t[-1]), np.concatenate([x0, xd0]), method="DOP853", t_eval=t, rtol=rtol,
+                        atol=rtol * 1e-2)
+    except _Stalled as exc:
+        tau, y = exc.args
+        try:
+            kin = solve_kinematics(model, y[None, :nt], y[None, nt:], z)
+            where = (f"the task coordinates' inverse singularity measure is "
+                     f"{float(singularity_measures(model, kin.q, only='inverse').inverse[0]):.3g} there")
+        except PkmdynError as err:
+            where = f"the pose there: {str(err).split(': ', 1)[-1]}"
+        raise MotionError(f"actuator motion: t = {tau:.6g} s: the passive freedoms' simulation stopped, its steps "
+                          f"shrinking (less than {STALL_PROGRESS:g} of the motion in {STALL_WINDOW} evaluations); {where} "
+                          "(a task whose coordinates stay independent along the motion, e.g. another task body, "
+                          "may pass)") from None
     if res.status != 0 or res.y.shape[1] != len(t):
         at = float(res.t[-1]) if res.t.size else float(t[0])
         raise MotionError(f"actuator motion: t = {at:.6g} s: the passive freedoms' simulation stopped "
