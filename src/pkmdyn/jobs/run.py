@@ -218,6 +218,21 @@ class _Summary:
         return out
 
 
+def _simulated(model: MechanismModel, am: Any) -> Any:
+    """An under-actuated mechanism's task motion along the actuator motion ``am``, its passive
+    freedoms simulated (:func:`passive_motion`), with a progress bar in simulated seconds on a
+    terminal."""
+    from tqdm import tqdm
+
+    span = float(am.t[-1] - am.t[0])
+    with tqdm(total=span, desc=f"{model.name}: the passive freedoms simulated", unit="s", leave=False,
+              disable=None, bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]") as bar:
+        def advance(tau: float) -> None:
+            bar.update(max(0.0, min(tau - float(am.t[0]), span) - bar.n))
+
+        return passive_motion(model, am.t, am.s, am.sd, am.sdd, progress=advance)
+
+
 def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, inputs: Any = (),
                   report: Callable[[dict[str, Path]], None] | None = None, description_text: str = "",
                   unique_reactions: bool = False, fmt: str = "csv", limits: dict | None = None,
@@ -403,7 +418,7 @@ def job(machine: str, out_dir: Path, *, motion_path: Path | None = None, actuato
                     raise MotionError(f"{actuator_path}: named loads ({', '.join(am.loads)}) along the actuator motion "
                                       "of an under-actuated mechanism are not simulated yet; give them by the "
                                       "description's magnitude_N")
-                motion = passive_motion(model, am.t, am.s, am.sd, am.sdd)
+                motion = _simulated(model, am)
             else:
                 motion, _ = task_motion(model, am)
     elif entry is None:

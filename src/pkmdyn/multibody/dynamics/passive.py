@@ -24,6 +24,7 @@ sd(0)``, unless given."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -80,10 +81,12 @@ def _start(model: MechanismModel, s0: Array, x_guess: Array) -> Array:
 
 
 def passive_motion(model: MechanismModel, t: Array, s: Array, sd: Array, sdd: Array, x0: Array | None = None,
-                   xd0: Array | None = None, rtol: float = 1e-10, load: Array | None = None) -> TaskMotion:
+                   xd0: Array | None = None, rtol: float = 1e-10, load: Array | None = None,
+                   progress: Callable[[float], None] | None = None) -> TaskMotion:
     """The task motion ``x, xd, xdd`` at the times ``t (n,)`` of an under-actuated mechanism
     whose actuated joints follow ``s, sd, sdd (n, na)`` [m or rad] (module docstring, Eq. P1);
-    ``x0, xd0`` (nt,) the start (default: nearest the reference pose, least-norm rate).
+    ``x0, xd0`` (nt,) the start (default: nearest the reference pose, least-norm rate);
+    ``progress(tau)`` called with the time reached [s] every few hundred evaluations.
     Raises :class:`~pkmdyn.errors.MotionError` naming the time where the integration fails."""
     from scipy.integrate import solve_ivp
 
@@ -118,6 +121,8 @@ def passive_motion(model: MechanismModel, t: Array, s: Array, sd: Array, sdd: Ar
 
     def rhs(tau: float, y: Array) -> Array:
         calls[0] += 1
+        if progress is not None and calls[0] % 256 == 0:
+            progress(float(tau))
         if calls[0] % STALL_WINDOW == 0:
             if tau - mark[0] < STALL_PROGRESS * (t[-1] - t[0]):
                 raise _Stalled(tau, y)
