@@ -150,13 +150,15 @@ def test_the_unactuated_force_ratio_is_the_hinge_torque_no_actuator_gives(tmp_pa
 
 def test_a_simulation_that_stops_advancing_is_stopped_naming_the_time(tmp_path, monkeypatch):
     """The passive simulation checks its progress every STALL_WINDOW evaluations: with a window
-    of 200 evaluations that must cover 90 % of the motion, the cart-pole's simulation (some
-    6,000 evaluations for 1.5 s) is stopped and named, with the measure there."""
+    of 200 evaluations that must cover 90 % of the motion (or 1 s), the cart-pole's simulation
+    (some 6,000 evaluations for 1.5 s) is stopped and named, with the measure there; with the
+    defaults it is not."""
     import pkmdyn.multibody.dynamics.passive as passive
     from pkmdyn.errors import MotionError
 
     monkeypatch.setattr(passive, "STALL_WINDOW", 200)
     monkeypatch.setattr(passive, "STALL_PROGRESS", 0.9)
+    monkeypatch.setattr(passive, "STALL_SECONDS", 1.0)
     m = pkmdyn.load(_cart_pole(tmp_path))
     t = np.linspace(0.0, 1.5, 151)
     with pytest.raises(MotionError, match=r"t = [0-9.e-]+ s: .*stopped.*inverse singularity measure is [0-9.e-]+ there"):

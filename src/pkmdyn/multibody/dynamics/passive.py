@@ -43,11 +43,14 @@ Array = NDArray[np.float64]
 #: Baumgarte's rate [1/s]: how fast a drift of the actuated joints from their motion decays
 BAUMGARTE = 50.0
 #: the integration's check of its progress: every this many right-hand-side evaluations it must
-#: have advanced by :data:`STALL_PROGRESS` of the motion's span, or it stops, naming where (a
-#: step that shrinks without end, near a singularity of the task coordinates, would run on;
-#: the cart-pole of the tests takes some 6,000 evaluations for its whole 1.5 s)
+#: have advanced by :data:`STALL_PROGRESS` of the motion's span or by :data:`STALL_SECONDS`,
+#: whichever is less, or it stops, naming where (a step that shrinks without end, near a
+#: singularity of the task coordinates, would run on; the cart-pole of the tests takes some
+#: 6,000 evaluations for its whole 1.5 s, and 1e-4 s in 20,000 evaluations is a mean step some
+#: 1e-7 s long: dynamics of megahertz)
 STALL_WINDOW = 20_000
 STALL_PROGRESS = 1e-3
+STALL_SECONDS = 1e-4
 
 
 class _Stalled(Exception):
@@ -118,13 +121,14 @@ def passive_motion(model: MechanismModel, t: Array, s: Array, sd: Array, sdd: Ar
         return sol[:nt], sol[nt:]
 
     calls, mark = [0], [float(t[0])]  # evaluations so far; the time at the last check
+    least = min(STALL_PROGRESS * float(t[-1] - t[0]), STALL_SECONDS)  # the least advance of a window [s]
 
     def rhs(tau: float, y: Array) -> Array:
         calls[0] += 1
         if progress is not None and calls[0] % 256 == 0:
             progress(float(tau))
         if calls[0] % STALL_WINDOW == 0:
-            if tau - mark[0] < STALL_PROGRESS * (t[-1] - t[0]):
+            if tau - mark[0] < least:
                 raise _Stalled(tau, y)
             mark[0] = tau
         try:
@@ -139,13 +143,13 @@ def passive_motion(model: MechanismModel, t: Array, s: Array, sd: Array, sdd: Ar
     except _Stalled as exc:
         tau, y = exc.args
         try:
-            kin = solve_kinematics(model, y[None, :nt], y[None, nt:], z)
+            kin = solve_kinematics(model, y[None, :nt], y[None, nt:], z, q_start=data.last_q())
             where = (f"the task coordinates' inverse singularity measure is "
                      f"{float(singularity_measures(model, kin.q, only='inverse').inverse[0]):.3g} there")
         except PkmdynError as err:
             where = f"the pose there: {str(err).split(': ', 1)[-1]}"
         raise MotionError(f"actuator motion: t = {tau:.6g} s: the passive freedoms' simulation stopped, its steps "
-                          f"shrinking (less than {STALL_PROGRESS:g} of the motion in {STALL_WINDOW} evaluations); {where} "
+                          f"shrinking (less than {least:.3g} s in {STALL_WINDOW} evaluations); {where} "
                           "(a task whose coordinates stay independent along the motion, e.g. another task body, "
                           "may pass)") from None
     if res.status != 0 or res.y.shape[1] != len(t):
@@ -153,5 +157,8 @@ def passive_motion(model: MechanismModel, t: Array, s: Array, sd: Array, sdd: Ar
         raise MotionError(f"actuator motion: t = {at:.6g} s: the passive freedoms' simulation stopped "
                           f"({res.message})")
     x, xd = res.y[:nt].T.copy(), res.y[nt:].T.copy()
+    # the accelerations sample by sample from the start, warm-started from the sample before (not
+    # from the integration's last pose, which may lead Newton onto another assembly branch)
+    data = MechanismData(model)
     xdd = np.array([accel(x[i], xd[i], float(t[i]))[0] for i in range(len(t))])
     return TaskMotion(t, x, xd, xdd, {})
