@@ -880,23 +880,24 @@ def described_job(machine: str, controller: str, out_dir: Path, *, motion_path: 
     if not duration_s <= span:
         raise MotionError(f"--duration: {duration_s:g} s must be at most the motion's {span:g} s")
     notes: list[str] = []
-    if model.na < model.nt and motion_path is None:
+    under = model.na < model.nt and motion_path is None
+    limited = _inverse.limited_joints(model)
+    if under or limited:  # the reference's kinematics over the run, for the checks below
+        span_mask = motion.t <= motion.t[0] + duration_s
+        kin = _multibody.solve_kinematics(model, motion.x[span_mask], motion.xd[span_mask], motion.xdd[span_mask],
+                                          motion.t[span_mask])
+    if under:
         # under-actuated: the plant simulates the passive freedoms, but only a dynamically
         # consistent reference can be tracked; the default motion (exact rates) is refused where
         # it is not, naming the sample (a file's rates may be differentiated from its positions,
         # consistent only to that differentiation: it is tracked as it is)
-        span_mask = motion.t <= motion.t[0] + duration_s
-        kin = _multibody.solve_kinematics(model, motion.x[span_mask], motion.xd[span_mask], motion.xdd[span_mask],
-                                          motion.t[span_mask])
         try:
             _newton_euler.inverse_dynamics(model, kin)
         except MotionError as exc:
             raise MotionError(f"{what}: {exc} (a reference for an under-actuated machine: pkmdyn run --actuator-motion "
                               "writes one, its passive freedoms simulated)") from None
-    if _inverse.limited_joints(model):  # the plant has no end stops: say where the reference leaves the joint limits
-        span_mask = motion.t <= motion.t[0] + duration_s
-        beyond = _inverse.limit_message(model, _multibody.solve_kinematics(model, motion.x[span_mask], motion.xd[span_mask],
-                                                       motion.xdd[span_mask], motion.t[span_mask]))
+    if limited:  # the plant has no end stops: say where the reference leaves the joint limits
+        beyond = _inverse.limit_message(model, kin)
         if beyond is not None:
             notes.append(f"the reference motion leaves the joint limits: {beyond}")
     settings = _control.overlay_settings(described_control_settings(model), gains_path)

@@ -485,9 +485,13 @@ def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple
     t = motion.t
     direct = model.na == model.nt
     m: dict[str, float] = {}
-    if ctx.gci and model.na > model.nt:  # redundant actuation: the tall direct measure (by its SVD)
-        m["gci"] = _mean(singularity_measures(model, kin.q, only="direct").direct, t)
-    if ctx.gci and model.na <= model.nt:
+    # redundant actuation: the tall direct measure at every sample (by its SVD), for the
+    # conditioning index and the least measures both
+    tall = singularity_measures(model, kin.q, only="direct").direct if (
+        model.na > model.nt and (ctx.gci or ctx.measures)) else None
+    if ctx.gci and tall is not None:
+        m["gci"] = _mean(tall, t)
+    if ctx.gci and tall is None:
         # the conditioning index's measure at every sample, the least of each from proven brackets
         # (the decompositions only where a sample can hold the least: the same values to the bit)
         mu = getattr(singularity_measures(model, kin.q, only="direct" if direct else "inverse"),
@@ -495,8 +499,8 @@ def evaluate_model(model: Any, motion: Any, ctx: DescribedSweepContext) -> tuple
         m["gci"] = _mean(mu, t)
     # the least measures: proven brackets, the decompositions only where a sample can hold the least
     least = least_measures(model, kin.q) if ctx.measures else None
-    if least is not None and model.na > model.nt:  # redundant actuation: the tall map's measure, by its SVD
-        least = {**least, "direct": float(np.min(singularity_measures(model, kin.q, only="direct").direct))}
+    if least is not None and tall is not None:
+        least = {**least, "direct": float(np.min(tall))}
         direct = True
     if least is not None:
         m["min_inverse_measure"] = least["inverse"]
