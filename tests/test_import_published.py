@@ -215,6 +215,26 @@ def test_missing_mesh_files_where_the_inertia_is_given(tmp_path, capsys):
     assert code == 2 and len(err) == 1 and "body platform: its inertia would come from mesh plate" in err[0]
 
 
+def test_a_missing_texture_only_colours_and_is_left_out(tmp_path, capsys):
+    """A model published without its texture image (Menagerie's Cassie names one from its
+    material): the texture is left out (said), the material and the mechanism stay."""
+    xml = stewart_free_xml()
+    textured = xml.replace("<worldbody>", '<asset><texture name="skin" file="assets/skin.png" type="2d"/>'
+                                          '<material name="skin" texture="skin" rgba="1 0 0 1"/></asset>\n'
+                                          '  <worldbody>', 1)
+    textured = textured.replace('<freejoint name="float"/>',
+                                '<freejoint name="float"/><geom type="sphere" size="0.05" material="skin" mass="0"/>')
+    code, out = _import(tmp_path, textured, name="textured")
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert "texture files missing (assets/skin.png): left out" in err
+    code, plain = _import(tmp_path, xml, name="plain")
+    assert code == 0
+    capsys.readouterr()
+    a, b = (tomllib.loads(p.read_text()) for p in (out, plain))
+    assert a["bodies"] == b["bodies"] and a["joints"] == b["joints"]
+
+
 def test_a_floor_mesh_and_inertia_from_geoms(tmp_path, capsys):
     """A missing mesh on the world (a floor) decides no inertia and is left out; with
     inertiafromgeom="true" every body's inertia comes from its geoms, so a missing mesh on a

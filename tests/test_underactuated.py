@@ -2,7 +2,8 @@
 its shoulder driven and its elbow free (a pendubot). Its efforts exist only where the motion is
 dynamically consistent: held still with the free link hanging straight down the shoulder torque
 is the closed form; with the free link held aside no torque of the shoulder does it, and the
-run is refused naming the sample; describe and the run say what the mechanism is."""
+run is refused naming the sample; describe says what the mechanism is, and the run on defaults
+drives the shoulder along the default motion's shoulder angle, the elbow simulated."""
 
 from __future__ import annotations
 
@@ -65,14 +66,41 @@ def test_a_motion_no_shoulder_torque_makes_is_refused_naming_the_sample():
         joint_reactions(m, _still(m, tips))
 
 
-def test_describe_and_run_say_it(tmp_path, capsys):
+def test_describe_says_it_and_the_default_run_drives_the_shoulder_and_simulates_the_elbow(tmp_path, capsys):
+    import csv
+
     import tomlkit
+
+    from pkmdyn.multibody import default_motion
 
     path = tmp_path / "pendubot.toml"
     path.write_text(tomlkit.dumps(pendubot()))
     assert main(["describe", "--machine", str(path)]) == 0
-    assert "under-actuated: 1 actuators for 2 degrees of freedom" in capsys.readouterr().out
-    out = tmp_path / "run"
-    assert main(["run", "--machine", str(path), "--out", str(out)]) == 2  # its default motion swings the free link
+    said = capsys.readouterr().out
+    assert "under-actuated: 1 actuators for 2 degrees of freedom" in said
+    assert "its default motion drives the actuators and simulates the other freedoms" in said
+    # the default motion as a task motion swings the free link by a sine of its own: refused
+    m = load_mechanism(pendubot())
+    dm = default_motion(m)
+    sine = tmp_path / "sine.csv"
+    with open(sine, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["t_s", "x_m", "z_m"])
+        w.writerows(np.c_[dm.t, dm.x].tolist())
+    out = tmp_path / "refused"
+    assert main(["run", "--machine", str(path), "--motion", str(sine), "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "not dynamically consistent" in err[0] and not out.exists()
+    # on defaults the shoulder follows that sine's shoulder angle and the elbow swings as it must
+    out = tmp_path / "run"
+    assert main(["run", "--machine", str(path), "--out", str(out)]) == 0
+    with open(out / "results.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    shoulder = solve_kinematics(m, dm.x, dm.xd, dm.xdd, dm.t).act_q[:, 0]
+    got = np.array([float(r["shoulder_pos_rad"]) for r in rows])
+    assert len(got) == len(shoulder) and np.ptp(shoulder) > 5e-3
+    assert np.abs(got - shoulder).max() <= 1e-6
+    x = np.array([float(r["x_m"]) for r in rows])
+    assert np.abs(x - dm.x[:, 0]).max() > 1e-3  # not the sine: the elbow is free
+    import json
+    assert json.loads((out / "summary.json").read_text())["max_unactuated_force_ratio"] <= 1e-9

@@ -35,13 +35,17 @@ else:  # the readers and the engine load when the command runs, not for --help
 @click.option("--task-point", default=None, help="The task point: a site or frame name, or x,y,z [m] in the base frame.")
 @click.option("--task-position", default=None, help="Task position components, e.g. x,y,z (default: chosen).")
 @click.option("--task-orientation", default=None, help="Task Euler angles of XYZ, e.g. 1,2,3 (default: chosen).")
+@click.option("--task-joints", default=None,
+              help="Joints whose coordinates are task coordinates, comma-separated (a mechanism whose freedoms no "
+                   "single body carries; default: chosen where no body's coordinates do).")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="The description to write (e.g. mechanism.toml).")
 def import_(src, fmt, sidecar, actuated, assemble, keyframe, weld_free, task_body, task_point, task_position,
-            task_orientation, out_path) -> None:
+            task_orientation, task_joints, out_path) -> None:
     """Read a closed-chain mechanism from another format and write its description, checked by
     loading it as `pkmdyn describe` and `run` do. Nothing is written when an element has no
     equivalent (one line naming it)."""
     show(import_job.job(src, out_path, fmt=fmt, sidecar=sidecar, actuated=actuated, assemble=assemble, keyframe=keyframe,
                         task_body=task_body, task_point=task_point, task_position=task_position,
-                        task_orientation=task_orientation, announce=list_files, weld_free=weld_free))
+                        task_orientation=task_orientation, task_joints=task_joints, announce=list_files,
+                        weld_free=weld_free))

@@ -827,7 +827,7 @@ def described_control_settings(model) -> dict:
         "sensors": {"encoder_counts_per_turn": 1000000, "encoder_travel_per_turn_m": 0.001,
                     "velocity_cutoff_Hz": 200.0, "acceleration_cutoff_Hz": 50.0, "pose_noise_si": [0.0] * nt,
                     "pose_delay_cycles": 0, "pose_feedback_from_sensor": 1, "seed": 1, "exact_encoders": 1},
-        "run": {"divergence_limit_si": [0.2 if k == 1 else 0.05 for k in model.task_kind]},
+        "run": {"divergence_limit_si": [0.05 if k else 0.2 for k in model.task_length]},
         "computed-torque": {"kp_1_s2": [wn * wn] * nt, "kd_1_s": [2 * zeta * wn] * nt},
         "pd": dict(pd),
         "augmented-pd": dict(pd),

@@ -34,11 +34,13 @@ def job(machine: str) -> JobResult:
         + (f" ({', '.join(f'{j} {d}' for j, d in rep.overconstrained)})" if rep.overconstrained else ""),
         f"actuated joints: {', '.join(model.actuator_names)}",
         (f"under-actuated: {model.na} actuators for {rep.dof} degrees of freedom (a task motion's efforts exist only "
-         "where the motion is dynamically consistent; pkmdyn run refuses it elsewhere, naming the sample)")
+         "where the motion is dynamically consistent; pkmdyn run refuses it elsewhere, naming the sample; its default "
+         "motion drives the actuators and simulates the other freedoms)")
         if model.na < rep.dof else None,
         _redundancy(model) if model.na > rep.dof else None,
         f"task coordinates: {', '.join(f'{n} [{u}]' for n, u in zip(model.task_names, model.task_units))} "
-        f"of body {model.body_names[model.task_body]}",
+        + (f"of body {model.body_names[model.task_body]}" if any(k != 2 for k in model.task_kind) else
+           f"(joints' coordinates; runs write the pose of body {model.body_names[model.task_body]})"),
         f"explicit legs (closed form, {model.legs.count}): "
         + (", ".join(f"{'-'.join(chain)} to {cut} ({LEG_PATTERNS[kind].split(' ')[0]}{_held(model, chain)})"
                      for cut, chain, kind in model.legs.names) or "none; Newton solves every loop")

@@ -25,13 +25,13 @@ def _csv(text: str | None, kind=str) -> tuple | None:
 
 def job(src: Path, out_path: Path, *, fmt: str | None = None, sidecar: Path | None = None, actuated: str | None = None,
         assemble: bool = False, keyframe: str | None = None, task_body: str | None = None, task_point: str | None = None,
-        task_position: str | None = None, task_orientation: str | None = None,
+        task_position: str | None = None, task_orientation: str | None = None, task_joints: str | None = None,
         announce: Callable[[Mapping[str, Path]], None] | None = None, weld_free: bool = False) -> JobResult:
     """The model file ``src`` (``fmt`` from its extension by default) as a description written to
     ``out_path``, checked by loading it as ``pkmdyn describe`` and ``run`` do; the options are those
     of ``pkmdyn import`` as text (``actuated``: joint names, comma-separated; ``task_point``: a
     site or frame name or ``x,y,z`` [m]; ``task_position``: ``x,y,z`` letters; ``task_orientation``:
-    Euler angle numbers ``1,2,3``)."""
+    Euler angle numbers ``1,2,3``; ``task_joints``: joint names)."""
     fmt = fmt or FORMATS.get(Path(src).suffix.lower())
     if fmt is None:
         raise ParameterError(f"--from {Path(src).name}: unknown extension; give --format mjcf, urdf or sdf")
@@ -54,8 +54,12 @@ def job(src: Path, out_path: Path, *, fmt: str | None = None, sidecar: Path | No
         raise ParameterError("--task-position: letters x, y, z, comma-separated")
     if orient is not None and any(k not in (1, 2, 3) for k in orient):
         raise ParameterError("--task-orientation: angle numbers 1, 2 or 3, comma-separated")
-    choice = TaskChoice(body=task_body, point=point, position=pos if pos is not None or orient is None else (),
-                        orientation=orient if orient is not None or pos is None else ())
+    joints = _csv(task_joints)
+    if joints is not None and not joints:
+        raise ParameterError("--task-joints: joint names, comma-separated")
+    given = pos is not None or orient is not None or joints is not None
+    choice = TaskChoice(body=task_body, point=point, position=pos if pos is not None or not given else (),
+                        orientation=orient if orient is not None or not given else (), joints=joints)
     text, notes = import_description(Path(src), fmt, sidecar=sidecar, actuated=_csv(actuated) or (),
                                      assemble=assemble, keyframe=keyframe, choice=choice, weld_free=weld_free)
     files = write_texts({"description": (Path(out_path), text)}, inputs, announce)

@@ -54,7 +54,7 @@ from ..multibody.dynamics.actuators import (
     motor_effort_column,
 )
 from ..multibody.dynamics.newton_euler import effort_unit, joint_reactions, load_forces
-from ..multibody.dynamics.passive import passive_motion
+from ..multibody.dynamics.passive import driven_motion, passive_motion
 from ..multibody.dynamics.reactions import ComplianceDataMissing
 from ..multibody.kinematics.direct import task_motion
 from ..multibody.kinematics.inverse import (
@@ -67,6 +67,7 @@ from ..multibody.kinematics.inverse import (
     solve_kinematics,
 )
 from ..multibody.kinematics.motion import (
+    TaskMotion,
     motion_columns,
     periodic_motion,
     read_actuator_motion,
@@ -219,9 +220,9 @@ class _Summary:
 
 
 def _simulated(model: MechanismModel, am: Any) -> Any:
-    """An under-actuated mechanism's task motion along the actuator motion ``am``, its passive
-    freedoms simulated (:func:`passive_motion`), with a progress bar in simulated seconds on a
-    terminal."""
+    """An under-actuated mechanism's task motion along the actuator motion ``am`` (or along the
+    actuated joints of a task motion, :func:`driven_motion`), its passive freedoms simulated
+    (:func:`passive_motion`), with a progress bar in simulated seconds on a terminal."""
     from tqdm import tqdm
 
     span = float(am.t[-1] - am.t[0])
@@ -230,6 +231,8 @@ def _simulated(model: MechanismModel, am: Any) -> Any:
         def advance(tau: float) -> None:
             bar.update(max(0.0, min(tau - float(am.t[0]), span) - bar.n))
 
+        if isinstance(am, TaskMotion):
+            return driven_motion(model, am, progress=advance)
         return passive_motion(model, am.t, am.s, am.sd, am.sdd, progress=advance)
 
 
@@ -425,6 +428,8 @@ def job(machine: str, out_dir: Path, *, motion_path: Path | None = None, actuato
         motion = periodic_motion(model, 1.0 if cycles is None else cycles, samples_per_cycle,
                                  max_samples=int(lim["max_samples"]))
         window = motion.samples_per_cycle + 1  # the plots and the animation show the first cycle
+        if model.na < model.nt:  # under-actuated: the default motion drives the actuators, the rest simulated
+            motion = _simulated(model, motion.chunk(0, len(motion)))
     else:
         if samples_per_cycle is not None:
             raise ParameterError(f"--samples-per-cycle applies to a described mechanism's default motion; "

@@ -99,8 +99,8 @@ def pose_columns(model: MechanismModel, kin: MechanismKinematics) -> dict[str, A
         ang = _euler_angles(model, R)
         if b == model.task_body:
             for j, (kind, i) in enumerate(zip(model.task_kind, model.task_index)):
-                k = inv[int(i)]
                 if kind == 1:
+                    k = inv[int(i)]
                     turns = (kin.x[:, j] - ang[:, k]) / (2.0 * np.pi)
                     same = np.abs(turns - np.round(turns)) < 1e-9
                     ang[same, k] = kin.x[same, j]
@@ -220,13 +220,15 @@ def _load_entry(model: MechanismModel, k: int) -> dict[str, Any]:
 
 
 def _task_coordinates(model: MechanismModel, pos: list[str]) -> list[dict[str, Any]]:
-    """Each task coordinate: its column, and the base-frame component (0-2) of the task point
-    or the place (1-3) of the Euler angle in ``euler_sequence`` as written."""
+    """Each task coordinate: its column, and the base-frame component (0-2) of the task point,
+    the place (1-3) of the Euler angle in ``euler_sequence`` as written, or the joint."""
     out = []
     inv = {int(v): k for k, v in enumerate(model.euler_perm)}
     for c, kind, i in zip(pos, model.task_kind, model.task_index):
         if kind == 0:
             out.append({"column": c, "kind": "position", "component": int(i)})
+        elif kind == 2:
+            out.append({"column": c, "kind": "joint", "joint": model.joint_names[int(model.coord_joint[int(i)])]})
         else:
             out.append({"column": c, "kind": "euler_angle", "angle": inv[int(i)] + 1})
     return out

@@ -233,6 +233,15 @@ def _point_transfer(p: Array) -> Array:
     return X
 
 
+def _check_task(model: MechanismModel) -> None:
+    """Refuse a task with joint coordinates: the stiffness is the task body's (a wrench on it
+    against its small twist), which a joint's coordinate is not a function of."""
+    if np.any(model.task_kind == 2):
+        names = [n for n, k in zip(model.task_names, model.task_kind) if k == 2]
+        raise ParameterError(f"[task] joints: the stiffness is the task body's, and task coordinate {names[0]!r} is a "
+                             "joint's; describe the task by a body's position and orientation for the stiffness")
+
+
 def _check_sources(model: MechanismModel) -> dict[str, list[str]]:
     src = compliance_sources(model)
     if not any(src.values()):
@@ -332,6 +341,7 @@ def stiffness(model: MechanismModel, kin: MechanismKinematics, sample_offset: in
     cannot carry a load on the task body or its mass matrix is singular."""
     if rotors not in ROTORS:
         raise ParameterError(f"rotors: {rotors!r} is not one of {', '.join(ROTORS)}")
+    _check_task(model)
     _check_sources(model)
     st = _Structure(model, kin, sample_offset)
     nt = model.nt
@@ -402,6 +412,7 @@ def deflection(model: MechanismModel, kin: MechanismKinematics, reactions: objec
     loads (unit-load method, module docstring): ``reactions`` the motion's
     :class:`~pkmdyn.multibody.dynamics.newton_euler.JointReactions` (every joint's wrench), ``loads``/``named`` as for
     :func:`pkmdyn.multibody.dynamics.newton_euler.body_wrenches` (the same as the reactions were computed with)."""
+    _check_task(model)
     _check_sources(model)
     st = _Structure(model, kin, sample_offset)
     n = len(kin)
@@ -427,7 +438,7 @@ def internal_force_stiffness(model: MechanismModel, x: Array, u: Array, step: fl
     x = np.atleast_2d(np.asarray(x, dtype=float))
     u = np.atleast_2d(np.asarray(u, dtype=float))
     n, nt = x.shape
-    h = step * np.where(model.task_kind == 1, 1.0, model.length_scale)
+    h = step * np.where(model.task_length, model.length_scale, 1.0)
     K = np.empty((n, nt, nt))
     z = np.zeros_like(x)
     for j in range(nt):

@@ -177,11 +177,12 @@ class _Load(Section):
 
 
 class _Task(Section):
-    body: str = NAME
+    body: str | None = Field(default=None, min_length=1, max_length=64, pattern=r"^[A-Za-z_][A-Za-z0-9_'.-]*$")
     point_m: Vec3 | None = None
     position: list[Literal["x", "y", "z"]] = Field(default_factory=list, max_length=3)
     euler_sequence: str = "XYZ"
     orientation: list[Literal[1, 2, 3]] = Field(default_factory=list, max_length=3)
+    joints: list[str] = Field(default_factory=list, max_length=600)
 
 
 class _Output(Section):
@@ -388,9 +389,12 @@ class JointSpec:
 @dataclass(frozen=True)
 class TaskSpec:
     """Task coordinates: base-frame components of a point of ``body`` and Euler angles of its
-    frame. ``point (3,)`` [m] base frame, reference configuration (default: the body's centre
-    of mass); ``position``: component
-    indices 0-2; ``sequence``: the Euler sequence; ``orientation``: angle indices 0-2."""
+    frame, then the coordinates of ``joints`` (each a joint of one coordinate, its value as the
+    joint's own: an actuated joint's is its actuator coordinate). ``point (3,)`` [m] base frame,
+    reference configuration (default: the body's centre of mass); ``position``: component
+    indices 0-2; ``sequence``: the Euler sequence; ``orientation``: angle indices 0-2. A task
+    of joints alone has for ``body`` (the body whose whole pose a run writes) the one given,
+    else the child of its last joint."""
 
     body: str
     point: Array
@@ -399,6 +403,7 @@ class TaskSpec:
     orientation: tuple[int, ...]
     names: tuple[str, ...]
     units: tuple[str, ...]
+    joints: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -891,23 +896,39 @@ def _matrix_to_xyz_deg(R: Array) -> Vec3:
 _POS_NAMES = {"x": 0, "y": 1, "z": 2}
 
 
-def _task(t: _Task, where: str, bodies: dict[str, BodySpec]) -> TaskSpec:
-    if t.body not in bodies:
-        raise ParameterError(f"{where} body: {t.body!r} is not a body of the mechanism")
-    if not t.position and not t.orientation:
-        raise ParameterError(f"{where}: no task coordinate (give position and/or orientation)")
+def _task(t: _Task, where: str, bodies: dict[str, BodySpec], joints: list[JointSpec]) -> TaskSpec:
+    by_name = {j.name: j for j in joints}
+    for k, nm in enumerate(t.joints):
+        if nm not in by_name:
+            raise ParameterError(f"{where} joints[{k}]: {nm!r} is not a joint of the mechanism")
+        if len(joint_type(by_name[nm].type).motions) != 1:
+            raise ParameterError(f"{where} joints[{k}]: {nm!r} is a {by_name[nm].type} joint; a task coordinate is "
+                                 "the coordinate of a joint of one freedom (revolute, prismatic, ...)")
+    if len(set(t.joints)) != len(t.joints):
+        raise ParameterError(f"{where} joints: a joint is named twice")
+    body = t.body
+    if body is None:
+        if not t.joints or t.position or t.orientation:
+            raise ParameterError(f"{where} body: missing (the task body; a task of joints alone may leave it out)")
+        body = by_name[t.joints[-1]].child
+    if body not in bodies:
+        raise ParameterError(f"{where} body: {body!r} is not a body of the mechanism")
+    if not t.position and not t.orientation and not t.joints:
+        raise ParameterError(f"{where}: no task coordinate (give position and/or orientation, or joints)")
     if len(set(t.position)) != len(t.position) or len(set(t.orientation)) != len(t.orientation):
         raise ParameterError(f"{where}: a task coordinate is named twice")
     try:
         seq = check_sequence(t.euler_sequence)
     except ParameterError as exc:
         raise ParameterError(f"{where} {exc}") from None
-    b = bodies[t.body]
+    b = bodies[body]
     point = np.array(t.point_m if t.point_m is not None else b.p0 + b.R0 @ b.com, dtype=float)
-    names = tuple(t.position) + tuple(f"euler{k}" for k in t.orientation)
-    units = ("m",) * len(t.position) + ("rad",) * len(t.orientation)
-    return TaskSpec(body=t.body, point=point, position=tuple(_POS_NAMES[c] for c in t.position), sequence=seq,
-                    orientation=tuple(int(k) - 1 for k in t.orientation), names=names, units=units)
+    names = tuple(t.position) + tuple(f"euler{k}" for k in t.orientation) + tuple(f"{nm}_q" for nm in t.joints)
+    units = (("m",) * len(t.position) + ("rad",) * len(t.orientation)
+             + tuple(joint_type(by_name[nm].type).units[0] for nm in t.joints))
+    return TaskSpec(body=body, point=point, position=tuple(_POS_NAMES[c] for c in t.position), sequence=seq,
+                    orientation=tuple(int(k) - 1 for k in t.orientation), names=names, units=units,
+                    joints=tuple(t.joints))
 
 
 #: keys of directions (normalised where read: only their direction counts), bounded by nothing
@@ -1010,7 +1031,7 @@ def load_description(source: str | Path | dict[str, Any], limits: dict[str, Any]
     _check_beams(label, body_specs, joints)
     if not any(j.actuated for j in joints):
         raise ParameterError(f"{label}: [joints]: no joint is actuated (set actuated = true on the driven joints)")
-    task = _task(data.task, f"{label}: [task]", body_specs)
+    task = _task(data.task, f"{label}: [task]", body_specs, joints)
     loads = [_load(ld, f"{label}: [loads][{k}]", body_specs, task) for k, ld in enumerate(data.loads)]
     first: dict[str, tuple[int, float]] = {}
     for k, ld in enumerate(loads):

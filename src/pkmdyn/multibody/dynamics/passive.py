@@ -36,7 +36,7 @@ from ..kinematics.motion import TaskMotion
 from ..model.compiler import MechanismModel
 from .verbs import MechanismData, _all
 
-__all__ = ["passive_motion"]
+__all__ = ["passive_motion", "driven_motion"]
 
 Array = NDArray[np.float64]
 
@@ -162,3 +162,14 @@ def passive_motion(model: MechanismModel, t: Array, s: Array, sd: Array, sdd: Ar
     data = MechanismData(model)
     xdd = np.array([accel(x[i], xd[i], float(t[i]))[0] for i in range(len(t))])
     return TaskMotion(t, x, xd, xdd, {})
+
+
+def driven_motion(model: MechanismModel, motion: TaskMotion,
+                  progress: Callable[[float], None] | None = None) -> TaskMotion:
+    """An under-actuated mechanism's motion whose actuated joints follow those of the task
+    motion ``motion`` (its inverse kinematics' actuator coordinates, rates and accelerations),
+    the passive freedoms simulated (:func:`passive_motion`): the default motion of such a
+    mechanism, which a task motion of its own would not be (its efforts exist only where it is
+    dynamically consistent)."""
+    kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
+    return passive_motion(model, motion.t, kin.act_q, kin.act_qd, kin.act_qdd, progress=progress)

@@ -27,7 +27,11 @@ configuration (MJCF: ``qpos0`` or a keyframe; URDF, SDFormat: zero joint positio
   (by name), then the moving bodies with the most joints, the deepest in the tree first;
   its coordinates are chosen among ``x y z`` first, then the ``XYZ`` Euler angles, as many
   as the mechanism's degrees of freedom, independent at the reference configuration
-  (pivoted QR of the task rows on the loops' null space).
+  (pivoted QR of the task rows on the loops' null space); where no body's coordinates can (a
+  mechanism of two legs, whose freedoms no single body carries), joint coordinates: the
+  actuated joints', then the sprung ones', then the others' in the file's order, then the
+  first candidate body's, each taken where it is independent of those before it on the loops'
+  null space less the idle freedoms (a task of joints, said in a note).
 
 Anything without an equivalent is refused with one line naming the element
 (:class:`~pkmdyn.errors.ParameterError`).
@@ -37,6 +41,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import scipy.linalg
@@ -45,7 +50,7 @@ from numpy.typing import NDArray
 from ...errors import ParameterError
 from ..description.schema import GROUND, MOTOR_KEYS, load_description
 from ..model.compiler import compile_model
-from ..model.topology import _null, analyse_topology, column_scale, constraint_jacobian, row_scale
+from ..model.topology import _null, _point_jacobian, analyse_topology, column_scale, constraint_jacobian, row_scale
 
 Array = NDArray[np.float64]
 
@@ -166,6 +171,8 @@ class TaskChoice:
     position: tuple[str, ...] | None = None
     orientation: tuple[int, ...] | None = None
     sequence: str | None = None
+    #: joints whose coordinates are task coordinates (after the body's, if any)
+    joints: tuple[str, ...] | None = None
 
 
 def safe_name(name: str, fallback: str) -> str:
@@ -512,9 +519,11 @@ def _task_candidates(b: _Builder, joints: list[dict], choice: TaskChoice) -> lis
 
 def _choose_coordinates(desc: dict, choice: TaskChoice, source: str) -> None:
     """Set ``[task] position`` and ``orientation`` (module docstring)."""
-    if choice.position is not None or choice.orientation is not None:
+    if choice.position is not None or choice.orientation is not None or choice.joints is not None:
         desc["task"]["position"] = list(choice.position or [])
         desc["task"]["orientation"] = list(choice.orientation or [])
+        if choice.joints:
+            desc["task"]["joints"] = list(choice.joints)
         return
     desc["task"]["position"] = ["x", "y", "z"]
     desc["task"]["orientation"] = [1, 2, 3]
@@ -552,6 +561,52 @@ def _choose_coordinates(desc: dict, choice: TaskChoice, source: str) -> None:
     desc["task"]["orientation"] = [i - 2 for i in chosen if i >= 3]
 
 
+def _choose_joints(desc: dict, source: str) -> None:
+    """Set ``[task] joints`` (module docstring), and the task body's coordinates where the
+    joints' do not suffice: the coordinates of one-freedom tree joints, the actuated first,
+    then the sprung, then the others, then the task body's ``x y z`` and ``XYZ`` angles, each
+    kept where its row on the loops' null space less the idle freedoms (the motions that move
+    no joint centre) is independent of the rows kept before it (scaled residual above 1e-6),
+    until there are as many as the mechanism's degrees of freedom."""
+    task = desc["task"]
+    task.update(position=["x", "y", "z"], orientation=[1, 2, 3], joints=[])
+    model = compile_model(load_description(desc), topology_only=True)
+    _, J = constraint_jacobian(model, model.coord_offset)
+    nr = model.row_loop.shape[0]
+    Js = J[0] * row_scale(model)[:, None] * column_scale(model)[None, :]
+    N = _null(Js[:nr], model.nq)
+    # the freedoms that move a joint centre: the idle ones (a rod's spin) are no task's
+    P = _point_jacobian(model, model.coord_offset) / model.length_scale * column_scale(model)[None, :]
+    moving = _null(_null(P @ N, N.shape[1]).T, N.shape[1]) if N.shape[1] else np.zeros((0, 0))
+    Nm = N @ moving
+    dof = Nm.shape[1]
+    if dof <= 0:
+        raise ParameterError(f"{source}: the mechanism does not move")
+    spec = {j["name"]: j for j in desc["joints"]}
+    order = sorted(
+        (k for k in range(len(model.joint_names)) if not model.joint_cut[k] and model.joint_nq[k] == 1),
+        key=lambda k: (0 if model.joint_actuated[k] else 1 if spec[model.joint_names[k]].get("spring") else 2, k))
+    rows = [(("joint", model.joint_names[k]), Nm[int(model.joint_q0[k])]) for k in order]
+    rows += [(("body", r), Js[nr + r] @ Nm) for r in range(6)]
+    chosen: list[tuple[str, Any]] = []
+    basis = np.zeros((0, dof))
+    for what, row in rows:
+        row = row - (row @ basis.T) @ basis if basis.size else row.copy()
+        size = float(np.linalg.norm(row))
+        if size > 1e-6:
+            chosen.append(what)
+            basis = np.vstack([basis, row / size])
+        if len(chosen) == dof:
+            break
+    if len(chosen) != dof:
+        raise ParameterError(f"{source}: no {dof} independent coordinates of joints and of body {task['body']} "
+                             "either (choose the task with --task-body or --task-joints)")
+    task["joints"] = [nm for kind, nm in chosen if kind == "joint"]
+    body = sorted(r for kind, r in chosen if kind == "body")
+    task["position"] = ["xyz"[r] for r in body if r < 3]
+    task["orientation"] = [r - 2 for r in body if r >= 3]
+
+
 def description_from_graph(g: Graph, choice: TaskChoice = TaskChoice()) -> tuple[dict, list[str]]:
     """The description (a dict, as :func:`~pkmdyn.multibody.load_mechanism` takes) of ``g``,
     and the notes (module docstring)."""
@@ -582,15 +637,29 @@ def description_from_graph(g: Graph, choice: TaskChoice = TaskChoice()) -> tuple
     drives = [d for d in drives if d["joint"] not in given] + [dict(d) for d in g.drives]
     if drives:
         desc["actuators"] = drives
+    chose_body = choice.body is not None or choice.point is not None
     for k, (body, point) in enumerate(candidates[:MAX_CANDIDATES]):
         desc["task"].update(body=body, point_m=list(map(float, point)))
         try:
             _choose_coordinates(desc, choice, g.source)
             break
-        except ParameterError:
+        except ParameterError as exc:
             if k == min(len(candidates), MAX_CANDIDATES) - 1:
-                raise
+                if chose_body:
+                    raise
+                # no body carries every freedom (two legs): a task of joint coordinates
+                desc["task"].update(body=candidates[0][0], point_m=list(map(float, candidates[0][1])))
+                _choose_joints(desc, g.source)
+                t = desc["task"]
+                also = [*t["position"], *(f"euler{k}" for k in t["orientation"])]
+                b.notes.append(f"task: no body's coordinates determine the mechanism's freedoms (the last tried: "
+                               f"{str(exc).split(': ', 1)[-1]}); the task is the coordinates of joints "
+                               f"{', '.join(t['joints'])}" + (f" and {', '.join(also)} of body {t['body']}" if also
+                                                               else "") + " (--task-joints to choose others)")
+    units = {j["name"]: "m" if j["type"] in ("prismatic", "slide") else "rad" for j in desc["joints"]}
     amp = {f"{c}_m": 0.01 * b.size for c in desc["task"]["position"]}
     amp.update({f"euler{k}_rad": 0.02 for k in desc["task"]["orientation"]})
+    amp.update({f"{j}_q_{units[j]}": 0.01 * b.size if units[j] == "m" else 0.02
+                for j in desc["task"].get("joints", [])})
     desc["default_motion"] = {"period_s": 2.0, "samples": 201, "amplitude": amp}
     return desc, b.notes

@@ -47,7 +47,8 @@ def _merge(asked: TaskChoice, side: TaskChoice) -> TaskChoice:
     return TaskChoice(body=asked.body or side.body, point=asked.point if asked.point is not None else side.point,
                       position=asked.position if asked.position is not None else side.position,
                       orientation=asked.orientation if asked.orientation is not None else side.orientation,
-                      sequence=asked.sequence or side.sequence)
+                      sequence=asked.sequence or side.sequence,
+                      joints=asked.joints if asked.joints is not None else side.joints)
 
 
 #: the default motion's amplitude is divided by this until the mechanism follows it
@@ -90,7 +91,8 @@ def import_description(path: Path, fmt: str, *, sidecar: Path | None = None, act
                      "the minimum-norm joint reactions, flagged); [[bodies]] section and material make them unique")
     if model.na < model.topology.dof:
         notes.append(f"under-actuated: {model.na} actuators for {model.topology.dof} degrees of freedom; a task motion's "
-                     "efforts exist only where it is dynamically consistent (pkmdyn run refuses it elsewhere)")
+                     "efforts exist only where it is dynamically consistent (pkmdyn run refuses it elsewhere; its default motion "
+                     "drives the actuators and simulates the other freedoms)")
     if model.na > model.topology.dof:
         notes.append(f"redundantly actuated: {model.na} actuators for {model.topology.dof} degrees of freedom; the "
                      "efforts are the minimum-norm ones unless an [actuation] section says otherwise "

@@ -68,8 +68,15 @@ def _compiled(mujoco, path: Path, src: str, notes: list[str], problems: list[str
         raise ParameterError(why) from None
     folder = path.parent / (spec.meshdir or "")
     missing = {mesh.name: mesh for mesh in spec.meshes if mesh.file and not (folder / mesh.file).is_file()}
-    if not missing:
+    tex_folder = path.parent / (spec.texturedir or "")
+    textures = {t.name: t.file for t in spec.textures if t.file and not (tex_folder / t.file).is_file()}
+    if not missing and not textures:
         raise ParameterError(why)
+    for mat in spec.materials:  # a texture only colours: its material keeps its colour without it
+        mat.textures = ["" if name in textures else name for name in mat.textures]
+    for t in list(spec.textures):
+        if t.name in textures:
+            spec.delete(t)
     # with inertiafromgeom="true" MuJoCo takes every body's inertia from its geoms, <inertial> or not
     from_geoms = int(spec.compiler.inertiafromgeom) == int(mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_TRUE)
     hint = ' and drop inertiafromgeom="true"' if from_geoms else ""
@@ -92,9 +99,14 @@ def _compiled(mujoco, path: Path, src: str, notes: list[str], problems: list[str
             raise ParameterError(_refusals(src, problems)) from None
         raise ParameterError(why) from None
     files = sorted({mesh.file for mesh in missing.values()})
-    notes.append(f"mesh files missing ({', '.join(files[:5])}{' ...' if len(files) > 5 else ''}): their geoms "
-                 f"left out of bodies {', '.join(sorted(set(left))[:8])}, whose inertia the file gives explicitly"
-                 " (the world's geoms carry none)")
+    if files:
+        notes.append(f"mesh files missing ({', '.join(files[:5])}{' ...' if len(files) > 5 else ''}): their geoms "
+                     f"left out of bodies {', '.join(sorted(set(left))[:8])}, whose inertia the file gives explicitly"
+                     " (the world's geoms carry none)")
+    if textures:
+        tex = sorted(set(textures.values()))
+        notes.append(f"texture files missing ({', '.join(tex[:5])}{' ...' if len(tex) > 5 else ''}): left out "
+                     "(a texture only colours the geoms)")
     return m
 
 
@@ -146,7 +158,8 @@ def _custom(mujoco, m, problems: list[str]) -> tuple[TaskChoice | None, dict[str
             task = TaskChoice(body=safe_name(fields["body"], "body"), point=fields.get("point") or None,
                               position=tuple(c for c in fields.get("position", "").split(",") if c),
                               orientation=tuple(int(c) for c in fields.get("orientation", "").split(",") if c),
-                              sequence=fields.get("sequence") or None)
+                              sequence=fields.get("sequence") or None,
+                              joints=tuple(c for c in fields.get("joints", "").split(",") if c) or None)
         except (KeyError, ValueError):
             problems.append(f"custom text {TASK_TEXT}: {text[:80]!r} is not body=...;position=...;orientation=...")
     for i in range(m.nnumeric):

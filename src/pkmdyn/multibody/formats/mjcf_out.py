@@ -124,13 +124,18 @@ DRIVE_STIFFNESS = "pkmdyn_drive_stiffness_"
 
 
 def _custom(model: MechanismModel) -> list[str]:
-    """``<custom>``: the task (``body=...;point=<site>;position=x,y;orientation=1,3;sequence=XYZ``)
-    and each actuated joint's drive stiffness (joint side, N/m or N m/rad)."""
+    """``<custom>``: the task (``body=...;point=<site>;position=x,y;orientation=1,3;sequence=XYZ``,
+    then ``;joints=a,b`` for a task with joint coordinates) and each actuated joint's drive
+    stiffness (joint side, N/m or N m/rad)."""
     inv = {int(v): k for k, v in enumerate(model.euler_perm)}
     pos = ",".join("xyz"[int(i)] for kind, i in zip(model.task_kind, model.task_index) if kind == 0)
     ori = ",".join(str(inv[int(i)] + 1) for kind, i in zip(model.task_kind, model.task_index) if kind == 1)
     task = (f"body={model.body_names[model.task_body]};point={TASK_SITE};position={pos};orientation={ori};"
             f"sequence={model.euler_sequence}")
+    joints = [model.joint_names[int(model.coord_joint[int(i)])]
+              for kind, i in zip(model.task_kind, model.task_index) if kind == 2]
+    if joints:
+        task += f";joints={','.join(joints)}"
     out = ["  <custom>", f'    <text name="{TASK_TEXT}" data="{task}"/>']
     for j in model.act_joint:
         st = model.joint_stiffness[j] or {}

@@ -113,6 +113,7 @@ class _SidecarTask(Section):
 
     position: list[Literal["x", "y", "z"]] = Field(default_factory=list, max_length=3)
     orientation: list[Literal[1, 2, 3]] = Field(default_factory=list, max_length=3)
+    joints: list[_Frame] = Field(default_factory=list, max_length=600)
     euler_sequence: str = Field(default="XYZ", pattern=r"^([XYZ]{3}|[xyz]{3})$")
 
     @field_validator("euler_sequence")
@@ -201,7 +202,9 @@ def sidecar_task(side: dict[str, Any]) -> TaskChoice:
         point = tuple(float(x) for x in point)
     pos = tuple(t["position"]) if "position" in t else None
     ori = tuple(int(x) for x in t["orientation"]) if "orientation" in t else None
-    return TaskChoice(body=t.get("body"), point=point, position=pos, orientation=ori, sequence=t.get("euler_sequence"))
+    joints = tuple(str(x) for x in t["joints"]) if "joints" in t else None
+    return TaskChoice(body=t.get("body"), point=point, position=pos, orientation=ori, sequence=t.get("euler_sequence"),
+                      joints=joints)
 
 
 def _closure_pairs(model, src: str, sidecar: dict[str, Any] | None) -> list[tuple[str, str, str]]:

@@ -178,7 +178,10 @@ def mechanism_urdf(model: MechanismModel) -> tuple[str, dict, list[str]]:
             "point": [float(x) for x in model.p0[model.task_body] + model.R0[model.task_body] @ model.task_point],
             "position": [model.task_names[i] for i in range(model.nt) if model.task_kind[i] == 0],
             "orientation": [int(model.task_names[i][5:]) for i in range(model.nt) if model.task_kind[i] == 1],
-            "euler_sequence": model.euler_sequence}
+            "euler_sequence": model.euler_sequence,
+            **({"joints": [model.joint_names[int(model.coord_joint[int(i)])]
+                           for kind, i in zip(model.task_kind, model.task_index) if kind == 2]}
+               if np.any(model.task_kind == 2) else {})}
     sidecar = {"gravity_m_s2": [float(x) for x in model.gravity], "closed_loop": closed, "type": types,
                "name_mot": [model.joint_names[j] for j in model.act_joint], "task": task}
     drives = _drives(model)

@@ -168,9 +168,10 @@ def direct_sample(s, sd, sdd, q, chord, tree, loops, task, sol, work, info):  # 
     while True:
         forward_positions(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset, coord_sign,
                           tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, off, late, off)
+        mode = values if chord else jac  # (a conditional among the arguments would not compile)
         ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-                  RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
-                  val, J, rowpos, colpos, values if chord else jac, V, A, gamma, w33, w3)
+                  RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes, q,
+                  val, J, rowpos, colpos, mode, V, A, gamma, w33, w3)
         evals += 1
         big = 0.0
         worst = cut[0] if nc > 0 else 0
@@ -249,7 +250,7 @@ def direct_sample(s, sd, sdd, q, chord, tree, loops, task, sol, work, info):  # 
         G[ca, a] = 1.0
     bias_motion(G, sd, qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre, A)
     rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-         RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+         RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes, q,
          val, J, rowpos, colpos, drift, V, A, gamma, w33, w3)
     for i in range(nc):
         rr = cut[i]

@@ -380,11 +380,11 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
             # the rows that only the legs placed from the task alone move are closed (their
             # closed forms, at this sample's task): not evaluated (NaN), no step for them
             ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-                      RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+                      RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes, q,
                       val, K, rowpos, colpos, mode, V, A, gamma, w33, w3, legs[18])
         else:
             ok = rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-                      RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+                      RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes, q,
                       val, K, rowpos, colpos, mode, V, A, gamma, w33, w3)
         # ---- the right-hand side
         if phase == _RATES:

@@ -360,7 +360,7 @@ def task_route_map(model: MechanismModel) -> NDArray[np.int64] | None:
     None otherwise (the tree-space route answers)."""
     lg = model.legs
     n_ang, n_pos = int(np.sum(model.task_kind == 1)), int(np.sum(model.task_kind == 0))
-    if lg.count == 0 or model.na != model.nt or n_ang != 3 or n_pos not in (0, 3):
+    if lg.count == 0 or model.na != model.nt or n_ang != 3 or n_pos not in (0, 3) or np.any(model.task_kind == 2):
         return None
     if not any(lg.kind[L] >= 10 and lg.fixed[L] for L in range(lg.count)):
         return None  # the task body is not placed by a leg from the task alone
@@ -831,7 +831,7 @@ def assembly_modes(model: MechanismModel, s: Array, starts: int | None = None, s
     if not modes:
         raise UnreachablePoseError(f"actuator {model.actuator_names[0]!r}: no solution at {_values(model, s)} passed "
                                    "the inverse kinematics check")
-    scale_x = np.where(model.task_kind == 0, 1.0 / L, 1.0)
+    scale_x = np.where(model.task_length, 1.0 / L, 1.0)
     modes.sort(key=lambda a: float(np.abs((a.x - x_ref) * scale_x).max()))
     return AssemblyModes(s=s, modes=tuple(modes), starts=m, converged=converged,
                          patience=None if starts is not None else int(patience), last_new_mode_at=last_new)

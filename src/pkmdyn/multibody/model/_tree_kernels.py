@@ -811,7 +811,7 @@ def _settled(b, anc, settled):
 
 @njit(cache=True, _nrt=False)
 def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-         RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+         RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes, q,
          val, J, rowpos, colpos, mode, V, A, gamma, w33, w3, settled=None):
     """Values ``val (nr + nt,)`` and, by ``mode``: the Jacobian (``ROWS_JACOBIAN``), row ``rr``
     and column ``c`` at ``J[rowpos[rr], colpos[c]]`` (rows with ``rowpos < 0`` left out: the
@@ -823,7 +823,8 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
     rate c by ``(s_b - s_a) (e . S_v - (e x o_C) . S_w)`` (s_a, s_b: 1 where c moves body a, b;
     the terms of ``o_P`` and of the turning ``e`` cancel into this), a rotation row
     ``e . c_j`` by ``(s_a - s_b) (e x c_j) . S_w``, a task position component m of point x by
-    ``S_v[m] + (x x e_m) . S_w``, a task Euler angle by ``(E^-1 S_w)[m]``.
+    ``S_v[m] + (x x e_m) . S_w``, a task Euler angle by ``(E^-1 S_w)[m]``, a task joint
+    coordinate ``q[c]`` (``q`` the tree coordinates) by the unit row of c, with no drift.
 
     With ``settled (nq,)`` (``ROWS_VALUES`` only): the rows of a joint, or the task rows, whose
     bodies only coordinates with ``settled[c] != 0`` move (legs placed from the task alone,
@@ -883,11 +884,32 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
             else:
                 _direction_motion(b, cj, V, A, cd, cdd, t3)
                 gamma[rr] = _dot(edd, cj) + 2.0 * _dot(ed, cd) + _dot(e, cdd)
-    # task rows
+    # task rows: a joint's coordinate first, then the task body's (none where its body is settled)
+    body_rows = False
+    for t in range(task_kind.shape[0]):
+        rr = nr + t
+        if task_kind[t] != 2:
+            body_rows = True
+            continue
+        c = _nn(task_index[t])
+        if settled is not None and settled[c] != 0:
+            val[rr] = np.nan
+            continue
+        val[rr] = q[c]
+        if mode == ROWS_JACOBIAN and rowpos[rr] >= 0:
+            i = _nn(rowpos[rr])
+            for j in range(J.shape[1]):
+                J[i, j] = 0.0
+            J[i, _nn(colpos[c])] = 1.0
+        if mode == ROWS_DRIFT:
+            gamma[rr] = 0.0
     tb = _nn(task_body)
+    if not body_rows:
+        return True
     if settled is not None and _settled(tb, anc, settled):
         for t in range(task_kind.shape[0]):
-            val[nr + t] = np.nan
+            if task_kind[t] != 2:
+                val[nr + t] = np.nan
         return True
     for m in range(3):
         x[m] = p[tb, m] + R[tb, m, 0] * task_point[0] + R[tb, m, 1] * task_point[1] + R[tb, m, 2] * task_point[2]
@@ -912,6 +934,8 @@ def rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_paren
     for t in range(task_kind.shape[0]):
         rr = nr + t
         m = _nn(task_index[t])
+        if task_kind[t] == 2:
+            continue
         if task_kind[t] == 0:
             val[rr] = x[m]
             # (x x e_m) . S_w + S_v[m]
@@ -982,5 +1006,5 @@ def jacobians_batch(q, body_parent, body_joint, joint_q0, joint_nq, coord_motion
         forward_positions(q[s], body_parent, body_joint, joint_q0, joint_nq, coord_motion, coord_offset,
                           coord_sign, tRP, tpP, tRC, tpC, R, p, S, w33, w3, trig, off, late, off)
         rows(R, p, S, anc, row_loop, row_kind, row_i, row_j, loop_joint, joint_parent, joint_child,
-             RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes,
+             RP, pP, RC, pC, task_body, task_point, task_kind, task_index, euler_axes, q[s],
              val_out[s], J_out[s], rowpos, colpos, jac, V, A, gamma, w33, w3)

@@ -80,6 +80,7 @@ class TaskKey(NamedTuple):
     orientation: tuple[int, ...]
     names: tuple[str, ...]
     units: tuple[str, ...]
+    joints: tuple[str, ...] = ()
 
 
 class StructureKey(NamedTuple):
@@ -105,7 +106,8 @@ def structure_key(desc: Description) -> StructureKey:
         joints=tuple(JointKey(j.name, j.type, j.parent, j.child, bool(j.actuated), j.spring is not None)
                      for j in desc.joints),
         cut_joints=None if desc.cut_joints is None else tuple(desc.cut_joints),
-        task=TaskKey(t.body, tuple(t.position), t.sequence, tuple(t.orientation), tuple(t.names), tuple(t.units)),
+        task=TaskKey(t.body, tuple(t.position), t.sequence, tuple(t.orientation), tuple(t.names), tuple(t.units),
+                     tuple(t.joints)),
         loads=tuple((ld.body, ld.name) for ld in desc.loads))
 
 
@@ -113,13 +115,16 @@ def spanning_tree(desc: Description) -> tuple[list[int], list[int]]:
     """Tree joints (in the order they were added, i.e. parents first) and cut joints (indices
     into ``desc.joints``); see the module docstring for the rule."""
     key = structure_key(desc)
-    return _spanning_tree(key.bodies, key.joints, key.cut_joints)
+    return _spanning_tree(key.bodies, key.joints, key.cut_joints, key.task.joints)
 
 
-def _spanning_tree(bodies: Sequence[str], joints: Sequence[JointKey], cut_joints: Sequence[str] | None
-                   ) -> tuple[list[int], list[int]]:
-    """:func:`spanning_tree` of the bodies' names and the joints' structure (:class:`JointKey`)."""
+def _spanning_tree(bodies: Sequence[str], joints: Sequence[JointKey], cut_joints: Sequence[str] | None,
+                   task_joints: Sequence[str] = ()) -> tuple[list[int], list[int]]:
+    """:func:`spanning_tree` of the bodies' names and the joints' structure (:class:`JointKey`);
+    the task's joints (``task_joints``) are taken into the tree first, as the actuated and
+    sprung ones are (a task coordinate is a tree coordinate)."""
     forced_cut = set(cut_joints or ())
+    first = set(task_joints)
     adj: dict[str, list[int]] = {GROUND: [], **{b: [] for b in bodies}}
     for k, j in enumerate(joints):
         adj[j.parent].append(k)
@@ -133,7 +138,7 @@ def _spanning_tree(bodies: Sequence[str], joints: Sequence[JointKey], cut_joints
             j = joints[k]
             if j.name not in forced_cut:
                 backwards = 1 if j.child == body else 0  # reaching the parent through the child
-                heapq.heappush(heap, (0 if j.actuated or j.sprung else 1, backwards, joint_type(j.type).freedoms, k))
+                heapq.heappush(heap, (0 if j.actuated or j.sprung or j.name in first else 1, backwards, joint_type(j.type).freedoms, k))
 
     push(GROUND)
     while heap:
@@ -197,7 +202,7 @@ def model_structure(key: StructureKey) -> ModelStructure:
     Raises :class:`~pkmdyn.errors.ParameterError` when the cut joints named in the file
     disconnect a body or an actuated joint would have to be cut."""
     joints = key.joints
-    tree, cuts = _spanning_tree(key.bodies, joints, key.cut_joints)
+    tree, cuts = _spanning_tree(key.bodies, joints, key.cut_joints, key.task.joints)
     # body order: the order in which the tree reached them
     order: list[str] = []
     child_of_joint = {}
@@ -261,8 +266,14 @@ def model_structure(key: StructureKey) -> ModelStructure:
     else:
         axes = [{"x": 0, "y": 1, "z": 2}[c] for c in reversed(seq)]
         perm = [2, 1, 0]  # user angle k is intrinsic angle perm[k]
-    task_kind = [0] * len(task.position) + [1] * len(task.orientation)
-    task_index = list(task.position) + [perm[k] for k in task.orientation]
+    jnames = {j.name: k for k, j in enumerate(joints)}
+    for nm in task.joints:
+        if jnames[nm] in cuts:
+            raise ParameterError(f"[task] joints: {nm!r} is a loop's cut joint, so its coordinate is not one of "
+                                 "the tree's; name another joint of that loop in [mechanism] cut_joints, or choose "
+                                 "another task joint")
+    task_kind = [0] * len(task.position) + [1] * len(task.orientation) + [2] * len(task.joints)
+    task_index = list(task.position) + [perm[k] for k in task.orientation] + [q0[jnames[nm]] for nm in task.joints]
     act = sorted(k for k in tree if joints[k].actuated)
     fields = dict(
         body_names=tuple(order), body_parent=body_parent, body_joint=body_joint,
@@ -276,7 +287,8 @@ def model_structure(key: StructureKey) -> ModelStructure:
         row_loop=np.array(row_loop, dtype=np.int64), row_kind=np.array(row_kind, dtype=np.int64),
         row_i=np.array(row_i, dtype=np.int64), row_j=np.array(row_j, dtype=np.int64),
         task_body=bidx[task.body], task_kind=np.array(task_kind, dtype=np.int64),
-        task_index=np.array(task_index, dtype=np.int64), euler_sequence=seq, euler_axes=np.array(axes, dtype=np.int64),
+        task_index=np.array(task_index, dtype=np.int64), task_length=np.array([u == "m" for u in task.units]),
+        euler_sequence=seq, euler_axes=np.array(axes, dtype=np.int64),
         euler_perm=np.array(perm, dtype=np.int64), task_names=task.names, task_units=task.units,
         act_joint=np.array(act, dtype=np.int64), act_coord=np.array([q0[k] for k in act], dtype=np.int64),
         load_body=np.array([bidx[b] for b, _ in key.loads], dtype=np.int64),

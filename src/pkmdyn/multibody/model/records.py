@@ -77,10 +77,11 @@ class MechanismModel:
     1 rotation), ``row_i``, ``row_j`` (nr,).
 
     Task coordinates: ``task_body``; ``task_point`` (3,) [m] body frame; ``task_kind`` (nt,)
-    0 position / 1 Euler angle; ``task_index`` (nt,) the base-frame component or the angle's
-    place in ``euler_axes`` (3,) (the intrinsic axes; an extrinsic sequence is stored as the
-    reversed intrinsic one, ``euler_perm`` mapping its angles); ``task_names``,
-    ``task_units``.
+    0 position / 1 Euler angle / 2 a joint's coordinate; ``task_index`` (nt,) the base-frame
+    component, the angle's place in ``euler_axes`` (3,) (the intrinsic axes; an extrinsic
+    sequence is stored as the reversed intrinsic one, ``euler_perm`` mapping its angles) or the
+    tree coordinate; ``task_length`` (nt,) whether the coordinate is a length [m] (else an
+    angle [rad]); ``task_names``, ``task_units``.
 
     Actuators: ``act_joint`` (na,) joint indices, ``act_coord`` (na,) tree coordinates.
 
@@ -146,6 +147,7 @@ class MechanismModel:
     task_point: Array
     task_kind: IntArray
     task_index: IntArray
+    task_length: NDArray[np.bool_]
     euler_sequence: str
     euler_axes: IntArray
     euler_perm: IntArray

@@ -97,7 +97,7 @@ def row_scale(model: MechanismModel) -> Array:
     """(nr + nt,) factors making every row dimensionless: 1/L for lengths, 1 for angles."""
     L = model.length_scale
     cut = np.where(model.row_kind == 0, 1.0 / L, 1.0)
-    task = np.where(model.task_kind == 0, 1.0 / L, 1.0)
+    task = np.where(model.task_length, 1.0 / L, 1.0)
     return np.concatenate([cut, task])
 
 

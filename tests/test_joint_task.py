@@ -1,0 +1,278 @@
+"""A task made of joint coordinates (``[task] joints``): a mechanism whose freedoms no single
+body carries (two legs, each closed by its own loop).
+
+Oracles, written apart from the engine's task rows:
+
+* a second route: the same physical motion described by a body's task (the crank's angle)
+  and by a passive joint's coordinate (the four-bar's coupler-rocker joint, its coordinate
+  read from the first route's solution) gives the same tree coordinates, rates,
+  accelerations and efforts;
+* finite differences: the joint task's rates and accelerations against central differences
+  of the solved coordinates;
+* the power balance on two legs: the actuators' power against the time derivative of the
+  kinetic and potential energy, both computed here from the bodies' motion;
+* the import of a two-legged MJCF model (no body carries both legs' freedoms) falls back on
+  the joints' coordinates and runs on built-in defaults, an under-actuated one (a sprung
+  joint) with its passive freedom simulated.
+"""
+
+from __future__ import annotations
+
+import copy
+import csv
+import json
+import tomllib
+
+import numpy as np
+import pytest
+
+import multibody_examples as ex
+from pkmdyn.cli import main
+from pkmdyn.errors import ParameterError
+from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
+from pkmdyn.multibody.dynamics.newton_euler import inverse_dynamics
+
+
+def _two_legs(task_joints=("A_L", "A_R")):
+    """Two four-bars (tests/multibody_examples.py's points), one in the plane z = 0.3, the other
+    shifted 3 m along x; each crank actuated."""
+    base = ex.four_bar()
+    bodies, joints = [], []
+    for side, dx in (("L", 0.0), ("R", 3.0)):
+        for b in base["bodies"]:
+            nb = copy.deepcopy(b)
+            nb["name"] = f"{b['name']}_{side}"
+            nb["com_m"] = [b["com_m"][0] + dx, b["com_m"][1], b["com_m"][2]]
+            bodies.append(nb)
+        for j in base["joints"]:
+            nj = copy.deepcopy(j)
+            nj["name"] = f"{j['name']}_{side}"
+            nj["parent"] = j["parent"] if j["parent"] == "ground" else f"{j['parent']}_{side}"
+            nj["child"] = j["child"] if j["child"] == "ground" else f"{j['child']}_{side}"
+            nj["point_m"] = [j["point_m"][0] + dx, j["point_m"][1], j["point_m"][2]]
+            joints.append(nj)
+    d = {"mechanism": {"name": "two_legs", "gravity_m_s2": [0.0, -9.81, 0.0]}, "bodies": bodies, "joints": joints,
+         "task": {"joints": list(task_joints)}}
+    return d
+
+
+def _motion(m, t, amp=0.3):
+    x0 = reference_task(m)
+    w = 2 * np.pi / 1.5
+    ph = np.arange(m.nt)
+    x = x0 + amp * np.sin(w * t[:, None] + ph)
+    xd = amp * w * np.cos(w * t[:, None] + ph)
+    xdd = -amp * w * w * np.sin(w * t[:, None] + ph)
+    return x, xd, xdd
+
+
+def test_a_passive_joints_coordinate_as_the_task_follows_the_body_task_route():
+    d_body = ex.four_bar()  # task: the crank's angle (Euler ZYX angle 1 of the crank)
+    d_joint = ex.four_bar()
+    d_joint["task"] = {"body": "rocker", "joints": ["C"]}  # the coupler-rocker joint's coordinate
+    mb, mj = load_mechanism(d_body), load_mechanism(d_joint)
+    assert list(mj.task_kind) == [2] and mj.task_names == ("C_q",) and mj.task_units == ("rad",)
+    t = np.linspace(0.0, 1.0, 41)
+    x, xd, xdd = _motion(mb, t, 0.4)
+    kb = solve_kinematics(mb, x, xd, xdd, t)
+    c = int(mj.joint_q0[mj.joint_names.index("C")])
+    assert mb.joint_names == mj.joint_names
+    cb = int(mb.joint_q0[mb.joint_names.index("C")])
+    # the second route's task: joint C's coordinate, rate and acceleration from the first one
+    kj = solve_kinematics(mj, kb.q[:, cb:cb + 1], kb.qd[:, cb:cb + 1], kb.qdd[:, cb:cb + 1], t)
+    assert c == cb
+    # the two routes order their tree coordinates alike here (same cut), so compare directly
+    np.testing.assert_allclose(kj.q, kb.q, atol=1e-9)
+    np.testing.assert_allclose(kj.qd, kb.qd, atol=1e-8)
+    np.testing.assert_allclose(kj.qdd, kb.qdd, atol=1e-6)
+    np.testing.assert_allclose(kj.x[:, 0], kb.q[:, cb], atol=1e-12)
+    ub, uj = inverse_dynamics(mb, kb).u, inverse_dynamics(mj, kj).u
+    np.testing.assert_allclose(uj, ub, rtol=1e-7, atol=1e-8 * np.abs(ub).max())
+
+
+def test_the_joint_tasks_rates_and_accelerations_match_finite_differences():
+    m = load_mechanism(_two_legs(("C_L", "B_R")))
+    h = 1e-4
+    tc = np.linspace(0.1, 0.9, 5)
+    t = (tc[:, None] + h * np.array([-1.0, 0.0, 1.0])).reshape(-1)
+    x, xd, xdd = _motion(m, t, 0.25)
+    k = solve_kinematics(m, x, xd, xdd, t)
+    q = k.q.reshape(len(tc), 3, -1)
+    qd = k.qd.reshape(len(tc), 3, -1)
+    fd_qd = (q[:, 2] - q[:, 0]) / (2 * h)
+    fd_qdd = (qd[:, 2] - qd[:, 0]) / (2 * h)
+    scale_v = np.abs(qd[:, 1]).max()
+    scale_a = np.abs(k.qdd).max()
+    assert scale_v > 0.1 and scale_a > 0.1
+    np.testing.assert_allclose(qd[:, 1], fd_qd, atol=1e-5 * scale_v)
+    np.testing.assert_allclose(k.qdd.reshape(len(tc), 3, -1)[:, 1], fd_qdd, atol=1e-5 * scale_a)
+    # the task coordinates are the joints' own coordinates
+    for i, nm in enumerate(("C_L", "B_R")):
+        c = int(m.joint_q0[m.joint_names.index(nm)])
+        np.testing.assert_allclose(k.x[:, i], k.q[:, c], atol=1e-12)
+
+
+def _energy(m, k):
+    """Kinetic and gravity's potential energy from the bodies' motion (computed here)."""
+    T = np.zeros(len(k))
+    V = np.zeros(len(k))
+    for b in range(m.nb):
+        I = np.einsum("nij,jk,nlk->nil", k.R[:, b], m.inertia[b], k.R[:, b])
+        T += 0.5 * m.mass[b] * np.einsum("ni,ni->n", k.v[:, b], k.v[:, b])
+        T += 0.5 * np.einsum("ni,nij,nj->n", k.w[:, b], I, k.w[:, b])
+        V -= m.mass[b] * k.p[:, b] @ m.gravity
+    return T + V
+
+
+def test_two_legs_the_power_balance_holds():
+    m = load_mechanism(_two_legs(("A_L", "C_R")))
+    h = 2e-4
+    tc = np.linspace(0.05, 1.2, 9)
+    t = (tc[:, None] + h * np.array([-2, -1, 0, 1, 2])[None]).reshape(-1)
+    x, xd, xdd = _motion(m, t, 0.3)
+    k = solve_kinematics(m, x, xd, xdd, t)
+    E = _energy(m, k).reshape(-1, 5)
+    dE = (E[:, 0] - 8 * E[:, 1] + 8 * E[:, 3] - E[:, 4]) / (12 * h)
+    u = inverse_dynamics(m, k).u
+    P = np.einsum("na,na->n", u, k.act_qd).reshape(-1, 5)[:, 2]
+    assert np.abs(P).max() > 0.1
+    assert np.abs(P - dE).max() <= 1e-6 * np.abs(P).max()
+
+
+@pytest.mark.parametrize("task, words", [
+    ({"joints": ["nope"]}, "joints[0]: 'nope' is not a joint"),
+    ({"joints": ["A_L", "A_L"]}, "named twice"),
+    ({"position": ["x"]}, "body: missing"),
+])
+def test_bad_joint_tasks_are_refused_by_name(task, words):
+    d = _two_legs()
+    d["task"] = task
+    with pytest.raises(ParameterError, match=words.replace("[", r"\[").replace("]", r"\]")):
+        load_mechanism(d)
+
+
+def test_a_ball_joint_or_a_cut_joint_is_refused_as_a_task_coordinate():
+    d = ex.rssr()
+    d["task"] = {"joints": ["S1"]}
+    with pytest.raises(ParameterError, match="S1.*spherical joint"):
+        load_mechanism(d)
+    d = ex.four_bar()
+    d["mechanism"]["cut_joints"] = ["C"]
+    d["task"] = {"body": "crank", "joints": ["C"]}
+    with pytest.raises(ParameterError, match="'C' is a loop's cut joint"):
+        load_mechanism(d)
+
+
+def test_the_stiffness_asks_for_a_body_task(tmp_path, capsys):
+    d = _two_legs()
+    for j in d["joints"]:
+        if j.get("actuated"):
+            j["stiffness"] = {"drive_Nm_rad": 1e3}
+    path = tmp_path / "two.toml"
+    from pkmdyn.io import dumps_toml
+    path.write_text(dumps_toml(d))
+    code = main(["stiffness", "--machine", str(path), "--out", str(tmp_path / "st")])
+    err = capsys.readouterr().err
+    assert code == 2 and "task coordinate 'A_L_q' is a joint's" in err
+    assert not (tmp_path / "st").exists()
+
+
+def _legs_xml(spring=False):
+    """Two planar four-bars in MJCF, each closed by a ``connect`` (hinges about z), the cranks
+    driven; with ``spring``, the right crank turns on a sprung hinge 0.05 m along a hub that the
+    drive turns (a five-bar with a passive freedom: under-actuated)."""
+    legs = []
+    for side, dx in (("L", 0.0), ("R", 3.0)):
+        sprung = spring and side == "R"
+        hub = (f'<body name="hub_{side}"><joint name="A_{side}" type="hinge" axis="0 0 1"/>'
+               f'<inertial pos="0.025 0 0" mass="0.5" diaginertia="0.01 0.01 0.01"/>'
+               f'<body name="crank_{side}" pos="0.05 0 0">'
+               f'<joint name="H_{side}" type="hinge" axis="0 0 1" stiffness="40"/>'
+               if sprung else
+               f'<body name="crank_{side}"><joint name="A_{side}" type="hinge" axis="0 0 1"/>')
+        close = "</body></body>" if sprung else "</body>"
+        off = 0.05 if sprung else 0.0  # the crank's frame on the hub's arm
+        legs.append(f"""
+    <body name="base_{side}" pos="{dx} 0 0.3">
+      {hub}
+        <inertial pos="{0.1 - off} 0.45 0" mass="1" diaginertia="0.01 0.01 0.01"/>
+        <body name="coupler_{side}" pos="{0.2 - off} 0.9 0">
+          <joint name="B_{side}" type="hinge" axis="0 0 1"/>
+          <inertial pos="0.75 0.25 0" mass="1" diaginertia="0.01 0.01 0.01"/>
+          <site name="tip_{side}" pos="1.5 0.5 0"/>
+        </body>
+      {close}
+      <body name="rocker_{side}" pos="2 0 0">
+        <joint name="D_{side}" type="hinge" axis="0 0 1"/>
+        <inertial pos="-0.15 0.7 0" mass="1" diaginertia="0.01 0.01 0.01"/>
+        <site name="top_{side}" pos="-0.3 1.4 0"/>
+      </body>
+    </body>""")
+    eqs = "".join(f'\n    <connect site1="tip_{s}" site2="top_{s}"/>' for s in "LR")
+    acts = "".join(f'\n    <motor name="m_{s}" joint="A_{s}"/>' for s in "LR")
+    return f"""<mujoco model="two_legs">
+  <compiler angle="radian"/>
+  <option gravity="0 -9.81 0"/>
+  <worldbody>{''.join(legs)}
+  </worldbody>
+  <equality>{eqs}
+  </equality>
+  <actuator>{acts}
+  </actuator>
+</mujoco>
+"""
+
+
+def _rows(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+@pytest.mark.parametrize("spring", [False, True])
+def test_a_two_legged_model_imports_with_a_joint_task_and_runs_on_defaults(tmp_path, capsys, spring):
+    pytest.importorskip("mujoco")
+    src = tmp_path / "legs.xml"
+    src.write_text(_legs_xml(spring))
+    out = tmp_path / "legs.toml"
+    assert main(["import", "--from", str(src), "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "no body's coordinates determine the mechanism's freedoms" in err
+    task = tomllib.loads(out.read_text())["task"]
+    want = ["A_L", "A_R", "H_R"] if spring else ["A_L", "A_R"]  # the actuated first, then the sprung
+    assert task["joints"] == want and not task["position"] and not task["orientation"]
+    run = tmp_path / "run"
+    assert main(["run", "--machine", str(out), "--out", str(run)]) == 0
+    rows = _rows(run / "results.csv")
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["samples"] == len(rows) > 100
+    for side in "LR":  # an actuated joint's task coordinate is its actuator coordinate
+        a = np.array([float(r[f"A_{side}_q_rad"]) for r in rows])
+        np.testing.assert_allclose(a, [float(r[f"A_{side}_pos_rad"]) for r in rows], atol=1e-12)
+        assert np.ptp(a) > 0.01
+    bodies = np.load(run / "bodies.npz")
+    names = [str(n) for n in bodies["coordinate_joints"]]
+    for j in want:
+        np.testing.assert_allclose([float(r[f"{j}_q_rad"]) for r in rows], bodies["q"][:, names.index(j)],
+                                   atol=1e-12)
+    if spring:  # the sprung hinge moves on its own (simulated), and the motion is consistent
+        h = np.array([float(r["H_R_q_rad"]) for r in rows])
+        assert np.ptp(h) > 1e-3
+        assert summary["max_unactuated_force_ratio"] <= 1e-9
+
+
+def test_a_joint_task_survives_export_and_import(tmp_path, capsys):
+    pytest.importorskip("mujoco")
+    from pkmdyn.io import dumps_toml
+    d = _two_legs(("C_L", "A_R"))
+    path = tmp_path / "two.toml"
+    path.write_text(dumps_toml(d))
+    for fmt, name in (("mjcf", "two.xml"), ("urdf", "two.urdf")):
+        exported = tmp_path / name
+        args = ["export", "--machine", str(path), "--format", fmt, "--out", str(exported)]
+        assert main(args) == 0, capsys.readouterr().err
+        back = tmp_path / f"back_{fmt}.toml"
+        extra = ["--sidecar", str(exported.with_suffix(".yaml"))] if fmt == "urdf" else []
+        assert main(["import", "--from", str(exported), "--out", str(back), *extra]) == 0, capsys.readouterr().err
+        m0, m1 = load_mechanism(d), load_mechanism(tomllib.loads(back.read_text()))
+        assert m1.task_names == m0.task_names == ("C_L_q", "A_R_q")
+        np.testing.assert_allclose(reference_task(m1), reference_task(m0), atol=1e-9)
