@@ -258,6 +258,42 @@ def test_a_two_legged_model_imports_with_a_joint_task_and_runs_on_defaults(tmp_p
         h = np.array([float(r["H_R_q_rad"]) for r in rows])
         assert np.ptp(h) > 1e-3
         assert summary["max_unactuated_force_ratio"] <= 1e-9
+        _mujoco_agrees(src, bodies, rows)
+
+
+def _mujoco_agrees(src, bodies, rows):
+    """The run's motion in MuJoCo's own equations of the same file: ``M qacc + bias - passive``
+    (the spring's force among the passive ones) is carried by the equality rows and the motors
+    alone, the motors' part is the run's efforts, and the sprung hinge's row balances without
+    any actuator (least squares over the equality forces and the motors' efforts)."""
+    import mujoco
+
+    mm = mujoco.MjModel.from_xml_path(str(src))
+    md = mujoco.MjData(mm)
+    names = [str(n) for n in bodies["coordinate_joints"]]
+    worst_res = worst_u = 0.0
+    for s in range(0, len(rows), 25):
+        qacc = np.zeros(mm.nv)
+        for j in range(mm.njnt):
+            c = names.index(mm.joint(j).name)
+            md.qpos[mm.jnt_qposadr[j]] = bodies["q"][s, c]
+            md.qvel[mm.jnt_dofadr[j]] = bodies["qd"][s, c]
+            qacc[mm.jnt_dofadr[j]] = bodies["qdd"][s, c]
+        mujoco.mj_forward(mm, md)
+        assert np.abs(md.efc_pos[:md.ne]).max() < 1e-9  # the file's loops closed at the run's poses
+        M = np.zeros((mm.nv, mm.nv))
+        mujoco.mj_fullM(mm, md, M)
+        Q = M @ qacc + md.qfrc_bias - md.qfrc_passive
+        B = np.zeros((mm.nv, mm.nu))
+        for a in range(mm.nu):
+            B[mm.jnt_dofadr[mm.actuator_trnid[a, 0]], a] = mm.actuator_gear[a, 0]
+        A = np.hstack([md.efc_J.reshape(md.nefc, mm.nv)[:md.ne].T, B])
+        sol, *_ = np.linalg.lstsq(A, Q, rcond=None)
+        u_run = np.array([float(rows[s][f"{mm.joint(mm.actuator_trnid[a, 0]).name}_effort_Nm"])
+                          for a in range(mm.nu)])
+        worst_res = max(worst_res, float(np.abs(A @ sol - Q).max() / np.abs(Q).max()))
+        worst_u = max(worst_u, float(np.abs(sol[-mm.nu:] - u_run).max() / np.abs(u_run).max()))
+    assert worst_res <= 1e-8 and worst_u <= 1e-8
 
 
 def test_a_joint_task_survives_export_and_import(tmp_path, capsys):
