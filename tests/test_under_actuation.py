@@ -1,5 +1,5 @@
 """An under-actuated mechanism (fewer actuated joints than freedoms) run from an actuator motion:
-its passive freedoms simulated (:mod:`pkmdyn.multibody.dynamics.passive`).
+its passive freedoms simulated (:mod:`pkmdyn.simulate.passive`).
 
 Oracle written apart from the engine: the cart-pole (``tests/data/cart_pole.toml``), a cart on
 a rail following ``x_c(t)`` and a pendulum hinged on it about +y, its centre of mass ``l`` below
@@ -22,7 +22,7 @@ from scipy.integrate import solve_ivp
 
 import pkmdyn
 from pkmdyn.cli import main
-from pkmdyn.multibody.dynamics.passive import passive_motion
+from pkmdyn.simulate.passive import passive_motion
 
 DATA = Path(__file__).parent / "data"
 M_POLE, L_COM, I_COM, G = 0.4, 0.3, 0.004, 9.80665
@@ -153,7 +153,7 @@ def test_a_simulation_that_stops_advancing_is_stopped_naming_the_time(tmp_path, 
     of 200 evaluations that must cover 90 % of the motion (or 1 s), the cart-pole's simulation
     (some 6,000 evaluations for 1.5 s) is stopped and named, with the measure there; with the
     defaults it is not."""
-    import pkmdyn.multibody.dynamics.passive as passive
+    import pkmdyn.simulate.passive as passive
     from pkmdyn.errors import MotionError
 
     monkeypatch.setattr(passive, "STALL_WINDOW", 200)

@@ -15,9 +15,9 @@ from ..errors import PkmdynError
 from ..profiles._columns import check_smoothing
 
 if TYPE_CHECKING:
-    from ..jobs import params as _params_job
+    from ..jobs import parameter_file as _params_job
 else:  # the parameter files' writers load when a file is asked for, not for --help
-    _params_job = lazy_module("pkmdyn.jobs.params")
+    _params_job = lazy_module("pkmdyn.jobs.parameter_file")
 
 __all__ = ["cli", "pdm", "PATH_IN", "MACHINE_HELP", "FiniteFloat", "list_files", "echo_lines", "echo", "show"]
 

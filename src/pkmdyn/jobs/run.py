@@ -54,8 +54,7 @@ from ..multibody.dynamics.actuators import (
     motor_effort_column,
 )
 from ..multibody.dynamics.newton_euler import effort_unit, joint_reactions, load_forces
-from ..multibody.dynamics.passive import driven_motion, passive_motion
-from ..multibody.dynamics.reactions import ComplianceDataMissing
+from ..multibody.dynamics.compliance.reactions import ComplianceDataMissing
 from ..multibody.kinematics.direct import task_motion
 from ..multibody.kinematics.inverse import (
     MechanismKinematics,
@@ -80,6 +79,7 @@ from ..multibody.scene import frame_indices_of, mechanism_scene
 from ..params_util import check_limit, parse_limit_options
 from ..profiles._columns import check_smoothing
 from ..report import Curve, FramePicker, TimePlot, write_report
+from ..simulate.passive import driven_motion, passive_motion
 from ._files import JobResult, prepare
 
 __all__ = ["job", "run_mechanism", "write_run_report", "report_columns", "CHUNK"]

@@ -46,7 +46,7 @@ from ..dynamics.actuators import (
     motor_efforts,
 )
 from ..dynamics.newton_euler import effort_unit, inverse_dynamics, joint_reactions
-from ..dynamics.reactions import ComplianceDataMissing
+from ..dynamics.compliance.reactions import ComplianceDataMissing
 from ..kinematics.inverse import (
     beyond_limits,
     joint_coordinates,

@@ -1,7 +1,7 @@
 """Stiffness and vibration of any described mechanism with its actuators locked.
 
 **Compliance sources** (``docs/stiffness.md``, "Compliance sources"): the elastic bodies'
-beam segments (a body's ``section`` and ``material``, the beam model of :mod:`pkmdyn.multibody.dynamics.reactions`:
+beam segments (a body's ``section`` and ``material``, the beam model of :mod:`pkmdyn.multibody.dynamics.compliance.reactions`:
 tension, torsion and bending, Eq. 63-64 of the PDM paper), the drives
 (``[joints.stiffness] drive_N_m`` or ``drive_Nm_rad`` of an actuated joint, joint side) and the
 joints' own springs (``force_N_m``, ``moment_Nm_rad`` against the joint's reaction, along the
@@ -75,7 +75,7 @@ from ..dynamics.newton_euler import (
     generalised_forces,
     task_mass_matrix,
 )
-from ..dynamics.reactions import compliance_terms
+from ..dynamics.compliance.reactions import compliance_terms
 from ..kinematics.inverse import MechanismKinematics, solve_kinematics
 from ..model._tree_kernels import euler_angles, euler_rate_map
 from ..model.compiler import MechanismModel

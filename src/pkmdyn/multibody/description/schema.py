@@ -51,7 +51,7 @@ class _Section(Section):
     outer_diameter_m: float = Field(gt=0)
     inner_diameter_m: float = Field(default=0.0, ge=0)
     #: the beam's axis: the line through the body's two joints farthest apart, or the body
-    #: frame's x axis through the centre of mass (multibody.dynamics.reactions)
+    #: frame's x axis through the centre of mass (multibody.dynamics.compliance.reactions)
     beam_axis: Literal["joints", "body_x"] = "joints"
 
 

@@ -1,5 +1,5 @@
 """Dynamics on a solved motion: inverse dynamics and efforts (:mod:`.newton_euler`), every joint
-reaction, unique by link compliance where over-constrained (:mod:`.reactions`), joint friction
+reaction, unique by link compliance where over-constrained (:mod:`.compliance.reactions`), joint friction
 (:mod:`.friction`), external loads (:mod:`.loads`), drives and motor efforts (:mod:`.actuators`),
 and the single-sample verbs of the closed loop (:mod:`.verbs`); their compiled kernels beside them.
 
@@ -22,6 +22,6 @@ __getattr__, __dir__ = attach(__name__, {
                      "inverse_dynamics", "joint_reactions", "load_forces", "named_magnitudes", "task_mass_matrix"),
                      ".newton_euler"),
     **dict.fromkeys(("ComplianceDataMissing", "beam_terms", "compliance_terms", "compliant_reactions",
-                     "elastic_bodies", "joint_spring_terms"), ".reactions"),
+                     "elastic_bodies", "joint_spring_terms"), ".compliance.reactions"),
     **dict.fromkeys(("MechanismData", "MechanismVerbs", "machine_verbs"), ".verbs"),
 })

@@ -38,7 +38,7 @@ child). For a tree joint ``T_i = S_c``; for a cut joint the free twists are thos
 type at its frames (rotation axes through the child frame's origin; the last elementary
 motion about the child frame's axis, the others about the parent frame's). The solution is
 unique when the mechanism is not over-constrained; otherwise ``t`` self-stress states remain
-(the null space of the matrix), which :mod:`pkmdyn.multibody.dynamics.reactions` fixes by link compliance.
+(the null space of the matrix), which :mod:`pkmdyn.multibody.dynamics.compliance.reactions` fixes by link compliance.
 Reported as ``joint_force`` (n, nj, 3) [N] and ``joint_moment`` (n, nj, 3) [N m] about the
 joint point (``kin.joint_point``), the PDM's schema.
 """
@@ -68,7 +68,7 @@ from ._reaction_kernels import cut_reactions_batch
 from .distribution import distribute, least_norm_map
 from .friction import JointFriction, friction_diverges, known_friction
 from .loads import load_forces, named_magnitudes
-from .reactions import compliant_reactions
+from .compliance.reactions import compliant_reactions
 
 __all__ = ["body_wrenches", "spring_wrenches", "named_magnitudes", "load_forces", "coordinate_twists", "generalised_forces", "actuator_efforts",
            "InverseDynamics", "inverse_dynamics", "idle_holding", "EffortShares", "effort_shares", "effort_unit", "free_twists", "equilibrium_system",
@@ -483,7 +483,7 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
     friction (:mod:`pkmdyn.multibody.dynamics.friction`) when the description gives any and ``friction`` is true.
 
     An over-constrained mechanism's reactions are made unique by link compliance
-    (:func:`pkmdyn.multibody.dynamics.reactions.compliant_reactions`, from the bodies' ``section`` and
+    (:func:`pkmdyn.multibody.dynamics.compliance.reactions.compliant_reactions`, from the bodies' ``section`` and
     ``material``); raises :class:`~pkmdyn.errors.ParameterError` naming the bodies when that
     data is missing. Load-dependent friction couples the reactions and the efforts: solved by
     fixed-point iteration (friction from the last reactions, then efforts and reactions again)

@@ -222,7 +222,7 @@ class MechanismModel:
     #: per joint: its spring ``(k, q_s)`` or None (:func:`pkmdyn.multibody.dynamics.newton_euler.spring_wrenches`)
     joint_spring: tuple = ()
     #: per joint: its ``bearing`` as 0 (the parent) or 1 (the child), -1 where none is named
-    #: (:func:`pkmdyn.multibody.dynamics.reactions.beam_terms`)
+    #: (:func:`pkmdyn.multibody.dynamics.compliance.reactions.beam_terms`)
     joint_bearing: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     #: ``[[outputs]]``: the names, bodies and points (body frame) whose pose a run writes
     output_names: tuple[str, ...] = ()

@@ -1,13 +1,13 @@
 """Compiled complementary energy of the elastic bodies, written in the cut joints' unknowns.
 
-One pass per sample of the beam model of :mod:`pkmdyn.multibody.dynamics.reactions` (module docstring there; Eq. 63-64
+One pass per sample of the beam model of :mod:`pkmdyn.multibody.dynamics.compliance.reactions` (module docstring there; Eq. 63-64
 of the PDM paper, generalised): for every elastic body its nodes (the joints' centres and the
 centre of mass) projected on its beam axis, the loads at the nodes as affine functions of the
 cut joints' unknowns ``lam`` (``z = z0 + Z lam``), the resultant beyond each segment and the
 segment's cantilever flexibility, summed into ``H = sum_s G_s^T C_s G_s`` and
 ``h = sum_s G_s^T C_s w0_s`` (``K x K`` and ``K``), without forming any segment's wrench over
 all the joints' columns. Driven by the model's arrays only (nothing here knows a mechanism);
-:func:`pkmdyn.multibody.dynamics.reactions.beam_terms` is the same model in arrays over all samples (tested against
+:func:`pkmdyn.multibody.dynamics.compliance.reactions.beam_terms` is the same model in arrays over all samples (tested against
 each other). The compatibility equations are homogeneous in the flexibilities, so each
 sample's ``H, h`` are divided by that sample's largest flexibility entry (O(1) numbers; the
 reactions do not change).

@@ -30,18 +30,18 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ...analysis.compliance import (
+from ....analysis.compliance import (
     beam_flexibility,
     circular_section,
     segment_wrenches,
     unique_reactions,
     unique_reactions_energy,
 )
-from ...errors import ParameterError, SingularityError
-from ...spatial import skew
-from ..description.joint_types import JOINT_TYPES
-from ..kinematics.inverse import MechanismKinematics, joint_frame
-from ..model.compiler import MechanismModel
+from ....errors import ParameterError, SingularityError
+from ....spatial import skew
+from ...description.joint_types import JOINT_TYPES
+from ...kinematics.inverse import MechanismKinematics, joint_frame
+from ...model.compiler import MechanismModel
 from ._compliance_kernels import beam_energy_batch
 
 __all__ = ["elastic_bodies", "compliant_reactions", "ComplianceDataMissing", "beam_terms", "joint_spring_terms",
@@ -122,7 +122,7 @@ def _beam_bodies(model: MechanismModel, kin: MechanismKinematics, elastic: list[
 def _compiled_energy(model: MechanismModel, kin: MechanismKinematics, W: Array, elastic: list[int],
                      affine: tuple[Array, Array]) -> tuple[Array, Array, int] | None:
     """``(H, h, segments)`` of the elastic bodies in the unknowns ``lam`` of ``affine`` by the
-    compiled pass (:mod:`pkmdyn.multibody.dynamics._compliance_kernels`), or None where the joints carry springs (their
+    compiled pass (:mod:`pkmdyn.multibody.dynamics.compliance._compliance_kernels`), or None where the joints carry springs (their
     terms: :func:`compliance_terms`)."""
     if any(st and ("force_N_m" in st or "moment_Nm_rad" in st) for st in model.joint_stiffness):
         return None

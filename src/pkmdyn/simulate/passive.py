@@ -30,11 +30,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import MotionError, PkmdynError
-from ..kinematics.inverse import reference_task, singularity_measures, solve_kinematics
-from ..kinematics.motion import TaskMotion
-from ..model.compiler import MechanismModel
-from .verbs import MechanismData, _all
+from ..errors import MotionError, PkmdynError
+from ..multibody.dynamics.verbs import MechanismData, _all
+from ..multibody.kinematics.inverse import reference_task, singularity_measures, solve_kinematics
+from ..multibody.kinematics.motion import TaskMotion
+from ..multibody.model.compiler import MechanismModel
 
 __all__ = ["passive_motion", "driven_motion"]
 
