@@ -46,13 +46,13 @@ def _moving(model, seed=0):
     return mo, solve_kinematics(model, mo.x, mo.xd, mo.xdd, mo.t)
 
 
-def _same_motion(m0, kin0, t, m1, keeps_origin=False):
+def _same_motion(m0, kin0, t, m1):
     """Kinematics of ``m1`` (an export of ``m0`` read back) along ``m0``'s actuator motion: the
-    export's joint coordinates are ``m0``'s themselves where the format keeps their origin (MJCF,
-    each joint's ``ref``), else ``m0``'s less their reference values (URDF has no place for them)."""
+    export's joint coordinates are ``m0``'s themselves (both formats keep their origin: MJCF each
+    joint's ``ref``, pkmdyn's URDF sidecar its ``reference``)."""
     idx = [m1.actuator_names.index(n) for n in m0.actuator_names]
     s, sd, sdd = (np.empty_like(kin0.act_q) for _ in range(3))
-    s[:, idx] = kin0.act_q if keeps_origin else kin0.act_q - m0.coord_offset[m0.act_coord]
+    s[:, idx] = kin0.act_q
     sd[:, idx], sdd[:, idx] = kin0.act_qd, kin0.act_qdd
     dk = direct_kinematics(m1, s, sd, sdd, t)
     return solve_kinematics(m1, dk.x, dk.xd, dk.xdd, t), idx
@@ -76,13 +76,12 @@ def test_builtin_export_import_round_trip(name, fmt, tmp_path):
     assert m1.nq == m0.nq and m1.nb == m0.nb
     assert np.isclose(m1.mass.sum(), m0.mass.sum(), rtol=1e-14)
     mo, k0 = _moving(m0)
-    k1, idx = _same_motion(m0, k0, mo.t, m1, keeps_origin=fmt == "mjcf")
+    k1, idx = _same_motion(m0, k0, mo.t, m1)
     u0, u1 = _efforts(m0, k0), _efforts(m1, k1)[:, idx]
     assert np.abs(u1 - u0).max() <= REL * np.abs(u0).max()
-    if fmt == "mjcf":  # the limits come back in the same coordinate
-        for j, lim in enumerate(m0.joint_limits):
-            if lim is not None and j not in set(m0.loop_joint.tolist()):
-                assert m1.joint_limits[m1.joint_names.index(m0.joint_names[j])] == pytest.approx(lim, abs=1e-12)
+    for j, lim in enumerate(m0.joint_limits):  # the limits come back in the same coordinate
+        if lim is not None and j not in set(m0.loop_joint.tolist()):
+            assert m1.joint_limits[m1.joint_names.index(m0.joint_names[j])] == pytest.approx(lim, abs=1e-12)
     # key by key: the name, the task (body, coordinates, point in the base frame) and the drives' stiffness
     assert m1.name == m0.name
     assert m1.body_names[m1.task_body] == m0.body_names[m0.task_body]

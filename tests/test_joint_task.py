@@ -66,26 +66,62 @@ def _motion(m, t, amp=0.3):
     return x, xd, xdd
 
 
-def test_a_passive_joints_coordinate_as_the_task_follows_the_body_task_route():
-    d_body = ex.four_bar()  # task: the crank's angle (Euler ZYX angle 1 of the crank)
-    d_joint = ex.four_bar()
-    d_joint["task"] = {"body": "rocker", "joints": ["C"]}  # the coupler-rocker joint's coordinate
+#: (description, the joint task's table, the body task's coordinates it keeps): a passive joint
+#: with the task body elsewhere; a joint the tree reaches backwards (a flipped coordinate); a joint
+#: whose child is the ground (the default task body its parent); a prismatic joint; the Stewart
+#: platform with a leg's length in place of its third angle (a mixed task)
+def _cut_at(make, joint):
+    def made():
+        d = make()
+        d["mechanism"]["cut_joints"] = [joint]  # the joint of the task a tree joint of the body route too
+        return d
+    return made
+
+
+ROUTES = [
+    (ex.four_bar, {"body": "crank", "joints": ["C"]}, []),
+    (ex.four_bar_cut_b, {"joints": ["C"]}, []),
+    (_cut_at(ex.four_bar, "C"), {"joints": ["D"]}, []),
+    (_cut_at(ex.slider_crank, "C"), {"joints": ["D"]}, []),
+    (lambda: ex.builtin_dict("stewart"),
+     {"body": "platform", "point_m": [0.0, 0.0, 1.0], "position": ["x", "y", "z"], "orientation": [1, 2],
+      "joints": ["P_6"]}, [0, 1, 2, 3, 4]),
+]
+
+
+@pytest.mark.parametrize("make, task, kept", ROUTES)
+def test_a_joint_task_follows_the_body_task_route(make, task, kept):
+    """The motion solved with the description's own (body) task; the joints' coordinates (and
+    the body coordinates ``kept``) of that solution, with their rates and accelerations, given
+    as the task of the same mechanism: the same tree coordinates, rates, accelerations and
+    efforts."""
+    d_body = make()
+    d_joint = make()
+    d_joint["task"] = task
+    d_joint.pop("default_motion", None)  # (keyed by the body task's columns)
     mb, mj = load_mechanism(d_body), load_mechanism(d_joint)
-    assert list(mj.task_kind) == [2] and mj.task_names == ("C_q",) and mj.task_units == ("rad",)
+    assert list(mj.task_kind) == [0, 0, 0, 1, 1, 2][-mj.nt:] if kept else list(mj.task_kind) == [2]
     t = np.linspace(0.0, 1.0, 41)
-    x, xd, xdd = _motion(mb, t, 0.4)
+    x, xd, xdd = _motion(mb, t, 0.05 if mb.nt == 6 else 0.15)  # (the four-bar's rocker: no dead point)
     kb = solve_kinematics(mb, x, xd, xdd, t)
-    c = int(mj.joint_q0[mj.joint_names.index("C")])
-    assert mb.joint_names == mj.joint_names
-    cb = int(mb.joint_q0[mb.joint_names.index("C")])
-    # the second route's task: joint C's coordinate, rate and acceleration from the first one
-    kj = solve_kinematics(mj, kb.q[:, cb:cb + 1], kb.qd[:, cb:cb + 1], kb.qdd[:, cb:cb + 1], t)
-    assert c == cb
-    # the two routes order their tree coordinates alike here (same cut), so compare directly
-    np.testing.assert_allclose(kj.q, kb.q, atol=1e-9)
-    np.testing.assert_allclose(kj.qd, kb.qd, atol=1e-8)
-    np.testing.assert_allclose(kj.qdd, kb.qdd, atol=1e-6)
-    np.testing.assert_allclose(kj.x[:, 0], kb.q[:, cb], atol=1e-12)
+    assert mb.joint_names == mj.joint_names and mb.nq == mj.nq
+    cols = [int(mb.joint_q0[mb.joint_names.index(nm)]) for nm in task["joints"]]
+    assert not any(mb.joint_cut[mb.joint_names.index(nm)] for nm in task["joints"])
+    xj = np.concatenate([kb.x[:, kept], kb.q[:, cols]], axis=1)
+    xdj = np.concatenate([kb.xd[:, kept], kb.qd[:, cols]], axis=1)
+    xddj = np.concatenate([kb.xdd[:, kept], kb.qdd[:, cols]], axis=1)
+    kj = solve_kinematics(mj, xj, xdj, xddj, t)
+    # the coordinates of the joints both trees hold (the task's joints enter the tree first, so the
+    # cut may differ), joint by joint
+    both = [k for k in range(len(mb.joint_names)) if not mb.joint_cut[k] and not mj.joint_cut[k]]
+    assert len(both) >= int(np.sum(~mb.joint_cut)) - 1
+
+    def by_joint(m, a):
+        return np.concatenate([a[:, m.joint_q0[k]:m.joint_q0[k] + m.joint_nq[k]] for k in both], axis=1)
+    np.testing.assert_allclose(by_joint(mj, kj.q), by_joint(mb, kb.q), atol=1e-9)
+    np.testing.assert_allclose(by_joint(mj, kj.qd), by_joint(mb, kb.qd), atol=1e-8)
+    np.testing.assert_allclose(by_joint(mj, kj.qdd), by_joint(mb, kb.qdd), atol=1e-6)
+    np.testing.assert_allclose(kj.x, xj, atol=1e-12)
     ub, uj = inverse_dynamics(mb, kb).u, inverse_dynamics(mj, kj).u
     np.testing.assert_allclose(uj, ub, rtol=1e-7, atol=1e-8 * np.abs(ub).max())
 
@@ -300,6 +336,9 @@ def test_a_joint_task_survives_export_and_import(tmp_path, capsys):
     pytest.importorskip("mujoco")
     from pkmdyn.io import dumps_toml
     d = _two_legs(("C_L", "A_R"))
+    for j in d["joints"]:  # the coordinates' origins away from zero: the round trip must keep them
+        if j["name"] in ("C_L", "A_R"):
+            j["angle_at_reference_rad"] = 0.3 if j["name"] == "C_L" else -1.1
     path = tmp_path / "two.toml"
     path.write_text(dumps_toml(d))
     for fmt, name in (("mjcf", "two.xml"), ("urdf", "two.urdf")):
@@ -311,4 +350,11 @@ def test_a_joint_task_survives_export_and_import(tmp_path, capsys):
         assert main(["import", "--from", str(exported), "--out", str(back), *extra]) == 0, capsys.readouterr().err
         m0, m1 = load_mechanism(d), load_mechanism(tomllib.loads(back.read_text()))
         assert m1.task_names == m0.task_names == ("C_L_q", "A_R_q")
+        np.testing.assert_allclose(reference_task(m0), [0.3, -1.1], atol=1e-12)
         np.testing.assert_allclose(reference_task(m1), reference_task(m0), atol=1e-9)
+        t = np.linspace(0.0, 1.0, 11)  # the same motion: the same actuator motion and efforts
+        x, xd, xdd = _motion(m0, t, 0.1)
+        k0, k1 = solve_kinematics(m0, x, xd, xdd, t), solve_kinematics(m1, x, xd, xdd, t)
+        np.testing.assert_allclose(k1.act_q, k0.act_q, atol=1e-9)
+        u0, u1 = inverse_dynamics(m0, k0).u, inverse_dynamics(m1, k1).u
+        np.testing.assert_allclose(u1, u0, atol=1e-8 * np.abs(u0).max())

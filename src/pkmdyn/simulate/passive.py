@@ -168,8 +168,9 @@ def driven_motion(model: MechanismModel, motion: TaskMotion,
                   progress: Callable[[float], None] | None = None) -> TaskMotion:
     """An under-actuated mechanism's motion whose actuated joints follow those of the task
     motion ``motion`` (its inverse kinematics' actuator coordinates, rates and accelerations),
-    the passive freedoms simulated (:func:`passive_motion`): the default motion of such a
-    mechanism, which a task motion of its own would not be (its efforts exist only where it is
-    dynamically consistent)."""
+    the passive freedoms simulated (:func:`passive_motion`) from the task motion's first pose
+    and rates: the default motion of such a mechanism, which a task motion of its own would not
+    be (its efforts exist only where it is dynamically consistent)."""
     kin = solve_kinematics(model, motion.x, motion.xd, motion.xdd, motion.t)
-    return passive_motion(model, motion.t, kin.act_q, kin.act_qd, kin.act_qdd, progress=progress)
+    return passive_motion(model, motion.t, kin.act_q, kin.act_qd, kin.act_qdd, x0=motion.x[0], xd0=motion.xd[0],
+                          progress=progress)

@@ -394,7 +394,7 @@ class TaskSpec:
     reference configuration (default: the body's centre of mass); ``position``: component
     indices 0-2; ``sequence``: the Euler sequence; ``orientation``: angle indices 0-2. A task
     of joints alone has for ``body`` (the body whose whole pose a run writes) the one given,
-    else the child of its last joint."""
+    else its last joint's child (its parent where the child is the ground)."""
 
     body: str
     point: Array
@@ -910,7 +910,8 @@ def _task(t: _Task, where: str, bodies: dict[str, BodySpec], joints: list[JointS
     if body is None:
         if not t.joints or t.position or t.orientation:
             raise ParameterError(f"{where} body: missing (the task body; a task of joints alone may leave it out)")
-        body = by_name[t.joints[-1]].child
+        last = by_name[t.joints[-1]]
+        body = last.child if last.child != GROUND else last.parent
     if body not in bodies:
         raise ParameterError(f"{where} body: {body!r} is not a body of the mechanism")
     if not t.position and not t.orientation and not t.joints:

@@ -638,6 +638,18 @@ def description_from_graph(g: Graph, choice: TaskChoice = TaskChoice()) -> tuple
     if drives:
         desc["actuators"] = drives
     chose_body = choice.body is not None or choice.point is not None
+    if choice.joints is not None:  # the joints asked for, by their names in the description
+        known = {j["name"] for j in joints + cuts}
+        named = []
+        for given in choice.joints:
+            nm = safe_name(given, "")
+            if nm not in known:
+                raise ParameterError(f"{g.source}: task joint {given!r}: no joint of that name (the joints: "
+                                     f"{', '.join(sorted(known)[:12])}{' ...' if len(known) > 12 else ''})")
+            named.append(nm)
+        choice = TaskChoice(body=choice.body, point=choice.point, position=choice.position,
+                            orientation=choice.orientation, sequence=choice.sequence, joints=tuple(named))
+        chose_body = True  # the task asked for is the task: no other is tried
     for k, (body, point) in enumerate(candidates[:MAX_CANDIDATES]):
         desc["task"].update(body=body, point_m=list(map(float, point)))
         try:

@@ -69,14 +69,16 @@ def _compiled(mujoco, path: Path, src: str, notes: list[str], problems: list[str
     folder = path.parent / (spec.meshdir or "")
     missing = {mesh.name: mesh for mesh in spec.meshes if mesh.file and not (folder / mesh.file).is_file()}
     tex_folder = path.parent / (spec.texturedir or "")
-    textures = {t.name: t.file for t in spec.textures if t.file and not (tex_folder / t.file).is_file()}
+    # a texture's image, or a cube's or skybox's six (``fileright`` ...): those missing
+    textures = [(t, absent) for t in spec.textures
+                if (absent := [f for f in (t.file, *t.cubefiles) if f and not (tex_folder / f).is_file()])]
     if not missing and not textures:
         raise ParameterError(why)
+    gone = {t.name for t, _ in textures if t.name}
     for mat in spec.materials:  # a texture only colours: its material keeps its colour without it
-        mat.textures = ["" if name in textures else name for name in mat.textures]
-    for t in list(spec.textures):
-        if t.name in textures:
-            spec.delete(t)
+        mat.textures = ["" if name in gone else name for name in mat.textures]
+    for t, _ in textures:
+        spec.delete(t)
     # with inertiafromgeom="true" MuJoCo takes every body's inertia from its geoms, <inertial> or not
     from_geoms = int(spec.compiler.inertiafromgeom) == int(mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_TRUE)
     hint = ' and drop inertiafromgeom="true"' if from_geoms else ""
@@ -104,7 +106,7 @@ def _compiled(mujoco, path: Path, src: str, notes: list[str], problems: list[str
                      f"left out of bodies {', '.join(sorted(set(left))[:8])}, whose inertia the file gives explicitly"
                      " (the world's geoms carry none)")
     if textures:
-        tex = sorted(set(textures.values()))
+        tex = sorted({f for _, absent in textures for f in absent})
         notes.append(f"texture files missing ({', '.join(tex[:5])}{' ...' if len(tex) > 5 else ''}): left out "
                      "(a texture only colours the geoms)")
     return m

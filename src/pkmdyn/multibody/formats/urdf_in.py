@@ -138,6 +138,9 @@ class _Sidecar(Section):
     actuators: list[dict[str, Any]] = Field(default_factory=list, max_length=1000)
     gravity_m_s2: Annotated[list[float], Field(min_length=3, max_length=3)] = list(URDF_GRAVITY)
     drive_stiffness: dict[_Frame, Annotated[float, Field(gt=0)]] = Field(default_factory=dict, max_length=1000)
+    #: a joint's coordinate at the URDF's zero position [rad or m] (pkmdyn's exports: its reference value)
+    reference: dict[_Frame, Annotated[float, Field(allow_inf_nan=False)]] = Field(default_factory=dict,
+                                                                                 max_length=1000)
 
 
 def _plain_yaml(text: str, src: str) -> Any:
@@ -191,7 +194,8 @@ def read_sidecar(path: str | Path) -> dict[str, Any]:
     return {"gravity_m_s2": [float(x) for x in side.gravity_m_s2], "closed_loop": loops, "type": types,
             "name_mot": list(side.name_mot), "joint_name": list(side.joint_name),
             "joint_type": [t.upper() for t in side.joint_type], "task": task,
-            "actuators": [dict(d) for d in side.actuators], "drive_stiffness": dict(side.drive_stiffness)}
+            "actuators": [dict(d) for d in side.actuators], "drive_stiffness": dict(side.drive_stiffness),
+            "reference": dict(side.reference)}
 
 
 def sidecar_task(side: dict[str, Any]) -> TaskChoice:
@@ -322,6 +326,7 @@ def urdf_graph(path: str | Path, sidecar: dict[str, Any] | None = None,
             link_of[int(f.parentJoint)] = nm if nm != GROUND else "ground_body"  # a moving link called ground
     links, joints = [], []
     stiff = dict(side.get("drive_stiffness", {}))
+    refs = dict(side.get("reference", {}))
     for j in range(1, model.njoints):
         jm, name = model.joints[j], safe_name(model.names[j], f"joint_{j}")
         short = jm.shortname()
@@ -347,6 +352,9 @@ def urdf_graph(path: str | Path, sidecar: dict[str, Any] | None = None,
         lo, hi = float(model.lowerPositionLimit[iq]), float(model.upperPositionLimit[iq])
         lim = (lo, hi) if lo < hi and np.isfinite(lo) and np.isfinite(hi) and abs(hi - lo) < 1e6 \
             and "RUB" not in short and "Unbounded" not in short else None
+        r = refs.pop(model.names[j], 0.0)  # the coordinate at the URDF's zero
+        value += r
+        lim = None if lim is None else (lim[0] + r, lim[1] + r)
         v = model.idx_vs[j]
         kw = dict(value=value, limits=lim, damping=float(model.damping[v]),
                   frictionloss=float(model.friction[v]))
@@ -397,6 +405,8 @@ def urdf_graph(path: str | Path, sidecar: dict[str, Any] | None = None,
     if stiff:
         raise ParameterError(f"{src}: sidecar drive_stiffness {next(iter(stiff))!r}: no hinge or slide joint of that "
                              "name")
+    if refs:
+        raise ParameterError(f"{src}: sidecar reference {next(iter(refs))!r}: no hinge or slide joint of that name")
     g = np.array(side.get("gravity_m_s2", URDF_GRAVITY), dtype=float)
     # a generic robot name (Gepetto's files say "robot", onshape-to-robot's "onshape"): the file's own name
     name = Path(path).stem if model.name in ("", "onshape", "robot") else model.name

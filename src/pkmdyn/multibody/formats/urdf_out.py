@@ -187,6 +187,11 @@ def mechanism_urdf(model: MechanismModel) -> tuple[str, dict, list[str]]:
     drives = _drives(model)
     if drives:
         sidecar["actuators"] = drives
+    # URDF's joint position is the coordinate less its reference value: the sidecar keeps that value
+    refs = {model.joint_names[k]: float(model.coord_offset[int(model.joint_q0[k])]) for k in range(len(model.joint_names))
+            if not model.joint_cut[k] and model.joint_nq[k] == 1 and model.coord_offset[int(model.joint_q0[k])] != 0.0}
+    if refs:
+        sidecar["reference"] = refs
     stiff = {model.joint_names[j]: float(model.joint_stiffness[j]["drive"]) for j in model.act_joint
              if (model.joint_stiffness[j] or {}).get("drive")}
     if stiff:  # URDF has no place for it: the sidecar keeps it (joint side, N/m or N m/rad)

@@ -258,8 +258,8 @@ def block_structure(model: MechanismModel, rows: Array, idle: Array) -> tuple[Ar
     """Row and column orders making the Newton matrix ``[J[rows]; idle]`` block lower-triangular.
 
     From the structural pattern (:func:`block_pattern`: a loop row depends on the coordinates
-    that move either of its bodies, a task row on those that move the task body, an idle row on
-    its nonzero entries): a perfect matching of rows to columns (``maximum_bipartite_matching``),
+    that move either of its bodies, a task row on those that move the task body (a joint's
+    coordinate on that coordinate), an idle row on its nonzero entries): a perfect matching of rows to columns (``maximum_bipartite_matching``),
     the strongly connected components of the row graph ``i -> j`` where row i uses the column
     matched to row j (``connected_components``), put in an order where every block uses only
     the columns of itself and of the blocks before it (the block triangular form of
@@ -284,6 +284,8 @@ def block_pattern(model: MechanismModel, rows: Array, idle: Array) -> NDArray[np
             for b in (model.joint_parent[k], model.joint_child[k]):
                 if b >= 0:
                     P[i] |= model.ancestors[b]
+        elif model.task_kind[r - nr] == 2:  # a joint's coordinate: that coordinate alone
+            P[i, int(model.task_index[r - nr])] = True
         else:
             P[i] = model.ancestors[model.task_body]
     P[m:] = np.abs(idle) > 1e-14 * max(float(np.abs(idle).max(initial=0.0)), 1e-300)
