@@ -663,7 +663,7 @@ def description_from_graph(g: Graph, choice: TaskChoice = TaskChoice()) -> tuple
                 desc["task"].update(body=candidates[0][0], point_m=list(map(float, candidates[0][1])))
                 _choose_joints(desc, g.source)
                 t = desc["task"]
-                also = [*t["position"], *(f"euler{k}" for k in t["orientation"])]
+                also = [*t["position"], *(f"euler{a}" for a in t["orientation"])]
                 b.notes.append(f"task: no body's coordinates determine the mechanism's freedoms (the last tried: "
                                f"{str(exc).split(': ', 1)[-1]}); the task is the coordinates of joints "
                                f"{', '.join(t['joints'])}" + (f" and {', '.join(also)} of body {t['body']}" if also
