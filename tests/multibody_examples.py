@@ -190,3 +190,23 @@ def passive_last_drive(d):
             j["actuated"] = False
             j.pop("stiffness", None)
     return d
+
+
+def round_trip(m0, fmt, folder):
+    """``m0`` exported to ``fmt`` (``"mjcf"``, or ``"urdf"`` with its sidecar) in ``folder`` and
+    imported back: the description's TOML text."""
+    from pkmdyn.io import dumps_yaml
+    from pkmdyn.multibody.formats.importer import import_description
+    from pkmdyn.multibody.formats.mjcf_out import mechanism_mjcf
+    from pkmdyn.multibody.formats.urdf_out import mechanism_urdf
+
+    side = None
+    if fmt == "mjcf":
+        src = Path(folder) / "m.xml"
+        src.write_text(mechanism_mjcf(m0))
+    else:
+        text, sidecar, _ = mechanism_urdf(m0)
+        src, side = Path(folder) / "m.urdf", Path(folder) / "m.yaml"
+        src.write_text(text)
+        side.write_text(dumps_yaml(sidecar))
+    return import_description(src, fmt, sidecar=side)[0]

@@ -19,7 +19,6 @@ import multibody_examples as ex
 from oracles.projected_id import mujoco_efforts, pinocchio_efforts
 from pkmdyn.cli import main
 from pkmdyn.errors import ParameterError
-from pkmdyn.io import dumps_yaml
 from pkmdyn.multibody import default_motion, load_mechanism, solve_kinematics
 from pkmdyn.multibody.kinematics.direct import direct_kinematics
 from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
@@ -62,16 +61,7 @@ def _same_motion(m0, kin0, t, m1):
 @pytest.mark.parametrize("fmt", ["mjcf", "urdf"])
 def test_builtin_export_import_round_trip(name, fmt, tmp_path):
     m0 = load_mechanism(ex.builtin_dict(name))
-    if fmt == "mjcf":
-        src, side = tmp_path / "m.xml", None
-        src.write_text(mechanism_mjcf(m0))
-    else:
-        text, sidecar, _ = mechanism_urdf(m0)
-        src, side = tmp_path / "m.urdf", tmp_path / "m.yaml"
-        src.write_text(text)
-        side.write_text(dumps_yaml(sidecar))
-    toml_text, _ = import_description(src, fmt, sidecar=side)
-    m1 = load_mechanism(tomllib.loads(toml_text))
+    m1 = load_mechanism(tomllib.loads(ex.round_trip(m0, fmt, tmp_path)))
     assert sorted(m1.actuator_names) == sorted(m0.actuator_names)
     assert m1.nq == m0.nq and m1.nb == m0.nb
     assert np.isclose(m1.mass.sum(), m0.mass.sum(), rtol=1e-14)

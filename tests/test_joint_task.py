@@ -86,7 +86,23 @@ ROUTES = [
     (lambda: ex.builtin_dict("stewart"),
      {"body": "platform", "point_m": [0.0, 0.0, 1.0], "position": ["x", "y", "z"], "orientation": [1, 2],
       "joints": ["P_6"]}, [0, 1, 2, 3, 4]),
+    (lambda: ex.builtin_dict("stewart"),  # a universal joint's second angle: one coordinate of two
+     {"body": "platform", "point_m": [0.0, 0.0, 1.0], "position": ["x", "y", "z"], "orientation": [1, 2],
+      "joints": ["U_6:2"]}, [0, 1, 2, 3, 4]),
+    (ex.stewart_flipped_spheres,  # a ball the tree reaches from its child: its angles reversed
+     {"body": "platform", "point_m": [0.0, 0.0, 1.0], "position": ["x", "y", "z"], "orientation": [1, 2],
+      "joints": ["S_1:1"]}, [0, 1, 2, 3, 4]),
 ]
+
+
+def _coordinate(m, item):
+    """The tree coordinate of a ``[task] joints`` entry, found here from the joint's place in
+    the tree (its coordinates reversed where the tree reaches it from its child)."""
+    name, _, k = item.partition(":")
+    j = m.joint_names.index(name)
+    i = int(k) - 1 if k else 0
+    n = int(m.joint_nq[j])
+    return int(m.joint_q0[j]) + (n - 1 - i if m.joint_flipped[j] else i)
 
 
 @pytest.mark.parametrize("make, task, kept", ROUTES)
@@ -105,8 +121,8 @@ def test_a_joint_task_follows_the_body_task_route(make, task, kept):
     x, xd, xdd = _motion(mb, t, 0.05 if mb.nt == 6 else 0.15)  # (the four-bar's rocker: no dead point)
     kb = solve_kinematics(mb, x, xd, xdd, t)
     assert mb.joint_names == mj.joint_names and mb.nq == mj.nq
-    cols = [int(mb.joint_q0[mb.joint_names.index(nm)]) for nm in task["joints"]]
-    assert not any(mb.joint_cut[mb.joint_names.index(nm)] for nm in task["joints"])
+    cols = [_coordinate(mb, item) for item in task["joints"]]
+    assert not any(mb.joint_cut[mb.joint_names.index(item.partition(":")[0])] for item in task["joints"])
     xj = np.concatenate([kb.x[:, kept], kb.q[:, cols]], axis=1)
     xdj = np.concatenate([kb.xd[:, kept], kb.qd[:, cols]], axis=1)
     xddj = np.concatenate([kb.xdd[:, kept], kb.qdd[:, cols]], axis=1)
@@ -190,7 +206,14 @@ def test_bad_joint_tasks_are_refused_by_name(task, words):
 def test_a_ball_joint_or_a_cut_joint_is_refused_as_a_task_coordinate():
     d = ex.rssr()
     d["task"] = {"joints": ["S1"]}
-    with pytest.raises(ParameterError, match="S1.*spherical joint"):
+    with pytest.raises(ParameterError, match=r"joints\[0\]: 'S1' is a spherical joint of 3 coordinates; name one of "
+                                             r"them, 'S1:1' \.\.\. 'S1:3'"):
+        load_mechanism(d)
+    d["task"] = {"joints": ["S1:4"]}
+    with pytest.raises(ParameterError, match=r"joints\[0\]: 'S1:4': joint 'S1' has 3 coordinate"):
+        load_mechanism(d)
+    d["task"] = {"joints": ["S1:2", "S1:2"]}
+    with pytest.raises(ParameterError, match="a joint coordinate is named twice"):
         load_mechanism(d)
     d = ex.four_bar()
     d["mechanism"]["cut_joints"] = ["C"]
@@ -358,3 +381,28 @@ def test_a_joint_task_survives_export_and_import(tmp_path, capsys):
         np.testing.assert_allclose(k1.act_q, k0.act_q, atol=1e-9)
         u0, u1 = inverse_dynamics(m0, k0).u, inverse_dynamics(m1, k1).u
         np.testing.assert_allclose(u1, u0, atol=1e-8 * np.abs(u0).max())
+
+
+@pytest.mark.parametrize("make, item", [(lambda: ex.builtin_dict("stewart"), "U_6:2"),
+                                        (ex.stewart_flipped_spheres, "S_1:1")])
+def test_a_coordinate_of_a_joint_of_several_survives_export_and_import(make, item, tmp_path):
+    """One angle of a universal joint, and of a ball the tree reaches from its child (its
+    coordinates reversed in the exported tree), as a task coordinate: after an MJCF and a URDF
+    round trip the same task motion gives the same actuator motion."""
+    pytest.importorskip("mujoco")
+    d = make()
+    d.pop("default_motion", None)
+    d["task"] = {"body": "platform", "point_m": [0.0, 0.0, 1.0], "position": ["x", "y", "z"], "orientation": [1, 2],
+                 "joints": [item]}
+    m0 = load_mechanism(d)
+    name, _, k = item.partition(":")
+    assert m0.task_names[-1] == f"{name}_q{k}" and m0.task_joints == (item,)
+    t = np.linspace(0.0, 1.0, 6)
+    x, xd, xdd = _motion(m0, t, 0.002)
+    k0 = solve_kinematics(m0, x, xd, xdd, t)
+    assert np.ptp(k0.act_q, axis=0).max() > 1e-3
+    for fmt in ("mjcf", "urdf"):
+        m1 = load_mechanism(tomllib.loads(ex.round_trip(m0, fmt, tmp_path)))
+        k1 = solve_kinematics(m1, x, xd, xdd, t)
+        idx = [m1.actuator_names.index(n) for n in m0.actuator_names]
+        np.testing.assert_allclose(k1.act_q[:, idx], k0.act_q, atol=1e-9)

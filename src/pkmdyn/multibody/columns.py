@@ -228,7 +228,8 @@ def _task_coordinates(model: MechanismModel, pos: list[str]) -> list[dict[str, A
         if kind == 0:
             out.append({"column": c, "kind": "position", "component": int(i)})
         elif kind == 2:
-            out.append({"column": c, "kind": "joint", "joint": model.joint_names[int(model.coord_joint[int(i)])]})
+            item = model.task_joints[sum(1 for k in model.task_kind[:len(out)] if k == 2)]
+            out.append({"column": c, "kind": "joint", "joint": item})
         else:
             out.append({"column": c, "kind": "euler_angle", "angle": inv[int(i)] + 1})
     return out

@@ -30,7 +30,7 @@ from ...spatial import check_sequence, cross
 from .expressions import parameter_bounds, resolve_parameters
 from .joint_types import JOINT_TYPES, joint_type
 
-__all__ = ["MAGNITUDES", "Description", "BodySpec", "JointSpec", "TaskSpec", "LoadSpec", "MotionSpec", "ActuatorSpec",
+__all__ = ["MAGNITUDES", "Description", "BodySpec", "JointSpec", "TaskSpec", "split_task_joint", "LoadSpec", "MotionSpec", "ActuatorSpec",
            "load_description", "GROUND", "inertia_matrix", "LIMIT_KEYS", "RESERVED_PARTS"]
 
 Array = NDArray[np.float64]
@@ -389,8 +389,9 @@ class JointSpec:
 @dataclass(frozen=True)
 class TaskSpec:
     """Task coordinates: base-frame components of a point of ``body`` and Euler angles of its
-    frame, then the coordinates of ``joints`` (each a joint of one coordinate, its value as the
-    joint's own: an actuated joint's is its actuator coordinate). ``point (3,)`` [m] base frame,
+    frame, then the coordinates of ``joints`` (``"name"``, a joint of one coordinate, or
+    ``"name:k"``, a joint's k-th coordinate; its value as the joint's own: an actuated joint's
+    is its actuator coordinate). ``point (3,)`` [m] base frame,
     reference configuration (default: the body's centre of mass); ``position``: component
     indices 0-2; ``sequence``: the Euler sequence; ``orientation``: angle indices 0-2. A task
     of joints alone has for ``body`` (the body whose whole pose a run writes) the one given,
@@ -896,21 +897,43 @@ def _matrix_to_xyz_deg(R: Array) -> Vec3:
 _POS_NAMES = {"x": 0, "y": 1, "z": 2}
 
 
+def split_task_joint(item: str) -> tuple[str, int]:
+    """A ``[task] joints`` entry as ``(joint name, k)``: ``"name"`` (k = 0, a joint of one
+    freedom) or ``"name:k"``, the joint's k-th coordinate (1-based, in the order of its type's
+    motions)."""
+    name, sep, k = item.rpartition(":")
+    if sep and k.isdigit() and name and int(k) > 0:
+        return name, int(k)
+    return item, 0
+
+
 def _task(t: _Task, where: str, bodies: dict[str, BodySpec], joints: list[JointSpec]) -> TaskSpec:
     by_name = {j.name: j for j in joints}
-    for k, nm in enumerate(t.joints):
+    seen = set()
+    coords = []  # (name, k) of each entry, k 1-based
+    for i, item in enumerate(t.joints):
+        nm, k = split_task_joint(item)
         if nm not in by_name:
-            raise ParameterError(f"{where} joints[{k}]: {nm!r} is not a joint of the mechanism")
-        if len(joint_type(by_name[nm].type).motions) != 1:
-            raise ParameterError(f"{where} joints[{k}]: {nm!r} is a {by_name[nm].type} joint; a task coordinate is "
-                                 "the coordinate of a joint of one freedom (revolute, prismatic, ...)")
-    if len(set(t.joints)) != len(t.joints):
-        raise ParameterError(f"{where} joints: a joint is named twice")
+            raise ParameterError(f"{where} joints[{i}]: {nm!r} is not a joint of the mechanism")
+        jt = joint_type(by_name[nm].type)
+        n = len(jt.motions)
+        if n == 0:
+            raise ParameterError(f"{where} joints[{i}]: {nm!r} is a {jt.name} joint, which has no coordinate")
+        if k == 0 and n != 1:
+            raise ParameterError(f"{where} joints[{i}]: {nm!r} is a {jt.name} joint of {n} coordinates; name one of "
+                                 f"them, {nm + ':1'!r} ... {nm + ':' + str(n)!r}")
+        if k > n:
+            raise ParameterError(f"{where} joints[{i}]: {item!r}: joint {nm!r} has {n} coordinate(s)")
+        key = (nm, max(k, 1))
+        if key in seen:
+            raise ParameterError(f"{where} joints: a joint coordinate is named twice ({item!r})")
+        seen.add(key)
+        coords.append((nm, k))
     body = t.body
     if body is None:
         if not t.joints or t.position or t.orientation:
             raise ParameterError(f"{where} body: missing (the task body; a task of joints alone may leave it out)")
-        last = by_name[t.joints[-1]]
+        last = by_name[coords[-1][0]]
         body = last.child if last.child != GROUND else last.parent
     if body not in bodies:
         raise ParameterError(f"{where} body: {body!r} is not a body of the mechanism")
@@ -924,9 +947,10 @@ def _task(t: _Task, where: str, bodies: dict[str, BodySpec], joints: list[JointS
         raise ParameterError(f"{where} {exc}") from None
     b = bodies[body]
     point = np.array(t.point_m if t.point_m is not None else b.p0 + b.R0 @ b.com, dtype=float)
-    names = tuple(t.position) + tuple(f"euler{k}" for k in t.orientation) + tuple(f"{nm}_q" for nm in t.joints)
+    names = (tuple(t.position) + tuple(f"euler{k}" for k in t.orientation)
+             + tuple(f"{nm}_q{k}" if k else f"{nm}_q" for nm, k in coords))
     units = (("m",) * len(t.position) + ("rad",) * len(t.orientation)
-             + tuple(joint_type(by_name[nm].type).units[0] for nm in t.joints))
+             + tuple(joint_type(by_name[nm].type).units[max(k, 1) - 1] for nm, k in coords))
     return TaskSpec(body=body, point=point, position=tuple(_POS_NAMES[c] for c in t.position), sequence=seq,
                     orientation=tuple(int(k) - 1 for k in t.orientation), names=names, units=units,
                     joints=tuple(t.joints))

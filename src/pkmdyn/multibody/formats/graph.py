@@ -30,8 +30,9 @@ configuration (MJCF: ``qpos0`` or a keyframe; URDF, SDFormat: zero joint positio
   (pivoted QR of the task rows on the loops' null space); where no body's coordinates can (a
   mechanism of two legs, whose freedoms no single body carries), joint coordinates: the
   actuated joints', then the sprung ones', then the others' in the file's order, then the
-  first candidate body's, each taken where it is independent of those before it on the loops'
-  null space less the idle freedoms (a task of joints, said in a note).
+  first candidate body's, then single coordinates of joints of several freedoms, each taken
+  where it is independent of those before it on the loops' null space less the idle freedoms
+  (a task of joints, said in a note).
 
 Anything without an equivalent is refused with one line naming the element
 (:class:`~pkmdyn.errors.ParameterError`).
@@ -48,7 +49,8 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from ...errors import ParameterError
-from ..description.schema import GROUND, MOTOR_KEYS, load_description
+from ..description.joint_types import joint_type
+from ..description.schema import GROUND, MOTOR_KEYS, load_description, split_task_joint
 from ..model.compiler import compile_model
 from ..model.topology import _null, _point_jacobian, analyse_topology, column_scale, constraint_jacobian, row_scale
 
@@ -564,7 +566,8 @@ def _choose_coordinates(desc: dict, choice: TaskChoice, source: str) -> None:
 def _choose_joints(desc: dict, source: str) -> None:
     """Set ``[task] joints`` (module docstring), and the task body's coordinates where the
     joints' do not suffice: the coordinates of one-freedom tree joints, the actuated first,
-    then the sprung, then the others, then the task body's ``x y z`` and ``XYZ`` angles, each
+    then the sprung, then the others, then the task body's ``x y z`` and ``XYZ`` angles, then
+    the coordinates of joints of several freedoms (``"name:k"``), each
     kept where its row on the loops' null space less the idle freedoms (the motions that move
     no joint centre) is independent of the rows kept before it (scaled residual above 1e-6),
     until there are as many as the mechanism's degrees of freedom."""
@@ -588,6 +591,13 @@ def _choose_joints(desc: dict, source: str) -> None:
         key=lambda k: (0 if model.joint_actuated[k] else 1 if spec[model.joint_names[k]].get("spring") else 2, k))
     rows = [(("joint", model.joint_names[k]), Nm[int(model.joint_q0[k])]) for k in order]
     rows += [(("body", r), Js[nr + r] @ Nm) for r in range(6)]
+    for k in range(len(model.joint_names)):  # last, a coordinate of a joint of several (a ball's angle)
+        n = int(model.joint_nq[k])
+        if model.joint_cut[k] or n < 2:
+            continue
+        for i in range(n):
+            c = int(model.joint_q0[k]) + (n - 1 - i if model.joint_flipped[k] else i)
+            rows.append((("joint", f"{model.joint_names[k]}:{i + 1}"), Nm[c]))
     chosen: list[tuple[str, Any]] = []
     basis = np.zeros((0, dof))
     for what, row in rows:
@@ -642,11 +652,12 @@ def description_from_graph(g: Graph, choice: TaskChoice = TaskChoice()) -> tuple
         known = {j["name"] for j in joints + cuts}
         named = []
         for given in choice.joints:
-            nm = safe_name(given, "")
+            base, kc = split_task_joint(given)
+            nm = safe_name(base, "")
             if nm not in known:
                 raise ParameterError(f"{g.source}: task joint {given!r}: no joint of that name (the joints: "
                                      f"{', '.join(sorted(known)[:12])}{' ...' if len(known) > 12 else ''})")
-            named.append(nm)
+            named.append(f"{nm}:{kc}" if kc else nm)
         choice = TaskChoice(body=choice.body, point=choice.point, position=choice.position,
                             orientation=choice.orientation, sequence=choice.sequence, joints=tuple(named))
         chose_body = True  # the task asked for is the task: no other is tried
@@ -668,10 +679,12 @@ def description_from_graph(g: Graph, choice: TaskChoice = TaskChoice()) -> tuple
                                f"{str(exc).split(': ', 1)[-1]}); the task is the coordinates of joints "
                                f"{', '.join(t['joints'])}" + (f" and {', '.join(also)} of body {t['body']}" if also
                                                                else "") + " (--task-joints to choose others)")
-    units = {j["name"]: "m" if j["type"] in ("prismatic", "slide") else "rad" for j in desc["joints"]}
+    types = {j["name"]: j["type"] for j in desc["joints"]}
     amp = {f"{c}_m": 0.01 * b.size for c in desc["task"]["position"]}
     amp.update({f"euler{k}_rad": 0.02 for k in desc["task"]["orientation"]})
-    amp.update({f"{j}_q_{units[j]}": 0.01 * b.size if units[j] == "m" else 0.02
-                for j in desc["task"].get("joints", [])})
+    for item in desc["task"].get("joints", []):
+        nm, kc = split_task_joint(item)
+        unit = joint_type(types[nm]).units[max(kc, 1) - 1]
+        amp[f"{nm}_q{kc or ''}_{unit}"] = 0.01 * b.size if unit == "m" else 0.02
     desc["default_motion"] = {"period_s": 2.0, "samples": 201, "amplitude": amp}
     return desc, b.notes

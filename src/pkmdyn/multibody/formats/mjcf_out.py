@@ -51,7 +51,7 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError
 from ..description.joint_types import JOINT_TYPES
-from ..model.compiler import MechanismModel
+from ..model.compiler import MechanismModel, tree_task_joints
 
 __all__ = ["mechanism_mjcf", "mujoco_qpos", "mujoco_order", "coordinate_names", "SOLREF", "SOLIMP", "TASK_SITE",
            "TASK_TEXT", "DRIVE_STIFFNESS"]
@@ -132,10 +132,8 @@ def _custom(model: MechanismModel) -> list[str]:
     ori = ",".join(str(inv[int(i)] + 1) for kind, i in zip(model.task_kind, model.task_index) if kind == 1)
     task = (f"body={model.body_names[model.task_body]};point={TASK_SITE};position={pos};orientation={ori};"
             f"sequence={model.euler_sequence}")
-    joints = [model.joint_names[int(model.coord_joint[int(i)])]
-              for kind, i in zip(model.task_kind, model.task_index) if kind == 2]
-    if joints:
-        task += f";joints={','.join(joints)}"
+    if model.task_joints:
+        task += f";joints={','.join(tree_task_joints(model))}"
     out = ["  <custom>", f'    <text name="{TASK_TEXT}" data="{task}"/>']
     for j in model.act_joint:
         st = model.joint_stiffness[j] or {}

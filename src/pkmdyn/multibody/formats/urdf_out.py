@@ -34,7 +34,7 @@ import numpy as np
 from ...errors import ParameterError
 from ..description.schema import MOTOR_KEYS
 from ..description.joint_types import JOINT_TYPES
-from ..model.compiler import MechanismModel
+from ..model.compiler import MechanismModel, tree_task_joints
 
 __all__ = ["mechanism_urdf"]
 
@@ -179,9 +179,7 @@ def mechanism_urdf(model: MechanismModel) -> tuple[str, dict, list[str]]:
             "position": [model.task_names[i] for i in range(model.nt) if model.task_kind[i] == 0],
             "orientation": [int(model.task_names[i][5:]) for i in range(model.nt) if model.task_kind[i] == 1],
             "euler_sequence": model.euler_sequence,
-            **({"joints": [model.joint_names[int(model.coord_joint[int(i)])]
-                           for kind, i in zip(model.task_kind, model.task_index) if kind == 2]}
-               if np.any(model.task_kind == 2) else {})}
+            **({"joints": list(tree_task_joints(model))} if model.task_joints else {})}
     sidecar = {"gravity_m_s2": [float(x) for x in model.gravity], "closed_loop": closed, "type": types,
                "name_mot": [model.joint_names[j] for j in model.act_joint], "task": task}
     drives = _drives(model)

@@ -47,12 +47,13 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError
 from ..description.joint_types import MOTION_CODES, joint_type, type_code
-from ..description.schema import GROUND, Description, load_description
+from ..description.schema import GROUND, Description, load_description, split_task_joint
 from .legs import explicit_legs
 from .records import LoopRecord, MechanismModel
 from .topology import block_structure, solver_selection
 
 __all__ = ["MechanismModel", "LoopRecord", "compile_model", "load_mechanism", "spanning_tree", "structure_key",
+           "tree_task_joints",
            "ModelStructure", "model_structure", "compile_with"]
 
 Array = NDArray[np.float64]
@@ -124,7 +125,7 @@ def _spanning_tree(bodies: Sequence[str], joints: Sequence[JointKey], cut_joints
     the task's joints (``task_joints``) are taken into the tree first, as the actuated and
     sprung ones are (a task coordinate is a tree coordinate)."""
     forced_cut = set(cut_joints or ())
-    first = set(task_joints)
+    first = {split_task_joint(item)[0] for item in task_joints}
     adj: dict[str, list[int]] = {GROUND: [], **{b: [] for b in bodies}}
     for k, j in enumerate(joints):
         adj[j.parent].append(k)
@@ -267,13 +268,18 @@ def model_structure(key: StructureKey) -> ModelStructure:
         axes = [{"x": 0, "y": 1, "z": 2}[c] for c in reversed(seq)]
         perm = [2, 1, 0]  # user angle k is intrinsic angle perm[k]
     jnames = {j.name: k for k, j in enumerate(joints)}
-    for nm in task.joints:
-        if jnames[nm] in cuts:
-            raise ParameterError(f"[task] joints: {nm!r} is a loop's cut joint, so its coordinate is not one of "
-                                 "the tree's; name another joint of that loop in [mechanism] cut_joints, or choose "
+    joint_coords = []  # the tree coordinate of each task joint entry
+    for item in task.joints:
+        nm, kc = split_task_joint(item)
+        kj = jnames[nm]
+        if kj in cuts:
+            raise ParameterError(f"[task] joints: {nm!r} is a loop's cut joint, so its coordinates are not the "
+                                 "tree's; name another joint of that loop in [mechanism] cut_joints, or choose "
                                  "another task joint")
+        i = max(kc, 1) - 1  # the joint's i-th motion: a joint traversed backwards has them reversed
+        joint_coords.append(q0[kj] + (nqj[kj] - 1 - i if kj in flipped else i))
     task_kind = [0] * len(task.position) + [1] * len(task.orientation) + [2] * len(task.joints)
-    task_index = list(task.position) + [perm[k] for k in task.orientation] + [q0[jnames[nm]] for nm in task.joints]
+    task_index = list(task.position) + [perm[k] for k in task.orientation] + joint_coords
     act = sorted(k for k in tree if joints[k].actuated)
     fields = dict(
         body_names=tuple(order), body_parent=body_parent, body_joint=body_joint,
@@ -290,6 +296,7 @@ def model_structure(key: StructureKey) -> ModelStructure:
         task_index=np.array(task_index, dtype=np.int64), task_length=np.array([u == "m" for u in task.units]),
         euler_sequence=seq, euler_axes=np.array(axes, dtype=np.int64),
         euler_perm=np.array(perm, dtype=np.int64), task_names=task.names, task_units=task.units,
+        task_joints=tuple(task.joints),
         act_joint=np.array(act, dtype=np.int64), act_coord=np.array([q0[k] for k in act], dtype=np.int64),
         load_body=np.array([bidx[b] for b, _ in key.loads], dtype=np.int64),
         load_name=tuple(name for _, name in key.loads),
@@ -521,3 +528,16 @@ def _loop_path(joints: Sequence[JointKey], tree: list[int], child_of_joint: dict
     common = next(x for x in ua if x in ub)
     path = [joint_of[x] for x in ua[:ua.index(common)]] + [joint_of[x] for x in reversed(ub[:ub.index(common)])]
     return tuple(path)
+
+
+def tree_task_joints(model: MechanismModel) -> tuple[str, ...]:
+    """The task's ``[task] joints`` entries as the spanning tree holds the joints (what an export
+    writes): a joint of several coordinates that the tree reaches from its child has them in
+    reverse order, so its k-th coordinate is the tree's ``n + 1 - k``-th (the same value)."""
+    out = []
+    for item in model.task_joints:
+        nm, k = split_task_joint(item)
+        j = model.joint_names.index(nm)
+        n = int(model.joint_nq[j])
+        out.append(f"{nm}:{n + 1 - k}" if k and n > 1 and model.joint_flipped[j] else item)
+    return tuple(out)

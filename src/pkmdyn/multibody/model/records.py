@@ -164,6 +164,8 @@ class MechanismModel:
     #: per load: its name when it is a named load (magnitude per sample), else None; its unit
     #: direction (base frame; zero for a constant load); the distinct names in order
     load_name: tuple[str | None, ...] = ()
+    #: the task's ``[task] joints`` entries (``"name"`` or ``"name:k"``), in the order of its joint rows
+    task_joints: tuple[str, ...] = ()
     load_direction: Array = field(default_factory=lambda: np.zeros((0, 3)))
     load_magnitude: Array = field(default_factory=lambda: np.zeros(0))
     named_loads: tuple[str, ...] = ()
