@@ -101,13 +101,26 @@ def test_run_takes_an_under_actuated_mechanisms_actuator_motion(tmp_path):
     assert summary["max_unactuated_force_ratio"] == ratio.max()
 
 
-def test_control_refuses_an_inconsistent_default_motion_naming_the_sample(tmp_path, capsys):
-    """The cart-pole's default motion swings the pendulum by a sine of its own: no cart force makes
-    that motion; the command says so, naming the sample, and writes nothing."""
-    out = tmp_path / "c"
-    assert main(["control", "--machine", str(_cart_pole(tmp_path)), "--out", str(out)]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "sample" in err[0] and "under-actuated" in err[0] and not out.exists()
+def test_control_refuses_an_under_actuated_mechanism_in_one_line(tmp_path, capsys):
+    """The sensors' pose and rates come through the actuated joints and the laws map a task
+    effort: ``control`` of the cart-pole is refused in one line, with its default motion and
+    with a consistent motion (the run's own simulated one), and writes nothing."""
+    import csv
+
+    run = tmp_path / "run"
+    assert main(["run", "--machine", str(_cart_pole(tmp_path)), "--out", str(run)]) == 0
+    capsys.readouterr()
+    motion = tmp_path / "motion.csv"
+    with open(run / "results.csv", newline="") as fh, open(motion, "w", newline="") as out:
+        w = csv.writer(out)
+        w.writerow(["t_s", "x_m", "euler1_rad"])
+        w.writerows([r["t_s"], r["x_m"], r["euler1_rad"]] for r in csv.DictReader(fh))
+    for extra in ([], ["--motion", str(motion)]):
+        out = tmp_path / "c"
+        assert main(["control", "--machine", str(_cart_pole(tmp_path)), *extra, "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "under-actuated (1 actuator(s) for 2 degrees of freedom)" in err[0]
+        assert not out.exists()
 
 
 def test_the_unactuated_force_ratio_is_the_hinge_torque_no_actuator_gives(tmp_path):

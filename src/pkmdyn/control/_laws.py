@@ -174,9 +174,11 @@ def _task_effort_map(model: Any, B: Array) -> Array:
     least-norm joint efforts (:func:`pkmdyn.multibody.dynamics.distribution.least_norm_map`, Eq.
     R1-R2: its distribution's rule, or that rule's linear part for a minimax, bounded or
     preloaded one, whose internal force the feedforward holds), each divided by its drive's
-    ratio ``k``; ``B^+`` for another machine."""
+    ratio ``k``; ``B^+`` for another machine, and for an under-actuated one (fewer actuators
+    than task coordinates: the efforts whose generalised force is nearest the task effort, in
+    least squares; the least-norm map needs ``B`` of full row rank)."""
     k = getattr(model, "drive_ratio", None)
-    if k is None or not hasattr(model, "act_distribution"):
+    if k is None or not hasattr(model, "act_distribution") or B.shape[-2] > B.shape[-1]:
         return np.linalg.pinv(B)
     return least_norm_map(model, B / k[None, None, :]) / k[None, :, None]
 

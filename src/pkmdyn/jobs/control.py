@@ -41,7 +41,6 @@ if TYPE_CHECKING:
     from .. import multibody as _multibody
     from .. import simulate as _simulate
     from ..multibody import scene as _scene
-    from ..multibody.dynamics import newton_euler as _newton_euler
     from ..multibody.dynamics import verbs as _verbs
     from ..multibody.kinematics import inverse as _inverse
 else:  # loaded when a run starts: the command line imports this module for its constants and help
@@ -49,7 +48,6 @@ else:  # loaded when a run starts: the command line imports this module for its 
     _multibody = lazy_module("pkmdyn.multibody")
     _simulate = lazy_module("pkmdyn.simulate")
     _verbs = lazy_module("pkmdyn.multibody.dynamics.verbs")
-    _newton_euler = lazy_module("pkmdyn.multibody.dynamics.newton_euler")
     _inverse = lazy_module("pkmdyn.multibody.kinematics.inverse")
     _scene = lazy_module("pkmdyn.multibody.scene")
 
@@ -869,6 +867,14 @@ def described_job(machine: str, controller: str, out_dir: Path, *, motion_path: 
     check_table_format(fmt)
     p = prepare(machine, out_dir, {"--motion": motion_path, "--gains": gains_path})
     model = p.model
+    if model.na < model.nt:
+        # the sensors' pose and rates come through the actuated joints (the encoders' direct
+        # kinematics), and the laws' efforts map a task effort: neither is defined with fewer
+        # actuators than freedoms (no under-actuated controller yet)
+        raise ParameterError(f"{machine}: mechanism {model.name!r} is under-actuated ({model.na} actuator(s) for "
+                             f"{model.nt} degrees of freedom): pkmdyn control's sensors and laws need as many "
+                             "actuators as freedoms; pkmdyn run simulates its passive freedoms along its default "
+                             "motion or an --actuator-motion")
     if motion_path is not None:
         motion = _multibody.read_task_motion(model, Path(motion_path).absolute())
         what = str(motion_path)
@@ -880,23 +886,11 @@ def described_job(machine: str, controller: str, out_dir: Path, *, motion_path: 
     if not duration_s <= span:
         raise MotionError(f"--duration: {duration_s:g} s must be at most the motion's {span:g} s")
     notes: list[str] = []
-    under = model.na < model.nt and motion_path is None
     limited = _inverse.limited_joints(model)
-    if under or limited:  # the reference's kinematics over the run, for the checks below
+    if limited:  # the plant has no end stops: say where the reference leaves the joint limits
         span_mask = motion.t <= motion.t[0] + duration_s
         kin = _multibody.solve_kinematics(model, motion.x[span_mask], motion.xd[span_mask], motion.xdd[span_mask],
                                           motion.t[span_mask])
-    if under:
-        # under-actuated: the plant simulates the passive freedoms, but only a dynamically
-        # consistent reference can be tracked; the default motion (exact rates) is refused where
-        # it is not, naming the sample (a file's rates may be differentiated from its positions,
-        # consistent only to that differentiation: it is tracked as it is)
-        try:
-            _newton_euler.inverse_dynamics(model, kin)
-        except MotionError as exc:
-            raise MotionError(f"{what}: {exc} (a reference for an under-actuated machine: pkmdyn run --actuator-motion "
-                              "writes one, its passive freedoms simulated)") from None
-    if limited:  # the plant has no end stops: say where the reference leaves the joint limits
         beyond = _inverse.limit_message(model, kin)
         if beyond is not None:
             notes.append(f"the reference motion leaves the joint limits: {beyond}")
