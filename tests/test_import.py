@@ -358,6 +358,18 @@ def test_bad_input_is_refused_by_name(tmp_path, capsys):
     side.write_text("closed_loop: [['closedloop1_A', 'closedloop1_B']]\ntype: ['6d']\nname_mot: ['mot7']\n")
     _refused(tmp_path, capsys, ["--from", str(urdf), "--sidecar", str(side), "--assemble"],
              r"actuated joint 'mot7': no joint of that name")
+    # a 6D pair whose frames are turned by half a turn about an axis the loop cannot turn about:
+    # the refusal names the angle left, not only the gap
+    turned = tmp_path / "turned.urdf"
+    text = five_bar_urdf("gepetto")
+    at = text.index('name="closedloop1_B"')
+    end = text.index("</joint>", at)
+    turned.write_text(text[:at] + text[at:end].replace('rpy="0 0 0"', 'rpy="0 0 3.141592653589793"') + text[end:])
+    assert turned.read_text() != text
+    side.write_text("closed_loop: [['closedloop1_A', 'closedloop1_B']]\ntype: ['6d']\nname_mot: ['mot1', 'mot2']\n")
+    _refused(tmp_path, capsys, ["--from", str(turned), "--sidecar", str(side), "--assemble"],
+             r"closedloop1_A-closedloop1_B: the loops do not close near the zero configuration \(gap \S+ m and "
+             r"3\.14\d* rad after assembly\)")
     sdf = tmp_path / "screw.sdf"
     sdf.write_text(SDF.replace('name="B" type="revolute"', 'name="B" type="screw"'))
     _refused(tmp_path, capsys, ["--from", str(sdf), "--actuated", "A"], r"joint B: a screw joint has no equivalent")

@@ -281,9 +281,11 @@ def _assemble(model, data, q0, pairs: list[tuple[str, str, str]], src: str):
     for fa, fb, kind in ids:
         n = 6 if kind == "6d" else 3
         gap = float(np.linalg.norm(r[k:k + 3])) * size
-        if gap > CLOSE_TOL * size or np.linalg.norm(r[k + 3:k + n]) > 1e-6:
+        turn = float(np.linalg.norm(r[k + 3:k + n]))  # a 6D pair's frames: the angle between them [rad]
+        if gap > CLOSE_TOL * size or turn > 1e-6:
+            angle = f" and {turn:.6g} rad" if n == 6 else ""
             raise ParameterError(f"{src}: loop closure {model.frames[fa].name}-{model.frames[fb].name}: the loops do "
-                                 f"not close near the zero configuration (gap {gap:.6g} m after assembly)")
+                                 f"not close near the zero configuration (gap {gap:.6g} m{angle} after assembly)")
         k += n
     return q
 
