@@ -242,6 +242,7 @@ def _assemble(model, data, q0, pairs: list[tuple[str, str, str]], src: str):
     pin = _pinocchio()
     ids = [(model.getFrameId(a), model.getFrameId(b), kind) for a, b, kind in pairs]
     q = q0.copy()
+    pin.forwardKinematics(model, data, q)  # the joints' places at the start: the model's size
     size = max(float(np.abs(np.array([np.array(data.oMi[j].translation) for j in range(model.njoints)])).max()), 1e-3)
 
     def residual(q):
