@@ -236,10 +236,12 @@ def test_the_stiffness_asks_for_a_body_task(tmp_path, capsys):
     assert not (tmp_path / "st").exists()
 
 
-def _legs_xml(spring=False):
+def _legs_xml(spring=False, ball=False):
     """Two planar four-bars in MJCF, each closed by a ``connect`` (hinges about z), the cranks
     driven; with ``spring``, the right crank turns on a sprung hinge 0.05 m along a hub that the
-    drive turns (a five-bar with a passive freedom: under-actuated)."""
+    drive turns (a five-bar with a passive freedom: under-actuated); with ``ball``, the left
+    coupler hangs from a ball joint, a rod between two balls whose spin is an idle freedom (as
+    Cassie's achilles rods)."""
     legs = []
     for side, dx in (("L", 0.0), ("R", 3.0)):
         sprung = spring and side == "R"
@@ -256,7 +258,7 @@ def _legs_xml(spring=False):
       {hub}
         <inertial pos="{0.1 - off} 0.45 0" mass="1" diaginertia="0.01 0.01 0.01"/>
         <body name="coupler_{side}" pos="{0.2 - off} 0.9 0">
-          <joint name="B_{side}" type="hinge" axis="0 0 1"/>
+          <joint name="B_{side}" type="{'ball' if ball and side == 'L' else 'hinge'}"{'' if ball and side == 'L' else ' axis="0 0 1"'}/>
           <inertial pos="0.75 0.25 0" mass="1" diaginertia="0.01 0.01 0.01"/>
           <site name="tip_{side}" pos="1.5 0.5 0"/>
         </body>
@@ -287,11 +289,11 @@ def _rows(path):
         return list(csv.DictReader(fh))
 
 
-@pytest.mark.parametrize("spring", [False, True])
-def test_a_two_legged_model_imports_with_a_joint_task_and_runs_on_defaults(tmp_path, capsys, spring):
+@pytest.mark.parametrize("spring, ball", [(False, False), (True, False), (False, True)])
+def test_a_two_legged_model_imports_with_a_joint_task_and_runs_on_defaults(tmp_path, capsys, spring, ball):
     pytest.importorskip("mujoco")
     src = tmp_path / "legs.xml"
-    src.write_text(_legs_xml(spring))
+    src.write_text(_legs_xml(spring, ball))
     out = tmp_path / "legs.toml"
     assert main(["import", "--from", str(src), "--out", str(out)]) == 0
     err = capsys.readouterr().err
@@ -304,6 +306,8 @@ def test_a_two_legged_model_imports_with_a_joint_task_and_runs_on_defaults(tmp_p
     rows = _rows(run / "results.csv")
     summary = json.loads((run / "summary.json").read_text())
     assert summary["samples"] == len(rows) > 100
+    # the rod's spin (ball) is idle: no task coordinate of its own, held by the run
+    assert summary["topology"]["idle_freedoms"] == (1 if ball else 0)
     for side in "LR":  # an actuated joint's task coordinate is its actuator coordinate
         a = np.array([float(r[f"A_{side}_q_rad"]) for r in rows])
         np.testing.assert_allclose(a, [float(r[f"A_{side}_pos_rad"]) for r in rows], atol=1e-12)
