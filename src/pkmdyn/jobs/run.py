@@ -19,6 +19,7 @@ folder beside ``--out`` and moved into place only when the whole run succeeded
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -66,7 +67,6 @@ from ..multibody.kinematics.inverse import (
     solve_kinematics,
 )
 from ..multibody.kinematics.motion import (
-    TaskMotion,
     motion_columns,
     periodic_motion,
     read_actuator_motion,
@@ -219,21 +219,20 @@ class _Summary:
         return out
 
 
-def _simulated(model: MechanismModel, am: Any) -> Any:
-    """An under-actuated mechanism's task motion along the actuator motion ``am`` (or along the
-    actuated joints of a task motion, :func:`driven_motion`), its passive freedoms simulated
-    (:func:`passive_motion`), with a progress bar in simulated seconds on a terminal."""
+def _simulated(model: MechanismModel, t: Array, simulate: Callable[..., Any]) -> Any:
+    """An under-actuated mechanism's task motion at the times ``t``, its passive freedoms
+    simulated by ``simulate(progress=...)`` (:func:`passive_motion` along an actuator motion,
+    :func:`driven_motion` along a task motion's actuated joints), with a progress bar in
+    simulated seconds on a terminal."""
     from tqdm import tqdm
 
-    span = float(am.t[-1] - am.t[0])
+    span = float(t[-1] - t[0])
     with tqdm(total=span, desc=f"{model.name}: the passive freedoms simulated", unit="s", leave=False,
               disable=None, bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]") as bar:
         def advance(tau: float) -> None:
-            bar.update(max(0.0, min(tau - float(am.t[0]), span) - bar.n))
+            bar.update(max(0.0, min(tau - float(t[0]), span) - bar.n))
 
-        if isinstance(am, TaskMotion):
-            return driven_motion(model, am, progress=advance)
-        return passive_motion(model, am.t, am.s, am.sd, am.sdd, progress=advance)
+        return simulate(progress=advance)
 
 
 def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, inputs: Any = (),
@@ -421,7 +420,7 @@ def job(machine: str, out_dir: Path, *, motion_path: Path | None = None, actuato
                     raise MotionError(f"{actuator_path}: named loads ({', '.join(am.loads)}) along the actuator motion "
                                       "of an under-actuated mechanism are not simulated yet; give them by the "
                                       "description's magnitude_N")
-                motion = _simulated(model, am)
+                motion = _simulated(model, am.t, partial(passive_motion, model, am.t, am.s, am.sd, am.sdd))
             else:
                 motion, _ = task_motion(model, am)
     elif entry is None:
@@ -429,7 +428,8 @@ def job(machine: str, out_dir: Path, *, motion_path: Path | None = None, actuato
                                  max_samples=int(lim["max_samples"]))
         window = motion.samples_per_cycle + 1  # the plots and the animation show the first cycle
         if model.na < model.nt:  # under-actuated: the default motion drives the actuators, the rest simulated
-            motion = _simulated(model, motion.chunk(0, len(motion)))
+            whole = motion.chunk(0, len(motion))
+            motion = _simulated(model, whole.t, partial(driven_motion, model, whole))
     else:
         if samples_per_cycle is not None:
             raise ParameterError(f"--samples-per-cycle applies to a described mechanism's default motion; "

@@ -224,12 +224,12 @@ def _task_coordinates(model: MechanismModel, pos: list[str]) -> list[dict[str, A
     the place (1-3) of the Euler angle in ``euler_sequence`` as written, or the joint."""
     out = []
     inv = {int(v): k for k, v in enumerate(model.euler_perm)}
+    joints = iter(model.task_joints)  # the joint rows' entries, in the rows' order
     for c, kind, i in zip(pos, model.task_kind, model.task_index):
         if kind == 0:
             out.append({"column": c, "kind": "position", "component": int(i)})
         elif kind == 2:
-            item = model.task_joints[sum(1 for k in model.task_kind[:len(out)] if k == 2)]
-            out.append({"column": c, "kind": "joint", "joint": item})
+            out.append({"column": c, "kind": "joint", "joint": next(joints)})
         else:
             out.append({"column": c, "kind": "euler_angle", "angle": inv[int(i)] + 1})
     return out

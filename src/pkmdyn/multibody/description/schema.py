@@ -42,7 +42,9 @@ MAX_JOINTS = 600
 _TYPES = tuple(t.name for t in JOINT_TYPES)
 Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 Pair = Annotated[list[float], Field(min_length=2, max_length=2)]
-NAME = Field(min_length=1, max_length=64, pattern=r"^[A-Za-z_][A-Za-z0-9_'.-]*$")
+#: a name of the description (a body, a joint, ...): a letter or ``_``, then letters, digits, ``_ ' . -``
+NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_'.-]*$"
+NAME = Field(min_length=1, max_length=64, pattern=NAME_PATTERN)
 
 
 class _Section(Section):
@@ -177,7 +179,7 @@ class _Load(Section):
 
 
 class _Task(Section):
-    body: str | None = Field(default=None, min_length=1, max_length=64, pattern=r"^[A-Za-z_][A-Za-z0-9_'.-]*$")
+    body: str | None = Field(default=None, min_length=1, max_length=64, pattern=NAME_PATTERN)
     point_m: Vec3 | None = None
     position: list[Literal["x", "y", "z"]] = Field(default_factory=list, max_length=3)
     euler_sequence: str = "XYZ"

@@ -552,11 +552,11 @@ def joint_reactions(model: MechanismModel, kin: MechanismKinematics, loads: dict
         mu = None  # the idle freedoms' holding forces where the solve gives them
         if over:
             z0, Z = cuts.affine(model, W, F)
-            z, t = compliant_reactions(model, kin, cuts.A, (Q if Qf is None else Q + Qf) - eff, -1, W,
+            z, t = compliant_reactions(model, kin, cuts.A, Q_u - eff, -1, W,
                                        affine=(z0, Z))
             method = "compliance"
         elif fast:
-            z, mu, res = _cut_solve(model, probe.tab, kin, S, W, (Q if Qf is None else Q + Qf) - eff, eff, F)
+            z, mu, res = _cut_solve(model, probe.tab, kin, S, W, Q_u - eff, eff, F)
             method, t = "rigid", 0
         elif r < A.shape[2] and overconstrained == "minimum-norm":
             coef = np.einsum("nmr,nm->nr", U[:, :, :r], b) / sv[:, :r]
