@@ -210,3 +210,11 @@ def round_trip(m0, fmt, folder):
         src.write_text(text)
         side.write_text(dumps_yaml(sidecar))
     return import_description(src, fmt, sidecar=side)[0]
+
+
+def mjcf_document(name, worldbody, equality, actuator, option=""):
+    """An MJCF model as the import tests write one: angles in radians, ``option`` (a line of
+    its own, e.g. a gravity) before the ``worldbody``, then the ``equality`` and ``actuator``
+    elements' contents."""
+    return (f'<mujoco model="{name}">\n  <compiler angle="radian"/>\n{option}  <worldbody>{worldbody}\n  </worldbody>\n'
+            f"  <equality>{equality}\n  </equality>\n  <actuator>{actuator}\n  </actuator>\n</mujoco>\n")

@@ -12,6 +12,7 @@ import tomllib
 import numpy as np
 import pytest
 
+import multibody_examples as ex
 from oracles import stewart
 from pkmdyn.cli import main
 from pkmdyn.multibody import load_mechanism, reference_task, solve_kinematics
@@ -51,20 +52,12 @@ def stewart_free_xml(platform_kg=10.0):
     sites = "".join(f'\n      <site name="s{i + 1}" pos="{_fmt(b[i])}"/>' for i in range(6))
     eqs = "".join(f'\n    <connect name="c{i + 1}" site1="tip{i + 1}" site2="s{i + 1}"/>' for i in range(6))
     acts = "".join(f'\n    <motor name="m{i + 1}" joint="p{i + 1}"/>' for i in range(6))
-    return f"""<mujoco model="stewart_free">
-  <compiler angle="radian"/>
-  <worldbody>{''.join(legs)}
+    platform = f"""
     <body name="platform" pos="{_fmt(home)}">
       <freejoint name="float"/>
       <inertial pos="0 0 0" mass="{platform_kg}" diaginertia="0.625 0.625 1.25"/>{sites}
-    </body>
-  </worldbody>
-  <equality>{eqs}
-  </equality>
-  <actuator>{acts}
-  </actuator>
-</mujoco>
-"""
+    </body>"""
+    return ex.mjcf_document("stewart_free", "".join(legs) + platform, eqs, acts)
 
 
 def _import(tmp_path, xml, *extra, name="m"):
@@ -192,21 +185,32 @@ def test_a_loop_left_open_in_the_file_is_closed_by_assemble(tmp_path, capsys):
     np.testing.assert_allclose(solve_kinematics(m, x).act_q[:, order], ref["L"], rtol=0, atol=1e-11)
 
 
+def _with_asset(asset, geom):
+    """The free-platform Stewart with ``asset`` in an ``<asset>`` element and ``geom`` on its
+    platform."""
+    xml = stewart_free_xml().replace("<worldbody>", f"<asset>{asset}</asset>\n  <worldbody>", 1)
+    return xml.replace('<freejoint name="float"/>', f'<freejoint name="float"/>{geom}')
+
+
+def _beside_plain(tmp_path, capsys, xml, note):
+    """``xml`` imported (saying ``note``) and the plain free-platform Stewart: both descriptions."""
+    code, out = _import(tmp_path, xml, name="variant")
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert note in err
+    code, plain = _import(tmp_path, stewart_free_xml(), name="plain")
+    assert code == 0
+    capsys.readouterr()
+    return tuple(tomllib.loads(p.read_text()) for p in (out, plain))
+
+
 def test_missing_mesh_files_where_the_inertia_is_given(tmp_path, capsys):
     """A model published without its mesh files: where each body gives its <inertial>, the mesh
     geoms are left out (said) and the mechanism is the one without them; a body whose inertia
     the missing mesh would give is refused by name."""
-    xml = stewart_free_xml()
-    meshed = xml.replace("<worldbody>", '<asset><mesh name="plate" file="meshes/plate.stl"/></asset>\n  <worldbody>', 1)
-    meshed = meshed.replace('<freejoint name="float"/>', '<freejoint name="float"/><geom type="mesh" mesh="plate"/>')
-    code, out = _import(tmp_path, meshed, name="meshed")
-    err = capsys.readouterr().err
-    assert code == 0, err
-    assert "mesh files missing (meshes/plate.stl): their geoms left out of bodies platform" in err
-    code, plain = _import(tmp_path, xml, name="plain")
-    assert code == 0
-    capsys.readouterr()
-    a, b = (tomllib.loads(p.read_text()) for p in (out, plain))
+    meshed = _with_asset('<mesh name="plate" file="meshes/plate.stl"/>', '<geom type="mesh" mesh="plate"/>')
+    a, b = _beside_plain(tmp_path, capsys, meshed, "mesh files missing (meshes/plate.stl): their geoms left out of "
+                                                   "bodies platform")
     assert [bd["mass_kg"] for bd in a["bodies"]] == [bd["mass_kg"] for bd in b["bodies"]]
     no_inertial = meshed.replace('<inertial pos="0 0 0" mass="10.0" diaginertia="0.625 0.625 1.25"/>', "")
     assert no_inertial != meshed
@@ -218,20 +222,10 @@ def test_missing_mesh_files_where_the_inertia_is_given(tmp_path, capsys):
 def test_a_missing_texture_only_colours_and_is_left_out(tmp_path, capsys):
     """A model published without its texture image (Menagerie's Cassie names one from its
     material): the texture is left out (said), the material and the mechanism stay."""
-    xml = stewart_free_xml()
-    textured = xml.replace("<worldbody>", '<asset><texture name="skin" file="assets/skin.png" type="2d"/>'
-                                          '<material name="skin" texture="skin" rgba="1 0 0 1"/></asset>\n'
-                                          '  <worldbody>', 1)
-    textured = textured.replace('<freejoint name="float"/>',
-                                '<freejoint name="float"/><geom type="sphere" size="0.05" material="skin" mass="0"/>')
-    code, out = _import(tmp_path, textured, name="textured")
-    err = capsys.readouterr().err
-    assert code == 0, err
-    assert "texture files missing (assets/skin.png): left out" in err
-    code, plain = _import(tmp_path, xml, name="plain")
-    assert code == 0
-    capsys.readouterr()
-    a, b = (tomllib.loads(p.read_text()) for p in (out, plain))
+    textured = _with_asset('<texture name="skin" file="assets/skin.png" type="2d"/>'
+                           '<material name="skin" texture="skin" rgba="1 0 0 1"/>',
+                           '<geom type="sphere" size="0.05" material="skin" mass="0"/>')
+    a, b = _beside_plain(tmp_path, capsys, textured, "texture files missing (assets/skin.png): left out")
     assert a["bodies"] == b["bodies"] and a["joints"] == b["joints"]
 
 

@@ -271,17 +271,7 @@ def _legs_xml(spring=False, ball=False):
     </body>""")
     eqs = "".join(f'\n    <connect site1="tip_{s}" site2="top_{s}"/>' for s in "LR")
     acts = "".join(f'\n    <motor name="m_{s}" joint="A_{s}"/>' for s in "LR")
-    return f"""<mujoco model="two_legs">
-  <compiler angle="radian"/>
-  <option gravity="0 -9.81 0"/>
-  <worldbody>{''.join(legs)}
-  </worldbody>
-  <equality>{eqs}
-  </equality>
-  <actuator>{acts}
-  </actuator>
-</mujoco>
-"""
+    return ex.mjcf_document("two_legs", "".join(legs), eqs, acts, option='  <option gravity="0 -9.81 0"/>\n')
 
 
 def _rows(path):
