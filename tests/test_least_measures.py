@@ -2,8 +2,9 @@
 bit for bit, to the least of every sample's singular value decompositions
 (``singularity_measures``), whatever the order of the samples (a smooth motion, shuffled poses,
 one pose repeated, a pose near a singularity), on every built-in mechanism and on mechanisms
-without a direct measure or without loop rows; and the brackets it decides by hold every
-sample's decomposition (to its rounding)."""
+without a direct measure or without loop rows; given the least of other samples (``below``),
+the least of both; and the brackets it decides by, the anchors' and the screened samples'
+Weyl bounds alike, hold every sample's decomposition (to its rounding)."""
 
 from __future__ import annotations
 
@@ -13,7 +14,8 @@ import pytest
 import multibody_examples as ex
 from pkmdyn.machines.registry import resolve
 from pkmdyn.multibody import default_motion, load_mechanism, solve_kinematics
-from pkmdyn.multibody.kinematics.inverse import _measure_bounds, least_measures, singularity_measures
+from pkmdyn.multibody.kinematics._measure_kernels import measure_brackets
+from pkmdyn.multibody.kinematics.inverse import SCREEN_STRIDE, _measure_arguments, least_measures, singularity_measures
 from pkmdyn.multibody.model.compiler import compile_model
 from pkmdyn.multibody.description.schema import load_description
 
@@ -49,21 +51,62 @@ def test_equal_to_every_samples_decomposition(name):
         assert _same(least_measures(m, order), _reference(m, order))
 
 
+def _brackets(m, q, below=(np.inf, np.inf, np.inf), stride=SCREEN_STRIDE):
+    lohi = np.ones((q.shape[0], 3, 2))
+    measure_brackets(*_measure_arguments(m, q), stride, np.asarray(below, dtype=float), lohi)
+    return lohi
+
+
 @pytest.mark.parametrize("name", ["stewart", "delta", "rrr3"])
 def test_brackets_hold_every_samples_decomposition(name):
     m, q = _builtin(name)
     q = np.concatenate([_fine(q, 3), q[::-1]])  # a jump back to the start, then backwards
-    _, lohi = _measure_bounds(m, q, np.zeros(3), False, brackets=True)
     sm = singularity_measures(m, q)
     vals = np.stack([sm.constraint, sm.inverse, sm.direct], axis=1)
     have = ~np.isnan(vals)
-    lo, hi = lohi[:, :, 0], lohi[:, :, 1]
-    # the decomposition's own rounding: relative 1e-12 of each value (least_measures allows 1e-8)
-    assert np.all((lo <= vals * (1 + 1e-12) + 1e-15)[have]) and np.all((vals <= hi * (1 + 1e-12) + 1e-15)[have])
-    assert np.all(lo <= hi)
-    # along the fine motion (after its first samples) the brackets are narrow: few decompositions
-    width = ((hi - lo) / vals)[5:q.shape[0] // 2]
-    assert np.nanmedian(width) < 1e-2
+    fine = (q.shape[0] - q.shape[0] // 4) // 2  # about the first half of the fine motion
+    for stride in (1, SCREEN_STRIDE, 50):
+        lohi = _brackets(m, q, stride=stride)
+        lo, hi = lohi[:, :, 0], lohi[:, :, 1]
+        # the decomposition's own rounding: relative 1e-12 of each value (least_measures allows 1e-8)
+        assert np.all((lo <= vals * (1 + 1e-12) + 1e-15)[have]) and np.all((vals <= hi * (1 + 1e-12) + 1e-15)[have])
+        assert np.all(lo <= hi)
+        width = (hi - lo) / vals
+        # the first sample's bracket as tight as rounding allows (its state by an eigendecomposition)
+        assert np.all(width[0][have[0]] < 1e-6)
+        if stride < 50:  # the samples bracketed along the fine motion, narrowly: few decompositions
+            anchors = np.zeros(q.shape[0], dtype=bool)
+            anchors[::stride] = True
+            bracketed = ((hi < 1.0) | anchors[:, None]) & have
+            assert np.nanmedian(width[:fine][bracketed[:fine]]) < 1e-2
+
+
+@pytest.mark.parametrize("name", ["stewart", "hip", "rrr3"])
+def test_below_gives_the_least_of_both(name):
+    """``below`` (a least found elsewhere): the least of it and of the samples, whether it lies
+    above every sample's measure, below every one or between; the motion taken in pieces, each
+    given the least of those before (as a run takes its chunks), gives the whole motion's."""
+    m, q = _builtin(name)
+    ref = _reference(m, q)
+    keys = ("constraint", "inverse", "direct")
+    for scale in (2.0, 0.5, 1.0 + 1e-3):
+        below = {k: ref[k] * scale for k in keys}
+        want = {k: float(np.min([ref[k], below[k]])) for k in keys}
+        if np.isnan(ref["direct"]):
+            want["direct"] = float("nan")
+        assert _same(least_measures(m, q, below=below), want), scale
+    half = _reference(m, q[: q.shape[0] // 2])
+    assert _same(least_measures(m, q, below={k: v for k, v in half.items() if not np.isnan(v)}), ref)
+    running = {k: np.inf for k in keys}
+    for piece in np.array_split(q, 5):
+        found = least_measures(m, piece, below=running)
+        running = {k: min(running[k], found[k]) if not np.isnan(found[k]) else running[k] for k in keys}
+    assert _same({k: (running[k] if np.isfinite(running[k]) else float("nan")) for k in keys}, ref)
+    # a below under every sample's measure: along a fine motion, nothing but the anchors bracketed
+    qf = _fine(q, 4)
+    ref = _reference(m, qf)
+    half = [0.5 * ref["constraint"], 0.5 * ref["inverse"], 0.5 * np.nan_to_num(ref["direct"])]
+    assert np.mean(_brackets(m, qf, below=half)[:, :2, 1] < 1.0) <= 1.0 / SCREEN_STRIDE + 2.0 / qf.shape[0]
 
 
 def test_near_a_singularity_and_without_a_direct_measure():

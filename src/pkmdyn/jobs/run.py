@@ -312,10 +312,11 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
                             s, k = hit
                             summ.limit_first = limit_line(model, kin, s, limited[k], float(c[s, k]), start)
                     # every sample of the bodies' window, then every SINGULARITY_STRIDE-th: the least of
-                    # each measure, the singular value decompositions only where bounds leave it open
+                    # each measure (with the earlier chunks'), the singular value decompositions only
+                    # where bounds leave it open
                     idx = np.arange(start, stop)
                     pick = np.flatnonzero((idx < body_rows) | (idx % SINGULARITY_STRIDE == 0))
-                    sm = least_measures(model, kin.q[pick]) if pick.size else None
+                    sm = least_measures(model, kin.q[pick], below=summ.sing) if pick.size else None
                     try:
                         reac = joint_reactions(model, kin, named=m.loads, split=True, sample_offset=start,
                                                overconstrained=overconstrained)

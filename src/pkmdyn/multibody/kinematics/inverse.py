@@ -31,6 +31,7 @@ limit; :func:`reachable` counts such a pose as out of the workspace, and
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, fields, replace
 
 import numpy as np
@@ -41,7 +42,7 @@ from ..description.joint_types import JOINT_TYPES
 from ..model.compiler import MechanismModel
 from ..model.topology import column_scale, constraint_jacobian, row_labels, row_scale
 from . import _solve_kernels as K
-from ._measure_kernels import measure_bounds
+from ._measure_kernels import WIDEN_ABS, WIDEN_REL, measure_bounds, measure_brackets
 
 __all__ = ["MechanismKinematics", "solve_kinematics", "reference_task", "loop_residuals", "least_measure_bounds", "least_measures",
            "singularity_measures", "SingularityMeasures", "reachable", "TOLERANCE", "joint_coordinates",
@@ -560,26 +561,48 @@ def singularity_measures(model: MechanismModel, q: Array, only: str | None = Non
     return SingularityMeasures(inverse=inverse, direct=direct, constraint=constraint)
 
 
-def _measure_bounds(model: MechanismModel, q: Array, levels: Array, tight: bool, brackets: bool = False
+#: each thread's buffers of :func:`_measure_arguments`' Jacobians, reused up to this many values
+#: (a run's chunk of the Stewart platform's takes some 0.5 million)
+_SCRATCH_VALUES = 4_000_000
+_scratch = threading.local()
+
+
+def _measure_arguments(model: MechanismModel, q: Array) -> tuple:
+    """The model's arrays of :func:`pkmdyn.multibody.kinematics._measure_kernels.measure_bounds`
+    and ``measure_brackets`` at ``q (n, nq)``, ``n >= 1``: the Jacobian, the row and column
+    factors, the cut, task and idle rows, the actuated coordinates and whether the direct
+    measure applies. The Jacobian is written into this thread's buffer (valid until its next
+    call) where it fits :data:`_SCRATCH_VALUES`."""
+    n, nrow = q.shape[0], model.row_loop.shape[0] + model.nt
+    size = n * nrow * model.nq
+    out = None
+    if size <= _SCRATCH_VALUES:
+        flat = getattr(_scratch, "J", None)
+        if flat is None or flat.size < size or _scratch.val.size < n * nrow:
+            _scratch.J, _scratch.val = np.empty(max(size, 1)), np.empty(max(n * nrow, 1))
+        out = (_scratch.val[: n * nrow].reshape(n, nrow), _scratch.J[:size].reshape(n, nrow, model.nq))
+    _, J = constraint_jacobian(model, q, out=out)
+    cs = column_scale(model)
+    rows = model.solver_rows
+    nr = model.row_loop.shape[0]
+    return (J, np.ascontiguousarray(row_scale(model)), np.ascontiguousarray(cs),
+            np.ascontiguousarray(rows[rows < nr]), np.ascontiguousarray(rows[rows >= nr]),
+            np.ascontiguousarray(model.solver_idle * cs[None, :]),
+            np.ascontiguousarray(model.act_coord, dtype=np.int64), model.na == model.nt)
+
+
+def _measure_bounds(model: MechanismModel, q: Array, levels: Array, tight: bool
                     ) -> tuple[NDArray[np.bool_], Array]:
     """Per-measure bounds at ``q (n, nq)``: ``passed (n, 3)`` where measure ``k`` (constraint,
     inverse, direct) is proven above ``levels[k]`` (True for the direct one where it does not
-    apply) and ``upper (n, 3)`` an upper bound of each; with ``brackets``, ``upper (n, 3, 2)``
-    a proven bracket of each instead (:func:`pkmdyn.multibody.kinematics._measure_kernels.measure_bounds`)."""
+    apply) and ``upper (n, 3)`` an upper bound of each (:func:`pkmdyn.multibody.kinematics._measure_kernels.measure_bounds`)."""
     n = q.shape[0]
     passed = np.ones((n, 3), dtype=np.bool_)
-    upper = np.ones((n, 3, 2))
+    upper = np.ones((n, 3))
     if n:
-        _, J = constraint_jacobian(model, q)
-        cs = column_scale(model)
-        rows = model.solver_rows
-        nr = model.row_loop.shape[0]
-        measure_bounds(np.ascontiguousarray(J), np.ascontiguousarray(row_scale(model)), np.ascontiguousarray(cs),
-                       np.ascontiguousarray(rows[rows < nr]), np.ascontiguousarray(rows[rows >= nr]),
-                       np.ascontiguousarray(model.solver_idle * cs[None, :]),
-                       np.ascontiguousarray(model.act_coord, dtype=np.int64), model.na == model.nt,
-                       np.ascontiguousarray(levels, dtype=float), bool(tight), passed, upper, bool(brackets))
-    return passed, (upper if brackets else upper[:, :, 0])
+        measure_bounds(*_measure_arguments(model, q), np.ascontiguousarray(levels, dtype=float), bool(tight),
+                       passed, upper)
+    return passed, upper
 
 
 def least_measure_bounds(model: MechanismModel, q: Array, level: float, tight: bool = False
@@ -598,27 +621,39 @@ def least_measure_bounds(model: MechanismModel, q: Array, level: float, tight: b
     return passed.all(axis=1), upper.min(axis=1)
 
 
+#: every this many samples one is bracketed by :func:`least_measures` whatever its neighbours
+#: (an anchor); the others, first screened by Weyl's inequality from their nearest anchor
+#: (:func:`pkmdyn.multibody.kinematics._measure_kernels.measure_brackets`)
+SCREEN_STRIDE = 8
 #: the :class:`SingularityMeasures` fields in the order of :func:`pkmdyn.multibody.kinematics._measure_kernels.measure_bounds`
 _MEASURES = ("constraint", "inverse", "direct")
 
 
-def least_measures(model: MechanismModel, q: Array) -> dict[str, float]:
+def least_measures(model: MechanismModel, q: Array, below: dict[str, float] | None = None) -> dict[str, float]:
     """The least of each of the :class:`SingularityMeasures` over the samples ``q (n, nq)``,
     ``n >= 1`` (``direct`` NaN where it does not apply): the least of
     :func:`singularity_measures` ``(model, q)``'s fields, the same singular value decompositions
-    deciding, at a fraction of the cost.
+    deciding, at a fraction of the cost. With ``below`` (a least found elsewhere, e.g. over the
+    earlier chunks of one motion; NaN or infinite entries for none), the least of it and of
+    these samples, each measure's samples proven above its entry left out.
 
     Each measure of every sample is first bracketed, ``lo <= measure <= hi``, by proven bounds
     on its matrix's largest and least singular values (:func:`pkmdyn.multibody.kinematics._measure_kernels._bracket`:
     iterations warm-started from the sample before, certified by Cholesky factorisations), the
-    bracket widened by the rounding of a decomposition (relative 1e-8, absolute 1e-12). Only
-    where ``lo`` is at most the least ``hi`` of all samples can a sample hold the least
+    bracket widened by the rounding of a decomposition (relative 1e-8, absolute 1e-12); every
+    :data:`SCREEN_STRIDE`-th sample is bracketed so, and the others only where Weyl's
+    inequality from their nearest such sample does not already place them above the least
+    (:func:`pkmdyn.multibody.kinematics._measure_kernels.measure_brackets`). Only where ``lo``
+    is at most the least ``hi`` of all samples (and ``below``) can a sample hold the least
     measure: the decompositions run there alone (a few samples along a smooth motion; every
     sample whose bracket was not found)."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    _, lohi = _measure_bounds(model, q, np.zeros(3), False, brackets=True)
-    lo = lohi[:, :, 0] * (1.0 - 1e-8) - 1e-12
-    hi = lohi[:, :, 1] * (1.0 + 1e-8) + 1e-12
+    known = np.array([(below or {}).get(key, np.inf) for key in _MEASURES], dtype=float)
+    known[~np.isfinite(known)] = np.inf
+    lohi = np.ones((q.shape[0], 3, 2))
+    measure_brackets(*_measure_arguments(model, q), SCREEN_STRIDE, known, lohi)
+    lo = lohi[:, :, 0] * (1.0 - WIDEN_REL) - WIDEN_ABS
+    hi = lohi[:, :, 1] * (1.0 + WIDEN_REL) + WIDEN_ABS
     direct = model.na == model.nt
     applies = [not np.all(lohi[:, k] == 1.0) for k in range(3)]  # (1, 1): no rows, or the direct one not applying
     least = np.ones(3)
@@ -628,8 +663,8 @@ def least_measures(model: MechanismModel, q: Array) -> dict[str, float]:
         # a sample whose bracket is not a number (a pose of non-finite coordinates) is decided by
         # its decomposition too: the least is then NaN, as the least of every decomposition is
         bad = ~(np.isfinite(lo[:, k]) & np.isfinite(hi[:, k]))
-        top = np.min(hi[~bad, k]) if np.any(~bad) else np.inf
+        top = min(np.min(hi[~bad, k]) if np.any(~bad) else np.inf, known[k])
         rows = np.flatnonzero((lo[:, k] <= top) | bad)
-        if rows.size:  # (each measure's own decompositions, on its own candidates)
-            least[k] = float(np.min(getattr(singularity_measures(model, q[rows], only=key), key)))
+        found = getattr(singularity_measures(model, q[rows], only=key), key) if rows.size else np.empty(0)
+        least[k] = float(np.min(np.append(found, known[k])))  # (each measure's own decompositions, on its own candidates; NaN kept)
     return {key: (float(least[k]) if (k < 2 or direct) else float("nan")) for k, key in enumerate(_MEASURES)}

@@ -127,16 +127,24 @@ def _args(model: MechanismModel) -> tuple:
             model.task_kind, model.task_index, model.euler_axes)
 
 
-def constraint_jacobian(model: MechanismModel, q: Array) -> tuple[Array, Array]:
+def constraint_jacobian(model: MechanismModel, q: Array, out: tuple[Array, Array] | None = None
+                        ) -> tuple[Array, Array]:
     """Row values (n, nr + nt) and Jacobians (n, nr + nt, nq) at tree coordinates ``q (n, nq)``.
 
     Rows: the cut joints' constraint residuals (loop order, the directions of each loop
     record) then the task coordinates' values (not residuals); columns: tree coordinates.
+    ``out``: the two arrays to write (zeroed here), e.g. a caller's buffers reused from call to
+    call (a fresh array of some megabytes costs its first touch of every page, about as much as
+    the Jacobians themselves).
     """
     q = np.ascontiguousarray(np.atleast_2d(q), dtype=float)
     n, nrow = q.shape[0], model.row_loop.shape[0] + model.nt
-    val = np.zeros((n, nrow))
-    J = np.zeros((n, nrow, model.nq))
+    if out is None:
+        val, J = np.zeros((n, nrow)), np.zeros((n, nrow, model.nq))
+    else:
+        val, J = out
+        val.fill(0.0)
+        J.fill(0.0)
     K.jacobians_batch(q, *_args(model), val, J)
     return val, J
 
