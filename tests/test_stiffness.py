@@ -532,6 +532,17 @@ def test_command_pose_motion_and_grid(tmp_path):
     for n, u in zip(m.task_names, m.task_units):
         assert f"{n}_deflection_{u}" in head
     assert "lowest_frequency_Hz" in head and "min_stiffness_N_m" in head
+    # the library's result turns into the same columns (pkmdyn.stiffness(...).columns)
+    import pkmdyn
+
+    rows = [line.split(",") for line in (out / "results.csv").read_text().splitlines()]
+    table = {name: np.array([float(r[k]) for r in rows[1:]]) for k, name in enumerate(rows[0])}
+    kin = pkmdyn.kinematics(m, mo)
+    got = pkmdyn.stiffness(m, kin).columns(m)
+    assert set(got) == {f"{n}_{u}" for n, u in zip(m.task_names, m.task_units)} | {
+        "min_stiffness_N_m", "min_rot_stiffness_Nm_rad", "lowest_frequency_Hz"}
+    for name, v in got.items():
+        np.testing.assert_allclose(v, table[name], rtol=1e-9, atol=1e-12, err_msg=name)
 
     out = tmp_path / "grid"
     r = _cli("stiffness", "--machine", "stewart", "--grid", "x=-0.1:0.1:3,z=0.95:1.05:3", "--out", str(out))

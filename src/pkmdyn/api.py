@@ -146,7 +146,8 @@ def assembly_modes(model: Any, s: Array, starts: int | None = None, seed: int = 
 def stiffness(model: Any, kin: Any, rotors: str = "held") -> Any:
     """The Cartesian stiffness of the task body with the actuators locked, per sample of ``kin``
     (:func:`pkmdyn.multibody.analyses.stiffness.stiffness`; the description needs a compliance source);
-    the modes with the drives' rotors ``"held"`` or ``"moving"`` (both frequency sets are kept)."""
+    the modes with the drives' rotors ``"held"`` or ``"moving"`` (both frequency sets are kept);
+    ``.columns(model)`` gives the columns ``pkmdyn stiffness`` writes for these poses."""
     return k(model, kin, rotors=rotors)
 
 

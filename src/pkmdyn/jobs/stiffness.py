@@ -22,6 +22,7 @@ from ..multibody.analyses.stiffness import (
     compliance_sources,
     deflection,
     internal_force_stiffness,
+    metric_columns,
     reaction_route,
     stiffness,
 )
@@ -228,11 +229,7 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
         for s, (_, st1) in results.items():
             kt[s], kr[s], f1[s] = st1.min_stiffness[0], st1.min_rot_stiffness[0], st1.frequencies[0, 0]
         cols: dict[str, Array] = {f"{n}_{u}": x[ok, i] for i, (n, u) in enumerate(zip(model.task_names, model.task_units))}
-        if np.all(np.isfinite(kt[ok])):
-            cols["min_stiffness_N_m"] = kt[ok]
-        if np.all(np.isfinite(kr[ok])):
-            cols["min_rot_stiffness_Nm_rad"] = kr[ok]
-        cols["lowest_frequency_Hz"] = f1[ok]
+        cols.update(metric_columns(kt[ok], kr[ok], f1[ok]))
         files["grid"] = out / "grid.csv"
         write_csv(files["grid"], cols)
         files["map"] = out / "stiffness_map.png"
@@ -269,11 +266,7 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
             cols[f"{n}_{u}"] = kin_all.x[:, i]
         for i, (n, u) in enumerate(zip(model.task_names, model.task_units)):
             cols[f"{n}_deflection_{u}"] = dx[:, i]
-        if np.all(np.isfinite(kt)):
-            cols["min_stiffness_N_m"] = kt
-        if np.all(np.isfinite(kr)):
-            cols["min_rot_stiffness_Nm_rad"] = kr
-        cols["lowest_frequency_Hz"] = f1
+        cols.update(metric_columns(kt, kr, f1))
         files["results"] = out / "results.csv"
         write_csv(files["results"], cols)
         assert worst is not None

@@ -80,7 +80,7 @@ from ..kinematics.inverse import MechanismKinematics, solve_kinematics
 from ..model._tree_kernels import euler_angles, euler_rate_map
 from ..model.compiler import MechanismModel
 
-__all__ = ["Stiffness", "stiffness", "deflection", "compliance_sources", "reaction_route", "StiffnessDataMissing",
+__all__ = ["Stiffness", "stiffness", "metric_columns", "deflection", "compliance_sources", "reaction_route", "StiffnessDataMissing",
            "internal_force_stiffness"]
 
 Array = NDArray[np.float64]
@@ -130,6 +130,29 @@ class Stiffness:
     rotors: str
     frequencies_rotors_held: Array
     frequencies_rotors_moving: Array
+
+    def columns(self, model: MechanismModel) -> dict[str, Array]:
+        """The columns ``pkmdyn stiffness`` writes for these poses (``grid.csv``; ``results.csv``
+        along a motion less its time and deflections), by name: the task coordinates
+        ``<name>_<unit>`` and :func:`metric_columns`."""
+        cols = {f"{n}_{u}": self.x[:, i] for i, (n, u) in enumerate(zip(model.task_names, model.task_units))}
+        cols.update(metric_columns(self.min_stiffness, self.min_rot_stiffness, self.frequencies[:, 0]))
+        return cols
+
+
+def metric_columns(k_trans: Array, k_rot: Array, f_lowest: Array) -> dict[str, Array]:
+    """The stiffness metrics' columns of ``pkmdyn stiffness``'s tables, one value per pose:
+    ``min_stiffness_N_m`` (``k_trans``) and ``min_rot_stiffness_Nm_rad`` (``k_rot``) where every
+    pose has a finite one (infinite where the task point cannot translate, or turn, at all),
+    ``lowest_frequency_Hz`` (``f_lowest``)."""
+    cols: dict[str, Array] = {}
+    if np.all(np.isfinite(k_trans)):
+        cols["min_stiffness_N_m"] = np.asarray(k_trans)
+    if np.all(np.isfinite(k_rot)):
+        cols["min_rot_stiffness_Nm_rad"] = np.asarray(k_rot)
+    cols["lowest_frequency_Hz"] = np.asarray(f_lowest)
+    return cols
+
 
 #: the rotor conventions of the natural frequencies (module docstring)
 ROTORS = ("held", "moving")
