@@ -148,6 +148,21 @@ def test_wear_command_on_a_described_mechanism_uses_the_joint_reaction(tmp_path)
     assert a["tracks_on_cup"]["aspect_ratio"] == b["tracks_on_cup"]["aspect_ratio"]  # the same kinematics
     assert a["tracks_on_cup"]["track_load_integral_per_cycle_N_m"]["mean"] != \
         b["tracks_on_cup"]["track_load_integral_per_cycle_N_m"]["mean"]
+    # the library's tracks turn into the markers' tables the command wrote (SlideTracks.columns)
+    import pkmdyn
+
+    from pkmdyn.machines.registry import resolve
+
+    m = pkmdyn.load("hip")
+    mo = resolve("hip")[0].default_motion()  # the command's motion: the machine's own (the ISO cycle)
+    on_cup, on_head, _ = pkmdyn.wear(m, pkmdyn.kinematics(m, mo), "S0_upper", radius_m=0.014, loads=mo.loads)
+    for surface, tracks in (("cup", on_cup), ("head", on_head)):
+        rows = [ln.split(",") for ln in (out1 / f"markers_S0_upper_on_{surface}.csv").read_text().splitlines()]
+        cols = tracks.columns()
+        assert list(cols) == rows[0]
+        for k, name in enumerate(rows[0]):
+            np.testing.assert_allclose(cols[name], [float(r[k]) for r in rows[1:]], rtol=1e-9, atol=1e-15,
+                                       err_msg=name)
 
 
 @pytest.mark.parametrize("args, words", [

@@ -157,7 +157,8 @@ def wear(model: Any, kin: Any, joint: str, radius_m: float | None = None, load: 
     head along ``kin`` (:func:`pkmdyn.multibody.analyses.wear.joint_wear`: ``(on_cup, on_head,
     what loads it)``); ``radius_m``: the head's radius (default the joint's friction
     ``ball_radius_m``); ``load``: a named load's name pressing the head (default the joint's
-    own reaction), its magnitudes in ``loads``."""
+    own reaction), its magnitudes in ``loads``. Each track set's ``.columns()`` is the markers'
+    table ``pkmdyn wear`` writes."""
     return joint_wear(model, kin, joint, WearOptions(radius_m=radius_m, load=load), dict(loads or {}))
 
 

@@ -125,13 +125,7 @@ def write_wear_files(out: Path, model: Any, results: list[tuple[str, SlideTracks
     for j, on_cup, on_head, _ in results:
         for surface, tr in (("cup", on_cup), ("head", on_head)):
             files[f"markers_{j}_on_{surface}"] = out / f"markers_{j}_on_{surface}.csv"
-            write_csv(files[f"markers_{j}_on_{surface}"], {
-                "marker": np.arange(len(tr.weights), dtype=float),
-                **{f"direction_{c}": tr.markers[:, k] for k, c in enumerate("xyz")},
-                "weight": tr.weights, "sliding_distance_per_cycle_m": tr.sliding_distance / tr.cycles,
-                "aspect_ratio": tr.aspect_ratio, "cross_shear": tr.cross_shear,
-                "track_load_integral_per_cycle_N_m": tr.load_integral / tr.cycles,
-                "wear_mm3_per_million_cycles": tr.wear * 1e6 / tr.cycles})
+            write_csv(files[f"markers_{j}_on_{surface}"], tr.columns())
             arrays[f"{j}__on_{surface}_points_m"] = tr.points
         if plots:
             files[f"png_{j}"] = _png(out / f"wear_{j}.png", j, on_cup, on_head)

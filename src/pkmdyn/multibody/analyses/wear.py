@@ -158,6 +158,16 @@ class SlideTracks:
     wear_per_million_cycles: float
     cycles: float
 
+    def columns(self) -> dict[str, Array]:
+        """The markers' table ``pkmdyn wear`` writes for these tracks
+        (``markers_<joint>_on_<surface>.csv``, docs/wear.md), one row per marker, by column name."""
+        return {"marker": np.arange(len(self.weights), dtype=float),
+                **{f"direction_{c}": self.markers[:, k] for k, c in enumerate("xyz")},
+                "weight": self.weights, "sliding_distance_per_cycle_m": self.sliding_distance / self.cycles,
+                "aspect_ratio": self.aspect_ratio, "cross_shear": self.cross_shear,
+                "track_load_integral_per_cycle_N_m": self.load_integral / self.cycles,
+                "wear_mm3_per_million_cycles": self.wear * 1e6 / self.cycles}
+
     def summary(self) -> dict:
         """Statistics over the markers (``docs/wear.md``, ``wear.json``)."""
         ar, cs, sd = self.aspect_ratio, self.cross_shear, self.sliding_distance
