@@ -81,6 +81,57 @@ def test_brackets_hold_every_samples_decomposition(name):
             assert np.nanmedian(width[:fine][bracketed[:fine]]) < 1e-2
 
 
+def _svd_measure(A):
+    sv = np.linalg.svd(A, compute_uv=False)
+    return sv[-1] / sv[0] if sv[0] > 0 else 0.0
+
+
+def test_the_screen_holds_where_weyls_bound_is_nearly_tight():
+    """Three coordinates, two loop rows and one task row, the task row's entry ``b`` falling from
+    0.5 to 0.2 over 33 samples (nearly diagonal: each singular value moves by about as much as the
+    matrix, so a screen that leaves out a part of the difference, or takes another anchor's
+    bounds, places samples above their measure); one sample's matrix all zero (no bounds proven
+    there, nor from it: its small neighbour is not screened by an earlier anchor's bounds). Every bracket, anchors' and screened samples' alike, holds the measure
+    of each sample's matrices by their own singular value decompositions."""
+    n = 33
+    b = np.linspace(0.5, 0.2, n)
+    J = np.zeros((n, 3, 3))
+    J[:, 0, 0], J[:, 0, 1], J[:, 1, 1], J[:, 2, 2], J[:, 2, 0] = 1.0, 0.02, 0.9, b, 0.01 * b
+    J[16] = 0.0  # an anchor at stride 2, 4, 8 and 16
+    J[17] = 1e-4 * np.diag([1.0, 1e-2, 1e-2])  # beside it, small: its measures about 1e-2
+    cut, task, act = np.array([0, 1]), np.array([2]), np.array([2])
+    unit = np.zeros((1, 3))
+    unit[0, 2] = 1.0
+    true = np.array([[_svd_measure(J[s, cut]), _svd_measure(J[s]), _svd_measure(np.vstack([J[s, cut], unit]))]
+                     for s in range(n)])
+    for stride in (2, 4, 8, 16, 100):
+        for below in (np.inf, 0.3, 0.0):
+            out = np.ones((n, 3, 2))
+            measure_brackets(J, np.ones(3), np.ones(3), cut, task, np.zeros((0, 3)), act, True, stride,
+                             np.full(3, below), out)
+            lo, hi = out[:, :, 0], out[:, :, 1]
+            assert np.all(lo <= true * (1 + 1e-12) + 1e-15) and np.all(true <= hi * (1 + 1e-12) + 1e-15), \
+                (stride, below)
+    empty = np.ones((0, 3, 2))  # no samples: nothing to do (nothing read or written)
+    measure_brackets(J[:0], np.ones(3), np.ones(3), cut, task, np.zeros((0, 3)), act, True, 8, np.full(3, np.inf),
+                     empty)
+
+
+def test_no_samples_and_measures_without_rows():
+    """No samples: each measure 1, as before (the direct one NaN where it does not apply); a
+    measure without rows (a serial arm's loop measure) is 1 at every sample, so with ``below``
+    the least of both."""
+    m, q = _builtin("stewart")
+    assert least_measures(m, q[:0]) == {"constraint": 1.0, "inverse": 1.0, "direct": 1.0}
+    arm = compile_model(load_description(ex.serial_arm()))
+    mo = default_motion(arm)
+    qa = solve_kinematics(arm, mo.x, mo.xd, mo.xdd, mo.t).q
+    ref = _reference(arm, qa)
+    assert ref["constraint"] == 1.0
+    got = least_measures(arm, qa, below={"constraint": 0.5, "inverse": 2.0})
+    assert got["constraint"] == 0.5 and got["inverse"] == ref["inverse"]
+
+
 @pytest.mark.parametrize("name", ["stewart", "hip", "rrr3"])
 def test_below_gives_the_least_of_both(name):
     """``below`` (a least found elsewhere): the least of it and of the samples, whether it lies

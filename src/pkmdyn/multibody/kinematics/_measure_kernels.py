@@ -287,6 +287,8 @@ def _bracket(G, d, W, top, low, w, est, first):  # pragma: no cover - compiled
     yet, ten power steps instead), updated in place: each shift is the eigenvalue extrapolated
     from the last two samples, moved out by twice its last change (and 1e-9 of it). ``(0, 1)``
     where nothing is proven."""
+    est[4] = 0.0  # no singular value bounds (until proven below): a screen from them proves nothing
+    est[5] = math.inf
     if d == 0:
         return 1.0, 1.0
     tr = 0.0
@@ -468,6 +470,8 @@ def measure_brackets(J, rs, cs, cut, task, idle, act, direct, stride, below, out
     as the anchors are, warm-started from the sample before, or from the anchor before where
     that one was not bracketed."""
     n = J.shape[0]
+    if n == 0:
+        return
     nq = J.shape[2]
     nt = task.shape[0]
     na = act.shape[0]
@@ -502,10 +506,10 @@ def measure_brackets(J, rs, cs, cut, task, idle, act, direct, stride, below, out
             tops[k, i] = 0.5 + (0.6180339887498949 * (i + 1)) % 1.0
             lows[k, i] = 0.5 + (0.7548776662466927 * (i + 1)) % 1.0
     top = np.empty(3)
+    rows = np.ones(3, dtype=np.bool_)  # whether each measure's matrix has rows (else the measure is 1)
     for which in range(3):
         top[which] = below[which]
-        if which == 2 and not direct:
-            top[which] = -np.inf  # nothing screened: the measure does not apply
+    rows[2] = direct
     # ---- pass 1: the anchors
     for k in range(na_):
         s = anchor[k]
@@ -524,7 +528,7 @@ def measure_brackets(J, rs, cs, cut, task, idle, act, direct, stride, below, out
                 break
             d = _gram(which, M, T, mp, act, GP, G, nz)
             if d == 0:
-                top[which] = -np.inf
+                rows[which] = False
                 continue
             first = k == 0
             if first and np.all(np.isfinite(G[:d, :d])):
@@ -564,7 +568,7 @@ def measure_brackets(J, rs, cs, cut, task, idle, act, direct, stride, below, out
             out[s, which, 1] = 1.0
             if which == 2 and not direct:
                 break
-            if top[which] == -np.inf:  # no rows: the measure is 1
+            if not rows[which]:  # no rows: the measure is 1
                 continue
             # Weyl from the nearest anchor, the norm's rounding covered (its sum of squares of
             # sums of at most mt nq terms); excluded where least_measures' widened bracket would
@@ -572,7 +576,7 @@ def measure_brackets(J, rs, cs, cut, task, idle, act, direct, stride, below, out
             delta = math.sqrt(dphi + dtask if which == 1 else dphi) * (1.0 + 4.0 * (mt * nq + 2) * _U)
             smin, smax = aest[near, which, 4], aest[near, which, 5]
             den = smax + delta
-            lo = max(smin - delta, 0.0) / den if den > 0.0 else 0.0
+            lo = max(smin - delta, 0.0) / den * (1.0 - 4.0 * _U) if den > 0.0 else 0.0  # (rounded down)
             if lo * (1.0 - WIDEN_REL) - WIDEN_ABS > top[which] * (1.0 + WIDEN_REL) + WIDEN_ABS:
                 out[s, which, 0] = lo
                 continue
