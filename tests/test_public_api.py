@@ -47,6 +47,33 @@ def test_the_dynamics_columns_are_the_runs(example, tmp_path, capsys):
         np.testing.assert_allclose(v, table[name], rtol=1e-12, atol=1e-12 * max(np.abs(v).max(), 1.0), err_msg=name)
 
 
+@pytest.mark.parametrize("name", ["hip", "pdm"])
+def test_a_papers_machine_moves_as_its_commands(name, tmp_path, capsys):
+    """A paper's machine loaded by name keeps its commands' default motion (the hip's ISO 14242-1
+    cycle with its hydraulic load; the PDM's Eq. 84 motion), so that ``kinematics`` and
+    ``dynamics`` on it give what ``pkmdyn run --machine NAME`` writes, column by column."""
+    assert main(["run", "--machine", name, "--out", str(tmp_path / "run")]) == 0
+    capsys.readouterr()
+    with open(tmp_path / "run" / "results.csv") as fh:
+        rows = list(csv.reader(fh))
+    table = {col: np.array([float(r[k]) for r in rows[1:]]) for k, col in enumerate(rows[0])}
+    m = pkmdyn.load(name)
+    kin = pkmdyn.kinematics(m)
+    assert len(kin) == len(rows) - 1 and np.array_equal(kin.t, table["t_s"])
+    cols = pkmdyn.dynamics(m, kin).columns()
+    assert cols and set(cols) <= set(table)
+    for col, v in cols.items():
+        np.testing.assert_allclose(v, table[col], rtol=1e-12, atol=1e-12 * max(np.abs(v).max(), 1.0), err_msg=col)
+    # a description of the same machine, given as a dict, has its own [default_motion]
+    assert len(pkmdyn.kinematics(pkmdyn.load(resolve_description(name)))) != len(kin)
+
+
+def resolve_description(name):
+    from pkmdyn.machines.registry import resolve
+
+    return resolve(name)[0].description(None)
+
+
 def test_load_takes_names_files_dicts_and_parameter_files(tmp_path):
     from pkmdyn.machines.hip_simulator.params import paper_params_path
     from pkmdyn.machines.registry import description_path

@@ -21,7 +21,8 @@ the commands (``pkmdyn run``, ...) are these verbs plus their files.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import weakref
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -61,6 +62,24 @@ __all__ = ["load", "default_motion", "kinematics", "Dynamics", "dynamics", "forw
 
 Array = NDArray[np.float64]
 
+#: what the verbs remember of the objects they made, by the object (held weakly): a generated
+#: machine's own default motion for each model :func:`load` made of one, and the named loads of
+#: the motion each :func:`kinematics` was solved along; so that ``kinematics(load("hip"))`` and
+#: ``dynamics`` on it are what ``pkmdyn run --machine hip`` computes (the ISO 14242-1 cycle and
+#: its hydraulic load, which a description's ``[default_motion]`` cannot hold)
+_own_motions: dict[int, tuple[weakref.ref, Callable[[], Any]]] = {}
+_motion_loads: dict[int, tuple[weakref.ref, Mapping[str, Array]]] = {}
+
+
+def _remember(table: dict, obj: Any, value: Any) -> None:
+    table[id(obj)] = (weakref.ref(obj), value)
+    weakref.finalize(obj, table.pop, id(obj), None)
+
+
+def _recall(table: dict, obj: Any) -> Any:
+    held = table.get(id(obj))
+    return held[1] if held is not None and held[0]() is obj else None
+
 
 def load(machine: str | Path | Mapping[str, Any], params: str | Path | None = None) -> Any:
     """The compiled mechanism (:class:`pkmdyn.multibody.MechanismModel`) of ``machine``: a
@@ -74,22 +93,32 @@ def load(machine: str | Path | Mapping[str, Any], params: str | Path | None = No
         return load_mechanism(dict(machine))
     entry, path = resolve(str(machine))
     if entry is not None:
-        return load_mechanism(entry.description(None if params is None else Path(params)))
+        model = load_mechanism(entry.description(None if params is None else Path(params)))
+        if hasattr(entry, "default_motion"):  # a paper's machine: its commands' own default motion
+            _remember(_own_motions, model, entry.default_motion)
+        return model
     if params is not None:
         raise ParameterError(f"params: {machine} is a description; only a generated machine takes a parameter file")
     return load_mechanism(path)
 
 
 def default_motion(model: Any) -> Any:
-    """The description's default task motion (:class:`pkmdyn.multibody.TaskMotion`)."""
-    return motion(model)
+    """The default task motion (:class:`pkmdyn.multibody.TaskMotion`) that the commands take for
+    ``model``: a paper's machine's own where :func:`load` made ``model`` of one (the hip's ISO
+    14242-1 cycle with its hydraulic load, the PDM's Eq. 84 motion), else the description's."""
+    own = _recall(_own_motions, model)
+    return own() if own is not None else motion(model)
 
 
 def kinematics(model: Any, motion: Any = None) -> Any:
     """Every body's and joint's kinematics (:class:`pkmdyn.multibody.MechanismKinematics`) along
-    ``motion`` (a :class:`pkmdyn.multibody.TaskMotion`; default the description's own)."""
+    ``motion`` (a :class:`pkmdyn.multibody.TaskMotion`; default :func:`default_motion`); its
+    named loads are what :func:`dynamics` takes along these kinematics unless given others."""
     m = default_motion(model) if motion is None else motion
-    return solve_kinematics(model, m.x, m.xd, m.xdd, m.t)
+    kin = solve_kinematics(model, m.x, m.xd, m.xdd, m.t)
+    if m.loads:
+        _remember(_motion_loads, kin, dict(m.loads))
+    return kin
 
 
 @dataclass(frozen=True)
@@ -114,10 +143,10 @@ class Dynamics:
 def dynamics(model: Any, kin: Any, loads: Mapping[str, Array] | None = None) -> Dynamics:
     """Actuator and motor efforts with every joint's reaction and the joints' friction (the
     load-dependent friction iterated on the reactions) along ``kin``; ``loads``: the named
-    loads' magnitudes per sample (``{name: (n,)}`` [N or N m]; the description's
-    ``magnitude_N`` otherwise)."""
+    loads' magnitudes per sample (``{name: (n,)}`` [N or N m]; by default those of the motion
+    :func:`kinematics` solved ``kin`` along, else the description's ``magnitude_N``)."""
 
-    named = dict(loads or {})
+    named = dict(loads if loads is not None else (_recall(_motion_loads, kin) or {}))
     reac = joint_reactions(model, kin, named=named, split=True)
     return Dynamics(model, kin, reac, motor_efforts(model, kin.act_q, kin.act_qd, kin.act_qdd, reac.u), named)
 
@@ -189,7 +218,7 @@ def retime(model: Any, path: Array | None = None, points: int = 1000,
     and friction dissipation, Eq. E1; its ``cycle_time`` is shorter where the least energy is
     reached sooner). Returns the :class:`pkmdyn.multibody.analyses.retime.Retiming` (``t``,
     ``sd``, ``x, xd, xdd``; ``.motion()`` a motion for :func:`kinematics`; ``docs/retime.md``)."""
-    rows = motion(model).x if path is None else np.asarray(path, dtype=float)
+    rows = default_motion(model).x if path is None else np.asarray(path, dtype=float)
     nj = len(model.joint_names)
     eff = np.full(model.na, np.inf)
     if isinstance(max_effort, Mapping):
