@@ -390,6 +390,21 @@ def _gram(which, M, T, mp, act, GP, G, nz):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def _work(J, cut, task, idle, act):  # pragma: no cover - compiled
+    """The work space of :func:`measure_bounds` and :func:`measure_brackets`: ``mp`` the rows of
+    ``Phi``, ``big`` the largest matrix's size, the rows ``M (mp + max(nt, na), nq)`` and ``T
+    (nt, nq)``, ``GP (nq, nq)``, the Gram matrix ``G`` and factor ``W`` (``big`` square), a
+    vector ``w`` and the nonzero list ``nz``."""
+    nq = J.shape[2]
+    nt = task.shape[0]
+    mp = cut.shape[0] + idle.shape[0]
+    mt = mp + max(nt, act.shape[0])
+    big = max(mt, nq)
+    return (mp, big, np.empty((mt, nq)), np.empty((nt, nq)), np.empty((nq, nq)), np.empty((big, big)),
+            np.empty((big, big)), np.empty(big), np.empty(nq, dtype=np.int64))
+
+
+@njit(cache=True)
 def measure_bounds(J, rs, cs, cut, task, idle, act, direct, levels, tight, passed, upper):  # pragma: no cover - compiled
     """Bounds on the three singularity measures of every sample (module docstring).
 
@@ -407,19 +422,8 @@ def measure_bounds(J, rs, cs, cut, task, idle, act, direct, levels, tight, passe
     cost) rather than by ``trace G``, which may exceed it by the number of rows."""
     n = J.shape[0]
     nq = J.shape[2]
-    nt = task.shape[0]
-    na = act.shape[0]
-    mp = cut.shape[0] + idle.shape[0]
-    mt = mp + max(nt, na)
-    big = max(mt, nq)
-    M = np.empty((mt, nq))
-    T = np.empty((nt, nq))
-    GP = np.empty((nq, nq))
-    G = np.empty((big, big))
-    W = np.empty((big, big))
+    mp, big, M, T, GP, G, W, w, nz = _work(J, cut, task, idle, act)
     v = np.empty(big)
-    w = np.empty(big)
-    nz = np.empty(nq, dtype=np.int64)
     for s in range(n):
         _rows(J, s, rs, cs, cut, task, idle, M, T)
         _phi_gram(M, mp, nq, GP, nz)
@@ -474,17 +478,8 @@ def measure_brackets(J, rs, cs, cut, task, idle, act, direct, stride, below, out
         return
     nq = J.shape[2]
     nt = task.shape[0]
-    na = act.shape[0]
-    mp = cut.shape[0] + idle.shape[0]
-    mt = mp + max(nt, na)
-    big = max(mt, nq)
-    M = np.empty((mt, nq))
-    T = np.empty((nt, nq))
-    GP = np.empty((nq, nq))
-    G = np.empty((big, big))
-    W = np.empty((big, big))
-    w = np.empty(big)
-    nz = np.empty(nq, dtype=np.int64)
+    mp, big, M, T, GP, G, W, w, nz = _work(J, cut, task, idle, act)
+    mt = M.shape[0]
     # the anchors: every stride-th sample and the last
     na_ = (n - 1) // stride + 1
     if (n - 1) % stride != 0:
