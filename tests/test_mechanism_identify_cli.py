@@ -67,6 +67,19 @@ def test_identification_recovers_friction_and_predicts_another_motion(tmp_path):
                  "--out", str(tmp_path / "id")]) == 0
     rep = json.loads((tmp_path / "id" / "identification.json").read_text())
     assert min(rep["explained_percent"].values()) > 99.9999
+    # the library's fit of the same log turns into the efforts table the command wrote
+    import pkmdyn
+    from pkmdyn.identify.described import read_measured
+
+    mp = load_mechanism(prior)
+    t, x, xd, xdd, u, named = read_measured(mp, tmp_path / "run" / "results.csv", 15, 5)
+    fit = pkmdyn.identification(mp, solve_kinematics(mp, x, xd, xdd, t), u, loads=named)
+    with open(tmp_path / "id" / "efforts.csv") as fh:
+        rows = list(csv.reader(fh))
+    cols = fit.columns(t)
+    assert list(cols) == rows[0] and len(rows[0]) == 1 + 2 * mp.na
+    for k, name in enumerate(rows[0]):
+        np.testing.assert_allclose(cols[name], [float(r[k]) for r in rows[1:]], rtol=1e-12, atol=1e-9, err_msg=name)
     for k in (1, 2, 3, 4, 5, 6):
         for law, want in (("coulomb", 3.0), ("viscous", 15.0)):
             name = f"P_{k}_{law}"

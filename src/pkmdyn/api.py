@@ -248,7 +248,8 @@ def identification(model: Any, kin: Any, u: Array, loads: Mapping[str, Array] | 
     named loads' magnitudes ``{name: (n,)}``. Returns the
     :class:`pkmdyn.identify._identify.Identification` (``names``, ``prior`` the description's
     values, ``base`` what the motion determines, ``estimate.theta``, ``u_identified``,
-    ``residual_rms``; ``docs/identification.md``)."""
+    ``residual_rms``; ``.columns(t)`` the efforts table ``pkmdyn identify`` writes;
+    ``docs/identification.md``)."""
     u = np.asarray(u, dtype=float)
     if u.ndim != 2 or u.shape != (len(kin), model.na):
         cols = ", ".join(measured_columns(model))

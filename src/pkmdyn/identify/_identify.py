@@ -36,8 +36,11 @@ Array = NDArray[np.float64]
 @dataclass(frozen=True)
 class Identification:
     """One identification. ``names, prior (p,)`` the parameters and their prior values;
-    ``u_measured, u_identified (n, nu)``; ``residual_rms (nu,)`` per actuator [effort]; ``T,
-    lower, upper`` the consistency transform and bounds that were imposed."""
+    ``u_measured, u_identified (n, nu)`` (the efforts fitted: a redundantly actuated mechanism's
+    without their internal force); ``residual_rms (nu,)`` per actuator [effort]; ``T, lower,
+    upper`` the consistency transform and bounds that were imposed; ``actuators`` the efforts'
+    column names and ``u_given (n, nu)`` the efforts as given (where the fit knows them: a
+    described mechanism's, :func:`pkmdyn.identify.described.fit_described`)."""
 
     names: tuple[str, ...]
     prior: Array
@@ -50,6 +53,21 @@ class Identification:
     T: Array
     lower: Array
     upper: Array
+    actuators: tuple[str, ...] = ()
+    u_given: Array | None = None
+
+    def columns(self, t: Array | None = None) -> dict[str, Array]:
+        """The efforts table ``pkmdyn identify`` writes (``efforts.csv``), by column name:
+        ``t_s`` (the times ``t`` [s], where given), then per actuator ``measured_<effort>`` (the
+        efforts as given) and ``identified_<effort>`` (``actuator_<k>`` where the fit names no
+        efforts)."""
+        given = self.u_measured if self.u_given is None else self.u_given
+        cols: dict[str, Array] = {} if t is None else {"t_s": np.asarray(t, dtype=float)}
+        for k in range(self.u_identified.shape[1]):
+            a = self.actuators[k] if k < len(self.actuators) else f"actuator_{k + 1}"
+            cols[f"measured_{a}"] = given[:, k]
+            cols[f"identified_{a}"] = self.u_identified[:, k]
+        return cols
 
 
 def identify_efforts(

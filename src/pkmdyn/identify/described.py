@@ -25,6 +25,7 @@ job that writes ``identification.json`` and ``efforts.csv`` is :mod:`pkmdyn.jobs
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -129,13 +130,14 @@ def fit_described(model: MechanismModel, kin: MechanismKinematics, u: Array, nam
     description's values as the prior, base parameters, estimate, identified efforts, residuals)."""
     reg0 = regressor(model, kin, named or None)
     reg = Regressor(reg0.Y, reg0.u0, reg0.names)
-    u = np.asarray(u, dtype=float)
+    given = u = np.asarray(u, dtype=float)
     P = least_norm_projector(model, kin)
     if P is not None:  # redundant actuation: measured efforts and regressor without the internal
         # force, which no parameter determines (the fit is the task-space one, A K u = A K Y theta)
         reg = Regressor(P @ reg.Y, np.einsum("nij,nj->ni", P, reg.offset), reg.names)
         u = np.einsum("nij,nj->ni", P, u)
-    return fit_regressor(reg, u, reg0.theta, _consistency(reg), rank_tol, source=source)
+    fit = fit_regressor(reg, u, reg0.theta, _consistency(reg), rank_tol, source=source)
+    return replace(fit, actuators=tuple(effort_columns(model)), u_given=given)
 
 
 def identification_document(model: MechanismModel, fit: Identification) -> dict[str, Any]:

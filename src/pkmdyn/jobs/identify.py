@@ -7,15 +7,8 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
-import numpy as np
-
 from ..identify._base import DEFAULT_RANK_TOL
-from ..identify.described import (
-    effort_columns,
-    fit_described,
-    identification_document,
-    read_measured,
-)
+from ..identify.described import fit_described, identification_document, read_measured
 from ..io import write_csv, write_json
 from ..multibody.kinematics.inverse import solve_kinematics
 from ._files import JobResult, prepare, write
@@ -36,10 +29,7 @@ def job(machine: str, measured_path: Path, out_dir: Path, *, rank_tol: float = D
     kin = solve_kinematics(model, x, xd, xdd, t)
     fit = fit_described(model, kin, u, named, rank_tol, source=str(path))
     doc = identification_document(model, fit)
-    cols: dict[str, np.ndarray] = {"t_s": t}
-    for k, a in enumerate(effort_columns(model)):
-        cols[f"measured_{a}"] = u[:, k]
-        cols[f"identified_{a}"] = fit.u_identified[:, k]
+    cols = fit.columns(t)
 
     def make(out: Path) -> dict[str, Path]:
         files = {"identification": out / "identification.json", "efforts": out / "efforts.csv"}
