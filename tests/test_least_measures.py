@@ -227,3 +227,23 @@ def test_a_sweeps_measure_metrics_are_every_samples_decompositions(name, tmp_pat
     high = ad.prepare(d, {"singularity_threshold": float(worst[k]) * 1.5}, tmp_path)
     singular = evaluate_one(d, high)
     assert singular.status == "singular" and f"(sample {k + 1})" in singular.reason
+
+
+def test_a_runs_least_measures_over_its_chunks_are_every_samples(tmp_path, capsys):
+    """``pkmdyn run`` of 3,001 samples (three chunks, each given the least of those before):
+    its summary's least measures are the least of every sample's decompositions."""
+    import json
+
+    from pkmdyn.cli import main
+    from pkmdyn.jobs.run import CHUNK
+
+    m, _ = _builtin("stewart")
+    assert main(["run", "--machine", "stewart", "--samples-per-cycle", "3000", "--out", str(tmp_path / "r")]) == 0
+    capsys.readouterr()
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    mo = default_motion(m, samples_per_cycle=3000)
+    assert len(mo) > 2 * CHUNK and summary["samples"] == len(mo)
+    ref = _reference(m, solve_kinematics(m, mo.x, mo.xd, mo.xdd, mo.t).q)
+    for key in ("inverse", "direct", "constraint"):
+        assert summary[f"min_{key}_singularity_measure"] == pytest.approx(ref[key], rel=1e-12), key
+
