@@ -40,10 +40,12 @@ from ._groups import cli, echo
 if TYPE_CHECKING:
     from .. import multibody as _multibody
     from ..multibody.kinematics import direct as _direct
+    from ..multibody.kinematics import inverse as _inverse
     from ..simulate import _cycles
 else:  # loaded when a command runs, not on import (nor for --help)
     _multibody = lazy_module("pkmdyn.multibody")
     _direct = lazy_module("pkmdyn.multibody.kinematics.direct")
+    _inverse = lazy_module("pkmdyn.multibody.kinematics.inverse")
     _cycles = lazy_module("pkmdyn.simulate._cycles")
 
 __all__ = ["LANES", "compile_kernels"]
@@ -51,7 +53,9 @@ __all__ = ["LANES", "compile_kernels"]
 #: each lane: the exercises one process runs in order, each a command line without ``--out``
 #: (``{k}`` names the folder of the lane's k-th exercise: its files as an input; ``@reference``
 #: the actuators a little off their reference), or ``@cycles``: the closed loop's compiled cycles
-#: (:func:`pkmdyn.simulate._cycles.compile_for_runs`), which no short run takes.
+#: (:func:`pkmdyn.simulate._cycles.compile_for_runs`), which no short run takes, or ``@bounds``: the
+#: singularity measures' level bounds (:func:`pkmdyn.multibody.kinematics.inverse.least_measure_bounds`),
+#: which a sweep's workspace takes and no command.
 #: Lane 0 takes the closed loops (the single-sample kernels and the loop's cycles, the longest
 #: compilations), lane 1 the batched kinematics, dynamics and analyses.
 _GENERIC_LANES: tuple[tuple[tuple[str, ...], ...], ...] = (
@@ -72,6 +76,7 @@ _GENERIC_LANES: tuple[tuple[tuple[str, ...], ...], ...] = (
         ("stiffness", "--machine", "delta", "--default-motion"),
         ("workspace", "--machine", "delta", "--grid", "x=-0.6:0.6:5,y=-0.6:0.6:5", "--pose", "z=-1.2"),
         ("pdm", "run", "--no-plots"),
+        ("@bounds",),
     ),
 )
 
@@ -105,6 +110,11 @@ def _exercise(args: tuple[str, ...], outs: list[Path], root: Path) -> tuple[int,
     registered by then); its exit status and what it said last."""
     if args == ("@cycles",):
         _cycles.compile_for_runs()
+        return 0, ""
+    if args == ("@bounds",):
+        model = _multibody.load_mechanism(resolve("delta")[1])
+        for tight in (False, True):
+            _inverse.least_measure_bounds(model, model.coord_offset[None, :], 1e-3, tight=tight)
         return 0, ""
     line = [a.format(*outs) if "{" in a else a for a in args]
     if "@reference" in line:
