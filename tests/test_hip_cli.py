@@ -384,3 +384,20 @@ def test_a_run_shorter_than_a_cycle_tracks_a_whole_cycle(tmp_path):
     np.testing.assert_allclose(q[1], o[1], rtol=1e-12, atol=1e-15)
     wear = q[0].index("wear_mm3_per_million_cycles")
     assert np.all(q[1][:, wear] > 0)
+
+
+def test_hip_control_says_a_friction_regularisation_it_does_not_use(tmp_path, capsys):
+    """A parameter file whose friction_velocity_eps_* differ from the engine's: hip control says
+    once (the controller's file, and the plant made of it) that they are not used, as hip run and
+    hip identify say it; the built-in file says nothing."""
+    params = tmp_path / "p.toml"
+    params.write_text(DEFAULT_PARAMS_TEXT.replace("friction_velocity_eps_rad_s = 1e-3",
+                                                  "friction_velocity_eps_rad_s = 0.002"))
+    assert "0.002" in params.read_text()
+    assert main(["hip", "control", "--controller", "pd", "--params", str(params), "--cycles", "0.01", "--no-plots",
+                 "--out", str(tmp_path / "c")]) == 0
+    said = [ln for ln in capsys.readouterr().err.splitlines() if "friction_velocity_eps_rad_s = 0.002" in ln]
+    assert len(said) == 1 and "not used" in said[0]
+    assert main(["hip", "control", "--controller", "pd", "--cycles", "0.01", "--no-plots",
+                 "--out", str(tmp_path / "d")]) == 0
+    assert "friction_velocity_eps" not in capsys.readouterr().err

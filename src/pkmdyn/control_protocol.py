@@ -130,6 +130,9 @@ class ControlJob(Protocol):
         """The 3D scene of the plant's motion (efforts ``u`` as colours)."""
         ...
 
+    # optional: ``notes(model) -> list[str]``, what the run says of a model's parameter file
+    # (each line a warning of the run, e.g. a value the engine does not use)
+
     def parameters_text(self, params: str | None) -> str:
         """The parameter file as text for the report (None: the built-in one)."""
         ...

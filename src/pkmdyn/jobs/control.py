@@ -107,6 +107,10 @@ def machine_setup(machine: str, params: Path | None, plant_params: Path | None, 
                                     "plant (parameters with the [mismatch] factors)")
         plant_source = (f"{params or 'built-in parameters'} with masses x {mm['mass_factor']:g}, "
                         f"friction x {mm['friction_factor']:g}")
+    notes = getattr(job, "notes", None)  # what the machine says of a parameter file (ControlJob.notes)
+    if notes is not None:
+        for line in dict.fromkeys([*notes(model), *notes(plant)]):
+            warnings.warn(line, ControlWarning, stacklevel=2)
     if motion is None:
         bm = job.builtin_motion(model, cycles)
         fn, duration, motion_source, span, fold = bm.fn, bm.duration_s, bm.source, bm.span_s, bm.fold_s

@@ -86,6 +86,13 @@ def load_params(path: Path) -> Any:
     return control_model(_params.load_params(path))
 
 
+def notes(model: Any) -> list[str]:
+    """What the run says of the model's parameter file: its ``friction_velocity_eps_*`` where the
+    engine does not use them (:func:`.paper.regularisation_note`, as ``hip run`` says it)."""
+    note = _paper.regularisation_note(model.params)
+    return [] if note is None else [note]
+
+
 def builtin_motion(model: Any, cycles: float) -> BuiltinMotion:
     """``cycles`` ISO 14242-1 cycles of the model's cycle model, with the hydraulic load."""
     cyc = _paper.iso_cycle_preset(model.params.motion_model)
