@@ -71,7 +71,8 @@ def _stages(ad, designs: list[dict], ctx) -> dict[str, float]:
     import numpy as np
 
     from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
-    from pkmdyn.multibody.kinematics.inverse import least_measures, solve_kinematics
+    from pkmdyn.multibody.kinematics.inverse import solve_kinematics
+    from pkmdyn.multibody.kinematics.singularity.measures import least_measures
     from pkmdyn.multibody.description.schema import load_description
     from pkmdyn.multibody.model.compiler import compile_with
     from pkmdyn.multibody.analyses.designs import evaluate_model

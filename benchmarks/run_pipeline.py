@@ -31,7 +31,7 @@ from _timing import best_times
 from pkmdyn.machines.registry import resolve
 from pkmdyn.multibody import default_motion, load_mechanism, solve_kinematics
 from pkmdyn.multibody.dynamics.newton_euler import joint_reactions
-from pkmdyn.multibody.kinematics.inverse import least_measures, singularity_measures
+from pkmdyn.multibody.kinematics.singularity.measures import least_measures, singularity_measures
 from pkmdyn.jobs.run import CHUNK, run_mechanism
 from pkmdyn.multibody.columns import effort_columns, results_columns
 

@@ -25,8 +25,8 @@ FROM_SOURCE = (Path(pkmdyn.__file__).resolve().parents[2] / "pyproject.toml").is
     ("pkmdyn.multibody.kinematics._solve_kernels", "solve_sample"), ("pkmdyn.multibody.kinematics._solve_kernels", "solve_batch"),
     ("pkmdyn.multibody.dynamics._sample_kernels", "_dynamics"), ("pkmdyn.multibody.kinematics._direct_kernels", "direct_one"),
     ("pkmdyn.multibody.kinematics._direct_kernels", "direct_task_one"), ("pkmdyn.multibody.dynamics._reaction_kernels", "cut_reactions_batch"),
-    ("pkmdyn.multibody.kinematics._measure_kernels", "measure_bounds"), ("pkmdyn.simulate._cycles", "run_cycles"),
-    ("pkmdyn.multibody.kinematics._measure_kernels", "measure_brackets"),
+    ("pkmdyn.multibody.kinematics.singularity._kernels", "measure_bounds"), ("pkmdyn.simulate._cycles", "run_cycles"),
+    ("pkmdyn.multibody.kinematics.singularity._kernels", "measure_brackets"),
 ])
 def test_the_installed_package_carries_its_compiled_kernels(module, kernel):
     dispatcher = getattr(importlib.import_module(module), kernel)

@@ -12,7 +12,7 @@ from oracles import hip
 from pkmdyn.errors import ParameterError, UnreachablePoseError
 from pkmdyn.machines.hip_simulator.params import default_params_dict, load_params, model_from_dict
 from pkmdyn.multibody import solve_kinematics
-from pkmdyn.multibody.kinematics.inverse import singularity_measures
+from pkmdyn.multibody.kinematics.singularity.measures import singularity_measures
 
 SEEDS = range(4)
 PLATFORMS = ("upper", "lower")

@@ -1,4 +1,4 @@
-"""The least singularity measures of a run (pkmdyn.multibody.kinematics.inverse.least_measures): equal,
+"""The least singularity measures of a run (pkmdyn.multibody.kinematics.singularity.measures.least_measures): equal,
 bit for bit, to the least of every sample's singular value decompositions
 (``singularity_measures``), whatever the order of the samples (a smooth motion, shuffled poses,
 one pose repeated, a pose near a singularity), on every built-in mechanism and on mechanisms
@@ -14,8 +14,8 @@ import pytest
 import multibody_examples as ex
 from pkmdyn.machines.registry import resolve
 from pkmdyn.multibody import default_motion, load_mechanism, solve_kinematics
-from pkmdyn.multibody.kinematics._measure_kernels import measure_brackets
-from pkmdyn.multibody.kinematics.inverse import SCREEN_STRIDE, _measure_arguments, least_measures, singularity_measures
+from pkmdyn.multibody.kinematics.singularity._kernels import measure_brackets
+from pkmdyn.multibody.kinematics.singularity.measures import SCREEN_STRIDE, _measure_arguments, least_measures, singularity_measures
 from pkmdyn.multibody.model.compiler import compile_model
 from pkmdyn.multibody.description.schema import load_description
 

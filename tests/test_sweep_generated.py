@@ -47,7 +47,7 @@ def test_the_engine_measures_when_asked_for_and_the_same_rows_without_them():
     from pkmdyn.machines.hip_simulator.description import hip_description
     from pkmdyn.machines.hip_simulator.params import model_from_dict
     from pkmdyn.multibody import load_mechanism, solve_kinematics
-    from pkmdyn.multibody.kinematics.inverse import singularity_measures
+    from pkmdyn.multibody.kinematics.singularity.measures import singularity_measures
 
     ad = sweep_adapter("hip")
     base = ad.base_description(None)

@@ -348,7 +348,7 @@ def test_a_required_region_constrains_a_sweep(tmp_path):
 
 
 def _least(m, q):
-    from pkmdyn.multibody.kinematics.inverse import singularity_measures
+    from pkmdyn.multibody.kinematics.singularity.measures import singularity_measures
 
     sm = singularity_measures(m, q)
     least = np.minimum(sm.inverse, sm.constraint)
@@ -362,7 +362,7 @@ def test_the_cheap_measure_bounds_hold_and_decide(name):
     measure by the factor its proof may lose (the square root of the coordinates, twice over)
     it proves every pose; with ``tight``, at 0.9 of each pose's own measure."""
     from pkmdyn.multibody import default_motion
-    from pkmdyn.multibody.kinematics.inverse import least_measure_bounds
+    from pkmdyn.multibody.kinematics.singularity.measures import least_measure_bounds
 
     m = load_mechanism(MACHINES / name / f"{name}.toml")
     mo = default_motion(m)

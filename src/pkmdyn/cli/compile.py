@@ -40,12 +40,12 @@ from ._groups import cli, echo
 if TYPE_CHECKING:
     from .. import multibody as _multibody
     from ..multibody.kinematics import direct as _direct
-    from ..multibody.kinematics import inverse as _inverse
+    from ..multibody.kinematics.singularity import measures as _measures
     from ..simulate import _cycles
 else:  # loaded when a command runs, not on import (nor for --help)
     _multibody = lazy_module("pkmdyn.multibody")
     _direct = lazy_module("pkmdyn.multibody.kinematics.direct")
-    _inverse = lazy_module("pkmdyn.multibody.kinematics.inverse")
+    _measures = lazy_module("pkmdyn.multibody.kinematics.singularity.measures")
     _cycles = lazy_module("pkmdyn.simulate._cycles")
 
 __all__ = ["LANES", "compile_kernels"]
@@ -54,7 +54,7 @@ __all__ = ["LANES", "compile_kernels"]
 #: (``{k}`` names the folder of the lane's k-th exercise: its files as an input; ``@reference``
 #: the actuators a little off their reference), or ``@cycles``: the closed loop's compiled cycles
 #: (:func:`pkmdyn.simulate._cycles.compile_for_runs`), which no short run takes, or ``@bounds``: the
-#: singularity measures' level bounds (:func:`pkmdyn.multibody.kinematics.inverse.least_measure_bounds`),
+#: singularity measures' level bounds (:func:`pkmdyn.multibody.kinematics.singularity.measures.least_measure_bounds`),
 #: which a sweep's workspace takes and no command.
 #: Lane 0 takes the closed loops (the single-sample kernels and the loop's cycles, the longest
 #: compilations), lane 1 the batched kinematics, dynamics and analyses.
@@ -114,7 +114,7 @@ def _exercise(args: tuple[str, ...], outs: list[Path], root: Path) -> tuple[int,
     if args == ("@bounds",):
         model = _multibody.load_mechanism(resolve("delta")[1])
         for tight in (False, True):
-            _inverse.least_measure_bounds(model, model.coord_offset[None, :], 1e-3, tight=tight)
+            _measures.least_measure_bounds(model, model.coord_offset[None, :], 1e-3, tight=tight)
         return 0, ""
     line = [a.format(*outs) if "{" in a else a for a in args]
     if "@reference" in line:

@@ -60,12 +60,12 @@ from ..multibody.kinematics.direct import task_motion
 from ..multibody.kinematics.inverse import (
     MechanismKinematics,
     joint_coordinates,
-    least_measures,
     limit_hit,
     limit_line,
     limited_joints,
     solve_kinematics,
 )
+from ..multibody.kinematics.singularity.measures import least_measures
 from ..multibody.kinematics.motion import (
     motion_columns,
     periodic_motion,

@@ -21,13 +21,12 @@ if TYPE_CHECKING:
     from .description.joint_types import JOINT_TYPES, JointType, joint_type
     from .kinematics.inverse import (
         MechanismKinematics,
-        SingularityMeasures,
         loop_residuals,
         reachable,
         reference_task,
-        singularity_measures,
         solve_kinematics,
     )
+    from .kinematics.singularity.measures import SingularityMeasures, singularity_measures
     from .model.legs import LegTable, newton_only
     from .model.compiler import LoopRecord, MechanismModel, compile_model, load_mechanism
     from .kinematics.motion import TaskMotion, default_motion, read_task_motion, task_columns
@@ -47,8 +46,9 @@ __all__ = [
 __getattr__, __dir__ = attach(__name__, {
     **dict.fromkeys(("Description", "load_description"), ".description.schema"),
     **dict.fromkeys(("JOINT_TYPES", "JointType", "joint_type"), ".description.joint_types"),
-    **dict.fromkeys(("MechanismKinematics", "SingularityMeasures", "loop_residuals", "reachable", "reference_task",
-                     "singularity_measures", "solve_kinematics"), ".kinematics.inverse"),
+    **dict.fromkeys(("MechanismKinematics", "loop_residuals", "reachable", "reference_task", "solve_kinematics"),
+                    ".kinematics.inverse"),
+    **dict.fromkeys(("SingularityMeasures", "singularity_measures"), ".kinematics.singularity.measures"),
     **dict.fromkeys(("LegTable", "newton_only"), ".model.legs"),
     **dict.fromkeys(("LoopRecord", "MechanismModel", "compile_model", "load_mechanism"), ".model.compiler"),
     **dict.fromkeys(("TaskMotion", "default_motion", "read_task_motion", "task_columns"), ".kinematics.motion"),

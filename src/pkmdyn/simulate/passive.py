@@ -32,7 +32,8 @@ from numpy.typing import NDArray
 
 from ..errors import MotionError, PkmdynError
 from ..multibody.dynamics.verbs import MechanismData, _all
-from ..multibody.kinematics.inverse import reference_task, singularity_measures, solve_kinematics
+from ..multibody.kinematics.inverse import reference_task, solve_kinematics
+from ..multibody.kinematics.singularity.measures import singularity_measures
 from ..multibody.kinematics.motion import TaskMotion
 from ..multibody.model.compiler import MechanismModel
 

@@ -50,13 +50,12 @@ from ..dynamics.compliance.reactions import ComplianceDataMissing
 from ..kinematics.inverse import (
     beyond_limits,
     joint_coordinates,
-    least_measures,
     limit_bounds,
     limited_joints,
     reference_task,
-    singularity_measures,
     solve_kinematics,
 )
+from ..kinematics.singularity.measures import least_measures, singularity_measures
 from ..kinematics.motion import default_motion, read_task_motion
 from ..model.compiler import (
     compile_with,

@@ -9,7 +9,7 @@ grid axis, breadth first, so every pose on the description's assembly branch. A 
 is *reached* where it is solved with every joint within its limits (``limits_rad``/``limits_m``,
 actuated joints included). It is *in the workspace* where
 
-1. it is reached and every singularity measure (:func:`pkmdyn.multibody.kinematics.inverse.singularity_measures`:
+1. it is reached and every singularity measure (:func:`pkmdyn.multibody.kinematics.singularity.measures.singularity_measures`:
    inverse, direct, constraint) at it is at least ``threshold``, and
 2. it is connected to the start through such poses (neighbours along the grid's axes): the
    part of the grid the mechanism moves through from its reference without crossing a
@@ -71,15 +71,14 @@ from ...errors import ParameterError
 from ..kinematics.inverse import (
     beyond_limits,
     joint_coordinates,
-    least_measure_bounds,
     limit_bounds,
     limited_joints,
     neighbour_pairs,
     reference_task,
-    singularity_measures,
     solve_graph,
     solve_grid,
 )
+from ..kinematics.singularity.measures import least_measure_bounds, singularity_measures
 from ..model.compiler import MechanismModel
 from .task_grid import grid_poses
 
@@ -311,7 +310,7 @@ def _held(model: MechanismModel, axes: list[tuple[int, Array]], base: Array, thr
     """The workspace on the grid at one held pose ``base`` (module docstring): reached, inside,
     the smallest singularity measure (0 where not reached), the tree coordinates, and an upper
     bound of the measure (the measure itself where computed). Without ``all_measures`` the
-    measure is computed only where its bounds (:func:`pkmdyn.multibody.kinematics.inverse.least_measure_bounds`) do not
+    measure is computed only where its bounds (:func:`pkmdyn.multibody.kinematics.singularity.measures.least_measure_bounds`) do not
     prove it at least ``threshold``, and is NaN elsewhere."""
     x = grid_poses(model, axes, base)
     shape = tuple(len(v) for _, v in axes)
@@ -332,7 +331,7 @@ def _least_inside(model: MechanismModel, q: Array, inside: NDArray[np.bool_], me
     (``measure`` NaN elsewhere, ``upper`` their upper bounds): the measures of the
     ``candidates`` unknown poses of least upper bound are computed, ``U`` the least known
     measure; every other inside pose is proven above ``U``
-    (:func:`pkmdyn.multibody.kinematics.inverse.least_measure_bounds`, ``tight``: where its measure exceeds ``U`` by
+    (:func:`pkmdyn.multibody.kinematics.singularity.measures.least_measure_bounds`, ``tight``: where its measure exceeds ``U`` by
     more than a few per cent) or its measure is computed. ``U`` is a pose's measure, so the
     least is among the computed ones."""
     ins = np.flatnonzero(inside)
@@ -368,7 +367,7 @@ def workspace(model: MechanismModel, axes: list[tuple[int, Array]], base: Array 
     ``measures``: ``"all"`` every reached pose's singularity measures (``measure``);
     ``"least"`` (a sweep's workspace, where the size and the least measure count) a pose's
     measures only where their cheap bounds do not prove them at least ``threshold``
-    (:func:`pkmdyn.multibody.kinematics.inverse.least_measure_bounds`, some ten times cheaper than the singular
+    (:func:`pkmdyn.multibody.kinematics.singularity.measures.least_measure_bounds`, some ten times cheaper than the singular
     values), and the least over the inside poses as :func:`_least_inside` finds it: the same
     ``reached``, ``inside``, size and ``least_measure`` as ``"all"`` (to rounding), no
     ``measure`` per pose; ``"none"`` as ``"least"`` without ``least_measure`` (None). Over

@@ -49,15 +49,9 @@ from ..model.poses import body_poses
 from ..model.topology import column_scale, constraint_jacobian, row_labels, row_scale
 from . import _direct_kernels as D
 from . import _solve_kernels as K
-from .inverse import (
-    CHECK_TOLERANCE,
-    MAX_ITER,
-    TOLERANCE,
-    reference_task,
-    singularity_measures,
-    solve_kinematics,
-)
+from .inverse import CHECK_TOLERANCE, MAX_ITER, TOLERANCE, reference_task, solve_kinematics
 from .motion import ActuatorMotion, TaskMotion
+from .singularity.measures import singularity_measures
 
 if TYPE_CHECKING:
     import scipy.linalg as linalg
@@ -119,7 +113,7 @@ class Assembly:
     """One assembly mode: task coordinates ``x (nt,)`` (angles the branch nearest the reference
     pose's), tree coordinates ``q (nq,)``, the scaled loop ``residual``, the scaled actuator
     difference of the inverse kinematics round trip, the sign of the direct kinematics
-    Jacobian's determinant, the singularity measures (:func:`pkmdyn.multibody.kinematics.inverse.singularity_measures`:
+    Jacobian's determinant, the singularity measures (:func:`pkmdyn.multibody.kinematics.singularity.measures.singularity_measures`:
     ``inverse``, ``direct``, ``constraint``) and the starts that reached it (``hits``)."""
 
     x: Array

@@ -1,4 +1,4 @@
-"""Compiled bounds on the singularity measures (:func:`pkmdyn.multibody.kinematics.inverse.singularity_measures`),
+"""Compiled bounds on the singularity measures (:func:`pkmdyn.multibody.kinematics.singularity.measures.singularity_measures`),
 driven by the model's arrays only.
 
 Each measure is the ratio ``sigma_min / sigma_max`` of a dimensionless matrix ``M (m, n)``. Its
@@ -21,7 +21,7 @@ of its singular value decomposition. The pivots bound the measure from above (``
 21 rows, against some 15 us for its singular value decomposition; where a bound decides nothing,
 the caller computes the measure itself.
 
-Brackets (``brackets``: :func:`_bracket`, for :func:`pkmdyn.multibody.kinematics.inverse.least_measures`). Along a
+Brackets (``brackets``: :func:`_bracket`, for :func:`pkmdyn.multibody.kinematics.singularity.measures.least_measures`). Along a
 motion each measure is bracketed from both sides by bracketing the largest and the least
 eigenvalue of ``G`` (:func:`_extreme`). For the largest, a shift ``s`` a little above the last
 samples' value (extrapolated, moved out by twice its last change) is proven above it by the
@@ -61,7 +61,7 @@ __all__ = ["measure_bounds", "measure_brackets", "WIDEN_REL", "WIDEN_ABS"]
 #: the unit roundoff of float64
 _U = 2.0 ** -53
 #: a bracket widened by the rounding of a singular value decomposition, relative and absolute
-#: (:func:`pkmdyn.multibody.kinematics.inverse.least_measures`; :func:`measure_brackets` screens with the same)
+#: (:func:`pkmdyn.multibody.kinematics.singularity.measures.least_measures`; :func:`measure_brackets` screens with the same)
 WIDEN_REL, WIDEN_ABS = 1e-8, 1e-12
 
 
@@ -412,7 +412,7 @@ def measure_bounds(J, rs, cs, cut, task, idle, act, direct, levels, tight, passe
     ``cs (nq,)`` the row and column factors that make it dimensionless, ``cut`` the solved loop
     rows, ``task`` the solved task rows, ``idle (ni, nq)`` the scaled idle rows, ``act`` the
     actuated coordinates, ``direct`` whether the direct measure applies (as many actuators as
-    degrees of freedom). The matrices are those of :func:`pkmdyn.multibody.kinematics.inverse.singularity_measures`:
+    degrees of freedom). The matrices are those of :func:`pkmdyn.multibody.kinematics.singularity.measures.singularity_measures`:
     ``Phi = [Js[cut]; idle]`` (constraint, measure 0), ``[Phi; Js[task]]`` (inverse, 1),
     ``[Phi; E_a]`` (direct, 2); where one has at least ``nq`` rows its Gram matrix is
     ``Phi^T Phi`` (computed once a sample) plus its own rows' part. Writes ``passed[s, k]``
@@ -460,7 +460,7 @@ def _start(G, d, top, low, est):  # pragma: no cover - compiled
 def measure_brackets(J, rs, cs, cut, task, idle, act, direct, stride, below, out):  # pragma: no cover - compiled
     """A proven bracket ``out[s, k] = (lo, hi)`` of each measure ``k`` of every sample ``s``
     (:func:`measure_bounds`' arguments and matrices; ``(0, 1)`` where none was found, ``(1, 1)``
-    where the measure does not apply), for :func:`pkmdyn.multibody.kinematics.inverse.least_measures`.
+    where the measure does not apply), for :func:`pkmdyn.multibody.kinematics.singularity.measures.least_measures`.
 
     Two passes (module docstring, "Screen"). First every ``stride``-th sample and the last, the
     anchors: :func:`_bracket`, warm-started from the anchor before. The least ``hi`` of the
