@@ -106,20 +106,6 @@ def _measure_arguments(model: MechanismModel, q: Array) -> tuple:
             np.ascontiguousarray(model.act_coord, dtype=np.int64), model.na == model.nt)
 
 
-def _measure_bounds(model: MechanismModel, q: Array, levels: Array, tight: bool
-                    ) -> tuple[NDArray[np.bool_], Array]:
-    """Per-measure bounds at ``q (n, nq)``: ``passed (n, 3)`` where measure ``k`` (constraint,
-    inverse, direct) is proven above ``levels[k]`` (True for the direct one where it does not
-    apply) and ``upper (n, 3)`` an upper bound of each (:func:`pkmdyn.multibody.kinematics.singularity._kernels.measure_bounds`)."""
-    n = q.shape[0]
-    passed = np.ones((n, 3), dtype=np.bool_)
-    upper = np.ones((n, 3))
-    if n:
-        measure_bounds(*_measure_arguments(model, q), np.ascontiguousarray(levels, dtype=float), bool(tight),
-                       passed, upper)
-    return passed, upper
-
-
 def least_measure_bounds(model: MechanismModel, q: Array, level: float, tight: bool = False
                          ) -> tuple[NDArray[np.bool_], Array]:
     """Cheap bounds on the least of the :class:`SingularityMeasures` at ``q (n, nq)`` (the
@@ -132,7 +118,11 @@ def least_measure_bounds(model: MechanismModel, q: Array, level: float, tight: b
     pose is proven above a level it exceeds by more than that, where the cheaper bound may need
     its measure to exceed the level by up to the square root of the matrix's rows."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    passed, upper = _measure_bounds(model, q, np.full(3, float(level)), tight)
+    n = q.shape[0]
+    passed = np.ones((n, 3), dtype=np.bool_)  # per measure (True for the direct one where it does not apply)
+    upper = np.ones((n, 3))
+    if n:
+        measure_bounds(*_measure_arguments(model, q), np.full(3, float(level)), bool(tight), passed, upper)
     return passed.all(axis=1), upper.min(axis=1)
 
 
