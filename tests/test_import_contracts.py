@@ -145,3 +145,25 @@ def test_the_circle_check_finds_a_function_local_circle():
     graph = _import_graph(files, {"p"})
     assert _cycles(graph) == [["p.a", "p.b"], ["p.c", "p.d"]]
     assert graph["p.d"] == {"p.c"} and graph["p.c"] == {"p.d"}
+
+
+def _calls_of(text: str, names: tuple[str, ...]) -> list[int]:
+    """Lines of the calls of any of ``names`` (as a bare name or an attribute) in the module ``text``."""
+    import ast
+
+    return [node.lineno for node in ast.walk(ast.parse(text)) if isinstance(node, ast.Call)
+            and getattr(node.func, "id", getattr(node.func, "attr", None)) in names]
+
+
+def test_one_writer_of_output_folders():
+    """A job's folder, its summary and its report are written by one writer
+    (pkmdyn.report.write_output): no other module calls write_report or output_dir."""
+    src = ROOT / "src" / "pkmdyn"
+    callers = sorted(str(p.relative_to(src)) for p in src.rglob("*.py")
+                     if _calls_of(p.read_text(encoding="utf-8"), ("write_report", "output_dir")))
+    assert callers == ["report/_output.py"]
+
+
+def test_the_call_scan_finds_a_call():
+    probe = "from x import write_report\nimport io\nwrite_report(1)\nio.output_dir(2)\nf = output_dir\n"
+    assert _calls_of(probe, ("write_report", "output_dir")) == [3, 4]

@@ -217,3 +217,74 @@ def test_a_large_results_table_is_announced():
     assert len(said) == 1  # 0.26 GB: nothing said
     note_table_size(10_000, 40, "csv", said.append)
     assert len(said) == 1
+
+
+def _png(path):
+    """A one-pixel PNG written by matplotlib (a figure the report embeds)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(figsize=(0.1, 0.1))
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def test_the_one_writer_adds_the_summary_and_the_report(tmp_path):
+    """write_output: the job's files, then summary.json (the summary and every file's name,
+    itself and the report included) and report.html (its images the output's PNG files named by
+    label, the summary shown), announced at their final paths before the folder moves."""
+    from pkmdyn.report import Output, Report, write_output
+
+    out = tmp_path / "o"
+    seen = {}
+
+    def make(folder):
+        (folder / "a.csv").write_text("x_m\n1\n")
+        _png(folder / "fig.png")
+        return Output({"table": folder / "a.csv", "figure": folder / "fig.png"}, {"samples": 1},
+                      Report("a title", images=["figure"], notes=["a note"]))
+
+    def announce(placed):
+        seen.update(placed)
+        assert not out.exists()  # before the move
+
+    files, output = write_output(out, {}, make, announce)
+    assert list(files) == ["table", "figure", "summary", "report"]
+    assert files == seen and all(p.parent == out and p.exists() for p in files.values())
+    doc = json.loads((out / "summary.json").read_text())
+    assert doc == output.summary == {"samples": 1, "files": ["a.csv", "fig.png", "report.html", "summary.json"]}
+    assert sorted(p.name for p in out.iterdir()) == sorted([RUN_MARKER, *doc["files"]])
+    page = (out / "report.html").read_text()
+    assert "a title" in page and "a note" in page and "data:image/png;base64," in page and "fig.png" in page
+    assert not _leftovers(tmp_path)
+
+
+def test_the_one_writer_without_summary_or_report_writes_the_files_alone(tmp_path):
+    from pkmdyn.report import Output, write_output
+
+    def make(folder):
+        (folder / "t.csv").write_text("a\n")
+        return Output({"t": folder / "t.csv"})
+
+    files, output = write_output(tmp_path / "o", {}, make)
+    assert list(files) == ["t"] and output.summary is None and output.report is None
+    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == [RUN_MARKER, "t.csv"]
+
+
+@pytest.mark.parametrize("where", ["make", "report"])
+def test_a_failing_job_or_report_leaves_nothing(tmp_path, where):
+    """A failure while the job writes, or while the report is rendered (an image label the
+    output lacks), leaves no folder and nothing beside it."""
+    from pkmdyn.report import Output, Report, write_output
+
+    def make(folder):
+        (folder / "a.csv").write_text("x")
+        if where == "make":
+            raise PkmdynError("bad")
+        return Output({"a": folder / "a.csv"}, {"n": 1}, Report("t", images=["missing"]))
+
+    with pytest.raises((PkmdynError, KeyError)):
+        write_output(tmp_path / "o", {}, make)
+    assert not (tmp_path / "o").exists() and not _leftovers(tmp_path)

@@ -711,3 +711,16 @@ def test_a_section_with_no_beam_is_refused(tmp_path, capsys, case, words):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and words in err[0], err
     assert not out.exists()
+
+
+def test_the_job_result_carries_the_reports_scene_and_what_the_folder_holds(tmp_path):
+    """pkmdyn.jobs.stiffness.job: the result's scene is the report's modes animation (16 frames
+    a mode, the joints of the machine), and summary.json lists every file of the folder."""
+    import pkmdyn.jobs.stiffness as job
+
+    res = job.job(str(ex.MACHINES / "stewart" / "stewart.toml"), tmp_path / "o")
+    assert res.scene is not None and res.scene.t.shape[0] % 16 == 0 and res.scene.t.shape[0] >= 16
+    m = load_mechanism(ex.MACHINES / "stewart" / "stewart.toml")
+    assert res.scene.points.shape[1:] == (len(m.joint_names), 3)
+    assert set(res.files) >= {"stiffness", "report"} and all(p.exists() for p in res.files.values())
+    assert res.report.title.startswith(m.name)

@@ -97,7 +97,7 @@ def echo(line: str) -> None:
 
 def list_files(files: Mapping[str, Path]) -> None:
     """Print ``label: path`` for every file of a run; given to a run as its ``report``, so that the
-    listing is written before the files move into place (:func:`pkmdyn.io.output_dir`)."""
+    listing is written before the files move into place (:func:`pkmdyn.report.write_output`)."""
     for name, path in files.items():
         echo(f"{name}: {path}")
 

@@ -1,13 +1,14 @@
-"""What every job shares: the machine it is given, the one writer of ``--out``, and its result.
+"""What every job shares: the machine it is given and its result.
 
-A job runs in three steps, and this module holds the first and the last:
+A job runs in three steps:
 
 1. :func:`prepare`: the machine resolved (a built-in name or a description file), the output
    folder checked against the output rule before anything is computed (:func:`pkmdyn.io.check_output_dir`:
    no input, link, device or foreign folder is ever replaced) and the mechanism compiled;
 2. the job's own computation (the engine's free functions);
-3. :func:`write`: the files written into a temporary folder beside ``--out``, announced, and
-   moved into place only once all of them are written (:func:`pkmdyn.io.output_dir`).
+3. its files written by the one writer of ``--out``, :func:`pkmdyn.report.write_output`: the job's
+   own files, ``summary.json`` and ``report.html`` (a :class:`pkmdyn.report.Report`) into a temporary
+   folder beside ``--out``, announced, and moved into place only once all of them are written.
 
 A job returns a :class:`JobResult`; the command prints it and writes nothing itself.
 """
@@ -21,16 +22,17 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .._lazy import lazy_module
-from ..io import atomic_file, check_output_dir, check_output_file, output_dir
+from ..io import atomic_file, check_output_dir, check_output_file
 from ..machines.registry import resolve
 
 if TYPE_CHECKING:
     from ..multibody.model import compiler as _compiler
+    from ..report import Report, Scene, TimePlot
     from ..multibody.model.compiler import MechanismModel
 else:  # the compiler and its kernels load when a job runs: a command module may import its job for --help
     _compiler = lazy_module("pkmdyn.multibody.model.compiler")
 
-__all__ = ["JobResult", "Prepared", "prepare", "load_machine", "write", "write_texts"]
+__all__ = ["JobResult", "Prepared", "prepare", "load_machine", "write_texts"]
 
 
 @dataclass(frozen=True)
@@ -39,13 +41,25 @@ class JobResult:
     wrote none), ``summary`` (the document its summary or main JSON file holds), ``lines`` (what
     the command prints on stdout after the files), ``warnings`` (one line each, for stderr) and
     ``notes`` (what the user should know that is not wrong: a default filled in, an element
-    approximated; one line each, for stderr)."""
+    approximated; one line each, for stderr) and ``report``, the content of its ``report.html``
+    (None: the job wrote none), whose :attr:`scene` and :attr:`plots` a notebook can show."""
 
     files: Mapping[str, Path] = field(default_factory=dict)
     summary: Mapping[str, Any] = field(default_factory=dict)
     lines: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()
     notes: tuple[str, ...] = ()
+    report: Report | None = None
+
+    @property
+    def scene(self) -> Scene | None:
+        """The mechanism along the job's motion, as its report animates it (None: none)."""
+        return None if self.report is None else self.report.scene
+
+    @property
+    def plots(self) -> tuple[TimePlot, ...]:
+        """The report's time plots."""
+        return () if self.report is None else tuple(self.report.plots)
 
 
 @dataclass(frozen=True)
@@ -82,20 +96,6 @@ def prepare(machine: str, out_dir: Path | None, inputs: Mapping[str, Path | None
     model, entry = load_machine(machine, limits)
     text = path.read_text(encoding="utf-8", errors="replace") if path is not None else ""
     return Prepared(model, entry, path, text, given)
-
-
-def write(out_dir: Path, inputs: Mapping[str, Path | None], make: Callable[[Path], dict[str, Path]],
-          announce: Callable[[Mapping[str, Path]], None] | None = None) -> dict[str, Path]:
-    """Write a job's files: ``make(folder)`` writes them into a temporary folder beside ``out_dir``
-    and returns label -> path; ``announce`` is given their final paths before they move into place
-    (a listing that fails leaves ``out_dir`` as it was). Returns the final paths."""
-    final = Path(out_dir)
-    with output_dir(out_dir, inputs=inputs) as out:
-        files = make(out)
-        placed = {k: final / v.relative_to(out) for k, v in files.items()}
-        if announce is not None:
-            announce(placed)
-    return placed
 
 
 def write_texts(texts: Mapping[str, tuple[Path, str]], inputs: Mapping[str, Path | None],

@@ -15,8 +15,8 @@ from ..io import write_json
 from ..multibody.columns import model_summary
 from ..multibody.kinematics.direct import PATIENCE, assembly_modes, parse_actuators
 from ..multibody.kinematics.inverse import solve_kinematics
-from ..report import scene_from_joints, write_report
-from ._files import JobResult, prepare, write
+from ..report import Output, Report, scene_from_joints, write_output
+from ._files import JobResult, prepare
 
 __all__ = ["job"]
 
@@ -56,8 +56,8 @@ def _coordinate_names(model: Any) -> list[str]:
     return out
 
 
-def _report(out: Path, model: Any, modes: Any, doc: dict[str, Any], text: str) -> Path:
-    """``report.html``: one frame per assembly mode."""
+def _report(model: Any, modes: Any, text: str) -> Report:
+    """``report.html``'s content: one frame per assembly mode."""
     points = []
     for a in modes.modes:
         kin = solve_kinematics(model, a.x[None], q_start=a.q)
@@ -69,10 +69,10 @@ def _report(out: Path, model: Any, modes: Any, doc: dict[str, Any], text: str) -
     actuated = {j["name"]: (zero, f"{j['name']} (actuated)", "-") for j in summ["joints"] if j.get("actuated")}
     scene = replace(scene_from_joints(np.arange(1, len(modes.modes) + 1, dtype=float), jp, joints, actuated),
                     frame_label="mode", frame_unit="")
-    return write_report(out, title=f"{model.name}: assembly modes", scene=scene, summary=doc, parameters=text,
-                        notes=[f"{len(modes.modes)} assembly mode(s) at " + ", ".join(
-                            f"{a} = {v + 0.0:.6g}" for a, v in zip(model.actuator_names, modes.s))],
-                        scene_note="One frame per assembly mode, numbered as in the table.")
+    return Report(f"{model.name}: assembly modes", scene=scene, parameters=text,
+                  notes=[f"{len(modes.modes)} assembly mode(s) at " + ", ".join(
+                      f"{a} = {v + 0.0:.6g}" for a, v in zip(model.actuator_names, modes.s))],
+                  scene_note="One frame per assembly mode, numbered as in the table.")
 
 
 def job(machine: str, actuators: str, starts: int | None, seed: int, out_dir: Path | None,
@@ -101,12 +101,12 @@ def job(machine: str, actuators: str, starts: int | None, seed: int, out_dir: Pa
                      f"{sm['direct']:.4g}, constraint {sm['constraint']:.4g}; starts reaching it "
                      f"{m['starts_reaching_it']}")
     files: dict[str, Path] = {}
+    report = replace(_report(model, modes, p.text), summary=doc)
     if out_dir is not None:
-        def make(out: Path) -> dict[str, Path]:
+        def make(out: Path) -> Output:
             written = {"assemblies": out / "assemblies.json"}
             write_json(written["assemblies"], doc)
-            written["report"] = _report(out, model, modes, doc, p.text)
-            return written
+            return Output(written, report=report)
 
-        files = write(out_dir, p.inputs, make, announce)
-    return JobResult(files, doc, tuple(lines))
+        files, _ = write_output(out_dir, p.inputs, make, announce)
+    return JobResult(files, doc, tuple(lines), report=report)

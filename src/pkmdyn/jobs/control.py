@@ -29,11 +29,9 @@ from ..io import (
     check_output_dir,
     check_table_format,
     open_table_writer,
-    output_dir,
-    write_json,
 )
 from ..machines.registry import control_adapter, generated_machines
-from ..report import MAX_FRAMES, Curve, FramePicker, TimePlot, write_report
+from ..report import MAX_FRAMES, Curve, FramePicker, Output, Report, TimePlot, write_output
 from ._files import JobResult, prepare
 
 if TYPE_CHECKING:
@@ -629,9 +627,9 @@ def _effort_label(setup: _Setup, a: int) -> tuple[str, str]:
     return (f"{base} force", "N") if unit == "N" else (f"{base} torque", "N m")
 
 
-def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dict[str, Any], tmp: Path,
-            images: list[Path], gains_path: Path | None, K: int) -> Path:
-    """``report.html`` of a control run: the plant's true motion animated (held efforts as colours),
+def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dict[str, Any],
+            images: list[str], gains_path: Path | None, K: int) -> Report:
+    """The content of a control run's ``report.html``: the plant's true motion animated (held efforts as colours),
     the machine's own curves (:meth:`~pkmdyn.control_protocol.ControlJob.report_plots`) and efforts
     against time, the PNG figures, summary,
     parameters and warnings."""
@@ -676,11 +674,10 @@ def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dic
             params += f"\n\n# control settings: {gains_path}\n" + Path(gains_path).read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError):
             pass
-    return write_report(tmp, title=title, scene=scene, plots=plots,
-                        summary=summary, parameters=params, warnings=warns, images=images,
-                        notes=[f"parameters: {setup.params_source}", f"plant: {setup.plant_source}",
-                               f"motion: {setup.motion_source}"],
-                        scene_note="The plant's true pose; actuated chains coloured by the held effort.", samples=K)
+    return Report(title, scene=scene, plots=plots, parameters=params, warnings=warns, images=images,
+                  notes=[f"parameters: {setup.params_source}", f"plant: {setup.plant_source}",
+                         f"motion: {setup.motion_source}"],
+                  scene_note="The plant's true pose; actuated chains coloured by the held effort.", samples=K)
 
 
 def _loop_method(settings: dict[str, Any]) -> str:
@@ -694,10 +691,10 @@ def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str,
     """Run the loop span by span (:func:`pkmdyn.simulate.track_spans`) straight into the output
     folder: the table is written span by span and the summary and plots gathered on the way, so
     memory does not grow with the run; the folder moves into place only when the whole run
-    succeeded (:func:`pkmdyn.io.output_dir`). ``html_report``: also ``report.html``, its
+    succeeded (:func:`pkmdyn.report.write_output`). ``html_report``: also ``report.html``, its
     animation's frames picked span by span (:class:`pkmdyn.report.FramePicker`); ``announce`` is
-    given the files' final paths before they move into place. The one writer of a streamed job's
-    folder (the others write through :func:`._files.write`). Returns the files and the summary."""
+    given the files' final paths before they move into place. Returns the files, the summary and
+    the report's content (None without one)."""
     check_table_format(fmt)
     K = int(round(setup.duration / ls.cycle_s))
     summ = _Summary(setup)
@@ -705,7 +702,9 @@ def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str,
     frames = FramePicker(K, MAX_FRAMES) if html_report else None
     table = "control.csv" if fmt == "csv" else "control.parquet"
     kind, fast = controller, False
-    with output_dir(out, inputs=inputs) as tmp:
+
+    def make(tmp: Path) -> Output:
+        nonlocal kind, fast
         with open_table_writer(tmp / table, fmt) as writer:
             start = 0
             try:
@@ -746,17 +745,17 @@ def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str,
             "motion": setup.motion_source,
             "gains_file": str(gains_path) if gains_path else "built-in",
         }
-        write_json(tmp / "summary.json", summary)
-        names = [table, "summary.json"]
+        files = {table: tmp / table}
         if curves is not None and plots:
-            names += [p.name for p in _plots(setup, curves, kind, tmp)]
+            files.update((p.name, p) for p in _plots(setup, curves, kind, tmp))
+        report = None
         if frames is not None and curves is not None:
-            names.append(_report(setup, kind, curves, frames, summary, tmp,
-                                 [tmp / n for n in names if n.endswith(".png")], gains_path, K).name)
-        files = {n: out / n for n in names}
-        if announce is not None:
-            announce(files)
-    return files, summary
+            report = _report(setup, kind, curves, frames, summary, [n for n in files if n.endswith(".png")],
+                             gains_path, K)
+        return Output(files, summary, report)
+
+    files, output = write_output(out, inputs, make, announce)
+    return files, dict(output.summary or {}), output.report
 
 
 def _caught(caught: list) -> tuple[str, ...]:
@@ -787,10 +786,10 @@ def job(machine: str, controller: str, out_dir: Path, *, params_path: Path | Non
         warnings.simplefilter("always", ControlWarning)
         warnings.simplefilter("ignore", RuntimeWarning)
         setup, settings, ls, g = _prepare(machine, controller, params_path, plant_path, motion_path, cycles, gains_path)
-        files, summary = _stream(setup, controller, g, ls, settings, out_dir, not no_plots, gains_path, inputs, fmt,
-                                 announce=announce)
+        files, summary, report = _stream(setup, controller, g, ls, settings, out_dir, not no_plots, gains_path,
+                                         inputs, fmt, announce=announce)
         _warn_unstable(setup, controller)
-    return JobResult(files, summary, (), _caught(caught))
+    return JobResult(files, summary, (), _caught(caught), report=report)
 
 
 # ----------------------------------------------------------------------------- a described mechanism
@@ -913,6 +912,6 @@ def described_job(machine: str, controller: str, out_dir: Path, *, motion_path: 
                    "the controller's model", what, span_s=span, load_column=column, drive_encoders=encoders)
     _check_encoder(setup, ls, settings, gains_path)
     n = model.na if controller == "pid" else model.nt
-    files, summary = _stream(setup, controller, _control.gains(settings, controller, n), ls, settings, out_dir,
-                             not no_plots, gains_path, dict(p.inputs), fmt, announce=announce)
-    return JobResult(files, summary, (), tuple(notes))
+    files, summary, report = _stream(setup, controller, _control.gains(settings, controller, n), ls, settings,
+                                     out_dir, not no_plots, gains_path, dict(p.inputs), fmt, announce=announce)
+    return JobResult(files, summary, (), tuple(notes), report=report)

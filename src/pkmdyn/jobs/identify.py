@@ -11,7 +11,8 @@ from ..identify._base import DEFAULT_RANK_TOL
 from ..identify.described import fit_described, identification_document, read_measured
 from ..io import write_csv, write_json
 from ..multibody.kinematics.inverse import solve_kinematics
-from ._files import JobResult, prepare, write
+from ..report import Output, write_output
+from ._files import JobResult, prepare
 
 __all__ = ["job"]
 
@@ -31,13 +32,13 @@ def job(machine: str, measured_path: Path, out_dir: Path, *, rank_tol: float = D
     doc = identification_document(model, fit)
     cols = fit.columns(t)
 
-    def make(out: Path) -> dict[str, Path]:
+    def make(out: Path) -> Output:
         files = {"identification": out / "identification.json", "efforts": out / "efforts.csv"}
         write_csv(files["efforts"], cols)
         write_json(files["identification"], doc)
-        return files
+        return Output(files)
 
-    files = write(out_dir, p.inputs, make, announce)
+    files, _ = write_output(out_dir, p.inputs, make, announce)
     worst = min((v for v in doc["explained_percent"].values() if v is not None), default=None)
     line = (f"rank {doc['rank']} of {len(doc['parameters_asked'])} parameters; "
             + (f"least explained actuator {worst:.4g} %" if worst is not None else "no effort explained"))

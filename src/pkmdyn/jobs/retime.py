@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -35,8 +36,8 @@ from ..multibody.kinematics.inverse import solve_kinematics
 from ..multibody.kinematics.motion import MAX_MOTION_ROWS, default_motion, task_columns
 from ..multibody.scene import mechanism_scene
 from ..params_util import parse_limit_options
-from ..report import Curve, TimePlot, write_report
-from ._files import JobResult, prepare, write
+from ..report import Curve, Output, Report, TimePlot, write_output
+from ._files import JobResult, prepare
 
 __all__ = ["job", "parse_bounds"]
 
@@ -255,7 +256,18 @@ def job(machine: str, out_dir: Path, *, path_file: Path | None = None, points: i
              **{f"{_key(n)}_use_ratio": use.use[:, k] for k, n in enumerate(use.names)}}
     what = "fastest timing" if least is None else f"least-energy timing within {cycle_time:.6g} s"
 
-    def make(out: Path) -> dict[str, Path]:
+    scene = mechanism_scene(model, ret.t, kin.joint_point, {
+        nm: (reac.u[:, i], f"{nm} effort", "N" if model.actuator_units[i] == "m" else "N m")
+        for i, nm in enumerate(model.actuator_names)})
+    order = np.argsort(-use.largest)[:8]
+    figs = [TimePlot("Use of the most used bounds", "|value| / bound", ret.t,
+                     tuple(Curve(use.names[k], use.use[:, k]) for k in order)),
+            TimePlot("Path speed", "sd [1/s]", ret.t, (Curve("sd", ret.sd),))]
+    report = Report(f"{model.name}: the {what} of its path", scene=scene, plots=figs,
+                    summary={k: v for k, v in doc.items() if k not in ("bounds", "copper_loss_coefficients")},
+                    parameters=p.text, notes=[f"path: {source}", "definitions: docs/retime.md"])
+
+    def make(out: Path) -> Output:
         files = {"motion": out / "timed_motion.csv", "table": out / "retime.csv", "summary": out / "retime.json"}
         write_csv(files["motion"], motion_cols)
         write_csv(files["table"], table)
@@ -265,21 +277,9 @@ def job(machine: str, out_dir: Path, *, path_file: Path | None = None, points: i
             write_csv(files["pareto"], front)
         images = _pngs(out, ret, use, None if least is None else fastest, front) if plots else {}
         files.update(images)
-        scene = mechanism_scene(model, ret.t, kin.joint_point, {
-            nm: (reac.u[:, i], f"{nm} effort", "N" if model.actuator_units[i] == "m" else "N m")
-            for i, nm in enumerate(model.actuator_names)})
-        order = np.argsort(-use.largest)[:8]
-        figs = [TimePlot("Use of the most used bounds", "|value| / bound", ret.t,
-                         tuple(Curve(use.names[k], use.use[:, k]) for k in order)),
-                TimePlot("Path speed", "sd [1/s]", ret.t, (Curve("sd", ret.sd),))]
-        files["report"] = write_report(out, title=f"{model.name}: the {what} of its path", scene=scene,
-                                       plots=figs, summary={k: v for k, v in doc.items()
-                                                            if k not in ("bounds", "copper_loss_coefficients")},
-                                       parameters=p.text, images=list(images.values()),
-                                       notes=[f"path: {source}", "definitions: docs/retime.md"])
-        return files
+        return Output(files, report=replace(report, images=list(images)))
 
-    files = write(out_dir, p.inputs, make, announce)
+    files, output = write_output(out_dir, p.inputs, make, announce)
     over = [b for b in doc["bounds"] if b["largest_use_ratio"] > 1.0 + 1e-6]
     line = (f"{what}: cycle time {ret.cycle_time:.6g} s over {len(ret.s)} grid points ({ret.iterations} passes), "
             f"energy {doc['energy_J']:.6g} J; largest use of a bound {doc['largest_use_ratio']:.9g}; a bound at 99 % "
@@ -303,4 +303,4 @@ def job(machine: str, out_dir: Path, *, path_file: Path | None = None, points: i
         missing = [nm for nm, g in zip(model.actuator_names, given) if not g]
         notes.append(f"copper losses of {', '.join(missing)}: no winding_resistance_ohm and motor constant in "
                      "[[actuators]]; their squared motor effort counts with 1 W per (N m)^2 or N^2")
-    return JobResult(files, doc, tuple(lines), warnings, tuple(notes))
+    return JobResult(files, doc, tuple(lines), warnings, tuple(notes), report=output.report)

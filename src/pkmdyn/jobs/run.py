@@ -13,7 +13,7 @@ rows appended to ``results.csv`` (or ``.parquet``), and the summary's extremes k
 length), the report's plots and animation a window of them (the first cycle of a repeated
 default motion). The files are written into a temporary
 folder beside ``--out`` and moved into place only when the whole run succeeded
-(:func:`pkmdyn.io.output_dir`); formats: ``docs/mechanism_format.md``, "Outputs".
+(:func:`pkmdyn.report.write_output`); formats: ``docs/mechanism_format.md``, "Outputs".
 """
 
 from __future__ import annotations
@@ -32,7 +32,6 @@ from ..io import (
     check_table_format,
     note_table_size,
     open_table_writer,
-    output_dir,
     write_json,
 )
 from ..multibody.columns import (
@@ -78,11 +77,11 @@ from ..multibody.model.compiler import MechanismModel
 from ..multibody.scene import frame_indices_of, mechanism_scene
 from ..params_util import check_limit, parse_limit_options
 from ..profiles._columns import check_smoothing
-from ..report import Curve, FramePicker, TimePlot, write_report
+from ..report import Curve, FramePicker, Output, Report, TimePlot, write_output
 from ..simulate.passive import driven_motion, passive_motion
 from ._files import JobResult, prepare
 
-__all__ = ["job", "run_mechanism", "write_run_report", "report_columns", "CHUNK"]
+__all__ = ["job", "run_mechanism", "run_report", "report_columns", "CHUNK"]
 
 Array = NDArray[np.float64]
 
@@ -121,15 +120,15 @@ def _pose_groups(model: MechanismModel) -> list[tuple[str, str, list[str]]]:
 
 
 def report_columns(model: MechanismModel) -> list[str]:
-    """The results columns a run's report plots (:func:`write_run_report`)."""
+    """The results columns a run's report plots (:func:`run_report`)."""
     pos, _, _ = task_columns(model)
     groups = _report_groups(model) + _pose_groups(model)
     return ["t_s", *pos, *(c for _, _, cols in groups for c in cols)]
 
 
-def write_run_report(out: Path, model: MechanismModel, cols: dict[str, Array], frames: dict[str, Array],
-                     summary: dict[str, Any], description_text: str, samples: int | None = None) -> Path:
-    """``report.html`` of a run (:mod:`pkmdyn.report`): the mechanism drawn at the animation's
+def run_report(model: MechanismModel, cols: dict[str, Array], frames: dict[str, Array], description_text: str,
+               samples: int | None = None) -> Report:
+    """The content of a run's ``report.html`` (:mod:`pkmdyn.report`): the mechanism drawn at the animation's
     samples ``frames`` (``t``, ``joint_point``: each body through its joint centres, actuated
     joints as chains coloured by effort), the task and actuator coordinates, rates and efforts
     against time from the results columns ``cols`` (the plots' window of the run; ``samples``:
@@ -147,10 +146,9 @@ def write_run_report(out: Path, model: MechanismModel, cols: dict[str, Array], f
     notes = [f"mechanism: {model.name}" + (f" ({model.source})" if model.source else "")]
     if samples is not None and samples > t.shape[0]:
         notes.append(f"plots and animation: the first {t.shape[0]} of {samples} samples (results hold every sample)")
-    return write_report(out, title=f"{model.name}: pkmdyn run", scene=scene,
-                        plots=plots, summary=summary, parameters=description_text, notes=notes,
-                        scene_note="Joint centres as in bodies.npz (joint_point); actuated joints drawn as chains.",
-                        samples=t.shape[0])
+    return Report(f"{model.name}: pkmdyn run", scene=scene, plots=plots, parameters=description_text, notes=notes,
+                  scene_note="Joint centres as in bodies.npz (joint_point); actuated joints drawn as chains.",
+                  samples=t.shape[0])
 
 
 
@@ -268,19 +266,18 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
     note_table_size(n, len(results_column_names(model, deflection)), fmt)
     body_rows = min(n, int(lim["max_body_samples"]))
     window = min(body_rows, n if plot_window is None else int(plot_window))
-    summ = _Summary(model)
     limited = limited_joints(model)
-    prev_coords: Array | None = None
-    overconstrained = "compliance"
-    reason = ""
-
-    frames = FramePicker(window)
-    plot_parts: list[dict[str, Array]] = []
     plotted = report_columns(model)
-    final = Path(out_dir)
-    with output_dir(out_dir, inputs=inputs) as out:
+
+    def make(out: Path) -> Output:
+        summ = _Summary(model)
+        prev_coords: Array | None = None
+        overconstrained = "compliance"
+        reason = ""
+        frames = FramePicker(window)
+        plot_parts: list[dict[str, Array]] = []
         files = {"results": out / ("results.csv" if fmt == "csv" else "results.parquet"), "model": out / "model.json",
-                 "bodies": out / "bodies.npz", "summary": out / "summary.json"}
+                 "bodies": out / "bodies.npz"}
         write_json(files["model"], model_summary(model))
         npz = NpzWriter(files["bodies"], body_rows)
         try:
@@ -379,13 +376,10 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
         if model.na < model.nt:  # under-actuated: the motion's least dynamic consistency
             summary["max_unactuated_force_ratio"] = summ.unactuated
         plot_cols = {k: np.concatenate([p[k] for p in plot_parts]) for k in plot_parts[0]}
-        files["report"] = write_run_report(out, model, plot_cols, frames.arrays(), summary, description_text,
-                                           samples=n)
-        summary["files"] = sorted(p.name for p in files.values())
-        write_json(files["summary"], summary)
-        if report is not None:
-            report({k: final / v.name for k, v in files.items()})
-    return {**summary, "files": {k: final / v.name for k, v in files.items()}}
+        return Output(files, summary, run_report(model, plot_cols, frames.arrays(), description_text, samples=n))
+
+    files, output = write_output(out_dir, inputs, make, report)
+    return {**(output.summary or {}), "files": files}
 
 
 def job(machine: str, out_dir: Path, *, motion_path: Path | None = None, actuator_path: Path | None = None,

@@ -41,8 +41,8 @@ from ..multibody.kinematics.motion import default_motion as one_cycle
 from ..multibody.kinematics.motion import read_task_motion
 from ..multibody.model.compiler import MechanismModel
 from ..params_util import parse_limit_options
-from ..report import scene_from_joints, write_report
-from ._files import JobResult, prepare, write
+from ..report import Output, Report, scene_from_joints, write_output
+from ._files import JobResult, prepare
 
 __all__ = ["job", "pose_document", "run_stiffness", "MAX_GRID_POINTS"]
 
@@ -156,8 +156,8 @@ def _mode_scene(model: MechanismModel, kin: MechanismKinematics, st: Stiffness, 
     return np.arange(jp.shape[0], dtype=float), jp, notes
 
 
-def _report(out: Path, model: MechanismModel, kin: MechanismKinematics, st: Stiffness, s: int, summary: dict,
-            text: str, images: list[Path]) -> Path:
+def _report(model: MechanismModel, kin: MechanismKinematics, st: Stiffness, s: int, summary: dict,
+            text: str, images: list[str]) -> Report:
 
     t, jp, notes = _mode_scene(model, kin, st, s)
     scene = None
@@ -165,11 +165,11 @@ def _report(out: Path, model: MechanismModel, kin: MechanismKinematics, st: Stif
         summ = model_summary(model)
         joints = [(j["name"], j["type"], j["body_a"], j["body_b"]) for j in summ["joints"]]
         scene = scene_from_joints(t, jp, joints)
-    return write_report(out, title=f"{model.name}: stiffness and natural frequencies", scene=scene, summary=summary,
-                        parameters=text, images=images,
-                        notes=[f"lowest modes at pose {s + 1}: " + "; ".join(notes)] if notes else [],
-                        scene_note="Each of the lowest modes swings once, 16 frames each, in frequency order "
-                                   "(amplitude exaggerated: 5 % of the length scale).")
+    return Report(f"{model.name}: stiffness and natural frequencies", scene=scene, summary=summary,
+                  parameters=text, images=images,
+                  notes=[f"lowest modes at pose {s + 1}: " + "; ".join(notes)] if notes else [],
+                  scene_note="Each of the lowest modes swings once, 16 frames each, in frequency order "
+                             "(amplitude exaggerated: 5 % of the length scale).")
 
 
 def _map_png(path: Path, model: MechanismModel, axes: list[tuple[int, Array]], ok: Array, kt: Array, f1: Array) -> None:
@@ -201,13 +201,14 @@ def _map_png(path: Path, model: MechanismModel, axes: list[tuple[int, Array]], o
 
 def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = None, motion: Any = None,
                   grid: list[tuple[int, Array]] | None = None, description_text: str = "", rotors: str = "held"
-                  ) -> tuple[dict[str, Any], dict[str, Path]]:
+                  ) -> tuple[dict[str, Any], Output]:
     """Write the stiffness job's files into the (temporary) folder ``out``; exactly one of
     ``poses (n, nt)``, ``motion`` (a task motion, its loads included) or ``grid`` (axes of
-    :func:`parse_grid`); the modes with the drives' rotors ``rotors`` (``"held"``, ``"moving"``). Returns the document written to ``stiffness.json`` and the files written
-    (label -> path)."""
+    :func:`parse_grid`); the modes with the drives' rotors ``rotors`` (``"held"``, ``"moving"``).
+    Returns the document written to ``stiffness.json`` and the output (the files written, label ->
+    path, and the report's content, :func:`pkmdyn.report.write_output`)."""
     files: dict[str, Path] = {}
-    images: list[Path] = []
+    images: list[str] = []
     if grid is not None:
         x = grid_poses(model, grid)
         ok = reachable(model, x)
@@ -234,7 +235,7 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
         write_csv(files["grid"], cols)
         files["map"] = out / "stiffness_map.png"
         _map_png(files["map"], model, grid, ok, kt, f1)
-        images.append(files["map"])
+        images.append("map")
         worst = min(results, key=lambda s: (kt[s], f1[s]))
         doc = _head(model, "grid", rotors)
         doc["grid"] = {"axes": {f"{model.task_names[i]}_{model.task_units[i]}": [float(v) for v in vals]
@@ -291,8 +292,7 @@ def run_stiffness(model: MechanismModel, out: Path, *, poses: Array | None = Non
     summary = {k: v for k, v in doc.items() if k not in ("poses",)}
     if "worst" not in summary:
         summary["pose"] = doc["poses"][0]
-    files["report"] = _report(out, model, kin, st, s0, summary, description_text, images)
-    return doc, files
+    return doc, Output(files, report=_report(model, kin, st, s0, summary, description_text, images))
 
 
 def job(machine: str, out_dir: Path, *, poses: tuple[str, ...] = (), motion_path: Path | None = None,
@@ -323,11 +323,11 @@ def job(machine: str, out_dir: Path, *, poses: tuple[str, ...] = (), motion_path
         kw["grid"] = parse_grid(model, grid, max_axes=2, max_points=MAX_GRID_POINTS, limits=eff)
     held: dict[str, Any] = {}
 
-    def make(out: Path) -> dict[str, Path]:
-        held["doc"], files = run_stiffness(model, out, description_text=p.text, rotors=rotors, **kw)
-        return files
+    def make(out: Path) -> Output:
+        held["doc"], written = run_stiffness(model, out, description_text=p.text, rotors=rotors, **kw)
+        return written
 
-    files = write(out_dir, p.inputs, make, announce)
+    files, output = write_output(out_dir, p.inputs, make, announce)
     doc = held["doc"]
     pose = doc.get("worst") or doc["poses"][0]
     k = pose["min_stiffness_N_m"]
@@ -338,4 +338,4 @@ def job(machine: str, out_dir: Path, *, poses: tuple[str, ...] = (), motion_path
              f"rotational: {'rigid' if kr is None else f'{kr:.6g} N m/rad'}",
              f"  natural frequencies (rotors {rotors}): "
              + ", ".join(f"{f:.6g}" for f in pose.get("frequencies_Hz", [])) + " Hz")
-    return JobResult(files, doc, lines)
+    return JobResult(files, doc, lines, report=output.report)

@@ -28,9 +28,9 @@ from ..multibody.description.schema import LIMIT_KEYS
 from ..multibody.dynamics.actuators import effective_limits
 from ..multibody.kinematics.inverse import solve_kinematics
 from ..multibody.kinematics.motion import default_motion, read_task_motion
-from ..report import write_report
+from ..report import Output, Report, write_output
 from ..params_util import check_limit, parse_limit_options
-from ._files import JobResult, prepare, write
+from ._files import JobResult, prepare
 
 __all__ = ["job", "wear_file", "wear_document", "write_wear_files", "tracks_figure"]
 
@@ -192,16 +192,15 @@ def job(machine: str, joints: tuple[str, ...], out_dir: Path, *, motion_path: Pa
     extra = {"motion": str(motion_path) if motion_path else "the machine's default motion"}
     doc = wear_file(model, results, opts, extra)
 
-    def make(out: Path) -> dict[str, Path]:
-        files = write_wear_files(out, model, results, opts, extra)
-        files["report"] = write_report(out, title=f"{model.name}: slide tracks and wear", scene=None,
-                                       summary={j["joint"]: j for j in doc["joints"]}, parameters=p.text,
-                                       images=[f for f in files.values() if f.suffix == ".png"],
-                                       notes=["definitions: docs/wear.md"],
-                                       figures=[(f"{j}: tracks on the cup", tracks_figure(j, c)) for j, c, _, _ in results])
-        return files
+    report = Report(f"{model.name}: slide tracks and wear", summary={j["joint"]: j for j in doc["joints"]},
+                    parameters=p.text, notes=["definitions: docs/wear.md"],
+                    figures=[(f"{j}: tracks on the cup", tracks_figure(j, c)) for j, c, _, _ in results])
 
-    files = write(out_dir, p.inputs, make, announce)
+    def make(out: Path) -> Output:
+        files = write_wear_files(out, model, results, opts, extra)
+        return Output(files, report=replace(report, images=[k for k, f in files.items() if f.suffix == ".png"]))
+
+    files, output = write_output(out_dir, p.inputs, make, announce)
     lines = []
     for j, on_cup, on_head, what in results:
         s = on_cup.summary()
@@ -210,4 +209,4 @@ def job(machine: str, joints: tuple[str, ...], out_dir: Path, *, motion_path: Pa
                      f"{s['aspect_ratio']['median']:.4g}, share above 5.5: "
                      f"{100 * s['share_aspect_ratio_above_5_5']:.0f} %; cross-shear mean {s['cross_shear']['mean']:.3g}; "
                      f"wear {on_head.wear_per_million_cycles:.4g} mm^3 per million cycles")
-    return JobResult(files, doc, tuple(lines))
+    return JobResult(files, doc, tuple(lines), report=output.report)

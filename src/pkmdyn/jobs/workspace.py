@@ -23,8 +23,8 @@ from ..multibody.description.schema import LIMIT_KEYS
 from ..multibody.dynamics.actuators import effective_limits
 from ..multibody.model.compiler import MechanismModel
 from ..params_util import parse_limit_options
-from ..report import write_report
-from ._files import JobResult, prepare, write
+from ..report import Output, Report, write_output
+from ._files import JobResult, prepare
 
 __all__ = ["job"]
 
@@ -56,17 +56,17 @@ def job(machine: str, grid: str, pose: str, orientation_range: str | None, thres
     ws = workspace(model, axes, base, threshold, c, ranges, refine=refine)
     doc = workspace_document(model, ws)
 
-    def make(out: Path) -> dict[str, Path]:
+    report = Report(f"{model.name}: workspace", summary=doc, parameters=p.text, images=["map"],
+                    notes=["definitions: docs/workspace.md"])
+
+    def make(out: Path) -> Output:
         files = {"workspace": out / "workspace.json", "poses": out / "workspace.csv", "map": out / "workspace.png"}
         write_json(files["workspace"], doc)
         write_csv(files["poses"], ws.columns())
         workspace_png(files["map"], model, ws)
-        files["report"] = write_report(out, title=f"{model.name}: workspace", scene=None, summary=doc,
-                                       parameters=p.text, images=[files["map"]],
-                                       notes=["definitions: docs/workspace.md"])
-        return files
+        return Output(files, report=report)
 
-    files = write(out_dir, p.inputs, make, announce)
+    files, _ = write_output(out_dir, p.inputs, make, announce)
     shapes = ("" if ws.cube_half_width is None else
               f"; inscribed cube half-width {ws.cube_half_width:.4g}, cylinder radius {ws.cylinder_radius:.4g}")
     lines = (f"{doc['inside']} of {doc['poses']} poses inside (reached: {doc['reached']}); size "
@@ -75,7 +75,7 @@ def job(machine: str, grid: str, pose: str, orientation_range: str | None, thres
     if doc["size_is_lower_bound"]:
         warnings = (f"the workspace reaches the grid's edge along {', '.join(doc['inside_at_grid_edge'])}: "
                     "its size is a lower bound (widen --grid there)",)
-    return JobResult(files, doc, lines, warnings)
+    return JobResult(files, doc, lines, warnings, report=report)
 
 
 def workspace_png(path, model: MechanismModel, ws: Workspace) -> None:

@@ -15,6 +15,7 @@ from .._lazy import attach
 
 if TYPE_CHECKING:
     from ._figures import Curve, TimePlot, decimate_minmax
+    from ._output import SUMMARY_NAME, Output, Report, write_output
     from ._page import REPORT_NAME, write_report, write_view
     from ._scene import MAX_FRAMES, FramePicker, Scene, SceneActuator, SceneBody, frame_indices, scene_from_files, scene_from_joints
     from ._topology import Topology, fundamental_loops, layered_layout, topology_from_model
@@ -34,6 +35,10 @@ __all__ = [
     "write_report",
     "write_view",
     "REPORT_NAME",
+    "Report",
+    "Output",
+    "write_output",
+    "SUMMARY_NAME",
     "Topology",
     "topology_from_model",
     "fundamental_loops",
@@ -45,6 +50,7 @@ __all__ = [
 __getattr__, __dir__ = attach(__name__, {
     **dict.fromkeys(("Curve", "TimePlot", "decimate_minmax"), "._figures"),
     **dict.fromkeys(("REPORT_NAME", "write_report", "write_view"), "._page"),
+    **dict.fromkeys(("Report", "Output", "write_output", "SUMMARY_NAME"), "._output"),
     **dict.fromkeys(("MAX_FRAMES", "FramePicker", "Scene", "SceneActuator", "SceneBody", "frame_indices",
                      "scene_from_files", "scene_from_joints"), "._scene"),
     **dict.fromkeys(("Topology", "fundamental_loops", "layered_layout", "topology_from_model"), "._topology"),

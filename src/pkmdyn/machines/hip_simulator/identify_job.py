@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import copy
 import tomllib
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +20,7 @@ import numpy as np
 
 from ...errors import LimitError, MotionError, ParameterError
 from ...identify._report import MIN_EXPLAINED_PERCENT, explained_percent, fit_failure, identification_report
-from ...io import atomic_file, check_output_dir, check_output_file, dumps_toml, output_dir, write_csv, write_json
+from ...io import atomic_file, check_output_dir, check_output_file, dumps_toml, write_csv, write_json
 from ...params_util import read_toml
 from ...profiles.orientation import write_motion_csv
 from .identify_excite import ExcitationLimits, design_excitation, excitation_motion
@@ -43,7 +43,7 @@ import warnings
 from ...identify.plots import plot_residuals, plot_torque_fit
 from ...multibody import load_mechanism
 from ...multibody.scene import motion_scene
-from ...report import MAX_FRAMES, Curve, TimePlot, frame_indices, write_report
+from ...report import MAX_FRAMES, Curve, Output, Report, TimePlot, frame_indices, write_output
 from .description import hip_description
 from .identify_bounds import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW  # noqa: E402  (the bounds, stated by the CLI)
 from .identify_excite import design_work
@@ -211,30 +211,37 @@ def run_identify(
     lines.append(f"residual RMS per motor [N mm]: {rms}")
     if eps_note is not None:
         lines.append(eps_note)
-    out = Path(out_dir)
-    with output_dir(out, inputs=inputs) as tmp:
-        (tmp / "identified.toml").write_text(text, encoding="utf-8")
-        write_json(tmp / "identification.json", report_doc)
-        write_csv(tmp / "torques.csv", columns)
-        names = ["identified.toml", "identification.json", "torques.csv"]
+    warns = ([str(w.message) for w in caught if not issubclass(w.category, RuntimeWarning)]
+             + ([eps_note] if eps_note is not None else []))
+
+    def make(tmp: Path) -> Output:
+        files = {"identified": tmp / "identified.toml", "identification": tmp / "identification.json",
+                 "torques": tmp / "torques.csv"}
+        files["identified"].write_text(text, encoding="utf-8")
+        write_json(files["identification"], report_doc)
+        write_csv(files["torques"], columns)
         if make_plots:
-            plot_torque_fit(motion.t, tau, result.tau_identified, tmp / "torque_fit.png")
-            plot_residuals(motion.t, tau - result.tau_identified, tmp / "residuals.png")
-            names += ["torque_fit.png", "residuals.png"]
+            files["torque_fit"] = tmp / "torque_fit.png"
+            files["residuals"] = tmp / "residuals.png"
+            plot_torque_fit(motion.t, tau, result.tau_identified, files["torque_fit"])
+            plot_residuals(motion.t, tau - result.tau_identified, files["residuals"])
+        rep = None
         if html_report:
-            names.append(_report(tmp, model, motion, tau, result.tau_identified, report_doc, params_path,
-                                 [tmp / n for n in names if n.endswith(".png")],
-                                 [str(w.message) for w in caught if not issubclass(w.category, RuntimeWarning)]
-                                 + ([eps_note] if eps_note is not None else [])).name)
-        files = {Path(n).stem.replace(".", "_"): out / n for n in names}
+            rep = _report(model, motion, tau, result.tau_identified, report_doc, params_path,
+                          [k for k, p in files.items() if p.suffix == ".png"], warns)
+        return Output(files, report=rep)
+
+    def listing(placed: Mapping[str, Path]) -> None:
         if report is not None:
-            report([*lines, *(f"{name}: {path}" for name, path in files.items())])
+            report([*lines, *(f"{name}: {path}" for name, path in placed.items())])
+
+    files, _ = write_output(out_dir, inputs, make, listing)
     return files, lines
 
 
-def _report(tmp: Path, model: HipModel, motion: Any, tau: np.ndarray, tau_id: np.ndarray, doc: dict[str, Any],
-            params_path: str | Path | None, images: list[Path], warns: list[str]) -> Path:
-
+def _report(model: HipModel, motion: Any, tau: np.ndarray, tau_id: np.ndarray, doc: dict[str, Any],
+            params_path: str | Path | None, images: list[str], warns: list[str]) -> Report:
+    """The content of ``report.html``: the measured motion animated, measured and identified torques."""
     idx = frame_indices(len(motion), MAX_FRAMES)
     scene = motion_scene(load_mechanism(hip_description(model)), motion.t[idx], motion.angles[idx], tau[idx],
                          labels=tuple((f"motor {i + 1} torque", "N m") for i in range(3)))
@@ -245,12 +252,12 @@ def _report(tmp: Path, model: HipModel, motion: Any, tau: np.ndarray, tau_id: np
                           tuple(Curve(f"motor {i + 1}", tau[:, i] - tau_id[:, i]) for i in range(3))))
     plots.append(TimePlot("Measured motion", "angle [deg]", t, tuple(
         Curve(n, np.degrees(motion.angles[:, c])) for c, n in enumerate(("alpha (FE)", "beta (AA)", "gamma (IER)")))))
-    return write_report(tmp, title="2(3PUS+S) hip simulator: hip identify", scene=scene, plots=plots, summary=doc,
-                        parameters=parameters_text(params_path), warnings=warns, images=images,
-                        notes=[f"measured: {doc['measured']}", f"parameters: {doc['parameters']}",
-                               f"identify: {doc['identify']}"],
-                        scene_note="The measured motion; actuated carriages coloured by the measured motor torques.",
-                        samples=len(motion))
+    return Report("2(3PUS+S) hip simulator: hip identify", scene=scene, plots=plots, summary=doc,
+                  parameters=parameters_text(params_path), warnings=warns, images=images,
+                  notes=[f"measured: {doc['measured']}", f"parameters: {doc['parameters']}",
+                         f"identify: {doc['identify']}"],
+                  scene_note="The measured motion; actuated carriages coloured by the measured motor torques.",
+                  samples=len(motion))
 
 
 def run_excite(

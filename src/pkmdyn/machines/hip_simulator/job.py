@@ -15,7 +15,7 @@ draws them. The results stream to the file and the summary's extremes and the pl
 kept on the fly, so peak memory does not grow with the number of samples
 (``benchmarks/memory.py``). Every input is checked before the output folder is touched; the
 files are written into a temporary folder beside ``--out`` that replaces it only when the whole
-run succeeded (:func:`pkmdyn.io.output_dir`).
+run succeeded (:func:`pkmdyn.report.write_output`).
 """
 
 from __future__ import annotations
@@ -32,14 +32,14 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from ...errors import ParameterError, PkmdynError, SingularityWarning
-from ...io import TABLE_FORMATS, check_table_format, note_table_size, open_table_writer, output_dir, write_json
+from ...io import TABLE_FORMATS, check_table_format, note_table_size, open_table_writer
 from ...jobs.wear import tracks_figure, write_wear_files
 from ...multibody.analyses.wear import WearOptions, joint_wear
 from ...multibody.scene import mechanism_scene
 from ...params_util import check_limit, parse_limit_options
 from ...profiles.iso14242 import IsoCycle, iso14242_block, iso14242_motion, iso14242_samples, iso14242_times
 from ...profiles.orientation import OrientationMotion, read_motion_csv
-from ...report import MAX_FRAMES, FramePicker, write_report
+from ...report import MAX_FRAMES, FramePicker, Output, Report, write_output
 from . import figures, paper
 from .params import LIMIT_KEYS, HipLimits, HipModel, check_motion_limits, load_params
 
@@ -191,7 +191,7 @@ def run_hip(
     limits on load and angles) is checked before ``out_dir`` is touched; the slider speed and
     acceleration limits are checked block by block as the kinematics are computed. On any error
     nothing is left at or beside ``out_dir``. ``report`` is called with the files' final paths
-    before they move into place (:func:`pkmdyn.io.output_dir`), so that a listing that cannot
+    before they move into place (:func:`pkmdyn.report.write_output`), so that a listing that cannot
     be printed leaves ``out_dir`` as it was.
     """
     singularity_threshold = _finite_option("--singularity-threshold", singularity_threshold, 0.0, 1.0)
@@ -245,8 +245,11 @@ def run_hip(
     worst = (0.0, 0.0, 0)  # cond, t, sample
     other: dict[str, None] = {}
     q_prev: Array | None = None
-    with output_dir(out_dir, inputs={"--params": params_path, "--motion": motion_path}) as tmp:
-        files = {"results": tmp / ("results.csv" if fmt == "csv" else "results.parquet"), "summary": tmp / "summary.json"}
+    messages: list[str] = []
+
+    def make(tmp: Path) -> Output:
+        nonlocal near, worst, q_prev
+        files = {"results": tmp / ("results.csv" if fmt == "csv" else "results.parquet")}
         blocks = _motion_blocks(motion, n, cycles, cycle, chunk)
         bar = tqdm(blocks, total=-(-n // chunk), desc="hip: kinematics + dynamics", unit="block",
                    disable=not progress or None, leave=False)
@@ -281,7 +284,7 @@ def run_hip(
                     collect.add(s, curves, mb.load, res.parts["friction"])
                 if frames is not None:
                     frames.add(s, t=mb.t, joint_point=res.kin.joint_point, tau=res.tau)
-        messages = list(other)
+        messages.extend(other)
         eps_note = paper.regularisation_note(model)
         if eps_note is not None:
             messages.append(eps_note)
@@ -295,8 +298,6 @@ def run_hip(
         doc["motion"] = source
         doc["limits"] = dataclasses.asdict(lim)
         doc["warnings"] = messages
-        if html_report:
-            files["report"] = tmp / "report.html"
         try:
             wear_kin, wear_load = _wear_cycle(view, wear, motion, n, samples_per_cycle, cycle)
             wear_files, wear_views = _wear(tmp, view.mech, model, wear_kin, wear_load, motion is None, params_path,
@@ -307,24 +308,23 @@ def run_hip(
             wear_views = []
             messages.append(f"slide tracks and wear left out: {exc}")
             doc["warnings"] = messages
-        write_json(files["summary"], doc)
         if collect is not None:
             data = collect.data(note)
         if make_plots:
             files.update(figures.write_figures(data, tmp))
+        rep = None
         if frames is not None:
-
             f = frames.arrays()
             efforts = {f"P_{i + 1}": (f["tau"][:, i], f"motor {i + 1} torque", "N m") for i in range(3)}
-            write_report(tmp, title="2(3PUS+S) hip simulator: hip run",
+            rep = Report("2(3PUS+S) hip simulator: hip run",
                          scene=mechanism_scene(view.mech, f["t"], f["joint_point"], efforts),
                          plots=figures.report_plots(data), summary=doc,
                          parameters=paper.parameters_text(params_path), warnings=messages,
-                         images=[p for p in files.values() if p.suffix == ".png"],
+                         images=[k for k, p in files.items() if p.suffix == ".png"],
                          notes=[f"parameters: {doc['parameters']}", f"motion: {source}"],
                          scene_note=(f"The animation covers the plots' window: {note}." if note else ""),
                          samples=window, figures=wear_views)
-        final = {k: Path(out_dir) / p.name for k, p in files.items()}
-        if report is not None:
-            report(final)
+        return Output(files, doc, rep)
+
+    final, _ = write_output(out_dir, {"--params": params_path, "--motion": motion_path}, make, report)
     return final, messages

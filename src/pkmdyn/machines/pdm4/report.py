@@ -5,17 +5,16 @@ summary and the parameters."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ...report import Curve, TimePlot, write_report
+from ...report import Curve, Report, TimePlot
 from .paper import REDUNDANT_LABELS
 from .params import PdmModel, default_params_path
 from .scene import pdm_scene
 
-__all__ = ["write_run_report", "parameters_text"]
+__all__ = ["run_report", "run_plots", "parameters_text"]
 
 Array = NDArray[np.float64]
 _LIMBS = ("l11", "l12", "l23", "l24")
@@ -61,15 +60,13 @@ def run_plots(cols: dict[str, Array]) -> list[TimePlot]:
     ]
 
 
-def write_run_report(out: Path, model: PdmModel, params_path: str | Path | None, motion_source: str,
-                     cols: dict[str, Array], npz: dict[str, Array], summary: dict[str, Any],
-                     images: list[Path]) -> Path:
-    """Write ``report.html`` into the run's (temporary) folder ``out``."""
+def run_report(model: PdmModel, params_path: str | Path | None, motion_source: str, cols: dict[str, Array],
+               npz: dict[str, Array], images: list[str]) -> Report:
+    """The content of a run's ``report.html`` (``images``: the labels of the run's PNG files)."""
     force = np.stack([cols[f"f{k}_N"] for k in range(1, 5)], axis=-1)
     P = np.stack([cols["x_m"], cols["y_m"], cols["z_m"]], axis=-1)
     scene = pdm_scene(npz["t"], npz["joint_point"], force, P)
-    return write_report(
-        out, title="4-DOF PDM: pdm run", scene=scene, plots=run_plots(cols), summary=summary,
-        parameters=parameters_text(params_path), warnings=(), images=images,
-        notes=[f"parameters: {model.source}", f"motion: {motion_source}"],
+    return Report(
+        "4-DOF PDM: pdm run", scene=scene, plots=run_plots(cols), parameters=parameters_text(params_path),
+        images=images, notes=[f"parameters: {model.source}", f"motion: {motion_source}"],
         scene_note="Joint centres as in bodies.npz (joint_point); the orange line is the path of the platform point P.")

@@ -8,7 +8,7 @@ analysis), ``geometry.json`` (the joint positions the layout derives), ``workspa
 ``workspace_xy.csv`` (boundary search), and unless plots are off ``limbs.png``,
 ``forces.png``, ``overconstraints.png``, ``workspace.png`` and ``schematic.png``. Everything is
 computed before the output folder is touched, and the folder is written whole through
-:func:`pkmdyn.io.output_dir`.
+:func:`pkmdyn.report.write_output`.
 """
 
 from __future__ import annotations
@@ -25,10 +25,11 @@ from tqdm import tqdm
 
 from ...analysis.mobility import analyse
 from ...errors import PkmdynError
-from ...io import check_output_dir, open_table_writer, output_dir, write_json
+from ...io import check_output_dir, open_table_writer, write_json
 from ...multibody import load_mechanism, solve_kinematics
 from ...multibody.dynamics.newton_euler import joint_reactions
 from ...params_util import check_limit, parse_limit_options
+from ...report import Output, write_output
 from ...profiles.pdm_motion import PdmMotion, cycloidal_motion, read_pdm_motion
 from . import paper
 from .description import pdm_description
@@ -36,7 +37,7 @@ from .kinematics import inverse_position, mechanism_joints
 from .paper import BODY_NAMES, JOINTS, LIMB_LABELS, REDUNDANT_LABELS
 from .params import LIMIT_KEYS, PdmModel, TrajectorySettings, load_params
 from .plots import plot_forces, plot_limbs, plot_overconstraints, plot_workspace
-from .report import write_run_report
+from .report import run_report
 from .schematic import draw_schematic
 from .workspace import reachable_workspace, write_projection_csv, write_workspace_csv
 
@@ -204,7 +205,7 @@ def _check_plausible(model: PdmModel, cols: dict[str, Array]) -> None:
                     f"t = {t[r]:.6g} s (sample {r + 1}): {LIMB_LABELS[k]} {what}", key, unit)
 
 
-def _summary(cols: dict[str, Array], n: int, mob: dict[str, Any], files: dict[str, Path]) -> dict[str, Any]:
+def _summary(cols: dict[str, Array], n: int, mob: dict[str, Any]) -> dict[str, Any]:
     def peak(name: str) -> float:
         return float(np.abs(cols[name]).max())
 
@@ -215,7 +216,6 @@ def _summary(cols: dict[str, Array], n: int, mob: dict[str, Any], files: dict[st
         "max_abs_u_joint_torque_Nm": {k: peak(k) for k in ("U23_torque_Nm", "U24_torque_Nm")},
         "max_loop_residual_m": float(cols["loop_residual_m"].max()),
         "t": mob["t"],
-        "files": sorted(p.name for p in files.values()),
     }
 
 
@@ -262,21 +262,15 @@ def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_
     _check_plausible(model, cols)
     mob = mobility_summary(model, motion.q[0])
     ws = reachable_workspace(model)
-    with output_dir(out_dir, inputs=inputs) as out:  # only now: a user error above leaves nothing behind
+
+    def make(out: Path) -> Output:  # only now: a user error above leaves nothing behind
         files = _write(model, out, cols, npz, mob, ws, plots)
-        summ = _summary(cols, len(motion), mob, files)
-        files["summary"] = out / "summary.json"
-        images = [p for k, p in files.items() if p.suffix == ".png"]
-        if html_report:
-            files["report"] = out / "report.html"
-        summ["files"] = sorted(p.name for p in files.values())
-        write_json(files["summary"], summ)
-        if html_report:
-            write_run_report(out, model, params_path, motion_source, cols, npz, summ, images)
-        final = {k: Path(out_dir) / v.name for k, v in files.items()}
-        if report is not None:
-            report(final)
-    return {**summ, "files": final}
+        images = [k for k, p in files.items() if p.suffix == ".png"]
+        rep = run_report(model, params_path, motion_source, cols, npz, images) if html_report else None
+        return Output(files, _summary(cols, len(motion), mob), rep)
+
+    final, output = write_output(out_dir, inputs, make, report)
+    return {**(output.summary or {}), "files": final}
 
 
 def _write(model: PdmModel, out: Path, cols: dict[str, Array], npz: dict[str, Array], mob: dict[str, Any],
