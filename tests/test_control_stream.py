@@ -12,7 +12,8 @@ import pyarrow.parquet as pq
 import pytest
 
 from pkmdyn.cli import main
-from pkmdyn.jobs.control import PLOT_RAW_MAX, _Curves, machine_setup
+from pkmdyn.jobs.control import machine_setup
+from pkmdyn.report import PLOT_RAW_MAX, Curves
 from pkmdyn.control import gains, load_settings, loop_settings
 from pkmdyn.simulate import track, track_spans
 from pkmdyn.simulate import _run
@@ -91,20 +92,22 @@ def test_memory_does_not_grow_with_the_run(tmp_path, monkeypatch):
 
 
 def test_multi_cycle_plots_keep_the_first_cycle_and_the_band_of_every_cycle():
-    T, fold = 0.001, 1.0
+    T, fold = 0.001, 1000
     K = 12_000
-    c = _Curves(K, T, fold)
+    c = Curves(K, fold=fold)
     assert c.mode == "fold" and c.size == 1000
     t = np.arange(K) * T
     wave = np.sin(2 * np.pi * t)[:, None] * (1 + np.floor(t)[:, None])  # cycle i has amplitude i + 1
     for start in range(0, K, 700):
         c.add(start, t[start:start + 700], {"x": wave[start:start + 700]})
-    tt, first, lo, hi, note = c.data()
+    d = c.data()
+    tt, first, hi, note = d.t, d.first, d.hi, d.note
     assert tt.shape == (1000,) and np.allclose(tt, t[:1000])
     np.testing.assert_allclose(first["x"][:, 0], wave[:1000, 0])
     np.testing.assert_allclose(hi["x"][250, 0], 12.0)  # the largest cycle's peak at the quarter phase
+    np.testing.assert_allclose(d.lo["x"][750, 0], -12.0)
     assert "12 motion cycles" in note
-    assert _Curves(PLOT_RAW_MAX, T, fold).mode == "raw" and _Curves(K, T, 0.0).mode == "bins"
+    assert Curves(PLOT_RAW_MAX, fold=fold).mode == "raw" and Curves(K).mode == "bins"
 
 
 def test_a_many_cycle_run_writes_readable_plots(tmp_path):

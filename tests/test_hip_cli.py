@@ -219,6 +219,7 @@ def test_parquet_and_csv_hold_the_same_numbers(tmp_path):
 
 def test_plot_envelope_is_the_min_and_max_of_each_bin():
     from pkmdyn.machines.hip_simulator import figures as hrun
+    from pkmdyn.report import PLOT_BINS
 
     rng = np.random.default_rng(8)
     n = 12_345
@@ -231,12 +232,14 @@ def test_plot_envelope_is_the_min_and_max_of_each_bin():
         sl = slice(s, s + k)
         col.add(s, {"t": np.arange(n, dtype=float)[sl], "tau": x[sl]}, np.zeros(min(k, n - s)), x[sl])
         s += k
-    bins = np.arange(n) * hrun.PLOT_BINS // n
-    for b in (0, 17, hrun.PLOT_BINS - 1):
-        np.testing.assert_array_equal(col.lo["tau"][b], x[bins == b].min(axis=0))
-        np.testing.assert_array_equal(col.hi["tau"][b], x[bins == b].max(axis=0))
+    bins = np.arange(n) * PLOT_BINS // n
     data = col.data("")
-    assert data.t.shape == (hrun.PLOT_BINS,) and len(data.scatter_load) <= hrun.SCATTER_MAX
+    for b in (0, 17, PLOT_BINS - 1):
+        np.testing.assert_array_equal(data.lo["tau"][b], x[bins == b].min(axis=0))
+        np.testing.assert_array_equal(data.hi["tau"][b], x[bins == b].max(axis=0))
+        np.testing.assert_allclose(data.t[b], np.arange(n)[bins == b].mean(), rtol=1e-12)
+    assert data.t.shape == (PLOT_BINS,) and len(data.scatter_load) <= hrun.SCATTER_MAX
+    assert "envelope (min-max) of 12345 samples in 1000 bins" in data.note
 
 
 def test_multi_cycle_plots_show_the_first_cycle(tmp_path):

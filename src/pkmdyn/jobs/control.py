@@ -31,7 +31,7 @@ from ..io import (
     open_table_writer,
 )
 from ..machines.registry import control_adapter, generated_machines
-from ..report import MAX_FRAMES, Curve, FramePicker, Output, Report, TimePlot, write_output
+from ..report import MAX_FRAMES, Curve, Curves, Extremes, FramePicker, Output, Report, TimePlot, write_output
 from ._files import JobResult, prepare
 
 if TYPE_CHECKING:
@@ -405,10 +405,7 @@ class _Summary:
 
     def __init__(self, setup: _Setup) -> None:
         self.setup = setup
-        nq, nu = len(setup.verbs.COORDINATES), len(setup.verbs.ACTUATORS)
-        self.sq, self.mx, self.rows = np.zeros(nq), np.zeros(nq), 0
-        self.peak, self.sat = np.zeros(nu), np.zeros(nu, dtype=np.int64)
-        self.acc_ref_peak, self.acc_enc_peak = np.zeros(nu), np.zeros(nu)
+        self.ext = Extremes()
         self.buf: dict[str, list[np.ndarray]] = {k: [] for k in ("s", "s_enc", "sd", "sd_enc", "sdd", "sdd_enc")}
         self.kept = 0
         self.T = 0.0
@@ -418,13 +415,14 @@ class _Summary:
         K = r.t.shape[0]
         self.T = ref.T
         e = ref.q[:K] - r.q
-        self.sq += np.sum(e**2, axis=0)
-        self.mx = np.maximum(self.mx, np.max(np.abs(e), axis=0))
-        self.rows += K
-        self.peak = np.maximum(self.peak, np.max(np.abs(r.u), axis=0))
-        self.sat += np.sum(r.saturated, axis=0)
-        self.acc_ref_peak = np.maximum(self.acc_ref_peak, np.max(np.abs(j.sdd[:K]), axis=0))
-        self.acc_enc_peak = np.maximum(self.acc_enc_peak, np.max(np.abs(r.sdd_enc), axis=0))
+        x = self.ext
+        x.sum("sq", np.sum(e**2, axis=0))
+        x.max("mx", np.max(np.abs(e), axis=0))
+        x.sum("rows", K)
+        x.max("peak", np.max(np.abs(r.u), axis=0))
+        x.sum("sat", np.sum(r.saturated, axis=0))
+        x.max("acc_ref_peak", np.max(np.abs(j.sdd[:K]), axis=0))
+        x.max("acc_enc_peak", np.max(np.abs(r.sdd_enc), axis=0))
         take = min(K, ANALYSIS_CYCLES - self.kept)
         if take > 0:
             for key, v in (("s", j.s), ("s_enc", r.s_enc), ("sd", j.sd), ("sd_enc", r.sd_enc), ("sdd", j.sdd),
@@ -433,15 +431,16 @@ class _Summary:
             self.kept += take
 
     def result(self) -> dict[str, Any]:
+        x = self.ext
         coords: dict[str, Any] = {}
         for c, name in enumerate(self.setup.verbs.COORDINATES):
             base, scale, unit = _coordinate_scale(name)
-            coords[base] = {f"rms_err_{unit}": float(np.sqrt(self.sq[c] / self.rows)) * scale,
-                            f"max_abs_err_{unit}": float(self.mx[c]) * scale}
+            coords[base] = {f"rms_err_{unit}": float(np.sqrt(x["sq"][c] / x["rows"])) * scale,
+                            f"max_abs_err_{unit}": float(x["mx"][c]) * scale}
         efforts: dict[str, Any] = {}
         for a, name in enumerate(self.setup.verbs.ACTUATORS):
             base, unit = name.rsplit("_", 1)  # the actuator's name (it may hold "_"), then its unit
-            efforts[base] = {f"peak_abs_{unit}": float(self.peak[a]), "saturated_cycles": int(self.sat[a])}
+            efforts[base] = {f"peak_abs_{unit}": float(x["peak"][a]), "saturated_cycles": int(x["sat"][a])}
         b = {k: np.concatenate(v) for k, v in self.buf.items()}
         names = [c[0] for c in _joint_columns(self.setup)]
         T = self.T
@@ -452,85 +451,15 @@ class _Summary:
             acc_lag = _lag(b["sdd"][:, a], b["sdd_enc"][:, a], T, max_shift)
             d = int(round(acc_lag / T))
             den = float(np.sum(b["sdd"][:K - d, a] ** 2))
-            peak = float(self.acc_ref_peak[a])
+            peak = float(x["acc_ref_peak"][a])
             joints[nm] = {
                 "position_lag_ms": 1e3 * _lag(b["s"][:, a], b["s_enc"][:, a], T, max_shift),
                 "velocity_lag_ms": 1e3 * _lag(b["sd"][:, a], b["sd_enc"][:, a], T, max_shift),
                 "acceleration_lag_ms": 1e3 * acc_lag,
                 "acceleration_gain": float(np.sum(b["sdd_enc"][d:, a] * b["sdd"][:K - d, a]) / den) if den > 0 else 0.0,
-                "acceleration_peak_ratio": float(self.acc_enc_peak[a] / peak) if peak > 0 else 0.0,
+                "acceleration_peak_ratio": float(x["acc_enc_peak"][a] / peak) if peak > 0 else 0.0,
             }
         return {"coordinates": coords, "actuators": efforts, "encoders": joints}
-
-
-#: up to this many control cycles a plot shows every one; beyond, the first cycle of a built-in
-#: motion with the band of every cycle (folded by the motion's period), or an envelope
-PLOT_RAW_MAX = 5000
-#: bins of an envelope plot; longest motion period (in control cycles) a plot folds by
-PLOT_BINS, FOLD_MAX = 1000, 20_000
-
-
-class _Curves:
-    """The plots' curves, gathered span by span with bounded memory: every sample of a short run;
-    for a longer run of a built-in motion the first cycle of its period and, at each phase of
-    the period, the minimum and maximum over every cycle (a band); otherwise the minimum and
-    maximum over :data:`PLOT_BINS` equal bins of cycles (an envelope)."""
-
-    def __init__(self, K: int, T: float, fold_s: float) -> None:
-        fold = int(round(fold_s / T)) if fold_s > 0 else 0
-        self.K, self.T = K, T
-        if K <= PLOT_RAW_MAX:
-            self.mode, self.size = "raw", K
-        elif 0 < fold <= FOLD_MAX:
-            self.mode, self.size = "fold", min(fold, K)
-        else:
-            self.mode, self.size = "bins", PLOT_BINS
-        self.first: dict[str, np.ndarray] = {}
-        self.lo: dict[str, np.ndarray] = {}
-        self.hi: dict[str, np.ndarray] = {}
-        self.t_sum = np.zeros(self.size)
-        self.t_n = np.zeros(self.size)
-
-    def add(self, start: int, t: np.ndarray, curves: dict[str, np.ndarray]) -> None:
-        n = t.shape[0]
-        g = np.arange(start, start + n)
-        if self.mode == "raw" or self.mode == "fold":
-            where = g % self.size if self.mode == "fold" else g
-        else:
-            where = g * self.size // self.K
-        head = g < self.size if self.mode != "bins" else np.zeros(n, dtype=bool)
-        if self.mode == "bins":
-            np.add.at(self.t_sum, where, t)
-            np.add.at(self.t_n, where, 1.0)
-        else:
-            self.t_sum[g[head]] = t[head]
-            self.t_n[g[head]] = 1.0
-        for key, v in curves.items():
-            v = v.reshape(n, -1)
-            if key not in self.lo:
-                m = v.shape[1]
-                self.first[key] = np.full((self.size, m), np.nan)
-                self.lo[key] = np.full((self.size, m), np.inf)
-                self.hi[key] = np.full((self.size, m), -np.inf)
-            self.first[key][g[head]] = v[head]
-            np.minimum.at(self.lo[key], where, v)
-            np.maximum.at(self.hi[key], where, v)
-
-    def data(self) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray], dict[str, np.ndarray], str]:
-        """``t``, the first cycle (or every sample), the band's low and high curves, and a note."""
-        used = self.t_n > 0
-        t = self.t_sum[used] / self.t_n[used]
-        first = {k: v[used] for k, v in self.first.items()}
-        lo = {k: v[used] for k, v in self.lo.items()}
-        hi = {k: v[used] for k, v in self.hi.items()}
-        if self.mode == "fold":
-            cycles = self.K / self.size
-            note = f"first of {cycles:.4g} motion cycles; band: every cycle (min-max at each phase)"
-        elif self.mode == "bins":
-            note = f"envelope (min-max) of {self.K} control cycles in {self.size} bins"
-        else:
-            note = ""
-        return t, first, lo, hi, note
 
 
 def _plot_curves(setup: _Setup, tr: Any) -> dict[str, np.ndarray]:
@@ -561,14 +490,14 @@ def _draw(ax: Any, mode: str, t: np.ndarray, first: np.ndarray, lo: np.ndarray, 
                     label=label if line is None else None)
 
 
-def _plots(setup: _Setup, curves: _Curves, kind: str, tmp: Path) -> list[Path]:
+def _plots(setup: _Setup, curves: Curves, kind: str, tmp: Path) -> list[Path]:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    t, first, lo, hi, note = curves.data()
-    mode = curves.mode
+    d = curves.data()
+    t, first, lo, hi, note, mode = d.t, d.first, d.lo, d.hi, d.note, d.mode
     suffix = f"\n{note}" if note else ""
     paths = []
     if setup.job is not None:
@@ -627,7 +556,7 @@ def _effort_label(setup: _Setup, a: int) -> tuple[str, str]:
     return (f"{base} force", "N") if unit == "N" else (f"{base} torque", "N m")
 
 
-def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dict[str, Any],
+def _report(setup: _Setup, kind: str, curves: Curves, frames: Any, summary: dict[str, Any],
             images: list[str], gains_path: Path | None, K: int) -> Report:
     """The content of a control run's ``report.html``: the plant's true motion animated (held efforts as colours),
     the machine's own curves (:meth:`~pkmdyn.control_protocol.ControlJob.report_plots`) and efforts
@@ -646,10 +575,11 @@ def _report(setup: _Setup, kind: str, curves: _Curves, frames: Any, summary: dic
             scene = _scene.motion_scene(setup.plant_model, f["t"], f["q"], f["u"])
     except PkmdynError as exc:  # the plant left the machine's reach: the page says so, the run stands
         warns.append(f"report: the 3D view could not be built ({exc})")
-    t, first, lo, hi, note = curves.data()
+    d = curves.data()
+    t, first, lo, hi, note = d.t, d.first, d.lo, d.hi, d.note
 
     def curve(key: str, c: int, name: str) -> Curve:
-        if curves.mode == "bins":
+        if d.mode == "bins":
             return Curve(name, lo=lo[key][:, c], hi=hi[key][:, c])
         return Curve(name, first[key][:, c])
 
@@ -698,7 +628,8 @@ def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str,
     check_table_format(fmt)
     K = int(round(setup.duration / ls.cycle_s))
     summ = _Summary(setup)
-    curves = _Curves(K, ls.cycle_s, setup.fold_s) if plots or html_report else None
+    fold = int(round(setup.fold_s / ls.cycle_s)) if setup.fold_s > 0 else 0
+    curves = Curves(K, fold=fold, unit="control cycles") if plots or html_report else None
     frames = FramePicker(K, MAX_FRAMES) if html_report else None
     table = "control.csv" if fmt == "csv" else "control.parquet"
     kind, fast = controller, False

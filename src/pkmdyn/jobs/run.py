@@ -77,7 +77,7 @@ from ..multibody.model.compiler import MechanismModel
 from ..multibody.scene import frame_indices_of, mechanism_scene
 from ..params_util import check_limit, parse_limit_options
 from ..profiles._columns import check_smoothing
-from ..report import Curve, FramePicker, Output, Report, TimePlot, write_output
+from ..report import Curve, Curves, Extremes, FramePicker, Output, Report, TimePlot, write_output
 from ..simulate.passive import driven_motion, passive_motion
 from ._files import JobResult, prepare
 
@@ -153,65 +153,60 @@ def run_report(model: MechanismModel, cols: dict[str, Array], frames: dict[str, 
 
 
 class _Summary:
-    """The summary's extremes, kept chunk by chunk."""
+    """The summary's extremes, kept chunk by chunk (:class:`pkmdyn.report.Extremes`)."""
 
     def __init__(self, model: MechanismModel) -> None:
         self.model = model
-        self.residual = 0.0
+        self.ext = Extremes()
         self.sing = {"inverse": np.inf, "direct": np.inf, "constraint": np.inf}
         self.direct_nan = True
-        self.eq_residual = 0.0
-        self.iterations = 0
-        self.holding = 0.0
-        self.unactuated = 0.0
-        na = model.na
-        self.joint_effort = np.zeros(na)
-        self.motor_effort = np.zeros(na)
-        self.motor_speed = np.zeros(na)
-        self.beyond_effort: str | None = None
-        self.limit_first: str | None = None
         self.reactions: dict[str, Any] = {}
 
     def add(self, start: int, kin: MechanismKinematics, sm: dict[str, float] | None, reac: Any,
             cols: dict[str, Array]) -> None:
-        model = self.model
-        self.residual = max(self.residual, float(kin.residual.max()))
+        model, e = self.model, self.ext
+        e.max("residual", kin.residual.max())
         if sm is not None:  # (None: a chunk beyond the bodies' window without a sample of the stride)
             for key in ("inverse", "constraint"):
                 self.sing[key] = min(self.sing[key], sm[key])
             if not np.isnan(sm["direct"]):
                 self.direct_nan = False
                 self.sing["direct"] = min(self.sing["direct"], sm["direct"])
-        self.eq_residual = max(self.eq_residual, float(reac.residual.max()))
-        self.iterations = max(self.iterations, int(reac.iterations))
+        e.max("eq_residual", reac.residual.max())
+        e.max("iterations", int(reac.iterations))
         if reac.holding is not None and reac.holding.size:
-            self.holding = max(self.holding, float(np.abs(reac.holding).max()))
+            e.max("holding", np.abs(reac.holding).max())
         if reac.unactuated is not None:
-            self.unactuated = max(self.unactuated, float(reac.unactuated.max(initial=0.0)))
-        self.joint_effort = np.maximum(self.joint_effort, np.abs(reac.u).max(axis=0))
+            e.max("unactuated", reac.unactuated.max(initial=0.0))
+        e.max("joint_effort", np.abs(reac.u).max(axis=0))
         for i, name in enumerate(model.drive_name):
             tau = cols[actuator_effort_column(model, i)]
-            self.motor_effort[i] = max(self.motor_effort[i], float(np.abs(tau).max()))
-            self.motor_speed[i] = max(self.motor_speed[i], float(np.abs(kin.act_qd[:, i] * model.drive_ratio[i]).max()))
+            e.max(f"motor_effort_{i}", np.abs(tau).max())
+            e.max(f"motor_speed_{i}", np.abs(kin.act_qd[:, i] * model.drive_ratio[i]).max())
             lim = model.drive_max_effort[i]
-            if self.beyond_effort is None and np.isfinite(lim):
+            if e.get("beyond_effort") is None and np.isfinite(lim):
                 bad = np.flatnonzero(~(np.abs(tau) <= lim))
                 if bad.size:
                     s = int(bad[0])
                     u = "N m" if model.motor_units[i] == "rad" else "N"
-                    self.beyond_effort = (f"{at_sample(s, kin.t, start)}: actuator {name!r} needs {tau[s]:.4g} {u}, "
-                                          f"beyond its rated {lim:g} {u}")
+                    e.first("beyond_effort", f"{at_sample(s, kin.t, start)}: actuator {name!r} needs {tau[s]:.4g} {u}, "
+                                             f"beyond its rated {lim:g} {u}")
+
+    def value(self, key: str) -> float:
+        """The extreme kept under ``key`` as a number (0 where nothing was kept)."""
+        v = self.ext.get(key)
+        return 0.0 if v is None else float(v)
 
     def actuators(self) -> list[dict[str, Any]]:
         model = self.model
         out = []
         for i, joint in enumerate(model.actuator_names):
             spec = model.drive_specs[i] if model.drive_specs else None
-            entry: dict[str, Any] = {"joint": joint, "max_abs_joint_effort_SI": float(self.joint_effort[i])}
+            entry: dict[str, Any] = {"joint": joint, "max_abs_joint_effort_SI": float(self.ext["joint_effort"][i])}
             if spec is not None:
                 entry.update(name=spec.name, kind=spec.kind, ratio=float(spec.ratio),
-                             max_abs_motor_effort_SI=float(self.motor_effort[i]),
-                             max_abs_motor_speed_SI=float(self.motor_speed[i]),
+                             max_abs_motor_effort_SI=self.value(f"motor_effort_{i}"),
+                             max_abs_motor_speed_SI=self.value(f"motor_speed_{i}"),
                              rated_effort_SI=None if not np.isfinite(spec.max_effort) else float(spec.max_effort))
             out.append(entry)
         return out
@@ -275,7 +270,7 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
         overconstrained = "compliance"
         reason = ""
         frames = FramePicker(window)
-        plot_parts: list[dict[str, Array]] = []
+        curves = Curves(window, raw_max=None)  # every sample of the plots' window
         files = {"results": out / ("results.csv" if fmt == "csv" else "results.parquet"), "model": out / "model.json",
                  "bodies": out / "bodies.npz"}
         write_json(files["model"], model_summary(model))
@@ -304,10 +299,10 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
                     if limited:
                         c = joint_coordinates(model, kin, limited, previous=prev_coords)
                         prev_coords = c[-1]
-                        hit = limit_hit(model, c, limited) if summ.limit_first is None else None
+                        hit = limit_hit(model, c, limited) if summ.ext.get("limit_first") is None else None
                         if hit is not None:
                             s, k = hit
-                            summ.limit_first = limit_line(model, kin, s, limited[k], float(c[s, k]), start)
+                            summ.ext.first("limit_first", limit_line(model, kin, s, limited[k], float(c[s, k]), start))
                     # every sample of the bodies' window, then every SINGULARITY_STRIDE-th: the least of
                     # each measure (with the earlier chunks'), the singular value decompositions only
                     # where bounds leave it open
@@ -344,7 +339,7 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
                         npz.write({key: v[:k] for key, v in arrays.items()})
                     if start < window:
                         k = min(stop, window) - start
-                        plot_parts.append({key: cols[key][:k].copy() for key in plotted})
+                        curves.add(start, cols["t_s"][:k], {key: cols[key][:k] for key in plotted})
                         frames.add(start, t=kin.t[:k] if kin.t is not None else np.arange(start, start + k, dtype=float),
                                    joint_point=kin.joint_point[:k])
                     bar.update(stop - start)
@@ -353,29 +348,30 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
             npz.discard()
             raise
         summary = {
-            "mechanism": model.name, "samples": n, "max_residual": summ.residual,
+            "mechanism": model.name, "samples": n, "max_residual": summ.value("residual"),
             "min_inverse_singularity_measure": summ.sing["inverse"],
             "min_direct_singularity_measure": None if summ.direct_nan else summ.sing["direct"],
             "min_constraint_singularity_measure": summ.sing["constraint"],
             # the motion against the joints' limits (stored in the description; the run goes on beyond them)
-            "joint_limits": {"kept": summ.limit_first is None, "first_beyond": summ.limit_first},
+            "joint_limits": {"kept": summ.ext.get("limit_first") is None, "first_beyond": summ.ext.get("limit_first")},
             "topology": model.topology.as_dict() if model.topology is not None else None,
-            "reactions": {**summ.reactions, "max_equilibrium_residual": summ.eq_residual,
+            "reactions": {**summ.reactions, "max_equilibrium_residual": summ.value("eq_residual"),
                           "unique": overconstrained == "compliance",
                           **({"reason": reason} if reason else {}),
-                          "friction_iterations": summ.iterations,
+                          "friction_iterations": int(summ.value("iterations")),
                           "idle_freedoms": int(model.solver_idle.shape[0]),
-                          "max_idle_holding_effort_SI": summ.holding},
+                          "max_idle_holding_effort_SI": summ.value("holding")},
             "actuators": summ.actuators(),
-            "actuator_effort_limits": {"kept": summ.beyond_effort is None, "first_beyond": summ.beyond_effort},
+            "actuator_effort_limits": {"kept": summ.ext.get("beyond_effort") is None,
+                                       "first_beyond": summ.ext.get("beyond_effort")},
             "effort_split": {"groups": {g: [model.body_names[b] for b in np.flatnonzero(model.body_group == k)]
                                         for k, g in enumerate(model.group_names)},
                              "parts": [*model.group_names, *(["rotor"] if model.has_drives else []), "friction"]},
             "results_format": fmt, "limits": lim, "bodies_samples": body_rows,
         }
         if model.na < model.nt:  # under-actuated: the motion's least dynamic consistency
-            summary["max_unactuated_force_ratio"] = summ.unactuated
-        plot_cols = {k: np.concatenate([p[k] for p in plot_parts]) for k in plot_parts[0]}
+            summary["max_unactuated_force_ratio"] = summ.value("unactuated")
+        plot_cols = {k: v[:, 0] for k, v in curves.data().first.items()}
         return Output(files, summary, run_report(model, plot_cols, frames.arrays(), description_text, samples=n))
 
     files, output = write_output(out_dir, inputs, make, report)

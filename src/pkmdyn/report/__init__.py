@@ -15,6 +15,7 @@ from .._lazy import attach
 
 if TYPE_CHECKING:
     from ._figures import Curve, TimePlot, decimate_minmax
+    from ._collect import FOLD_MAX, PLOT_BINS, PLOT_RAW_MAX, CurveData, Curves, Extremes
     from ._output import SUMMARY_NAME, Output, Report, write_output
     from ._page import REPORT_NAME, write_report, write_view
     from ._scene import MAX_FRAMES, FramePicker, Scene, SceneActuator, SceneBody, frame_indices, scene_from_files, scene_from_joints
@@ -28,6 +29,12 @@ __all__ = [
     "scene_from_files",
     "frame_indices",
     "FramePicker",
+    "Curves",
+    "CurveData",
+    "Extremes",
+    "PLOT_RAW_MAX",
+    "PLOT_BINS",
+    "FOLD_MAX",
     "MAX_FRAMES",
     "Curve",
     "TimePlot",
@@ -50,6 +57,7 @@ __all__ = [
 __getattr__, __dir__ = attach(__name__, {
     **dict.fromkeys(("Curve", "TimePlot", "decimate_minmax"), "._figures"),
     **dict.fromkeys(("REPORT_NAME", "write_report", "write_view"), "._page"),
+    **dict.fromkeys(("Curves", "CurveData", "Extremes", "PLOT_RAW_MAX", "PLOT_BINS", "FOLD_MAX"), "._collect"),
     **dict.fromkeys(("Report", "Output", "write_output", "SUMMARY_NAME"), "._output"),
     **dict.fromkeys(("MAX_FRAMES", "FramePicker", "Scene", "SceneActuator", "SceneBody", "frame_indices",
                      "scene_from_files", "scene_from_joints"), "._scene"),

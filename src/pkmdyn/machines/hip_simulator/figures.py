@@ -16,15 +16,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ...report import Curve, TimePlot
+from ...report import Curve, Curves, TimePlot
 from .paper import PARTS
 
 __all__ = ["PlotData", "PlotCollector", "write_figures", "report_plots", "plot_motion_and_load", "plot_slider_motion",
            "plot_torque_parts", "plot_torques", "plot_friction_vs_load"]
 
 Array = NDArray[np.float64]
-PLOT_RAW_MAX = 5000  # up to this many samples a plot shows every sample, beyond it an envelope
-PLOT_BINS = 1000  # bins of an envelope plot
 SCATTER_MAX = 20_000  # points of the friction-against-load scatter
 _LEG_COLOURS = ("tab:blue", "tab:orange", "tab:green")
 
@@ -163,53 +161,33 @@ def plot_friction_vs_load(data: PlotData, path: Path) -> Path:
 
 
 class PlotCollector:
-    """The plots' data, gathered block by block with bounded memory.
-
-    The plots cover samples ``[0, window)`` (one cycle of the built-in motion, or the whole of
-    a motion file). Up to ``PLOT_RAW_MAX`` samples every sample is kept; beyond, ``PLOT_BINS``
-    equal bins of samples keep the minimum and maximum of every curve (an envelope). The
-    friction-against-load scatter keeps every k-th sample of the window, at most ``SCATTER_MAX``.
-    """
+    """The plots' data, gathered block by block with bounded memory: the curves of the samples
+    ``[0, window)`` (one cycle of the built-in motion, or the whole of a motion file) by
+    :class:`pkmdyn.report.Curves` (every sample up to its ``PLOT_RAW_MAX``, beyond that an envelope
+    of ``PLOT_BINS`` bins), and the friction-against-load scatter: every k-th sample of the window,
+    at most :data:`SCATTER_MAX`."""
 
     def __init__(self, window: int) -> None:
         self.window = window
-        self.envelope = window > PLOT_RAW_MAX
-        self.bins = PLOT_BINS if self.envelope else window
-        self.lo: dict[str, Array] = {}
-        self.hi: dict[str, Array] = {}
+        self.curves = Curves(window)
+        self.envelope = self.curves.mode == "bins"
         self.scatter_step = max(1, -(-window // SCATTER_MAX))
         self.scatter: list[Array] = []
 
     def add(self, start: int, curves: dict[str, Array], load: Array, friction: Array) -> None:
-        k = next(iter(curves.values())).shape[0]
-        idx = np.arange(start, start + k)
-        keep = idx < self.window
-        if not keep.any():
-            return
-        idx = idx[keep]
-        curves = {key: v[keep] for key, v in curves.items()}
-        pick = (idx % self.scatter_step) == 0
-        self.scatter.append(np.column_stack([load[keep][pick], friction[keep][pick]]))
-        b = idx * self.bins // self.window
-        starts = np.concatenate(([0], np.flatnonzero(np.diff(b)) + 1))
-        target = b[starts]
-        for key, v in curves.items():
-            v2 = v.reshape(v.shape[0], -1)
-            if key not in self.lo:
-                self.lo[key] = np.full((self.bins, v2.shape[1]), np.inf)
-                self.hi[key] = np.full((self.bins, v2.shape[1]), -np.inf)
-            self.lo[key][target] = np.minimum(self.lo[key][target], np.minimum.reduceat(v2, starts, axis=0))
-            self.hi[key][target] = np.maximum(self.hi[key][target], np.maximum.reduceat(v2, starts, axis=0))
+        """A block from sample ``start``: its ``curves`` (``"t"`` [s] among them), the load [N] and the
+        friction torques [N m] of the scatter."""
+        idx = np.arange(start, start + load.shape[0])
+        pick = (idx < self.window) & (idx % self.scatter_step == 0)
+        if pick.any():
+            self.scatter.append(np.column_stack([load[pick], friction[pick]]))
+        self.curves.add(start, curves["t"], {k: v for k, v in curves.items() if k != "t"})
 
     def data(self, note: str) -> PlotData:
-        used = np.isfinite(self.lo["t"][:, 0])
-        lo = {k: v[used] for k, v in self.lo.items()}
-        hi = {k: v[used] for k, v in self.hi.items()}
-        t = 0.5 * (lo.pop("t")[:, 0] + hi.pop("t")[:, 0])
-        if self.envelope:
-            note = (note + "; " if note else "") + f"envelope (min-max) of {self.window} samples in {self.bins} bins"
+        d = self.curves.data()
+        note = "; ".join(x for x in (note, d.note) if x)
         sc = np.concatenate(self.scatter)
-        return PlotData(t=t, lo=lo, hi=hi, envelope=self.envelope, note=note, scatter_load=sc[:, 0],
+        return PlotData(t=d.t, lo=d.lo, hi=d.hi, envelope=self.envelope, note=note, scatter_load=sc[:, 0],
                         scatter_friction=sc[:, 1:])
 
 

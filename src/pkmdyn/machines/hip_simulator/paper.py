@@ -41,6 +41,7 @@ from ...multibody.dynamics.friction import EPS_ROTATION, EPS_TRANSLATION
 from ...multibody.dynamics.newton_euler import joint_reactions
 from ...multibody.kinematics.inverse import solve_kinematics
 from ...profiles.iso14242 import AxisWave, IsoCycle, iso14242_motion
+from ...report import Extremes
 from ...spatial import euler_kinematics
 from .description import hip_description
 from .params import DEFAULT_PARAMS_TEXT, ISO_CYCLES, HipModel
@@ -198,35 +199,33 @@ def block_columns(t: Array, b: HipBlock) -> dict[str, Array]:
 
 
 class SummaryAccumulator:
-    """Per-slider and per-motor extremes, updated block by block (the summary without the data)."""
+    """Per-slider and per-motor extremes, updated block by block (the summary without the data;
+    :class:`pkmdyn.report.Extremes`)."""
 
     def __init__(self) -> None:
         self.samples = 0
         self.t0 = math.nan
         self.t1 = math.nan
-        self.ext: dict[str, Array] = {}
-
-    def _max(self, key: str, value: Array) -> None:
-        old = self.ext.get(key)
-        self.ext[key] = value if old is None else np.maximum(old, value)
+        self.ext = Extremes()
 
     def add(self, t: Array, b: HipBlock) -> None:
         if self.samples == 0:
             self.t0 = float(t[0])
         self.t1 = float(t[-1])
         self.samples += int(t.shape[0])
-        self._max("L_max", b.L.max(axis=0))
-        self._max("L_negmin", -b.L.min(axis=0))
-        self._max("Ld", np.abs(b.Ld).max(axis=0))
-        self._max("Ldd", np.abs(b.Ldd).max(axis=0))
-        self._max("tau", np.abs(b.tau).max(axis=0))
+        e = self.ext
+        e.max("L_max", b.L.max(axis=0))
+        e.min("L_min", b.L.min(axis=0))
+        e.max("Ld", np.abs(b.Ld).max(axis=0))
+        e.max("Ldd", np.abs(b.Ldd).max(axis=0))
+        e.max("tau", np.abs(b.tau).max(axis=0))
         for f in PARTS:
-            self._max(f, np.abs(b.parts[f]).max(axis=0))
-        self._max("hip_friction", np.abs(b.hip_friction).max(axis=0))
-        self._max("neg_detJa", -np.abs(b.det_Ja).min(keepdims=True))
-        self._max("neg_detJb", -np.abs(b.det_Jb).min(keepdims=True))
-        self._max("condJ", np.asarray([b.cond_J.max()]))
-        self._max("power", np.asarray([np.abs(b.power).max()]))
+            e.max(f, np.abs(b.parts[f]).max(axis=0))
+        e.max("hip_friction", np.abs(b.hip_friction).max(axis=0))
+        e.min("detJa", np.abs(b.det_Ja).min())
+        e.min("detJb", np.abs(b.det_Jb).min())
+        e.max("condJ", b.cond_J.max())
+        e.max("power", np.abs(b.power).max())
 
     def result(self) -> dict[str, Any]:
         """The summary document (JSON-ready, unit-suffixed keys)."""
@@ -236,7 +235,7 @@ class SummaryAccumulator:
             for i in range(3):
                 sliders[f"S{j + 1}{i + 1}"] = {
                     "max_position_m": float(e["L_max"][j, i]),
-                    "min_position_m": float(-e["L_negmin"][j, i]),
+                    "min_position_m": float(e["L_min"][j, i]),
                     "max_abs_velocity_m_s": float(e["Ld"][j, i]),
                     "max_abs_acceleration_m_s2": float(e["Ldd"][j, i]),
                 }
@@ -252,10 +251,10 @@ class SummaryAccumulator:
             "duration_s": self.t1 - self.t0,
             "sliders": sliders,
             "motors": motors,
-            "min_abs_detJa": float(-e["neg_detJa"][0]),
-            "min_abs_detJb_m3": float(-e["neg_detJb"][0]),
-            "max_condJ": float(e["condJ"][0]),
-            "max_abs_power_W": float(e["power"][0]),
+            "min_abs_detJa": float(e["detJa"]),
+            "min_abs_detJb_m3": float(e["detJb"]),
+            "max_condJ": float(e["condJ"]),
+            "max_abs_power_W": float(e["power"]),
         }
 
 
