@@ -134,6 +134,26 @@ def test_batch_of_one_equals_batch_of_many(case):
             assert np.allclose(a, b, rtol=1e-9, atol=1e-10 * max(1.0, float(np.abs(b).max()))), f"{name}: {field}"
 
 
+def test_a_pose_at_rest_has_the_moving_poses_maps_and_no_motion(case):
+    """A pose solved at rest (xd = xdd = 0: a grid's, a pose of its own) has the positions and the
+    maps G and J_ax of the same pose in motion, and every rate, velocity and acceleration zero
+    (the solver leaves their passes out at rest); the moving pose's rates are G xd."""
+    name, m = case
+    t = np.linspace(0.0, 1.0, 30)
+    x, xd, xdd = _motion(m, name, t, seed=3)
+    moving = solve_kinematics(m, x, xd, xdd, t)
+    for s in (0, 11, 29):
+        rest = solve_kinematics(m, x[s:s + 1], q_start=moving.q[s])
+        for field in ("q", "G", "J_ax", "R", "origin", "joint_point"):
+            a, b = getattr(rest, field)[0], getattr(moving, field)[s]
+            assert np.allclose(a, b, rtol=1e-9, atol=1e-10 * max(1.0, float(np.abs(b).max()))), f"{name}: {field}"
+        for field in ("qd", "qdd", "origin_v", "origin_a", "w", "wd", "v", "a", "joint_point_v", "joint_point_a",
+                      "act_qd", "act_qdd"):
+            assert np.all(getattr(rest, field) == 0.0), f"{name}: {field}"
+        np.testing.assert_allclose(moving.qd[s], moving.G[s] @ xd[s], rtol=1e-9,
+                                   atol=1e-12 * max(1.0, float(np.abs(moving.qd[s]).max())))
+
+
 def test_singularity_measures_are_in_range(case):
     name, m = case
     t = np.linspace(0.0, 1.0, 20)

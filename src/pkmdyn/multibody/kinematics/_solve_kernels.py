@@ -210,6 +210,33 @@ def bias_motion(G, rate, qd, body_parent, body_joint, joint_q0, joint_nq, S, V, 
 
 
 @njit(cache=True, inline="always")
+def _at_rest(xd, xdd):
+    """Whether the task rates ``xd`` and accelerations ``xdd`` are all zero."""
+    for t in range(xd.shape[0]):
+        if xd[t] != 0.0 or xdd[t] != 0.0:
+            return False
+    return True
+
+
+@njit(cache=True, inline="always")
+def _rest(qd, qdd, V, Vpre, A, gamma):
+    """The rates of a pose at rest: ``qd``, ``qdd``, the velocities ``V, Vpre``, the
+    accelerations ``A`` and the drift ``gamma`` all zero."""
+    for c in range(qd.shape[0]):
+        qd[c] = 0.0
+        qdd[c] = 0.0
+    for b in range(V.shape[0]):
+        for i in range(6):
+            V[b, i] = 0.0
+            A[b, i] = 0.0
+    for c in range(Vpre.shape[0]):
+        for i in range(6):
+            Vpre[c, i] = 0.0
+    for r in range(gamma.shape[0]):
+        gamma[r] = 0.0
+
+
+@njit(cache=True, inline="always")
 def largest_scaled(res, row_scale, n):
     """The largest scaled residual ``|res[r]| row_scale[r]`` of the first ``n`` rows and its row."""
     big = 0.0
@@ -361,6 +388,11 @@ def solve_sample(xs, xds, xdds, q, q_ref, chord, tree, loops, task, solver, work
         if phase == _RATES:
             # G = K^-1 (0; I) (all task columns in one pass), qd = G xd, bias motion
             block_lu_solve_columns(K, piv, blocks, prow, pcol, Gw, G, Gw2)
+            if _at_rest(xds, xdds):
+                # a pose held still (a grid's, a pose of its own): every rate, drift and
+                # acceleration is zero, as the passes below would find them
+                _rest(qd, qdd, V, Vpre, A, gamma)
+                return OK
             bias_motion(G, xds, qd, body_parent, body_joint, joint_q0, joint_nq, S, V, Vpre, A)
             mode = ROWS_DRIFT
         else:
@@ -681,7 +713,7 @@ def solve_batch(tm, x, xd, xdd, q_start, nbr, root, tree, loops, task, settings,
 def _refresh_cache() -> None:
     """The loop solver's kernels link and inline the tree's kernels (:mod:`.._cache`)."""
 
-    _cache.refresh((_fill_idle, solver_positions, block_lu_factor, block_lu_solve, block_lu_solve_columns, bias_motion, largest_scaled, _residuals, _idle_residuals, task_unit_rhs, jerk_factor, along_h2, second_order_applies, chord_pause, solve_sample, solve_batch), (_tree_kernels,))
+    _cache.refresh((_fill_idle, solver_positions, block_lu_factor, block_lu_solve, block_lu_solve_columns, bias_motion, _at_rest, _rest, largest_scaled, _residuals, _idle_residuals, task_unit_rhs, jerk_factor, along_h2, second_order_applies, chord_pause, solve_sample, solve_batch), (_tree_kernels,))
 
 
 _refresh_cache()
