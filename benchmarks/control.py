@@ -356,7 +356,7 @@ def mujoco_part(seconds: float) -> dict[str, Any]:
     import mujoco
 
     import pkmdyn.cli  # noqa: F401  (the command line first: the hip's commands module is one of its groups)
-    from pkmdyn.machines.hip_simulator.commands import PLATFORM_MASS_KG  # what pkmdyn hip export writes
+    from pkmdyn.machines.hip_simulator.job import PLATFORM_MASS_KG  # what pkmdyn hip export writes
     from pkmdyn.multibody import solve_kinematics
     from pkmdyn.multibody.formats.mjcf_out import mechanism_mjcf, mujoco_order, mujoco_qpos
 

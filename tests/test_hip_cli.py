@@ -177,7 +177,7 @@ def test_streamed_run_equals_the_in_memory_path(tmp_path):
     from pkmdyn.machines.hip_simulator.paper import RESULTS_COLUMNS, PaperView, SummaryAccumulator, block_columns
     from pkmdyn.profiles.iso14242 import iso14242_motion
 
-    files, _ = run_hip(tmp_path / "o", cycles=1.5, samples_per_cycle=40, make_plots=False, chunk=7)
+    files = run_hip(tmp_path / "o", cycles=1.5, samples_per_cycle=40, make_plots=False, chunk=7).files
     header, data = _read(files["results"])
     motion = iso14242_motion(1.5, 40)
     whole = PaperView(load_params()).solve(motion)

@@ -196,7 +196,7 @@ def test_a_parameter_file_with_another_friction_regularisation_is_warned_of(meas
     capsys.readouterr()
     assert main(["hip", "identify", "--no-plots", "--measured", str(path), "--params", str(params),
                  "--out", str(tmp_path / "id")]) == 0
-    said = [line for line in capsys.readouterr().out.splitlines() if "friction_velocity_eps_rad_s = 0.002" in line]
+    said = [line for line in capsys.readouterr().err.splitlines() if "friction_velocity_eps_rad_s = 0.002" in line]
     assert len(said) == 1 and "not used" in said[0] and "engine regularises friction at 0.001 rad/s" in said[0]
     written = tomllib.loads((tmp_path / "id" / "identified.toml").read_text())["friction"]
     assert written["friction_velocity_eps_rad_s"] == 2e-3  # written back as it was

@@ -167,3 +167,16 @@ def test_one_writer_of_output_folders():
 def test_the_call_scan_finds_a_call():
     probe = "from x import write_report\nimport io\nwrite_report(1)\nio.output_dir(2)\nf = output_dir\n"
     assert _calls_of(probe, ("write_report", "output_dir")) == [3, 4]
+
+
+def test_the_commands_write_nothing_themselves():
+    """The command line (cli/ and each machine's commands.py) parses, calls one job and prints:
+    it calls none of the writers."""
+    src = ROOT / "src" / "pkmdyn"
+    writers = ("atomic_file", "output_dir", "write_output", "write_report", "write_view", "write_json", "write_csv",
+               "open_table_writer", "write_text", "write_bytes", "savefig", "write_motion_csv")
+    modules = [*sorted((src / "cli").glob("*.py")), *sorted((src / "machines").glob("*/commands.py"))]
+    assert len(modules) > 10
+    found = {str(p.relative_to(src)): lines for p in modules
+             if (lines := _calls_of(p.read_text(encoding="utf-8"), writers))}
+    assert found == {}

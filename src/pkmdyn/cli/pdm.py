@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import click
 
 from .._lazy import lazy_module
-from ._groups import PATH_IN, list_files, params_command, pdm
+from ._groups import PATH_IN, list_files, params_command, pdm, show
 
 if TYPE_CHECKING:
     from ..machines.pdm4 import run as _run
@@ -44,8 +44,8 @@ def pdm_run(params_path: Path | None, motion_path: Path | None, stroke_x_m: floa
     """Kinematics, Newton-Euler dynamics and unique joint reactions, mobility, workspace and plots of the PDM."""
     trajectory = {"stroke_x_m": stroke_x_m, "stroke_y_m": stroke_y_m, "stroke_alpha_deg": stroke_alpha_deg,
                   "stroke_gamma_deg": stroke_gamma_deg, "period_s": period_s, "peak_y_accel_m_s2": peak_y_accel}
-    _run.run_pdm(params_path, motion_path, out_dir, plots=not no_plots, trajectory=trajectory, report=list_files,
-            limits=tuple(limits))
+    show(_run.run_pdm(params_path, motion_path, out_dir, plots=not no_plots, trajectory=trajectory, report=list_files,
+                      limits=tuple(limits)))
 
 
 params_command(pdm, "pdm", "pkmdyn pdm")

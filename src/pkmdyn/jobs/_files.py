@@ -17,49 +17,22 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .._lazy import lazy_module
 from ..io import atomic_file, check_output_dir, check_output_file
 from ..machines.registry import resolve
+from ..report._output import JobResult
 
 if TYPE_CHECKING:
     from ..multibody.model import compiler as _compiler
-    from ..report import Report, Scene, TimePlot
     from ..multibody.model.compiler import MechanismModel
 else:  # the compiler and its kernels load when a job runs: a command module may import its job for --help
     _compiler = lazy_module("pkmdyn.multibody.model.compiler")
 
 __all__ = ["JobResult", "Prepared", "prepare", "load_machine", "write_texts"]
-
-
-@dataclass(frozen=True)
-class JobResult:
-    """A job's outcome: ``files`` (label -> the written file's final path; empty where the job
-    wrote none), ``summary`` (the document its summary or main JSON file holds), ``lines`` (what
-    the command prints on stdout after the files), ``warnings`` (one line each, for stderr) and
-    ``notes`` (what the user should know that is not wrong: a default filled in, an element
-    approximated; one line each, for stderr) and ``report``, the content of its ``report.html``
-    (None: the job wrote none), whose :attr:`scene` and :attr:`plots` a notebook can show."""
-
-    files: Mapping[str, Path] = field(default_factory=dict)
-    summary: Mapping[str, Any] = field(default_factory=dict)
-    lines: tuple[str, ...] = ()
-    warnings: tuple[str, ...] = ()
-    notes: tuple[str, ...] = ()
-    report: Report | None = None
-
-    @property
-    def scene(self) -> Scene | None:
-        """The mechanism along the job's motion, as its report animates it (None: none)."""
-        return None if self.report is None else self.report.scene
-
-    @property
-    def plots(self) -> tuple[TimePlot, ...]:
-        """The report's time plots."""
-        return () if self.report is None else tuple(self.report.plots)
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ from .._lazy import attach
 if TYPE_CHECKING:
     from ._figures import Curve, TimePlot, decimate_minmax
     from ._collect import FOLD_MAX, PLOT_BINS, PLOT_RAW_MAX, CurveData, Curves, Extremes
-    from ._output import SUMMARY_NAME, Output, Report, write_output
+    from ._output import SUMMARY_NAME, JobResult, Output, Report, write_output
     from ._page import REPORT_NAME, write_report, write_view
     from ._scene import MAX_FRAMES, FramePicker, Scene, SceneActuator, SceneBody, frame_indices, scene_from_files, scene_from_joints
     from ._topology import Topology, fundamental_loops, layered_layout, topology_from_model
@@ -44,6 +44,7 @@ __all__ = [
     "REPORT_NAME",
     "Report",
     "Output",
+    "JobResult",
     "write_output",
     "SUMMARY_NAME",
     "Topology",
@@ -58,7 +59,7 @@ __getattr__, __dir__ = attach(__name__, {
     **dict.fromkeys(("Curve", "TimePlot", "decimate_minmax"), "._figures"),
     **dict.fromkeys(("REPORT_NAME", "write_report", "write_view"), "._page"),
     **dict.fromkeys(("Curves", "CurveData", "Extremes", "PLOT_RAW_MAX", "PLOT_BINS", "FOLD_MAX"), "._collect"),
-    **dict.fromkeys(("Report", "Output", "write_output", "SUMMARY_NAME"), "._output"),
+    **dict.fromkeys(("Report", "Output", "JobResult", "write_output", "SUMMARY_NAME"), "._output"),
     **dict.fromkeys(("MAX_FRAMES", "FramePicker", "Scene", "SceneActuator", "SceneBody", "frame_indices",
                      "scene_from_files", "scene_from_joints"), "._scene"),
     **dict.fromkeys(("Topology", "fundamental_loops", "layered_layout", "topology_from_model"), "._topology"),

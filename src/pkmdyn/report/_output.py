@@ -28,7 +28,7 @@ from ._figures import TimePlot
 from ._page import REPORT_NAME, write_report
 from ._scene import MAX_FRAMES, Scene
 
-__all__ = ["Report", "Output", "write_output", "SUMMARY_NAME"]
+__all__ = ["Report", "Output", "JobResult", "write_output", "SUMMARY_NAME"]
 
 #: the summary's file name inside an output folder
 SUMMARY_NAME = "summary.json"
@@ -67,6 +67,33 @@ class Output:
     files: Mapping[str, Path] = field(default_factory=dict)
     summary: Mapping[str, Any] | None = None
     report: Report | None = None
+
+
+@dataclass(frozen=True)
+class JobResult:
+    """A job's outcome: ``files`` (label -> the written file's final path; empty where the job
+    wrote none), ``summary`` (the document its summary or main JSON file holds), ``lines`` (what
+    the command prints on stdout after the files), ``warnings`` (one line each, for stderr) and
+    ``notes`` (what the user should know that is not wrong: a default filled in, an element
+    approximated; one line each, for stderr) and ``report``, the content of its ``report.html``
+    (None: the job wrote none), whose :attr:`scene` and :attr:`plots` a notebook can show."""
+
+    files: Mapping[str, Path] = field(default_factory=dict)
+    summary: Mapping[str, Any] = field(default_factory=dict)
+    lines: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
+    report: Report | None = None
+
+    @property
+    def scene(self) -> Scene | None:
+        """The mechanism along the job's motion, as its report animates it (None: none)."""
+        return None if self.report is None else self.report.scene
+
+    @property
+    def plots(self) -> tuple[TimePlot, ...]:
+        """The report's time plots."""
+        return () if self.report is None else tuple(self.report.plots)
 
 
 def write_output(out_dir: str | Path, inputs: Mapping[str, Path | None], make: Callable[[Path], Output],

@@ -22,36 +22,28 @@ from ..._lazy import lazy_module
 from ...cli._groups import (
     PATH_IN,
     FiniteFloat,
-    echo,
     echo_lines,
     list_files,
     params_command,
+    show,
 )
 from ...cli.control import control_command, control_options
-from ...io import DEFAULT_MAX_SAMPLES, atomic_file, check_output_file
-from ...profiles.iso14242 import iso14242_motion
-from ...profiles.orientation import write_motion_csv
+from ...io import DEFAULT_MAX_SAMPLES
 from . import identify_bounds as _ex
 from .control_job import CONTROLLERS
 from .identify_bounds import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW
 
 if TYPE_CHECKING:
-    from ... import multibody as _multibody
     from ... import params_util as _params_util
-    from ...multibody.formats import mjcf_out as _mjcf_out
-    from . import description as _description
     from . import identify_excite as _identify_excite
     from . import identify_job as _identify_job
     from . import job as _job
     from . import params as _params
 else:  # loaded when a command runs, not on import (nor for --help)
-    _description = lazy_module("pkmdyn.machines.hip_simulator.description")
     _identify_excite = lazy_module("pkmdyn.machines.hip_simulator.identify_excite")
     _identify_job = lazy_module("pkmdyn.machines.hip_simulator.identify_job")
     _job = lazy_module("pkmdyn.machines.hip_simulator.job")
     _params = lazy_module("pkmdyn.machines.hip_simulator.params")
-    _multibody = lazy_module("pkmdyn.multibody")
-    _mjcf_out = lazy_module("pkmdyn.multibody.formats.mjcf_out")
     _params_util = lazy_module("pkmdyn.params_util")
 
 __all__ = ["group"]
@@ -111,11 +103,9 @@ def hip_run(params_path, motion_path, cycles, samples_per_cycle, motion_model, s
     if motion_path is not None and (cycles != 1.0 or samples_per_cycle != 1000 or motion_model is not None):
         raise click.UsageError(
             "--cycles, --samples-per-cycle and --motion-model apply to the built-in motion, not to --motion")
-    files, messages = _job.run_hip(out_dir, params_path, motion_path, cycles, samples_per_cycle,
-                              make_plots=not no_plots, progress=True, singularity_threshold=singularity_threshold,
-                              fmt=fmt, limits=tuple(limits), motion_model=motion_model, report=list_files)
-    for m in messages:
-        click.echo(f"pkmdyn: warning: {m}", err=True)
+    show(_job.run_hip(out_dir, params_path, motion_path, cycles, samples_per_cycle, make_plots=not no_plots,
+                      progress=True, singularity_threshold=singularity_threshold, fmt=fmt, limits=tuple(limits),
+                      motion_model=motion_model, report=list_files))
 
 
 params_command(group, "hip", "pkmdyn hip")
@@ -133,10 +123,7 @@ params_command(group, "hip", "pkmdyn hip")
 def hip_profile(cycles, samples_per_cycle, limits, out_path) -> None:
     """Write the built-in ISO 14242-1 motion and load model as a motion CSV (all derivative columns)."""
     max_samples = _params_util.parse_limit_options(limits, {"max_samples": int}).get("max_samples", DEFAULT_MAX_SAMPLES)
-    motion = iso14242_motion(cycles, samples_per_cycle, max_samples=max_samples)
-    with atomic_file(out_path) as tmp:
-        write_motion_csv(tmp, motion)
-        echo(f"motion: {out_path}")
+    show(_job.profile_job(out_path, cycles, samples_per_cycle, max_samples, announce=list_files))
 
 @group.command("control")
 @paper_option
@@ -168,8 +155,8 @@ def hip_control(controller, params_path, plant_path, motion_path, cycles, gains_
 def hip_identify(measured_path, params_path, which, sg_window, sg_order, rank_tol, no_plots, out_dir) -> None:
     """Identify friction and/or inertia from measured motor torques; writes identified.toml,
     identification.json, torques.csv and plots."""
-    _identify_job.run_identify(out_dir, measured_path, params_path, which, sg_window, sg_order, rank_tol, make_plots=not no_plots,
-                 report=echo_lines)
+    show(_identify_job.run_identify(out_dir, measured_path, params_path, which, sg_window, sg_order, rank_tol,
+                                    make_plots=not no_plots, report=list_files))
 
 
 _ANGLE = FiniteFloat(-180.0, 180.0)
@@ -227,11 +214,6 @@ def hip_excite(params_path, which, period_s, harmonics, cycles, samples_per_cycl
     _identify_job.run_excite(out_path, params_path, which, limits, period_s, harmonics, cycles, samples_per_cycle,
                iterations, starts, seed, design_samples, progress=True, report=echo_lines)
 
-#: the mass [kg] written for a platform of zero mass (the paper gives none; MuJoCo needs a mass on a
-#: moving body): its centre of mass sits on the platform's fixed ball joint, so the value changes no
-#: dynamics
-PLATFORM_MASS_KG = 1e-3
-
 
 @group.command("export")
 @click.option("--format", "fmt", type=click.Choice(["mjcf"]), required=True,
@@ -248,11 +230,4 @@ def hip_export(fmt, params_path, timestep_s, out_path) -> None:
     """Write the machine in another engine's format (MuJoCo's MJCF, the same writer as pkmdyn
     export --machine hip); the file is written only when the whole model is valid."""
 
-    inputs = {"--params": params_path}
-    check_output_file(out_path, inputs)
-    model = _multibody.load_mechanism(_description.hip_description(_params.load_params(params_path)))
-    light = _mjcf_out.massless_bodies(model)
-    text = _mjcf_out.mechanism_mjcf(model, timestep_s, massless_kg=PLATFORM_MASS_KG if light else None)
-    with atomic_file(out_path, inputs=inputs) as tmp:
-        tmp.write_text(text, encoding="utf-8")
-        echo(f"{fmt}: {out_path}")
+    show(_job.export_job(fmt, params_path, timestep_s, out_path, announce=list_files))

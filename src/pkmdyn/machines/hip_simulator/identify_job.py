@@ -43,7 +43,7 @@ import warnings
 from ...identify.plots import plot_residuals, plot_torque_fit
 from ...multibody import load_mechanism
 from ...multibody.scene import motion_scene
-from ...report import MAX_FRAMES, Curve, Output, Report, TimePlot, frame_indices, write_output
+from ...report import MAX_FRAMES, Curve, JobResult, Output, Report, TimePlot, frame_indices, write_output
 from .description import hip_description
 from .identify_bounds import MAX_EXCITE_ROWS, MAX_SG_ORDER, MAX_SG_WINDOW  # noqa: E402  (the bounds, stated by the CLI)
 from .identify_excite import design_work
@@ -114,19 +114,20 @@ def run_identify(
     sg_order: int = 5,
     rank_tol: float = 1e-6,
     make_plots: bool = True,
-    report: Callable[[list[str]], None] | None = None,
+    report: Callable[[Mapping[str, Path]], None] | None = None,
     html_report: bool = True,
-) -> tuple[dict[str, Path], list[str]]:
+) -> JobResult:
     """Identify and write the output folder (with ``html_report``, also ``report.html``: the machine
     along the measured motion coloured by the measured torques, measured and identified torques,
-    residuals); returns the files written and summary lines.
+    residuals); returns the result: the files written, ``identification.json``'s document, the
+    summary lines and the warnings (a parameter file's friction regularisation not used).
 
     The options are checked first (``sg_window`` odd, 3 to :data:`MAX_SG_WINDOW`; ``sg_order``
     2 to :data:`MAX_SG_ORDER` and below the window; ``0 < rank_tol < 1``); the measured
     values by :func:`.identify_view.read_measured_csv`; a fit that still overflows is
     refused, never written. ``out_dir`` must pass the output rule
-    (:func:`pkmdyn.io.check_output_dir`), checked first; ``report`` is called with the summary
-    lines and the files' final paths before they move into place."""
+    (:func:`pkmdyn.io.check_output_dir`), checked first; ``report`` is called with the files' final
+    paths before they move into place."""
     _check_identify_options(which, sg_window, sg_order, rank_tol)
     inputs = {"--measured": measured_path, "--params": params_path}
     check_output_dir(out_dir, inputs)
@@ -136,8 +137,6 @@ def run_identify(
                             "built-in parameters")
     description = complete_description(description, model)
     eps_note = regularisation_note(model)
-    if eps_note is not None:
-        eps_note = "note: " + eps_note
     motion, tau, deriv = read_measured_csv(measured_path, sg_window, sg_order)
     for i, name in enumerate(TORQUE_COLUMNS):
         if not np.any(tau[:, i]):
@@ -209,8 +208,6 @@ def run_identify(
         lines.append("not excited: " + ", ".join(report_doc["not_excited"]))
     rms = ", ".join(f"{1e3 * v:.4g}" for v in result.residual_rms)
     lines.append(f"residual RMS per motor [N mm]: {rms}")
-    if eps_note is not None:
-        lines.append(eps_note)
     warns = ([str(w.message) for w in caught if not issubclass(w.category, RuntimeWarning)]
              + ([eps_note] if eps_note is not None else []))
 
@@ -231,12 +228,8 @@ def run_identify(
                           [k for k, p in files.items() if p.suffix == ".png"], warns)
         return Output(files, report=rep)
 
-    def listing(placed: Mapping[str, Path]) -> None:
-        if report is not None:
-            report([*lines, *(f"{name}: {path}" for name, path in placed.items())])
-
-    files, _ = write_output(out_dir, inputs, make, listing)
-    return files, lines
+    files, output = write_output(out_dir, inputs, make, report)
+    return JobResult(files, report_doc, tuple(lines), () if eps_note is None else (eps_note,), report=output.report)
 
 
 def _report(model: HipModel, motion: Any, tau: np.ndarray, tau_id: np.ndarray, doc: dict[str, Any],

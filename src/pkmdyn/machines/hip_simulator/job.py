@@ -32,18 +32,23 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from ...errors import ParameterError, PkmdynError, SingularityWarning
-from ...io import TABLE_FORMATS, check_table_format, note_table_size, open_table_writer
+from ...io import TABLE_FORMATS, atomic_file, check_output_file, check_table_format, note_table_size, open_table_writer
+from ...jobs._files import write_texts
 from ...jobs.wear import tracks_figure, write_wear_files
+from ...multibody import load_mechanism
+from ...multibody.formats import mjcf_out
 from ...multibody.analyses.wear import WearOptions, joint_wear
 from ...multibody.scene import mechanism_scene
 from ...params_util import check_limit, parse_limit_options
 from ...profiles.iso14242 import IsoCycle, iso14242_block, iso14242_motion, iso14242_samples, iso14242_times
-from ...profiles.orientation import OrientationMotion, read_motion_csv
-from ...report import MAX_FRAMES, FramePicker, Output, Report, write_output
+from ...profiles.orientation import OrientationMotion, read_motion_csv, write_motion_csv
+from ...report import MAX_FRAMES, FramePicker, JobResult, Output, Report, write_output
 from . import figures, paper
+from .description import hip_description
 from .params import LIMIT_KEYS, HipLimits, HipModel, check_motion_limits, load_params
 
-__all__ = ["run_hip", "RUN_CHUNK", "DEFAULT_SINGULARITY_THRESHOLD", "WEAR_SAMPLES"]
+__all__ = ["run_hip", "profile_job", "export_job", "RUN_CHUNK", "DEFAULT_SINGULARITY_THRESHOLD", "WEAR_SAMPLES",
+           "PLATFORM_MASS_KG"]
 
 Array = NDArray[np.float64]
 
@@ -180,8 +185,9 @@ def run_hip(
     motion_model: str | None = None,
     report: Callable[[dict[str, Path]], None] | None = None,
     html_report: bool = True,
-) -> tuple[dict[str, Path], list[str]]:
-    """Run the whole job; returns the files written and the warnings raised on the way.
+) -> JobResult:
+    """Run the whole job; returns its result: the files written, the summary, the warnings raised
+    on the way and the report's content.
 
     ``fmt``: ``"csv"`` or ``"parquet"`` for ``results``; ``limits``: overrides of the
     ``[limits]`` table (``{key: value}`` or ``("key=value", ...)``); ``motion_model``: the named
@@ -326,5 +332,41 @@ def run_hip(
                          samples=window, figures=wear_views)
         return Output(files, doc, rep)
 
-    final, _ = write_output(out_dir, {"--params": params_path, "--motion": motion_path}, make, report)
-    return final, messages
+    final, output = write_output(out_dir, {"--params": params_path, "--motion": motion_path}, make, report)
+    return JobResult(final, output.summary or {}, (), tuple(messages), report=output.report)
+
+
+def profile_job(out_path: str | Path, cycles: float, samples_per_cycle: int, max_samples: int,
+                announce: Callable[[dict[str, Path]], None] | None = None) -> JobResult:
+    """``pkmdyn hip profile``: ``cycles`` of the built-in ISO 14242-1 motion and load model at
+    ``samples_per_cycle`` (at most ``max_samples`` rows) as a motion CSV with every derivative
+    column, written whole or not at all (:func:`pkmdyn.io.atomic_file`; ``announce`` is given its
+    path before it moves into place)."""
+    motion = iso14242_motion(cycles, samples_per_cycle, max_samples=max_samples)
+    out = Path(out_path)
+    with atomic_file(out) as tmp:
+        write_motion_csv(tmp, motion)
+        if announce is not None:
+            announce({"motion": out})
+    return JobResult({"motion": out}, {"samples": len(motion)})
+
+
+#: the mass [kg] written for a platform of zero mass (the paper gives none; MuJoCo needs a mass on a
+#: moving body): its centre of mass sits on the platform's fixed ball joint, so the value changes no
+#: dynamics
+PLATFORM_MASS_KG = 1e-3
+
+
+def export_job(fmt: str, params_path: str | Path | None, timestep_s: float, out_path: str | Path,
+               announce: Callable[[dict[str, Path]], None] | None = None) -> JobResult:
+    """``pkmdyn hip export``: the machine of the parameter file ``params_path`` (None: the paper's
+    Tables 1-2) in ``fmt`` (``"mjcf"``: :func:`pkmdyn.multibody.formats.mjcf_out.mechanism_mjcf`, a
+    massless platform given :data:`PLATFORM_MASS_KG`) at ``out_path``, written only when the whole
+    model is valid (:func:`pkmdyn.jobs._files.write_texts`)."""
+    inputs = {"--params": None if params_path is None else Path(params_path)}
+    out = Path(out_path)
+    check_output_file(out, inputs)
+    model = load_mechanism(hip_description(load_params(params_path)))
+    light = mjcf_out.massless_bodies(model)
+    text = mjcf_out.mechanism_mjcf(model, timestep_s, massless_kg=PLATFORM_MASS_KG if light else None)
+    return JobResult(write_texts({fmt: (out, text)}, inputs, announce))

@@ -29,7 +29,7 @@ from ...io import check_output_dir, open_table_writer, write_json
 from ...multibody import load_mechanism, solve_kinematics
 from ...multibody.dynamics.newton_euler import joint_reactions
 from ...params_util import check_limit, parse_limit_options
-from ...report import Output, write_output
+from ...report import JobResult, Output, write_output
 from ...profiles.pdm_motion import PdmMotion, cycloidal_motion, read_pdm_motion
 from . import paper
 from .description import pdm_description
@@ -222,14 +222,14 @@ def _summary(cols: dict[str, Array], n: int, mob: dict[str, Any]) -> dict[str, A
 def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_dir: str | Path,
             plots: bool = True, trajectory: dict[str, float | None] | None = None,
             report: Callable[[dict[str, Path]], None] | None = None,
-            limits: tuple[str, ...] | dict[str, Any] | None = None, html_report: bool = True) -> dict[str, Any]:
+            limits: tuple[str, ...] | dict[str, Any] | None = None, html_report: bool = True) -> JobResult:
     """Run the PDM kinematics and dynamics and write every result file into ``out_dir``.
 
     ``params_path``: TOML parameters (None: built-in defaults); ``motion_path``: motion CSV
     (None: the Eq. 84 cycloidal motion of the ``[trajectory]`` section, with the overrides of
     ``trajectory``, the keyword arguments of :func:`trajectory_with`); ``html_report``: also write
-    ``report.html`` (:mod:`pkmdyn.report`). Returns the summary of
-    ``summary.json`` with ``files`` as ``{label: path}``. User errors raise
+    ``report.html`` (:mod:`pkmdyn.report`). Returns the result: the files (label -> path), the summary
+    ``summary.json`` holds and the report's content. User errors raise
     :class:`~pkmdyn.errors.PkmdynError` subclasses naming the file (full path), key, row,
     sample time or limb; they are raised before ``out_dir`` is touched (which must pass the output
     rule, :func:`pkmdyn.io.check_output_dir`, checked first). ``report`` is called with the files'
@@ -270,7 +270,7 @@ def run_pdm(params_path: str | Path | None, motion_path: str | Path | None, out_
         return Output(files, _summary(cols, len(motion), mob), rep)
 
     final, output = write_output(out_dir, inputs, make, report)
-    return {**(output.summary or {}), "files": final}
+    return JobResult(final, output.summary or {}, report=output.report)
 
 
 def _write(model: PdmModel, out: Path, cols: dict[str, Array], npz: dict[str, Array], mob: dict[str, Any],
