@@ -35,7 +35,7 @@ def test_extremes_in_chunks_are_the_whole_runs():
     np.testing.assert_allclose(e["sq"], np.sum(x**2, axis=0), rtol=1e-12)
     assert e["n"] == 5000 and e["peak"] == np.abs(x).max()
     assert e.get("beyond") == int(np.flatnonzero(x[:, 0] > 3.0)[0])
-    assert e.get("never") is None and e.get("never", 7) == 7 and "never" not in e and "hi" in e
+    assert e.get("never") is None and e.get("never", 7) == 7 and "never" not in e and "hi" in e and "beyond" in e
     with pytest.raises(KeyError):
         e["never"]
 

@@ -152,6 +152,18 @@ def test_a_pose_at_rest_has_the_moving_poses_maps_and_no_motion(case):
             assert np.all(getattr(rest, field) == 0.0), f"{name}: {field}"
         np.testing.assert_allclose(moving.qd[s], moving.G[s] @ xd[s], rtol=1e-9,
                                    atol=1e-12 * max(1.0, float(np.abs(moving.qd[s]).max())))
+    # at rest within a moving motion: after moving samples (whose velocities and accelerations
+    # fill the solver's buffers) and before others
+    xd2, xdd2 = xd.copy(), xdd.copy()
+    xd2[11:13] = xdd2[11:13] = 0.0
+    mixed = solve_kinematics(m, x, xd2, xdd2, t)
+    for field in ("qd", "qdd", "origin_v", "origin_a", "w", "wd", "v", "a", "joint_point_v", "joint_point_a"):
+        assert np.all(getattr(mixed, field)[11:13] == 0.0), f"{name}: {field}"
+        a, b = getattr(mixed, field)[13:], getattr(moving, field)[13:]
+        assert np.allclose(a, b, rtol=1e-9, atol=1e-9 * max(1.0, float(np.abs(b).max()))), f"{name}: {field}"
+    for field in ("q", "G"):
+        a, b = getattr(mixed, field), getattr(moving, field)
+        assert np.allclose(a, b, rtol=1e-9, atol=1e-10 * max(1.0, float(np.abs(b).max()))), f"{name}: {field}"
 
 
 def test_singularity_measures_are_in_range(case):

@@ -288,3 +288,25 @@ def test_sines_and_cosines_from_a_nearby_angle_are_exact_to_rounding():
         trig[0] = (0.25, 0.5, q0)  # not the sine and cosine of q0: a far angle must not use them
         assert _cos_sin(trig, 0, q0 + 2e-3, True) == (np.cos(q0 + 2e-3), np.sin(q0 + 2e-3))
     assert worst < 1e-15
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_a_sample_at_rest_after_moving_ones_equals_the_full_passes(name):
+    """A sample at rest (the task's rates zero), taken after moving samples whose velocities and
+    accelerations fill the kernel's buffers, skips the passes of the rates: its efforts and
+    accelerations equal those of the same sample at a velocity of 1e-200 (which takes every pass,
+    its velocity terms below any rounding), and forward(inverse) is the identity."""
+    m = load_mechanism(_with_load(CASES[name]()))
+    x, xd, xdd = _motion(m)
+    tiny = np.full(m.nt, 1e-200)
+    out = {}
+    for label, v in (("rest", np.zeros(m.nt)), ("tiny", tiny)):
+        V = machine_verbs(m)
+        for i in range(12):  # moving samples first
+            V.forward_dynamics_one(m, x[i], xd[i], V.inverse_dynamics_one(m, x[i], xd[i], xdd[i]))
+        u = V.inverse_dynamics_one(m, x[12], v, xdd[12])
+        out[label] = (u, V.forward_dynamics_one(m, x[12], v, u))
+    (u0, a0), (u1, a1) = out["rest"], out["tiny"]
+    assert np.abs(u0 - u1).max() <= 1e-12 * max(np.abs(u1).max(), 1e-9), name
+    assert np.abs(a0 - a1).max() <= 1e-10 * max(np.abs(a1).max(), 1e-9), name
+    assert np.abs(a0 - xdd[12]).max() <= 1e-8 * max(np.abs(xdd[12]).max(), 1e-9), name

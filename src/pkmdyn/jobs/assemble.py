@@ -101,8 +101,10 @@ def job(machine: str, actuators: str, starts: int | None, seed: int, out_dir: Pa
                      f"{sm['direct']:.4g}, constraint {sm['constraint']:.4g}; starts reaching it "
                      f"{m['starts_reaching_it']}")
     files: dict[str, Path] = {}
-    report = replace(_report(model, modes, p.text), summary=doc)
-    if out_dir is not None:
+    report = None
+    if out_dir is not None:  # (the report's frames: one kinematics solve per mode)
+        report = replace(_report(model, modes, p.text), summary=doc)
+
         def make(out: Path) -> Output:
             written = {"assemblies": out / "assemblies.json"}
             write_json(written["assemblies"], doc)

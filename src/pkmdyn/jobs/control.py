@@ -617,7 +617,8 @@ def _loop_method(settings: dict[str, Any]) -> str:
 
 def _stream(setup: _Setup, controller: str, g: Any, ls: Any, settings: dict[str, Any], out: Path, plots: bool,
             gains_path: Path | None, inputs: dict[str, Path | None], fmt: str, html_report: bool = True,
-            announce: Callable[[Mapping[str, Path]], None] | None = None) -> tuple[dict[str, Path], dict[str, Any]]:
+            announce: Callable[[Mapping[str, Path]], None] | None = None
+            ) -> tuple[dict[str, Path], dict[str, Any], Report | None]:
     """Run the loop span by span (:func:`pkmdyn.simulate.track_spans`) straight into the output
     folder: the table is written span by span and the summary and plots gathered on the way, so
     memory does not grow with the run; the folder moves into place only when the whole run

@@ -19,6 +19,7 @@ folder beside ``--out`` and moved into place only when the whole run succeeded
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -232,7 +233,7 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
                   report: Callable[[dict[str, Path]], None] | None = None, description_text: str = "",
                   unique_reactions: bool = False, fmt: str = "csv", limits: dict | None = None,
                   progress: bool = False, chunk: int = CHUNK, plot_window: int | None = None,
-                  deflection: bool = False) -> dict[str, Any]:
+                  deflection: bool = False) -> JobResult:
     """Kinematics, efforts and every joint reaction of ``model`` along ``motion`` (a
     :class:`~pkmdyn.multibody.kinematics.motion.TaskMotion` or :class:`~pkmdyn.multibody.kinematics.motion.PeriodicMotion`), written into ``out_dir``
     under the output rule (``inputs`` the files the run read: nothing is written when anything
@@ -247,7 +248,8 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
     ``unique_reactions``, is refused. ``deflection``: the task coordinates' elastic deflection
     under the run's loads in the results table (:func:`deflection_columns`; the description
     needs a compliance source, docs/stiffness.md). ``report`` is called with the files' final paths before
-    they move into place. Returns the summary with ``files`` as ``{label: path}``."""
+    they move into place. Returns the result: the files (label -> path), the summary ``summary.json``
+    holds and the report's content."""
     from tqdm import tqdm
 
     if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
@@ -375,7 +377,7 @@ def run_mechanism(model: MechanismModel, motion: Any, out_dir: str | Path, input
         return Output(files, summary, run_report(model, plot_cols, frames.arrays(), description_text, samples=n))
 
     files, output = write_output(out_dir, inputs, make, report)
-    return {**(output.summary or {}), "files": files}
+    return JobResult(files, output.summary or {}, report=output.report)
 
 
 def job(machine: str, out_dir: Path, *, motion_path: Path | None = None, actuator_path: Path | None = None,
@@ -430,12 +432,13 @@ def job(machine: str, out_dir: Path, *, motion_path: Path | None = None, actuato
                                  max_samples=int(lim["max_samples"]))
         window = len(cycle)
     try:
-        summary = run_mechanism(model, motion, out_dir, inputs=p.inputs, report=announce, description_text=p.text,
-                                unique_reactions=not (minimum_norm_reactions or model.reactions == "minimum-norm"),
-                                fmt=fmt, limits=limits, progress=True, deflection=deflection, plot_window=window)
+        res = run_mechanism(model, motion, out_dir, inputs=p.inputs, report=announce, description_text=p.text,
+                            unique_reactions=not (minimum_norm_reactions or model.reactions == "minimum-norm"),
+                            fmt=fmt, limits=limits, progress=True, deflection=deflection, plot_window=window)
     except ComplianceDataMissing as exc:
         raise ComplianceDataMissing(f"{exc}; or --minimum-norm-reactions ([mechanism] reactions = \"minimum-norm\") "
                                     "for reactions that balance every body but are not unique") from None
+    summary = res.summary
     warnings = []
     beyond = summary["joint_limits"]["first_beyond"]
     if beyond is not None:
@@ -446,5 +449,4 @@ def job(machine: str, out_dir: Path, *, motion_path: Path | None = None, actuato
     reactions = summary.get("reactions", {})
     if reactions.get("unique") is False:
         warnings.append(f"joint reactions are the minimum-norm ones, not unique: {reactions.get('reason')}")
-    files = summary.pop("files")
-    return JobResult(files, summary, (), tuple(warnings))
+    return replace(res, warnings=tuple(warnings))

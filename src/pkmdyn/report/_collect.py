@@ -59,7 +59,7 @@ class Extremes:
         return self._v[key]
 
     def __contains__(self, key: str) -> bool:
-        return key in self._v
+        return key in self._v or self._first.get(key) is not None
 
     def get(self, key: str, default: object = None) -> object:
         """What ``key`` holds (a kept value, or a :meth:`first` one), else ``default``."""
