@@ -70,3 +70,28 @@ def test_an_unreachable_pose_gives_the_checked_error(monkeypatch):
         _checked(m, x, monkeypatch)
     assert type(fast.value) is type(checked.value)
     assert "60" in str(fast.value) and "60" in str(checked.value)
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_repeated_and_near_repeated_poses_keep_the_map(name, monkeypatch):
+    """The kernel's predictor takes its second-order term from the path the solutions took: a pose
+    given twice, one a hair (1e-12 of a step) past the one before, or a jump back along the path
+    leave the map as the batched solver has it."""
+    m = load_mechanism(CASES[name]())
+    x = _motion(m)
+    near = x[80] + 1e-12 * (x[81] - x[80])
+    x = np.concatenate([x[:41], x[40:41], x[41:81], near[None], x[81:], x[30:40]])
+    B = machine_verbs(m).actuator_map(m, x)
+    ref = _checked(m, x, monkeypatch)
+    assert np.abs(B - ref).max() <= 1e-10 * np.abs(ref).max()
+    # and the kernel itself solves every pose, none left to the checked route
+    from pkmdyn.multibody.dynamics import _sample_kernels as one
+
+    pk = one.pack(m)
+    kin = machine_module._kin(m, MechanismData(m), x[:1])
+    one.prime(pk, kin.q[0], kin.x[0], kin.G[0])
+    steps = np.diff(x, axis=0)
+    out = np.empty((len(x) - 1, m.na * m.nt))
+    assert one.actuator_maps(pk, x[1:], steps, out) == len(x) - 1
+    mine = np.swapaxes(out.reshape(-1, m.na, m.nt), 1, 2) * m.drive_ratio  # J_ax^T K, as the verb gives it
+    assert np.abs(mine - ref[1:]).max() <= 1e-10 * np.abs(ref).max()

@@ -421,10 +421,36 @@ def _dynamics(pk, x, xd, v, load, mode, out):  # pragma: no cover - compiled
         ss += dx * xdp[t]
         vv += xdp[t] * xdp[t]
     ss = ss / vv if factored and vv > 0.0 else 0.0
+    # the map's own second-order term (below) is estimated only over a step along the previous
+    # rate, to within 10 % of the step (a path sampled finely, not poses one by one), and used
+    # only where it is a correction, smaller than half the first-order step (a curvature estimated
+    # over a far shorter step, e.g. at a repeated time, may be mostly rounding)
+    step = ss
+    along = False
+    if mode == MAP and ss != 0.0:
+        off = 0.0
+        dd = 0.0
+        for t in range(nt):
+            off += (r[t] - ss * xdp[t]) ** 2
+            dd += r[t] * r[t]
+        along = off <= 0.01 * dd
+        big2 = 0.0
+        big1 = 0.0
+        for c in range(nq):
+            big2 = max(big2, abs(0.5 * ss * ss * qddp[c]))
+            lin = 0.0
+            for t in range(nt):
+                lin += Gp[c, t] * r[t]
+            big1 = max(big1, abs(lin))
+        if not (along and big2 <= 0.5 * big1):
+            ss = 0.0
     for c in range(nq):
         acc = 0.5 * ss * ss * qddp[c]
+        lin = 0.0
         for t in range(nt):
             acc += Gp[c, t] * r[t]
+            lin += Gp[c, t] * r[t]
+        Qf[c] = q[c] + lin  # the first-order prediction (the map's curvature below is taken from it)
         q[c] += acc
     for t in range(nt):
         r[t] = 0.0  # the rates at xdd = 0
@@ -434,7 +460,11 @@ def _dynamics(pk, x, xd, v, load, mode, out):  # pragma: no cover - compiled
     task = (task_body, task_point, task_kind, task_index, euler_axes)
     solver = (sel_rows, idle, prow, pcol, blocks, row_scale, tol, check_tol, max_iter, rowpos, colpos, idlepos)
     work = (R, p, S, val, res, K, wi, rhs, ires, bwork, qd, qdd, V, Vpre, A, gamma, Gp, w33, w3, Gw, Gw2, trig)
-    status = solve_sample(x, xd, r, q, coord_offset, chord, tree, loops, task, solver, work, info)
+    # the map needs G alone: its solve is told the task is at rest (r is zero), which leaves out the
+    # rates, the drift and the accelerations; its predictor's second-order term is then the
+    # curvature of the path the solutions took (below)
+    status = solve_sample(x, r if mode == MAP else xd, r, q, coord_offset, chord, tree, loops, task, solver, work,
+                          info)
     if status != OK:
         st[0] = COLD_STATE
         return status
@@ -444,6 +474,12 @@ def _dynamics(pk, x, xd, v, load, mode, out):  # pragma: no cover - compiled
         xdp[t] = xd[t]
     for c in range(nq):
         qddp[c] = qdd[c]
+    if mode == MAP:
+        # the bias accelerations along the step, from how far the solution lies from the first-order
+        # prediction (q - Qf = qdd ss^2 / 2 to the third order in the step ss; none for a step not
+        # along the previous rate)
+        for c in range(nq):
+            qddp[c] = 2.0 * (q[c] - Qf[c]) / (step * step) if along else 0.0
     st[0] = FACTORED  # solve_sample left the factors of K at q in K, wi
     if mode == POSITIONS:
         for a in range(act_coord.shape[0]):
