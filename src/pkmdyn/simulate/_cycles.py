@@ -220,7 +220,8 @@ def run_cycles(i0, i1, first, pre, done, delay, steps, dt, method, law, exact, s
     cycles before the span, ``delay`` the sensor's delay in cycles), each as its Python cycle
     takes it; returns the first cycle it did not take (``i1`` where it took them all).
 
-    ``sense``: :func:`._sensors._sense`'s arrays and scalars after ``s_exact``, in its order;
+    ``sense``: :func:`._sensors._sense`'s arguments after ``s_exact``, in its order (``q, qd,
+    div, noise, pose_from_sensor`` and its groups ``ref, filt, mem, rec``);
     ``plant``: ``(pk, has_load, loads, modes)`` (``modes``: the
     single-sample kernel's forward, inverse and positions modes); ``encoders``: ``(pk, view, prev, out, ratio, a0,
     s_exact)``; ``direct``: ``(pk, d, out, ok, a0, ratio, a, ad)``; ``ctrl``: ``(pk, has_load,
@@ -228,8 +229,10 @@ def run_cycles(i0, i1, first, pre, done, delay, steps, dt, method, law, exact, s
     ``act``: ``(lim, u, out_u, sat)``; ``integ``: ``(A, W, vp, buf, qd_A, ws, f0, a2, a3, a4,
     fv)``; ``keep``: room for the state a cycle starts from (restored where it returns early).
     """
-    (q, qd, q_ref, div, s_ref_p, Bt_p, s_ref_c, rate_map, res, T, a_v, a_a, noise, from_sensor, s_prev, sd_prev,
-     yq, yqd, ys, ysd, ysdd, out_q, out_qd, out_att, out_s, out_qs, out_qds, out_se, out_sde, out_sdde) = sense
+    q, qd, div, noise, from_sensor, s_ref, s_filt, s_mem, s_rec = sense
+    q_ref = s_ref[0]
+    s_prev, sd_prev, yq, yqd, ys, ysd, ysdd = s_mem
+    out_qs, out_qds = s_rec[4], s_rec[5]
     pk, has_load, loads, modes = plant
     pk = (pk, modes)
     e_pk, e_view, e_prev, e_out, e_ratio, e_a0, s_exact = encoders
@@ -259,9 +262,8 @@ def run_cycles(i0, i1, first, pre, done, delay, steps, dt, method, law, exact, s
         if ok:
             jd = k - delay if g >= delay else 0
             start = g == 0
-            bad = _sense(kr, k, jd, start, exact, s_exact, q, qd, q_ref, div, s_ref_p,
-                         Bt_p, s_ref_c, rate_map, res, T, a_v, a_a, noise, from_sensor, s_prev, sd_prev, yq, yqd, ys,
-                         ysd, ysdd, out_q, out_qd, out_att, out_s, out_qs, out_qds, out_se, out_sde, out_sdde)
+            bad = _sense(kr, k, jd, start, exact, s_exact, q, qd, div, noise, from_sensor, s_ref, s_filt, s_mem,
+                         s_rec)
             ok = bad < 0
         if ok and exact:  # the controller's pose (:meth:`._loop.ExactEncoders.pose`)
             for a in range(nu):
@@ -385,13 +387,22 @@ def compiled_cycles(plant: Any, controller: Any, ref: Any, exact: Any, work: Any
             _c(controller.u_ff) if controller.u_ff is not None else np.zeros((1, 1)), kind == "augmented-pd",
             _c(j.s) if kind == "pid" else np.zeros((1, 1)), _c(j.sd) if kind == "pid" else np.zeros((1, 1)),
             float(ref.T), memory, controller.acc, controller.out)
-    if not all(isinstance(a, np.ndarray) and a.flags.c_contiguous for a in (*args[:9], *args[12:13], *args[14:])):
+    if not all(a.flags.c_contiguous for a in _leaves(args) if isinstance(a, np.ndarray)):
         return None
     cc = CompiledCycles(args, plant, loads, encoders, direct, ctrl, (lim, u, out_u, sat), work, method,
                         LAWS[kind], exact is not None, steps, dt)
     if _kinds((0, 0, 0, 0, 0, 0, *cc.head, *cc.tail)) != _kinds(example_arguments()):
         return None  # another type than the compiled one: the Python cycles, rather than a compilation here
     return cc
+
+
+def _leaves(args: Any) -> Any:
+    """Every leaf of nested tuples, in order."""
+    for a in args:
+        if isinstance(a, tuple):
+            yield from _leaves(a)
+        else:
+            yield a
 
 
 def _kinds(args: Any) -> Any:
@@ -410,8 +421,7 @@ def example_arguments() -> tuple:
     n = 2
     v, m2, m3 = np.zeros(n), np.zeros((1, n)), np.zeros((1, n, n))
     ipk = np.zeros(1, dtype=np.int64)
-    args = (v, v, m2, v, m2, m3, m2, m3, v, 1.0, 1.0, 1.0, m2, False, v, v, v, v, v, v, v, m2, m2, m2, m2, m2, m2,
-            m2, m2, m2)
+    args = (v, v, v, m2, False, (m2, m2, m3, m2, m3), (v, 1.0, 1.0, 1.0), (v,) * 7, (m2,) * 9)
     encoders = (ipk, v, v, v, v, v, v)
     direct = (ipk, ipk, v, 0, v, v, v, v)
     ctrl = (ipk, False, v, m2, m2, v, v, v, m3, m2, False, m2, m2, 1.0, v, v, v)

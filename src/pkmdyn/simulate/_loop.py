@@ -155,8 +155,8 @@ def compile_cycle_kernels() -> None:
 
     v, m2, m3 = np.zeros(2), np.zeros((1, 2)), np.zeros((1, 2, 2))
     one = np.ones(2)
-    _sense(0, 0, 0, True, True, v, v, v, m2, one, m2, m3, m2, m3, one, 1.0, 1.0, 1.0, m2, False, v.copy(),
-           v.copy(), v.copy(), v.copy(), v.copy(), v.copy(), v.copy(), *(np.zeros((1, 2)) for _ in range(9)))
+    _sense(0, 0, 0, True, True, v, v, v, one, m2, False, (m2, m2, m3, m2, m3), (one, 1.0, 1.0, 1.0),
+           tuple(v.copy() for _ in range(7)), tuple(np.zeros((1, 2)) for _ in range(9)))
     _actuate(0, v, one, v.copy(), np.zeros((1, 2)), np.zeros((1, 2), dtype=bool))
     _ct_acc(0, m2, m2, m2, v, v, v, v, v.copy())
     _pd(0, m2, m2, v, v, v, v, m3, m2, False, v.copy())
@@ -305,10 +305,11 @@ def run_span(plant: Plant, controller: Any, ref: Any, plant_joint: Any, ctrl_joi
     s_exact = np.zeros(nu)
     u = np.empty(nu)
     q_ref = np.ascontiguousarray(ref.q)
-    args = (q, qd, q_ref, div, np.ascontiguousarray(plant_joint.s), np.ascontiguousarray(plant_joint.Bt),
-            np.ascontiguousarray(ctrl_joint.s), np.ascontiguousarray(rate_map), res, T, a_v, a_a, noise,
-            from_sensor, state.s_prev, state.sd_prev, y.q, y.qd, y.s, y.sd, y.sdd, out_q, out_qd, out_att, out_s,
-            out_qs, out_qds, out_se, out_sde, out_sdde)
+    args = (q, qd, div, noise, from_sensor,
+            (q_ref, np.ascontiguousarray(plant_joint.s), np.ascontiguousarray(plant_joint.Bt),
+             np.ascontiguousarray(ctrl_joint.s), np.ascontiguousarray(rate_map)), (res, T, a_v, a_a),
+            (state.s_prev, state.sd_prev, y.q, y.qd, y.s, y.sd, y.sdd),
+            (out_q, out_qd, out_att, out_s, out_qs, out_qds, out_se, out_sde, out_sdde))
     done = state.done
 
     def cycle(i: int) -> None:

@@ -12,20 +12,26 @@ Array = NDArray[np.float64]
 
 
 @numba.njit(cache=True)
-def _sense(kr: int, k: int, j: int, first: bool, exact: bool, s_exact: Array, q: Array, qd: Array, q_ref: Array,
-           div: Array, s_ref_p: Array, Bt_p: Array, s_ref_c: Array, rate_map: Array, res: Array, T: float, a_v: float,
-           a_a: float, noise: Array, pose_from_sensor: bool,
-           s_prev: Array, sd_prev: Array, yq: Array, yqd: Array, ys: Array, ysd: Array, ysdd: Array,
-           out_q: Array, out_qd: Array, out_att: Array, out_s: Array, out_qs: Array, out_qds: Array,
-           out_se: Array, out_sde: Array, out_sdde: Array) -> int:  # pragma: no cover - compiled
+def _sense(kr: int, k: int, j: int, first: bool, exact: bool, s_exact: Array, q: Array, qd: Array, div: Array,
+           noise: Array, pose_from_sensor: bool, ref: tuple, filt: tuple, mem: tuple,
+           rec: tuple) -> int:  # pragma: no cover - compiled
     """Sensors of a cycle (:mod:`._loop`, items 1-2); records the true and sensed state.
     ``kr`` is the cycle's row in the reference arrays, ``k`` in the records (and ``noise``),
     ``j`` the record row the delayed pose sensor reads; ``first``: the run's first cycle (the
     filters start there); with ``exact`` the encoders read ``s_exact`` (the plant's true
     displacement) and the first-order estimate is left out: the caller takes the pose (unless
-    from the pose sensor) and the rate from the direct kinematics of the reading, and
-    ``s_ref_p``, ``Bt_p``, ``s_ref_c`` and ``rate_map`` are not read (they may be empty).
+    from the pose sensor) and the rate from the direct kinematics of the reading, and the
+    reference's joint arrays and ``rate_map`` are not read (they may be empty). The arrays
+    come in groups: ``ref`` the reference (``q_ref, s_ref_p, Bt_p, s_ref_c, rate_map``: the task
+    coordinates, the plant's and the controller's joint references and the rate map), ``filt``
+    the encoders (``res, T, a_v, a_a``: resolution, cycle, the two filters' gains), ``mem`` the
+    sensors' memory (``s_prev, sd_prev, yq, yqd, ys, ysd, ysdd``), ``rec`` the records
+    (``out_q, out_qd, out_att, out_s, out_qs, out_qds, out_se, out_sde, out_sdde``).
     Returns the index of a coordinate beyond its divergence limit (or not finite), else -1."""
+    q_ref, s_ref_p, Bt_p, s_ref_c, rate_map = ref
+    res, T, a_v, a_a = filt
+    s_prev, sd_prev, yq, yqd, ys, ysd, ysdd = mem
+    out_q, out_qd, out_att, out_s, out_qs, out_qds, out_se, out_sde, out_sdde = rec
     nq = q.shape[0]
     nu = ys.shape[0]
     for i in range(nq):
