@@ -95,3 +95,29 @@ def test_repeated_and_near_repeated_poses_keep_the_map(name, monkeypatch):
     assert one.actuator_maps(pk, x[1:], steps, out) == len(x) - 1
     mine = np.swapaxes(out.reshape(-1, m.na, m.nt), 1, 2) * m.drive_ratio  # J_ax^T K, as the verb gives it
     assert np.abs(mine - ref[1:]).max() <= 1e-10 * np.abs(ref).max()
+
+
+@pytest.mark.parametrize("tiny", [1e-300, 1e-200, 1e-160, 1e-100])
+def test_a_step_below_rounding_along_the_path_keeps_the_map(tiny, monkeypatch):
+    """Poses ``tiny`` metres past each other along the path after steps of 0.5 mm (a curvature
+    measured over such a step is rounding, or its square underflows): the map stays finite and
+    the batched solver's, with no error."""
+    m = load_mechanism(CASES["delta"]())
+    x = np.tile(reference_task(m), (43, 1))
+    x[:40, 0] += np.linspace(-20e-3, 0.0, 40)  # steps of 0.5 mm along x, then two of tiny metres, then 1 mm
+    x[40:, 0] += np.array([tiny, 2.0 * tiny, 1e-3])
+    B = machine_verbs(m).actuator_map(m, x)
+    ref = _checked(m, x, monkeypatch)
+    assert np.all(np.isfinite(B))
+    assert np.abs(B - ref).max() <= 1e-10 * np.abs(ref).max()
+
+
+def test_uneven_steps_keep_the_map(monkeypatch):
+    """Steps alternately a whole and a third of the motion's sampling: the map is the batched
+    solver's, and the kernel solves every pose."""
+    m = load_mechanism(CASES["delta"]())
+    t = np.sort(np.concatenate([np.linspace(0.0, 1.0, 121), np.linspace(0.0, 1.0, 121)[:-1] + 1.0 / 360.0]))
+    x = ex.smooth_motion(reference_task(m), np.where(m.task_kind == 1, 0.05, 0.03 * m.length_scale), t, 7)[0]
+    B = machine_verbs(m).actuator_map(m, x)
+    ref = _checked(m, x, monkeypatch)
+    assert np.abs(B - ref).max() <= 1e-10 * np.abs(ref).max()

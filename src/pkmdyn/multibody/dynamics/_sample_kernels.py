@@ -424,28 +424,37 @@ def _dynamics(pk, x, xd, v, load, mode, out):  # pragma: no cover - compiled
     # the map's own second-order term (below) is estimated only over a step along the previous
     # rate, to within 10 % of the step (a path sampled finely, not poses one by one), and used
     # only where it is a correction, smaller than half the first-order step (a curvature estimated
-    # over a far shorter step, e.g. at a repeated time, may be mostly rounding)
-    step = ss
-    along = False
+    # over a far shorter step, e.g. at a repeated time, may be mostly rounding); ``step2``: the
+    # square of this step in the units of its own rate (1 where the rates are the steps), over
+    # which the curvature is measured (0: none measured)
+    step2 = 0.0
     if mode == MAP and ss != 0.0:
         off = 0.0
         dd = 0.0
+        hh = 0.0
+        ww = 0.0
         for t in range(nt):
             off += (r[t] - ss * xdp[t]) ** 2
             dd += r[t] * r[t]
-        along = off <= 0.01 * dd
+            hh += r[t] * xd[t]
+            ww += xd[t] * xd[t]
+        hs = hh / ww if ww > 0.0 else 0.0
+        if off <= 0.01 * dd and hs * hs > 0.0 and np.isfinite(hs * hs):
+            step2 = hs * hs
         big2 = 0.0
         big1 = 0.0
         for c in range(nq):
-            big2 = max(big2, abs(0.5 * ss * ss * qddp[c]))
+            v2 = abs(0.5 * ss * ss * qddp[c])
+            if not v2 <= big2:  # (NaN or infinity kept: refused below)
+                big2 = v2
             lin = 0.0
             for t in range(nt):
                 lin += Gp[c, t] * r[t]
             big1 = max(big1, abs(lin))
-        if not (along and big2 <= 0.5 * big1):
+        if not (step2 > 0.0 and big2 <= 0.5 * big1):
             ss = 0.0
     for c in range(nq):
-        acc = 0.5 * ss * ss * qddp[c]
+        acc = 0.5 * ss * ss * qddp[c] if ss != 0.0 else 0.0
         lin = 0.0
         for t in range(nt):
             acc += Gp[c, t] * r[t]
@@ -476,10 +485,11 @@ def _dynamics(pk, x, xd, v, load, mode, out):  # pragma: no cover - compiled
         qddp[c] = qdd[c]
     if mode == MAP:
         # the bias accelerations along the step, from how far the solution lies from the first-order
-        # prediction (q - Qf = qdd ss^2 / 2 to the third order in the step ss; none for a step not
+        # prediction (q - Qf = qdd h^2 / 2 to the third order in the step h; none for a step not
         # along the previous rate)
         for c in range(nq):
-            qddp[c] = 2.0 * (q[c] - Qf[c]) / (step * step) if along else 0.0
+            v2 = 2.0 * (q[c] - Qf[c]) / step2 if step2 > 0.0 else 0.0
+            qddp[c] = v2 if np.isfinite(v2) else 0.0
     st[0] = FACTORED  # solve_sample left the factors of K at q in K, wi
     if mode == POSITIONS:
         for a in range(act_coord.shape[0]):
