@@ -451,15 +451,13 @@ def _dynamics(pk, x, xd, v, load, mode, out):  # pragma: no cover - compiled
             for t in range(nt):
                 lin += Gp[c, t] * r[t]
             big1 = max(big1, abs(lin))
+            Qf[c] = q[c] + lin  # the first-order prediction (the map's curvature below is taken from it)
         if not (step2 > 0.0 and big2 <= 0.5 * big1):
             ss = 0.0
     for c in range(nq):
         acc = 0.5 * ss * ss * qddp[c] if ss != 0.0 else 0.0
-        lin = 0.0
         for t in range(nt):
             acc += Gp[c, t] * r[t]
-            lin += Gp[c, t] * r[t]
-        Qf[c] = q[c] + lin  # the first-order prediction (the map's curvature below is taken from it)
         q[c] += acc
     for t in range(nt):
         r[t] = 0.0  # the rates at xdd = 0
